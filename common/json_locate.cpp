@@ -1,0 +1,344 @@
+#include "common/json_locate.hpp"
+
+#include <fstream>
+#include <sstream>
+
+namespace palplab::json {
+
+TextPos offset_to_pos(std::string_view text, std::size_t offset) {
+  if (offset > text.size()) offset = text.size();
+  TextPos p;
+  p.line = 1;
+  p.offset = static_cast<long>(offset);
+  std::size_t line_start = 0;
+  for (std::size_t i = 0; i < offset; ++i)
+    if (text[i] == '\n') {
+      ++p.line;
+      line_start = i + 1;
+    }
+  int col = 1;
+  for (std::size_t i = line_start; i < offset; ++i)
+    if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) ++col;  // skip UTF-8 continuations
+  p.column = col;
+  return p;
+}
+
+namespace {
+
+bool is_identifier(std::string_view k) {
+  if (k.empty()) return false;
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    char c = k[i];
+    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_' ||
+              (i > 0 && c >= '0' && c <= '9');
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// Recursive scanner over valid JSON text that records value and key offsets per path.
+class Scanner {
+ public:
+  Scanner(std::string_view t, std::unordered_map<std::string, std::pair<long, long>>& out,
+          std::vector<std::pair<std::string, std::pair<long, long>>>& dups)
+      : t_(t), out_(out), dups_(dups) {}
+
+  void run() {
+    skip_ws();
+    value("$", -1);
+  }
+
+ private:
+  void skip_ws() {
+    while (i_ < t_.size() && (t_[i_] == ' ' || t_[i_] == '\t' || t_[i_] == '\n' || t_[i_] == '\r'))
+      ++i_;
+  }
+  std::string string_literal() {
+    // Decodes escapes well enough for key comparison; \u sequences are decoded to UTF-8.
+    std::string s;
+    ++i_;  // opening quote
+    while (i_ < t_.size() && t_[i_] != '"') {
+      char c = t_[i_++];
+      if (c != '\\') {
+        s += c;
+        continue;
+      }
+      if (i_ >= t_.size()) break;
+      char e = t_[i_++];
+      switch (e) {
+        case 'n':
+          s += '\n';
+          break;
+        case 't':
+          s += '\t';
+          break;
+        case 'r':
+          s += '\r';
+          break;
+        case 'b':
+          s += '\b';
+          break;
+        case 'f':
+          s += '\f';
+          break;
+        case 'u': {
+          unsigned cp = 0;
+          for (int k = 0; k < 4 && i_ < t_.size(); ++k, ++i_) {
+            char h = t_[i_];
+            cp = cp * 16 + (h <= '9' ? h - '0' : (h | 0x20) - 'a' + 10);
+          }
+          if (cp < 0x80) {
+            s += static_cast<char>(cp);
+          } else if (cp < 0x800) {
+            s += static_cast<char>(0xC0 | (cp >> 6));
+            s += static_cast<char>(0x80 | (cp & 0x3F));
+          } else {  // surrogate halves are kept as-is; only used for path names
+            s += static_cast<char>(0xE0 | (cp >> 12));
+            s += static_cast<char>(0x80 | ((cp >> 6) & 0x3F));
+            s += static_cast<char>(0x80 | (cp & 0x3F));
+          }
+          break;
+        }
+        default:
+          s += e;
+      }
+    }
+    ++i_;  // closing quote
+    return s;
+  }
+  void value(const std::string& path, long key_off) {
+    long voff = static_cast<long>(i_);
+    auto [it, inserted] = out_.emplace(path, std::make_pair(voff, key_off < 0 ? voff : key_off));
+    if (!inserted) {
+      dups_.push_back({path, it->second});
+      dups_.back().second.second = key_off < 0 ? voff : key_off;
+      // Later members win in nlohmann::json, so point at the later one.
+      it->second = {voff, key_off < 0 ? voff : key_off};
+    }
+    if (i_ >= t_.size()) return;
+    char c = t_[i_];
+    if (c == '{') {
+      ++i_;
+      skip_ws();
+      if (i_ < t_.size() && t_[i_] == '}') {
+        ++i_;
+        return;
+      }
+      while (i_ < t_.size()) {
+        skip_ws();
+        long koff = static_cast<long>(i_);
+        std::string k = string_literal();
+        skip_ws();
+        ++i_;  // ':'
+        skip_ws();
+        value(path_key(path, k), koff);
+        skip_ws();
+        if (i_ < t_.size() && t_[i_] == ',') {
+          ++i_;
+          continue;
+        }
+        ++i_;  // '}'
+        break;
+      }
+    } else if (c == '[') {
+      ++i_;
+      skip_ws();
+      if (i_ < t_.size() && t_[i_] == ']') {
+        ++i_;
+        return;
+      }
+      std::size_t n = 0;
+      while (i_ < t_.size()) {
+        skip_ws();
+        value(path_index(path, n++), -1);
+        skip_ws();
+        if (i_ < t_.size() && t_[i_] == ',') {
+          ++i_;
+          continue;
+        }
+        ++i_;  // ']'
+        break;
+      }
+    } else if (c == '"') {
+      string_literal();
+    } else {
+      // number, true, false, null
+      while (i_ < t_.size() && t_[i_] != ',' && t_[i_] != '}' && t_[i_] != ']' && t_[i_] != ' ' &&
+             t_[i_] != '\n' && t_[i_] != '\r' && t_[i_] != '\t')
+        ++i_;
+    }
+  }
+
+  std::string_view t_;
+  std::size_t i_ = 0;
+  std::unordered_map<std::string, std::pair<long, long>>& out_;
+  std::vector<std::pair<std::string, std::pair<long, long>>>& dups_;
+};
+
+}  // namespace
+
+std::string path_key(std::string_view parent, std::string_view key) {
+  std::string s(parent);
+  if (is_identifier(key)) {
+    s += '.';
+    s += key;
+  } else {
+    s += "[\"";
+    for (char c : key) {
+      if (c == '"' || c == '\\') s += '\\';
+      s += c;
+    }
+    s += "\"]";
+  }
+  return s;
+}
+
+std::string path_index(std::string_view parent, std::size_t index) {
+  return std::string(parent) + "[" + std::to_string(index) + "]";
+}
+
+std::string normalize_path(std::string_view p) {
+  if (!p.empty() && p[0] == '$') return std::string(p);
+  std::string out = "$";
+  std::size_t i = 0;
+  while (i < p.size()) {
+    if (p[i] != '/') {
+      ++i;
+      continue;
+    }
+    std::size_t j = p.find('/', i + 1);
+    if (j == std::string_view::npos) j = p.size();
+    std::string tok;
+    for (std::size_t k = i + 1; k < j; ++k) {
+      if (p[k] == '~' && k + 1 < j) {
+        tok += p[k + 1] == '1' ? '/' : '~';
+        ++k;
+      } else {
+        tok += p[k];
+      }
+    }
+    bool numeric = !tok.empty() && tok.find_first_not_of("0123456789") == std::string::npos;
+    out = numeric ? path_index(out, std::stoul(tok)) : path_key(out, tok);
+    i = j;
+  }
+  return out;
+}
+
+JsonLocator::JsonLocator(std::string_view text) {
+  std::unordered_map<std::string, std::pair<long, long>> raw;
+  std::vector<std::pair<std::string, std::pair<long, long>>> dups;
+  std::unordered_map<std::string, std::pair<long, long>> first;
+  Scanner(text, raw, dups).run();
+  for (auto& [path, offs] : raw)
+    entries_[path] = Entry{offset_to_pos(text, static_cast<std::size_t>(offs.first)),
+                           offset_to_pos(text, static_cast<std::size_t>(offs.second))};
+  for (auto& [path, offs] : dups) {
+    DuplicateKey d;
+    d.path = path;
+    d.first = offset_to_pos(text, static_cast<std::size_t>(offs.first));
+    d.second = offset_to_pos(text, static_cast<std::size_t>(offs.second));
+    duplicates_.push_back(d);
+  }
+}
+
+const JsonLocator::Entry* JsonLocator::find(std::string_view path) const {
+  std::string p = normalize_path(path);
+  while (true) {
+    auto it = entries_.find(p);
+    if (it != entries_.end()) return &it->second;
+    if (p.size() <= 1) return nullptr;
+    // Strip the last component: ".key", "[n]" or "[\"key\"]".
+    std::size_t cut = std::string::npos;
+    if (p.back() == ']') {
+      // find the matching '[' (keys in brackets may contain ']' only escaped inside quotes)
+      bool quoted = p.size() >= 2 && p[p.size() - 2] == '"';
+      if (quoted) {
+        std::size_t q = p.rfind("[\"", p.size() - 2);
+        cut = q;
+      } else {
+        cut = p.rfind('[');
+      }
+    } else {
+      cut = p.rfind('.');
+    }
+    if (cut == std::string::npos || cut == 0) {
+      p = "$";
+    } else {
+      p.resize(cut);
+    }
+  }
+}
+
+TextPos JsonLocator::value(std::string_view path) const {
+  const Entry* e = find(path);
+  return e ? e->value : TextPos{};
+}
+
+TextPos JsonLocator::key(std::string_view path) const {
+  const Entry* e = find(path);
+  return e ? e->key : TextPos{};
+}
+
+bool JsonLocator::contains(std::string_view path) const {
+  return entries_.count(normalize_path(path)) > 0;
+}
+
+SourceLocation JsonLocator::locate(const std::string& file, std::string_view path,
+                                   bool at_key) const {
+  TextPos p = at_key ? key(path) : value(path);
+  SourceLocation loc;
+  loc.file = file;
+  loc.line = p.line;
+  loc.column = p.column;
+  loc.json_path = normalize_path(path);
+  return loc;
+}
+
+nlohmann::json parse_located(std::string_view text, const std::string& file) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text.begin(), text.end());
+  } catch (const nlohmann::json::parse_error& e) {
+    // e.byte counts the characters read, so the offending character is at e.byte - 1.
+    std::size_t off = e.byte > 0 ? e.byte - 1 : 0;
+    TextPos p = offset_to_pos(text, off);
+    std::string msg = e.what();
+    // Drop nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 5: ".
+    auto colon = msg.find(": ", msg.find("parse error"));
+    if (colon != std::string::npos) msg = msg.substr(colon + 2);
+    SourceLocation loc;
+    loc.file = file;
+    loc.line = p.line;
+    loc.column = p.column;
+    throw InputError(loc, "invalid JSON: " + msg);
+  }
+  JsonLocator loc(text);
+  if (!loc.duplicates().empty()) {
+    std::vector<Problem> ps;
+    for (auto& d : loc.duplicates()) {
+      SourceLocation where;
+      where.file = file;
+      where.line = d.second.line;
+      where.column = d.second.column;
+      where.json_path = d.path;
+      ps.push_back({where, "duplicate key (first defined at line " + std::to_string(d.first.line) +
+                               ", column " + std::to_string(d.first.column) +
+                               "); each key may appear once"});
+    }
+    throw InputError(std::move(ps));
+  }
+  return j;
+}
+
+nlohmann::json parse_file_located(const std::string& path, std::string* text_out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("cannot open file (expected a readable JSON file)", path);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  nlohmann::json j = parse_located(text, path);
+  if (text_out) *text_out = std::move(text);
+  return j;
+}
+
+}  // namespace palplab::json
