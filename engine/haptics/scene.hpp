@@ -1,0 +1,153 @@
+#pragma once
+// THE SCENE CONTRACT: what a study runner (protocols) and a virtual or real participant see of a
+// simulator prototype. Names here are stable: fields and functions may be added, never renamed.
+//
+// A Scene is built by palplab::prototypes::build_scene(prototype_json_path, overrides). It is
+// driven in lock-step: step(device_position) advances exactly one haptic step (1 ms of simulated
+// time by default; the model may sub-step internally) and returns what the simulator RENDERS —
+// everything a participant may perceive and nothing else — plus the events of that step for
+// logging. Deterministic and bit-reproducible: no threads, no clocks, no random numbers inside.
+//
+// Units: SI everywhere (m, N, s, kg). The device position is the haptic contact point (HCP) in
+// the organ's frame (m). Forces are the force the simulator applies to the hand (N): pressing
+// into the organ yields a force pointing back out of it.
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace palplab::engine {
+
+// Force limits of one anatomical part (N). ST < SFT; the audio cue sounds from ST on, MPF is the
+// target not to exceed, SFT the hard stopping threshold.
+struct Thresholds {
+  double st = 0.0;   // sound threshold (N)
+  double mpf = 0.0;  // maximum palpation force (N)
+  double sft = 0.0;  // stopping force threshold (N)
+};
+
+enum class EventKind {
+  contact_start,  // value: 0
+  contact_end,    // value: peak force magnitude of the contact (N)
+  st_reached,     // value: force magnitude at the crossing (N); region: contact region
+  mpf_reached,
+  sft_reached,
+};
+const char* to_string(EventKind k);
+
+// An event of one step. Events are for LOGGING, not perception: a participant model must use
+// only the fields of Rendered (a threshold event fires whether or not a cue renders it).
+struct Event {
+  double t = 0.0;  // s, simulated time of the step in which it happened
+  EventKind kind = EventKind::contact_start;
+  int region = -1;     // index into SceneGeometry::region_names; -1 = no labelled region
+  int node = -1;       // contact node (surface node index)
+  double value = 0.0;  // see EventKind
+};
+
+// What the simulator renders in one haptic step.
+struct Rendered {
+  double t = 0.0;                                   // s, simulated time at the end of the step
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N, force on the hand (0 if haptics off)
+  bool contact = false;                             // the HCP touches the organ
+  int contact_node = -1;    // nearest surface node of the contact; -1 without contact
+  int contact_region = -1;  // region of the contact node; -1 = none/unlabelled
+  // Visible deformation of the touched region (m): displacement magnitude of the contact node
+  // from its rest position as drawn. 0 for prototype A or when the visual-deformation cue is off.
+  double visible_deformation = 0.0;
+  bool audio = false;  // the audio cue sounds (force >= ST of the contact region, cue on)
+  // Events of this step; the span stays valid until the next call to step() or reset().
+  std::span<const Event> events;
+};
+
+// One logged sample per step (DESIGN.md's Sample{t, x, F, contact_node}).
+struct Sample {
+  double t = 0.0;                               // s
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // m, device position given to step()
+  Eigen::Vector3d F = Eigen::Vector3d::Zero();  // N, force on the hand
+  int contact_node = -1;
+};
+
+// Rest geometry for the participant's exploration (surface only; the tet interior is hidden).
+struct SceneGeometry {
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V;  // #V by 3 rest positions (m)
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> N;  // #V by 3 unit outward normals
+  Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> F;     // #F by 3 faces (ccw outside)
+  std::vector<int> vertex_region;         // #V region index per vertex, -1 = unlabelled
+  std::vector<std::string> region_names;  // e.g. "ovary_left", "body", "cervix"
+  Eigen::Vector3d start_position = Eigen::Vector3d::Zero();  // m, where the HCP starts
+
+  int region_index(const std::string& name) const;  // -1 if unknown
+  // Mean rest position of the region's vertices (m). Throws std::out_of_range if unknown.
+  Eigen::Vector3d region_centroid(const std::string& name) const;
+  // Surface node nearest to p (octree search).
+  int nearest_node(const Eigen::Vector3d& p) const;
+  // Surface node of the region nearest to its centroid (the "press here" node).
+  int region_node(const std::string& name) const;
+
+  std::shared_ptr<const void> search_index;  // octree over V (owned, opaque)
+};
+
+// What a study phase may change of a prototype without editing its file.
+struct SceneOverrides {
+  std::optional<bool> haptic;                    // render the force on the hand
+  std::optional<bool> visual_deformation;        // draw the live deformation
+  std::optional<bool> audio;                     // sound at ST
+  std::map<std::string, Thresholds> thresholds;  // region name -> limits (N); "*" = every region
+  std::optional<std::string> integrator;         // "symplectic_euler" | "backward_euler" | "rk4"
+};
+
+// Counters a researcher or a benchmark may want (not perceivable).
+struct SceneStats {
+  long nodes = 0;    // simulated nodes now (incl. refinement nodes)
+  long springs = 0;  // springs now
+  long coarse_nodes = 0;
+  long coarse_springs = 0;
+  long new_nodes_max = 0;       // most refinement nodes present at once since reset
+  long new_springs_max = 0;     // most refinement springs present at once since reset
+  double total_mass = 0.0;      // kg, now
+  double max_rest_error = 0.0;  // m, largest |x - x_rest| over the simulated nodes now
+  long awake_nodes = 0;         // nodes integrated in the last step
+  int level = 0;                // current refinement level (0 = coarse)
+  bool nan_detected = false;    // a non-finite state was found (and the step was rejected)
+};
+
+struct SceneImpl;
+
+class Scene {
+ public:
+  explicit Scene(std::unique_ptr<SceneImpl> impl);
+  Scene(Scene&&) noexcept;
+  Scene& operator=(Scene&&) noexcept;
+  ~Scene();
+
+  // One haptic step (dt() seconds of simulated time) with the HCP at `device_position` (m).
+  Rendered step(const Eigen::Vector3d& device_position);
+  // The sample of the last step (t, device position, force, contact node).
+  Sample last_sample() const;
+  // Back to the state right after construction (rest shape, t = 0, no contact). Cheap: no mesh
+  // generation, no precomputation.
+  void reset();
+
+  double dt() const;  // s, haptic step
+  double time() const;
+  const SceneGeometry& geometry() const;
+  const std::string& prototype() const;  // "A", "B", "C", "C1", "C2", ...
+  Thresholds thresholds(int region) const;
+  SceneStats stats() const;
+  // Current (deformed) positions of the simulated surface nodes, #V(now) by 3 (m), and faces of
+  // the current (possibly refined) surface — for a renderer. Not part of the perception contract.
+  void current_surface(Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
+                       Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& F) const;
+
+  SceneImpl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<SceneImpl> impl_;
+};
+
+}  // namespace palplab::engine

@@ -1,0 +1,135 @@
+#include "engine/models/mass_spring.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palplab::engine {
+
+Eigen::Vector3d spring_force(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
+                             const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, double ks,
+                             double kd, double rest) {
+  const Eigen::Vector3d du = x1 - x2;
+  const double len = du.norm();
+  if (len <= 0.0) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d dir = du / len;
+  const double mag = ks * (len - rest) + kd * (v1 - v2).dot(dir);
+  return -mag * dir;
+}
+
+void spring_jacobian(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double ks, double kd,
+                     double rest, bool definite, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv) {
+  const Eigen::Vector3d du = x1 - x2;
+  const double len = du.norm();
+  if (len <= 0.0) {
+    Kx.setZero();
+    Kv.setZero();
+    return;
+  }
+  const Eigen::Vector3d d = du / len;
+  const Eigen::Matrix3d P = d * d.transpose();
+  double lateral = ks * (1.0 - rest / len);
+  if (definite) lateral = std::max(lateral, 0.0);
+  Kx = -(ks * P + lateral * (Eigen::Matrix3d::Identity() - P));
+  Kv = -kd * P;
+}
+
+void build_adjacency(MassSpringSystem& sys) {
+  const long n = sys.nodes();
+  const auto& E = sys.springs.E;
+  sys.adj_start.assign(n + 1, 0);
+  for (long s = 0; s < E.rows(); ++s) {
+    ++sys.adj_start[E(s, 0) + 1];
+    ++sys.adj_start[E(s, 1) + 1];
+  }
+  for (long i = 0; i < n; ++i) sys.adj_start[i + 1] += sys.adj_start[i];
+  sys.adj_spring.resize(sys.adj_start[n]);
+  std::vector<int> fill(sys.adj_start.begin(), sys.adj_start.end() - 1);
+  for (long s = 0; s < E.rows(); ++s) {
+    sys.adj_spring[fill[E(s, 0)]++] = static_cast<int>(s);
+    sys.adj_spring[fill[E(s, 1)]++] = static_cast<int>(s);
+  }
+}
+
+namespace {
+inline void add_node_terms(const MassSpringSystem& sys, const RowMatX3d& X, const RowMatX3d& V,
+                           RowMatX3d& F, long i) {
+  F.row(i) = sys.F_ext.row(i);
+  const double kh = sys.home_ks[i], dh = sys.home_kd[i];
+  if (kh != 0.0 || dh != 0.0) F.row(i) += kh * (sys.X_rest.row(i) - X.row(i)) - dh * V.row(i);
+}
+inline void add_spring(const MassSpringSystem& sys, const RowMatX3d& X, const RowMatX3d& V,
+                       RowMatX3d& F, long s) {
+  const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
+  const Eigen::Vector3d f =
+      spring_force(X.row(a).transpose(), X.row(b).transpose(), V.row(a).transpose(),
+                   V.row(b).transpose(), sys.springs.ks[s], sys.springs.kd[s], sys.springs.rest[s]);
+  F.row(a) += f.transpose();
+  F.row(b) -= f.transpose();
+}
+}  // namespace
+
+void compute_forces(const MassSpringSystem& sys, const RowMatX3d& X, const RowMatX3d& V,
+                    RowMatX3d& F, const std::vector<int>* nodes, const std::vector<int>* springs) {
+  if (F.rows() != X.rows()) F.setZero(X.rows(), 3);
+  if (nodes) {
+    for (int i : *nodes) add_node_terms(sys, X, V, F, i);
+  } else {
+    for (long i = 0; i < X.rows(); ++i) add_node_terms(sys, X, V, F, i);
+  }
+  // Forces on endpoints outside `nodes` are written too (into rows the caller ignores).
+  if (springs) {
+    for (int s : *springs) add_spring(sys, X, V, F, s);
+  } else {
+    for (long s = 0; s < sys.springs.size(); ++s) add_spring(sys, X, V, F, s);
+  }
+}
+
+Springs springs_from_edges(const RowMatX3d& X, const RowMatX2i& edges, double ks, double kd) {
+  Springs s;
+  s.E = edges;
+  s.rest.resize(edges.rows());
+  for (long e = 0; e < edges.rows(); ++e)
+    s.rest[e] = (X.row(edges(e, 0)) - X.row(edges(e, 1))).norm();
+  s.ks = Eigen::VectorXd::Constant(edges.rows(), ks);
+  s.kd = Eigen::VectorXd::Constant(edges.rows(), kd);
+  return s;
+}
+
+namespace {
+RowMatX2i sorted_unique(std::vector<std::pair<int, int>>& e) {
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  RowMatX2i E(e.size(), 2);
+  for (size_t i = 0; i < e.size(); ++i) E.row(i) << e[i].first, e[i].second;
+  return E;
+}
+}  // namespace
+
+RowMatX2i unique_edges(const RowMatX3i& F) {
+  std::vector<std::pair<int, int>> e;
+  e.reserve(F.rows() * 3);
+  for (long f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      int a = F(f, k), b = F(f, (k + 1) % 3);
+      e.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  return sorted_unique(e);
+}
+
+RowMatX2i unique_edges(const RowMatX4i& T) {
+  std::vector<std::pair<int, int>> e;
+  e.reserve(T.rows() * 6);
+  for (long t = 0; t < T.rows(); ++t)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        int a = T(t, i), b = T(t, j);
+        e.emplace_back(std::min(a, b), std::max(a, b));
+      }
+  return sorted_unique(e);
+}
+
+double total_mass(const MassSpringSystem& sys) {
+  return sys.mass.sum();
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,76 @@
+#pragma once
+// Mass-spring (Voigt) model data and forces, SPEC §3 Eq 5.3, plus damped zero-rest-length home
+// springs (Eq 4.11). Everything is a plain array so any function can be tested on 2 nodes.
+//
+//   X, V      #V by 3 positions (m) and velocities (m/s)
+//   X_rest    #V by 3 rest positions (m); also the anchors of the home springs
+//   mass      #V node masses (kg)
+//   springs   #S springs: E #S by 2 node indices, rest #S lengths (m), ks #S stiffness (N/m),
+//             kd #S damping (N s/m)
+//   home_ks   #V home-spring stiffness (N/m), 0 = none; home_kd #V home damping (N s/m)
+//   fixed     #V 1 = node never moves (boundary condition)
+//   F_ext     #V by 3 external forces (N), e.g. the contact force
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace palplab::engine {
+
+using RowMatX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using RowMatX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using RowMatX4i = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
+using RowMatX2i = Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>;
+
+struct Springs {
+  RowMatX2i E;           // #S by 2 node indices
+  Eigen::VectorXd rest;  // #S rest lengths (m)
+  Eigen::VectorXd ks;    // #S stiffness (N/m)
+  Eigen::VectorXd kd;    // #S damping (N s/m)
+  long size() const { return E.rows(); }
+};
+
+struct MassSpringSystem {
+  RowMatX3d X, V, X_rest, F_ext;
+  Eigen::VectorXd mass, home_ks, home_kd;
+  std::vector<std::uint8_t> fixed;
+  Springs springs;
+  // Incident springs per node (CSR): springs of node i are adj_spring[adj_start[i] ..
+  // adj_start[i+1]). Built by build_adjacency(); needed by sleeping and the solvers.
+  std::vector<int> adj_start, adj_spring;
+  long nodes() const { return X.rows(); }
+};
+
+// Force on node 1 of one Voigt spring (Eq 5.3); the force on node 2 is its negative.
+//   F1 = -[ks(|du| - l) + kd (dv . du)/|du|] du/|du|,  du = x1 - x2, dv = v1 - v2.
+// A zero-length spring (x1 == x2) exerts no force (its direction is undefined).
+Eigen::Vector3d spring_force(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
+                             const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, double ks,
+                             double kd, double rest);
+
+// 3x3 Jacobian blocks of spring_force w.r.t. node 1: Kx = dF1/dx1 of the elastic part and
+// Kv = dF1/dv1 (exact). dF1/dx2 = -Kx, dF1/dv2 = -Kv, dF2 = -dF1. The position derivative of the
+// damping term is left out (Baraff & Witkin 1998; it vanishes when dv = 0 and makes the system
+// matrix unsymmetric). With `definite` the compressive part ks(1 - l/|du|) is clamped at 0 so
+// that -Kx is positive semi-definite and M - hD - h^2 K stays SPD for LDLT/CG.
+void spring_jacobian(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double ks, double kd,
+                     double rest, bool definite, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv);
+
+// Rebuilds sys.adj_start / adj_spring from sys.springs.E.
+void build_adjacency(MassSpringSystem& sys);
+
+// F (#V by 3) = spring forces + home-spring forces + F_ext, at state (X, V). Only rows of
+// `nodes` are written (all nodes if `nodes` is null); springs listed in `springs` (all if null)
+// are summed, so a caller integrating a sub-set passes the springs touching it.
+void compute_forces(const MassSpringSystem& sys, const RowMatX3d& X, const RowMatX3d& V,
+                    RowMatX3d& F, const std::vector<int>* nodes = nullptr,
+                    const std::vector<int>* springs = nullptr);
+
+// Springs of the edges of a triangle mesh F (#F by 3) and of a tet mesh T (#T by 4), each edge
+// once, sorted (i < j, lexicographic), rest lengths from X (m), uniform ks, kd.
+Springs springs_from_edges(const RowMatX3d& X, const RowMatX2i& edges, double ks, double kd);
+RowMatX2i unique_edges(const RowMatX3i& F);
+RowMatX2i unique_edges(const RowMatX4i& T);
+
+double total_mass(const MassSpringSystem& sys);
+
+}  // namespace palplab::engine

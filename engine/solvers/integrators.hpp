@@ -1,0 +1,75 @@
+#pragma once
+// Time integrators for MassSpringSystem (SPEC §3 "do better"):
+//   symplectic_euler  v += h F/m, x += h v — what the original called "implicit"; first order,
+//                     stable only for h < 2/omega_max.
+//   backward_euler    linearised backward Euler (Baraff & Witkin 1998), one sparse solve per step:
+//                     (M - h D - h^2 K) dv = h (f0 + h K v0),  v += dv,  x += h v.
+//                     First order, unconditionally stable for the (PSD-projected) linearisation.
+//   rk4               classical Runge–Kutta on (x, v); fourth order; the accuracy reference.
+// Each step integrates only the nodes of an ActiveSet (all nodes by default); the others are held
+// where they are (Dirichlet). Fixed nodes never move. Workspaces are reused so that a step does
+// not allocate once warmed up (except LDLT, whose sparse factorisation allocates in Eigen).
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <string>
+#include <vector>
+
+#include "engine/models/mass_spring.hpp"
+
+namespace palplab::engine {
+
+enum class Integrator { symplectic_euler, backward_euler, rk4 };
+// How backward Euler solves its linear system.
+enum class LinearSolver {
+  cg,             // matrix-free block-Jacobi preconditioned CG, warm-started from the last dv
+  ldlt_refactor,  // assembled sparse LDLT: pattern analysed once per active set, numeric
+                  // factorisation every step (exact linearised backward Euler)
+  ldlt_frozen,    // factorise once per active set and reuse it while the set is unchanged
+                // (the matrix lags the deformation: cheaper, not exact — see bench_engine_solver)
+};
+
+Integrator integrator_from_string(const std::string& s);  // throws std::invalid_argument
+const char* to_string(Integrator i);
+LinearSolver linear_solver_from_string(const std::string& s);
+const char* to_string(LinearSolver s);
+
+// The nodes to integrate and the springs touching them. `version` changes whenever the set does,
+// so solvers can cache per-set data (sparsity pattern, factorisation).
+struct ActiveSet {
+  std::vector<int> nodes;               // integrated nodes (not fixed), ascending
+  std::vector<int> springs;             // springs with at least one endpoint in `nodes`, ascending
+  std::vector<std::uint8_t> is_active;  // #V
+  long version = 0;
+};
+// Every non-fixed node.
+void activate_all(const MassSpringSystem& sys, ActiveSet& act);
+// Rebuilds act.springs from act.nodes / act.is_active (uses sys adjacency); bumps version.
+void rebuild_active_springs(const MassSpringSystem& sys, ActiveSet& act);
+
+struct SolverStats {
+  int cg_iterations = 0;
+  double residual = 0.0;  // relative residual of the last solve
+};
+
+struct IntegratorWorkspace {
+  LinearSolver solver = LinearSolver::cg;
+  double cg_tolerance = 1e-8;  // relative residual
+  int cg_max_iterations = 500;
+  SolverStats last;
+  // buffers (sized on first use)
+  RowMatX3d F, X1, V1, kx[4], kv[4], R, P, Z, AP, DV;
+  std::vector<Eigen::Matrix3d> S;     // per active spring: h Kv + h^2 Kx (negated sign kept)
+  std::vector<Eigen::Matrix3d> Dinv;  // per node: inverse diagonal block of A
+  std::vector<int> dof_of_node;       // LDLT: node -> row block, -1 inactive
+  Eigen::SparseMatrix<double> A;
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  long analysed_version = -1, factor_version = -1;
+  Eigen::VectorXd b, x;
+};
+
+// Advances sys by h seconds (one step of `method`) on the nodes of `act`.
+void integrate(MassSpringSystem& sys, const ActiveSet& act, double h, Integrator method,
+               IntegratorWorkspace& ws);
+
+}  // namespace palplab::engine
