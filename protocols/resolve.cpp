@@ -1,0 +1,66 @@
+#include "protocols/resolve.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace palplab::protocols {
+
+std::string source_tree_dir() {
+  // The build passes absolute source paths, so __FILE__ is <tree>/protocols/resolve.cpp. This
+  // avoids a compile definition (the top-level CMakeLists belongs to the lead).
+  fs::path f(__FILE__);
+  if (!f.is_absolute()) return {};
+  fs::path tree = f.parent_path().parent_path();
+  return fs::exists(tree / "prototypes") ? tree.string() : std::string();
+}
+
+static std::string exe_dir() {
+  char buf[4096];
+  ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
+  if (n <= 0) return {};
+  buf[n] = 0;
+  return fs::path(buf).parent_path().string();
+}
+
+std::vector<std::string> prototype_search_dirs(const std::string& study_file,
+                                               const std::vector<std::string>& prototype_dirs) {
+  std::vector<std::string> dirs;
+  fs::path sdir = fs::path(study_file).parent_path();
+  if (sdir.empty()) sdir = ".";
+  for (const auto& d : prototype_dirs) {
+    fs::path p(d);
+    dirs.push_back((p.is_absolute() ? p : sdir / p).lexically_normal().string());
+  }
+  dirs.push_back(sdir.lexically_normal().string());
+  dirs.push_back((sdir / "prototypes").lexically_normal().string());
+  if (const char* env = std::getenv("PALPLAB_PROTOTYPE_PATH")) {
+    std::string s(env);
+    std::size_t i = 0;
+    while (i <= s.size()) {
+      std::size_t j = s.find(':', i);
+      if (j == std::string::npos) j = s.size();
+      if (j > i) dirs.push_back(s.substr(i, j - i));
+      i = j + 1;
+    }
+  }
+  if (auto t = source_tree_dir(); !t.empty()) dirs.push_back((fs::path(t) / "prototypes").string());
+  if (auto e = exe_dir(); !e.empty())
+    dirs.push_back((fs::path(e) / ".." / "share" / "palplab" / "prototypes").lexically_normal());
+  return dirs;
+}
+
+std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs) {
+  if (id.empty() || id.find('/') != std::string::npos || id[0] == '.') return {};
+  for (const auto& d : search_dirs) {
+    fs::path p = fs::path(d) / (id + ".json");
+    std::error_code ec;
+    if (fs::is_regular_file(p, ec)) return p.string();
+  }
+  return {};
+}
+
+}  // namespace palplab::protocols

@@ -1,0 +1,124 @@
+#pragma once
+// A study as a researcher writes it (docs/formats/study.md): groups, a timeline of phases, the
+// task and its force thresholds, roles, measures, participant model and analyses. load_study()
+// validates the whole file and the prototype files it names and reports ALL problems at once
+// (palplab::InputError, one Problem per finding, FILE:LINE:COL: $.json.path: what was expected).
+//
+// Units: forces N, durations and offsets s (the JSON may say minutes/hours/days where noted).
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace palplab::protocols {
+
+inline constexpr int kStudyFormatVersion = 1;
+
+struct ForceLimits {
+  double st = 0.0;   // sound threshold (N): the audio cue sounds from here on
+  double mpf = 0.0;  // maximum palpation force (N): the target, not to be exceeded
+  double sft = 0.0;  // stopping force threshold (N): hard upper bound
+};
+
+struct CueSwitches {
+  std::optional<bool> haptic, visual_deformation, audio;  // unset = as the prototype says
+};
+
+struct Task {
+  std::string scene;    // informational; checked against the prototype's "scene" when it has one
+  std::string feature;  // region name of the feature to find (e.g. "ovary_left")
+  // Region name -> limits; "*" applies to every region without its own entry.
+  std::map<std::string, ForceLimits> thresholds;
+  double accuracy_tolerance = 0.25;  // N: a palpation is accurate if |peak - MPF| <= this
+  double identify_dwell = 0.2;       // s of continuous contact on the feature that identifies it
+  double palpation_onset = 0.5;      // N: force above which a contact counts as a palpation
+};
+
+// A gap or start offset: either an elapsed time (s) or a number of calendar days (a session
+// `days` later starts at the same clock time as the session it is counted from).
+struct Interval {
+  double seconds = 0.0;
+  int days = 0;
+  bool calendar = false;  // true: `days` is used; false: `seconds`
+};
+
+struct Phase {
+  std::string id;
+  std::string kind;  // "pre_training" | "training" | "post_training" | "other" (descriptive)
+  int sessions = 1;
+  double session_duration = 0.0;  // s
+  // Start of the phase's first session: on day `start_day` (0 = the participant's first day,
+  // same clock time), or `start_after` after the END of the previous phase's last session.
+  std::optional<int> start_day;
+  Interval start_after;
+  Interval gap;  // between consecutive sessions: calendar days start-to-start, else end-to-start
+  std::optional<std::string> prototype;  // the same prototype for every group in this phase
+  CueSwitches cues;
+  bool instructed = false;  // an instructor guides this phase's sessions (roles.instructor)
+};
+
+struct Group {
+  std::string id;
+  std::string prototype;                        // default prototype id
+  std::map<std::string, std::string> by_phase;  // phase id -> prototype id
+  int size = 0;
+  std::vector<std::string> participants;  // explicit assignment only
+};
+
+struct InstructorRole {
+  std::vector<std::string> ids;
+  // group id -> instructor per instructed session, in session order across instructed phases
+  std::map<std::string, std::vector<std::string>> assignment;
+  nlohmann::json parameters = nlohmann::json::object();  // instructor model parameters
+};
+
+struct Analysis {
+  std::string kind;     // "anova_oneway" | "pairwise_t" | "descriptives"
+  std::string measure;  // a measure name
+  std::string phase;    // phase id whose sessions are analysed
+  bool welch = true;    // pairwise_t: unequal variances (MINITAB default)
+  bool pooled = false;  // pool all sessions of the phase (experiment 1) instead of the last one
+};
+
+struct Study {
+  std::string file;       // path it was loaded from
+  std::string json_text;  // the exact bytes (hashed and stored with results)
+  std::string id, title, description;
+  std::uint64_t seed = 0;
+  Task task;
+  std::vector<Group> groups;
+  std::string assignment = "balanced_random";  // or "explicit"
+  std::vector<Phase> phases;
+  std::optional<InstructorRole> instructor;
+  std::vector<std::string> measures;
+  std::string participant_model = "pmm1";
+  nlohmann::json participant_parameters = nlohmann::json::object();
+  std::vector<Analysis> analyses;
+  std::vector<std::string> prototype_dirs;  // extra search dirs, resolved against the study dir
+  // Prototype id -> resolved file path (every id the study names).
+  std::map<std::string, std::string> prototype_files;
+};
+
+// The measure names palplab computes (units: N, s, 0/1, %).
+const std::vector<std::string>& known_measures();
+std::string measure_unit(const std::string& measure);
+
+// What the validator needs to know about a prototype beyond "the file exists and is JSON":
+// the region names its scene provides. The default asks the engine (prototypes::build_scene);
+// tests may pass their own. Throws palplab::InputError for a bad prototype file.
+struct PrototypeInfo {
+  std::vector<std::string> region_names;
+  std::string scene;  // may be empty
+};
+using PrototypeInspector = std::function<PrototypeInfo(const std::string& prototype_path)>;
+PrototypeInspector engine_prototype_inspector();
+
+// Reads, validates and returns the study; throws palplab::InputError listing every problem.
+Study load_study(const std::string& path, const PrototypeInspector& inspect);
+Study parse_study(const std::string& json_text, const std::string& file,
+                  const PrototypeInspector& inspect);
+
+}  // namespace palplab::protocols

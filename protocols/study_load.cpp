@@ -1,0 +1,715 @@
+// Study loading and validation: every problem is collected (not just the first), each located at
+// FILE:LINE:COL and JSON path, then thrown together as one palplab::InputError.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "common/input_error.hpp"
+#include "common/json_locate.hpp"
+#include "protocols/participants/params.hpp"
+#include "protocols/plan.hpp"
+#include "protocols/resolve.hpp"
+#include "protocols/study.hpp"
+
+namespace palplab::protocols {
+
+using nlohmann::json;
+using palplab::json::path_index;
+using palplab::json::path_key;
+
+const std::vector<std::string>& known_measures() {
+  static const std::vector<std::string> m = {"palpation_force", "exploration_time",
+                                             "feature_identified", "accuracy"};
+  return m;
+}
+
+std::string measure_unit(const std::string& m) {
+  if (m == "palpation_force") return "N";
+  if (m == "exploration_time") return "s";
+  if (m == "feature_identified") return "1";
+  if (m == "accuracy") return "%";
+  return "";
+}
+
+namespace {
+
+const char* type_name(const json& j) {
+  switch (j.type()) {
+    case json::value_t::null:
+      return "null";
+    case json::value_t::boolean:
+      return "a boolean";
+    case json::value_t::number_integer:
+    case json::value_t::number_unsigned:
+      return "an integer";
+    case json::value_t::number_float:
+      return "a number";
+    case json::value_t::string:
+      return "a string";
+    case json::value_t::array:
+      return "an array";
+    case json::value_t::object:
+      return "an object";
+    default:
+      return "an unsupported value";
+  }
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> d(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) d[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t prev = d[0];
+    d[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      std::size_t cur = d[j];
+      d[j] = std::min({d[j] + 1, d[j - 1] + 1, prev + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      prev = cur;
+    }
+  }
+  return d[b.size()];
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+  return s;
+}
+
+struct Ctx {
+  std::string file;
+  const palplab::json::JsonLocator& loc;
+  std::vector<Problem> problems;
+
+  void err(const std::string& path, const std::string& what, bool at_key = false) {
+    problems.push_back({loc.locate(file, path, at_key), what});
+  }
+  void keys(const json& obj, const std::string& path, const std::vector<std::string>& allowed) {
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+      if (std::find(allowed.begin(), allowed.end(), it.key()) != allowed.end()) continue;
+      std::string best;
+      std::size_t bd = 3;
+      for (const auto& a : allowed)
+        if (auto d = edit_distance(it.key(), a); d < bd) bd = d, best = a;
+      std::string msg = "unknown key \"" + it.key() + "\"";
+      msg += best.empty() ? "" : " (did you mean \"" + best + "\"?)";
+      msg += "; expected one of: " + join(allowed);
+      err(path_key(path, it.key()), msg, true);
+    }
+  }
+  bool object(const json& j, const std::string& path) {
+    if (j.is_object()) return true;
+    err(path, std::string("expected an object, got ") + type_name(j));
+    return false;
+  }
+  const json* member(const json& obj, const std::string& path, const char* key, bool required,
+                     const char* expected) {
+    auto it = obj.find(key);
+    if (it == obj.end()) {
+      if (required)
+        err(path, std::string("missing required key \"") + key + "\" (" + expected + ")");
+      return nullptr;
+    }
+    return &*it;
+  }
+  std::optional<std::string> str(const json& obj, const std::string& path, const char* key,
+                                 bool required) {
+    const json* v = member(obj, path, key, required, "a string");
+    if (!v) return std::nullopt;
+    if (!v->is_string() || v->get<std::string>().empty()) {
+      err(path_key(path, key), std::string("expected a non-empty string, got ") + type_name(*v));
+      return std::nullopt;
+    }
+    return v->get<std::string>();
+  }
+  std::optional<double> num(const json& obj, const std::string& path, const char* key,
+                            bool required, const char* expected = "a number") {
+    const json* v = member(obj, path, key, required, expected);
+    if (!v) return std::nullopt;
+    if (!v->is_number() || !std::isfinite(v->get<double>())) {
+      err(path_key(path, key), std::string("expected ") + expected + ", got " + type_name(*v));
+      return std::nullopt;
+    }
+    return v->get<double>();
+  }
+  std::optional<long long> integer(const json& obj, const std::string& path, const char* key,
+                                   bool required, const char* expected = "an integer") {
+    const json* v = member(obj, path, key, required, expected);
+    if (!v) return std::nullopt;
+    if (!v->is_number_integer()) {
+      err(path_key(path, key), std::string("expected ") + expected + ", got " + type_name(*v));
+      return std::nullopt;
+    }
+    return v->get<long long>();
+  }
+  std::optional<bool> boolean(const json& obj, const std::string& path, const char* key) {
+    const json* v = member(obj, path, key, false, "true or false");
+    if (!v) return std::nullopt;
+    if (!v->is_boolean()) {
+      err(path_key(path, key), std::string("expected true or false, got ") + type_name(*v));
+      return std::nullopt;
+    }
+    return v->get<bool>();
+  }
+  std::optional<std::string> one_of(const json& obj, const std::string& path, const char* key,
+                                    bool required, const std::vector<std::string>& options) {
+    auto s = str(obj, path, key, required);
+    if (!s) return s;
+    if (std::find(options.begin(), options.end(), *s) == options.end()) {
+      err(path_key(path, key), "\"" + *s + "\" is not one of: " + join(options));
+      return std::nullopt;
+    }
+    return s;
+  }
+};
+
+// {"seconds": x} | {"minutes": x} | {"hours": x} | {"days": n}: exactly one key, >= 0.
+std::optional<Interval> parse_interval(Ctx& c, const json& j, const std::string& path) {
+  if (!c.object(j, path)) return std::nullopt;
+  c.keys(j, path, {"seconds", "minutes", "hours", "days"});
+  int n = 0;
+  Interval iv;
+  bool ok = true;
+  for (const char* k : {"seconds", "minutes", "hours", "days"}) {
+    if (!j.contains(k)) continue;
+    ++n;
+    if (std::string(k) == "days") {
+      auto d = c.integer(j, path, k, true, "a whole number of days >= 0");
+      if (!d) {
+        ok = false;
+        continue;
+      }
+      if (*d < 0) {
+        c.err(path_key(path, k), "expected a whole number of days >= 0, got " + std::to_string(*d));
+        ok = false;
+      }
+      iv.calendar = true;
+      iv.days = static_cast<int>(*d);
+    } else {
+      auto v = c.num(j, path, k, true, "a number >= 0");
+      if (!v) {
+        ok = false;
+        continue;
+      }
+      if (*v < 0) {
+        c.err(path_key(path, k),
+              std::string("expected a number >= 0 (") + k + "), got " + json(*v).dump());
+        ok = false;
+      }
+      double scale = std::string(k) == "minutes" ? 60.0 : std::string(k) == "hours" ? 3600.0 : 1.0;
+      iv.seconds = *v * scale;
+    }
+  }
+  if (n != 1) {
+    c.err(path, "expected exactly one of \"seconds\", \"minutes\", \"hours\" or \"days\"");
+    return std::nullopt;
+  }
+  if (!ok) return std::nullopt;
+  return iv;
+}
+
+void parse_limits(Ctx& c, const json& j, const std::string& path, ForceLimits& out) {
+  if (!c.object(j, path)) return;
+  c.keys(j, path, {"ST", "MPF", "SFT"});
+  auto st = c.num(j, path, "ST", true, "a force in N > 0");
+  auto mpf = c.num(j, path, "MPF", true, "a force in N > 0");
+  auto sft = c.num(j, path, "SFT", true, "a force in N > 0");
+  for (auto [v, k] : {std::pair{st, "ST"}, {mpf, "MPF"}, {sft, "SFT"}})
+    if (v && *v <= 0)
+      c.err(path_key(path, k), std::string("expected a force in N > 0, got ") + json(*v).dump());
+  if (st && sft && *st >= *sft)
+    c.err(path_key(path, "ST"),
+          "ST (" + json(*st).dump() + " N) must be below SFT (" + json(*sft).dump() + " N)");
+  if (mpf && sft && *mpf > *sft)
+    c.err(path_key(path, "MPF"),
+          "MPF (" + json(*mpf).dump() + " N) must not exceed SFT (" + json(*sft).dump() + " N)");
+  if (st) out.st = *st;
+  if (mpf) out.mpf = *mpf;
+  if (sft) out.sft = *sft;
+}
+
+void parse_params(Ctx& c, const json& j, const std::string& path,
+                  const std::vector<participants::ParamSpec>& specs, json& out) {
+  if (!c.object(j, path)) return;
+  std::vector<std::string> names;
+  for (const auto& s : specs) names.push_back(s.name);
+  c.keys(j, path, names);
+  for (const auto& s : specs) {
+    auto v = c.num(j, path, s.name, false);
+    if (!v) continue;
+    if (*v < s.min || *v > s.max) {
+      c.err(path_key(path, s.name), std::string("expected a value in [") + json(s.min).dump() +
+                                        ", " + json(s.max).dump() + "] " + s.unit + ", got " +
+                                        json(*v).dump());
+      continue;
+    }
+    out[s.name] = *v;
+  }
+}
+
+}  // namespace
+
+Study parse_study(const std::string& text, const std::string& file,
+                  const PrototypeInspector& inspect) {
+  json root = palplab::json::parse_located(text, file);
+  palplab::json::JsonLocator loc(text);
+  Ctx c{file, loc, {}};
+  Study s;
+  s.file = file;
+  s.json_text = text;
+  const std::string R = "$";
+  if (!c.object(root, R)) throw InputError(c.problems);
+  c.keys(root, R,
+         {"palplab_study", "id", "title", "description", "seed", "task", "groups", "assignment",
+          "phases", "roles", "measures", "participant_model", "analyses", "prototype_dirs"});
+
+  if (auto v = c.integer(root, R, "palplab_study", true, "the study format version, 1"))
+    if (*v != kStudyFormatVersion)
+      c.err("$.palplab_study", "unsupported study format version " + std::to_string(*v) +
+                                   " (this palplab reads version 1)");
+  if (auto v = c.str(root, R, "id", true)) s.id = *v;
+  if (auto v = c.str(root, R, "title", true)) s.title = *v;
+  if (auto v = c.str(root, R, "description", false)) s.description = *v;
+  if (const json* v = c.member(root, R, "seed", true, "an integer >= 0")) {
+    if (v->is_number_unsigned() || (v->is_number_integer() && v->get<long long>() >= 0))
+      s.seed = v->get<std::uint64_t>();
+    else
+      c.err("$.seed", std::string("expected an integer >= 0, got ") +
+                          (v->is_number_integer() ? "a negative integer" : type_name(*v)));
+  }
+  if (const json* v = c.member(root, R, "prototype_dirs", false, "an array of directories")) {
+    if (!v->is_array())
+      c.err("$.prototype_dirs", std::string("expected an array of strings, got ") + type_name(*v));
+    else
+      for (std::size_t i = 0; i < v->size(); ++i) {
+        if ((*v)[i].is_string())
+          s.prototype_dirs.push_back((*v)[i].get<std::string>());
+        else
+          c.err(path_index("$.prototype_dirs", i), "expected a directory path (string)");
+      }
+  }
+
+  // ---- phases (before groups: groups may name phases)
+  std::set<std::string> phase_ids;
+  if (const json* ph = c.member(root, R, "phases", true, "an array of phases")) {
+    if (!ph->is_array() || ph->empty()) {
+      c.err("$.phases", std::string("expected a non-empty array of phases, got ") +
+                            (ph->is_array() ? "an empty array" : type_name(*ph)));
+    } else {
+      for (std::size_t i = 0; i < ph->size(); ++i) {
+        std::string P = path_index("$.phases", i);
+        const json& pj = (*ph)[i];
+        Phase p;
+        if (!c.object(pj, P)) continue;
+        c.keys(pj, P,
+               {"id", "kind", "sessions", "session_duration", "start", "gap", "prototype", "cues",
+                "instructed"});
+        if (auto v = c.str(pj, P, "id", true)) {
+          p.id = *v;
+          if (!phase_ids.insert(*v).second)
+            c.err(path_key(P, "id"), "duplicate phase id \"" + *v + "\"");
+        }
+        if (auto v = c.one_of(pj, P, "kind", true,
+                              {"pre_training", "training", "post_training", "other"}))
+          p.kind = *v;
+        if (auto v = c.integer(pj, P, "sessions", false, "an integer >= 1")) {
+          if (*v < 1)
+            c.err(path_key(P, "sessions"),
+                  "expected at least 1 session, got " + std::to_string(*v));
+          else
+            p.sessions = static_cast<int>(*v);
+        }
+        if (auto v = c.num(pj, P, "session_duration", true, "a duration in s > 0")) {
+          if (*v <= 0)
+            c.err(path_key(P, "session_duration"),
+                  "expected a duration in s > 0, got " + json(*v).dump());
+          else
+            p.session_duration = *v;
+        }
+        if (const json* st = c.member(pj, P, "start", false, "")) {
+          std::string SP = path_key(P, "start");
+          if (c.object(*st, SP)) {
+            c.keys(*st, SP, {"day", "after_previous"});
+            if (st->contains("day") == st->contains("after_previous")) {
+              c.err(SP, "expected exactly one of \"day\" or \"after_previous\"");
+            } else if (st->contains("day")) {
+              if (auto d = c.integer(*st, SP, "day", true, "a day number >= 0")) {
+                if (*d < 0)
+                  c.err(path_key(SP, "day"),
+                        "expected a day number >= 0, got " + std::to_string(*d));
+                else
+                  p.start_day = static_cast<int>(*d);
+              }
+            } else {
+              if (i == 0)
+                c.err(path_key(SP, "after_previous"),
+                      "the first phase has no previous phase; use {\"day\": 0}");
+              if (auto iv =
+                      parse_interval(c, (*st)["after_previous"], path_key(SP, "after_previous")))
+                p.start_after = *iv;
+            }
+          }
+        } else if (i == 0) {
+          p.start_day = 0;
+        }
+        if (const json* g = c.member(pj, P, "gap", false, ""))
+          if (auto iv = parse_interval(c, *g, path_key(P, "gap"))) p.gap = *iv;
+        if (p.sessions > 1 && !pj.contains("gap"))
+          c.err(P, "missing required key \"gap\" (the interval between this phase's " +
+                       std::to_string(p.sessions) + " sessions)");
+        if (auto v = c.str(pj, P, "prototype", false)) p.prototype = *v;
+        if (const json* cu = c.member(pj, P, "cues", false, "")) {
+          std::string CP = path_key(P, "cues");
+          if (c.object(*cu, CP)) {
+            c.keys(*cu, CP, {"haptic", "visual_deformation", "audio"});
+            p.cues.haptic = c.boolean(*cu, CP, "haptic");
+            p.cues.visual_deformation = c.boolean(*cu, CP, "visual_deformation");
+            p.cues.audio = c.boolean(*cu, CP, "audio");
+          }
+        }
+        if (auto v = c.boolean(pj, P, "instructed")) p.instructed = *v;
+        s.phases.push_back(p);
+      }
+      std::vector<std::pair<int, std::string>> sched_problems;
+      if (c.problems.empty()) schedule(s.phases, &sched_problems);
+      for (auto& [pi, msg] : sched_problems)
+        c.err(path_key(path_index("$.phases", pi), "start"), msg);
+    }
+  }
+
+  // ---- groups and assignment
+  if (auto v = c.one_of(root, R, "assignment", false, {"balanced_random", "explicit"}))
+    s.assignment = *v;
+  std::set<std::string> group_ids, participant_ids;
+  if (const json* gs = c.member(root, R, "groups", true, "an array of groups")) {
+    if (!gs->is_array() || gs->empty()) {
+      c.err("$.groups", std::string("expected a non-empty array of groups, got ") +
+                            (gs->is_array() ? "an empty array" : type_name(*gs)));
+    } else {
+      for (std::size_t i = 0; i < gs->size(); ++i) {
+        std::string G = path_index("$.groups", i);
+        const json& gj = (*gs)[i];
+        if (!c.object(gj, G)) continue;
+        c.keys(gj, G, {"id", "prototype", "phase_prototypes", "size", "participants"});
+        Group g;
+        if (auto v = c.str(gj, G, "id", true)) {
+          g.id = *v;
+          if (!group_ids.insert(*v).second)
+            c.err(path_key(G, "id"), "duplicate group id \"" + *v + "\"");
+        }
+        if (auto v = c.str(gj, G, "prototype", true)) g.prototype = *v;
+        if (const json* pp = c.member(gj, G, "phase_prototypes", false, "")) {
+          std::string PP = path_key(G, "phase_prototypes");
+          if (c.object(*pp, PP))
+            for (auto it = pp->begin(); it != pp->end(); ++it) {
+              if (!phase_ids.count(it.key()))
+                c.err(path_key(PP, it.key()), "unknown phase id \"" + it.key() + "\"", true);
+              if (it.value().is_string() && !it.value().get<std::string>().empty())
+                g.by_phase[it.key()] = it.value().get<std::string>();
+              else
+                c.err(path_key(PP, it.key()), "expected a prototype id (string)");
+            }
+        }
+        bool explicit_list = s.assignment == "explicit";
+        if (auto v = c.integer(gj, G, "size", !explicit_list, "an integer >= 1")) {
+          if (*v < 1)
+            c.err(path_key(G, "size"),
+                  "empty group: expected at least 1 participant, got " + std::to_string(*v));
+          else
+            g.size = static_cast<int>(*v);
+        }
+        if (const json* pl = c.member(gj, G, "participants", explicit_list,
+                                      "the participant ids of this group")) {
+          std::string PL = path_key(G, "participants");
+          if (!explicit_list) {
+            c.err(PL, "participant lists need \"assignment\": \"explicit\"", true);
+          } else if (!pl->is_array() || pl->empty()) {
+            c.err(PL,
+                  std::string("empty group: expected a non-empty array of participant ids, got ") +
+                      (pl->is_array() ? "an empty array" : type_name(*pl)));
+          } else {
+            for (std::size_t k = 0; k < pl->size(); ++k) {
+              const json& e = (*pl)[k];
+              if (!e.is_string() || e.get<std::string>().empty()) {
+                c.err(path_index(PL, k), "expected a participant id (string)");
+                continue;
+              }
+              if (!participant_ids.insert(e.get<std::string>()).second)
+                c.err(path_index(PL, k),
+                      "participant \"" + e.get<std::string>() + "\" is listed more than once");
+              g.participants.push_back(e.get<std::string>());
+            }
+            if (gj.contains("size") && g.size > 0 && g.size != static_cast<int>(pl->size()))
+              c.err(path_key(G, "size"), "size " + std::to_string(g.size) + " does not match the " +
+                                             std::to_string(pl->size()) + " listed participants");
+            g.size = static_cast<int>(g.participants.size());
+          }
+        }
+        s.groups.push_back(g);
+      }
+    }
+  }
+
+  // ---- task
+  if (const json* t = c.member(root, R, "task", true, "the task: feature and thresholds")) {
+    const std::string T = "$.task";
+    if (c.object(*t, T)) {
+      c.keys(*t, T,
+             {"scene", "feature", "thresholds", "accuracy_tolerance", "identify_dwell",
+              "palpation_onset"});
+      if (auto v = c.str(*t, T, "scene", false)) s.task.scene = *v;
+      if (auto v = c.str(*t, T, "feature", true)) s.task.feature = *v;
+      for (auto [key, field] : {std::pair{"accuracy_tolerance", &s.task.accuracy_tolerance},
+                                {"identify_dwell", &s.task.identify_dwell},
+                                {"palpation_onset", &s.task.palpation_onset}})
+        if (auto v = c.num(*t, T, key, false, "a number > 0")) {
+          if (*v <= 0)
+            c.err(path_key(T, key), "expected a number > 0, got " + json(*v).dump());
+          else
+            *field = *v;
+        }
+      if (const json* th = c.member(*t, T, "thresholds", true, "region name -> {ST, MPF, SFT}")) {
+        std::string TH = path_key(T, "thresholds");
+        if (c.object(*th, TH)) {
+          if (th->empty()) c.err(TH, "expected at least one region (or \"*\") with ST, MPF, SFT");
+          for (auto it = th->begin(); it != th->end(); ++it)
+            parse_limits(c, it.value(), path_key(TH, it.key()), s.task.thresholds[it.key()]);
+        }
+      }
+      if (!s.task.feature.empty() && !s.task.thresholds.count(s.task.feature) &&
+          !s.task.thresholds.count("*") && t->contains("thresholds"))
+        c.err("$.task.thresholds", "no thresholds for the feature \"" + s.task.feature +
+                                       "\" (give it its own entry or a \"*\" entry)");
+    }
+  }
+
+  // ---- roles
+  int instructed_sessions = 0;
+  for (const auto& p : s.phases)
+    if (p.instructed) instructed_sessions += p.sessions;
+  if (const json* ro = c.member(root, R, "roles", false, "")) {
+    const std::string RO = "$.roles";
+    if (c.object(*ro, RO)) {
+      c.keys(*ro, RO, {"trainee", "instructor"});
+      if (const json* tr = c.member(*ro, RO, "trainee", false, "")) {
+        std::string TR = "$.roles.trainee";
+        if (c.object(*tr, TR)) {
+          c.keys(*tr, TR, {"kind"});
+          c.one_of(*tr, TR, "kind", false, {"virtual"});
+        }
+      }
+      if (const json* in = c.member(*ro, RO, "instructor", false, "")) {
+        std::string IN = "$.roles.instructor";
+        if (c.object(*in, IN)) {
+          InstructorRole role;
+          c.keys(*in, IN, {"ids", "assignment", "parameters"});
+          std::set<std::string> ids;
+          if (const json* v = c.member(*in, IN, "ids", true, "the instructor ids")) {
+            if (!v->is_array() || v->empty())
+              c.err(path_key(IN, "ids"), "expected a non-empty array of instructor ids");
+            else
+              for (std::size_t k = 0; k < v->size(); ++k) {
+                if (!(*v)[k].is_string()) {
+                  c.err(path_index(path_key(IN, "ids"), k), "expected an instructor id (string)");
+                  continue;
+                }
+                if (!ids.insert((*v)[k].get<std::string>()).second)
+                  c.err(path_index(path_key(IN, "ids"), k), "duplicate instructor id");
+                role.ids.push_back((*v)[k].get<std::string>());
+              }
+          }
+          if (const json* a = c.member(*in, IN, "assignment", true,
+                                       "group id -> instructor per instructed session")) {
+            std::string A = path_key(IN, "assignment");
+            if (c.object(*a, A)) {
+              for (auto it = a->begin(); it != a->end(); ++it) {
+                std::string AG = path_key(A, it.key());
+                if (!group_ids.count(it.key()))
+                  c.err(AG, "unknown group id \"" + it.key() + "\"", true);
+                if (!it.value().is_array()) {
+                  c.err(AG, "expected an array of instructor ids, one per instructed session");
+                  continue;
+                }
+                if (static_cast<int>(it.value().size()) != instructed_sessions)
+                  c.err(AG, "expected " + std::to_string(instructed_sessions) +
+                                " instructor ids (one per instructed session), got " +
+                                std::to_string(it.value().size()));
+                std::vector<std::string> list;
+                for (std::size_t k = 0; k < it.value().size(); ++k) {
+                  const json& e = it.value()[k];
+                  if (!e.is_string() || !ids.count(e.get<std::string>()))
+                    c.err(path_index(AG, k),
+                          "expected one of the instructor ids: " + join(role.ids));
+                  else
+                    list.push_back(e.get<std::string>());
+                }
+                role.assignment[it.key()] = list;
+              }
+              for (const auto& g : group_ids)
+                if (!a->contains(g)) c.err(A, "missing the instructor list of group \"" + g + "\"");
+            }
+          }
+          if (const json* pj = c.member(*in, IN, "parameters", false, ""))
+            parse_params(c, *pj, path_key(IN, "parameters"), participants::instructor_param_specs(),
+                         role.parameters);
+          s.instructor = role;
+        }
+      }
+    }
+  }
+  if (instructed_sessions > 0 && !s.instructor)
+    c.err("$.roles", "phases are \"instructed\" but no roles.instructor is defined");
+  if (instructed_sessions == 0 && s.instructor)
+    c.err("$.roles.instructor", "an instructor is defined but no phase is \"instructed\"", true);
+
+  // ---- measures
+  if (const json* m = c.member(root, R, "measures", false, "")) {
+    if (!m->is_array() || m->empty()) {
+      c.err("$.measures", "expected a non-empty array of measure names: " + join(known_measures()));
+    } else {
+      for (std::size_t i = 0; i < m->size(); ++i) {
+        const json& e = (*m)[i];
+        auto& km = known_measures();
+        if (!e.is_string() || std::find(km.begin(), km.end(), e.get<std::string>()) == km.end())
+          c.err(path_index("$.measures", i), "expected a measure name, one of: " + join(km));
+        else
+          s.measures.push_back(e.get<std::string>());
+      }
+    }
+  } else {
+    s.measures = known_measures();
+  }
+
+  // ---- participant model
+  if (const json* pm = c.member(root, R, "participant_model", false, "")) {
+    const std::string PM = "$.participant_model";
+    if (c.object(*pm, PM)) {
+      c.keys(*pm, PM, {"model", "parameters"});
+      if (auto v = c.one_of(*pm, PM, "model", false, {"pmm1"})) s.participant_model = *v;
+      if (const json* pj = c.member(*pm, PM, "parameters", false, ""))
+        parse_params(c, *pj, path_key(PM, "parameters"), participants::trainee_param_specs(),
+                     s.participant_parameters);
+    }
+  }
+
+  // ---- analyses
+  if (const json* an = c.member(root, R, "analyses", false, "")) {
+    if (!an->is_array()) {
+      c.err("$.analyses", std::string("expected an array, got ") + type_name(*an));
+    } else {
+      for (std::size_t i = 0; i < an->size(); ++i) {
+        std::string A = path_index("$.analyses", i);
+        const json& aj = (*an)[i];
+        if (!c.object(aj, A)) continue;
+        c.keys(aj, A, {"kind", "measure", "phase", "welch", "pooled"});
+        Analysis a;
+        if (auto v = c.one_of(aj, A, "kind", true, {"anova_oneway", "pairwise_t", "descriptives"}))
+          a.kind = *v;
+        if (auto v = c.one_of(aj, A, "measure", true, known_measures())) {
+          a.measure = *v;
+          if (std::find(s.measures.begin(), s.measures.end(), *v) == s.measures.end())
+            c.err(path_key(A, "measure"), "\"" + *v + "\" is not in $.measures");
+        }
+        if (auto v = c.str(aj, A, "phase", true)) {
+          a.phase = *v;
+          if (!phase_ids.empty() && !phase_ids.count(*v))
+            c.err(path_key(A, "phase"), "unknown phase id \"" + *v + "\"");
+        }
+        if (auto v = c.boolean(aj, A, "welch")) a.welch = *v;
+        if (auto v = c.boolean(aj, A, "pooled")) a.pooled = *v;
+        s.analyses.push_back(a);
+      }
+    }
+  }
+
+  // ---- prototypes: resolve every id, inspect each file once, check region names
+  auto dirs = prototype_search_dirs(file, s.prototype_dirs);
+  std::vector<std::pair<std::string, std::string>> uses;  // id, path where it is named
+  for (std::size_t i = 0; i < s.groups.size(); ++i) {
+    std::string G = path_index("$.groups", i);
+    if (!s.groups[i].prototype.empty())
+      uses.push_back({s.groups[i].prototype, path_key(G, "prototype")});
+    for (auto& [ph, id] : s.groups[i].by_phase)
+      uses.push_back({id, path_key(path_key(G, "phase_prototypes"), ph)});
+  }
+  for (std::size_t i = 0; i < s.phases.size(); ++i)
+    if (s.phases[i].prototype)
+      uses.push_back({*s.phases[i].prototype, path_key(path_index("$.phases", i), "prototype")});
+  std::map<std::string, PrototypeInfo> infos;
+  std::set<std::string> failed;
+  for (auto& [id, path] : uses) {
+    if (infos.count(id) || failed.count(id)) continue;
+    std::string f = resolve_prototype(id, dirs);
+    if (f.empty()) {
+      c.err(path, "unresolved prototype \"" + id + "\": no " + id + ".json in " + join(dirs));
+      failed.insert(id);
+      continue;
+    }
+    try {
+      palplab::json::parse_file_located(f);  // exists and parses, located errors otherwise
+      infos[id] = inspect ? inspect(f) : PrototypeInfo{};
+      s.prototype_files[id] = f;
+    } catch (const InputError& e) {
+      for (const auto& p : e.problems()) c.problems.push_back(p);
+      c.err(path, "prototype \"" + id + "\" (" + f + ") is not valid (see above)");
+      failed.insert(id);
+    }
+  }
+  // Region names must exist in every prototype the study uses (a session may run on any);
+  // one problem per name, listing the prototypes that lack it.
+  if (inspect && !infos.empty()) {
+    auto lacking = [&](const std::string& r) {
+      std::vector<std::string> ids;
+      for (auto& [id, info] : infos)
+        if (std::find(info.region_names.begin(), info.region_names.end(), r) ==
+            info.region_names.end())
+          ids.push_back(id);
+      return ids;
+    };
+    auto regions = [&](const std::vector<std::string>& ids) {
+      return join(infos.at(ids.front()).region_names);
+    };
+    if (!s.task.feature.empty())
+      if (auto ids = lacking(s.task.feature); !ids.empty())
+        c.err("$.task.feature", "region \"" + s.task.feature +
+                                    "\" is not a region of prototype(s) " + join(ids) +
+                                    " (regions: " + regions(ids) + ")");
+    for (auto& [r, lim] : s.task.thresholds)
+      if (r != "*")
+        if (auto ids = lacking(r); !ids.empty())
+          c.err(path_key("$.task.thresholds", r),
+                "region \"" + r + "\" is not a region of prototype(s) " + join(ids) +
+                    " (regions: " + regions(ids) + ")",
+                true);
+    for (auto& [id, info] : infos)
+      if (!s.task.scene.empty() && !info.scene.empty() && info.scene != s.task.scene)
+        c.err("$.task.scene", "prototype \"" + id + "\" simulates scene \"" + info.scene +
+                                  "\", not \"" + s.task.scene + "\"");
+  }
+
+  if (!c.problems.empty()) {
+    // Report in file order.
+    auto key = [&](const Problem& p) {
+      return std::tuple(p.where.file == file ? 0 : 1, p.where.file, p.where.line, p.where.column);
+    };
+    std::stable_sort(c.problems.begin(), c.problems.end(),
+                     [&](const Problem& a, const Problem& b) { return key(a) < key(b); });
+    throw InputError(c.problems);
+  }
+  return s;
+}
+
+Study load_study(const std::string& path, const PrototypeInspector& inspect) {
+  std::string text;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("cannot open study file (expected a readable JSON file)", path);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parse_study(ss.str(), path, inspect);
+}
+
+}  // namespace palplab::protocols

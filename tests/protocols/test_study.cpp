@@ -1,0 +1,219 @@
+// Study validation: every error case reported with its location, all at once.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "common/input_error.hpp"
+#include "protocols/study.hpp"
+#include "study_fixture.hpp"
+
+using namespace palplab;
+using namespace palplab::protocols;
+
+namespace {
+
+const char* kValid = R"({
+  "palplab_study": 1,
+  "id": "t",
+  "title": "test",
+  "seed": 7,
+  "task": {
+    "feature": "ovary_left",
+    "thresholds": {"ovary_left": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}
+  },
+  "groups": [
+    {"id": "A", "prototype": "A", "size": 3},
+    {"id": "B", "prototype": "B", "size": 2}
+  ],
+  "phases": [
+    {"id": "training", "kind": "training", "sessions": 2, "session_duration": 60,
+     "gap": {"minutes": 10}},
+    {"id": "test", "kind": "post_training", "session_duration": 30,
+     "start": {"after_previous": {"minutes": 10}}, "prototype": "A",
+     "cues": {"audio": false, "visual_deformation": false}}
+  ]
+})";
+
+// Loads `text` (written as study.json next to prototype stubs) and returns its problems.
+std::vector<Problem> problems_of(const std::string& name, const std::string& text) {
+  std::string f = fixture::study_in_dir(name, text);
+  try {
+    load_study(f, fixture::tract_inspector());
+  } catch (const InputError& e) {
+    return e.problems();
+  }
+  return {};
+}
+
+// Replaces the first occurrence of `from` in kValid by `to`.
+std::string edit(const std::string& from, const std::string& to) {
+  std::string s = kValid;
+  auto i = s.find(from);
+  EXPECT_NE(i, std::string::npos) << from;
+  return s.replace(i, from.size(), to);
+}
+
+// Exactly one problem, at `path`, on line `line`, containing `what`.
+void expect_one(const std::vector<Problem>& ps, const std::string& path, int line,
+                const std::string& what) {
+  ASSERT_EQ(ps.size(), 1u) << (ps.empty() ? "no problem" : InputError(ps).what());
+  EXPECT_EQ(ps[0].where.json_path, path);
+  EXPECT_EQ(ps[0].where.line, line) << ps[0].format();
+  EXPECT_GT(ps[0].where.column, 0);
+  EXPECT_NE(ps[0].what.find(what), std::string::npos) << ps[0].format();
+  EXPECT_NE(ps[0].where.file.find("study.json"), std::string::npos);
+}
+
+}  // namespace
+
+TEST(Study, ValidStudyLoads) {
+  std::string f = fixture::study_in_dir("valid", kValid);
+  Study s = load_study(f, fixture::tract_inspector());
+  EXPECT_EQ(s.id, "t");
+  EXPECT_EQ(s.seed, 7u);
+  ASSERT_EQ(s.phases.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.phases[0].gap.seconds, 600.0);
+  EXPECT_DOUBLE_EQ(s.phases[1].start_after.seconds, 600.0);
+  EXPECT_EQ(s.phases[1].cues.audio, std::optional<bool>(false));
+  EXPECT_FALSE(s.phases[1].cues.haptic.has_value());
+  EXPECT_EQ(s.measures.size(), 4u);  // default: all measures
+  EXPECT_EQ(s.prototype_files.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.task.thresholds.at("ovary_left").mpf, 2.5);
+}
+
+TEST(Study, UnknownKeyAtItsKey) {
+  auto ps = problems_of("unknown", edit("\"seed\": 7,", "\"seed\": 7, \"sed\": 1,"));
+  expect_one(ps, "$.sed", 5, "unknown key \"sed\"");
+  EXPECT_EQ(ps[0].where.column, 14);  // the key, not the value
+  EXPECT_NE(ps[0].what.find("did you mean \"seed\""), std::string::npos);
+}
+
+TEST(Study, WrongType) {
+  auto ps = problems_of("type", edit("\"size\": 3", "\"size\": \"three\""));
+  expect_one(ps, "$.groups[0].size", 11, "expected an integer >= 1, got a string");
+}
+
+TEST(Study, UnresolvedPrototype) {
+  auto ps = problems_of("unresolved", edit("\"prototype\": \"B\"", "\"prototype\": \"Z\""));
+  expect_one(ps, "$.groups[1].prototype", 12, "unresolved prototype \"Z\"");
+}
+
+TEST(Study, UnknownRegion) {
+  auto ps = problems_of("region", edit("\"feature\": \"ovary_left\"", "\"feature\": \"kidney\""));
+  // The feature is not a region of either prototype, and it has no thresholds.
+  ASSERT_GE(ps.size(), 2u);
+  bool region = false;
+  for (auto& p : ps)
+    if (p.where.json_path == "$.task.feature" && p.where.line == 7 &&
+        p.what.find("\"kidney\" is not a region") != std::string::npos)
+      region = true;
+  EXPECT_TRUE(region) << InputError(ps).what();
+  auto ps2 = problems_of(
+      "region2", edit("{\"ovary_left\": {",
+                      "{\"ovary_left\": {\"ST\": 1, \"MPF\": 2, \"SFT\": 3}, \"liver\": {"));
+  expect_one(ps2, "$.task.thresholds.liver", 8, "\"liver\" is not a region");
+}
+
+TEST(Study, StNotBelowSft) {
+  auto ps = problems_of("st", edit("\"ST\": 2.3", "\"ST\": 3.5"));
+  expect_one(ps, "$.task.thresholds.ovary_left.ST", 8, "ST (3.5 N) must be below SFT (3.5 N)");
+}
+
+TEST(Study, MpfAboveSft) {
+  auto ps = problems_of("mpf", edit("\"MPF\": 2.5", "\"MPF\": 3.6"));
+  expect_one(ps, "$.task.thresholds.ovary_left.MPF", 8, "MPF (3.6 N) must not exceed SFT");
+}
+
+TEST(Study, NonPositiveDurations) {
+  auto ps = problems_of("dur0", edit("\"session_duration\": 60", "\"session_duration\": 0"));
+  expect_one(ps, "$.phases[0].session_duration", 15, "expected a duration in s > 0");
+  auto ps2 = problems_of("durneg", edit("\"session_duration\": 30", "\"session_duration\": -30"));
+  expect_one(ps2, "$.phases[1].session_duration", 17, "expected a duration in s > 0");
+  auto ps3 = problems_of("gapneg", edit("{\"minutes\": 10}", "{\"minutes\": -10}"));
+  expect_one(ps3, "$.phases[0].gap.minutes", 16, "expected a number >= 0");
+}
+
+TEST(Study, EmptyGroups) {
+  auto ps = problems_of("empty", edit("\"size\": 2", "\"size\": 0"));
+  expect_one(ps, "$.groups[1].size", 12, "empty group");
+  auto ps2 =
+      problems_of("empty2", edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": ["));
+  // explicit assignment needs participant lists: both groups lack them
+  EXPECT_EQ(ps2.size(), 2u) << InputError(ps2).what();
+  std::string s = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
+  s = s.replace(s.find("\"size\": 3"), 9, "\"participants\": []");
+  s = s.replace(s.find("\"size\": 2"), 9, "\"participants\": [\"x\"]");
+  auto ps3 = problems_of("empty3", s);
+  expect_one(ps3, "$.groups[0].participants", 11, "empty group");
+  auto ps4 = problems_of("nogroups", edit("\"groups\": [", "\"groups\": [], \"x_groups\": ["));
+  ASSERT_GE(ps4.size(), 1u);
+  EXPECT_EQ(ps4[0].where.json_path, "$.groups");
+}
+
+TEST(Study, OverlappingScheduleIsRejected) {
+  auto ps = problems_of("overlap", edit("{\"after_previous\": {\"minutes\": 10}}", "{\"day\": 0}"));
+  expect_one(ps, "$.phases[1].start", 18, "before the previous session ends");
+}
+
+TEST(Study, SyntaxErrorIsLocated) {
+  auto ps = problems_of("syntax", edit("\"seed\": 7,", "\"seed\": 7,,"));
+  expect_one(ps, "", 5, "invalid JSON");
+}
+
+TEST(Study, AllProblemsAtOnceInFileOrder) {
+  std::string s = edit("\"seed\": 7,", "\"seed\": -7, \"colour\": \"red\",");
+  s = s.replace(s.find("\"ST\": 2.3"), 9, "\"ST\": 9");
+  s = s.replace(s.find("\"size\": 2"), 9, "\"size\": 0");
+  s = s.replace(s.find("\"session_duration\": 30"), 22, "\"session_duration\": -1");
+  s = s.replace(s.rfind("\"prototype\": \"A\","), 17, "\"prototype\": \"Nope\",");
+  auto ps = problems_of("many", s);
+  std::vector<std::string> paths;
+  for (auto& p : ps) paths.push_back(p.where.json_path);
+  std::vector<std::string> expected = {"$.seed",
+                                       "$.colour",
+                                       "$.task.thresholds.ovary_left.ST",
+                                       "$.groups[1].size",
+                                       "$.phases[1].session_duration",
+                                       "$.phases[1].prototype"};
+  EXPECT_EQ(paths, expected) << InputError(ps).what();
+  for (std::size_t i = 1; i < ps.size(); ++i) EXPECT_LE(ps[i - 1].where.line, ps[i].where.line);
+  // the formatted message is FILE:LINE:COL: $.path: what
+  EXPECT_NE(ps[0].format().find("study.json:5:"), std::string::npos) << ps[0].format();
+  EXPECT_NE(ps[0].format().find(": $.seed: expected an integer >= 0"), std::string::npos);
+}
+
+TEST(Study, InstructorTableChecked) {
+  std::string s = fixture::reference_study("exp1_instructor.json");
+  const std::string row = "\"I9\", \"I10\", \"I3\", \"I6\"";
+  s = s.replace(s.find(row), row.size(), "\"I9\", \"I10\", \"I33\"");
+  auto ps = problems_of("instr", s);
+  ASSERT_EQ(ps.size(), 2u) << InputError(ps).what();
+  EXPECT_EQ(ps[0].where.json_path, "$.roles.instructor.assignment.B");
+  EXPECT_NE(ps[0].what.find("expected 4 instructor ids"), std::string::npos);
+  EXPECT_EQ(ps[1].where.json_path, "$.roles.instructor.assignment.B[2]");
+}
+
+TEST(Study, ParticipantParametersChecked) {
+  std::string s = edit("\"phases\": [",
+                       "\"participant_model\": {\"parameters\": {\"weber_fraction\": 2, \"wober\": "
+                       "1}}, \"phases\": [");
+  auto ps = problems_of("params", s);
+  ASSERT_EQ(ps.size(), 2u) << InputError(ps).what();
+  EXPECT_EQ(ps[0].where.json_path, "$.participant_model.parameters.weber_fraction");
+  EXPECT_NE(ps[0].what.find("expected a value in [0.01, 0.5]"), std::string::npos);
+  EXPECT_EQ(ps[1].where.json_path, "$.participant_model.parameters.wober");
+}
+
+TEST(Study, ReferenceStudiesAreValid) {
+  for (const char* f : {"exp1_instructor.json", "exp2_short_term.json", "exp3_long_term.json",
+                        "exp4_visual_extent.json", "example_minimal.json"}) {
+    std::string path = fixture::study_in_dir(std::string("ref_") + f, fixture::reference_study(f));
+    EXPECT_NO_THROW({
+      try {
+        load_study(path, fixture::tract_inspector());
+      } catch (const InputError& e) {
+        ADD_FAILURE() << f << ":\n" << e.what();
+        throw;
+      }
+    }) << f;
+  }
+}
