@@ -11,6 +11,7 @@
 //   fixed     #V 1 = node never moves (boundary condition)
 //   F_ext     #V by 3 external forces (N), e.g. the contact force
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
 

@@ -1,0 +1,401 @@
+#include "engine/models/refinement.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palplab::engine {
+
+namespace {
+
+inline std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+         static_cast<std::uint32_t>(b);
+}
+
+int find_mid(const AdaptiveMassSpring& m, int a, int b) {
+  auto it = m.midpoint.find(edge_key(a, b));
+  return it == m.midpoint.end() ? -1 : it->second;
+}
+
+// Rest positions of all nodes (coarse rest + midpoints of rest).
+Eigen::Vector3d rest_pos(const AdaptiveMassSpring& m, int i) {
+  return m.sys.X_rest.row(i).transpose();
+}
+
+double rest_area(const AdaptiveMassSpring& m, const RefineTri& t) {
+  const Eigen::Vector3d a = rest_pos(m, t.v[0]), b = rest_pos(m, t.v[1]), c = rest_pos(m, t.v[2]);
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+
+// Creates (or finds) the midpoint node of edge (a, b); appends a row to the current system
+// (state = mean of the parents), so rest positions of new nodes are available immediately.
+int get_mid(AdaptiveMassSpring& m, int a, int b, int level) {
+  const std::uint64_t k = edge_key(a, b);
+  auto it = m.midpoint.find(k);
+  if (it != m.midpoint.end()) return it->second;
+  MassSpringSystem& s = m.sys;
+  const int id = static_cast<int>(s.X.rows());
+  auto grow = [&](RowMatX3d& M) {
+    M.conservativeResize(id + 1, 3);
+    M.row(id) = 0.5 * (M.row(a) + M.row(b));
+  };
+  grow(s.X);
+  grow(s.V);
+  grow(s.X_rest);
+  s.F_ext.conservativeResize(id + 1, 3);
+  s.F_ext.row(id).setZero();
+  m.midpoint.emplace(k, id);
+  m.midpoint_parents.push_back({std::min(a, b), std::max(a, b)});
+  m.node_level.push_back(level);
+  return id;
+}
+
+void split(AdaptiveMassSpring& m, int t) {
+  if (m.tris[t].child >= 0) return;
+  const RefineTri T = m.tris[t];
+  const int d = T.depth + 1;
+  const int m01 = get_mid(m, T.v[0], T.v[1], d), m12 = get_mid(m, T.v[1], T.v[2], d),
+            m20 = get_mid(m, T.v[2], T.v[0], d);
+  const int c = static_cast<int>(m.tris.size());
+  m.tris[t].child = c;
+  m.tris.push_back({{T.v[0], m01, m20}, -1, d, T.root});
+  m.tris.push_back({{m01, T.v[1], m12}, -1, d, T.root});
+  m.tris.push_back({{m20, m12, T.v[2]}, -1, d, T.root});
+  m.tris.push_back({{m01, m12, m20}, -1, d, T.root});
+}
+
+void split_area(AdaptiveMassSpring& m, int t, const RefineParams& p) {
+  if (m.tris[t].depth >= p.max_level) return;
+  if (m.tris[t].child < 0) {
+    if (!(rest_area(m, m.tris[t]) > p.threshold_area)) return;
+    split(m, t);
+  }
+  const int c = m.tris[t].child;
+  for (int k = 0; k < 4; ++k) split_area(m, c + k, p);
+}
+
+void split_to(AdaptiveMassSpring& m, int t, int level) {
+  if (m.tris[t].depth >= level) return;
+  split(m, t);
+  const int c = m.tris[t].child;
+  for (int k = 0; k < 4; ++k) split_to(m, c + k, level);
+}
+
+// 1-irregular balance and green closure: split leaves until every leaf has at most two hanging
+// midpoints and no neighbour is more than one level finer along a shared edge.
+void close_mesh(AdaptiveMassSpring& m) {
+  bool changed = true;
+  while (changed) {
+    changed = false;
+    for (size_t t = 0; t < m.tris.size(); ++t) {
+      if (m.tris[t].child >= 0) continue;
+      int hanging = 0;
+      bool too_fine = false;
+      for (int k = 0; k < 3; ++k) {
+        const int a = m.tris[t].v[k], b = m.tris[t].v[(k + 1) % 3];
+        const int mid = find_mid(m, a, b);
+        if (mid < 0) continue;
+        ++hanging;
+        if (find_mid(m, a, mid) >= 0 || find_mid(m, mid, b) >= 0) too_fine = true;
+      }
+      if (hanging == 3 || too_fine) {
+        split(m, static_cast<int>(t));
+        changed = true;
+      }
+    }
+  }
+}
+
+// Emits the conforming surface and rebuilds masses, springs and home springs (Eq 5.10–5.18).
+void rebuild(AdaptiveMassSpring& m) {
+  MassSpringSystem& s = m.sys;
+  const MassSpringSystem& c = m.coarse;
+  const long N = c.nodes();
+  const long n = s.X.rows();
+
+  // --- faces (with the coarse face each comes from and its depth) ---
+  std::vector<std::array<int, 3>> faces;
+  std::vector<int> face_depth, face_root;
+  int max_depth = 0;
+  auto emit = [&](int a, int b, int cc, int depth, int root) {
+    faces.push_back({a, b, cc});
+    face_depth.push_back(depth);
+    face_root.push_back(root);
+  };
+  for (const RefineTri& t : m.tris) {
+    if (t.child >= 0) continue;
+    max_depth = std::max(max_depth, t.depth);
+    int h[3];
+    int count = 0;
+    for (int k = 0; k < 3; ++k) {
+      h[k] = find_mid(m, t.v[k], t.v[(k + 1) % 3]);
+      count += h[k] >= 0;
+    }
+    if (count == 0) {
+      emit(t.v[0], t.v[1], t.v[2], t.depth, t.root);
+    } else if (count == 1) {
+      const int k = h[0] >= 0 ? 0 : (h[1] >= 0 ? 1 : 2);
+      const int a = t.v[k], b = t.v[(k + 1) % 3], cc = t.v[(k + 2) % 3];
+      emit(a, h[k], cc, t.depth, t.root);
+      emit(h[k], b, cc, t.depth, t.root);
+    } else {
+      // Two hanging midpoints on edges i (v_i v_i+1) and i+1; the edge without one is i+2.
+      const int missing = h[0] < 0 ? 0 : (h[1] < 0 ? 1 : 2);
+      const int i = (missing + 1) % 3;
+      const int a = t.v[i], b = t.v[(i + 1) % 3], cc = t.v[(i + 2) % 3];
+      const int mi = h[i], mj = h[(i + 1) % 3];
+      emit(mi, b, mj, t.depth, t.root);
+      emit(a, mi, mj, t.depth, t.root);
+      emit(a, mj, cc, t.depth, t.root);
+    }
+  }
+  m.F.resize(static_cast<long>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) m.F.row(f) << faces[f][0], faces[f][1], faces[f][2];
+  m.level = max_depth;
+
+  // --- per-root Eq 5.16 factor and SLoD ---
+  const long F0n = m.F0.rows();
+  std::vector<double> factor(F0n, 1.0);
+  std::vector<int> slod(F0n, 4);
+  for (long r = 0; r < F0n; ++r) {
+    if (m.tris[r].child < 0) continue;
+    int l = 0, sl = 4;
+    level_and_slod(m, static_cast<int>(r), &l, &sl);
+    slod[r] = sl;
+    factor[r] = sl == 4 ? std::ldexp(1.0, l)
+                        : std::max(std::ldexp(1.0, l), sl / 4.0 * std::ldexp(1.0, l + 1));
+  }
+
+  // --- springs: coarse springs on unsplit edges, plus new surface edges ---
+  struct NewEdge {
+    int a, b, level, root;
+  };
+  std::vector<NewEdge> ne;
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      int a = faces[f][k], b = faces[f][(k + 1) % 3];
+      if (a >= N || b >= N) {
+        if (a > b) std::swap(a, b);
+        ne.push_back({a, b, face_depth[f], face_root[f]});
+      }
+    }
+  std::sort(ne.begin(), ne.end(),
+            [](const NewEdge& x, const NewEdge& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
+  // Merge duplicates (an edge is in two faces): max level, max factor.
+  std::vector<NewEdge> ue;
+  for (const NewEdge& e : ne) {
+    if (!ue.empty() && ue.back().a == e.a && ue.back().b == e.b) {
+      ue.back().level = std::max(ue.back().level, e.level);
+      if (factor[e.root] > factor[ue.back().root]) ue.back().root = e.root;
+    } else {
+      ue.push_back(e);
+    }
+  }
+  long kept = 0;
+  for (long k = 0; k < c.springs.size(); ++k)
+    if (find_mid(m, c.springs.E(k, 0), c.springs.E(k, 1)) < 0) ++kept;
+  const long S = kept + static_cast<long>(ue.size());
+  Springs sp;
+  sp.E.resize(S, 2);
+  sp.rest.resize(S);
+  sp.ks.resize(S);
+  sp.kd.resize(S);
+  std::vector<int> spring_level(S, 0);
+  long w = 0;
+  for (long k = 0; k < c.springs.size(); ++k) {
+    if (find_mid(m, c.springs.E(k, 0), c.springs.E(k, 1)) >= 0) continue;
+    sp.E.row(w) = c.springs.E.row(k);
+    sp.rest[w] = c.springs.rest[k];
+    sp.ks[w] = c.springs.ks[k];
+    sp.kd[w] = c.springs.kd[k];
+    ++w;
+  }
+  const double mass_ratio = static_cast<double>(N) / static_cast<double>(n);  // mean now/coarse
+  for (const NewEdge& e : ue) {
+    sp.E.row(w) << e.a, e.b;
+    sp.rest[w] = (s.X_rest.row(e.a) - s.X_rest.row(e.b)).norm();
+    const double ks = factor[e.root] * m.ks_surface * mass_ratio;  // Eq 5.16
+    sp.ks[w] = ks;
+    sp.kd[w] = slod[e.root] / 4.0 * m.kd_surface * (m.ks_surface > 0 ? ks / m.ks_surface : 1.0);
+    spring_level[w] = e.level;
+    ++w;
+  }
+  s.springs = std::move(sp);
+  m.new_nodes = n - N;
+  m.new_springs = static_cast<long>(ue.size());
+
+  // --- masses (Eq 5.10, 5.11, 5.13/5.14, then the total restored) ---
+  Eigen::VectorXd raw(n);
+  raw.head(N) = c.mass;
+  for (long i = N; i < n; ++i) {
+    const auto& pr = m.midpoint_parents[i - N];
+    raw[i] = 0.5 * (raw[pr[0]] + raw[pr[1]]);
+  }
+  s.mass = raw * mass_ratio;
+  build_adjacency(s);
+  {
+    std::vector<double> level_sum(max_depth + 2, 0.0);
+    std::vector<int> level_count(max_depth + 2, 0);
+    for (long i = 0; i < n; ++i) {
+      level_sum[m.node_level[i]] += s.mass[i];
+      ++level_count[m.node_level[i]];
+    }
+    Eigen::VectorXd mixed = s.mass;
+    std::vector<int> edges_at(max_depth + 2, 0);
+    for (long i = 0; i < n; ++i) {
+      std::fill(edges_at.begin(), edges_at.end(), 0);
+      int levels = 0;
+      for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k)
+        if (edges_at[spring_level[s.adj_spring[k]]]++ == 0) ++levels;
+      if (levels < 2) continue;
+      double num = 0.0, den = 0.0;
+      for (int L = 0; L <= max_depth + 1; ++L) {
+        if (!edges_at[L]) continue;
+        const double ML =
+            L == m.node_level[i] || !level_count[L] ? s.mass[i] : level_sum[L] / level_count[L];
+        num += ML * edges_at[L];
+        den += edges_at[L];
+      }
+      mixed[i] = num / den;
+    }
+    s.mass = mixed * (c.mass.sum() / mixed.sum());
+  }
+  // Home springs follow the mass (per-node, like mass): stiffness per kg is inherited from the
+  // parents, so the total home stiffness stays that of the coarse model.
+  s.home_ks.resize(n);
+  s.home_kd.resize(n);
+  for (long i = 0; i < n; ++i) {
+    if (i < N) {
+      s.home_ks[i] = c.mass[i] > 0 ? c.home_ks[i] / c.mass[i] : 0.0;
+      s.home_kd[i] = c.mass[i] > 0 ? c.home_kd[i] / c.mass[i] : 0.0;
+    } else {
+      const auto& pr = m.midpoint_parents[i - N];
+      s.home_ks[i] = 0.5 * (s.home_ks[pr[0]] + s.home_ks[pr[1]]);
+      s.home_kd[i] = 0.5 * (s.home_kd[pr[0]] + s.home_kd[pr[1]]);
+    }
+  }
+  s.home_ks = s.home_ks.cwiseProduct(s.mass);
+  s.home_kd = s.home_kd.cwiseProduct(s.mass);
+  s.fixed.resize(n, 0);
+  m.h = m.h_coarse / std::ldexp(1.0, m.level);  // Eq 5.18
+}
+
+}  // namespace
+
+void level_and_slod(const AdaptiveMassSpring& m, int root, int* level, int* slod) {
+  // Breadth-first over the tree by depth: l = deepest complete level, SLoD from the fraction of
+  // level-l triangles split further.
+  std::vector<int> cur{root}, next;
+  int l = 0;
+  while (true) {
+    int split_count = 0;
+    for (int t : cur)
+      if (m.tris[t].child >= 0) ++split_count;
+    if (split_count == static_cast<int>(cur.size())) {
+      next.clear();
+      for (int t : cur)
+        for (int k = 0; k < 4; ++k) next.push_back(m.tris[t].child + k);
+      cur.swap(next);
+      ++l;
+      continue;
+    }
+    *level = l;
+    if (split_count == 0) {
+      *slod = 4;
+    } else {
+      const double frac = static_cast<double>(split_count) / cur.size();
+      *slod = std::min(3, static_cast<int>(std::ceil(4.0 * frac)));
+    }
+    return;
+  }
+}
+
+AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0, double ks_surface,
+                                 double kd_surface, double h_coarse) {
+  AdaptiveMassSpring m;
+  const long n = coarse.nodes();
+  if (coarse.V.rows() != n) coarse.V.setZero(n, 3);
+  if (coarse.F_ext.rows() != n) coarse.F_ext.setZero(n, 3);
+  if (coarse.home_ks.size() != n) coarse.home_ks.setZero(n);
+  if (coarse.home_kd.size() != n) coarse.home_kd.setZero(n);
+  if (static_cast<long>(coarse.fixed.size()) != n) coarse.fixed.assign(n, 0);
+  build_adjacency(coarse);
+  m.coarse = std::move(coarse);
+  m.F0 = std::move(F0);
+  m.ks_surface = ks_surface;
+  m.kd_surface = kd_surface;
+  m.h_coarse = h_coarse;
+  m.h = h_coarse;
+  m.sys = m.coarse;
+  m.F = m.F0;
+  m.tris.reserve(m.F0.rows() * 2);
+  for (long f = 0; f < m.F0.rows(); ++f)
+    m.tris.push_back({{m.F0(f, 0), m.F0(f, 1), m.F0(f, 2)}, -1, 0, static_cast<int>(f)});
+  m.node_level.assign(n, 0);
+  return m;
+}
+
+bool refine_around(AdaptiveMassSpring& m, int node, const RefineParams& p) {
+  if (p.policy == RefinePolicy::whole) return refine_whole(m, p.level);
+  const size_t before = m.tris.size();
+  // One-neighbourhood: leaves having the node as a corner or as a hanging midpoint on an edge.
+  std::vector<int> ring;
+  for (size_t t = 0; t < m.tris.size(); ++t) {
+    const RefineTri& T = m.tris[t];
+    if (T.child >= 0) continue;
+    bool touch = false;
+    for (int k = 0; k < 3; ++k)
+      if (T.v[k] == node || find_mid(m, T.v[k], T.v[(k + 1) % 3]) == node) touch = true;
+    if (touch) ring.push_back(static_cast<int>(t));
+  }
+  for (int t : ring) {
+    if (p.policy == RefinePolicy::area_based)
+      split_area(m, t, p);
+    else
+      split_to(m, t, p.level);
+  }
+  if (m.tris.size() == before) return false;
+  close_mesh(m);
+  rebuild(m);
+  return true;
+}
+
+bool refine_whole(AdaptiveMassSpring& m, int level) {
+  const size_t before = m.tris.size();
+  for (long r = 0; r < m.F0.rows(); ++r) split_to(m, static_cast<int>(r), level);
+  if (m.tris.size() == before) return false;
+  close_mesh(m);
+  rebuild(m);
+  return true;
+}
+
+bool simplify(AdaptiveMassSpring& m) {
+  if (m.tris.size() == static_cast<size_t>(m.F0.rows())) return false;
+  const long N = m.coarse.nodes();
+  MassSpringSystem& s = m.sys;
+  // Keep the coarse nodes' current state; everything else comes back from the coarse copy.
+  s.X.conservativeResize(N, 3);
+  s.V.conservativeResize(N, 3);
+  s.X_rest = m.coarse.X_rest;
+  s.F_ext.conservativeResize(N, 3);
+  s.mass = m.coarse.mass;
+  s.home_ks = m.coarse.home_ks;
+  s.home_kd = m.coarse.home_kd;
+  s.fixed = m.coarse.fixed;
+  s.springs = m.coarse.springs;
+  s.adj_start = m.coarse.adj_start;
+  s.adj_spring = m.coarse.adj_spring;
+  m.F = m.F0;
+  m.tris.resize(m.F0.rows());
+  for (auto& t : m.tris) t.child = -1;
+  m.midpoint.clear();
+  m.midpoint_parents.clear();
+  m.node_level.resize(N);
+  m.level = 0;
+  m.h = m.h_coarse;
+  m.new_nodes = m.new_springs = 0;
+  return true;
+}
+
+}  // namespace palplab::engine

