@@ -1,0 +1,520 @@
+#include "results/store.hpp"
+
+#include <sqlite3.h>
+
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+#include "common/input_error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace palplab::results {
+
+namespace {
+
+// RAII prepared statement. Every value goes through bind_*; no SQL is built from data.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const char* sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql, -1, &st_, nullptr) != SQLITE_OK)
+      throw std::runtime_error(std::string("sqlite prepare: ") + sqlite3_errmsg(db) +
+                               " in: " + sql);
+  }
+  ~Stmt() { sqlite3_finalize(st_); }
+  Stmt(const Stmt&) = delete;
+  Stmt& operator=(const Stmt&) = delete;
+
+  Stmt& bind(int i, const std::string& s) {
+    check(sqlite3_bind_text(st_, i, s.data(), static_cast<int>(s.size()), SQLITE_TRANSIENT));
+    return *this;
+  }
+  Stmt& bind(int i, double v) {
+    check(sqlite3_bind_double(st_, i, v));
+    return *this;
+  }
+  Stmt& bind(int i, long long v) {
+    check(sqlite3_bind_int64(st_, i, v));
+    return *this;
+  }
+  Stmt& bind(int i, int v) { return bind(i, static_cast<long long>(v)); }
+  Stmt& bind_null(int i) {
+    check(sqlite3_bind_null(st_, i));
+    return *this;
+  }
+  Stmt& bind_blob(int i, const std::string& b) {
+    check(sqlite3_bind_blob(st_, i, b.data(), static_cast<int>(b.size()), SQLITE_TRANSIENT));
+    return *this;
+  }
+  Stmt& bind_opt_text(int i, const std::string& s) { return s.empty() ? bind_null(i) : bind(i, s); }
+
+  bool step() {
+    int rc = sqlite3_step(st_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw std::runtime_error(std::string("sqlite step: ") + sqlite3_errmsg(db_));
+  }
+  void run() {
+    step();
+    sqlite3_reset(st_);
+    sqlite3_clear_bindings(st_);
+  }
+  std::string text(int c) const {
+    auto p = sqlite3_column_text(st_, c);
+    return p ? std::string(reinterpret_cast<const char*>(p), sqlite3_column_bytes(st_, c)) : "";
+  }
+  std::string blob(int c) const {
+    auto p = sqlite3_column_blob(st_, c);
+    return p ? std::string(static_cast<const char*>(p), sqlite3_column_bytes(st_, c)) : "";
+  }
+  double real(int c) const { return sqlite3_column_double(st_, c); }
+  long long integer(int c) const { return sqlite3_column_int64(st_, c); }
+  bool null(int c) const { return sqlite3_column_type(st_, c) == SQLITE_NULL; }
+
+ private:
+  void check(int rc) {
+    if (rc != SQLITE_OK)
+      throw std::runtime_error(std::string("sqlite bind: ") + sqlite3_errmsg(db_));
+  }
+  sqlite3* db_;
+  sqlite3_stmt* st_ = nullptr;
+};
+
+void exec(sqlite3* db, const std::string& sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string m = err ? err : "?";
+    sqlite3_free(err);
+    throw std::runtime_error("sqlite: " + m);
+  }
+}
+
+std::uint64_t parse_u64(const std::string& s) {
+  return s.empty() ? 0 : std::stoull(s);
+}
+
+sqlite3* open_db(const std::string& path, int flags) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, flags, nullptr) != SQLITE_OK) {
+    std::string m = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    throw InputError("cannot open database: " + m, path);
+  }
+  sqlite3_busy_timeout(db, 10000);
+  return db;
+}
+
+void put_varint(std::string& out, std::uint64_t v) {
+  while (v >= 0x80) {
+    out += static_cast<char>((v & 0x7F) | 0x80);
+    v >>= 7;
+  }
+  out += static_cast<char>(v);
+}
+
+}  // namespace
+
+std::string utc_now() {
+  std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// ---- sample encoding 'qdv1': per sample 7 integers (x, y, z in um; Fx, Fy, Fz in 0.1 mN;
+// node + 1), each stored as the zigzag varint of its difference to the previous sample's
+// (the first sample of a blob is relative to 0).
+std::string encode_samples(const SampleSeries& s, std::size_t begin, std::size_t end) {
+  std::string out;
+  out.reserve((end - begin) * 9);
+  long long prev[7] = {0, 0, 0, 0, 0, 0, 0};
+  for (std::size_t i = begin; i < end; ++i) {
+    long long q[7];
+    for (int k = 0; k < 3; ++k) q[k] = std::llround(s.x[3 * i + k] * 1e6);
+    for (int k = 0; k < 3; ++k) q[3 + k] = std::llround(s.F[3 * i + k] * 1e4);
+    q[6] = s.node[i] + 1;
+    for (int k = 0; k < 7; ++k) {
+      long long d = q[k] - prev[k];
+      put_varint(out, (static_cast<std::uint64_t>(d) << 1) ^ static_cast<std::uint64_t>(d >> 63));
+      prev[k] = q[k];
+    }
+  }
+  return out;
+}
+
+void decode_samples(const std::string& blob, std::size_t n, double t0, double dt,
+                    SampleSeries& out) {
+  (void)t0;
+  (void)dt;
+  long long prev[7] = {0, 0, 0, 0, 0, 0, 0};
+  std::size_t p = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 7; ++k) {
+      std::uint64_t v = 0;
+      int shift = 0;
+      while (true) {
+        if (p >= blob.size()) throw std::runtime_error("corrupt sample blob (truncated)");
+        auto b = static_cast<unsigned char>(blob[p++]);
+        v |= static_cast<std::uint64_t>(b & 0x7F) << shift;
+        if (!(b & 0x80)) break;
+        shift += 7;
+      }
+      long long d = static_cast<long long>(v >> 1) ^ -static_cast<long long>(v & 1);
+      prev[k] += d;
+    }
+    for (int k = 0; k < 3; ++k) out.x.push_back(prev[k] * 1e-6);
+    for (int k = 0; k < 3; ++k) out.F.push_back(prev[3 + k] * 1e-4);
+    out.node.push_back(static_cast<int>(prev[6] - 1));
+  }
+}
+
+Store::Store(sqlite3* db, std::string path)
+    : db_(db), path_(std::move(path)), mu_(std::make_unique<std::mutex>()) {}
+Store::Store(Store&& o) noexcept
+    : db_(std::exchange(o.db_, nullptr)), path_(std::move(o.path_)), mu_(std::move(o.mu_)) {}
+Store& Store::operator=(Store&& o) noexcept {
+  if (this != &o) {
+    if (db_) sqlite3_close(db_);
+    db_ = std::exchange(o.db_, nullptr);
+    path_ = std::move(o.path_);
+    mu_ = std::move(o.mu_);
+  }
+  return *this;
+}
+Store::~Store() {
+  if (db_) sqlite3_close(db_);
+}
+
+Store Store::create(const std::string& path) {
+  if (fs::exists(path)) throw InputError("database already exists", path);
+  sqlite3* db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX);
+  Store s(db, path);
+  exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+  exec(db, "BEGIN;" + schema_sql() + "COMMIT;");
+  Stmt(db, "INSERT INTO meta(key, value) VALUES ('schema_version', ?1)")
+      .bind(1, std::to_string(kSchemaVersion))
+      .run();
+  Stmt(db, "INSERT INTO meta(key, value) VALUES ('created_at', ?1)").bind(1, utc_now()).run();
+  return s;
+}
+
+Store Store::open(const std::string& path) {
+  if (!fs::exists(path)) throw InputError("no such database", path);
+  sqlite3* db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
+  Store s(db, path);
+  long long version = -1;
+  try {
+    Stmt q(db, "PRAGMA user_version");
+    if (q.step()) version = q.integer(0);
+    Stmt m(db, "SELECT value FROM meta WHERE key = 'schema_version'");
+    if (!m.step()) version = -1;
+  } catch (const std::runtime_error&) {
+    throw InputError("not a palplab results database (expected schema version " +
+                         std::to_string(kSchemaVersion) + ")",
+                     path);
+  }
+  if (version != kSchemaVersion)
+    throw InputError("results schema version " + std::to_string(version) +
+                         " is not supported (expected " + std::to_string(kSchemaVersion) + ")",
+                     path);
+  exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+  return s;
+}
+
+void Store::write_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
+                        const std::vector<ParticipantRecord>& participants) {
+  std::lock_guard lock(*mu_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    Stmt(db_,
+         "INSERT INTO study(id, study_id, title, json, sha256, palplab_version, git_commit, seed, "
+         "started_at, finished_at) VALUES (1, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)")
+        .bind(1, s.study_id)
+        .bind(2, s.title)
+        .bind(3, s.json)
+        .bind(4, s.sha256)
+        .bind(5, s.palplab_version)
+        .bind(6, s.git_commit)
+        .bind(7, std::to_string(s.seed))
+        .bind(8, s.started_at)
+        .bind_opt_text(9, s.finished_at)
+        .run();
+    Stmt pr(db_, "INSERT INTO prototypes(prototype, path, sha256, json) VALUES (?1, ?2, ?3, ?4)");
+    for (const auto& p : prototypes)
+      pr.bind(1, p.prototype).bind(2, p.path).bind(3, p.sha256).bind(4, p.json).run();
+    Stmt pa(db_,
+            "INSERT INTO participants(participant, grp, number, seed) VALUES (?1, ?2, ?3, ?4)");
+    for (const auto& p : participants)
+      pa.bind(1, p.participant)
+          .bind(2, p.group)
+          .bind(3, p.number)
+          .bind(4, std::to_string(p.seed))
+          .run();
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+void Store::write_session(SessionData& d) {
+  std::lock_guard lock(*mu_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    const SessionRecord& r = d.session;
+    Stmt s(db_,
+           "INSERT INTO sessions(participant, ordinal, phase, phase_index, prototype, instructor, "
+           "study_offset, day, duration, steps, wall_duration, loop_median, loop_p99, seed, "
+           "state_after, completed_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, "
+           "?13, ?14, ?15, ?16)");
+    s.bind(1, r.participant).bind(2, r.ordinal).bind(3, r.phase).bind(4, r.phase_index);
+    s.bind(5, r.prototype).bind_opt_text(6, r.instructor).bind(7, r.study_offset).bind(8, r.day);
+    s.bind(9, r.duration).bind(10, r.steps).bind(11, r.wall_duration).bind(12, r.loop_median);
+    s.bind(13, r.loop_p99).bind(14, std::to_string(r.seed)).bind(15, r.state_after);
+    s.bind(16, r.completed_at.empty() ? utc_now() : r.completed_at).run();
+    long long id = sqlite3_last_insert_rowid(db_);
+    d.session.session = id;
+    Stmt m(db_, "INSERT INTO measures(session, name, value, unit) VALUES (?1, ?2, ?3, ?4)");
+    for (const auto& x : d.measures) {
+      m.bind(1, id).bind(2, x.name).bind(4, x.unit);
+      if (x.value && std::isfinite(*x.value))
+        m.bind(3, *x.value);
+      else
+        m.bind_null(3);
+      m.run();
+    }
+    Stmt e(db_, "INSERT INTO events(session, t, kind, value, region) VALUES (?1, ?2, ?3, ?4, ?5)");
+    for (const auto& x : d.events)
+      e.bind(1, id).bind(2, x.t).bind(3, x.kind).bind(4, x.value).bind_opt_text(5, x.region).run();
+    const SampleSeries& ss = d.samples;
+    if (ss.size() > 0) {
+      Stmt b(db_,
+             "INSERT INTO samples(session, second, t0, dt, n, encoding, data) VALUES (?1, ?2, ?3, "
+             "?4, ?5, 'qdv1', ?6)");
+      const std::size_t per =
+          std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(1.0 / ss.dt)));
+      for (std::size_t i = 0, sec = 0; i < ss.size(); i += per, ++sec) {
+        std::size_t end = std::min(ss.size(), i + per);
+        b.bind(1, id)
+            .bind(2, static_cast<long long>(sec))
+            .bind(3, ss.t0 + i * ss.dt)
+            .bind(4, ss.dt);
+        b.bind(5, static_cast<long long>(end - i)).bind_blob(6, encode_samples(ss, i, end)).run();
+      }
+    }
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+void Store::set_finished(const std::string& finished_at) {
+  std::lock_guard lock(*mu_);
+  Stmt(db_, "UPDATE study SET finished_at = ?1 WHERE id = 1").bind(1, finished_at).run();
+}
+
+StudyRecord Store::read_study() const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_,
+         "SELECT study_id, title, json, sha256, palplab_version, git_commit, seed, started_at, "
+         "finished_at FROM study WHERE id = 1");
+  if (!q.step()) throw InputError("the database has no study record (an aborted start?)", path_);
+  StudyRecord s;
+  s.study_id = q.text(0);
+  s.title = q.text(1);
+  s.json = q.text(2);
+  s.sha256 = q.text(3);
+  s.palplab_version = q.text(4);
+  s.git_commit = q.text(5);
+  s.seed = parse_u64(q.text(6));
+  s.started_at = q.text(7);
+  s.finished_at = q.null(8) ? "" : q.text(8);
+  return s;
+}
+
+std::vector<PrototypeRecord> Store::read_prototypes() const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_, "SELECT prototype, path, sha256, json FROM prototypes ORDER BY prototype");
+  std::vector<PrototypeRecord> out;
+  while (q.step()) out.push_back({q.text(0), q.text(1), q.text(2), q.text(3)});
+  return out;
+}
+
+std::vector<ParticipantRecord> Store::read_participants() const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_, "SELECT participant, grp, number, seed FROM participants ORDER BY number");
+  std::vector<ParticipantRecord> out;
+  while (q.step())
+    out.push_back({q.text(0), q.text(1), static_cast<int>(q.integer(2)), parse_u64(q.text(3))});
+  return out;
+}
+
+std::vector<SessionRecord> Store::read_sessions() const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_,
+         "SELECT s.session, s.participant, s.ordinal, s.phase, s.phase_index, s.prototype, "
+         "s.instructor, s.study_offset, s.day, s.duration, s.steps, s.wall_duration, "
+         "s.loop_median, s.loop_p99, s.seed, s.state_after, s.completed_at FROM sessions s JOIN "
+         "participants p ON p.participant = s.participant ORDER BY p.number, s.ordinal");
+  std::vector<SessionRecord> out;
+  while (q.step()) {
+    SessionRecord r;
+    r.session = q.integer(0);
+    r.participant = q.text(1);
+    r.ordinal = static_cast<int>(q.integer(2));
+    r.phase = q.text(3);
+    r.phase_index = static_cast<int>(q.integer(4));
+    r.prototype = q.text(5);
+    r.instructor = q.null(6) ? "" : q.text(6);
+    r.study_offset = q.real(7);
+    r.day = static_cast<int>(q.integer(8));
+    r.duration = q.real(9);
+    r.steps = q.integer(10);
+    r.wall_duration = q.real(11);
+    r.loop_median = q.real(12);
+    r.loop_p99 = q.real(13);
+    r.seed = parse_u64(q.text(14));
+    r.state_after = q.text(15);
+    r.completed_at = q.text(16);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<MeasureRow> Store::read_measures() const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_,
+         "SELECT s.participant, p.grp, s.phase, s.ordinal, s.phase_index, s.session, m.name, "
+         "m.value, m.unit FROM measures m JOIN sessions s ON s.session = m.session JOIN "
+         "participants p ON p.participant = s.participant ORDER BY p.number, s.ordinal, m.name");
+  std::vector<MeasureRow> out;
+  while (q.step()) {
+    MeasureRow r;
+    r.participant = q.text(0);
+    r.group = q.text(1);
+    r.phase = q.text(2);
+    r.ordinal = static_cast<int>(q.integer(3));
+    r.phase_index = static_cast<int>(q.integer(4));
+    r.session = q.integer(5);
+    r.name = q.text(6);
+    if (!q.null(7)) r.value = q.real(7);
+    r.unit = q.text(8);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<EventRecord> Store::read_events(long long session) const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_, "SELECT t, kind, value, region FROM events WHERE session = ?1 ORDER BY rowid");
+  q.bind(1, session);
+  std::vector<EventRecord> out;
+  while (q.step()) out.push_back({q.real(0), q.text(1), q.real(2), q.null(3) ? "" : q.text(3)});
+  return out;
+}
+
+SampleSeries Store::read_samples(long long session) const {
+  std::lock_guard lock(*mu_);
+  Stmt q(db_, "SELECT t0, dt, n, encoding, data FROM samples WHERE session = ?1 ORDER BY second");
+  q.bind(1, session);
+  SampleSeries out;
+  bool first = true;
+  while (q.step()) {
+    if (q.text(3) != "qdv1")
+      throw InputError("unknown sample encoding \"" + q.text(3) + "\"", path_);
+    if (first) {
+      out.t0 = q.real(0);
+      out.dt = q.real(1);
+      first = false;
+    }
+    decode_samples(q.blob(4), static_cast<std::size_t>(q.integer(2)), q.real(0), q.real(1), out);
+  }
+  return out;
+}
+
+namespace {
+std::string csv(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"') o += '"';
+    o += c;
+  }
+  return o + "\"";
+}
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+std::ofstream open_out(const fs::path& p) {
+  std::ofstream o(p, std::ios::binary);
+  if (!o) throw InputError("cannot write (expected a writable directory)", p.string());
+  return o;
+}
+}  // namespace
+
+void export_csv(const Store& store, const std::string& dir, bool samples) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw InputError("cannot create the export directory: " + ec.message(), dir);
+  std::map<std::string, std::string> group_of;
+  for (const auto& p : store.read_participants()) group_of[p.participant] = p.group;
+  {
+    auto o = open_out(fs::path(dir) / "measures.csv");
+    o << "participant,group,phase,session,measure,value,unit\n";
+    for (const auto& r : store.read_measures())
+      o << csv(r.participant) << ',' << csv(r.group) << ',' << csv(r.phase) << ','
+        << (r.phase_index + 1) << ',' << csv(r.name) << ',' << (r.value ? num(*r.value) : "") << ','
+        << csv(r.unit) << '\n';
+  }
+  auto sessions = store.read_sessions();
+  {
+    auto o = open_out(fs::path(dir) / "sessions.csv");
+    o << "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
+         "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at\n";
+    for (const auto& s : sessions)
+      o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
+        << (s.phase_index + 1) << ',' << (s.ordinal + 1) << ',' << csv(s.prototype) << ','
+        << csv(s.instructor) << ',' << num(s.study_offset) << ',' << s.day << ',' << num(s.duration)
+        << ',' << s.steps << ',' << num(s.wall_duration) << ',' << num(s.loop_median) << ','
+        << num(s.loop_p99) << ',' << s.seed << ',' << csv(s.completed_at) << '\n';
+  }
+  {
+    auto o = open_out(fs::path(dir) / "events.csv");
+    o << "participant,group,phase,session,t,kind,value,region\n";
+    for (const auto& s : sessions)
+      for (const auto& e : store.read_events(s.session))
+        o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
+          << (s.phase_index + 1) << ',' << num(e.t) << ',' << csv(e.kind) << ',' << num(e.value)
+          << ',' << csv(e.region) << '\n';
+  }
+  if (samples) {
+    auto o = open_out(fs::path(dir) / "samples.csv");
+    o << "participant,group,phase,session,t,x,y,z,fx,fy,fz,contact_node\n";
+    for (const auto& s : sessions) {
+      SampleSeries ss = store.read_samples(s.session);
+      std::string prefix = csv(s.participant) + ',' + csv(group_of[s.participant]) + ',' +
+                           csv(s.phase) + ',' + std::to_string(s.phase_index + 1) + ',';
+      for (std::size_t i = 0; i < ss.size(); ++i) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%d\n", ss.t0 + i * ss.dt,
+                      ss.x[3 * i], ss.x[3 * i + 1], ss.x[3 * i + 2], ss.F[3 * i], ss.F[3 * i + 1],
+                      ss.F[3 * i + 2], ss.node[i]);
+        o << prefix << buf;
+      }
+    }
+  }
+}
+
+}  // namespace palplab::results

@@ -1,0 +1,140 @@
+#pragma once
+// The SQLite results store (schema: results/schema.sql, docs/formats/results.md). WAL mode,
+// prepared statements for all data, one transaction per session: a session is in the database
+// completely or not at all, so an interrupted run (kill -9 included) loses at most the sessions
+// in progress. Thread-safe: writers from several threads are serialised by a mutex.
+//
+// results knows nothing of meshes or studies beyond these records.
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace palplab::results {
+
+inline constexpr int kSchemaVersion = 1;
+
+std::string schema_sql();  // the text of results/schema.sql
+
+struct StudyRecord {
+  std::string study_id, title, json, sha256, palplab_version, git_commit;
+  std::uint64_t seed = 0;
+  std::string started_at, finished_at;  // UTC ISO 8601; finished_at empty while incomplete
+};
+
+struct PrototypeRecord {
+  std::string prototype, path, sha256, json;
+};
+
+struct ParticipantRecord {
+  std::string participant, group;
+  int number = 0;
+  std::uint64_t seed = 0;
+};
+
+struct SessionRecord {
+  long long session = 0;  // assigned by the store
+  std::string participant;
+  int ordinal = 0;
+  std::string phase;
+  int phase_index = 0;
+  std::string prototype, instructor;  // instructor "" = none
+  double study_offset = 0.0;          // s
+  int day = 0;
+  double duration = 0.0;  // s simulated
+  long long steps = 0;
+  double wall_duration = 0.0;                // s
+  double loop_median = 0.0, loop_p99 = 0.0;  // s per haptic step
+  std::uint64_t seed = 0;
+  std::string state_after;  // JSON
+  std::string completed_at;
+};
+
+struct MeasureRecord {
+  std::string name;
+  std::optional<double> value;  // nullopt = undefined
+  std::string unit;
+};
+
+struct EventRecord {
+  double t = 0.0;
+  std::string kind;
+  double value = 0.0;
+  std::string region;  // "" = none
+};
+
+// Samples at a fixed rate: x, F are #n by 3 (m, N) stored row-major in flat vectors.
+struct SampleSeries {
+  double t0 = 0.0, dt = 0.001;
+  std::vector<double> x, F;  // 3n each
+  std::vector<int> node;     // n, -1 = no contact
+  std::size_t size() const { return node.size(); }
+};
+
+struct SessionData {
+  SessionRecord session;
+  std::vector<MeasureRecord> measures;
+  std::vector<EventRecord> events;
+  SampleSeries samples;  // empty = not stored
+};
+
+// One row of the measures table joined with its session and participant.
+struct MeasureRow {
+  std::string participant, group, phase;
+  int ordinal = 0, phase_index = 0;
+  long long session = 0;
+  std::string name;
+  std::optional<double> value;
+  std::string unit;
+};
+
+// Compact sample encoding 'qdv1' (docs/formats/results.md). Positions are quantised to 1 um and
+// forces to 0.1 mN, so decode(encode(s)) equals s to within half a quantum.
+std::string encode_samples(const SampleSeries& s, std::size_t begin, std::size_t end);
+void decode_samples(const std::string& blob, std::size_t n, double t0, double dt,
+                    SampleSeries& out);
+
+class Store {
+ public:
+  // Creates a new database (the file must not exist) with the schema.
+  static Store create(const std::string& path);
+  // Opens an existing database; InputError if it is not a palplab store of this schema version.
+  static Store open(const std::string& path);
+  Store(Store&&) noexcept;
+  Store& operator=(Store&&) noexcept;
+  ~Store();
+
+  void write_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
+                   const std::vector<ParticipantRecord>& participants);
+  void write_session(SessionData& d);  // one transaction; sets d.session.session
+  void set_finished(const std::string& finished_at);
+
+  StudyRecord read_study() const;
+  std::vector<ParticipantRecord> read_participants() const;
+  std::vector<SessionRecord> read_sessions() const;  // ordered by participant number, ordinal
+  std::vector<MeasureRow> read_measures() const;     // same order, then measure name
+  std::vector<EventRecord> read_events(long long session) const;
+  SampleSeries read_samples(long long session) const;
+  std::vector<PrototypeRecord> read_prototypes() const;
+
+  const std::string& path() const { return path_; }
+
+ private:
+  Store(sqlite3* db, std::string path);
+  sqlite3* db_ = nullptr;
+  std::string path_;
+  std::unique_ptr<std::mutex> mu_;
+};
+
+// Tidy CSV export: measures.csv (participant,group,phase,session,measure,value,unit),
+// sessions.csv, events.csv and, when `samples`, samples.csv. Creates `dir` if needed.
+void export_csv(const Store& store, const std::string& dir, bool samples);
+
+// Current UTC time as ISO 8601 ("2026-11-21T13:30:00Z").
+std::string utc_now();
+
+}  // namespace palplab::results
