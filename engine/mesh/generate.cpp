@@ -31,8 +31,8 @@ double jitter(std::uint64_t seed, const char* label) {
 struct TractShape {
   double z_cervix_end = 0.09, z_body_start = 0.12, z_region_split = 0.10, zj = 0.20;
   double r_cervix = 0.019, r_body = 0.025;
-  double xs = 0.0125, tilt = 4 * kPi / 180, straight = 0.115;
-  double Rx = 0.022, Rz = 0.034, shrink = 0.3, alpha_end = 1.42 * kPi;
+  double xs = 0.0125, tilt = 8 * kPi / 180, straight = 0.13;
+  double Rx = 0.0145, Rz = 0.0182, shrink = 0.05, alpha_end = 1.1 * kPi;
   double r_horn_start = 0.0115, r_horn = 0.0095, r_ovary = 0.0135;
   double u_ovary = 0.82;
 };
@@ -141,13 +141,19 @@ double meridian_length(double L, R radius) {
 }
 
 // Band of triangles between two rings of equal size, both counter-clockwise seen from ahead.
-void band(std::vector<std::array<int, 4>>& F, const std::vector<int>& a, const std::vector<int>& b,
-          int region) {
+// Each quad is split along its shorter diagonal (rings may be twisted against each other).
+void band(std::vector<std::array<int, 4>>& F, const std::vector<Vec3>& P, const std::vector<int>& a,
+          const std::vector<int>& b, int region) {
   const int n = static_cast<int>(a.size());
   for (int p = 0; p < n; ++p) {
     const int q = (p + 1) % n;
-    F.push_back({a[p], a[q], b[q], region});
-    F.push_back({a[p], b[q], b[p], region});
+    if ((P[a[p]] - P[b[q]]).squaredNorm() <= (P[a[q]] - P[b[p]]).squaredNorm()) {
+      F.push_back({a[p], a[q], b[q], region});
+      F.push_back({a[p], b[q], b[p], region});
+    } else {
+      F.push_back({a[p], a[q], b[p], region});
+      F.push_back({a[q], b[q], b[p], region});
+    }
   }
 }
 
@@ -169,7 +175,8 @@ SurfaceMesh pack(const std::vector<Vec3>& P, const std::vector<std::array<int, 4
 enum TractRegion { kOvaryL = 0, kOvaryR, kHornL, kHornR, kBody, kCervix };
 
 // Ring counts of the tract: 2n points per ring, trunk rings every `step` of meridian length,
-// horn rings every step/2 (horns are about half as wide, so their triangles stay near-equilateral).
+// horn rings every 0.35 step: a horn is 0.38 times as wide as the body, so its triangles stay
+// near-equilateral (and TetGen then fills the tract without Steiner points: Model-C).
 struct TractCounts {
   int n, nt, nh;
   long vertices() const { return 1 + 2L * n * nt + (n - 1) + 2 * ((nh - 1) * 2L * n + 1); }
@@ -178,7 +185,7 @@ struct TractCounts {
 TractCounts tract_counts(const TractShape& sh, int n, double step, double trunk_len,
                          double horn_len) {
   return {n, std::max(2, static_cast<int>(std::lround(trunk_len / step))),
-          std::max(3, static_cast<int>(std::lround(horn_len / (0.5 * step))))};
+          std::max(3, static_cast<int>(std::lround(horn_len / (0.35 * step))))};
 }
 
 SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
@@ -197,15 +204,18 @@ SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
   for (int i = 1; i <= nt; ++i) {
     const double z = zt[i], r = tr(z);
     ring_z[i] = z;
+    // Consecutive rings are twisted by half a step (the top ring, which the horns share, is
+    // not): the points are then not co-spherical and TetGen needs no Steiner points inside.
+    const double twist = (nt - i) % 2 ? 0.5 : 0.0;
     for (int p = 0; p < R; ++p) {
-      const double th = kPi * p / n;
+      const double th = kPi * (p + twist) / n;
       trunk[i].push_back(static_cast<int>(P.size()));
       P.push_back(Vec3(r * std::cos(th), r * std::sin(th), z));
     }
   }
   for (int p = 0; p < R; ++p) F.push_back({0, trunk[1][(p + 1) % R], trunk[1][p], kCervix});
   for (int i = 1; i < nt; ++i)
-    band(F, trunk[i], trunk[i + 1],
+    band(F, P, trunk[i], trunk[i + 1],
          0.5 * (ring_z[i] + ring_z[i + 1]) < sh.z_region_split ? kCervix : kBody);
 
   // --- junction: seam points across the top ring, shared by both horns ---
@@ -238,8 +248,9 @@ SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
     const Vec3 cj = c.pos(s), T = c.tangent(s);
     const Vec3 B(0, 1, 0), N = B.cross(T).normalized();
     const double w = smoothstep(0, 0.05, s);
+    const double twist = j % 2 ? 0.5 : 0.0;
     for (int p = 0; p < R; ++p) {
-      const double phi = kPi / 2 + kPi * p / n;
+      const double phi = kPi / 2 + kPi * (p + twist) / n;
       const Vec3 circle = cj + r * (std::cos(phi) * N + std::sin(phi) * B);
       const Vec3 d = P[d_left[p]] + (cj - c0);
       left[j].push_back((1 - w) * d + w * circle);
@@ -258,7 +269,7 @@ SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
         ring[p] = static_cast<int>(P.size());
         P.push_back(side == 0 ? left[j][p] : mirror(left[j][((n - p) % R + R) % R]));
       }
-      band(F, prev, ring, 0.5 * (sj[j - 1] + sj[j]) / L >= sh.u_ovary ? ovary : horn);
+      band(F, P, prev, ring, 0.5 * (sj[j - 1] + sj[j]) / L >= sh.u_ovary ? ovary : horn);
       prev = std::move(ring);
     }
     const int pole = static_cast<int>(P.size());
@@ -347,7 +358,7 @@ SurfaceMesh generate_stomach(std::uint64_t seed) {
       P.push_back(c + r * (std::cos(phi) * N + std::sin(phi) * B));
     }
   }
-  for (int i = 0; i + 1 < R; ++i) band(F, rings[i], rings[i + 1], 0);
+  for (int i = 0; i + 1 < R; ++i) band(F, P, rings[i], rings[i + 1], 0);
   return pack(P, F, {});
 }
 

@@ -1,0 +1,47 @@
+#pragma once
+// Tetrahedralization of a closed surface through TetGen 1.5 (libtet, in process) — SPEC §4.
+#include <string>
+#include <vector>
+
+#include "engine/mesh/surface_mesh.hpp"
+#include "engine/mesh/tet_mesh.hpp"
+
+namespace palplab::mesh {
+
+// One line of a SPEC §4 `.regions` file: `index x y z region_id attribute`.
+// (x, y, z) is a point inside the region; region_id becomes the attribute (tissue type, SPEC §4
+// table) of every tet of the region; `attribute` is TetGen's region attribute, the maximum tet
+// volume in that region (m^3; <= 0 = no constraint), as in TetGen's .poly region list.
+struct RegionSeed {
+  int index = 0;
+  Vec3 point = Vec3::Zero();
+  int region_id = 0;
+  double max_volume = 0;
+};
+
+// Reads a `.regions` file: first line the count, then one seed per line ('#' starts a comment).
+// Throws InputError with file and line on malformed input.
+std::vector<RegionSeed> read_region_seeds(const std::string& path);
+void write_region_seeds(const std::string& path, const std::vector<RegionSeed>& seeds);
+
+struct TetOptions {
+  // Radius-edge ratio bound (TetGen -q); 0 = no quality refinement (no Steiner points added for
+  // quality). TetGen accepts values >= about 1.0; 1.414 is its default when -q is given alone.
+  double quality = 0;
+  double max_volume = 0;          // global maximum tet volume (m^3, TetGen -a); 0 = none
+  bool keep_surface = true;       // TetGen -Y: no Steiner points on the input surface
+  std::vector<RegionSeed> seeds;  // TetGen -A regions; without seeds every tet gets
+  int default_attribute = 0;      //   this attribute (SPEC §4: 0-99 = undefined tissue)
+};
+
+// Tetrahedralizes the closed surface `s`. The input vertices keep their indices (Steiner points
+// are appended). The surface's named face regions carry over to the tets: a tet takes the region
+// held by most of its surface vertices (ties -> smaller id), or, when it touches no surface
+// vertex, the region of the surface vertex nearest to its centroid.
+// Throws InputError when TetGen rejects the surface (self-intersections, open surface, ...).
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt = {});
+
+// The TetGen switches used for opt (for reports): e.g. "pzQY q1.414 a1e-06 A".
+std::string tetgen_switches(const TetOptions& opt);
+
+}  // namespace palplab::mesh
