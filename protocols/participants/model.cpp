@@ -1,0 +1,342 @@
+#include "protocols/participants/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/seed.hpp"
+
+namespace palplab::protocols::participants {
+
+Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights) {
+  double inv_sum = 0.0, acc = 0.0;
+  for (const auto& e : in) inv_sum += 1.0 / e.variance;
+  for (const auto& e : in) acc += e.value / e.variance;
+  if (weights) {
+    weights->clear();
+    for (const auto& e : in) weights->push_back((1.0 / e.variance) / inv_sum);
+  }
+  return {acc / inv_sum, 1.0 / inv_sum};
+}
+
+double retention(double dt, const std::map<std::string, double>& p) {
+  if (dt <= 0) return 1.0;
+  const double tau = p.at("forgetting_tau"), d = p.at("forgetting_exponent");
+  const double tc = p.at("consolidation_time"), f = p.at("consolidated_factor");
+  if (dt <= tc) return std::pow(1.0 + dt / tau, -d);
+  // Up to consolidation the full exponent, after it a reduced one (continuous at tc).
+  return std::pow(1.0 + tc / tau, -d) * std::pow((1.0 + dt / tau) / (1.0 + tc / tau), -d * f);
+}
+
+nlohmann::json TraineeState::to_json() const {
+  return {{"initialised", initialised},
+          {"target_mean", target_mean},
+          {"target_var", target_var},
+          {"prior_mean", prior_mean},
+          {"prior_var", prior_var},
+          {"place", {place.x(), place.y(), place.z()}},
+          {"place_sd", place_sd},
+          {"k_hat", k_hat},
+          {"k_count", k_count},
+          {"feedback_count", feedback_count},
+          {"last_session_end", last_session_end}};
+}
+
+TraineeState TraineeState::from_json(const nlohmann::json& j) {
+  TraineeState s;
+  s.initialised = j.at("initialised").get<bool>();
+  s.target_mean = j.at("target_mean").get<double>();
+  s.target_var = j.at("target_var").get<double>();
+  s.prior_mean = j.at("prior_mean").get<double>();
+  s.prior_var = j.at("prior_var").get<double>();
+  s.place = {j.at("place")[0].get<double>(), j.at("place")[1].get<double>(),
+             j.at("place")[2].get<double>()};
+  s.place_sd = j.at("place_sd").get<double>();
+  s.k_hat = j.at("k_hat").get<double>();
+  s.k_count = j.at("k_count").get<int>();
+  s.feedback_count = j.at("feedback_count").get<int>();
+  s.last_session_end = j.at("last_session_end").get<double>();
+  return s;
+}
+
+Trainee::Trainee(std::map<std::string, double> params, TraineeState state)
+    : p_(std::move(params)), s_(state) {}
+
+void Trainee::begin_session(const SurfaceView& view, double briefed_target, double study_time,
+                            double duration, std::uint64_t participant_seed, std::uint64_t seed,
+                            Channels channels) {
+  (void)duration;
+  view_ = view;
+  ch_ = channels;
+  briefed_ = briefed_target;
+  rng_ = Rng(derive_seed(seed, "trainee"));
+  if (!s_.initialised) {
+    // The briefing: the target is told in newtons, but how much force that is to this person
+    // is uncertain; the anatomy lesson leaves a rough idea of where the feature lies.
+    Rng brief(derive_seed(participant_seed, "briefing"));
+    const double cv = p_.at("prior_target_cv");
+    s_.prior_mean = briefed_target * std::max(0.05, 1.0 + cv * brief.normal());
+    s_.prior_var = std::pow(cv * briefed_target, 2);
+    s_.target_mean = s_.prior_mean;
+    s_.target_var = s_.prior_var;
+    const double sd = p_.at("spatial_prior_sd");
+    s_.place = view.feature_centroid +
+               Eigen::Vector3d(brief.normal(), brief.normal(), brief.normal()) * sd;
+    s_.place_sd = sd;
+    s_.initialised = true;
+  } else {
+    // Forgetting over the retention interval: the learned part decays back towards what the
+    // briefing left, by a power law of the interval (Wixted & Ebbesen 1991).
+    const double r = retention(study_time - s_.last_session_end, p_);
+    s_.target_mean = s_.prior_mean + r * (s_.target_mean - s_.prior_mean);
+    s_.target_var = r * r * s_.target_var + (1.0 - r * r) * s_.prior_var;
+    s_.place_sd = std::sqrt(s_.place_sd * s_.place_sd +
+                            (1.0 - r * r) * std::pow(p_.at("spatial_forgetting_sd"), 2));
+  }
+  pos_ = view.start_position;
+  identified_ = false;
+  search_k_ = 0;
+  probed_.clear();
+  presses_ = 0;
+  marker_in_session_ = false;
+  dwell_start_ = -1.0;
+  release_at_ = -1.0;
+  t_prev_ = 0.0;
+  last_ = Percept{};
+  choose_search_target();
+}
+
+void Trainee::choose_search_target() {
+  // Probe where memory says the feature is: a draw from the spatial belief, widened slowly
+  // after misses (up to 2.5x), never the same surface node twice in a session.
+  const double sd = s_.place_sd * std::min(1.0 + 0.25 * search_k_, 2.5) + 1e-4;
+  const auto& V = *view_.V;
+  int best = 0;
+  for (int attempt = 0; attempt < 20; ++attempt) {
+    Eigen::Vector3d q =
+        s_.place + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) * sd;
+    double bd = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < V.rows(); ++i) {
+      double d = (V.row(i).transpose() - q).squaredNorm();
+      if (d < bd) bd = d, best = i;
+    }
+    if (std::find(probed_.begin(), probed_.end(), best) == probed_.end()) break;
+  }
+  probed_.push_back(best);
+  target_node_ = best;
+  ++search_k_;
+  Eigen::Vector3d n = view_.N->row(best).transpose();
+  press_dir_ = -n.normalized();
+  start_travel(V.row(best).transpose() + n.normalized() * p_.at("lift_height"), Mode::descend);
+}
+
+void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
+  goal_ = to;
+  after_travel_ = next;
+  mode_ = Mode::travel;
+}
+
+double Trainee::perceived_force(const Percept& p) const {
+  const double F = ch_.haptic ? p.force.norm() : 0.0;
+  const double w = p_.at("weber_fraction");
+  std::vector<Estimate> est;
+  if (ch_.haptic) est.push_back({F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)});
+  if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
+    const double fv = s_.k_hat * p.visible_deformation * (1.0 + eps_v_);
+    const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
+    est.push_back({fv, cv2 * std::max(fv * fv, 0.0025)});
+  }
+  if (est.empty()) return 0.0;
+  return mle_combine(est).value;
+}
+
+double Trainee::perceived_variance(const Percept& p, double f) const {
+  const double w = p_.at("weber_fraction");
+  std::vector<Estimate> est;
+  if (ch_.haptic) est.push_back({f, std::pow(w * std::max(f, 0.05), 2)});
+  if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
+    const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
+    est.push_back({f, cv2 * std::max(f * f, 0.0025)});
+  }
+  if (est.empty()) return 1e6;
+  return mle_combine(est).variance;
+}
+
+void Trainee::learn_target(double observed, double variance) {
+  // Kalman update of the target belief from a cue that marks "target reached".
+  const double obs_var = variance + std::pow(p_.at("memory_noise_cv") * observed, 2);
+  const double k = s_.target_var / (s_.target_var + obs_var);
+  s_.target_mean += k * (observed - s_.target_mean);
+  s_.target_var *= (1.0 - k);
+  ++s_.feedback_count;
+}
+
+Eigen::Vector3d Trainee::command(double t) {
+  const double dt = std::max(0.0, t - t_prev_);
+  t_prev_ = t;
+  auto move_towards = [&](const Eigen::Vector3d& g, double speed) {
+    Eigen::Vector3d d = g - pos_;
+    double len = d.norm(), step = speed * dt;
+    if (len <= step) {
+      pos_ = g;
+      return true;
+    }
+    pos_ += d * (step / len);
+    return false;
+  };
+  switch (mode_) {
+    case Mode::travel:
+      // A person lifts the hand when the organ is in the way: move with the felt force.
+      if (last_.contact && last_.force.norm() > 1e-9)
+        pos_ += last_.force.normalized() * p_.at("explore_speed") * dt;
+      if (move_towards(goal_, p_.at("explore_speed"))) {
+        mode_ = after_travel_;
+        mode_start_ = t;
+      }
+      break;
+    case Mode::descend:
+      pos_ += press_dir_ * 0.5 * p_.at("explore_speed") * dt;
+      if (t - mode_start_ > 3.0 * p_.at("lift_height") / (0.5 * p_.at("explore_speed")))
+        choose_search_target();  // nothing to touch here
+      break;
+    case Mode::dwell:
+      // Keep a light touch while recognising what is under the finger.
+      if (last_.force.norm() < 0.3) pos_ += press_dir_ * p_.at("press_speed") * dt;
+      if (t - mode_start_ >= p_.at("recognition_time")) {
+        if (last_.contact && last_.contact_region == view_.feature_region) {
+          identified_ = true;
+          // Store where it was found (noisy spatial memory).
+          s_.place = pos_ + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) *
+                                p_.at("spatial_memory_sd");
+          s_.place_sd = p_.at("spatial_memory_sd");
+          mode_ = Mode::press;
+          mode_start_ = t;
+          start_press();
+        } else {
+          // Not the feature: probe elsewhere (travel lifts off the surface on the way).
+          choose_search_target();
+        }
+      }
+      break;
+    case Mode::press:
+      pos_ += press_dir_ * p_.at("press_speed") * dt;
+      // Give up a press that never reaches the intended force (e.g. nothing felt).
+      if ((release_at_ >= 0 && t >= release_at_) || t - mode_start_ > 10.0) begin_release(t);
+      break;
+    case Mode::hold:
+      if (t - mode_start_ >= p_.at("hold_time") || (release_at_ >= 0 && t >= release_at_))
+        begin_release(t);
+      break;
+    case Mode::release:
+      pos_ -= press_dir_ * p_.at("release_speed") * dt;
+      if (!last_.contact && (pos_ - press_origin_).dot(-press_dir_) >= 0.002) {
+        mode_ = Mode::rest;
+        mode_start_ = t;
+      }
+      break;
+    case Mode::rest:
+      if (t - mode_start_ >= p_.at("rest_time")) start_press();
+      break;
+  }
+  return pos_;
+}
+
+void Trainee::start_press() {
+  mode_ = Mode::press;
+  mode_start_ = t_prev_;
+  press_origin_ = pos_;
+  // Signal-dependent motor noise (Harris & Wolpert 1998): the produced force scatters with an SD
+  // proportional to the intended force; per-press perceptual errors (Weber).
+  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.at("motor_noise_cv") * rng_.normal()));
+  eps_h_ = p_.at("weber_fraction") * rng_.normal();
+  eps_v_ = p_.at("visual_weber") * rng_.normal();
+  release_at_ = -1.0;
+  expect_marker_ = (ch_.audio || ch_.call) && (presses_ == 0 || marker_in_session_);
+  audio_seen_ = false;
+  call_heard_ = false;
+  peak_felt_ = 0.0;
+  peak_seen_d_ = 0.0;
+  ++presses_;
+}
+
+void Trainee::begin_release(double t) {
+  // Learn the felt-force / seen-deformation ratio from the press peak (visual calibration).
+  if (ch_.visual && ch_.haptic && peak_seen_d_ > 0 && peak_felt_ > 0) {
+    const double k = peak_felt_ / peak_seen_d_;
+    s_.k_hat += (k - s_.k_hat) / (s_.k_count + 1);
+    ++s_.k_count;
+  }
+  mode_ = Mode::release;
+  mode_start_ = t;
+  release_at_ = -1.0;
+}
+
+void Trainee::perceive(const Percept& p, bool call) {
+  if (mode_ == Mode::descend && p.contact) {
+    mode_ = Mode::dwell;
+    mode_start_ = p.t;
+    press_origin_ = pos_;
+  }
+  if (mode_ == Mode::press || mode_ == Mode::hold) {
+    const double f = perceived_force(p);
+    if (ch_.haptic) peak_felt_ = std::max(peak_felt_, p.force.norm() * (1.0 + eps_h_));
+    if (ch_.visual) peak_seen_d_ = std::max(peak_seen_d_, p.visible_deformation * (1.0 + eps_v_));
+    const double rt_audio = p_.at("reaction_time_audio");
+    // The sound means "target reached": learn the force felt at its onset, release after a
+    // reaction time.
+    if (ch_.audio && p.audio && !audio_seen_) {
+      audio_seen_ = true;
+      learn_target(f, perceived_variance(p, f));
+      if (release_at_ < 0) release_at_ = p.t + rt_audio;
+    }
+    if (call && !call_heard_) {
+      call_heard_ = true;
+      learn_target(f, perceived_variance(p, f));
+      if (release_at_ < 0 || p.t + rt_audio < release_at_) release_at_ = p.t + rt_audio;
+    }
+    if (audio_seen_ || call_heard_) marker_in_session_ = true;
+    // Without an expected marker the press stops at the intended force; waiting for a marker it
+    // goes on, but not beyond 1.3 times the intended force.
+    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * (expect_marker_ ? 1.3 : 1.0)) {
+      mode_ = Mode::hold;
+      mode_start_ = p.t;
+    }
+  }
+  last_ = p;
+}
+
+void Trainee::end_session(double study_time) {
+  s_.last_session_end = study_time;
+}
+
+Instructor::Instructor(std::map<std::string, double> params, std::uint64_t seed)
+    : p_(std::move(params)), rng_(derive_seed(seed, "instructor")) {
+  eps_ = p_.at("visual_weber") * rng_.normal();
+}
+
+bool Instructor::observe(const Percept& p, Channels ch) {
+  if (called_) return false;
+  if (ch.audio && p.audio && !prev_audio_) {
+    double at = p.t + p_.at("reaction_time_audio");
+    if (call_at_ < 0 || at < call_at_) call_at_ = at;
+  }
+  prev_audio_ = p.audio;
+  if (ch.visual && target_d_ > 0 && p.visible_deformation >= target_d_ * (1.0 + eps_)) {
+    double at = p.t + p_.at("reaction_time_visual");
+    if (call_at_ < 0 || at < call_at_) call_at_ = at;
+  }
+  if (call_at_ >= 0 && p.t >= call_at_) {
+    called_ = true;
+    return true;
+  }
+  return false;
+}
+
+void Instructor::reset_press() {
+  called_ = false;
+  call_at_ = -1.0;
+  prev_audio_ = false;
+  eps_ = p_.at("visual_weber") * rng_.normal();
+}
+
+}  // namespace palplab::protocols::participants

@@ -1,0 +1,165 @@
+#pragma once
+// The virtual trainee and instructor (SPEC §5, docs/PARTICIPANTS.md): a perception–memory–motor
+// model whose ONLY inputs are what the simulator renders in each haptic step (force on the hand,
+// contact and the touched region, visible deformation, audio cue) plus the instructor's spoken
+// call. Nothing here knows a prototype's id or name; group differences can arise only from what
+// the simulator renders.
+//
+// Perception: a judgement of force uses a per-press multiplicative error (Weber law, SD =
+// weber_fraction * F) on the haptic channel and, when the touched region visibly deforms, a
+// visual estimate  F_v = k_hat * d_perceived  (k_hat: the trainee's learned ratio of felt force
+// to seen deformation). Both are combined by maximum likelihood (weights ∝ 1/variance).
+// Memory: a Gaussian belief about the target force (mean, variance), updated like a Kalman
+// filter whenever a cue marks "target reached" (sound onset, instructor's call), forgotten by a
+// power law over the retention interval; a belief about the feature's position, likewise.
+// Motor: each press aims at the believed target times (1 + motor noise), SD ∝ force.
+//
+// Units: N, m, s. Positions in the organ's frame.
+#include <Eigen/Core>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "protocols/rng.hpp"
+
+namespace palplab::protocols::participants {
+
+// What one haptic step renders, as a participant perceives it (a copy of engine::Rendered's
+// perceivable fields; the runner fills it).
+struct Percept {
+  double t = 0.0;                                   // s, end of the step
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N, on the hand
+  bool contact = false;
+  int contact_region = -1;
+  double visible_deformation = 0.0;  // m, 0 when nothing is drawn
+  bool audio = false;
+};
+
+// The rest surface the trainee explores (what a person sees of the organ before touching it).
+struct SurfaceView {
+  const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>* V = nullptr;  // #V by 3 (m)
+  const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>* N = nullptr;  // #V by 3 normals
+  const std::vector<int>* vertex_region = nullptr;                               // #V
+  int feature_region = -1;  // region index of the feature to find
+  Eigen::Vector3d feature_centroid = Eigen::Vector3d::Zero();  // anatomy known from the briefing
+  Eigen::Vector3d start_position = Eigen::Vector3d::Zero();
+};
+
+// Which rendered channels a role may use in a session (experiment 1: the trainee feels only the
+// force, the instructor sees and hears the cues).
+struct Channels {
+  bool haptic = true, visual = true, audio = true;
+  bool call = false;  // an instructor may call "release" (the trainee listens for it)
+};
+
+// ---- perception (free functions, unit-tested)
+struct Estimate {
+  double value = 0.0;     // N
+  double variance = 0.0;  // N^2
+};
+// Maximum-likelihood combination of independent Gaussian estimates; `weights` (optional) gets
+// the weight of each input (∝ 1/variance, summing to 1).
+Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights = nullptr);
+
+// Power-law retention: share of what was learned that is kept after `dt` seconds.
+double retention(double dt, const std::map<std::string, double>& p);
+
+// ---- the trainee
+struct TraineeState {
+  bool initialised = false;
+  double target_mean = 0.0, target_var = 0.0;  // belief about the target force (N, N^2)
+  double prior_mean = 0.0, prior_var = 0.0;    // what the briefing left (forgetting decays to it)
+  Eigen::Vector3d place = Eigen::Vector3d::Zero();  // believed feature position (m)
+  double place_sd = 0.0;                            // m
+  double k_hat = 0.0;  // N/m learned felt-force / seen-deformation ratio (0 = none yet)
+  int k_count = 0;
+  int feedback_count = 0;         // target markers experienced so far
+  double last_session_end = 0.0;  // s of study time
+  nlohmann::json to_json() const;
+  static TraineeState from_json(const nlohmann::json& j);
+};
+
+class Trainee {
+ public:
+  // `briefed_target`: the MPF of the feature, told in the briefing (N).
+  Trainee(std::map<std::string, double> params, TraineeState state);
+
+  // Session start: applies forgetting over the interval since the last session, then plans the
+  // search. `study_time`: s of study time at the session start; `seed`: the session's seed.
+  void begin_session(const SurfaceView& view, double briefed_target, double study_time,
+                     double duration, std::uint64_t participant_seed, std::uint64_t seed,
+                     Channels channels);
+  // The device position for the next step, given what the previous step rendered.
+  Eigen::Vector3d command(double t);
+  // Perceives one step's output; `call`: an instructor said "release" in this step.
+  void perceive(const Percept& p, bool call);
+  // Session end (study time at the end).
+  void end_session(double study_time);
+
+  const TraineeState& state() const { return s_; }
+  // For tests and logs: the intended force of the current/last press (N) and presses made.
+  double intended_force() const { return intended_; }
+  int presses() const { return presses_; }
+  bool identified() const { return identified_; }
+
+ private:
+  enum class Mode { travel, descend, dwell, press, hold, release, rest };
+  void choose_search_target();
+  void start_travel(const Eigen::Vector3d& to, Mode next);
+  double perceived_force(const Percept& p) const;
+  double perceived_variance(const Percept& p, double f) const;
+  void learn_target(double observed, double variance);
+  void start_press();
+  void begin_release(double t);
+
+  std::map<std::string, double> p_;
+  TraineeState s_;
+  Rng rng_{0};
+  SurfaceView view_;
+  Channels ch_;
+  double briefed_ = 0.0;
+  Mode mode_ = Mode::travel;
+  Eigen::Vector3d pos_ = Eigen::Vector3d::Zero(), goal_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d press_dir_ = Eigen::Vector3d::Zero();  // unit, into the surface
+  Mode after_travel_ = Mode::descend;
+  int target_node_ = -1;
+  int search_k_ = 0;
+  std::vector<int> probed_;  // surface nodes probed this session
+  bool identified_ = false;
+  double dwell_start_ = -1.0, mode_start_ = 0.0, release_at_ = -1.0;
+  double intended_ = 0.0, eps_h_ = 0.0, eps_v_ = 0.0;
+  bool audio_seen_ = false, call_heard_ = false;
+  // A trainee who knows a cue marks the target presses until it comes (up to a limit); the
+  // first press of a session tries, and the expectation stays while the cue keeps coming.
+  bool expect_marker_ = false, marker_in_session_ = false;
+  int presses_ = 0;
+  Percept last_;
+  double peak_seen_d_ = 0.0, peak_felt_ = 0.0;
+  double t_prev_ = 0.0;
+  Eigen::Vector3d press_origin_ = Eigen::Vector3d::Zero();
+};
+
+// ---- the instructor (experiment 1): watches the rendered cues and calls "release".
+class Instructor {
+ public:
+  Instructor(std::map<std::string, double> params, std::uint64_t seed);
+  // Calibration: the deformation the instructor expects at the target, from an own press on the
+  // same simulator (the runner performs it on a scene and resets the scene afterwards). 0 = the
+  // simulator shows no deformation, so only the sound can be used.
+  void set_target_deformation(double d) { target_d_ = d; }
+  // True in the step in which the call reaches the trainee's ears (after the instructor's
+  // reaction time). `ch`: what the instructor may perceive.
+  bool observe(const Percept& p, Channels ch);
+  void reset_press();  // the trainee released: wait for the next press
+
+ private:
+  std::map<std::string, double> p_;
+  Rng rng_;
+  double target_d_ = 0.0, eps_ = 0.0;
+  double call_at_ = -1.0;
+  bool called_ = false, prev_audio_ = false;
+};
+
+}  // namespace palplab::protocols::participants

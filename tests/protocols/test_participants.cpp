@@ -1,0 +1,230 @@
+// The virtual participant model on a flat test tissue: a 0.2 m square surface at z = 0 with
+// linear stiffness, a disc-shaped "feature" region, optional visible deformation and a sound at
+// ST. This stand-in renders exactly what a Scene renders (force, contact, region, deformation,
+// audio) with known physics, so the model's learning can be checked against known truths.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/seed.hpp"
+#include "protocols/participants/model.hpp"
+#include "protocols/participants/params.hpp"
+
+using namespace palplab;
+using namespace palplab::protocols::participants;
+
+namespace {
+
+struct FlatTissue {
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V, N;
+  std::vector<int> region;
+  Eigen::Vector3d feature{0.05, 0.05, 0.0};
+  double k = 800.0;  // N/m
+  double st = 2.3;   // N
+  bool visual = true, audio = true;
+
+  FlatTissue() {
+    const int n = 41;
+    V.resize(n * n, 3);
+    N.resize(n * n, 3);
+    region.resize(n * n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        int v = i * n + j;
+        V.row(v) << -0.1 + 0.2 * i / (n - 1), -0.1 + 0.2 * j / (n - 1), 0.0;
+        N.row(v) << 0, 0, 1;
+        region[v] = (V.row(v).transpose() - feature).norm() < 0.015 ? 0 : 1;
+      }
+  }
+  SurfaceView view() const {
+    SurfaceView s;
+    s.V = &V;
+    s.N = &N;
+    s.vertex_region = &region;
+    s.feature_region = 0;
+    s.feature_centroid = feature;
+    s.start_position = {0.0, 0.0, 0.05};
+    return s;
+  }
+  Percept render(double t, const Eigen::Vector3d& x) const {
+    Percept p;
+    p.t = t;
+    const double depth = -x.z();
+    const bool inside = std::abs(x.x()) <= 0.1 && std::abs(x.y()) <= 0.1;
+    if (depth > 0 && inside) {
+      p.contact = true;
+      p.force = Eigen::Vector3d(0, 0, k * depth);
+      p.contact_region = (Eigen::Vector3d(x.x(), x.y(), 0) - feature).norm() < 0.015 ? 0 : 1;
+      p.visible_deformation = visual ? depth : 0.0;
+      p.audio = audio && p.force.norm() >= st;
+    }
+    return p;
+  }
+};
+
+// Runs one session of `duration` s; returns peak forces of the presses on the feature.
+std::vector<double> run_session(Trainee& tr, const FlatTissue& tissue, double study_time,
+                                double duration, std::uint64_t pseed, std::uint64_t seed,
+                                Channels ch = {}) {
+  tr.begin_session(tissue.view(), 2.5, study_time, duration, pseed, seed, ch);
+  std::vector<double> peaks;
+  double peak = 0.0;
+  bool in = false;
+  const int steps = static_cast<int>(duration * 1000);
+  for (int i = 1; i <= steps; ++i) {
+    double t = i * 0.001;
+    Percept p = tissue.render(t, tr.command(t));
+    tr.perceive(p, false);
+    if (p.contact) {
+      peak = std::max(peak, p.force.norm());
+      in = true;
+    } else if (in) {
+      if (tr.identified() && peak > 0.5) peaks.push_back(peak);
+      peak = 0.0;
+      in = false;
+    }
+  }
+  tr.end_session(study_time + duration);
+  return peaks;
+}
+
+// Mean |learned target - reference| over `n` virtual participants after `sessions` training
+// sessions of 60 s and a retention interval `retention_s`.
+double mean_learned_error(FlatTissue tissue, const nlohmann::json& overrides, int sessions,
+                          double retention_s, double reference, int n = 40) {
+  auto params = resolve_params(trainee_param_specs(), overrides);
+  double err = 0.0;
+  for (int k = 0; k < n; ++k) {
+    Trainee tr(params, TraineeState{});
+    std::uint64_t ps = derive_seed(99, static_cast<std::uint64_t>(k));
+    double t = 0;
+    for (int s = 0; s < sessions; ++s) {
+      run_session(tr, tissue, t, 60.0, ps, derive_seed(ps, static_cast<std::uint64_t>(s)));
+      t += 60.0 + 600.0;
+    }
+    // Forgetting is applied at the start of the next session: begin one after the interval.
+    tr.begin_session(tissue.view(), 2.5, t - 600.0 + retention_s, 1.0, ps, 1, {});
+    err += std::abs(tr.state().target_mean - reference);
+  }
+  return err / n;
+}
+
+}  // namespace
+
+TEST(Perception, MleWeightsAreInverseVariances) {
+  std::vector<double> w;
+  Estimate e = mle_combine({{2.0, 0.04}, {3.0, 0.01}}, &w);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NEAR(w[0], (1 / 0.04) / (1 / 0.04 + 1 / 0.01), 1e-12);
+  EXPECT_NEAR(w[1], 0.8, 1e-12);
+  EXPECT_NEAR(e.value, 0.2 * 2.0 + 0.8 * 3.0, 1e-12);
+  EXPECT_NEAR(e.variance, 1.0 / (25.0 + 100.0), 1e-12);
+  // The combined estimate is never less precise than the best cue alone.
+  EXPECT_LT(e.variance, 0.01);
+  // One cue: itself.
+  Estimate one = mle_combine({{1.5, 0.3}}, &w);
+  EXPECT_DOUBLE_EQ(one.value, 1.5);
+  EXPECT_DOUBLE_EQ(w[0], 1.0);
+}
+
+TEST(Memory, RetentionIsAPowerLawThatSlowsAfterConsolidation) {
+  auto p = resolve_params(trainee_param_specs(), nlohmann::json::object());
+  EXPECT_DOUBLE_EQ(retention(0.0, p), 1.0);
+  const double tau = p["forgetting_tau"], d = p["forgetting_exponent"];
+  EXPECT_NEAR(retention(600.0, p), std::pow(1 + 600.0 / tau, -d), 1e-12);
+  EXPECT_GT(retention(600.0, p), retention(86400.0, p));
+  EXPECT_GT(retention(86400.0, p), retention(6 * 86400.0, p));
+  // continuous at the consolidation time, slower afterwards
+  const double tc = p["consolidation_time"];
+  EXPECT_NEAR(retention(tc * (1 - 1e-9), p), retention(tc * (1 + 1e-9), p), 1e-6);
+  double full = std::pow(1 + 6 * 86400.0 / tau, -d);
+  EXPECT_GT(retention(6 * 86400.0, p), full);
+}
+
+TEST(Trainee, FindsTheFeatureAndPresses) {
+  FlatTissue tissue;
+  Trainee tr(resolve_params(trainee_param_specs(), {}), TraineeState{});
+  auto peaks = run_session(tr, tissue, 0.0, 60.0, 5, 6);
+  EXPECT_TRUE(tr.identified());
+  EXPECT_GE(peaks.size(), 5u);
+  for (double f : peaks) {
+    EXPECT_GT(f, 1.0);
+    EXPECT_LT(f, 5.0);
+  }
+}
+
+TEST(Trainee, SameSeedSameBehaviour) {
+  FlatTissue tissue;
+  auto params = resolve_params(trainee_param_specs(), {});
+  Trainee a(params, TraineeState{}), b(params, TraineeState{});
+  auto pa = run_session(a, tissue, 0, 30, 11, 12), pb = run_session(b, tissue, 0, 30, 11, 12);
+  EXPECT_EQ(pa, pb);
+  EXPECT_EQ(a.state().to_json(), b.state().to_json());
+  // state survives a JSON round trip exactly (resume)
+  EXPECT_EQ(TraineeState::from_json(a.state().to_json()).to_json(), a.state().to_json());
+}
+
+TEST(Trainee, MoreReliableCuesGiveSmallerLearnedForceError) {
+  // The sound at ST marks the target; the visible deformation adds a second, independent force
+  // estimate (MLE), so the force felt at the sound is judged more precisely.
+  FlatTissue with_visual, without_visual, no_marker;
+  without_visual.visual = false;
+  no_marker.audio = false;
+  no_marker.visual = false;
+  const double ref = 2.3;  // the force the cue marks
+  // Measured right after training (no retention interval), so only learning differs.
+  double e_av = mean_learned_error(with_visual, {}, 4, 0.0, ref);
+  double e_a = mean_learned_error(without_visual, {}, 4, 0.0, ref);
+  double e_none = mean_learned_error(no_marker, {}, 4, 0.0, ref);
+  EXPECT_LT(e_av, e_a) << e_av << " vs " << e_a;
+  EXPECT_LT(e_a, e_none) << e_a << " vs " << e_none;
+  // A finer haptic sense (smaller Weber fraction) also learns more precisely.
+  double e_fine = mean_learned_error(without_visual, {{"weber_fraction", 0.03}}, 4, 0.0, ref);
+  EXPECT_LT(e_fine, e_a) << e_fine << " vs " << e_a;
+}
+
+TEST(Trainee, LongerRetentionGivesLargerError) {
+  FlatTissue tissue;
+  const double ref = 2.3;
+  double e_10min = mean_learned_error(tissue, {}, 4, 600.0, ref);
+  double e_1day = mean_learned_error(tissue, {}, 4, 86400.0, ref);
+  double e_7days = mean_learned_error(tissue, {}, 4, 7 * 86400.0, ref);
+  EXPECT_LT(e_10min, e_1day) << e_10min << " " << e_1day;
+  EXPECT_LT(e_1day, e_7days) << e_1day << " " << e_7days;
+}
+
+TEST(Instructor, CallsAfterReactionTime) {
+  auto p = resolve_params(instructor_param_specs(), {});
+  Instructor in(p, 3);
+  Percept q;
+  q.contact = true;
+  int call_step = -1;
+  for (int i = 1; i <= 1000 && call_step < 0; ++i) {
+    q.t = i * 0.001;
+    q.audio = i >= 100;  // the sound starts at t = 0.1 s
+    if (in.observe(q, Channels{false, false, true})) call_step = i;
+  }
+  EXPECT_EQ(call_step, 100 + 160);  // 0.16 s auditory reaction time
+  // visual: calls when the deformation reaches the calibrated target (within its judgement noise)
+  Instructor v(p, 4);
+  v.set_target_deformation(0.003);
+  call_step = -1;
+  for (int i = 1; i <= 3000 && call_step < 0; ++i) {
+    q.t = i * 0.001;
+    q.audio = false;
+    q.visible_deformation = 0.00001 * i;  // reaches 3 mm at step 300
+    if (v.observe(q, Channels{false, true, false})) call_step = i;
+  }
+  EXPECT_GT(call_step, 300 * 0.6 + 190);
+  EXPECT_LT(call_step, 300 * 1.4 + 190);
+  // no cue it may perceive -> no call
+  Instructor none(p, 5);
+  none.set_target_deformation(0.0);
+  bool any = false;
+  for (int i = 1; i <= 1000; ++i) {
+    q.t = i * 0.001;
+    q.audio = true;
+    any |= none.observe(q, Channels{true, false, false});
+  }
+  EXPECT_FALSE(any);
+}
