@@ -1,0 +1,41 @@
+#pragma once
+// Multiple comparisons: p-value adjustments, all pairwise t-tests, Tukey–Kramer HSD and
+// Games–Howell (both on our studentized range distribution).
+#include <vector>
+
+#include "analysis/anova.hpp"
+#include "analysis/two_sample.hpp"
+
+namespace palplab::analysis {
+
+// Holm (1979) step-down and Bonferroni adjusted p-values, in the input order (as R's
+// p.adjust). NaN entries are left out of the family and stay NaN.
+std::vector<double> holm(const std::vector<double>& p);
+std::vector<double> bonferroni(const std::vector<double>& p);
+
+struct PairwiseT {
+  int a = 0, b = 0;  // group indices, a < b
+  TTest test;
+  double p_holm = 1, p_bonferroni = 1;  // over the k(k-1)/2 comparisons
+  EffectSize effect;
+};
+// Every pair (a < b, in group order) with Welch's (welch = true) or Student's t.
+std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch = true,
+                                  DfMode mode = DfMode::Exact);
+
+struct RangeComparison {
+  int a = 0, b = 0;      // group indices, a < b
+  double mean_diff = 0;  // mean(a) - mean(b)
+  double se = 0;         // sqrt(MS/2 (1/na + 1/nb)) (Tukey) or sqrt((va/na + vb/nb)/2)
+  double q = 0;          // |mean_diff| / se, studentized range statistic
+  double df = 0;
+  double p = 1;                    // P(Q(k, df) > q)
+  double ci_low = 0, ci_high = 0;  // simultaneous 95 % interval for mean_diff
+  bool defined = true;
+};
+// Tukey–Kramer HSD (pooled MS_within and df of the ANOVA; as R's TukeyHSD).
+std::vector<RangeComparison> tukey_kramer(const Groups& groups, double level = 0.95);
+// Games–Howell: per pair the Welch SE and Welch–Satterthwaite df.
+std::vector<RangeComparison> games_howell(const Groups& groups, double level = 0.95);
+
+}  // namespace palplab::analysis
