@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "engine/mesh/surface_mesh.hpp"
+#include "engine/mesh/tet_mesh.hpp"
 
 namespace palplab::mesh {
 
@@ -37,6 +38,13 @@ SurfaceMesh generate_stomach(std::uint64_t seed = 0);
 // target_vertices (642 -> nu = 8 exactly; 23522 -> nu = 48, 23042 vertices).
 SurfaceMesh generate_sphere(int target_vertices = 642);
 int sphere_frequency_for(int target_vertices);
+
+// Model-C: the tract surface with surface_vertices vertices (2490 for the default 2489)
+// tetrahedralized by TetGen without Steiner points on the surface (-pY, no quality bound): for
+// the reference shape 2490 nodes (TetGen adds none inside), 8765 tets, 4976 boundary faces
+// (SPEC: 2487 / 8744 / 4974). Every tet has attribute 101 (soft tissue) and the named region
+// carried over from the surface.
+TetMesh generate_model_c(std::uint64_t seed = 0, int surface_vertices = 2489);
 
 // The names of the regions of the tract, in id order.
 const std::vector<std::string>& tract_region_names();

@@ -95,8 +95,8 @@ std::string tetgen_switches(const TetOptions& opt) {
   // p: PLC input; z: number from 0; Q: quiet; Y: keep the surface as given.
   std::string s = "pzQ";
   if (opt.keep_surface) s += "Y";
-  if (opt.quality > 0) s += "q" + fmt(opt.quality);
-  if (opt.max_volume > 0) s += "a" + fmt(opt.max_volume);
+  if (opt.quality > 0) s.append("q").append(fmt(opt.quality));
+  if (opt.max_volume > 0) s.append("a").append(fmt(opt.max_volume));
   if (!opt.seeds.empty()) {
     s += "A";
     bool per_region = std::any_of(opt.seeds.begin(), opt.seeds.end(),

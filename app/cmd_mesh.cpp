@@ -1,0 +1,336 @@
+// `palplab mesh ...`: generate, info, check, repair, tetrahedralize, materials (issue 2).
+// Exit codes: 0 success (check: clean), 1 check found defects, 2 bad input / unreadable file.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+#include "engine/mesh/check.hpp"
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/info.hpp"
+#include "engine/mesh/io.hpp"
+#include "engine/mesh/materials.hpp"
+#include "engine/mesh/repair.hpp"
+#include "engine/mesh/tetrahedralize.hpp"
+
+namespace {
+
+using namespace palplab::mesh;
+using json = nlohmann::ordered_json;
+
+// Where a tet mesh goes: BASE.vtu -> VTU only; otherwise TetGen files at BASE (+ VTU if asked).
+void write_tet_output(const std::string& out, const TetMesh& m, bool vtu,
+                      const MaterialTable& mat) {
+  if (extension(out) == ".vtu") {
+    write_vtu(out, m, &mat);
+    return;
+  }
+  const std::string e = extension(out);
+  if (!e.empty() && e != ".node" && e != ".ele")
+    throw palplab::InputError(
+        "a tet mesh is written as TetGen files (BASE, BASE.node) or .vtu, not '" + e + "'", out);
+  const std::string base = tetgen_base(out);
+  write_tetgen(base, m);
+  if (vtu) write_vtu(base + ".vtu", m, &mat);
+}
+
+std::string written_files(const std::string& out, bool vtu, bool regions) {
+  if (extension(out) == ".vtu") return out;
+  const std::string b = tetgen_base(out);
+  std::string s = b + ".node, " + b + ".ele, " + b + ".face, " + b + ".neigh";
+  if (regions) s += ", " + b + ".names";
+  if (vtu) s += ", " + b + ".vtu";
+  return s;
+}
+
+MaterialTable load_materials(const std::string& path) {
+  return path.empty() ? default_materials() : read_materials(path);
+}
+
+json vec(const Vec3& p) {
+  return {p.x(), p.y(), p.z()};
+}
+
+json defect_json(const Defect& d) {
+  json j;
+  j["kind"] = d.kind;
+  if (!d.vertices.empty()) j["vertices"] = d.vertices;
+  if (!d.faces.empty()) j["faces"] = d.faces;
+  if (!d.tets.empty()) j["tets"] = d.tets;
+  json pts = json::array();
+  for (auto& p : d.points) pts.push_back(vec(p));
+  j["points"] = pts;
+  j["value"] = d.value;
+  return j;
+}
+
+void print_info_text(const json& j) {
+  std::cout << j["kind"].get<std::string>() << ": " << j["vertices"] << " vertices, " << j["faces"]
+            << " faces, " << j["edges"] << " edges, " << j["tets"] << " tets, "
+            << j["boundary_faces"] << " boundary faces\n";
+  std::cout << "boundary loops " << j["boundary_loops"] << ", genus " << j["genus"]
+            << ", euler characteristic " << j["euler_characteristic"] << ", closed " << j["closed"]
+            << "\n";
+  std::cout << "bbox " << j["bbox"].dump() << " (m)\n";
+  std::cout << "area " << j["area"] << " m^2, volume " << j["volume"] << " m^3\n";
+  std::cout << "edge length " << j["edge_length"].dump() << " (m)\n";
+  if (j.contains("face_area")) std::cout << "face area " << j["face_area"].dump() << " (m^2)\n";
+  if (j.contains("tet_volume")) {
+    std::cout << "tet volume " << j["tet_volume"].dump() << " (m^3)\n";
+    std::cout << "radius ratio " << j["radius_ratio"].dump() << "\n";
+    std::cout << "tissues " << j["tissues"].dump() << "\n";
+  }
+  std::cout << "regions " << j["regions"].dump() << "\n";
+}
+
+palplab::app::CommandRegistration reg{
+    "mesh", [](CLI::App& root, int* code) {
+      auto* mesh = root.add_subcommand(
+          "mesh", "Mesh toolkit: generate, inspect, check, repair, tetrahedralize");
+      mesh->require_subcommand(1);
+
+      // ---- generate
+      {
+        auto* c = mesh->add_subcommand(
+            "generate", "Generate a procedural mesh (model-a, model-b, model-c, stomach, sphere)");
+        auto name = std::make_shared<std::string>();
+        auto out = std::make_shared<std::string>();
+        auto vertices = std::make_shared<int>(0);
+        auto seed = std::make_shared<std::uint64_t>(0);
+        auto binary = std::make_shared<bool>(false);
+        auto vtu = std::make_shared<bool>(false);
+        c->add_option("NAME", *name, "model-a | model-b | model-c | stomach | sphere")->required();
+        c->add_option("--out", *out, "Output file; the extension picks the format")->required();
+        c->add_option(
+            "--vertices", *vertices,
+            "Target vertex count (tract models: surface vertices; sphere: 642 ... 23522)");
+        c->add_option("--seed", *seed,
+                      "0 = reference shape; other seeds perturb the tract/stomach by up to 5 %");
+        c->add_flag("--binary", *binary, "Binary STL/PLY");
+        c->add_flag("--vtu", *vtu, "model-c: also write BASE.vtu");
+        c->callback([=] {
+          const std::string& n = *name;
+          if (*vertices < 0) throw palplab::InputError("--vertices must be positive");
+          if (n == "model-c") {
+            const TetMesh m = generate_model_c(*seed, *vertices ? *vertices : 2489);
+            write_tet_output(*out, m, *vtu, default_materials());
+            std::cout << "model-c: " << m.V.rows() << " nodes, " << m.T.rows() << " tets, "
+                      << boundary_faces(m).F.rows() << " boundary faces -> "
+                      << written_files(*out, *vtu, !m.regions.empty()) << "\n";
+            *code = 0;
+            return;
+          }
+          SurfaceMesh m;
+          if (n == "model-a")
+            m = generate_tract({*vertices ? *vertices : 1500, *seed});
+          else if (n == "model-b")
+            m = generate_tract({*vertices ? *vertices : 6000, *seed});
+          else if (n == "stomach") {
+            if (*vertices && *vertices != 192)
+              throw palplab::InputError(
+                  "the stomach has the reference size (192 vertices); drop --vertices");
+            m = generate_stomach(*seed);
+          } else if (n == "sphere")
+            m = generate_sphere(*vertices ? *vertices : 642);
+          else
+            throw palplab::InputError("unknown mesh '" + n +
+                                      "' (expected model-a, model-b, model-c, stomach, sphere)");
+          if (is_tetgen_path(*out))
+            throw palplab::InputError(n + " is a surface: write .obj, .stl, .off, .ply or .vtu",
+                                      *out);
+          write_surface(*out, m, {*binary});
+          std::cout << n << ": " << m.V.rows() << " vertices, " << m.F.rows() << " faces, "
+                    << m.E.rows() << " edges -> " << *out << "\n";
+          *code = 0;
+        });
+      }
+
+      // ---- info
+      {
+        auto* c = mesh->add_subcommand(
+            "info", "Counts, bounding box, topology, quality and regions of a mesh file");
+        auto file = std::make_shared<std::string>();
+        auto js = std::make_shared<bool>(false);
+        auto mat = std::make_shared<std::string>();
+        c->add_option("FILE", *file, "Mesh file (.obj .stl .off .ply .vtu, TetGen .node/.ele)")
+            ->required();
+        c->add_flag("--json", *js, "Print as JSON");
+        c->add_option("--materials", *mat, "Material table JSON (default: built-in)");
+        c->callback([=] {
+          const AnyMesh a = read_mesh(*file);
+          const json j = a.is_tet ? tet_info(a.tet, load_materials(*mat)) : surface_info(a.surface);
+          if (*js)
+            std::cout << j.dump(2) << "\n";
+          else
+            print_info_text(j);
+          *code = 0;
+        });
+      }
+
+      // ---- check
+      {
+        auto* c = mesh->add_subcommand("check",
+                                       "Find mesh defects; exit 0 clean, 1 defects, 2 unreadable");
+        auto file = std::make_shared<std::string>();
+        auto js = std::make_shared<bool>(false);
+        auto allow_open = std::make_shared<bool>(false);
+        auto opt = std::make_shared<CheckOptions>();
+        c->add_option("FILE", *file, "Mesh file")->required();
+        c->add_flag("--json", *js, "Print as JSON");
+        c->add_flag("--allow-open", *allow_open,
+                    "The surface may have boundaries (no open_edge defects)");
+        c->add_option("--duplicate-tolerance", opt->duplicate_tolerance,
+                      "Distance (m) below which vertices are duplicates")
+            ->check(CLI::NonNegativeNumber);
+        c->add_option("--sliver-ratio", opt->sliver_ratio,
+                      "Radius ratio below which a tet is a sliver")
+            ->check(CLI::Range(0.0, 1.0));
+        c->add_option("--max-defects", opt->max_per_kind,
+                      "Defects listed per kind (all are counted)")
+            ->check(CLI::PositiveNumber);
+        c->callback([=] {
+          const AnyMesh a = read_mesh(*file);
+          CheckOptions o = *opt;
+          o.expect_closed = !*allow_open;
+          const CheckReport r = a.is_tet ? check_tets(a.tet, o) : check_surface(a.surface, o);
+          if (*js) {
+            json j;
+            j["clean"] = r.clean();
+            j["counts"] = json::object();
+            for (auto& [k, n] : r.counts) j["counts"][k] = n;
+            j["truncated"] = r.truncated;
+            j["defects"] = json::array();
+            for (auto& d : r.defects) j["defects"].push_back(defect_json(d));
+            std::cout << j.dump(2) << "\n";
+          } else if (r.clean()) {
+            std::cout << *file << ": clean\n";
+          } else {
+            for (auto& [k, n] : r.counts) std::cout << k << ": " << n << "\n";
+            for (auto& d : r.defects) std::cout << "  " << defect_json(d).dump() << "\n";
+            if (r.truncated) std::cout << "(list truncated; raise --max-defects)\n";
+          }
+          *code = r.clean() ? 0 : 1;
+        });
+      }
+
+      // ---- repair
+      {
+        auto* c = mesh->add_subcommand(
+            "repair", "Safe repairs: merge duplicates, drop degenerates, orient, fill small holes");
+        auto in = std::make_shared<std::string>();
+        auto out = std::make_shared<std::string>();
+        auto opt = std::make_shared<RepairOptions>();
+        auto js = std::make_shared<bool>(false);
+        c->add_option("IN", *in, "Input surface")->required();
+        c->add_option("--out", *out, "Output surface")->required();
+        c->add_option("--merge-tolerance", opt->merge_tolerance,
+                      "Distance (m) below which vertices merge")
+            ->check(CLI::NonNegativeNumber);
+        c->add_option("--max-hole-edges", opt->max_hole_edges,
+                      "Fill boundary loops up to this many edges (0 = none)")
+            ->check(CLI::NonNegativeNumber);
+        c->add_flag("--json", *js, "Print the changes as JSON");
+        c->callback([=] {
+          const SurfaceMesh m = read_surface(*in);
+          RepairLog log;
+          RepairOptions o = *opt;
+          o.fill_holes = o.max_hole_edges > 0;
+          const SurfaceMesh r = repair(m, o, &log);
+          write_surface(*out, r);
+          if (*js) {
+            json j = {{"merged_vertices", log.merged_vertices},
+                      {"dropped_degenerate_faces", log.dropped_degenerate_faces},
+                      {"dropped_duplicate_faces", log.dropped_duplicate_faces},
+                      {"flipped_faces", log.flipped_faces},
+                      {"filled_holes", log.filled_holes},
+                      {"added_faces", log.added_faces},
+                      {"added_vertices", log.added_vertices},
+                      {"removed_unused_vertices", log.removed_unused_vertices},
+                      {"unfilled_holes", log.unfilled_holes},
+                      {"vertices", r.V.rows()},
+                      {"faces", r.F.rows()}};
+            std::cout << j.dump(2) << "\n";
+          } else {
+            for (auto& l : log.lines()) std::cout << l << "\n";
+            std::cout << "wrote " << *out << ": " << r.V.rows() << " vertices, " << r.F.rows()
+                      << " faces\n";
+          }
+          *code = 0;
+        });
+      }
+
+      // ---- tetrahedralize
+      {
+        auto* c = mesh->add_subcommand("tetrahedralize",
+                                       "Tetrahedralize a closed surface with TetGen (in process)");
+        auto in = std::make_shared<std::string>();
+        auto out = std::make_shared<std::string>();
+        auto regions = std::make_shared<std::string>();
+        auto mat = std::make_shared<std::string>();
+        auto opt = std::make_shared<TetOptions>();
+        auto vtu = std::make_shared<bool>(false);
+        c->add_option("IN", *in, "Closed surface (.obj .stl .off .ply .vtu)")->required();
+        c->add_option("--out", *out, "Output: BASE (TetGen .node/.ele/.face/.neigh) or BASE.vtu")
+            ->required();
+        c->add_option("--regions", *regions,
+                      "SPEC §4 .regions file (default: IN's stem + .regions when present)");
+        c->add_option("--quality", opt->quality,
+                      "Radius-edge ratio bound (TetGen -q), >= 1.0; 0 = off");
+        c->add_option("--max-volume", opt->max_volume, "Maximum tet volume (m^3, TetGen -a)");
+        c->add_option("--attribute", opt->default_attribute,
+                      "Attribute (tissue type) of tets outside seeded regions");
+        c->add_option("--materials", *mat,
+                      "Material table JSON for the VTU cell data (default: built-in)");
+        c->add_flag("--vtu", *vtu, "Also write BASE.vtu");
+        c->callback([=] {
+          const SurfaceMesh s = read_surface(*in);
+          TetOptions o = *opt;
+          std::string rf = *regions;
+          if (rf.empty()) {
+            const std::filesystem::path p(*in);
+            const std::string side = (p.parent_path() / p.stem()).string() + ".regions";
+            if (std::filesystem::exists(side)) rf = side;
+          }
+          if (!rf.empty()) o.seeds = read_region_seeds(rf);
+          const MaterialTable materials = load_materials(*mat);
+          const TetMesh m = tetrahedralize(s, o);
+          write_tet_output(*out, m, *vtu, materials);
+          std::cout << "TetGen -" << tetgen_switches(o)
+                    << (rf.empty() ? "" : " with regions from " + rf) << ": " << m.V.rows()
+                    << " nodes (" << m.V.rows() - s.V.rows() << " added), " << m.T.rows()
+                    << " tets, " << boundary_faces(m).F.rows() << " boundary faces -> "
+                    << written_files(*out, *vtu, !m.regions.empty()) << "\n";
+          *code = 0;
+        });
+      }
+
+      // ---- materials
+      {
+        auto* c = mesh->add_subcommand("materials",
+                                       "Print (or write) the default tissue material table (JSON)");
+        auto out = std::make_shared<std::string>();
+        auto check = std::make_shared<std::string>();
+        c->add_option("--out", *out, "Write the table to this file instead of stdout");
+        c->add_option("--check", *check, "Validate a material table file");
+        c->callback([=] {
+          if (!check->empty()) {
+            const MaterialTable t = read_materials(*check);
+            std::cout << *check << ": " << t.materials.size() << " materials, valid\n";
+          } else if (out->empty()) {
+            std::cout << default_materials_json();
+          } else {
+            std::ofstream f(*out);
+            if (!f) throw palplab::InputError("cannot write file", *out);
+            f << default_materials_json();
+            std::cout << "wrote " << *out << "\n";
+          }
+          *code = 0;
+        });
+      }
+    }};
+
+}  // namespace

@@ -1,0 +1,222 @@
+#include "engine/mesh/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "engine/spatial/bvh.hpp"
+
+namespace palplab::mesh {
+
+const std::vector<std::string>& defect_kinds() {
+  static const std::vector<std::string> k{
+      "open_edge",         "non_manifold_edge", "non_manifold_vertex",
+      "duplicate_vertex",  "degenerate_face",   "inconsistent_orientation",
+      "self_intersection", "inverted_tet",      "sliver_tet"};
+  return k;
+}
+
+namespace {
+
+void add(CheckReport& r, const CheckOptions& o, Defect d) {
+  long& n = r.counts[d.kind];
+  ++n;
+  if (n <= o.max_per_kind)
+    r.defects.push_back(std::move(d));
+  else
+    r.truncated = true;
+}
+
+double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).dot((c - a).cross(d - a));
+}
+
+// Segment pq crosses the interior of triangle abc (strictly; touching and coplanar cases are not
+// counted). On success *x is the crossing point.
+bool segment_crosses(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
+                     Vec3* x) {
+  const double s1 = orient(a, b, c, p), s2 = orient(a, b, c, q);
+  if (!((s1 > 0 && s2 < 0) || (s1 < 0 && s2 > 0))) return false;
+  const double o1 = orient(p, q, a, b), o2 = orient(p, q, b, c), o3 = orient(p, q, c, a);
+  if (!((o1 > 0 && o2 > 0 && o3 > 0) || (o1 < 0 && o2 < 0 && o3 < 0))) return false;
+  if (x) *x = p + (q - p) * (s1 / (s1 - s2));
+  return true;
+}
+
+bool triangles_cross(const Positions& V, const Faces& F, int f, int g, Vec3* x) {
+  int shared = 0, sf = -1, sg = -1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (F(f, i) == F(g, j)) {
+        ++shared;
+        sf = i;
+        sg = j;
+      }
+  if (shared >= 2) return false;  // neighbours across an edge (folds are orientation issues)
+  const Vec3 A[3] = {row3(V, F(f, 0)), row3(V, F(f, 1)), row3(V, F(f, 2))};
+  const Vec3 B[3] = {row3(V, F(g, 0)), row3(V, F(g, 1)), row3(V, F(g, 2))};
+  if (shared == 1) {
+    // Triangles meeting at one vertex cross iff the edge opposite it in one crosses the other.
+    return segment_crosses(A[(sf + 1) % 3], A[(sf + 2) % 3], B[0], B[1], B[2], x) ||
+           segment_crosses(B[(sg + 1) % 3], B[(sg + 2) % 3], A[0], A[1], A[2], x);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (segment_crosses(A[k], A[(k + 1) % 3], B[0], B[1], B[2], x)) return true;
+    if (segment_crosses(B[k], B[(k + 1) % 3], A[0], A[1], A[2], x)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> duplicate_vertex_pairs(const Positions& V, double tol) {
+  std::vector<std::pair<int, int>> out;
+  if (tol < 0 || V.rows() == 0) return out;
+  // Cells no smaller than the tolerance (so neighbours cover it) nor than 1e-12 of the
+  // coordinates (so cell indices cannot overflow).
+  const double scale = V.allFinite() ? V.cwiseAbs().maxCoeff() : 1.0;
+  const double cell = std::max({tol, 1e-12 * scale, 1e-300});
+  auto key = [&](long x, long y, long z) {
+    return static_cast<std::uint64_t>(x) * 73856093ULL ^
+           static_cast<std::uint64_t>(y) * 19349663ULL ^
+           static_cast<std::uint64_t>(z) * 83492791ULL;
+  };
+  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  grid.reserve(V.rows() * 2);
+  auto cell_of = [&](int i, int a) { return static_cast<long>(std::floor(V(i, a) / cell)); };
+  for (int i = 0; i < V.rows(); ++i) {
+    if (!V.row(i).allFinite()) continue;
+    const long cx = cell_of(i, 0), cy = cell_of(i, 1), cz = cell_of(i, 2);
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) {
+          auto it = grid.find(key(cx + dx, cy + dy, cz + dz));
+          if (it == grid.end()) continue;
+          for (int j : it->second)
+            if ((V.row(i) - V.row(j)).norm() <= tol) out.push_back({j, i});
+        }
+    grid[key(cx, cy, cz)].push_back(i);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+std::vector<std::pair<int, int>> self_intersections(const Positions& V, const Faces& F,
+                                                    std::vector<Vec3>* points) {
+  const auto boxes = spatial::triangle_boxes(V, F);
+  const spatial::Bvh bvh = spatial::build_bvh(boxes, 4);
+  std::vector<std::pair<int, int>> out;
+  for (auto [f, g] : spatial::overlapping_pairs(bvh, boxes)) {
+    Vec3 x;
+    if (triangles_cross(V, F, f, g, &x)) {
+      out.push_back({f, g});
+      if (points) points->push_back(x);
+    }
+  }
+  return out;
+}
+
+std::vector<std::pair<int, int>> self_intersections_brute_force(const Positions& V,
+                                                                const Faces& F) {
+  std::vector<std::pair<int, int>> out;
+  for (int f = 0; f < F.rows(); ++f)
+    for (int g = f + 1; g < F.rows(); ++g)
+      if (triangles_cross(V, F, f, g, nullptr)) out.push_back({f, g});
+  return out;
+}
+
+CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
+  CheckReport r;
+  const Positions& V = m.V;
+  const Faces& F = m.F;
+  auto P = [&](int v) { return row3(V, v); };
+  // Per edge, its faces (for locating edge defects).
+  std::vector<std::vector<int>> edge_faces(m.E.rows());
+  for (int h = 0; h < 3 * F.rows(); ++h)
+    if (m.edge_faces[m.he_edge[h]] != 2) edge_faces[m.he_edge[h]].push_back(h / 3);
+  for (int e : m.inconsistent_edges)
+    for (int h = 0; h < 3 * F.rows(); ++h)
+      if (m.he_edge[h] == e) edge_faces[e].push_back(h / 3);
+  for (int e = 0; e < m.E.rows(); ++e) {
+    const int a = m.E(e, 0), b = m.E(e, 1);
+    if (m.edge_faces[e] == 1 && o.expect_closed)
+      add(r, o, {"open_edge", {a, b}, edge_faces[e], {}, {P(a), P(b)}, (P(a) - P(b)).norm()});
+    if (m.edge_faces[e] > 2)
+      add(r, o,
+          {"non_manifold_edge", {a, b}, edge_faces[e], {}, {P(a), P(b)}, double(m.edge_faces[e])});
+  }
+  for (int v : m.non_manifold_vertices) add(r, o, {"non_manifold_vertex", {v}, {}, {}, {P(v)}, 0});
+  for (auto [i, j] : duplicate_vertex_pairs(V, o.duplicate_tolerance))
+    add(r, o, {"duplicate_vertex", {i, j}, {}, {}, {P(i), P(j)}, (P(i) - P(j)).norm()});
+  for (int f = 0; f < F.rows(); ++f) {
+    const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
+    const double area2 = (P(b) - P(a)).cross(P(c) - P(a)).norm();
+    const double lmax = std::max(
+        {(P(b) - P(a)).squaredNorm(), (P(c) - P(b)).squaredNorm(), (P(a) - P(c)).squaredNorm()});
+    if (a == b || b == c || a == c || area2 <= o.degenerate_ratio * lmax)
+      add(r, o, {"degenerate_face", {a, b, c}, {f}, {}, {(P(a) + P(b) + P(c)) / 3}, area2 / 2});
+  }
+  for (int e : m.inconsistent_edges) {
+    const int a = m.E(e, 0), b = m.E(e, 1);
+    add(r, o, {"inconsistent_orientation", {a, b}, edge_faces[e], {}, {P(a), P(b)}, 0});
+  }
+  if (o.self_intersections) {
+    std::vector<Vec3> pts;
+    auto pairs = self_intersections(V, F, &pts);
+    for (size_t i = 0; i < pairs.size(); ++i) {
+      auto [f, g] = pairs[i];
+      add(r, o,
+          {"self_intersection",
+           {F(f, 0), F(f, 1), F(f, 2), F(g, 0), F(g, 1), F(g, 2)},
+           {f, g},
+           {},
+           {pts[i]},
+           0});
+    }
+  }
+  return r;
+}
+
+CheckReport check_tets(const TetMesh& m, const CheckOptions& o) {
+  CheckReport r;
+  for (int t = 0; t < m.T.rows(); ++t) {
+    const Vec3 a = row3(m.V, m.T(t, 0)), b = row3(m.V, m.T(t, 1)), c = row3(m.V, m.T(t, 2)),
+               d = row3(m.V, m.T(t, 3));
+    const std::vector<int> vs{m.T(t, 0), m.T(t, 1), m.T(t, 2), m.T(t, 3)};
+    const Vec3 centroid = (a + b + c + d) / 4;
+    const double vol = signed_volume(a, b, c, d);
+    if (vol < 0) {
+      add(r, o, {"inverted_tet", vs, {}, {t}, {centroid}, vol});
+      continue;
+    }
+    const double rr = radius_ratio(a, b, c, d);
+    if (rr < o.sliver_ratio) add(r, o, {"sliver_tet", vs, {}, {t}, {centroid}, rr});
+  }
+  for (auto [i, j] : duplicate_vertex_pairs(m.V, o.duplicate_tolerance))
+    add(r, o,
+        {"duplicate_vertex",
+         {i, j},
+         {},
+         {},
+         {row3(m.V, i), row3(m.V, j)},
+         (m.V.row(i) - m.V.row(j)).norm()});
+  // The boundary of a valid tet mesh is a closed 2-manifold; report where it is not.
+  const BoundaryFaces b = boundary_faces(m);
+  const SurfaceMesh s = make_surface_mesh(m.V, b.F);
+  CheckOptions so = o;
+  so.self_intersections = false;
+  so.duplicate_tolerance = -1;  // already checked on the tet mesh
+  CheckReport sr = check_surface(s, so);
+  for (auto& d : sr.defects) {
+    if (d.kind == "degenerate_face" || d.kind == "duplicate_vertex") continue;  // tets report those
+    for (int& f : d.faces) {
+      d.tets.push_back(b.tet[f]);
+    }
+    d.faces.clear();
+    add(r, o, d);
+  }
+  return r;
+}
+
+}  // namespace palplab::mesh

@@ -1,0 +1,146 @@
+#include "engine/mesh/materials.hpp"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "common/input_error.hpp"
+
+namespace palplab::mesh {
+
+const Material* MaterialTable::find(int a) const {
+  for (const Material& m : materials)
+    if (a >= m.first && a <= m.last) return &m;
+  return nullptr;
+}
+
+const std::string& default_materials_json() {
+  // Keep identical to engine/mesh/materials.json (a test compares them).
+  static const std::string s = R"JSON({
+  "format": "palplab-materials",
+  "version": 1,
+  "note": "Order-of-magnitude defaults for soft-tissue simulation; E in Pa, density in kg/m^3. Edit for your study.",
+  "materials": [
+    {"first": 0, "last": 99, "name": "undefined", "youngs_modulus": 10000.0, "poisson_ratio": 0.45, "density": 1000.0, "colour": [0.7, 0.7, 0.7], "rigid": false},
+    {"first": 100, "last": 100, "name": "skin", "youngs_modulus": 150000.0, "poisson_ratio": 0.48, "density": 1100.0, "colour": [0.94, 0.76, 0.64], "rigid": false},
+    {"first": 101, "last": 101, "name": "soft tissue", "youngs_modulus": 10000.0, "poisson_ratio": 0.45, "density": 1000.0, "colour": [0.9, 0.55, 0.55], "rigid": false},
+    {"first": 102, "last": 102, "name": "veins", "youngs_modulus": 500000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.25, 0.3, 0.8], "rigid": false},
+    {"first": 103, "last": 103, "name": "arteries", "youngs_modulus": 1000000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.85, 0.1, 0.1], "rigid": false},
+    {"first": 104, "last": 104, "name": "nerves", "youngs_modulus": 500000.0, "poisson_ratio": 0.45, "density": 1040.0, "colour": [0.95, 0.9, 0.3], "rigid": false},
+    {"first": 105, "last": 105, "name": "lung", "youngs_modulus": 3000.0, "poisson_ratio": 0.3, "density": 300.0, "colour": [0.95, 0.7, 0.75], "rigid": false},
+    {"first": 106, "last": 106, "name": "heart", "youngs_modulus": 100000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.6, 0.1, 0.15], "rigid": false},
+    {"first": 107, "last": 107, "name": "membrane", "youngs_modulus": 1000000.0, "poisson_ratio": 0.45, "density": 1100.0, "colour": [0.3, 0.8, 0.4], "rigid": false},
+    {"first": 200, "last": 299, "name": "bone", "youngs_modulus": 15000000000.0, "poisson_ratio": 0.3, "density": 1900.0, "colour": [0.95, 0.93, 0.85], "rigid": true},
+    {"first": 300, "last": 399, "name": "muscle", "youngs_modulus": 50000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.7, 0.2, 0.2], "rigid": false}
+  ]
+}
+)JSON";
+  return s;
+}
+
+const MaterialTable& default_materials() {
+  static const MaterialTable t = parse_materials(default_materials_json(), "<built-in materials>");
+  return t;
+}
+
+namespace {
+
+[[noreturn]] void bad(const std::string& source, const std::string& path, const std::string& what) {
+  throw InputError(SourceLocation{source, 0, 0, -1, path}, what);
+}
+
+double number(const nlohmann::json& j, const std::string& source, const std::string& path,
+              const char* key, double lo, double hi, bool open_lo, bool open_hi) {
+  if (!j.contains(key)) bad(source, path, std::string("missing \"") + key + "\"");
+  const auto& v = j.at(key);
+  const std::string p = path + "." + key;
+  if (!v.is_number()) bad(source, p, "expected a number");
+  const double x = v.get<double>();
+  if ((open_lo ? x <= lo : x < lo) || (open_hi ? x >= hi : x > hi))
+    bad(source, p,
+        "expected a value in " + std::string(open_lo ? "(" : "[") + std::to_string(lo) + ", " +
+            std::to_string(hi) + (open_hi ? ")" : "]") + ", got " + std::to_string(x));
+  return x;
+}
+
+}  // namespace
+
+MaterialTable parse_materials(const std::string& text, const std::string& source) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(SourceLocation{source, 0, 0, static_cast<long>(e.byte)},
+                     std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array())
+    bad(source, "$", "expected an object with a \"materials\" array");
+  MaterialTable t;
+  const auto& arr = j["materials"];
+  for (size_t i = 0; i < arr.size(); ++i) {
+    const std::string p = "$.materials[" + std::to_string(i) + "]";
+    const auto& e = arr[i];
+    if (!e.is_object()) bad(source, p, "expected an object");
+    Material m;
+    for (const char* k : {"first", "last"}) {
+      if (!e.contains(k) || !e[k].is_number_integer())
+        bad(source, p + "." + k, "expected an integer tissue attribute");
+    }
+    m.first = e["first"].get<int>();
+    m.last = e["last"].get<int>();
+    if (m.last < m.first) bad(source, p + ".last", "must be >= \"first\"");
+    if (!e.contains("name") || !e["name"].is_string() || e["name"].get<std::string>().empty())
+      bad(source, p + ".name", "expected a non-empty string");
+    m.name = e["name"].get<std::string>();
+    m.youngs_modulus = number(e, source, p, "youngs_modulus", 0, 1e13, true, false);
+    m.poisson_ratio = number(e, source, p, "poisson_ratio", -1, 0.5, true, true);
+    m.density = number(e, source, p, "density", 0, 1e5, true, false);
+    if (!e.contains("colour") || !e["colour"].is_array() || e["colour"].size() != 3)
+      bad(source, p + ".colour", "expected [r, g, b] with values in [0, 1]");
+    for (int c = 0; c < 3; ++c) {
+      const auto& v = e["colour"][c];
+      if (!v.is_number() || v.get<double>() < 0 || v.get<double>() > 1)
+        bad(source, p + ".colour[" + std::to_string(c) + "]", "expected a number in [0, 1]");
+      m.colour[c] = v.get<double>();
+    }
+    if (e.contains("rigid")) {
+      if (!e["rigid"].is_boolean()) bad(source, p + ".rigid", "expected true or false");
+      m.rigid = e["rigid"].get<bool>();
+    }
+    for (size_t k = 0; k < t.materials.size(); ++k)
+      if (m.first <= t.materials[k].last && t.materials[k].first <= m.last)
+        bad(source, p, "attribute range overlaps $.materials[" + std::to_string(k) + "]");
+    t.materials.push_back(std::move(m));
+  }
+  return t;
+}
+
+MaterialTable read_materials(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot open material table", path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_materials(ss.str(), path);
+}
+
+std::string materials_to_json(const MaterialTable& t) {
+  nlohmann::ordered_json j;
+  j["format"] = "palplab-materials";
+  j["version"] = 1;
+  j["materials"] = nlohmann::ordered_json::array();
+  for (const Material& m : t.materials) {
+    nlohmann::ordered_json e;
+    e["first"] = m.first;
+    e["last"] = m.last;
+    e["name"] = m.name;
+    e["youngs_modulus"] = m.youngs_modulus;
+    e["poisson_ratio"] = m.poisson_ratio;
+    e["density"] = m.density;
+    e["colour"] = m.colour;
+    e["rigid"] = m.rigid;
+    j["materials"].push_back(e);
+  }
+  return j.dump(2) + "\n";
+}
+
+}  // namespace palplab::mesh

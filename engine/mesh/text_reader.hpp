@@ -1,0 +1,91 @@
+#pragma once
+// Internal helpers of the mesh readers: a line reader that knows where it is, strict number
+// parsing and located errors. Not part of the public API.
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/input_error.hpp"
+
+namespace palplab::mesh::detail {
+
+inline std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("cannot open file", path);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline std::vector<std::string> split_ws(const std::string& s) {
+  std::vector<std::string> out;
+  std::istringstream is(s);
+  std::string t;
+  while (is >> t) out.push_back(t);
+  return out;
+}
+
+// Reads a text buffer line by line; strips `comment` to end of line and surrounding space.
+struct TextReader {
+  std::string path;
+  std::string data;
+  size_t pos = 0;
+  int line = 0;
+  char comment = '#';
+
+  TextReader(std::string p, char c = '#') : path(std::move(p)), data(read_file(path)), comment(c) {}
+  TextReader(std::string p, std::string d, char c)
+      : path(std::move(p)), data(std::move(d)), comment(c) {}
+
+  // Next line (raw, without newline); false at the end.
+  bool raw(std::string& out) {
+    if (pos >= data.size()) return false;
+    size_t e = data.find('\n', pos);
+    if (e == std::string::npos) e = data.size();
+    out.assign(data, pos, e - pos);
+    if (!out.empty() && out.back() == '\r') out.pop_back();
+    pos = e + 1;
+    ++line;
+    return true;
+  }
+  // Next non-empty line with comments stripped, split into tokens; false at the end.
+  bool tokens(std::vector<std::string>& out) {
+    std::string l;
+    while (raw(l)) {
+      if (comment) {
+        if (auto h = l.find(comment); h != std::string::npos) l.erase(h);
+      }
+      out = split_ws(l);
+      if (!out.empty()) return true;
+    }
+    return false;
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(SourceLocation{path, line}, what);
+  }
+  double number(const std::string& t, const char* what) const {
+    double v;
+    auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
+      fail(std::string("expected ") + what + " (a finite number), got '" + t + "'");
+    return v;
+  }
+  long integer(const std::string& t, const char* what) const {
+    long v;
+    auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size())
+      fail(std::string("expected ") + what + " (an integer), got '" + t + "'");
+    return v;
+  }
+};
+
+// Guards against absurd counts in headers before allocating.
+inline void check_count(const TextReader& r, long n, const char* what, long max = 500000000) {
+  if (n < 0 || n > max) r.fail(std::string("implausible ") + what + " count " + std::to_string(n));
+}
+
+}  // namespace palplab::mesh::detail
