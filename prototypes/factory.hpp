@@ -1,9 +1,11 @@
 #pragma once
 // Builds a Scene from a prototype JSON file (docs/formats/prototypes.md). Generated meshes and
-// their precomputation (rings, octree, springs) are cached per (generator, parameters), so
-// building a fresh scene for every session is cheap; Scene::reset() is cheaper still.
-// Bad files throw palplab::InputError located at FILE:LINE:COL and JSON path.
+// their precomputation (normals, regions, rings, octree) are cached per process and mesh
+// description, so building a fresh scene for every session is cheap; Scene::reset() is cheaper
+// still. Thread-safe (the cache is locked). Bad files throw palplab::InputError located at
+// FILE:LINE:COL and JSON path, listing every problem found.
 #include <string>
+#include <vector>
 
 #include "engine/haptics/scene.hpp"
 
@@ -11,5 +13,15 @@ namespace palplab::prototypes {
 
 engine::Scene build_scene(const std::string& prototype_json_path,
                           const engine::SceneOverrides& overrides = {});
+
+// Validates a prototype file without building the simulator and returns what a study needs to
+// know of it. Region names come from the mesh generator (no mesh is generated).
+struct PrototypeSummary {
+  std::string id;     // "A", "C1", ...
+  std::string scene;  // e.g. "bovine_reproductive_tract"
+  std::string model;  // "penalty" | "ring" | "mass_spring"
+  std::vector<std::string> region_names;
+};
+PrototypeSummary inspect_prototype(const std::string& prototype_json_path);
 
 }  // namespace palplab::prototypes

@@ -54,6 +54,10 @@ namespace {
 inline void add_node_terms(const MassSpringSystem& sys, const RowMatX3d& X, const RowMatX3d& V,
                            RowMatX3d& F, long i) {
   F.row(i) = sys.F_ext.row(i);
+  if (i == sys.contact_node) {
+    const double d = contact_penetration(sys, X);
+    if (d > 0.0) F.row(i) -= (sys.contact_k * d) * sys.contact_normal.transpose();
+  }
   const double kh = sys.home_ks[i], dh = sys.home_kd[i];
   if (kh != 0.0 || dh != 0.0) F.row(i) += kh * (sys.X_rest.row(i) - X.row(i)) - dh * V.row(i);
 }
@@ -130,6 +134,16 @@ RowMatX2i unique_edges(const RowMatX4i& T) {
 
 double total_mass(const MassSpringSystem& sys) {
   return sys.mass.sum();
+}
+
+}  // namespace palplab::engine
+
+namespace palplab::engine {
+
+double contact_penetration(const MassSpringSystem& sys, const RowMatX3d& X) {
+  if (sys.contact_node < 0) return 0.0;
+  return std::max(
+      0.0, (X.row(sys.contact_node).transpose() - sys.contact_point).dot(sys.contact_normal));
 }
 
 }  // namespace palplab::engine

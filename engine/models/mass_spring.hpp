@@ -35,6 +35,14 @@ struct MassSpringSystem {
   Eigen::VectorXd mass, home_ks, home_kd;
   std::vector<std::uint8_t> fixed;
   Springs springs;
+  // Penalty contact with the haptic device: while the penetration d = (X_p - point) . n > 0,
+  // node p = contact_node gets the force -contact_k d n (n = outward normal, point = device
+  // position); the device feels +contact_k d n. Its Jacobian -contact_k n n^T enters backward
+  // Euler, so a stiff coupling stays stable. contact_node = -1: no contact.
+  int contact_node = -1;
+  Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
+  double contact_k = 0.0;  // N/m
   // Incident springs per node (CSR): springs of node i are adj_spring[adj_start[i] ..
   // adj_start[i+1]). Built by build_adjacency(); needed by sleeping and the solvers.
   std::vector<int> adj_start, adj_spring;
@@ -73,5 +81,8 @@ RowMatX2i unique_edges(const RowMatX3i& F);
 RowMatX2i unique_edges(const RowMatX4i& T);
 
 double total_mass(const MassSpringSystem& sys);
+
+// Penetration of the device below node contact_node along its normal (m), 0 without contact.
+double contact_penetration(const MassSpringSystem& sys, const RowMatX3d& X);
 
 }  // namespace palplab::engine

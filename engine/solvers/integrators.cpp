@@ -129,6 +129,8 @@ void apply_A(const MassSpringSystem& sys, const ActiveSet& act, double h,
              const IntegratorWorkspace& ws, const RowMatX3d& P, RowMatX3d& Y) {
   for (int i : act.nodes)
     Y.row(i) = (sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i]) * P.row(i);
+  if (ws.contact_on)
+    Y.row(sys.contact_node) += (ws.contact_block * P.row(sys.contact_node).transpose()).transpose();
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
     const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
@@ -158,6 +160,16 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
     ws.R.row(i) = h * (ws.F.row(i) - h * sys.home_ks[i] * sys.V.row(i));
     ws.Dinv[i] =
         Eigen::Matrix3d::Identity() * (sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i]);
+  }
+  // Contact penalty: K = -k n n^T while penetrating.
+  ws.contact_on = sys.contact_node >= 0 && act.is_active[sys.contact_node] &&
+                  contact_penetration(sys, sys.X) > 0.0;
+  if (ws.contact_on) {
+    const int p = sys.contact_node;
+    const Eigen::Matrix3d Kc = -sys.contact_k * sys.contact_normal * sys.contact_normal.transpose();
+    ws.contact_block = -(h * h) * Kc;
+    ws.R.row(p) += ((h * h) * (Kc * sys.V.row(p).transpose())).transpose();
+    ws.Dinv[p] += ws.contact_block;
   }
   Eigen::Matrix3d Kx, Kv;
   for (size_t k = 0; k < act.springs.size(); ++k) {
@@ -225,14 +237,23 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
     const long m = static_cast<long>(act.nodes.size());
     ws.dof_of_node.assign(n, -1);
     for (long k = 0; k < m; ++k) ws.dof_of_node[act.nodes[k]] = static_cast<int>(k);
-    const bool need_factor =
-        ws.solver == LinearSolver::ldlt_refactor || ws.factor_version != act.version;
+    // The frozen factorisation is redone when the active set, the contact node/state or h change.
+    const int contact_key = ws.contact_on ? sys.contact_node : -1;
+    const bool need_factor = ws.solver == LinearSolver::ldlt_refactor ||
+                             ws.factor_version != act.version || ws.factor_contact != contact_key ||
+                             ws.factor_h != h;
+    ws.factor_contact = contact_key;
+    ws.factor_h = h;
     if (need_factor) {
       ws.triplets.clear();
       for (long k = 0; k < m; ++k) {
         const int i = act.nodes[k];
         const double d = sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i];
         for (int r = 0; r < 3; ++r) ws.triplets.emplace_back(3 * k + r, 3 * k + r, d);
+        if (ws.contact_on && i == sys.contact_node)
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+              ws.triplets.emplace_back(3 * k + r, 3 * k + c, ws.contact_block(r, c));
       }
       for (size_t k = 0; k < act.springs.size(); ++k) {
         const int s = act.springs[k];

@@ -40,6 +40,7 @@ struct ActiveSet {
   std::vector<int> springs;             // springs with at least one endpoint in `nodes`, ascending
   std::vector<std::uint8_t> is_active;  // #V
   long version = 0;
+  std::vector<int> removed;  // scratch of update_sleeping
 };
 // Every non-fixed node.
 void activate_all(const MassSpringSystem& sys, ActiveSet& act);
@@ -66,6 +67,10 @@ struct IntegratorWorkspace {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   long analysed_version = -1, factor_version = -1;
   Eigen::VectorXd b, x;
+  bool contact_on = false;
+  int factor_contact = -2;
+  double factor_h = 0.0;
+  Eigen::Matrix3d contact_block = Eigen::Matrix3d::Zero();
 };
 
 // Advances sys by h seconds (one step of `method`) on the nodes of `act`.

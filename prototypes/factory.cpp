@@ -1,0 +1,525 @@
+#include "prototypes/factory.hpp"
+
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+
+#include "common/input_error.hpp"
+#include "common/json_locate.hpp"
+#include "engine/haptics/scene_impl.hpp"
+#include "engine/mesh/generate.hpp"
+
+namespace palplab::prototypes {
+
+using nlohmann::json;
+namespace pj = palplab::json;
+using namespace palplab::engine;
+
+namespace {
+
+// ---------------------------------------------------------------- located validation helpers
+
+class Checker {
+ public:
+  Checker(std::string file, const std::string& text) : file_(std::move(file)), loc_(text) {}
+
+  void err(const std::string& path, const std::string& what, bool at_key = false) {
+    problems_.push_back({loc_.locate(file_, path, at_key), what});
+  }
+  void throw_if_any() {
+    if (!problems_.empty()) throw InputError(problems_);
+  }
+  bool ok() const { return problems_.empty(); }
+
+  // Unknown members are errors (a typo must not silently fall back to a default).
+  void keys(const json& o, const std::string& path, std::initializer_list<const char*> allowed) {
+    for (auto it = o.begin(); it != o.end(); ++it) {
+      bool known = false;
+      for (const char* k : allowed) known |= it.key() == k;
+      if (!known) {
+        std::string list;
+        for (const char* k : allowed) list += std::string(list.empty() ? "" : ", ") + k;
+        err(pj::path_key(path, it.key()),
+            "unknown key \"" + it.key() + "\" (expected one of: " + list + ")", true);
+      }
+    }
+  }
+
+  const json* member(const json& o, const std::string& path, const char* key, bool required,
+                     const char* expected) {
+    auto it = o.find(key);
+    if (it == o.end()) {
+      if (required)
+        err(path, std::string("missing required key \"") + key + "\" (" + expected + ")");
+      return nullptr;
+    }
+    return &*it;
+  }
+
+  const json* object(const json& o, const std::string& path, const char* key, bool required) {
+    const json* v = member(o, path, key, required, "an object");
+    if (v && !v->is_object()) {
+      err(pj::path_key(path, key), std::string("expected an object, got ") + v->type_name());
+      return nullptr;
+    }
+    return v;
+  }
+
+  std::optional<double> number(const json& o, const std::string& path, const char* key,
+                               bool required, double lo, double hi, const char* what,
+                               bool lo_open = false) {
+    const json* v = member(o, path, key, required, what);
+    if (!v) return std::nullopt;
+    const std::string p = pj::path_key(path, key);
+    if (!v->is_number()) {
+      err(p, std::string("expected a number: ") + what + ", got " + v->type_name());
+      return std::nullopt;
+    }
+    const double x = v->get<double>();
+    if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo)) {
+      err(p, "value " + v->dump() + " out of range: expected " + what + " in " +
+                 (lo_open ? "(" : "[") + fmt(lo) + ", " + fmt(hi) + "]");
+      return std::nullopt;
+    }
+    return x;
+  }
+
+  std::optional<long> integer(const json& o, const std::string& path, const char* key,
+                              bool required, long lo, long hi, const char* what) {
+    const json* v = member(o, path, key, required, what);
+    if (!v) return std::nullopt;
+    const std::string p = pj::path_key(path, key);
+    if (!v->is_number_integer()) {
+      err(p, std::string("expected an integer: ") + what + ", got " + v->dump());
+      return std::nullopt;
+    }
+    const long x = v->get<long>();
+    if (x < lo || x > hi) {
+      err(p, "value " + v->dump() + " out of range: expected " + what + " in [" +
+                 std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      return std::nullopt;
+    }
+    return x;
+  }
+
+  std::optional<bool> boolean(const json& o, const std::string& path, const char* key,
+                              bool required) {
+    const json* v = member(o, path, key, required, "true or false");
+    if (!v) return std::nullopt;
+    if (!v->is_boolean()) {
+      err(pj::path_key(path, key), std::string("expected true or false, got ") + v->dump());
+      return std::nullopt;
+    }
+    return v->get<bool>();
+  }
+
+  std::optional<std::string> text(const json& o, const std::string& path, const char* key,
+                                  bool required, std::initializer_list<const char*> allowed = {}) {
+    const json* v = member(o, path, key, required, "a string");
+    if (!v) return std::nullopt;
+    const std::string p = pj::path_key(path, key);
+    if (!v->is_string()) {
+      err(p, std::string("expected a string, got ") + v->type_name());
+      return std::nullopt;
+    }
+    std::string s = v->get<std::string>();
+    if (allowed.size()) {
+      bool ok = false;
+      std::string list;
+      for (const char* a : allowed) {
+        ok |= s == a;
+        list += std::string(list.empty() ? "" : ", ") + a;
+      }
+      if (!ok) {
+        err(p, "unknown value \"" + s + "\" (expected one of: " + list + ")");
+        return std::nullopt;
+      }
+    }
+    return s;
+  }
+
+ private:
+  static std::string fmt(double x) {
+    if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+    json j = x;
+    return j.dump();
+  }
+  std::string file_;
+  pj::JsonLocator loc_;
+  std::vector<Problem> problems_;
+};
+
+// ---------------------------------------------------------------- the parsed prototype
+
+struct MeshSpec {
+  std::string generator = "tract";
+  int vertices = 1500;
+  std::uint64_t seed = 0;
+  std::string key() const {
+    return generator + "/" + std::to_string(vertices) + "/" + std::to_string(seed);
+  }
+};
+
+struct Spec {
+  std::string id, scene, description;
+  MeshSpec mesh;
+  ModelKind kind = ModelKind::penalty;
+  // ring
+  RingParams ring;
+  Scope scope = Scope::rings;
+  // mass-spring
+  double total_mass = 0.5, stiffness = 100.0, damping = 0.5, home_ks = 50.0, home_kd = 0.5;
+  std::string fixed_region;
+  Integrator integrator = Integrator::backward_euler;
+  LinearSolver solver = LinearSolver::cg;
+  SleepParams sleep;
+  bool refine = false;
+  RefineParams refine_params;
+  double refine_force = 1.0;
+  bool substep = true;
+  // scene
+  double contact_k = 500.0, contact_radius = 0.0;
+  Cues cues;
+  double dt = 1e-3;
+  std::map<std::string, Thresholds> thresholds;
+  std::optional<Eigen::Vector3d> start;
+};
+
+const std::vector<std::string>& generator_regions(const std::string& gen) {
+  static const std::vector<std::string> none;
+  if (gen == "tract") return mesh::tract_region_names();
+  return none;
+}
+
+Thresholds read_thresholds(Checker& c, const json& o, const std::string& p) {
+  c.keys(o, p, {"st", "mpf", "sft"});
+  Thresholds t;
+  const double inf = 1e6;
+  t.st = c.number(o, p, "st", true, 0, inf, "the sound threshold ST (N)").value_or(0);
+  t.mpf = c.number(o, p, "mpf", true, 0, inf, "the maximum palpation force MPF (N)").value_or(0);
+  t.sft = c.number(o, p, "sft", true, 0, inf, "the stopping force threshold SFT (N)").value_or(0);
+  if (c.ok() && !(t.st < t.sft)) c.err(p, "expected ST < SFT (the sound comes before the stop)");
+  if (c.ok() && !(t.mpf <= t.sft)) c.err(p, "expected MPF <= SFT");
+  return t;
+}
+
+Spec parse(const std::string& path) {
+  std::string text;
+  const json root = pj::parse_file_located(path, &text);
+  Checker c(path, text);
+  Spec s;
+  const std::string R = "$";
+  if (!root.is_object()) {
+    c.err(R, "expected a JSON object describing a prototype");
+    c.throw_if_any();
+  }
+  c.keys(root, R,
+         {"format", "id", "scene", "description", "mesh", "model", "contact", "cues", "haptic_step",
+          "thresholds", "start_position"});
+  if (auto f = c.text(root, R, "format", true)) {
+    if (*f != "palplab-prototype/1")
+      c.err("$.format", "unsupported format \"" + *f + "\" (expected \"palplab-prototype/1\")");
+  }
+  s.id = c.text(root, R, "id", true).value_or("");
+  s.scene = c.text(root, R, "scene", false).value_or("");
+  s.description = c.text(root, R, "description", false).value_or("");
+  s.dt = c.number(root, R, "haptic_step", false, 1e-5, 0.01, "the haptic step (s)", false)
+             .value_or(1e-3);
+
+  if (const json* m = c.object(root, R, "mesh", true)) {
+    const std::string P = "$.mesh";
+    c.keys(*m, P, {"generator", "vertices", "seed"});
+    s.mesh.generator =
+        c.text(*m, P, "generator", true, {"tract", "stomach", "sphere"}).value_or("tract");
+    s.mesh.vertices = static_cast<int>(
+        c.integer(*m, P, "vertices", false, 12, 200000, "the vertex count").value_or(1500));
+    s.mesh.seed = static_cast<std::uint64_t>(
+        c.integer(*m, P, "seed", false, 0, 1L << 40, "the shape seed (0 = reference)").value_or(0));
+  }
+  const auto& regions = generator_regions(s.mesh.generator);
+  auto known_region = [&](const std::string& r) {
+    return std::find(regions.begin(), regions.end(), r) != regions.end();
+  };
+
+  if (const json* m = c.object(root, R, "model", true)) {
+    const std::string P = "$.model";
+    const auto kind = c.text(*m, P, "kind", true, {"penalty", "ring", "mass_spring"});
+    if (kind == "penalty") {
+      s.kind = ModelKind::penalty;
+      c.keys(*m, P, {"kind"});
+    } else if (kind == "ring") {
+      s.kind = ModelKind::ring;
+      c.keys(*m, P,
+             {"kind", "m1", "m2", "m3", "node_mass", "home_stiffness", "home_damping", "scope"});
+      s.ring.m1 = c.number(*m, P, "m1", true, 0, 1, "the touched node's step size |m1| (m/N)", true)
+                      .value_or(0);
+      s.ring.m2 =
+          c.number(*m, P, "m2", true, 0, 1, "the first ring's step size |m2| (m/N)").value_or(0);
+      s.ring.m3 =
+          c.number(*m, P, "m3", true, 0, 1, "the second ring's step size |m3| (m/N)").value_or(0);
+      if (c.ok() && !(s.ring.m1 > s.ring.m2 && s.ring.m2 > s.ring.m3))
+        c.err(P, "expected |m1| > |m2| > |m3| (displacement deepest at the touched node)");
+      s.ring.node_mass =
+          c.number(*m, P, "node_mass", false, 0, 10, "the node mass (kg)", true).value_or(1e-3);
+      s.ring.home_ks =
+          c.number(*m, P, "home_stiffness", false, 0, 1e6, "home-spring stiffness (N/m)", true)
+              .value_or(20);
+      s.ring.home_kd = c.number(*m, P, "home_damping", false, 0, 1e4, "home-spring damping (N s/m)")
+                           .value_or(0.2);
+      if (auto sc = c.text(*m, P, "scope", false, {"rings", "octant", "whole"}))
+        s.scope = scope_from_string(*sc);
+    } else if (kind == "mass_spring") {
+      s.kind = ModelKind::mass_spring;
+      c.keys(*m, P,
+             {"kind", "total_mass", "stiffness", "damping", "home_stiffness", "home_damping",
+              "fixed_region", "integrator", "linear_solver", "sleeping", "refinement"});
+      s.total_mass =
+          c.number(*m, P, "total_mass", true, 0, 1e3, "the organ's mass (kg)", true).value_or(1);
+      s.stiffness = c.number(*m, P, "stiffness", true, 0, 1e7, "spring stiffness k_s (N/m)", true)
+                        .value_or(1);
+      s.damping =
+          c.number(*m, P, "damping", true, 0, 1e5, "spring damping k_d (N s/m)").value_or(0);
+      s.home_ks =
+          c.number(*m, P, "home_stiffness", false, 0, 1e7, "home-spring stiffness per node (N/m)")
+              .value_or(0);
+      s.home_kd =
+          c.number(*m, P, "home_damping", false, 0, 1e5, "home-spring damping per node (N s/m)")
+              .value_or(0);
+      if (auto fr = c.text(*m, P, "fixed_region", false)) {
+        if (!known_region(*fr))
+          c.err("$.model.fixed_region",
+                "unknown region \"" + *fr + "\" of mesh generator \"" + s.mesh.generator + "\"");
+        else
+          s.fixed_region = *fr;
+      }
+      if (auto in =
+              c.text(*m, P, "integrator", false, {"symplectic_euler", "backward_euler", "rk4"}))
+        s.integrator = integrator_from_string(*in);
+      if (auto ls = c.text(*m, P, "linear_solver", false, {"cg", "ldlt_refactor", "ldlt_frozen"}))
+        s.solver = linear_solver_from_string(*ls);
+      if (const json* sl = c.object(*m, P, "sleeping", false)) {
+        const std::string Q = "$.model.sleeping";
+        c.keys(*sl, Q, {"enabled", "position_tolerance", "velocity_tolerance"});
+        s.sleep.enabled = c.boolean(*sl, Q, "enabled", false).value_or(true);
+        s.sleep.x_tol =
+            c.number(*sl, Q, "position_tolerance", false, 0, 0.01, "the rest tolerance (m)", true)
+                .value_or(1e-6);
+        s.sleep.v_tol = c.number(*sl, Q, "velocity_tolerance", false, 0, 1,
+                                 "the rest velocity tolerance (m/s)", true)
+                            .value_or(1e-5);
+      }
+      if (const json* rf = c.object(*m, P, "refinement", false)) {
+        const std::string Q = "$.model.refinement";
+        c.keys(*rf, Q,
+               {"enabled", "policy", "threshold_area", "threshold_force", "level", "max_level",
+                "substep"});
+        s.refine = c.boolean(*rf, Q, "enabled", false).value_or(true);
+        if (auto po = c.text(*rf, Q, "policy", false, {"area_based", "conventional", "whole"}))
+          s.refine_params.policy = *po == "area_based"     ? RefinePolicy::area_based
+                                   : *po == "conventional" ? RefinePolicy::conventional
+                                                           : RefinePolicy::whole;
+        s.refine_params.threshold_area =
+            c.number(*rf, Q, "threshold_area",
+                     s.refine_params.policy == RefinePolicy::area_based && s.refine, 0, 1,
+                     "the threshold area A_t (m^2)", true)
+                .value_or(1e-4);
+        s.refine_force = c.number(*rf, Q, "threshold_force", false, 0, 1e3,
+                                  "the force that triggers refinement (N)")
+                             .value_or(1.0);
+        s.refine_params.level = static_cast<int>(
+            c.integer(*rf, Q, "level", false, 1, 5, "the fixed level of the baselines")
+                .value_or(1));
+        s.refine_params.max_level = static_cast<int>(
+            c.integer(*rf, Q, "max_level", false, 1, 5, "the deepest level").value_or(3));
+        s.substep = c.boolean(*rf, Q, "substep", false).value_or(true);
+      }
+    }
+  }
+  if (const json* ct = c.object(root, R, "contact", false)) {
+    const std::string P = "$.contact";
+    c.keys(*ct, P, {"stiffness", "radius"});
+    s.contact_k = c.number(*ct, P, "stiffness", false, 0, 1e6, "the contact stiffness (N/m)", true)
+                      .value_or(500);
+    s.contact_radius =
+        c.number(*ct, P, "radius", false, 0, 1, "the contact capture radius (m)", true).value_or(0);
+  }
+  if (const json* cu = c.object(root, R, "cues", false)) {
+    const std::string P = "$.cues";
+    c.keys(*cu, P, {"haptic", "visual_deformation", "audio"});
+    s.cues.haptic = c.boolean(*cu, P, "haptic", false).value_or(true);
+    s.cues.visual_deformation = c.boolean(*cu, P, "visual_deformation", false).value_or(true);
+    s.cues.audio = c.boolean(*cu, P, "audio", false).value_or(false);
+  }
+  if (const json* th = c.object(root, R, "thresholds", false)) {
+    for (auto it = th->begin(); it != th->end(); ++it) {
+      const std::string P = pj::path_key("$.thresholds", it.key());
+      if (it.key() != "*" && !known_region(it.key())) {
+        c.err(P, "unknown region \"" + it.key() + "\" (expected \"*\" or a region of the mesh)",
+              true);
+        continue;
+      }
+      if (!it.value().is_object()) {
+        c.err(P, "expected an object {\"st\", \"mpf\", \"sft\"} in N");
+        continue;
+      }
+      s.thresholds[it.key()] = read_thresholds(c, it.value(), P);
+    }
+  }
+  if (const json* sp = c.member(root, R, "start_position", false, "[x, y, z] in m")) {
+    if (!sp->is_array() || sp->size() != 3 || !(*sp)[0].is_number() || !(*sp)[1].is_number() ||
+        !(*sp)[2].is_number())
+      c.err("$.start_position", "expected [x, y, z] (three numbers, m)");
+    else
+      s.start =
+          Eigen::Vector3d((*sp)[0].get<double>(), (*sp)[1].get<double>(), (*sp)[2].get<double>());
+  }
+  c.throw_if_any();
+  return s;
+}
+
+// ---------------------------------------------------------------- cached meshes
+
+struct CachedMesh {
+  mesh::SurfaceMesh sm;
+  RowMatX3d N;
+  std::vector<int> vertex_region;
+  Eigen::VectorXd vertex_area;  // lumped (m^2)
+  double mean_edge = 0.0;
+  std::shared_ptr<const spatial::Octree> octree;
+  std::shared_ptr<const mesh::RingTable> rings;
+};
+
+std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m) {
+  static std::mutex mu;
+  static std::map<std::string, std::shared_ptr<const CachedMesh>> cache;
+  std::lock_guard<std::mutex> lock(mu);
+  auto it = cache.find(m.key());
+  if (it != cache.end()) return it->second;
+  auto c = std::make_shared<CachedMesh>();
+  if (m.generator == "tract")
+    c->sm = mesh::generate_tract({m.vertices, m.seed});
+  else if (m.generator == "stomach")
+    c->sm = mesh::generate_stomach(m.seed);
+  else
+    c->sm = mesh::generate_sphere(m.vertices);
+  const auto& V = c->sm.V;
+  const auto& F = c->sm.F;
+  c->N = mesh::vertex_normals(V, F);
+  const Eigen::VectorXi vr = mesh::vertex_regions(c->sm);
+  c->vertex_region.assign(V.rows(), -1);
+  for (long i = 0; i < vr.size(); ++i) c->vertex_region[i] = vr[i];
+  const Eigen::VectorXd fa = mesh::face_areas(V, F);
+  c->vertex_area.setZero(V.rows());
+  for (long f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) c->vertex_area[F(f, k)] += fa[f] / 3.0;
+  double sum = 0.0;
+  for (long e = 0; e < c->sm.E.rows(); ++e)
+    sum += (V.row(c->sm.E(e, 0)) - V.row(c->sm.E(e, 1))).norm();
+  c->mean_edge = c->sm.E.rows() ? sum / c->sm.E.rows() : 0.01;
+  c->octree = std::make_shared<const spatial::Octree>(spatial::build_octree(V, 12, 8));
+  c->rings = std::make_shared<const mesh::RingTable>(
+      mesh::compute_rings(static_cast<int>(V.rows()), c->sm.E));
+  cache.emplace(m.key(), c);
+  return c;
+}
+
+}  // namespace
+
+PrototypeSummary inspect_prototype(const std::string& path) {
+  const Spec s = parse(path);
+  return {s.id, s.scene, to_string(s.kind), generator_regions(s.mesh.generator)};
+}
+
+engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
+  Spec s = parse(path);
+  const auto cm = cached_mesh(s.mesh);
+  auto impl = std::make_unique<SceneImpl>();
+  SceneImpl& sc = *impl;
+  sc.prototype = s.id;
+  sc.kind = s.kind;
+  sc.dt = s.dt;
+  sc.cues = s.cues;
+  if (ov.haptic) sc.cues.haptic = *ov.haptic;
+  if (ov.visual_deformation) sc.cues.visual_deformation = *ov.visual_deformation;
+  if (ov.audio) sc.cues.audio = *ov.audio;
+  sc.contact_k = s.contact_k;
+  sc.contact_radius = s.contact_radius > 0 ? s.contact_radius : 1.5 * cm->mean_edge;
+
+  SceneGeometry& g = sc.geom;
+  g.V = cm->sm.V;
+  g.N = cm->N;
+  g.F = cm->sm.F;
+  g.vertex_region = cm->vertex_region;
+  g.region_names = cm->sm.regions.names;
+  g.search_index = cm->octree;
+  sc.octree = cm->octree;
+  sc.surface_rings = cm->rings;
+  if (s.start) {
+    g.start_position = *s.start;
+  } else {
+    // 5 cm in front (-y) of the organ, at the height of its centre.
+    const Eigen::Vector3d lo = g.V.colwise().minCoeff().transpose();
+    const Eigen::Vector3d hi = g.V.colwise().maxCoeff().transpose();
+    g.start_position = 0.5 * (lo + hi);
+    g.start_position.y() = lo.y() - 0.05;
+  }
+
+  // Thresholds: per region from the file, then the study's overrides; "*" fills the rest.
+  std::map<std::string, Thresholds> th = s.thresholds;
+  for (const auto& [k, v] : ov.thresholds) {
+    if (k != "*" &&
+        std::find(g.region_names.begin(), g.region_names.end(), k) == g.region_names.end())
+      throw InputError("threshold override for unknown region \"" + k + "\" of prototype " + s.id,
+                       path);
+    th[k] = v;
+  }
+  Thresholds star{2.0, 2.5, 3.0};
+  if (th.count("*")) star = th["*"];
+  sc.default_thresholds = star;
+  sc.thresholds.assign(g.region_names.size(), star);
+  for (size_t r = 0; r < g.region_names.size(); ++r)
+    if (th.count(g.region_names[r])) sc.thresholds[r] = th[g.region_names[r]];
+
+  const long n = g.V.rows();
+  if (s.kind == ModelKind::ring) {
+    sc.ring = make_ring_model(g.V, cm->sm.E, s.ring);
+    sc.ring.scope = s.scope;
+    sc.ring.octree = cm->octree.get();
+  } else if (s.kind == ModelKind::mass_spring) {
+    MassSpringSystem sys;
+    sys.X_rest = g.V;
+    sys.X = g.V;
+    sys.V.setZero(n, 3);
+    sys.F_ext.setZero(n, 3);
+    const double area = cm->vertex_area.sum();
+    sys.mass = cm->vertex_area * (s.total_mass / area);
+    // Home springs per node scale with the node's share of the surface (uniform per m^2), so
+    // the organ's overall shape stiffness does not depend on the tessellation.
+    sys.home_ks = cm->vertex_area * (s.home_ks * n / area);
+    sys.home_kd = cm->vertex_area * (s.home_kd * n / area);
+    sys.fixed.assign(n, 0);
+    if (!s.fixed_region.empty()) {
+      const int r = g.region_index(s.fixed_region);
+      for (long i = 0; i < n; ++i)
+        if (g.vertex_region[i] == r) sys.fixed[i] = 1;
+    }
+    sys.springs = springs_from_edges(g.V, cm->sm.E, s.stiffness, s.damping);
+    MassSpringScene& ms = sc.ms;
+    ms.model = make_adaptive(std::move(sys), g.F, s.stiffness, s.damping, s.dt);
+    ms.integrator = ov.integrator ? integrator_from_string(*ov.integrator) : s.integrator;
+    ms.ws.solver = s.solver;
+    ms.ws.cg_tolerance = 1e-6;
+    ms.sleep = s.sleep;
+    ms.refine = s.refine;
+    ms.refine_params = s.refine_params;
+    ms.refine_force = s.refine_force;
+    ms.substep = s.substep;
+    ms.surface_to_model.resize(n);
+    for (long i = 0; i < n; ++i) ms.surface_to_model[i] = static_cast<int>(i);
+  }
+  return Scene(std::move(impl));
+}
+
+}  // namespace palplab::prototypes

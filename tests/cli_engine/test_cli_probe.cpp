@@ -1,0 +1,65 @@
+// `palplab probe` end to end: JSON keys of the issue, exit codes for bad input.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+struct Result {
+  int code;
+  std::string out;
+};
+Result run(const std::string& args) {
+  const std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
+  const int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+}  // namespace
+
+TEST(CliProbe, JsonKeysAndPlausibleValues) {
+  for (const char* id : {"A", "B", "C1"}) {
+    const Result r = run("probe " + proto(id) +
+                         " --press ovary_left --force 2.5 --duration 0.3 --release 0.5 --json");
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    for (const char* k : {"prototype", "peak_force", "peak_displacement", "mass_initial",
+                          "mass_final", "max_rest_error_after_release", "nodes", "springs",
+                          "new_nodes", "new_springs", "step_time_us", "nan_detected"})
+      EXPECT_TRUE(j.contains(k)) << k;
+    EXPECT_TRUE(j["step_time_us"].contains("median"));
+    EXPECT_TRUE(j["step_time_us"].contains("p99"));
+    EXPECT_EQ(j["prototype"], id);
+    EXPECT_NEAR(j["peak_force"].get<double>(), 2.5, 0.1);
+    EXPECT_FALSE(j["nan_detected"].get<bool>());
+    EXPECT_LT(j["max_rest_error_after_release"].get<double>(), 1e-5);
+    if (std::string(id) == "A") EXPECT_EQ(j["peak_displacement"].get<double>(), 0.0);
+    if (std::string(id) != "A") EXPECT_GT(j["peak_displacement"].get<double>(), 1e-3);
+    if (std::string(id) == "C1") {
+      EXPECT_NEAR(j["mass_final"].get<double>(), j["mass_initial"].get<double>(), 1e-12);
+      EXPECT_GT(j["springs"].get<long>(), 1000);
+    }
+  }
+}
+
+TEST(CliProbe, BadInputExitsTwo) {
+  EXPECT_EQ(run("probe " + proto("A") + " --press liver --force 2 --duration 1").code, 2);
+  EXPECT_EQ(run("probe " + proto("A") + " --press ovary_left --force -1 --duration 1").code, 2);
+  EXPECT_EQ(
+      run("probe " + proto("C") + " --press ovary_left --force 2 --duration 1 --integrator euler")
+          .code,
+      2);
+  EXPECT_EQ(run("probe /nonexistent.json --press body --force 2 --duration 1").code, 2);
+  EXPECT_EQ(run("probe " + proto("A") + " --press 999999 --force 2 --duration 1").code, 2);
+  const Result r = run("probe " + proto("A") + " --press liver --force 2 --duration 1");
+  EXPECT_NE(r.out.find("ovary_left"), std::string::npos) << r.out;  // lists the regions
+}

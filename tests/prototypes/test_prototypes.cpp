@@ -1,0 +1,232 @@
+// Prototype files and the Scene they build: every shipped file builds, bad files give located
+// errors, overrides switch cues, lock-step runs are bit-identical, reset() restores the start.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "common/input_error.hpp"
+#include "engine/haptics/scene_impl.hpp"
+#include "prototypes/factory.hpp"
+
+using namespace palplab;
+using namespace palplab::engine;
+
+namespace {
+
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const auto p = std::filesystem::temp_directory_path() / ("palplab_test_" + name);
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+// Replaces the first occurrence of `from` in prototype `id` and writes it to a temp file.
+std::string mutated(const std::string& id, const std::string& from, const std::string& to) {
+  std::ifstream in(proto(id));
+  std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto k = s.find(from);
+  EXPECT_NE(k, std::string::npos) << from;
+  s.replace(k, from.size(), to);
+  return write_temp(id + "_mut.json", s);
+}
+
+std::string error_of(const std::string& path) {
+  try {
+    prototypes::build_scene(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// What a step rendered, with its events copied (Rendered::events is only valid until the next
+// step).
+struct Rec : Rendered {
+  std::vector<Event> ev;
+};
+
+// A scripted press: approach the node of `region` along its inward normal, push 8 mm, withdraw.
+std::vector<Rec> press(Scene& s, const std::string& region, int steps = 1500) {
+  const auto& g = s.geometry();
+  const int node = g.region_node(region);
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  std::vector<Rec> out;
+  for (int k = 0; k < steps; ++k) {
+    const double t = k * s.dt();
+    const double depth =
+        std::max(-0.002, -0.002 + 0.02 * std::min(t, 0.5) - 0.03 * std::max(0.0, t - 0.9));
+    Rec r;
+    static_cast<Rendered&>(r) = s.step(p - depth * n);
+    r.ev.assign(r.events.begin(), r.events.end());
+    r.events = {};
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Prototypes, EveryShippedFileBuilds) {
+  for (const char* id : {"A", "B", "C", "C1", "C2"}) {
+    Scene s = prototypes::build_scene(proto(id));
+    EXPECT_EQ(s.prototype(), id);
+    EXPECT_EQ(s.dt(), 1e-3);
+    const auto& g = s.geometry();
+    EXPECT_GT(g.V.rows(), 1000);
+    EXPECT_EQ(g.N.rows(), g.V.rows());
+    EXPECT_EQ(static_cast<long>(g.vertex_region.size()), g.V.rows());
+    EXPECT_GE(g.region_index("ovary_left"), 0);
+    EXPECT_GE(g.region_node("ovary_left"), 0);
+    const auto sum = prototypes::inspect_prototype(proto(id));
+    EXPECT_EQ(sum.id, id);
+    EXPECT_EQ(sum.region_names, g.region_names);
+  }
+  // SPEC §1 table: mesh sizes and C2 = half of C1's threshold area.
+  EXPECT_NEAR(prototypes::build_scene(proto("A")).geometry().V.rows(), 1500, 30);
+  EXPECT_NEAR(prototypes::build_scene(proto("B")).geometry().V.rows(), 6000, 120);
+  auto c1 = prototypes::build_scene(proto("C1")), c2 = prototypes::build_scene(proto("C2"));
+  EXPECT_DOUBLE_EQ(c2.impl().ms.refine_params.threshold_area,
+                   0.5 * c1.impl().ms.refine_params.threshold_area);
+}
+
+TEST(Prototypes, PressRendersWhatEachPrototypeShows) {
+  for (const char* id : {"A", "B", "C"}) {
+    Scene s = prototypes::build_scene(proto(id));
+    const auto r = press(s, "ovary_left");
+    double fmax = 0, dmax = 0;
+    bool audio = false, start = false, end = false;
+    for (const auto& x : r) {
+      fmax = std::max(fmax, x.force.norm());
+      dmax = std::max(dmax, x.visible_deformation);
+      audio |= x.audio;
+      for (const auto& e : x.ev) {
+        start |= e.kind == EventKind::contact_start;
+        end |= e.kind == EventKind::contact_end;
+      }
+      if (x.contact)
+        EXPECT_EQ(s.geometry().region_names[x.contact_region], "ovary_left")
+            << x.t << " node " << x.contact_node;
+    }
+    EXPECT_GT(fmax, 2.0) << id;
+    EXPECT_TRUE(start && end) << id;
+    EXPECT_EQ(audio, std::string(id) == "A") << id;  // only A has the sound cue
+    if (std::string(id) == "A")
+      EXPECT_EQ(dmax, 0.0);
+    else
+      EXPECT_GT(dmax, 1e-3) << id;
+    EXPECT_FALSE(r.back().contact);
+  }
+}
+
+TEST(Prototypes, OverridesSwitchCuesAndThresholds) {
+  SceneOverrides ov;
+  ov.audio = false;
+  ov.visual_deformation = false;
+  ov.thresholds["ovary_left"] = Thresholds{0.5, 0.8, 1.0};
+  for (const char* id : {"A", "C"}) {
+    Scene s = prototypes::build_scene(proto(id), ov);
+    bool st = false;
+    for (const auto& x : press(s, "ovary_left")) {
+      EXPECT_FALSE(x.audio);
+      EXPECT_EQ(x.visible_deformation, 0.0);
+      for (const auto& e : x.ev)
+        if (e.kind == EventKind::st_reached) {
+          st = true;
+          EXPECT_NEAR(e.value, 0.5, 0.05);  // crossed at the overridden ST
+        }
+    }
+    EXPECT_TRUE(st);
+  }
+  SceneOverrides haptic_off;
+  haptic_off.haptic = false;
+  Scene s = prototypes::build_scene(proto("B"), haptic_off);
+  for (const auto& x : press(s, "ovary_left")) EXPECT_EQ(x.force.norm(), 0.0);
+  SceneOverrides bad;
+  bad.thresholds["liver"] = Thresholds{1, 2, 3};
+  EXPECT_THROW(prototypes::build_scene(proto("A"), bad), InputError);
+}
+
+TEST(Prototypes, LockStepIsBitIdenticalAcrossRunsAndReset) {
+  for (const char* id : {"B", "C2"}) {
+    Scene a = prototypes::build_scene(proto(id));
+    Scene b = prototypes::build_scene(proto(id));
+    const auto ra = press(a, "ovary_right", 1200);
+    const auto rb = press(b, "ovary_right", 1200);
+    a.reset();
+    const auto rc = press(a, "ovary_right", 1200);
+    ASSERT_EQ(ra.size(), rb.size());
+    for (size_t k = 0; k < ra.size(); ++k) {
+      ASSERT_EQ(std::memcmp(ra[k].force.data(), rb[k].force.data(), sizeof(double) * 3), 0) << k;
+      ASSERT_EQ(std::memcmp(ra[k].force.data(), rc[k].force.data(), sizeof(double) * 3), 0) << k;
+      ASSERT_EQ(ra[k].visible_deformation, rb[k].visible_deformation);
+      ASSERT_EQ(ra[k].visible_deformation, rc[k].visible_deformation);
+      ASSERT_EQ(ra[k].contact_node, rc[k].contact_node);
+      ASSERT_EQ(ra[k].ev.size(), rc[k].ev.size());
+      for (size_t e = 0; e < ra[k].ev.size(); ++e) {
+        ASSERT_EQ(ra[k].ev[e].kind, rb[k].ev[e].kind);
+        ASSERT_EQ(ra[k].ev[e].value, rb[k].ev[e].value);
+      }
+    }
+  }
+}
+
+TEST(Prototypes, MassConservedAndRestoredThroughRefinement) {
+  Scene s = prototypes::build_scene(proto("C2"));
+  const double m0 = s.stats().total_mass;
+  const auto& g = s.geometry();
+  const int node = g.region_node("body");
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  long max_new = 0;
+  for (int k = 0; k < 600; ++k) {
+    s.step(p + (0.002 - 0.02 * std::min(k * 1e-3, 0.4)) * n);
+    const auto st = s.stats();
+    max_new = std::max(max_new, st.nodes - st.coarse_nodes);
+    ASSERT_NEAR(st.total_mass, m0, 1e-12 * m0);
+  }
+  EXPECT_GT(max_new, 0);  // refined while pressing
+  for (int k = 0; k < 1500; ++k) s.step(p + 0.01 * n);
+  const auto st = s.stats();
+  EXPECT_EQ(st.nodes, st.coarse_nodes);  // simplified after release
+  EXPECT_EQ(st.total_mass, m0);
+  EXPECT_LT(st.max_rest_error, 1e-5);
+  EXPECT_FALSE(st.nan_detected);
+}
+
+TEST(Prototypes, BadFilesGiveLocatedErrors) {
+  // Syntax error: line and column.
+  const std::string syn =
+      write_temp("syntax.json",
+                 "{\n  \"format\": \"palplab-prototype/1\",\n  \"id\": \"X\" \"mesh\": {}\n}\n");
+  std::string e = error_of(syn);
+  EXPECT_NE(e.find(syn + ":3:"), std::string::npos) << e;
+  // Unknown key, located at the key, with the JSON path.
+  e = error_of(mutated("B", "\"scope\": \"rings\"", "\"scop\": \"rings\""));
+  EXPECT_NE(e.find(":11:"), std::string::npos) << e;
+  EXPECT_NE(e.find("$.model.scop"), std::string::npos) << e;
+  // Out-of-range value.
+  e = error_of(mutated("A", "\"stiffness\": 500.0", "\"stiffness\": -3"));
+  EXPECT_NE(e.find("$.contact.stiffness"), std::string::npos) << e;
+  EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  // Semantic rule: |m1| > |m2| > |m3|.
+  e = error_of(mutated("B", "\"m1\": 0.004", "\"m1\": 0.002"));
+  EXPECT_NE(e.find("|m1| > |m2| > |m3|"), std::string::npos) << e;
+  // ST must be below SFT; unknown region in thresholds; unknown integrator.
+  e = error_of(mutated("A", "\"st\": 2.0", "\"st\": 4.0"));
+  EXPECT_NE(e.find("ST < SFT"), std::string::npos) << e;
+  e = error_of(mutated("A", "\"*\":", "\"liver\":"));
+  EXPECT_NE(e.find("$.thresholds.liver"), std::string::npos) << e;
+  e = error_of(mutated("C", "\"backward_euler\"", "\"forward_euler\""));
+  EXPECT_NE(e.find("$.model.integrator"), std::string::npos) << e;
+  EXPECT_NE(e.find(":14:"), std::string::npos) << e;
+  // Wrong type, missing required key, missing file.
+  e = error_of(mutated("C", "\"total_mass\": 0.8", "\"total_mass\": \"heavy\""));
+  EXPECT_NE(e.find("$.model.total_mass"), std::string::npos) << e;
+  e = error_of(mutated("A", "\"id\": \"A\",", ""));
+  EXPECT_NE(e.find("missing required key \"id\""), std::string::npos) << e;
+  EXPECT_NE(error_of("/nonexistent/X.json").find("/nonexistent/X.json"), std::string::npos);
+}
