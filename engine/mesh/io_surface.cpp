@@ -93,8 +93,29 @@ int region_of(const SurfaceMesh& m, int f) {
 // ---------------------------------------------------------------- OBJ
 
 SurfaceMesh read_obj(const std::string& path) {
+  std::vector<std::string> preset_names;
+  // Region ids in file order: `# region <id> <name>` comments (written by palplab) come first.
+  {
+    TextReader pre(path, '\0');
+    std::vector<std::string> t;
+    std::vector<std::pair<long, std::string>> declared;
+    while (pre.tokens(t))
+      if (t.size() >= 4 && t[0] == "#" && t[1] == "region") {
+        std::string name = t[3];
+        for (size_t c = 4; c < t.size(); ++c) name += " " + t[c];
+        declared.push_back({pre.integer(t[2], "a region id"), name});
+      }
+    if (!declared.empty()) {
+      Builder probe;
+      for (auto& [id, name] : declared)
+        if (id != probe.region_id(name))
+          pre.fail("`# region` comments must number the regions 0, 1, 2, ... in order");
+      preset_names = probe.names;
+    }
+  }
   TextReader r(path);
   Builder b;
+  b.names = preset_names;
   int current = -1;
   std::vector<std::string> t;
   std::vector<int> idx;
@@ -141,6 +162,8 @@ SurfaceMesh read_obj(const std::string& path) {
 void write_obj(const std::string& path, const SurfaceMesh& m) {
   auto out = open_out(path);
   out << "# palplab surface: " << m.V.rows() << " vertices, " << m.F.rows() << " faces (m)\n";
+  for (size_t i = 0; i < m.regions.names.size(); ++i)
+    out << "# region " << i << " " << m.regions.names[i] << "\n";
   for (int i = 0; i < m.V.rows(); ++i)
     out << "v " << num(m.V(i, 0)) << " " << num(m.V(i, 1)) << " " << num(m.V(i, 2)) << "\n";
   int current = -2;

@@ -88,20 +88,38 @@ void build_connectivity(SurfaceMesh& m) {
       m.vertex_he[v] = h;
     }
   }
-  // A vertex is manifold when one fan rotation visits all its faces and it has at most one
-  // outgoing half-edge without twin (boundary vertices have exactly one).
+  // A vertex is manifold when its faces form one fan: faces are linked through the edges at the
+  // vertex that have exactly two faces (orientation does not matter here: that is a separate
+  // defect). Local union-find over the faces of each vertex.
   m.non_manifold_vertices.clear();
+  std::vector<int> off(nv + 1, 0);
+  for (int h = 0; h < nh; ++h) ++off[he_origin(m, h) + 1];
+  for (int v = 0; v < nv; ++v) off[v + 1] += off[v];
+  std::vector<int> vh(nh), fill(off.begin(), off.end() - 1);
+  for (int h = 0; h < nh; ++h) vh[fill[he_origin(m, h)]++] = h;  // outgoing half-edges of v
+  std::vector<int> parent;
   for (int v = 0; v < nv; ++v) {
-    if (m.vertex_he[v] < 0) continue;
-    int visited = 0;
-    int h = m.vertex_he[v];
-    do {
-      ++visited;
-      int t = m.twin[he_prev(h)];
-      if (t < 0) break;
-      h = t;
-    } while (h != m.vertex_he[v] && visited <= nfaces[v]);
-    if (visited != nfaces[v] || nfree[v] > 1) m.non_manifold_vertices.push_back(v);
+    const int n = off[v + 1] - off[v];
+    if (n <= 1) continue;
+    parent.resize(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto root = [&](int x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    // Face i (outgoing h_i = v->a_i, incoming prev(h_i) = b_i->v) touches edges {v,a_i}, {v,b_i}.
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) {
+        const int hi = vh[off[v] + i], hj = vh[off[v] + j];
+        const int ei[2] = {m.he_edge[hi], m.he_edge[he_prev(hi)]};
+        const int ej[2] = {m.he_edge[hj], m.he_edge[he_prev(hj)]};
+        for (int x : ei)
+          for (int y : ej)
+            if (x == y && m.edge_faces[x] == 2) parent[root(i)] = root(j);
+      }
+    int comps = 0;
+    for (int i = 0; i < n; ++i) comps += root(i) == i;
+    if (comps > 1) m.non_manifold_vertices.push_back(v);
   }
 }
 

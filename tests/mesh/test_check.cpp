@@ -1,0 +1,222 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "engine/mesh/check.hpp"
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/repair.hpp"
+#include "engine/mesh/tetrahedralize.hpp"
+#include "fixtures.hpp"
+
+using namespace palplab::mesh;
+using namespace palplab::mesh::testing;
+
+namespace {
+
+long count(const CheckReport& r, const std::string& k) {
+  auto it = r.counts.find(k);
+  return it == r.counts.end() ? 0 : it->second;
+}
+
+const Defect* first(const CheckReport& r, const std::string& k) {
+  for (auto& d : r.defects)
+    if (d.kind == k) return &d;
+  return nullptr;
+}
+
+SurfaceMesh with_faces(const SurfaceMesh& m, Positions V, Faces F) {
+  return make_surface_mesh(std::move(V), std::move(F));
+}
+
+// Two unit cubes' surfaces, the second shifted by d.
+SurfaceMesh two_cubes(const Vec3& d) {
+  SurfaceMesh c = cube();
+  Positions V(16, 3);
+  V.topRows(8) = c.V;
+  V.bottomRows(8) = c.V.rowwise() + d.transpose();
+  Faces F(24, 3);
+  F.topRows(12) = c.F;
+  F.bottomRows(12) = c.F.array() + 8;
+  return make_surface_mesh(V, F);
+}
+
+}  // namespace
+
+TEST(Check, CleanMeshesHaveNoDefects) {
+  EXPECT_TRUE(check_surface(cube()).clean());
+  EXPECT_TRUE(check_surface(generate_tract({1500, 0})).clean());
+  EXPECT_TRUE(check_surface(generate_tract({6000, 0})).clean());
+  EXPECT_TRUE(check_surface(generate_tract({1500, 3})).clean());
+  EXPECT_TRUE(check_surface(generate_sphere(2562)).clean());
+  CheckOptions open;
+  open.expect_closed = false;
+  EXPECT_TRUE(check_surface(generate_stomach(), open).clean());
+  EXPECT_TRUE(check_tets(generate_model_c()).clean());
+  EXPECT_TRUE(check_tets(kuhn_grid(3, [](double, double, double) { return 101; })).clean());
+}
+
+TEST(Check, OpenEdgesOfAHole) {
+  SurfaceMesh c = cube();
+  Faces F = c.F.topRows(11);  // drop the last triangle: a 3-edge hole
+  CheckReport r = check_surface(with_faces(c, c.V, F));
+  EXPECT_EQ(count(r, "open_edge"), 3);
+  EXPECT_EQ(r.counts.size(), 1u);
+  const Defect* d = first(r, "open_edge");
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->vertices.size(), 2u);
+  EXPECT_EQ(d->points.size(), 2u);
+  EXPECT_EQ(d->points[0], row3(c.V, d->vertices[0]));
+  // The stomach's ends are open edges unless boundaries are allowed.
+  EXPECT_EQ(count(check_surface(generate_stomach()), "open_edge"), 12);
+}
+
+TEST(Check, NonManifoldEdgeAndVertex) {
+  SurfaceMesh c = cube();
+  // A fin: a third face on edge (0,1) to a new vertex.
+  Positions V(9, 3);
+  V.topRows(8) = c.V;
+  V.row(8) << 0.5, -1, 0;
+  Faces F(13, 3);
+  F.topRows(12) = c.F;
+  F.row(12) << 0, 1, 8;
+  CheckReport r = check_surface(make_surface_mesh(V, F));
+  EXPECT_EQ(count(r, "non_manifold_edge"), 1);
+  const Defect* d = first(r, "non_manifold_edge");
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->vertices, (std::vector<int>{0, 1}));
+  EXPECT_EQ(d->faces.size(), 3u);
+  // Two cubes touching at one corner (vertex 7 of the first = vertex 0 of the second, shared).
+  SurfaceMesh t = two_cubes(Vec3(1, 1, 1));
+  Faces G = t.F;
+  for (int i = 0; i < G.size(); ++i)
+    if (G.data()[i] == 8) G.data()[i] = 7;
+  CheckReport r2 = check_surface(make_surface_mesh(t.V, G));
+  EXPECT_EQ(count(r2, "non_manifold_vertex"), 1);
+  EXPECT_EQ(first(r2, "non_manifold_vertex")->vertices, std::vector<int>{7});
+  EXPECT_EQ(count(r2, "non_manifold_edge"), 0);
+}
+
+TEST(Check, DuplicateVertexAndDegenerateFace) {
+  SurfaceMesh c = cube();
+  // Vertex 8 duplicates vertex 3 and replaces it in one face: the mesh gets open edges too.
+  Positions V(9, 3);
+  V.topRows(8) = c.V;
+  V.row(8) = c.V.row(3);
+  Faces F = c.F;
+  F.row(1) << 1, 2, 8;
+  CheckReport r = check_surface(make_surface_mesh(V, F));
+  EXPECT_EQ(count(r, "duplicate_vertex"), 1);
+  EXPECT_EQ(first(r, "duplicate_vertex")->vertices, (std::vector<int>{3, 8}));
+  // A zero-area sliver face glued into an edge: split edge (0,1) at its midpoint m and add the
+  // flat triangle (0, m, 1)... here simply: a face with a repeated vertex, and a collinear one.
+  Positions W(11, 3);
+  W.topRows(8) = c.V;
+  W.row(8) << 5, 5, 5;
+  W.row(9) << 6, 5, 5;
+  W.row(10) << 7, 5, 5;  // collinear with 8, 9
+  Faces G(14, 3);
+  G.topRows(12) = c.F;
+  G.row(12) << 8, 9, 10;
+  G.row(13) << 8, 8, 9;
+  CheckOptions o;
+  o.expect_closed = false;
+  CheckReport r2 = check_surface(make_surface_mesh(W, G), o);
+  EXPECT_EQ(count(r2, "degenerate_face"), 2);
+  EXPECT_EQ(first(r2, "degenerate_face")->faces, std::vector<int>{12});
+}
+
+TEST(Check, InconsistentOrientation) {
+  SurfaceMesh c = cube();
+  Faces F = c.F;
+  std::swap(F(5, 1), F(5, 2));
+  CheckReport r = check_surface(make_surface_mesh(c.V, F));
+  EXPECT_EQ(count(r, "inconsistent_orientation"), 3);
+  EXPECT_EQ(r.counts.size(), 1u);
+  for (auto& d : r.defects) {
+    EXPECT_EQ(d.faces.size(), 2u);
+    EXPECT_TRUE(std::find(d.faces.begin(), d.faces.end(), 5) != d.faces.end());
+  }
+}
+
+TEST(Check, SelfIntersectionsFoundByBvhEqualBruteForce) {
+  SurfaceMesh t = two_cubes(Vec3(0.5, 0.3, 0.2));
+  CheckReport r = check_surface(t);
+  EXPECT_GT(count(r, "self_intersection"), 0);
+  EXPECT_EQ(r.counts.size(), 1u);
+  auto fast = self_intersections(t.V, t.F);
+  EXPECT_EQ(fast, self_intersections_brute_force(t.V, t.F));
+  for (auto [f, g] : fast) EXPECT_TRUE(f < 12 && g >= 12);  // each cube alone is clean
+  // The crossing point lies on both faces' planes.
+  const Defect* d = first(r, "self_intersection");
+  ASSERT_TRUE(d);
+  Positions N = face_normals(t.V, t.F);
+  for (int f : d->faces)
+    EXPECT_NEAR(N.row(f).dot((d->points[0] - row3(t.V, t.F(f, 0))).transpose()), 0, 1e-12);
+  // Disjoint cubes: none.
+  SurfaceMesh apart = two_cubes(Vec3(1.5, 0, 0));
+  EXPECT_TRUE(check_surface(apart).clean());
+  // A vertex of the tract pushed through the opposite wall.
+  SurfaceMesh m = generate_tract({1500, 0});
+  const int v = 200;
+  m.V.row(v) -= 0.06 * vertex_normals(m.V, m.F).row(v);  // through the opposite wall
+  CheckReport r3 = check_surface(m);
+  EXPECT_GT(count(r3, "self_intersection"), 0);
+  EXPECT_EQ(self_intersections(m.V, m.F), self_intersections_brute_force(m.V, m.F));
+}
+
+TEST(Check, InvertedAndSliverTets) {
+  TetMesh g = kuhn_grid(2, [](double, double, double) { return 101; });
+  Tets T = g.T;
+  std::swap(T(5, 0), T(5, 1));
+  // A sliver: four almost coplanar points added as a separate tet.
+  Positions V(g.V.rows() + 4, 3);
+  V.topRows(g.V.rows()) = g.V;
+  const int b = static_cast<int>(g.V.rows());
+  V.row(b) << 3, 0, 0;
+  V.row(b + 1) << 4, 0, 0;
+  V.row(b + 2) << 3.5, 1, 0;
+  V.row(b + 3) << 3.5, 0.3, 1e-7;
+  T.conservativeResize(T.rows() + 1, 4);
+  T.row(T.rows() - 1) << b, b + 1, b + 2, b + 3;
+  CheckReport r = check_tets(make_tet_mesh(V, T));
+  EXPECT_EQ(count(r, "inverted_tet"), 1);
+  EXPECT_EQ(first(r, "inverted_tet")->tets, std::vector<int>{5});
+  EXPECT_EQ(count(r, "sliver_tet"), 1);
+  EXPECT_EQ(first(r, "sliver_tet")->tets, std::vector<int>{static_cast<int>(T.rows()) - 1});
+  EXPECT_EQ(first(r, "sliver_tet")->points.size(), 1u);
+}
+
+TEST(Repair, FixesWhatCheckFinds) {
+  SurfaceMesh c = cube();
+  // Duplicate of vertex 3 used by one face, a flipped face, a degenerate face, a missing face.
+  Positions V(9, 3);
+  V.topRows(8) = c.V;
+  V.row(8) = c.V.row(3);
+  Faces F(12, 3);
+  F.topRows(11) = c.F.topRows(11);  // face 11 (1,7,5 side) missing -> hole
+  F.row(1) << 1, 2, 8;
+  std::swap(F(6, 1), F(6, 2));
+  F.row(11) << 0, 0, 4;  // degenerate
+  SurfaceMesh bad = make_surface_mesh(V, F);
+  EXPECT_FALSE(check_surface(bad).clean());
+  RepairLog log;
+  SurfaceMesh fixed = repair(bad, {}, &log);
+  EXPECT_EQ(log.merged_vertices, 1);
+  EXPECT_EQ(log.dropped_degenerate_faces, 1);
+  EXPECT_EQ(log.flipped_faces, 1);
+  EXPECT_EQ(log.filled_holes, 1);
+  EXPECT_TRUE(check_surface(fixed).clean());
+  EXPECT_EQ(genus(fixed), 0);
+  EXPECT_NEAR(enclosed_volume(fixed.V, fixed.F), 1.0, 1e-12);  // the hole was planar
+  // A clean mesh is left alone; an inside-out one is turned outwards.
+  RepairLog none;
+  SurfaceMesh same = repair(generate_sphere(642), {}, &none);
+  EXPECT_FALSE(none.changed());
+  Faces inv = c.F;
+  inv.col(1).swap(inv.col(2));
+  RepairLog flipped;
+  SurfaceMesh out = repair(make_surface_mesh(c.V, inv), {}, &flipped);
+  EXPECT_EQ(flipped.flipped_faces, 12);
+  EXPECT_NEAR(enclosed_volume(out.V, out.F), 1.0, 1e-12);
+}

@@ -1,0 +1,223 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/input_error.hpp"
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/io.hpp"
+#include "engine/mesh/tetrahedralize.hpp"
+#include "fixtures.hpp"
+
+using namespace palplab::mesh;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string tmp(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("palplab_test_io_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return (d / name).string();
+}
+
+void write_text(const std::string& path, const std::string& s) {
+  std::ofstream(path, std::ios::binary) << s;
+}
+
+// Same faces with the same corner coordinates and region names, vertex numbering aside (STL
+// renumbers vertices in order of first use, and region ids in order of first appearance).
+void expect_same_geometry(const SurfaceMesh& a, const SurfaceMesh& b) {
+  ASSERT_EQ(a.V.rows(), b.V.rows());
+  ASSERT_EQ(a.F.rows(), b.F.rows());
+  for (int f = 0; f < a.F.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(a.V.row(a.F(f, k)), b.V.row(b.F(f, k))) << f;
+    if (!a.regions.empty()) {
+      ASSERT_EQ(a.regions.names[a.regions.id[f]], b.regions.names[b.regions.id[f]]) << f;
+    }
+  }
+}
+
+void expect_same(const SurfaceMesh& a, const SurfaceMesh& b, double tol = 0) {
+  ASSERT_EQ(a.V.rows(), b.V.rows());
+  ASSERT_EQ(a.F.rows(), b.F.rows());
+  if (tol == 0)
+    EXPECT_EQ(a.V, b.V);
+  else
+    EXPECT_LE((a.V - b.V).cwiseAbs().maxCoeff(), tol);
+  EXPECT_EQ(a.F, b.F);
+  EXPECT_EQ(a.regions.names, b.regions.names);
+  EXPECT_EQ(a.regions.id, b.regions.id);
+}
+
+// The error names the file and the line (or byte offset).
+void expect_located(const std::function<void()>& f, const std::string& file, int line,
+                    long byte = -1) {
+  try {
+    f();
+    ADD_FAILURE() << "no InputError for " << file;
+  } catch (const palplab::InputError& e) {
+    ASSERT_FALSE(e.problems().empty());
+    const auto& w = e.problems()[0].where;
+    EXPECT_EQ(w.file, file) << e.what();
+    if (line > 0) {
+      EXPECT_EQ(w.line, line) << e.what();
+    }
+    if (byte >= 0) {
+      EXPECT_EQ(w.byte_offset, byte) << e.what();
+    }
+  }
+}
+
+}  // namespace
+
+TEST(Io, SurfaceRoundTripsKeepEverything) {
+  const SurfaceMesh m = generate_tract({1500, 0});  // has regions
+  for (const char* ext : {".obj", ".ply", ".vtu"}) {
+    for (bool binary : {false, true}) {
+      if (binary && std::string(ext) != ".ply") continue;
+      const std::string p = tmp(std::string("tract") + (binary ? "_bin" : "") + ext);
+      write_surface(p, m, {binary});
+      SCOPED_TRACE(p);
+      expect_same(m, read_surface(p));
+    }
+  }
+  // ASCII STL: one solid per region run; exact coordinates, vertices renumbered by first use.
+  const std::string stl = tmp("tract.stl");
+  write_stl(stl, m, false);
+  expect_same_geometry(m, read_stl(stl));
+}
+
+TEST(Io, FormatsWithoutRegionsKeepGeometry) {
+  const SurfaceMesh m = generate_sphere(642);
+  const std::string off = tmp("sphere.off");
+  write_off(off, m);
+  expect_same(m, read_off(off));
+  // Binary STL stores float32: exact up to float rounding, vertices welded back.
+  const std::string stl = tmp("sphere_bin.stl");
+  write_stl(stl, m, true);
+  SurfaceMesh b = read_stl(stl);
+  ASSERT_EQ(b.F.rows(), m.F.rows());
+  ASSERT_EQ(b.V.rows(), m.V.rows());
+  for (int f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ASSERT_LE((b.V.row(b.F(f, k)) - m.V.row(m.F(f, k))).norm(), 1e-8);
+  EXPECT_EQ(genus(b), 0);
+  // A tract through OFF loses its regions but nothing else.
+  const SurfaceMesh t = generate_tract({1500, 0});
+  write_off(off, t);
+  SurfaceMesh r = read_off(off);
+  EXPECT_EQ(r.V, t.V);
+  EXPECT_EQ(r.F, t.F);
+  EXPECT_TRUE(r.regions.empty());
+}
+
+TEST(Io, PolygonsAreFanTriangulated) {
+  const std::string p = tmp("quad.obj");
+  write_text(p, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1 4//1\n");
+  SurfaceMesh m = read_obj(p);
+  EXPECT_EQ(m.F.rows(), 2);
+  EXPECT_EQ(m.F.row(1), Eigen::RowVector3i(0, 2, 3));
+  write_text(p, "v 0 0 0\nv 1 0 0\nv 1 1 0\nf -3 -2 -1\n");  // relative indices
+  EXPECT_EQ(read_obj(p).F.row(0), Eigen::RowVector3i(0, 1, 2));
+}
+
+TEST(Io, TetgenRoundTripWithDerivedFiles) {
+  const TetMesh m = generate_model_c(0, 600);
+  const std::string base = tmp("mc");
+  write_tetgen(base, m);
+  const TetMesh r = read_tetgen(base + ".ele");
+  EXPECT_EQ(r.V, m.V);
+  EXPECT_EQ(r.T, m.T);
+  EXPECT_EQ(r.attribute, m.attribute);
+  EXPECT_EQ(r.regions.names, m.regions.names);
+  EXPECT_EQ(r.regions.id, m.regions.id);
+  Eigen::VectorXi markers;
+  const BoundaryFaces b = boundary_faces(m);
+  EXPECT_EQ(read_tetgen_face(base + ".face", &markers), b.F);
+  EXPECT_TRUE((markers.array() == 101).all());
+  EXPECT_EQ(read_tetgen_neigh(base + ".neigh"), tet_neighbours(m));
+  // VTU of a tet mesh reads back too.
+  write_vtu(base + ".vtu", m);
+  AnyMesh a = read_mesh(base + ".vtu");
+  ASSERT_TRUE(a.is_tet);
+  EXPECT_EQ(a.tet.V, m.V);
+  EXPECT_EQ(a.tet.T, m.T);
+  EXPECT_EQ(a.tet.attribute, m.attribute);
+  EXPECT_EQ(a.tet.regions.id, m.regions.id);
+}
+
+TEST(Io, TetgenOneBasedFilesAreRead) {
+  const std::string base = tmp("onebased");
+  write_text(base + ".node", "# comment\n4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n");
+  write_text(base + ".ele", "1 4 1\n1 1 2 3 4 -7\n");
+  TetMesh m = read_tetgen(base);
+  EXPECT_EQ(m.T.row(0), Eigen::RowVector4i(0, 1, 2, 3));
+  EXPECT_EQ(m.attribute[0], -7);
+  EXPECT_NEAR(m.volume[0], 1.0 / 6, 1e-16);
+}
+
+TEST(Io, RegionSeedsRoundTrip) {
+  std::vector<RegionSeed> s = {{1, Vec3(0.1, 0.2, 0.3), 101, 0}, {2, Vec3(-1, 0, 1e-3), 200, 1e-6}};
+  const std::string p = tmp("seeds.regions");
+  write_region_seeds(p, s);
+  auto r = read_region_seeds(p);
+  ASSERT_EQ(r.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(r[i].index, s[i].index);
+    EXPECT_EQ(r[i].point, s[i].point);
+    EXPECT_EQ(r[i].region_id, s[i].region_id);
+    EXPECT_EQ(r[i].max_volume, s[i].max_volume);
+  }
+}
+
+TEST(Io, MalformedFilesAreLocated) {
+  std::string p = tmp("bad.obj");
+  write_text(p, "v 0 0 0\nv 1 0 0\nf 1 2 3\n");
+  expect_located([&] { read_obj(p); }, p, 3);
+  write_text(p, "v 0 0 zero\n");
+  expect_located([&] { read_obj(p); }, p, 1);
+  write_text(p, "v 0 0 0\ncurv 0 1 1 2\n");
+  expect_located([&] { read_obj(p); }, p, 2);
+
+  p = tmp("bad.off");
+  write_text(p, "OFF\n3 1 0\n0 0 0\n1 0 0\n");
+  expect_located([&] { read_off(p); }, p, 4);  // ran out after line 4
+  write_text(p, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n");
+  expect_located([&] { read_off(p); }, p, 6);
+
+  p = tmp("bad_ascii.stl");
+  write_text(p,
+             "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+             "endfacet\nendsolid x\n");
+  expect_located([&] { read_stl(p); }, p, 7);  // endloop missing
+
+  // Binary STL: size disagrees with the triangle count in bytes 80..83.
+  p = tmp("bad_bin.stl");
+  std::string bin(84 + 50, '\0');
+  bin[80] = 2;  // announces 2 triangles, has 1
+  write_text(p, bin);
+  expect_located([&] { read_stl(p); }, p, 0, 80);
+
+  // Binary PLY truncated inside the vertex data: byte offset of the missing value.
+  p = tmp("bad_bin.ply");
+  const std::string head =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 0\nproperty list uchar int "
+      "vertex_indices\nend_header\n";
+  write_text(p, head + std::string(12 + 4, '\0'));
+  expect_located([&] { read_ply(p); }, p, 0, static_cast<long>(head.size() + 16));
+  p = tmp("bad_ascii.ply");
+  write_text(p,
+             "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+             "property float z\nend_header\n0 0\n");
+  expect_located([&] { read_ply(p); }, p, 8);
+
+  const std::string base = tmp("bad_tg");
+  write_text(base + ".node", "2 3 0 0\n0 0 0 0\n2 1 0 0\n");
+  expect_located([&] { read_tetgen(base); }, base + ".node", 3);
+
+  p = tmp("bad.regions");
+  write_text(p, "2\n1 0 0 0 101 0\n");
+  expect_located([&] { read_region_seeds(p); }, p, 2);
+  EXPECT_THROW(read_surface(tmp("missing.obj")), palplab::InputError);
+  EXPECT_THROW(read_surface(tmp("x.unknown")), palplab::InputError);
+}
