@@ -1,0 +1,197 @@
+// End-to-end tests of `palplab mesh ...`: exit codes, JSON keys, files written.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+fs::path dir() {
+  static const fs::path d = [] {
+    fs::path p = fs::temp_directory_path() / ("palplab_cli_mesh_" + std::to_string(::getpid()));
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Result run(const std::string& args) {
+  const fs::path o = dir() / "stdout.txt", e = dir() / "stderr.txt";
+  const std::string cmd =
+      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
+  const int st = std::system(cmd.c_str());
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+std::string p(const std::string& name) {
+  return (dir() / name).string();
+}
+
+}  // namespace
+
+TEST(CliMesh, GenerateThenInfoJsonHasTheContractKeys) {
+  ASSERT_EQ(run("mesh generate model-a --out " + p("a.obj")).code, 0);
+  Result r = run("mesh info " + p("a.obj") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  for (const char* k : {"vertices", "faces", "edges", "tets", "boundary_faces", "boundary_loops",
+                        "genus", "bbox", "regions"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_NEAR(j["vertices"].get<double>(), 1500, 150);
+  EXPECT_NEAR(j["faces"].get<double>(), 3000, 300);
+  EXPECT_EQ(j["tets"], 0);
+  EXPECT_EQ(j["genus"], 0);
+  EXPECT_EQ(j["boundary_loops"], 0);
+  EXPECT_NEAR(j["bbox"][1][2].get<double>() - j["bbox"][0][2].get<double>(), 0.355, 0.0355);
+  for (const char* reg : {"ovary_left", "ovary_right", "horn_left", "horn_right", "body", "cervix"})
+    EXPECT_GT(j["regions"][reg].get<int>(), 0) << reg;
+}
+
+TEST(CliMesh, ModelCAndRegionsSurviveTetrahedralization) {
+  ASSERT_EQ(run("mesh generate model-c --out " + p("c") + " --vtu").code, 0);
+  for (const char* ext : {".node", ".ele", ".face", ".neigh", ".names", ".vtu"})
+    EXPECT_TRUE(fs::exists(p(std::string("c") + ext))) << ext;
+  Result r = run("mesh info " + p("c.ele") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_NEAR(j["vertices"].get<double>(), 2487, 248.7);
+  EXPECT_NEAR(j["tets"].get<double>(), 8744, 874.4);
+  EXPECT_NEAR(j["boundary_faces"].get<double>(), 4974, 497.4);
+  EXPECT_EQ(j["genus"], 0);
+  EXPECT_EQ(j["regions"].size(), 6u);
+  EXPECT_EQ(run("mesh check " + p("c.node")).code, 0);
+  // The VTU copy reads back with the same counts.
+  const json v = json::parse(run("mesh info " + p("c.vtu") + " --json").out);
+  EXPECT_EQ(v["tets"], j["tets"]);
+  EXPECT_EQ(v["regions"], j["regions"]);
+}
+
+TEST(CliMesh, GenerateIsDeterministic) {
+  for (const char* name : {"model-b", "stomach", "sphere"}) {
+    ASSERT_EQ(
+        run(std::string("mesh generate ") + name + " --out " + p("d1.ply") + " --binary").code, 0);
+    ASSERT_EQ(
+        run(std::string("mesh generate ") + name + " --out " + p("d2.ply") + " --binary").code, 0);
+    EXPECT_EQ(slurp(p("d1.ply")), slurp(p("d2.ply"))) << name;
+  }
+  ASSERT_EQ(run("mesh generate model-a --seed 5 --out " + p("s5.obj")).code, 0);
+  ASSERT_EQ(run("mesh generate model-a --out " + p("s0.obj")).code, 0);
+  EXPECT_NE(slurp(p("s5.obj")), slurp(p("s0.obj")));
+  const json j = json::parse(run("mesh info " + p("s5.obj") + " --json").out);
+  EXPECT_EQ(j["genus"], 0);
+}
+
+TEST(CliMesh, CheckExitCodesAndJson) {
+  // Clean: 0.
+  ASSERT_EQ(run("mesh generate sphere --vertices 2562 --out " + p("sp.stl")).code, 0);
+  Result r = run("mesh check " + p("sp.stl") + " --json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  json j = json::parse(r.out);
+  EXPECT_EQ(j["clean"], true);
+  EXPECT_TRUE(j["defects"].empty());
+  // Defects: 1, with located entries of the contract kinds.
+  {
+    std::ofstream f(p("hole.off"));
+    f << "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n";
+  }
+  r = run("mesh check " + p("hole.off") + " --json");
+  EXPECT_EQ(r.code, 1);
+  j = json::parse(r.out);
+  EXPECT_EQ(j["clean"], false);
+  ASSERT_EQ(j["defects"].size(), 3u);
+  for (auto& d : j["defects"]) {
+    EXPECT_EQ(d["kind"], "open_edge");
+    EXPECT_EQ(d["vertices"].size(), 2u);
+    EXPECT_EQ(d["points"].size(), 2u);
+  }
+  // The stomach is open by design.
+  ASSERT_EQ(run("mesh generate stomach --out " + p("st.obj")).code, 0);
+  EXPECT_EQ(run("mesh check " + p("st.obj")).code, 1);
+  EXPECT_EQ(run("mesh check " + p("st.obj") + " --allow-open").code, 0);
+  // Unreadable: 2, with the file and line on stderr.
+  {
+    std::ofstream f(p("bad.obj"));
+    f << "v 0 0 0\nf 1 2 3\n";
+  }
+  r = run("mesh check " + p("bad.obj"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("bad.obj:2:"), std::string::npos) << r.err;
+  EXPECT_EQ(run("mesh check " + p("does-not-exist.obj")).code, 2);
+}
+
+TEST(CliMesh, RepairMakesTheMeshClean) {
+  {
+    std::ofstream f(p("broken.obj"));
+    // Tetrahedron with one face flipped, one missing, and a duplicated corner.
+    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 2 3 5\n";
+  }
+  EXPECT_EQ(run("mesh check " + p("broken.obj")).code, 1);
+  Result r = run("mesh repair " + p("broken.obj") + " --out " + p("fixed.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("duplicate vertices merged"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("holes filled"), std::string::npos) << r.out;
+  EXPECT_EQ(run("mesh check " + p("fixed.obj")).code, 0);
+  const json j = json::parse(run("mesh info " + p("fixed.obj") + " --json").out);
+  EXPECT_EQ(j["genus"], 0);
+}
+
+TEST(CliMesh, TetrahedralizeWithRegionsFile) {
+  ASSERT_EQ(run("mesh generate sphere --out " + p("ball.stl")).code, 0);
+  {
+    std::ofstream f(p("ball.regions"));  // SPEC §4 side file next to the STL: picked up
+    f << "1\n1 0 0 0 103 0\n";
+  }
+  Result r =
+      run("mesh tetrahedralize " + p("ball.stl") + " --out " + p("ball_t") + " --quality 1.5");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("ball.regions"), std::string::npos);
+  json j = json::parse(run("mesh info " + p("ball_t.node") + " --json").out);
+  EXPECT_EQ(j["tissues"].size(), 1u);
+  EXPECT_EQ(j["tissues"]["103"]["tissue"], "arteries");
+  // .vtu output by extension; bad flags and files are exit 2.
+  EXPECT_EQ(run("mesh tetrahedralize " + p("ball.stl") + " --out " + p("ball_t.vtu")).code, 0);
+  EXPECT_TRUE(fs::exists(p("ball_t.vtu")));
+  EXPECT_EQ(
+      run("mesh tetrahedralize " + p("ball.stl") + " --out " + p("x") + " --quality 0.5").code, 2);
+  EXPECT_EQ(run("mesh tetrahedralize " + p("st.obj") + " --out " + p("x")).code, 2);  // open
+  EXPECT_EQ(run("mesh generate nothing --out " + p("x.obj")).code, 2);
+  EXPECT_EQ(run("mesh generate sphere").code, 2);  // --out missing
+  EXPECT_EQ(run("mesh generate model-a --out " + p("x.xyz")).code, 2);
+}
+
+TEST(CliMesh, MaterialsTable) {
+  Result r = run("mesh materials");
+  ASSERT_EQ(r.code, 0);
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["materials"].size(), 11u);
+  ASSERT_EQ(run("mesh materials --out " + p("m.json")).code, 0);
+  EXPECT_EQ(run("mesh materials --check " + p("m.json")).code, 0);
+  {
+    std::ofstream f(p("badm.json"));
+    f << R"({"materials": [{"first": 1}]})";
+  }
+  r = run("mesh materials --check " + p("badm.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("$.materials[0]"), std::string::npos) << r.err;
+}
