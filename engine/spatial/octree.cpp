@@ -122,6 +122,35 @@ int nearest(const Octree& t, const Positions& V, const Vec3& q, double* d2) {
     int node;
     double d;
   };
+  // A first bound from the leaf whose cell holds q (or the nearest cell on the way down), so
+  // that the traversal below prunes from the start.
+  {
+    int n = 0;
+    while (!t.nodes[n].leaf) {
+      const OctreeNode& node = t.nodes[n];
+      int next = node.child[octant_of(node.cell, q.data())];
+      if (next < 0) {  // empty octant: the child with the nearest box
+        double dn = std::numeric_limits<double>::infinity();
+        for (int c : node.child)
+          if (c >= 0) {
+            const double d = t.nodes[c].box.squaredExteriorDistance(q);
+            if (d < dn) {
+              dn = d;
+              next = c;
+            }
+          }
+      }
+      n = next;
+    }
+    for (int i = t.nodes[n].begin; i < t.nodes[n].end; ++i) {
+      const int p = t.order[i];
+      const double d = (V.row(p).transpose() - q).squaredNorm();
+      if (d < bd || (d == bd && p < best)) {
+        bd = d;
+        best = p;
+      }
+    }
+  }
   Item stack[7 * kMaxOctreeDepth + 8];
   int top = 0;
   stack[top++] = {0, t.nodes[0].box.squaredExteriorDistance(q)};
