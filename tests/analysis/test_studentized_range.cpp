@@ -44,7 +44,7 @@ TEST(StudentizedRange, MpmathReferenceCdf) {
 
 // k = 2: Q = |Z1 - Z2| / S = sqrt(2)|T_ν|, so P(Q > q) = P(F(1, ν) > q²/2); ν = ∞: erfc(q/2).
 TEST(StudentizedRange, TwoMeansClosedForm) {
-  for (double nu : {2.0, 5.0, 17.5, 60.0, 1000.0})
+  for (double nu : {1.0, 1.3, 2.0, 5.0, 17.5, 60.0, 1000.0})
     for (double q : {0.05, 0.5, 2.0, 4.0, 8.0}) {
       double expect = t_two_sided_p(q / std::sqrt(2.0), nu);
       double got = studentized_range_sf(q, 2, nu);
@@ -57,9 +57,9 @@ TEST(StudentizedRange, TwoMeansClosedForm) {
 }
 
 TEST(StudentizedRange, QuantileInvertsCdf) {
-  for (int k : {2, 3, 5, 10})
-    for (double nu : {3.0, 12.0, 27.0, 120.0})
-      for (double p : {0.5, 0.9, 0.95, 0.99}) {
+  for (int k : {2, 3, 10})
+    for (double nu : {3.0, 27.0, 120.0})
+      for (double p : {0.5, 0.95, 0.99}) {
         double q = studentized_range_quantile(p, k, nu);
         EXPECT_NEAR(studentized_range_cdf(q, k, nu), p, 1e-12) << k << " " << nu << " " << p;
       }

@@ -1,0 +1,93 @@
+#include "analysis/grouped.hpp"
+
+#include <map>
+#include <string_view>
+
+#include "analysis/decimal.hpp"
+#include "common/input_error.hpp"
+
+namespace palplab::analysis {
+
+namespace {
+std::string trim(const std::string& s) {
+  size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return {};
+  size_t e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+}  // namespace
+
+WhereFilter parse_where(const std::string& spec) {
+  size_t eq = spec.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError(SourceLocation{"--where"}, "expected COLUMN=VALUE, got '" + spec + "'");
+  return {trim(spec.substr(0, eq)), trim(spec.substr(eq + 1))};
+}
+
+GroupedData group_table(const CsvTable& t, const std::string& value_column,
+                        const std::string& group_column, const std::vector<WhereFilter>& where,
+                        int min_per_group, int min_groups) {
+  GroupedData g;
+  g.value_column = value_column;
+  g.group_column = group_column;
+  const int vc = column_index(t, value_column);
+  const int gc = column_index(t, group_column);
+  // column -> accepted values
+  std::map<int, std::vector<std::string>> filters;
+  for (const auto& w : where) filters[column_index(t, w.column)].push_back(w.value);
+
+  std::vector<std::string_view> texts;
+  std::vector<int> group_of, line_of;
+  std::map<std::string, int> index;
+  for (size_t r = 0; r < t.rows.size(); ++r) {
+    bool keep = true;
+    for (const auto& [col, accepted] : filters) {
+      std::string v = trim(t.rows[r][col]);
+      bool any = false;
+      for (const auto& a : accepted) any = any || v == a;
+      keep = keep && any;
+    }
+    if (!keep) continue;
+    parse_number(t, static_cast<int>(r), vc);  // validates, with the line, before use
+    std::string name = trim(t.rows[r][gc]);
+    if (name.empty())
+      throw InputError(SourceLocation{t.file, t.line[r]},
+                       "column '" + group_column + "': empty group label");
+    auto [it, fresh] = index.emplace(name, static_cast<int>(g.names.size()));
+    if (fresh) g.names.push_back(name);
+    texts.push_back(t.rows[r][vc]);
+    group_of.push_back(it->second);
+    line_of.push_back(t.line[r]);
+  }
+  if (texts.empty()) {
+    std::string what = "no data rows";
+    if (!where.empty()) what += " match the --where filters";
+    throw InputError(what, t.file);
+  }
+  auto cv = centre_decimals(texts);
+  g.offset = cv.centre;
+  g.values.assign(g.names.size(), {});
+  g.lines.assign(g.names.size(), {});
+  for (size_t i = 0; i < texts.size(); ++i) {
+    g.values[group_of[i]].push_back(cv.dev[i]);
+    g.lines[group_of[i]].push_back(line_of[i]);
+  }
+  g.rows_used = static_cast<int>(texts.size());
+  for (size_t k = 0; k < g.names.size(); ++k)
+    if (static_cast<int>(g.values[k].size()) < min_per_group) {
+      std::string lines;
+      for (int l : g.lines[k]) lines += (lines.empty() ? "" : ", ") + std::to_string(l);
+      throw InputError(SourceLocation{t.file, g.lines[k].front()},
+                       "group '" + g.names[k] + "' (column '" + group_column + "') has " +
+                           std::to_string(g.values[k].size()) + " value(s) (line " + lines +
+                           "); every group needs at least " + std::to_string(min_per_group));
+    }
+  if (static_cast<int>(g.names.size()) < min_groups)
+    throw InputError(SourceLocation{t.file}, "column '" + group_column + "' has " +
+                                                 std::to_string(g.names.size()) +
+                                                 " group(s) in the rows used; at least " +
+                                                 std::to_string(min_groups) + " are needed");
+  return g;
+}
+
+}  // namespace palplab::analysis

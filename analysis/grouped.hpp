@@ -1,0 +1,38 @@
+#pragma once
+// From a CSV table to a one-way design: pick the value and group columns, keep the rows that
+// pass the --where filters, parse the values (exactly centred, decimal.hpp) and split them by
+// group in order of first appearance. Every problem is an InputError with the CSV line.
+#include <string>
+#include <vector>
+
+#include "analysis/anova.hpp"
+#include "analysis/csv.hpp"
+
+namespace palplab::analysis {
+
+// "COL=VALUE": keep rows whose column COL equals VALUE (exact text match after trimming
+// blanks). Several filters on the same column are alternatives (OR); filters on different
+// columns must all hold (AND).
+struct WhereFilter {
+  std::string column, value;
+};
+// Parses "COL=VALUE" (the first '=' splits); InputError when there is no '=' or COL is empty.
+WhereFilter parse_where(const std::string& spec);
+
+struct GroupedData {
+  std::string value_column, group_column;
+  std::vector<std::string> names;       // #groups group labels, first-appearance order
+  Groups values;                        // #groups samples, as deviations from `offset`
+  std::vector<std::vector<int>> lines;  // CSV line of every value
+  double offset = 0;                    // value = offset + deviation (decimal.hpp)
+  int rows_used = 0;
+};
+
+// Throws InputError for: a missing column, a non-numeric or empty value (with its line), no
+// row left after filtering, fewer than `min_groups` groups, a group with fewer than
+// `min_per_group` values (with the line of its values).
+GroupedData group_table(const CsvTable& t, const std::string& value_column,
+                        const std::string& group_column, const std::vector<WhereFilter>& where,
+                        int min_per_group = 2, int min_groups = 2);
+
+}  // namespace palplab::analysis

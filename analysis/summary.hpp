@@ -1,0 +1,55 @@
+#pragma once
+// The full one-way analysis of a grouped sample, as `palplab stats` prints it and the report
+// uses it: descriptives per group, classical and Welch ANOVA, every pairwise t-test (Holm and
+// Bonferroni adjusted) with Hedges' g, Tukey–Kramer, Games–Howell, Levene, Brown–Forsythe,
+// Shapiro–Wilk per group, Kruskal–Wallis and pairwise Mann–Whitney. JSON keys: see
+// docs/formats/stats.md.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "analysis/anova.hpp"
+#include "analysis/descriptives.hpp"
+#include "analysis/grouped.hpp"
+#include "analysis/normality.hpp"
+#include "analysis/posthoc.hpp"
+#include "analysis/two_sample.hpp"
+
+namespace palplab::analysis {
+
+struct StatsOptions {
+  DfMode df_mode = DfMode::Exact;  // for the pairwise Welch tests
+  bool welch_pairwise = true;      // false: Student's pooled-variance t
+  bool post_hoc = true;            // Tukey–Kramer and Games–Howell (the slowest part)
+};
+
+struct StatsSummary {
+  std::vector<std::string> names;
+  std::vector<Descriptives> groups;
+  std::vector<ShapiroWilk> shapiro;  // per group; defined = false when n < 3 or constant
+  Anova anova;
+  WelchAnova welch;
+  std::vector<PairwiseT> pairwise;
+  std::vector<MannWhitney> mann_whitney;  // same order as pairwise
+  std::vector<RangeComparison> tukey, games_howell;
+  Anova levene, brown_forsythe;
+  KruskalWallis kruskal;
+  StatsOptions options;
+};
+
+StatsSummary summarize(const GroupedData& data, const StatsOptions& options = {});
+
+// APA style pieces: "p = .003", "p < .001", "p > .999"; numbers to 2 decimals.
+std::string apa_p(double p);
+// "F(2, 27) = 23.68, p < .001" (fractional df get 2 decimals).
+std::string apa_f(double F, double df1, double df2, double p);
+// "t(17) = 3.43, p = .003".
+std::string apa_t(double t, double df, double p);
+// "1e-300" style for tables: "< 1e-300" when the p-value is an underflow bound.
+std::string format_p(double p);
+
+nlohmann::json to_json(const StatsSummary& s);
+// Human-readable tables and APA lines.
+std::string to_text(const StatsSummary& s);
+
+}  // namespace palplab::analysis
