@@ -172,6 +172,9 @@ struct Spec {
   // mass-spring
   double total_mass = 0.5, stiffness = 100.0, damping = 0.5, home_ks = 50.0, home_kd = 0.5;
   std::string fixed_region;
+  double scope_radius = 0.0;
+  int scope_max_nodes = 1 << 30;
+  double cg_tolerance = 1e-6;
   Integrator integrator = Integrator::backward_euler;
   LinearSolver solver = LinearSolver::cg;
   SleepParams sleep;
@@ -274,7 +277,8 @@ Spec parse(const std::string& path) {
       s.kind = ModelKind::mass_spring;
       c.keys(*m, P,
              {"kind", "total_mass", "stiffness", "damping", "home_stiffness", "home_damping",
-              "fixed_region", "integrator", "linear_solver", "sleeping", "refinement"});
+              "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
+              "scope_radius", "scope_max_nodes", "cg_tolerance"});
       s.total_mass =
           c.number(*m, P, "total_mass", true, 0, 1e3, "the organ's mass (kg)", true).value_or(1);
       s.stiffness = c.number(*m, P, "stiffness", true, 0, 1e7, "spring stiffness k_s (N/m)", true)
@@ -287,6 +291,15 @@ Spec parse(const std::string& path) {
       s.home_kd =
           c.number(*m, P, "home_damping", false, 0, 1e5, "home-spring damping per node (N s/m)")
               .value_or(0);
+      s.scope_radius = c.number(*m, P, "scope_radius", false, 0, 10,
+                                "the integration scope radius around the contact (m, 0 = whole)")
+                           .value_or(0.0);
+      s.cg_tolerance = c.number(*m, P, "cg_tolerance", false, 0, 0.1,
+                                "the relative residual of the CG solve", true)
+                           .value_or(1e-6);
+      s.scope_max_nodes = static_cast<int>(
+          c.integer(*m, P, "scope_max_nodes", false, 1, 1L << 30, "the most nodes in the scope")
+              .value_or(1L << 30));
       if (auto fr = c.text(*m, P, "fixed_region", false)) {
         if (!known_region(*fr))
           c.err("$.model.fixed_region",
@@ -510,12 +523,15 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
     ms.model = make_adaptive(std::move(sys), g.F, s.stiffness, s.damping, s.dt);
     ms.integrator = ov.integrator ? integrator_from_string(*ov.integrator) : s.integrator;
     ms.ws.solver = s.solver;
-    ms.ws.cg_tolerance = 1e-6;
+    ms.ws.cg_tolerance = s.cg_tolerance;
+    ms.ws.cg_force_tolerance = 1e-6;  // N
     ms.sleep = s.sleep;
     ms.refine = s.refine;
     ms.refine_params = s.refine_params;
     ms.refine_force = s.refine_force;
     ms.substep = s.substep;
+    ms.scope_radius = s.scope_radius;
+    ms.scope_max_nodes = s.scope_max_nodes;
     ms.surface_to_model.resize(n);
     for (long i = 0; i < n; ++i) ms.surface_to_model[i] = static_cast<int>(i);
   }

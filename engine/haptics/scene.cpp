@@ -111,6 +111,41 @@ Thresholds Scene::thresholds(int region) const {
 
 namespace {
 
+// Marks the nodes within scope_radius of `center` (rest positions, breadth-first through springs
+// so that the scope never jumps across a gap to another part of the organ), nearest rings first,
+// at most scope_max_nodes of them (a fine region such as an ovary would otherwise hold hundreds).
+void compute_scope(MassSpringScene& ms, int center) {
+  const MassSpringSystem& s = ms.model.sys;
+  const long n = s.nodes();
+  if (static_cast<long>(ms.in_scope.size()) != n) {
+    ms.in_scope.assign(n, 0);
+  } else {
+    for (int i : ms.scope_nodes) ms.in_scope[i] = 0;
+  }
+  ms.scope_nodes.clear();
+  ms.scope_center = center;
+  if (center < 0) return;
+  const Eigen::Vector3d c = s.X_rest.row(center).transpose();
+  const double r2 = ms.scope_radius * ms.scope_radius;
+  ms.in_scope[center] = 1;
+  ms.scope_nodes.push_back(center);
+  for (size_t q = 0; q < ms.scope_nodes.size(); ++q) {
+    const int i = ms.scope_nodes[q];
+    for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k) {
+      const int e = s.adj_spring[k];
+      const int j = s.springs.E(e, 0) == i ? s.springs.E(e, 1) : s.springs.E(e, 0);
+      if (ms.in_scope[j] || (s.X_rest.row(j).transpose() - c).squaredNorm() > r2) continue;
+      if (static_cast<int>(ms.scope_nodes.size()) >= ms.scope_max_nodes) return;
+      ms.in_scope[j] = 1;
+      ms.scope_nodes.push_back(j);
+    }
+  }
+}
+
+const std::vector<std::uint8_t>* scope_mask(const MassSpringScene& ms) {
+  return ms.scope_radius > 0.0 ? &ms.in_scope : nullptr;
+}
+
 void reset_mass_spring(MassSpringScene& ms) {
   simplify(ms.model);
   MassSpringSystem& s = ms.model.sys;
@@ -120,6 +155,9 @@ void reset_mass_spring(MassSpringScene& ms) {
   s.contact_node = -1;
   ms.ws.DV.setZero(s.nodes(), 3);
   ms.refined_node = -1;
+  ms.in_scope.assign(s.nodes(), 0);
+  ms.scope_nodes.clear();
+  ms.scope_center = -1;
   if (ms.sleep.enabled)
     sleep_all(s, ms.act);
   else
@@ -146,6 +184,11 @@ void resync_active(MassSpringScene& ms) {
       ms.act.is_active[i] = 0;
   rebuild_active_springs(s, ms.act);
   ms.scratch.assign(n, 0);
+  if (ms.scope_radius > 0.0) {
+    ms.scope_nodes.clear();  // the node count changed: rebuild the marks from scratch
+    ms.in_scope.assign(n, 0);
+    compute_scope(ms, ms.scope_center < n ? ms.scope_center : -1);
+  }
 }
 
 double check_threshold(SceneImpl& s, int which, double limit, double f, EventKind kind,
@@ -246,7 +289,9 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
         sys.contact_point = x;
         sys.contact_normal = n;
         sys.contact_k = s.contact_k;
-        if (ms.sleep.enabled && !ms.act.is_active[mnode]) wake_around(sys, ms.act, mnode);
+        if (ms.scope_radius > 0.0 && mnode != ms.scope_center) compute_scope(ms, mnode);
+        if (ms.sleep.enabled && !ms.act.is_active[mnode])
+          wake_around(sys, ms.act, mnode, scope_mask(ms));
       } else {
         sys.contact_node = -1;
         if (ms.model.refined() && ms.refine) {
@@ -259,7 +304,7 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
       const double h = s.dt / sub;
       for (int k = 0; k < sub; ++k) {
         integrate(sys, ms.act, h, ms.integrator, ms.ws);
-        update_sleeping(sys, ms.act, ms.sleep, mnode, &ms.ws.DV, ms.scratch);
+        update_sleeping(sys, ms.act, ms.sleep, mnode, &ms.ws.DV, ms.scratch, scope_mask(ms));
       }
       if (mnode >= 0) {
         force = s.contact_k * contact_penetration(sys, sys.X) * n;

@@ -37,6 +37,13 @@ struct MassSpringScene {
   bool substep = true;                // sub-step h/2^l while refined (Eq 5.18)
   int refined_node = -1;              // model node last refined around
   std::vector<int> surface_to_model;  // surface node -> model node (identity for surfaces)
+  // Integration scope: only nodes within scope_radius (m, rest distance, reached through springs)
+  // of the contact node may wake; 0 = whole model. Held nodes act as fixed boundary.
+  double scope_radius = 0.0;
+  int scope_max_nodes = 1 << 30;  // cap on the scope (nearest rings first)
+  int scope_center = -1;
+  std::vector<std::uint8_t> in_scope;
+  std::vector<int> scope_nodes, bfs;
 };
 
 struct SceneImpl {

@@ -124,32 +124,106 @@ void rk4(MassSpringSystem& sys, const ActiveSet& act, double h, IntegratorWorksp
   }
 }
 
-// y = A p on active rows, A = M - h D - h^2 K (PSD-projected), p = 0 on inactive nodes.
-void apply_A(const MassSpringSystem& sys, const ActiveSet& act, double h,
-             const IntegratorWorkspace& ws, const RowMatX3d& P, RowMatX3d& Y) {
-  for (int i : act.nodes)
-    Y.row(i) = (sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i]) * P.row(i);
-  if (ws.contact_on)
-    Y.row(sys.contact_node) += (ws.contact_block * P.row(sys.contact_node).transpose()).transpose();
+// Compact, branch-free data of an active set for CG: local 0..m-1 indices, springs with both
+// ends active (inner) and with one end held (their block only adds to the active end's diagonal).
+void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactCg& C) {
+  const long n = sys.nodes();
+  if (static_cast<long>(C.local.size()) != n) {
+    C.local.assign(n, -1);
+  } else {
+    for (int i : C.prev_nodes) C.local[i] = -1;
+  }
+  for (size_t k = 0; k < act.nodes.size(); ++k) C.local[act.nodes[k]] = static_cast<int>(k);
+  C.prev_nodes = act.nodes;
+  C.inner.clear();
+  C.held.clear();
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
-    const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
-    Eigen::Vector3d d = Eigen::Vector3d::Zero();
-    if (act.is_active[a]) d += P.row(a).transpose();
-    if (act.is_active[b]) d -= P.row(b).transpose();
-    const Eigen::Vector3d y = ws.S[k] * d;
-    if (act.is_active[a]) Y.row(a) += y.transpose();
-    if (act.is_active[b]) Y.row(b) -= y.transpose();
+    const int a = C.local[sys.springs.E(s, 0)], b = C.local[sys.springs.E(s, 1)];
+    if (a >= 0 && b >= 0)
+      C.inner.push_back({a, b, static_cast<int>(k)});
+    else
+      C.held.push_back({a >= 0 ? a : b, -1, static_cast<int>(k)});
   }
+  const long m = static_cast<long>(act.nodes.size());
+  C.D.resize(m);
+  C.Dinv.resize(m);
+  C.x.resize(3 * m);
+  C.r.resize(3 * m);
+  C.z.resize(3 * m);
+  C.p.resize(3 * m);
+  C.ap.resize(3 * m);
+  C.version = act.version;
+}
+
+// y = A p over the active nodes (compact).
+inline void apply_compact(const CompactCg& C, const std::vector<Eigen::Matrix3d>& S,
+                          const Eigen::VectorXd& p, Eigen::VectorXd& y) {
+  const long m = static_cast<long>(C.D.size());
+  for (long k = 0; k < m; ++k) y.segment<3>(3 * k).noalias() = C.D[k] * p.segment<3>(3 * k);
+  for (const auto& e : C.inner) {
+    const Eigen::Vector3d t = S[e.k] * (p.segment<3>(3 * e.a) - p.segment<3>(3 * e.b));
+    y.segment<3>(3 * e.a) += t;
+    y.segment<3>(3 * e.b) -= t;
+  }
+}
+
+void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, IntegratorWorkspace& ws) {
+  CompactCg& C = ws.compact;
+  if (C.version != act.version || static_cast<long>(C.local.size()) != sys.nodes())
+    rebuild_compact(sys, act, C);
+  const long m = static_cast<long>(act.nodes.size());
+  const double h = ws.h;
+  for (long k = 0; k < m; ++k) {
+    const int i = act.nodes[k];
+    C.D[k] =
+        Eigen::Matrix3d::Identity() * (sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i]);
+    C.Dinv[k] = ws.Dinv[i].inverse();  // block-Jacobi preconditioner (full diagonal block)
+    C.x.segment<3>(3 * k) = ws.DV.row(i).transpose();  // warm start
+  }
+  if (ws.contact_on) C.D[C.local[sys.contact_node]] += ws.contact_block;
+  for (const auto& e : C.held) C.D[e.a] += ws.S[e.k];
+  apply_compact(C, ws.S, C.x, C.ap);
+  double bnorm = 0.0;
+  for (long k = 0; k < m; ++k) {
+    const Eigen::Vector3d b = ws.R.row(act.nodes[k]).transpose();
+    bnorm += b.squaredNorm();
+    C.r.segment<3>(3 * k) = b - C.ap.segment<3>(3 * k);
+    C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
+  }
+  bnorm = std::sqrt(bnorm);
+  C.p = C.z;
+  double rz = C.r.dot(C.z);
+  double rnorm = C.r.norm();
+  // Relative to the rhs, with an absolute floor: at rest b -> 0 and a purely relative test
+  // would chase rounding noise.
+  const double tol = std::max(ws.cg_tolerance * bnorm, h * ws.cg_force_tolerance);
+  int it = 0;
+  while (rnorm > tol && it < ws.cg_max_iterations) {
+    apply_compact(C, ws.S, C.p, C.ap);
+    const double pAp = C.p.dot(C.ap);
+    if (!(pAp > 0.0)) break;
+    const double alpha = rz / pAp;
+    C.x += alpha * C.p;
+    C.r -= alpha * C.ap;
+    for (long k = 0; k < m; ++k)
+      C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
+    const double rz_new = C.r.dot(C.z);
+    rnorm = C.r.norm();
+    C.p = C.z + (rz_new / rz) * C.p;
+    rz = rz_new;
+    ++it;
+  }
+  for (long k = 0; k < m; ++k) ws.DV.row(act.nodes[k]) = C.x.segment<3>(3 * k).transpose();
+  ws.last.cg_iterations = it;
+  ws.last.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
 }
 
 void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
                     IntegratorWorkspace& ws) {
   const long n = sys.nodes();
+  ws.h = h;
   ensure(ws.R, n);
-  ensure(ws.P, n);
-  ensure(ws.Z, n);
-  ensure(ws.AP, n);
   ensure(ws.DV, n);
   if (ws.Dinv.size() < static_cast<size_t>(n)) ws.Dinv.resize(n);
   if (ws.S.size() < act.springs.size()) ws.S.resize(act.springs.size() + act.springs.size() / 2);
@@ -193,46 +267,7 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
   }
 
   if (ws.solver == LinearSolver::cg) {
-    for (int i : act.nodes) ws.Dinv[i] = ws.Dinv[i].inverse().eval();
-    // Warm start from the previous step's dv; r = b - A x.
-    apply_A(sys, act, h, ws, ws.DV, ws.AP);
-    double bnorm = 0.0, rz = 0.0;
-    for (int i : act.nodes) {
-      bnorm += ws.R.row(i).squaredNorm();
-      ws.R.row(i) -= ws.AP.row(i);
-      ws.Z.row(i) = (ws.Dinv[i] * ws.R.row(i).transpose()).transpose();
-      ws.P.row(i) = ws.Z.row(i);
-      rz += ws.R.row(i).dot(ws.Z.row(i));
-    }
-    bnorm = std::sqrt(bnorm);
-    int it = 0;
-    double rnorm = 0.0;
-    for (int i : act.nodes) rnorm += ws.R.row(i).squaredNorm();
-    rnorm = std::sqrt(rnorm);
-    const double tol = ws.cg_tolerance * (bnorm > 0 ? bnorm : 1.0);
-    while (rnorm > tol && it < ws.cg_max_iterations) {
-      apply_A(sys, act, h, ws, ws.P, ws.AP);
-      double pAp = 0.0;
-      for (int i : act.nodes) pAp += ws.P.row(i).dot(ws.AP.row(i));
-      if (!(pAp > 0.0)) break;
-      const double alpha = rz / pAp;
-      double rz_new = 0.0;
-      rnorm = 0.0;
-      for (int i : act.nodes) {
-        ws.DV.row(i) += alpha * ws.P.row(i);
-        ws.R.row(i) -= alpha * ws.AP.row(i);
-        ws.Z.row(i) = (ws.Dinv[i] * ws.R.row(i).transpose()).transpose();
-        rz_new += ws.R.row(i).dot(ws.Z.row(i));
-        rnorm += ws.R.row(i).squaredNorm();
-      }
-      rnorm = std::sqrt(rnorm);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      for (int i : act.nodes) ws.P.row(i) = ws.Z.row(i) + beta * ws.P.row(i);
-      ++it;
-    }
-    ws.last.cg_iterations = it;
-    ws.last.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+    solve_cg_compact(sys, act, ws);
   } else {
     const long m = static_cast<long>(act.nodes.size());
     ws.dof_of_node.assign(n, -1);

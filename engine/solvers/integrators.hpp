@@ -52,9 +52,22 @@ struct SolverStats {
   double residual = 0.0;  // relative residual of the last solve
 };
 
+// Compact per-active-set data of the CG solver (see integrators.cpp).
+struct CompactCg {
+  struct Link {
+    int a, b, k;  // local node indices (b = -1: other end held), index into S
+  };
+  long version = -1;
+  std::vector<int> local, prev_nodes;
+  std::vector<Link> inner, held;
+  std::vector<Eigen::Matrix3d> D, Dinv;
+  Eigen::VectorXd x, r, z, p, ap;
+};
+
 struct IntegratorWorkspace {
   LinearSolver solver = LinearSolver::cg;
-  double cg_tolerance = 1e-8;  // relative residual
+  double cg_tolerance = 1e-8;        // relative residual
+  double cg_force_tolerance = 1e-9;  // N: absolute floor of the residual (as a force)
   int cg_max_iterations = 500;
   SolverStats last;
   // buffers (sized on first use)
@@ -68,6 +81,8 @@ struct IntegratorWorkspace {
   long analysed_version = -1, factor_version = -1;
   Eigen::VectorXd b, x;
   bool contact_on = false;
+  double h = 0.0;
+  CompactCg compact;
   int factor_contact = -2;
   double factor_h = 0.0;
   Eigen::Matrix3d contact_block = Eigen::Matrix3d::Zero();

@@ -12,8 +12,10 @@ void sleep_all(const MassSpringSystem& sys, ActiveSet& act) {
 }
 
 namespace {
-inline bool wake(const MassSpringSystem& sys, ActiveSet& act, int j) {
+inline bool wake(const MassSpringSystem& sys, ActiveSet& act, int j,
+                 const std::vector<std::uint8_t>* allowed) {
   if (act.is_active[j] || (!sys.fixed.empty() && sys.fixed[j])) return false;
+  if (allowed && !(*allowed)[j]) return false;
   act.is_active[j] = 1;
   act.nodes.push_back(j);
   return true;
@@ -24,18 +26,21 @@ void finish(const MassSpringSystem& sys, ActiveSet& act) {
 }
 }  // namespace
 
-bool wake_around(const MassSpringSystem& sys, ActiveSet& act, int i) {
-  bool grew = wake(sys, act, i);
+bool wake_around(const MassSpringSystem& sys, ActiveSet& act, int i,
+                 const std::vector<std::uint8_t>* allowed) {
+  bool grew = wake(sys, act, i, allowed);
   for (int k = sys.adj_start[i]; k < sys.adj_start[i + 1]; ++k) {
     const int s = sys.adj_spring[k];
-    grew |= wake(sys, act, sys.springs.E(s, 0) == i ? sys.springs.E(s, 1) : sys.springs.E(s, 0));
+    grew |= wake(sys, act, sys.springs.E(s, 0) == i ? sys.springs.E(s, 1) : sys.springs.E(s, 0),
+                 allowed);
   }
   if (grew) finish(sys, act);
   return grew;
 }
 
 bool update_sleeping(MassSpringSystem& sys, ActiveSet& act, const SleepParams& p, int keep_awake,
-                     RowMatX3d* dv, std::vector<std::uint8_t>& excited) {
+                     RowMatX3d* dv, std::vector<std::uint8_t>& excited,
+                     const std::vector<std::uint8_t>* allowed) {
   if (!p.enabled) return false;
   if (excited.size() != static_cast<size_t>(sys.nodes())) excited.assign(sys.nodes(), 0);
   const double x2 = p.x_tol * p.x_tol, v2 = p.v_tol * p.v_tol;
@@ -68,6 +73,7 @@ bool update_sleeping(MassSpringSystem& sys, ActiveSet& act, const SleepParams& p
       const int s = sys.adj_spring[q];
       const int j = sys.springs.E(s, 0) == i ? sys.springs.E(s, 1) : sys.springs.E(s, 0);
       if (act.is_active[j] || (!sys.fixed.empty() && sys.fixed[j])) continue;
+      if (allowed && !(*allowed)[j]) continue;
       act.is_active[j] = 1;
       act.nodes.push_back(j);
       changed = true;

@@ -17,11 +17,14 @@ struct SleepParams {
 // Puts every node to sleep (empty active set) — the state of a model at rest.
 void sleep_all(const MassSpringSystem& sys, ActiveSet& act);
 // Wakes node i and its spring neighbours (no-op for fixed nodes). Returns true if the set grew.
-bool wake_around(const MassSpringSystem& sys, ActiveSet& act, int i);
+// `allowed` (#V, optional): only nodes with allowed[j] != 0 may wake (the integration scope).
+bool wake_around(const MassSpringSystem& sys, ActiveSet& act, int i,
+                 const std::vector<std::uint8_t>* allowed = nullptr);
 // After a step: wake neighbours of excited nodes, put quiet nodes to sleep (except keep_awake),
 // rebuild the active springs when the set changed. `dv` (may be null) is the backward-Euler warm
 // start, cleared for nodes that fall asleep. Returns true when the set changed.
 bool update_sleeping(MassSpringSystem& sys, ActiveSet& act, const SleepParams& p, int keep_awake,
-                     RowMatX3d* dv, std::vector<std::uint8_t>& scratch);
+                     RowMatX3d* dv, std::vector<std::uint8_t>& scratch,
+                     const std::vector<std::uint8_t>* allowed = nullptr);
 
 }  // namespace palplab::engine

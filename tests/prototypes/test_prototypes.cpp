@@ -108,17 +108,19 @@ TEST(Prototypes, PressRendersWhatEachPrototypeShows) {
         start |= e.kind == EventKind::contact_start;
         end |= e.kind == EventKind::contact_end;
       }
-      if (x.contact)
+      if (x.contact) {
         EXPECT_EQ(s.geometry().region_names[x.contact_region], "ovary_left")
             << x.t << " node " << x.contact_node;
+      }
     }
     EXPECT_GT(fmax, 2.0) << id;
     EXPECT_TRUE(start && end) << id;
     EXPECT_EQ(audio, std::string(id) == "A") << id;  // only A has the sound cue
-    if (std::string(id) == "A")
+    if (std::string(id) == "A") {
       EXPECT_EQ(dmax, 0.0);
-    else
+    } else {
       EXPECT_GT(dmax, 1e-3) << id;
+    }
     EXPECT_FALSE(r.back().contact);
   }
 }
