@@ -1,0 +1,128 @@
+// `palplab stats` end to end: the JSON contract of the issue, --where, --df-mode, APA lines,
+// and exit 2 with the CSV line for bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  static int counter = 0;
+  auto dir = std::filesystem::temp_directory_path();
+  std::string errf = (dir / ("palplab_cli_stats_err_" + std::to_string(::getpid()) + "_" +
+                             std::to_string(counter++)))
+                         .string();
+  std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>" + errf;
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  std::ifstream e(errf);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  std::filesystem::remove(errf);
+  return r;
+}
+
+std::string fixture(const std::string& name) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/tests/data/r/" + name;
+}
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  auto path = std::filesystem::temp_directory_path() /
+              ("palplab_cli_stats_" + std::to_string(::getpid()) + "_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+}  // namespace
+
+TEST(CliStats, JsonContract) {
+  Result r = run("stats --csv " + fixture("unequal.csv") + " --value force --group group --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["groups"].size(), 3u);
+  for (const char* k : {"name", "n", "mean", "sd"}) EXPECT_TRUE(j["groups"][0].contains(k)) << k;
+  EXPECT_EQ(j["groups"][0]["name"], "A");
+  EXPECT_EQ(j["groups"][0]["n"], 10);
+  for (const char* sec : {"anova", "welch_anova"})
+    for (const char* k : {"df_between", "df_within", "F", "p", "eta_squared"})
+      EXPECT_TRUE(j[sec].contains(k)) << sec << "." << k;
+  ASSERT_EQ(j["pairwise"].size(), 3u);
+  for (const char* k : {"a", "b", "t", "df", "p", "p_holm", "mean_diff", "hedges_g"})
+    EXPECT_TRUE(j["pairwise"][0].contains(k)) << k;
+  // Values: R 4.2.2 (tests/data/r/reference.csv).
+  EXPECT_NEAR(j["anova"]["F"].get<double>(), 4.7406000441386213, 1e-10 * 4.74);
+  EXPECT_EQ(j["anova"]["df_between"], 2);
+  EXPECT_EQ(j["anova"]["df_within"], 29);
+  EXPECT_EQ(j["pairwise"][0]["a"], "A");
+  EXPECT_EQ(j["pairwise"][0]["b"], "B");
+  EXPECT_EQ(j["anova"]["apa"], "F(2, 29) = 4.74, p = .017");
+}
+
+TEST(CliStats, WhereAndFloorDf) {
+  Result r = run("stats --csv " + fixture("unequal.csv") +
+                 " --value force --group group --where phase=post --df-mode floor --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["input"]["rows_used"], 16);
+  EXPECT_EQ(j["df_mode"], "floor");
+  for (const auto& p : j["pairwise"]) {
+    double df = p["df"], exact = p["df_exact"];
+    EXPECT_EQ(df, std::floor(exact));
+  }
+}
+
+TEST(CliStats, TextHasTablesAndApaLines) {
+  Result r = run("stats --csv " + fixture("unequal.csv") + " --value force --group group");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("F(2, 29) = 4.74, p = .017"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("A vs B: t(17.92) = 1.01, p = .325"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Tukey-Kramer"), std::string::npos);
+  EXPECT_NE(r.out.find("Games-Howell"), std::string::npos);
+}
+
+TEST(CliStats, BadInputExitsTwoWithTheLine) {
+  std::string good = "group,value\nA,1\nA,2\nB,3\nB,4.5\n";
+  struct Case {
+    std::string csv, args, expect;
+  };
+  std::vector<Case> cases = {
+      {good, "--value force --group group", "no column 'force'"},
+      {good, "--value value --group grp", "no column 'grp'"},
+      {"group,value\nA,1\nA,2\nB,abc\nB,4\n", "--value value --group group", ":4:"},
+      {"group,value\nA,1\nA,2\nB,\nB,4\n", "--value value --group group", ":4:"},
+      {"group,value\nA,1\nA,2\nB,3\nC,4\nC,5\n", "--value value --group group", ":4:"},
+      {"group,value\nA,1\nA,2\nB,3,9\nB,4\n", "--value value --group group", ":4:"},
+      {"group,value\nA,1\n\"A,2\nB,3\n", "--value value --group group", ":3:"},
+      {good, "--value value --group group --where group", "COLUMN=VALUE"},
+      {good, "--value value --group group --where nosuch=1", "no column 'nosuch'"},
+      {good, "--value value --group group --where group=Z", "no data rows"},
+      {good, "--value value --group group --df-mode round", "df-mode"},
+  };
+  int i = 0;
+  for (const auto& c : cases) {
+    std::string path = write_temp("bad" + std::to_string(i++) + ".csv", c.csv);
+    Result r = run("stats --csv " + path + " " + c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << c.csv << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos)
+        << "expected '" << c.expect << "' in: " << r.err;
+    std::filesystem::remove(path);
+  }
+  Result r = run("stats --csv /nonexistent.csv --value v --group g");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cannot open"), std::string::npos);
+}
