@@ -10,6 +10,7 @@
 #include "common/json_locate.hpp"
 #include "engine/haptics/scene_impl.hpp"
 #include "engine/mesh/generate.hpp"
+#include "engine/mesh/tet_mesh.hpp"
 
 namespace palplab::prototypes {
 
@@ -172,7 +173,7 @@ struct Spec {
   // mass-spring
   double total_mass = 0.5, stiffness = 100.0, damping = 0.5, home_ks = 50.0, home_kd = 0.5;
   std::string fixed_region;
-  double scope_radius = 0.0;
+  double scope_radius = 0.0, fixed_z_below = 0.0;
   int scope_max_nodes = 1 << 30;
   double cg_tolerance = 1e-6;
   Integrator integrator = Integrator::backward_euler;
@@ -192,7 +193,7 @@ struct Spec {
 
 const std::vector<std::string>& generator_regions(const std::string& gen) {
   static const std::vector<std::string> none;
-  if (gen == "tract") return mesh::tract_region_names();
+  if (gen == "tract" || gen == "model_c") return mesh::tract_region_names();
   return none;
 }
 
@@ -234,8 +235,8 @@ Spec parse(const std::string& path) {
   if (const json* m = c.object(root, R, "mesh", true)) {
     const std::string P = "$.mesh";
     c.keys(*m, P, {"generator", "vertices", "seed"});
-    s.mesh.generator =
-        c.text(*m, P, "generator", true, {"tract", "stomach", "sphere"}).value_or("tract");
+    s.mesh.generator = c.text(*m, P, "generator", true, {"tract", "model_c", "stomach", "sphere"})
+                           .value_or("tract");
     s.mesh.vertices = static_cast<int>(
         c.integer(*m, P, "vertices", false, 12, 200000, "the vertex count").value_or(1500));
     s.mesh.seed = static_cast<std::uint64_t>(
@@ -278,7 +279,7 @@ Spec parse(const std::string& path) {
       c.keys(*m, P,
              {"kind", "total_mass", "stiffness", "damping", "home_stiffness", "home_damping",
               "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
-              "scope_radius", "scope_max_nodes", "cg_tolerance"});
+              "scope_radius", "scope_max_nodes", "cg_tolerance", "fixed_z_below"});
       s.total_mass =
           c.number(*m, P, "total_mass", true, 0, 1e3, "the organ's mass (kg)", true).value_or(1);
       s.stiffness = c.number(*m, P, "stiffness", true, 0, 1e7, "spring stiffness k_s (N/m)", true)
@@ -300,6 +301,10 @@ Spec parse(const std::string& path) {
       s.scope_max_nodes = static_cast<int>(
           c.integer(*m, P, "scope_max_nodes", false, 1, 1L << 30, "the most nodes in the scope")
               .value_or(1L << 30));
+      s.fixed_z_below = c.number(*m, P, "fixed_z_below", false, 0, 10,
+                                 "the height above the mesh's lowest point below which nodes "
+                                 "are pinned (m)")
+                            .value_or(0.0);
       if (auto fr = c.text(*m, P, "fixed_region", false)) {
         if (!known_region(*fr))
           c.err("$.model.fixed_region",
@@ -395,14 +400,56 @@ Spec parse(const std::string& path) {
 // ---------------------------------------------------------------- cached meshes
 
 struct CachedMesh {
-  mesh::SurfaceMesh sm;
+  mesh::SurfaceMesh sm;  // the surface the participant sees (compact surface node indices)
   RowMatX3d N;
   std::vector<int> vertex_region;
   Eigen::VectorXd vertex_area;  // lumped (m^2)
   double mean_edge = 0.0;
   std::shared_ptr<const spatial::Octree> octree;
   std::shared_ptr<const mesh::RingTable> rings;
+  // Tetrahedral model (generator model_c): all nodes, springs on tet edges, lumped volumes.
+  bool tet = false;
+  RowMatX3d model_V;
+  mesh::Edges model_E;
+  Eigen::VectorXd node_volume;  // m^3
+  RowMatX3i model_F;            // boundary faces in model node indices
+  std::vector<int> surface_to_model;
 };
+
+void build_tet(CachedMesh& c, const MeshSpec& m) {
+  const mesh::TetMesh tm = mesh::generate_model_c(m.seed, m.vertices);
+  const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
+  const long n = tm.V.rows();
+  std::vector<int> m2s(n, -1);
+  for (long f = 0; f < bf.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = bf.F(f, k);
+      if (m2s[v] < 0) {
+        m2s[v] = static_cast<int>(c.surface_to_model.size());
+        c.surface_to_model.push_back(v);
+      }
+    }
+  mesh::Positions Vs(c.surface_to_model.size(), 3);
+  for (size_t i = 0; i < c.surface_to_model.size(); ++i)
+    Vs.row(i) = tm.V.row(c.surface_to_model[i]);
+  mesh::Faces Fs(bf.F.rows(), 3);
+  for (long f = 0; f < bf.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) Fs(f, k) = m2s[bf.F(f, k)];
+  mesh::Regions reg;
+  if (!tm.regions.empty()) {
+    reg.names = tm.regions.names;
+    reg.id.resize(bf.F.rows());
+    for (long f = 0; f < bf.F.rows(); ++f) reg.id[f] = tm.regions.id[bf.tet[f]];
+  }
+  c.sm = mesh::make_surface_mesh(std::move(Vs), std::move(Fs), std::move(reg));
+  c.tet = true;
+  c.model_V = tm.V;
+  c.model_E = mesh::tet_edges(tm.T);
+  c.model_F = bf.F;
+  c.node_volume.setZero(n);
+  for (long t = 0; t < tm.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) c.node_volume[tm.T(t, k)] += tm.volume[t] / 4.0;
+}
 
 std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m) {
   static std::mutex mu;
@@ -415,8 +462,10 @@ std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m) {
     c->sm = mesh::generate_tract({m.vertices, m.seed});
   else if (m.generator == "stomach")
     c->sm = mesh::generate_stomach(m.seed);
-  else
+  else if (m.generator == "sphere")
     c->sm = mesh::generate_sphere(m.vertices);
+  else
+    build_tet(*c, m);
   const auto& V = c->sm.V;
   const auto& F = c->sm.F;
   c->N = mesh::vertex_normals(V, F);
@@ -434,6 +483,13 @@ std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m) {
   c->octree = std::make_shared<const spatial::Octree>(spatial::build_octree(V, 12, 8));
   c->rings = std::make_shared<const mesh::RingTable>(
       mesh::compute_rings(static_cast<int>(V.rows()), c->sm.E));
+  if (!c->tet) {
+    c->model_V = V;
+    c->model_E = c->sm.E;
+    c->model_F = F;
+    c->surface_to_model.resize(V.rows());
+    for (long i = 0; i < V.rows(); ++i) c->surface_to_model[i] = static_cast<int>(i);
+  }
   cache.emplace(m.key(), c);
   return c;
 }
@@ -501,26 +557,40 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
     sc.ring.scope = s.scope;
     sc.ring.octree = cm->octree.get();
   } else if (s.kind == ModelKind::mass_spring) {
+    // Mass lumped by surface area (surface model) or tet volume (tetrahedral model).
+    const long nm = cm->model_V.rows();
     MassSpringSystem sys;
-    sys.X_rest = g.V;
-    sys.X = g.V;
-    sys.V.setZero(n, 3);
-    sys.F_ext.setZero(n, 3);
-    const double area = cm->vertex_area.sum();
-    sys.mass = cm->vertex_area * (s.total_mass / area);
+    sys.X_rest = cm->model_V;
+    sys.X = cm->model_V;
+    sys.V.setZero(nm, 3);
+    sys.F_ext.setZero(nm, 3);
+    const Eigen::VectorXd& share = cm->tet ? cm->node_volume : cm->vertex_area;
+    sys.mass = share * (s.total_mass / share.sum());
     // Home springs per node scale with the node's share of the surface (uniform per m^2), so
-    // the organ's overall shape stiffness does not depend on the tessellation.
-    sys.home_ks = cm->vertex_area * (s.home_ks * n / area);
-    sys.home_kd = cm->vertex_area * (s.home_kd * n / area);
-    sys.fixed.assign(n, 0);
+    // the organ's overall shape stiffness does not depend on the tessellation. The tetrahedral
+    // model has none (SPEC §3) unless the file asks for them.
+    sys.home_ks.setZero(nm);
+    sys.home_kd.setZero(nm);
+    const double area = cm->vertex_area.sum();
+    for (long i = 0; i < n; ++i) {
+      const int j = cm->surface_to_model[i];
+      sys.home_ks[j] = cm->vertex_area[i] * (s.home_ks * n / area);
+      sys.home_kd[j] = cm->vertex_area[i] * (s.home_kd * n / area);
+    }
+    sys.fixed.assign(nm, 0);
     if (!s.fixed_region.empty()) {
       const int r = g.region_index(s.fixed_region);
       for (long i = 0; i < n; ++i)
-        if (g.vertex_region[i] == r) sys.fixed[i] = 1;
+        if (g.vertex_region[i] == r) sys.fixed[cm->surface_to_model[i]] = 1;
     }
-    sys.springs = springs_from_edges(g.V, cm->sm.E, s.stiffness, s.damping);
+    if (s.fixed_z_below > 0.0) {
+      const double z0 = cm->model_V.col(2).minCoeff();
+      for (long i = 0; i < nm; ++i)
+        if (cm->model_V(i, 2) < z0 + s.fixed_z_below) sys.fixed[i] = 1;
+    }
+    sys.springs = springs_from_edges(cm->model_V, cm->model_E, s.stiffness, s.damping);
     MassSpringScene& ms = sc.ms;
-    ms.model = make_adaptive(std::move(sys), g.F, s.stiffness, s.damping, s.dt);
+    ms.model = make_adaptive(std::move(sys), cm->model_F, s.stiffness, s.damping, s.dt);
     ms.integrator = ov.integrator ? integrator_from_string(*ov.integrator) : s.integrator;
     ms.ws.solver = s.solver;
     ms.ws.cg_tolerance = s.cg_tolerance;
@@ -532,8 +602,7 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
     ms.substep = s.substep;
     ms.scope_radius = s.scope_radius;
     ms.scope_max_nodes = s.scope_max_nodes;
-    ms.surface_to_model.resize(n);
-    for (long i = 0; i < n; ++i) ms.surface_to_model[i] = static_cast<int>(i);
+    ms.surface_to_model = cm->surface_to_model;
   }
   return Scene(std::move(impl));
 }

@@ -52,7 +52,9 @@ TEST(RingModel, EveryNodeReturnsToRestAfterReleaseInEveryScope) {
     EXPECT_LT(max_disp, 0.0061) << "home springs must not overshoot beyond the press";
     EXPECT_EQ(ring_max_displacement(m), 0.0) << to_string(scope);  // exactly home
     EXPECT_EQ(m.V.norm(), 0.0);
-    if (scope == Scope::rings) EXPECT_TRUE(m.active.empty());
+    if (scope == Scope::rings) {
+      EXPECT_TRUE(m.active.empty());
+    }
   }
 }
 
