@@ -116,7 +116,8 @@ palplab::app::CommandRegistration reg{
           const std::string& n = *name;
           if (*vertices < 0) throw palplab::InputError("--vertices must be positive");
           if (n == "model-c") {
-            const TetMesh m = generate_model_c(*seed, *vertices ? *vertices : 2489);
+            const TetMesh m =
+                generate_model_c(*seed, *vertices ? *vertices : kModelCSurfaceVertices);
             write_tet_output(*out, m, *vtu, default_materials());
             std::cout << "model-c: " << m.V.rows() << " nodes, " << m.T.rows() << " tets, "
                       << boundary_faces(m).F.rows() << " boundary faces -> "

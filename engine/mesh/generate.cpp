@@ -31,8 +31,8 @@ double jitter(std::uint64_t seed, const char* label) {
 struct TractShape {
   double z_cervix_end = 0.09, z_body_start = 0.12, z_region_split = 0.10, zj = 0.20;
   double r_cervix = 0.019, r_body = 0.025;
-  double xs = 0.0125, tilt = 8 * kPi / 180, straight = 0.13;
-  double Rx = 0.0145, Rz = 0.0182, shrink = 0.05, alpha_end = 1.1 * kPi;
+  double xs = 0.0125, tilt = 10 * kPi / 180, straight = 0.12, yaw = 45 * kPi / 180;
+  double Rx = 0.027, Rz = 0.025, shrink = 0.2, alpha_end = 1.2 * kPi;
   double r_horn_start = 0.0115, r_horn = 0.0095, r_ovary = 0.0135;
   double u_ovary = 0.82;
 };
@@ -75,20 +75,26 @@ struct Curve {
   }
 };
 
-// Left horn centreline in the xz plane: a straight rise tilted outwards, then an elliptic
-// spiral curling outwards and down, tip pointing back towards the body.
+// Left horn centreline, in the vertical plane through z and the direction H, which points
+// outwards (-x) turned forwards (+y) by the yaw angle: a straight rise tilted towards H, then an
+// elliptic spiral curling outwards, forwards and down, the tip pointing back towards the rise.
+Vec3 horn_heading(const TractShape& sh) {
+  return Vec3(-std::cos(sh.yaw), std::sin(sh.yaw), 0);
+}
+
 Curve left_horn_curve(const TractShape& sh) {
   Curve c;
+  const Vec3 H = horn_heading(sh), Z(0, 0, 1);
   const Vec3 p0(-sh.xs, 0, sh.zj);
-  const Vec3 dir(-std::sin(sh.tilt), 0, std::cos(sh.tilt));
+  const Vec3 dir = std::sin(sh.tilt) * H + std::cos(sh.tilt) * Z;
   const int ns = 400, na = 1600;
   for (int i = 0; i < ns; ++i) c.p.push_back(p0 + dir * (sh.straight * i / ns));
   const Vec3 p1 = p0 + dir * sh.straight;
-  const Vec3 centre = p1 - Vec3(sh.Rx, 0, 0);
+  const Vec3 centre = p1 + sh.Rx * H;
   for (int i = 0; i <= na; ++i) {
     const double a = sh.alpha_end * i / na;
     const double rho = 1 - sh.shrink * a / sh.alpha_end;
-    c.p.push_back(centre + Vec3(sh.Rx * rho * std::cos(a), 0, sh.Rz * rho * std::sin(a)));
+    c.p.push_back(centre - sh.Rx * rho * std::cos(a) * H + sh.Rz * rho * std::sin(a) * Z);
   }
   const int n = static_cast<int>(c.p.size());
   c.s.assign(n, 0);
@@ -246,11 +252,13 @@ SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
   for (int j = 1; j < nh; ++j) {
     const double s = sj[j], r = hr(s);
     const Vec3 cj = c.pos(s), T = c.tangent(s);
-    const Vec3 B(0, 1, 0), N = B.cross(T).normalized();
+    // The curve is planar: B is the plane's normal, N = B x T (so N x B = T).
+    const Vec3 B = horn_heading(sh).cross(Vec3(0, 0, 1)), N = B.cross(T).normalized();
     const double w = smoothstep(0, 0.05, s);
     const double twist = j % 2 ? 0.5 : 0.0;
     for (int p = 0; p < R; ++p) {
-      const double phi = kPi / 2 + kPi * (p + twist) / n;
+      // + yaw: the frame is turned by -yaw about z against the junction ring's x/y frame.
+      const double phi = kPi / 2 + kPi * (p + twist) / n + sh.yaw;
       const Vec3 circle = cj + r * (std::cos(phi) * N + std::sin(phi) * B);
       const Vec3 d = P[d_left[p]] + (cj - c0);
       left[j].push_back((1 - w) * d + w * circle);

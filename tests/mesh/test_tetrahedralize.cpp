@@ -107,7 +107,7 @@ TEST(Tetrahedralize, ModelCMatchesTheReferenceAndKeepsRegions) {
   ASSERT_EQ(m.regions.names, tract_region_names());
   for (int r = 0; r < 6; ++r) EXPECT_GT((m.regions.id.array() == r).count(), 100) << r;
   EXPECT_TRUE((m.attribute.array() == 101).all());
-  const SurfaceMesh s = generate_tract({2489, 0});
+  const SurfaceMesh s = generate_tract({kModelCSurfaceVertices, 0});
   expect_fills(s, m);
   // Ovary tets sit where the ovary faces are.
   for (int t = 0; t < m.T.rows(); ++t) {
