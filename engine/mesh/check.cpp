@@ -132,12 +132,13 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
   const Faces& F = m.F;
   auto P = [&](int v) { return row3(V, v); };
   // Per edge, its faces (for locating edge defects).
+  // Faces of the edges that will be reported (one pass over the half-edges).
+  std::vector<char> report(m.E.rows(), 0);
+  for (int e = 0; e < m.E.rows(); ++e) report[e] = m.edge_faces[e] != 2;
+  for (int e : m.inconsistent_edges) report[e] = 1;
   std::vector<std::vector<int>> edge_faces(m.E.rows());
   for (int h = 0; h < 3 * F.rows(); ++h)
-    if (m.edge_faces[m.he_edge[h]] != 2) edge_faces[m.he_edge[h]].push_back(h / 3);
-  for (int e : m.inconsistent_edges)
-    for (int h = 0; h < 3 * F.rows(); ++h)
-      if (m.he_edge[h] == e) edge_faces[e].push_back(h / 3);
+    if (report[m.he_edge[h]]) edge_faces[m.he_edge[h]].push_back(h / 3);
   for (int e = 0; e < m.E.rows(); ++e) {
     const int a = m.E(e, 0), b = m.E(e, 1);
     if (m.edge_faces[e] == 1 && o.expect_closed)

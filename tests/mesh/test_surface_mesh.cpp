@@ -191,6 +191,17 @@ TEST(Generate, TractModelsAreClosedGenusZeroWithinSizes) {
   }
 }
 
+TEST(Generate, SeedsPerturbWithinTenPercent) {
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    SurfaceMesh m = generate_tract({1500, seed});
+    const Eigen::RowVector3d size = m.V.colwise().maxCoeff() - m.V.colwise().minCoeff();
+    EXPECT_NEAR(size.x(), 0.145, 0.1 * 0.145) << seed;
+    EXPECT_NEAR(size.z(), 0.355, 0.1 * 0.355) << seed;
+    EXPECT_EQ(genus(m), 0) << seed;
+    EXPECT_NEAR(m.V.rows(), 1500, 0.02 * 1500);
+  }
+}
+
 TEST(Generate, Deterministic) {
   SurfaceMesh a = generate_tract({1500, 0}), b = generate_tract({1500, 0});
   EXPECT_EQ(a.V, b.V);
