@@ -655,7 +655,8 @@ Study parse_study(const std::string& text, const std::string& file,
       s.prototype_files[id] = f;
     } catch (const InputError& e) {
       for (const auto& p : e.problems()) c.problems.push_back(p);
-      c.err(path, "prototype \"" + id + "\" (" + f + ") is not valid (see above)");
+      c.err(path, "prototype \"" + id + "\" (" + f +
+                      ") is not valid (see the problems reported in that file)");
       failed.insert(id);
     }
   }

@@ -508,9 +508,9 @@ void export_csv(const Store& store, const std::string& dir, bool samples) {
                            csv(s.phase) + ',' + std::to_string(s.phase_index + 1) + ',';
       for (std::size_t i = 0; i < ss.size(); ++i) {
         char buf[256];
-        std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%d\n", ss.t0 + i * ss.dt,
-                      ss.x[3 * i], ss.x[3 * i + 1], ss.x[3 * i + 2], ss.F[3 * i], ss.F[3 * i + 1],
-                      ss.F[3 * i + 2], ss.node[i]);
+        std::snprintf(buf, sizeof buf, "%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%d\n",
+                      ss.t0 + (i + 1) * ss.dt, ss.x[3 * i], ss.x[3 * i + 1], ss.x[3 * i + 2],
+                      ss.F[3 * i], ss.F[3 * i + 1], ss.F[3 * i + 2], ss.node[i]);
         o << prefix << buf;
       }
     }

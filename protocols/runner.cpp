@@ -1,0 +1,356 @@
+#include "protocols/runner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "common/input_error.hpp"
+#include "common/seed.hpp"
+#include "engine/scene.hpp"
+#include "palplab/version.hpp"
+#include "protocols/measures.hpp"
+#include "protocols/participants/model.hpp"
+#include "protocols/participants/params.hpp"
+#include "prototypes/factory.hpp"
+#include "results/sha256.hpp"
+#include "results/store.hpp"
+
+namespace fs = std::filesystem;
+
+namespace palplab::protocols {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+namespace pm = participants;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+ForceLimits limits_for(const Study& s, const std::string& region) {
+  if (auto it = s.task.thresholds.find(region); it != s.task.thresholds.end()) return it->second;
+  if (auto it = s.task.thresholds.find("*"); it != s.task.thresholds.end()) return it->second;
+  return {};
+}
+
+// The instructor's expert calibration: one own press on the feature of this simulator, feeling
+// the force (with Weber noise) up to the MPF and noting how much the organ visibly deforms then.
+// Returns 0 when the simulator shows no deformation. The scene is reset afterwards.
+double calibrate_instructor(engine::Scene& scene, int node, double mpf, double weber,
+                            std::uint64_t seed) {
+  const auto& g = scene.geometry();
+  Rng rng(derive_seed(seed, "instructor-calibration"));
+  const double eps = weber * rng.normal();
+  Eigen::Vector3d n = g.N.row(node).transpose().normalized();
+  Eigen::Vector3d x = g.V.row(node).transpose() + n * 0.01;
+  const double dt = scene.dt(), speed = 0.004;  // m/s, a slow deliberate press
+  double d = 0.0;
+  for (int i = 0; i < static_cast<int>(20.0 / dt); ++i) {
+    x -= n * speed * dt;
+    engine::Rendered r = scene.step(x);
+    if (r.force.norm() * (1.0 + eps) >= mpf) {
+      d = r.visible_deformation;
+      break;
+    }
+  }
+  scene.reset();
+  return d;
+}
+
+struct SessionOutcome {
+  results::SessionData data;
+  pm::TraineeState state_after;
+};
+
+SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const SessionSpec& spec,
+                           const pm::TraineeState& state_before, bool keep_samples,
+                           const std::map<std::string, std::string>& prototype_sha) {
+  // The scene is built from the file; it must still be the file recorded when the run started,
+  // or the database would mix two simulators under one name.
+  if (auto it = prototype_sha.find(spec.prototype);
+      it != prototype_sha.end() && results::sha256_hex(slurp(spec.prototype_file)) != it->second)
+    throw InputError(
+        "prototype file changed since the run started (SHA-256 differs from the one "
+        "stored in the database); restore it or start a new run",
+        spec.prototype_file);
+  engine::SceneOverrides ov;
+  ov.haptic = spec.cues.haptic;
+  ov.visual_deformation = spec.cues.visual_deformation;
+  ov.audio = spec.cues.audio;
+  for (const auto& [region, l] : study.task.thresholds) {
+    engine::Thresholds t;
+    t.st = l.st;
+    t.mpf = l.mpf;
+    t.sft = l.sft;
+    ov.thresholds[region] = t;
+  }
+  engine::Scene scene = prototypes::build_scene(spec.prototype_file, ov);
+  const engine::SceneGeometry& g = scene.geometry();
+  const int feature = g.region_index(study.task.feature);
+  if (feature < 0)
+    throw InputError(
+        "prototype \"" + spec.prototype + "\" has no region \"" + study.task.feature + "\"",
+        spec.prototype_file);
+  const ForceLimits lim = limits_for(study, study.task.feature);
+
+  pm::SurfaceView view;
+  view.V = &g.V;
+  view.N = &g.N;
+  view.vertex_region = &g.vertex_region;
+  view.feature_region = feature;
+  view.feature_centroid = g.region_centroid(study.task.feature);
+  view.start_position = g.start_position;
+
+  const bool instructed = !spec.instructor.empty();
+  // Experiment 1: the trainee feels only the force; the instructor sees and hears the cues.
+  pm::Channels trainee_ch;
+  if (instructed) trainee_ch = pm::Channels{true, false, false, true};
+  const pm::Channels instructor_ch{false, true, true, false};
+
+  pm::Trainee trainee(pm::resolve_params(pm::trainee_param_specs(), study.participant_parameters),
+                      state_before);
+  std::optional<pm::Instructor> instructor;
+  if (instructed) {
+    auto ip = pm::resolve_params(pm::instructor_param_specs(), study.instructor
+                                                                   ? study.instructor->parameters
+                                                                   : nlohmann::json::object());
+    const std::uint64_t iseed =
+        derive_seed(spec.seed, label_hash("instructor"), label_hash(spec.instructor));
+    instructor.emplace(ip, iseed);
+    const double weber = pm::resolve_params(pm::trainee_param_specs(), {}).at("weber_fraction");
+    instructor->set_target_deformation(
+        calibrate_instructor(scene, g.region_node(study.task.feature), lim.mpf, weber, iseed));
+  }
+  trainee.begin_session(view, lim.mpf, spec.offset, spec.duration, pp.seed, spec.seed, trainee_ch);
+
+  const double dt = scene.dt();
+  const long steps = std::lround(spec.duration / dt);
+  results::SessionData out;
+  results::SampleSeries samples;
+  samples.t0 = 0.0;
+  samples.dt = dt;
+  samples.x.reserve(3 * steps);
+  samples.F.reserve(3 * steps);
+  samples.node.reserve(steps);
+  std::vector<float> loop(steps);
+  const auto wall0 = Clock::now();
+  bool prev_contact = false;
+  for (long i = 0; i < steps; ++i) {
+    const double t = (i + 1) * dt;
+    const Eigen::Vector3d x = trainee.command(t);
+    const auto a = Clock::now();
+    const engine::Rendered r = scene.step(x);
+    loop[i] = std::chrono::duration<float>(Clock::now() - a).count();
+    samples.x.insert(samples.x.end(), {x.x(), x.y(), x.z()});
+    samples.F.insert(samples.F.end(), {r.force.x(), r.force.y(), r.force.z()});
+    samples.node.push_back(r.contact_node);
+    for (const auto& e : r.events)
+      out.events.push_back({e.t, engine::to_string(e.kind), e.value,
+                            e.region >= 0 && e.region < static_cast<int>(g.region_names.size())
+                                ? g.region_names[e.region]
+                                : std::string()});
+    pm::Percept p;
+    p.t = r.t;
+    p.force = r.force;
+    p.contact = r.contact;
+    p.contact_region = r.contact_region;
+    p.visible_deformation = r.visible_deformation;
+    p.audio = r.audio;
+    bool call = false;
+    if (instructor) {
+      call = instructor->observe(p, instructor_ch);
+      if (prev_contact && !r.contact) instructor->reset_press();
+    }
+    prev_contact = r.contact;
+    trainee.perceive(p, call);
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
+  trainee.end_session(spec.offset + spec.duration);
+
+  MeasureInputs mi;
+  mi.samples = &samples;
+  mi.events = &out.events;
+  mi.vertex_region = &g.vertex_region;
+  mi.feature_region = feature;
+  mi.mpf = lim.mpf;
+  mi.accuracy_tolerance = study.task.accuracy_tolerance;
+  mi.identify_dwell = study.task.identify_dwell;
+  mi.palpation_onset = study.task.palpation_onset;
+  out.measures = compute_measures(mi);
+
+  results::SessionRecord& rec = out.session;
+  rec.participant = pp.id;
+  rec.ordinal = spec.ordinal;
+  rec.phase = spec.phase_id;
+  rec.phase_index = spec.index;
+  rec.prototype = spec.prototype;
+  rec.instructor = spec.instructor;
+  rec.study_offset = spec.offset;
+  rec.day = spec.day;
+  rec.duration = steps * dt;
+  rec.steps = steps;
+  rec.wall_duration = wall;
+  if (!loop.empty()) {
+    auto mid = loop.begin() + loop.size() / 2;
+    std::nth_element(loop.begin(), mid, loop.end());
+    rec.loop_median = *mid;
+    auto p99 = loop.begin() + std::min(loop.size() - 1, loop.size() * 99 / 100);
+    std::nth_element(loop.begin(), p99, loop.end());
+    rec.loop_p99 = *p99;
+  }
+  rec.seed = spec.seed;
+  // The state goes through JSON exactly as a resumed run reads it back.
+  const nlohmann::json st = trainee.state().to_json();
+  rec.state_after = st.dump();
+  SessionOutcome o;
+  o.state_after = pm::TraineeState::from_json(nlohmann::json::parse(rec.state_after));
+  if (keep_samples) out.samples = std::move(samples);
+  o.data = std::move(out);
+  return o;
+}
+
+}  // namespace
+
+RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt) {
+  const auto t0 = Clock::now();
+  const std::string sha = results::sha256_hex(study.json_text);
+  const bool exists = fs::exists(opt.db);
+  if (exists && !opt.resume && !opt.force)
+    throw InputError(
+        "the database already exists; use --resume to continue it or --force to "
+        "replace it",
+        opt.db);
+  if (exists && opt.force && !opt.resume) {
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(opt.db + suffix);
+  }
+  results::Store store =
+      fs::exists(opt.db) ? results::Store::open(opt.db) : results::Store::create(opt.db);
+  std::map<std::string, std::map<int, std::string>> done;  // participant -> ordinal -> state
+  std::map<std::string, std::string> prototype_sha;        // id -> SHA-256 at run start
+  if (exists && opt.resume) {
+    results::StudyRecord rec = store.read_study();
+    if (rec.sha256 != sha)
+      throw InputError("the database holds a run of another study file (SHA-256 " +
+                           rec.sha256.substr(0, 12) + "…, this file " + sha.substr(0, 12) +
+                           "…); resume needs the identical study",
+                       opt.db);
+    auto parts = store.read_participants();
+    bool same = parts.size() == plan.participants.size();
+    for (std::size_t i = 0; same && i < parts.size(); ++i)
+      same = parts[i].participant == plan.participants[i].id &&
+             parts[i].group == plan.participants[i].group;
+    if (!same) throw InputError("the database's participants differ from the plan", opt.db);
+    for (const auto& s : store.read_sessions()) done[s.participant][s.ordinal] = s.state_after;
+    for (const auto& p : store.read_prototypes()) {
+      prototype_sha[p.prototype] = p.sha256;
+      auto it = study.prototype_files.find(p.prototype);
+      if (it == study.prototype_files.end() || results::sha256_hex(slurp(it->second)) != p.sha256)
+        throw InputError("prototype \"" + p.prototype +
+                             "\" differs from the file the run started with (SHA-256); resume "
+                             "needs identical prototypes",
+                         it == study.prototype_files.end() ? opt.db : it->second);
+    }
+  } else {
+    results::StudyRecord rec;
+    rec.study_id = study.id;
+    rec.title = study.title;
+    rec.json = study.json_text;
+    rec.sha256 = sha;
+    rec.palplab_version = kVersion;
+    rec.git_commit = kGitCommit;
+    rec.seed = study.seed;
+    rec.started_at = results::utc_now();
+    std::vector<results::PrototypeRecord> protos;
+    for (const auto& [id, path] : study.prototype_files) {
+      std::string text = slurp(path);
+      protos.push_back({id, path, results::sha256_hex(text), text});
+      prototype_sha[id] = protos.back().sha256;
+    }
+    std::vector<results::ParticipantRecord> parts;
+    for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
+    store.write_study(rec, protos, parts);
+  }
+
+  Progress progress;
+  progress.participants_total = static_cast<int>(plan.participants.size());
+  progress.sessions_total = static_cast<long>(plan.session_count());
+  for (const auto& [p, m] : done) progress.sessions_resumed += static_cast<long>(m.size());
+  progress.sessions_done = progress.sessions_resumed;
+  for (const auto& p : plan.participants)
+    if (done.count(p.id) && done[p.id].size() == p.sessions.size()) ++progress.participants_done;
+
+  std::mutex mu;
+  std::atomic<std::size_t> next{0};
+  std::atomic<long> started{0};
+  std::atomic<bool> stop{false};
+  std::exception_ptr error;
+  RunSummary sum;
+  sum.sessions_skipped = progress.sessions_resumed;
+
+  auto worker = [&] {
+    while (!stop) {
+      const std::size_t i = next++;
+      if (i >= plan.participants.size()) return;
+      const ParticipantPlan& pp = plan.participants[i];
+      try {
+        pm::TraineeState state;
+        std::size_t k = 0;
+        auto it = done.find(pp.id);
+        if (it != done.end()) {
+          // Sessions are stored in order per participant; continue after the last one.
+          while (k < pp.sessions.size() && it->second.count(static_cast<int>(k))) ++k;
+          if (k > 0)
+            state = pm::TraineeState::from_json(
+                nlohmann::json::parse(it->second.at(static_cast<int>(k - 1))));
+        }
+        for (; k < pp.sessions.size() && !stop; ++k) {
+          if (opt.max_sessions > 0 && started++ >= opt.max_sessions) {
+            stop = true;
+            break;
+          }
+          SessionOutcome o =
+              run_session(study, pp, pp.sessions[k], state, opt.samples, prototype_sha);
+          store.write_session(o.data);
+          state = o.state_after;
+          std::lock_guard lock(mu);
+          ++sum.sessions_run;
+          sum.simulated += o.data.session.duration;
+          ++progress.sessions_done;
+          progress.simulated = sum.simulated;
+          if (k + 1 == pp.sessions.size()) ++progress.participants_done;
+          progress.last = pp.id + " " + pp.sessions[k].phase_id + " #" +
+                          std::to_string(pp.sessions[k].index + 1);
+          progress.elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+          if (opt.progress) opt.progress(progress);
+        }
+      } catch (...) {
+        std::lock_guard lock(mu);
+        if (!error) error = std::current_exception();
+        stop = true;
+      }
+    }
+  };
+  const int jobs = std::max(1, opt.jobs);
+  std::vector<std::thread> threads;
+  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+
+  sum.wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  sum.complete = static_cast<long>(store.read_sessions().size()) == progress.sessions_total;
+  if (sum.complete) store.set_finished(results::utc_now());
+  return sum;
+}
+
+}  // namespace palplab::protocols

@@ -1,0 +1,297 @@
+// End-to-end tests of `palplab validate`, `palplab run` and `palplab export` on the real
+// prototypes: exit codes, located errors, determinism, resume after interruption (including
+// kill -9), renamed prototypes, the long-term schedule in the database and the CSV export.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "results/store.hpp"
+
+namespace fs = std::filesystem;
+using palplab::results::Store;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+fs::path tmp(const std::string& name) {
+  auto d = fs::temp_directory_path() / ("palplab_cli_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+Result cli(const std::string& args, const fs::path& dir) {
+  Result r;
+  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
+  std::string cmd =
+      std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
+  int st = std::system(cmd.c_str());
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::string ref(const std::string& f) {
+  return (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / f).string();
+}
+
+// A short study on A and B (and optionally a haptic-only test) for run tests.
+std::string small_study(const std::string& proto1, const std::string& proto2, int per_group,
+                        double duration, bool long_term = false) {
+  std::ostringstream s;
+  s << R"({"palplab_study": 1, "id": "small", "title": "small", "seed": 42,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "G1", "prototype": ")"
+    << proto1 << R"(", "size": )" << per_group << R"(},
+             {"id": "G2", "prototype": ")"
+    << proto2 << R"(", "size": )" << per_group << R"(}],
+  "phases": [
+    {"id": "pre", "kind": "pre_training", "session_duration": )"
+    << duration << R"(, "start": {"day": 0}},
+    {"id": "training", "kind": "training", "sessions": 2, "session_duration": )"
+    << duration << ", "
+    << (long_term ? R"("start": {"day": 1}, "gap": {"days": 1})"
+                  : R"("start": {"after_previous": {"minutes": 10}}, "gap": {"minutes": 10})")
+    << R"(},
+    {"id": "test", "kind": "post_training", "session_duration": )"
+    << duration << ", "
+    << (long_term ? R"("start": {"day": 7})" : R"("start": {"after_previous": {"minutes": 10}})")
+    << R"(, "prototype": ")" << proto1
+    << R"(", "cues": {"visual_deformation": false, "audio": false}}]})";
+  return s.str();
+}
+
+// The measures table as text: participant, group, phase, session index, name, value (exact).
+std::string measures_table(const fs::path& db) {
+  Store s = Store::open(db.string());
+  std::ostringstream o;
+  o.precision(17);
+  for (const auto& m : s.read_measures())
+    o << m.participant << ',' << m.group << ',' << m.phase << ',' << m.phase_index << ',' << m.name
+      << ',' << (m.value ? std::to_string(*m.value) + "|" : "NA|") << (m.value ? *m.value : 0.0)
+      << '\n';
+  return o.str();
+}
+
+void copy_prototype(const std::string& id, const fs::path& to, const std::string& new_id) {
+  std::string text = slurp(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / (id + ".json"));
+  auto pos = text.find("\"id\": \"" + id + "\"");
+  if (pos != std::string::npos) text.replace(pos, 8 + id.size(), "\"id\": \"" + new_id + "\"");
+  std::ofstream(to / (new_id + ".json"), std::ios::binary) << text;
+}
+
+}  // namespace
+
+TEST(CliValidate, ReferenceStudiesAreValid) {
+  auto d = tmp("valid");
+  for (const char* f : {"exp1_instructor.json", "exp2_short_term.json", "exp3_long_term.json",
+                        "exp4_visual_extent.json", "example_minimal.json"}) {
+    Result r = cli("validate " + ref(f), d);
+    EXPECT_EQ(r.code, 0) << f << "\n" << r.err;
+    EXPECT_NE(r.out.find("valid: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("timeline per participant"), std::string::npos);
+  }
+}
+
+TEST(CliValidate, AllProblemsLocatedExitTwo) {
+  auto d = tmp("invalid");
+  std::string s = small_study("A", "B", 2, 10);
+  s.replace(s.find("\"seed\": 42"), 10, "\"seed\": \"x\"");
+  s.replace(s.find("\"MPF\": 2.5"), 10, "\"MPF\": 9.5");
+  s.replace(s.find("\"prototype\": \"B\""), 16, "\"prototype\": \"NoSuch\"");
+  s.replace(s.find("\"feature\": \"ovary_left\""), 23, "\"feature\": \"spleen\"");
+  std::ofstream(d / "bad.json") << s;
+  Result r = cli("validate " + (d / "bad.json").string(), d);
+  EXPECT_EQ(r.code, 2);
+  const std::string f = (d / "bad.json").string();
+  for (const char* path : {": $.seed: expected an integer", ": $.task.feature: region \"spleen\"",
+                           ": $.task.thresholds[\"*\"].MPF: MPF (9.5 N) must not exceed SFT",
+                           ": $.groups[1].prototype: unresolved prototype \"NoSuch\""})
+    EXPECT_NE(r.err.find(path), std::string::npos) << path << "\n" << r.err;
+  // every line is FILE:LINE:COL: $.path: what
+  std::istringstream lines(r.err);
+  std::string line;
+  int n = 0;
+  while (std::getline(lines, line)) {
+    if (line.rfind("error: ", 0) == 0) line = line.substr(7);
+    EXPECT_EQ(line.rfind(f + ":", 0), 0u) << line;
+    ++n;
+  }
+  EXPECT_EQ(n, 4) << r.err;
+  // a prototype that is broken is reported inside the prototype file
+  auto d2 = tmp("badproto");
+  std::ofstream(d2 / "Broken.json") << "{\"format\": \"palplab-prototype/1\", \"id\": \"Broken\",";
+  std::ofstream(d2 / "s.json") << small_study("A", "Broken", 1, 10);
+  Result r2 = cli("validate " + (d2 / "s.json").string(), d2);
+  EXPECT_EQ(r2.code, 2);
+  EXPECT_NE(r2.err.find((d2 / "Broken.json").string() + ":1:"), std::string::npos) << r2.err;
+}
+
+TEST(CliRun, SameSeedIdenticalMeasuresAnyJobs) {
+  auto d = tmp("determinism");
+  std::ofstream(d / "s.json") << small_study("A", "B", 2, 20);
+  Result a = cli(
+      "run " + (d / "s.json").string() + " --db " + (d / "a.db").string() + " --jobs 1 --quiet", d);
+  ASSERT_EQ(a.code, 0) << a.err;
+  Result b = cli(
+      "run " + (d / "s.json").string() + " --db " + (d / "b.db").string() + " --jobs 2 --quiet", d);
+  ASSERT_EQ(b.code, 0) << b.err;
+  std::string ta = measures_table(d / "a.db");
+  EXPECT_EQ(std::count(ta.begin(), ta.end(), '\n'), 4 * 4 * 6);
+  EXPECT_EQ(ta, measures_table(d / "b.db"));
+  // refuses to overwrite; --force replaces
+  Result c = cli("run " + (d / "s.json").string() + " --db " + (d / "a.db").string(), d);
+  EXPECT_EQ(c.code, 2);
+  EXPECT_NE(c.err.find("already exists; use --resume"), std::string::npos) << c.err;
+  Result f = cli(
+      "run " + (d / "s.json").string() + " --db " + (d / "a.db").string() + " --force --quiet", d);
+  EXPECT_EQ(f.code, 0) << f.err;
+  EXPECT_EQ(ta, measures_table(d / "a.db"));
+  // the study and its hash are stored
+  Store s = Store::open((d / "a.db").string());
+  EXPECT_EQ(s.read_study().json, slurp(d / "s.json"));
+  EXPECT_FALSE(s.read_study().finished_at.empty());
+  EXPECT_EQ(s.read_prototypes().size(), 2u);
+}
+
+TEST(CliRun, InterruptedThenResumedEqualsUninterrupted) {
+  auto d = tmp("resume");
+  std::ofstream(d / "s.json") << small_study("A", "B", 2, 20);
+  const std::string study = (d / "s.json").string();
+  ASSERT_EQ(cli("run " + study + " --db " + (d / "full.db").string() + " --quiet", d).code, 0);
+  Result part = cli(
+      "run " + study + " --db " + (d / "part.db").string() + " --jobs 2 --max-sessions 5 --quiet",
+      d);
+  ASSERT_EQ(part.code, 0) << part.err;
+  {
+    Store s = Store::open((d / "part.db").string());
+    EXPECT_LT(s.read_sessions().size(), 16u);
+    EXPECT_TRUE(s.read_study().finished_at.empty());
+  }
+  Result res = cli("run " + study + " --db " + (d / "part.db").string() + " --resume", d);
+  ASSERT_EQ(res.code, 0) << res.err;
+  EXPECT_NE(res.out.find("already in the database"), std::string::npos);
+  EXPECT_EQ(measures_table(d / "full.db"), measures_table(d / "part.db"));
+  // resuming with a different study file is refused
+  std::string other = small_study("A", "B", 2, 21);
+  std::ofstream(d / "other.json") << other;
+  Result bad = cli(
+      "run " + (d / "other.json").string() + " --db " + (d / "part.db").string() + " --resume", d);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("another study"), std::string::npos) << bad.err;
+}
+
+TEST(CliRun, KillNineThenResumeEqualsUninterrupted) {
+  auto d = tmp("kill");
+  // Long enough to be killed mid-run: 8 participants, 4 sessions of 60 s each.
+  std::ofstream(d / "s.json") << small_study("A", "B", 4, 60);
+  const std::string study = (d / "s.json").string();
+  ASSERT_EQ(cli("run " + study + " --db " + (d / "full.db").string() + " --quiet", d).code, 0);
+  const std::string db = (d / "killed.db").string();
+  pid_t pid = fork();
+  if (pid == 0) {
+    execl(PALPLAB_BINARY, PALPLAB_BINARY, "run", study.c_str(), "--db", db.c_str(), "--quiet",
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait for some sessions to be committed, then kill -9.
+  std::size_t at_kill = 0;
+  for (int i = 0; i < 4000; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    if (!fs::exists(db)) continue;
+    try {
+      Store s = Store::open(db);
+      at_kill = s.read_sessions().size();
+      if (at_kill >= 3) break;
+    } catch (...) {
+    }
+  }
+  kill(pid, SIGKILL);
+  int st = 0;
+  waitpid(pid, &st, 0);
+  ASSERT_TRUE(WIFSIGNALED(st)) << "the run finished before it could be killed";
+  {
+    Store s = Store::open(db);
+    EXPECT_LT(s.read_sessions().size(), 32u);
+    EXPECT_TRUE(s.read_study().finished_at.empty());
+  }
+  Result res = cli("run " + study + " --db " + db + " --resume --jobs 2 --quiet", d);
+  ASSERT_EQ(res.code, 0) << res.err;
+  EXPECT_EQ(measures_table(d / "full.db"), measures_table(db));
+}
+
+TEST(CliRun, RenamedPrototypeCopiesGiveIdenticalResults) {
+  auto d = tmp("renamed");
+  copy_prototype("A", d, "A");
+  copy_prototype("B", d, "B");
+  copy_prototype("A", d, "Rigid7");
+  copy_prototype("B", d, "Zeta");
+  std::ofstream(d / "orig.json") << small_study("A", "B", 2, 20);
+  std::ofstream(d / "renamed.json") << small_study("Rigid7", "Zeta", 2, 20);
+  ASSERT_EQ(
+      cli("run " + (d / "orig.json").string() + " --db " + (d / "o.db").string() + " --quiet", d)
+          .code,
+      0);
+  Result r = cli(
+      "run " + (d / "renamed.json").string() + " --db " + (d / "r.db").string() + " --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string o = measures_table(d / "o.db");
+  EXPECT_FALSE(o.empty());
+  EXPECT_EQ(o, measures_table(d / "r.db"));
+  Store s = Store::open((d / "r.db").string());
+  EXPECT_EQ(s.read_sessions()[1].prototype, "Rigid7");
+}
+
+TEST(CliRun, LongTermScheduleInTheDatabase) {
+  auto d = tmp("longterm");
+  std::ofstream(d / "s.json") << small_study("A", "B", 1, 5, true);
+  ASSERT_EQ(
+      cli("run " + (d / "s.json").string() + " --db " + (d / "l.db").string() + " --quiet", d).code,
+      0);
+  Store s = Store::open((d / "l.db").string());
+  auto sessions = s.read_sessions();
+  ASSERT_EQ(sessions.size(), 8u);
+  const int days[] = {0, 1, 2, 7};
+  for (std::size_t i = 0; i < sessions.size(); ++i) {
+    EXPECT_EQ(sessions[i].day, days[i % 4]) << i;
+    EXPECT_DOUBLE_EQ(sessions[i].study_offset, days[i % 4] * 86400.0);
+  }
+}
+
+TEST(CliExport, TidyCsv) {
+  auto d = tmp("export");
+  std::ofstream(d / "s.json") << small_study("A", "B", 1, 5);
+  ASSERT_EQ(
+      cli("run " + (d / "s.json").string() + " --db " + (d / "e.db").string() + " --quiet", d).code,
+      0);
+  Result r =
+      cli("export " + (d / "e.db").string() + " --csv " + (d / "out").string() + " --samples", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string m = slurp(d / "out" / "measures.csv");
+  EXPECT_EQ(m.substr(0, m.find('\n')), "participant,group,phase,session,measure,value,unit");
+  EXPECT_EQ(std::count(m.begin(), m.end(), '\n'), 1 + 2 * 4 * 6);
+  EXPECT_NE(m.find(",training,2,palpation_force,"), std::string::npos);
+  std::string smp = slurp(d / "out" / "samples.csv");
+  EXPECT_EQ(std::count(smp.begin(), smp.end(), '\n'), 1 + 2 * 4 * 5000);
+  EXPECT_TRUE(fs::exists(d / "out" / "events.csv"));
+  EXPECT_TRUE(fs::exists(d / "out" / "sessions.csv"));
+  Result bad = cli("export " + (d / "missing.db").string() + " --csv " + (d / "o2").string(), d);
+  EXPECT_EQ(bad.code, 2);
+}
