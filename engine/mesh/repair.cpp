@@ -133,6 +133,11 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
   }
   // 4. Holes: each boundary loop of at most max_hole_edges edges gets a centre vertex and a fan.
   if (opt.fill_holes) {
+    // Region of some face at each vertex, so that a hole's new faces take a bordering region.
+    std::vector<int> vregion(V.rows(), -1);
+    for (size_t f = 0; f < F.size(); ++f)
+      for (int v : F[f])
+        if (vregion[v] < 0) vregion[v] = region[f];
     for (const auto& loop : boundary_loops(m)) {
       if (static_cast<int>(loop.size()) > opt.max_hole_edges || loop.size() < 3) {
         ++log.unfilled_holes;
@@ -146,18 +151,10 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
       V.row(cv) = c.transpose();
       // The loop runs along boundary half-edges a->b (face on their left); the fan must run
       // b->a to pair with them.
-      int reg = -1;
       for (size_t i = 0; i < loop.size(); ++i) {
         const int a = loop[i], b = loop[(i + 1) % loop.size()];
         F.push_back({b, a, cv});
-        region.push_back(reg);
-      }
-      // The new faces take the region of a face they border (the first found).
-      if (!in.regions.empty()) {
-        for (int f = 0; f < static_cast<int>(region.size()) - static_cast<int>(loop.size()); ++f)
-          for (int k = 0; k < 3 && reg < 0; ++k)
-            if (F[f][k] == loop[0]) reg = region[f];
-        for (size_t i = 0; i < loop.size(); ++i) region[region.size() - 1 - i] = reg;
+        region.push_back(vregion[loop[0]]);
       }
       ++log.filled_holes;
       ++log.added_vertices;

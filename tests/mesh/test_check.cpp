@@ -220,3 +220,30 @@ TEST(Repair, FixesWhatCheckFinds) {
   EXPECT_EQ(flipped.flipped_faces, 12);
   EXPECT_NEAR(enclosed_volume(out.V, out.F), 1.0, 1e-12);
 }
+
+TEST(Repair, FillsAHoleInTheTractKeepingRegions) {
+  const SurfaceMesh m = generate_tract({1500, 0});
+  const int v = 700;
+  std::vector<int> keep;
+  for (int f = 0; f < m.F.rows(); ++f)
+    if (!(m.F.row(f).array() == v).any()) keep.push_back(f);
+  Faces F(static_cast<int>(keep.size()), 3);
+  Regions r{m.regions.names, Eigen::VectorXi(static_cast<int>(keep.size()))};
+  for (size_t i = 0; i < keep.size(); ++i) {
+    F.row(i) = m.F.row(keep[i]);
+    r.id[i] = m.regions.id[keep[i]];
+  }
+  const SurfaceMesh holed = make_surface_mesh(m.V, F, r);
+  EXPECT_EQ(boundary_loops(holed).size(), 1u);
+  RepairLog log;
+  const SurfaceMesh fixed = repair(holed, {}, &log);
+  EXPECT_EQ(log.filled_holes, 1);
+  EXPECT_EQ(log.removed_unused_vertices, 1);  // the vertex whose faces were removed
+  EXPECT_EQ(fixed.V.rows(), m.V.rows());      // ... replaced by the hole's centre
+  EXPECT_EQ(fixed.F.rows(), m.F.rows());
+  EXPECT_TRUE(check_surface(fixed).clean());
+  EXPECT_EQ(fixed.regions.names, m.regions.names);
+  EXPECT_TRUE((fixed.regions.id.array() >= 0).all());
+  EXPECT_NEAR(enclosed_volume(fixed.V, fixed.F), enclosed_volume(m.V, m.F),
+              1e-3 * enclosed_volume(m.V, m.F));
+}
