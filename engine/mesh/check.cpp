@@ -43,6 +43,52 @@ bool segment_crosses(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
   return true;
 }
 
+double orient2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+}
+
+bool strictly_inside(const Eigen::Vector2d& p, const Eigen::Vector2d* t) {
+  const double a = orient2(t[0], t[1], p), b = orient2(t[1], t[2], p), c = orient2(t[2], t[0], p);
+  return (a > 0 && b > 0 && c > 0) || (a < 0 && b < 0 && c < 0);
+}
+
+// Two triangles in one plane (no shared vertex) overlap: an edge pair crosses properly or a
+// corner of one lies strictly inside the other. Projected on the plane's dominant axis.
+bool coplanar_overlap(const Vec3* A, const Vec3* B, Vec3* x) {
+  const Vec3 n = (A[1] - A[0]).cross(A[2] - A[0]);
+  int drop;
+  n.cwiseAbs().maxCoeff(&drop);
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  Eigen::Vector2d a[3], b[3];
+  for (int k = 0; k < 3; ++k) {
+    a[k] = {A[k][u], A[k][v]};
+    b[k] = {B[k][u], B[k][v]};
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double o1 = orient2(a[i], a[(i + 1) % 3], b[j]);
+      const double o2 = orient2(a[i], a[(i + 1) % 3], b[(j + 1) % 3]);
+      const double o3 = orient2(b[j], b[(j + 1) % 3], a[i]);
+      const double o4 = orient2(b[j], b[(j + 1) % 3], a[(i + 1) % 3]);
+      if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) &&
+          ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) {
+        if (x) *x = A[i] + (A[(i + 1) % 3] - A[i]) * (o3 / (o3 - o4));
+        return true;
+      }
+    }
+  for (int k = 0; k < 3; ++k) {
+    if (strictly_inside(b[k], a)) {
+      if (x) *x = B[k];
+      return true;
+    }
+    if (strictly_inside(a[k], b)) {
+      if (x) *x = A[k];
+      return true;
+    }
+  }
+  return false;
+}
+
 bool triangles_cross(const Positions& V, const Faces& F, int f, int g, Vec3* x) {
   int shared = 0, sf = -1, sg = -1;
   for (int i = 0; i < 3; ++i)
@@ -64,6 +110,10 @@ bool triangles_cross(const Positions& V, const Faces& F, int f, int g, Vec3* x) 
     if (segment_crosses(A[k], A[(k + 1) % 3], B[0], B[1], B[2], x)) return true;
     if (segment_crosses(B[k], B[(k + 1) % 3], A[0], A[1], A[2], x)) return true;
   }
+  // Exactly coplanar triangles (e.g. overlapping copies in CAD exports) need a 2D test.
+  if (orient(A[0], A[1], A[2], B[0]) == 0 && orient(A[0], A[1], A[2], B[1]) == 0 &&
+      orient(A[0], A[1], A[2], B[2]) == 0)
+    return coplanar_overlap(A, B, x);
   return false;
 }
 

@@ -153,6 +153,16 @@ TEST(Check, SelfIntersectionsFoundByBvhEqualBruteForce) {
   Positions N = face_normals(t.V, t.F);
   for (int f : d->faces)
     EXPECT_NEAR(N.row(f).dot((d->points[0] - row3(t.V, t.F(f, 0))).transpose()), 0, 1e-12);
+  // Coplanar overlapping triangles (no shared vertex) are found too.
+  Positions P(6, 3);
+  P << 0, 0, 0, 2, 0, 0, 0, 2, 0, 0.5, 0.5, 0, 3, 0.5, 0, 0.5, 3, 0;
+  Faces Q(2, 3);
+  Q << 0, 1, 2, 3, 4, 5;
+  EXPECT_EQ(self_intersections(P, Q).size(), 1u);
+  P.row(3) << 5, 5, 0;  // moved away: no overlap
+  P.row(4) << 6, 5, 0;
+  P.row(5) << 5, 6, 0;
+  EXPECT_TRUE(self_intersections(P, Q).empty());
   // Disjoint cubes: none.
   SurfaceMesh apart = two_cubes(Vec3(1.5, 0, 0));
   EXPECT_TRUE(check_surface(apart).clean());
