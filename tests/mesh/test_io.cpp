@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -108,6 +109,40 @@ TEST(Io, FormatsWithoutRegionsKeepGeometry) {
   EXPECT_EQ(r.V, t.V);
   EXPECT_EQ(r.F, t.F);
   EXPECT_TRUE(r.regions.empty());
+}
+
+TEST(Io, BigEndianPlyWithOtherElementsIsRead) {
+  std::string d =
+      "ply\nformat binary_big_endian 1.0\ncomment made by hand\nelement vertex 3\n"
+      "property float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+      "element face 1\nproperty list uchar int vertex_indices\nelement edge 1\n"
+      "property int vertex1\nproperty int vertex2\nend_header\n";
+  auto be32 = [&](std::uint32_t v) {
+    for (int k = 3; k >= 0; --k) d.push_back(static_cast<char>((v >> (8 * k)) & 0xff));
+  };
+  auto bef = [&](float f) {
+    std::uint32_t u;
+    std::memcpy(&u, &f, 4);
+    be32(u);
+  };
+  const float xyz[3][3] = {{0, 0, 0}, {1.5f, 0, 0}, {0, 2.25f, -1}};
+  for (auto& p : xyz) {
+    for (float c : p) bef(c);
+    d.push_back('\x7f');  // red
+  }
+  d.push_back(3);
+  be32(0);
+  be32(1);
+  be32(2);
+  be32(0);  // the edge element, skipped
+  be32(1);
+  const std::string p = tmp("be.ply");
+  write_text(p, d);
+  const SurfaceMesh m = read_ply(p);
+  ASSERT_EQ(m.V.rows(), 3);
+  EXPECT_EQ(m.V(2, 1), 2.25);
+  EXPECT_EQ(m.V(2, 2), -1);
+  EXPECT_EQ(m.F.row(0), Eigen::RowVector3i(0, 1, 2));
 }
 
 TEST(Io, PolygonsAreFanTriangulated) {
