@@ -1,0 +1,154 @@
+// Lock-step haptic step cost per prototype during a typical press (SPEC cost budget: 10–20 us
+// median), and what local integration buys: prototype C with its scope + sleeping vs the same
+// model integrating every node every step (speed-up and the force/deformation error it costs).
+//
+// Press: the contact point starts 2 mm outside the node nearest the region's centroid, pushes
+// along the inward normal at 2 cm/s until 2.5 N, holds 1 s, withdraws. Only steps in contact
+// are timed (a participant spends the expensive part of a session there).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "engine/haptics/scene_impl.hpp"
+#include "prototypes/factory.hpp"
+
+using namespace palplab;
+using namespace palplab::engine;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+struct Run {
+  std::vector<double> us;           // per contact step
+  std::vector<double> force, defo;  // per step (all steps)
+  long awake_max = 0;
+};
+
+double pct(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(q * (v.size() - 1) + 0.5)];
+}
+
+Run press(Scene& s, const std::string& region, double target = 2.5) {
+  Run r;
+  const auto& g = s.geometry();
+  const int node = g.region_node(region);
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  double depth = -0.002;
+  int phase = 0, hold = 0;
+  for (int k = 0; k < 4000 && phase < 3; ++k) {
+    const auto t0 = Clock::now();
+    const Rendered out = s.step(p - depth * n);
+    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    if (out.contact) r.us.push_back(us);
+    r.force.push_back(out.force.norm());
+    r.defo.push_back(out.visible_deformation);
+    r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
+    if (phase == 0) {
+      depth += 0.02 * s.dt();
+      if (out.force.norm() >= target) phase = 1;
+    } else if (phase == 1) {
+      if (++hold >= 1000) phase = 2;
+    } else {
+      depth -= 0.05 * s.dt();
+      if (depth < -0.002) phase = 3;
+    }
+  }
+  return r;
+}
+
+// A press that does not depend on the force: ramp to `depth_max` at 2 cm/s, hold 0.7 s,
+// withdraw at 5 cm/s.
+Run fixed_press(Scene& s, const std::string& region, double depth_max) {
+  Run r;
+  const auto& g = s.geometry();
+  const int node = g.region_node(region);
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  const double t_in = (depth_max + 0.002) / 0.02, t_hold = t_in + 0.7;
+  for (int k = 0; k < 1500; ++k) {
+    const double t = k * s.dt();
+    const double depth = t < t_in     ? -0.002 + 0.02 * t
+                         : t < t_hold ? depth_max
+                                      : std::max(-0.002, depth_max - 0.05 * (t - t_hold));
+    const auto t0 = Clock::now();
+    const Rendered out = s.step(p - depth * n);
+    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    if (out.contact) r.us.push_back(us);
+    r.force.push_back(out.force.norm());
+    r.defo.push_back(out.visible_deformation);
+    r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
+  }
+  return r;
+}
+
+double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0.0;
+  for (size_t k = 0; k < std::min(a.size(), b.size()); ++k) m = std::max(m, std::abs(a[k] - b[k]));
+  return m;
+}
+
+}  // namespace
+
+// The prototypes directory: argv[1], or the source tree this file was compiled from.
+std::string prototypes_dir(int argc, char** argv) {
+  if (argc > 1) return std::string(argv[1]) + "/";
+  std::string f = __FILE__;
+  return f.substr(0, f.rfind("/bench/")) + "/prototypes/";
+}
+
+int main(int argc, char** argv) {
+  const std::string dir = prototypes_dir(argc, argv);
+  std::printf("haptic step cost during a 2.5 N press (wall time of Scene::step, contact steps)\n");
+  std::printf("%-4s %-11s %8s %8s %8s %8s %7s\n", "id", "region", "median", "p90", "p99", "max",
+              "awake");
+  for (const char* id : {"A", "B", "C", "C1", "C2"})
+    for (const char* region : {"ovary_left", "horn_right", "body"}) {
+      Scene s = prototypes::build_scene(dir + id + ".json");
+      press(s, region);  // warm-up (caches, buffers)
+      s.reset();
+      const Run r = press(s, region);
+      std::printf("%-4s %-11s %7.2fus %7.2fus %7.2fus %7.0fus %7ld\n", id, region, pct(r.us, 0.5),
+                  pct(r.us, 0.9), pct(r.us, 0.99), pct(r.us, 1.0), r.awake_max);
+    }
+
+  // Accuracy of local integration: the same fixed device trajectory (ramp 6 mm at 2 cm/s, hold
+  // 0.7 s, withdraw), so that the errors are not shifts in time of force-triggered phases.
+  std::printf("\nprototype C, fixed 6 mm press: local integration vs every node every step\n");
+  std::printf("%-11s %-22s %9s %8s %7s %10s %12s %12s\n", "region", "mode", "median", "speedup",
+              "awake", "peak F", "max|dF| (N)", "max|dx| (um)");
+  for (const char* region : {"ovary_left", "body"}) {
+    struct Mode {
+      const char* name;
+      double radius;
+      int cap;
+      bool sleep;
+    };
+    const Mode modes[] = {
+        {"whole (reference)", 0.0, 1 << 30, false},   {"sleeping only", 0.0, 1 << 30, true},
+        {"scope 2 cm, <=192 nodes", 0.02, 192, true}, {"scope 2 cm, <=96 nodes", 0.02, 96, true},
+        {"scope 2 cm, <=48 nodes", 0.02, 48, true},   {"scope 2 cm, <=24 nodes", 0.02, 24, true}};
+    Run ref;
+    double ref_median = 0.0;
+    for (const Mode& m : modes) {
+      Scene s = prototypes::build_scene(dir + "C.json");
+      s.impl().ms.scope_radius = m.radius;
+      s.impl().ms.scope_max_nodes = m.cap;
+      s.impl().ms.sleep.enabled = m.sleep;
+      s.reset();
+      const Run r = fixed_press(s, region, 0.006);
+      const double med = pct(r.us, 0.5);
+      if (&m == &modes[0]) {
+        ref = r;
+        ref_median = med;
+      }
+      std::printf("%-11s %-22s %7.2fus %7.1fx %7ld %9.3fN %12.4f %12.2f\n", region, m.name, med,
+                  ref_median / med, r.awake_max, *std::max_element(r.force.begin(), r.force.end()),
+                  max_abs_diff(r.force, ref.force), 1e6 * max_abs_diff(r.defo, ref.defo));
+    }
+  }
+  return 0;
+}
