@@ -47,7 +47,10 @@ Anova oneway_anova(const Groups& groups) {
   long double sst = ssb + ssw;
   a.eta_squared = sst > 0 ? static_cast<double>(ssb / sst) : kNaN;
   a.omega_squared = sst > 0 ? static_cast<double>((ssb - (k - 1) * msw) / (sst + msw)) : kNaN;
-  if (msw > 0) {
+  // Within-group variation at the rounding level of the data (e.g. |x - mean| of two values,
+  // which are equal up to one ulp) is no variation: F would be a rounding artefact (~1e32).
+  const bool no_within = !(ssw > 64 * std::numeric_limits<double>::epsilon() * n_total * sst);
+  if (!no_within) {
     a.F = static_cast<double>(msb / msw);
     a.p = f_upper_p(a.F, a.df_between, a.df_within);
   } else {

@@ -44,6 +44,11 @@ std::string apa_f(double F, double df1, double df2, double p) {
   return "F(" + df_text(df1) + ", " + df_text(df2) + ") = " + num_text(F, "%.2f") + ", " + apa_p(p);
 }
 
+std::string apa_anova(const Anova& a) {
+  if (!a.defined) return "undefined (no variation within groups)";
+  return apa_f(a.F, a.df_between, a.df_within, a.p);
+}
+
 std::string apa_t(double t, double df, double p) {
   return "t(" + df_text(df) + ") = " + num_text(t, "%.2f") + ", " + apa_p(p);
 }
@@ -117,7 +122,7 @@ nlohmann::json to_json(const StatsSummary& s) {
                 {"ss_within", a.ss_within},
                 {"ms_between", a.ms_between},
                 {"ms_within", a.ms_within},
-                {"apa", apa_f(a.F, a.df_between, a.df_within, a.p)}};
+                {"apa", apa_anova(a)}};
   const auto& w = s.welch;
   j["welch_anova"] = {{"df_between", w.df_between},
                       {"df_within", num(w.df_within)},
@@ -256,12 +261,8 @@ std::string to_text(const StatsSummary& s) {
     range_table("Games-Howell", s.games_howell);
   }
   o << "\nAssumptions\n";
-  o << "  Levene (mean):          "
-    << apa_f(s.levene.F, s.levene.df_between, s.levene.df_within, s.levene.p) << "\n";
-  o << "  Brown-Forsythe (median): "
-    << apa_f(s.brown_forsythe.F, s.brown_forsythe.df_between, s.brown_forsythe.df_within,
-             s.brown_forsythe.p)
-    << "\n";
+  o << "  Levene (mean):           " << apa_anova(s.levene) << "\n";
+  o << "  Brown-Forsythe (median): " << apa_anova(s.brown_forsythe) << "\n";
   for (size_t i = 0; i < s.shapiro.size(); ++i)
     o << "  Shapiro-Wilk " << s.names[i] << ": "
       << (s.shapiro[i].defined

@@ -43,6 +43,9 @@ StatsSummary summarize(const GroupedData& data, const StatsOptions& options = {}
 std::string apa_p(double p);
 // "F(2, 27) = 23.68, p < .001" (fractional df get 2 decimals).
 std::string apa_f(double F, double df1, double df2, double p);
+// apa_f of an ANOVA (or Levene / Brown–Forsythe), or "undefined (no variation within
+// groups)" when it has none.
+std::string apa_anova(const Anova& a);
 // "t(17) = 3.43, p = .003".
 std::string apa_t(double t, double df, double p);
 // "1e-300" style for tables: "< 1e-300" when the p-value is an underflow bound.

@@ -8,6 +8,7 @@
 
 #include "analysis/csv.hpp"
 #include "analysis/grouped.hpp"
+#include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "app/command.hpp"
 #include "common/input_error.hpp"
@@ -57,6 +58,28 @@ palplab::app::CommandRegistration reg{
                     << " rows of " << a->csv << ")\n\n"
                     << to_text(s);
         }
+        *code = 0;
+      });
+    }};
+}  // namespace
+
+// `palplab report DB --out DIR`: report.md, self-contained report.html and figures/*.svg from a
+// results database (analysis/report.hpp). Registered here because it is the statistics' front
+// end; bad input (missing or foreign database) → exit 2.
+namespace {
+palplab::app::CommandRegistration reg_report{
+    "report", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand(
+          "report",
+          "Write report.md, a self-contained report.html and SVG figures from a results DB");
+      auto db = std::make_shared<std::string>();
+      auto out = std::make_shared<std::string>();
+      cmd->add_option("db", *db, "Results database (palplab run --db)")->required();
+      cmd->add_option("--out", *out, "Output directory (created if needed)")->required();
+      cmd->callback([db, out, code] {
+        auto files = palplab::analysis::write_report(*db, *out);
+        std::cout << "report: " << files.analyses << " analyses, " << files.figures.size()
+                  << " figures\n  " << files.markdown << "\n  " << files.html << "\n";
         *code = 0;
       });
     }};
