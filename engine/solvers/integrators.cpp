@@ -124,6 +124,50 @@ void rk4(MassSpringSystem& sys, const ActiveSet& act, double h, IntegratorWorksp
   }
 }
 
+// Assembles A = M - h D - h^2 K (PSD-projected) over the active nodes (in act.nodes order) and
+// factorises it (sparse LDLT; the pattern is analysed once per active set).
+void factor_A(const MassSpringSystem& sys, const ActiveSet& act, double h,
+              IntegratorWorkspace& ws) {
+  const long n = sys.nodes();
+  const long m = static_cast<long>(act.nodes.size());
+  ws.dof_of_node.assign(n, -1);
+  for (long k = 0; k < m; ++k) ws.dof_of_node[act.nodes[k]] = static_cast<int>(k);
+  ws.factor_contact = ws.contact_on ? sys.contact_node : -1;
+  ws.factor_h = h;
+  ws.triplets.clear();
+  for (long k = 0; k < m; ++k) {
+    const int i = act.nodes[k];
+    const double d = sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i];
+    for (int r = 0; r < 3; ++r) ws.triplets.emplace_back(3 * k + r, 3 * k + r, d);
+    if (ws.contact_on && i == sys.contact_node)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          ws.triplets.emplace_back(3 * k + r, 3 * k + c, ws.contact_block(r, c));
+  }
+  for (size_t k = 0; k < act.springs.size(); ++k) {
+    const int s = act.springs[k];
+    const int a = ws.dof_of_node[sys.springs.E(s, 0)], b = ws.dof_of_node[sys.springs.E(s, 1)];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        const double v = ws.S[k](r, c);
+        if (a >= 0) ws.triplets.emplace_back(3 * a + r, 3 * a + c, v);
+        if (b >= 0) ws.triplets.emplace_back(3 * b + r, 3 * b + c, v);
+        if (a >= 0 && b >= 0) {
+          ws.triplets.emplace_back(3 * a + r, 3 * b + c, -v);
+          ws.triplets.emplace_back(3 * b + r, 3 * a + c, -v);
+        }
+      }
+  }
+  ws.A.resize(3 * m, 3 * m);
+  ws.A.setFromTriplets(ws.triplets.begin(), ws.triplets.end());
+  if (ws.analysed_version != act.version) {
+    ws.ldlt.analyzePattern(ws.A);
+    ws.analysed_version = act.version;
+  }
+  ws.ldlt.factorize(ws.A);
+  ws.factor_version = act.version;
+}
+
 // Compact, branch-free data of an active set for CG: local 0..m-1 indices, springs with both
 // ends active (inner) and with one end held (their block only adds to the active end's diagonal).
 void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactCg& C) {
@@ -191,6 +235,8 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
     C.r.segment<3>(3 * k) = b - C.ap.segment<3>(3 * k);
     C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
   }
+  const bool ldlt_pre = ws.solver == LinearSolver::ldlt_frozen;
+  if (ldlt_pre) C.z = ws.ldlt.solve(C.r);
   bnorm = std::sqrt(bnorm);
   C.p = C.z;
   double rz = C.r.dot(C.z);
@@ -206,8 +252,12 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
     const double alpha = rz / pAp;
     C.x += alpha * C.p;
     C.r -= alpha * C.ap;
-    for (long k = 0; k < m; ++k)
-      C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
+    if (ldlt_pre) {
+      C.z = ws.ldlt.solve(C.r);
+    } else {
+      for (long k = 0; k < m; ++k)
+        C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
+    }
     const double rz_new = C.r.dot(C.z);
     rnorm = C.r.norm();
     C.p = C.z + (rz_new / rz) * C.p;
@@ -266,53 +316,19 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
     }
   }
 
-  if (ws.solver == LinearSolver::cg) {
+  if (ws.solver == LinearSolver::cg || ws.solver == LinearSolver::ldlt_frozen) {
+    if (ws.solver == LinearSolver::ldlt_frozen) {
+      // Reuse a factorisation: A at the time of factorisation preconditions CG on the current A
+      // (a stale A used as the solve itself is unstable: at rest it has no lateral stiffness).
+      const int contact_key = ws.contact_on ? sys.contact_node : -1;
+      if (ws.factor_version != act.version || ws.factor_contact != contact_key || ws.factor_h != h)
+        factor_A(sys, act, h, ws);
+    }
     solve_cg_compact(sys, act, ws);
   } else {
+    // Exact linearised backward Euler: assemble and factorise every step.
+    factor_A(sys, act, h, ws);
     const long m = static_cast<long>(act.nodes.size());
-    ws.dof_of_node.assign(n, -1);
-    for (long k = 0; k < m; ++k) ws.dof_of_node[act.nodes[k]] = static_cast<int>(k);
-    // The frozen factorisation is redone when the active set, the contact node/state or h change.
-    const int contact_key = ws.contact_on ? sys.contact_node : -1;
-    const bool need_factor = ws.solver == LinearSolver::ldlt_refactor ||
-                             ws.factor_version != act.version || ws.factor_contact != contact_key ||
-                             ws.factor_h != h;
-    ws.factor_contact = contact_key;
-    ws.factor_h = h;
-    if (need_factor) {
-      ws.triplets.clear();
-      for (long k = 0; k < m; ++k) {
-        const int i = act.nodes[k];
-        const double d = sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i];
-        for (int r = 0; r < 3; ++r) ws.triplets.emplace_back(3 * k + r, 3 * k + r, d);
-        if (ws.contact_on && i == sys.contact_node)
-          for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c)
-              ws.triplets.emplace_back(3 * k + r, 3 * k + c, ws.contact_block(r, c));
-      }
-      for (size_t k = 0; k < act.springs.size(); ++k) {
-        const int s = act.springs[k];
-        const int a = ws.dof_of_node[sys.springs.E(s, 0)], b = ws.dof_of_node[sys.springs.E(s, 1)];
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) {
-            const double v = ws.S[k](r, c);
-            if (a >= 0) ws.triplets.emplace_back(3 * a + r, 3 * a + c, v);
-            if (b >= 0) ws.triplets.emplace_back(3 * b + r, 3 * b + c, v);
-            if (a >= 0 && b >= 0) {
-              ws.triplets.emplace_back(3 * a + r, 3 * b + c, -v);
-              ws.triplets.emplace_back(3 * b + r, 3 * a + c, -v);
-            }
-          }
-      }
-      ws.A.resize(3 * m, 3 * m);
-      ws.A.setFromTriplets(ws.triplets.begin(), ws.triplets.end());
-      if (ws.analysed_version != act.version) {
-        ws.ldlt.analyzePattern(ws.A);
-        ws.analysed_version = act.version;
-      }
-      ws.ldlt.factorize(ws.A);
-      ws.factor_version = act.version;
-    }
     ws.b.resize(3 * m);
     for (long k = 0; k < m; ++k) ws.b.segment<3>(3 * k) = ws.R.row(act.nodes[k]).transpose();
     ws.x = ws.ldlt.solve(ws.b);
