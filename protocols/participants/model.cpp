@@ -38,6 +38,8 @@ nlohmann::json TraineeState::to_json() const {
           {"place_sd", place_sd},
           {"k_hat", k_hat},
           {"k_count", k_count},
+          {"k_felt_sum", k_felt_sum},
+          {"k_seen_sum", k_seen_sum},
           {"feedback_count", feedback_count},
           {"last_session_end", last_session_end}};
 }
@@ -54,6 +56,8 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   s.place_sd = j.at("place_sd").get<double>();
   s.k_hat = j.at("k_hat").get<double>();
   s.k_count = j.at("k_count").get<int>();
+  s.k_felt_sum = j.at("k_felt_sum").get<double>();
+  s.k_seen_sum = j.at("k_seen_sum").get<double>();
   s.feedback_count = j.at("feedback_count").get<int>();
   s.last_session_end = j.at("last_session_end").get<double>();
   return s;
@@ -136,27 +140,31 @@ void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
   mode_ = Mode::travel;
 }
 
+// Cue reliabilities scale with the stimulus (Weber), not with the noisy sample: a sample that
+// happens to be low must not earn itself a small variance (that would bias towards low values).
 double Trainee::perceived_force(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
   const double w = p_.at("weber_fraction");
   std::vector<Estimate> est;
   if (ch_.haptic) est.push_back({F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)});
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
-    const double fv = s_.k_hat * p.visible_deformation * (1.0 + eps_v_);
+    const double fv_true = s_.k_hat * p.visible_deformation;
     const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
-    est.push_back({fv, cv2 * std::max(fv * fv, 0.0025)});
+    est.push_back({fv_true * (1.0 + eps_v_), cv2 * std::max(fv_true * fv_true, 0.0025)});
   }
   if (est.empty()) return 0.0;
   return mle_combine(est).value;
 }
 
-double Trainee::perceived_variance(const Percept& p, double f) const {
+double Trainee::perceived_variance(const Percept& p) const {
+  const double F = ch_.haptic ? p.force.norm() : 0.0;
   const double w = p_.at("weber_fraction");
   std::vector<Estimate> est;
-  if (ch_.haptic) est.push_back({f, std::pow(w * std::max(f, 0.05), 2)});
+  if (ch_.haptic) est.push_back({F, std::pow(w * std::max(F, 0.05), 2)});
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
+    const double fv_true = s_.k_hat * p.visible_deformation;
     const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
-    est.push_back({f, cv2 * std::max(f * f, 0.0025)});
+    est.push_back({fv_true, cv2 * std::max(fv_true * fv_true, 0.0025)});
   }
   if (est.empty()) return 1e6;
   return mle_combine(est).variance;
@@ -164,7 +172,7 @@ double Trainee::perceived_variance(const Percept& p, double f) const {
 
 void Trainee::learn_target(double observed, double variance) {
   // Kalman update of the target belief from a cue that marks "target reached".
-  const double obs_var = variance + std::pow(p_.at("memory_noise_cv") * observed, 2);
+  const double obs_var = variance + std::pow(p_.at("memory_noise_cv") * std::max(observed, 0.0), 2);
   const double k = s_.target_var / (s_.target_var + obs_var);
   s_.target_mean += k * (observed - s_.target_mean);
   s_.target_var *= (1.0 - k);
@@ -250,6 +258,7 @@ void Trainee::start_press() {
   intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.at("motor_noise_cv") * rng_.normal()));
   eps_h_ = p_.at("weber_fraction") * rng_.normal();
   eps_v_ = p_.at("visual_weber") * rng_.normal();
+  rt_scale_ = std::max(0.3, 1.0 + p_.at("reaction_time_cv") * rng_.normal());
   release_at_ = -1.0;
   expect_marker_ = (ch_.audio || ch_.call) && (presses_ == 0 || marker_in_session_);
   audio_seen_ = false;
@@ -262,9 +271,11 @@ void Trainee::start_press() {
 void Trainee::begin_release(double t) {
   // Learn the felt-force / seen-deformation ratio from the press peak (visual calibration).
   if (ch_.visual && ch_.haptic && peak_seen_d_ > 0 && peak_felt_ > 0) {
-    const double k = peak_felt_ / peak_seen_d_;
-    s_.k_hat += (k - s_.k_hat) / (s_.k_count + 1);
+    // Ratio of sums (not mean of ratios, which is biased upwards by the deformation noise).
+    s_.k_felt_sum += peak_felt_;
+    s_.k_seen_sum += peak_seen_d_;
     ++s_.k_count;
+    s_.k_hat = s_.k_felt_sum / s_.k_seen_sum;
   }
   mode_ = Mode::release;
   mode_start_ = t;
@@ -281,17 +292,18 @@ void Trainee::perceive(const Percept& p, bool call) {
     const double f = perceived_force(p);
     if (ch_.haptic) peak_felt_ = std::max(peak_felt_, p.force.norm() * (1.0 + eps_h_));
     if (ch_.visual) peak_seen_d_ = std::max(peak_seen_d_, p.visible_deformation * (1.0 + eps_v_));
-    const double rt_audio = p_.at("reaction_time_audio");
+    // Reaction times vary from trial to trial: one draw per press (rt_scale_).
+    const double rt_audio = p_.at("reaction_time_audio") * rt_scale_;
     // The sound means "target reached": learn the force felt at its onset, release after a
     // reaction time.
     if (ch_.audio && p.audio && !audio_seen_) {
       audio_seen_ = true;
-      learn_target(f, perceived_variance(p, f));
+      learn_target(f, perceived_variance(p));
       if (release_at_ < 0) release_at_ = p.t + rt_audio;
     }
     if (call && !call_heard_) {
       call_heard_ = true;
-      learn_target(f, perceived_variance(p, f));
+      learn_target(f, perceived_variance(p));
       if (release_at_ < 0 || p.t + rt_audio < release_at_) release_at_ = p.t + rt_audio;
     }
     if (audio_seen_ || call_heard_) marker_in_session_ = true;
@@ -311,18 +323,18 @@ void Trainee::end_session(double study_time) {
 
 Instructor::Instructor(std::map<std::string, double> params, std::uint64_t seed)
     : p_(std::move(params)), rng_(derive_seed(seed, "instructor")) {
-  eps_ = p_.at("visual_weber") * rng_.normal();
+  reset_press();
 }
 
 bool Instructor::observe(const Percept& p, Channels ch) {
   if (called_) return false;
   if (ch.audio && p.audio && !prev_audio_) {
-    double at = p.t + p_.at("reaction_time_audio");
+    double at = p.t + p_.at("reaction_time_audio") * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   prev_audio_ = p.audio;
   if (ch.visual && target_d_ > 0 && p.visible_deformation >= target_d_ * (1.0 + eps_)) {
-    double at = p.t + p_.at("reaction_time_visual");
+    double at = p.t + p_.at("reaction_time_visual") * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   if (call_at_ >= 0 && p.t >= call_at_) {
@@ -337,6 +349,7 @@ void Instructor::reset_press() {
   call_at_ = -1.0;
   prev_audio_ = false;
   eps_ = p_.at("visual_weber") * rng_.normal();
+  rt_scale_ = std::max(0.3, 1.0 + p_.at("reaction_time_cv") * rng_.normal());
 }
 
 }  // namespace palplab::protocols::participants

@@ -75,8 +75,9 @@ struct TraineeState {
   double place_sd = 0.0;                            // m
   double k_hat = 0.0;  // N/m learned felt-force / seen-deformation ratio (0 = none yet)
   int k_count = 0;
-  int feedback_count = 0;         // target markers experienced so far
-  double last_session_end = 0.0;  // s of study time
+  double k_felt_sum = 0.0, k_seen_sum = 0.0;  // N, m: sums over calibrating presses
+  int feedback_count = 0;                     // target markers experienced so far
+  double last_session_end = 0.0;              // s of study time
   nlohmann::json to_json() const;
   static TraineeState from_json(const nlohmann::json& j);
 };
@@ -109,7 +110,7 @@ class Trainee {
   void choose_search_target();
   void start_travel(const Eigen::Vector3d& to, Mode next);
   double perceived_force(const Percept& p) const;
-  double perceived_variance(const Percept& p, double f) const;
+  double perceived_variance(const Percept& p) const;
   void learn_target(double observed, double variance);
   void start_press();
   void begin_release(double t);
@@ -129,7 +130,7 @@ class Trainee {
   std::vector<int> probed_;  // surface nodes probed this session
   bool identified_ = false;
   double dwell_start_ = -1.0, mode_start_ = 0.0, release_at_ = -1.0;
-  double intended_ = 0.0, eps_h_ = 0.0, eps_v_ = 0.0;
+  double intended_ = 0.0, eps_h_ = 0.0, eps_v_ = 0.0, rt_scale_ = 1.0;
   bool audio_seen_ = false, call_heard_ = false;
   // A trainee who knows a cue marks the target presses until it comes (up to a limit); the
   // first press of a session tries, and the expectation stays while the cue keeps coming.
@@ -157,7 +158,7 @@ class Instructor {
  private:
   std::map<std::string, double> p_;
   Rng rng_;
-  double target_d_ = 0.0, eps_ = 0.0;
+  double target_d_ = 0.0, eps_ = 0.0, rt_scale_ = 1.0;
   double call_at_ = -1.0;
   bool called_ = false, prev_audio_ = false;
 };

@@ -34,6 +34,8 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       {"rest_time", 1.0, 0.0, 60.0, "s", "pause between palpations"},
       {"reaction_time_audio", 0.16, 0.0, 2.0, "s", "simple reaction time to a sound"},
       {"reaction_time_visual", 0.19, 0.0, 2.0, "s", "simple reaction time to a visual event"},
+      {"reaction_time_cv", 0.15, 0.0, 1.0, "1",
+       "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)"},
       {"lift_height", 0.01, 0.0, 0.2, "m", "height above the surface while moving between points"},
   };
   return specs;
@@ -43,6 +45,8 @@ const std::vector<ParamSpec>& instructor_param_specs() {
   static const std::vector<ParamSpec> specs = {
       {"reaction_time_audio", 0.16, 0.0, 2.0, "s", "time from the sound to the call"},
       {"reaction_time_visual", 0.19, 0.0, 2.0, "s", "time from seeing the target deformation"},
+      {"reaction_time_cv", 0.15, 0.0, 1.0, "1",
+       "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)"},
       {"visual_weber", 0.10, 0.01, 1.0, "1",
        "relative SD of the instructor's deformation judgement"},
       {"trainee_reaction_time", 0.16, 0.0, 2.0, "s", "trainee's reaction to the spoken call"},
