@@ -1,0 +1,144 @@
+#include "engine/haptics/clock.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace palplab::engine {
+
+namespace {
+
+void take_frame(const Scene& scene, const Rendered& r, const Eigen::Vector3d& x, long step,
+                Frame& f) {
+  scene.current_surface(f.V, f.F);
+  f.t = r.t;
+  f.step = step;
+  f.device = x;
+  f.force = r.force;
+  f.contact = r.contact;
+  f.audio = r.audio;
+  f.visible_deformation = r.visible_deformation;
+}
+
+double pct(std::vector<double>& v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(q * (v.size() - 1) + 0.5)];
+}
+
+}  // namespace
+
+long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
+                  const std::function<void(const Rendered&, const Sample&)>& on_step,
+                  const std::function<void(const Frame&)>& on_frame) {
+  const long n = std::lround(opt.duration / scene.dt());
+  // Frames on integer step boundaries (no drift): frame k >= 1 after step ceil(k * period / dt).
+  auto frame_step = [&](long k) {
+    return static_cast<long>(std::ceil(k * opt.frame_period / scene.dt() - 1e-9));
+  };
+  long frame_index = 1, next_frame = frame_step(1);
+  Frame frame;
+  for (long k = 1; k <= n; ++k) {
+    const DeviceInput in = device.read(scene.time());
+    const Rendered r = scene.step(in.position);
+    device.write(r);
+    if (on_step) on_step(r, scene.last_sample());
+    if (on_frame && opt.frame_period > 0 && k >= next_frame) {
+      take_frame(scene, r, in.position, k, frame);
+      on_frame(frame);
+      next_frame = frame_step(++frame_index);
+    }
+  }
+  return n;
+}
+
+RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& opt,
+                           const std::function<void(const Frame&)>& on_frame) {
+  using Clock = std::chrono::steady_clock;
+  RealtimeStats st;
+  const long n = std::lround(opt.duration / scene.dt());
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(scene.dt()));
+  const long frame_every = std::max(1L, std::lround(opt.frame_period / scene.dt()));
+
+  // Double buffer: the haptic thread fills `back` alone, then swaps it with `front` under the
+  // lock; the graphics thread copies `front` under the lock and draws its copy outside it.
+  Frame back, front;
+  bool fresh = false, done = false;
+  std::mutex mu;
+  std::condition_variable cv;
+  long frames_published = 0;
+
+  std::vector<double> periods, step_us;
+  periods.reserve(n);
+  step_us.reserve(n);
+  long overruns = 0;
+
+  std::thread haptic([&] {
+    auto next = Clock::now();
+    auto last_start = next;
+    for (long k = 1; k <= n; ++k) {
+      std::this_thread::sleep_until(next);
+      const auto start = Clock::now();
+      if (k > 1)
+        periods.push_back(std::chrono::duration<double, std::micro>(start - last_start).count());
+      if (start - next > period) ++overruns;
+      last_start = start;
+      const DeviceInput in = device.read(scene.time());
+      const Rendered r = scene.step(in.position);
+      device.write(r);
+      step_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
+      if (k % frame_every == 0) {
+        take_frame(scene, r, in.position, k, back);
+        {
+          std::lock_guard<std::mutex> lock(mu);
+          std::swap(back, front);
+          fresh = true;
+          ++frames_published;
+        }
+        cv.notify_one();
+      }
+      next += period;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      done = true;
+    }
+    cv.notify_one();
+  });
+
+  long drawn = 0;
+  std::thread graphics([&] {
+    Frame mine;
+    while (true) {
+      {
+        std::unique_lock<std::mutex> lock(mu);
+        cv.wait(lock, [&] { return fresh || done; });
+        if (!fresh && done) break;
+        mine = front;  // copy under the lock; draw outside it
+        fresh = false;
+      }
+      if (on_frame) on_frame(mine);
+      ++drawn;
+    }
+  });
+  haptic.join();
+  graphics.join();
+  st.steps = n;
+  st.frames_published = frames_published;
+  st.frames_drawn = drawn;
+  st.period_median_us = pct(periods, 0.5);
+  st.period_p99_us = pct(periods, 0.99);
+  st.period_max_us = periods.empty() ? 0.0 : periods.back();
+  st.step_median_us = pct(step_us, 0.5);
+  st.step_p99_us = pct(step_us, 0.99);
+  st.overruns = overruns;
+  return st;
+}
+
+}  // namespace palplab::engine

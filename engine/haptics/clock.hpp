@@ -1,0 +1,59 @@
+#pragma once
+// The two clocks (DESIGN.md). Both call the same Scene::step.
+//
+// Lock-step: one thread, simulated time, as fast as the CPU allows, deterministic. A graphics
+// frame is taken every frame_period seconds of SIMULATED time.
+//
+// Real time: a haptic thread steps the scene at 1/dt Hz against the steady clock (sleep until the
+// next tick; measured jitter), and publishes a graphics frame every frame_period into a double
+// buffer; a graphics thread picks up the newest frame at its own rate (60 Hz) and hands it to the
+// renderer callback. The scene and the device are touched by the haptic thread only; frames are
+// the only shared state (mutex-protected swap), so the pair is data-race free (ThreadSanitizer).
+#include <functional>
+
+#include "engine/haptics/device.hpp"
+#include "engine/models/mass_spring.hpp"
+
+namespace palplab::engine {
+
+// What a renderer draws: the current surface and the perceivable state.
+struct Frame {
+  double t = 0.0;  // s, simulated time of the haptic step it was taken after
+  long step = 0;   // haptic step index
+  RowMatX3d V;     // current surface positions (m)
+  RowMatX3i F;     // current surface faces
+  Eigen::Vector3d device = Eigen::Vector3d::Zero();
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  bool contact = false, audio = false;
+  double visible_deformation = 0.0;
+};
+
+struct LockstepOptions {
+  double duration = 1.0;             // s of simulated time
+  double frame_period = 1.0 / 60.0;  // s; <= 0: no frames
+};
+
+// Runs duration/dt steps; on_step (optional) sees every step (copy the events you keep),
+// on_frame (optional) every graphics frame. Returns the number of steps.
+long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
+                  const std::function<void(const Rendered&, const Sample&)>& on_step = {},
+                  const std::function<void(const Frame&)>& on_frame = {});
+
+struct RealtimeOptions {
+  double duration = 1.0;             // s of wall time (= simulated time when on schedule)
+  double frame_period = 1.0 / 60.0;  // s, frame publication and graphics rate
+};
+
+struct RealtimeStats {
+  long steps = 0, frames_published = 0, frames_drawn = 0;
+  // Haptic loop period (wall time between step starts), us.
+  double period_median_us = 0, period_p99_us = 0, period_max_us = 0;
+  double step_median_us = 0, step_p99_us = 0;  // wall time inside Scene::step
+  long overruns = 0;                           // steps that started more than one period late
+};
+
+// Blocks for opt.duration; on_frame runs on the graphics thread.
+RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& opt,
+                           const std::function<void(const Frame&)>& on_frame = {});
+
+}  // namespace palplab::engine
