@@ -176,15 +176,21 @@ TEST(Refinement, ParameterIdentification) {
   }
   // Home springs follow mass: total home stiffness unchanged.
   EXPECT_NEAR(m.sys.home_ks.sum(), 30.0, 1e-12);
-  // Partial refinement of a root gives a SLoD between 1 and 3.
+  // Partial refinement of a root gives a SLoD between 1 and 3: after a whole level 1, refine
+  // around one coarse corner of root 0 to level 2 — only the children at that corner split.
   AdaptiveMassSpring q = octahedron(1.0);
   refine_whole(q, 1);
-  // split one child of root 0 again
   RefineParams p;
   p.policy = RefinePolicy::conventional;
   p.level = 2;
-  const int child_corner = q.tris[q.tris[0].child].v[0];  // a coarse corner of root 0
-  (void)child_corner;
+  const int corner = q.F0(0, 0);
+  ASSERT_TRUE(refine_around(q, corner, p));
   level_and_slod(q, 0, &l, &slod);
-  EXPECT_EQ(slod, 4);
+  EXPECT_EQ(l, 1);
+  EXPECT_GE(slod, 1);
+  EXPECT_LE(slod, 3);
+  EXPECT_EQ(q.level, 2);
+  EXPECT_DOUBLE_EQ(q.h, 0.25e-3);
+  EXPECT_TRUE(closed_and_conforming(q.F, q.sys.nodes()));
+  EXPECT_NEAR(q.sys.mass.sum(), 0.06, 1e-15);
 }

@@ -124,3 +124,41 @@ TEST(Springs, UniqueEdgesOfTetAndTriangles) {
   EXPECT_EQ(E.rows(), 6);
   for (long e = 0; e < E.rows(); ++e) EXPECT_LT(E(e, 0), E(e, 1));
 }
+
+TEST(Springs, ContactPenaltyForceAndItsJacobian) {
+  // One node pushed by the device along -n: force -k d n while the penetration d > 0.
+  MassSpringSystem s;
+  s.X.resize(1, 3);
+  s.X << 0.01, 0.02, -0.001;
+  s.V.setZero(1, 3);
+  s.X_rest = s.X;
+  s.F_ext.setZero(1, 3);
+  s.mass.setOnes(1);
+  s.home_ks.setZero(1);
+  s.home_kd.setZero(1);
+  s.contact_node = 0;
+  s.contact_point = Vector3d(0.011, 0.019, -0.004);
+  s.contact_normal = Vector3d(0.2, -0.1, 1.0).normalized();
+  s.contact_k = 2000.0;
+  const double d = contact_penetration(s, s.X);
+  EXPECT_NEAR(d, (s.X.row(0).transpose() - s.contact_point).dot(s.contact_normal), 1e-15);
+  ASSERT_GT(d, 0.0);
+  RowMatX3d F;
+  compute_forces(s, s.X, s.V, F);
+  EXPECT_NEAR((F.row(0).transpose() + 2000.0 * d * s.contact_normal).norm(), 0.0, 1e-12);
+  // dF/dx = -k n n^T (what backward Euler uses), by central differences.
+  const Matrix3d K = -2000.0 * s.contact_normal * s.contact_normal.transpose();
+  for (int k = 0; k < 3; ++k) {
+    RowMatX3d Xp = s.X, Xm = s.X, Fp, Fm;
+    Xp(0, k) += 1e-7;
+    Xm(0, k) -= 1e-7;
+    compute_forces(s, Xp, s.V, Fp);
+    compute_forces(s, Xm, s.V, Fm);
+    const Vector3d fd = (Fp.row(0) - Fm.row(0)).transpose() / 2e-7;
+    for (int r = 0; r < 3; ++r) EXPECT_NEAR(K(r, k), fd[r], 1e-5);
+  }
+  // No pull: the device above the surface exerts nothing.
+  s.contact_point = s.X.row(0).transpose() + 0.001 * s.contact_normal;
+  compute_forces(s, s.X, s.V, F);
+  EXPECT_EQ(F.row(0).norm(), 0.0);
+}
