@@ -428,43 +428,50 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
   // ---- Example force trace per group
   doc.heading(2, "Example force traces");
   {
-    // The first participant of each group, in the phase of the first analysis (else the last).
-    std::string phase =
-        units.empty() ? (phase_order.empty() ? "" : phase_order.back()) : units.front().phase;
+    // The first participant of each group with stored samples, in the first phase that has
+    // them: the analysed phases first (in declaration order), then the others from the last.
+    std::vector<std::string> candidates;
+    for (const auto& u : units) candidates.push_back(u.phase);
+    for (auto it = phase_order.rbegin(); it != phase_order.rend(); ++it) candidates.push_back(*it);
     std::vector<Series> ser;
-    for (size_t g = 0; g < groups.size(); ++g) {
-      const results::SessionRecord* pick = nullptr;
-      for (const auto& p : participants) {
-        if (p.group != groups[g]) continue;
-        for (const auto& s : sessions)
-          if (s.participant == p.participant && s.phase == phase) {
-            pick = &s;
-            break;
+    std::string phase;
+    for (const auto& cand : candidates) {
+      phase = cand;
+      for (size_t g = 0; g < groups.size(); ++g) {
+        for (const auto& p : participants) {
+          if (p.group != groups[g]) continue;
+          const results::SessionRecord* pick = nullptr;
+          for (const auto& s : sessions)
+            if (s.participant == p.participant && s.phase == phase) {
+              pick = &s;
+              break;
+            }
+          if (!pick) continue;
+          results::SampleSeries smp = store.read_samples(pick->session);
+          if (smp.size() == 0) continue;
+          Series s;
+          s.name = groups[g] + " (" + pick->participant + ")";
+          s.colour = static_cast<int>(g);
+          // Decimate to max |F| per bin so peaks (the palpation force) survive.
+          const size_t n = smp.size(), bins = std::max<size_t>(1, options.max_trace_points);
+          const size_t per = std::max<size_t>(1, (n + bins - 1) / bins);
+          for (size_t i = 0; i < n; i += per) {
+            double best = 0;
+            for (size_t j = i; j < std::min(n, i + per); ++j)
+              best = std::max(best, std::sqrt(smp.F[3 * j] * smp.F[3 * j] +
+                                              smp.F[3 * j + 1] * smp.F[3 * j + 1] +
+                                              smp.F[3 * j + 2] * smp.F[3 * j + 2]));
+            s.x.push_back(smp.t0 + (i + 1) * smp.dt);
+            s.y.push_back(best);
           }
-        if (pick) break;
+          ser.push_back(s);
+          break;  // one participant per group
+        }
       }
-      if (!pick) continue;
-      results::SampleSeries smp = store.read_samples(pick->session);
-      if (smp.size() == 0) continue;
-      Series s;
-      s.name = groups[g] + " (" + pick->participant + ")";
-      s.colour = static_cast<int>(g);
-      // Decimate to max |F| per bin so peaks (the palpation force) survive.
-      const size_t n = smp.size(), bins = std::max<size_t>(1, options.max_trace_points);
-      const size_t per = std::max<size_t>(1, (n + bins - 1) / bins);
-      for (size_t i = 0; i < n; i += per) {
-        double best = 0;
-        for (size_t j = i; j < std::min(n, i + per); ++j)
-          best = std::max(
-              best, std::sqrt(smp.F[3 * j] * smp.F[3 * j] + smp.F[3 * j + 1] * smp.F[3 * j + 1] +
-                              smp.F[3 * j + 2] * smp.F[3 * j + 2]));
-        s.x.push_back(smp.t0 + (i + 1) * smp.dt);
-        s.y.push_back(best);
-      }
-      ser.push_back(s);
+      if (!ser.empty()) break;
     }
     if (ser.empty()) {
-      doc.para("No force samples stored for phase " + phase + " (run with --samples full).");
+      doc.para("No force samples stored in this database (run with --samples full).");
     } else {
       save_figure(
           "force_traces.svg",

@@ -1,0 +1,276 @@
+// The report of a small fixture database: every section present, APA lines that match the
+// statistics of the same numbers, every SVG (files and the ones inlined in the HTML) well-formed
+// XML, no NaN / inf anywhere; bad databases are InputErrors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+
+#include "analysis/anova.hpp"
+#include "analysis/report.hpp"
+#include "analysis/summary.hpp"
+#include "common/input_error.hpp"
+#include "results/store.hpp"
+
+using namespace palplab;
+using namespace palplab::analysis;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Minimal XML well-formedness check: balanced, properly nested tags, quoted attributes, valid
+// entities, a single root element. Returns "" when well-formed, else what is wrong.
+std::string xml_problem(const std::string& s) {
+  std::vector<std::string> stack;
+  size_t i = 0, roots = 0;
+  auto entity_ok = [&](size_t at) {
+    static const std::regex ent("^&(amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);");
+    return std::regex_search(s.substr(at, 12), ent);
+  };
+  while (i < s.size()) {
+    if (s[i] == '<') {
+      if (s.compare(i, 4, "<!--") == 0) {
+        size_t e = s.find("-->", i);
+        if (e == std::string::npos) return "unterminated comment";
+        i = e + 3;
+        continue;
+      }
+      if (s.compare(i, 2, "<?") == 0) {
+        size_t e = s.find("?>", i);
+        if (e == std::string::npos) return "unterminated declaration";
+        i = e + 2;
+        continue;
+      }
+      bool closing = s[i + 1] == '/';
+      size_t j = i + (closing ? 2 : 1);
+      size_t n0 = j;
+      while (j < s.size() && (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == ':' ||
+                              s[j] == '-' || s[j] == '_'))
+        ++j;
+      std::string name = s.substr(n0, j - n0);
+      if (name.empty()) return "empty tag name at " + std::to_string(i);
+      if (closing) {
+        while (j < s.size() && std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+        if (j >= s.size() || s[j] != '>') return "bad closing tag " + name;
+        if (stack.empty() || stack.back() != name) return "mismatched </" + name + ">";
+        stack.pop_back();
+        i = j + 1;
+        continue;
+      }
+      // attributes
+      while (true) {
+        while (j < s.size() && std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+        if (j >= s.size()) return "unterminated tag " + name;
+        if (s[j] == '>' || s.compare(j, 2, "/>") == 0) break;
+        size_t a0 = j;
+        while (j < s.size() && s[j] != '=' && !std::isspace(static_cast<unsigned char>(s[j])) &&
+               s[j] != '>')
+          ++j;
+        if (j == a0 || j >= s.size() || s[j] != '=') return "attribute without value in " + name;
+        ++j;
+        if (j >= s.size() || (s[j] != '"' && s[j] != '\'')) return "unquoted attribute in " + name;
+        char q = s[j++];
+        while (j < s.size() && s[j] != q) {
+          if (s[j] == '<') return "'<' in attribute of " + name;
+          if (s[j] == '&' && !entity_ok(j)) return "bad entity in attribute of " + name;
+          ++j;
+        }
+        if (j >= s.size()) return "unterminated attribute in " + name;
+        ++j;
+      }
+      if (stack.empty()) ++roots;
+      if (s[j] == '>') {
+        stack.push_back(name);
+        i = j + 1;
+      } else {
+        i = j + 2;
+      }
+      continue;
+    }
+    if (s[i] == '&' && !entity_ok(i)) return "bad entity at " + std::to_string(i);
+    if (stack.empty() && !std::isspace(static_cast<unsigned char>(s[i])))
+      return "text outside the root";
+    ++i;
+  }
+  if (!stack.empty()) return "unclosed <" + stack.back() + ">";
+  if (roots != 1) return "expected one root element, got " + std::to_string(roots);
+  return "";
+}
+
+bool has_nan_or_inf(const std::string& s) {
+  static const std::regex bad("(^|[^A-Za-z])(nan|NaN|NAN|-?inf|-?Inf|infinity)([^A-Za-z]|$)");
+  return std::regex_search(s, bad);
+}
+
+struct FixtureDb {
+  fs::path dir, db;
+  std::vector<double> post[3];  // post-training palpation_force per group (defined values)
+};
+
+FixtureDb make_fixture() {
+  FixtureDb f;
+  f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
+  fs::remove_all(f.dir);
+  fs::create_directories(f.dir);
+  f.db = f.dir / "study.db";
+  nlohmann::json sj = {
+      {"palplab_study", 1},
+      {"id", "fixture"},
+      {"title", "Fixture study <with & special> characters"},
+      {"description", "Three groups, three training sessions and a post-training test."},
+      {"groups", {{{"id", "A"}}, {{"id", "B"}}, {{"id", "C"}}}},
+      {"phases",
+       {{{"id", "training"}, {"kind", "training"}, {"sessions", 3}},
+        {{"id", "post_training"}, {"kind", "post_training"}, {"sessions", 1}}}},
+      {"analyses",
+       {{{"kind", "descriptives"},
+         {"measure", "palpation_force"},
+         {"phase", "training"},
+         {"pooled", true}},
+        {{"kind", "anova_oneway"}, {"measure", "palpation_force"}, {"phase", "post_training"}},
+        {{"kind", "pairwise_t"},
+         {"measure", "palpation_force"},
+         {"phase", "post_training"},
+         {"welch", true}},
+        {{"kind", "anova_oneway"}, {"measure", "exploration_time"}, {"phase", "post_training"}}}}};
+  auto store = results::Store::create(f.db.string());
+  results::StudyRecord st;
+  st.study_id = "fixture";
+  st.title = sj["title"];
+  st.json = sj.dump(2);
+  st.sha256 = "0123abcd";
+  st.palplab_version = "0.1.0";
+  st.git_commit = "test";
+  st.seed = 42;
+  st.started_at = "2026-11-21T10:00:00Z";
+  std::vector<results::ParticipantRecord> ps;
+  const char* groups[] = {"A", "B", "C"};
+  for (int g = 0; g < 3; ++g)
+    for (int i = 0; i < 5; ++i) {
+      results::ParticipantRecord p;
+      p.participant = std::string(groups[g]) + std::to_string(i + 1);
+      p.group = groups[g];
+      p.number = g * 5 + i;
+      p.seed = 1000 + p.number;
+      ps.push_back(p);
+    }
+  store.write_study(st, {{"A", "prototypes/A.json", "aa", "{}"}}, ps);
+  for (const auto& p : ps) {
+    int g = p.number / 5, i = p.number % 5;
+    for (int s = 0; s < 4; ++s) {
+      results::SessionData d;
+      d.session.participant = p.participant;
+      d.session.ordinal = s;
+      d.session.phase = s < 3 ? "training" : "post_training";
+      d.session.phase_index = s < 3 ? s : 0;
+      d.session.prototype = "A";
+      d.session.duration = 2;
+      d.session.steps = 2000;
+      d.session.seed = 7;
+      d.session.state_after = "{}";
+      d.session.completed_at = "2026-11-21T10:10:00Z";
+      double force = 2.0 + 0.4 * g + 0.1 * i + 0.05 * (3 - s) * (g + 1) + 0.03 * ((i * 7 + s) % 3);
+      std::optional<double> fv = force;
+      if (s == 3 && g == 2 && i == 4) fv.reset();  // not identified: undefined force
+      if (s == 3 && fv) f.post[g].push_back(*fv);
+      d.measures.push_back({"palpation_force", fv, "N"});
+      d.measures.push_back({"exploration_time", 10.0 + g + 0.7 * i - s, "s"});
+      if (s == 3) {
+        d.samples.t0 = 0;
+        d.samples.dt = 0.001;
+        for (int k = 0; k < 2000; ++k) {
+          double fz = force * std::max(0.0, std::sin(k * 0.005));
+          d.samples.x.insert(d.samples.x.end(), {0.0, 0.0, 0.01});
+          d.samples.F.insert(d.samples.F.end(), {0.0, 0.0, fz});
+          d.samples.node.push_back(fz > 0 ? 3 : -1);
+        }
+      }
+      store.write_session(d);
+    }
+  }
+  store.set_finished("2026-11-21T11:00:00Z");
+  return f;
+}
+
+}  // namespace
+
+TEST(Report, FixtureDatabaseHasEverySectionValidSvgAndNoNaN) {
+  FixtureDb f = make_fixture();
+  auto out = f.dir / "report";
+  ReportFiles files = write_report(f.db.string(), out.string());
+  EXPECT_EQ(files.analyses, 3);  // (force, post), (force, training pooled), (time, post)
+  std::string md = slurp(files.markdown), html = slurp(files.html);
+  for (const char* section :
+       {"## Study and provenance", "## Analysis: palpation_force — phase post_training",
+        "## Analysis: palpation_force — phase training (all sessions pooled)",
+        "## Analysis: exploration_time — phase post_training", "### Descriptives",
+        "### One-way ANOVA", "### Pairwise Welch t-tests", "### Post-hoc comparisons",
+        "### Assumption checks and nonparametric tests", "## Learning curves",
+        "## Example force traces", "Undefined values left out"})
+    EXPECT_NE(md.find(section), std::string::npos) << section;
+  // The APA line is the statistics of the same numbers.
+  Anova a = oneway_anova({f.post[0], f.post[1], f.post[2]});
+  std::string apa = apa_f(a.F, a.df_between, a.df_within, a.p);
+  EXPECT_NE(md.find("Classical: " + apa), std::string::npos) << apa;
+  EXPECT_EQ(a.df_within, 11);  // 14 defined values (one undefined left out) - 3 groups
+  EXPECT_NE(html.find("Fixture study &lt;with &amp; special&gt; characters"), std::string::npos);
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  // Self-contained: the only URL is the SVG namespace name (not fetched by browsers).
+  auto count_of = [&](const std::string& needle) {
+    size_t n = 0;
+    for (size_t p = html.find(needle); p != std::string::npos; p = html.find(needle, p + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count_of("http"), count_of("http://www.w3.org/2000/svg"));
+  EXPECT_EQ(count_of(" src="), 0u);
+  EXPECT_FALSE(has_nan_or_inf(md)) << "NaN/inf in report.md";
+  EXPECT_FALSE(has_nan_or_inf(html)) << "NaN/inf in report.html";
+  // Figures: box + participants per analysis, a learning curve per measure, the force traces.
+  EXPECT_EQ(files.figures.size(), 3u * 2 + 2 + 1);
+  for (const auto& fig : files.figures) {
+    std::string svg = slurp(fig);
+    EXPECT_EQ(xml_problem(svg), "") << fig;
+    EXPECT_FALSE(has_nan_or_inf(svg)) << fig;
+    EXPECT_NE(svg.find("<svg xmlns=\"http://www.w3.org/2000/svg\""), std::string::npos);
+    EXPECT_NE(md.find("figures/" + fs::path(fig).filename().string()), std::string::npos);
+  }
+  // Inline SVGs of the HTML parse as XML too, one per figure.
+  size_t count = 0;
+  for (size_t p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) {
+    size_t e = html.find("</svg>", p);
+    ASSERT_NE(e, std::string::npos);
+    EXPECT_EQ(xml_problem(html.substr(p, e + 6 - p)), "");
+    ++count;
+  }
+  EXPECT_EQ(count, files.figures.size());
+  fs::remove_all(f.dir);
+}
+
+TEST(Report, BadDatabaseIsAnInputError) {
+  auto dir = fs::temp_directory_path() / ("palplab_report_bad_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  EXPECT_THROW(write_report((dir / "missing.db").string(), (dir / "out").string()), InputError);
+  std::ofstream(dir / "not.db") << "this is not a database";
+  EXPECT_THROW(write_report((dir / "not.db").string(), (dir / "out").string()), InputError);
+  fs::remove_all(dir);
+}
+
+TEST(Report, XmlCheckerRejectsBrokenSvg) {
+  EXPECT_EQ(xml_problem("<svg a=\"1\"><g><rect/></g></svg>"), "");
+  EXPECT_NE(xml_problem("<svg><g></svg>"), "");
+  EXPECT_NE(xml_problem("<svg a=1></svg>"), "");
+  EXPECT_NE(xml_problem("<svg>a & b</svg>"), "");
+  EXPECT_TRUE(has_nan_or_inf("x=\"nan\""));
+  EXPECT_FALSE(has_nan_or_inf("provenance, information"));
+}
