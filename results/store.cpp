@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -451,10 +452,11 @@ std::string csv(const std::string& s) {
   }
   return o + "\"";
 }
+// Shortest text that reads back as the same double (no "15.633000000000001" artefacts).
 std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
 }
 std::ofstream open_out(const fs::path& p) {
   std::ofstream o(p, std::ios::binary);
