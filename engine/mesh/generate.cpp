@@ -412,7 +412,8 @@ SurfaceMesh generate_sphere(int target_vertices) {
     auto [it, fresh] = ids.emplace(key, static_cast<int>(P.size()));
     if (fresh) {
       Vec3 p = Vec3::Zero();
-      for (auto& [c, wt] : w) p += wt * ico[c];
+      for (auto& [c, wt] : w)
+        if (wt) p += wt * ico[c];  // zero weights carry no corner (c = -1)
       P.push_back(radius * p.normalized());
     }
     return it->second;
