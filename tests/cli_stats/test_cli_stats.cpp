@@ -1,5 +1,5 @@
 // `palplab stats` end to end: the JSON contract of the issue, --where, --df-mode, APA lines,
-// and exit 2 with the CSV line for bad input.
+// and exit 2 with the CSV line for bad input; `palplab report` on a small database.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -9,6 +9,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "results/store.hpp"
 
 namespace {
 
@@ -125,4 +127,55 @@ TEST(CliStats, BadInputExitsTwoWithTheLine) {
   Result r = run("stats --csv /nonexistent.csv --value v --group g");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("cannot open"), std::string::npos);
+}
+
+
+TEST(CliReport, WritesReportAndRejectsBadDatabases) {
+  namespace fs = std::filesystem;
+  using namespace palplab::results;
+  auto dir = fs::temp_directory_path() / ("palplab_cli_report_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string db = (dir / "r.db").string();
+  {
+    auto store = Store::create(db);
+    StudyRecord st;
+    st.study_id = "cli";
+    st.title = "CLI report fixture";
+    st.json = R"({"id": "cli", "groups": [{"id": "A"}, {"id": "B"}],
+                  "phases": [{"id": "test", "kind": "post_training"}],
+                  "analyses": [{"kind": "anova_oneway", "measure": "palpation_force", "phase": "test"}]})";
+    st.sha256 = "00";
+    st.palplab_version = "0.1.0";
+    st.git_commit = "test";
+    st.started_at = "2026-11-21T10:00:00Z";
+    std::vector<ParticipantRecord> ps;
+    for (int i = 0; i < 6; ++i) ps.push_back({"P" + std::to_string(i), i < 3 ? "A" : "B", i, 1});
+    store.write_study(st, {}, ps);
+    for (int i = 0; i < 6; ++i) {
+      SessionData d;
+      d.session.participant = ps[i].participant;
+      d.session.phase = "test";
+      d.session.prototype = "A";
+      d.session.state_after = "{}";
+      d.session.completed_at = "2026-11-21T10:10:00Z";
+      d.measures.push_back({"palpation_force", 2.0 + 0.3 * i + 0.05 * (i % 2), "N"});
+      store.write_session(d);
+    }
+  }
+  const std::string out = (dir / "out").string();
+  Result r = run("report " + db + " --out " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out + "/report.md"));
+  EXPECT_TRUE(fs::exists(out + "/report.html"));
+  EXPECT_TRUE(fs::exists(out + "/figures/palpation_force_test_box.svg"));
+  std::ofstream(dir / "junk.db") << "not sqlite";
+  r = run("report " + (dir / "junk.db").string() + " --out " + out);
+  EXPECT_EQ(r.code, 2) << r.err;
+  r = run("report " + (dir / "missing.db").string() + " --out " + out);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("missing.db"), std::string::npos);
+  r = run("report " + db);
+  EXPECT_EQ(r.code, 2);  // --out is required
+  fs::remove_all(dir);
 }
