@@ -95,9 +95,10 @@ double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) 
 
 // The prototypes directory: argv[1], or the source tree this file was compiled from.
 std::string prototypes_dir(int argc, char** argv) {
-  if (argc > 1) return std::string(argv[1]) + "/";
-  std::string f = __FILE__;
-  return f.substr(0, f.rfind("/bench/")) + "/prototypes/";
+  std::string d = argc > 1 ? std::string(argv[1]) : std::string(__FILE__);
+  if (argc <= 1) d.resize(d.rfind("/bench/"));
+  d.append("/prototypes/");
+  return d;
 }
 
 int main(int argc, char** argv) {
@@ -120,7 +121,7 @@ int main(int argc, char** argv) {
   std::printf("\nprototype C, fixed 6 mm press: local integration vs every node every step\n");
   std::printf("%-11s %-22s %9s %8s %7s %10s %12s %12s\n", "region", "mode", "median", "speedup",
               "awake", "peak F", "max|dF| (N)", "max|dx| (um)");
-  for (const char* region : {"ovary_left", "body"}) {
+  for (const char* region : {"ovary_left", "horn_right", "body"}) {
     struct Mode {
       const char* name;
       double radius;
@@ -128,9 +129,10 @@ int main(int argc, char** argv) {
       bool sleep;
     };
     const Mode modes[] = {
-        {"whole (reference)", 0.0, 1 << 30, false},   {"sleeping only", 0.0, 1 << 30, true},
-        {"scope 2 cm, <=192 nodes", 0.02, 192, true}, {"scope 2 cm, <=96 nodes", 0.02, 96, true},
-        {"scope 2 cm, <=48 nodes", 0.02, 48, true},   {"scope 2 cm, <=24 nodes", 0.02, 24, true}};
+        {"whole (reference)", 0.0, 1 << 30, false}, {"sleeping only", 0.0, 1 << 30, true},
+        {"scope 4 cm, <=192", 0.04, 192, true},     {"scope 3 cm, <=96", 0.03, 96, true},
+        {"scope 3 cm, <=64 (C)", 0.03, 64, true},   {"scope 3 cm, <=48", 0.03, 48, true},
+        {"scope 2 cm, <=48", 0.02, 48, true},       {"scope 2 cm, <=24", 0.02, 24, true}};
     Run ref;
     double ref_median = 0.0;
     for (const Mode& m : modes) {
