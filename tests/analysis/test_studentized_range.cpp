@@ -33,13 +33,28 @@ TEST(StudentizedRange, MpmathReferenceCdf) {
         << "q=" << q << " k=" << k << " v=" << v << " sf=" << sf;
     worst_abs = std::max(worst_abs, std::fabs(cdf - ref));
     // Relative error where the reference itself has full relative accuracy (values > 1e-20:
-    // for k = 20, q = 0.1 the mpmath values, 1e-22 ... 5e-28, fall below the ν = ∞ limit,
-    // which is impossible, so they are only absolute references; see the data README).
+    // for k = 20, q = 0.1 the scipy/mpmath values, 1e-22 ... 5e-28, even fall below the ν = ∞
+    // limit, which is impossible; an independent mpmath run agrees with us, see the next test).
     if (ref > 1e-20) worst_rel_big = std::max(worst_rel_big, std::fabs(cdf - ref) / ref);
   }
   std::printf("[ SRANGE   ] 72 CDF cases: max abs error %.2e, max rel error (ref > 1e-20) %.2e\n",
               worst_abs, worst_rel_big);
   EXPECT_LT(worst_rel_big, 1e-11);
+}
+
+// The k = 20, q = 0.1 lower tails, recomputed with mpmath at 30 digits
+// (tests/data/studentized-range/check_k20_mpmath.py and .out), to 1e-11 relative.
+TEST(StudentizedRange, TinyLowerTailsAgainstIndependentMpmath) {
+  struct C {
+    double nu, ref;
+  };
+  for (C c : {C{3, 9.53977219531843e-22}, C{120, 2.19817268156832e-26},
+              C{INFINITY, 1.1588437168132e-26}}) {
+    double got = studentized_range_cdf(0.1, 20, c.nu);
+    EXPECT_NEAR(got, c.ref, 1e-11 * c.ref) << "nu=" << c.nu;
+    std::printf("[ SRANGE   ] k=20 q=0.1 nu=%g: %.15g (mpmath %.15g, rel %.1e)\n", c.nu, got, c.ref,
+                std::fabs(got - c.ref) / c.ref);
+  }
 }
 
 // k = 2: Q = |Z1 - Z2| / S = sqrt(2)|T_ν|, so P(Q > q) = P(F(1, ν) > q²/2); ν = ∞: erfc(q/2).
