@@ -39,6 +39,11 @@ std::map<std::string, double> compute(const Fixture& f) {
     o["n." + nm[i]] = s.groups[i].n;
     o["mean." + nm[i]] = s.groups[i].mean;
     o["sd." + nm[i]] = s.groups[i].sd;
+    o["q1." + nm[i]] = s.groups[i].q1;
+    o["median." + nm[i]] = s.groups[i].median;
+    o["q3." + nm[i]] = s.groups[i].q3;
+    o["ci." + nm[i] + ".lo"] = s.groups[i].ci_low;
+    o["ci." + nm[i] + ".hi"] = s.groups[i].ci_high;
     if (s.shapiro[i].defined) {
       o["sw." + nm[i] + ".W"] = s.shapiro[i].W;
       o["sw." + nm[i] + ".p"] = s.shapiro[i].p;
@@ -70,6 +75,8 @@ std::map<std::string, double> compute(const Fixture& f) {
       o["welch." + key + ".t"] = p.test.t;
       o["welch." + key + ".df"] = p.test.df;
       o["welch." + key + ".p"] = p.test.p;
+      o["welch." + key + ".lo"] = p.test.ci_low;
+      o["welch." + key + ".hi"] = p.test.ci_high;
       o["floor." + key + ".df"] = floor[i].test.df;
       o["floor." + key + ".p"] = floor[i].test.p;
       o["holm." + key] = p.p_holm;

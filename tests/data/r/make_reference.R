@@ -31,6 +31,13 @@ for (f in fixtures) {
   for (i in seq_len(k)) {
     out(id, paste0("n.", lv[i]), n[i]); out(id, paste0("mean.", lv[i]), centre + m[i])
     out(id, paste0("sd.", lv[i]), sqrt(v[i]))
+    qs <- quantile(xs[[i]], c(0.25, 0.5, 0.75), type = 7)
+    out(id, paste0("q1.", lv[i]), centre + qs[1]); out(id, paste0("median.", lv[i]), centre + qs[2])
+    out(id, paste0("q3.", lv[i]), centre + qs[3])
+    if (v[i] > 0) {
+      ci <- t.test(xs[[i]])$conf.int
+      out(id, paste0("ci.", lv[i], ".lo"), centre + ci[1]); out(id, paste0("ci.", lv[i], ".hi"), centre + ci[2])
+    }
     if (n[i] >= 3 && v[i] > 0) {
       sw <- shapiro.test(xs[[i]])
       out(id, paste0("sw.", lv[i], ".W"), sw$statistic); out(id, paste0("sw.", lv[i], ".p"), sw$p.value)
@@ -64,6 +71,7 @@ for (f in fixtures) {
       wt <- t.test(a, b, var.equal = FALSE)
       out(id, paste0("welch.", key, ".t"), wt$statistic); out(id, paste0("welch.", key, ".df"), wt$parameter)
       out(id, paste0("welch.", key, ".p"), wt$p.value)
+      out(id, paste0("welch.", key, ".lo"), wt$conf.int[1]); out(id, paste0("welch.", key, ".hi"), wt$conf.int[2])
       fdf <- max(1, floor(wt$parameter))
       out(id, paste0("floor.", key, ".df"), fdf)
       out(id, paste0("floor.", key, ".p"), 2 * pt(-abs(wt$statistic), fdf))
