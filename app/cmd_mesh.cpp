@@ -29,8 +29,9 @@ void write_tet_output(const std::string& out, const TetMesh& m, bool vtu,
     write_vtu(out, m, &mat);
     return;
   }
+  // Any other name is a TetGen base ("out/model-c", "mesh.1"); surface formats are a mistake.
   const std::string e = extension(out);
-  if (!e.empty() && e != ".node" && e != ".ele")
+  if (e == ".obj" || e == ".stl" || e == ".off" || e == ".ply")
     throw palplab::InputError(
         "a tet mesh is written as TetGen files (BASE, BASE.node) or .vtu, not '" + e + "'", out);
   const std::string base = tetgen_base(out);
