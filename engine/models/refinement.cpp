@@ -14,6 +14,9 @@ inline std::uint64_t edge_key(int a, int b) {
 }
 
 int find_mid(const AdaptiveMassSpring& m, int a, int b) {
+  // Cheap reject: both ends of a split edge are flagged (most edges are far from any split).
+  const int n = static_cast<int>(m.mid_flag.size());
+  if (a >= n || b >= n || !m.mid_flag[a] || !m.mid_flag[b]) return -1;
   auto it = m.midpoint.find(edge_key(a, b));
   return it == m.midpoint.end() ? -1 : it->second;
 }
@@ -46,6 +49,12 @@ int get_mid(AdaptiveMassSpring& m, int a, int b, int level) {
   s.F_ext.conservativeResize(id + 1, 3);
   s.F_ext.row(id).setZero();
   m.midpoint.emplace(k, id);
+  if (m.mid_flag.size() < static_cast<size_t>(id + 1)) m.mid_flag.resize(id + 1, 0);
+  for (int e : {a, b})
+    if (!m.mid_flag[e]) {
+      m.mid_flag[e] = 1;
+      m.flagged.push_back(e);
+    }
   m.midpoint_parents.push_back({std::min(a, b), std::max(a, b)});
   m.node_level.push_back(level);
   return id;
@@ -243,7 +252,17 @@ void rebuild(AdaptiveMassSpring& m) {
     }
     Eigen::VectorXd mixed = s.mass;
     std::vector<int> edges_at(max_depth + 2, 0);
-    for (long i = 0; i < n; ++i) {
+    // Only endpoints of new springs can touch several levels (kept coarse springs are level 0).
+    std::vector<int> candidates;
+    std::vector<std::uint8_t> seen(n, 0);
+    for (const NewEdge& e : ue)
+      for (int v : {e.a, e.b})
+        if (!seen[v]) {
+          seen[v] = 1;
+          candidates.push_back(v);
+        }
+    std::sort(candidates.begin(), candidates.end());
+    for (const int i : candidates) {
       std::fill(edges_at.begin(), edges_at.end(), 0);
       int levels = 0;
       for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k)
@@ -333,6 +352,7 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0, double k
   for (long f = 0; f < m.F0.rows(); ++f)
     m.tris.push_back({{m.F0(f, 0), m.F0(f, 1), m.F0(f, 2)}, -1, 0, static_cast<int>(f)});
   m.node_level.assign(n, 0);
+  m.mid_flag.assign(n, 0);
   return m;
 }
 
@@ -391,6 +411,9 @@ bool simplify(AdaptiveMassSpring& m) {
   for (auto& t : m.tris) t.child = -1;
   m.midpoint.clear();
   m.midpoint_parents.clear();
+  for (int e : m.flagged) m.mid_flag[e] = 0;
+  m.flagged.clear();
+  m.mid_flag.resize(N);
   m.node_level.resize(N);
   m.level = 0;
   m.h = m.h_coarse;

@@ -62,9 +62,11 @@ struct AdaptiveMassSpring {
   std::vector<RefineTri> tris;  // [0, #F0) are the roots
   std::unordered_map<std::uint64_t, int> midpoint;   // edge (a<b) -> midpoint node
   std::vector<std::array<int, 2>> midpoint_parents;  // per new node (index - coarse nodes)
-  std::vector<int> node_level;  // per node: 0 coarse, d+1 for a midpoint of a depth-d split
-  int level = 0;                // deepest leaf
-  double h = 1e-3;              // current time step (Eq 5.18)
+  std::vector<int> node_level;         // per node: 0 coarse, d+1 for a midpoint of a depth-d split
+  std::vector<std::uint8_t> mid_flag;  // per node: endpoint of an edge that has a midpoint
+  std::vector<int> flagged;            // nodes with mid_flag set (to clear them cheaply)
+  int level = 0;                       // deepest leaf
+  double h = 1e-3;                     // current time step (Eq 5.18)
   long new_nodes = 0, new_springs = 0;
 
   long coarse_nodes() const { return coarse.nodes(); }
