@@ -25,8 +25,9 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main() {
-  std::printf("%8s %10s %12s %12s %8s %12s %12s %6s\n", "vertices", "leaves", "linear_us",
-              "octree_us", "ratio", "build_us", "refit_us", "check");
+  // Octree: max depth 10, at most 8 nodes per leaf (and 32 per leaf for comparison).
+  std::printf("%8s %10s %12s %12s %8s %14s %8s %12s %12s %6s\n", "vertices", "leaves", "linear_us",
+              "octree_us", "ratio", "octree32_us", "ratio32", "build_us", "refit_us", "check");
   long sink = 0;
   for (int target : {994, 1442, 3000, 6000, 8664, 14392}) {
     const mesh::SurfaceMesh m = mesh::generate_tract({target, 0});
@@ -37,8 +38,9 @@ int main() {
     const int nq = 5000;
     std::vector<mesh::Vec3> q(nq);
     for (auto& x : q) x = mesh::row3(V, pick(rng)) + mesh::Vec3(n(rng), n(rng), n(rng));
-    std::vector<double> lin, oct, build, refit;
+    std::vector<double> lin, oct, oct32, build, refit;
     spatial::Octree tree;
+    const spatial::Octree tree32 = spatial::build_octree(V, 10, 32);
     bool same = true;
     for (int rep = 0; rep < 11; ++rep) {
       auto t0 = Clock::now();
@@ -48,19 +50,23 @@ int main() {
       auto t2 = Clock::now();
       build.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
       refit.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
-      std::vector<int> a(nq), b(nq);
+      std::vector<int> a(nq), b(nq), c(nq);
       t0 = Clock::now();
       for (int i = 0; i < nq; ++i) a[i] = spatial::linear_nearest(V, q[i]);
       t1 = Clock::now();
       for (int i = 0; i < nq; ++i) b[i] = spatial::nearest(tree, V, q[i]);
       t2 = Clock::now();
+      for (int i = 0; i < nq; ++i) c[i] = spatial::nearest(tree32, V, q[i]);
+      const auto t3 = Clock::now();
       lin.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count() / nq);
       oct.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count() / nq);
-      same = same && a == b;
+      oct32.push_back(std::chrono::duration<double, std::micro>(t3 - t2).count() / nq);
+      same = same && a == b && a == c;
       sink += a[0] + b[nq - 1];
     }
-    std::printf("%8ld %10d %12.3f %12.3f %8.1f %12.1f %12.1f %6s\n", static_cast<long>(V.rows()),
-                spatial::count_leaves(tree), median(lin), median(oct), median(lin) / median(oct),
+    std::printf("%8ld %10d %12.3f %12.3f %8.1f %14.3f %8.1f %12.1f %12.1f %6s\n",
+                static_cast<long>(V.rows()), spatial::count_leaves(tree), median(lin), median(oct),
+                median(lin) / median(oct), median(oct32), median(lin) / median(oct32),
                 median(build), median(refit), same ? "same" : "DIFF");
   }
   std::printf(
