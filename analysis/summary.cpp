@@ -220,8 +220,8 @@ std::string to_text(const StatsSummary& s) {
   const auto& w = s.welch;
   o << "\nWelch ANOVA\n  ";
   if (w.defined)
-    o << apa_f(w.F, w.df_between, w.df_within, w.p) << " (p " << format_p(w.p)
-      << "), eta^2 = " << num_text(w.eta_squared, "%.3f") << "\n";
+    o << apa_f(w.F, w.df_between, w.df_within, w.p)
+      << ", eta^2 = " << num_text(w.eta_squared, "%.3f") << "\n";
   else
     o << "undefined: a group has zero variance\n";
   o << "\nPairwise " << (s.options.welch_pairwise ? "Welch" : "Student") << " t-tests (df "
@@ -250,9 +250,9 @@ std::string to_text(const StatsSummary& s) {
     o << b;
     for (const auto& r : v) {
       std::string pair = s.names[r.a] + " - " + s.names[r.b];
-      std::snprintf(b, sizeof b, "  %-22s %10.4g %9s %8s %10s   [%10.4g, %10.4g]\n", pair.c_str(),
+      std::snprintf(b, sizeof b, "  %-22s %10.4g %9s %8s %10s   [%10s, %10s]\n", pair.c_str(),
                     r.mean_diff, num_text(r.q, "%.3f").c_str(), num_text(r.df, "%.2f").c_str(),
-                    format_p(r.p).c_str(), r.ci_low, r.ci_high);
+                    format_p(r.p).c_str(), num_text(r.ci_low).c_str(), num_text(r.ci_high).c_str());
       o << b;
     }
   };

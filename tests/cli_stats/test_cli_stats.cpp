@@ -97,6 +97,22 @@ TEST(CliStats, TextHasTablesAndApaLines) {
   EXPECT_NE(r.out.find("Games-Howell"), std::string::npos);
 }
 
+TEST(CliStats, ConstantDataGiveUndefinedNotNaN) {
+  std::string path = write_temp("const.csv", "g,v\nA,1\nA,1\nA,1\nB,1\nB,1\nC,1\nC,1\n");
+  Result r = run("stats --csv " + path + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("inf"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("undefined"), std::string::npos);
+  r = run("stats --csv " + path + " --value v --group g --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);  // NaN would not parse
+  EXPECT_TRUE(j["anova"]["F"].is_null());
+  EXPECT_TRUE(j["pairwise"][0]["t"].is_null());
+  EXPECT_TRUE(j["welch_anova"]["F"].is_null());
+  std::filesystem::remove(path);
+}
+
 TEST(CliStats, BadInputExitsTwoWithTheLine) {
   std::string good = "group,value\nA,1\nA,2\nB,3\nB,4.5\n";
   struct Case {
@@ -128,7 +144,6 @@ TEST(CliStats, BadInputExitsTwoWithTheLine) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("cannot open"), std::string::npos);
 }
-
 
 TEST(CliReport, WritesReportAndRejectsBadDatabases) {
   namespace fs = std::filesystem;
