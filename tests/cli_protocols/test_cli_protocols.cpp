@@ -295,3 +295,16 @@ TEST(CliExport, TidyCsv) {
   Result bad = cli("export " + (d / "missing.db").string() + " --csv " + (d / "o2").string(), d);
   EXPECT_EQ(bad.code, 2);
 }
+
+TEST(CliRun, ResumeRefusesAChangedPrototype) {
+  auto d = tmp("changed");
+  copy_prototype("A", d, "A");
+  copy_prototype("B", d, "B");
+  std::ofstream(d / "s.json") << small_study("A", "B", 1, 5);
+  const std::string study = (d / "s.json").string(), db = (d / "c.db").string();
+  ASSERT_EQ(cli("run " + study + " --db " + db + " --max-sessions 2 --quiet", d).code, 0);
+  std::ofstream(d / "B.json", std::ios::app) << "\n";  // any byte counts
+  Result r = cli("run " + study + " --db " + db + " --resume", d);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("differs from the file the run started with"), std::string::npos) << r.err;
+}
