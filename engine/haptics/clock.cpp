@@ -103,7 +103,11 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
         }
         cv.notify_one();
       }
+      // On schedule: the next tick one period later. Late by more than a period (preempted):
+      // re-anchor instead of bursting through the missed ticks, so the hand never gets a
+      // train of back-to-back steps; simulated time then lags wall time (counted in overruns).
       next += period;
+      if (Clock::now() > next) next = Clock::now() + period;
     }
     {
       std::lock_guard<std::mutex> lock(mu);

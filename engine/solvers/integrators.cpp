@@ -192,23 +192,26 @@ void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactC
   const long m = static_cast<long>(act.nodes.size());
   C.D.resize(m);
   C.Dinv.resize(m);
-  C.x.resize(3 * m);
-  C.r.resize(3 * m);
-  C.z.resize(3 * m);
-  C.p.resize(3 * m);
-  C.ap.resize(3 * m);
+  // Vectors only grow (no allocation in steady state); CG works on their heads.
+  if (C.x.size() < 3 * m) {
+    const long cap = std::max(3 * m, 2 * static_cast<long>(C.x.size()));
+    for (Eigen::VectorXd* v : {&C.x, &C.r, &C.z, &C.p, &C.ap}) v->setZero(cap);
+  }
   C.version = act.version;
 }
 
-// y = A p over the active nodes (compact).
-inline void apply_compact(const CompactCg& C, const std::vector<Eigen::Matrix3d>& S,
-                          const Eigen::VectorXd& p, Eigen::VectorXd& y) {
+// y = A p over the active nodes (compact; p and y hold 3m entries).
+template <typename In, typename Out>
+inline void apply_compact(const CompactCg& C, const std::vector<Eigen::Matrix3d>& S, const In& p,
+                          Out&& y) {
   const long m = static_cast<long>(C.D.size());
-  for (long k = 0; k < m; ++k) y.segment<3>(3 * k).noalias() = C.D[k] * p.segment<3>(3 * k);
+  for (long k = 0; k < m; ++k)
+    y.template segment<3>(3 * k).noalias() = C.D[k] * p.template segment<3>(3 * k);
   for (const auto& e : C.inner) {
-    const Eigen::Vector3d t = S[e.k] * (p.segment<3>(3 * e.a) - p.segment<3>(3 * e.b));
-    y.segment<3>(3 * e.a) += t;
-    y.segment<3>(3 * e.b) -= t;
+    const Eigen::Vector3d t =
+        S[e.k] * (p.template segment<3>(3 * e.a) - p.template segment<3>(3 * e.b));
+    y.template segment<3>(3 * e.a) += t;
+    y.template segment<3>(3 * e.b) -= t;
   }
 }
 
@@ -223,48 +226,49 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
     C.D[k] =
         Eigen::Matrix3d::Identity() * (sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i]);
     C.Dinv[k] = ws.Dinv[i].inverse();  // block-Jacobi preconditioner (full diagonal block)
-    C.x.segment<3>(3 * k) = ws.DV.row(i).transpose();  // warm start
+    C.x.segment<3>(3 * k) = ws.DV.row(i).transpose();  // warm start (head of C.x)
   }
   if (ws.contact_on) C.D[C.local[sys.contact_node]] += ws.contact_block;
   for (const auto& e : C.held) C.D[e.a] += ws.S[e.k];
-  apply_compact(C, ws.S, C.x, C.ap);
+  auto x = C.x.head(3 * m), r = C.r.head(3 * m), z = C.z.head(3 * m), p = C.p.head(3 * m),
+       ap = C.ap.head(3 * m);
+  apply_compact(C, ws.S, x, ap);
   double bnorm = 0.0;
   for (long k = 0; k < m; ++k) {
     const Eigen::Vector3d b = ws.R.row(act.nodes[k]).transpose();
     bnorm += b.squaredNorm();
-    C.r.segment<3>(3 * k) = b - C.ap.segment<3>(3 * k);
-    C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
+    r.segment<3>(3 * k) = b - ap.segment<3>(3 * k);
+    z.segment<3>(3 * k).noalias() = C.Dinv[k] * r.segment<3>(3 * k);
   }
   const bool ldlt_pre = ws.solver == LinearSolver::ldlt_frozen;
-  if (ldlt_pre) C.z = ws.ldlt.solve(C.r);
+  if (ldlt_pre) z = ws.ldlt.solve(r);
   bnorm = std::sqrt(bnorm);
-  C.p = C.z;
-  double rz = C.r.dot(C.z);
-  double rnorm = C.r.norm();
+  p = z;
+  double rz = r.dot(z);
+  double rnorm = r.norm();
   // Relative to the rhs, with an absolute floor: at rest b -> 0 and a purely relative test
   // would chase rounding noise.
   const double tol = std::max(ws.cg_tolerance * bnorm, h * ws.cg_force_tolerance);
   int it = 0;
   while (rnorm > tol && it < ws.cg_max_iterations) {
-    apply_compact(C, ws.S, C.p, C.ap);
-    const double pAp = C.p.dot(C.ap);
+    apply_compact(C, ws.S, p, ap);
+    const double pAp = p.dot(ap);
     if (!(pAp > 0.0)) break;
     const double alpha = rz / pAp;
-    C.x += alpha * C.p;
-    C.r -= alpha * C.ap;
+    x += alpha * p;
+    r -= alpha * ap;
     if (ldlt_pre) {
-      C.z = ws.ldlt.solve(C.r);
+      z = ws.ldlt.solve(r);
     } else {
-      for (long k = 0; k < m; ++k)
-        C.z.segment<3>(3 * k).noalias() = C.Dinv[k] * C.r.segment<3>(3 * k);
+      for (long k = 0; k < m; ++k) z.segment<3>(3 * k).noalias() = C.Dinv[k] * r.segment<3>(3 * k);
     }
-    const double rz_new = C.r.dot(C.z);
-    rnorm = C.r.norm();
-    C.p = C.z + (rz_new / rz) * C.p;
+    const double rz_new = r.dot(z);
+    rnorm = r.norm();
+    p = z + (rz_new / rz) * p;
     rz = rz_new;
     ++it;
   }
-  for (long k = 0; k < m; ++k) ws.DV.row(act.nodes[k]) = C.x.segment<3>(3 * k).transpose();
+  for (long k = 0; k < m; ++k) ws.DV.row(act.nodes[k]) = x.segment<3>(3 * k).transpose();
   ws.last.cg_iterations = it;
   ws.last.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
 }

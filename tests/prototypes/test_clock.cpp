@@ -78,9 +78,10 @@ TEST(Clock, RealtimeHapticAndGraphicsThreads) {
   EXPECT_GE(frames, 1);
   EXPECT_LE(frames, st.frames_published);
   EXPECT_TRUE(ordered);  // the graphics thread never sees an older frame after a newer one
-  // 1 kHz on schedule (loose bounds: the machine is shared).
-  EXPECT_GT(st.period_median_us, 900.0);
-  EXPECT_LT(st.period_median_us, 1500.0);
+  // 1 kHz: never faster than the period (no catch-up bursts); loose upper bound, the machine
+  // is shared.
+  EXPECT_GT(st.period_median_us, 990.0);
+  EXPECT_LT(st.period_median_us, 3000.0);
   std::printf(
       "real time: period median %.1f us, p99 %.1f us, max %.1f us, overruns %ld, step "
       "median %.2f us, frames %ld/%ld\n",
