@@ -122,6 +122,7 @@ nlohmann::json to_json(const StatsSummary& s) {
                 {"ss_within", a.ss_within},
                 {"ms_between", a.ms_between},
                 {"ms_within", a.ms_within},
+                {"p_is_bound", p_is_bound(a.p)},
                 {"apa", apa_anova(a)}};
   const auto& w = s.welch;
   j["welch_anova"] = {{"df_between", w.df_between},
@@ -129,6 +130,7 @@ nlohmann::json to_json(const StatsSummary& s) {
                       {"F", num(w.F)},
                       {"p", num(w.p)},
                       {"eta_squared", num(w.eta_squared)},
+                      {"p_is_bound", p_is_bound(w.p)},
                       {"apa", w.defined ? apa_f(w.F, w.df_between, w.df_within, w.p)
                                         : std::string("undefined: a group has zero variance")}};
   json pw = json::array();
@@ -145,6 +147,7 @@ nlohmann::json to_json(const StatsSummary& s) {
                   {"welch", t.welch},
                   {"p", num(t.p)},
                   {"p_holm", num(p.p_holm)},
+                  {"p_is_bound", p_is_bound(t.p)},
                   {"p_bonferroni", num(p.p_bonferroni)},
                   {"mean_diff", num(t.mean_diff)},
                   {"se", num(t.se)},

@@ -113,6 +113,24 @@ TEST(CliStats, ConstantDataGiveUndefinedNotNaN) {
   std::filesystem::remove(path);
 }
 
+TEST(CliStats, UnderflowingPIsABound) {
+  std::string csv = "g,v\n";
+  for (int i = 0; i < 60; ++i) csv += "A," + std::to_string(1.0 + 0.001 * (i % 7)) + "\n";
+  for (int i = 0; i < 60; ++i) csv += "B," + std::to_string(50.0 + 0.001 * (i % 5)) + "\n";
+  std::string path = write_temp("sep.csv", csv);
+  Result r = run("stats --csv " + path + " --value v --group g --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["anova"]["p"].get<double>(), 1e-300);
+  EXPECT_TRUE(j["anova"]["p_is_bound"].get<bool>());
+  EXPECT_TRUE(j["pairwise"][0]["p_is_bound"].get<bool>());
+  EXPECT_GT(j["pairwise"][0]["p"].get<double>(), 0);
+  r = run("stats --csv " + path + " --value v --group g");
+  EXPECT_NE(r.out.find("< 1e-300"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("p < .001"), std::string::npos);
+  std::filesystem::remove(path);
+}
+
 TEST(CliStats, BadInputExitsTwoWithTheLine) {
   std::string good = "group,value\nA,1\nA,2\nB,3\nB,4.5\n";
   struct Case {
