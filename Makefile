@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 GEN := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: deps build demo test bench format clean
+.PHONY: deps build demo demo-mesh test bench format clean
 
 deps:
 	@bash .ci/install-deps
@@ -16,6 +16,9 @@ build: deps $(BUILD)/CMakeCache.txt
 
 demo: build
 	bash .ci/demo $(BUILD)
+
+demo-mesh: build
+	bash .ci/demo-mesh $(BUILD)
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
