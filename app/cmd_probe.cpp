@@ -44,6 +44,11 @@ int run_probe(const ProbeArgs& a) {
     ov.integrator = a.integrator;
   }
   engine::Scene scene = prototypes::build_scene(a.file, ov);
+  if (!a.integrator.empty() && scene.impl().kind != engine::ModelKind::mass_spring)
+    throw InputError("--integrator: prototype " + scene.prototype() + " has a " +
+                     engine::to_string(scene.impl().kind) +
+                     " model, which is not time-integrated (the option applies to mass_spring "
+                     "prototypes)");
   const auto& g = scene.geometry();
   int node = -1;
   if (g.region_index(a.press) >= 0) {

@@ -5,6 +5,7 @@
 #include <mutex>
 #include <optional>
 #include <set>
+#include <stdexcept>
 
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
@@ -591,7 +592,14 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
     sys.springs = springs_from_edges(cm->model_V, cm->model_E, s.stiffness, s.damping);
     MassSpringScene& ms = sc.ms;
     ms.model = make_adaptive(std::move(sys), cm->model_F, s.stiffness, s.damping, s.dt);
-    ms.integrator = ov.integrator ? integrator_from_string(*ov.integrator) : s.integrator;
+    ms.integrator = s.integrator;
+    if (ov.integrator) {
+      try {
+        ms.integrator = integrator_from_string(*ov.integrator);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(std::string("integrator override: ") + e.what(), path);
+      }
+    }
     ms.ws.solver = s.solver;
     ms.ws.cg_tolerance = s.cg_tolerance;
     ms.ws.cg_force_tolerance = 1e-6;  // N

@@ -173,6 +173,10 @@ void resync_active(MassSpringScene& ms) {
     activate_all(s, ms.act);
     return;
   }
+  // Keep the backward-Euler warm start of the coarse nodes; new nodes start from 0.
+  const long dv_rows = ms.ws.DV.rows();
+  ms.ws.DV.conservativeResize(n, 3);
+  if (n > dv_rows) ms.ws.DV.bottomRows(n - dv_rows).setZero();
   const long old = static_cast<long>(ms.act.is_active.size());
   ms.act.is_active.resize(n, 0);
   for (long i = old; i < n; ++i) ms.act.is_active[i] = 1;
@@ -320,9 +324,10 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
       break;
     }
   }
-  if (!std::isfinite(force.squaredNorm()) || !std::isfinite(deformation)) {
-    // Numerical blow-up (e.g. symplectic Euler on stiff tissue): flag it, return to rest rather
-    // than render garbage to a hand.
+  if (!std::isfinite(force.squaredNorm()) || !std::isfinite(deformation) ||
+      force.norm() > s.divergence_force || deformation > s.divergence_displacement) {
+    // Numerical blow-up (e.g. symplectic Euler on stiff tissue): a non-finite state, or one far
+    // beyond anything physical. Flag it and return to rest rather than render it to a hand.
     s.counters.nan_detected = true;
     if (s.kind == ModelKind::mass_spring) reset_mass_spring(s.ms);
     if (s.kind == ModelKind::ring) ring_reset(s.ring);

@@ -113,7 +113,9 @@ struct SceneStats {
   double max_rest_error = 0.0;  // m, largest |x - x_rest| over the simulated nodes now
   long awake_nodes = 0;         // nodes integrated in the last step
   int level = 0;                // current refinement level (0 = coarse)
-  bool nan_detected = false;    // a non-finite state was found (and the step was rejected)
+  // A non-finite or diverged state (force > 100 N or touched-node displacement > 0.5 m) was
+  // found since reset; the model was put back to rest and that step rendered no force.
+  bool nan_detected = false;
 };
 
 struct SceneImpl;

@@ -53,6 +53,10 @@ struct SceneImpl {
   Cues cues;
   double contact_k = 800.0;      // N/m, penalty (A, B) or device coupling (C)
   double contact_radius = 0.01;  // m, how close to a surface node a contact may start
+  // A step is treated as diverged (SceneStats::nan_detected, model reset to rest) when the force
+  // or the touched node's displacement exceed these (or are not finite).
+  double divergence_force = 100.0;       // N (palpation forces are a few N)
+  double divergence_displacement = 0.5;  // m
   SceneGeometry geom;
   std::shared_ptr<const spatial::Octree> octree;         // over geom.V (rest)
   std::shared_ptr<const mesh::RingTable> surface_rings;  // first ring of the surface, for walking

@@ -85,7 +85,7 @@ bool update_sleeping(MassSpringSystem& sys, ActiveSet& act, const SleepParams& p
     act.is_active[i] = 0;
     sys.X.row(i) = sys.X_rest.row(i);
     sys.V.row(i).setZero();
-    if (dv) dv->row(i).setZero();
+    if (dv && i < dv->rows()) dv->row(i).setZero();
     excited[i] = 0;
   }
   for (size_t k = 0; k < w; ++k) excited[act.nodes[k]] = 0;
