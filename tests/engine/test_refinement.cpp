@@ -6,6 +6,9 @@
 
 #include <map>
 
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/rings.hpp"
+#include "engine/mesh/tet_mesh.hpp"
 #include "engine/models/refinement.hpp"
 
 using namespace palplab::engine;
@@ -193,4 +196,37 @@ TEST(Refinement, ParameterIdentification) {
   EXPECT_DOUBLE_EQ(q.h, 0.25e-3);
   EXPECT_TRUE(closed_and_conforming(q.F, q.sys.nodes()));
   EXPECT_NEAR(q.sys.mass.sum(), 0.06, 1e-15);
+}
+
+TEST(Refinement, ModelCSurfaceStaysClosedUnderEveryPolicy) {
+  // The real tetrahedral Model-C: only its boundary faces refine; the refined surface must stay
+  // closed and conforming wherever and however it is refined, and simplify must restore it.
+  const palplab::mesh::TetMesh tm = palplab::mesh::generate_model_c(0, 2489);
+  const palplab::mesh::BoundaryFaces bf = palplab::mesh::boundary_faces(tm);
+  MassSpringSystem s;
+  s.X_rest = tm.V;
+  s.X = tm.V;
+  s.mass = Eigen::VectorXd::Constant(tm.V.rows(), 0.8 / tm.V.rows());
+  s.springs = springs_from_edges(tm.V, palplab::mesh::tet_edges(tm.T), 150.0, 0.15);
+  AdaptiveMassSpring m = make_adaptive(std::move(s), bf.F, 150.0, 0.15, 1e-3);
+  ASSERT_TRUE(closed_and_conforming(m.F, m.sys.nodes()));
+  const RowMatX3i F0 = m.F;
+  const long S0 = m.sys.springs.size();
+  for (RefinePolicy pol : {RefinePolicy::area_based, RefinePolicy::conventional}) {
+    RefineParams p;
+    p.policy = pol;
+    p.threshold_area = 2e-6;
+    p.max_level = 3;
+    p.level = 2;
+    // Accumulate refinements around several nodes (a sliding press), then check.
+    for (int v = 0; v < static_cast<int>(F0.rows()); v += 397) refine_around(m, F0(v, 0), p);
+    EXPECT_GT(m.new_nodes, 0);
+    EXPECT_TRUE(closed_and_conforming(m.F, m.sys.nodes()));
+    // Interior (tet) springs are untouched: every coarse spring not on a split edge survives.
+    EXPECT_GE(m.sys.springs.size(), S0);
+    EXPECT_NEAR(m.sys.mass.sum(), 0.8, 1e-12);
+    simplify(m);
+    EXPECT_TRUE((m.F.array() == F0.array()).all());
+    EXPECT_EQ(m.sys.springs.size(), S0);
+  }
 }
