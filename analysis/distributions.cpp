@@ -2,6 +2,7 @@
 
 #include <gsl/gsl_cdf.h>
 #include <gsl/gsl_errno.h>
+#include <gsl/gsl_sf_gamma.h>
 
 #include <cmath>
 #include <limits>
@@ -19,18 +20,7 @@ void gsl_quiet() {
   std::call_once(once, [] { gsl_set_error_handler_off(); });
 }
 
-double t_two_sided_p(double t, double df) {
-  gsl_quiet();
-  if (!std::isfinite(t) || !(df > 0)) return std::numeric_limits<double>::quiet_NaN();
-  return clamp_p(gsl_cdf_fdist_Q(t * t, 1.0, df));
-}
-
-double f_upper_p(double f, double d1, double d2) {
-  gsl_quiet();
-  if (!std::isfinite(f) || !(d1 > 0) || !(d2 > 0)) return std::numeric_limits<double>::quiet_NaN();
-  if (f <= 0) return 1.0;
-  return clamp_p(gsl_cdf_fdist_Q(f, d1, d2));
-}
+// t_two_sided_p and f_upper_p are defined after the quadrature helpers below.
 
 double chi2_upper_p(double x, double df) {
   gsl_quiet();
@@ -74,11 +64,12 @@ double phi_d(double x) {
 double upper_normal_d(double x) {
   return 0.5 * std::erfc(x * 0.7071067811865476);
 }
-// Φ(b) - Φ(a) for a <= b without cancellation: a short interval by Gauss–Legendre on the
-// density, otherwise the difference of the two tails on the same side of 0, or erf sums when
-// the interval straddles 0.
-double normal_mass_d(double a, double b) {
-  if (b - a <= 0.0625) {
+// Φ(a + w) - Φ(a) for w >= 0 without cancellation: a short interval by Gauss–Legendre on the
+// density (with the half-width w/2 taken exactly, not as a difference of rounded end points,
+// whose relative error ~eps·|a|/w would make the integrand jitter for tiny w), otherwise the
+// difference of the two tails on the same side of 0, or erf sums when it straddles 0.
+double normal_mass_d(double a, double w) {
+  if (w <= 0.0625) {  // 8 nodes integrate φ over so short an interval to full precision
     static const GaussLegendre<8> g;
     static const auto xw = [] {
       std::array<double, 16> r{};
@@ -88,10 +79,11 @@ double normal_mass_d(double a, double b) {
       }
       return r;
     }();
-    double c = 0.5 * (a + b), h = 0.5 * (b - a), s = 0;
+    double h = 0.5 * w, c = a + h, s = 0;
     for (int i = 0; i < 8; ++i) s += xw[8 + i] * phi_d(c + h * xw[i]);
     return s * h;
   }
+  const double b = a + w;
   if (a >= 0) return upper_normal_d(a) - upper_normal_d(b);
   if (b <= 0) return upper_normal_d(-b) - upper_normal_d(-a);
   return 0.5 * (std::erf(b * 0.7071067811865476) + std::erf(-a * 0.7071067811865476));
@@ -116,6 +108,27 @@ struct ChiScaled {
   }
 };
 
+// Breakpoints of an integral over s ∈ [0, smax] against the density of S: around each centre c
+// at c(1 ± d·width), d = 0, 3, 8, 20 (so no piece hides a Gaussian-like peak or tail
+// at its edge, where every node of the rule would see zero), and for ν < 2, where the density
+// s^(ν-1) is singular or not smooth at 0, a geometric grading towards 0.
+std::vector<ld> outer_breakpoints(ld nu, std::initializer_list<ld> centres, ld width, ld smax) {
+  std::vector<ld> pts{0, smax};
+  ld lowest = smax;
+  for (ld c : centres)
+    for (ld d : {0.0L, 3.0L, 8.0L, 20.0L})
+      for (ld sign : {-1.0L, 1.0L}) {
+        ld p = c * (1 + sign * d * width);
+        if (p > 0 && p < smax) {
+          pts.push_back(p);
+          lowest = std::min(lowest, p);
+        }
+      }
+  if (nu < 2)
+    for (int j = 1; j <= 30; ++j) pts.push_back(lowest * std::ldexp(1.0L, -j));
+  return pts;
+}
+
 // P(R <= w) (lower) or P(R > w) (upper) for the range R of k standard normals.
 ld range_prob(ld w, int k, bool upper) {
   if (w <= 0) return upper ? 1.0L : 0.0L;
@@ -123,7 +136,7 @@ ld range_prob(ld w, int k, bool upper) {
   const double wd = static_cast<double>(w);
   auto lower_f = [&](ld zl) {
     double z = static_cast<double>(zl);
-    double b = normal_mass_d(z, z + wd);
+    double b = normal_mass_d(z, wd);
     return static_cast<ld>(k * phi_d(z) * std::pow(b, m));
   };
   // 1 - P(R <= w) = k ∫ φ(z) [Q(z)^m - (Q(z) - Q(z+w))^m] dz, the bracket written as
@@ -137,11 +150,14 @@ ld range_prob(ld w, int k, bool upper) {
     double frac = -std::expm1(m * std::log1p(-r));
     return static_cast<ld>(k * phi_d(z) * std::pow(a, m) * frac);
   };
-  // The mass lies near the expected minimum (within [-12, 12]) and, for the tail of a wide
-  // range, near z = -w/2.
-  ld lo = std::min<ld>(-12, -0.5L * w - 12);
-  std::vector<ld> pts{lo, -0.5L * w - 3, -0.5L * w, -0.5L * w + 3, 0, 12};
-  for (auto& p : pts) p = std::clamp(p, lo, 12.0L);
+  // The lower-tail integrand lives in z ∈ [-12, 12] (φ(z) and a bracket <= 1); the upper
+  // one also near z = -w/2 (φ(z)·Q(z+w) peaks there for a wide range). Breakpoints at the
+  // peaks keep the adaptive rule from stepping over a narrow peak inside a long piece.
+  std::vector<ld> pts{-12, -3, 0, 3, 12};
+  const ld c = -0.5L * w;
+  if (c > -12) pts.push_back(c);
+  if (upper)
+    for (ld d : {-12.0L, -3.0L, 0.0L, 3.0L, 12.0L}) pts.push_back(c + d);
   ld v = upper ? integrate(upper_f, pts, kInnerTol) : integrate(lower_f, pts, kInnerTol);
   return std::clamp<ld>(v, 0, 1);
 }
@@ -159,12 +175,7 @@ ld studentized_range(double q, int k, double df, bool upper) {
   ld s0 = std::sqrt(std::max<ld>(nu - 1, 0.5L) / nu);  // mode of the density
   ld s_low = std::sqrt((nu + k - 2) / nu);             // mode for small q (lower)
   ld s_up = std::sqrt(std::max<ld>(nu - 1, 0.5L) / (nu + 0.5L * q * q));  // small s (upper)
-  std::vector<ld> pts{0, smax};
-  for (ld c : {s0, upper ? s_up : s_low})
-    for (ld d : {-6.0L, 0.0L, 6.0L}) {
-      ld p = c + d * width * c;
-      if (p > 0 && p < smax) pts.push_back(p);
-    }
+  std::vector<ld> pts = outer_breakpoints(nu, {s0, upper ? s_up : s_low}, width, smax);
   auto f = [&](ld s) {
     ld d = chi.density(s);
     if (d == 0) return 0.0L;
@@ -174,6 +185,46 @@ ld studentized_range(double q, int k, double df, bool upper) {
 }
 
 }  // namespace
+
+namespace {
+// P(F(d1, d2) > f) = P(χ²_d1 > d1·f·S²) with S = sqrt(χ²_d2/d2) independent:
+// ∫ f_S(s) Q_χ²(d1·f·s²; d1) ds. GSL's F upper tail (incomplete beta) loses digits for large
+// d2 in the far tail (d2 = 1000, F = 800: 2e-5 relative; d2 = 1e6, F = 800: 0 instead of
+// 6.3e-176); this integral keeps relative accuracy (checked against R's pf in
+// tests/analysis/test_vs_r.cpp). For d1 = 1 the χ² tail is erfc(sqrt(x/2)) in long double.
+ld f_upper(double f, double d1, double d2) {
+  auto chi_tail = [d1](ld x) -> ld {
+    if (x <= 0) return 1;
+    if (d1 == 1) return std::erfc(std::sqrt(0.5L * x));
+    return gsl_sf_gamma_inc_Q(0.5 * d1, static_cast<double>(0.5L * x));
+  };
+  if (std::isinf(d2) || d2 > 1e9) return chi_tail(static_cast<ld>(d1) * f);
+  ChiScaled chi(d2);
+  const ld nu = d2, smax = chi.upper_limit();
+  const ld s0 = std::sqrt(std::max<ld>(nu - 1, 0.5L) / nu);
+  // Where density × tail peaks for a large f (the tail then decays like e^{-d1 f s²/2}).
+  const ld s_tail = std::sqrt(std::max<ld>(nu + d1 - 2, 0.5L) / (nu + d1 * static_cast<ld>(f)));
+  const ld width = 1 / std::sqrt(2 * nu);
+  std::vector<ld> pts = outer_breakpoints(nu, {s0, s_tail}, width, smax);
+  auto g = [&](ld s) {
+    ld d = chi.density(s);
+    return d == 0 ? 0.0L : d * chi_tail(static_cast<ld>(d1) * f * s * s);
+  };
+  return std::clamp<ld>(integrate(g, pts, 1e-13L), 0, 1);
+}
+}  // namespace
+
+double f_upper_p(double f, double d1, double d2) {
+  gsl_quiet();
+  if (!std::isfinite(f) || !(d1 > 0) || !(d2 > 0)) return std::numeric_limits<double>::quiet_NaN();
+  if (f <= 0) return 1.0;
+  return clamp_p(static_cast<double>(f_upper(f, d1, d2)));
+}
+
+double t_two_sided_p(double t, double df) {
+  if (!std::isfinite(t) || !(df > 0)) return std::numeric_limits<double>::quiet_NaN();
+  return f_upper_p(t * t, 1.0, df);  // P(|T| > |t|) = P(F(1, df) > t²)
+}
 
 double studentized_range_cdf(double q, int k, double df) {
   return static_cast<double>(studentized_range(q, k, df, false));
@@ -213,11 +264,7 @@ double noncentral_t_cdf(double t, double df, double delta) {
   ld smax = chi.upper_limit();
   ld width = 1 / std::sqrt(2 * nu);
   ld s0 = std::sqrt(std::max<ld>(nu - 1, 0.5L) / nu);
-  std::vector<ld> pts{0, smax};
-  for (ld d : {-8.0L, -3.0L, 0.0L, 3.0L, 8.0L}) {
-    ld p = s0 + d * width * s0;
-    if (p > 0 && p < smax) pts.push_back(p);
-  }
+  std::vector<ld> pts = outer_breakpoints(nu, {s0}, width, smax);
   if (t != 0) {
     ld sc = static_cast<ld>(delta) / t;  // where the Φ switches
     if (sc > 0 && sc < smax) pts.push_back(sc);

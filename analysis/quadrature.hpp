@@ -62,7 +62,8 @@ long double gauss_legendre_fixed(const F& f, long double a, long double b) {
 
 namespace detail {
 // `budget` caps the number of interval evaluations so a tolerance below the rounding noise
-// cannot recurse without end; the roundoff floor is a few ulps of the piece itself.
+// cannot recurse without end; the roundoff floor is a few double ulps of the piece itself (the
+// integrands are accurate to double precision, so agreement beyond that is noise).
 template <class F>
 long double adapt(const F& f, long double a, long double b, long double whole,
                   long double tol_per_length, int depth, long& budget) {
@@ -72,7 +73,7 @@ long double adapt(const F& f, long double a, long double b, long double whole,
   budget -= 2;
   long double err = std::fabs(both - whole);
   if (depth <= 0 || budget <= 0 || err <= tol_per_length * (b - a) ||
-      err <= 8 * 1.0842e-19L * std::fabs(both) || !(m > a && m < b))
+      err <= 16 * 2.220446e-16L * std::fabs(both) || !(m > a && m < b))
     return both;
   return adapt(f, a, m, l, tol_per_length, depth - 1, budget) +
          adapt(f, m, b, r, tol_per_length, depth - 1, budget);
@@ -81,9 +82,10 @@ long double adapt(const F& f, long double a, long double b, long double whole,
 
 // ∫ f over the pieces [p0,p1], [p1,p2], ... of the sorted breakpoints `pts`, to relative
 // accuracy `rel_tol` of the total (or `abs_tol`, whichever is larger).
+// `max_refinements` bounds the work (each refinement costs 30 evaluations of f).
 template <class F>
 long double integrate(const F& f, std::vector<long double> pts, long double rel_tol,
-                      long double abs_tol = 0) {
+                      long double abs_tol = 0, long max_refinements = 1000) {
   std::sort(pts.begin(), pts.end());
   pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
   if (pts.size() < 2) return 0;
@@ -98,7 +100,7 @@ long double integrate(const F& f, std::vector<long double> pts, long double rel_
   long double len = fine.back() - fine.front();
   if (tol == 0) return 0;  // the integrand vanishes at every node of the first estimate
   long double sum = 0;
-  long budget = 20000;
+  long budget = 2 * max_refinements;
   for (size_t i = 0; i + 1 < fine.size(); ++i)
     sum += detail::adapt(f, fine[i], fine[i + 1], est[i], tol / len, 50, budget);
   return sum;

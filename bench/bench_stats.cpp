@@ -41,6 +41,8 @@ int main() {
     double sf = median_ms([&] { sink = sink + studentized_range_sf(c.q, c.k, c.df); }, 9);
     std::printf("  q=%5.2f k=%2d df=%4g   cdf %7.2f ms   sf %7.2f ms\n", c.q, c.k, c.df, cdf, sf);
   }
+  double fp = median_ms([&] { sink = sink + f_upper_p(4.2, 2, 27) + t_two_sided_p(3.1, 17.3); }, 9);
+  std::printf("  F and t p-values (one of each): %.3f ms\n", fp);
   double qt = median_ms([] { (void)studentized_range_quantile(0.95, 3, 27); }, 5);
   std::printf("  quantile p=.95 k=3 df=27: %.1f ms\n", qt);
 
@@ -57,8 +59,9 @@ int main() {
   lite.post_hoc = false;
   double t_full = median_ms([&] { sink = sink + summarize(d, full).anova.F; }, 5);
   double t_lite = median_ms([&] { sink = sink + summarize(d, lite).anova.F; }, 5);
-  std::printf("one-way summary, 3 groups x 40: %.1f ms with Tukey + Games-Howell, %.1f ms without"
-              " (ratio %.1f)\n",
-              t_full, t_lite, t_full / t_lite);
+  std::printf(
+      "one-way summary, 3 groups x 40: %.1f ms with Tukey + Games-Howell, %.1f ms without"
+      " (ratio %.1f)\n",
+      t_full, t_lite, t_full / t_lite);
   return 0;
 }

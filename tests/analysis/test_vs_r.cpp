@@ -13,6 +13,7 @@
 #include <string>
 
 #include "analysis/csv.hpp"
+#include "analysis/distributions.hpp"
 #include "analysis/grouped.hpp"
 #include "analysis/summary.hpp"
 
@@ -178,4 +179,22 @@ TEST(VersusR, AllFixtures) {
   for (const auto& [cls, w] : worst)
     std::printf("[ R        ]   max error %-40s %.2e\n", cls.c_str(), w);
   EXPECT_GT(compared, 600);
+}
+
+// F upper tails (and two-sided t p-values, d1 = 1) against R's pf on a grid with far tails and
+// denominator df up to 1e6 (tests/data/r/pf_grid.csv, make_pf_grid.R): 1e-10 relative.
+TEST(VersusR, FUpperTailGrid) {
+  CsvTable g = read_csv(kDir + "pf_grid.csv");
+  double worst = 0;
+  for (size_t r = 0; r < g.rows.size(); ++r) {
+    double f = std::stod(g.rows[r][0]), d1 = std::stod(g.rows[r][1]), d2 = std::stod(g.rows[r][2]);
+    double expect = std::stod(g.rows[r][3]);
+    double got = f_upper_p(f, d1, d2);
+    EXPECT_LE(std::fabs(got - expect), 1e-10 * expect)
+        << "F=" << f << " d1=" << d1 << " d2=" << d2 << ": palplab " << got << ", R " << expect;
+    worst = std::max(worst, std::fabs(got - expect) / expect);
+    if (d1 == 1) EXPECT_LE(std::fabs(t_two_sided_p(-std::sqrt(f), d2) - expect), 1e-10 * expect);
+  }
+  std::printf("[ R        ] F upper tail, %zu grid points: max relative error %.2e\n",
+              g.rows.size(), worst);
 }
