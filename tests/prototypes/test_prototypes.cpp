@@ -244,3 +244,28 @@ TEST(Prototypes, BadFilesGiveLocatedErrors) {
   EXPECT_NE(e.find("missing required key \"id\""), std::string::npos) << e;
   EXPECT_NE(error_of("/nonexistent/X.json").find("/nonexistent/X.json"), std::string::npos);
 }
+
+TEST(Prototypes, ProxyDoesNotSlipThroughThinParts) {
+  // Push straight through a horn (a tube about 2-3 cm across) to 4 cm: a nearest-node contact
+  // would jump to the far wall half way and flip the force; the proxy keeps the near wall.
+  Scene s = prototypes::build_scene(proto("A"));
+  const auto& g = s.geometry();
+  const int node = g.region_node("horn_left");
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  double last = 0.0;
+  for (int k = 0; k <= 2100; ++k) {
+    const double depth = -0.002 + 0.02 * k * s.dt();  // to 4 cm
+    const Rendered r = s.step(p - depth * n);
+    if (depth <= 0.0) continue;
+    ASSERT_TRUE(r.contact) << depth;
+    ASSERT_GT(g.N.row(r.contact_node).dot(n.transpose()), 0.5)
+        << "jumped to the far side at " << depth;
+    ASSERT_GE(r.force.norm(), last - 1e-9) << depth;  // keeps growing with depth
+    ASSERT_GT(r.force.dot(n), 0.0);                   // and keeps pushing the hand out
+    last = r.force.norm();
+  }
+  EXPECT_NEAR(last, 500.0 * 0.04, 1.0);  // Hooke: 500 N/m x 4 cm
+  // The scenario is a real thin part: at 4 cm the nearest surface node faces the other way.
+  const Eigen::Vector3d deep = p - 0.04 * n;
+  EXPECT_LT(g.N.row(g.nearest_node(deep)).dot(n.transpose()), 0.0);
+}
