@@ -195,13 +195,12 @@ void resync_active(MassSpringScene& ms) {
   }
 }
 
-double check_threshold(SceneImpl& s, int which, double limit, double f, EventKind kind,
-                       int region) {
+// A threshold event fires once per contact, at the first step whose force reaches the limit.
+void check_threshold(SceneImpl& s, int which, double limit, double f, EventKind kind, int region) {
   if (!s.reached[which] && limit > 0.0 && f >= limit) {
     s.reached[which] = true;
     s.events.push_back({s.t, kind, region, s.node, f});
   }
-  return 0.0;
 }
 
 }  // namespace
