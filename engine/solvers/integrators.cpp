@@ -282,12 +282,18 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
   if (ws.Dinv.size() < static_cast<size_t>(n)) ws.Dinv.resize(n);
   if (ws.S.size() < act.springs.size()) ws.S.resize(act.springs.size() + act.springs.size() / 2);
 
-  // f0 and the rhs b = h (f0 + h K v0); held nodes count as v = 0.
-  compute_forces(sys, sys.X, sys.V, ws.F, &act.nodes, &act.springs);
+  // The rhs b = h (f0 + h K v0) (held nodes count as v = 0 in K v0) and the diagonal blocks,
+  // node terms first, then one fused pass over the springs: force, Jacobian, rhs, blocks.
   for (int i : act.nodes) {
-    ws.R.row(i) = h * (ws.F.row(i) - h * sys.home_ks[i] * sys.V.row(i));
-    ws.Dinv[i] =
-        Eigen::Matrix3d::Identity() * (sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i]);
+    Eigen::RowVector3d f = sys.F_ext.row(i);
+    const double kh = sys.home_ks[i], dh = sys.home_kd[i];
+    if (kh != 0.0 || dh != 0.0) f += kh * (sys.X_rest.row(i) - sys.X.row(i)) - dh * sys.V.row(i);
+    if (i == sys.contact_node) {
+      const double d = contact_penetration(sys, sys.X);
+      if (d > 0.0) f -= (sys.contact_k * d) * sys.contact_normal.transpose();
+    }
+    ws.R.row(i) = h * (f - h * kh * sys.V.row(i));
+    ws.Dinv[i] = Eigen::Matrix3d::Identity() * (sys.mass[i] + h * dh + h * h * kh);
   }
   // Contact penalty: K = -k n n^T while penetrating.
   ws.contact_on = sys.contact_node >= 0 && act.is_active[sys.contact_node] &&
@@ -299,23 +305,36 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
     ws.R.row(p) += ((h * h) * (Kc * sys.V.row(p).transpose())).transpose();
     ws.Dinv[p] += ws.contact_block;
   }
-  Eigen::Matrix3d Kx, Kv;
+  const double h2 = h * h;
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
     const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
-    spring_jacobian(sys.X.row(a).transpose(), sys.X.row(b).transpose(), sys.springs.ks[s],
-                    sys.springs.kd[s], sys.springs.rest[s], true, Kx, Kv);
-    ws.S[k] = -(h * Kv + h * h * Kx);
+    const bool aa = act.is_active[a], ba = act.is_active[b];
+    const Eigen::Vector3d du = (sys.X.row(a) - sys.X.row(b)).transpose();
+    const double len = du.norm();
+    if (len <= 0.0) {
+      ws.S[k].setZero();
+      continue;
+    }
+    const Eigen::Vector3d d = du / len;
+    const Eigen::Vector3d vrel = (sys.V.row(a) - sys.V.row(b)).transpose();
+    const double ks = sys.springs.ks[s], kd = sys.springs.kd[s];
+    // Force on a (Eq 5.3) and the Jacobian blocks of spring_jacobian(definite = true).
+    const Eigen::Vector3d f1 = -(ks * (len - sys.springs.rest[s]) + kd * vrel.dot(d)) * d;
+    const double lateral = std::max(ks * (1.0 - sys.springs.rest[s] / len), 0.0);
+    const Eigen::Matrix3d P = d * d.transpose();
+    const Eigen::Matrix3d Kx = -(ks * P + lateral * (Eigen::Matrix3d::Identity() - P));
+    ws.S[k] = (h * kd) * P - h2 * Kx;  // -(h Kv + h^2 Kx), Kv = -kd P
     Eigen::Vector3d dv = Eigen::Vector3d::Zero();
-    if (act.is_active[a]) dv += sys.V.row(a).transpose();
-    if (act.is_active[b]) dv -= sys.V.row(b).transpose();
-    const Eigen::Vector3d kv0 = (h * h) * (Kx * dv);
-    if (act.is_active[a]) {
-      ws.R.row(a) += kv0.transpose();
+    if (aa) dv += sys.V.row(a).transpose();
+    if (ba) dv -= sys.V.row(b).transpose();
+    const Eigen::Vector3d r = h * f1 + h2 * (Kx * dv);
+    if (aa) {
+      ws.R.row(a) += r.transpose();
       ws.Dinv[a] += ws.S[k];
     }
-    if (act.is_active[b]) {
-      ws.R.row(b) -= kv0.transpose();
+    if (ba) {
+      ws.R.row(b) -= r.transpose();
       ws.Dinv[b] += ws.S[k];
     }
   }
