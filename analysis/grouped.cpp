@@ -26,7 +26,7 @@ WhereFilter parse_where(const std::string& spec) {
 
 GroupedData group_table(const CsvTable& t, const std::string& value_column,
                         const std::string& group_column, const std::vector<WhereFilter>& where,
-                        int min_per_group, int min_groups) {
+                        int min_per_group, int min_groups, bool skip_empty) {
   GroupedData g;
   g.value_column = value_column;
   g.group_column = group_column;
@@ -48,6 +48,13 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
       keep = keep && any;
     }
     if (!keep) continue;
+    if (skip_empty) {
+      std::string v = trim(t.rows[r][vc]);
+      if (v.empty() || v == "NA") {
+        ++g.rows_skipped_empty;
+        continue;
+      }
+    }
     parse_number(t, static_cast<int>(r), vc);  // validates, with the line, before use
     std::string name = trim(t.rows[r][gc]);
     if (name.empty())
@@ -62,6 +69,8 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
   if (texts.empty()) {
     std::string what = "no data rows";
     if (!where.empty()) what += " match the --where filters";
+    if (g.rows_skipped_empty > 0)
+      what += " (" + std::to_string(g.rows_skipped_empty) + " with an empty value skipped)";
     throw InputError(what, t.file);
   }
   auto cv = centre_decimals(texts);

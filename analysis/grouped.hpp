@@ -26,13 +26,16 @@ struct GroupedData {
   std::vector<std::vector<int>> lines;  // CSV line of every value
   double offset = 0;                    // value = offset + deviation (decimal.hpp)
   int rows_used = 0;
+  int rows_skipped_empty = 0;  // rows left out because the value was empty (skip_empty)
 };
 
 // Throws InputError for: a missing column, a non-numeric or empty value (with its line), no
 // row left after filtering, fewer than `min_groups` groups, a group with fewer than
-// `min_per_group` values (with the line of its values).
+// `min_per_group` values (with the line of its values). With `skip_empty`, rows whose value is
+// empty or "NA" (how palplab export and R write an undefined measure) are left out and
+// counted instead of being an error; any other non-numeric text is still an error.
 GroupedData group_table(const CsvTable& t, const std::string& value_column,
                         const std::string& group_column, const std::vector<WhereFilter>& where,
-                        int min_per_group = 2, int min_groups = 2);
+                        int min_per_group = 2, int min_groups = 2, bool skip_empty = false);
 
 }  // namespace palplab::analysis

@@ -17,7 +17,7 @@ namespace {
 struct StatsArgs {
   std::string csv, value, group, df_mode = "exact";
   std::vector<std::string> where;
-  bool json = false;
+  bool json = false, skip_empty = false;
 };
 
 palplab::app::CommandRegistration reg{
@@ -35,13 +35,16 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--df-mode", a->df_mode,
                       "Welch df: exact (Welch-Satterthwaite) or floor (truncated, as MINITAB)")
           ->check(CLI::IsMember({"exact", "floor"}));
+      cmd->add_flag("--skip-empty", a->skip_empty,
+                    "Leave out rows whose value is empty or NA (undefined measures) instead of "
+                    "failing; their number is reported");
       cmd->add_flag("--json", a->json, "Print JSON instead of tables");
       cmd->callback([a, code] {
         using namespace palplab::analysis;
         std::vector<WhereFilter> where;
         for (const auto& w : a->where) where.push_back(parse_where(w));
         CsvTable t = read_csv(a->csv);
-        GroupedData data = group_table(t, a->value, a->group, where);
+        GroupedData data = group_table(t, a->value, a->group, where, 2, 2, a->skip_empty);
         StatsOptions opt;
         opt.df_mode = a->df_mode == "floor" ? DfMode::Floor : DfMode::Exact;
         StatsSummary s = summarize(data, opt);
@@ -51,11 +54,17 @@ palplab::app::CommandRegistration reg{
                         {"value", a->value},
                         {"group", a->group},
                         {"where", a->where},
-                        {"rows_used", data.rows_used}};
+                        {"rows_used", data.rows_used},
+                        {"rows_skipped_empty", data.rows_skipped_empty}};
           std::cout << j.dump(2) << "\n";
         } else {
           std::cout << "palplab stats: " << a->value << " by " << a->group << " (" << data.rows_used
-                    << " rows of " << a->csv << ")\n\n"
+                    << " rows of " << a->csv
+                    << (data.rows_skipped_empty > 0
+                            ? ", " + std::to_string(data.rows_skipped_empty) +
+                                  " empty values skipped"
+                            : std::string())
+                    << ")\n\n"
                     << to_text(s);
         }
         *code = 0;

@@ -97,6 +97,26 @@ TEST(CliStats, TextHasTablesAndApaLines) {
   EXPECT_NE(r.out.find("Games-Howell"), std::string::npos);
 }
 
+TEST(CliStats, SkipEmptyLeavesOutUndefinedValues) {
+  std::string path = write_temp("empty.csv", "g,v\nA,1\nA,\nA,2\nA,1.5\nB,NA\nB,3\nB,4\nB,3.5\n");
+  Result r = run("stats --csv " + path + " --value v --group g --json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(":3:"), std::string::npos) << r.err;  // the empty value's line
+  r = run("stats --csv " + path + " --value v --group g --skip-empty --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["input"]["rows_skipped_empty"], 2);
+  EXPECT_EQ(j["groups"][0]["n"], 3);
+  EXPECT_EQ(j["groups"][1]["n"], 3);
+  std::filesystem::remove(path);
+  // Other text is still an error with --skip-empty.
+  path = write_temp("text.csv", "g,v\nA,1\nA,2\nB,x\nB,3\nB,4\n");
+  r = run("stats --csv " + path + " --value v --group g --skip-empty");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(":4:"), std::string::npos) << r.err;
+  std::filesystem::remove(path);
+}
+
 TEST(CliStats, ConstantDataGiveUndefinedNotNaN) {
   std::string path = write_temp("const.csv", "g,v\nA,1\nA,1\nA,1\nB,1\nB,1\nC,1\nC,1\n");
   Result r = run("stats --csv " + path + " --value v --group g");
