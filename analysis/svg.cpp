@@ -179,9 +179,11 @@ std::string svg_box_plot(const std::vector<std::string>& names,
     for (size_t i = 0; i < values[g].size(); ++i) {
       double x = values[g][i];
       if (!std::isfinite(x)) continue;
-      double j = std::fmod(0.618033988749895 * (i + 1), 1.0) - 0.5;
-      f.body << "<circle cx=\"" << num(cx + 1.6 * half + j * half * 0.6) << "\" cy=\""
-             << num(f.py(x)) << "\" r=\"3\" fill=\"" << col << "\" fill-opacity=\"0.7\"/>\n";
+      // Dots in a narrow band right of the box, inside the group's slot.
+      double j = std::fmod(0.618033988749895 * (i + 1), 1.0);
+      double dx = half + 4 + j * std::min(16.0, 0.35 * half);
+      f.body << "<circle cx=\"" << num(cx + dx) << "\" cy=\"" << num(f.py(x))
+             << "\" r=\"3\" fill=\"" << col << "\" fill-opacity=\"0.7\"/>\n";
     }
   }
   return f.finish(title, "group", y_label, false);
