@@ -76,6 +76,7 @@ std::vector<double> ticks(double lo, double hi, int target = 6) {
 struct Frame {
   double W = 720, H = 400, left = 70, right = 20, top = 40, bottom = 60;
   double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  bool integer_x = false;  // x is a count (session number): no fractional ticks
   std::ostringstream body;
 
   double px(double x) const { return left + (x - x0) / (x1 - x0) * (W - left - right); }
@@ -111,6 +112,7 @@ struct Frame {
     }
     if (numeric_x)
       for (double t : ticks(x0, x1, 8)) {
+        if (integer_x && std::fabs(t - std::round(t)) > 1e-9) continue;
         o << "<line x1=\"" << num(px(t)) << "\" x2=\"" << num(px(t)) << "\" y1=\""
           << num(H - bottom) << "\" y2=\"" << num(H - bottom + 5) << "\" stroke=\"black\"/>\n";
         o << "<text x=\"" << num(px(t)) << "\" y=\"" << num(H - bottom + 18)
@@ -232,6 +234,9 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
     }
   }
   f.set_y(ylo, yhi);
+  f.integer_x = markers;
+  for (const auto& s : series)
+    for (double x : s.x) f.integer_x = f.integer_x && std::fabs(x - std::round(x)) < 1e-12;
   if (!std::isfinite(xlo) || !std::isfinite(xhi)) xlo = 0, xhi = 1;
   if (xhi <= xlo) xlo -= 0.5, xhi += 0.5;
   double pad = markers ? 0.05 * (xhi - xlo) : 0;
