@@ -192,6 +192,15 @@ Eigen::Vector3d Trainee::command(double t) {
     pos_ += d * (step / len);
     return false;
   };
+  // Physiological bound: nobody pushes on against a force far beyond what the task asks for.
+  // Above max_force the hand yields along the felt force, whatever it was doing, and a press
+  // ends (this also bounds what any other motion can do if it runs into the organ).
+  const double felt = ch_.haptic && last_.contact ? last_.force.norm() : 0.0;
+  if (felt > p_.at("max_force")) {
+    pos_ += last_.force / felt * p_.at("release_speed") * dt;
+    if (mode_ == Mode::press || mode_ == Mode::hold) begin_release(t);
+    return pos_;
+  }
   switch (mode_) {
     case Mode::travel:
       // A person lifts the hand when the organ is in the way: move with the felt force.
@@ -235,13 +244,32 @@ Eigen::Vector3d Trainee::command(double t) {
       if (t - mode_start_ >= p_.at("hold_time") || (release_at_ >= 0 && t >= release_at_))
         begin_release(t);
       break;
-    case Mode::release:
-      pos_ -= press_dir_ * p_.at("release_speed") * dt;
-      if (!last_.contact && (pos_ - press_origin_).dot(-press_dir_) >= 0.002) {
-        mode_ = Mode::rest;
-        mode_start_ = t;
+    case Mode::release: {
+      // Lift off along the pressed part's outward direction. If something resists the lift (the
+      // hand runs into another part of the organ), move with the felt force as in travel, and
+      // stop as soon as the hand is free.
+      const Eigen::Vector3d up = -press_dir_;
+      if (last_.contact && ch_.haptic && last_.force.dot(up) < 0.0) {
+        pos_ += last_.force.normalized() * p_.at("release_speed") * dt;
+        release_blocked_ = true;
+      } else {
+        pos_ += up * p_.at("release_speed") * dt;
+      }
+      if (!last_.contact) {
+        // The clearance is measured from where the contact ended, not from where the press
+        // started: the next press starts just above the organ, every time (measuring it from
+        // the press start made the hand creep 2 mm further away with every palpation).
+        if (!lifted_off_) {
+          lifted_off_ = true;
+          lift_off_ = pos_;
+        }
+        if (release_blocked_ || (pos_ - lift_off_).dot(up) >= kReleaseClearance) {
+          mode_ = Mode::rest;
+          mode_start_ = t;
+        }
       }
       break;
+    }
     case Mode::rest:
       if (t - mode_start_ >= p_.at("rest_time")) start_press();
       break;
@@ -252,7 +280,6 @@ Eigen::Vector3d Trainee::command(double t) {
 void Trainee::start_press() {
   mode_ = Mode::press;
   mode_start_ = t_prev_;
-  press_origin_ = pos_;
   // Signal-dependent motor noise (Harris & Wolpert 1998): the produced force scatters with an SD
   // proportional to the intended force; per-press perceptual errors (Weber).
   intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.at("motor_noise_cv") * rng_.normal()));
@@ -280,13 +307,14 @@ void Trainee::begin_release(double t) {
   mode_ = Mode::release;
   mode_start_ = t;
   release_at_ = -1.0;
+  lifted_off_ = false;
+  release_blocked_ = false;
 }
 
 void Trainee::perceive(const Percept& p, bool call) {
   if (mode_ == Mode::descend && p.contact) {
     mode_ = Mode::dwell;
     mode_start_ = p.t;
-    press_origin_ = pos_;
   }
   if (mode_ == Mode::press || mode_ == Mode::hold) {
     const double f = perceived_force(p);

@@ -139,7 +139,10 @@ class Trainee {
   Percept last_;
   double peak_seen_d_ = 0.0, peak_felt_ = 0.0;
   double t_prev_ = 0.0;
-  Eigen::Vector3d press_origin_ = Eigen::Vector3d::Zero();
+  // Release: where the contact ended, and whether something resisted the lift.
+  static constexpr double kReleaseClearance = 0.002;  // m lifted after the contact ends
+  Eigen::Vector3d lift_off_ = Eigen::Vector3d::Zero();
+  bool lifted_off_ = false, release_blocked_ = false;
 };
 
 // ---- the instructor (experiment 1): watches the rendered cues and calls "release".

@@ -37,6 +37,9 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       {"reaction_time_cv", 0.15, 0.0, 1.0, "1",
        "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)"},
       {"lift_height", 0.01, 0.0, 0.2, "m", "height above the surface while moving between points"},
+      {"max_force", 10.0, 0.5, 100.0, "N",
+       "largest force the trainee will push against; above it the hand yields along the felt "
+       "force and a press ends"},
   };
   return specs;
 }
