@@ -1,6 +1,7 @@
 #include "prototypes/factory.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -11,6 +12,7 @@
 #include "common/json_locate.hpp"
 #include "engine/haptics/scene_impl.hpp"
 #include "engine/mesh/generate.hpp"
+#include "engine/mesh/io.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 
 namespace palplab::prototypes {
@@ -159,10 +161,16 @@ struct MeshSpec {
   std::string generator = "tract";
   int vertices = 1500;
   std::uint64_t seed = 0;
+  std::string file;  // absolute path of a mesh file (instead of a generator)
   std::string key() const {
+    if (!file.empty()) return "file:" + file;
     return generator + "/" + std::to_string(vertices) + "/" + std::to_string(seed);
   }
 };
+
+struct CachedMesh;
+std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m);
+const std::vector<std::string>& mesh_regions(const MeshSpec& m);
 
 struct Spec {
   std::string id, scene, description;
@@ -233,17 +241,47 @@ Spec parse(const std::string& path) {
   s.dt = c.number(root, R, "haptic_step", false, 1e-5, 0.01, "the haptic step (s)", false)
              .value_or(1e-3);
 
+  bool mesh_ok = false;
   if (const json* m = c.object(root, R, "mesh", true)) {
     const std::string P = "$.mesh";
-    c.keys(*m, P, {"generator", "vertices", "seed"});
-    s.mesh.generator = c.text(*m, P, "generator", true, {"tract", "model_c", "stomach", "sphere"})
-                           .value_or("tract");
-    s.mesh.vertices = static_cast<int>(
-        c.integer(*m, P, "vertices", false, 12, 200000, "the vertex count").value_or(1500));
-    s.mesh.seed = static_cast<std::uint64_t>(
-        c.integer(*m, P, "seed", false, 0, 1L << 40, "the shape seed (0 = reference)").value_or(0));
+    c.keys(*m, P, {"generator", "vertices", "seed", "file"});
+    const bool has_file = m->contains("file"), has_gen = m->contains("generator");
+    if (has_file == has_gen) {
+      c.err(P, has_file ? "give either \"generator\" or \"file\", not both"
+                        : "missing \"generator\" (tract, model_c, stomach, sphere) or \"file\" "
+                          "(a mesh file)");
+    } else if (has_file) {
+      if (auto f = c.text(*m, P, "file", true)) {
+        namespace fs = std::filesystem;
+        fs::path fp(*f);
+        if (fp.is_relative()) fp = fs::path(path).parent_path() / fp;
+        std::error_code ec;
+        if (!fs::is_regular_file(fp, ec) &&
+            !fs::is_regular_file(fs::path(fp).replace_extension(".node"), ec))
+          c.err("$.mesh.file", "no such mesh file: " + fp.string() +
+                                   " (expected .obj, .stl, .off, .ply, .vtu or TetGen .node/.ele, "
+                                   "relative to the prototype file)");
+        else
+          s.mesh.file = fs::absolute(fp).lexically_normal().string();
+      }
+      for (const char* k : {"vertices", "seed"})
+        if (m->contains(k))
+          c.err(pj::path_key(P, k), std::string("\"") + k + "\" applies to generators only", true);
+    } else {
+      s.mesh.generator = c.text(*m, P, "generator", true, {"tract", "model_c", "stomach", "sphere"})
+                             .value_or("tract");
+      s.mesh.vertices = static_cast<int>(
+          c.integer(*m, P, "vertices", false, 12, 200000, "the vertex count").value_or(1500));
+      s.mesh.seed = static_cast<std::uint64_t>(
+          c.integer(*m, P, "seed", false, 0, 1L << 40, "the shape seed (0 = reference)")
+              .value_or(0));
+    }
+    mesh_ok = c.ok();
   }
-  const auto& regions = generator_regions(s.mesh.generator);
+  // Region names: fixed for generators; a mesh file is read (and cached) to learn them. A bad
+  // mesh file throws its own located InputError (file, line or byte).
+  static const std::vector<std::string> no_regions;
+  const auto& regions = mesh_ok ? mesh_regions(s.mesh) : no_regions;
   auto known_region = [&](const std::string& r) {
     return std::find(regions.begin(), regions.end(), r) != regions.end();
   };
@@ -417,8 +455,7 @@ struct CachedMesh {
   std::vector<int> surface_to_model;
 };
 
-void build_tet(CachedMesh& c, const MeshSpec& m) {
-  const mesh::TetMesh tm = mesh::generate_model_c(m.seed, m.vertices);
+void build_tet(CachedMesh& c, const mesh::TetMesh& tm) {
   const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
   const long n = tm.V.rows();
   std::vector<int> m2s(n, -1);
@@ -459,14 +496,21 @@ std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m) {
   auto it = cache.find(m.key());
   if (it != cache.end()) return it->second;
   auto c = std::make_shared<CachedMesh>();
-  if (m.generator == "tract")
+  if (!m.file.empty()) {
+    mesh::AnyMesh am = mesh::read_mesh(m.file);
+    if (am.is_tet)
+      build_tet(*c, am.tet);
+    else
+      c->sm = std::move(am.surface);
+  } else if (m.generator == "tract") {
     c->sm = mesh::generate_tract({m.vertices, m.seed});
-  else if (m.generator == "stomach")
+  } else if (m.generator == "stomach") {
     c->sm = mesh::generate_stomach(m.seed);
-  else if (m.generator == "sphere")
+  } else if (m.generator == "sphere") {
     c->sm = mesh::generate_sphere(m.vertices);
-  else
-    build_tet(*c, m);
+  } else {
+    build_tet(*c, mesh::generate_model_c(m.seed, m.vertices));
+  }
   const auto& V = c->sm.V;
   const auto& F = c->sm.F;
   c->N = mesh::vertex_normals(V, F);
@@ -495,11 +539,16 @@ std::shared_ptr<const CachedMesh> cached_mesh(const MeshSpec& m) {
   return c;
 }
 
+const std::vector<std::string>& mesh_regions(const MeshSpec& m) {
+  if (m.file.empty()) return generator_regions(m.generator);
+  return cached_mesh(m)->sm.regions.names;
+}
+
 }  // namespace
 
 PrototypeSummary inspect_prototype(const std::string& path) {
   const Spec s = parse(path);
-  return {s.id, s.scene, to_string(s.kind), generator_regions(s.mesh.generator)};
+  return {s.id, s.scene, to_string(s.kind), mesh_regions(s.mesh)};
 }
 
 engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {

@@ -8,6 +8,8 @@
 
 #include "common/input_error.hpp"
 #include "engine/haptics/scene_impl.hpp"
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
 
 using namespace palplab;
@@ -268,4 +270,44 @@ TEST(Prototypes, ProxyDoesNotSlipThroughThinParts) {
   // The scenario is a real thin part: at 4 cm the nearest surface node faces the other way.
   const Eigen::Vector3d deep = p - 0.04 * n;
   EXPECT_LT(g.N.row(g.nearest_node(deep)).dot(n.transpose()), 0.0);
+}
+
+TEST(Prototypes, MeshFilesInsteadOfGenerators) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "palplab_test_meshfile";
+  fs::create_directories(dir);
+  // A surface (OBJ with region groups) and a tet mesh (TetGen files) written by the mesh module.
+  palplab::mesh::write_obj((dir / "tract.obj").string(), palplab::mesh::generate_tract({1500, 0}));
+  palplab::mesh::write_tetgen((dir / "tract_c").string(), palplab::mesh::generate_model_c(0, 2489));
+  auto with_mesh = [&](const std::string& id, const std::string& mesh_json) {
+    std::ifstream in(proto(id));
+    std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto a = s.find("\"mesh\":"), b = s.find('}', a);
+    s.replace(a, b - a + 1, "\"mesh\": " + mesh_json);
+    const fs::path p = dir / (id + "_file.json");
+    std::ofstream(p) << s;
+    return p.string();
+  };
+  // Relative paths are relative to the prototype file.
+  Scene a = prototypes::build_scene(with_mesh("A", "{\"file\": \"tract.obj\"}"));
+  EXPECT_EQ(a.geometry().V.rows(), prototypes::build_scene(proto("A")).geometry().V.rows());
+  EXPECT_GE(a.geometry().region_index("ovary_left"), 0);
+  double fmax = 0;
+  for (const auto& r : press(a, "ovary_left")) fmax = std::max(fmax, r.force.norm());
+  EXPECT_GT(fmax, 2.0);
+  Scene c = prototypes::build_scene(with_mesh("C", "{\"file\": \"tract_c.node\"}"));
+  EXPECT_GT(c.stats().springs, 10000);  // tet edges
+  EXPECT_EQ(
+      prototypes::inspect_prototype(with_mesh("C", "{\"file\": \"tract_c.node\"}")).region_names,
+      c.geometry().region_names);
+  // Errors: missing file (located at $.mesh.file), both keys, generator-only keys, bad content.
+  std::string e = error_of(with_mesh("A", "{\"file\": \"nope.obj\"}"));
+  EXPECT_NE(e.find("$.mesh.file"), std::string::npos) << e;
+  e = error_of(with_mesh("A", "{\"file\": \"tract.obj\", \"generator\": \"tract\"}"));
+  EXPECT_NE(e.find("not both"), std::string::npos) << e;
+  e = error_of(with_mesh("A", "{\"file\": \"tract.obj\", \"vertices\": 10}"));
+  EXPECT_NE(e.find("$.mesh.vertices"), std::string::npos) << e;
+  std::ofstream(dir / "broken.obj") << "v 0 0 0\nv 1 0 0\nf 1 2 7\n";
+  e = error_of(with_mesh("A", "{\"file\": \"broken.obj\"}"));
+  EXPECT_NE(e.find("broken.obj"), std::string::npos) << e;
 }
