@@ -9,6 +9,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -115,6 +117,37 @@ int main(int argc, char** argv) {
       std::printf("%-4s %-11s %7.2fus %7.2fus %7.2fus %7.0fus %7ld\n", id, region, pct(r.us, 0.5),
                   pct(r.us, 0.9), pct(r.us, 0.99), pct(r.us, 1.0), r.awake_max);
     }
+
+  // Prototype B's haptic-loop scope (SPEC §2; published: two rings 0.90 us at 1442 vertices to
+  // 2.70 us at 8664, whole model 3.8 to 21.5 us): the same press with each scope on tracts of
+  // several sizes.
+  std::printf(
+      "\nprototype B ring model: haptic step by scope (median over contact steps, ovary press)\n");
+  std::printf("%-9s %10s %10s %10s %12s\n", "vertices", "rings", "octant", "whole", "whole/rings");
+  for (int verts : {1500, 6000, 8664, 14392}) {
+    // B.json with another tract size, written next to the system's temp files.
+    std::ifstream in(dir + "B.json");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string from = "\"vertices\": 6000";
+    text.replace(text.find(from), from.size(), "\"vertices\": " + std::to_string(verts));
+    const std::string file = (std::filesystem::temp_directory_path() /
+                              ("palplab_bench_B" + std::to_string(verts) + ".json"))
+                                 .string();
+    std::ofstream(file) << text;
+    double med[3];
+    int k = 0;
+    long nv = 0;
+    for (Scope sc : {Scope::rings, Scope::octant, Scope::whole}) {
+      Scene s = prototypes::build_scene(file);
+      s.impl().ring.scope = sc;
+      nv = s.geometry().V.rows();
+      press(s, "ovary_left");
+      s.reset();
+      med[k++] = pct(press(s, "ovary_left").us, 0.5);
+    }
+    std::printf("%-9ld %8.2fus %8.2fus %8.2fus %11.1fx\n", nv, med[0], med[1], med[2],
+                med[2] / med[0]);
+  }
 
   // Accuracy of local integration: the same fixed device trajectory (ramp 6 mm at 2 cm/s, hold
   // 0.7 s, withdraw), so that the errors are not shifts in time of force-triggered phases.
