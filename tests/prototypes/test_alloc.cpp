@@ -9,7 +9,12 @@
 #include "prototypes/factory.hpp"
 
 // Sanitizers bring their own allocator: no counting there (the test skips).
-#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer) || __has_feature(address_sanitizer)
+#define PALPLAB_SANITIZED 1
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__) || defined(PALPLAB_SANITIZED)
 #define PALPLAB_COUNT_ALLOCATIONS 0
 #else
 #define PALPLAB_COUNT_ALLOCATIONS 1
