@@ -3,7 +3,7 @@
 // uses it: descriptives per group, classical and Welch ANOVA, every pairwise t-test (Holm and
 // Bonferroni adjusted) with Hedges' g, Tukey–Kramer, Games–Howell, Levene, Brown–Forsythe,
 // Shapiro–Wilk per group, Kruskal–Wallis and pairwise Mann–Whitney. JSON keys: see
-// docs/formats/stats.md.
+// docs/FORMATS.md.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>

@@ -1,5 +1,5 @@
 #pragma once
-// A study as a researcher writes it (docs/formats/study.md): groups, a timeline of phases, the
+// A study as a researcher writes it (docs/FORMATS.md): groups, a timeline of phases, the
 // task and its force thresholds, roles, measures, participant model and analyses. load_study()
 // validates the whole file and the prototype files it names and reports ALL problems at once
 // (palplab::InputError, one Problem per finding, FILE:LINE:COL: $.json.path: what was expected).

@@ -1,5 +1,5 @@
 #pragma once
-// Builds a Scene from a prototype JSON file (docs/formats/prototypes.md). Generated meshes and
+// Builds a Scene from a prototype JSON file (docs/FORMATS.md). Generated meshes and
 // their precomputation (normals, regions, rings, octree) are cached per process and mesh
 // description, so building a fresh scene for every session is cheap; Scene::reset() is cheaper
 // still. Thread-safe (the cache is locked). Bad files throw palplab::InputError located at

@@ -1,4 +1,4 @@
--- palplab results store, schema version 1 (docs/formats/results.md).
+-- palplab results store, schema version 1 (docs/FORMATS.md).
 -- One database holds one run of one study. Units: s, N, m. Times of day are UTC ISO 8601.
 -- results/schema.cpp embeds this file verbatim (a test checks that they are identical).
 PRAGMA user_version = 1;
@@ -78,7 +78,7 @@ CREATE TABLE events (
 CREATE INDEX events_by_session ON events (session, t);
 
 -- Device samples, one row per started second of a session. `data` holds `n` samples taken every
--- `dt` s from `t0`, encoded as described in docs/formats/results.md (quantised, delta, zigzag
+-- `dt` s from `t0`, encoded as described in docs/FORMATS.md (quantised, delta, zigzag
 -- varints: x, y, z in um; Fx, Fy, Fz in 0.1 mN; contact node + 1).
 CREATE TABLE samples (
   session  INTEGER NOT NULL REFERENCES sessions (session),

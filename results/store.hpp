@@ -1,5 +1,5 @@
 #pragma once
-// The SQLite results store (schema: results/schema.sql, docs/formats/results.md). WAL mode,
+// The SQLite results store (schema: results/schema.sql, docs/FORMATS.md). WAL mode,
 // prepared statements for all data, one transaction per session: a session is in the database
 // completely or not at all, so an interrupted run (kill -9 included) loses at most the sessions
 // in progress. Thread-safe: writers from several threads are serialised by a mutex.
@@ -92,7 +92,7 @@ struct MeasureRow {
   std::string unit;
 };
 
-// Compact sample encoding 'qdv1' (docs/formats/results.md). Positions are quantised to 1 um and
+// Compact sample encoding 'qdv1' (docs/FORMATS.md). Positions are quantised to 1 um and
 // forces to 0.1 mN, so decode(encode(s)) equals s to within half a quantum.
 std::string encode_samples(const SampleSeries& s, std::size_t begin, std::size_t end);
 void decode_samples(const std::string& blob, std::size_t n, double t0, double dt,
