@@ -6,17 +6,18 @@
 #include "palplab/version.hpp"
 
 namespace {
-palplab::app::CommandRegistration reg{"version", [](CLI::App& root, int* code) {
-  auto* cmd = root.add_subcommand("version", "Print the palplab version and git commit");
-  auto json = std::make_shared<bool>(false);
-  cmd->add_flag("--json", *json, "Print as JSON");
-  cmd->callback([json, code] {
-    if (*json)
-      std::cout << "{\"version\": \"" << palplab::kVersion << "\", \"git_commit\": \""
-                << palplab::kGitCommit << "\"}\n";
-    else
-      std::cout << "palplab " << palplab::kVersion << " (" << palplab::kGitCommit << ")\n";
-    *code = 0;
-  });
-}};
+palplab::app::CommandRegistration reg{
+    "version", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand("version", "Print the palplab version and git commit");
+      auto json = std::make_shared<bool>(false);
+      cmd->add_flag("--json", *json, "Print as JSON");
+      cmd->callback([json, code] {
+        if (*json)
+          std::cout << "{\"version\": \"" << palplab::kVersion << "\", \"git_commit\": \""
+                    << palplab::kGitCommit << "\"}\n";
+        else
+          std::cout << "palplab " << palplab::kVersion << " (" << palplab::kGitCommit << ")\n";
+        *code = 0;
+      });
+    }};
 }  // namespace

@@ -24,8 +24,8 @@ CommandRegistration::CommandRegistration(std::string name, CommandSetup setup) {
 int main(int argc, char** argv) {
   using namespace palplab::app;
   CLI::App cli{"palplab — experiment runner and evaluation for haptic palpation-training studies"};
-  cli.set_version_flag("--version", std::string("palplab ") + palplab::kVersion + " (" +
-                                        palplab::kGitCommit + ")");
+  cli.set_version_flag(
+      "--version", std::string("palplab ") + palplab::kVersion + " (" + palplab::kGitCommit + ")");
   cli.require_subcommand(1);
   int code = 0;
   auto& reg = command_registry();
