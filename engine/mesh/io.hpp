@@ -24,6 +24,10 @@
 
 namespace palplab::mesh {
 
+// A double as text that reads back to the same bits (%.17g): every writer uses it, so round
+// trips through text formats are exact.
+std::string format_exact(double x);
+
 struct MaterialTable;
 
 struct WriteOptions {

@@ -28,12 +28,6 @@ std::string extension(const std::string& path) {
 
 namespace {
 
-std::string num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
 std::ofstream open_out(const std::string& path, bool binary = false) {
   std::ofstream out(path, binary ? std::ios::binary : std::ios::out);
   if (!out) throw InputError("cannot write file", path);
@@ -165,7 +159,8 @@ void write_obj(const std::string& path, const SurfaceMesh& m) {
   for (size_t i = 0; i < m.regions.names.size(); ++i)
     out << "# region " << i << " " << m.regions.names[i] << "\n";
   for (int i = 0; i < m.V.rows(); ++i)
-    out << "v " << num(m.V(i, 0)) << " " << num(m.V(i, 1)) << " " << num(m.V(i, 2)) << "\n";
+    out << "v " << format_exact(m.V(i, 0)) << " " << format_exact(m.V(i, 1)) << " "
+        << format_exact(m.V(i, 2)) << "\n";
   int current = -2;
   for (int f = 0; f < m.F.rows(); ++f) {
     const int reg = region_of(m, f);
@@ -325,12 +320,12 @@ void write_stl(const std::string& path, const SurfaceMesh& m, bool binary) {
       const std::string name = reg >= 0 ? m.regions.names[reg] : "palplab";
       out << "solid " << name << "\n";
       for (; f < nf && region_of(m, f) == reg; ++f) {
-        out << "  facet normal " << num(N(f, 0)) << " " << num(N(f, 1)) << " " << num(N(f, 2))
-            << "\n    outer loop\n";
+        out << "  facet normal " << format_exact(N(f, 0)) << " " << format_exact(N(f, 1)) << " "
+            << format_exact(N(f, 2)) << "\n    outer loop\n";
         for (int k = 0; k < 3; ++k) {
           const int v = m.F(f, k);
-          out << "      vertex " << num(m.V(v, 0)) << " " << num(m.V(v, 1)) << " " << num(m.V(v, 2))
-              << "\n";
+          out << "      vertex " << format_exact(m.V(v, 0)) << " " << format_exact(m.V(v, 1)) << " "
+              << format_exact(m.V(v, 2)) << "\n";
         }
         out << "    endloop\n  endfacet\n";
       }
@@ -385,7 +380,8 @@ void write_off(const std::string& path, const SurfaceMesh& m) {
   auto out = open_out(path);
   out << "OFF\n" << m.V.rows() << " " << m.F.rows() << " " << m.E.rows() << "\n";
   for (int i = 0; i < m.V.rows(); ++i)
-    out << num(m.V(i, 0)) << " " << num(m.V(i, 1)) << " " << num(m.V(i, 2)) << "\n";
+    out << format_exact(m.V(i, 0)) << " " << format_exact(m.V(i, 1)) << " "
+        << format_exact(m.V(i, 2)) << "\n";
   for (int f = 0; f < m.F.rows(); ++f)
     out << "3 " << m.F(f, 0) << " " << m.F(f, 1) << " " << m.F(f, 2) << "\n";
   finish(out, path);
@@ -714,7 +710,8 @@ void write_ply(const std::string& path, const SurfaceMesh& m, bool binary) {
     if (binary)
       for (int a = 0; a < 3; ++a) put(m.V(i, a));
     else
-      out << num(m.V(i, 0)) << " " << num(m.V(i, 1)) << " " << num(m.V(i, 2)) << "\n";
+      out << format_exact(m.V(i, 0)) << " " << format_exact(m.V(i, 1)) << " "
+          << format_exact(m.V(i, 2)) << "\n";
   }
   for (int f = 0; f < m.F.rows(); ++f) {
     if (binary) {
@@ -756,6 +753,12 @@ void write_surface(const std::string& path, const SurfaceMesh& m, const WriteOpt
   if (e == ".vtu") return write_vtu(path, m);
   throw InputError("unknown surface format '" + e + "' (expected .obj, .stl, .off, .ply, .vtu)",
                    path);
+}
+
+std::string format_exact(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
 }
 
 }  // namespace palplab::mesh

@@ -13,12 +13,6 @@ using detail::TextReader;
 
 namespace {
 
-std::string num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
 std::ofstream open_out(const std::string& path) {
   std::ofstream out(path);
   if (!out) throw InputError("cannot write file", path);
@@ -149,7 +143,8 @@ void write_tetgen(const std::string& path, const TetMesh& m) {
     auto out = open_out(base + ".node");
     out << m.V.rows() << " 3 0 0\n";
     for (int i = 0; i < m.V.rows(); ++i)
-      out << i << " " << num(m.V(i, 0)) << " " << num(m.V(i, 1)) << " " << num(m.V(i, 2)) << "\n";
+      out << i << " " << format_exact(m.V(i, 0)) << " " << format_exact(m.V(i, 1)) << " "
+          << format_exact(m.V(i, 2)) << "\n";
     if (!out) throw InputError("error while writing", base + ".node");
   }
   {

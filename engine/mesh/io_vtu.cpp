@@ -14,12 +14,6 @@ namespace palplab::mesh {
 
 namespace {
 
-std::string num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
 void header(std::ofstream& out, const Positions& V, long cells, const Regions& r) {
   out << "<?xml version=\"1.0\"?>\n";
   if (!r.empty()) {
@@ -32,7 +26,8 @@ void header(std::ofstream& out, const Positions& V, long cells, const Regions& r
       << cells << "\">\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
       << "format=\"ascii\">\n";
   for (int i = 0; i < V.rows(); ++i)
-    out << num(V(i, 0)) << " " << num(V(i, 1)) << " " << num(V(i, 2)) << "\n";
+    out << format_exact(V(i, 0)) << " " << format_exact(V(i, 1)) << " " << format_exact(V(i, 2))
+        << "\n";
   out << "</DataArray>\n</Points>\n";
 }
 
@@ -87,11 +82,12 @@ void write_vtu(const std::string& path, const TetMesh& m, const MaterialTable* m
   cell_array(out, "Int32", "attribute", m.T.rows(), [&](long i) { return m.attribute[i]; });
   if (!m.regions.empty())
     cell_array(out, "Int32", "region", m.T.rows(), [&](long i) { return m.regions.id[i]; });
-  cell_array(out, "Float64", "volume", m.T.rows(), [&](long i) { return num(m.volume[i]); });
+  cell_array(out, "Float64", "volume", m.T.rows(),
+             [&](long i) { return format_exact(m.volume[i]); });
   if (mat) {
     auto prop = [&](long i, auto get) {
       const Material* x = mat->find(m.attribute[i]);
-      return x ? num(get(*x)) : std::string("nan");
+      return x ? format_exact(get(*x)) : std::string("nan");
     };
     cell_array(out, "Float64", "youngs_modulus", m.T.rows(),
                [&](long i) { return prop(i, [](const Material& x) { return x.youngs_modulus; }); });

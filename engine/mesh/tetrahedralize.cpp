@@ -10,17 +10,12 @@
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "engine/mesh/io.hpp"
 #include "engine/spatial/octree.hpp"
 
 namespace palplab::mesh {
 
 namespace {
-
-std::string fmt(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
 
 std::string tetgen_error(int code) {
   switch (code) {
@@ -87,16 +82,17 @@ void write_region_seeds(const std::string& path, const std::vector<RegionSeed>& 
   if (!out) throw InputError("cannot write region file", path);
   out << seeds.size() << "\n";
   for (auto& s : seeds)
-    out << s.index << " " << fmt(s.point.x()) << " " << fmt(s.point.y()) << " " << fmt(s.point.z())
-        << " " << s.region_id << " " << fmt(s.max_volume) << "\n";
+    out << s.index << " " << format_exact(s.point.x()) << " " << format_exact(s.point.y()) << " "
+        << format_exact(s.point.z()) << " " << s.region_id << " " << format_exact(s.max_volume)
+        << "\n";
 }
 
 std::string tetgen_switches(const TetOptions& opt) {
   // p: PLC input; z: number from 0; Q: quiet; Y: keep the surface as given.
   std::string s = "pzQ";
   if (opt.keep_surface) s += "Y";
-  if (opt.quality > 0) s.append("q").append(fmt(opt.quality));
-  if (opt.max_volume > 0) s.append("a").append(fmt(opt.max_volume));
+  if (opt.quality > 0) s.append("q").append(format_exact(opt.quality));
+  if (opt.max_volume > 0) s.append("a").append(format_exact(opt.max_volume));
   if (!opt.seeds.empty()) {
     s += "A";
     bool per_region = std::any_of(opt.seeds.begin(), opt.seeds.end(),
@@ -109,8 +105,9 @@ std::string tetgen_switches(const TetOptions& opt) {
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
   if (opt.quality < 0 || (opt.quality > 0 && opt.quality < 1.0))
     throw InputError("--quality must be 0 (off) or a radius-edge ratio >= 1.0, got " +
-                     fmt(opt.quality));
-  if (opt.max_volume < 0) throw InputError("--max-volume must be > 0, got " + fmt(opt.max_volume));
+                     format_exact(opt.quality));
+  if (opt.max_volume < 0)
+    throw InputError("--max-volume must be > 0, got " + format_exact(opt.max_volume));
   tetgenio in, out;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(s.V.rows());

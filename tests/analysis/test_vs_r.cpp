@@ -193,7 +193,9 @@ TEST(VersusR, FUpperTailGrid) {
     EXPECT_LE(std::fabs(got - expect), 1e-10 * expect)
         << "F=" << f << " d1=" << d1 << " d2=" << d2 << ": palplab " << got << ", R " << expect;
     worst = std::max(worst, std::fabs(got - expect) / expect);
-    if (d1 == 1) EXPECT_LE(std::fabs(t_two_sided_p(-std::sqrt(f), d2) - expect), 1e-10 * expect);
+    if (d1 == 1) {
+      EXPECT_LE(std::fabs(t_two_sided_p(-std::sqrt(f), d2) - expect), 1e-10 * expect);
+    }
   }
   std::printf("[ R        ] F upper tail, %zu grid points: max relative error %.2e\n",
               g.rows.size(), worst);
