@@ -4,6 +4,8 @@
 
 namespace palplab::results {
 
-std::string schema_sql() { return kSchemaSqlText; }
+std::string schema_sql() {
+  return kSchemaSqlText;
+}
 
 }  // namespace palplab::results

@@ -7,60 +7,15 @@
 #include <cmath>
 
 #include "common/seed.hpp"
+#include "flat_tissue.hpp"
 #include "protocols/participants/model.hpp"
 #include "protocols/participants/params.hpp"
 
 using namespace palplab;
 using namespace palplab::protocols::participants;
+using palplab::protocols::participants::fixtures::FlatTissue;
 
 namespace {
-
-struct FlatTissue {
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V, N;
-  std::vector<int> region;
-  Eigen::Vector3d feature{0.05, 0.05, 0.0};
-  double k = 800.0;  // N/m
-  double st = 2.3;   // N
-  bool visual = true, audio = true;
-
-  FlatTissue() {
-    const int n = 41;
-    V.resize(n * n, 3);
-    N.resize(n * n, 3);
-    region.resize(n * n);
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) {
-        int v = i * n + j;
-        V.row(v) << -0.1 + 0.2 * i / (n - 1), -0.1 + 0.2 * j / (n - 1), 0.0;
-        N.row(v) << 0, 0, 1;
-        region[v] = (V.row(v).transpose() - feature).norm() < 0.015 ? 0 : 1;
-      }
-  }
-  SurfaceView view() const {
-    SurfaceView s;
-    s.V = &V;
-    s.N = &N;
-    s.vertex_region = &region;
-    s.feature_region = 0;
-    s.feature_centroid = feature;
-    s.start_position = {0.0, 0.0, 0.05};
-    return s;
-  }
-  Percept render(double t, const Eigen::Vector3d& x) const {
-    Percept p;
-    p.t = t;
-    const double depth = -x.z();
-    const bool inside = std::abs(x.x()) <= 0.1 && std::abs(x.y()) <= 0.1;
-    if (depth > 0 && inside) {
-      p.contact = true;
-      p.force = Eigen::Vector3d(0, 0, k * depth);
-      p.contact_region = (Eigen::Vector3d(x.x(), x.y(), 0) - feature).norm() < 0.015 ? 0 : 1;
-      p.visible_deformation = visual ? depth : 0.0;
-      p.audio = audio && p.force.norm() >= st;
-    }
-    return p;
-  }
-};
 
 // Runs one session of `duration` s; returns peak forces of the presses on the feature.
 std::vector<double> run_session(Trainee& tr, const FlatTissue& tissue, double study_time,

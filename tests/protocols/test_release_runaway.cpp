@@ -13,6 +13,7 @@
 #include <filesystem>
 
 #include "common/seed.hpp"
+#include "flat_tissue.hpp"
 #include "protocols/participants/model.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/plan.hpp"
@@ -29,36 +30,12 @@ namespace {
 // A flat tissue at z = 0 (feature disc around (0.05, 0.05)) with a second part of the organ
 // overhanging it: a shelf whose underside is at z = shelf_z, normal pointing down (like the
 // left horn curling over the left ovary).
-struct OverhangTissue {
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V, N;
-  std::vector<int> region;
-  Eigen::Vector3d feature{0.05, 0.05, 0.0};
-  double k = 500.0;        // N/m, as prototype A
+struct OverhangTissue : fixtures::FlatTissue {
   double shelf_z = 0.025;  // m above the feature
-  double st = 2.3;
 
   OverhangTissue() {
-    const int n = 41;
-    V.resize(n * n, 3);
-    N.resize(n * n, 3);
-    region.resize(n * n);
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) {
-        const int v = i * n + j;
-        V.row(v) << -0.1 + 0.2 * i / (n - 1), -0.1 + 0.2 * j / (n - 1), 0.0;
-        N.row(v) << 0, 0, 1;
-        region[v] = (V.row(v).transpose() - feature).norm() < 0.015 ? 0 : 1;
-      }
-  }
-  SurfaceView view() const {
-    SurfaceView s;
-    s.V = &V;
-    s.N = &N;
-    s.vertex_region = &region;
-    s.feature_region = 0;
-    s.feature_centroid = feature;
-    s.start_position = {0.0, 0.0, 0.015};
-    return s;
+    k = 500.0;  // N/m, as prototype A
+    start_height = 0.015;
   }
   // Penalty contact with whichever part the HCP is in (the floor or the shelf above it).
   Percept render(double t, const Eigen::Vector3d& x) const {
