@@ -35,6 +35,18 @@ double pct(std::vector<double> v, double q) {
   return v[static_cast<size_t>(q * (v.size() - 1) + 0.5)];
 }
 
+// One timed Scene::step, recorded into `r` (step time only while in contact).
+Rendered timed_step(Scene& s, const Eigen::Vector3d& x, Run& r) {
+  const auto t0 = Clock::now();
+  const Rendered out = s.step(x);
+  const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+  if (out.contact) r.us.push_back(us);
+  r.force.push_back(out.force.norm());
+  r.defo.push_back(out.visible_deformation);
+  r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
+  return out;
+}
+
 Run press(Scene& s, const std::string& region, double target = 2.5) {
   Run r;
   const auto& g = s.geometry();
@@ -43,13 +55,7 @@ Run press(Scene& s, const std::string& region, double target = 2.5) {
   double depth = -0.002;
   int phase = 0, hold = 0;
   for (int k = 0; k < 4000 && phase < 3; ++k) {
-    const auto t0 = Clock::now();
-    const Rendered out = s.step(p - depth * n);
-    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
-    if (out.contact) r.us.push_back(us);
-    r.force.push_back(out.force.norm());
-    r.defo.push_back(out.visible_deformation);
-    r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
+    const Rendered out = timed_step(s, p - depth * n, r);
     if (phase == 0) {
       depth += 0.02 * s.dt();
       if (out.force.norm() >= target) phase = 1;
@@ -76,13 +82,7 @@ Run fixed_press(Scene& s, const std::string& region, double depth_max) {
     const double depth = t < t_in     ? -0.002 + 0.02 * t
                          : t < t_hold ? depth_max
                                       : std::max(-0.002, depth_max - 0.05 * (t - t_hold));
-    const auto t0 = Clock::now();
-    const Rendered out = s.step(p - depth * n);
-    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
-    if (out.contact) r.us.push_back(us);
-    r.force.push_back(out.force.norm());
-    r.defo.push_back(out.visible_deformation);
-    r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
+    timed_step(s, p - depth * n, r);
   }
   return r;
 }
