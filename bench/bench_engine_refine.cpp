@@ -13,6 +13,7 @@
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/rings.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/models/mass_spring_material.hpp"
 #include "engine/models/refinement.hpp"
 #include "engine/solvers/integrators.hpp"
 
@@ -32,25 +33,31 @@ AdaptiveMassSpring stomach() {
   MassSpringSystem s;
   s.X_rest = m.V;
   s.X = m.V;
-  s.mass = Eigen::VectorXd::Constant(m.V.rows(), 0.3 / m.V.rows());
-  s.home_ks = Eigen::VectorXd::Constant(m.V.rows(), 50.0);
-  s.home_kd = Eigen::VectorXd::Constant(m.V.rows(), 0.1);
-  s.springs = springs_from_edges(m.V, m.E, 100.0, 0.1);
-  return make_adaptive(std::move(s), m.F, 100.0, 0.1, 1e-3);
+  // A 5 mm wall of 10 kPa tissue, 1000 kg/m^3, on a 2e5 N/m^3 foundation.
+  const Eigen::VectorXd c = Eigen::VectorXd::Constant(m.F.rows(), 1e4 * 0.005);
+  const Eigen::VectorXd area = lumped_area(m.V, m.F);
+  s.mass = area * (1000.0 * 0.005);
+  s.home_ks = 2e5 * area;
+  s.home_kd = 200.0 * area;
+  s.springs = membrane_springs(m.V, m.F, c, 0.002);
+  return make_adaptive(std::move(s), m.F, c, 0.002, 1e-3);
 }
 
 AdaptiveMassSpring model_c() {
-  const mesh::TetMesh tm = mesh::generate_model_c(0, 2489);
+  const mesh::TetMesh tm = mesh::generate_model_c();
   const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
   MassSpringSystem s;
-  const long n = tm.V.rows();
   s.X_rest = tm.V;
   s.X = tm.V;
-  s.mass = Eigen::VectorXd::Constant(n, 0.8 / n);
-  s.home_ks = Eigen::VectorXd::Constant(n, 150.0);
-  s.home_kd = Eigen::VectorXd::Constant(n, 0.1);
-  s.springs = springs_from_edges(tm.V, mesh::tet_edges(tm.T), 150.0, 0.15);
-  return make_adaptive(std::move(s), bf.F, 150.0, 0.15, 1e-3);
+  // Prototype C's material: E = 100 kPa, 1000 kg/m^3, foundation 2e5 N/m^3.
+  const Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
+  s.mass = tet_lumped_mass(tm.V, tm.T, Eigen::VectorXd::Constant(tm.T.rows(), 1000.0));
+  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
+  const Eigen::VectorXd area = lumped_area(tm.V, bf.F);
+  s.home_ks = 2e5 * area;
+  s.home_kd = 200.0 * area;
+  return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
+                       1e-3);
 }
 
 struct Counts {

@@ -13,7 +13,9 @@
 #include "engine/haptics/scene_impl.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
+#include "engine/mesh/materials.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/models/mass_spring_material.hpp"
 
 namespace palplab::prototypes {
 
@@ -180,7 +182,14 @@ struct Spec {
   RingParams ring;
   Scope scope = Scope::rings;
   // mass-spring
-  double total_mass = 0.5, stiffness = 100.0, damping = 0.5, home_ks = 50.0, home_kd = 0.5;
+  // Material: a tissue of the table (by name) or explicit values; thickness for surface models.
+  std::string tissue;  // empty: the mesh's own tissue attribute (tet meshes) or "soft tissue"
+  std::optional<double> youngs_modulus, density;
+  double thickness = 0.005;      // m, membrane thickness of a surface model
+  double rayleigh_beta = 0.002;  // s, kd = beta ks
+  double support_modulus = 0.0;  // N/m^3, elastic foundation under the surface
+  double support_damping = 0.0;  // N s/m^3
+  SpringJacobian jacobian = SpringJacobian::definite;
   std::string fixed_region;
   double scope_radius = 0.0, fixed_z_below = 0.0;
   int scope_max_nodes = 1 << 30;
@@ -194,6 +203,7 @@ struct Spec {
   bool substep = true;
   // scene
   double contact_k = 500.0, contact_radius = 0.0;
+  double patch_radius = 0.01;  // m, radius of the probe face (mass-spring models)
   Cues cues;
   double dt = 1e-3;
   std::map<std::string, Thresholds> thresholds;
@@ -315,22 +325,49 @@ Spec parse(const std::string& path) {
         s.scope = scope_from_string(*sc);
     } else if (kind == "mass_spring") {
       s.kind = ModelKind::mass_spring;
-      c.keys(*m, P,
-             {"kind", "total_mass", "stiffness", "damping", "home_stiffness", "home_damping",
-              "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
-              "scope_radius", "scope_max_nodes", "cg_tolerance", "fixed_z_below"});
-      s.total_mass =
-          c.number(*m, P, "total_mass", true, 0, 1e3, "the organ's mass (kg)", true).value_or(1);
-      s.stiffness = c.number(*m, P, "stiffness", true, 0, 1e7, "spring stiffness k_s (N/m)", true)
-                        .value_or(1);
-      s.damping =
-          c.number(*m, P, "damping", true, 0, 1e5, "spring damping k_d (N s/m)").value_or(0);
-      s.home_ks =
-          c.number(*m, P, "home_stiffness", false, 0, 1e7, "home-spring stiffness per node (N/m)")
-              .value_or(0);
-      s.home_kd =
-          c.number(*m, P, "home_damping", false, 0, 1e5, "home-spring damping per node (N s/m)")
-              .value_or(0);
+      c.keys(
+          *m, P,
+          {"kind", "material", "thickness", "rayleigh_beta", "support_modulus", "support_damping",
+           "jacobian", "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
+           "scope_radius", "scope_max_nodes", "cg_tolerance", "fixed_z_below"});
+      if (const json* mat = c.member(*m, P, "material", false, "a tissue name or an object")) {
+        const std::string Q = "$.model.material";
+        if (mat->is_string()) {
+          s.tissue = mat->get<std::string>();
+        } else if (mat->is_object()) {
+          c.keys(*mat, Q, {"tissue", "youngs_modulus", "density"});
+          s.tissue = c.text(*mat, Q, "tissue", false).value_or("");
+          s.youngs_modulus =
+              c.number(*mat, Q, "youngs_modulus", false, 0, 1e11, "Young's modulus E (Pa)", true);
+          s.density = c.number(*mat, Q, "density", false, 0, 1e5, "the density (kg/m^3)", true);
+        } else {
+          c.err(Q, std::string("expected a tissue name or an object, got ") + mat->type_name());
+        }
+        if (!s.tissue.empty()) {
+          std::string names;
+          bool known = false;
+          for (const auto& e : mesh::default_materials().materials) {
+            known |= e.name == s.tissue;
+            names += (names.empty() ? "" : ", ") + e.name;
+          }
+          if (!known)
+            c.err(Q, "unknown tissue \"" + s.tissue + "\" (expected one of: " + names + ")");
+        }
+      }
+      s.thickness = c.number(*m, P, "thickness", false, 0, 1,
+                             "the membrane thickness of a surface model (m)", true)
+                        .value_or(0.005);
+      s.rayleigh_beta = c.number(*m, P, "rayleigh_beta", false, 0, 10,
+                                 "the stiffness-proportional damping kd/ks (s)")
+                            .value_or(0.002);
+      s.support_modulus = c.number(*m, P, "support_modulus", false, 0, 1e9,
+                                   "the elastic foundation under the surface (N/m^3)")
+                              .value_or(0.0);
+      s.support_damping = c.number(*m, P, "support_damping", false, 0, 1e9,
+                                   "the damping of the foundation (N s/m^3)")
+                              .value_or(0.0);
+      if (auto jc = c.text(*m, P, "jacobian", false, {"definite", "exact"}))
+        s.jacobian = *jc == "exact" ? SpringJacobian::exact : SpringJacobian::definite;
       s.scope_radius = c.number(*m, P, "scope_radius", false, 0, 10,
                                 "the integration scope radius around the contact (m, 0 = whole)")
                            .value_or(0.0);
@@ -396,12 +433,21 @@ Spec parse(const std::string& path) {
   }
   if (const json* ct = c.object(root, R, "contact", false)) {
     const std::string P = "$.contact";
-    c.keys(*ct, P, {"stiffness", "radius"});
+    c.keys(*ct, P, {"stiffness", "radius", "patch_radius"});
+    s.patch_radius =
+        c.number(*ct, P, "patch_radius", false, 0, 0.1, "the radius of the probe face (m)")
+            .value_or(0.01);
     s.contact_k = c.number(*ct, P, "stiffness", false, 0, 1e6, "the contact stiffness (N/m)", true)
                       .value_or(500);
     s.contact_radius =
         c.number(*ct, P, "radius", false, 0, 1, "the contact capture radius (m)", true).value_or(0);
   }
+  if (s.kind == ModelKind::ring && c.ok() && s.ring.m1 * s.contact_k > 1.0 + 1e-12)
+    c.err("$.model.m1", "m1 = " + json(s.ring.m1).dump() + " m/N shows the touched node " +
+                            json(s.ring.m1 * s.contact_k).dump() +
+                            " times deeper than the penetration it renders (contact stiffness " +
+                            json(s.contact_k).dump() +
+                            " N/m): expected m1 <= 1 / contact stiffness");
   if (const json* cu = c.object(root, R, "cues", false)) {
     const std::string P = "$.cues";
     c.keys(*cu, P, {"haptic", "visual_deformation", "audio"});
@@ -453,6 +499,9 @@ struct CachedMesh {
   Eigen::VectorXd node_volume;  // m^3
   RowMatX3i model_F;            // boundary faces in model node indices
   std::vector<int> surface_to_model;
+  RowMatX4i model_T;              // #T tets (tet model)
+  Eigen::VectorXi tet_attribute;  // #T tissue attribute
+  Eigen::VectorXi boundary_tet;   // #model_F owning tet
 };
 
 void build_tet(CachedMesh& c, const mesh::TetMesh& tm) {
@@ -484,6 +533,10 @@ void build_tet(CachedMesh& c, const mesh::TetMesh& tm) {
   c.model_V = tm.V;
   c.model_E = mesh::tet_edges(tm.T);
   c.model_F = bf.F;
+  c.model_T = tm.T;
+  c.tet_attribute = tm.attribute;
+  if (c.tet_attribute.size() != tm.T.rows()) c.tet_attribute.setZero(tm.T.rows());
+  c.boundary_tet = bf.tet;
   c.node_volume.setZero(n);
   for (long t = 0; t < tm.T.rows(); ++t)
     for (int k = 0; k < 4; ++k) c.node_volume[tm.T(t, k)] += tm.volume[t] / 4.0;
@@ -607,26 +660,49 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
     sc.ring.scope = s.scope;
     sc.ring.octree = cm->octree.get();
   } else if (s.kind == ModelKind::mass_spring) {
-    // Mass lumped by surface area (surface model) or tet volume (tetrahedral model).
+    // Every stiffness, mass and support from the material and the rest geometry
+    // (engine/models/mass_spring_material.hpp): nothing per vertex.
     const long nm = cm->model_V.rows();
+    const mesh::MaterialTable& table = mesh::default_materials();
+    auto material_of = [&](int attribute) {
+      mesh::Material mat;
+      const mesh::Material* named = nullptr;
+      for (const auto& e : table.materials)
+        if (!s.tissue.empty() && e.name == s.tissue) named = &e;
+      if (!named) named = table.find(s.tissue.empty() ? attribute : 101);
+      if (named) mat = *named;
+      if (s.youngs_modulus) mat.youngs_modulus = *s.youngs_modulus;
+      if (s.density) mat.density = *s.density;
+      return mat;
+    };
     MassSpringSystem sys;
     sys.X_rest = cm->model_V;
     sys.X = cm->model_V;
     sys.V.setZero(nm, 3);
     sys.F_ext.setZero(nm, 3);
-    const Eigen::VectorXd& share = cm->tet ? cm->node_volume : cm->vertex_area;
-    sys.mass = share * (s.total_mass / share.sum());
-    // Home springs per node scale with the node's share of the surface (uniform per m^2), so
-    // the organ's overall shape stiffness does not depend on the tessellation. The tetrahedral
-    // model has none (SPEC §3) unless the file asks for them.
-    sys.home_ks.setZero(nm);
-    sys.home_kd.setZero(nm);
-    const double area = cm->vertex_area.sum();
-    for (long i = 0; i < n; ++i) {
-      const int j = cm->surface_to_model[i];
-      sys.home_ks[j] = cm->vertex_area[i] * (s.home_ks * n / area);
-      sys.home_kd[j] = cm->vertex_area[i] * (s.home_kd * n / area);
+    Eigen::VectorXd face_membrane;
+    if (cm->tet) {
+      const long nt = cm->model_T.rows();
+      Eigen::VectorXd E(nt), rho(nt);
+      for (long t = 0; t < nt; ++t) {
+        const mesh::Material mat = material_of(cm->tet_attribute[t]);
+        E[t] = mat.youngs_modulus;
+        rho[t] = mat.density;
+      }
+      sys.springs = tet_springs(cm->model_V, cm->model_T, E, s.rayleigh_beta);
+      sys.mass = tet_lumped_mass(cm->model_V, cm->model_T, rho);
+      face_membrane = boundary_membrane(cm->model_V, cm->model_T, cm->model_F, cm->boundary_tet, E);
+    } else {
+      const mesh::Material mat = material_of(101);
+      face_membrane =
+          Eigen::VectorXd::Constant(cm->model_F.rows(), mat.youngs_modulus * s.thickness);
+      sys.springs = membrane_springs(cm->model_V, cm->model_F, face_membrane, s.rayleigh_beta);
+      sys.mass = lumped_area(cm->model_V, cm->model_F) * (mat.density * s.thickness);
     }
+    // The support: an elastic foundation per unit area of the surface it holds.
+    const Eigen::VectorXd area = lumped_area(cm->model_V, cm->model_F);
+    sys.home_ks = s.support_modulus * area;
+    sys.home_kd = s.support_damping * area;
     sys.fixed.assign(nm, 0);
     if (!s.fixed_region.empty()) {
       const int r = g.region_index(s.fixed_region);
@@ -638,9 +714,10 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
       for (long i = 0; i < nm; ++i)
         if (cm->model_V(i, 2) < z0 + s.fixed_z_below) sys.fixed[i] = 1;
     }
-    sys.springs = springs_from_edges(cm->model_V, cm->model_E, s.stiffness, s.damping);
     MassSpringScene& ms = sc.ms;
-    ms.model = make_adaptive(std::move(sys), cm->model_F, s.stiffness, s.damping, s.dt);
+    ms.model = make_adaptive(std::move(sys), cm->model_F, face_membrane, s.rayleigh_beta, s.dt);
+    ms.ws.jacobian = s.jacobian;
+    ms.patch_radius = s.patch_radius;
     ms.integrator = s.integrator;
     if (ov.integrator) {
       try {

@@ -145,6 +145,38 @@ void compute_scope(MassSpringScene& ms, int center) {
   }
 }
 
+// The contact patch: surface nodes within patch_radius (rest distance, reached through surface
+// springs from the centre) with their share of the probe face (lumped surface area).
+void compute_patch(MassSpringScene& ms, int center) {
+  MassSpringSystem& s = ms.model.sys;
+  const Eigen::VectorXd& area = ms.model.surface_area;
+  s.contact_nodes.clear();
+  s.contact_weights.clear();
+  ms.patch_center = center;
+  ms.patch_nodes_version = s.nodes();
+  const Eigen::Vector3d c = s.X_rest.row(center).transpose();
+  const double r2 = ms.patch_radius * ms.patch_radius;
+  s.contact_nodes.push_back(center);
+  if (static_cast<long>(ms.patch_mark.size()) != s.nodes()) ms.patch_mark.assign(s.nodes(), 0);
+  ms.patch_mark[center] = 1;
+  for (size_t q = 0; q < s.contact_nodes.size(); ++q) {
+    const int i = s.contact_nodes[q];
+    for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k) {
+      const int e = s.adj_spring[k];
+      const int j = s.springs.E(e, 0) == i ? s.springs.E(e, 1) : s.springs.E(e, 0);
+      if (ms.patch_mark[j] || !(area[j] > 0.0) ||
+          (s.X_rest.row(j).transpose() - c).squaredNorm() > r2)
+        continue;
+      ms.patch_mark[j] = 1;
+      s.contact_nodes.push_back(j);
+    }
+  }
+  double sum = 0.0;
+  for (int i : s.contact_nodes) sum += area[i];
+  for (int i : s.contact_nodes) s.contact_weights.push_back(sum > 0 ? area[i] / sum : 1.0);
+  for (int i : s.contact_nodes) ms.patch_mark[i] = 0;
+}
+
 const std::vector<std::uint8_t>* scope_mask(const MassSpringScene& ms) {
   return ms.scope_radius > 0.0 ? &ms.in_scope : nullptr;
 }
@@ -161,6 +193,9 @@ void reset_mass_spring(MassSpringScene& ms) {
   ms.in_scope.assign(s.nodes(), 0);
   ms.scope_nodes.clear();
   ms.scope_center = -1;
+  ms.patch_center = -1;
+  s.contact_nodes.clear();
+  s.contact_weights.clear();
   if (ms.sleep.enabled)
     sleep_all(s, ms.act);
   else
@@ -180,9 +215,16 @@ void resync_active(MassSpringScene& ms) {
   const long dv_rows = ms.ws.DV.rows();
   ms.ws.DV.conservativeResize(n, 3);
   if (n > dv_rows) ms.ws.DV.bottomRows(n - dv_rows).setZero();
+  if (ms.scope_radius > 0.0) {
+    ms.scope_nodes.clear();  // the node count changed: rebuild the marks from scratch
+    ms.in_scope.assign(n, 0);
+    compute_scope(ms, ms.scope_center < n ? ms.scope_center : -1);
+  }
+  // New nodes start awake, but only inside the integration scope (the scope's cap holds after
+  // refinement too).
   const long old = static_cast<long>(ms.act.is_active.size());
   ms.act.is_active.resize(n, 0);
-  for (long i = old; i < n; ++i) ms.act.is_active[i] = 1;
+  for (long i = old; i < n; ++i) ms.act.is_active[i] = ms.scope_radius > 0.0 ? ms.in_scope[i] : 1;
   ms.act.nodes.clear();
   for (long i = 0; i < n; ++i)
     if (ms.act.is_active[i] && (s.fixed.empty() || !s.fixed[i]))
@@ -191,11 +233,6 @@ void resync_active(MassSpringScene& ms) {
       ms.act.is_active[i] = 0;
   rebuild_active_springs(s, ms.act);
   ms.scratch.assign(n, 0);
-  if (ms.scope_radius > 0.0) {
-    ms.scope_nodes.clear();  // the node count changed: rebuild the marks from scratch
-    ms.in_scope.assign(n, 0);
-    compute_scope(ms, ms.scope_center < n ? ms.scope_center : -1);
-  }
 }
 
 // A threshold event fires once per contact, at the first step whose force reaches the limit.
@@ -296,8 +333,14 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
         sys.contact_normal = n;
         sys.contact_k = s.contact_k;
         if (ms.scope_radius > 0.0 && mnode != ms.scope_center) compute_scope(ms, mnode);
-        if (ms.sleep.enabled && !ms.act.is_active[mnode])
-          wake_around(sys, ms.act, mnode, scope_mask(ms));
+        if (mnode != ms.patch_center || ms.patch_nodes_version != sys.nodes())
+          compute_patch(ms, mnode);
+        if (ms.sleep.enabled)
+          for (size_t q = 0; q < sys.contact_nodes.size(); ++q) {
+            const int i = sys.contact_nodes[q];
+            if (!ms.act.is_active[i] && (i == mnode || contact_node_penetration(sys, sys.X, q) > 0))
+              wake_around(sys, ms.act, i, scope_mask(ms));
+          }
       } else {
         sys.contact_node = -1;
         if (ms.model.refined() && ms.refine) {

@@ -41,6 +41,10 @@ struct MassSpringScene {
   // of the contact node may wake; 0 = whole model. Held nodes act as fixed boundary.
   double scope_radius = 0.0;
   int scope_max_nodes = 1 << 30;  // cap on the scope (nearest rings first)
+  double patch_radius = 0.01;     // m, radius of the probe face (the contact patch)
+  int patch_center = -1;          // model node the patch was built around
+  long patch_nodes_version = -1;  // model node count the patch was built for
+  std::vector<std::uint8_t> patch_mark;
   int scope_center = -1;
   std::vector<std::uint8_t> in_scope;
   std::vector<int> scope_nodes, bfs;

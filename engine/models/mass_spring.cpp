@@ -16,19 +16,22 @@ Eigen::Vector3d spring_force(const Eigen::Vector3d& x1, const Eigen::Vector3d& x
   return -mag * dir;
 }
 
-void spring_jacobian(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double ks, double kd,
-                     double rest, bool definite, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv) {
+void spring_eval(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
+                 const Eigen::Vector3d& v2, double ks, double kd, double rest, SpringJacobian jac,
+                 Eigen::Vector3d& f1, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv) {
   const Eigen::Vector3d du = x1 - x2;
   const double len = du.norm();
   if (len <= 0.0) {
+    f1.setZero();
     Kx.setZero();
     Kv.setZero();
     return;
   }
   const Eigen::Vector3d d = du / len;
+  f1 = -(ks * (len - rest) + kd * (v1 - v2).dot(d)) * d;
   const Eigen::Matrix3d P = d * d.transpose();
   double lateral = ks * (1.0 - rest / len);
-  if (definite) lateral = std::max(lateral, 0.0);
+  if (jac == SpringJacobian::definite) lateral = std::max(lateral, 0.0);
   Kx = -(ks * P + lateral * (Eigen::Matrix3d::Identity() - P));
   Kv = -kd * P;
 }
@@ -54,10 +57,6 @@ namespace {
 inline void add_node_terms(const MassSpringSystem& sys, const RowMatX3d& X, const RowMatX3d& V,
                            RowMatX3d& F, long i) {
   F.row(i) = sys.F_ext.row(i);
-  if (i == sys.contact_node) {
-    const double d = contact_penetration(sys, X);
-    if (d > 0.0) F.row(i) -= (sys.contact_k * d) * sys.contact_normal.transpose();
-  }
   const double kh = sys.home_ks[i], dh = sys.home_kd[i];
   if (kh != 0.0 || dh != 0.0) F.row(i) += kh * (sys.X_rest.row(i) - X.row(i)) - dh * V.row(i);
 }
@@ -80,6 +79,14 @@ void compute_forces(const MassSpringSystem& sys, const RowMatX3d& X, const RowMa
   } else {
     for (long i = 0; i < X.rows(); ++i) add_node_terms(sys, X, V, F, i);
   }
+  // The probe's penalty on the patch (rows outside `nodes` are written into, and ignored).
+  if (sys.contact_node >= 0)
+    for (size_t k = 0; k < sys.contact_nodes.size(); ++k) {
+      const double d = contact_node_penetration(sys, X, k);
+      if (d > 0.0)
+        F.row(sys.contact_nodes[k]) -=
+            (sys.contact_k * sys.contact_weights[k] * d) * sys.contact_normal.transpose();
+    }
   // Forces on endpoints outside `nodes` are written too (into rows the caller ignores).
   if (springs) {
     for (int s : *springs) add_spring(sys, X, V, F, s);
@@ -140,10 +147,21 @@ double total_mass(const MassSpringSystem& sys) {
 
 namespace palplab::engine {
 
+double contact_node_penetration(const MassSpringSystem& sys, const RowMatX3d& X, size_t k) {
+  const int i = sys.contact_nodes[k];
+  const Eigen::Vector3d& n = sys.contact_normal;
+  const double flat = (X.row(i).transpose() - sys.contact_point).dot(n);
+  // Rest height of the node above the centre's tangent plane: the pad yields to it.
+  const double above = (sys.X_rest.row(i) - sys.X_rest.row(sys.contact_node)).dot(n.transpose());
+  return std::max(0.0, flat - std::max(0.0, above));
+}
+
 double contact_penetration(const MassSpringSystem& sys, const RowMatX3d& X) {
   if (sys.contact_node < 0) return 0.0;
-  return std::max(
-      0.0, (X.row(sys.contact_node).transpose() - sys.contact_point).dot(sys.contact_normal));
+  double d = 0.0;
+  for (size_t k = 0; k < sys.contact_nodes.size(); ++k)
+    d += sys.contact_weights[k] * contact_node_penetration(sys, X, k);
+  return d;
 }
 
 }  // namespace palplab::engine

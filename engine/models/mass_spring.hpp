@@ -35,14 +35,24 @@ struct MassSpringSystem {
   Eigen::VectorXd mass, home_ks, home_kd;
   std::vector<std::uint8_t> fixed;
   Springs springs;
-  // Penalty contact with the haptic device: while the penetration d = (X_p - point) . n > 0,
-  // node p = contact_node gets the force -contact_k d n (n = outward normal, point = device
-  // position); the device feels +contact_k d n. Its Jacobian -contact_k n n^T enters backward
-  // Euler, so a stiff coupling stays stable. contact_node = -1: no contact.
-  int contact_node = -1;
+  // Contact with the haptic device's probe, a flat pad of finite size (so the press stiffness
+  // converges as the mesh is refined: a point load on a continuum does not). The pad passes
+  // through contact_point with outward normal n = contact_normal; node contact_nodes[k]
+  // penetrates it by
+  //   d_k = (X_k - contact_point) . n - max(0, (X_rest_k - X_rest_c) . n),   c = contact_node:
+  // a flat face on convex tissue, which yields (like a fingertip's pulp) to nodes that stand
+  // above the centre's rest tangent plane in a concave spot, so that no pad node is already
+  // deep when the contact engages and the force grows continuously from 0. While d_k > 0 the
+  // node gets the penalty force -contact_k w_k d_k n, with w_k = contact_weights[k] its share of
+  // the pad (lumped surface area, the weights sum to 1). The device feels the sum,
+  // contact_k * sum_k w_k d_k+. The Jacobian blocks -contact_k w_k n n^T enter backward Euler,
+  // so a stiff coupling stays stable. contact_node = -1: no contact.
+  int contact_node = -1;           // the centre node of the contact
+  std::vector<int> contact_nodes;  // the patch (contains contact_node)
+  std::vector<double> contact_weights;
   Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
-  double contact_k = 0.0;  // N/m
+  double contact_k = 0.0;  // N/m, total coupling stiffness of the probe face
   // Incident springs per node (CSR): springs of node i are adj_spring[adj_start[i] ..
   // adj_start[i+1]). Built by build_adjacency(); needed by sleeping and the solvers.
   std::vector<int> adj_start, adj_spring;
@@ -56,13 +66,22 @@ Eigen::Vector3d spring_force(const Eigen::Vector3d& x1, const Eigen::Vector3d& x
                              const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, double ks,
                              double kd, double rest);
 
-// 3x3 Jacobian blocks of spring_force w.r.t. node 1: Kx = dF1/dx1 of the elastic part and
-// Kv = dF1/dv1 (exact). dF1/dx2 = -Kx, dF1/dv2 = -Kv, dF2 = -dF1. The position derivative of the
-// damping term is left out (Baraff & Witkin 1998; it vanishes when dv = 0 and makes the system
-// matrix unsymmetric). With `definite` the compressive part ks(1 - l/|du|) is clamped at 0 so
-// that -Kx is positive semi-definite and M - hD - h^2 K stays SPD for LDLT/CG.
-void spring_jacobian(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double ks, double kd,
-                     double rest, bool definite, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv);
+// How the spring Jacobian treats a compressed spring. Its lateral stiffness ks(1 - l/|du|) is
+// negative under compression (buckling), which can make M - hD - h^2 K indefinite and CG fail.
+//   definite: drop the negative lateral part (Choi & Ko 2002): -Kx stays positive semi-definite,
+//             the step is a modified (not exact) linearisation; it changes h^2 K only for
+//             compressed springs and only in the two directions across the spring.
+//   exact:    the true derivative (use with an LDLT solver; CG may stop on an indefinite A).
+enum class SpringJacobian { definite, exact };
+
+// Force on node 1 (f1) and the 3x3 Jacobian blocks of one spring w.r.t. node 1: Kx = dF1/dx1 of
+// the elastic part and Kv = dF1/dv1 (exact). dF1/dx2 = -Kx, dF1/dv2 = -Kv, dF2 = -dF1. The
+// position derivative of the damping term is left out (Baraff & Witkin 1998; it vanishes when
+// dv = 0 and makes the system matrix unsymmetric). This is THE spring evaluation: the force
+// sums and the backward-Euler assembly both call it, and the finite-difference tests test it.
+void spring_eval(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
+                 const Eigen::Vector3d& v2, double ks, double kd, double rest, SpringJacobian jac,
+                 Eigen::Vector3d& f1, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv);
 
 // Rebuilds sys.adj_start / adj_spring from sys.springs.E.
 void build_adjacency(MassSpringSystem& sys);
@@ -82,7 +101,10 @@ RowMatX2i unique_edges(const RowMatX4i& T);
 
 double total_mass(const MassSpringSystem& sys);
 
-// Penetration of the device below node contact_node along its normal (m), 0 without contact.
+// Penetration of node contact_nodes[k] below the probe face (m, 0 when it does not touch).
+double contact_node_penetration(const MassSpringSystem& sys, const RowMatX3d& X, size_t k);
+// The probe's weighted penetration sum_k w_k d_k+ (m): the device force is contact_k times this.
+// 0 without contact.
 double contact_penetration(const MassSpringSystem& sys, const RowMatX3d& X);
 
 }  // namespace palplab::engine

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace palplab::engine {
 
@@ -116,7 +117,7 @@ void close_mesh(AdaptiveMassSpring& m) {
   }
 }
 
-// Emits the conforming surface and rebuilds masses, springs and home springs (Eq 5.10–5.18).
+// Emits the conforming surface and rebuilds masses, springs and home springs (see the header).
 void rebuild(AdaptiveMassSpring& m) {
   MassSpringSystem& s = m.sys;
   const MassSpringSystem& c = m.coarse;
@@ -162,141 +163,126 @@ void rebuild(AdaptiveMassSpring& m) {
   m.F.resize(static_cast<long>(faces.size()), 3);
   for (size_t f = 0; f < faces.size(); ++f) m.F.row(f) << faces[f][0], faces[f][1], faces[f][2];
   m.level = max_depth;
+  std::vector<double> face_leaf_area(faces.size());
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const Eigen::Vector3d pa = s.X_rest.row(faces[f][0]).transpose();
+    face_leaf_area[f] =
+        0.5 * (Eigen::Vector3d(s.X_rest.row(faces[f][1]).transpose()) - pa)
+                  .cross(Eigen::Vector3d(s.X_rest.row(faces[f][2]).transpose()) - pa)
+                  .norm();
+  }
 
-  // --- per-root Eq 5.16 factor and SLoD ---
+  // --- which roots changed: an unsplit root without hanging midpoints emits itself alone ---
   const long F0n = m.F0.rows();
-  std::vector<double> factor(F0n, 1.0);
-  std::vector<int> slod(F0n, 4);
-  for (long r = 0; r < F0n; ++r) {
-    if (m.tris[r].child < 0) continue;
-    int l = 0, sl = 4;
-    level_and_slod(m, static_cast<int>(r), &l, &sl);
-    slod[r] = sl;
-    factor[r] = sl == 4 ? std::ldexp(1.0, l)
-                        : std::max(std::ldexp(1.0, l), sl / 4.0 * std::ldexp(1.0, l + 1));
-  }
+  std::vector<int> emitted(F0n, 0);
+  for (int r : face_root) ++emitted[r];
+  std::vector<int> refined_roots;
+  for (long r = 0; r < F0n; ++r)
+    if (emitted[r] != 1 || m.tris[r].child >= 0) refined_roots.push_back(static_cast<int>(r));
+  auto len2 = [&](int a, int b) { return (s.X_rest.row(a) - s.X_rest.row(b)).squaredNorm(); };
 
-  // --- springs: coarse springs on unsplit edges, plus new surface edges ---
-  struct NewEdge {
-    int a, b, level, root;
-  };
-  std::vector<NewEdge> ne;
-  for (size_t f = 0; f < faces.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      int a = faces[f][k], b = faces[f][(k + 1) % 3];
-      if (a >= N || b >= N) {
-        if (a > b) std::swap(a, b);
-        ne.push_back({a, b, face_depth[f], face_root[f]});
+  // --- node quantities (mass, support): each coarse node's value is split over its surface
+  // faces by area (q_v A_f / A_v); a refined root gathers its corners' shares and lumps them
+  // over its leaves by area, so the patch's total (and the model's) is conserved exactly ---
+  auto redistribute = [&](const Eigen::VectorXd& coarse_q, Eigen::VectorXd& q) {
+    q.setZero(n);
+    q.head(N) = coarse_q;
+    std::vector<double> gathered(F0n, 0.0);
+    for (int r : refined_roots)
+      for (int k = 0; k < 3; ++k) {
+        const int v = m.F0(r, k);
+        if (!(m.node_area[v] > 0.0)) continue;
+        const double share = coarse_q[v] * m.face_area[r] / m.node_area[v];
+        q[v] -= share;
+        gathered[r] += share;
       }
+    for (size_t f = 0; f < faces.size(); ++f) {
+      const int r = face_root[f];
+      if (emitted[r] == 1 && m.tris[r].child < 0) continue;
+      const double part = gathered[r] * face_leaf_area[f] / m.face_area[r] / 3.0;
+      for (int k = 0; k < 3; ++k) q[faces[f][k]] += part;
     }
-  std::sort(ne.begin(), ne.end(),
-            [](const NewEdge& x, const NewEdge& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
-  // Merge duplicates (an edge is in two faces): max level, max factor.
-  std::vector<NewEdge> ue;
-  for (const NewEdge& e : ne) {
-    if (!ue.empty() && ue.back().a == e.a && ue.back().b == e.b) {
-      ue.back().level = std::max(ue.back().level, e.level);
-      if (factor[e.root] > factor[ue.back().root]) ue.back().root = e.root;
-    } else {
-      ue.push_back(e);
+  };
+  redistribute(c.mass, s.mass);
+  redistribute(c.home_ks, s.home_ks);
+  redistribute(c.home_kd, s.home_kd);
+
+  // --- springs: a surface face f carries the membrane share c_f A_f / |e|^2 of each of its
+  // edges' springs (van Gelder 1998: k_e = sum over the elements at e of E |element| / |e|^2).
+  // A refined root hands its share from its coarse edges to its leaves' edges by the same rule,
+  // which conserves the strain energy of any uniform in-plane strain exactly for 1->4 splits
+  // (children are similar to the parent) and to first order for the green closures. ---
+  Eigen::VectorXd ks = c.springs.ks, kd = c.springs.kd;
+  std::unordered_map<std::uint64_t, double> added;
+  added.reserve(refined_roots.size() * 12);
+  for (int r : refined_roots) {
+    const double cf = m.face_membrane[r];
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.F0(r, k), b = m.F0(r, (k + 1) % 3);
+      auto it = m.coarse_spring.find(edge_key(a, b));
+      if (it != m.coarse_spring.end()) ks[it->second] -= cf * m.face_area[r] / len2(a, b);
     }
   }
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const int r = face_root[f];
+    if (emitted[r] == 1 && m.tris[r].child < 0) continue;
+    const double cf = m.face_membrane[r] * face_leaf_area[f];
+    for (int k = 0; k < 3; ++k) {
+      const int a = faces[f][k], b = faces[f][(k + 1) % 3];
+      added[edge_key(a, b)] += cf / len2(a, b);
+    }
+  }
+  std::vector<std::pair<std::uint64_t, double>> fresh;
+  for (const auto& [key, val] : added) {
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    auto it = (a < N && b < N) ? m.coarse_spring.find(key) : m.coarse_spring.end();
+    if (it != m.coarse_spring.end())
+      ks[it->second] += val;
+    else
+      fresh.emplace_back(key, val);
+  }
+  std::sort(fresh.begin(), fresh.end());
   long kept = 0;
+  const double eps = 1e-9;  // a share removed to rounding: the spring is gone
   for (long k = 0; k < c.springs.size(); ++k)
-    if (find_mid(m, c.springs.E(k, 0), c.springs.E(k, 1)) < 0) ++kept;
-  const long S = kept + static_cast<long>(ue.size());
+    if (ks[k] > eps * c.springs.ks[k]) ++kept;
+  const long S = kept + static_cast<long>(fresh.size());
   Springs sp;
   sp.E.resize(S, 2);
   sp.rest.resize(S);
   sp.ks.resize(S);
   sp.kd.resize(S);
-  std::vector<int> spring_level(S, 0);
   long w = 0;
   for (long k = 0; k < c.springs.size(); ++k) {
-    if (find_mid(m, c.springs.E(k, 0), c.springs.E(k, 1)) >= 0) continue;
+    if (!(ks[k] > eps * c.springs.ks[k])) continue;
     sp.E.row(w) = c.springs.E.row(k);
     sp.rest[w] = c.springs.rest[k];
-    sp.ks[w] = c.springs.ks[k];
-    sp.kd[w] = c.springs.kd[k];
+    sp.ks[w] = ks[k];
+    sp.kd[w] = c.springs.ks[k] > 0.0 ? kd[k] * ks[k] / c.springs.ks[k] : kd[k];
     ++w;
   }
-  const double mass_ratio = static_cast<double>(N) / static_cast<double>(n);  // mean now/coarse
-  for (const NewEdge& e : ue) {
-    sp.E.row(w) << e.a, e.b;
-    sp.rest[w] = (s.X_rest.row(e.a) - s.X_rest.row(e.b)).norm();
-    const double ks = factor[e.root] * m.ks_surface * mass_ratio;  // Eq 5.16
-    sp.ks[w] = ks;
-    sp.kd[w] = slod[e.root] / 4.0 * m.kd_surface * (m.ks_surface > 0 ? ks / m.ks_surface : 1.0);
-    spring_level[w] = e.level;
+  for (const auto& [key, val] : fresh) {
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    sp.E.row(w) << a, b;
+    sp.rest[w] = std::sqrt(len2(a, b));
+    sp.ks[w] = val;
+    sp.kd[w] = m.beta * val;
     ++w;
   }
   s.springs = std::move(sp);
   m.new_nodes = n - N;
-  m.new_springs = static_cast<long>(ue.size());
+  m.new_springs = static_cast<long>(fresh.size());
+  build_adjacency(s);
 
-  // --- masses (Eq 5.10, 5.11, 5.13/5.14, then the total restored) ---
-  Eigen::VectorXd raw(n);
-  raw.head(N) = c.mass;
+  // --- lumped surface area of the current surface (the contact patch weights) ---
+  m.surface_area.setZero(n);
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (int k = 0; k < 3; ++k) m.surface_area[faces[f][k]] += face_leaf_area[f] / 3.0;
+  s.fixed.resize(n, 0);
   for (long i = N; i < n; ++i) {
     const auto& pr = m.midpoint_parents[i - N];
-    raw[i] = 0.5 * (raw[pr[0]] + raw[pr[1]]);
+    s.fixed[i] = s.fixed[pr[0]] && s.fixed[pr[1]];
   }
-  s.mass = raw * mass_ratio;
-  build_adjacency(s);
-  {
-    std::vector<double> level_sum(max_depth + 2, 0.0);
-    std::vector<int> level_count(max_depth + 2, 0);
-    for (long i = 0; i < n; ++i) {
-      level_sum[m.node_level[i]] += s.mass[i];
-      ++level_count[m.node_level[i]];
-    }
-    Eigen::VectorXd mixed = s.mass;
-    std::vector<int> edges_at(max_depth + 2, 0);
-    // Only endpoints of new springs can touch several levels (kept coarse springs are level 0).
-    std::vector<int> candidates;
-    std::vector<std::uint8_t> seen(n, 0);
-    for (const NewEdge& e : ue)
-      for (int v : {e.a, e.b})
-        if (!seen[v]) {
-          seen[v] = 1;
-          candidates.push_back(v);
-        }
-    std::sort(candidates.begin(), candidates.end());
-    for (const int i : candidates) {
-      std::fill(edges_at.begin(), edges_at.end(), 0);
-      int levels = 0;
-      for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k)
-        if (edges_at[spring_level[s.adj_spring[k]]]++ == 0) ++levels;
-      if (levels < 2) continue;
-      double num = 0.0, den = 0.0;
-      for (int L = 0; L <= max_depth + 1; ++L) {
-        if (!edges_at[L]) continue;
-        const double ML =
-            L == m.node_level[i] || !level_count[L] ? s.mass[i] : level_sum[L] / level_count[L];
-        num += ML * edges_at[L];
-        den += edges_at[L];
-      }
-      mixed[i] = num / den;
-    }
-    s.mass = mixed * (c.mass.sum() / mixed.sum());
-  }
-  // Home springs follow the mass (per-node, like mass): stiffness per kg is inherited from the
-  // parents, so the total home stiffness stays that of the coarse model.
-  s.home_ks.resize(n);
-  s.home_kd.resize(n);
-  for (long i = 0; i < n; ++i) {
-    if (i < N) {
-      s.home_ks[i] = c.mass[i] > 0 ? c.home_ks[i] / c.mass[i] : 0.0;
-      s.home_kd[i] = c.mass[i] > 0 ? c.home_kd[i] / c.mass[i] : 0.0;
-    } else {
-      const auto& pr = m.midpoint_parents[i - N];
-      s.home_ks[i] = 0.5 * (s.home_ks[pr[0]] + s.home_ks[pr[1]]);
-      s.home_kd[i] = 0.5 * (s.home_kd[pr[0]] + s.home_kd[pr[1]]);
-    }
-  }
-  s.home_ks = s.home_ks.cwiseProduct(s.mass);
-  s.home_kd = s.home_kd.cwiseProduct(s.mass);
-  s.fixed.resize(n, 0);
   m.h = m.h_coarse / std::ldexp(1.0, m.level);  // Eq 5.18
 }
 
@@ -330,8 +316,8 @@ void level_and_slod(const AdaptiveMassSpring& m, int root, int* level, int* slod
   }
 }
 
-AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0, double ks_surface,
-                                 double kd_surface, double h_coarse) {
+AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
+                                 Eigen::VectorXd face_membrane, double beta, double h_coarse) {
   AdaptiveMassSpring m;
   const long n = coarse.nodes();
   if (coarse.V.rows() != n) coarse.V.setZero(n, 3);
@@ -339,13 +325,25 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0, double k
   if (coarse.home_ks.size() != n) coarse.home_ks.setZero(n);
   if (coarse.home_kd.size() != n) coarse.home_kd.setZero(n);
   if (static_cast<long>(coarse.fixed.size()) != n) coarse.fixed.assign(n, 0);
+  if (face_membrane.size() != F0.rows())
+    throw std::invalid_argument("make_adaptive: one membrane modulus per surface face expected");
   build_adjacency(coarse);
   m.coarse = std::move(coarse);
   m.F0 = std::move(F0);
-  m.ks_surface = ks_surface;
-  m.kd_surface = kd_surface;
+  m.face_membrane = std::move(face_membrane);
+  m.beta = beta;
   m.h_coarse = h_coarse;
   m.h = h_coarse;
+  m.face_area = mesh_face_areas(m.coarse.X_rest, m.F0);
+  m.node_area.setZero(n);
+  for (long f = 0; f < m.F0.rows(); ++f)
+    for (int k = 0; k < 3; ++k) m.node_area[m.F0(f, k)] += m.face_area[f];
+  m.surface_area = m.node_area / 3.0;
+  m.coarse_surface_area = m.surface_area;
+  m.coarse_spring.reserve(m.coarse.springs.size() * 2);
+  for (long k = 0; k < m.coarse.springs.size(); ++k)
+    m.coarse_spring.emplace(edge_key(m.coarse.springs.E(k, 0), m.coarse.springs.E(k, 1)),
+                            static_cast<int>(k));
   m.sys = m.coarse;
   m.F = m.F0;
   m.tris.reserve(m.F0.rows() * 2);
@@ -354,6 +352,17 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0, double k
   m.node_level.assign(n, 0);
   m.mid_flag.assign(n, 0);
   return m;
+}
+
+Eigen::VectorXd mesh_face_areas(const RowMatX3d& X, const RowMatX3i& F) {
+  Eigen::VectorXd a(F.rows());
+  for (long f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d p = X.row(F(f, 0)).transpose();
+    a[f] = 0.5 * (Eigen::Vector3d(X.row(F(f, 1)).transpose()) - p)
+                     .cross(Eigen::Vector3d(X.row(F(f, 2)).transpose()) - p)
+                     .norm();
+  }
+  return a;
 }
 
 bool refine_around(AdaptiveMassSpring& m, int node, const RefineParams& p) {
@@ -418,6 +427,7 @@ bool simplify(AdaptiveMassSpring& m) {
   m.level = 0;
   m.h = m.h_coarse;
   m.new_nodes = m.new_springs = 0;
+  m.surface_area = m.coarse_surface_area;
   return true;
 }
 

@@ -133,16 +133,20 @@ void factor_A(const MassSpringSystem& sys, const ActiveSet& act, double h,
   ws.dof_of_node.assign(n, -1);
   for (long k = 0; k < m; ++k) ws.dof_of_node[act.nodes[k]] = static_cast<int>(k);
   ws.factor_contact = ws.contact_on ? sys.contact_node : -1;
+  ws.factor_contact_k = ws.contact_on ? sys.contact_k : 0.0;
   ws.factor_h = h;
   ws.triplets.clear();
   for (long k = 0; k < m; ++k) {
     const int i = act.nodes[k];
     const double d = sys.mass[i] + h * sys.home_kd[i] + h * h * sys.home_ks[i];
     for (int r = 0; r < 3; ++r) ws.triplets.emplace_back(3 * k + r, 3 * k + r, d);
-    if (ws.contact_on && i == sys.contact_node)
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          ws.triplets.emplace_back(3 * k + r, 3 * k + c, ws.contact_block(r, c));
+  }
+  for (size_t q = 0; q < ws.contact_blocks.size(); ++q) {
+    const int k = ws.dof_of_node[ws.contact_block_node[q]];
+    if (k < 0) continue;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        ws.triplets.emplace_back(3 * k + r, 3 * k + c, ws.contact_blocks[q](r, c));
   }
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
@@ -228,7 +232,8 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
     C.Dinv[k] = ws.Dinv[i].inverse();  // block-Jacobi preconditioner (full diagonal block)
     C.x.segment<3>(3 * k) = ws.DV.row(i).transpose();  // warm start (head of C.x)
   }
-  if (ws.contact_on) C.D[C.local[sys.contact_node]] += ws.contact_block;
+  for (size_t q = 0; q < ws.contact_blocks.size(); ++q)
+    C.D[C.local[ws.contact_block_node[q]]] += ws.contact_blocks[q];
   for (const auto& e : C.held) C.D[e.a] += ws.S[e.k];
   auto x = C.x.head(3 * m), r = C.r.head(3 * m), z = C.z.head(3 * m), p = C.p.head(3 * m),
        ap = C.ap.head(3 * m);
@@ -288,23 +293,29 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
     Eigen::RowVector3d f = sys.F_ext.row(i);
     const double kh = sys.home_ks[i], dh = sys.home_kd[i];
     if (kh != 0.0 || dh != 0.0) f += kh * (sys.X_rest.row(i) - sys.X.row(i)) - dh * sys.V.row(i);
-    if (i == sys.contact_node) {
-      const double d = contact_penetration(sys, sys.X);
-      if (d > 0.0) f -= (sys.contact_k * d) * sys.contact_normal.transpose();
-    }
     ws.R.row(i) = h * (f - h * kh * sys.V.row(i));
     ws.Dinv[i] = Eigen::Matrix3d::Identity() * (sys.mass[i] + h * dh + h * h * kh);
   }
-  // Contact penalty: K = -k n n^T while penetrating.
-  ws.contact_on = sys.contact_node >= 0 && act.is_active[sys.contact_node] &&
-                  contact_penetration(sys, sys.X) > 0.0;
-  if (ws.contact_on) {
-    const int p = sys.contact_node;
-    const Eigen::Matrix3d Kc = -sys.contact_k * sys.contact_normal * sys.contact_normal.transpose();
-    ws.contact_block = -(h * h) * Kc;
-    ws.R.row(p) += ((h * h) * (Kc * sys.V.row(p).transpose())).transpose();
-    ws.Dinv[p] += ws.contact_block;
+  // The probe's penalty on every penetrating, integrated patch node: force -k w d n, Jacobian
+  // K = -k w n n^T (contact_node_penetration is the same function the force sum uses).
+  ws.contact_blocks.clear();
+  ws.contact_block_node.clear();
+  if (sys.contact_node >= 0) {
+    const Eigen::Matrix3d nn = sys.contact_normal * sys.contact_normal.transpose();
+    for (size_t q = 0; q < sys.contact_nodes.size(); ++q) {
+      const int p = sys.contact_nodes[q];
+      const double d = contact_node_penetration(sys, sys.X, q);
+      if (!(d > 0.0) || !act.is_active[p]) continue;
+      const double kw = sys.contact_k * sys.contact_weights[q];
+      const Eigen::Matrix3d Kc = -kw * nn;
+      ws.R.row(p) -= (h * kw * d) * sys.contact_normal.transpose();
+      ws.R.row(p) += ((h * h) * (Kc * sys.V.row(p).transpose())).transpose();
+      ws.contact_blocks.push_back(-(h * h) * Kc);
+      ws.contact_block_node.push_back(p);
+      ws.Dinv[p] += ws.contact_blocks.back();
+    }
   }
+  ws.contact_on = !ws.contact_blocks.empty();
   const double h2 = h * h;
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
@@ -316,15 +327,12 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
       ws.S[k].setZero();
       continue;
     }
-    const Eigen::Vector3d d = du / len;
-    const Eigen::Vector3d vrel = (sys.V.row(a) - sys.V.row(b)).transpose();
-    const double ks = sys.springs.ks[s], kd = sys.springs.kd[s];
-    // Force on a (Eq 5.3) and the Jacobian blocks of spring_jacobian(definite = true).
-    const Eigen::Vector3d f1 = -(ks * (len - sys.springs.rest[s]) + kd * vrel.dot(d)) * d;
-    const double lateral = std::max(ks * (1.0 - sys.springs.rest[s] / len), 0.0);
-    const Eigen::Matrix3d P = d * d.transpose();
-    const Eigen::Matrix3d Kx = -(ks * P + lateral * (Eigen::Matrix3d::Identity() - P));
-    ws.S[k] = (h * kd) * P - h2 * Kx;  // -(h Kv + h^2 Kx), Kv = -kd P
+    Eigen::Vector3d f1;
+    Eigen::Matrix3d Kx, Kv;
+    spring_eval(sys.X.row(a).transpose(), sys.X.row(b).transpose(), sys.V.row(a).transpose(),
+                sys.V.row(b).transpose(), sys.springs.ks[s], sys.springs.kd[s], sys.springs.rest[s],
+                ws.jacobian, f1, Kx, Kv);
+    ws.S[k] = -h * Kv - h2 * Kx;  // -(h Kv + h^2 Kx)
     Eigen::Vector3d dv = Eigen::Vector3d::Zero();
     if (aa) dv += sys.V.row(a).transpose();
     if (ba) dv -= sys.V.row(b).transpose();
@@ -344,7 +352,8 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
       // Reuse a factorisation: A at the time of factorisation preconditions CG on the current A
       // (a stale A used as the solve itself is unstable: at rest it has no lateral stiffness).
       const int contact_key = ws.contact_on ? sys.contact_node : -1;
-      if (ws.factor_version != act.version || ws.factor_contact != contact_key || ws.factor_h != h)
+      if (ws.factor_version != act.version || ws.factor_contact != contact_key ||
+          ws.factor_h != h || ws.factor_contact_k != (ws.contact_on ? sys.contact_k : 0.0))
         factor_A(sys, act, h, ws);
     }
     solve_cg_compact(sys, act, ws);

@@ -84,8 +84,11 @@ struct IntegratorWorkspace {
   double h = 0.0;
   CompactCg compact;
   int factor_contact = -2;
-  double factor_h = 0.0;
-  Eigen::Matrix3d contact_block = Eigen::Matrix3d::Zero();
+  double factor_h = 0.0, factor_contact_k = 0.0;
+  // Backward-Euler system blocks of the probe contact, one per penetrating patch node.
+  std::vector<Eigen::Matrix3d> contact_blocks;
+  std::vector<int> contact_block_node;
+  SpringJacobian jacobian = SpringJacobian::definite;
 };
 
 // Advances sys by h seconds (one step of `method`) on the nodes of `act`.

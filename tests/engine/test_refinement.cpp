@@ -9,6 +9,7 @@
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/rings.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/models/mass_spring_material.hpp"
 #include "engine/models/refinement.hpp"
 
 using namespace palplab::engine;
@@ -30,7 +31,9 @@ AdaptiveMassSpring octahedron(double stretch, double threshold_mass_noise = 0.0)
   s.home_ks = Eigen::VectorXd::Constant(6, 5.0);
   s.home_kd = Eigen::VectorXd::Constant(6, 0.1);
   s.springs = springs_from_edges(s.X_rest, unique_edges(F), 100.0, 0.5);
-  return make_adaptive(std::move(s), F, 100.0, 0.5, 1e-3);
+  const Eigen::VectorXd c = Eigen::VectorXd::Constant(F.rows(), 100.0);  // N/m membrane
+  s.springs = membrane_springs(s.X_rest, F, c, 0.005);
+  return make_adaptive(std::move(s), F, c, 0.005, 1e-3);
 }
 
 // Closed, edge-manifold, consistently oriented: every directed edge exactly once, and its
@@ -157,28 +160,72 @@ TEST(Refinement, AreaBasedEqualsConventionalWhenAllAreasEqual) {
   EXPECT_TRUE((a.F.array() == c.F.array()).all());
 }
 
+// Strain energy of the springs under the uniform small strain eps: sum 1/2 ks (l e.eps.e)^2.
+double uniform_strain_energy(const MassSpringSystem& s, const Eigen::Matrix3d& eps) {
+  double w = 0.0;
+  for (long k = 0; k < s.springs.size(); ++k) {
+    const Eigen::Vector3d d =
+        (s.X_rest.row(s.springs.E(k, 0)) - s.X_rest.row(s.springs.E(k, 1))).transpose();
+    const double stretch = d.dot(eps * d) / d.norm();
+    w += 0.5 * s.springs.ks[k] * stretch * stretch;
+  }
+  return w;
+}
+
 TEST(Refinement, ParameterIdentification) {
   AdaptiveMassSpring m = octahedron(1.0);
+  const double ks0 = m.sys.springs.ks[0];
   ASSERT_TRUE(refine_whole(m, 1));  // every face once: N = 6, N' = 6 + 12 = 18
   EXPECT_EQ(m.new_nodes, 12);
-  EXPECT_EQ(m.sys.springs.size(), 48);  // 8 faces -> 32 faces, E = 3F/2
+  EXPECT_EQ(m.sys.springs.size(), 48);  // 8 faces -> 32 faces, E = 3F/2; no coarse edge left
   EXPECT_EQ(m.new_springs, 48);
   EXPECT_DOUBLE_EQ(m.h, 0.5e-3);  // Eq 5.18, l = 1
   int l = -1, slod = -1;
   level_and_slod(m, 0, &l, &slod);
   EXPECT_EQ(l, 1);
   EXPECT_EQ(slod, 4);
-  // Eq 5.10/5.11 with uniform masses: every node N/N' of the coarse mass -> 0.01 * 6/18.
-  for (long i = 0; i < m.sys.nodes(); ++i) EXPECT_NEAR(m.sys.mass[i], 0.01 / 3.0, 1e-15);
-  // Eq 5.16: ks = 2^1 * ks * (mean mass refined / coarse) = 2 * 100 * 1/3; Eq 5.17 kd scales alike.
-  for (long s = 0; s < m.sys.springs.size(); ++s) {
-    EXPECT_NEAR(m.sys.springs.ks[s], 200.0 / 3.0, 1e-12);
-    EXPECT_NEAR(m.sys.springs.kd[s], 0.5 * (200.0 / 3.0) / 100.0, 1e-12);
-    const int a = m.sys.springs.E(s, 0), b = m.sys.springs.E(s, 1);
-    EXPECT_NEAR(m.sys.springs.rest[s], (m.sys.X_rest.row(a) - m.sys.X_rest.row(b)).norm(), 1e-15);
+  // Masses by area lumping of each face's share: a face gathers 4 x 0.01/4... = 0.0075 kg and
+  // gives each of its 4 children's corners 0.0075/12: a coarse corner is in 4 faces (one child
+  // each), a midpoint in 2 faces (three children each).
+  for (long i = 0; i < 6; ++i) EXPECT_NEAR(m.sys.mass[i], 0.0025, 1e-15);
+  for (long i = 6; i < 18; ++i) EXPECT_NEAR(m.sys.mass[i], 0.00375, 1e-15);
+  EXPECT_NEAR(m.sys.mass.sum(), 0.06, 1e-15);
+  // van Gelder on the children (area/4, edge/2): every spring keeps the coarse stiffness, and
+  // damping stays stiffness-proportional.
+  for (long k = 0; k < m.sys.springs.size(); ++k) {
+    EXPECT_NEAR(m.sys.springs.ks[k], ks0, 1e-9 * ks0);
+    EXPECT_NEAR(m.sys.springs.kd[k], 0.005 * m.sys.springs.ks[k], 1e-12);
+    const int a = m.sys.springs.E(k, 0), b = m.sys.springs.E(k, 1);
+    EXPECT_NEAR(m.sys.springs.rest[k], (m.sys.X_rest.row(a) - m.sys.X_rest.row(b)).norm(), 1e-15);
   }
-  // Home springs follow mass: total home stiffness unchanged.
+  // The support (home springs) is conserved like the mass.
   EXPECT_NEAR(m.sys.home_ks.sum(), 30.0, 1e-12);
+}
+
+TEST(Refinement, StrainEnergyAndPatchMassConservedOnIrregularMesh) {
+  // A stretched octahedron with uneven masses: red splits keep the strain energy of every
+  // uniform strain exactly; green closures (partial refinement) to first order; the mass is
+  // conserved exactly and restored bit for bit by simplify.
+  Eigen::Matrix3d eps;
+  eps << 0.010, 0.003, -0.002, 0.003, -0.004, 0.005, -0.002, 0.005, 0.007;
+  AdaptiveMassSpring m = octahedron(1.7, 0.001);
+  const double w0 = uniform_strain_energy(m.sys, eps);
+  const Eigen::VectorXd mass0 = m.sys.mass;
+  ASSERT_TRUE(refine_whole(m, 2));
+  EXPECT_NEAR(uniform_strain_energy(m.sys, eps), w0, 1e-12 * w0);
+  EXPECT_NEAR(m.sys.mass.sum(), mass0.sum(), 1e-15);
+  simplify(m);
+  EXPECT_TRUE((m.sys.mass.array() == mass0.array()).all());
+  RefineParams p;
+  p.policy = RefinePolicy::conventional;
+  p.level = 2;
+  ASSERT_TRUE(refine_around(m, 0, p));  // the four faces at the tip, green closures around them
+  EXPECT_NEAR(uniform_strain_energy(m.sys, eps), w0, 0.05 * w0);
+  EXPECT_NEAR(m.sys.mass.sum(), mass0.sum(), 1e-15);
+  for (long i = 0; i < m.sys.nodes(); ++i) EXPECT_GT(m.sys.mass[i], 0.0) << i;
+}
+
+TEST(Refinement, PartialRefinementLevels) {
   // Partial refinement of a root gives a SLoD between 1 and 3: after a whole level 1, refine
   // around one coarse corner of root 0 to level 2 — only the children at that corner split.
   AdaptiveMassSpring q = octahedron(1.0);
@@ -188,6 +235,7 @@ TEST(Refinement, ParameterIdentification) {
   p.level = 2;
   const int corner = q.F0(0, 0);
   ASSERT_TRUE(refine_around(q, corner, p));
+  int l = -1, slod = -1;
   level_and_slod(q, 0, &l, &slod);
   EXPECT_EQ(l, 1);
   EXPECT_GE(slod, 1);
@@ -207,8 +255,10 @@ TEST(Refinement, ModelCSurfaceStaysClosedUnderEveryPolicy) {
   s.X_rest = tm.V;
   s.X = tm.V;
   s.mass = Eigen::VectorXd::Constant(tm.V.rows(), 0.8 / tm.V.rows());
-  s.springs = springs_from_edges(tm.V, palplab::mesh::tet_edges(tm.T), 150.0, 0.15);
-  AdaptiveMassSpring m = make_adaptive(std::move(s), bf.F, 150.0, 0.15, 1e-3);
+  const Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
+  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
+  AdaptiveMassSpring m = make_adaptive(std::move(s), bf.F,
+                                       boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002, 1e-3);
   ASSERT_TRUE(closed_and_conforming(m.F, m.sys.nodes()));
   const RowMatX3i F0 = m.F;
   const long S0 = m.sys.springs.size();

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "engine/models/mass_spring.hpp"
+#include "engine/solvers/integrators.hpp"
 
 using namespace palplab::engine;
 using Eigen::Matrix3d;
@@ -75,7 +76,9 @@ TEST(Springs, JacobianMatchesFiniteDifferences) {
     // Alternate stretched and compressed springs.
     const double l = (x1 - x2).norm() * (trial % 2 ? 1.5 : 0.6);
     Matrix3d Kx, Kv;
-    spring_jacobian(x1, x2, ks, kd, l, false, Kx, Kv);
+    Vector3d f1;
+    spring_eval(x1, x2, v1, v2, ks, kd, l, SpringJacobian::exact, f1, Kx, Kv);
+    EXPECT_NEAR((f1 - spring_force(x1, x2, v1, v2, ks, kd, l)).norm(), 0.0, 1e-12 * ks);
     const double eps = 1e-6;
     for (int k = 0; k < 3; ++k) {
       Vector3d a = x1, b = x1;
@@ -105,11 +108,18 @@ TEST(Springs, JacobianMatchesFiniteDifferences) {
     }
     // The PSD projection only changes compressed springs, and makes -Kx PSD.
     Matrix3d Kp, Kvp;
-    spring_jacobian(x1, x2, ks, kd, l, true, Kp, Kvp);
+    spring_eval(x1, x2, v1, v2, ks, kd, l, SpringJacobian::definite, f1, Kp, Kvp);
     Eigen::SelfAdjointEigenSolver<Matrix3d> es(-Kp);
     EXPECT_GE(es.eigenvalues().minCoeff(), -1e-9);
     if (trial % 2 == 0) {
       EXPECT_NEAR((Kp - Kx).norm(), 0.0, 1e-12);  // stretched: unchanged
+    } else {
+      // Compressed: exactly the negative lateral term ks(1 - l/|du|)(I - P) is dropped.
+      const Vector3d d = (x1 - x2).normalized();
+      const double lateral = ks * (1.0 - l / (x1 - x2).norm());
+      ASSERT_LT(lateral, 0.0);
+      EXPECT_NEAR((Kp - Kx - lateral * (Matrix3d::Identity() - d * d.transpose())).norm(), 0.0,
+                  1e-9 * ks);
     }
   }
 }
@@ -137,6 +147,8 @@ TEST(Springs, ContactPenaltyForceAndItsJacobian) {
   s.home_ks.setZero(1);
   s.home_kd.setZero(1);
   s.contact_node = 0;
+  s.contact_nodes = {0};
+  s.contact_weights = {1.0};
   s.contact_point = Vector3d(0.011, 0.019, -0.004);
   s.contact_normal = Vector3d(0.2, -0.1, 1.0).normalized();
   s.contact_k = 2000.0;
@@ -161,4 +173,67 @@ TEST(Springs, ContactPenaltyForceAndItsJacobian) {
   s.contact_point = s.X.row(0).transpose() + 0.001 * s.contact_normal;
   compute_forces(s, s.X, s.V, F);
   EXPECT_EQ(F.row(0).norm(), 0.0);
+}
+
+TEST(Springs, BackwardEulerSolvesWithTheFiniteDifferenceJacobian) {
+  // The integrator's own path: one linearised backward-Euler step (exact Jacobian, LDLT) must
+  // equal the solve of (M - h^2 K) dv = h f0 with K from central differences of compute_forces
+  // (springs, home springs and a two-node contact patch), at v = 0 with no damping.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1, 1);
+  MassSpringSystem s;
+  const int n = 6;
+  s.X_rest.resize(n, 3);
+  for (int i = 0; i < n; ++i) s.X_rest.row(i) << 0.02 * U(rng), 0.02 * U(rng), 0.02 * U(rng);
+  RowMatX2i E(9, 2);
+  E << 0, 1, 0, 2, 1, 2, 1, 3, 2, 3, 3, 4, 2, 4, 4, 5, 3, 5;
+  s.springs = springs_from_edges(s.X_rest, E, 150.0, 0.0);
+  s.X = s.X_rest;
+  for (int i = 0; i < n; ++i) s.X.row(i) += 0.003 * Eigen::RowVector3d(U(rng), U(rng), U(rng));
+  s.V.setZero(n, 3);
+  s.F_ext.setZero(n, 3);
+  s.mass = Eigen::VectorXd::Constant(n, 0.002);
+  s.home_ks = Eigen::VectorXd::Constant(n, 20.0);
+  s.home_kd.setZero(n);
+  s.fixed.assign(n, 0);
+  s.contact_node = 4;
+  s.contact_nodes = {4, 5};
+  s.contact_weights = {0.7, 0.3};
+  s.contact_normal = Vector3d(0.3, 0.1, 1.0).normalized();
+  s.contact_point = s.X.row(4).transpose() - 0.002 * s.contact_normal;
+  s.contact_k = 900.0;
+  build_adjacency(s);
+  ASSERT_GT(contact_node_penetration(s, s.X, 0), 0.0);
+  ASSERT_GT(contact_node_penetration(s, s.X, 1), 0.0);
+
+  const double h = 1e-3;
+  RowMatX3d F0;
+  compute_forces(s, s.X, s.V, F0);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  const double eps = 1e-7;
+  for (int j = 0; j < 3 * n; ++j) {
+    RowMatX3d Xp = s.X, Xm = s.X, Fp, Fm;
+    Xp(j / 3, j % 3) += eps;
+    Xm(j / 3, j % 3) -= eps;
+    compute_forces(s, Xp, s.V, Fp);
+    compute_forces(s, Xm, s.V, Fm);
+    for (int i = 0; i < 3 * n; ++i)
+      A(i, j) = -h * h * (Fp(i / 3, i % 3) - Fm(i / 3, i % 3)) / (2 * eps);
+  }
+  Eigen::VectorXd b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) {
+    A(i, i) += s.mass[i / 3];
+    b[i] = h * F0(i / 3, i % 3);
+  }
+  const Eigen::VectorXd dv = A.partialPivLu().solve(b);
+
+  ActiveSet act;
+  activate_all(s, act);
+  IntegratorWorkspace ws;
+  ws.solver = LinearSolver::ldlt_refactor;
+  ws.jacobian = SpringJacobian::exact;
+  MassSpringSystem stepped = s;
+  integrate(stepped, act, h, Integrator::backward_euler, ws);
+  for (int i = 0; i < 3 * n; ++i)
+    EXPECT_NEAR(stepped.V(i / 3, i % 3), dv[i], 1e-7 * dv.cwiseAbs().maxCoeff()) << i;
 }

@@ -227,8 +227,12 @@ TEST(Prototypes, BadFilesGiveLocatedErrors) {
   EXPECT_NE(e.find("$.contact.stiffness"), std::string::npos) << e;
   EXPECT_NE(e.find("out of range"), std::string::npos) << e;
   // Semantic rule: |m1| > |m2| > |m3|.
-  e = error_of(mutated("B", "\"m1\": 0.004", "\"m1\": 0.002"));
+  e = error_of(mutated("B", "\"m1\": 0.002", "\"m1\": 0.001"));
   EXPECT_NE(e.find("|m1| > |m2| > |m3|"), std::string::npos) << e;
+  // The touched node may not be shown deeper than the penetration rendered (m1 k <= 1).
+  e = error_of(mutated("B", "\"m1\": 0.002", "\"m1\": 0.004"));
+  EXPECT_NE(e.find("$.model.m1"), std::string::npos) << e;
+  EXPECT_NE(e.find("penetration"), std::string::npos) << e;
   // ST must be below SFT; unknown region in thresholds; unknown integrator.
   e = error_of(mutated("A", "\"st\": 2.0", "\"st\": 4.0"));
   EXPECT_NE(e.find("ST < SFT"), std::string::npos) << e;
@@ -240,8 +244,14 @@ TEST(Prototypes, BadFilesGiveLocatedErrors) {
             std::string::npos)
       << e;
   // Wrong type, missing required key, missing file.
-  e = error_of(mutated("C", "\"total_mass\": 0.8", "\"total_mass\": \"heavy\""));
-  EXPECT_NE(e.find("$.model.total_mass"), std::string::npos) << e;
+  e = error_of(mutated("C", "\"rayleigh_beta\": 0.002", "\"rayleigh_beta\": \"heavy\""));
+  EXPECT_NE(e.find("$.model.rayleigh_beta"), std::string::npos) << e;
+  // Stiffness per spring is not a prototype parameter any more: it comes from the material.
+  e = error_of(mutated("C", "\"rayleigh_beta\": 0.002", "\"stiffness\": 150.0"));
+  EXPECT_NE(e.find("unknown key \"stiffness\""), std::string::npos) << e;
+  e = error_of(mutated("C", "\"material\": {\"tissue\": \"soft tissue\"",
+                       "\"material\": {\"tissue\": \"jelly\""));
+  EXPECT_NE(e.find("$.model.material"), std::string::npos) << e;
   e = error_of(mutated("A", "\"id\": \"A\",", ""));
   EXPECT_NE(e.find("missing required key \"id\""), std::string::npos) << e;
   EXPECT_NE(error_of("/nonexistent/X.json").find("/nonexistent/X.json"), std::string::npos);
