@@ -64,6 +64,21 @@ double phi_d(double x) {
 double upper_normal_d(double x) {
   return 0.5 * std::erfc(x * 0.7071067811865476);
 }
+double log_phi_d(double x) {
+  return -0.5 * x * x - 0.91893853320467274;
+}
+// log Q(x) without underflow: erfc where Q(x) > 1e-198, else the asymptotic series
+// Q(x) = φ(x)/x · (1 - u + 3u² - 15u³ + 105u⁴ - 945u⁵ + 10395u⁶ - ...), u = 1/x², whose next
+// term at x = 30 is 3e-16 relative.
+double log_upper_normal_d(double x) {
+  if (x < 30) return std::log(upper_normal_d(x));
+  const double u = 1 / (x * x);
+  const double series =
+      1 - u * (1 - 3 * u * (1 - 5 * u * (1 - 7 * u * (1 - 9 * u * (1 - 11 * u)))));
+  return log_phi_d(x) - std::log(x) + std::log(series);
+}
+// Widths of the range beyond which its upper tail is integrated in log space (range_prob).
+constexpr double kLogSpaceRange = 24;
 // Φ(a + w) - Φ(a) for w >= 0 without cancellation: a short interval by Gauss–Legendre on the
 // density (with the half-width w/2 taken exactly, not as a difference of rounded end points,
 // whose relative error ~eps·|a|/w would make the integrand jitter for tiny w), otherwise the
@@ -158,8 +173,38 @@ ld range_prob(ld w, int k, bool upper) {
   if (c > -12) pts.push_back(c);
   if (upper)
     for (ld d : {-12.0L, -3.0L, 0.0L, 3.0L, 12.0L}) pts.push_back(c + d);
+  if (upper && w > kLogSpaceRange) {
+    // Far tail: the integrand (~φ(w/2)², below 1e-100) would underflow a double at its
+    // shoulders, and with it the rule's error estimate (the cause of the old budget burn).
+    // Evaluate it in log space, scaled by its value at the peak z = -w/2, and put the scale
+    // back in long double (whose range reaches 1e-4900).
+    const double m_d = m, log_k = std::log(static_cast<double>(k)), log_m = std::log(m_d);
+    auto log_f = [&](double z) {
+      double la = log_upper_normal_d(z), lr = log_upper_normal_d(z + wd) - la;  // log r <= 0
+      double lfrac = lr < -30 ? log_m + lr + std::log1p(-0.5 * (m_d - 1) * std::exp(lr))
+                              : std::log(-std::expm1(m_d * std::log1p(-std::exp(lr))));
+      return log_k + log_phi_d(z) + m_d * la + lfrac;
+    };
+    const double scale = log_f(static_cast<double>(c));
+    auto scaled = [&](ld z) {
+      return static_cast<ld>(std::exp(log_f(static_cast<double>(z)) - scale));
+    };
+    return integrate(scaled, pts, kInnerTol) * std::exp(static_cast<ld>(scale));
+  }
   ld v = upper ? integrate(upper_f, pts, kInnerTol) : integrate(lower_f, pts, kInnerTol);
   return std::clamp<ld>(v, 0, 1);
+}
+
+// log P(|T_ν| > t) <= this (t > 0): with x = ν/(ν + t²), P(|T| > t) = I_x(ν/2, 1/2)
+// = x^a (1-x)^b / (a B(a,b)) · 2F1(a+b, 1; a+1; x), and for b = 1/2 every coefficient of the
+// 2F1 series is <= 1, so the series is <= 1/(1 - x). ν = ∞: P(|Z| > t) <= 2φ(t)/t.
+ld log_t_two_sided_bound(ld t, ld nu) {
+  if (std::isinf(nu))
+    return std::log(2.0L) - 0.5L * t * t - 0.918938533204672741780329736L - std::log(t);
+  const ld a = 0.5L * nu, b = 0.5L, t2 = t * t;
+  const ld log_x = std::log(nu) - std::log(nu + t2), log_1mx = std::log(t2) - std::log(nu + t2);
+  const ld lbeta = std::lgamma(a) + std::lgamma(b) - std::lgamma(a + b);
+  return a * log_x + (b - 1) * log_1mx - std::log(a) - lbeta;
 }
 
 ld studentized_range(double q, int k, double df, bool upper) {
@@ -167,6 +212,13 @@ ld studentized_range(double q, int k, double df, bool upper) {
   if (!(df > 0)) throw std::invalid_argument("studentized range: df must be > 0");
   if (!(q > 0)) return upper ? 1.0L : 0.0L;
   if (std::isinf(q)) return upper ? 0.0L : 1.0L;
+  // Any pair's |Z_i - Z_j| / S exceeds q when the range does, so P(Q > q) <= C(k,2)·P(|T_ν| >
+  // q/√2). Where that bound is far below the reported floor (kPFloor) the p-value is
+  // reported as the bound "< 1e-300" anyway; skip the quadrature (q = 89.5, k = 9, ν = 4000).
+  const ld log_bound =
+      std::log(0.5L * k * (k - 1)) +
+      log_t_two_sided_bound(static_cast<ld>(q) / kSqrt2, df > 1e7 ? INFINITY : static_cast<ld>(df));
+  if (log_bound < std::log(static_cast<ld>(kPFloor)) - 5) return upper ? 0.0L : 1.0L;
   if (std::isinf(df) || df > 1e7) return range_prob(q, k, upper);
   ChiScaled chi(df);
   ld nu = df;
