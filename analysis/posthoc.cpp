@@ -45,7 +45,9 @@ std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch, DfMode mode)
       r.a = static_cast<int>(a);
       r.b = static_cast<int>(b);
       r.test = welch ? welch_t(groups[a], groups[b], mode) : student_t(groups[a], groups[b]);
-      r.effect = cohens_d(groups[a], groups[b]);
+      // The effect-size interval inverts the same t as the test beside it.
+      r.effect =
+          welch ? cohens_d_welch(groups[a], groups[b], r.test) : cohens_d(groups[a], groups[b]);
       out.push_back(r);
     }
   std::vector<double> p;
@@ -79,7 +81,9 @@ RangeQuantiles::RangeQuantiles(double level, int k, const std::vector<double>& d
     const double checks[] = {big[big.size() / 3], big[big.size() / 2], big[2 * big.size() / 3]};
     double exact[3];
     for (int c = 0; c < 3; ++c) exact[c] = studentized_range_quantile(level, k, checks[c]);
-    for (int n = 9; n <= kMaxNodes && nodes_.empty(); n = 2 * n - 1) {
+    // A narrow df range (e.g. Welch df that differ only by rounding) needs 2 or 3 nodes.
+    const int first = x_hi_ - x_lo_ < 1e-3 * x_hi_ ? 2 : 9;
+    for (int n = first; n <= kMaxNodes && nodes_.empty(); n = 2 * n - 1) {
       std::vector<double> x(n), q(n);
       for (int i = 0; i < n; ++i) {
         x[i] = 0.5 * (x_lo_ + x_hi_) + 0.5 * (x_hi_ - x_lo_) * std::cos(M_PI * i / (n - 1));
@@ -90,7 +94,7 @@ RangeQuantiles::RangeQuantiles(double level, int k, const std::vector<double>& d
       double worst = 0;
       for (int c = 0; c < 3; ++c)
         worst = std::max(worst, std::fabs(interpolate(1 / checks[c]) - exact[c]) / exact[c]);
-      if (worst > kInterpolationTol) nodes_.clear();
+      if (!(worst <= kInterpolationTol)) nodes_.clear();
     }
     if (nodes_.empty()) direct_df_.insert(direct_df_.end(), big.begin(), big.end());
   }
