@@ -19,8 +19,9 @@ struct BenchOptions {
 struct BenchResult {
   std::string name, what;  // short id, human description
   int reps = 0;
-  double median_s = 0, min_s = 0, max_s = 0, cold_s = 0;
-  double goal_s = 0;  // 0 = no stated goal
+  double median_s = 0, min_s = 0, max_s = 0, cold_s = 0;  // wall time
+  double median_cpu_s = 0;  // process CPU time: on a shared machine wall time includes waiting
+  double goal_s = 0;        // 0 = no stated goal
 };
 
 // Runs `work` once (cold) and then `reps` times; the median, min and max are over the reps.
