@@ -450,8 +450,18 @@ double noncentral_t_cdf(double t, double df, double delta) {
   // The exponent of the density is a difference of terms ~ν (thousands): summed in long
   // double, so that its rounding (not ~ν·eps) is what the double exp sees; otherwise that
   // noise (3e-13 at ν = 6600) keeps the adaptive rule from converging.
-  const double tt = t, dd = delta;
-  auto dens = [&](ld s) { return s > 0 ? std::exp(static_cast<double>(chi.log_density(s))) : 0.0; };
+  // For ν > 2 it is written relative to the mode s0 (ν s0² = ν - 1), x = s/s0 - 1:
+  // log f(s) - log f(s0) = (ν - 1)(log1p(x) - x - x²/2), whose rounding is ~ν·eps·|x| (1e-14
+  // where the mass is), all in double.
+  const double tt = t, dd = delta, nud = df;
+  const double s0d = nud > 2 ? std::sqrt((nud - 1) / nud) : 1;
+  const double lmode = static_cast<double>(chi.log_density(s0d));
+  auto dens = [&](ld sl) {
+    if (!(sl > 0)) return 0.0;
+    if (!(nud > 2)) return static_cast<double>(std::exp(chi.log_density(sl)));
+    const double x = static_cast<double>(sl) / s0d - 1;
+    return std::exp(lmode + (nud - 1) * (std::log1p(x) - x - 0.5 * x * x));
+  };
   auto lower = [&](ld s) {
     return static_cast<ld>(dens(s) * upper_normal_d(dd - tt * static_cast<double>(s)));
   };

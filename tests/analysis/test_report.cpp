@@ -118,7 +118,7 @@ struct FixtureDb {
   std::vector<double> post[3];  // post-training palpation_force per group (defined values)
 };
 
-FixtureDb make_fixture() {
+FixtureDb make_fixture(bool finished = true) {
   FixtureDb f;
   f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
   fs::remove_all(f.dir);
@@ -199,7 +199,7 @@ FixtureDb make_fixture() {
       store.write_session(d);
     }
   }
-  store.set_finished("2026-11-21T11:00:00Z");
+  if (finished) store.set_finished("2026-11-21T11:00:00Z");
   return f;
 }
 
@@ -273,4 +273,34 @@ TEST(Report, XmlCheckerRejectsBrokenSvg) {
   EXPECT_NE(xml_problem("<svg>a & b</svg>"), "");
   EXPECT_TRUE(has_nan_or_inf("x=\"nan\""));
   EXPECT_FALSE(has_nan_or_inf("provenance, information"));
+}
+
+// An unfinished run (study.finished_at NULL) is flagged at the top of the report; a finished
+// one is not. Force analyses carry an equivalence section (default margin ±7 % of the grand
+// mean, the force Weber fraction) whose verdicts are the three words, never "no difference",
+// and the pairwise table states the unit of the mean difference.
+TEST(Report, IncompleteWarningEquivalenceAndUnits) {
+  for (bool finished : {false, true}) {
+    FixtureDb f = make_fixture(finished);
+    auto out = f.dir / "report";
+    ReportFiles files = write_report(f.db.string(), out.string());
+    std::string md = slurp(files.markdown);
+    EXPECT_EQ(md.find("Warning: INCOMPLETE database") != std::string::npos, !finished);
+    if (!finished) {
+      // The warning comes before any result.
+      EXPECT_LT(md.find("Warning: INCOMPLETE database"), md.find("## Study and provenance"));
+    }
+    ASSERT_NE(md.find("### Equivalence (TOST)"), std::string::npos);
+    EXPECT_NE(md.find("force Weber fraction"), std::string::npos);
+    EXPECT_NE(md.find("mean diff (N)"), std::string::npos);
+    const size_t eq = md.find("### Equivalence (TOST)");
+    const std::string section = md.substr(eq, md.find("###", eq + 5) - eq);
+    int verdicts = 0;
+    for (const char* v : {"| equivalent |", "| different |", "| inconclusive |"})
+      for (size_t p = section.find(v); p != std::string::npos; p = section.find(v, p + 1))
+        ++verdicts;
+    EXPECT_EQ(verdicts, 3) << section;  // one per pair of A, B, C
+    EXPECT_EQ(md.find("no difference between"), std::string::npos);
+    fs::remove_all(f.dir);
+  }
 }
