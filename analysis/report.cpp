@@ -101,6 +101,10 @@ struct Unit {  // one analysis: a measure in a phase, pooled over its sessions o
   bool pooled = false, welch = true;
   std::set<std::string> kinds;
   double margin = 0;  // equivalence margin the study declares ("margin", data units); 0: default
+  // pooled: sessions are averaged per participant (one value each) unless the study asks for
+  // pooling the sessions themselves ("pool_sessions": true), which treats repeated sessions of
+  // one person as independent observations (pseudo-replication) and is flagged in the report.
+  bool pool_sessions = false;
 };
 
 // Force Weber fraction: the default equivalence margin of a force measure (unit N) is ±7 % of
@@ -174,6 +178,7 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
                          a.value("pooled", false));
       u.kinds.insert(a.value("kind", std::string("descriptives")));
       if (a.contains("welch")) u.welch = a.value("welch", true);
+      if (a.value("pool_sessions", false)) u.pool_sessions = true;
       if (a.contains("margin") && a["margin"].is_number() && a["margin"].get<double>() > 0)
         u.margin = a["margin"].get<double>();
     }
@@ -245,8 +250,17 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     ++files.analyses;
     const std::string unit = unit_of.count(u.measure) ? unit_of[u.measure] : "";
     const std::string label = u.measure + (unit.empty() || unit == "1" ? "" : " (" + unit + ")");
-    doc.heading(2, "Analysis: " + u.measure + " — phase " + u.phase +
-                       (u.pooled ? " (all sessions pooled)" : " (last session of the phase)"));
+    const bool means = u.pooled && !u.pool_sessions;
+    doc.heading(
+        2, "Analysis: " + u.measure + " — phase " + u.phase +
+               (means ? " (participant means over all sessions)"
+                      : (u.pooled ? " (all sessions pooled)" : " (last session of the phase)")));
+    if (u.pooled && u.pool_sessions)
+      doc.para(
+          "**Warning: pseudo-replication.** The study asks for every session to be pooled as an "
+          "independent observation, but sessions of one participant are not independent: "
+          "degrees of freedom and p-values below overstate the evidence. Participant means "
+          "(the default for pooled analyses) or a mixed model are the valid analyses.");
     // Values: per participant the last session of the phase, or every session when pooled.
     std::map<std::string, int> last_index;
     for (const auto& m : measures)
@@ -258,12 +272,23 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     data.values.assign(groups.size(), {});
     std::vector<int> undefined(groups.size(), 0);
     std::vector<ParticipantPoint> points;
+    // Participant means: the defined values of each participant's sessions, averaged in
+    // participant order of first appearance (one value per participant).
+    std::map<std::string, std::pair<long double, int>> sums;
+    std::vector<std::pair<std::string, int>> order;
     for (const auto& m : measures) {
       if (m.phase != u.phase || m.name != u.measure) continue;
       if (!u.pooled && m.phase_index != last_index[m.participant]) continue;
       int g = group_index(m.group);
       if (!m.value || !std::isfinite(*m.value)) {
         undefined[g]++;
+        continue;
+      }
+      if (means) {
+        auto [it, fresh] = sums.emplace(m.participant, std::make_pair(0.0L, 0));
+        if (fresh) order.push_back({m.participant, g});
+        it->second.first += *m.value;
+        it->second.second += 1;
         continue;
       }
       data.values[g].push_back(*m.value);
@@ -273,6 +298,12 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
         who += std::to_string(m.phase_index + 1);
       }
       points.push_back({who, g, *m.value});
+    }
+    for (const auto& [who, g] : order) {
+      const auto& [sum, n] = sums[who];
+      const double v = static_cast<double>(sum / n);
+      data.values[g].push_back(v);
+      points.push_back({who, g, v});
     }
     int total = 0, excluded = 0;
     for (size_t g = 0; g < groups.size(); ++g)

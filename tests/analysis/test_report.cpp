@@ -118,7 +118,7 @@ struct FixtureDb {
   std::vector<double> post[3];  // post-training palpation_force per group (defined values)
 };
 
-FixtureDb make_fixture(bool finished = true) {
+FixtureDb make_fixture(bool finished = true, bool pool_sessions = false) {
   FixtureDb f;
   f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
   fs::remove_all(f.dir);
@@ -144,6 +144,7 @@ FixtureDb make_fixture(bool finished = true) {
          {"phase", "post_training"},
          {"welch", true}},
         {{"kind", "anova_oneway"}, {"measure", "exploration_time"}, {"phase", "post_training"}}}}};
+  if (pool_sessions) sj["analyses"][0]["pool_sessions"] = true;
   auto store = results::Store::create(f.db.string());
   results::StudyRecord st;
   st.study_id = "fixture";
@@ -213,7 +214,7 @@ TEST(Report, FixtureDatabaseHasEverySectionValidSvgAndNoNaN) {
   std::string md = slurp(files.markdown), html = slurp(files.html);
   for (const char* section :
        {"## Study and provenance", "## Analysis: palpation_force — phase post_training",
-        "## Analysis: palpation_force — phase training (all sessions pooled)",
+        "## Analysis: palpation_force — phase training (participant means over all sessions)",
         "## Analysis: exploration_time — phase post_training", "### Descriptives",
         "### One-way ANOVA", "### Pairwise Welch t-tests", "### Post-hoc comparisons",
         "### Assumption checks and nonparametric tests", "## Learning curves",
@@ -303,4 +304,27 @@ TEST(Report, IncompleteWarningEquivalenceAndUnits) {
     EXPECT_EQ(md.find("no difference between"), std::string::npos);
     fs::remove_all(f.dir);
   }
+}
+
+// A pooled analysis is analysed on participant means by default (one value per participant,
+// issue 11: pooled sessions gave F(2,117) where F(2,27) is right); pooling the sessions
+// themselves happens only on explicit request and carries a pseudo-replication warning.
+TEST(Report, PooledAnalysesUseParticipantMeans) {
+  FixtureDb f = make_fixture();
+  auto out = f.dir / "report";
+  ReportFiles files = write_report(f.db.string(), out.string());
+  std::string md = slurp(files.markdown);
+  const size_t at = md.find("phase training (participant means over all sessions)");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_EQ(md.find("pseudo-replication"), std::string::npos);
+  // Descriptives of the pooled section: n per group = participants of the group, not sessions.
+  auto store = results::Store::open(f.db.string());
+  std::map<std::string, int> per_group;
+  for (const auto& p : store.read_participants()) per_group[p.group]++;
+  const std::string section = md.substr(at, md.find("## Analysis", at + 10) - at);
+  for (const auto& [g, n] : per_group)
+    EXPECT_NE(section.find("| " + g + " | " + std::to_string(n) + " |"), std::string::npos)
+        << g << " n=" << n << "\n"
+        << section.substr(0, 800);
+  fs::remove_all(f.dir);
 }
