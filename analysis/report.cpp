@@ -574,7 +574,9 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
        << xml_escape(study.title) << "</title>\n<style>\n"
        << "body{font-family:Helvetica,Arial,sans-serif;max-width:960px;margin:2em auto;padding:0 "
           "1em;color:#222}\n"
-       << "table{border-collapse:collapse;margin:0.5em 0 1em}th,td{border:1px solid "
+       // Wide tables scroll inside the page instead of being cut at the body width.
+       << "table{border-collapse:collapse;margin:0.5em 0 1em;display:block;max-width:100%;"
+          "overflow-x:auto}th,td{border:1px solid "
           "#ccc;padding:3px 8px;"
           "text-align:right}th:first-child,td:first-child{text-align:left}th{background:#f3f3f3}\n"
        << "figure{margin:1em "
