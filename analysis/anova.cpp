@@ -47,9 +47,10 @@ Anova oneway_anova(const Groups& groups) {
   long double sst = ssb + ssw;
   a.eta_squared = sst > 0 ? static_cast<double>(ssb / sst) : kNaN;
   a.omega_squared = sst > 0 ? static_cast<double>((ssb - (k - 1) * msw) / (sst + msw)) : kNaN;
-  // Within-group variation at the rounding level of the data (e.g. |x - mean| of two values,
-  // which are equal up to one ulp) is no variation: F would be a rounding artefact (~1e32).
-  const bool no_within = !(ssw > 64 * std::numeric_limits<double>::epsilon() * n_total * sst);
+  // Only exactly no within-group variation is undefined: the values are read exactly
+  // (decimal.hpp), so identical values give ssw = 0 exactly, and a tiny but real spread (F =
+  // 1.5e18) is a valid, if extreme, F.
+  const bool no_within = !(ssw > 0);
   if (!no_within) {
     a.F = static_cast<double>(msb / msw);
     a.p = f_upper_p(a.F, a.df_between, a.df_within);
@@ -104,8 +105,16 @@ WelchAnova welch_anova(const Groups& groups) {
 Anova levene(const Groups& groups, LeveneCentre centre) {
   Groups dev(groups.size());
   for (size_t g = 0; g < groups.size(); ++g) {
-    double c = centre == LeveneCentre::Mean ? mean(groups[g]) : median(groups[g]);
-    for (double v : groups[g]) dev[g].push_back(std::fabs(v - c));
+    // Centre and deviations in long double, so that deviations equal in exact arithmetic
+    // (both of a group of two) come out equal and "no variation" stays exactly zero.
+    long double c = mean_ld(groups[g]);
+    if (centre == LeveneCentre::Median) {
+      std::vector<double> s = groups[g];
+      std::sort(s.begin(), s.end());
+      const size_t n = s.size();
+      c = n % 2 ? s[n / 2] : (static_cast<long double>(s[n / 2 - 1]) + s[n / 2]) / 2;
+    }
+    for (double v : groups[g]) dev[g].push_back(static_cast<double>(std::fabs(v - c)));
   }
   return oneway_anova(dev);
 }

@@ -1,6 +1,9 @@
 #include "analysis/decimal.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <numeric>
 #include <string>
 
 namespace palplab::analysis {
@@ -107,13 +110,52 @@ double decimal_difference(std::string_view x, std::string_view c) {
   return static_cast<double>(d);
 }
 
+int compare_decimals(std::string_view a, std::string_view b) {
+  if (trim(a) == trim(b)) return 0;
+  double d = decimal_difference(a, b);
+  if (d != 0) return d < 0 ? -1 : 1;
+  // Zero after rounding: equal values written differently ("1.0", "1") or a difference below
+  // the double range; long double settles the second.
+  std::string as(trim(a)), bs(trim(b));
+  long double x = std::strtold(as.c_str(), nullptr), y = std::strtold(bs.c_str(), nullptr);
+  return x < y ? -1 : (x > y ? 1 : 0);
+}
+
 CentredValues centre_decimals(const std::vector<std::string_view>& texts) {
   CentredValues r;
   if (texts.empty()) return r;
-  std::string c0(trim(texts[0]));
-  r.centre = std::strtod(c0.c_str(), nullptr);
-  r.dev.reserve(texts.size());
-  for (auto t : texts) r.dev.push_back(decimal_difference(t, texts[0]));
+  const size_t n = texts.size();
+  std::vector<double> x(n);
+  for (size_t i = 0; i < n; ++i) {
+    std::string t(trim(texts[i]));
+    x[i] = std::strtod(t.c_str(), nullptr);
+  }
+  // The centre is the lower median in the exact decimal order, so it depends on the values,
+  // never on which row comes first (nth_element with a total order: equal doubles are ordered
+  // by their exact decimal values).
+  std::vector<size_t> idx(n);
+  std::iota(idx.begin(), idx.end(), size_t{0});
+  auto less = [&](size_t a, size_t b) {
+    if (x[a] != x[b]) return x[a] < x[b];
+    return compare_decimals(texts[a], texts[b]) < 0;
+  };
+  const size_t mid = (n - 1) / 2;
+  std::nth_element(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(mid), idx.end(), less);
+  const size_t c = idx[mid];
+  double spread = 0;
+  for (double v : x) spread = std::max(spread, std::fabs(v - x[c]));
+  r.dev.reserve(n);
+  // Centring helps only when every value shares the centre's leading digits. With
+  // |x - c| <= |c|/4 for all x, |x| >= 3|c|/4, so the one rounding of x - c (<= ulp(|c|/4)/2)
+  // is below the rounding of x itself: no value loses a digit. Otherwise (values of different
+  // magnitudes, e.g. 1e15 beside 1.1) the values are taken as written, rounded once each.
+  if (x[c] != 0 && spread <= 0.25 * std::fabs(x[c])) {
+    r.centre = x[c];
+    for (auto t : texts) r.dev.push_back(decimal_difference(t, texts[c]));
+  } else {
+    r.centre = 0;
+    r.dev = x;
+  }
   return r;
 }
 

@@ -24,8 +24,14 @@ std::optional<Decimal> parse_decimal(std::string_view text);
 // Falls back to long double arithmetic when the aligned mantissas would not fit.
 double decimal_difference(std::string_view x, std::string_view c);
 
-// Values as offsets from a centre: value_i = centre + dev_i. `centre` is the first value
-// (rounded to double); dev_i = decimal_difference(text_i, text_0).
+// Sign of the exact decimal difference a - b (-1, 0, 1).
+int compare_decimals(std::string_view a, std::string_view b);
+
+// Values as offsets from a centre: value_i = centre + dev_i. The centre depends only on the
+// set of values, not on their order: the lower median (exact decimal order) when every value
+// lies within a quarter of its magnitude from it (then dev_i = decimal_difference(text_i,
+// median), one rounding, no digit lost: NIST SmLs09's 1000000000000.4 keeps its .4);
+// otherwise 0 and dev_i is the value as written, rounded once (strtod).
 struct CentredValues {
   double centre = 0;
   std::vector<double> dev;

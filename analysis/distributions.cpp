@@ -2,10 +2,13 @@
 
 #include <gsl/gsl_cdf.h>
 #include <gsl/gsl_errno.h>
+#include <gsl/gsl_randist.h>
 #include <gsl/gsl_sf_gamma.h>
 
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 
@@ -42,6 +45,16 @@ double t_quantile(double p, double df) {
   // P(|T| > t) = P(F(1, df) > t²) = 2 min(p, 1-p).
   double tail = 2 * std::min(p, 1 - p);
   double t = std::sqrt(gsl_cdf_fdist_Qinv(tail, 1.0, df));
+  if (!std::isfinite(t)) {
+    // GSL's F quantile fails for some large df (tail .05, df 4000 gives NaN); the t quantile
+    // does not, and Newton steps on our own accurate two-sided p restore the last digits.
+    t = gsl_cdf_tdist_Qinv(tail / 2, df);
+    for (int it = 0; it < 3 && std::isfinite(t) && t > 0; ++it) {
+      const double dens = gsl_ran_tdist_pdf(t, df);
+      if (!(dens > 0)) break;
+      t += (t_two_sided_p(t, df) - tail) / (2 * dens);
+    }
+  }
   return p > 0.5 ? t : -t;
 }
 
@@ -51,6 +64,7 @@ namespace {
 // accurate than this difference for these analytic integrands (checked against mpmath).
 constexpr ld kInnerTol = 1e-10L, kOuterTol = 1e-10L;
 constexpr ld kSqrt2 = 1.414213562373095048801688724209698079L;
+constexpr double kSqrt2d = 1.4142135623730951;
 
 ld upper_normal(ld x) {
   return 0.5L * std::erfc(x / kSqrt2);
@@ -64,6 +78,21 @@ double phi_d(double x) {
 double upper_normal_d(double x) {
   return 0.5 * std::erfc(x * 0.7071067811865476);
 }
+double log_phi_d(double x) {
+  return -0.5 * x * x - 0.91893853320467274;
+}
+// log Q(x) without underflow: erfc where Q(x) > 1e-198, else the asymptotic series
+// Q(x) = φ(x)/x · (1 - u + 3u² - 15u³ + 105u⁴ - 945u⁵ + 10395u⁶ - ...), u = 1/x², whose next
+// term at x = 30 is 3e-16 relative.
+double log_upper_normal_d(double x) {
+  if (x < 30) return std::log(upper_normal_d(x));
+  const double u = 1 / (x * x);
+  const double series =
+      1 - u * (1 - 3 * u * (1 - 5 * u * (1 - 7 * u * (1 - 9 * u * (1 - 11 * u)))));
+  return log_phi_d(x) - std::log(x) + std::log(series);
+}
+// Widths of the range beyond which its upper tail is integrated in log space (range_prob).
+constexpr double kLogSpaceRange = 24;
 // Φ(a + w) - Φ(a) for w >= 0 without cancellation: a short interval by Gauss–Legendre on the
 // density (with the half-width w/2 taken exactly, not as a difference of rounded end points,
 // whose relative error ~eps·|a|/w would make the integrand jitter for tiny w), otherwise the
@@ -97,7 +126,10 @@ struct ChiScaled {
   }
   ld density(ld s) const {
     if (s <= 0) return 0;
-    return std::exp(log_norm + (nu - 1) * std::log(s) - 0.5L * nu * s * s);
+    return std::exp(log_density(s));
+  }
+  ld log_density(ld s) const {
+    return s > 0 ? log_norm + (nu - 1) * std::log(s) - 0.5L * nu * s * s : -INFINITY;
   }
   // s beyond which the density is below e^-250 (nothing we report is that small relative to
   // the mass near the mode).
@@ -158,8 +190,95 @@ ld range_prob(ld w, int k, bool upper) {
   if (c > -12) pts.push_back(c);
   if (upper)
     for (ld d : {-12.0L, -3.0L, 0.0L, 3.0L, 12.0L}) pts.push_back(c + d);
+  if (upper && w > kLogSpaceRange) {
+    // Far tail: the integrand (~φ(w/2)², below 1e-100) would underflow a double at its
+    // shoulders, and with it the rule's error estimate (the cause of the old budget burn).
+    // Evaluate it in log space, scaled by its value at the peak z = -w/2, and put the scale
+    // back in long double (whose range reaches 1e-4900).
+    const double m_d = m, log_k = std::log(static_cast<double>(k)), log_m = std::log(m_d);
+    auto log_f = [&](double z) {
+      double la = log_upper_normal_d(z), lr = log_upper_normal_d(z + wd) - la;  // log r <= 0
+      double lfrac = lr < -30 ? log_m + lr + std::log1p(-0.5 * (m_d - 1) * std::exp(lr))
+                              : std::log(-std::expm1(m_d * std::log1p(-std::exp(lr))));
+      return log_k + log_phi_d(z) + m_d * la + lfrac;
+    };
+    const double scale = log_f(static_cast<double>(c));
+    auto scaled = [&](ld z) {
+      return static_cast<ld>(std::exp(log_f(static_cast<double>(z)) - scale));
+    };
+    return integrate(scaled, pts, kInnerTol) * std::exp(static_cast<ld>(scale));
+  }
   ld v = upper ? integrate(upper_f, pts, kInnerTol) : integrate(lower_f, pts, kInnerTol);
   return std::clamp<ld>(v, 0, 1);
+}
+
+// log P(R > w) of the range of k standard normals for w in [0, kTableMax], tabulated once per
+// k: piecewise Chebyshev interpolation (kTableDeg + 1 nodes of the second kind per unit
+// interval, barycentric form) of the log of range_prob. A p-value integrates P(R > q s) over s
+// at ~10^3 nodes, so one table (~1700 range_prob calls, a few ms) replaces the inner integral
+// of every later p-value with the same k: Tukey and Games–Howell over 435 pairs went from
+// ~60 s to well under a second. The table checks itself on construction at points between
+// nodes and is not used (nullptr) if any is off by more than 1e-13 relative.
+constexpr int kTableDeg = 20;
+constexpr double kTableMax = 80;  // P(R > 80) < 1e-690: beyond, range_prob directly
+class RangeUpperTable {
+ public:
+  explicit RangeUpperTable(int k) {
+    const int pieces = static_cast<int>(kTableMax);
+    nodes_.resize(kTableDeg + 1);
+    for (int i = 0; i <= kTableDeg; ++i) nodes_[i] = 0.5 - 0.5 * std::cos(M_PI * i / kTableDeg);
+    logp_.resize(static_cast<size_t>(pieces) * (kTableDeg + 1));
+    for (int j = 0; j < pieces; ++j)
+      for (int i = 0; i <= kTableDeg; ++i)
+        logp_[j * (kTableDeg + 1) + i] =
+            static_cast<double>(std::log(range_prob(j + nodes_[i], k, true)));
+    ok_ = true;
+    for (double w : {0.137, 1.61, 3.3, 5.92, 9.47, 17.5, 26.3, 41.7, 63.1, 79.4}) {
+      const double direct = static_cast<double>(std::log(range_prob(w, k, true)));
+      // |Δ log P| is the relative error of P.
+      if (!(std::fabs(log_upper(w) - direct) <= 1e-13 * std::max(1.0, std::fabs(direct)) + 1e-14))
+        ok_ = false;
+    }
+  }
+  bool ok() const { return ok_; }
+  double log_upper(double w) const {
+    int j = std::min(static_cast<int>(w), static_cast<int>(kTableMax) - 1);
+    const double x = w - j;
+    const double* v = &logp_[static_cast<size_t>(j) * (kTableDeg + 1)];
+    double num = 0, den = 0;
+    for (int i = 0; i <= kTableDeg; ++i) {
+      const double d = x - nodes_[i];
+      if (d == 0) return v[i];
+      const double c = (i % 2 ? -1.0 : 1.0) * (i == 0 || i == kTableDeg ? 0.5 : 1.0) / d;
+      num += c * v[i];
+      den += c;
+    }
+    return num / den;
+  }
+  static const RangeUpperTable* get(int k) {
+    static std::mutex m;
+    static std::map<int, std::unique_ptr<RangeUpperTable>> tables;
+    std::lock_guard<std::mutex> lock(m);
+    auto& t = tables[k];
+    if (!t) t = std::make_unique<RangeUpperTable>(k);
+    return t->ok() ? t.get() : nullptr;
+  }
+
+ private:
+  std::vector<double> nodes_, logp_;
+  bool ok_ = false;
+};
+
+// log P(|T_ν| > t) <= this (t > 0): with x = ν/(ν + t²), P(|T| > t) = I_x(ν/2, 1/2)
+// = x^a (1-x)^b / (a B(a,b)) · 2F1(a+b, 1; a+1; x), and for b = 1/2 every coefficient of the
+// 2F1 series is <= 1, so the series is <= 1/(1 - x). ν = ∞: P(|Z| > t) <= 2φ(t)/t.
+ld log_t_two_sided_bound(ld t, ld nu) {
+  if (std::isinf(nu))
+    return std::log(2.0L) - 0.5L * t * t - 0.918938533204672741780329736L - std::log(t);
+  const ld a = 0.5L * nu, b = 0.5L, t2 = t * t;
+  const ld log_x = std::log(nu) - std::log(nu + t2), log_1mx = std::log(t2) - std::log(nu + t2);
+  const ld lbeta = std::lgamma(a) + std::lgamma(b) - std::lgamma(a + b);
+  return a * log_x + (b - 1) * log_1mx - std::log(a) - lbeta;
 }
 
 ld studentized_range(double q, int k, double df, bool upper) {
@@ -167,6 +286,13 @@ ld studentized_range(double q, int k, double df, bool upper) {
   if (!(df > 0)) throw std::invalid_argument("studentized range: df must be > 0");
   if (!(q > 0)) return upper ? 1.0L : 0.0L;
   if (std::isinf(q)) return upper ? 0.0L : 1.0L;
+  // Any pair's |Z_i - Z_j| / S exceeds q when the range does, so P(Q > q) <= C(k,2)·P(|T_ν| >
+  // q/√2). Where that bound is far below the reported floor (kPFloor) the p-value is
+  // reported as the bound "< 1e-300" anyway; skip the quadrature (q = 89.5, k = 9, ν = 4000).
+  const ld log_bound =
+      std::log(0.5L * k * (k - 1)) +
+      log_t_two_sided_bound(static_cast<ld>(q) / kSqrt2, df > 1e7 ? INFINITY : static_cast<ld>(df));
+  if (log_bound < std::log(static_cast<ld>(kPFloor)) - 5) return upper ? 0.0L : 1.0L;
   if (std::isinf(df) || df > 1e7) return range_prob(q, k, upper);
   ChiScaled chi(df);
   ld nu = df;
@@ -176,10 +302,45 @@ ld studentized_range(double q, int k, double df, bool upper) {
   ld s_low = std::sqrt((nu + k - 2) / nu);             // mode for small q (lower)
   ld s_up = std::sqrt(std::max<ld>(nu - 1, 0.5L) / (nu + 0.5L * q * q));  // small s (upper)
   std::vector<ld> pts = outer_breakpoints(nu, {s0, upper ? s_up : s_low}, width, smax);
+  if (upper) {
+    // Only where density × P(R > qs) can matter: bounded by U(s) = f_S(s)·min(1, C(k,2)·
+    // erfc(qs/2)) (union bound over pairs, tight in the far tail). Pieces where U is below
+    // e^-80 of its maximum (sampled finely) are dropped: they add < 1e-30 relative but cost
+    // a full inner integral per node.
+    const ld log_pairs = std::log(static_cast<ld>(k) * (k - 1));
+    auto log_u = [&](ld s) -> ld {
+      ld ld_ = chi.log_density(s);
+      ld lw = log_pairs + log_upper_normal_d(static_cast<double>(q * s / kSqrt2));
+      return ld_ + std::min<ld>(0, lw);
+    };
+    const int n = 400;
+    ld top = -INFINITY;
+    std::vector<ld> lu(n + 1);
+    for (int i = 1; i <= n; ++i) top = std::max(top, lu[i] = log_u(smax * i / n));
+    int first = n, last = 0;
+    for (int i = 1; i <= n; ++i)
+      if (lu[i] > top - 80) {
+        first = std::min(first, i);
+        last = i;
+      }
+    if (first <= last) {
+      const ld lo = smax * (first - 1) / n, hi = std::min<ld>(smax, smax * (last + 1) / n);
+      std::vector<ld> kept{lo, hi};
+      for (ld p : pts)
+        if (p > lo && p < hi) kept.push_back(p);
+      pts = kept;
+    }
+  }
+  const RangeUpperTable* table = upper ? RangeUpperTable::get(k) : nullptr;
   auto f = [&](ld s) {
+    if (s <= 0) return 0.0L;
+    const ld w = static_cast<ld>(q) * s;
+    if (table && w < kTableMax)
+      return std::exp(chi.log_density(s) +
+                      static_cast<ld>(table->log_upper(static_cast<double>(w))));
     ld d = chi.density(s);
     if (d == 0) return 0.0L;
-    return d * range_prob(static_cast<ld>(q) * s, k, upper);
+    return d * range_prob(w, k, upper);
   };
   return std::clamp<ld>(integrate(f, pts, kOuterTol), 0, 1);
 }
@@ -244,7 +405,22 @@ double studentized_range_quantile(double p, int k, double df) {
     return upper ? target - v : v - target;  // increasing in q
   };
   double a = 0, b = 1;
-  double fa = -target, fb = g(b);
+  double fa = -target, fb;
+  // Upper quantiles lie between one pair's and the Bonferroni bound over all C(k,2) pairs:
+  // P(|T| > q/√2) <= P(Q > q) <= C(k,2)·P(|T| > q/√2). Both are cheap t quantiles and give a
+  // bracket a few root steps wide (no doubling search).
+  if (upper && df <= 1e7) {
+    const double pairs = 0.5 * k * (k - 1);
+    const double lo = kSqrt2d * t_quantile(1 - target / 2, df);
+    const double hi = kSqrt2d * t_quantile(1 - target / (2 * pairs), df);
+    const double glo = g(lo), ghi = g(hi);
+    if (glo <= 0 && ghi >= 0) {
+      if (glo == 0) return lo;
+      if (ghi == 0) return hi;
+      return find_root(g, lo, hi, glo, ghi, 1e-13);
+    }
+  }
+  fb = g(b);
   while (fb < 0) {
     a = b;
     fa = fb;
@@ -269,19 +445,44 @@ double noncentral_t_cdf(double t, double df, double delta) {
     ld sc = static_cast<ld>(delta) / t;  // where the Φ switches
     if (sc > 0 && sc < smax) pts.push_back(sc);
   }
-  ld tt = t, dd = delta;
-  auto lower = [&](ld s) { return chi.density(s) * upper_normal(dd - tt * s); };
-  auto upper = [&](ld s) { return chi.density(s) * upper_normal(tt * s - dd); };
-  ld up = integrate(upper, pts, 1e-15L);
+  // The normal tails in double (summed in long double): relative error ~1e-15, far inside what
+  // the interval needs (its roots are solved to 1e-12), at less cost than long double erfcl.
+  // The exponent of the density is a difference of terms ~ν (thousands): summed in long
+  // double, so that its rounding (not ~ν·eps) is what the double exp sees; otherwise that
+  // noise (3e-13 at ν = 6600) keeps the adaptive rule from converging.
+  // For ν > 2 it is written relative to the mode s0 (ν s0² = ν - 1), x = s/s0 - 1:
+  // log f(s) - log f(s0) = (ν - 1)(log1p(x) - x - x²/2), whose rounding is ~ν·eps·|x| (1e-14
+  // where the mass is), all in double.
+  const double tt = t, dd = delta, nud = df;
+  const double s0d = nud > 2 ? std::sqrt((nud - 1) / nud) : 1;
+  const double lmode = static_cast<double>(chi.log_density(s0d));
+  auto dens = [&](ld sl) {
+    if (!(sl > 0)) return 0.0;
+    if (!(nud > 2)) return static_cast<double>(std::exp(chi.log_density(sl)));
+    const double x = static_cast<double>(sl) / s0d - 1;
+    return std::exp(lmode + (nud - 1) * (std::log1p(x) - x - 0.5 * x * x));
+  };
+  auto lower = [&](ld s) {
+    return static_cast<ld>(dens(s) * upper_normal_d(dd - tt * static_cast<double>(s)));
+  };
+  auto upper = [&](ld s) {
+    return static_cast<ld>(dens(s) * upper_normal_d(tt * static_cast<double>(s) - dd));
+  };
+  ld up = integrate(upper, pts, 1e-12L);
   if (up < 0.5L) return static_cast<double>(1 - up);
-  return static_cast<double>(std::clamp<ld>(integrate(lower, pts, 1e-15L), 0, 1));
+  return static_cast<double>(std::clamp<ld>(integrate(lower, pts, 1e-12L), 0, 1));
 }
 
 double noncentral_t_delta_for_cdf(double t, double df, double p) {
   // The CDF falls from 1 to 0 as delta grows; bracket around t.
   auto g = [&](double d) { return noncentral_t_cdf(t, df, d) - p; };
-  double step = 1 + std::fabs(t) * 0.5;
-  double a = t - step, b = t + step;
+  // Start from the normal approximation T ≈ N(δ, 1 + δ²/(2ν)): δ0 = t - z_p·σ, bracketed by
+  // ±σ/2 (widened below if that is not enough), which saves most of the root's evaluations.
+  gsl_quiet();
+  const double sigma = std::sqrt(1 + t * t / (2 * df));
+  const double d0 = t - gsl_cdf_ugaussian_Pinv(p) * sigma;
+  double step = 0.5 * sigma;
+  double a = d0 - step, b = d0 + step;
   double fa = g(a), fb = g(b);
   for (int i = 0; i < 60 && fa < 0; ++i) {
     a -= step;

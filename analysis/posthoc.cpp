@@ -45,7 +45,9 @@ std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch, DfMode mode)
       r.a = static_cast<int>(a);
       r.b = static_cast<int>(b);
       r.test = welch ? welch_t(groups[a], groups[b], mode) : student_t(groups[a], groups[b]);
-      r.effect = cohens_d(groups[a], groups[b]);
+      // The effect-size interval inverts the same t as the test beside it.
+      r.effect =
+          welch ? cohens_d_welch(groups[a], groups[b], r.test) : cohens_d(groups[a], groups[b]);
       out.push_back(r);
     }
   std::vector<double> p;
@@ -58,8 +60,71 @@ std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch, DfMode mode)
   return out;
 }
 
+RangeQuantiles::RangeQuantiles(double level, int k, const std::vector<double>& dfs)
+    : level_(level), k_(k) {
+  std::vector<double> big;  // the df interpolated over
+  for (double v : dfs)
+    if (v > 0 && std::isfinite(v)) (v >= kMinInterpolatedDf ? big : direct_df_).push_back(v);
+  std::sort(direct_df_.begin(), direct_df_.end());
+  direct_df_.erase(std::unique(direct_df_.begin(), direct_df_.end()), direct_df_.end());
+  std::sort(big.begin(), big.end());
+  big.erase(std::unique(big.begin(), big.end()), big.end());
+  if (big.size() <= kDirectMax) {
+    direct_df_.insert(direct_df_.end(), big.begin(), big.end());
+  } else {
+    // Interpolate in x = 1/ν on Chebyshev points of the second kind (barycentric form):
+    // q(x) is analytic there, so the error falls geometrically with the number of nodes.
+    // The error is measured at the df of three pairs between nodes; more nodes when it is
+    // above kInterpolationTol, all pairs directly if even kMaxNodes do not reach it.
+    x_lo_ = 1 / big.back();
+    x_hi_ = 1 / big.front();
+    const double checks[] = {big[big.size() / 3], big[big.size() / 2], big[2 * big.size() / 3]};
+    double exact[3];
+    for (int c = 0; c < 3; ++c) exact[c] = studentized_range_quantile(level, k, checks[c]);
+    // A narrow df range (e.g. Welch df that differ only by rounding) needs 2 or 3 nodes.
+    const int first = x_hi_ - x_lo_ < 1e-3 * x_hi_ ? 2 : 9;
+    for (int n = first; n <= kMaxNodes && nodes_.empty(); n = 2 * n - 1) {
+      std::vector<double> x(n), q(n);
+      for (int i = 0; i < n; ++i) {
+        x[i] = 0.5 * (x_lo_ + x_hi_) + 0.5 * (x_hi_ - x_lo_) * std::cos(M_PI * i / (n - 1));
+        q[i] = studentized_range_quantile(level, k, 1 / x[i]);
+      }
+      nodes_ = x;
+      values_ = q;
+      double worst = 0;
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, std::fabs(interpolate(1 / checks[c]) - exact[c]) / exact[c]);
+      if (!(worst <= kInterpolationTol)) nodes_.clear();
+    }
+    if (nodes_.empty()) direct_df_.insert(direct_df_.end(), big.begin(), big.end());
+  }
+  for (double v : direct_df_) direct_q_.push_back(studentized_range_quantile(level, k, v));
+}
+
+double RangeQuantiles::interpolate(double x) const {
+  // Barycentric weights of Chebyshev points of the second kind: (-1)^i, halved at the ends.
+  const size_t n = nodes_.size();
+  double num = 0, den = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double d = x - nodes_[i];
+    if (d == 0) return values_[i];
+    double w = (i % 2 ? -1.0 : 1.0) * (i == 0 || i + 1 == n ? 0.5 : 1.0) / d;
+    num += w * values_[i];
+    den += w;
+  }
+  return num / den;
+}
+
+double RangeQuantiles::operator()(double df) const {
+  auto it = std::lower_bound(direct_df_.begin(), direct_df_.end(), df);
+  if (it != direct_df_.end() && *it == df) return direct_q_[it - direct_df_.begin()];
+  const double x = 1 / df;
+  if (!nodes_.empty() && x >= x_lo_ && x <= x_hi_) return interpolate(x);
+  return studentized_range_quantile(level_, k_, df);
+}
+
 namespace {
-void finish_range(RangeComparison& r, int k, double level) {
+void finish_range(RangeComparison& r, int k, const RangeQuantiles& qc) {
   if (!(r.se > 0) || !(r.df > 0)) {
     r.defined = false;
     r.q = r.p = r.ci_low = r.ci_high = kNaN;
@@ -67,9 +132,9 @@ void finish_range(RangeComparison& r, int k, double level) {
   }
   r.q = std::fabs(r.mean_diff) / r.se;
   r.p = clamp_p(studentized_range_sf(r.q, k, r.df));
-  double qc = studentized_range_quantile(level, k, r.df);
-  r.ci_low = r.mean_diff - qc * r.se;
-  r.ci_high = r.mean_diff + qc * r.se;
+  const double c = qc(r.df);
+  r.ci_low = r.mean_diff - c * r.se;
+  r.ci_high = r.mean_diff + c * r.se;
 }
 }  // namespace
 
@@ -103,6 +168,7 @@ std::vector<RangeComparison> tukey_kramer(const Groups& groups, double level) {
 std::vector<RangeComparison> games_howell(const Groups& groups, double level) {
   const int k = static_cast<int>(groups.size());
   std::vector<RangeComparison> out;
+  std::vector<double> dfs;
   for (int a = 0; a < k; ++a)
     for (int b = a + 1; b < k; ++b) {
       RangeComparison r;
@@ -112,9 +178,12 @@ std::vector<RangeComparison> games_howell(const Groups& groups, double level) {
       r.mean_diff = w.mean_diff;
       r.se = w.se / std::sqrt(2.0);
       r.df = w.df_exact;
-      finish_range(r, k, level);
+      if (r.se > 0 && r.df > 0) dfs.push_back(r.df);
       out.push_back(r);
     }
+  // One critical value per pair's df, but not one slow root search per pair.
+  RangeQuantiles qc(level, k, dfs);
+  for (auto& r : out) finish_range(r, k, qc);
   return out;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Multiple comparisons: p-value adjustments, all pairwise t-tests, Tukey–Kramer HSD and
 // Games–Howell (both on our studentized range distribution).
+#include <cstddef>
 #include <vector>
 
 #include "analysis/anova.hpp"
@@ -33,6 +34,30 @@ struct RangeComparison {
   double ci_low = 0, ci_high = 0;  // simultaneous 95 % interval for mean_diff
   bool defined = true;
 };
+// Critical values q with P(Q(k, ν) <= q) = level for the df of many comparisons at once
+// (Games–Howell has one df per pair). Up to kDirectMax distinct df (and every df below
+// kMinInterpolatedDf) are solved one by one; more are interpolated in 1/ν on Chebyshev nodes
+// (each node one root search), accepted only when three pairs' df solved directly agree to
+// kInterpolationTol relative, else every df is solved directly.
+class RangeQuantiles {
+ public:
+  static constexpr std::size_t kDirectMax = 12;
+  static constexpr double kMinInterpolatedDf = 4;
+  static constexpr int kMaxNodes = 33;
+  static constexpr double kInterpolationTol = 1e-11;
+  RangeQuantiles(double level, int k, const std::vector<double>& dfs);
+  double operator()(double df) const;
+  bool interpolated() const { return !nodes_.empty(); }
+
+ private:
+  double interpolate(double x) const;
+  double level_;
+  int k_;
+  std::vector<double> direct_df_, direct_q_;  // sorted df and their quantiles
+  std::vector<double> nodes_, values_;        // Chebyshev nodes in x = 1/ν and q there
+  double x_lo_ = 0, x_hi_ = 0;
+};
+
 // Tukey–Kramer HSD (pooled MS_within and df of the ANOVA; as R's TukeyHSD).
 std::vector<RangeComparison> tukey_kramer(const Groups& groups, double level = 0.95);
 // Games–Howell: per pair the Welch SE and Welch–Satterthwaite df.

@@ -100,7 +100,16 @@ struct Unit {  // one analysis: a measure in a phase, pooled over its sessions o
   std::string measure, phase;
   bool pooled = false, welch = true;
   std::set<std::string> kinds;
+  double margin = 0;  // equivalence margin the study declares ("margin", data units); 0: default
+  // pooled: sessions are averaged per participant (one value each) unless the study asks for
+  // pooling the sessions themselves ("pool_sessions": true), which treats repeated sessions of
+  // one person as independent observations (pseudo-replication) and is flagged in the report.
+  bool pool_sessions = false;
 };
+
+// Force Weber fraction: the default equivalence margin of a force measure (unit N) is ±7 % of
+// its reference level when the study declares none.
+constexpr double kForceWeberFraction = 0.07;
 
 std::string slug(const std::string& s) {
   std::string o;
@@ -169,6 +178,9 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
                          a.value("pooled", false));
       u.kinds.insert(a.value("kind", std::string("descriptives")));
       if (a.contains("welch")) u.welch = a.value("welch", true);
+      if (a.value("pool_sessions", false)) u.pool_sessions = true;
+      if (a.contains("margin") && a["margin"].is_number() && a["margin"].get<double>() > 0)
+        u.margin = a["margin"].get<double>();
     }
   if (units.empty() && !phase_order.empty()) {
     std::set<std::string> names;
@@ -192,6 +204,10 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
   doc.md << "# " << study.title << "\n\n";
   doc.html << "<h1>" << xml_escape(study.title) << "</h1>\n";
   if (sj.contains("description") && sj["description"].is_string()) doc.para(sj["description"]);
+  if (study.finished_at.empty())
+    doc.para(
+        "**Warning: INCOMPLETE database.** The run did not finish (study.finished_at is NULL): "
+        "sessions or participants may be missing, and every result below is provisional.");
   doc.heading(2, "Study and provenance");
   std::map<std::string, int> per_group;
   for (const auto& p : participants) per_group[p.group]++;
@@ -225,7 +241,8 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
   doc.para(
       "Statistics: palplab analysis (GSL; own studentized range). Pairwise t-tests use "
       "Welch's unequal-variance test unless the study says otherwise; p-values are "
-      "Holm-adjusted over the pairs; Hedges' g with a 95 % noncentral-t interval. "
+      "Holm-adjusted over the pairs; Hedges' g with a 95 % noncentral-t interval that inverts "
+      "the same t as the test beside it (Welch's t and df for a Welch test). "
       "APA style: p < .001 below .001.");
 
   // ---- Analyses
@@ -233,8 +250,17 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     ++files.analyses;
     const std::string unit = unit_of.count(u.measure) ? unit_of[u.measure] : "";
     const std::string label = u.measure + (unit.empty() || unit == "1" ? "" : " (" + unit + ")");
-    doc.heading(2, "Analysis: " + u.measure + " — phase " + u.phase +
-                       (u.pooled ? " (all sessions pooled)" : " (last session of the phase)"));
+    const bool means = u.pooled && !u.pool_sessions;
+    doc.heading(
+        2, "Analysis: " + u.measure + " — phase " + u.phase +
+               (means ? " (participant means over all sessions)"
+                      : (u.pooled ? " (all sessions pooled)" : " (last session of the phase)")));
+    if (u.pooled && u.pool_sessions)
+      doc.para(
+          "**Warning: pseudo-replication.** The study asks for every session to be pooled as an "
+          "independent observation, but sessions of one participant are not independent: "
+          "degrees of freedom and p-values below overstate the evidence. Participant means "
+          "(the default for pooled analyses) or a mixed model are the valid analyses.");
     // Values: per participant the last session of the phase, or every session when pooled.
     std::map<std::string, int> last_index;
     for (const auto& m : measures)
@@ -246,12 +272,23 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     data.values.assign(groups.size(), {});
     std::vector<int> undefined(groups.size(), 0);
     std::vector<ParticipantPoint> points;
+    // Participant means: the defined values of each participant's sessions, averaged in
+    // participant order of first appearance (one value per participant).
+    std::map<std::string, std::pair<long double, int>> sums;
+    std::vector<std::pair<std::string, int>> order;
     for (const auto& m : measures) {
       if (m.phase != u.phase || m.name != u.measure) continue;
       if (!u.pooled && m.phase_index != last_index[m.participant]) continue;
       int g = group_index(m.group);
       if (!m.value || !std::isfinite(*m.value)) {
         undefined[g]++;
+        continue;
+      }
+      if (means) {
+        auto [it, fresh] = sums.emplace(m.participant, std::make_pair(0.0L, 0));
+        if (fresh) order.push_back({m.participant, g});
+        it->second.first += *m.value;
+        it->second.second += 1;
         continue;
       }
       data.values[g].push_back(*m.value);
@@ -261,6 +298,12 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
         who += std::to_string(m.phase_index + 1);
       }
       points.push_back({who, g, *m.value});
+    }
+    for (const auto& [who, g] : order) {
+      const auto& [sum, n] = sums[who];
+      const double v = static_cast<double>(sum / n);
+      data.values[g].push_back(v);
+      points.push_back({who, g, v});
     }
     int total = 0, excluded = 0;
     for (size_t g = 0; g < groups.size(); ++g)
@@ -312,6 +355,26 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     }
     StatsOptions opt;
     opt.welch_pairwise = u.welch;
+    // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the grand mean for
+    // a force; other measures without a declared margin get no equivalence test.
+    std::string margin_source;
+    if (u.margin > 0) {
+      opt.margins = std::make_pair(-u.margin, u.margin);
+      margin_source = "declared by the study";
+    } else if (unit == "N") {
+      long double sum = 0;
+      int n = 0;
+      for (const auto& gv : data.values)
+        for (double v : gv) {
+          sum += v + static_cast<long double>(data.offset);
+          ++n;
+        }
+      const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
+      if (m > 0) {
+        opt.margins = std::make_pair(-m, m);
+        margin_source = "default: ±7 % (force Weber fraction) of the grand mean";
+      }
+    }
     StatsSummary s = summarize(data, opt);
     const bool want_anova = u.kinds.count("anova_oneway") > 0;
     const bool want_pairs = u.kinds.count("pairwise_t") > 0 || want_anova;
@@ -345,8 +408,28 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
             (p.test.defined ? apa_t(p.test.t, p.test.df, p.test.p) : std::string("undefined")) +
             " (Holm " + apa_p(p.p_holm) + "), g = " + fmt(p.effect.g, "%.2f"));
       }
-      doc.table({"pair", "mean diff", "t", "df", "p", "p (Holm)", "Hedges g [95% CI]"}, pr);
+      doc.table({"pair", "mean diff" + (unit.empty() || unit == "1" ? "" : " (" + unit + ")"), "t",
+                 "df", "p", "p (Holm)", "Hedges g [95% CI]"},
+                pr);
       doc.bullets(apa);
+      if (!s.equivalence.empty()) {
+        const auto& q0 = s.equivalence.front();
+        doc.heading(3, "Equivalence (TOST)");
+        doc.para(
+            "Margins ±" + fmt(q0.high) + (unit.empty() || unit == "1" ? "" : " " + unit) + " (" +
+            margin_source +
+            "). A pair is \"equivalent\" when both one-sided tests reject at α = .05 (its 90 % "
+            "interval lies inside the margins), \"different\" when Welch's test rejects, "
+            "and \"inconclusive\" otherwise — a non-significant test is not evidence of no "
+            "difference.");
+        std::vector<std::vector<std::string>> er;
+        for (size_t i = 0; i < s.pairwise.size(); ++i) {
+          const auto& q = s.equivalence[i];
+          er.push_back({groups[s.pairwise[i].a] + " – " + groups[s.pairwise[i].b], fmt(q.mean_diff),
+                        interval(q.ci_low, q.ci_high), format_p(q.p), q.verdict});
+        }
+        doc.table({"pair", "mean diff", "90% CI", "p (TOST)", "verdict"}, er);
+      }
       if (want_anova) {
         doc.heading(3, "Post-hoc comparisons");
         std::vector<std::vector<std::string>> tr;
@@ -491,7 +574,9 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
        << xml_escape(study.title) << "</title>\n<style>\n"
        << "body{font-family:Helvetica,Arial,sans-serif;max-width:960px;margin:2em auto;padding:0 "
           "1em;color:#222}\n"
-       << "table{border-collapse:collapse;margin:0.5em 0 1em}th,td{border:1px solid "
+       // Wide tables scroll inside the page instead of being cut at the body width.
+       << "table{border-collapse:collapse;margin:0.5em 0 1em;display:block;max-width:100%;"
+          "overflow-x:auto}th,td{border:1px solid "
           "#ccc;padding:3px 8px;"
           "text-align:right}th:first-child,td:first-child{text-align:left}th{background:#f3f3f3}\n"
        << "figure{margin:1em "

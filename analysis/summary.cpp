@@ -79,6 +79,10 @@ StatsSummary summarize(const GroupedData& data, const StatsOptions& options) {
   s.welch = welch_anova(g);
   s.pairwise = pairwise_t(g, options.welch_pairwise, options.df_mode);
   for (const auto& pr : s.pairwise) s.mann_whitney.push_back(mann_whitney(g[pr.a], g[pr.b]));
+  if (options.margins)
+    for (const auto& pr : s.pairwise)
+      s.equivalence.push_back(tost_welch(g[pr.a], g[pr.b], options.margins->first,
+                                         options.margins->second, options.alpha, options.df_mode));
   if (options.post_hoc) {
     s.tukey = tukey_kramer(g);
     s.games_howell = games_howell(g);
@@ -157,9 +161,25 @@ nlohmann::json to_json(const StatsSummary& s) {
                   {"cohens_d_ci", {num(e.d_ci_low), num(e.d_ci_high)}},
                   {"hedges_g", num(e.g)},
                   {"hedges_g_ci", {num(e.g_ci_low), num(e.g_ci_high)}},
+                  {"effect_ci_method", e.ci_method},
                   {"mann_whitney", {{"W", mw.W}, {"p", num(mw.p)}, {"exact", mw.exact}}},
                   {"apa", t.defined ? apa_t(t.t, t.df, t.p) : std::string("undefined")}});
   }
+  if (!s.equivalence.empty())
+    for (size_t i = 0; i < s.pairwise.size(); ++i) {
+      const auto& q = s.equivalence[i];
+      pw[i]["equivalence"] = {{"margins", {q.low, q.high}},
+                              {"alpha", q.alpha},
+                              {"t_low", num(q.t_low)},
+                              {"t_high", num(q.t_high)},
+                              {"df", num(q.df)},
+                              {"p_low", num(q.p_low)},
+                              {"p_high", num(q.p_high)},
+                              {"p", num(q.p)},
+                              {"ci", {num(q.ci_low), num(q.ci_high)}},
+                              {"ci_level", 1 - 2 * q.alpha},
+                              {"verdict", q.verdict}};
+    }
   j["pairwise"] = pw;
   j["df_mode"] = s.options.df_mode == DfMode::Floor ? "floor" : "exact";
   auto range_json = [&](const std::vector<RangeComparison>& v) {
@@ -246,6 +266,22 @@ std::string to_text(const StatsSummary& s) {
       << (p.test.defined ? apa_t(p.test.t, p.test.df, p.test.p) : std::string("undefined"))
       << ", g = " << num_text(p.effect.g, "%.2f") << " [" << num_text(p.effect.g_ci_low, "%.2f")
       << ", " << num_text(p.effect.g_ci_high, "%.2f") << "]\n";
+  if (!s.equivalence.empty()) {
+    const auto& q0 = s.equivalence.front();
+    o << "\nEquivalence (TOST on Welch's t, margins [" << num_text(q0.low) << ", "
+      << num_text(q0.high) << "], alpha = " << num_text(q0.alpha) << ")\n";
+    std::snprintf(b, sizeof b, "  %-22s %10s %10s %25s  %s\n", "pair", "mean diff", "p TOST",
+                  (num_text(100 * (1 - 2 * q0.alpha), "%.0f") + "% CI").c_str(), "verdict");
+    o << b;
+    for (size_t i = 0; i < s.pairwise.size(); ++i) {
+      const auto& q = s.equivalence[i];
+      std::string pair = s.names[s.pairwise[i].a] + " - " + s.names[s.pairwise[i].b];
+      std::snprintf(b, sizeof b, "  %-22s %10.4g %10s   [%10s, %10s]  %s\n", pair.c_str(),
+                    q.mean_diff, format_p(q.p).c_str(), num_text(q.ci_low).c_str(),
+                    num_text(q.ci_high).c_str(), q.verdict.c_str());
+      o << b;
+    }
+  }
   auto range_table = [&](const char* title, const std::vector<RangeComparison>& v) {
     o << "\n" << title << "\n";
     std::snprintf(b, sizeof b, "  %-22s %10s %9s %8s %10s %25s\n", "pair", "mean diff", "q", "df",

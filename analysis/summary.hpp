@@ -5,7 +5,9 @@
 // Shapiro–Wilk per group, Kruskal–Wallis and pairwise Mann–Whitney. JSON keys: see
 // docs/FORMATS.md.
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/anova.hpp"
@@ -21,6 +23,10 @@ struct StatsOptions {
   DfMode df_mode = DfMode::Exact;  // for the pairwise Welch tests
   bool welch_pairwise = true;      // false: Student's pooled-variance t
   bool post_hoc = true;            // Tukey–Kramer and Games–Howell (the slowest part)
+  // Equivalence margins [low, high] on mean(a) - mean(b), in the data's units; when set, every
+  // pair also gets a TOST (tost_welch) and a verdict. alpha is the TOST's level.
+  std::optional<std::pair<double, double>> margins;
+  double alpha = 0.05;
 };
 
 struct StatsSummary {
@@ -31,6 +37,7 @@ struct StatsSummary {
   WelchAnova welch;
   std::vector<PairwiseT> pairwise;
   std::vector<MannWhitney> mann_whitney;  // same order as pairwise
+  std::vector<Equivalence> equivalence;   // same order as pairwise; empty without margins
   std::vector<RangeComparison> tukey, games_howell;
   Anova levene, brown_forsythe;
   KruskalWallis kruskal;

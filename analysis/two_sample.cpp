@@ -148,4 +148,62 @@ EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b, 
   return e;
 }
 
+EffectSize cohens_d_welch(const std::vector<double>& a, const std::vector<double>& b,
+                          const TTest& w, double level) {
+  EffectSize e = cohens_d(a, b, level);
+  e.ci_method = "welch";
+  if (!e.defined || !w.defined) {
+    e.d_ci_low = e.d_ci_high = e.g_ci_low = e.g_ci_high = kNaN;
+    return e;
+  }
+  // Welch's t = Δ̂/SE_w is noncentral t(ν_w, δ = Δ/SE_w) (approximately, as the test itself
+  // assumes); invert it at the observed t and convert δ to the d scale by SE_w / s_pooled.
+  // At δ = 0 the inverted CDF is the test's own null distribution, hence the consistency.
+  const double na = a.size(), nb = b.size(), nu = na + nb - 2;
+  const double sp = static_cast<double>(std::sqrt((sum_sq_dev(a) + sum_sq_dev(b)) / nu));
+  const double scale = w.se / sp, alpha = 1 - level;
+  e.d_ci_low = noncentral_t_delta_for_cdf(w.t, w.df, 1 - alpha / 2) * scale;
+  e.d_ci_high = noncentral_t_delta_for_cdf(w.t, w.df, alpha / 2) * scale;
+  const double j = e.g / e.d;
+  e.g_ci_low = j * e.d_ci_low;
+  e.g_ci_high = j * e.d_ci_high;
+  return e;
+}
+
+Equivalence tost_welch(const std::vector<double>& a, const std::vector<double>& b, double low,
+                       double high, double alpha, DfMode mode) {
+  if (!(low < high)) throw std::invalid_argument("TOST: the lower margin must be below the upper");
+  if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("TOST: alpha must be in (0, 0.5)");
+  TTest w = welch_t(a, b, mode);
+  Equivalence e;
+  e.low = low;
+  e.high = high;
+  e.alpha = alpha;
+  e.df = w.df;
+  e.se = w.se;
+  e.mean_diff = w.mean_diff;
+  e.p_difference = w.p;
+  if (!w.defined) {
+    e.defined = false;
+    e.t_low = e.t_high = e.p_low = e.p_high = e.p = e.ci_low = e.ci_high = kNaN;
+    e.verdict = "undefined";
+    return e;
+  }
+  // One-sided tails from the two-sided p (which keeps its relative accuracy far out).
+  auto upper_tail = [&](double t) {
+    double two = t_two_sided_p(t, w.df);
+    return t > 0 ? two / 2 : 1 - two / 2;
+  };
+  e.t_low = (w.mean_diff - low) / w.se;
+  e.t_high = (w.mean_diff - high) / w.se;
+  e.p_low = upper_tail(e.t_low);
+  e.p_high = upper_tail(-e.t_high);
+  e.p = std::max(e.p_low, e.p_high);
+  const double q = t_quantile(1 - alpha, w.df);
+  e.ci_low = w.mean_diff - q * w.se;
+  e.ci_high = w.mean_diff + q * w.se;
+  e.verdict = e.p < alpha ? "equivalent" : (w.p < alpha ? "different" : "inconclusive");
+  return e;
+}
+
 }  // namespace palplab::analysis

@@ -1,5 +1,6 @@
 #pragma once
 // Two-sample comparisons: Student and Welch t-tests, Mann–Whitney, Cohen's d / Hedges' g.
+#include <string>
 #include <vector>
 
 namespace palplab::analysis {
@@ -41,9 +42,35 @@ struct EffectSize {
   double d_ci_low = 0, d_ci_high = 0;  // by inverting the noncentral t (Steiger & Fouladi)
   double g_ci_low = 0, g_ci_high = 0;  // the d interval times J
   double level = 0.95;
+  // Which t the interval inverts: "student" (pooled SE, ν = #a + #b - 2) or "welch" (Welch's
+  // t and df, the interval of δ = Δ/SE_welch rescaled by SE_welch / pooled SD), so that the
+  // interval excludes 0 exactly when the test beside it has p < 1 - level.
+  const char* ci_method = "student";
   bool defined = true;  // false when the pooled SD is 0
 };
 EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b,
                     double level = 0.95);
+// Cohen's d / Hedges' g (same point values as cohens_d) with the interval that matches the
+// Welch test `w` (welch_t(a, b, mode) with the same mode, so floored df stay consistent).
+EffectSize cohens_d_welch(const std::vector<double>& a, const std::vector<double>& b,
+                          const TTest& w, double level = 0.95);
+
+// Two one-sided tests (TOST, Schuirmann 1987) of equivalence of mean(a) - mean(b) within the
+// margins [low, high] (low < high, in the data's units), on Welch's t and df (the `mode` of the
+// accompanying Welch test): H0 Δ <= low rejected with p_low = P(T > (Δ̂ - low)/SE), H0 Δ >= high
+// with p_high = P(T < (Δ̂ - high)/SE); p = max(p_low, p_high). The (1 - 2α) interval of Δ lies
+// inside the margins exactly when p < α. verdict: "equivalent" (p < α), else "different"
+// (Welch's two-sided p < α), else "inconclusive" — never "no difference".
+struct Equivalence {
+  double low = 0, high = 0, alpha = 0.05;
+  double t_low = 0, t_high = 0, df = 0, se = 0, mean_diff = 0;
+  double p_low = 1, p_high = 1, p = 1;
+  double ci_low = 0, ci_high = 0;  // (1 - 2α) interval of mean_diff
+  double p_difference = 1;         // Welch's two-sided p (same df)
+  std::string verdict;
+  bool defined = true;  // false when SE = 0
+};
+Equivalence tost_welch(const std::vector<double>& a, const std::vector<double>& b, double low,
+                       double high, double alpha = 0.05, DfMode mode = DfMode::Exact);
 
 }  // namespace palplab::analysis

@@ -1,10 +1,13 @@
 // `palplab stats --csv FILE --value COL --group COL [--where COL=VALUE ...]
-//                [--df-mode exact|floor] [--json]`: descriptives per group, classical and
+//                [--df-mode exact|floor] [--margin M | --margins LOW,HIGH] [--alpha A] [--json]`:
+//                descriptives per group, classical and
 // Welch ANOVA, every pairwise Welch t-test (Holm/Bonferroni), post-hoc tests, assumption
 // checks; APA lines. Bad input (missing column, non-numeric value, a group with < 2 values,
 // bad --where) → InputError → exit 2 with the CSV line.
+#include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "analysis/csv.hpp"
 #include "analysis/grouped.hpp"
@@ -18,6 +21,9 @@ struct StatsArgs {
   std::string csv, value, group, df_mode = "exact";
   std::vector<std::string> where;
   bool json = false, skip_empty = false;
+  std::optional<double> margin;
+  std::vector<double> margins;
+  double alpha = 0.05;
 };
 
 palplab::app::CommandRegistration reg{
@@ -38,6 +44,14 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--skip-empty", a->skip_empty,
                     "Leave out rows whose value is empty or NA (undefined measures) instead of "
                     "failing; their number is reported");
+      cmd->add_option("--margin", a->margin,
+                      "Equivalence margin M (> 0, data units): every pair also gets a TOST of "
+                      "|mean difference| < M and a verdict (equivalent/different/inconclusive)");
+      cmd->add_option("--margins", a->margins,
+                      "Asymmetric equivalence margins LOW,HIGH (LOW < HIGH, data units)")
+          ->delimiter(',')
+          ->expected(2);
+      cmd->add_option("--alpha", a->alpha, "Level of the equivalence tests (default 0.05)");
       cmd->add_flag("--json", a->json, "Print JSON instead of tables");
       cmd->callback([a, code] {
         using namespace palplab::analysis;
@@ -47,6 +61,27 @@ palplab::app::CommandRegistration reg{
         GroupedData data = group_table(t, a->value, a->group, where, 2, 2, a->skip_empty);
         StatsOptions opt;
         opt.df_mode = a->df_mode == "floor" ? DfMode::Floor : DfMode::Exact;
+        if (!(a->alpha > 0 && a->alpha < 0.5))
+          throw palplab::InputError(
+              palplab::SourceLocation{"--alpha"},
+              "expected a level in (0, 0.5), got " + std::to_string(a->alpha));
+        opt.alpha = a->alpha;
+        if (a->margin && !a->margins.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--margin"},
+                                    "give either --margin or --margins, not both");
+        if (a->margin) {
+          if (!(*a->margin > 0) || !std::isfinite(*a->margin))
+            throw palplab::InputError(palplab::SourceLocation{"--margin"},
+                                      "expected a finite margin > 0");
+          opt.margins = std::make_pair(-*a->margin, *a->margin);
+        }
+        if (!a->margins.empty()) {
+          if (!(a->margins[0] < a->margins[1]) || !std::isfinite(a->margins[0]) ||
+              !std::isfinite(a->margins[1]))
+            throw palplab::InputError(palplab::SourceLocation{"--margins"},
+                                      "expected LOW,HIGH with LOW < HIGH (finite numbers)");
+          opt.margins = std::make_pair(a->margins[0], a->margins[1]);
+        }
         StatsSummary s = summarize(data, opt);
         if (a->json) {
           auto j = to_json(s);

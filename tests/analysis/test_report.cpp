@@ -118,7 +118,7 @@ struct FixtureDb {
   std::vector<double> post[3];  // post-training palpation_force per group (defined values)
 };
 
-FixtureDb make_fixture() {
+FixtureDb make_fixture(bool finished = true, bool pool_sessions = false) {
   FixtureDb f;
   f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
   fs::remove_all(f.dir);
@@ -144,6 +144,7 @@ FixtureDb make_fixture() {
          {"phase", "post_training"},
          {"welch", true}},
         {{"kind", "anova_oneway"}, {"measure", "exploration_time"}, {"phase", "post_training"}}}}};
+  if (pool_sessions) sj["analyses"][0]["pool_sessions"] = true;
   auto store = results::Store::create(f.db.string());
   results::StudyRecord st;
   st.study_id = "fixture";
@@ -199,7 +200,7 @@ FixtureDb make_fixture() {
       store.write_session(d);
     }
   }
-  store.set_finished("2026-11-21T11:00:00Z");
+  if (finished) store.set_finished("2026-11-21T11:00:00Z");
   return f;
 }
 
@@ -213,7 +214,7 @@ TEST(Report, FixtureDatabaseHasEverySectionValidSvgAndNoNaN) {
   std::string md = slurp(files.markdown), html = slurp(files.html);
   for (const char* section :
        {"## Study and provenance", "## Analysis: palpation_force — phase post_training",
-        "## Analysis: palpation_force — phase training (all sessions pooled)",
+        "## Analysis: palpation_force — phase training (participant means over all sessions)",
         "## Analysis: exploration_time — phase post_training", "### Descriptives",
         "### One-way ANOVA", "### Pairwise Welch t-tests", "### Post-hoc comparisons",
         "### Assumption checks and nonparametric tests", "## Learning curves",
@@ -273,4 +274,57 @@ TEST(Report, XmlCheckerRejectsBrokenSvg) {
   EXPECT_NE(xml_problem("<svg>a & b</svg>"), "");
   EXPECT_TRUE(has_nan_or_inf("x=\"nan\""));
   EXPECT_FALSE(has_nan_or_inf("provenance, information"));
+}
+
+// An unfinished run (study.finished_at NULL) is flagged at the top of the report; a finished
+// one is not. Force analyses carry an equivalence section (default margin ±7 % of the grand
+// mean, the force Weber fraction) whose verdicts are the three words, never "no difference",
+// and the pairwise table states the unit of the mean difference.
+TEST(Report, IncompleteWarningEquivalenceAndUnits) {
+  for (bool finished : {false, true}) {
+    FixtureDb f = make_fixture(finished);
+    auto out = f.dir / "report";
+    ReportFiles files = write_report(f.db.string(), out.string());
+    std::string md = slurp(files.markdown);
+    EXPECT_EQ(md.find("Warning: INCOMPLETE database") != std::string::npos, !finished);
+    if (!finished) {
+      // The warning comes before any result.
+      EXPECT_LT(md.find("Warning: INCOMPLETE database"), md.find("## Study and provenance"));
+    }
+    ASSERT_NE(md.find("### Equivalence (TOST)"), std::string::npos);
+    EXPECT_NE(md.find("force Weber fraction"), std::string::npos);
+    EXPECT_NE(md.find("mean diff (N)"), std::string::npos);
+    const size_t eq = md.find("### Equivalence (TOST)");
+    const std::string section = md.substr(eq, md.find("###", eq + 5) - eq);
+    int verdicts = 0;
+    for (const char* v : {"| equivalent |", "| different |", "| inconclusive |"})
+      for (size_t p = section.find(v); p != std::string::npos; p = section.find(v, p + 1))
+        ++verdicts;
+    EXPECT_EQ(verdicts, 3) << section;  // one per pair of A, B, C
+    EXPECT_EQ(md.find("no difference between"), std::string::npos);
+    fs::remove_all(f.dir);
+  }
+}
+
+// A pooled analysis is analysed on participant means by default (one value per participant,
+// issue 11: pooled sessions gave F(2,117) where F(2,27) is right); pooling the sessions
+// themselves happens only on explicit request and carries a pseudo-replication warning.
+TEST(Report, PooledAnalysesUseParticipantMeans) {
+  FixtureDb f = make_fixture();
+  auto out = f.dir / "report";
+  ReportFiles files = write_report(f.db.string(), out.string());
+  std::string md = slurp(files.markdown);
+  const size_t at = md.find("phase training (participant means over all sessions)");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_EQ(md.find("pseudo-replication"), std::string::npos);
+  // Descriptives of the pooled section: n per group = participants of the group, not sessions.
+  auto store = results::Store::open(f.db.string());
+  std::map<std::string, int> per_group;
+  for (const auto& p : store.read_participants()) per_group[p.group]++;
+  const std::string section = md.substr(at, md.find("## Analysis", at + 10) - at);
+  for (const auto& [g, n] : per_group)
+    EXPECT_NE(section.find("| " + g + " | " + std::to_string(n) + " |"), std::string::npos)
+        << g << " n=" << n << "\n"
+        << section.substr(0, 800);
+  fs::remove_all(f.dir);
 }

@@ -6,8 +6,11 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
 
 #include "analysis/distributions.hpp"
+#include "analysis/posthoc.hpp"
 
 using namespace palplab::analysis;
 
@@ -104,4 +107,63 @@ TEST(StudentizedRange, TinyUpperTailKeepsRelativeAccuracy) {
   double got = studentized_range_sf(30, 2, 40);
   ASSERT_GT(expect, 0);
   EXPECT_NEAR(got, expect, 1e-9 * expect);
+}
+
+// Far upper tail against an independent mpmath computation (30 digits, no underflow:
+// tests/data/studentized-range/far_tail_mpmath.py and .out). Every value >= 1e-300 (the
+// reporting floor kPFloor) must keep 1e-9 relative accuracy; values below it must be reported
+// as the bound. q = 89.5, k = 9, ν = 4000 (SmLs09's Games–Howell) once cost 68 s.
+TEST(StudentizedRange, FarUpperTailAgainstMpmath) {
+  std::ifstream in(std::string(PALPLAB_SOURCE_DIR) +
+                   "/tests/data/studentized-range/far_tail_mpmath.out");
+  ASSERT_TRUE(in.good());
+  std::string line;
+  int n = 0, below = 0;
+  double worst = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double q, nu;
+    int k;
+    std::string ref_text;
+    ASSERT_TRUE(static_cast<bool>(ss >> q >> k >> nu >> ref_text)) << line;
+    // The reference may be far below the double range: compare in log10 via the text.
+    long double ref = std::strtold(ref_text.c_str(), nullptr);
+    double got = studentized_range_sf(q, k, nu);
+    ++n;
+    if (ref < 1e-300L) {
+      ++below;
+      EXPECT_TRUE(p_is_bound(clamp_p(got))) << line << " got " << got;
+      continue;
+    }
+    double rel = static_cast<double>(std::fabs(got - ref) / ref);
+    worst = std::max(worst, rel);
+    EXPECT_LT(rel, 1e-9) << line << " got " << got;
+  }
+  EXPECT_GE(n, 9);
+  EXPECT_GE(below, 1);
+  std::printf("[ SRANGE   ] far tail: %d values (%d below 1e-300), max rel error %.1e\n", n, below,
+              worst);
+}
+
+// Games–Howell critical values: interpolated over the pairs' df, they agree with the root of
+// each df solved on its own.
+TEST(StudentizedRange, CriticalValuesInterpolatedOverDf) {
+  std::vector<double> dfs;
+  for (int i = 0; i < 40; ++i) dfs.push_back(6.5 + 3.7 * i + 0.01 * i * i);
+  RangeQuantiles qc(0.95, 6, dfs);
+  EXPECT_TRUE(qc.interpolated());
+  for (double df : {7.3, 23.9, 61.2, 130.0, 151.4}) {
+    double exact = studentized_range_quantile(0.95, 6, df);
+    EXPECT_NEAR(qc(df), exact, 1e-10 * exact) << df;
+  }
+  // Welch df equal up to rounding (SmLs09: 36 pairs at ~4000): no NaN, agrees with the root.
+  std::vector<double> near;
+  for (int i = 0; i < 36; ++i) near.push_back(4000 * (1 + 1e-13 * i));
+  RangeQuantiles nq(0.95, 9, near);
+  EXPECT_NEAR(nq(near[17]), studentized_range_quantile(0.95, 9, near[17]), 1e-12);
+  // Few distinct df: each solved directly.
+  RangeQuantiles few(0.95, 3, {10, 20, 20, 30});
+  EXPECT_FALSE(few.interpolated());
+  EXPECT_NEAR(few(20), studentized_range_quantile(0.95, 3, 20), 1e-13);
 }

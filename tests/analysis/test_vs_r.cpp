@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 
 #include "analysis/csv.hpp"
@@ -92,11 +93,14 @@ std::map<std::string, double> compute(const Fixture& f) {
     o["tukey." + key + ".p"] = tk.p;
     o["tukey." + key + ".lwr"] = tk.ci_low;
     o["tukey." + key + ".upr"] = tk.ci_high;
-    if (p.effect.defined) {
-      o["d." + key] = p.effect.d;
-      o["g." + key] = p.effect.g;
-      o["d." + key + ".lo"] = p.effect.d_ci_low;
-      o["d." + key + ".hi"] = p.effect.d_ci_high;
+    // reference.csv holds the Student (pooled) interval of d; the pairwise table's is the
+    // Welch-consistent one (equivalence.csv, TEST(VsR, EquivalenceAndWelchEffectSize)).
+    EffectSize student = cohens_d(data.values[p.a], data.values[p.b]);
+    if (student.defined) {
+      o["d." + key] = student.d;
+      o["g." + key] = student.g;
+      o["d." + key + ".lo"] = student.d_ci_low;
+      o["d." + key + ".hi"] = student.d_ci_high;
     }
     const auto& mw = s.mann_whitney[i];
     o["mw." + key + ".W"] = mw.W;
@@ -199,4 +203,79 @@ TEST(VersusR, FUpperTailGrid) {
   }
   std::printf("[ R        ] F upper tail, %zu grid points: max relative error %.2e\n",
               g.rows.size(), worst);
+}
+
+// Welch-consistent interval of d and TOST equivalence tests against base R
+// (tests/data/r/make_equivalence.R -> equivalence.csv: t.test with mu and one-sided
+// alternatives, pt with ncp inverted by uniroot). Margins ±7 % of the fixture's grand mean (the
+// force Weber fraction, as the report's default for forces).
+TEST(VsR, EquivalenceAndWelchEffectSize) {
+  CsvTable ref = read_csv(std::string(PALPLAB_SOURCE_DIR) + "/tests/data/r/equivalence.csv");
+  struct F {
+    std::string id, file, value;
+    std::vector<WhereFilter> where;
+  };
+  std::map<std::string, std::map<std::string, double>> ours;
+  std::map<std::string, std::map<std::string, std::string>> verdicts;
+  for (const F& f : {F{"unequal", "unequal.csv", "force", {}},
+                     F{"unequal_post", "unequal.csv", "force", {{"phase", "post"}}},
+                     F{"ties", "ties.csv", "score", {}}, F{"large", "large.csv", "value", {}},
+                     F{"close", "close.csv", "value", {}}}) {
+    CsvTable t = read_csv(std::string(PALPLAB_SOURCE_DIR) + "/tests/data/r/" + f.file);
+    GroupedData data = group_table(t, f.value, "group", f.where);
+    long double sum = 0;
+    int n = 0;
+    for (const auto& g : data.values)
+      for (double v : g) {
+        sum += v + static_cast<long double>(data.offset);
+        ++n;
+      }
+    const double margin = 0.07 * static_cast<double>(sum / n);
+    auto& o = ours[f.id];
+    for (size_t a = 0; a < data.values.size(); ++a)
+      for (size_t b = a + 1; b < data.values.size(); ++b) {
+        const std::string key = data.names[a] + "." + data.names[b];
+        TTest w = welch_t(data.values[a], data.values[b]);
+        EffectSize e = cohens_d_welch(data.values[a], data.values[b], w);
+        o["dw." + key + ".lo"] = e.d_ci_low;
+        o["dw." + key + ".hi"] = e.d_ci_high;
+        // Consistency: the interval excludes 0 exactly when Welch's p < .05.
+        EXPECT_EQ(e.d_ci_low > 0 || e.d_ci_high < 0, w.p < 0.05) << f.id << " " << key;
+        Equivalence q = tost_welch(data.values[a], data.values[b], -margin, margin);
+        o["tost." + key + ".p_low"] = q.p_low;
+        o["tost." + key + ".p_high"] = q.p_high;
+        o["tost." + key + ".p"] = q.p;
+        o["tost." + key + ".lo90"] = q.ci_low;
+        o["tost." + key + ".hi90"] = q.ci_high;
+        o["tost." + key + ".margin"] = margin;
+        verdicts[f.id][key] = q.verdict;
+        EXPECT_EQ(q.ci_low > -margin && q.ci_high < margin, q.p < 0.05) << f.id << " " << key;
+      }
+  }
+  int compared = 0;
+  double worst = 0;
+  std::set<std::string> seen_verdicts;
+  for (size_t r = 0; r < ref.rows.size(); ++r) {
+    const std::string &id = ref.rows[r][0], &key = ref.rows[r][1], &val = ref.rows[r][2];
+    ASSERT_TRUE(ours.count(id)) << id;
+    if (key.ends_with(".verdict")) {
+      std::string pair = key.substr(5, key.size() - 5 - 8);  // "tost." pair ".verdict"
+      EXPECT_EQ(verdicts[id][pair], val) << id << " " << key;
+      seen_verdicts.insert(val);
+      continue;
+    }
+    auto it = ours[id].find(key);
+    ASSERT_NE(it, ours[id].end()) << id << " " << key;
+    double expect = std::stod(val), got = it->second;
+    // uniroot's tol = 1e-14 on δ; R's pt with ncp (AS 243) is good to ~1e-12 near the centre.
+    double tol = key.starts_with("dw.") ? 1e-8 : 1e-10;
+    EXPECT_NEAR(got, expect, tol * std::fabs(expect) + 1e-14) << id << " " << key;
+    worst = std::max(worst, std::fabs(got - expect) / std::max(std::fabs(expect), 1e-300));
+    ++compared;
+  }
+  EXPECT_GE(compared, 40);
+  // The fixtures are chosen so that all three verdicts occur.
+  EXPECT_EQ(seen_verdicts.size(), 3u);
+  std::printf("[ R        ] equivalence / Welch d interval: %d values, max rel error %.1e\n",
+              compared, worst);
 }

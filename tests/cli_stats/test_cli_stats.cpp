@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "results/store.hpp"
@@ -231,4 +232,33 @@ TEST(CliReport, WritesReportAndRejectsBadDatabases) {
   r = run("report " + db);
   EXPECT_EQ(r.code, 2);  // --out is required
   fs::remove_all(dir);
+}
+
+// Equivalence: --margin adds a TOST per pair with a verdict; the effect-size interval is the
+// Welch-consistent one; bad margins are input errors (exit 2).
+TEST(CliStats, EquivalenceMarginsAndVerdicts) {
+  std::string csv = std::string(PALPLAB_SOURCE_DIR) + "/tests/data/r/close.csv";
+  Result r = run("stats --csv " + csv + " --value value --group group --margin 0.7 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["pairwise"].size(), 3u);
+  std::set<std::string> verdicts;
+  for (const auto& p : j["pairwise"]) {
+    EXPECT_EQ(p["effect_ci_method"], "welch");
+    ASSERT_TRUE(p.contains("equivalence"));
+    verdicts.insert(p["equivalence"]["verdict"].get<std::string>());
+    double lo = p["hedges_g_ci"][0], hi = p["hedges_g_ci"][1];
+    EXPECT_EQ(lo > 0 || hi < 0, p["p"].get<double>() < 0.05) << p.dump();
+  }
+  EXPECT_TRUE(verdicts.count("equivalent"));
+  EXPECT_TRUE(verdicts.count("different"));
+  r = run("stats --csv " + csv + " --value value --group group --margin 0.7");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("Equivalence (TOST"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("no difference"), std::string::npos);
+  for (const char* bad :
+       {"--margin -1", "--margins 1,0", "--margin 1 --margins -1,1", "--margin 0.5 --alpha 0.7"}) {
+    r = run("stats --csv " + csv + " --value value --group group " + bad);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+  }
 }

@@ -1,0 +1,199 @@
+#include "analysis/recheck.hpp"
+
+#include <cmath>
+#include <regex>
+
+#include "analysis/anova.hpp"
+#include "analysis/grouped.hpp"
+#include "analysis/summary.hpp"
+#include "analysis/two_sample.hpp"
+#include "common/input_error.hpp"
+
+namespace palplab::analysis {
+
+namespace {
+
+int decimals_of(const std::string& number) {
+  size_t dot = number.find('.');
+  return dot == std::string::npos ? 0 : static_cast<int>(number.size() - dot - 1);
+}
+
+// ".001" and "0.001" both mean 0.001 (APA omits the leading zero of p).
+double to_number(const std::string& s) {
+  return std::stod(s.size() && s[0] == '.' ? "0" + s
+                                           : (s.rfind("-.", 0) == 0 ? "-0" + s.substr(1) : s));
+}
+
+int rank(const std::string& v) {
+  return v == "consistent" ? 0 : (v == "rounding" ? 1 : 2);
+}
+
+}  // namespace
+
+ApaStatistic parse_apa(const std::string& text, const std::string& where) {
+  // F(2, 27) = 18.65, p < .001    t(17.92) = -3.02, p = .056   (spaces optional, "−" allowed)
+  std::string t = std::regex_replace(text, std::regex("\xE2\x88\x92"), "-");
+  static const std::regex re(
+      R"(^\s*([Ft])\s*\(\s*([0-9]+(?:\.[0-9]+)?)\s*(?:,\s*([0-9]+(?:\.[0-9]+)?)\s*)?\)\s*=\s*(-?[0-9]*\.?[0-9]+)\s*,\s*p\s*([<>=])\s*([0-9]*\.[0-9]+|[01])\s*$)");
+  std::smatch m;
+  if (!std::regex_match(t, m, re))
+    throw InputError(SourceLocation{where},
+                     "expected APA text such as \"F(2, 27) = 18.65, p < .001\" or "
+                     "\"t(17.9) = -3.02, p = .056\", got \"" +
+                         text + "\"");
+  ApaStatistic a;
+  a.kind = m[1].str()[0];
+  a.df1 = to_number(m[2]);
+  a.df1_decimals = decimals_of(m[2]);
+  if (a.kind == 'F') {
+    if (!m[3].matched)
+      throw InputError(SourceLocation{where},
+                       "an F needs two df: F(df1, df2), got \"" + text + "\"");
+    a.df2 = to_number(m[3]);
+    a.df2_decimals = decimals_of(m[3]);
+  } else if (m[3].matched) {
+    throw InputError(SourceLocation{where}, "a t has one df: t(df), got \"" + text + "\"");
+  }
+  a.value = to_number(m[4]);
+  a.value_decimals = decimals_of(m[4]);
+  a.p_relation = m[5];
+  a.p = to_number(m[6]);
+  a.p_decimals = decimals_of(m[6]);
+  return a;
+}
+
+std::string classify_number(double reported, int decimals, double recomputed) {
+  if (!std::isfinite(recomputed)) return "inconsistent";
+  const double unit = std::pow(10.0, -decimals);
+  // Rounded half away from zero, as printed; a small relative slack absorbs the binary
+  // representation of values exactly on a half.
+  const double rounded = std::round(recomputed / unit) * unit;
+  const double slack = 1e-9 * unit;
+  if (std::fabs(rounded - reported) <= slack) return "consistent";
+  if (std::fabs(recomputed - reported) <= unit + slack) return "rounding";
+  return "inconsistent";
+}
+
+std::string classify_p(const std::string& relation, double reported, int decimals,
+                       double recomputed) {
+  if (!std::isfinite(recomputed)) return "inconsistent";
+  const double unit = decimals > 0 ? std::pow(10.0, -decimals) : 1;
+  // A bound is a claim ("p < .05" with p = .051 claims significance that is not there): it
+  // holds or it is inconsistent; no rounding slack.
+  (void)unit;
+  if (relation == "<") return recomputed < reported ? "consistent" : "inconsistent";
+  if (relation == ">") return recomputed > reported ? "consistent" : "inconsistent";
+  return classify_number(reported, decimals, recomputed);
+}
+
+std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& table,
+                                 const std::string& file) {
+  if (!rep.is_object() || !rep.contains("statistics") || !rep["statistics"].is_array())
+    throw InputError(SourceLocation{file, 0, 0, -1, "$.statistics"},
+                     "expected an object with an array \"statistics\"");
+  auto str = [&](const nlohmann::json& j, const char* key, const std::string& path,
+                 const std::string& def) -> std::string {
+    if (!j.contains(key)) {
+      if (!def.empty()) return def;
+      throw InputError(SourceLocation{file, 0, 0, -1, path + "." + key}, "missing key");
+    }
+    if (!j[key].is_string())
+      throw InputError(SourceLocation{file, 0, 0, -1, path + "." + key}, "expected a string");
+    return j[key];
+  };
+  const std::string def_value = rep.contains("value") ? str(rep, "value", "", "") : "";
+  const std::string def_group = rep.contains("group") ? str(rep, "group", "", "") : "";
+  std::vector<RecheckItem> out;
+  for (size_t i = 0; i < rep["statistics"].size(); ++i) {
+    const auto& s = rep["statistics"][i];
+    const std::string path = "$.statistics[" + std::to_string(i) + "]";
+    if (!s.is_object())
+      throw InputError(SourceLocation{file, 0, 0, -1, path}, "expected an object");
+    for (auto it = s.begin(); it != s.end(); ++it)
+      if (it.key() != "id" && it.key() != "text" && it.key() != "test" && it.key() != "value" &&
+          it.key() != "group" && it.key() != "where" && it.key() != "pair")
+        throw InputError(SourceLocation{file, 0, 0, -1, path + "." + it.key()},
+                         "unknown key (expected id, text, test, value, group, where, pair)");
+    RecheckItem item;
+    item.id = s.contains("id") ? str(s, "id", path, "") : std::to_string(i + 1);
+    item.text = str(s, "text", path, "");
+    ApaStatistic a = parse_apa(item.text, file + ": " + path + ".text");
+    item.test =
+        s.contains("test") ? str(s, "test", path, "") : (a.kind == 'F' ? "anova" : "welch_t");
+    const std::string value = str(s, "value", path, def_value);
+    const std::string group = str(s, "group", path, def_group);
+    std::vector<WhereFilter> where;
+    if (s.contains("where")) {
+      if (!s["where"].is_array())
+        throw InputError(SourceLocation{file, 0, 0, -1, path + ".where"},
+                         "expected an array of \"COL=VALUE\" strings");
+      for (const auto& w : s["where"]) {
+        if (!w.is_string())
+          throw InputError(SourceLocation{file, 0, 0, -1, path + ".where"},
+                           "expected \"COL=VALUE\" strings");
+        where.push_back(parse_where(w));
+      }
+    }
+    GroupedData d = group_table(table, value, group, where);
+    double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
+    const bool f_test = item.test == "anova" || item.test == "welch_anova";
+    const bool t_test = item.test == "welch_t" || item.test == "student_t";
+    if (!f_test && !t_test)
+      throw InputError(
+          SourceLocation{file, 0, 0, -1, path + ".test"},
+          "expected anova, welch_anova, welch_t or student_t, got \"" + item.test + "\"");
+    if ((a.kind == 'F') != f_test)
+      throw InputError(SourceLocation{file, 0, 0, -1, path + ".test"},
+                       "test \"" + item.test + "\" does not print as " + std::string(1, a.kind));
+    if (item.test == "anova") {
+      Anova r = oneway_anova(d.values);
+      df1 = r.df_between, df2 = r.df_within, stat = r.F, p = r.p;
+    } else if (item.test == "welch_anova") {
+      WelchAnova r = welch_anova(d.values);
+      df1 = r.df_between, df2 = r.df_within, stat = r.F, p = r.p;
+    } else {
+      if (!s.contains("pair") || !s["pair"].is_array() || s["pair"].size() != 2 ||
+          !s["pair"][0].is_string() || !s["pair"][1].is_string())
+        throw InputError(SourceLocation{file, 0, 0, -1, path + ".pair"},
+                         "a t-test needs \"pair\": [\"GROUP_A\", \"GROUP_B\"] (t = A − B)");
+      int ia = -1, ib = -1;
+      for (size_t g = 0; g < d.names.size(); ++g) {
+        if (d.names[g] == s["pair"][0].get<std::string>()) ia = static_cast<int>(g);
+        if (d.names[g] == s["pair"][1].get<std::string>()) ib = static_cast<int>(g);
+      }
+      if (ia < 0 || ib < 0 || ia == ib)
+        throw InputError(SourceLocation{file, 0, 0, -1, path + ".pair"},
+                         "both groups must be distinct groups of column '" + group + "'");
+      TTest r = item.test == "welch_t" ? welch_t(d.values[ia], d.values[ib])
+                                       : student_t(d.values[ia], d.values[ib]);
+      df1 = r.df, stat = r.t, p = r.p;
+      // A printed t may be the |t| of a pair written the other way round.
+      if (a.value >= 0 && stat < 0 && s["pair"].is_array()) stat = -stat;
+    }
+    auto part = [&](const std::string& name, const std::string& shown, std::string verdict,
+                    double v) {
+      item.parts.push_back({name, shown, v, std::move(verdict)});
+    };
+    char b[64];
+    auto show = [&](double v, int dec) {
+      std::snprintf(b, sizeof b, "%.*f", dec, v);
+      return std::string(b);
+    };
+    part(a.kind == 'F' ? "df1" : "df", show(a.df1, a.df1_decimals),
+         classify_number(a.df1, a.df1_decimals, df1), df1);
+    if (a.kind == 'F')
+      part("df2", show(a.df2, a.df2_decimals), classify_number(a.df2, a.df2_decimals, df2), df2);
+    part("statistic", show(a.value, a.value_decimals),
+         classify_number(a.value, a.value_decimals, stat), stat);
+    part("p", a.p_relation + " " + show(a.p, a.p_decimals),
+         classify_p(a.p_relation, a.p, a.p_decimals, p), p);
+    item.verdict = "consistent";
+    for (const auto& pt : item.parts)
+      if (rank(pt.verdict) > rank(item.verdict)) item.verdict = pt.verdict;
+    item.recomputed_apa = a.kind == 'F' ? apa_f(stat, df1, df2, p) : apa_t(stat, df1, p);
+    out.push_back(std::move(item));
+  }
+  return out;
+}
+
+}  // namespace palplab::analysis

@@ -1,0 +1,44 @@
+#pragma once
+// Sections of `palplab bench [SECTION...] [--quick] [--json FILE] [--md FILE]` (app/cmd_bench.cpp).
+// A section registers itself with a static BenchSectionRegistration (one file per section,
+// e.g. app/bench_section_stats.cpp) and returns its measurements; the command times nothing
+// itself. Every measurement is the wall time of `reps` repetitions of one piece of work
+// (reps >= 5): median, min, max in seconds, plus the first (cold) run separately, since
+// caches (e.g. the studentized range tables) make later runs faster than a fresh process.
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace palplab::app {
+
+struct BenchOptions {
+  bool quick = false;    // fewer repetitions / smaller cases, for CI
+  std::string data_dir;  // the repository's tests/data (NIST sets and other fixtures)
+};
+
+struct BenchResult {
+  std::string name, what;  // short id, human description
+  int reps = 0;
+  double median_s = 0, min_s = 0, max_s = 0, cold_s = 0;  // wall time
+  double median_cpu_s = 0;  // process CPU time: on a shared machine wall time includes waiting
+  double goal_s = 0;        // 0 = no stated goal
+};
+
+// Runs `work` once (cold) and then `reps` times; the median, min and max are over the reps.
+BenchResult time_reps(const std::string& name, const std::string& what, int reps,
+                      const std::function<void()>& work, double goal_s = 0);
+
+using BenchSectionFn = std::function<std::vector<BenchResult>(const BenchOptions&)>;
+
+struct BenchSection {
+  std::string name, description;
+  BenchSectionFn run;
+};
+
+std::vector<BenchSection>& bench_sections();
+
+struct BenchSectionRegistration {
+  BenchSectionRegistration(std::string name, std::string description, BenchSectionFn run);
+};
+
+}  // namespace palplab::app

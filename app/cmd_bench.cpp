@@ -1,0 +1,153 @@
+// `palplab bench [SECTION...] [--quick] [--json FILE] [--md FILE] [--data DIR]`: runs the named
+// benchmark sections (all when none is named) and prints one table; --json writes one key per
+// section ({"stats": {"results": [...]}}), --md a Markdown table. Sections: app/bench.hpp.
+// An unknown section name is an input error (exit 2).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "app/bench.hpp"
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+
+namespace palplab::app {
+
+std::vector<BenchSection>& bench_sections() {
+  static std::vector<BenchSection> s;
+  return s;
+}
+
+BenchSectionRegistration::BenchSectionRegistration(std::string name, std::string description,
+                                                   BenchSectionFn run) {
+  bench_sections().push_back({std::move(name), std::move(description), std::move(run)});
+}
+
+BenchResult time_reps(const std::string& name, const std::string& what, int reps,
+                      const std::function<void()>& work, double goal_s) {
+  using clock = std::chrono::steady_clock;
+  std::vector<double> cpu;
+  auto once = [&] {
+    auto a = clock::now();
+    std::clock_t c = std::clock();
+    work();
+    cpu.push_back(static_cast<double>(std::clock() - c) / CLOCKS_PER_SEC);
+    return std::chrono::duration<double>(clock::now() - a).count();
+  };
+  BenchResult r;
+  r.name = name;
+  r.what = what;
+  r.goal_s = goal_s;
+  r.reps = std::max(reps, 5);
+  r.cold_s = once();
+  std::vector<double> t;
+  for (int i = 0; i < r.reps; ++i) t.push_back(once());
+  std::sort(t.begin(), t.end());
+  r.median_s = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+  r.min_s = t.front();
+  r.max_s = t.back();
+  cpu.erase(cpu.begin());  // the cold run
+  std::sort(cpu.begin(), cpu.end());
+  r.median_cpu_s = cpu[cpu.size() / 2];
+  return r;
+}
+
+}  // namespace palplab::app
+
+namespace {
+struct BenchArgs {
+  std::vector<std::string> sections;
+  bool quick = false;
+  std::string json, md, data = "tests/data";
+};
+
+std::string fmt_s(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", s);
+  return b;
+}
+
+palplab::app::CommandRegistration reg{
+    "bench", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand("bench", "Run benchmark sections (median of >= 5 runs)");
+      auto a = std::make_shared<BenchArgs>();
+      cmd->add_option("sections", a->sections, "Sections to run (default: all)");
+      cmd->add_flag("--quick", a->quick, "Fewer repetitions and smaller cases");
+      cmd->add_option("--json", a->json, "Write results as JSON (one key per section)");
+      cmd->add_option("--md", a->md, "Write results as a Markdown table");
+      cmd->add_option("--data", a->data,
+                      "The repository's tests/data directory (default: tests/data, i.e. run "
+                      "from the repository root)");
+      cmd->callback([a, code] {
+        using namespace palplab::app;
+        auto& all = bench_sections();
+        std::vector<const BenchSection*> run;
+        for (const auto& name : a->sections) {
+          auto it = std::find_if(all.begin(), all.end(),
+                                 [&](const BenchSection& s) { return s.name == name; });
+          if (it == all.end()) {
+            std::string known;
+            for (const auto& s : all) known += (known.empty() ? "" : ", ") + s.name;
+            throw palplab::InputError(palplab::SourceLocation{"bench"},
+                                      "unknown section '" + name + "'; sections are: " + known);
+          }
+          run.push_back(&*it);
+        }
+        if (run.empty())
+          for (const auto& s : all) run.push_back(&s);
+        if (!std::filesystem::is_directory(a->data))
+          throw palplab::InputError(
+              palplab::SourceLocation{"--data"},
+              "no directory '" + a->data + "' (run from the repository root or pass --data)");
+        BenchOptions opt{a->quick, a->data};
+        nlohmann::json j = nlohmann::json::object();
+        std::string md =
+            "| section | case | reps | median s | min s | max s | cold s | median CPU s | goal s "
+            "|\n"
+            "|---|---|---|---|---|---|---|---|---|\n";
+        for (const auto* s : run) {
+          auto results = s->run(opt);
+          nlohmann::json arr = nlohmann::json::array();
+          std::cout << s->name << ": " << s->description << "\n";
+          for (const auto& r : results) {
+            std::printf("  %-20s median %9s s  min %9s  max %9s  cold %9s  cpu %9s  (%d reps)%s\n",
+                        r.name.c_str(), fmt_s(r.median_s).c_str(), fmt_s(r.min_s).c_str(),
+                        fmt_s(r.max_s).c_str(), fmt_s(r.cold_s).c_str(),
+                        fmt_s(r.median_cpu_s).c_str(), r.reps,
+                        r.goal_s > 0 ? ("  goal <= " + fmt_s(r.goal_s) + " s").c_str() : "");
+            std::fflush(stdout);
+            nlohmann::json e = {{"name", r.name},     {"what", r.what},
+                                {"reps", r.reps},     {"median_s", r.median_s},
+                                {"min_s", r.min_s},   {"max_s", r.max_s},
+                                {"cold_s", r.cold_s}, {"median_cpu_s", r.median_cpu_s}};
+            if (r.goal_s > 0) {
+              e["goal_s"] = r.goal_s;
+              e["meets_goal"] = r.cold_s <= r.goal_s;
+            }
+            arr.push_back(e);
+            md += "| " + s->name + " | " + r.what + " | " + std::to_string(r.reps) + " | " +
+                  fmt_s(r.median_s) + " | " + fmt_s(r.min_s) + " | " + fmt_s(r.max_s) + " | " +
+                  fmt_s(r.cold_s) + " | " + fmt_s(r.median_cpu_s) + " | " +
+                  (r.goal_s > 0 ? fmt_s(r.goal_s) : "") + " |\n";
+          }
+          j[s->name] = {{"description", s->description}, {"quick", a->quick}, {"results", arr}};
+        }
+        if (!a->json.empty()) {
+          std::ofstream out(a->json);
+          if (!out) throw palplab::InputError("cannot write the JSON file", a->json);
+          out << j.dump(2) << "\n";
+        }
+        if (!a->md.empty()) {
+          std::ofstream out(a->md);
+          if (!out) throw palplab::InputError("cannot write the Markdown file", a->md);
+          out << md;
+        }
+        *code = 0;
+      });
+    }};
+}  // namespace

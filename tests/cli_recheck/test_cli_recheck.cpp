@@ -1,0 +1,113 @@
+// `palplab recheck` end to end on statistics with planted errors
+// (tests/data/recheck/planted.json on tests/data/r/unequal.csv; the true values come from
+// `palplab stats`, which test_vs_r checks against R): each verdict, the recomputed values, the
+// exit code (1 when anything is inconsistent) and input errors (exit 2).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  static int counter = 0;
+  auto errf =
+      std::filesystem::temp_directory_path() /
+      ("palplab_cli_recheck_err_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>" + errf.string();
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  std::ifstream e(errf);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  std::filesystem::remove(errf);
+  return r;
+}
+
+std::string src(const std::string& rel) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/" + rel;
+}
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  auto path = std::filesystem::temp_directory_path() /
+              ("palplab_cli_recheck_" + std::to_string(::getpid()) + "_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+}  // namespace
+
+TEST(CliRecheck, PlantedErrorsAreFound) {
+  Result r = run("recheck " + src("tests/data/recheck/planted.json") + " --csv " +
+                 src("tests/data/r/unequal.csv") + " --json");
+  EXPECT_EQ(r.code, 1) << r.err;  // something is inconsistent
+  auto j = nlohmann::json::parse(r.out);
+  const auto& s = j["statistics"];
+  ASSERT_EQ(s.size(), 8u);
+  const char* expect[] = {"consistent", "rounding",     "inconsistent", "consistent",
+                          "consistent", "inconsistent", "consistent",   "inconsistent"};
+  for (size_t i = 0; i < 8; ++i) EXPECT_EQ(s[i]["verdict"], expect[i]) << s[i].dump();
+  EXPECT_EQ(j["inconsistent"], 3);
+  // The truncated F: only the statistic is off, by one unit in the last digit.
+  for (const auto& p : s[1]["parts"])
+    EXPECT_EQ(p["verdict"], p["part"] == "statistic" ? "rounding" : "consistent") << p.dump();
+  // The pooled df: df2 and p are flagged, with the recomputed values.
+  for (const auto& p : s[2]["parts"]) {
+    if (p["part"] == "df2") {
+      EXPECT_EQ(p["verdict"], "inconsistent");
+      EXPECT_EQ(p["recomputed"], 13);
+    }
+    if (p["part"] == "p") EXPECT_EQ(p["verdict"], "inconsistent");  // .0016 is not < .001
+  }
+  EXPECT_NEAR(s[0]["parts"][2]["recomputed"].get<double>(), 11.045142662145704, 1e-9);
+  EXPECT_EQ(s[0]["recomputed"], "F(2, 13) = 11.05, p = .002");
+  // "p < .05" for p = .051 claims a significance that is not there.
+  EXPECT_EQ(s[5]["parts"][2]["verdict"], "inconsistent");
+  // Text output names the inconsistent part.
+  r = run("recheck " + src("tests/data/recheck/planted.json") + " --csv " +
+          src("tests/data/r/unequal.csv"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("A-C-transposed: \"t(3.02) = -3.20, p = .049\" -> inconsistent"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("8 statistics, 3 inconsistent"), std::string::npos);
+}
+
+TEST(CliRecheck, AllConsistentExitsZero) {
+  std::string f = write_temp("ok.json", R"({"value": "force", "group": "group", "statistics": [
+      {"text": "F(2, 13) = 11.05, p = .002", "where": ["phase=post"]},
+      {"text": "t(3.59) = -2.88, p = .051", "pair": ["B", "C"], "where": ["phase=post"]}]})");
+  Result r = run("recheck " + f + " --csv " + src("tests/data/r/unequal.csv"));
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  std::filesystem::remove(f);
+}
+
+TEST(CliRecheck, BadInputIsExitTwo) {
+  const std::string csv = " --csv " + src("tests/data/r/unequal.csv");
+  for (
+      const char* bad :
+      {R"({"statistics": [{"text": "F = 11.05", "value": "force", "group": "group"}]})",
+       R"({"statistics": [{"text": "t(3) = 1.2, p = .3", "value": "force", "group": "group"}]})",
+       R"({"statistics": [{"text": "F(2, 13) = 1.2, p = .3", "value": "force", "group": "group", "typo": 1}]})",
+       R"({"statistics": [{"text": "F(2, 13) = 1.2, p = .3", "value": "nosuch", "group": "group"}]})",
+       R"({"statistics": [{"text": "F(2, 13) = 1.2, p = .3", "test": "chi2", "value": "force", "group": "group"}]})",
+       R"({"stats": []})", "not json"}) {
+    std::string f = write_temp("bad.json", bad);
+    Result r = run("recheck " + f + csv);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.out << r.err;
+    EXPECT_FALSE(r.err.empty()) << bad;
+    std::filesystem::remove(f);
+  }
+}
