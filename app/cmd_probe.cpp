@@ -16,7 +16,8 @@
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
-#include "engine/haptics/scene_impl.hpp"
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
 
 namespace {
@@ -44,41 +45,33 @@ int run_probe(const ProbeArgs& a) {
     ov.integrator = a.integrator;
   }
   engine::Scene scene = prototypes::build_scene(a.file, ov);
-  if (!a.integrator.empty() && scene.impl().kind != engine::ModelKind::mass_spring)
+  if (!a.integrator.empty() && std::string(scene.model_kind()) != "mass_spring")
     throw InputError("--integrator: prototype " + scene.prototype() + " has a " +
-                     engine::to_string(scene.impl().kind) +
+                     scene.model_kind() +
                      " model, which is not time-integrated (the option applies to mass_spring "
                      "prototypes)");
   const auto& g = scene.geometry();
   int node = -1;
-  if (g.region_index(a.press) >= 0) {
-    node = g.region_node(a.press);
-  } else {
-    bool digits = !a.press.empty() && std::all_of(a.press.begin(), a.press.end(),
-                                                  [](char c) { return c >= '0' && c <= '9'; });
-    if (digits && a.press.size() < 10) node = std::stoi(a.press);
-    if (node < 0 || node >= g.V.rows()) {
-      std::string names;
-      for (const auto& r : g.region_names) names += (names.empty() ? "" : ", ") + r;
-      throw InputError("--press: \"" + a.press + "\" is neither a region (" +
-                       (names.empty() ? "this mesh has none" : names) +
-                       ") nor a node index in [0, " + std::to_string(g.V.rows() - 1) + "]");
-    }
+  try {
+    node = engine::press_node(g, a.press);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("--press: ") + e.what());
   }
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  const double dt = scene.dt();
   const engine::SceneStats s0 = scene.stats();
+  engine::PressDevice press(engine::press_at(g, node, a.force, a.duration, a.release));
 
   std::vector<double> times;
-  times.reserve(static_cast<size_t>((a.duration + a.release + 10.0) / dt));
-  double peak_force = 0.0, peak_disp = 0.0, time_to_force = -1.0;
-  bool nan = false;
+  times.reserve(static_cast<size_t>((a.duration + a.release + 10.0) / scene.dt()));
+  double peak_force = 0.0, peak_disp = 0.0;
+  bool nan = false, loaded_taken = false;
+  engine::SceneStats s_loaded = s0;
   nlohmann::json events = nlohmann::json::array();
-  auto step = [&](const Eigen::Vector3d& x) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const engine::Rendered r = scene.step(x);
-    const auto t1 = std::chrono::steady_clock::now();
-    times.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  // The step time is measured around Scene::step alone (the device and the logging are not).
+  engine::TimedDevice timed(press, times);
+  engine::LockstepOptions opt;
+  opt.duration = 1e6;  // the press script ends the run
+  opt.frame_period = 0.0;
+  engine::run_lockstep(scene, timed, opt, [&](const engine::Rendered& r, const engine::Sample&) {
     const double f = r.force.norm();
     if (!std::isfinite(f)) nan = true;
     peak_force = std::max(peak_force, f);
@@ -88,50 +81,20 @@ int run_probe(const ProbeArgs& a) {
                         {"kind", engine::to_string(e.kind)},
                         {"region", e.region >= 0 ? g.region_names[e.region] : ""},
                         {"value", e.value}});
-    return r;
-  };
-  // 1. approach and press
-  double depth = -0.002;  // m below the rest surface (negative = outside)
-  const double v_in = 0.02, v_out = 0.05, max_depth = 0.06, max_press_time = 10.0;
-  double t = 0.0;
-  engine::Rendered r;
-  bool reached = false;
-  while (t < max_press_time && depth < max_depth) {
-    r = step(p - depth * n);
-    t += dt;
-    if (r.force.norm() >= a.force) {
-      reached = true;
-      time_to_force = t;
-      break;
+    if (!loaded_taken && press.phase() == engine::PressPhase::withdraw) {
+      s_loaded = scene.stats();  // the state at the end of the hold
+      loaded_taken = true;
     }
-    depth += v_in * dt;
-  }
-  // 2. hold the force
-  const engine::SceneImpl& impl = scene.impl();
-  const double gain = 0.2 / std::max(impl.contact_k, 1.0);  // m per N per step
-  for (double th = 0.0; th < a.duration; th += dt) {
-    r = step(p - depth * n);
-    depth += gain * (a.force - r.force.norm());
-  }
-  const engine::SceneStats s_loaded = scene.stats();
-  // 3. withdraw to the start point, then let it settle
-  while (depth > -0.002) {
-    depth -= v_out * dt;
-    r = step(p - depth * n);
-  }
-  for (double tr = 0.0; tr < a.release; tr += dt) step(p + 0.002 * n);
+  });
+  const bool reached = press.force_reached();
+  const double time_to_force = press.time_to_force();
   const engine::SceneStats s1 = scene.stats();
   nan = nan || s1.nan_detected;
 
-  std::vector<double> sorted = times;
-  std::sort(sorted.begin(), sorted.end());
-  auto pct = [&](double q) {
-    if (sorted.empty()) return 0.0;
-    return sorted[std::min(sorted.size() - 1, static_cast<size_t>(q * (sorted.size() - 1) + 0.5))];
-  };
+  const engine::TimingSummary st = engine::summarize_times(times);
   nlohmann::json out = {
       {"prototype", scene.prototype()},
-      {"model", engine::to_string(impl.kind)},
+      {"model", scene.model_kind()},
       {"node", node},
       {"region", g.vertex_region[node] >= 0 ? g.region_names[g.vertex_region[node]] : ""},
       {"target_force", a.force},
@@ -149,22 +112,21 @@ int run_probe(const ProbeArgs& a) {
       {"new_springs", s1.new_springs_max},
       {"level_loaded", s_loaded.level},
       {"steps", static_cast<long>(times.size())},
-      {"step_time_us",
-       {{"median", pct(0.5)}, {"p99", pct(0.99)}, {"max", sorted.empty() ? 0.0 : sorted.back()}}},
+      {"step_time_us", {{"median", st.median}, {"p99", st.p99}, {"max", st.max}}},
       {"nan_detected", nan},
       {"events", events}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {
-    std::cout << "prototype " << scene.prototype() << " (" << engine::to_string(impl.kind)
-              << "), press node " << node << " (" << out["region"].get<std::string>() << ")\n"
+    std::cout << "prototype " << scene.prototype() << " (" << scene.model_kind() << "), press node "
+              << node << " (" << out["region"].get<std::string>() << ")\n"
               << "  peak force " << peak_force << " N" << (reached ? "" : " (target NOT reached)")
               << ", peak visible displacement " << peak_disp * 1e3 << " mm\n"
               << "  mass " << s0.total_mass << " -> " << s1.total_mass
               << " kg, rest error after release " << s1.max_rest_error << " m\n"
               << "  nodes " << s0.nodes << ", springs " << s0.springs << ", new nodes "
               << s1.new_nodes_max << ", new springs " << s1.new_springs_max << "\n"
-              << "  step time median " << pct(0.5) << " us, p99 " << pct(0.99) << " us"
+              << "  step time median " << st.median << " us, p99 " << st.p99 << " us"
               << (nan ? ", NaN detected" : "") << "\n";
   }
   return nan ? 1 : 0;

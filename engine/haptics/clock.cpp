@@ -33,6 +33,28 @@ double pct(std::vector<double>& v, double q) {
 
 }  // namespace
 
+TimingSummary summarize_times(std::vector<double> times) {
+  TimingSummary s;
+  s.count = static_cast<long>(times.size());
+  if (times.empty()) return s;
+  s.median = pct(times, 0.5);
+  s.p99 = pct(times, 0.99);
+  s.max = times.back();  // pct sorted them
+  return s;
+}
+
+DeviceInput TimedDevice::read(double t) {
+  const DeviceInput in = inner_.read(t);
+  t0_ = std::chrono::steady_clock::now();
+  return in;
+}
+
+void TimedDevice::write(const Rendered& r) {
+  const auto t1 = std::chrono::steady_clock::now();
+  out_.push_back(std::chrono::duration<double, std::micro>(t1 - t0_).count());
+  inner_.write(r);
+}
+
 long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
                   const std::function<void(const Rendered&, const Sample&)>& on_step,
                   const std::function<void(const Frame&)>& on_frame) {
@@ -43,7 +65,8 @@ long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
   };
   long frame_index = 1, next_frame = frame_step(1);
   Frame frame;
-  for (long k = 1; k <= n; ++k) {
+  long k = 1;
+  for (; k <= n && !device.finished(); ++k) {
     const DeviceInput in = device.read(scene.time());
     const Rendered r = scene.step(in.position);
     device.write(r);
@@ -54,7 +77,7 @@ long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
       next_frame = frame_step(++frame_index);
     }
   }
-  return n;
+  return k - 1;
 }
 
 RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& opt,

@@ -9,7 +9,9 @@
 // buffer; a graphics thread picks up the newest frame at its own rate (60 Hz) and hands it to the
 // renderer callback. The scene and the device are touched by the haptic thread only; frames are
 // the only shared state (mutex-protected swap), so the pair is data-race free (ThreadSanitizer).
+#include <chrono>
 #include <functional>
+#include <vector>
 
 #include "engine/haptics/device.hpp"
 #include "engine/models/mass_spring.hpp"
@@ -34,10 +36,34 @@ struct LockstepOptions {
 };
 
 // Runs duration/dt steps; on_step (optional) sees every step (copy the events you keep),
-// on_frame (optional) every graphics frame. Returns the number of steps.
+// on_frame (optional) every graphics frame. Stops early when device.finished(). Returns the
+// number of steps taken.
 long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
                   const std::function<void(const Rendered&, const Sample&)>& on_step = {},
                   const std::function<void(const Frame&)>& on_frame = {});
+
+// Median, 99th percentile and maximum of a set of durations (any unit); zeros when empty.
+// The one percentile convention of palplab's timings: nearest rank on the sorted values.
+struct TimingSummary {
+  double median = 0.0, p99 = 0.0, max = 0.0;
+  long count = 0;
+};
+TimingSummary summarize_times(std::vector<double> times);
+
+// Wraps a device and records the wall time between its read() and write(), which under
+// run_lockstep is exactly the Scene::step in between (us). For probes and benchmarks.
+class TimedDevice : public Device {
+ public:
+  TimedDevice(Device& inner, std::vector<double>& step_us) : inner_(inner), out_(step_us) {}
+  DeviceInput read(double t) override;
+  void write(const Rendered& r) override;
+  bool finished() const override { return inner_.finished(); }
+
+ private:
+  Device& inner_;
+  std::vector<double>& out_;
+  std::chrono::steady_clock::time_point t0_;
+};
 
 struct RealtimeOptions {
   double duration = 1.0;             // s of wall time (= simulated time when on schedule)

@@ -22,6 +22,8 @@ class Device {
   virtual DeviceInput read(double t) = 0;
   // What the simulator rendered for the last step (force on the hand, cues).
   virtual void write(const Rendered& r) = 0;
+  // A scripted device may end before the clock's duration; run_lockstep stops then.
+  virtual bool finished() const { return false; }
 };
 
 // A device that follows a piecewise-linear path through (t, x) waypoints (s, m), holding the

@@ -99,6 +99,9 @@ const SceneGeometry& Scene::geometry() const {
 const std::string& Scene::prototype() const {
   return impl_->prototype;
 }
+const char* Scene::model_kind() const {
+  return to_string(impl_->kind);
+}
 Sample Scene::last_sample() const {
   return impl_->last;
 }

@@ -139,6 +139,7 @@ class Scene {
   double time() const;
   const SceneGeometry& geometry() const;
   const std::string& prototype() const;  // "A", "B", "C", "C1", "C2", ...
+  const char* model_kind() const;        // "penalty", "ring", "mass_spring", ...
   Thresholds thresholds(int region) const;
   SceneStats stats() const;
   // Current (deformed) positions of the simulated surface nodes, #V(now) by 3 (m), and faces of

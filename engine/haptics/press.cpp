@@ -1,0 +1,115 @@
+#include "engine/haptics/press.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace palplab::engine {
+
+const char* to_string(PressPhase p) {
+  switch (p) {
+    case PressPhase::approach:
+      return "approach";
+    case PressPhase::hold:
+      return "hold";
+    case PressPhase::withdraw:
+      return "withdraw";
+    case PressPhase::release:
+      return "release";
+    case PressPhase::done:
+      return "done";
+  }
+  return "?";
+}
+
+PressDevice::PressDevice(const PressSpec& spec) : spec_(spec), depth_(-spec.start_offset) {
+  if (!(spec.force > 0.0) || !std::isfinite(spec.force))
+    throw std::invalid_argument("press: the target force must be a positive number of N");
+  if (!(spec.hold >= 0.0) || !(spec.release >= 0.0) || !std::isfinite(spec.hold + spec.release))
+    throw std::invalid_argument("press: hold and release times must be >= 0 s");
+  if (!(spec.approach_speed > 0.0) || !(spec.withdraw_speed > 0.0))
+    throw std::invalid_argument("press: speeds must be > 0 m/s");
+  if (!spec.point.allFinite() || !(std::abs(spec.normal.norm() - 1.0) < 1e-6))
+    throw std::invalid_argument("press: point must be finite and the normal a unit vector");
+}
+
+DeviceInput PressDevice::read(double t) {
+  t_ = t;
+  DeviceInput in;
+  in.position = position();
+  return in;
+}
+
+void PressDevice::write(const Rendered& r) {
+  const double dt = std::max(r.t - t_, 1e-6);  // the step just taken
+  const double f = r.force.norm();
+  switch (phase_) {
+    case PressPhase::approach:
+      if (f > 0.0 && contact_depth_ < 0.0) contact_depth_ = std::max(depth_, 0.0);
+      if (f >= spec_.force) {
+        time_to_force_ = r.t;
+        // Integral gain: a fifth of the inverse secant stiffness measured on the way in (stable
+        // for any stiffness up to 10x that secant), per step.
+        const double k = f / std::max(depth_ - std::max(contact_depth_, 0.0), 1e-5);
+        gain_ = 0.2 / std::max(k, 1.0);
+        phase_ = PressPhase::hold;
+        phase_start_ = r.t;
+        break;
+      }
+      depth_ += spec_.approach_speed * dt;
+      if (depth_ > spec_.max_depth || r.t > spec_.max_approach_time) {
+        phase_ = PressPhase::withdraw;  // target not reachable: give up, withdraw
+        phase_start_ = r.t;
+      }
+      break;
+    case PressPhase::hold:
+      if (r.t - phase_start_ >= spec_.hold - 1e-12) {
+        phase_ = PressPhase::withdraw;
+        phase_start_ = r.t;
+        break;
+      }
+      depth_ += gain_ * (spec_.force - f);
+      break;
+    case PressPhase::withdraw:
+      depth_ -= spec_.withdraw_speed * dt;
+      if (depth_ <= -spec_.start_offset) {
+        depth_ = -spec_.start_offset;
+        phase_ = PressPhase::release;
+        phase_start_ = r.t;
+      }
+      break;
+    case PressPhase::release:
+      if (r.t - phase_start_ >= spec_.release - 1e-12) phase_ = PressPhase::done;
+      break;
+    case PressPhase::done:
+      break;
+  }
+}
+
+int press_node(const SceneGeometry& g, const std::string& what) {
+  if (g.region_index(what) >= 0) return g.region_node(what);
+  const bool digits =
+      !what.empty() && what.size() < 10 &&
+      std::all_of(what.begin(), what.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const int node = digits ? std::stoi(what) : -1;
+  if (node < 0 || node >= g.V.rows()) {
+    std::string names;
+    for (const auto& r : g.region_names) names += (names.empty() ? "" : ", ") + r;
+    throw std::invalid_argument(
+        "\"" + what + "\" is neither a region (" + (names.empty() ? "this mesh has none" : names) +
+        ") nor a node index in [0, " + std::to_string(g.V.rows() - 1) + "]");
+  }
+  return node;
+}
+
+PressSpec press_at(const SceneGeometry& g, int node, double force, double hold, double release) {
+  PressSpec s;
+  s.point = g.V.row(node).transpose();
+  s.normal = g.N.row(node).transpose().normalized();
+  s.force = force;
+  s.hold = hold;
+  s.release = release;
+  return s;
+}
+
+}  // namespace palplab::engine
