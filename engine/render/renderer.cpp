@@ -392,7 +392,7 @@ void Renderer::draw(const Camera& cam, int width, int height, const DrawOptions&
     const double r = opt.marker_radius > 0 ? opt.marker_radius : 0.012 * radius_;
     glUniform1i(g.u_mode, 2);
     if (opt.contact)
-      glUniform4f(g.u_solid, 0.85f, 0.08f, 0.08f, 1.0f);
+      glUniform4f(g.u_solid, 0.95f, 0.0f, 0.85f, 1.0f);
     else
       glUniform4f(g.u_solid, 0.10f, 0.25f, 0.85f, 1.0f);
     const Eigen::Vector3d& p = *opt.device_position;
@@ -400,6 +400,17 @@ void Renderer::draw(const Camera& cam, int width, int height, const DrawOptions&
                 static_cast<float>(p.z()), static_cast<float>(r));
     glBindVertexArray(g.marker_vao);
     glDrawElements(GL_TRIANGLES, g.marker_count, GL_UNSIGNED_INT, nullptr);
+    // Pressing puts the HCP inside the tissue: draw it once more through the surface, faint.
+    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    if (opt.contact)
+      glUniform4f(g.u_solid, 0.95f, 0.0f, 0.85f, 0.5f);
+    else
+      glUniform4f(g.u_solid, 0.10f, 0.25f, 0.85f, 0.45f);
+    glDrawElements(GL_TRIANGLES, g.marker_count, GL_UNSIGNED_INT, nullptr);
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
     glUniform4f(g.u_model, 0, 0, 0, 1);
   }
   // Transparent regions, back to front (face centroids by eye depth), without depth writes.

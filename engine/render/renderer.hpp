@@ -30,7 +30,7 @@ struct DrawOptions {
   // Per-region opacity in [0, 1], indexed like SceneGeometry::region_names; missing = 1.
   std::vector<float> region_alpha;
   std::optional<Eigen::Vector3d> device_position;  // m; draws the HCP marker
-  bool contact = false;                            // marker colour: red in contact, blue not
+  bool contact = false;                            // marker colour: magenta in contact, blue not
   double marker_radius = 0.0;                      // m; 0 = 1.2% of the rest bounding radius
   bool highlight_refined = true;
   std::array<float, 3> background = {1.0f, 1.0f, 1.0f};

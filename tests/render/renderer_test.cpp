@@ -240,7 +240,7 @@ TEST_F(RenderTest, RefinedFacesAreHighlightedAndTheMarkerDrawn) {
   const pr::Image m = draw(r, cam, opt);
   const Eigen::Vector2d mc = r.matrices(cam, W, H).project(*opt.device_position);
   const std::uint8_t* mp = m.pixel(static_cast<int>(mc.x()), static_cast<int>(mc.y()));
-  EXPECT_GT(mp[0], 150);  // red marker
+  EXPECT_GT(mp[0], 150);  // magenta marker
   EXPECT_LT(mp[1], 60);
 }
 

@@ -57,7 +57,7 @@ class MouseDevice : public Device {
   // Haptic thread.
   DeviceInput read(double t) override;
   void write(const Rendered& r) override;
-  bool finished() const { return stop_.load(std::memory_order_acquire); }
+  bool finished() const override { return stop_.load(std::memory_order_acquire); }
 
  private:
   SeqlockValue<4> in_;   // x, y, z, button
