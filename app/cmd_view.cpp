@@ -6,6 +6,8 @@
 //   right drag     presses in (drag down) / backs out (drag up), 0.1 mm per pixel
 //   middle drag    orbits the camera; W wireframe, T transparency, R release, Esc quit
 //
+// --device udp:PORT or trace:FILE takes the contact point from a bridge or a recorded track
+// instead (the mouse then only orbits); a UDP device must pass the start-up rate self-test.
 // The scene is stepped at 1 kHz by the real-time clock (engine/haptics/clock.hpp) on its own
 // threads; the window thread draws the newest published frame and never blocks the haptic loop.
 // The ST cue (force >= the contact region's ST with the audio cue on) is shown as a flash of the
@@ -31,7 +33,12 @@
 #include "app/command.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
+#include "engine/haptics/devices/device_spec.hpp"
+#include "engine/haptics/devices/monitored_device.hpp"
 #include "engine/haptics/devices/mouse_device.hpp"
+#include "engine/haptics/devices/self_test.hpp"
+#include "engine/haptics/devices/trace_device.hpp"
+#include "engine/haptics/devices/udp_device.hpp"
 #include "engine/render/pick.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/render/window.hpp"
@@ -42,8 +49,9 @@ namespace {
 using namespace palplab;
 
 struct ViewArgs {
-  std::string file, screenshot, size = "1280x800";
+  std::string file, screenshot, size = "1280x800", device = "mouse", record_trace;
   long frames = 0;
+  double min_rate = 900.0;
 };
 
 // The newest frame published by the real-time clock, handed to the window thread.
@@ -123,12 +131,40 @@ int run_view(const ViewArgs& a) {
   if (a.frames < 0) throw InputError("--frames: expected a count >= 0");
   if (!a.screenshot.empty() && a.frames == 0)
     throw InputError("--screenshot needs --frames N (the frame to save)");
+  const engine::DeviceSpec spec = engine::parse_device_spec(a.device);
+  if (!(a.min_rate >= 0.0) || a.min_rate > 100000.0)
+    throw InputError("--min-device-rate: expected a rate in [0, 100000] Hz");
   engine::Scene scene = prototypes::build_scene(a.file);
   const engine::SceneGeometry& g = scene.geometry();
   std::vector<engine::Thresholds> th;
   for (int r = 0; r < static_cast<int>(g.region_names.size()); ++r)
     th.push_back(scene.thresholds(r));
   const long coarse_nodes = scene.stats().coarse_nodes;
+
+  // Start 2 mm outside the surface point nearest to the scene's start position.
+  const int n0 = g.nearest_node(g.start_position);
+  Eigen::Vector3d hit = g.V.row(n0).transpose();
+  Eigen::Vector3d ray_dir = -g.N.row(n0).transpose();
+  double depth = -0.002;  // m along the ray past the surface point (negative = outside)
+  engine::MouseDevice mouse(hit + depth * ray_dir);
+  engine::Device* inner = &mouse;
+  std::unique_ptr<engine::UdpDevice> udp;
+  std::unique_ptr<engine::TraceDevice> replay;
+  if (spec.kind == "udp") {
+    udp = std::make_unique<engine::UdpDevice>(engine::UdpDeviceOptions{spec.port, 0.002});
+    inner = udp.get();
+  } else if (spec.kind == "trace") {
+    replay = std::make_unique<engine::TraceDevice>(engine::read_trace(spec.file));
+    inner = replay.get();
+  }
+  if (inner->samples_received() >= 0) {  // a hardware device: is it fast enough?
+    const engine::DeviceRate rate = engine::require_device_rate(*inner, spec.text, a.min_rate);
+    std::cout << "device " << spec.text << ": " << std::lround(rate.rate_hz) << " Hz\n";
+  }
+  engine::TraceRecorder recorder(*inner);
+  engine::MonitoredDevice monitor(a.record_trace.empty() ? *inner
+                                                         : static_cast<engine::Device&>(recorder));
+  std::atomic<bool> stop{false};
 
   std::unique_ptr<render::Window> win;
   try {
@@ -144,13 +180,6 @@ int run_view(const ViewArgs& a) {
   ImGui_ImplGlfw_InitForOpenGL(win->handle(), true);
   ImGui_ImplOpenGL3_Init("#version 330 core");
 
-  // Start 2 mm outside the surface point nearest to the scene's start position.
-  const int n0 = g.nearest_node(g.start_position);
-  Eigen::Vector3d hit = g.V.row(n0).transpose();
-  Eigen::Vector3d ray_dir = -g.N.row(n0).transpose();
-  double depth = -0.002;  // m along the ray past the surface point (negative = outside)
-  engine::MouseDevice mouse(hit + depth * ray_dir);
-
   FrameSlot slot;
   std::thread haptic([&] {
     // The real-time clock runs in 0.5 s spans back to back (its stats refresh the panel), until
@@ -158,9 +187,9 @@ int run_view(const ViewArgs& a) {
     engine::RealtimeOptions ro;
     ro.duration = 0.5;
     ro.frame_period = 1.0 / 60.0;
-    while (!mouse.finished()) {
+    while (!stop.load()) {
       const engine::RealtimeStats st =
-          engine::run_realtime(scene, mouse, ro, [&](const engine::Frame& f) {
+          engine::run_realtime(scene, monitor, ro, [&](const engine::Frame& f) {
             std::lock_guard<std::mutex> lock(slot.mu);
             slot.frame = f;
             slot.fresh = true;
@@ -217,8 +246,8 @@ int run_view(const ViewArgs& a) {
     last_x = in.mouse_x;
     last_y = in.mouse_y;
     have_last = true;
-    const Eigen::Vector3d hcp = hit + depth * ray_dir;
-    mouse.set_position(hcp, in.left);
+    mouse.set_position(hit + depth * ray_dir, in.left);
+    const Eigen::Vector3d hcp = monitor.last_position();  // what the haptic loop used
 
     {
       std::lock_guard<std::mutex> lock(slot.mu);
@@ -230,7 +259,7 @@ int run_view(const ViewArgs& a) {
       stats_copy.have_stats = slot.have_stats;
     }
     if (frame.V.rows() > 0) renderer.update_surface(frame.V, frame.F, coarse_nodes);
-    const engine::RenderedSummary s = mouse.last_rendered();
+    const engine::RenderedSummary s = monitor.last_rendered();
     render::DrawOptions opt;
     opt.wireframe = wireframe;
     if (transparent) opt.region_alpha.assign(g.region_names.size(), 0.45f);
@@ -267,8 +296,17 @@ int run_view(const ViewArgs& a) {
     if (frame_ms.size() > 120) frame_ms.pop_front();
     t_prev = t_now;
   }
+  stop = true;
   mouse.stop();
   haptic.join();
+  if (!a.record_trace.empty()) {
+    recorder.trace().meta["prototype"] = scene.prototype();
+    recorder.trace().meta["device"] = spec.text;
+    recorder.trace().meta["dt"] = std::to_string(scene.dt());
+    engine::write_trace(a.record_trace, recorder.trace());
+    std::cout << "wrote " << a.record_trace << " (" << recorder.trace().samples.size()
+              << " samples)\n";
+  }
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
   ImGui::DestroyContext();
@@ -284,6 +322,12 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--frames", a->frames, "Close after N frames (0 = run until closed)");
       cmd->add_option("--screenshot", a->screenshot, "Save the last frame as PNG (with --frames)");
       cmd->add_option("--size", a->size, "Window size WIDTHxHEIGHT (default 1280x800)");
+      cmd->add_option("--device", a->device,
+                      "mouse (default), udp:PORT (a bridge on 127.0.0.1, docs/DEVICES.md) or "
+                      "trace:FILE (replay a recorded device track)");
+      cmd->add_option("--min-device-rate", a->min_rate,
+                      "Refuse a hardware device slower than this (Hz, default 900)");
+      cmd->add_option("--record-trace", a->record_trace, "Write the device track to FILE");
       cmd->callback([a, code] { *code = run_view(*a); });
     }};
 

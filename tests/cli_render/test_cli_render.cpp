@@ -151,3 +151,34 @@ TEST(CliView, FramesAndScreenshotUnderXvfb) {
   EXPECT_GT(dark, 5000);
   EXPECT_EQ(cli("view " + proto("A") + " --screenshot " + shot.string()).code, 2);
 }
+
+TEST(CliView, SlowUdpDeviceIsRefusedBeforeAnyWindowOpens) {
+  // No bridge on this port: 0 Hz < 900 Hz. Needs no display.
+  const Result r = cli("view " + proto("A") +
+                       " --device udp:" + std::to_string(20000 + getpid() % 20000) + " --frames 1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("below the required 900 Hz"), std::string::npos) << r.out;
+  EXPECT_EQ(cli("view " + proto("A") + " --device serial:1 --frames 1").code, 2);
+  EXPECT_EQ(cli("view " + proto("A") + " --device trace:/nonexistent.trace --frames 1").code, 2);
+}
+
+TEST(CliView, RecordTraceThenReplayItUnderXvfb) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  const fs::path trace = tmp("view.trace"), shot = tmp("replay.png");
+  const std::string xvfb = "xvfb-run -a -s '-screen 0 800x600x24' " + std::string(PALPLAB_BINARY);
+  Result r = run(xvfb + " view " + proto("B") + " --frames 20 --size 320x240 --record-trace " +
+                 trace.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::FILE* f = std::fopen(trace.c_str(), "r");
+  ASSERT_TRUE(f);
+  char line[64] = {};
+  ASSERT_TRUE(std::fgets(line, sizeof line, f));
+  std::fclose(f);
+  EXPECT_EQ(std::string(line), "# palplab-trace/1\n");
+  EXPECT_NE(r.out.find("samples)"), std::string::npos) << r.out;
+  r = run(xvfb + " view " + proto("B") + " --frames 10 --size 320x240 --device trace:" +
+          trace.string() + " --screenshot " + shot.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(pr::read_png(shot.string()).width, 320);
+}

@@ -1,8 +1,8 @@
 #pragma once
-// The mouse as the haptic device (`palplab view`, `run --human --device mouse`): the window
-// thread sets where the contact point is (from the cursor ray and the press depth); the haptic
-// thread reads it at 1 kHz and reports what it rendered back. Both directions go through
-// seqlocks of atomics, so neither thread ever waits for the other (data-race free under TSan).
+// The mouse as the haptic device (`palplab view`): the window thread sets where the contact point
+// is (from the cursor ray and the press depth); the haptic thread reads it at 1 kHz. The hand-over
+// is a seqlock of atomics, so neither thread ever waits for the other (data-race free under
+// TSan). What was rendered goes back through MonitoredDevice.
 #include <Eigen/Core>
 #include <atomic>
 
@@ -38,25 +38,15 @@ class SeqlockValue {
   std::atomic<double> data_[N] = {};
 };
 
-// What the haptic thread last rendered, for the window's force bar and cue flash.
-struct RenderedSummary {
-  double t = 0.0;                                   // s
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N
-  bool contact = false, audio = false;
-  int contact_region = -1;
-  double peak_force = 0.0;  // N, largest force magnitude since the last contact start
-};
-
 class MouseDevice : public Device {
  public:
   explicit MouseDevice(const Eigen::Vector3d& start);
   // Window thread.
   void set_position(const Eigen::Vector3d& x, bool button);
-  RenderedSummary last_rendered() const;
   void stop() { stop_.store(true, std::memory_order_release); }
   // Haptic thread.
   DeviceInput read(double t) override;
-  void write(const Rendered& r) override;
+  void write(const Rendered& r) override {}
   bool finished() const override { return stop_.load(std::memory_order_acquire); }
 
  private:
