@@ -85,6 +85,16 @@ void print_info_text(const json& j) {
     std::cout << "radius ratio " << j["radius_ratio"].dump() << "\n";
     std::cout << "tissues " << j["tissues"].dump() << "\n";
   }
+  if (j.contains("dihedral_angle")) {
+    std::cout << "dihedral angle " << j["dihedral_angle"].dump() << " (degrees)\n";
+    std::cout << "radius-edge ratio " << j["radius_edge_ratio"].dump() << "\n";
+    std::cout << "nodes: " << j["interior_nodes"] << " interior, " << j["boundary_nodes"]
+              << " on the boundary, " << j["unused_nodes"] << " in no tet\n";
+    std::cout << "lumped node volume " << j["node_volume"].dump() << " (m^3), node mass ratio "
+              << (j["node_mass_ratio"].is_null() ? std::string("inf (a node has no tet)")
+                                                 : j["node_mass_ratio"].dump() + ":1")
+              << "\n";
+  }
   std::cout << "regions " << j["regions"].dump() << "\n";
 }
 

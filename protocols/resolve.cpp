@@ -10,12 +10,11 @@ namespace fs = std::filesystem;
 namespace palplab::protocols {
 
 std::string source_tree_dir() {
-  // The build passes absolute source paths, so __FILE__ is <tree>/protocols/resolve.cpp. This
-  // avoids a compile definition (the top-level CMakeLists belongs to the lead).
-  fs::path f(__FILE__);
-  if (!f.is_absolute()) return {};
-  fs::path tree = f.parent_path().parent_path();
-  return fs::exists(tree / "prototypes") ? tree.string() : std::string();
+  // The source tree the binary was built from (a compile definition: __FILE__ is not reliably
+  // absolute, e.g. under ccache's base_dir rewriting), used only if it still holds prototypes.
+  const fs::path tree(PALPLAB_SOURCE_TREE);
+  std::error_code ec;
+  return fs::exists(tree / "prototypes", ec) ? tree.string() : std::string();
 }
 
 static std::string exe_dir() {

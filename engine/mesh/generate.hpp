@@ -39,14 +39,45 @@ SurfaceMesh generate_stomach(std::uint64_t seed = 0);
 SurfaceMesh generate_sphere(int target_vertices = 642);
 int sphere_frequency_for(int target_vertices);
 
-// Model-C: the tract surface with surface_vertices vertices tetrahedralized by TetGen without
-// Steiner points on the surface (-pY, no quality bound). The default surface size balances the
-// three reference counts (SPEC: 2487 nodes, 8744 tets, 4974 boundary faces): the reference shape
-// gives 2410 nodes (TetGen adds none inside), 9223 tets, 4816 boundary faces — all within 6 %.
-// (A surface of 2487 vertices would give about 9400 tets: a surface-only tetrahedralization of
-// this shape has about 3.8 tets per node where the original had 3.5.) Every tet has attribute
-// 101 (soft tissue) and the named region carried over from the surface.
-inline constexpr int kModelCSurfaceVertices = 2420;
+// Model-C: the tract surface with surface_vertices vertices filled with a quality tet mesh by
+// TetGen (issue 9): radius-edge ratio <= radius_edge (-q), a minimum dihedral angle target
+// (-q.../d; TetGen treats it as a goal, not a guarantee), and a maximum tet volume
+// volume_factor × (volume of the regular tet whose edge is the surface's mean edge length, -a),
+// so interior tets are about as large as the surface triangles. The surface is kept as generated
+// (-Y: boundary faces = the surface's faces, its vertices keep their indices 0..n-1), so TetGen's
+// quality bound cannot be enforced at the boundary; the levels below are chosen (seed 0) where
+// it holds everywhere — check other seeds with tet_quality (engine/mesh/info.hpp).
+// Every tet has attribute 101 (soft tissue) and a named region: a tet on the boundary takes the
+// region of its boundary face (the smaller id if it has two faces of different regions), an
+// interior tet the majority region of its surface vertices (see tetrahedralize).
+// Default (seed 0, 1604 surface vertices): 2426 nodes (822 interior), 9264 tets, 3204 boundary
+// faces (SPEC: 2487 / 8744 / 4974; the SPEC's mesh was a skin of 3.5 tets per node with 2
+// interior nodes), min dihedral 7.7°, radius-edge <= 1.95, lumped node-mass ratio 217:1
+// (the old skin mesh: 36 000:1).
+struct ModelCOptions {
+  int surface_vertices = 1600;  // target surface vertex count (generate_tract)
+  std::uint64_t seed = 0;       // generate_tract's shape seed
+  double radius_edge = 2.0;     // TetGen -q bound; 0 = no quality refinement (the old skin mesh)
+  double min_dihedral = 12;     // degrees, TetGen -q<ratio>/<angle>; 0 = TetGen's default
+  double volume_factor = 3;     // max tet volume / regular-tet volume of the mean surface edge;
+                                // 0 = no volume bound
+};
+inline constexpr int kModelCSurfaceVertices = ModelCOptions{}.surface_vertices;
+
+// Resolution family for convergence studies: the same organ (same shape and seed) at four
+// resolutions, each a quality mesh with the default recipe. Surface vertex targets, coarse to
+// fine; level 2 is the default Model-C. Seed 0: 886 / 1689 / 2426 / 4565 nodes.
+inline constexpr int kModelCLevels[] = {750, 1200, 1600, 2440};
+inline constexpr int kModelCLevelCount = 4;
+// Options of level 0 .. kModelCLevelCount-1; throws InputError for another level.
+ModelCOptions model_c_level(int level, std::uint64_t seed = 0);
+
+// The -a bound used for `s`: volume_factor · L³ / (6√2), L = mean edge length of s (m^3).
+double model_c_max_volume(const SurfaceMesh& s, double volume_factor);
+
+// Throws InputError on out-of-range options (vertex count as generate_tract; radius_edge 0 or
+// >= 1; min_dihedral in [0, 60); volume_factor >= 0) or when TetGen fails.
+TetMesh generate_model_c(const ModelCOptions& opt);
 TetMesh generate_model_c(std::uint64_t seed = 0, int surface_vertices = kModelCSurfaceVertices);
 
 // The names of the regions of the tract, in id order.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 
 #include "engine/mesh/rings.hpp"
 
@@ -64,6 +65,84 @@ void surface_part(nlohmann::ordered_json& j, const SurfaceMesh& m) {
 
 }  // namespace
 
+std::array<double, 6> dihedral_angles(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const std::array<const Vec3*, 4> p{&a, &b, &c, &d};
+  // Edge (i, j) with the two other corners (k, l): the angle between k and l seen along the edge,
+  // i.e. between their offsets from the edge line projected onto the plane normal to it.
+  static constexpr int kEdge[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2},
+                                      {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+  std::array<double, 6> out{};
+  for (int e = 0; e < 6; ++e) {
+    const Vec3& o = *p[kEdge[e][0]];
+    const Vec3 t = *p[kEdge[e][1]] - o;
+    const double tt = t.squaredNorm();
+    if (tt <= 0) continue;
+    Vec3 u = *p[kEdge[e][2]] - o, w = *p[kEdge[e][3]] - o;
+    u -= (u.dot(t) / tt) * t;
+    w -= (w.dot(t) / tt) * t;
+    if (u.squaredNorm() <= 0 || w.squaredNorm() <= 0) continue;
+    out[e] = std::atan2(u.cross(w).norm(), u.dot(w));
+  }
+  return out;
+}
+
+double radius_edge_ratio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double vol = std::abs(signed_volume(a, b, c, d));
+  if (vol <= 0) return std::numeric_limits<double>::infinity();
+  // Circumradius: |u²(v×w) + v²(w×u) + w²(u×v)| / (12 V) with u,v,w the edges from a.
+  const Vec3 u = b - a, v = c - a, w = d - a;
+  const Vec3 num =
+      u.squaredNorm() * v.cross(w) + v.squaredNorm() * w.cross(u) + w.squaredNorm() * u.cross(v);
+  const double shortest =
+      std::sqrt(std::min({u.squaredNorm(), v.squaredNorm(), w.squaredNorm(), (c - b).squaredNorm(),
+                          (d - b).squaredNorm(), (d - c).squaredNorm()}));
+  return num.norm() / (12 * vol) / shortest;
+}
+
+TetQuality tet_quality(const TetMesh& m) {
+  TetQuality q;
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  Stats dih, re;
+  const int nv = static_cast<int>(m.V.rows());
+  Eigen::VectorXd node(nv);
+  node.setZero();
+  for (int t = 0; t < m.T.rows(); ++t) {
+    const Vec3 a = row3(m.V, m.T(t, 0)), b = row3(m.V, m.T(t, 1)), c = row3(m.V, m.T(t, 2)),
+               d = row3(m.V, m.T(t, 3));
+    for (double x : dihedral_angles(a, b, c, d)) dih.add(x * kDeg);
+    re.add(radius_edge_ratio(a, b, c, d));
+    for (int k = 0; k < 4; ++k) node[m.T(t, k)] += m.volume[t] / 4;
+  }
+  if (dih.n) {
+    q.min_dihedral_deg = dih.min;
+    q.max_dihedral_deg = dih.max;
+    q.mean_dihedral_deg = dih.sum / dih.n;
+    q.min_radius_edge = re.min;
+    q.max_radius_edge = re.max;
+    q.mean_radius_edge = re.sum / re.n;
+  }
+  std::vector<char> on_boundary(nv, 0);
+  const BoundaryFaces b = boundary_faces(m);
+  for (int f = 0; f < b.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) on_boundary[b.F(f, k)] = 1;
+  for (int v = 0; v < nv; ++v) {
+    if (m.vertex_tets.row(v).empty())
+      ++q.unused_nodes;
+    else if (on_boundary[v])
+      ++q.boundary_nodes;
+    else
+      ++q.interior_nodes;
+  }
+  if (nv > 0) {
+    q.min_node_volume = node.minCoeff();
+    q.max_node_volume = node.maxCoeff();
+    q.mean_node_volume = node.mean();
+    q.node_mass_ratio = q.min_node_volume > 0 ? q.max_node_volume / q.min_node_volume
+                                              : std::numeric_limits<double>::infinity();
+  }
+  return q;
+}
+
 nlohmann::ordered_json surface_info(const SurfaceMesh& m) {
   nlohmann::ordered_json j;
   j["kind"] = "surface";
@@ -121,6 +200,26 @@ nlohmann::ordered_json tet_info(const TetMesh& m, const MaterialTable& materials
     tj[std::to_string(a)] = {{"tissue", mat ? mat->name : "unknown"}, {"tets", n}};
   }
   j["tissues"] = tj;
+  const TetQuality q = tet_quality(m);
+  auto finite = [](double x) {
+    return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr);
+  };
+  if (m.T.rows() > 0) {
+    j["dihedral_angle"] = {
+        {"min", q.min_dihedral_deg}, {"max", q.max_dihedral_deg}, {"mean", q.mean_dihedral_deg}};
+    j["radius_edge_ratio"] = {{"min", finite(q.min_radius_edge)},
+                              {"max", finite(q.max_radius_edge)},
+                              {"mean", finite(q.mean_radius_edge)}};
+  } else {
+    j["dihedral_angle"] = nullptr;
+    j["radius_edge_ratio"] = nullptr;
+  }
+  j["interior_nodes"] = q.interior_nodes;
+  j["boundary_nodes"] = q.boundary_nodes;
+  j["unused_nodes"] = q.unused_nodes;
+  j["node_volume"] = {
+      {"min", q.min_node_volume}, {"max", q.max_node_volume}, {"mean", q.mean_node_volume}};
+  j["node_mass_ratio"] = finite(q.node_mass_ratio);
   return j;
 }
 

@@ -92,6 +92,7 @@ std::string tetgen_switches(const TetOptions& opt) {
   std::string s = "pzQ";
   if (opt.keep_surface) s += "Y";
   if (opt.quality > 0) s.append("q").append(format_exact(opt.quality));
+  if (opt.quality > 0 && opt.min_dihedral > 0) s.append("/").append(format_exact(opt.min_dihedral));
   if (opt.max_volume > 0) s.append("a").append(format_exact(opt.max_volume));
   if (!opt.seeds.empty()) {
     s += "A";

@@ -28,6 +28,10 @@ struct TetOptions {
   // Radius-edge ratio bound (TetGen -q); 0 = no quality refinement (no Steiner points added for
   // quality). TetGen accepts values >= about 1.0; 1.414 is its default when -q is given alone.
   double quality = 0;
+  // Minimum dihedral angle bound (degrees, TetGen -q<ratio>/<angle>); 0 = TetGen's default
+  // (no bound beyond its sliver removal). Used only with quality > 0; TetGen does not guarantee
+  // it (it removes slivers by local optimisation), so check the result.
+  double min_dihedral = 0;
   double max_volume = 0;          // global maximum tet volume (m^3, TetGen -a); 0 = none
   bool keep_surface = true;       // TetGen -Y: no Steiner points on the input surface
   std::vector<RegionSeed> seeds;  // TetGen -A regions; without seeds every tet gets
