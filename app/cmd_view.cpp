@@ -291,6 +291,9 @@ int run_view(const ViewArgs& a) {
       win->request_close();
     }
     win->swap();
+    // At most 60 frames/s even where swap does not wait for a vertical blank (Xvfb, some
+    // drivers): the frames of a busy window would take the CPU from the haptic thread.
+    std::this_thread::sleep_until(t_prev + std::chrono::microseconds(16667));
     const auto t_now = std::chrono::steady_clock::now();
     frame_ms.push_back(std::chrono::duration<double, std::milli>(t_now - t_prev).count());
     if (frame_ms.size() > 120) frame_ms.pop_front();
