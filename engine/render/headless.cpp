@@ -25,8 +25,8 @@ std::string egl_error(const char* what) {
 }
 
 // Tries one display: initialise, choose a pbuffer-capable GL config, create a 3.3 core context.
-bool try_display(EGLDisplay d, bool surfaceless, HeadlessContext* /*unused*/, EGLContext& ctx,
-                 EGLSurface& surf, std::string& why) {
+bool try_display(EGLDisplay d, bool surfaceless, EGLContext& ctx, EGLSurface& surf,
+                 std::string& why) {
   if (d == EGL_NO_DISPLAY) {
     why += "no display; ";
     return false;
@@ -99,14 +99,14 @@ HeadlessContext::HeadlessContext(int width, int height) : egl_(std::make_unique<
         eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (get_display) {
       egl_->display = get_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-      ok = try_display(egl_->display, true, this, egl_->context, egl_->surface, why);
+      ok = try_display(egl_->display, true, egl_->context, egl_->surface, why);
     }
   } else {
     why += "EGL_MESA_platform_surfaceless not offered; ";
   }
   if (!ok) {
     egl_->display = eglGetDisplay(EGL_DEFAULT_DISPLAY);
-    ok = try_display(egl_->display, false, this, egl_->context, egl_->surface, why);
+    ok = try_display(egl_->display, false, egl_->context, egl_->surface, why);
   }
   if (!ok)
     throw NoDisplayError("no headless OpenGL 3.3 core context (EGL): " + why +
