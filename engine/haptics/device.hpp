@@ -3,6 +3,7 @@
 // stylus, a virtual participant, a recorded trace: all drive a Scene through this interface
 // (one virtual call per haptic step, never per node).
 #include <Eigen/Core>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -12,7 +13,18 @@ namespace palplab::engine {
 
 struct DeviceInput {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m, haptic contact point
-  bool button = false;
+  bool button = false;                                 // = buttons & 1
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s, as the device measures it (0 if not)
+  unsigned buttons = 0;                                // bit i = button i pressed
+};
+
+// Something that happened at the device (not in the simulation), for the session's event log:
+// "device_timeout" (no fresh sample for longer than the timeout; the force was switched off),
+// "device_resumed" (samples arrive again), "device_gap" (value = sequence numbers lost).
+struct DeviceEvent {
+  double t = 0.0;  // s, simulated time of the step in which it was noticed
+  std::string kind;
+  double value = 0.0;
 };
 
 class Device {
@@ -24,6 +36,11 @@ class Device {
   virtual void write(const Rendered& r) = 0;
   // A scripted device may end before the clock's duration; run_lockstep stops then.
   virtual bool finished() const { return false; }
+  // Device events since the last call (moved out). Devices without any return none.
+  virtual std::vector<DeviceEvent> take_events() { return {}; }
+  // Fresh samples received from hardware so far, for the start-up rate self-test
+  // (devices/self_test.hpp); -1 for devices whose samples are made by the simulator's own loop.
+  virtual long samples_received() const { return -1; }
 };
 
 // A device that follows a piecewise-linear path through (t, x) waypoints (s, m), holding the

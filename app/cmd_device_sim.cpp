@@ -1,0 +1,188 @@
+// `palplab device-sim --port P [--script FILE.json] [--rate HZ] [--duration S] [--stop-after S]
+//  [--json]`: a scripted hand on the UDP device protocol (engine/haptics/devices/udp_device.hpp),
+// for tests and for checking a study setup without hardware. It sends position datagrams to
+// 127.0.0.1:P at HZ (default 1000) along the script's piecewise-linear waypoints, receives the
+// force datagrams, and prints a summary: datagrams sent and received, the largest force, and —
+// with --stop-after — how long after its last position palplab's first "force off" arrived.
+//
+// Script: {"waypoints": [[t, x, y, z], ...]} (s, m; increasing t); the hand holds the last
+// waypoint. Without --script the hand rests at the origin.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+#include "engine/haptics/device.hpp"
+#include "engine/haptics/devices/udp_device.hpp"
+
+namespace {
+
+using namespace palplab;
+
+struct SimArgs {
+  int port = 0;
+  std::string script;
+  double rate = 1000.0, duration = -1.0, stop_after = -1.0, linger = 0.1;
+  bool json = false;
+};
+
+std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the script");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  if (!j.is_object() || !j.contains("waypoints") || !j["waypoints"].is_array() ||
+      j["waypoints"].empty())
+    throw InputError(path + ": $.waypoints: expected a non-empty array of [t, x, y, z]");
+  std::vector<std::pair<double, Eigen::Vector3d>> w;
+  for (size_t i = 0; i < j["waypoints"].size(); ++i) {
+    const auto& p = j["waypoints"][i];
+    const std::string where = path + ": $.waypoints[" + std::to_string(i) + "]";
+    if (!p.is_array() || p.size() != 4) throw InputError(where + ": expected [t, x, y, z] (s, m)");
+    for (const auto& v : p)
+      if (!v.is_number() || !std::isfinite(v.get<double>()))
+        throw InputError(where + ": expected four finite numbers");
+    const double t = p[0].get<double>();
+    if (!w.empty() && t <= w.back().first) throw InputError(where + ": times must increase");
+    w.emplace_back(t, Eigen::Vector3d(p[1].get<double>(), p[2].get<double>(), p[3].get<double>()));
+  }
+  return w;
+}
+
+int run_device_sim(const SimArgs& a) {
+  using Clock = std::chrono::steady_clock;
+  if (a.port < 1 || a.port > 65535) throw InputError("--port: expected 1..65535");
+  if (!(a.rate >= 1.0 && a.rate <= 10000.0)) throw InputError("--rate: expected 1..10000 Hz");
+  std::vector<std::pair<double, Eigen::Vector3d>> path = {{0.0, Eigen::Vector3d::Zero()}};
+  if (!a.script.empty()) path = read_script(a.script);
+  const double duration = a.duration >= 0 ? a.duration : path.back().first + 0.1;
+  if (!(duration > 0.0) || duration > 3600.0) throw InputError("--duration: expected (0, 3600] s");
+  const double stop = a.stop_after >= 0 ? std::min(a.stop_after, duration) : duration;
+  if (!(a.linger >= 0.0) || a.linger > 10.0) throw InputError("--linger: expected [0, 10] s");
+  engine::ScriptedDevice hand(path);
+
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw std::runtime_error("device-sim: socket failed");
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(a.port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  sockaddr_in self{};
+  self.sin_family = AF_INET;
+  self.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&self), sizeof self);
+
+  long sent = 0, received = 0, force_off = 0, bad = 0;
+  double max_force = 0.0, first_off_ms = -1.0;
+  std::uint32_t last_ack = 0;
+  const auto t0 = Clock::now();
+  Clock::time_point last_send = t0;
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / a.rate));
+  auto next = t0;
+  std::uint32_t seq = 0;
+  Eigen::Vector3d prev = path.front().second;
+  auto receive = [&] {
+    std::uint8_t buf[256];
+    while (true) {
+      const ssize_t n = ::recv(fd, buf, sizeof buf, MSG_DONTWAIT);
+      if (n < 0) break;
+      const auto f = engine::decode_force(buf, static_cast<size_t>(n));
+      if (!f) {
+        ++bad;
+        continue;
+      }
+      ++received;
+      last_ack = f->ack;
+      max_force = std::max(max_force, f->f.norm());
+      if (f->flags & engine::kUdpForceOff) {
+        ++force_off;
+        if (first_off_ms < 0 && sent > 0 &&
+            Clock::now() - t0 >= std::chrono::duration<double>(stop))
+          first_off_ms =
+              std::chrono::duration<double, std::milli>(Clock::now() - last_send).count();
+      }
+    }
+  };
+  // Send phase: bounded by `stop` seconds.
+  while (true) {
+    const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (t >= stop) break;
+    const Eigen::Vector3d x = hand.read(t).position;
+    engine::UdpPosition m;
+    m.seq = ++seq;
+    m.t_device = t;
+    m.x = x;
+    m.v = (x - prev) * a.rate;
+    prev = x;
+    const auto b = engine::encode(m);
+    ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    last_send = Clock::now();
+    ++sent;
+    receive();
+    next += period;
+    std::this_thread::sleep_until(next);
+  }
+  // Silent phase: keep receiving (force-off latency), bounded by `linger`.
+  const auto end =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                         std::chrono::duration<double>(a.stop_after >= 0 ? a.linger : 0.02));
+  while (Clock::now() < end) {
+    receive();
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  ::close(fd);
+  nlohmann::json out = {{"port", a.port},
+                        {"sent", sent},
+                        {"received", received},
+                        {"force_off_datagrams", force_off},
+                        {"malformed", bad},
+                        {"max_force", max_force},
+                        {"last_ack", last_ack},
+                        {"stopped_at", stop},
+                        {"force_off_after_stop_ms", first_off_ms}};
+  if (a.json) {
+    std::cout << out.dump(2) << "\n";
+  } else {
+    std::cout << "device-sim: sent " << sent << " positions to 127.0.0.1:" << a.port
+              << ", received " << received << " forces (max " << max_force << " N)";
+    if (a.stop_after >= 0)
+      std::cout << "; force off " << first_off_ms << " ms after the last position";
+    std::cout << "\n";
+  }
+  return received > 0 ? 0 : 1;
+}
+
+palplab::app::CommandRegistration reg{
+    "device-sim", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand(
+          "device-sim", "Play a scripted hand over the UDP device protocol (for tests)");
+      auto a = std::make_shared<SimArgs>();
+      cmd->add_option("--port", a->port, "palplab's UDP port on 127.0.0.1")->required();
+      cmd->add_option("--script", a->script, "JSON {\"waypoints\": [[t, x, y, z], ...]} (s, m)");
+      cmd->add_option("--rate", a->rate, "Position datagrams per second (default 1000)");
+      cmd->add_option("--duration", a->duration, "Seconds to run (default: script end + 0.1)");
+      cmd->add_option("--stop-after", a->stop_after,
+                      "Stop sending after S seconds and measure the force-off latency");
+      cmd->add_option("--linger", a->linger, "Seconds to listen after --stop-after (default 0.1)");
+      cmd->add_flag("--json", a->json, "Print the summary as JSON");
+      cmd->callback([a, code] { *code = run_device_sim(*a); });
+    }};
+
+}  // namespace

@@ -1,0 +1,178 @@
+// `palplab render PROTOTYPE.json [--press REGION --force N] [--camera az,el[,dist]]
+//  [--size WxH] [--wireframe] [--alpha REGION=A ...] --out FILE.png`: a headless (EGL) still of
+// a prototype's organ, shaded with per-region colours.
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
+#include "engine/render/headless.hpp"
+#include "engine/render/still.hpp"
+#include "prototypes/factory.hpp"
+
+namespace {
+
+// Runs the one press script (engine/haptics/press.hpp) and stops at the end of its hold, so the
+// still shows the organ under the target force.
+class UntilHoldEnds : public palplab::engine::Device {
+ public:
+  explicit UntilHoldEnds(palplab::engine::PressDevice& p) : press_(p) {}
+  palplab::engine::DeviceInput read(double t) override { return press_.read(t); }
+  void write(const palplab::engine::Rendered& r) override {
+    press_.write(r);
+    contact_ = r.contact;
+    force_ = r.force.norm();
+    deformation_ = r.visible_deformation;
+  }
+  bool finished() const override {
+    return press_.phase() == palplab::engine::PressPhase::withdraw ||
+           press_.phase() == palplab::engine::PressPhase::release ||
+           press_.phase() == palplab::engine::PressPhase::done;
+  }
+  bool contact_ = false;
+  double force_ = 0.0, deformation_ = 0.0;
+
+ private:
+  palplab::engine::PressDevice& press_;
+};
+
+struct RenderArgs {
+  std::string file, out, camera, size = "800x600", press, look_at;
+  double force = 0.0, hold = 0.5;
+  bool wireframe = false;
+  std::vector<std::string> alpha;
+};
+
+std::vector<double> parse_numbers(const std::string& flag, const std::string& text, char sep,
+                                  size_t min_n, size_t max_n, const std::string& expected) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, sep)) {
+    size_t used = 0;
+    double x = 0.0;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(x))
+      throw palplab::InputError(flag + ": \"" + text + "\": expected " + expected);
+    v.push_back(x);
+  }
+  if (v.size() < min_n || v.size() > max_n)
+    throw palplab::InputError(flag + ": \"" + text + "\": expected " + expected);
+  return v;
+}
+
+int run_render(const RenderArgs& a) {
+  using namespace palplab;
+  const auto wh =
+      parse_numbers("--size", a.size, 'x', 2, 2, "WIDTHxHEIGHT in pixels, e.g. 800x600");
+  for (double x : wh)
+    if (x < 16 || x > 8192 || x != std::floor(x))
+      throw InputError("--size: \"" + a.size + "\": each side must be a whole number in 16..8192");
+  render::Camera cam;
+  if (!a.camera.empty()) {
+    const auto c = parse_numbers("--camera", a.camera, ',', 2, 3,
+                                 "AZIMUTH,ELEVATION[,DISTANCE] (degrees, degrees, m)");
+    if (c[1] < -90 || c[1] > 90)
+      throw InputError("--camera: elevation " + std::to_string(c[1]) +
+                       " outside [-90, 90] degrees");
+    cam.azimuth_deg = c[0];
+    cam.elevation_deg = c[1];
+    if (c.size() == 3) {
+      if (!(c[2] > 0.0))
+        throw InputError("--camera: distance must be > 0 m (omit it to fit the organ in view)");
+      cam.distance = c[2];
+    }
+  }
+  if (a.press.empty() != (a.force == 0.0))
+    throw InputError("--press and --force go together (REGION_OR_NODE and a force in N)");
+  if (!a.press.empty() && (!(a.force > 0.0) || a.force > 100.0))
+    throw InputError("--force: expected a force in (0, 100] N, got " + std::to_string(a.force));
+  if (!(a.hold >= 0.0) || a.hold > 60.0)
+    throw InputError("--hold: expected a time in [0, 60] s, got " + std::to_string(a.hold));
+  engine::Scene scene = prototypes::build_scene(a.file);
+  render::StillOptions opt;
+  if (!a.press.empty()) {
+    int node = -1;
+    try {
+      node = engine::press_node(scene.geometry(), a.press);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("--press: ") + e.what());
+    }
+    engine::PressDevice press(engine::press_at(scene.geometry(), node, a.force, a.hold, 0.0));
+    UntilHoldEnds dev(press);
+    engine::LockstepOptions lo;
+    lo.duration = press.spec().max_approach_time + a.hold + 1.0;
+    lo.frame_period = 0.0;
+    engine::run_lockstep(scene, dev, lo);
+    opt.device_position = scene.last_sample().x;
+    opt.contact = dev.contact_;
+    if (!press.force_reached())
+      std::cerr << "palplab render: warning: the press did not reach " << a.force
+                << " N (force at the still " << dev.force_ << " N)\n";
+    std::cout << "pressed node " << node << " to " << dev.force_ << " N for " << a.hold
+              << " s; visible deformation " << dev.deformation_ * 1e3 << " mm\n";
+  }
+  if (!a.look_at.empty()) {
+    const auto& g = scene.geometry();
+    if (g.region_index(a.look_at) < 0) {
+      std::string names;
+      for (const auto& n : g.region_names) names += (names.empty() ? "" : ", ") + n;
+      throw InputError("--look-at: unknown region \"" + a.look_at + "\" (regions: " + names + ")");
+    }
+    cam.target = g.region_centroid(a.look_at);
+  }
+  opt.wireframe = a.wireframe;
+  for (const auto& s : a.alpha) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw InputError("--alpha: \"" + s + "\": expected REGION=OPACITY, e.g. body=0.4");
+    const auto v = parse_numbers("--alpha", s.substr(eq + 1), ',', 1, 1, "an opacity in [0, 1]");
+    opt.region_alpha[s.substr(0, eq)] = static_cast<float>(v[0]);
+  }
+  render::Image img;
+  try {
+    img = render::render_still(scene, cam, static_cast<int>(wh[0]), static_cast<int>(wh[1]), opt);
+  } catch (const render::NoDisplayError& e) {
+    std::cerr << "palplab render: " << e.what() << "\n";
+    return 3;
+  }
+  render::write_png(a.out, img);
+  std::cout << "wrote " << a.out << " (" << img.width << "x" << img.height << ", prototype "
+            << scene.prototype() << ")\n";
+  return 0;
+}
+
+palplab::app::CommandRegistration reg{
+    "render", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand("render", "Headless still of a prototype's organ (PNG)");
+      auto a = std::make_shared<RenderArgs>();
+      cmd->add_option("prototype", a->file, "Prototype JSON file")->required();
+      cmd->add_option("--out", a->out, "PNG file to write")->required();
+      cmd->add_option("--camera", a->camera,
+                      "AZIMUTH,ELEVATION[,DISTANCE]: degrees about +z, degrees above the xy "
+                      "plane, m from the organ's centre (default 30,25 and fit to view)");
+      cmd->add_option("--size", a->size, "Image size WIDTHxHEIGHT in pixels (default 800x600)");
+      cmd->add_option("--look-at", a->look_at,
+                      "Region whose centroid the camera aims at (default: the organ's centre)");
+      cmd->add_flag("--wireframe", a->wireframe, "Draw the mesh edges over the surface");
+      cmd->add_option("--alpha", a->alpha,
+                      "REGION=OPACITY (0..1, '*' = every region); transparent regions are drawn "
+                      "back to front. Repeatable");
+      cmd->add_option("--press", a->press, "Region name or surface node index to press");
+      cmd->add_option("--force", a->force, "Target device force of the press (N)");
+      cmd->add_option("--hold", a->hold,
+                      "Time the press holds the force before the still (s, default 0.5)");
+      cmd->callback([a, code] { *code = run_render(*a); });
+    }};
+
+}  // namespace

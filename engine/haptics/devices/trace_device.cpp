@@ -1,0 +1,121 @@
+#include "engine/haptics/devices/trace_device.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "common/input_error.hpp"
+
+namespace palplab::engine {
+
+namespace {
+const char* kMagic = "# palplab-trace/1";
+const char* kHeader = "t,x,y,z,vx,vy,vz,buttons";
+}  // namespace
+
+Trace read_trace(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the trace: " + std::strerror(errno));
+  Trace tr;
+  std::string line;
+  int ln = 0;
+  auto fail = [&](const std::string& what) {
+    throw InputError(path + ":" + std::to_string(ln) + ": " + what);
+  };
+  bool magic = false, header = false;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      if (ln == 1) {
+        if (line != kMagic) fail("expected \"" + std::string(kMagic) + "\" on the first line");
+        magic = true;
+        continue;
+      }
+      const auto eq = line.find('=');
+      if (eq != std::string::npos) {
+        std::string key = line.substr(1, eq - 1);
+        key.erase(0, key.find_first_not_of(' '));
+        tr.meta[key] = line.substr(eq + 1);
+      }
+      continue;
+    }
+    if (!magic) fail("not a palplab trace (expected \"" + std::string(kMagic) + "\")");
+    if (!header) {
+      if (line != kHeader) fail("expected the header \"" + std::string(kHeader) + "\"");
+      header = true;
+      continue;
+    }
+    double v[8];
+    const char* p = line.c_str();
+    for (int k = 0; k < 8; ++k) {
+      char* end = nullptr;
+      errno = 0;
+      v[k] = std::strtod(p, &end);
+      if (end == p || errno == ERANGE || !std::isfinite(v[k]))
+        fail("column " + std::to_string(k + 1) + ": expected a finite number");
+      p = end;
+      if (k < 7) {
+        if (*p != ',') fail("expected 8 comma-separated columns (" + std::string(kHeader) + ")");
+        ++p;
+      } else if (*p != '\0') {
+        fail("unexpected text after the 8th column");
+      }
+    }
+    if (v[7] < 0 || v[7] != std::floor(v[7]) || v[7] > 4294967295.0)
+      fail("buttons: expected a non-negative whole number (bit mask)");
+    if (!tr.samples.empty() && v[0] < tr.samples.back().t)
+      fail("time goes backwards (" + std::to_string(v[0]) + " s after " +
+           std::to_string(tr.samples.back().t) + " s)");
+    TraceSample s;
+    s.t = v[0];
+    s.in.position = {v[1], v[2], v[3]};
+    s.in.velocity = {v[4], v[5], v[6]};
+    s.in.buttons = static_cast<unsigned>(v[7]);
+    s.in.button = (s.in.buttons & 1u) != 0;
+    tr.samples.push_back(s);
+  }
+  if (!header)
+    throw InputError(path + ": empty trace (no header \"" + std::string(kHeader) + "\")");
+  return tr;
+}
+
+void write_trace(const std::string& path, const Trace& trace) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw InputError(path + ": cannot write the trace: " + std::strerror(errno));
+  std::fprintf(f, "%s\n", kMagic);
+  for (const auto& [k, v] : trace.meta) std::fprintf(f, "# %s=%s\n", k.c_str(), v.c_str());
+  std::fprintf(f, "%s\n", kHeader);
+  for (const auto& s : trace.samples) {
+    const auto& p = s.in.position;
+    const auto& v = s.in.velocity;
+    const unsigned b = s.in.buttons | (s.in.button ? 1u : 0u);
+    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u\n", s.t, p.x(), p.y(), p.z(),
+                 v.x(), v.y(), v.z(), b);
+  }
+  const bool ok = std::fflush(f) == 0;
+  std::fclose(f);
+  if (!ok) throw InputError(path + ": writing the trace failed");
+}
+
+DeviceInput TraceRecorder::read(double t) {
+  DeviceInput in = inner_.read(t);
+  trace_.samples.push_back({t, in});
+  return in;
+}
+
+TraceDevice::TraceDevice(Trace trace) : trace_(std::move(trace)) {}
+
+DeviceInput TraceDevice::read(double /*t*/) {
+  if (trace_.samples.empty()) return {};
+  const size_t k = std::min(next_, trace_.samples.size() - 1);
+  if (next_ < trace_.samples.size()) ++next_;
+  return trace_.samples[k].in;
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,93 @@
+#pragma once
+// The UDP device: a bridge program (around any vendor SDK) sends the stylus position to palplab
+// and gets the force back, as little-endian datagrams on localhost (docs/DEVICES.md).
+//
+//   position (bridge -> palplab), 72 bytes:
+//     0 u32 magic 0x444C5050 ("PPLD")   4 u16 version 1   6 u16 type 1
+//     8 u32 seq (+1 per datagram)        12 u32 buttons (bit mask)
+//    16 f64 t_device (s, bridge clock)   24 f64 x, y, z (m, organ frame)   48 f64 vx, vy, vz (m/s)
+//   force (palplab -> bridge, to the sender of the newest position), 64 bytes:
+//     0 u32 magic   4 u16 version 1   6 u16 type 2
+//     8 u32 seq (palplab's, +1 per datagram)   12 u32 ack (seq of the newest position used)
+//    16 u32 flags: bit 0 contact, bit 1 audio cue (force >= ST), bit 2 force off (timeout)
+//    20 u32 reserved (0)   24 f64 t (s, simulated)   32 f64 fx, fy, fz (N, force on the hand)
+//    56 f64 reserved (0)
+//
+// palplab binds 127.0.0.1:PORT only and ignores datagrams from other addresses, with a bad
+// magic/version/type/size, or with a sequence number not newer than the newest one (late or
+// duplicated). When no fresh position arrived for `timeout` (default 2 ms), every force datagram
+// carries zero force and the "force off" flag until positions arrive again; events
+// device_timeout / device_resumed / device_gap are reported through take_events().
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/haptics/device.hpp"
+
+namespace palplab::engine {
+
+constexpr std::uint32_t kUdpMagic = 0x444C5050u;  // "PPLD" little-endian
+constexpr std::uint16_t kUdpVersion = 1;
+constexpr size_t kUdpPositionSize = 72, kUdpForceSize = 64;
+
+struct UdpPosition {
+  std::uint32_t seq = 0, buttons = 0;
+  double t_device = 0.0;
+  Eigen::Vector3d x = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+};
+struct UdpForce {
+  std::uint32_t seq = 0, ack = 0, flags = 0;
+  double t = 0.0;
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();
+};
+enum UdpFlags : std::uint32_t { kUdpContact = 1u, kUdpAudio = 2u, kUdpForceOff = 4u };
+
+std::array<std::uint8_t, kUdpPositionSize> encode(const UdpPosition& p);
+std::array<std::uint8_t, kUdpForceSize> encode(const UdpForce& f);
+// Empty when the bytes are not a well-formed datagram of that type.
+std::optional<UdpPosition> decode_position(const std::uint8_t* data, size_t n);
+std::optional<UdpForce> decode_force(const std::uint8_t* data, size_t n);
+
+struct UdpDeviceOptions {
+  int port = 0;            // 127.0.0.1:port; 0 = any free port (see port())
+  double timeout = 0.002;  // s without a fresh position before the force is switched off
+};
+
+class UdpDevice : public Device {
+ public:
+  // Binds the socket; throws palplab::InputError when the port is taken or invalid.
+  explicit UdpDevice(const UdpDeviceOptions& opt);
+  ~UdpDevice() override;
+  UdpDevice(const UdpDevice&) = delete;
+  UdpDevice& operator=(const UdpDevice&) = delete;
+
+  DeviceInput read(double t) override;
+  void write(const Rendered& r) override;
+  std::vector<DeviceEvent> take_events() override;
+  long samples_received() const override;  // fresh positions since construction
+
+  int port() const { return port_; }
+  bool timed_out() const { return timed_out_; }
+  bool connected() const { return have_peer_; }
+  long dropped() const { return dropped_; }  // stale, malformed or foreign datagrams ignored
+  long lost() const { return lost_; }        // sequence numbers skipped
+
+ private:
+  void drain(double t);
+  int fd_ = -1;
+  int port_ = 0;
+  UdpDeviceOptions opt_;
+  bool have_peer_ = false, have_sample_ = false, timed_out_ = false;
+  std::array<std::uint8_t, 16> peer_{};  // sockaddr_in of the bridge
+  UdpPosition last_;
+  std::chrono::steady_clock::time_point last_rx_;
+  std::uint32_t tx_seq_ = 0;
+  long received_ = 0, dropped_ = 0, lost_ = 0;
+  double t_ = 0.0;
+  std::vector<DeviceEvent> events_;
+};
+
+}  // namespace palplab::engine

@@ -1,0 +1,87 @@
+#include "engine/render/image.hpp"
+
+#include <png.h>
+
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include "common/input_error.hpp"
+
+namespace palplab::render {
+
+namespace {
+struct FileCloser {
+  void operator()(std::FILE* f) const {
+    if (f) std::fclose(f);
+  }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+}  // namespace
+
+void write_png(const std::string& path, const Image& img) {
+  if (img.width <= 0 || img.height <= 0 ||
+      img.rgba.size() != static_cast<size_t>(img.width) * img.height * 4)
+    throw std::invalid_argument("write_png: image size does not match its pixels");
+  FilePtr f(std::fopen(path.c_str(), "wb"));
+  if (!f) throw InputError(path + ": cannot open for writing: " + std::strerror(errno));
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!png || !info) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error("write_png: out of memory");
+  }
+  // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw InputError(path + ": writing the PNG failed (disk full?)");
+  }
+  png_init_io(png, f.get());
+  png_set_IHDR(png, info, img.width, img.height, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (int y = 0; y < img.height; ++y) png_write_row(png, const_cast<png_bytep>(img.pixel(0, y)));
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  if (std::fflush(f.get()) != 0) throw InputError(path + ": writing the PNG failed");
+}
+
+Image read_png(const std::string& path) {
+  FilePtr f(std::fopen(path.c_str(), "rb"));
+  if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  unsigned char sig[8] = {};
+  if (std::fread(sig, 1, 8, f.get()) != 8 || png_sig_cmp(sig, 0, 8) != 0)
+    throw InputError(path + ": not a PNG file (bad signature)");
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!png || !info) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw std::runtime_error("read_png: out of memory");
+  }
+  Image img;
+  std::vector<png_bytep> rows;
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw InputError(path + ": corrupt PNG");
+  }
+  png_init_io(png, f.get());
+  png_set_sig_bytes(png, 8);
+  png_read_info(png, info);
+  png_set_expand(png);
+  png_set_strip_16(png);
+  png_set_gray_to_rgb(png);
+  png_set_add_alpha(png, 0xff, PNG_FILLER_AFTER);
+  png_read_update_info(png, info);
+  img.width = static_cast<int>(png_get_image_width(png, info));
+  img.height = static_cast<int>(png_get_image_height(png, info));
+  img.rgba.resize(static_cast<size_t>(img.width) * img.height * 4);
+  rows.resize(img.height);
+  for (int y = 0; y < img.height; ++y)
+    rows[y] = img.rgba.data() + static_cast<size_t>(y) * img.width * 4;
+  png_read_image(png, rows.data());
+  png_read_end(png, nullptr);
+  png_destroy_read_struct(&png, &info, nullptr);
+  return img;
+}
+
+}  // namespace palplab::render

@@ -1,0 +1,184 @@
+// `palplab render` and `palplab view` end to end: a press changes the still at the contact and
+// nowhere far from it; the view window renders frames under Xvfb; bad input exits 2. Skipped only
+// when the machine has no EGL device (render exits 3) or no xvfb-run (view).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "engine/haptics/press.hpp"
+#include "engine/render/camera.hpp"
+#include "engine/render/image.hpp"
+#include "prototypes/factory.hpp"
+
+namespace fs = std::filesystem;
+namespace pr = palplab::render;
+
+namespace {
+struct Result {
+  int code;
+  std::string out;
+};
+Result run(const std::string& cmdline) {
+  FILE* p = popen((cmdline + " 2>&1").c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
+  const int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+Result cli(const std::string& args) {
+  return run(std::string(PALPLAB_BINARY) + " " + args);
+}
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+fs::path tmp(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("palplab_cli_render_" + std::to_string(getpid()));
+  fs::create_directories(d);
+  return d / name;
+}
+bool background(const std::uint8_t* p) {
+  return p[0] > 250 && p[1] > 250 && p[2] > 250;
+}
+}  // namespace
+
+TEST(CliRender, PressChangesTheStillOnlyNearTheContact) {
+  const std::string cam = " --camera 0,20 --size 480x360";
+  const fs::path still = tmp("rest.png"), pressed = tmp("pressed.png");
+  Result r = cli("render " + proto("B") + cam + " --out " + still.string());
+  if (r.code == 3) GTEST_SKIP() << "no EGL device: " << r.out;
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = cli("render " + proto("B") + cam + " --press ovary_left --force 2.5 --out " +
+          pressed.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const pr::Image a = pr::read_png(still.string()), b = pr::read_png(pressed.string());
+  ASSERT_EQ(a.width, 480);
+  ASSERT_EQ(a.height, 360);
+  ASSERT_EQ(b.width, a.width);
+
+  // Where the camera puts the pressed point, and how many pixels 3 cm there span.
+  const palplab::engine::Scene scene = palplab::prototypes::build_scene(proto("B"));
+  const auto& g = scene.geometry();
+  const Eigen::Vector3d p = g.V.row(palplab::engine::press_node(g, "ovary_left")).transpose();
+  Eigen::Vector3d centre;
+  double radius = 0.0;
+  pr::bounding_sphere(g.V, centre, radius);
+  pr::Camera c;
+  c.azimuth_deg = 0;
+  c.elevation_deg = 20;
+  const pr::CameraMatrices m = pr::camera_matrices(c, centre, radius, a.width, a.height);
+  const Eigen::Vector2d at = m.project(p);
+  const Eigen::Vector3d side = m.view.block<1, 3>(0, 0).transpose();  // camera right, world
+  const double px_3cm = (m.project(p + 0.03 * side) - at).norm();
+  ASSERT_GT(px_3cm, 5.0);
+
+  // The organ is in view; the press point is on it.
+  long organ = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) organ += !background(a.pixel(x, y));
+  EXPECT_GT(organ, 2000);
+  long near = 0, far = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const auto* u = a.pixel(x, y);
+      const auto* v = b.pixel(x, y);
+      if (std::abs(u[0] - v[0]) + std::abs(u[1] - v[1]) + std::abs(u[2] - v[2]) <= 24) continue;
+      const double d = std::hypot(x + 0.5 - at.x(), y + 0.5 - at.y());
+      (d <= px_3cm ? near : far) += 1;
+    }
+  EXPECT_GT(near, 10) << "no visible change at the contact (" << at.transpose() << ")";
+  EXPECT_EQ(far, 0) << "pixels changed more than 3 cm (" << px_3cm << " px) from the contact";
+}
+
+TEST(CliRender, PrototypeAShowsOnlyTheMarkerWhenPressed) {
+  // Prototype A draws no deformation: the press changes just the contact marker.
+  const std::string cam = " --camera 0,20 --size 320x240";
+  const fs::path still = tmp("a_rest.png"), pressed = tmp("a_pressed.png");
+  Result r = cli("render " + proto("A") + cam + " --out " + still.string());
+  if (r.code == 3) GTEST_SKIP() << "no EGL device: " << r.out;
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = cli("render " + proto("A") + cam + " --press ovary_left --force 2 --out " + pressed.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("visible deformation 0 mm"), std::string::npos) << r.out;
+  const pr::Image a = pr::read_png(still.string()), b = pr::read_png(pressed.string());
+  long changed = 0;
+  for (size_t i = 0; i < a.rgba.size(); i += 4)
+    changed += std::abs(a.rgba[i] - b.rgba[i]) + std::abs(a.rgba[i + 1] - b.rgba[i + 1]) > 24;
+  EXPECT_GT(changed, 0);
+  EXPECT_LT(changed, 60);  // a marker of 1.2% of the organ's radius
+}
+
+TEST(CliRender, BadInputExitsTwo) {
+  const std::string out = " --out " + tmp("x.png").string();
+  EXPECT_EQ(cli("render " + proto("A") + " --size 12x" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --size 10x10" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --camera 10" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --camera 0,95" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --press liver --force 2" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --press ovary_left" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --alpha body" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --alpha spleen=0.5" + out).code, 2);
+  EXPECT_EQ(cli("render " + proto("A") + " --out /nonexistent/dir/x.png").code, 2);
+}
+
+TEST(CliView, FramesAndScreenshotUnderXvfb) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  const fs::path shot = tmp("view.png");
+  const Result r =
+      run("xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(PALPLAB_BINARY) + " view " +
+          proto("A") + " --frames 30 --size 640x480 --screenshot " + shot.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const pr::Image img = pr::read_png(shot.string());
+  ASSERT_EQ(img.width, 640);
+  ASSERT_EQ(img.height, 480);
+  // The organ (coloured) and the panel (dark) are both drawn.
+  long organ = 0, dark = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const auto* p = img.pixel(x, y);
+      const int mx = std::max({p[0], p[1], p[2]}), mn = std::min({p[0], p[1], p[2]});
+      organ += y > 300 && mx - mn > 40;  // below the panel
+      dark += x < 300 && y < 200 && mx < 60;
+    }
+  EXPECT_GT(organ, 1000);
+  EXPECT_GT(dark, 5000);
+  EXPECT_EQ(cli("view " + proto("A") + " --screenshot " + shot.string()).code, 2);
+}
+
+TEST(CliView, SlowUdpDeviceIsRefusedBeforeAnyWindowOpens) {
+  // No bridge on this port: 0 Hz < 900 Hz. Needs no display.
+  const Result r = cli("view " + proto("A") +
+                       " --device udp:" + std::to_string(20000 + getpid() % 20000) + " --frames 1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("below the required 900 Hz"), std::string::npos) << r.out;
+  EXPECT_EQ(cli("view " + proto("A") + " --device serial:1 --frames 1").code, 2);
+  EXPECT_EQ(cli("view " + proto("A") + " --device trace:/nonexistent.trace --frames 1").code, 2);
+}
+
+TEST(CliView, RecordTraceThenReplayItUnderXvfb) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  const fs::path trace = tmp("view.trace"), shot = tmp("replay.png");
+  const std::string xvfb = "xvfb-run -a -s '-screen 0 800x600x24' " + std::string(PALPLAB_BINARY);
+  Result r = run(xvfb + " view " + proto("B") + " --frames 20 --size 320x240 --record-trace " +
+                 trace.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::FILE* f = std::fopen(trace.c_str(), "r");
+  ASSERT_TRUE(f);
+  char line[64] = {};
+  ASSERT_TRUE(std::fgets(line, sizeof line, f));
+  std::fclose(f);
+  EXPECT_EQ(std::string(line), "# palplab-trace/1\n");
+  EXPECT_NE(r.out.find("samples)"), std::string::npos) << r.out;
+  r = run(xvfb + " view " + proto("B") + " --frames 10 --size 320x240 --device trace:" +
+          trace.string() + " --screenshot " + shot.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(pr::read_png(shot.string()).width, 320);
+}

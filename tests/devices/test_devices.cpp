@@ -1,0 +1,320 @@
+// The device layer: UDP protocol encoding, the UDP device against an in-test bridge (sequence
+// numbers, localhost, timeouts -> force off within 5 ms and an event), the start-up rate
+// self-test, and trace record -> replay giving bit-identical sessions. Every loop is bounded.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/devices/self_test.hpp"
+#include "engine/haptics/devices/trace_device.hpp"
+#include "engine/haptics/devices/udp_device.hpp"
+#include "engine/haptics/press.hpp"
+#include "prototypes/factory.hpp"
+
+namespace e = palplab::engine;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+
+// A bridge program's end of the protocol, in the test.
+struct Bridge {
+  int fd = -1;
+  sockaddr_in to{};
+  std::uint32_t seq = 0;
+  explicit Bridge(int port) {
+    fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_in self{};
+    self.sin_family = AF_INET;
+    self.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::bind(fd, reinterpret_cast<sockaddr*>(&self), sizeof self);
+    to.sin_family = AF_INET;
+    to.sin_port = htons(static_cast<std::uint16_t>(port));
+    to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  }
+  ~Bridge() { ::close(fd); }
+  void send(const Eigen::Vector3d& x, std::uint32_t s, unsigned buttons = 0) {
+    e::UdpPosition m;
+    m.seq = s;
+    m.x = x;
+    m.buttons = buttons;
+    const auto b = e::encode(m);
+    ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+  }
+  void send(const Eigen::Vector3d& x) { send(x, ++seq); }
+  std::optional<e::UdpForce> receive(double wait_s = 0.0) {
+    const auto end = Clock::now() + std::chrono::duration<double>(wait_s);
+    std::uint8_t buf[256];
+    do {
+      const ssize_t n = ::recv(fd, buf, sizeof buf, MSG_DONTWAIT);
+      if (n >= 0) return e::decode_force(buf, static_cast<size_t>(n));
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    } while (Clock::now() < end);
+    return std::nullopt;
+  }
+};
+
+}  // namespace
+
+TEST(UdpProtocol, RoundTripAndLittleEndianLayout) {
+  e::UdpPosition p;
+  p.seq = 0x01020304u;
+  p.buttons = 5;
+  p.t_device = 1.25;
+  p.x = {0.1, -0.2, 0.3};
+  p.v = {1, 2, 3};
+  const auto b = e::encode(p);
+  ASSERT_EQ(b.size(), 72u);
+  EXPECT_EQ(b[0], 0x50);  // 'P'
+  EXPECT_EQ(b[3], 0x44);  // 'D'
+  EXPECT_EQ(b[4], 1);     // version
+  EXPECT_EQ(b[6], 1);     // type position
+  EXPECT_EQ(b[8], 0x04);  // seq, least significant byte first
+  EXPECT_EQ(b[11], 0x01);
+  const auto q = e::decode_position(b.data(), b.size());
+  ASSERT_TRUE(q);
+  EXPECT_EQ(q->seq, p.seq);
+  EXPECT_EQ(q->buttons, 5u);
+  EXPECT_EQ(q->t_device, 1.25);
+  EXPECT_EQ(q->x, p.x);
+  EXPECT_EQ(q->v, p.v);
+  // Malformed: wrong size, magic, type.
+  EXPECT_FALSE(e::decode_position(b.data(), 71));
+  auto bad = b;
+  bad[0] = 0;
+  EXPECT_FALSE(e::decode_position(bad.data(), bad.size()));
+  EXPECT_FALSE(e::decode_force(b.data(), b.size()));
+  e::UdpForce f;
+  f.seq = 7;
+  f.ack = 9;
+  f.flags = e::kUdpContact | e::kUdpForceOff;
+  f.t = 0.5;
+  f.f = {0, 0, 2.5};
+  const auto fb = e::encode(f);
+  ASSERT_EQ(fb.size(), 64u);
+  const auto g = e::decode_force(fb.data(), fb.size());
+  ASSERT_TRUE(g);
+  EXPECT_EQ(g->ack, 9u);
+  EXPECT_EQ(g->flags, f.flags);
+  EXPECT_EQ(g->f, f.f);
+}
+
+TEST(UdpDevice, PositionInForceOutWithSequenceNumbers) {
+  e::UdpDevice dev({0, 0.5});
+  ASSERT_GT(dev.port(), 0);
+  Bridge br(dev.port());
+  br.send({0.01, 0.02, 0.03}, 10, 1);
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  e::DeviceInput in = dev.read(0.0);
+  EXPECT_EQ(in.position, Eigen::Vector3d(0.01, 0.02, 0.03));
+  EXPECT_TRUE(in.button);
+  e::Rendered r;
+  r.t = 0.001;
+  r.force = {0, 0, 1.5};
+  r.contact = true;
+  dev.write(r);
+  auto f = br.receive(0.5);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->ack, 10u);
+  EXPECT_EQ(f->f, r.force);
+  EXPECT_EQ(f->flags & e::kUdpContact, e::kUdpContact);
+  EXPECT_EQ(f->flags & e::kUdpForceOff, 0u);
+  // A late datagram (older sequence) is ignored; a jump reports the lost ones.
+  br.send({9, 9, 9}, 9);
+  br.send({0.04, 0, 0}, 14);
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  in = dev.read(0.002);
+  EXPECT_EQ(in.position, Eigen::Vector3d(0.04, 0, 0));
+  EXPECT_EQ(dev.dropped(), 1);
+  EXPECT_EQ(dev.lost(), 3);
+  const auto ev = dev.take_events();
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].kind, "device_gap");
+  EXPECT_EQ(ev[0].value, 3.0);
+  EXPECT_EQ(dev.samples_received(), 2);
+}
+
+TEST(UdpDevice, PortInUseIsAnInputError) {
+  e::UdpDevice a({0, 0.002});
+  EXPECT_THROW(e::UdpDevice({a.port(), 0.002}), palplab::InputError);
+}
+
+// The haptic loop runs at 1 kHz (the real-time clock) on prototype A; the bridge sends at 1 kHz
+// and then goes silent. Within 5 ms of its last position it must receive a force-off datagram,
+// and the device must report a device_timeout event.
+TEST(UdpDevice, SilentBridgeGetsForceOffWithinFiveMs) {
+  e::Scene scene = palplab::prototypes::build_scene(proto("A"));
+  const auto& g = scene.geometry();
+  const int node = e::press_node(g, "ovary_left");
+  const Eigen::Vector3d inside = g.V.row(node).transpose() - 0.003 * g.N.row(node).transpose();
+  e::UdpDevice dev({0, 0.002});
+  Bridge br(dev.port());
+  std::atomic<bool> done{false};
+  double off_latency_ms = -1.0, last_force = 0.0;
+  long forces = 0;
+  std::thread bridge([&] {
+    const auto t0 = Clock::now();
+    auto next = t0;
+    Clock::time_point last_send = t0;
+    while (Clock::now() - t0 < std::chrono::milliseconds(150)) {  // bounded
+      const bool sending = Clock::now() - t0 < std::chrono::milliseconds(80);
+      if (sending) {
+        br.send(inside);
+        last_send = Clock::now();
+      }
+      while (auto f = br.receive()) {
+        ++forces;
+        if (sending && (f->flags & e::kUdpForceOff) == 0) last_force = f->f.norm();
+        if (!sending && (f->flags & e::kUdpForceOff) && off_latency_ms < 0)
+          off_latency_ms =
+              std::chrono::duration<double, std::milli>(Clock::now() - last_send).count();
+      }
+      next += std::chrono::microseconds(1000);
+      if (sending) {
+        std::this_thread::sleep_until(next);
+      } else {  // silent: poll finely so the measured latency is palplab's, not ours
+        std::this_thread::sleep_for(std::chrono::microseconds(50));
+      }
+    }
+    done = true;
+  });
+  e::RealtimeOptions ro;
+  ro.duration = 0.14;
+  ro.frame_period = 0.0;
+  std::vector<e::DeviceEvent> events;
+  const e::RealtimeStats st = e::run_realtime(scene, dev, ro);
+  bridge.join();
+  for (auto& ev : dev.take_events()) events.push_back(ev);
+  EXPECT_GT(forces, 50);
+  EXPECT_GT(last_force, 0.5);  // it was pressing 3 mm into the organ
+  ASSERT_GE(off_latency_ms, 0.0) << "no force-off datagram after the bridge went silent";
+  // 2 ms timeout + one 1 ms haptic step + delivery: < 5 ms. On a shared, overloaded machine the
+  // haptic thread itself may be descheduled; then the bound is the timeout plus the longest
+  // haptic period the clock measured (the force goes off at the first step that runs).
+  const double worst_period_ms = st.period_max_us / 1e3;
+  if (worst_period_ms <= 2.5) {
+    EXPECT_LE(off_latency_ms, 5.0);
+  } else {
+    EXPECT_LE(off_latency_ms, 2.0 + worst_period_ms + 1.0)
+        << "haptic loop was late (period max " << worst_period_ms << " ms)";
+  }
+  bool timeout = false;
+  for (const auto& ev : events) timeout = timeout || ev.kind == "device_timeout";
+  EXPECT_TRUE(timeout);
+}
+
+TEST(DeviceSelfTest, RefusesASlowDeviceAndAcceptsAFastOne) {
+  e::UdpDevice dev({0, 0.002});
+  Bridge br(dev.port());
+  // Silent bridge: 0 Hz.
+  try {
+    e::require_device_rate(dev, "udp:" + std::to_string(dev.port()), 900.0, 0.1);
+    FAIL() << "a silent device passed the self-test";
+  } catch (const palplab::InputError& err) {
+    const std::string m = err.what();
+    EXPECT_NE(m.find("below the required 900 Hz"), std::string::npos) << m;
+    EXPECT_NE(m.find("udp:"), std::string::npos) << m;
+  }
+  // A bridge at 1 kHz measured at >= 500 Hz (the limit is lowered for loaded test machines;
+  // what is checked here is that the count follows the datagrams).
+  std::atomic<bool> stop{false};
+  std::thread t([&] {
+    auto next = Clock::now();
+    for (int i = 0; i < 400 && !stop; ++i) {
+      br.send({0, 0, 0});
+      next += std::chrono::microseconds(1000);
+      std::this_thread::sleep_until(next);
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const e::DeviceRate r = e::require_device_rate(dev, "udp", 500.0, 0.2);
+  stop = true;
+  t.join();
+  EXPECT_TRUE(r.hardware);
+  EXPECT_GT(r.rate_hz, 500.0);
+  EXPECT_LT(r.rate_hz, 1300.0);  // a late sender catches up in bursts
+}
+
+// Record a scripted press on prototype C (adaptive refinement, the hardest to reproduce) through
+// the lock-step clock, write the trace, read it back, replay it: every sample and event equal.
+TEST(TraceDevice, RecordAndReplayAreIdentical) {
+  struct Log {
+    std::vector<e::Sample> samples;
+    std::vector<e::Event> events;
+  };
+  auto session = [](e::Device& dev) {
+    e::Scene scene = palplab::prototypes::build_scene(proto("C1"));
+    Log log;
+    e::LockstepOptions lo;
+    lo.duration = 2.0;
+    lo.frame_period = 0.0;
+    e::run_lockstep(scene, dev, lo, [&](const e::Rendered& r, const e::Sample& s) {
+      log.samples.push_back(s);
+      log.events.insert(log.events.end(), r.events.begin(), r.events.end());
+    });
+    return log;
+  };
+  e::Scene probe = palplab::prototypes::build_scene(proto("C1"));
+  const int node = e::press_node(probe.geometry(), "ovary_left");
+  e::PressDevice press(e::press_at(probe.geometry(), node, 2.0, 0.2, 0.1));
+  e::TraceRecorder rec(press);
+  const Log a = session(rec);
+  ASSERT_GT(a.samples.size(), 100u);
+  ASSERT_FALSE(a.events.empty());
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("palplab_trace_" + std::to_string(getpid()) + ".csv");
+  rec.trace().meta["prototype"] = "C1";
+  e::write_trace(path.string(), rec.trace());
+  e::Trace tr = e::read_trace(path.string());
+  std::filesystem::remove(path);
+  EXPECT_EQ(tr.meta["prototype"], "C1");
+  ASSERT_EQ(tr.samples.size(), rec.trace().samples.size());
+  e::TraceDevice replay(std::move(tr));
+  const Log b = session(replay);
+  ASSERT_EQ(b.samples.size(), a.samples.size());
+  for (size_t k = 0; k < a.samples.size(); ++k) {
+    ASSERT_EQ(b.samples[k].x, a.samples[k].x) << k;
+    ASSERT_EQ(b.samples[k].F, a.samples[k].F) << k;  // bit-identical forces
+    ASSERT_EQ(b.samples[k].contact_node, a.samples[k].contact_node) << k;
+  }
+  ASSERT_EQ(b.events.size(), a.events.size());
+  for (size_t k = 0; k < a.events.size(); ++k) {
+    EXPECT_EQ(b.events[k].kind, a.events[k].kind);
+    EXPECT_EQ(b.events[k].t, a.events[k].t);
+    EXPECT_EQ(b.events[k].value, a.events[k].value);
+  }
+}
+
+TEST(TraceDevice, BadFilesAreLocated) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("palplab_badtrace_" + std::to_string(getpid()) + ".csv");
+  auto write = [&](const std::string& text) {
+    FILE* f = fopen(path.c_str(), "w");
+    fputs(text.c_str(), f);
+    fclose(f);
+  };
+  write("t,x,y,z\n");
+  EXPECT_THROW(e::read_trace(path.string()), palplab::InputError);
+  write("# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n0,1,2,3,0,0,0,0\n0.001,1,2,x,0,0,0,0\n");
+  try {
+    e::read_trace(path.string());
+    FAIL();
+  } catch (const palplab::InputError& err) {
+    EXPECT_NE(std::string(err.what()).find(":4:"), std::string::npos) << err.what();
+  }
+  write("# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n0.002,1,2,3,0,0,0,0\n0.001,1,2,3,0,0,0,0\n");
+  EXPECT_THROW(e::read_trace(path.string()), palplab::InputError);
+  std::filesystem::remove(path);
+}
