@@ -46,7 +46,9 @@ int sphere_frequency_for(int target_vertices);
 // so interior tets are about as large as the surface triangles. The surface is kept as generated
 // (-Y: boundary faces = the surface's faces, its vertices keep their indices 0..n-1), so TetGen's
 // quality bound cannot be enforced at the boundary; the levels below are chosen (seed 0) where
-// it holds everywhere — check other seeds with tet_quality (engine/mesh/info.hpp).
+// it holds everywhere. Other seeds get best effort (default size, seeds 1-5: min dihedral
+// 4.3-6.9°, radius-edge max 1.9-8.4, mass ratio 144-495 : 1): check with tet_quality
+// (engine/mesh/info.hpp).
 // Every tet has attribute 101 (soft tissue) and a named region: a tet on the boundary takes the
 // region of its boundary face (the smaller id if it has two faces of different regions), an
 // interior tet the majority region of its surface vertices (see tetrahedralize).
