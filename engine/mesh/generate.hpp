@@ -10,6 +10,7 @@
 // Face regions, in this order (ids 0..5): ovary_left, ovary_right, horn_left, horn_right, body,
 // cervix. "left" is the -x side.
 #include <cstdint>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -41,19 +42,21 @@ int sphere_frequency_for(int target_vertices);
 
 // Model-C: the tract surface with surface_vertices vertices filled with a quality tet mesh by
 // TetGen (issue 9): radius-edge ratio <= radius_edge (-q), a minimum dihedral angle target
-// (-q.../d; TetGen treats it as a goal, not a guarantee), and a maximum tet volume
+// (-q<ratio>/<angle>; TetGen treats it as a goal, not a guarantee), and a maximum tet volume
 // volume_factor × (volume of the regular tet whose edge is the surface's mean edge length, -a),
 // so interior tets are about as large as the surface triangles. The surface is kept as generated
 // (-Y: boundary faces = the surface's faces, its vertices keep their indices 0..n-1), so TetGen's
 // quality bound cannot be enforced at the boundary; the levels below are chosen (seed 0) where
-// it holds everywhere — check other seeds with tet_quality (engine/mesh/info.hpp).
+// it holds everywhere. Other seeds get best effort (default size, seeds 1-5: min dihedral
+// 4.3-6.9°, radius-edge max 1.9-8.4, mass ratio 144-495 : 1): check with tet_quality
+// (engine/mesh/info.hpp).
 // Every tet has attribute 101 (soft tissue) and a named region: a tet on the boundary takes the
 // region of its boundary face (the smaller id if it has two faces of different regions), an
 // interior tet the majority region of its surface vertices (see tetrahedralize).
 // Default (seed 0, 1604 surface vertices): 2426 nodes (822 interior), 9264 tets, 3204 boundary
-// faces (SPEC: 2487 / 8744 / 4974; the SPEC's mesh was a skin of 3.5 tets per node with 2
-// interior nodes), min dihedral 7.7°, radius-edge <= 1.95, lumped node-mass ratio 217:1
-// (the old skin mesh: 36 000:1).
+// faces (SPEC: 2487 / 8744 / 4974 — 3.5 tets per node, a ratio only a skin mesh reaches; the
+// previous generated Model-C was such a skin, with 2 interior nodes), min dihedral 7.7°,
+// radius-edge <= 1.95, lumped node-mass ratio 217:1 (the old skin mesh: 36 000:1).
 struct ModelCOptions {
   int surface_vertices = 1600;  // target surface vertex count (generate_tract)
   std::uint64_t seed = 0;       // generate_tract's shape seed
@@ -68,7 +71,7 @@ inline constexpr int kModelCSurfaceVertices = ModelCOptions{}.surface_vertices;
 // resolutions, each a quality mesh with the default recipe. Surface vertex targets, coarse to
 // fine; level 2 is the default Model-C. Seed 0: 886 / 1689 / 2426 / 4565 nodes.
 inline constexpr int kModelCLevels[] = {750, 1200, 1600, 2440};
-inline constexpr int kModelCLevelCount = 4;
+inline constexpr int kModelCLevelCount = static_cast<int>(std::size(kModelCLevels));
 // Options of level 0 .. kModelCLevelCount-1; throws InputError for another level.
 ModelCOptions model_c_level(int level, std::uint64_t seed = 0);
 

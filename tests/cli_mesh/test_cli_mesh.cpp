@@ -101,6 +101,11 @@ TEST(CliMesh, GenerateIsDeterministic) {
         run(std::string("mesh generate ") + name + " --out " + p("d2.ply") + " --binary").code, 0);
     EXPECT_EQ(slurp(p("d1.ply")), slurp(p("d2.ply"))) << name;
   }
+  // Model-C (TetGen with quality refinement): same arguments, same bytes.
+  ASSERT_EQ(run("mesh generate model-c --vertices 750 --out " + p("mc1")).code, 0);
+  ASSERT_EQ(run("mesh generate model-c --vertices 750 --out " + p("mc2")).code, 0);
+  for (const char* ext : {".node", ".ele", ".face", ".names"})
+    EXPECT_EQ(slurp(p(std::string("mc1") + ext)), slurp(p(std::string("mc2") + ext))) << ext;
   ASSERT_EQ(run("mesh generate model-a --seed 5 --out " + p("s5.obj")).code, 0);
   ASSERT_EQ(run("mesh generate model-a --out " + p("s0.obj")).code, 0);
   EXPECT_NE(slurp(p("s5.obj")), slurp(p("s0.obj")));
