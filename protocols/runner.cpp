@@ -73,8 +73,19 @@ struct SessionOutcome {
   pm::TraineeState state_after;
 };
 
-SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const SessionSpec& spec,
-                           const pm::TraineeState& state_before, bool keep_samples,
+// The model parameters of a study, converted from its (validated) JSON once per run.
+struct ModelParams {
+  pm::TraineeParams trainee;
+  pm::InstructorParams instructor;
+  explicit ModelParams(const Study& s)
+      : trainee(pm::trainee_params(s.participant_parameters, s.file)),
+        instructor(pm::instructor_params(
+            s.instructor ? s.instructor->parameters : nlohmann::json::object(), s.file)) {}
+};
+
+SessionOutcome run_session(const Study& study, const ModelParams& mp, const ParticipantPlan& pp,
+                           const SessionSpec& spec, const pm::TraineeState& state_before,
+                           bool keep_samples,
                            const std::map<std::string, std::string>& prototype_sha) {
   // The scene is built from the file; it must still be the file recorded when the run started,
   // or the database would mix two simulators under one name.
@@ -118,19 +129,15 @@ SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const 
   if (instructed) trainee_ch = pm::Channels{true, false, false, true};
   const pm::Channels instructor_ch{false, true, true, false};
 
-  pm::Trainee trainee(pm::resolve_params(pm::trainee_param_specs(), study.participant_parameters),
-                      state_before);
+  pm::Trainee trainee(mp.trainee, state_before);
   std::optional<pm::Instructor> instructor;
   if (instructed) {
-    auto ip = pm::resolve_params(pm::instructor_param_specs(), study.instructor
-                                                                   ? study.instructor->parameters
-                                                                   : nlohmann::json::object());
     const std::uint64_t iseed =
         derive_seed(spec.seed, label_hash("instructor"), label_hash(spec.instructor));
-    instructor.emplace(ip, iseed);
-    const double weber = pm::resolve_params(pm::trainee_param_specs(), {}).at("weber_fraction");
-    instructor->set_target_deformation(
-        calibrate_instructor(scene, g.region_node(study.task.feature), lim.mpf, weber, iseed));
+    instructor.emplace(mp.instructor, iseed);
+    // The instructor calibrates with the instructor's own Weber fraction (an expert's hand).
+    instructor->set_target_deformation(calibrate_instructor(
+        scene, g.region_node(study.task.feature), lim.mpf, mp.instructor.weber_fraction, iseed));
   }
   trainee.begin_session(view, lim.mpf, spec.offset, spec.duration, pp.seed, spec.seed, trainee_ch);
 
@@ -222,6 +229,20 @@ SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const 
 
 }  // namespace
 
+std::vector<results::SessionData> simulate_participant(const Study& study,
+                                                       const ParticipantPlan& pp,
+                                                       bool keep_samples) {
+  const ModelParams mp(study);
+  std::vector<results::SessionData> out;
+  pm::TraineeState state;
+  for (const auto& spec : pp.sessions) {
+    SessionOutcome o = run_session(study, mp, pp, spec, state, keep_samples, {});
+    state = o.state_after;
+    out.push_back(std::move(o.data));
+  }
+  return out;
+}
+
 RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt) {
   const auto t0 = Clock::now();
   const std::string sha = results::sha256_hex(study.json_text);
@@ -290,6 +311,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   for (const auto& p : plan.participants)
     if (done.count(p.id) && done[p.id].size() == p.sessions.size()) ++progress.participants_done;
 
+  const ModelParams mp(study);
   std::mutex mu;
   std::atomic<std::size_t> next{0};
   std::atomic<long> started{0};
@@ -320,7 +342,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             break;
           }
           SessionOutcome o =
-              run_session(study, pp, pp.sessions[k], state, opt.samples, prototype_sha);
+              run_session(study, mp, pp, pp.sessions[k], state, opt.samples, prototype_sha);
           store.write_session(o.data);
           state = o.state_after;
           std::lock_guard lock(mu);

@@ -19,10 +19,10 @@ Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weigh
   return {acc / inv_sum, 1.0 / inv_sum};
 }
 
-double retention(double dt, const std::map<std::string, double>& p) {
+double retention(double dt, const TraineeParams& p) {
   if (dt <= 0) return 1.0;
-  const double tau = p.at("forgetting_tau"), d = p.at("forgetting_exponent");
-  const double tc = p.at("consolidation_time"), f = p.at("consolidated_factor");
+  const double tau = p.forgetting_tau, d = p.forgetting_exponent;
+  const double tc = p.consolidation_time, f = p.consolidated_factor;
   if (dt <= tc) return std::pow(1.0 + dt / tau, -d);
   // Up to consolidation the full exponent, after it a reduced one (continuous at tc).
   return std::pow(1.0 + tc / tau, -d) * std::pow((1.0 + dt / tau) / (1.0 + tc / tau), -d * f);
@@ -63,8 +63,7 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   return s;
 }
 
-Trainee::Trainee(std::map<std::string, double> params, TraineeState state)
-    : p_(std::move(params)), s_(state) {}
+Trainee::Trainee(const TraineeParams& params, TraineeState state) : p_(params), s_(state) {}
 
 void Trainee::begin_session(const SurfaceView& view, double briefed_target, double study_time,
                             double duration, std::uint64_t participant_seed, std::uint64_t seed,
@@ -78,12 +77,12 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     // The briefing: the target is told in newtons, but how much force that is to this person
     // is uncertain; the anatomy lesson leaves a rough idea of where the feature lies.
     Rng brief(derive_seed(participant_seed, "briefing"));
-    const double cv = p_.at("prior_target_cv");
+    const double cv = p_.prior_target_cv;
     s_.prior_mean = briefed_target * std::max(0.05, 1.0 + cv * brief.normal());
     s_.prior_var = std::pow(cv * briefed_target, 2);
     s_.target_mean = s_.prior_mean;
     s_.target_var = s_.prior_var;
-    const double sd = p_.at("spatial_prior_sd");
+    const double sd = p_.spatial_prior_sd;
     s_.place = view.feature_centroid +
                Eigen::Vector3d(brief.normal(), brief.normal(), brief.normal()) * sd;
     s_.place_sd = sd;
@@ -95,7 +94,7 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     s_.target_mean = s_.prior_mean + r * (s_.target_mean - s_.prior_mean);
     s_.target_var = r * r * s_.target_var + (1.0 - r * r) * s_.prior_var;
     s_.place_sd = std::sqrt(s_.place_sd * s_.place_sd +
-                            (1.0 - r * r) * std::pow(p_.at("spatial_forgetting_sd"), 2));
+                            (1.0 - r * r) * std::pow(p_.spatial_forgetting_sd, 2));
   }
   pos_ = view.start_position;
   identified_ = false;
@@ -131,7 +130,7 @@ void Trainee::choose_search_target() {
   ++search_k_;
   Eigen::Vector3d n = view_.N->row(best).transpose();
   press_dir_ = -n.normalized();
-  start_travel(V.row(best).transpose() + n.normalized() * p_.at("lift_height"), Mode::descend);
+  start_travel(V.row(best).transpose() + n.normalized() * p_.lift_height, Mode::descend);
 }
 
 void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
@@ -144,12 +143,12 @@ void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
 // happens to be low must not earn itself a small variance (that would bias towards low values).
 double Trainee::perceived_force(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
-  const double w = p_.at("weber_fraction");
+  const double w = p_.weber_fraction;
   std::vector<Estimate> est;
   if (ch_.haptic) est.push_back({F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)});
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
     const double fv_true = s_.k_hat * p.visible_deformation;
-    const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
+    const double cv2 = std::pow(p_.visual_weber, 2) + w * w / (s_.k_count + 1);
     est.push_back({fv_true * (1.0 + eps_v_), cv2 * std::max(fv_true * fv_true, 0.0025)});
   }
   if (est.empty()) return 0.0;
@@ -158,12 +157,12 @@ double Trainee::perceived_force(const Percept& p) const {
 
 double Trainee::perceived_variance(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
-  const double w = p_.at("weber_fraction");
+  const double w = p_.weber_fraction;
   std::vector<Estimate> est;
   if (ch_.haptic) est.push_back({F, std::pow(w * std::max(F, 0.05), 2)});
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
     const double fv_true = s_.k_hat * p.visible_deformation;
-    const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
+    const double cv2 = std::pow(p_.visual_weber, 2) + w * w / (s_.k_count + 1);
     est.push_back({fv_true, cv2 * std::max(fv_true * fv_true, 0.0025)});
   }
   if (est.empty()) return 1e6;
@@ -172,7 +171,7 @@ double Trainee::perceived_variance(const Percept& p) const {
 
 void Trainee::learn_target(double observed, double variance) {
   // Kalman update of the target belief from a cue that marks "target reached".
-  const double obs_var = variance + std::pow(p_.at("memory_noise_cv") * std::max(observed, 0.0), 2);
+  const double obs_var = variance + std::pow(p_.memory_noise_cv * std::max(observed, 0.0), 2);
   const double k = s_.target_var / (s_.target_var + obs_var);
   s_.target_mean += k * (observed - s_.target_mean);
   s_.target_var *= (1.0 - k);
@@ -196,8 +195,8 @@ Eigen::Vector3d Trainee::command(double t) {
   // Above max_force the hand yields along the felt force, whatever it was doing, and a press
   // ends (this also bounds what any other motion can do if it runs into the organ).
   const double felt = ch_.haptic && last_.contact ? last_.force.norm() : 0.0;
-  if (felt > p_.at("max_force")) {
-    pos_ += last_.force / felt * p_.at("release_speed") * dt;
+  if (felt > p_.max_force) {
+    pos_ += last_.force / felt * p_.release_speed * dt;
     if (mode_ == Mode::press || mode_ == Mode::hold) begin_release(t);
     return pos_;
   }
@@ -205,27 +204,27 @@ Eigen::Vector3d Trainee::command(double t) {
     case Mode::travel:
       // A person lifts the hand when the organ is in the way: move with the felt force.
       if (last_.contact && last_.force.norm() > 1e-9)
-        pos_ += last_.force.normalized() * p_.at("explore_speed") * dt;
-      if (move_towards(goal_, p_.at("explore_speed"))) {
+        pos_ += last_.force.normalized() * p_.explore_speed * dt;
+      if (move_towards(goal_, p_.explore_speed)) {
         mode_ = after_travel_;
         mode_start_ = t;
       }
       break;
     case Mode::descend:
-      pos_ += press_dir_ * 0.5 * p_.at("explore_speed") * dt;
-      if (t - mode_start_ > 3.0 * p_.at("lift_height") / (0.5 * p_.at("explore_speed")))
+      pos_ += press_dir_ * 0.5 * p_.explore_speed * dt;
+      if (t - mode_start_ > 3.0 * p_.lift_height / (0.5 * p_.explore_speed))
         choose_search_target();  // nothing to touch here
       break;
     case Mode::dwell:
       // Keep a light touch while recognising what is under the finger.
-      if (last_.force.norm() < 0.3) pos_ += press_dir_ * p_.at("press_speed") * dt;
-      if (t - mode_start_ >= p_.at("recognition_time")) {
+      if (last_.force.norm() < 0.3) pos_ += press_dir_ * p_.press_speed * dt;
+      if (t - mode_start_ >= p_.recognition_time) {
         if (last_.contact && last_.contact_region == view_.feature_region) {
           identified_ = true;
           // Store where it was found (noisy spatial memory).
           s_.place = pos_ + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) *
-                                p_.at("spatial_memory_sd");
-          s_.place_sd = p_.at("spatial_memory_sd");
+                                p_.spatial_memory_sd;
+          s_.place_sd = p_.spatial_memory_sd;
           mode_ = Mode::press;
           mode_start_ = t;
           start_press();
@@ -236,12 +235,12 @@ Eigen::Vector3d Trainee::command(double t) {
       }
       break;
     case Mode::press:
-      pos_ += press_dir_ * p_.at("press_speed") * dt;
+      pos_ += press_dir_ * p_.press_speed * dt;
       // Give up a press that never reaches the intended force (e.g. nothing felt).
       if ((release_at_ >= 0 && t >= release_at_) || t - mode_start_ > 10.0) begin_release(t);
       break;
     case Mode::hold:
-      if (t - mode_start_ >= p_.at("hold_time") || (release_at_ >= 0 && t >= release_at_))
+      if (t - mode_start_ >= p_.hold_time || (release_at_ >= 0 && t >= release_at_))
         begin_release(t);
       break;
     case Mode::release: {
@@ -250,10 +249,10 @@ Eigen::Vector3d Trainee::command(double t) {
       // stop as soon as the hand is free.
       const Eigen::Vector3d up = -press_dir_;
       if (last_.contact && ch_.haptic && last_.force.dot(up) < 0.0) {
-        pos_ += last_.force.normalized() * p_.at("release_speed") * dt;
+        pos_ += last_.force.normalized() * p_.release_speed * dt;
         release_blocked_ = true;
       } else {
-        pos_ += up * p_.at("release_speed") * dt;
+        pos_ += up * p_.release_speed * dt;
       }
       if (!last_.contact) {
         // The clearance is measured from where the contact ended, not from where the press
@@ -271,7 +270,7 @@ Eigen::Vector3d Trainee::command(double t) {
       break;
     }
     case Mode::rest:
-      if (t - mode_start_ >= p_.at("rest_time")) start_press();
+      if (t - mode_start_ >= p_.rest_time) start_press();
       break;
   }
   return pos_;
@@ -282,10 +281,10 @@ void Trainee::start_press() {
   mode_start_ = t_prev_;
   // Signal-dependent motor noise (Harris & Wolpert 1998): the produced force scatters with an SD
   // proportional to the intended force; per-press perceptual errors (Weber).
-  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.at("motor_noise_cv") * rng_.normal()));
-  eps_h_ = p_.at("weber_fraction") * rng_.normal();
-  eps_v_ = p_.at("visual_weber") * rng_.normal();
-  rt_scale_ = std::max(0.3, 1.0 + p_.at("reaction_time_cv") * rng_.normal());
+  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.motor_noise_cv * rng_.normal()));
+  eps_h_ = p_.weber_fraction * rng_.normal();
+  eps_v_ = p_.visual_weber * rng_.normal();
+  rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());
   release_at_ = -1.0;
   expect_marker_ = (ch_.audio || ch_.call) && (presses_ == 0 || marker_in_session_);
   audio_seen_ = false;
@@ -321,7 +320,7 @@ void Trainee::perceive(const Percept& p, bool call) {
     if (ch_.haptic) peak_felt_ = std::max(peak_felt_, p.force.norm() * (1.0 + eps_h_));
     if (ch_.visual) peak_seen_d_ = std::max(peak_seen_d_, p.visible_deformation * (1.0 + eps_v_));
     // Reaction times vary from trial to trial: one draw per press (rt_scale_).
-    const double rt_audio = p_.at("reaction_time_audio") * rt_scale_;
+    const double rt_audio = p_.reaction_time_audio * rt_scale_;
     // The sound means "target reached": learn the force felt at its onset, release after a
     // reaction time.
     if (ch_.audio && p.audio && !audio_seen_) {
@@ -349,20 +348,20 @@ void Trainee::end_session(double study_time) {
   s_.last_session_end = study_time;
 }
 
-Instructor::Instructor(std::map<std::string, double> params, std::uint64_t seed)
-    : p_(std::move(params)), rng_(derive_seed(seed, "instructor")) {
+Instructor::Instructor(const InstructorParams& params, std::uint64_t seed)
+    : p_(params), rng_(derive_seed(seed, "instructor")) {
   reset_press();
 }
 
 bool Instructor::observe(const Percept& p, Channels ch) {
   if (called_) return false;
   if (ch.audio && p.audio && !prev_audio_) {
-    double at = p.t + p_.at("reaction_time_audio") * rt_scale_;
+    double at = p.t + p_.reaction_time_audio * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   prev_audio_ = p.audio;
   if (ch.visual && target_d_ > 0 && p.visible_deformation >= target_d_ * (1.0 + eps_)) {
-    double at = p.t + p_.at("reaction_time_visual") * rt_scale_;
+    double at = p.t + p_.reaction_time_visual * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   if (call_at_ >= 0 && p.t >= call_at_) {
@@ -376,8 +375,8 @@ void Instructor::reset_press() {
   called_ = false;
   call_at_ = -1.0;
   prev_audio_ = false;
-  eps_ = p_.at("visual_weber") * rng_.normal();
-  rt_scale_ = std::max(0.3, 1.0 + p_.at("reaction_time_cv") * rng_.normal());
+  eps_ = p_.visual_weber * rng_.normal();
+  rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());
 }
 
 }  // namespace palplab::protocols::participants

@@ -16,12 +16,12 @@
 //
 // Units: N, m, s. Positions in the organ's frame.
 #include <Eigen/Core>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "protocols/participants/params.hpp"
 #include "protocols/rng.hpp"
 
 namespace palplab::protocols::participants {
@@ -64,7 +64,7 @@ struct Estimate {
 Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights = nullptr);
 
 // Power-law retention: share of what was learned that is kept after `dt` seconds.
-double retention(double dt, const std::map<std::string, double>& p);
+double retention(double dt, const TraineeParams& p);
 
 // ---- the trainee
 struct TraineeState {
@@ -85,7 +85,7 @@ struct TraineeState {
 class Trainee {
  public:
   // `briefed_target`: the MPF of the feature, told in the briefing (N).
-  Trainee(std::map<std::string, double> params, TraineeState state);
+  Trainee(const TraineeParams& params, TraineeState state);
 
   // Session start: applies forgetting over the interval since the last session, then plans the
   // search. `study_time`: s of study time at the session start; `seed`: the session's seed.
@@ -115,7 +115,7 @@ class Trainee {
   void start_press();
   void begin_release(double t);
 
-  std::map<std::string, double> p_;
+  TraineeParams p_;
   TraineeState s_;
   Rng rng_{0};
   SurfaceView view_;
@@ -148,7 +148,7 @@ class Trainee {
 // ---- the instructor (experiment 1): watches the rendered cues and calls "release".
 class Instructor {
  public:
-  Instructor(std::map<std::string, double> params, std::uint64_t seed);
+  Instructor(const InstructorParams& params, std::uint64_t seed);
   // Calibration: the deformation the instructor expects at the target, from an own press on the
   // same simulator (the runner performs it on a scene and resets the scene afterwards). 0 = the
   // simulator shows no deformation, so only the sound can be used.
@@ -159,7 +159,7 @@ class Instructor {
   void reset_press();  // the trainee released: wait for the next press
 
  private:
-  std::map<std::string, double> p_;
+  InstructorParams p_;
   Rng rng_;
   double target_d_ = 0.0, eps_ = 0.0, rt_scale_ = 1.0;
   double call_at_ = -1.0;
