@@ -44,23 +44,24 @@ ForceLimits limits_for(const Study& s, const std::string& region) {
   return {};
 }
 
-// The instructor's expert calibration: one own press on the feature of this simulator, feeling
-// the force (with Weber noise) up to the MPF and noting how much the organ visibly deforms then.
-// Returns 0 when the simulator shows no deformation. The scene is reset afterwards.
-double calibrate_instructor(engine::Scene& scene, int node, double mpf, double weber,
-                            std::uint64_t seed) {
+// A demonstration press on the feature of this simulator: a slow deliberate press until the
+// force, judged with relative error `eps`, reaches the MPF; what it rendered on the way (the
+// visible deformation at the target, 0 when none is drawn; whether the sound came). The scene
+// is reset afterwards. Used for the instructor's own calibration (eps from the instructor's
+// Weber fraction) and for the briefing's demonstration to the trainee (eps 0: the trainee
+// watches an exact demonstration).
+pm::Demonstration demonstrate(engine::Scene& scene, int node, double mpf, double eps) {
   const auto& g = scene.geometry();
-  Rng rng(derive_seed(seed, "instructor-calibration"));
-  const double eps = weber * rng.normal();
   Eigen::Vector3d n = g.N.row(node).transpose().normalized();
   Eigen::Vector3d x = g.V.row(node).transpose() + n * 0.01;
   const double dt = scene.dt(), speed = 0.004;  // m/s, a slow deliberate press
-  double d = 0.0;
+  pm::Demonstration d;
   for (int i = 0; i < static_cast<int>(20.0 / dt); ++i) {
     x -= n * speed * dt;
     engine::Rendered r = scene.step(x);
+    d.sound = d.sound || r.audio;
     if (r.force.norm() * (1.0 + eps) >= mpf) {
-      d = r.visible_deformation;
+      d.deformation = r.visible_deformation;
       break;
     }
   }
@@ -136,9 +137,14 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
         derive_seed(spec.seed, label_hash("instructor"), label_hash(spec.instructor));
     instructor.emplace(mp.instructor, iseed);
     // The instructor calibrates with the instructor's own Weber fraction (an expert's hand).
-    instructor->set_target_deformation(calibrate_instructor(
-        scene, g.region_node(study.task.feature), lim.mpf, mp.instructor.weber_fraction, iseed));
+    Rng rng(derive_seed(iseed, "instructor-calibration"));
+    const double eps = mp.instructor.weber_fraction * rng.normal();
+    instructor->set_target_deformation(
+        demonstrate(scene, g.region_node(study.task.feature), lim.mpf, eps).deformation);
   }
+  // The briefing (before the first session) demonstrates the target press on this simulator.
+  if (!state_before.initialised)
+    trainee.set_demonstration(demonstrate(scene, g.region_node(study.task.feature), lim.mpf, 0.0));
   trainee.begin_session(view, lim.mpf, spec.offset, spec.duration, pp.seed, spec.seed, trainee_ch);
 
   const double dt = scene.dt();

@@ -41,7 +41,14 @@ nlohmann::json TraineeState::to_json() const {
           {"k_felt_sum", k_felt_sum},
           {"k_seen_sum", k_seen_sum},
           {"feedback_count", feedback_count},
-          {"last_session_end", last_session_end}};
+          {"last_session_end", last_session_end},
+          {"demo_sound", demo_sound},
+          {"demo_d", demo_d},
+          {"reliance", reliance},
+          {"finds", finds},
+          {"speed_factor", speed_factor},
+          {"k_log_sum", k_log_sum},
+          {"k_log_sq", k_log_sq}};
 }
 
 TraineeState TraineeState::from_json(const nlohmann::json& j) {
@@ -60,6 +67,14 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   s.k_seen_sum = j.at("k_seen_sum").get<double>();
   s.feedback_count = j.at("feedback_count").get<int>();
   s.last_session_end = j.at("last_session_end").get<double>();
+  // Added with the guidance / visual-learning mechanisms (older states lack them).
+  s.demo_sound = j.value("demo_sound", false);
+  s.demo_d = j.value("demo_d", 0.0);
+  s.reliance = j.value("reliance", 0.0);
+  s.finds = j.value("finds", 0);
+  s.speed_factor = j.value("speed_factor", 1.0);
+  s.k_log_sum = j.value("k_log_sum", 0.0);
+  s.k_log_sq = j.value("k_log_sq", 0.0);
   return s;
 }
 
@@ -86,6 +101,17 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     s_.place = view.feature_centroid +
                Eigen::Vector3d(brief.normal(), brief.normal(), brief.normal()) * sd;
     s_.place_sd = sd;
+    // Individual differences: one speed factor per person (lognormal, median 1).
+    s_.speed_factor = std::exp(p_.individual_cv * brief.normal());
+    // The demonstration: a sound on the way to the target says "a sound marks the target"
+    // (the trainee will wait for it); a visible deformation at the target is remembered (seen
+    // with visual Weber noise) as what the target looks like.
+    if (demo_) {
+      s_.demo_sound = demo_->sound;
+      s_.reliance = demo_->sound ? 1.0 : 0.0;
+      if (demo_->deformation > 0)
+        s_.demo_d = demo_->deformation * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
+    }
     s_.initialised = true;
   } else {
     // Forgetting over the retention interval: the learned part decays back towards what the
@@ -101,6 +127,7 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
   search_k_ = 0;
   probed_.clear();
   presses_ = 0;
+  misses_ = 0;
   marker_in_session_ = false;
   dwell_start_ = -1.0;
   release_at_ = -1.0;
@@ -169,10 +196,18 @@ double Trainee::perceived_variance(const Percept& p) const {
   return mle_combine(est).variance;
 }
 
-void Trainee::learn_target(double observed, double variance) {
-  // Kalman update of the target belief from a cue that marks "target reached".
+double Trainee::draw_recognition_time() {
+  // Median recognition_time for a novice of average speed, faster with practice (power law over
+  // the sessions in which the feature was found) and for faster people; lognormal spread.
+  return p_.recognition_time / s_.speed_factor * std::pow(1.0 + s_.finds, -p_.practice_exponent) *
+         std::exp(p_.recognition_cv * rng_.normal());
+}
+
+void Trainee::learn_target(double observed, double variance, double gain_scale) {
+  // Kalman update of the target belief from a cue that marks "target reached"; gain_scale < 1
+  // when part of the learning is withheld (guidance).
   const double obs_var = variance + std::pow(p_.memory_noise_cv * std::max(observed, 0.0), 2);
-  const double k = s_.target_var / (s_.target_var + obs_var);
+  const double k = gain_scale * s_.target_var / (s_.target_var + obs_var);
   s_.target_mean += k * (observed - s_.target_mean);
   s_.target_var *= (1.0 - k);
   ++s_.feedback_count;
@@ -204,27 +239,37 @@ Eigen::Vector3d Trainee::command(double t) {
     case Mode::travel:
       // A person lifts the hand when the organ is in the way: move with the felt force.
       if (last_.contact && last_.force.norm() > 1e-9)
-        pos_ += last_.force.normalized() * p_.explore_speed * dt;
-      if (move_towards(goal_, p_.explore_speed)) {
+        pos_ += last_.force.normalized() * p_.explore_speed * s_.speed_factor * dt;
+      if (move_towards(goal_, p_.explore_speed * s_.speed_factor)) {
         mode_ = after_travel_;
         mode_start_ = t;
       }
       break;
     case Mode::descend:
-      pos_ += press_dir_ * 0.5 * p_.explore_speed * dt;
-      if (t - mode_start_ > 3.0 * p_.lift_height / (0.5 * p_.explore_speed))
+      pos_ += press_dir_ * 0.5 * p_.explore_speed * s_.speed_factor * dt;
+      if (t - mode_start_ > 3.0 * p_.lift_height / (0.5 * p_.explore_speed * s_.speed_factor))
         choose_search_target();  // nothing to touch here
       break;
     case Mode::dwell:
       // Keep a light touch while recognising what is under the finger.
       if (last_.force.norm() < 0.3) pos_ += press_dir_ * p_.press_speed * dt;
-      if (t - mode_start_ >= p_.recognition_time) {
-        if (last_.contact && last_.contact_region == view_.feature_region) {
+      // Seeing the touched part deform makes the judgement faster (a second, visual cue).
+      if (t - mode_start_ >= rec_time_ / (1.0 + (dwell_saw_d_ ? p_.visual_recognition_gain : 0))) {
+        if (last_.contact && last_.contact_region == view_.feature_region &&
+            rng_.uniform() >= p_.miss_probability) {
           identified_ = true;
-          // Store where it was found (noisy spatial memory).
-          s_.place = pos_ + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) *
-                                p_.spatial_memory_sd;
-          s_.place_sd = p_.spatial_memory_sd;
+          // Where it was found, from the hand's position and, if the part visibly deformed,
+          // from seeing it: both combined by inverse variances, then merged into the belief
+          // (Kalman), so memory sharpens over sessions and sharpens more with vision.
+          const double sh = p_.spatial_memory_sd, sv = p_.visual_spatial_sd;
+          const double obs_sd =
+              dwell_saw_d_ ? 1.0 / std::sqrt(1.0 / (sh * sh) + 1.0 / (sv * sv)) : sh;
+          const Eigen::Vector3d obs =
+              pos_ + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) * obs_sd;
+          const double k =
+              s_.place_sd * s_.place_sd / (s_.place_sd * s_.place_sd + obs_sd * obs_sd + 1e-18);
+          s_.place += k * (obs - s_.place);
+          s_.place_sd = std::sqrt((1.0 - k) * s_.place_sd * s_.place_sd);
           mode_ = Mode::press;
           mode_start_ = t;
           start_press();
@@ -286,7 +331,10 @@ void Trainee::start_press() {
   eps_v_ = p_.visual_weber * rng_.normal();
   rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());
   release_at_ = -1.0;
-  expect_marker_ = (ch_.audio || ch_.call) && (presses_ == 0 || marker_in_session_);
+  // A trainee who has come to rely on a marker (sound, call) waits for it.
+  expect_marker_ = (ch_.audio || ch_.call) && s_.reliance > 0.05;
+  marker_this_press_ = false;
+  visual_marker_ = false;
   audio_seen_ = false;
   call_heard_ = false;
   peak_felt_ = 0.0;
@@ -302,6 +350,17 @@ void Trainee::begin_release(double t) {
     s_.k_seen_sum += peak_seen_d_;
     ++s_.k_count;
     s_.k_hat = s_.k_felt_sum / s_.k_seen_sum;
+    const double lr = std::log(peak_felt_ / peak_seen_d_);
+    s_.k_log_sum += lr;
+    s_.k_log_sq += lr * lr;
+  }
+  // Guidance: reliance grows with every marker received, and fades when an expected one fails.
+  if (marker_this_press_) {
+    s_.reliance += p_.guidance_rate * (1.0 - s_.reliance);
+    misses_ = 0;
+  } else if (expect_marker_) {
+    s_.reliance *= 1.0 - p_.extinction_rate;
+    ++misses_;
   }
   mode_ = Mode::release;
   mode_start_ = t;
@@ -314,7 +373,11 @@ void Trainee::perceive(const Percept& p, bool call) {
   if (mode_ == Mode::descend && p.contact) {
     mode_ = Mode::dwell;
     mode_start_ = p.t;
+    rec_time_ = draw_recognition_time();
+    dwell_saw_d_ = false;
   }
+  if (mode_ == Mode::dwell && ch_.visual && p.contact && p.visible_deformation > 0)
+    dwell_saw_d_ = true;
   if (mode_ == Mode::press || mode_ == Mode::hold) {
     const double f = perceived_force(p);
     if (ch_.haptic) peak_felt_ = std::max(peak_felt_, p.force.norm() * (1.0 + eps_h_));
@@ -323,20 +386,44 @@ void Trainee::perceive(const Percept& p, bool call) {
     const double rt_audio = p_.reaction_time_audio * rt_scale_;
     // The sound means "target reached": learn the force felt at its onset, release after a
     // reaction time.
+    // Guidance hypothesis: the more the trainee relies on the marker, the less of what it
+    // marks reaches the internal memory of the force.
+    const double guided = 1.0 - p_.guidance_dependence * s_.reliance;
     if (ch_.audio && p.audio && !audio_seen_) {
       audio_seen_ = true;
-      learn_target(f, perceived_variance(p));
+      marker_this_press_ = true;
+      learn_target(f, perceived_variance(p), guided);
       if (release_at_ < 0) release_at_ = p.t + rt_audio;
     }
     if (call && !call_heard_) {
       call_heard_ = true;
-      learn_target(f, perceived_variance(p));
+      marker_this_press_ = true;
+      learn_target(f, perceived_variance(p), guided);
       if (release_at_ < 0 || p.t + rt_audio < release_at_) release_at_ = p.t + rt_audio;
     }
     if (audio_seen_ || call_heard_) marker_in_session_ = true;
+    // Seen deformation reaching what the demonstration showed at the target: the felt force
+    // there is an observation of the target (visual-haptic learning). Its variance adds how
+    // inconsistently felt force and seen deformation went together so far (a simulator whose
+    // picture does not follow the force teaches less).
+    if (ch_.visual && ch_.haptic && s_.demo_d > 0 && !visual_marker_ &&
+        p.visible_deformation * (1.0 + eps_v_) >= s_.demo_d) {
+      visual_marker_ = true;
+      double var = perceived_variance(p) + std::pow(p_.visual_weber * f, 2);
+      if (s_.k_count >= 2) {
+        const double m = s_.k_log_sum / s_.k_count;
+        var += std::max(0.0, s_.k_log_sq / s_.k_count - m * m) * f * f;
+      }
+      learn_target(f, var);
+      const double at = p.t + p_.reaction_time_visual * rt_scale_;
+      if (release_at_ < 0 || at < release_at_) release_at_ = at;
+    }
     // Without an expected marker the press stops at the intended force; waiting for a marker it
-    // goes on, but not beyond 1.3 times the intended force.
-    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * (expect_marker_ ? 1.3 : 1.0)) {
+    // goes on, to a limit that grows with the reliance and with each marker that failed.
+    const double wait = expect_marker_ ? std::pow(1.0 + p_.marker_wait_overshoot * s_.reliance,
+                                                  1 + std::min(misses_, 3))
+                                       : 1.0;
+    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * wait) {
       mode_ = Mode::hold;
       mode_start_ = p.t;
     }
@@ -346,6 +433,7 @@ void Trainee::perceive(const Percept& p, bool call) {
 
 void Trainee::end_session(double study_time) {
   s_.last_session_end = study_time;
+  if (identified_) ++s_.finds;
 }
 
 Instructor::Instructor(const InstructorParams& params, std::uint64_t seed)

@@ -36,7 +36,7 @@ struct TraineeParams {
   double explore_speed = 0.05;         // m/s
   double press_speed = 0.004;          // m/s
   double release_speed = 0.02;         // m/s
-  double recognition_time = 0.3;       // s
+  double recognition_time = 1.0;       // s
   double hold_time = 0.3;              // s
   double rest_time = 1.0;              // s
   double reaction_time_audio = 0.16;   // s
@@ -44,6 +44,18 @@ struct TraineeParams {
   double reaction_time_cv = 0.15;      // 1
   double lift_height = 0.01;           // m
   double max_force = 10.0;             // N
+  // guidance: reliance on a binary "target reached" marker (sound, call)
+  double guidance_dependence = 0.6;    // 1, share of marker learning withheld at full reliance
+  double guidance_rate = 0.2;          // 1, reliance gained per press with a marker
+  double extinction_rate = 0.3;        // 1, reliance lost per press whose expected marker failed
+  double marker_wait_overshoot = 0.3;  // 1, press beyond the intended force awaiting a marker
+  // visual learning and search
+  double visual_spatial_sd = 0.004;      // m, SD of locating the touched point by eye
+  double visual_recognition_gain = 1.0;  // 1, recognition speed-up when the part deforms
+  double recognition_cv = 0.3;           // 1, trial-to-trial SD / mean of a recognition time
+  double miss_probability = 0.2;         // 1, chance the feature is not recognised on a touch
+  double practice_exponent = 0.3;        // 1, power law of practice for recognition
+  double individual_cv = 0.15;           // 1, between-person SD of speed (log scale)
 };
 
 struct InstructorParams {
