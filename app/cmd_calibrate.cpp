@@ -41,6 +41,9 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--sim-n", a->opt.sim_n,
                       "Simulated participants per group (default: the study's group sizes)")
           ->check(CLI::Range(2, 100000));
+      cmd->add_option("--measures", a->opt.measures,
+                      "Measures to fit (default: the study's declared measures)")
+          ->expected(1, -1);
       cmd->add_option("--out", a->out, "Where to write the fitted parameters (JSON)")->required();
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, code] {

@@ -43,6 +43,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   std::map<std::tuple<std::string, std::string, int, std::string>, std::vector<double>> values;
   std::map<std::tuple<std::string, std::string, int, std::string>, int> first_line;
   std::vector<std::tuple<std::string, std::string, int, std::string>> order;
+  std::map<std::tuple<std::string, std::string, int, std::string>, int> undefined;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const double s = analysis::parse_number(t, static_cast<int>(r), col[2]);
     if (s < 1 || s != std::floor(s))
@@ -50,15 +51,22 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
                        "column 'session': expected a session number >= 1 within the phase");
     auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], static_cast<int>(s),
                                t.rows[r][col[3]]);
+    // An undefined measure (empty or NA, as `palplab export` and R write it) is no value.
+    const std::string& field = t.rows[r][col[4]];
     if (!values.count(key)) order.push_back(key), first_line[key] = t.line[r];
+    if (field.find_first_not_of(" \t") == std::string::npos || field == "NA") {
+      ++undefined[key];
+      values[key];
+      continue;
+    }
     values[key].push_back(analysis::parse_number(t, static_cast<int>(r), col[4]));
   }
   if (order.empty()) throw InputError("no data rows", csv_path);
   std::vector<HumanCell> cells;
   for (const auto& key : order) {
     const auto& v = values[key];
-    HumanCell c{std::get<0>(key), std::get<1>(key), std::get<2>(key), std::get<3>(key),
-                static_cast<int>(v.size())};
+    HumanCell c{std::get<0>(key), std::get<1>(key),           std::get<2>(key),
+                std::get<3>(key), static_cast<int>(v.size()), undefined[key]};
     if (c.n < 2)
       throw InputError(SourceLocation{csv_path, first_line[key], 1},
                        "group " + c.group + ", " + c.measure + ": fewer than 2 values");
@@ -96,14 +104,16 @@ double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int 
       loss += 1e3;  // nothing to compare: far worse than any fit
     } else {
       mean_sd(x, f.mean, f.sd);
-      const double s2 = std::max(c.sd * c.sd, 1e-12);
+      const double sd_floor = std::max(0.01 * std::abs(c.mean), 1e-9);
+      const double s2 = std::pow(std::max(c.sd, sd_floor), 2);
       const double var_m = s2 / c.n + s2 / f.n_sim;
       const double var_s = s2 / (2.0 * (c.n - 1)) + s2 / (2.0 * (f.n_sim - 1));
       f.z_mean = (f.mean - c.mean) / std::sqrt(var_m);
       f.z_sd = (f.sd - c.sd) / std::sqrt(var_s);
       loss += f.z_mean * f.z_mean + f.z_sd * f.z_sd;
     }
-    loss += 25.0 * f.undefined / total;
+    const double u_h = static_cast<double>(c.undefined) / (c.n + c.undefined);
+    loss += 25.0 * std::abs(static_cast<double>(f.undefined) / total - u_h);
     if (fit) fit->push_back(f);
   }
   return loss;
@@ -201,6 +211,13 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   if (opt.keys.empty()) throw InputError("--params: name at least one parameter to fit");
   CalibrationResult r;
   r.keys = opt.keys;
+  const std::vector<std::string>& measures = opt.measures.empty() ? study.measures : opt.measures;
+  std::vector<HumanCell> used;
+  for (const auto& c : cells)
+    if (std::find(measures.begin(), measures.end(), c.measure) != measures.end()) used.push_back(c);
+  if (used.empty())
+    throw InputError("the human data have no cell of the measures to fit (" +
+                     std::to_string(measures.size()) + " measures named)");
   std::vector<double> lo, hi, step;
   const pm::TraineeParams current = pm::trainee_params(study.participant_parameters, study.file);
   for (const auto& k : opt.keys) {
@@ -230,32 +247,35 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
   auto loss = [&](const std::vector<double>& x) {
-    const double l = moment_loss(with(x), cells, opt.jobs);
+    const double l = moment_loss(with(x), used, opt.jobs);
     ++evaluations;
     best = std::min(best, l);
     if (opt.progress) opt.progress(evaluations, l, best);
     return l;
   };
-  r.loss_before = moment_loss(with(r.start), cells, opt.jobs, &r.fit_before);
+  r.loss_before = moment_loss(with(r.start), used, opt.jobs, &r.fit_before);
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
   r.restarts = nm.restarts;
-  r.loss_after = moment_loss(with(r.fitted), cells, opt.jobs, &r.fit_after);
+  r.loss_after = moment_loss(with(r.fitted), used, opt.jobs, &r.fit_after);
 
-  // Curvature at the optimum by central differences, h = 5 % of the starting step.
+  // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
+  // starting value): wide enough to average over the small steps that common random numbers
+  // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
   const std::size_t d = r.fitted.size();
   Eigen::MatrixXd H(d, d);
   std::vector<double> h(d);
   for (std::size_t i = 0; i < d; ++i) {
-    h[i] = 0.05 * step[i];
+    h[i] = 0.2 * step[i];
     // Keep the stencil inside the bounds.
-    h[i] = std::min({h[i], (r.fitted[i] - lo[i]) > 0 ? r.fitted[i] - lo[i] : h[i],
-                     (hi[i] - r.fitted[i]) > 0 ? hi[i] - r.fitted[i] : h[i]});
+    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
+    if (room > 0) h[i] = std::min(h[i], room);
   }
   auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
     std::vector<double> x = r.fitted;
     x[i] += di;
     x[j] += dj;
+    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
     return loss(x);
   };
   const double f0 = r.loss_after;

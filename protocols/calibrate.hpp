@@ -7,10 +7,11 @@
 // Loss (a simulated-moments distance, χ²-like): over the cells,
 //   Σ (m_sim - m_h)² / (s_h²/n_h + s_h²/n_sim) + (s_sim - s_h)² / (s_h²/(2(n_h-1)) +
 //   s_h²/(2(n_sim-1)))
-//   + 25 · (share of simulated values that are undefined)
+//   + 25 · |share of simulated values undefined - share of human values undefined|
+// (s_h floored at 1 % of |m_h| and 1e-9, so a constant human cell cannot divide by 0),
 // i.e. each simulated mean and SD is compared with the human one in units of its sampling SE
-// (human sampling error plus simulation error); people always produced a value, so undefined
-// simulated measures (feature never found) are penalised. Common random numbers: every
+// (human sampling error plus simulation error); undefined measures (feature never found) are
+// compared as shares. Common random numbers: every
 // evaluation simulates the same plan (same seeds), so the loss changes only through the
 // parameters. Optimiser: Nelder–Mead (Lagarias et al. 1998 coefficients) on parameters scaled
 // by their starting step, projected into their bounds, restarted from the best point until a
@@ -30,11 +31,13 @@ struct HumanCell {
   std::string group, phase;
   int session = 1;
   std::string measure;
-  int n = 0;
+  int n = 0;          // defined values
+  int undefined = 0;  // empty / NA values (e.g. the feature was never found)
   double mean = 0.0, sd = 0.0;
 };
 
-// Reads a tidy CSV (columns participant, group, phase, session, measure, value) into cells;
+// Reads a tidy CSV (columns participant, group, phase, session, measure, value) into cells
+// (empty or NA values, i.e. undefined measures, are left out);
 // InputError with the line for missing columns, non-numbers, or cells with fewer than 2 values.
 std::vector<HumanCell> read_human_cells(const std::string& csv_path);
 
@@ -66,6 +69,9 @@ struct CalibrateOptions {
   int budget = 200;               // loss evaluations for the optimiser (SEs need 2p² + 1 more)
   int jobs = 1;
   int sim_n = 0;  // simulated participants per group; 0 = the study's group sizes
+  // Measures to fit (cells of other measures in the CSV are ignored); empty = the study's
+  // declared "measures".
+  std::vector<std::string> measures;
   std::function<void(int evaluation, double loss, double best)> progress;
 };
 
