@@ -137,21 +137,35 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
 }
 
 void Trainee::choose_search_target() {
-  // Probe where memory says the feature is: a draw from the spatial belief, widened slowly
-  // after misses (up to 2.5x), never the same surface node twice in a session.
+  // Probe where memory says the feature is, but not where this session already probed: of 8
+  // draws from the spatial belief (SD widened slowly after misses, up to 2.5x), take the surface
+  // node that best trades belief density against closeness to the probes already made (a
+  // touched place is known to about spatial_memory_sd; inhibition of return, Klein 2000). A
+  // node is never probed twice in a session.
   const double sd = s_.place_sd * std::min(1.0 + 0.25 * search_k_, 2.5) + 1e-4;
+  const double r = std::max(p_.spatial_memory_sd, 1e-4);
   const auto& V = *view_.V;
-  int best = 0;
-  for (int attempt = 0; attempt < 20; ++attempt) {
+  int best = -1, fallback = 0;
+  double best_score = -std::numeric_limits<double>::infinity();
+  for (int attempt = 0; attempt < 8; ++attempt) {
     Eigen::Vector3d q =
         s_.place + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) * sd;
+    int node = 0;
     double bd = std::numeric_limits<double>::infinity();
     for (int i = 0; i < V.rows(); ++i) {
       double d = (V.row(i).transpose() - q).squaredNorm();
-      if (d < bd) bd = d, best = i;
+      if (d < bd) bd = d, node = i;
     }
-    if (std::find(probed_.begin(), probed_.end(), best) == probed_.end()) break;
+    fallback = node;
+    if (std::find(probed_.begin(), probed_.end(), node) != probed_.end()) continue;
+    const Eigen::Vector3d x = V.row(node).transpose();
+    double dmin2 = std::numeric_limits<double>::infinity();
+    for (int k : probed_) dmin2 = std::min(dmin2, (V.row(k).transpose() - x).squaredNorm());
+    const double score = -(x - s_.place).squaredNorm() / (2 * sd * sd) +
+                         std::log(1.0 - std::exp(-dmin2 / (2 * r * r)) + 1e-12);
+    if (score > best_score) best_score = score, best = node;
   }
+  if (best < 0) best = fallback;
   probed_.push_back(best);
   target_node_ = best;
   ++search_k_;
@@ -423,7 +437,12 @@ void Trainee::perceive(const Percept& p, bool call) {
     const double wait = expect_marker_ ? std::pow(1.0 + p_.marker_wait_overshoot * s_.reliance,
                                                   1 + std::min(misses_, 3))
                                        : 1.0;
-    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * wait) {
+    // While the trainee sees the part deform and knows what the target looks like, the press
+    // aims at that picture (it ends at the visual marker above), bounded like a marker wait.
+    const bool aiming_visually = ch_.visual && s_.demo_d > 0 && p.visible_deformation > 0;
+    const double limit =
+        aiming_visually ? std::max(wait, 1.0 + p_.marker_wait_overshoot) * 1.5 : wait;
+    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * limit) {
       mode_ = Mode::hold;
       mode_start_ = p.t;
     }

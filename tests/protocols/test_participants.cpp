@@ -106,7 +106,9 @@ TEST(Memory, RetentionIsAPowerLawThatSlowsAfterConsolidation) {
 
 TEST(Trainee, FindsTheFeatureAndPresses) {
   FlatTissue tissue;
-  Trainee tr(trainee_params({}), TraineeState{});
+  // A quick, sure recogniser: this test is about pressing, not about how long a search takes.
+  Trainee tr(trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}}),
+             TraineeState{});
   auto peaks = run_session(tr, tissue, 0.0, 60.0, 5, 6);
   EXPECT_TRUE(tr.identified());
   EXPECT_GE(peaks.size(), 5u);

@@ -65,7 +65,8 @@ struct OverhangTissue : fixtures::FlatTissue {
 // organ 2.5 cm above the feature.
 TEST(TraineeRelease, PressesDoNotCreepAwayOrRunIntoTheOrganAbove) {
   OverhangTissue tissue;
-  const auto params = trainee_params(nlohmann::json::object());
+  // A quick, sure recogniser: this test is about the presses, not the search.
+  const auto params = trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}});
   for (std::uint64_t k = 0; k < 4; ++k) {
     SCOPED_TRACE("participant " + std::to_string(k));
     Trainee tr(params, TraineeState{});
