@@ -8,15 +8,22 @@
 
 namespace palplab::protocols::participants {
 
-Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights) {
+namespace {
+// The combination over an array (the per-step percept uses a stack array: no allocation).
+Estimate combine(const Estimate* in, std::size_t n, std::vector<double>* weights) {
   double inv_sum = 0.0, acc = 0.0;
-  for (const auto& e : in) inv_sum += 1.0 / e.variance;
-  for (const auto& e : in) acc += e.value / e.variance;
+  for (std::size_t i = 0; i < n; ++i) inv_sum += 1.0 / in[i].variance;
+  for (std::size_t i = 0; i < n; ++i) acc += in[i].value / in[i].variance;
   if (weights) {
     weights->clear();
-    for (const auto& e : in) weights->push_back((1.0 / e.variance) / inv_sum);
+    for (std::size_t i = 0; i < n; ++i) weights->push_back((1.0 / in[i].variance) / inv_sum);
   }
   return {acc / inv_sum, 1.0 / inv_sum};
+}
+}  // namespace
+
+Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights) {
+  return combine(in.data(), in.size(), weights);
 }
 
 double retention(double dt, const TraineeParams& p) {
@@ -185,29 +192,31 @@ void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
 double Trainee::perceived_force(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
   const double w = p_.weber_fraction;
-  std::vector<Estimate> est;
-  if (ch_.haptic) est.push_back({F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)});
+  Estimate est[2];
+  std::size_t n = 0;
+  if (ch_.haptic) est[n++] = Estimate{F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)};
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
     const double fv_true = s_.k_hat * p.visible_deformation;
     const double cv2 = std::pow(p_.visual_weber, 2) + w * w / (s_.k_count + 1);
-    est.push_back({fv_true * (1.0 + eps_v_), cv2 * std::max(fv_true * fv_true, 0.0025)});
+    est[n++] = Estimate{fv_true * (1.0 + eps_v_), cv2 * std::max(fv_true * fv_true, 0.0025)};
   }
-  if (est.empty()) return 0.0;
-  return mle_combine(est).value;
+  if (n == 0) return 0.0;
+  return combine(est, n, nullptr).value;
 }
 
 double Trainee::perceived_variance(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
   const double w = p_.weber_fraction;
-  std::vector<Estimate> est;
-  if (ch_.haptic) est.push_back({F, std::pow(w * std::max(F, 0.05), 2)});
+  Estimate est[2];
+  std::size_t n = 0;
+  if (ch_.haptic) est[n++] = Estimate{F, std::pow(w * std::max(F, 0.05), 2)};
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
     const double fv_true = s_.k_hat * p.visible_deformation;
     const double cv2 = std::pow(p_.visual_weber, 2) + w * w / (s_.k_count + 1);
-    est.push_back({fv_true, cv2 * std::max(fv_true * fv_true, 0.0025)});
+    est[n++] = Estimate{fv_true, cv2 * std::max(fv_true * fv_true, 0.0025)};
   }
-  if (est.empty()) return 1e6;
-  return mle_combine(est).variance;
+  if (n == 0) return 1e6;
+  return combine(est, n, nullptr).variance;
 }
 
 double Trainee::draw_recognition_time() {
