@@ -382,7 +382,10 @@ void Trainee::begin_release(double t) {
     s_.reliance += p_.guidance_rate * (1.0 - s_.reliance);
     misses_ = 0;
   } else if (expect_marker_) {
-    s_.reliance *= 1.0 - p_.extinction_rate;
+    // An expectation built on markers received fades when they stop; one that rests only on
+    // the demonstration (no marker received yet) keeps the trainee searching, pressing harder
+    // after each miss (this is what ends the "never hears the sound" mode of group A).
+    if (s_.feedback_count > 0) s_.reliance *= 1.0 - p_.extinction_rate;
     ++misses_;
   }
   mode_ = Mode::release;
