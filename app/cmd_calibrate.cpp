@@ -16,7 +16,7 @@
 
 namespace {
 struct CalibrateArgs {
-  std::string study, human, out;
+  std::string study, human, out, write_defaults;
   palplab::protocols::CalibrateOptions opt;
   bool quiet = false;
 };
@@ -45,6 +45,9 @@ palplab::app::CommandRegistration reg{
                       "Measures to fit (default: the study's declared measures)")
           ->expected(1, -1);
       cmd->add_option("--out", a->out, "Where to write the fitted parameters (JSON)")->required();
+      cmd->add_option("--write-defaults", a->write_defaults,
+                      "Also write the fitted values as the defaults into this params.hpp "
+                      "(protocols/participants/params.hpp; rebuild afterwards)");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, code] {
         using namespace palplab::protocols;
@@ -64,6 +67,11 @@ palplab::app::CommandRegistration reg{
         o << j.dump(2) << "\n";
         if (!o) throw palplab::InputError("cannot write the parameter file", a->out);
         std::cout << to_text(r) << "wrote " << a->out << "\n";
+        if (!a->write_defaults.empty()) {
+          write_defaults(r, a->write_defaults);
+          std::cout << "wrote the fitted defaults into " << a->write_defaults
+                    << " (rebuild to ship them)\n";
+        }
         *code = 0;
       });
     }};

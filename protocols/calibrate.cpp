@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <numeric>
+#include <regex>
 #include <sstream>
 
 #include "analysis/csv.hpp"
@@ -299,6 +301,36 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
                                                           : nlohmann::json::object();
   for (std::size_t i = 0; i < d; ++i) r.parameters[r.keys[i]] = r.fitted[i];
   return r;
+}
+
+void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
+  std::string text;
+  {
+    std::ifstream in(params_hpp, std::ios::binary);
+    if (!in) throw InputError("cannot read", params_hpp);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  const std::size_t begin = text.find("struct TraineeParams {");
+  const std::size_t end = begin == std::string::npos ? begin : text.find("\n};", begin);
+  if (end == std::string::npos)
+    throw InputError("no `struct TraineeParams { ... };` found", params_hpp);
+  std::string body = text.substr(begin, end - begin);
+  for (std::size_t i = 0; i < r.keys.size(); ++i) {
+    const std::regex member("(\\bdouble " + r.keys[i] + " = )([^;]+)(;)");
+    std::smatch m;
+    if (!std::regex_search(body, m, member))
+      throw InputError("no member initialiser `double " + r.keys[i] + " = ...;`", params_hpp);
+    char value[64];
+    std::snprintf(value, sizeof value, "%.6g", r.fitted[i]);
+    // Replace the value by position ("$1" followed by digits would read as another group).
+    body.replace(m.position(2), m.length(2), value);
+  }
+  text.replace(begin, end - begin, body);
+  std::ofstream out(params_hpp, std::ios::binary);
+  out << text;
+  if (!out) throw InputError("cannot write", params_hpp);
 }
 
 nlohmann::json to_json(const CalibrationResult& r) {

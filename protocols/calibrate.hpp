@@ -87,6 +87,12 @@ struct CalibrationResult {
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
                             const CalibrateOptions& opt);
 
+// Writes the fitted values as the new defaults into the member initialisers of
+// `struct TraineeParams` in `params_hpp` (protocols/participants/params.hpp), so the shipped
+// defaults are exactly this command's output after a rebuild. InputError when the file or a
+// member is not found.
+void write_defaults(const CalibrationResult& r, const std::string& params_hpp);
+
 nlohmann::json to_json(const CalibrationResult& r);
 std::string to_text(const CalibrationResult& r);
 

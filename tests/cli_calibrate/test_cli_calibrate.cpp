@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -68,11 +69,14 @@ TEST(Calibrate, RecoversKnownParameters) {
             0);
   ASSERT_EQ(cli("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
             0);
+  // --write-defaults edits a copy of the real params.hpp.
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "params.hpp",
+                d / "params.hpp");
   auto r = cli("calibrate " + data("recovery_study.json").string() + " --human " +
                    (d / "csv" / "measures.csv").string() +
                    " --params prior_target_cv explore_speed --budget 40 --sim-n 12 --jobs 2 "
                    "--quiet --out " +
-                   (d / "fit.json").string(),
+                   (d / "fit.json").string() + " --write-defaults " + (d / "params.hpp").string(),
                d);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("loss before"), std::string::npos);
@@ -91,6 +95,14 @@ TEST(Calibrate, RecoversKnownParameters) {
   EXPECT_LE(std::abs(sp - true_speed), 2 * sp_se) << sp << " ± " << sp_se;
   EXPECT_LE(std::abs(cv - true_cv), 0.1 * true_cv) << cv;
   EXPECT_LE(std::abs(sp - true_speed), 0.1 * true_speed) << sp;
+  // The fitted values are now the defaults in the edited params.hpp (%.6g, as written).
+  const std::string hpp = slurp(d / "params.hpp");
+  char expect[96];
+  std::snprintf(expect, sizeof expect, "double prior_target_cv = %.6g;", cv);
+  EXPECT_NE(hpp.find(expect), std::string::npos) << expect;
+  std::snprintf(expect, sizeof expect, "double explore_speed = %.6g;", sp);
+  EXPECT_NE(hpp.find(expect), std::string::npos) << expect;
+  EXPECT_NE(hpp.find("double weber_fraction = 0.08;"), std::string::npos);  // untouched
   // The start (defaults 0.30 and 0.05) is far outside: recovery is not the start value.
   EXPECT_GT(std::abs(0.30 - true_cv), 2 * cv_se);
   fs::remove_all(d);
