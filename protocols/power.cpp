@@ -270,7 +270,7 @@ long run_power(const Study& study, const PowerOptions& opt) {
   const std::string sha = results::sha256_hex(study.json_text);
   const std::string file = replicate_file(opt);
 
-  // Every (n, replicate) has a global index; this process takes index % (K·ranks) == its slot.
+  // Every (n, replicate) has a global index; shard I of K takes index % K == I - 1.
   std::set<std::pair<int, int>> done;
   if (ranks.rank == 0) {
     std::error_code ec;
@@ -302,17 +302,16 @@ long run_power(const Study& study, const PowerOptions& opt) {
   struct Task {
     int n, replicate;
   };
+  // This shard's missing replicates, in index order (the same list on every rank); rank r of
+  // K takes every K-th of them.
   std::vector<Task> mine;
   long total = 0;
-  const long slots = static_cast<long>(opt.shards) * ranks.size;
-  const long slot = static_cast<long>(opt.shard) * ranks.size + ranks.rank;
   for (std::size_t i = 0; i < ns.size(); ++i)
     for (int r = 0; r < opt.replicates; ++r) {
       const long index = static_cast<long>(i) * opt.replicates + r;
       if (index % opt.shards != opt.shard) continue;
       if (done.count({ns[i], r})) continue;
-      ++total;
-      if (index % slots == slot) mine.push_back({ns[i], r});
+      if (total++ % ranks.size == ranks.rank) mine.push_back({ns[i], r});
     }
 
   // Rounds: each rank runs up to `jobs` replicates in parallel, then rank 0 appends everything

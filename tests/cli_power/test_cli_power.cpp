@@ -132,6 +132,20 @@ TEST(Power, MpiEqualsSingleProcess) {
   auto r = run(mpirun, base + (d / "mpi").string(), d);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_EQ(power_json(d / "mpi"), power_json(d / "single"));
+  // Shards under MPI (each shard's replicates shared by the ranks), merged.
+  for (int i = 1; i <= 2; ++i) {
+    auto s = run(
+        mpirun,
+        base + (d / ("m" + std::to_string(i))).string() + " --shard " + std::to_string(i) + "/2",
+        d);
+    ASSERT_EQ(s.code, 0) << s.out << s.err;
+  }
+  ASSERT_EQ(cli("merge " + (d / "m1").string() + " " + (d / "m2").string() + " --out " +
+                    (d / "mmerged").string(),
+                d)
+                .code,
+            0);
+  EXPECT_EQ(power_json(d / "mmerged"), power_json(d / "single"));
   fs::remove_all(d);
 #endif
 }
