@@ -44,23 +44,24 @@ ForceLimits limits_for(const Study& s, const std::string& region) {
   return {};
 }
 
-// The instructor's expert calibration: one own press on the feature of this simulator, feeling
-// the force (with Weber noise) up to the MPF and noting how much the organ visibly deforms then.
-// Returns 0 when the simulator shows no deformation. The scene is reset afterwards.
-double calibrate_instructor(engine::Scene& scene, int node, double mpf, double weber,
-                            std::uint64_t seed) {
+// A demonstration press on the feature of this simulator: a slow deliberate press until the
+// force, judged with relative error `eps`, reaches the MPF; what it rendered on the way (the
+// visible deformation at the target, 0 when none is drawn; whether the sound came). The scene
+// is reset afterwards. Used for the instructor's own calibration (eps from the instructor's
+// Weber fraction) and for the briefing's demonstration to the trainee (eps 0: the trainee
+// watches an exact demonstration).
+pm::Demonstration demonstrate(engine::Scene& scene, int node, double mpf, double eps) {
   const auto& g = scene.geometry();
-  Rng rng(derive_seed(seed, "instructor-calibration"));
-  const double eps = weber * rng.normal();
   Eigen::Vector3d n = g.N.row(node).transpose().normalized();
   Eigen::Vector3d x = g.V.row(node).transpose() + n * 0.01;
   const double dt = scene.dt(), speed = 0.004;  // m/s, a slow deliberate press
-  double d = 0.0;
+  pm::Demonstration d;
   for (int i = 0; i < static_cast<int>(20.0 / dt); ++i) {
     x -= n * speed * dt;
     engine::Rendered r = scene.step(x);
+    d.sound = d.sound || r.audio;
     if (r.force.norm() * (1.0 + eps) >= mpf) {
-      d = r.visible_deformation;
+      d.deformation = r.visible_deformation;
       break;
     }
   }
@@ -73,8 +74,19 @@ struct SessionOutcome {
   pm::TraineeState state_after;
 };
 
-SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const SessionSpec& spec,
-                           const pm::TraineeState& state_before, bool keep_samples,
+// The model parameters of a study, converted from its (validated) JSON once per run.
+struct ModelParams {
+  pm::TraineeParams trainee;
+  pm::InstructorParams instructor;
+  explicit ModelParams(const Study& s)
+      : trainee(pm::trainee_params(s.participant_parameters, s.file)),
+        instructor(pm::instructor_params(
+            s.instructor ? s.instructor->parameters : nlohmann::json::object(), s.file)) {}
+};
+
+SessionOutcome run_session(const Study& study, const ModelParams& mp, const ParticipantPlan& pp,
+                           const SessionSpec& spec, const pm::TraineeState& state_before,
+                           bool keep_samples,
                            const std::map<std::string, std::string>& prototype_sha) {
   // The scene is built from the file; it must still be the file recorded when the run started,
   // or the database would mix two simulators under one name.
@@ -118,20 +130,21 @@ SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const 
   if (instructed) trainee_ch = pm::Channels{true, false, false, true};
   const pm::Channels instructor_ch{false, true, true, false};
 
-  pm::Trainee trainee(pm::resolve_params(pm::trainee_param_specs(), study.participant_parameters),
-                      state_before);
+  pm::Trainee trainee(mp.trainee, state_before);
   std::optional<pm::Instructor> instructor;
   if (instructed) {
-    auto ip = pm::resolve_params(pm::instructor_param_specs(), study.instructor
-                                                                   ? study.instructor->parameters
-                                                                   : nlohmann::json::object());
     const std::uint64_t iseed =
         derive_seed(spec.seed, label_hash("instructor"), label_hash(spec.instructor));
-    instructor.emplace(ip, iseed);
-    const double weber = pm::resolve_params(pm::trainee_param_specs(), {}).at("weber_fraction");
+    instructor.emplace(mp.instructor, iseed);
+    // The instructor calibrates with the instructor's own Weber fraction (an expert's hand).
+    Rng rng(derive_seed(iseed, "instructor-calibration"));
+    const double eps = mp.instructor.weber_fraction * rng.normal();
     instructor->set_target_deformation(
-        calibrate_instructor(scene, g.region_node(study.task.feature), lim.mpf, weber, iseed));
+        demonstrate(scene, g.region_node(study.task.feature), lim.mpf, eps).deformation);
   }
+  // The briefing (before the first session) demonstrates the target press on this simulator.
+  if (!state_before.initialised)
+    trainee.set_demonstration(demonstrate(scene, g.region_node(study.task.feature), lim.mpf, 0.0));
   trainee.begin_session(view, lim.mpf, spec.offset, spec.duration, pp.seed, spec.seed, trainee_ch);
 
   const double dt = scene.dt();
@@ -143,15 +156,20 @@ SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const 
   samples.x.reserve(3 * steps);
   samples.F.reserve(3 * steps);
   samples.node.reserve(steps);
-  std::vector<float> loop(steps);
+  // Step times for the loop median / p99: every kTimedEvery-th step (reading the clock twice
+  // per step cost 12 % of an exp2 run; a systematic 1-in-8 sample estimates both quantiles).
+  constexpr long kTimedEvery = 8;
+  std::vector<float> loop;
+  loop.reserve(steps / kTimedEvery + 1);
   const auto wall0 = Clock::now();
   bool prev_contact = false;
   for (long i = 0; i < steps; ++i) {
     const double t = (i + 1) * dt;
     const Eigen::Vector3d x = trainee.command(t);
-    const auto a = Clock::now();
+    const bool timed = i % kTimedEvery == 0;
+    const auto a = timed ? Clock::now() : Clock::time_point{};
     const engine::Rendered r = scene.step(x);
-    loop[i] = std::chrono::duration<float>(Clock::now() - a).count();
+    if (timed) loop.push_back(std::chrono::duration<float>(Clock::now() - a).count());
     samples.x.insert(samples.x.end(), {x.x(), x.y(), x.z()});
     samples.F.insert(samples.F.end(), {r.force.x(), r.force.y(), r.force.z()});
     samples.node.push_back(r.contact_node);
@@ -222,6 +240,20 @@ SessionOutcome run_session(const Study& study, const ParticipantPlan& pp, const 
 
 }  // namespace
 
+std::vector<results::SessionData> simulate_participant(const Study& study,
+                                                       const ParticipantPlan& pp,
+                                                       bool keep_samples) {
+  const ModelParams mp(study);
+  std::vector<results::SessionData> out;
+  pm::TraineeState state;
+  for (const auto& spec : pp.sessions) {
+    SessionOutcome o = run_session(study, mp, pp, spec, state, keep_samples, {});
+    state = o.state_after;
+    out.push_back(std::move(o.data));
+  }
+  return out;
+}
+
 RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt) {
   const auto t0 = Clock::now();
   const std::string sha = results::sha256_hex(study.json_text);
@@ -290,6 +322,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   for (const auto& p : plan.participants)
     if (done.count(p.id) && done[p.id].size() == p.sessions.size()) ++progress.participants_done;
 
+  const ModelParams mp(study);
   std::mutex mu;
   std::atomic<std::size_t> next{0};
   std::atomic<long> started{0};
@@ -320,7 +353,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             break;
           }
           SessionOutcome o =
-              run_session(study, pp, pp.sessions[k], state, opt.samples, prototype_sha);
+              run_session(study, mp, pp, pp.sessions[k], state, opt.samples, prototype_sha);
           store.write_session(o.data);
           state = o.state_after;
           std::lock_guard lock(mu);

@@ -16,6 +16,7 @@
 
 #include "protocols/plan.hpp"
 #include "protocols/study.hpp"
+#include "results/store.hpp"
 
 namespace palplab::protocols {
 
@@ -47,5 +48,12 @@ struct RunSummary {
 };
 
 RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt);
+
+// Every session of one planned participant, in memory (no database; the measures are computed
+// exactly as `run` computes them): what calibration and power analysis simulate. Samples are
+// dropped unless `keep_samples`. Same results as run_study for the same study and plan.
+std::vector<results::SessionData> simulate_participant(const Study& study,
+                                                       const ParticipantPlan& pp,
+                                                       bool keep_samples = false);
 
 }  // namespace palplab::protocols

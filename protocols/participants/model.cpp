@@ -8,21 +8,28 @@
 
 namespace palplab::protocols::participants {
 
-Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights) {
+namespace {
+// The combination over an array (the per-step percept uses a stack array: no allocation).
+Estimate combine(const Estimate* in, std::size_t n, std::vector<double>* weights) {
   double inv_sum = 0.0, acc = 0.0;
-  for (const auto& e : in) inv_sum += 1.0 / e.variance;
-  for (const auto& e : in) acc += e.value / e.variance;
+  for (std::size_t i = 0; i < n; ++i) inv_sum += 1.0 / in[i].variance;
+  for (std::size_t i = 0; i < n; ++i) acc += in[i].value / in[i].variance;
   if (weights) {
     weights->clear();
-    for (const auto& e : in) weights->push_back((1.0 / e.variance) / inv_sum);
+    for (std::size_t i = 0; i < n; ++i) weights->push_back((1.0 / in[i].variance) / inv_sum);
   }
   return {acc / inv_sum, 1.0 / inv_sum};
 }
+}  // namespace
 
-double retention(double dt, const std::map<std::string, double>& p) {
+Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights) {
+  return combine(in.data(), in.size(), weights);
+}
+
+double retention(double dt, const TraineeParams& p) {
   if (dt <= 0) return 1.0;
-  const double tau = p.at("forgetting_tau"), d = p.at("forgetting_exponent");
-  const double tc = p.at("consolidation_time"), f = p.at("consolidated_factor");
+  const double tau = p.forgetting_tau, d = p.forgetting_exponent;
+  const double tc = p.consolidation_time, f = p.consolidated_factor;
   if (dt <= tc) return std::pow(1.0 + dt / tau, -d);
   // Up to consolidation the full exponent, after it a reduced one (continuous at tc).
   return std::pow(1.0 + tc / tau, -d) * std::pow((1.0 + dt / tau) / (1.0 + tc / tau), -d * f);
@@ -41,7 +48,14 @@ nlohmann::json TraineeState::to_json() const {
           {"k_felt_sum", k_felt_sum},
           {"k_seen_sum", k_seen_sum},
           {"feedback_count", feedback_count},
-          {"last_session_end", last_session_end}};
+          {"last_session_end", last_session_end},
+          {"demo_sound", demo_sound},
+          {"demo_d", demo_d},
+          {"reliance", reliance},
+          {"finds", finds},
+          {"speed_factor", speed_factor},
+          {"k_log_sum", k_log_sum},
+          {"k_log_sq", k_log_sq}};
 }
 
 TraineeState TraineeState::from_json(const nlohmann::json& j) {
@@ -60,11 +74,18 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   s.k_seen_sum = j.at("k_seen_sum").get<double>();
   s.feedback_count = j.at("feedback_count").get<int>();
   s.last_session_end = j.at("last_session_end").get<double>();
+  // Added with the guidance / visual-learning mechanisms (older states lack them).
+  s.demo_sound = j.value("demo_sound", false);
+  s.demo_d = j.value("demo_d", 0.0);
+  s.reliance = j.value("reliance", 0.0);
+  s.finds = j.value("finds", 0);
+  s.speed_factor = j.value("speed_factor", 1.0);
+  s.k_log_sum = j.value("k_log_sum", 0.0);
+  s.k_log_sq = j.value("k_log_sq", 0.0);
   return s;
 }
 
-Trainee::Trainee(std::map<std::string, double> params, TraineeState state)
-    : p_(std::move(params)), s_(state) {}
+Trainee::Trainee(const TraineeParams& params, TraineeState state) : p_(params), s_(state) {}
 
 void Trainee::begin_session(const SurfaceView& view, double briefed_target, double study_time,
                             double duration, std::uint64_t participant_seed, std::uint64_t seed,
@@ -78,15 +99,26 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     // The briefing: the target is told in newtons, but how much force that is to this person
     // is uncertain; the anatomy lesson leaves a rough idea of where the feature lies.
     Rng brief(derive_seed(participant_seed, "briefing"));
-    const double cv = p_.at("prior_target_cv");
+    const double cv = p_.prior_target_cv;
     s_.prior_mean = briefed_target * std::max(0.05, 1.0 + cv * brief.normal());
     s_.prior_var = std::pow(cv * briefed_target, 2);
     s_.target_mean = s_.prior_mean;
     s_.target_var = s_.prior_var;
-    const double sd = p_.at("spatial_prior_sd");
+    const double sd = p_.spatial_prior_sd;
     s_.place = view.feature_centroid +
                Eigen::Vector3d(brief.normal(), brief.normal(), brief.normal()) * sd;
     s_.place_sd = sd;
+    // Individual differences: one speed factor per person (lognormal, median 1).
+    s_.speed_factor = std::exp(p_.individual_cv * brief.normal());
+    // The demonstration: a sound on the way to the target says "a sound marks the target"
+    // (the trainee will wait for it); a visible deformation at the target is remembered (seen
+    // with visual Weber noise) as what the target looks like.
+    if (demo_) {
+      s_.demo_sound = demo_->sound;
+      s_.reliance = demo_->sound ? 1.0 : 0.0;
+      if (demo_->deformation > 0)
+        s_.demo_d = demo_->deformation * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
+    }
     s_.initialised = true;
   } else {
     // Forgetting over the retention interval: the learned part decays back towards what the
@@ -95,13 +127,14 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     s_.target_mean = s_.prior_mean + r * (s_.target_mean - s_.prior_mean);
     s_.target_var = r * r * s_.target_var + (1.0 - r * r) * s_.prior_var;
     s_.place_sd = std::sqrt(s_.place_sd * s_.place_sd +
-                            (1.0 - r * r) * std::pow(p_.at("spatial_forgetting_sd"), 2));
+                            (1.0 - r * r) * std::pow(p_.spatial_forgetting_sd, 2));
   }
   pos_ = view.start_position;
   identified_ = false;
   search_k_ = 0;
   probed_.clear();
   presses_ = 0;
+  misses_ = 0;
   marker_in_session_ = false;
   dwell_start_ = -1.0;
   release_at_ = -1.0;
@@ -111,27 +144,41 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
 }
 
 void Trainee::choose_search_target() {
-  // Probe where memory says the feature is: a draw from the spatial belief, widened slowly
-  // after misses (up to 2.5x), never the same surface node twice in a session.
+  // Probe where memory says the feature is, but not where this session already probed: of 8
+  // draws from the spatial belief (SD widened slowly after misses, up to 2.5x), take the surface
+  // node that best trades belief density against closeness to the probes already made (a
+  // touched place is known to about spatial_memory_sd; inhibition of return, Klein 2000). A
+  // node is never probed twice in a session.
   const double sd = s_.place_sd * std::min(1.0 + 0.25 * search_k_, 2.5) + 1e-4;
+  const double r = std::max(p_.spatial_memory_sd, 1e-4);
   const auto& V = *view_.V;
-  int best = 0;
-  for (int attempt = 0; attempt < 20; ++attempt) {
+  int best = -1, fallback = 0;
+  double best_score = -std::numeric_limits<double>::infinity();
+  for (int attempt = 0; attempt < 8; ++attempt) {
     Eigen::Vector3d q =
         s_.place + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) * sd;
+    int node = 0;
     double bd = std::numeric_limits<double>::infinity();
     for (int i = 0; i < V.rows(); ++i) {
       double d = (V.row(i).transpose() - q).squaredNorm();
-      if (d < bd) bd = d, best = i;
+      if (d < bd) bd = d, node = i;
     }
-    if (std::find(probed_.begin(), probed_.end(), best) == probed_.end()) break;
+    fallback = node;
+    if (std::find(probed_.begin(), probed_.end(), node) != probed_.end()) continue;
+    const Eigen::Vector3d x = V.row(node).transpose();
+    double dmin2 = std::numeric_limits<double>::infinity();
+    for (int k : probed_) dmin2 = std::min(dmin2, (V.row(k).transpose() - x).squaredNorm());
+    const double score = -(x - s_.place).squaredNorm() / (2 * sd * sd) +
+                         std::log(1.0 - std::exp(-dmin2 / (2 * r * r)) + 1e-12);
+    if (score > best_score) best_score = score, best = node;
   }
+  if (best < 0) best = fallback;
   probed_.push_back(best);
   target_node_ = best;
   ++search_k_;
   Eigen::Vector3d n = view_.N->row(best).transpose();
   press_dir_ = -n.normalized();
-  start_travel(V.row(best).transpose() + n.normalized() * p_.at("lift_height"), Mode::descend);
+  start_travel(V.row(best).transpose() + n.normalized() * p_.lift_height, Mode::descend);
 }
 
 void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
@@ -144,36 +191,46 @@ void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
 // happens to be low must not earn itself a small variance (that would bias towards low values).
 double Trainee::perceived_force(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
-  const double w = p_.at("weber_fraction");
-  std::vector<Estimate> est;
-  if (ch_.haptic) est.push_back({F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)});
+  const double w = p_.weber_fraction;
+  Estimate est[2];
+  std::size_t n = 0;
+  if (ch_.haptic) est[n++] = Estimate{F * (1.0 + eps_h_), std::pow(w * std::max(F, 0.05), 2)};
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
     const double fv_true = s_.k_hat * p.visible_deformation;
-    const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
-    est.push_back({fv_true * (1.0 + eps_v_), cv2 * std::max(fv_true * fv_true, 0.0025)});
+    const double cv2 = std::pow(p_.visual_weber, 2) + w * w / (s_.k_count + 1);
+    est[n++] = Estimate{fv_true * (1.0 + eps_v_), cv2 * std::max(fv_true * fv_true, 0.0025)};
   }
-  if (est.empty()) return 0.0;
-  return mle_combine(est).value;
+  if (n == 0) return 0.0;
+  return combine(est, n, nullptr).value;
 }
 
 double Trainee::perceived_variance(const Percept& p) const {
   const double F = ch_.haptic ? p.force.norm() : 0.0;
-  const double w = p_.at("weber_fraction");
-  std::vector<Estimate> est;
-  if (ch_.haptic) est.push_back({F, std::pow(w * std::max(F, 0.05), 2)});
+  const double w = p_.weber_fraction;
+  Estimate est[2];
+  std::size_t n = 0;
+  if (ch_.haptic) est[n++] = Estimate{F, std::pow(w * std::max(F, 0.05), 2)};
   if (ch_.visual && p.visible_deformation > 0 && s_.k_hat > 0) {
     const double fv_true = s_.k_hat * p.visible_deformation;
-    const double cv2 = std::pow(p_.at("visual_weber"), 2) + w * w / (s_.k_count + 1);
-    est.push_back({fv_true, cv2 * std::max(fv_true * fv_true, 0.0025)});
+    const double cv2 = std::pow(p_.visual_weber, 2) + w * w / (s_.k_count + 1);
+    est[n++] = Estimate{fv_true, cv2 * std::max(fv_true * fv_true, 0.0025)};
   }
-  if (est.empty()) return 1e6;
-  return mle_combine(est).variance;
+  if (n == 0) return 1e6;
+  return combine(est, n, nullptr).variance;
 }
 
-void Trainee::learn_target(double observed, double variance) {
-  // Kalman update of the target belief from a cue that marks "target reached".
-  const double obs_var = variance + std::pow(p_.at("memory_noise_cv") * std::max(observed, 0.0), 2);
-  const double k = s_.target_var / (s_.target_var + obs_var);
+double Trainee::draw_recognition_time() {
+  // Median recognition_time for a novice of average speed, faster with practice (power law over
+  // the sessions in which the feature was found) and for faster people; lognormal spread.
+  return p_.recognition_time / s_.speed_factor * std::pow(1.0 + s_.finds, -p_.practice_exponent) *
+         std::exp(p_.recognition_cv * rng_.normal());
+}
+
+void Trainee::learn_target(double observed, double variance, double gain_scale) {
+  // Kalman update of the target belief from a cue that marks "target reached"; gain_scale < 1
+  // when part of the learning is withheld (guidance).
+  const double obs_var = variance + std::pow(p_.memory_noise_cv * std::max(observed, 0.0), 2);
+  const double k = gain_scale * s_.target_var / (s_.target_var + obs_var);
   s_.target_mean += k * (observed - s_.target_mean);
   s_.target_var *= (1.0 - k);
   ++s_.feedback_count;
@@ -196,8 +253,8 @@ Eigen::Vector3d Trainee::command(double t) {
   // Above max_force the hand yields along the felt force, whatever it was doing, and a press
   // ends (this also bounds what any other motion can do if it runs into the organ).
   const double felt = ch_.haptic && last_.contact ? last_.force.norm() : 0.0;
-  if (felt > p_.at("max_force")) {
-    pos_ += last_.force / felt * p_.at("release_speed") * dt;
+  if (felt > p_.max_force) {
+    pos_ += last_.force / felt * p_.release_speed * dt;
     if (mode_ == Mode::press || mode_ == Mode::hold) begin_release(t);
     return pos_;
   }
@@ -205,27 +262,37 @@ Eigen::Vector3d Trainee::command(double t) {
     case Mode::travel:
       // A person lifts the hand when the organ is in the way: move with the felt force.
       if (last_.contact && last_.force.norm() > 1e-9)
-        pos_ += last_.force.normalized() * p_.at("explore_speed") * dt;
-      if (move_towards(goal_, p_.at("explore_speed"))) {
+        pos_ += last_.force.normalized() * p_.explore_speed * s_.speed_factor * dt;
+      if (move_towards(goal_, p_.explore_speed * s_.speed_factor)) {
         mode_ = after_travel_;
         mode_start_ = t;
       }
       break;
     case Mode::descend:
-      pos_ += press_dir_ * 0.5 * p_.at("explore_speed") * dt;
-      if (t - mode_start_ > 3.0 * p_.at("lift_height") / (0.5 * p_.at("explore_speed")))
+      pos_ += press_dir_ * 0.5 * p_.explore_speed * s_.speed_factor * dt;
+      if (t - mode_start_ > 3.0 * p_.lift_height / (0.5 * p_.explore_speed * s_.speed_factor))
         choose_search_target();  // nothing to touch here
       break;
     case Mode::dwell:
       // Keep a light touch while recognising what is under the finger.
-      if (last_.force.norm() < 0.3) pos_ += press_dir_ * p_.at("press_speed") * dt;
-      if (t - mode_start_ >= p_.at("recognition_time")) {
-        if (last_.contact && last_.contact_region == view_.feature_region) {
+      if (last_.force.norm() < 0.3) pos_ += press_dir_ * p_.press_speed * dt;
+      // Seeing the touched part deform makes the judgement faster (a second, visual cue).
+      if (t - mode_start_ >= rec_time_ / (1.0 + (dwell_saw_d_ ? p_.visual_recognition_gain : 0))) {
+        if (last_.contact && last_.contact_region == view_.feature_region &&
+            rng_.uniform() >= p_.miss_probability) {
           identified_ = true;
-          // Store where it was found (noisy spatial memory).
-          s_.place = pos_ + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) *
-                                p_.at("spatial_memory_sd");
-          s_.place_sd = p_.at("spatial_memory_sd");
+          // Where it was found, from the hand's position and, if the part visibly deformed,
+          // from seeing it: both combined by inverse variances, then merged into the belief
+          // (Kalman), so memory sharpens over sessions and sharpens more with vision.
+          const double sh = p_.spatial_memory_sd, sv = p_.visual_spatial_sd;
+          const double obs_sd =
+              dwell_saw_d_ ? 1.0 / std::sqrt(1.0 / (sh * sh) + 1.0 / (sv * sv)) : sh;
+          const Eigen::Vector3d obs =
+              pos_ + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) * obs_sd;
+          const double k =
+              s_.place_sd * s_.place_sd / (s_.place_sd * s_.place_sd + obs_sd * obs_sd + 1e-18);
+          s_.place += k * (obs - s_.place);
+          s_.place_sd = std::sqrt((1.0 - k) * s_.place_sd * s_.place_sd);
           mode_ = Mode::press;
           mode_start_ = t;
           start_press();
@@ -236,12 +303,12 @@ Eigen::Vector3d Trainee::command(double t) {
       }
       break;
     case Mode::press:
-      pos_ += press_dir_ * p_.at("press_speed") * dt;
+      pos_ += press_dir_ * p_.press_speed * dt;
       // Give up a press that never reaches the intended force (e.g. nothing felt).
       if ((release_at_ >= 0 && t >= release_at_) || t - mode_start_ > 10.0) begin_release(t);
       break;
     case Mode::hold:
-      if (t - mode_start_ >= p_.at("hold_time") || (release_at_ >= 0 && t >= release_at_))
+      if (t - mode_start_ >= p_.hold_time || (release_at_ >= 0 && t >= release_at_))
         begin_release(t);
       break;
     case Mode::release: {
@@ -250,10 +317,10 @@ Eigen::Vector3d Trainee::command(double t) {
       // stop as soon as the hand is free.
       const Eigen::Vector3d up = -press_dir_;
       if (last_.contact && ch_.haptic && last_.force.dot(up) < 0.0) {
-        pos_ += last_.force.normalized() * p_.at("release_speed") * dt;
+        pos_ += last_.force.normalized() * p_.release_speed * dt;
         release_blocked_ = true;
       } else {
-        pos_ += up * p_.at("release_speed") * dt;
+        pos_ += up * p_.release_speed * dt;
       }
       if (!last_.contact) {
         // The clearance is measured from where the contact ended, not from where the press
@@ -271,7 +338,7 @@ Eigen::Vector3d Trainee::command(double t) {
       break;
     }
     case Mode::rest:
-      if (t - mode_start_ >= p_.at("rest_time")) start_press();
+      if (t - mode_start_ >= p_.rest_time) start_press();
       break;
   }
   return pos_;
@@ -282,12 +349,15 @@ void Trainee::start_press() {
   mode_start_ = t_prev_;
   // Signal-dependent motor noise (Harris & Wolpert 1998): the produced force scatters with an SD
   // proportional to the intended force; per-press perceptual errors (Weber).
-  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.at("motor_noise_cv") * rng_.normal()));
-  eps_h_ = p_.at("weber_fraction") * rng_.normal();
-  eps_v_ = p_.at("visual_weber") * rng_.normal();
-  rt_scale_ = std::max(0.3, 1.0 + p_.at("reaction_time_cv") * rng_.normal());
+  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.motor_noise_cv * rng_.normal()));
+  eps_h_ = p_.weber_fraction * rng_.normal();
+  eps_v_ = p_.visual_weber * rng_.normal();
+  rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());
   release_at_ = -1.0;
-  expect_marker_ = (ch_.audio || ch_.call) && (presses_ == 0 || marker_in_session_);
+  // A trainee who has come to rely on a marker (sound, call) waits for it.
+  expect_marker_ = (ch_.audio || ch_.call) && s_.reliance > 0.05;
+  marker_this_press_ = false;
+  visual_marker_ = false;
   audio_seen_ = false;
   call_heard_ = false;
   peak_felt_ = 0.0;
@@ -303,6 +373,20 @@ void Trainee::begin_release(double t) {
     s_.k_seen_sum += peak_seen_d_;
     ++s_.k_count;
     s_.k_hat = s_.k_felt_sum / s_.k_seen_sum;
+    const double lr = std::log(peak_felt_ / peak_seen_d_);
+    s_.k_log_sum += lr;
+    s_.k_log_sq += lr * lr;
+  }
+  // Guidance: reliance grows with every marker received, and fades when an expected one fails.
+  if (marker_this_press_) {
+    s_.reliance += p_.guidance_rate * (1.0 - s_.reliance);
+    misses_ = 0;
+  } else if (expect_marker_) {
+    // An expectation built on markers received fades when they stop; one that rests only on
+    // the demonstration (no marker received yet) keeps the trainee searching, pressing harder
+    // after each miss (this is what ends the "never hears the sound" mode of group A).
+    if (s_.feedback_count > 0) s_.reliance *= 1.0 - p_.extinction_rate;
+    ++misses_;
   }
   mode_ = Mode::release;
   mode_start_ = t;
@@ -315,29 +399,62 @@ void Trainee::perceive(const Percept& p, bool call) {
   if (mode_ == Mode::descend && p.contact) {
     mode_ = Mode::dwell;
     mode_start_ = p.t;
+    rec_time_ = draw_recognition_time();
+    dwell_saw_d_ = false;
   }
+  if (mode_ == Mode::dwell && ch_.visual && p.contact && p.visible_deformation > 0)
+    dwell_saw_d_ = true;
   if (mode_ == Mode::press || mode_ == Mode::hold) {
     const double f = perceived_force(p);
     if (ch_.haptic) peak_felt_ = std::max(peak_felt_, p.force.norm() * (1.0 + eps_h_));
     if (ch_.visual) peak_seen_d_ = std::max(peak_seen_d_, p.visible_deformation * (1.0 + eps_v_));
     // Reaction times vary from trial to trial: one draw per press (rt_scale_).
-    const double rt_audio = p_.at("reaction_time_audio") * rt_scale_;
+    const double rt_audio = p_.reaction_time_audio * rt_scale_;
     // The sound means "target reached": learn the force felt at its onset, release after a
     // reaction time.
+    // Guidance hypothesis: the more the trainee relies on the marker, the less of what it
+    // marks reaches the internal memory of the force.
+    const double guided = 1.0 - p_.guidance_dependence * s_.reliance;
     if (ch_.audio && p.audio && !audio_seen_) {
       audio_seen_ = true;
-      learn_target(f, perceived_variance(p));
+      marker_this_press_ = true;
+      learn_target(f, perceived_variance(p), guided);
       if (release_at_ < 0) release_at_ = p.t + rt_audio;
     }
     if (call && !call_heard_) {
       call_heard_ = true;
-      learn_target(f, perceived_variance(p));
+      marker_this_press_ = true;
+      learn_target(f, perceived_variance(p), guided);
       if (release_at_ < 0 || p.t + rt_audio < release_at_) release_at_ = p.t + rt_audio;
     }
     if (audio_seen_ || call_heard_) marker_in_session_ = true;
+    // Seen deformation reaching what the demonstration showed at the target: the felt force
+    // there is an observation of the target (visual-haptic learning). Its variance adds how
+    // inconsistently felt force and seen deformation went together so far (a simulator whose
+    // picture does not follow the force teaches less).
+    if (ch_.visual && ch_.haptic && s_.demo_d > 0 && !visual_marker_ &&
+        p.visible_deformation * (1.0 + eps_v_) >= s_.demo_d) {
+      visual_marker_ = true;
+      double var = perceived_variance(p) + std::pow(p_.visual_weber * f, 2);
+      if (s_.k_count >= 2) {
+        const double m = s_.k_log_sum / s_.k_count;
+        var += std::max(0.0, s_.k_log_sq / s_.k_count - m * m) * f * f;
+      }
+      learn_target(f, var);
+      const double at = p.t + p_.reaction_time_visual * rt_scale_;
+      if (release_at_ < 0 || at < release_at_) release_at_ = at;
+    }
     // Without an expected marker the press stops at the intended force; waiting for a marker it
-    // goes on, but not beyond 1.3 times the intended force.
-    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * (expect_marker_ ? 1.3 : 1.0)) {
+    // goes on, to a limit that grows with the reliance and with each marker that failed.
+    const double wait = expect_marker_ ? std::pow(1.0 + p_.marker_wait_overshoot * s_.reliance,
+                                                  1 + std::min(misses_, 3))
+                                       : 1.0;
+    // While the trainee sees the part deform and knows what the target looks like, the press
+    // aims at that picture (it ends at the visual marker above), bounded like a marker wait.
+    const bool aiming_visually = ch_.visual && s_.demo_d > 0 && p.visible_deformation > 0;
+    const double limit =
+        aiming_visually ? std::max(wait, 1.0 + p_.marker_wait_overshoot) * 1.5 : wait;
+    if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * limit) {
       mode_ = Mode::hold;
       mode_start_ = p.t;
     }
@@ -347,22 +464,23 @@ void Trainee::perceive(const Percept& p, bool call) {
 
 void Trainee::end_session(double study_time) {
   s_.last_session_end = study_time;
+  if (identified_) ++s_.finds;
 }
 
-Instructor::Instructor(std::map<std::string, double> params, std::uint64_t seed)
-    : p_(std::move(params)), rng_(derive_seed(seed, "instructor")) {
+Instructor::Instructor(const InstructorParams& params, std::uint64_t seed)
+    : p_(params), rng_(derive_seed(seed, "instructor")) {
   reset_press();
 }
 
 bool Instructor::observe(const Percept& p, Channels ch) {
   if (called_) return false;
   if (ch.audio && p.audio && !prev_audio_) {
-    double at = p.t + p_.at("reaction_time_audio") * rt_scale_;
+    double at = p.t + p_.reaction_time_audio * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   prev_audio_ = p.audio;
   if (ch.visual && target_d_ > 0 && p.visible_deformation >= target_d_ * (1.0 + eps_)) {
-    double at = p.t + p_.at("reaction_time_visual") * rt_scale_;
+    double at = p.t + p_.reaction_time_visual * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   if (call_at_ >= 0 && p.t >= call_at_) {
@@ -376,8 +494,8 @@ void Instructor::reset_press() {
   called_ = false;
   call_at_ = -1.0;
   prev_audio_ = false;
-  eps_ = p_.at("visual_weber") * rng_.normal();
-  rt_scale_ = std::max(0.3, 1.0 + p_.at("reaction_time_cv") * rng_.normal());
+  eps_ = p_.visual_weber * rng_.normal();
+  rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());
 }
 
 }  // namespace palplab::protocols::participants

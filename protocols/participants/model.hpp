@@ -16,12 +16,12 @@
 //
 // Units: N, m, s. Positions in the organ's frame.
 #include <Eigen/Core>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "protocols/participants/params.hpp"
 #include "protocols/rng.hpp"
 
 namespace palplab::protocols::participants {
@@ -64,7 +64,14 @@ struct Estimate {
 Estimate mle_combine(const std::vector<Estimate>& in, std::vector<double>* weights = nullptr);
 
 // Power-law retention: share of what was learned that is kept after `dt` seconds.
-double retention(double dt, const std::map<std::string, double>& p);
+double retention(double dt, const TraineeParams& p);
+
+// What a demonstration press up to the target force on a simulator renders (the briefing shows
+// one on the simulator the trainee first trains on; the instructor makes one before coaching).
+struct Demonstration {
+  double deformation = 0.0;  // m, visible deformation when the target force is reached
+  bool sound = false;        // the audio cue came on the way to the target force
+};
 
 // ---- the trainee
 struct TraineeState {
@@ -78,6 +85,13 @@ struct TraineeState {
   double k_felt_sum = 0.0, k_seen_sum = 0.0;  // N, m: sums over calibrating presses
   int feedback_count = 0;                     // target markers experienced so far
   double last_session_end = 0.0;              // s of study time
+  // What the briefing's demonstration press showed (on the first session's simulator).
+  bool demo_sound = false;    // a sound came on the way to the target force
+  double demo_d = 0.0;        // m, visible deformation at the target as remembered (0 = none)
+  double reliance = 0.0;      // 0..1, reliance on a binary marker (guidance hypothesis)
+  int finds = 0;              // sessions in which the feature was found (practice)
+  double speed_factor = 1.0;  // individual speed (>1 faster), drawn at the briefing
+  double k_log_sum = 0.0, k_log_sq = 0.0;  // Σ log(felt/seen), Σ log² over calibrating presses
   nlohmann::json to_json() const;
   static TraineeState from_json(const nlohmann::json& j);
 };
@@ -85,7 +99,7 @@ struct TraineeState {
 class Trainee {
  public:
   // `briefed_target`: the MPF of the feature, told in the briefing (N).
-  Trainee(std::map<std::string, double> params, TraineeState state);
+  Trainee(const TraineeParams& params, TraineeState state);
 
   // Session start: applies forgetting over the interval since the last session, then plans the
   // search. `study_time`: s of study time at the session start; `seed`: the session's seed.
@@ -94,6 +108,9 @@ class Trainee {
                      Channels channels);
   // The device position for the next step, given what the previous step rendered.
   Eigen::Vector3d command(double t);
+  // The briefing's demonstration (used when the state is not yet initialised; call before
+  // begin_session).
+  void set_demonstration(const Demonstration& d) { demo_ = d; }
   // Perceives one step's output; `call`: an instructor said "release" in this step.
   void perceive(const Percept& p, bool call);
   // Session end (study time at the end).
@@ -111,11 +128,12 @@ class Trainee {
   void start_travel(const Eigen::Vector3d& to, Mode next);
   double perceived_force(const Percept& p) const;
   double perceived_variance(const Percept& p) const;
-  void learn_target(double observed, double variance);
+  void learn_target(double observed, double variance, double gain_scale = 1.0);
+  double draw_recognition_time();
   void start_press();
   void begin_release(double t);
 
-  std::map<std::string, double> p_;
+  TraineeParams p_;
   TraineeState s_;
   Rng rng_{0};
   SurfaceView view_;
@@ -137,6 +155,10 @@ class Trainee {
   bool expect_marker_ = false, marker_in_session_ = false;
   int presses_ = 0;
   Percept last_;
+  std::optional<Demonstration> demo_;
+  int misses_ = 0;  // consecutive presses of this session whose expected marker did not come
+  bool marker_this_press_ = false, visual_marker_ = false, dwell_saw_d_ = false;
+  double rec_time_ = 0.0;
   double peak_seen_d_ = 0.0, peak_felt_ = 0.0;
   double t_prev_ = 0.0;
   // Release: where the contact ended, and whether something resisted the lift.
@@ -148,7 +170,7 @@ class Trainee {
 // ---- the instructor (experiment 1): watches the rendered cues and calls "release".
 class Instructor {
  public:
-  Instructor(std::map<std::string, double> params, std::uint64_t seed);
+  Instructor(const InstructorParams& params, std::uint64_t seed);
   // Calibration: the deformation the instructor expects at the target, from an own press on the
   // same simulator (the runner performs it on a scene and resets the scene afterwards). 0 = the
   // simulator shows no deformation, so only the sound can be used.
@@ -159,7 +181,7 @@ class Instructor {
   void reset_press();  // the trainee released: wait for the next press
 
  private:
-  std::map<std::string, double> p_;
+  InstructorParams p_;
   Rng rng_;
   double target_d_ = 0.0, eps_ = 0.0, rt_scale_ = 1.0;
   double call_at_ = -1.0;

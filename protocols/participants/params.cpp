@@ -1,70 +1,208 @@
 #include "protocols/participants/params.hpp"
 
+#include <cmath>
+
+#include "common/input_error.hpp"
+
 namespace palplab::protocols::participants {
+
+namespace {
+
+using T = TraineeParams;
+using I = InstructorParams;
+
+ParamSpec tspec(const char* name, double T::*m, double lo, double hi, const char* unit,
+                const char* meaning, const char* source) {
+  return {name, TraineeParams{}.*m, lo, hi, unit, meaning, source, m, nullptr};
+}
+ParamSpec ispec(const char* name, double I::*m, double lo, double hi, const char* unit,
+                const char* meaning, const char* source) {
+  return {name, InstructorParams{}.*m, lo, hi, unit, meaning, source, nullptr, m};
+}
+
+constexpr const char* kRt =
+    "Kosinski 2008 (review of simple reaction times: ~0.16 s to sound, "
+    "~0.19 s to light)";
+
+// Overrides applied to a struct through the spec table; `set` writes one field.
+template <class P, class Set>
+P apply(const std::vector<ParamSpec>& specs, const nlohmann::json& overrides,
+        const std::string& where, Set set) {
+  P p;
+  if (overrides.is_null()) return p;
+  if (!overrides.is_object())
+    throw InputError("participant parameters: expected an object of name -> number", where);
+  for (auto it = overrides.begin(); it != overrides.end(); ++it) {
+    const ParamSpec* s = find_param(specs, it.key());
+    if (!s) {
+      std::string names;
+      for (const auto& x : specs) names += std::string(names.empty() ? "" : ", ") + x.name;
+      throw InputError(
+          "unknown participant parameter \"" + it.key() + "\"; expected one of: " + names, where);
+    }
+    if (!it.value().is_number())
+      throw InputError("participant parameter \"" + it.key() + "\": expected a number", where);
+    const double v = it.value().get<double>();
+    if (!(v >= s->min && v <= s->max))
+      throw InputError("participant parameter \"" + it.key() + "\": expected a value in [" +
+                           nlohmann::json(s->min).dump() + ", " + nlohmann::json(s->max).dump() +
+                           "] " + s->unit + ", got " + nlohmann::json(v).dump(),
+                       where);
+    set(p, *s, v);
+  }
+  return p;
+}
+
+}  // namespace
 
 const std::vector<ParamSpec>& trainee_param_specs() {
   static const std::vector<ParamSpec> specs = {
-      {"weber_fraction", 0.08, 0.01, 0.5, "1",
-       "haptic force JND as a fraction of force; perception SD = weber_fraction * F"},
-      {"visual_weber", 0.10, 0.01, 1.0, "1", "relative SD of the perceived visible deformation"},
-      {"motor_noise_cv", 0.05, 0.0, 0.5, "1",
-       "signal-dependent motor noise: SD of the produced force / intended force"},
-      {"prior_target_cv", 0.30, 0.0, 2.0, "1",
-       "relative SD of the target force believed after the briefing (MPF told in words)"},
-      {"memory_noise_cv", 0.03, 0.0, 1.0, "1",
-       "relative SD added to the force memory each time it is stored"},
-      {"forgetting_exponent", 0.05, 0.0, 2.0, "1",
-       "power-law forgetting: learned share kept = (1 + dt/forgetting_tau)^-exponent"},
-      {"forgetting_tau", 60.0, 1e-3, 1e7, "s", "time scale of the power law"},
-      {"consolidation_time", 21600.0, 0.0, 1e8, "s",
-       "after this delay a memory is consolidated: forgetting slows by consolidated_factor"},
-      {"consolidated_factor", 0.5, 0.0, 1.0, "1",
-       "exponent multiplier for the part of a retention interval after consolidation"},
-      {"spatial_prior_sd", 0.03, 0.0, 1.0, "m",
-       "SD of the believed feature position before any session (briefing: anatomy)"},
-      {"spatial_memory_sd", 0.01, 0.0, 1.0, "m", "SD of storing a found feature position"},
-      {"spatial_forgetting_sd", 0.01, 0.0, 1.0, "m",
-       "spatial SD added at full forgetting (scaled by the same power law)"},
-      {"explore_speed", 0.05, 1e-4, 2.0, "m/s", "HCP speed while searching the surface"},
-      {"press_speed", 0.004, 1e-5, 1.0, "m/s", "HCP speed into the surface while pressing"},
-      {"release_speed", 0.02, 1e-5, 1.0, "m/s", "HCP speed out of the surface on release"},
-      {"recognition_time", 0.3, 0.0, 10.0, "s",
-       "light-touch time needed to tell whether the touched part is the feature"},
-      {"hold_time", 0.3, 0.0, 10.0, "s", "hold at the intended force before releasing"},
-      {"rest_time", 1.0, 0.0, 60.0, "s", "pause between palpations"},
-      {"reaction_time_audio", 0.16, 0.0, 2.0, "s", "simple reaction time to a sound"},
-      {"reaction_time_visual", 0.19, 0.0, 2.0, "s", "simple reaction time to a visual event"},
-      {"reaction_time_cv", 0.15, 0.0, 1.0, "1",
-       "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)"},
-      {"lift_height", 0.01, 0.0, 0.2, "m", "height above the surface while moving between points"},
-      {"max_force", 10.0, 0.5, 100.0, "N",
-       "largest force the trainee will push against; above it the hand yields along the felt "
-       "force and a press ends"},
+      tspec("weber_fraction", &T::weber_fraction, 0.01, 0.5, "1",
+            "haptic force JND as a fraction of force; perception SD = weber_fraction * F",
+            "Jones 1989; Pang, Tan & Durlach 1991 (force JND 7-10 %)"),
+      tspec("visual_weber", &T::visual_weber, 0.01, 1.0, "1",
+            "relative SD of the perceived visible deformation",
+            "Ernst & Banks 2002 (visual size estimates, SD a few % to >10 % with noise)"),
+      tspec("motor_noise_cv", &T::motor_noise_cv, 0.0, 0.5, "1",
+            "signal-dependent motor noise: SD of the produced force / intended force",
+            "Harris & Wolpert 1998 (SD proportional to force)"),
+      tspec("prior_target_cv", &T::prior_target_cv, 0.0, 2.0, "1",
+            "relative SD of the target force believed after the briefing (MPF told in words)",
+            "model assumption; fitted to exp2 (docs/PARTICIPANTS.md)"),
+      tspec("memory_noise_cv", &T::memory_noise_cv, 0.0, 1.0, "1",
+            "relative SD added to the force memory each time it is stored",
+            "model assumption (memory noise of the Kalman observation)"),
+      tspec("forgetting_exponent", &T::forgetting_exponent, 0.0, 2.0, "1",
+            "power-law forgetting: learned share kept = (1 + dt/forgetting_tau)^-exponent",
+            "Wixted & Ebbesen 1991 (power law of forgetting)"),
+      tspec("forgetting_tau", &T::forgetting_tau, 1e-3, 1e7, "s", "time scale of the power law",
+            "Wixted & Ebbesen 1991"),
+      tspec("consolidation_time", &T::consolidation_time, 0.0, 1e8, "s",
+            "after this delay a memory is consolidated: forgetting slows by consolidated_factor",
+            "Brashers-Krug, Shadmehr & Bizzi 1996 (motor memory consolidates within 4-6 h)"),
+      tspec("consolidated_factor", &T::consolidated_factor, 0.0, 1.0, "1",
+            "exponent multiplier for the part of a retention interval after consolidation",
+            "Walker et al. 2003 (consolidated motor memories are more stable)"),
+      tspec("spatial_prior_sd", &T::spatial_prior_sd, 0.0, 1.0, "m",
+            "SD of the believed feature position before any session (briefing: anatomy)",
+            "model assumption"),
+      tspec("spatial_memory_sd", &T::spatial_memory_sd, 0.0, 1.0, "m",
+            "SD of storing a found feature position", "model assumption"),
+      tspec("spatial_forgetting_sd", &T::spatial_forgetting_sd, 0.0, 1.0, "m",
+            "spatial SD added at full forgetting (scaled by the same power law)",
+            "model assumption"),
+      tspec("explore_speed", &T::explore_speed, 1e-4, 2.0, "m/s",
+            "HCP speed while searching the surface", "model assumption"),
+      tspec("press_speed", &T::press_speed, 1e-5, 1.0, "m/s",
+            "HCP speed into the surface while pressing",
+            "model assumption (slow deliberate press)"),
+      tspec("release_speed", &T::release_speed, 1e-5, 1.0, "m/s",
+            "HCP speed out of the surface on release", "model assumption"),
+      tspec("recognition_time", &T::recognition_time, 0.0, 30.0, "s",
+            "median light-touch time a novice needs to tell whether the touched part is the "
+            "feature (before practice)",
+            "Klatzky, Lederman & Metzger 1985 (haptic recognition of objects takes 1-2 s)"),
+      tspec("hold_time", &T::hold_time, 0.0, 10.0, "s",
+            "hold at the intended force before releasing", "model assumption"),
+      tspec("rest_time", &T::rest_time, 0.0, 60.0, "s", "pause between palpations",
+            "model assumption"),
+      tspec("reaction_time_audio", &T::reaction_time_audio, 0.0, 2.0, "s",
+            "simple reaction time to a sound", kRt),
+      tspec("reaction_time_visual", &T::reaction_time_visual, 0.0, 2.0, "s",
+            "simple reaction time to a visual event", kRt),
+      tspec("reaction_time_cv", &T::reaction_time_cv, 0.0, 1.0, "1",
+            "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)",
+            "Luce 1986 (RT distributions, CV ~0.1-0.2)"),
+      tspec("lift_height", &T::lift_height, 0.0, 0.2, "m",
+            "height above the surface while moving between points", "model assumption"),
+      tspec("max_force", &T::max_force, 0.5, 100.0, "N",
+            "largest force the trainee will push against; above it the hand yields along the "
+            "felt force and a press ends",
+            "model assumption (far above the 2.5-5 N task forces)"),
+      tspec("guidance_dependence", &T::guidance_dependence, 0.0, 1.0, "1",
+            "share of the learning from a binary target marker (sound, call) that does not reach "
+            "the internal force memory when the trainee fully relies on the marker",
+            "guidance hypothesis: Salmoni, Schmidt & Walter 1984; Winstein & Schmidt 1990"),
+      tspec("guidance_rate", &T::guidance_rate, 0.0, 1.0, "1",
+            "reliance on a marker gained per press in which it came (reliance += rate*(1-r))",
+            "Salmoni, Schmidt & Walter 1984 (dependence grows with frequent feedback)"),
+      tspec("extinction_rate", &T::extinction_rate, 0.0, 1.0, "1",
+            "share of the reliance lost per press in which an expected marker did not come",
+            "model assumption (extinction of an expectation)"),
+      tspec("marker_wait_overshoot", &T::marker_wait_overshoot, 0.0, 2.0, "1",
+            "a press awaiting a marker goes on to intended*(1+overshoot*reliance) per miss",
+            "Winstein & Schmidt 1990 (performance drops once the guiding feedback is withdrawn)"),
+      tspec("visual_spatial_sd", &T::visual_spatial_sd, 1e-5, 1.0, "m",
+            "SD of locating the touched point by eye when it visibly deforms; combined with the "
+            "haptic SD (spatial_memory_sd) by inverse variances",
+            "van Beers, Sittig & Denier van der Gon 1999 (visual-proprioceptive localisation)"),
+      tspec("visual_recognition_gain", &T::visual_recognition_gain, 0.0, 10.0, "1",
+            "recognition time / (1 + gain) when the touched part visibly deforms",
+            "Ernst & Banks 2002 (a second cue makes the judgement more reliable, so faster)"),
+      tspec("recognition_cv", &T::recognition_cv, 0.0, 2.0, "1",
+            "trial-to-trial SD / mean of a recognition time (lognormal)",
+            "Luce 1986 (decision times are right-skewed)"),
+      tspec("miss_probability", &T::miss_probability, 0.0, 0.95, "1",
+            "chance that touching the feature does not lead to recognising it (search goes on)",
+            "model assumption (novices misjudge what they touch)"),
+      tspec("practice_exponent", &T::practice_exponent, 0.0, 2.0, "1",
+            "recognition time * (1 + sessions in which the feature was found)^-exponent",
+            "Newell & Rosenbloom 1981 (power law of practice)"),
+      tspec("individual_cv", &T::individual_cv, 0.0, 2.0, "1",
+            "between-person SD (log scale) of a speed factor on exploration and recognition",
+            "model assumption (individual differences in motor speed)"),
   };
   return specs;
 }
 
 const std::vector<ParamSpec>& instructor_param_specs() {
   static const std::vector<ParamSpec> specs = {
-      {"reaction_time_audio", 0.16, 0.0, 2.0, "s", "time from the sound to the call"},
-      {"reaction_time_visual", 0.19, 0.0, 2.0, "s", "time from seeing the target deformation"},
-      {"reaction_time_cv", 0.15, 0.0, 1.0, "1",
-       "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)"},
-      {"visual_weber", 0.10, 0.01, 1.0, "1",
-       "relative SD of the instructor's deformation judgement"},
-      {"trainee_reaction_time", 0.16, 0.0, 2.0, "s", "trainee's reaction to the spoken call"},
+      ispec("reaction_time_audio", &I::reaction_time_audio, 0.0, 2.0, "s",
+            "time from the sound to the call", kRt),
+      ispec("reaction_time_visual", &I::reaction_time_visual, 0.0, 2.0, "s",
+            "time from seeing the target deformation", kRt),
+      ispec("reaction_time_cv", &I::reaction_time_cv, 0.0, 1.0, "1",
+            "trial-to-trial SD of a reaction time / its mean (truncated at 0.3x the mean)",
+            "Luce 1986"),
+      ispec("visual_weber", &I::visual_weber, 0.01, 1.0, "1",
+            "relative SD of the instructor's deformation judgement", "Ernst & Banks 2002"),
+      ispec("trainee_reaction_time", &I::trainee_reaction_time, 0.0, 2.0, "s",
+            "trainee's reaction to the spoken call", kRt),
+      ispec("weber_fraction", &I::weber_fraction, 0.01, 0.5, "1",
+            "the instructor's haptic force JND / force, in the own calibration press",
+            "Jones 1989; Pang, Tan & Durlach 1991"),
   };
   return specs;
 }
 
-std::map<std::string, double> resolve_params(const std::vector<ParamSpec>& specs,
-                                             const nlohmann::json& overrides) {
-  std::map<std::string, double> p;
-  for (const auto& s : specs) p[s.name] = s.value;
-  if (overrides.is_object())
-    for (auto it = overrides.begin(); it != overrides.end(); ++it)
-      if (p.count(it.key()) && it.value().is_number()) p[it.key()] = it.value().get<double>();
-  return p;
+const ParamSpec* find_param(const std::vector<ParamSpec>& specs, const std::string& name) {
+  for (const auto& s : specs)
+    if (name == s.name) return &s;
+  return nullptr;
+}
+
+TraineeParams trainee_params(const nlohmann::json& overrides, const std::string& where) {
+  return apply<TraineeParams>(
+      trainee_param_specs(), overrides, where,
+      [](TraineeParams& p, const ParamSpec& s, double v) { p.*(s.trainee) = v; });
+}
+
+InstructorParams instructor_params(const nlohmann::json& overrides, const std::string& where) {
+  return apply<InstructorParams>(
+      instructor_param_specs(), overrides, where,
+      [](InstructorParams& p, const ParamSpec& s, double v) { p.*(s.instructor) = v; });
+}
+
+nlohmann::json to_json(const TraineeParams& p) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& s : trainee_param_specs()) j[s.name] = p.*(s.trainee);
+  return j;
+}
+
+nlohmann::json to_json(const InstructorParams& p) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& s : instructor_param_specs()) j[s.name] = p.*(s.instructor);
+  return j;
 }
 
 }  // namespace palplab::protocols::participants

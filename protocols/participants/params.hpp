@@ -1,31 +1,100 @@
 #pragma once
-// Parameters of the virtual trainee and instructor models (docs/PARTICIPANTS.md gives the model,
-// each parameter's meaning and its literature source). A study's "participant_model.parameters"
-// and "roles.instructor.parameters" override the defaults by name; unknown names and values
-// outside [min, max] are input errors.
+// Parameters of the virtual trainee and instructor models: typed structs whose member
+// initialisers are THE defaults, plus one table per model giving each field's name (the JSON
+// key), bounds, unit, meaning and literature source (docs/PARTICIPANTS.md explains the model).
+// A study's "participant_model.parameters" and "roles.instructor.parameters" override defaults
+// by name; study loading (protocols/study_load.cpp) reports unknown names and out-of-range
+// values with FILE:LINE:COL and the JSON path (exit 2). The runner converts the validated JSON
+// into the structs once per run; the models read plain members (no string look-ups per step).
 //
 // Nothing here (or anywhere in the models) depends on a prototype's id or name: the models see
 // only what the simulator renders.
-#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 namespace palplab::protocols::participants {
 
+struct TraineeParams {
+  // perception
+  double weber_fraction = 0.08;  // 1, haptic force JND / force
+  double visual_weber = 0.10;    // 1, relative SD of a perceived visible deformation
+  // motor
+  double motor_noise_cv = 0.05;  // 1, SD of produced / intended force
+  // memory of the target force
+  double prior_target_cv = 0.30;        // 1, relative SD of the briefed target belief
+  double memory_noise_cv = 0.03;        // 1, relative SD added when a force is stored
+  double forgetting_exponent = 0.05;    // 1, power-law exponent
+  double forgetting_tau = 60.0;         // s
+  double consolidation_time = 21600.0;  // s
+  double consolidated_factor = 0.5;     // 1
+  // spatial memory
+  double spatial_prior_sd = 0.03;       // m
+  double spatial_memory_sd = 0.01;      // m
+  double spatial_forgetting_sd = 0.01;  // m
+  // movement and timing
+  double explore_speed = 0.05;         // m/s
+  double press_speed = 0.004;          // m/s
+  double release_speed = 0.02;         // m/s
+  double recognition_time = 1.0;       // s
+  double hold_time = 0.3;              // s
+  double rest_time = 1.0;              // s
+  double reaction_time_audio = 0.16;   // s
+  double reaction_time_visual = 0.19;  // s
+  double reaction_time_cv = 0.15;      // 1
+  double lift_height = 0.01;           // m
+  double max_force = 10.0;             // N
+  // guidance: reliance on a binary "target reached" marker (sound, call)
+  double guidance_dependence = 0.6;    // 1, share of marker learning withheld at full reliance
+  double guidance_rate = 0.2;          // 1, reliance gained per press with a marker
+  double extinction_rate = 0.3;        // 1, reliance lost per press whose expected marker failed
+  double marker_wait_overshoot = 0.3;  // 1, press beyond the intended force awaiting a marker
+  // visual learning and search
+  double visual_spatial_sd = 0.004;      // m, SD of locating the touched point by eye
+  double visual_recognition_gain = 1.0;  // 1, recognition speed-up when the part deforms
+  double recognition_cv = 0.3;           // 1, trial-to-trial SD / mean of a recognition time
+  double miss_probability = 0.2;         // 1, chance the feature is not recognised on a touch
+  double practice_exponent = 0.3;        // 1, power law of practice for recognition
+  double individual_cv = 0.15;           // 1, between-person SD of speed (log scale)
+};
+
+struct InstructorParams {
+  double reaction_time_audio = 0.16;    // s
+  double reaction_time_visual = 0.19;   // s
+  double reaction_time_cv = 0.15;       // 1
+  double visual_weber = 0.10;           // 1
+  double trainee_reaction_time = 0.16;  // s
+  // The instructor's own haptic Weber fraction, used when the instructor calibrates the
+  // deformation to watch for by an own press (an expert's, not the trainee's).
+  double weber_fraction = 0.08;  // 1
+};
+
+// One field of a parameter struct: its JSON name, default, bounds, unit, meaning and source.
+// Exactly one of `trainee` / `instructor` is set (the member it describes).
 struct ParamSpec {
   const char* name;
-  double value;  // default
+  double value;  // default (read from a default-constructed struct)
   double min, max;
   const char* unit;
   const char* meaning;
+  const char* source;
+  double TraineeParams::*trainee = nullptr;
+  double InstructorParams::*instructor = nullptr;
 };
 
 const std::vector<ParamSpec>& trainee_param_specs();
 const std::vector<ParamSpec>& instructor_param_specs();
+// The spec of `name` in `specs`, or nullptr.
+const ParamSpec* find_param(const std::vector<ParamSpec>& specs, const std::string& name);
 
-// Defaults overridden by `overrides` (an object name -> number; validated before).
-std::map<std::string, double> resolve_params(const std::vector<ParamSpec>& specs,
-                                             const nlohmann::json& overrides);
+// Defaults overridden by `overrides` (an object name -> number). Study files are validated with
+// located errors when loaded; for any other caller an unknown name, a non-number or a value out
+// of bounds is an InputError naming `where` and the key.
+TraineeParams trainee_params(const nlohmann::json& overrides, const std::string& where = "");
+InstructorParams instructor_params(const nlohmann::json& overrides, const std::string& where = "");
+
+// Every field by name (for logs, calibration output and tests).
+nlohmann::json to_json(const TraineeParams& p);
+nlohmann::json to_json(const InstructorParams& p);
 
 }  // namespace palplab::protocols::participants

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "common/input_error.hpp"
 #include "common/seed.hpp"
 #include "flat_tissue.hpp"
 #include "protocols/participants/model.hpp"
@@ -50,7 +51,7 @@ std::vector<double> run_session(Trainee& tr, const FlatTissue& tissue, double st
 double mean_learned_error(FlatTissue tissue, const nlohmann::json& overrides, int sessions,
                           double retention_s, double reference, int n = 40,
                           bool learners_only = false, int* learners = nullptr) {
-  auto params = resolve_params(trainee_param_specs(), overrides);
+  auto params = trainee_params(overrides);
   double err = 0.0;
   int counted = 0;
   for (int k = 0; k < n; ++k) {
@@ -90,14 +91,14 @@ TEST(Perception, MleWeightsAreInverseVariances) {
 }
 
 TEST(Memory, RetentionIsAPowerLawThatSlowsAfterConsolidation) {
-  auto p = resolve_params(trainee_param_specs(), nlohmann::json::object());
+  auto p = trainee_params(nlohmann::json::object());
   EXPECT_DOUBLE_EQ(retention(0.0, p), 1.0);
-  const double tau = p["forgetting_tau"], d = p["forgetting_exponent"];
+  const double tau = p.forgetting_tau, d = p.forgetting_exponent;
   EXPECT_NEAR(retention(600.0, p), std::pow(1 + 600.0 / tau, -d), 1e-12);
   EXPECT_GT(retention(600.0, p), retention(86400.0, p));
   EXPECT_GT(retention(86400.0, p), retention(6 * 86400.0, p));
   // continuous at the consolidation time, slower afterwards
-  const double tc = p["consolidation_time"];
+  const double tc = p.consolidation_time;
   EXPECT_NEAR(retention(tc * (1 - 1e-9), p), retention(tc * (1 + 1e-9), p), 1e-6);
   double full = std::pow(1 + 6 * 86400.0 / tau, -d);
   EXPECT_GT(retention(6 * 86400.0, p), full);
@@ -105,7 +106,9 @@ TEST(Memory, RetentionIsAPowerLawThatSlowsAfterConsolidation) {
 
 TEST(Trainee, FindsTheFeatureAndPresses) {
   FlatTissue tissue;
-  Trainee tr(resolve_params(trainee_param_specs(), {}), TraineeState{});
+  // A quick, sure recogniser: this test is about pressing, not about how long a search takes.
+  Trainee tr(trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}}),
+             TraineeState{});
   auto peaks = run_session(tr, tissue, 0.0, 60.0, 5, 6);
   EXPECT_TRUE(tr.identified());
   EXPECT_GE(peaks.size(), 5u);
@@ -117,7 +120,7 @@ TEST(Trainee, FindsTheFeatureAndPresses) {
 
 TEST(Trainee, SameSeedSameBehaviour) {
   FlatTissue tissue;
-  auto params = resolve_params(trainee_param_specs(), {});
+  auto params = trainee_params({});
   Trainee a(params, TraineeState{}), b(params, TraineeState{});
   auto pa = run_session(a, tissue, 0, 30, 11, 12), pb = run_session(b, tissue, 0, 30, 11, 12);
   EXPECT_EQ(pa, pb);
@@ -170,7 +173,7 @@ TEST(Trainee, LongerRetentionGivesLargerError) {
 
 TEST(Instructor, CallsAfterReactionTime) {
   // Fixed reaction times here (cv 0) so the call time is exact; variability is tested below.
-  auto p = resolve_params(instructor_param_specs(), {{"reaction_time_cv", 0.0}});
+  auto p = instructor_params({{"reaction_time_cv", 0.0}});
   Instructor in(p, 3);
   Percept q;
   q.contact = true;
@@ -206,7 +209,7 @@ TEST(Instructor, CallsAfterReactionTime) {
 }
 
 TEST(Instructor, ReactionTimesVaryWithTheGivenSpread) {
-  auto p = resolve_params(instructor_param_specs(), {});
+  auto p = instructor_params({});
   Instructor in(p, 8);
   double sum = 0, sum2 = 0;
   const int n = 400;
@@ -228,4 +231,31 @@ TEST(Instructor, ReactionTimesVaryWithTheGivenSpread) {
   const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
   EXPECT_NEAR(mean, 0.16, 0.01);
   EXPECT_NEAR(sd / 0.16, 0.15, 0.03);
+}
+
+TEST(Params, DefaultsComeFromTheStructAndEverySpecHasASource) {
+  const TraineeParams def;
+  for (const auto& s : trainee_param_specs()) {
+    ASSERT_NE(s.trainee, nullptr) << s.name;
+    EXPECT_DOUBLE_EQ(s.value, def.*(s.trainee)) << s.name;
+    EXPECT_LE(s.min, s.value) << s.name;
+    EXPECT_GE(s.max, s.value) << s.name;
+    EXPECT_GT(std::string(s.source).size(), 5u) << s.name;
+  }
+  for (const auto& s : instructor_param_specs()) {
+    ASSERT_NE(s.instructor, nullptr) << s.name;
+    EXPECT_GT(std::string(s.source).size(), 5u) << s.name;
+  }
+}
+
+TEST(Params, OverridesAreTypedAndBadNamesOrValuesAreInputErrors) {
+  auto p = trainee_params({{"weber_fraction", 0.12}, {"hold_time", 0.5}});
+  EXPECT_DOUBLE_EQ(p.weber_fraction, 0.12);
+  EXPECT_DOUBLE_EQ(p.hold_time, 0.5);
+  EXPECT_DOUBLE_EQ(p.motor_noise_cv, TraineeParams{}.motor_noise_cv);
+  EXPECT_EQ(to_json(p)["hold_time"].get<double>(), 0.5);
+  EXPECT_THROW(trainee_params({{"weber_fracton", 0.1}}), palplab::InputError);
+  EXPECT_THROW(trainee_params({{"weber_fraction", 0.9}}), palplab::InputError);
+  EXPECT_THROW(trainee_params({{"weber_fraction", "x"}}), palplab::InputError);
+  EXPECT_DOUBLE_EQ(instructor_params({{"weber_fraction", 0.05}}).weber_fraction, 0.05);
 }

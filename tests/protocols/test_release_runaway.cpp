@@ -65,7 +65,8 @@ struct OverhangTissue : fixtures::FlatTissue {
 // organ 2.5 cm above the feature.
 TEST(TraineeRelease, PressesDoNotCreepAwayOrRunIntoTheOrganAbove) {
   OverhangTissue tissue;
-  const auto params = resolve_params(trainee_param_specs(), nlohmann::json::object());
+  // A quick, sure recogniser: this test is about the presses, not the search.
+  const auto params = trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}});
   for (std::uint64_t k = 0; k < 4; ++k) {
     SCOPED_TRACE("participant " + std::to_string(k));
     Trainee tr(params, TraineeState{});
@@ -102,8 +103,8 @@ TEST(TraineeRelease, ForceAboveTheLimitMakesTheHandYield) {
   OverhangTissue tissue;
   tissue.shelf_z = 1.0;  // nothing overhead
   tissue.st = 1e9;       // no sound
-  auto params = resolve_params(trainee_param_specs(), nlohmann::json::object());
-  params["max_force"] = 4.0;
+  auto params = trainee_params(nlohmann::json::object());
+  params.max_force = 4.0;
   Trainee tr(params, TraineeState{});
   tr.begin_session(tissue.view(), 20.0, 0.0, 60.0, 1, 2, Channels{});
   double fmax = 0.0;

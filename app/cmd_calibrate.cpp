@@ -1,0 +1,78 @@
+// `palplab calibrate STUDY.json --human FILE.csv --params KEYS... [--budget N] [--jobs N]
+//                    [--sim-n N] --out PARAMS.json`: fits the named trainee-model parameters to
+// human data by Nelder–Mead with restarts over a simulated-moments loss with common random
+// numbers (protocols/calibrate.hpp); prints the fitted values with standard errors, the loss
+// before and after, and the fit per group and measure; writes them all to PARAMS.json (its
+// "participant_model" object can be pasted into a study).
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+#include "protocols/calibrate.hpp"
+#include "protocols/study.hpp"
+
+namespace {
+struct CalibrateArgs {
+  std::string study, human, out, write_defaults;
+  palplab::protocols::CalibrateOptions opt;
+  bool quiet = false;
+};
+
+palplab::app::CommandRegistration reg{
+    "calibrate", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand("calibrate",
+                                      "Fit participant-model parameters to human data (tidy CSV)");
+      auto a = std::make_shared<CalibrateArgs>();
+      cmd->add_option("STUDY", a->study, "Study file (JSON) that produced the human data")
+          ->required();
+      cmd->add_option("--human", a->human,
+                      "Human data: CSV with participant,group,phase,session,measure,value")
+          ->required();
+      cmd->add_option("--params", a->opt.keys, "Trainee parameters to fit (names)")
+          ->required()
+          ->expected(1, -1);
+      cmd->add_option("--budget", a->opt.budget, "Loss evaluations for the optimiser")
+          ->check(CLI::Range(1, 1000000));
+      cmd->add_option("--jobs", a->opt.jobs, "Participants simulated in parallel (threads)")
+          ->check(CLI::Range(1, 1024));
+      cmd->add_option("--sim-n", a->opt.sim_n,
+                      "Simulated participants per group (default: the study's group sizes)")
+          ->check(CLI::Range(2, 100000));
+      cmd->add_option("--measures", a->opt.measures,
+                      "Measures to fit (default: the study's declared measures)")
+          ->expected(1, -1);
+      cmd->add_option("--out", a->out, "Where to write the fitted parameters (JSON)")->required();
+      cmd->add_option("--write-defaults", a->write_defaults,
+                      "Also write the fitted values as the defaults into this params.hpp "
+                      "(protocols/participants/params.hpp; rebuild afterwards)");
+      cmd->add_flag("--quiet", a->quiet, "No progress output");
+      cmd->callback([a, code] {
+        using namespace palplab::protocols;
+        Study s = load_study(a->study, engine_prototype_inspector());
+        auto cells = read_human_cells(a->human);
+        if (!a->quiet)
+          a->opt.progress = [](int e, double l, double best) {
+            std::fprintf(stderr, "evaluation %d: loss %.4g (best %.4g)\n", e, l, best);
+          };
+        CalibrationResult r = calibrate(s, cells, a->opt);
+        auto j = to_json(r);
+        j["study"] = a->study;
+        j["human"] = a->human;
+        j["sim_n"] = a->opt.sim_n;
+        j["budget"] = a->opt.budget;
+        std::ofstream o(a->out, std::ios::binary);
+        o << j.dump(2) << "\n";
+        if (!o) throw palplab::InputError("cannot write the parameter file", a->out);
+        std::cout << to_text(r) << "wrote " << a->out << "\n";
+        if (!a->write_defaults.empty()) {
+          write_defaults(r, a->write_defaults);
+          std::cout << "wrote the fitted defaults into " << a->write_defaults
+                    << " (rebuild to ship them)\n";
+        }
+        *code = 0;
+      });
+    }};
+}  // namespace

@@ -1,0 +1,94 @@
+// `palplab power STUDY.json --replicates R [--n 6,8,10,...] [--jobs N] [--out DIR]
+//                [--shard I/K] [--alpha A]`: simulates the whole study R times per group size
+// and reports the power of every declared test (protocols/power.hpp). Replicates are appended
+// to DIR/replicates.jsonl as they finish; running the same command again resumes. Under MPI
+// (a PALPLAB_MPI build launched by mpirun) the ranks share the replicates and rank 0 writes.
+// With --shard I/K only every K-th replicate is run (job arrays); `palplab merge` combines.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+#include "protocols/power.hpp"
+#include "protocols/study.hpp"
+
+namespace {
+struct PowerArgs {
+  std::string study, out = "power", shard;
+  std::vector<int> n;
+  palplab::protocols::PowerOptions opt;
+  bool quiet = false;
+};
+
+palplab::app::CommandRegistration reg{
+    "power", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand(
+          "power", "Power analysis: simulate the study many times per group size");
+      auto a = std::make_shared<PowerArgs>();
+      cmd->add_option("STUDY", a->study, "Study file (JSON)")->required();
+      cmd->add_option("--replicates", a->opt.replicates, "Simulated studies per group size")
+          ->required()
+          ->check(CLI::Range(1, 10000000));
+      cmd->add_option("--n", a->n, "Participants per group, comma separated (default: the study's)")
+          ->delimiter(',')
+          ->check(CLI::Range(2, 100000));
+      cmd->add_option("--jobs", a->opt.jobs, "Replicates simulated in parallel (threads)")
+          ->check(CLI::Range(1, 1024));
+      cmd->add_option("--out", a->out, "Output directory (replicates.jsonl, power.json/md/svg)");
+      cmd->add_option("--alpha", a->opt.alpha, "Significance level")->check(CLI::Range(1e-9, 0.5));
+      cmd->add_option("--target-power", a->opt.target_power, "Power the smallest n must reach")
+          ->check(CLI::Range(0.01, 0.999999));
+      cmd->add_option("--shard", a->shard, "Run only shard I of K (I/K, 1-based), for job arrays");
+      cmd->add_flag("--quiet", a->quiet, "No progress output");
+      cmd->callback([a, code] {
+        using namespace palplab::protocols;
+        if (!a->shard.empty()) {
+          int i = 0, k = 0;
+          char extra = 0;
+          if (std::sscanf(a->shard.c_str(), "%d/%d%c", &i, &k, &extra) != 2 || k < 1 || i < 1 ||
+              i > k)
+            throw palplab::InputError("--shard: expected I/K with 1 <= I <= K, got \"" + a->shard +
+                                      "\"");
+          a->opt.shard = i - 1;
+          a->opt.shards = k;
+        }
+        a->opt.n = a->n;
+        a->opt.out_dir = a->out;
+        Study s = load_study(a->study, engine_prototype_inspector());
+        const bool tty = isatty(2);
+        if (!a->quiet)
+          a->opt.progress = [tty](long done, long total, double elapsed) {
+            const double eta = done > 0 ? elapsed / done * (total - done) : NAN;
+            std::fprintf(
+                stderr, "%sreplicates %ld/%ld, %.0f s elapsed, ETA %s%s", tty ? "\r" : "", done,
+                total, elapsed,
+                std::isfinite(eta) ? (std::to_string(std::lround(eta)) + " s").c_str() : "?",
+                tty && done < total ? "   " : "\n");
+            std::fflush(stderr);
+          };
+        const long ran = run_power(s, a->opt);
+        if (ran < 0) {  // an MPI rank other than 0
+          *code = 0;
+          return;
+        }
+        if (a->opt.shards > 1) {
+          std::cout << "shard " << a->opt.shard + 1 << "/" << a->opt.shards << ": " << ran
+                    << " replicates run into " << a->out
+                    << "; combine the shards with `palplab merge`\n";
+          *code = 0;
+          return;
+        }
+        auto summary =
+            power_summary({(std::filesystem::path(a->out) / "replicates.jsonl").string()},
+                          a->opt.alpha, a->opt.target_power);
+        std::cout << write_power_report(summary, a->out) << "\nwrote " << a->out
+                  << "/power.json, power.md, power.svg (" << ran << " replicates run now)\n";
+        *code = 0;
+      });
+    }};
+}  // namespace

@@ -1,0 +1,401 @@
+#include "protocols/calibrate.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <regex>
+#include <sstream>
+
+#include "analysis/csv.hpp"
+#include "common/input_error.hpp"
+#include "protocols/participants/params.hpp"
+#include "protocols/power.hpp"
+
+namespace palplab::protocols {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+void mean_sd(const std::vector<double>& x, double& m, double& sd) {
+  m = std::accumulate(x.begin(), x.end(), 0.0) / std::max<std::size_t>(1, x.size());
+  double ss = 0;
+  for (double v : x) ss += (v - m) * (v - m);
+  sd = x.size() > 1 ? std::sqrt(ss / (x.size() - 1)) : 0.0;
+}
+
+}  // namespace
+
+std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
+  const analysis::CsvTable t = analysis::read_csv(csv_path);
+  int col[5];
+  const char* names[5] = {"group", "phase", "session", "measure", "value"};
+  for (int i = 0; i < 5; ++i) {
+    col[i] = analysis::column_index(t, names[i]);
+    if (col[i] < 0)
+      throw InputError(SourceLocation{csv_path, 1, 1},
+                       std::string("missing column \"") + names[i] +
+                           "\" (expected participant,group,phase,session,measure,value)");
+  }
+  std::map<std::tuple<std::string, std::string, int, std::string>, std::vector<double>> values;
+  std::map<std::tuple<std::string, std::string, int, std::string>, int> first_line;
+  std::vector<std::tuple<std::string, std::string, int, std::string>> order;
+  std::map<std::tuple<std::string, std::string, int, std::string>, int> undefined;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const double s = analysis::parse_number(t, static_cast<int>(r), col[2]);
+    if (s < 1 || s != std::floor(s))
+      throw InputError(SourceLocation{csv_path, t.line[r], 1},
+                       "column 'session': expected a session number >= 1 within the phase");
+    auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], static_cast<int>(s),
+                               t.rows[r][col[3]]);
+    // An undefined measure (empty or NA, as `palplab export` and R write it) is no value.
+    const std::string& field = t.rows[r][col[4]];
+    if (!values.count(key)) order.push_back(key), first_line[key] = t.line[r];
+    if (field.find_first_not_of(" \t") == std::string::npos || field == "NA") {
+      ++undefined[key];
+      values[key];
+      continue;
+    }
+    values[key].push_back(analysis::parse_number(t, static_cast<int>(r), col[4]));
+  }
+  if (order.empty()) throw InputError("no data rows", csv_path);
+  std::vector<HumanCell> cells;
+  for (const auto& key : order) {
+    const auto& v = values[key];
+    HumanCell c{std::get<0>(key), std::get<1>(key),           std::get<2>(key),
+                std::get<3>(key), static_cast<int>(v.size()), undefined[key]};
+    if (c.n < 2)
+      throw InputError(SourceLocation{csv_path, first_line[key], 1},
+                       "group " + c.group + ", " + c.measure + ": fewer than 2 values");
+    mean_sd(v, c.mean, c.sd);
+    cells.push_back(c);
+  }
+  return cells;
+}
+
+double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int jobs,
+                   std::vector<CellFit>* fit) {
+  const std::vector<SimValue> sim = simulate_study(study, jobs);
+  double loss = 0.0;
+  if (fit) fit->clear();
+  for (const auto& c : cells) {
+    CellFit f;
+    f.human = c;
+    std::vector<double> x;
+    for (const auto& v : sim)
+      if (v.group == c.group && v.phase == c.phase && v.session == c.session &&
+          v.measure == c.measure) {
+        if (v.value)
+          x.push_back(*v.value);
+        else
+          ++f.undefined;
+      }
+    const int total = static_cast<int>(x.size()) + f.undefined;
+    if (total == 0)
+      throw InputError("the human data have a cell the study does not simulate: group " + c.group +
+                       ", phase " + c.phase + ", session " + std::to_string(c.session) +
+                       ", measure " + c.measure);
+    f.n_sim = static_cast<int>(x.size());
+    if (x.size() < 2) {
+      f.mean = f.sd = f.z_mean = f.z_sd = kNaN;
+      loss += 1e3;  // nothing to compare: far worse than any fit
+    } else {
+      mean_sd(x, f.mean, f.sd);
+      const double sd_floor = std::max(0.01 * std::abs(c.mean), 1e-9);
+      const double s2 = std::pow(std::max(c.sd, sd_floor), 2);
+      const double var_m = s2 / c.n + s2 / f.n_sim;
+      const double var_s = s2 / (2.0 * (c.n - 1)) + s2 / (2.0 * (f.n_sim - 1));
+      f.z_mean = (f.mean - c.mean) / std::sqrt(var_m);
+      f.z_sd = (f.sd - c.sd) / std::sqrt(var_s);
+      loss += f.z_mean * f.z_mean + f.z_sd * f.z_sd;
+    }
+    const double u_h = static_cast<double>(c.undefined) / (c.n + c.undefined);
+    loss += 25.0 * std::abs(static_cast<double>(f.undefined) / total - u_h);
+    if (fit) fit->push_back(f);
+  }
+  return loss;
+}
+
+NelderMeadResult nelder_mead(const std::function<double(const std::vector<double>&)>& f,
+                             std::vector<double> x0, const std::vector<double>& step,
+                             const std::vector<double>& lo, const std::vector<double>& hi,
+                             int budget) {
+  const std::size_t d = x0.size();
+  NelderMeadResult res;
+  // Work in z = (x - x0) / step, project x into [lo, hi].
+  const std::vector<double> origin = x0;
+  auto to_x = [&](const std::vector<double>& z) {
+    std::vector<double> x(d);
+    for (std::size_t i = 0; i < d; ++i) x[i] = std::clamp(origin[i] + z[i] * step[i], lo[i], hi[i]);
+    return x;
+  };
+  auto eval = [&](const std::vector<double>& z) {
+    ++res.evaluations;
+    return f(to_x(z));
+  };
+  std::vector<double> best_z(d, 0.0);
+  double best_f = eval(best_z);
+  const double alpha = 1.0, gamma = 2.0, rho = 0.5, sigma = 0.5;
+  for (int restart = 0; res.evaluations < budget; ++restart) {
+    // Simplex of d + 1 points around the best point, unit size in z.
+    std::vector<std::vector<double>> pts(d + 1, best_z);
+    std::vector<double> fv(d + 1, best_f);
+    for (std::size_t i = 0; i < d && res.evaluations < budget; ++i) {
+      pts[i + 1][i] += 1.0;
+      fv[i + 1] = eval(pts[i + 1]);
+    }
+    const double start_f = best_f;
+    while (res.evaluations < budget) {
+      std::vector<std::size_t> idx(d + 1);
+      std::iota(idx.begin(), idx.end(), 0);
+      std::sort(idx.begin(), idx.end(), [&](auto a, auto b) { return fv[a] < fv[b]; });
+      const std::size_t b = idx[0], w = idx[d], sw = idx[d - 1 < d ? d - 1 : 0];
+      // Converged: the simplex is tiny or its values agree.
+      double size = 0;
+      for (std::size_t i = 0; i <= d; ++i)
+        for (std::size_t k = 0; k < d; ++k) size = std::max(size, std::abs(pts[i][k] - pts[b][k]));
+      if (size < 1e-3 || std::abs(fv[w] - fv[b]) <= 1e-8 * (1 + std::abs(fv[b]))) break;
+      std::vector<double> c(d, 0.0);
+      for (std::size_t i = 0; i <= d; ++i)
+        if (i != w)
+          for (std::size_t k = 0; k < d; ++k) c[k] += pts[i][k] / d;
+      auto along = [&](double t) {
+        std::vector<double> z(d);
+        for (std::size_t k = 0; k < d; ++k) z[k] = c[k] + t * (pts[w][k] - c[k]);
+        return z;
+      };
+      auto xr = along(-alpha);
+      const double fr = eval(xr);
+      if (fr < fv[b]) {
+        auto xe = along(-gamma);
+        const double fe = res.evaluations < budget ? eval(xe) : fr + 1;
+        if (fe < fr)
+          pts[w] = xe, fv[w] = fe;
+        else
+          pts[w] = xr, fv[w] = fr;
+      } else if (fr < fv[sw]) {
+        pts[w] = xr, fv[w] = fr;
+      } else {
+        const bool outside = fr < fv[w];
+        auto xc = along(outside ? -rho : rho);
+        const double fc = eval(xc);
+        if (fc < (outside ? fr : fv[w])) {
+          pts[w] = xc, fv[w] = fc;
+        } else {
+          for (std::size_t i = 0; i <= d && res.evaluations < budget; ++i) {
+            if (i == b) continue;
+            for (std::size_t k = 0; k < d; ++k)
+              pts[i][k] = pts[b][k] + sigma * (pts[i][k] - pts[b][k]);
+            fv[i] = eval(pts[i]);
+          }
+        }
+      }
+    }
+    for (std::size_t i = 0; i <= d; ++i)
+      if (fv[i] < best_f) best_f = fv[i], best_z = pts[i];
+    res.restarts = restart;
+    // A restart that found nothing better ends the search.
+    if (restart > 0 && best_f >= start_f - 1e-9 * (1 + std::abs(start_f))) break;
+  }
+  res.x = to_x(best_z);
+  res.f = best_f;
+  return res;
+}
+
+CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
+                            const CalibrateOptions& opt) {
+  namespace pm = participants;
+  if (opt.keys.empty()) throw InputError("--params: name at least one parameter to fit");
+  CalibrationResult r;
+  r.keys = opt.keys;
+  const std::vector<std::string>& measures = opt.measures.empty() ? study.measures : opt.measures;
+  std::vector<HumanCell> used;
+  for (const auto& c : cells)
+    if (std::find(measures.begin(), measures.end(), c.measure) != measures.end()) used.push_back(c);
+  if (used.empty())
+    throw InputError("the human data have no cell of the measures to fit (" +
+                     std::to_string(measures.size()) + " measures named)");
+  std::vector<double> lo, hi, step;
+  const pm::TraineeParams current = pm::trainee_params(study.participant_parameters, study.file);
+  for (const auto& k : opt.keys) {
+    const pm::ParamSpec* s = pm::find_param(pm::trainee_param_specs(), k);
+    if (!s) {
+      std::string names;
+      for (const auto& x : pm::trainee_param_specs())
+        names += std::string(names.empty() ? "" : ", ") + x.name;
+      throw InputError("--params: unknown participant parameter \"" + k +
+                       "\"; expected one of: " + names);
+    }
+    const double x0 = current.*(s->trainee);
+    r.start.push_back(x0);
+    lo.push_back(s->min);
+    hi.push_back(s->max);
+    // A quarter of the value (or a tenth of a bounded range when the value is 0).
+    step.push_back(x0 != 0 ? 0.25 * std::abs(x0) : 0.1 * std::min(s->max - s->min, 1.0));
+  }
+  Study base = study;
+  if (opt.sim_n > 0)
+    base = resized_study(study, opt.sim_n, study.seed);  // same seed: common random numbers
+  auto with = [&](const std::vector<double>& x) {
+    Study s = base;
+    for (std::size_t i = 0; i < x.size(); ++i) s.participant_parameters[opt.keys[i]] = x[i];
+    return s;
+  };
+  int evaluations = 0;
+  double best = std::numeric_limits<double>::infinity();
+  auto loss = [&](const std::vector<double>& x) {
+    const double l = moment_loss(with(x), used, opt.jobs);
+    ++evaluations;
+    best = std::min(best, l);
+    if (opt.progress) opt.progress(evaluations, l, best);
+    return l;
+  };
+  r.loss_before = moment_loss(with(r.start), used, opt.jobs, &r.fit_before);
+  NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
+  r.fitted = nm.x;
+  r.restarts = nm.restarts;
+  r.loss_after = moment_loss(with(r.fitted), used, opt.jobs, &r.fit_after);
+
+  // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
+  // starting value): wide enough to average over the small steps that common random numbers
+  // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
+  const std::size_t d = r.fitted.size();
+  Eigen::MatrixXd H(d, d);
+  std::vector<double> h(d);
+  for (std::size_t i = 0; i < d; ++i) {
+    h[i] = 0.2 * step[i];
+    // Keep the stencil inside the bounds.
+    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
+    if (room > 0) h[i] = std::min(h[i], room);
+  }
+  auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
+    std::vector<double> x = r.fitted;
+    x[i] += di;
+    x[j] += dj;
+    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
+    return loss(x);
+  };
+  const double f0 = r.loss_after;
+  for (std::size_t i = 0; i < d; ++i) {
+    H(i, i) = (at(i, h[i], i, 0) - 2 * f0 + at(i, -h[i], i, 0)) / (h[i] * h[i]);
+    for (std::size_t j = 0; j < i; ++j) {
+      const double v = (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) +
+                        at(i, -h[i], j, -h[j])) /
+                       (4 * h[i] * h[j]);
+      H(i, j) = H(j, i) = v;
+    }
+  }
+  r.se.assign(d, kNaN);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
+    const Eigen::MatrixXd cov = 2.0 * H.inverse();
+    for (std::size_t i = 0; i < d; ++i) r.se[i] = std::sqrt(cov(i, i));
+  }
+  r.evaluations = evaluations;
+  r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
+                                                          : nlohmann::json::object();
+  for (std::size_t i = 0; i < d; ++i) r.parameters[r.keys[i]] = r.fitted[i];
+  return r;
+}
+
+void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
+  std::string text;
+  {
+    std::ifstream in(params_hpp, std::ios::binary);
+    if (!in) throw InputError("cannot read", params_hpp);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  const std::size_t begin = text.find("struct TraineeParams {");
+  const std::size_t end = begin == std::string::npos ? begin : text.find("\n};", begin);
+  if (end == std::string::npos)
+    throw InputError("no `struct TraineeParams { ... };` found", params_hpp);
+  std::string body = text.substr(begin, end - begin);
+  for (std::size_t i = 0; i < r.keys.size(); ++i) {
+    const std::regex member("(\\bdouble " + r.keys[i] + " = )([^;]+)(;)");
+    std::smatch m;
+    if (!std::regex_search(body, m, member))
+      throw InputError("no member initialiser `double " + r.keys[i] + " = ...;`", params_hpp);
+    char value[64];
+    std::snprintf(value, sizeof value, "%.6g", r.fitted[i]);
+    // Replace the value by position ("$1" followed by digits would read as another group).
+    body.replace(m.position(2), m.length(2), value);
+  }
+  text.replace(begin, end - begin, body);
+  std::ofstream out(params_hpp, std::ios::binary);
+  out << text;
+  if (!out) throw InputError("cannot write", params_hpp);
+}
+
+nlohmann::json to_json(const CalibrationResult& r) {
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  auto fits = [&](const std::vector<CellFit>& v) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& f : v)
+      a.push_back(
+          {{"group", f.human.group},
+           {"phase", f.human.phase},
+           {"session", f.human.session},
+           {"measure", f.human.measure},
+           {"human", {{"n", f.human.n}, {"mean", f.human.mean}, {"sd", f.human.sd}}},
+           {"simulated",
+            {{"n", f.n_sim}, {"undefined", f.undefined}, {"mean", num(f.mean)}, {"sd", num(f.sd)}}},
+           {"z_mean", num(f.z_mean)},
+           {"z_sd", num(f.z_sd)}});
+    return a;
+  };
+  nlohmann::json fitted = nlohmann::json::object(), se = nlohmann::json::object(),
+                 start = nlohmann::json::object();
+  for (std::size_t i = 0; i < r.keys.size(); ++i) {
+    fitted[r.keys[i]] = r.fitted[i];
+    se[r.keys[i]] = num(r.se[i]);
+    start[r.keys[i]] = r.start[i];
+  }
+  return {{"palplab_calibration", 1},
+          {"fitted", fitted},
+          {"standard_errors", se},
+          {"start", start},
+          {"loss_before", r.loss_before},
+          {"loss_after", r.loss_after},
+          {"evaluations", r.evaluations},
+          {"restarts", r.restarts},
+          {"fit_before", fits(r.fit_before)},
+          {"fit_after", fits(r.fit_after)},
+          {"participant_model", {{"model", "pmm1"}, {"parameters", r.parameters}}}};
+}
+
+std::string to_text(const CalibrationResult& r) {
+  std::ostringstream o;
+  char buf[256];
+  o << "fitted parameters (SE from the loss curvature):\n";
+  for (std::size_t i = 0; i < r.keys.size(); ++i) {
+    std::snprintf(
+        buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g)\n", r.keys[i].c_str(), r.fitted[i],
+        std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str() : "not estimable", r.start[i]);
+    o << buf;
+  }
+  std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n\n",
+                r.loss_before, r.loss_after, r.evaluations, r.restarts);
+  o << buf;
+  o << "fit per group and measure (human mean ± SD vs simulated; z in SE units):\n";
+  for (std::size_t i = 0; i < r.fit_after.size(); ++i) {
+    const CellFit& b = r.fit_before[i];
+    const CellFit& f = r.fit_after[i];
+    std::snprintf(buf, sizeof buf,
+                  "  %-4s %-18s %-18s human %8.3f ± %-7.3f before %8.3f ± %-7.3f after %8.3f ± "
+                  "%-7.3f z_mean %6.2f z_sd %6.2f%s\n",
+                  f.human.group.c_str(), f.human.phase.c_str(), f.human.measure.c_str(),
+                  f.human.mean, f.human.sd, b.mean, b.sd, f.mean, f.sd, f.z_mean, f.z_sd,
+                  f.undefined ? (" (" + std::to_string(f.undefined) + " undefined)").c_str() : "");
+    o << buf;
+  }
+  return o.str();
+}
+
+}  // namespace palplab::protocols

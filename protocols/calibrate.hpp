@@ -1,0 +1,99 @@
+#pragma once
+// Calibration of participant-model parameters to human data (`palplab calibrate`;
+// docs/PARTICIPANTS.md "Calibration").
+//
+// Data: a tidy CSV (participant, group, phase, session, measure, value; `palplab export`
+// writes the same shape) reduced to cells (group, phase, session, measure) with n, mean, SD.
+// Loss (a simulated-moments distance, χ²-like): over the cells,
+//   Σ (m_sim - m_h)² / (s_h²/n_h + s_h²/n_sim) + (s_sim - s_h)² / (s_h²/(2(n_h-1)) +
+//   s_h²/(2(n_sim-1)))
+//   + 25 · |share of simulated values undefined - share of human values undefined|
+// (s_h floored at 1 % of |m_h| and 1e-9, so a constant human cell cannot divide by 0),
+// i.e. each simulated mean and SD is compared with the human one in units of its sampling SE
+// (human sampling error plus simulation error); undefined measures (feature never found) are
+// compared as shares. Common random numbers: every
+// evaluation simulates the same plan (same seeds), so the loss changes only through the
+// parameters. Optimiser: Nelder–Mead (Lagarias et al. 1998 coefficients) on parameters scaled
+// by their starting step, projected into their bounds, restarted from the best point until a
+// restart no longer improves or the budget of loss evaluations is spent. Standard errors: from
+// the curvature of the loss at the optimum (loss ≈ -2 log L, so Cov ≈ 2 H⁻¹, H by central
+// finite differences).
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "protocols/study.hpp"
+
+namespace palplab::protocols {
+
+struct HumanCell {
+  std::string group, phase;
+  int session = 1;
+  std::string measure;
+  int n = 0;          // defined values
+  int undefined = 0;  // empty / NA values (e.g. the feature was never found)
+  double mean = 0.0, sd = 0.0;
+};
+
+// Reads a tidy CSV (columns participant, group, phase, session, measure, value) into cells
+// (empty or NA values, i.e. undefined measures, are left out);
+// InputError with the line for missing columns, non-numbers, or cells with fewer than 2 values.
+std::vector<HumanCell> read_human_cells(const std::string& csv_path);
+
+struct CellFit {
+  HumanCell human;
+  int n_sim = 0, undefined = 0;
+  double mean = 0.0, sd = 0.0;  // simulated
+  double z_mean = 0.0, z_sd = 0.0;
+};
+
+// Simulates `study` and compares it with `cells`; returns the loss (see above).
+double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int jobs,
+                   std::vector<CellFit>* fit = nullptr);
+
+// Minimises f over x in [lo, hi] (box) with Nelder–Mead and restarts; `step` is the initial
+// simplex size per coordinate. Stops after `budget` evaluations of f.
+struct NelderMeadResult {
+  std::vector<double> x;
+  double f = 0.0;
+  int evaluations = 0, restarts = 0;
+};
+NelderMeadResult nelder_mead(const std::function<double(const std::vector<double>&)>& f,
+                             std::vector<double> x0, const std::vector<double>& step,
+                             const std::vector<double>& lo, const std::vector<double>& hi,
+                             int budget);
+
+struct CalibrateOptions {
+  std::vector<std::string> keys;  // trainee parameter names to fit
+  int budget = 200;               // loss evaluations for the optimiser (SEs need 2p² + 1 more)
+  int jobs = 1;
+  int sim_n = 0;  // simulated participants per group; 0 = the study's group sizes
+  // Measures to fit (cells of other measures in the CSV are ignored); empty = the study's
+  // declared "measures".
+  std::vector<std::string> measures;
+  std::function<void(int evaluation, double loss, double best)> progress;
+};
+
+struct CalibrationResult {
+  std::vector<std::string> keys;
+  std::vector<double> start, fitted, se;  // se NaN when the curvature is not positive definite
+  double loss_before = 0.0, loss_after = 0.0;
+  int evaluations = 0, restarts = 0;
+  std::vector<CellFit> fit_before, fit_after;
+  nlohmann::json parameters;  // the study's parameters with the fitted values applied
+};
+
+CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
+                            const CalibrateOptions& opt);
+
+// Writes the fitted values as the new defaults into the member initialisers of
+// `struct TraineeParams` in `params_hpp` (protocols/participants/params.hpp), so the shipped
+// defaults are exactly this command's output after a rebuild. InputError when the file or a
+// member is not found.
+void write_defaults(const CalibrationResult& r, const std::string& params_hpp);
+
+nlohmann::json to_json(const CalibrationResult& r);
+std::string to_text(const CalibrationResult& r);
+
+}  // namespace palplab::protocols

@@ -1,0 +1,523 @@
+#include "protocols/power.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#ifdef PALPLAB_MPI
+#include <mpi.h>
+#endif
+
+#include "analysis/anova.hpp"
+#include "analysis/svg.hpp"
+#include "analysis/two_sample.hpp"
+#include "common/input_error.hpp"
+#include "common/seed.hpp"
+#include "protocols/plan.hpp"
+#include "protocols/runner.hpp"
+#include "results/sha256.hpp"
+
+namespace fs = std::filesystem;
+
+namespace palplab::protocols {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+nlohmann::json num_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nullptr;
+}
+double num_or_nan(const nlohmann::json& j) {
+  return j.is_number() ? j.get<double>() : kNaN;
+}
+
+// Type-7 quantile (linear interpolation) of sorted values.
+double quantile(const std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return kNaN;
+  const double h = (sorted.size() - 1) * q;
+  const std::size_t lo = static_cast<std::size_t>(std::floor(h));
+  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (h - lo) * (sorted[hi] - sorted[lo]);
+}
+
+// Which process this is when launched by mpirun with an MPI build; a single process otherwise.
+struct Ranks {
+  int rank = 0, size = 1;
+  bool mpi = false;
+};
+
+#ifdef PALPLAB_MPI
+bool launched_by_mpirun() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+#endif
+
+Ranks init_ranks() {
+  Ranks r;
+#ifdef PALPLAB_MPI
+  if (!launched_by_mpirun()) return r;
+  int inited = 0;
+  MPI_Initialized(&inited);
+  if (!inited) MPI_Init(nullptr, nullptr);
+  MPI_Comm_rank(MPI_COMM_WORLD, &r.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &r.size);
+  r.mpi = true;
+#endif
+  return r;
+}
+
+// Concatenated lines of every rank, on rank 0 (others get "").
+std::string gather_to_root(const Ranks& r, const std::string& mine) {
+#ifdef PALPLAB_MPI
+  if (r.mpi) {
+    int len = static_cast<int>(mine.size());
+    std::vector<int> lens(r.size), displs(r.size);
+    MPI_Gather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+    std::string all;
+    if (r.rank == 0) {
+      int total = 0;
+      for (int i = 0; i < r.size; ++i) displs[i] = total, total += lens[i];
+      all.resize(total);
+    }
+    MPI_Gatherv(mine.data(), len, MPI_CHAR, all.data(), lens.data(), displs.data(), MPI_CHAR, 0,
+                MPI_COMM_WORLD);
+    return all;
+  }
+#endif
+  (void)r;
+  return mine;
+}
+
+long max_over_ranks(const Ranks& r, long v) {
+#ifdef PALPLAB_MPI
+  if (r.mpi) {
+    long out = v;
+    MPI_Allreduce(&v, &out, 1, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
+    return out;
+  }
+#endif
+  (void)r;
+  return v;
+}
+
+std::string replicate_file(const PowerOptions& o) {
+  if (o.shards <= 1) return (fs::path(o.out_dir) / "replicates.jsonl").string();
+  return (fs::path(o.out_dir) / ("replicates.shard-" + std::to_string(o.shard + 1) + "-of-" +
+                                 std::to_string(o.shards) + ".jsonl"))
+      .string();
+}
+
+// Cuts a line left half-written by an interruption, so appends start on a fresh line.
+void repair_tail(const std::string& path) {
+  if (!fs::exists(path)) return;
+  std::string text;
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  if (text.empty() || text.back() == '\n') return;
+  const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+  fs::resize_file(path, keep);
+}
+
+std::vector<nlohmann::json> read_replicates(const std::string& path) {
+  std::vector<nlohmann::json> out;
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read replicate file", path);
+  std::string line;
+  int no = 0;
+  while (std::getline(in, line)) {
+    ++no;
+    if (line.empty()) continue;
+    try {
+      out.push_back(nlohmann::json::parse(line));
+    } catch (const std::exception&) {
+      // Only an interrupted last line may be incomplete.
+      if (in.peek() == EOF) break;
+      throw InputError(SourceLocation{path, no, 1}, "not a replicate record (JSON line)");
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<SimValue> simulate_study(const Study& study, int jobs) {
+  const Plan plan = make_plan(study);
+  std::vector<std::vector<SimValue>> per(plan.participants.size());
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex mu;
+  auto worker = [&] {
+    for (std::size_t i; (i = next++) < plan.participants.size();) {
+      try {
+        const ParticipantPlan& pp = plan.participants[i];
+        auto sessions = simulate_participant(study, pp);
+        for (const auto& s : sessions)
+          for (const auto& m : s.measures)
+            per[i].push_back(
+                {pp.id, pp.group, s.session.phase, s.session.phase_index + 1, m.name, m.value});
+      } catch (...) {
+        std::lock_guard lock(mu);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::max(1, jobs); ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+  std::vector<SimValue> out;
+  for (auto& v : per) out.insert(out.end(), v.begin(), v.end());
+  return out;
+}
+
+Study resized_study(const Study& study, int n, std::uint64_t seed) {
+  if (study.assignment == "explicit")
+    throw InputError(
+        "the study assigns participants explicitly; group sizes cannot be varied (use "
+        "balanced_random assignment for a power analysis)",
+        study.file);
+  if (n < 2) throw InputError("group size must be >= 2, got " + std::to_string(n));
+  Study s = study;
+  for (auto& g : s.groups) g.size = n;
+  s.seed = seed;
+  return s;
+}
+
+std::vector<TestOutcome> run_declared_analyses(const Study& study,
+                                               const std::vector<SimValue>& values) {
+  std::vector<TestOutcome> out;
+  for (const auto& a : study.analyses) {
+    if (a.kind != "anova_oneway" && a.kind != "pairwise_t") continue;
+    // The last session of the phase, or all of them pooled (as the report does).
+    int last = 0;
+    for (const auto& v : values)
+      if (v.phase == a.phase && v.measure == a.measure) last = std::max(last, v.session);
+    analysis::Groups groups(study.groups.size());
+    for (const auto& v : values) {
+      if (v.phase != a.phase || v.measure != a.measure || !v.value) continue;
+      if (!a.pooled && v.session != last) continue;
+      for (std::size_t g = 0; g < study.groups.size(); ++g)
+        if (study.groups[g].id == v.group) groups[g].push_back(*v.value);
+    }
+    const std::string base = a.kind + " " + a.measure + " " + a.phase + (a.pooled ? " pooled" : "");
+    auto enough = [](const std::vector<double>& x) { return x.size() >= 2; };
+    if (a.kind == "anova_oneway") {
+      TestOutcome t{base, kNaN, kNaN, "eta_squared"};
+      if (std::all_of(groups.begin(), groups.end(), enough) && groups.size() >= 2) {
+        const analysis::Anova r = analysis::oneway_anova(groups);
+        if (r.defined) t.p = r.p, t.effect = r.eta_squared;
+      }
+      out.push_back(t);
+    } else {
+      for (std::size_t i = 0; i < groups.size(); ++i)
+        for (std::size_t j = i + 1; j < groups.size(); ++j) {
+          TestOutcome t{base + (a.welch ? "" : " student") + " " + study.groups[i].id + "-" +
+                            study.groups[j].id,
+                        kNaN, kNaN, "hedges_g"};
+          if (enough(groups[i]) && enough(groups[j])) {
+            const analysis::TTest r = a.welch ? analysis::welch_t(groups[i], groups[j])
+                                              : analysis::student_t(groups[i], groups[j]);
+            if (r.defined) t.p = r.p;
+            const analysis::EffectSize e = analysis::cohens_d(groups[i], groups[j]);
+            if (e.defined) t.effect = e.g;
+          }
+          out.push_back(t);
+        }
+    }
+  }
+  return out;
+}
+
+std::pair<double, double> wilson_interval(long k, long n, double z) {
+  if (n <= 0) return {0.0, 1.0};
+  const double p = static_cast<double>(k) / n, z2 = z * z;
+  const double c = (p + z2 / (2 * n)) / (1 + z2 / n);
+  const double h = z * std::sqrt(p * (1 - p) / n + z2 / (4.0 * n * n)) / (1 + z2 / n);
+  return {std::max(0.0, c - h), std::min(1.0, c + h)};
+}
+
+long run_power(const Study& study, const PowerOptions& opt) {
+  const Ranks ranks = init_ranks();
+  std::vector<int> ns = opt.n;
+  if (ns.empty()) {
+    for (const auto& g : study.groups)
+      if (g.size != study.groups.front().size)
+        throw InputError("groups differ in size; give the sizes to simulate with --n", study.file);
+    ns.push_back(study.groups.front().size);
+  }
+  if (opt.replicates < 1) throw InputError("--replicates must be >= 1");
+  if (opt.shards < 1 || opt.shard < 0 || opt.shard >= opt.shards)
+    throw InputError("--shard I/K needs 1 <= I <= K");
+  const std::string sha = results::sha256_hex(study.json_text);
+  const std::string file = replicate_file(opt);
+
+  // Every (n, replicate) has a global index; shard I of K takes index % K == I - 1.
+  std::set<std::pair<int, int>> done;
+  if (ranks.rank == 0) {
+    std::error_code ec;
+    fs::create_directories(opt.out_dir, ec);
+    if (!fs::is_directory(opt.out_dir))
+      throw InputError("cannot create the output directory", opt.out_dir);
+    repair_tail(file);
+    if (fs::exists(file))
+      for (const auto& r : read_replicates(file)) {
+        if (r.value("study_sha256", "") != sha)
+          throw InputError(
+              "the replicate file holds another study (SHA-256 differs); use another --out", file);
+        done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
+      }
+  }
+  // Every rank needs to know what is done: rank 0 read it; share as text.
+  std::string done_text;
+  for (const auto& [n, r] : done) done_text += std::to_string(n) + " " + std::to_string(r) + "\n";
+#ifdef PALPLAB_MPI
+  if (ranks.mpi) {
+    long len = static_cast<long>(done_text.size());
+    MPI_Bcast(&len, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+    done_text.resize(len);
+    MPI_Bcast(done_text.data(), static_cast<int>(len), MPI_CHAR, 0, MPI_COMM_WORLD);
+    std::istringstream in(done_text);
+    for (int n, r; in >> n >> r;) done.insert({n, r});
+  }
+#endif
+  struct Task {
+    int n, replicate;
+  };
+  // This shard's missing replicates, in index order (the same list on every rank); rank r of
+  // K takes every K-th of them.
+  std::vector<Task> mine;
+  long total = 0;
+  for (std::size_t i = 0; i < ns.size(); ++i)
+    for (int r = 0; r < opt.replicates; ++r) {
+      const long index = static_cast<long>(i) * opt.replicates + r;
+      if (index % opt.shards != opt.shard) continue;
+      if (done.count({ns[i], r})) continue;
+      if (total++ % ranks.size == ranks.rank) mine.push_back({ns[i], r});
+    }
+
+  // Rounds: each rank runs up to `jobs` replicates in parallel, then rank 0 appends everything
+  // finished in the round (so an interruption loses at most one round).
+  const int jobs = std::max(1, opt.jobs);
+  const long rounds = max_over_ranks(ranks, (static_cast<long>(mine.size()) + jobs - 1) / jobs);
+  const auto t0 = Clock::now();
+  long finished = 0, run_here = 0;
+  for (long round = 0; round < rounds; ++round) {
+    const std::size_t begin = std::min(mine.size(), static_cast<std::size_t>(round * jobs));
+    const std::size_t end = std::min(mine.size(), begin + jobs);
+    std::vector<std::string> lines(end - begin);
+    std::vector<std::thread> threads;
+    std::exception_ptr error;
+    std::mutex mu;
+    for (std::size_t k = begin; k < end; ++k)
+      threads.emplace_back([&, k] {
+        try {
+          const Task t = mine[k];
+          const std::uint64_t seed =
+              derive_seed(study.seed, label_hash("power"), static_cast<std::uint64_t>(t.n),
+                          static_cast<std::uint64_t>(t.replicate));
+          const Study s = resized_study(study, t.n, seed);
+          nlohmann::json rec = {
+              {"study_sha256", sha},      {"study", study.id}, {"n", t.n},
+              {"replicate", t.replicate}, {"seed", seed},      {"tests", nlohmann::json::array()}};
+          for (const auto& o : run_declared_analyses(s, simulate_study(s, 1)))
+            rec["tests"].push_back({{"id", o.id},
+                                    {"p", num_or_null(o.p)},
+                                    {"effect", num_or_null(o.effect)},
+                                    {"effect_name", o.effect_name}});
+          lines[k - begin] = rec.dump() + "\n";
+        } catch (...) {
+          std::lock_guard lock(mu);
+          if (!error) error = std::current_exception();
+        }
+      });
+    for (auto& t : threads) t.join();
+    if (error) std::rethrow_exception(error);  // under MPI: mpirun aborts the other ranks
+    std::string mine_text;
+    for (const auto& l : lines) mine_text += l;
+    run_here += static_cast<long>(lines.size());
+    const std::string all = gather_to_root(ranks, mine_text);
+    if (ranks.rank == 0) {
+      std::ofstream out(file, std::ios::app | std::ios::binary);
+      out << all;
+      out.flush();
+      if (!out) throw InputError("cannot append to the replicate file", file);
+      finished += std::count(all.begin(), all.end(), '\n');
+      if (opt.progress)
+        opt.progress(finished, total, std::chrono::duration<double>(Clock::now() - t0).count());
+    }
+  }
+#ifdef PALPLAB_MPI
+  if (ranks.mpi) {
+    MPI_Barrier(MPI_COMM_WORLD);
+    MPI_Finalize();
+    // Only rank 0 writes the summary.
+    if (ranks.rank != 0) return -1;
+  }
+#endif
+  return run_here;
+}
+
+nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
+                             double target_power) {
+  std::map<std::pair<int, int>, nlohmann::json> reps;
+  std::string sha, study_id;
+  for (const auto& f : files)
+    for (auto& r : read_replicates(f)) {
+      const std::string s = r.value("study_sha256", "");
+      if (sha.empty()) sha = s, study_id = r.value("study", "");
+      if (s != sha)
+        throw InputError("replicates of different studies (SHA-256 " + s.substr(0, 12) + " vs " +
+                             sha.substr(0, 12) + ")",
+                         f);
+      const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
+      if (auto it = reps.find(key); it != reps.end()) {
+        if (it->second != r)
+          throw InputError("replicate n=" + std::to_string(key.first) + " #" +
+                               std::to_string(key.second) + " differs between files",
+                           f);
+        continue;
+      }
+      reps.emplace(key, std::move(r));
+    }
+  if (reps.empty()) throw InputError("no replicates found", files.empty() ? "" : files.front());
+
+  struct Cell {
+    long reps = 0, significant = 0, undefined = 0;
+    std::vector<double> effects;
+  };
+  std::vector<std::string> ids;  // test order of the first replicate
+  std::map<std::string, std::string> effect_name;
+  std::map<std::string, std::map<int, Cell>> cells;
+  std::map<int, long> per_n;
+  for (const auto& [key, r] : reps) {
+    ++per_n[key.first];
+    for (const auto& t : r.at("tests")) {
+      const std::string id = t.at("id").get<std::string>();
+      if (!effect_name.count(id)) ids.push_back(id), effect_name[id] = t.value("effect_name", "");
+      Cell& c = cells[id][key.first];
+      ++c.reps;
+      const double p = num_or_nan(t.at("p"));
+      if (!std::isfinite(p))
+        ++c.undefined;
+      else if (p < alpha)
+        ++c.significant;
+      const double e = num_or_nan(t.at("effect"));
+      if (std::isfinite(e)) c.effects.push_back(e);
+    }
+  }
+  nlohmann::json out = {{"study", study_id},
+                        {"study_sha256", sha},
+                        {"alpha", alpha},
+                        {"target_power", target_power},
+                        {"replicates", nlohmann::json::object()},
+                        {"tests", nlohmann::json::array()}};
+  for (const auto& [n, k] : per_n) out["replicates"][std::to_string(n)] = k;
+  for (const auto& id : ids) {
+    nlohmann::json t = {
+        {"id", id}, {"effect_name", effect_name[id]}, {"by_n", nlohmann::json::array()}};
+    nlohmann::json smallest = nullptr;
+    for (auto& [n, c] : cells[id]) {
+      std::sort(c.effects.begin(), c.effects.end());
+      const auto [lo, hi] = wilson_interval(c.significant, c.reps);
+      const double power = static_cast<double>(c.significant) / c.reps;
+      double mean = kNaN;
+      if (!c.effects.empty()) {
+        mean = 0;
+        for (double e : c.effects) mean += e;
+        mean /= c.effects.size();
+      }
+      t["by_n"].push_back({{"n", n},
+                           {"replicates", c.reps},
+                           {"significant", c.significant},
+                           {"undefined", c.undefined},
+                           {"power", power},
+                           {"ci_low", lo},
+                           {"ci_high", hi},
+                           {"effect_mean", num_or_null(mean)},
+                           {"effect_q025", num_or_null(quantile(c.effects, 0.025))},
+                           {"effect_median", num_or_null(quantile(c.effects, 0.5))},
+                           {"effect_q975", num_or_null(quantile(c.effects, 0.975))}});
+      if (smallest.is_null() && power >= target_power) smallest = n;
+    }
+    t["smallest_n"] = smallest;
+    out["tests"].push_back(t);
+  }
+  return out;
+}
+
+std::string write_power_report(const nlohmann::json& s, const std::string& out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  auto fmt = [](const nlohmann::json& v, int digits) {
+    if (!v.is_number()) return std::string("—");
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v.get<double>());
+    return std::string(buf);
+  };
+  std::ostringstream md;
+  md << "# Power analysis: " << s.at("study").get<std::string>() << "\n\n"
+     << "alpha = " << s.at("alpha").get<double>() << ", target power "
+     << s.at("target_power").get<double>()
+     << "; power = share of replicates with p < alpha, 95 % Monte Carlo interval (Wilson); "
+        "effect: η² (ANOVA) or Hedges' g (pairs), median [2.5 %, 97.5 %].\n\n"
+     << "| test | n per group | replicates | power | 95 % CI | effect median [2.5 %, 97.5 %] |\n"
+     << "|---|---:|---:|---:|---|---|\n";
+  std::vector<analysis::Series> series;
+  int colour = 0;
+  for (const auto& t : s.at("tests")) {
+    analysis::Series line;
+    line.name = t.at("id").get<std::string>();
+    line.colour = colour++;
+    for (const auto& c : t.at("by_n")) {
+      md << "| " << line.name << " | " << c.at("n").get<int>() << " | "
+         << c.at("replicates").get<long>() << " | " << fmt(c.at("power"), 3) << " | ["
+         << fmt(c.at("ci_low"), 3) << ", " << fmt(c.at("ci_high"), 3) << "] | "
+         << fmt(c.at("effect_median"), 2) << " [" << fmt(c.at("effect_q025"), 2) << ", "
+         << fmt(c.at("effect_q975"), 2) << "] |\n";
+      line.x.push_back(c.at("n").get<double>());
+      line.y.push_back(c.at("power").get<double>());
+      line.err.push_back((c.at("ci_high").get<double>() - c.at("ci_low").get<double>()) / 2);
+    }
+    series.push_back(line);
+  }
+  md << "\nSmallest n per group reaching the target power:\n\n";
+  for (const auto& t : s.at("tests"))
+    md << "- " << t.at("id").get<std::string>() << ": "
+       << (t.at("smallest_n").is_null() ? std::string("not reached in the simulated sizes")
+                                        : std::to_string(t.at("smallest_n").get<int>()))
+       << "\n";
+  const std::string table = md.str();
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream o(fs::path(out_dir) / name, std::ios::binary);
+    o << text;
+    if (!o) throw InputError("cannot write", (fs::path(out_dir) / name).string());
+  };
+  write("power.json", s.dump(2) + "\n");
+  write("power.md", table);
+  write("power.svg", analysis::svg_line_plot(series,
+                                             "Power by group size (bars: half-width of the 95 % "
+                                             "Monte Carlo interval)",
+                                             "participants per group", "power"));
+  return table;
+}
+
+}  // namespace palplab::protocols

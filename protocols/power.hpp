@@ -1,0 +1,81 @@
+#pragma once
+// Whole-study simulation in memory, and power analysis by simulating a study many times
+// (`palplab power`, `palplab merge`; docs/PARTICIPANTS.md "Power analysis").
+//
+// A replicate is the study run once with virtual participants: every group gets n participants
+// and the study seed is replaced by derive_seed(study seed, "power", n, replicate), so
+// replicates are independent and each is reproducible on its own — whichever thread, shard or
+// MPI rank computes it. Each replicate runs the study's declared analyses (one-way ANOVA and
+// pairwise t-tests on a measure in a phase) and keeps, per test, its p-value and effect size
+// (η² for an ANOVA, Hedges' g for a pair). Replicates are appended to DIR/replicates.jsonl as
+// they finish (resume skips those already there); the summary (power with a Wilson 95 % Monte
+// Carlo interval, effect-size quantiles, smallest n reaching the target power) is computed from
+// that file alone, so shards merged afterwards give the single-run result exactly.
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "protocols/study.hpp"
+
+namespace palplab::protocols {
+
+// One measure value of one simulated session (tidy, as `palplab export` writes measures.csv).
+struct SimValue {
+  std::string participant, group, phase;
+  int session = 1;  // 1-based index within the phase
+  std::string measure;
+  std::optional<double> value;  // nullopt = undefined (e.g. the feature was never found)
+};
+
+// Simulates every planned participant of `study` on `jobs` threads (results do not depend on
+// `jobs`). Participants are in plan order, sessions in timeline order.
+std::vector<SimValue> simulate_study(const Study& study, int jobs = 1);
+
+// `study` with every group resized to `n` (balanced random assignment only: an explicit
+// assignment fixes the participants, an InputError) and its seed replaced by `seed`.
+Study resized_study(const Study& study, int n, std::uint64_t seed);
+
+// The outcome of one declared test in one replicate.
+struct TestOutcome {
+  std::string id;           // "anova_oneway palpation_force post_training", "pairwise_t ... A-B"
+  double p = 1.0;           // two-sided p; NaN when the test is undefined
+  double effect = 0.0;      // η² (ANOVA) or Hedges' g (pair, mean a - mean b); NaN if undefined
+  std::string effect_name;  // "eta_squared" | "hedges_g"
+};
+
+// Runs the study's declared analyses (anova_oneway, pairwise_t; descriptives have no test) on
+// simulated values. The one place that couples power analysis to analysis/.
+std::vector<TestOutcome> run_declared_analyses(const Study& study,
+                                               const std::vector<SimValue>& values);
+
+struct PowerOptions {
+  std::vector<int> n;  // group sizes; empty = the study's own (all groups equal)
+  int replicates = 100;
+  int jobs = 1;
+  double alpha = 0.05;
+  double target_power = 0.80;
+  std::string out_dir;
+  int shard = 0, shards = 1;  // this process runs replicates with index % shards == shard
+  std::function<void(long done, long total, double elapsed_s)> progress;
+};
+
+// Runs the replicates this process is responsible for (skipping those already in
+// DIR/replicates.jsonl) and appends each as it finishes. Under MPI (PALPLAB_MPI, launched by
+// mpirun) ranks share the replicates and rank 0 writes them. Returns the number run here, or
+// -1 on an MPI rank other than 0 (which must not write the summary).
+long run_power(const Study& study, const PowerOptions& opt);
+
+// The summary of every replicate found in `files` (replicates.jsonl from one or more shards;
+// duplicates must agree). InputError when files hold different studies or settings.
+nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
+                             double target_power);
+// Writes DIR/power.json, DIR/power.md (the table, also returned) and DIR/power.svg.
+std::string write_power_report(const nlohmann::json& summary, const std::string& out_dir);
+
+// Wilson score 95 % interval of a proportion k/n.
+std::pair<double, double> wilson_interval(long k, long n, double z = 1.959963984540054);
+
+}  // namespace palplab::protocols

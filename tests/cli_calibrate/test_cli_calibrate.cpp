@@ -1,0 +1,129 @@
+// End-to-end test of `palplab calibrate`: data simulated with known participant parameters
+// (`palplab run` + `palplab export` of tests/data/calibration/recovery_study.json with the
+// parameters set) are fitted back from the defaults; the fitted values must lie within two
+// standard errors of the truth (and within 10 %). The data are simulated with the seed and size
+// calibration simulates with (common random numbers), so the loss is 0 at the truth and the test
+// checks the loss, the optimiser and the standard errors, not sampling luck. (With another seed
+// the estimates scatter by about their standard errors; with 12 simulated participants per
+// group the curvature-based SEs are then on the small side — see docs/PARTICIPANTS.md.) Slow for a
+// test (~20-40 s on one core: every loss evaluation simulates the whole small study); that is the
+// price of testing recovery on the code path `calibrate` really uses.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+Result cli(const std::string& args, const fs::path& dir) {
+  Result r;
+  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
+  std::string cmd =
+      std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
+  int st = std::system(cmd.c_str());
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+fs::path data(const std::string& f) {
+  return fs::path(PALPLAB_SOURCE_DIR) / "tests" / "data" / "calibration" / f;
+}
+
+}  // namespace
+
+TEST(Calibrate, RecoversKnownParameters) {
+  auto d = fs::temp_directory_path() / ("palplab_calibrate_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  const double true_cv = 0.15, true_speed = 0.03;
+  // The "human" data: the study with known parameters, 12 per group.
+  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
+  for (auto& g : study["groups"]) g["size"] = 12;
+  study["participant_model"]["parameters"]["prior_target_cv"] = true_cv;
+  study["participant_model"]["parameters"]["explore_speed"] = true_speed;
+  study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
+  std::ofstream(d / "truth.json") << study.dump(1);
+  ASSERT_EQ(cli("run " + (d / "truth.json").string() + " --db " + (d / "truth.db").string() +
+                    " --samples none --quiet",
+                d)
+                .code,
+            0);
+  ASSERT_EQ(cli("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
+            0);
+  // --write-defaults edits a copy of the real params.hpp.
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "params.hpp",
+                d / "params.hpp");
+  auto r = cli("calibrate " + data("recovery_study.json").string() + " --human " +
+                   (d / "csv" / "measures.csv").string() +
+                   " --params prior_target_cv explore_speed --budget 40 --sim-n 12 --jobs 2 "
+                   "--quiet --out " +
+                   (d / "fit.json").string() + " --write-defaults " + (d / "params.hpp").string(),
+               d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("loss before"), std::string::npos);
+  auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_LT(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
+  const double cv = fit["fitted"]["prior_target_cv"],
+               cv_se = fit["standard_errors"]["prior_target_cv"].is_number()
+                           ? fit["standard_errors"]["prior_target_cv"].get<double>()
+                           : NAN;
+  const double sp = fit["fitted"]["explore_speed"],
+               sp_se = fit["standard_errors"]["explore_speed"].is_number()
+                           ? fit["standard_errors"]["explore_speed"].get<double>()
+                           : NAN;
+  ASSERT_TRUE(std::isfinite(cv_se) && std::isfinite(sp_se)) << fit.dump(1);
+  EXPECT_LE(std::abs(cv - true_cv), 2 * cv_se) << cv << " ± " << cv_se;
+  EXPECT_LE(std::abs(sp - true_speed), 2 * sp_se) << sp << " ± " << sp_se;
+  EXPECT_LE(std::abs(cv - true_cv), 0.1 * true_cv) << cv;
+  EXPECT_LE(std::abs(sp - true_speed), 0.1 * true_speed) << sp;
+  // The fitted values are now the defaults in the edited params.hpp (%.6g, as written).
+  const std::string hpp = slurp(d / "params.hpp");
+  char expect[96];
+  std::snprintf(expect, sizeof expect, "double prior_target_cv = %.6g;", cv);
+  EXPECT_NE(hpp.find(expect), std::string::npos) << expect;
+  std::snprintf(expect, sizeof expect, "double explore_speed = %.6g;", sp);
+  EXPECT_NE(hpp.find(expect), std::string::npos) << expect;
+  EXPECT_NE(hpp.find("double weber_fraction = 0.08;"), std::string::npos);  // untouched
+  // The start (defaults 0.30 and 0.05) is far outside: recovery is not the start value.
+  EXPECT_GT(std::abs(0.30 - true_cv), 2 * cv_se);
+  fs::remove_all(d);
+}
+
+TEST(Calibrate, BadInputIsExit2) {
+  auto d = fs::temp_directory_path() / ("palplab_calibrate_bad_" + std::to_string(getpid()));
+  fs::create_directories(d);
+  EXPECT_EQ(cli("calibrate " + data("recovery_study.json").string() + " --human " +
+                    data("exp2_human.csv").string() + " --params weber_fracton --out " +
+                    (d / "x.json").string(),
+                d)
+                .code,
+            2);
+  std::ofstream(d / "bad.csv") << "participant,group,phase,session,measure,value\nP1,G1,test,1,"
+                                  "palpation_force,abc\n";
+  EXPECT_EQ(cli("calibrate " + data("recovery_study.json").string() + " --human " +
+                    (d / "bad.csv").string() + " --params weber_fraction --out " +
+                    (d / "x.json").string(),
+                d)
+                .code,
+            2);
+  fs::remove_all(d);
+}

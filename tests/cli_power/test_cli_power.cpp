@@ -1,0 +1,151 @@
+// End-to-end tests of `palplab power` and `palplab merge`: a study without any effect has power
+// alpha (its Monte Carlo interval covers .05), resuming adds only the missing replicates and
+// gives the uninterrupted result, shards merged equal a single run, and (in a PALPLAB_MPI
+// build) `mpirun -np 2` equals a single process. The null test needs many replicates to say
+// anything about alpha, so it is the slow one (~10 s on one core): replicates are tiny
+// (2 x 3 participants, one 12 s session).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+fs::path tmp(const std::string& name) {
+  auto d = fs::temp_directory_path() / ("palplab_power_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+Result run(const std::string& prefix, const std::string& args, const fs::path& dir) {
+  Result r;
+  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
+  std::string cmd = prefix + std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() +
+                    " 2>" + err.string();
+  int st = std::system(cmd.c_str());
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+Result cli(const std::string& args, const fs::path& dir) {
+  return run("", args, dir);
+}
+
+std::string null_study() {
+  return (fs::path(PALPLAB_SOURCE_DIR) / "tests" / "data" / "power" / "null_study.json").string();
+}
+
+nlohmann::json power_json(const fs::path& dir) {
+  return nlohmann::json::parse(slurp(dir / "power.json"));
+}
+
+}  // namespace
+
+TEST(Power, NoEffectGivesAlpha) {
+  auto d = tmp("null");
+  auto r = cli(
+      "power " + null_study() + " --replicates 60 --jobs 2 --quiet --out " + (d / "out").string(),
+      d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = power_json(d / "out");
+  ASSERT_EQ(j["tests"].size(), 2u);  // the ANOVA and the one pair
+  for (const auto& t : j["tests"]) {
+    const auto& c = t["by_n"][0];
+    EXPECT_EQ(c["n"], 3);
+    EXPECT_EQ(c["replicates"], 60);
+    // Every replicate gives a defined test (the feature is found in 12 s).
+    EXPECT_LE(c["undefined"].get<int>(), 3) << t["id"];
+    EXPECT_LE(c["ci_low"].get<double>(), 0.05) << t["id"];
+    EXPECT_GE(c["ci_high"].get<double>(), 0.05) << t["id"];
+    EXPECT_LT(c["power"].get<double>(), 0.25) << t["id"];
+  }
+  EXPECT_TRUE(fs::exists(d / "out" / "power.svg"));
+  EXPECT_NE(slurp(d / "out" / "power.md").find("| anova_oneway palpation_force test |"),
+            std::string::npos);
+  fs::remove_all(d);
+}
+
+TEST(Power, ResumeAndShardsGiveTheSingleRunResult) {
+  auto d = tmp("shard");
+  const std::string base = "power " + null_study() + " --n 2,3 --quiet";
+  auto single = cli(base + " --replicates 3 --out " + (d / "single").string(), d);
+  ASSERT_EQ(single.code, 0) << single.err;
+  // Resume: 2 replicates first, then 3 in the same directory runs only the missing ones.
+  ASSERT_EQ(cli(base + " --replicates 2 --out " + (d / "resumed").string(), d).code, 0);
+  auto resumed = cli(base + " --replicates 3 --out " + (d / "resumed").string(), d);
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_NE(resumed.out.find("(2 replicates run now)"), std::string::npos) << resumed.out;
+  EXPECT_EQ(power_json(d / "resumed"), power_json(d / "single"));
+  // Shards 1/2 and 2/2 into separate directories, then merged.
+  for (int i = 1; i <= 2; ++i) {
+    auto s = cli(base + " --replicates 3 --shard " + std::to_string(i) + "/2 --out " +
+                     (d / ("s" + std::to_string(i))).string(),
+                 d);
+    ASSERT_EQ(s.code, 0) << s.err;
+  }
+  auto m = cli("merge " + (d / "s1").string() + " " + (d / "s2").string() + " --out " +
+                   (d / "merged").string(),
+               d);
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(power_json(d / "merged"), power_json(d / "single"));
+  // A shard alone is not the whole result.
+  EXPECT_FALSE(fs::exists(d / "s1" / "power.json"));
+  fs::remove_all(d);
+}
+
+TEST(Power, BadArgumentsAreInputErrors) {
+  auto d = tmp("bad");
+  EXPECT_EQ(
+      cli("power " + null_study() + " --replicates 2 --shard 3/2 --out " + d.string(), d).code, 2);
+  EXPECT_EQ(cli("merge " + (d / "nothing").string() + " --out " + d.string(), d).code, 2);
+  fs::remove_all(d);
+}
+
+TEST(Power, MpiEqualsSingleProcess) {
+#ifndef PALPLAB_MPIEXEC
+  GTEST_SKIP() << "built without PALPLAB_MPI";
+#else
+  auto d = tmp("mpi");
+  const std::string base = "power " + null_study() + " --n 2,3 --replicates 3 --quiet --out ";
+  ASSERT_EQ(cli(base + (d / "single").string(), d).code, 0);
+  // Root in containers: OpenMPI refuses unless told; --oversubscribe for 2 ranks on 1 core.
+  const std::string mpirun =
+      std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") + PALPLAB_MPIEXEC +
+      " -np 2 --oversubscribe ";
+  auto r = run(mpirun, base + (d / "mpi").string(), d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(power_json(d / "mpi"), power_json(d / "single"));
+  // Shards under MPI (each shard's replicates shared by the ranks), merged.
+  for (int i = 1; i <= 2; ++i) {
+    auto s = run(
+        mpirun,
+        base + (d / ("m" + std::to_string(i))).string() + " --shard " + std::to_string(i) + "/2",
+        d);
+    ASSERT_EQ(s.code, 0) << s.out << s.err;
+  }
+  ASSERT_EQ(cli("merge " + (d / "m1").string() + " " + (d / "m2").string() + " --out " +
+                    (d / "mmerged").string(),
+                d)
+                .code,
+            0);
+  EXPECT_EQ(power_json(d / "mmerged"), power_json(d / "single"));
+  fs::remove_all(d);
+#endif
+}
