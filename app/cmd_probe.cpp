@@ -114,6 +114,8 @@ int run_probe(const ProbeArgs& a) {
       {"steps", static_cast<long>(times.size())},
       {"step_time_us", {{"median", st.median}, {"p99", st.p99}, {"max", st.max}}},
       {"nan_detected", nan},
+      {"divergences", s1.divergences},
+      {"force_limited_steps", s1.force_limited},
       {"events", events}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";

@@ -204,6 +204,7 @@ struct Spec {
   // scene
   double contact_k = 500.0, contact_radius = 0.0;
   double patch_radius = 0.01;  // m, radius of the probe face (mass-spring models)
+  double force_limit = 8.5;    // N, the device's peak force (a common desktop device)
   Cues cues;
   double dt = 1e-3;
   std::map<std::string, Thresholds> thresholds;
@@ -433,7 +434,10 @@ Spec parse(const std::string& path) {
   }
   if (const json* ct = c.object(root, R, "contact", false)) {
     const std::string P = "$.contact";
-    c.keys(*ct, P, {"stiffness", "radius", "patch_radius"});
+    c.keys(*ct, P, {"stiffness", "radius", "patch_radius", "force_limit"});
+    s.force_limit =
+        c.number(*ct, P, "force_limit", false, 0, 1000, "the device's peak force (N)", true)
+            .value_or(8.5);
     s.patch_radius =
         c.number(*ct, P, "patch_radius", false, 0, 0.1, "the radius of the probe face (m)")
             .value_or(0.01);
@@ -617,6 +621,7 @@ engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {
   if (ov.visual_deformation) sc.cues.visual_deformation = *ov.visual_deformation;
   if (ov.audio) sc.cues.audio = *ov.audio;
   sc.contact_k = s.contact_k;
+  sc.force_limit = s.force_limit;
   sc.contact_radius = s.contact_radius > 0 ? s.contact_radius : 1.5 * cm->mean_edge;
 
   SceneGeometry& g = sc.geom;

@@ -17,6 +17,14 @@ const char* to_string(EventKind k) {
       return "mpf_reached";
     case EventKind::sft_reached:
       return "sft_reached";
+    case EventKind::force_limited:
+      return "force_limited";
+    case EventKind::divergence:
+      return "divergence";
+    case EventKind::energy_injected:
+      return "energy_injected";
+    case EventKind::device_invalid:
+      return "device_invalid";
   }
   return "?";
 }
@@ -255,21 +263,35 @@ void Scene::reset() {
   s.reached[0] = s.reached[1] = s.reached[2] = false;
   s.events.clear();
   s.last = Sample{0.0, s.geom.start_position, Eigen::Vector3d::Zero(), -1};
+  s.limited = s.energy_flagged = s.device_bad = false;
+  s.energy_out = 0.0;
+  s.x_prev = s.geom.start_position;
+  s.f_prev.setZero();
   s.counters = SceneStats{};
   if (s.kind == ModelKind::ring) ring_reset(s.ring);
   if (s.kind == ModelKind::mass_spring) reset_mass_spring(s.ms);
 }
 
-Rendered Scene::step(const Eigen::Vector3d& x) {
+Rendered Scene::step(const Eigen::Vector3d& x_in) {
   SceneImpl& s = *impl_;
   s.events.clear();
   ++s.step_index;
   s.t = static_cast<double>(s.step_index) * s.dt;
   const SceneGeometry& g = s.geom;
+  // A non-finite or absurd device position (a broken driver, a NaN from a bridge; no device
+  // reaches a kilometre) is no contact: the hand is taken to be where it last was valid,
+  // disengaged.
+  const bool valid = x_in.allFinite() && x_in.cwiseAbs().maxCoeff() < 1e3;
+  if (!valid && !s.device_bad) s.events.push_back({s.t, EventKind::device_invalid, -1, -1, 0.0});
+  s.device_bad = !valid;
+  if (!valid) s.engaged = false;
+  const Eigen::Vector3d x = valid ? x_in : s.last.x;
 
   // --- contact tracking on the rest surface (a god-object proxy walks over the surface from
   // the last contact node, so pushing through a thin part cannot jump to its far side) ---
-  if (!s.engaged) {
+  if (!valid) {
+    // stay disengaged
+  } else if (!s.engaged) {
     const int p = g.nearest_node(x);
     if (p >= 0) {
       const Eigen::Vector3d vp = g.V.row(p).transpose();
@@ -369,15 +391,30 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
       break;
     }
   }
-  if (!std::isfinite(force.squaredNorm()) || !std::isfinite(deformation) ||
-      force.norm() > s.divergence_force || deformation > s.divergence_displacement) {
+  // --- watchdog ---
+  const double f_model = force.norm();
+  if (s.kind != ModelKind::penalty &&
+      (!std::isfinite(f_model) || !std::isfinite(deformation) || f_model > s.divergence_force ||
+       deformation > s.divergence_displacement)) {
     // Numerical blow-up (e.g. symplectic Euler on stiff tissue): a non-finite state, or one far
-    // beyond anything physical. Flag it and return to rest rather than render it to a hand.
+    // beyond anything physical. Log it and return to rest rather than render it to a hand.
     s.counters.nan_detected = true;
+    ++s.counters.divergences;
+    s.events.push_back(
+        {s.t, EventKind::divergence, -1, node, std::isfinite(f_model) ? f_model : -1.0});
     if (s.kind == ModelKind::mass_spring) reset_mass_spring(s.ms);
     if (s.kind == ModelKind::ring) ring_reset(s.ring);
     force.setZero();
     deformation = 0.0;
+  } else if (!std::isfinite(f_model)) {
+    force.setZero();  // a rigid surface cannot diverge; a non-finite input renders nothing
+  }
+  if (force.norm() > s.force_limit) {
+    // The device cannot render more: clamp (a rigid model keeps its state, nothing is reset).
+    if (!s.limited) s.events.push_back({s.t, EventKind::force_limited, -1, node, force.norm()});
+    s.limited = true;
+    ++s.counters.force_limited;
+    force *= s.force_limit / force.norm();
   }
   const double f = force.norm();
   const bool was_contact = s.contact;
@@ -386,7 +423,18 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
   if (s.contact && !was_contact) {
     s.peak_force = 0.0;
     s.reached[0] = s.reached[1] = s.reached[2] = false;
+    s.limited = s.energy_flagged = false;
+    s.energy_out = 0.0;
     s.events.push_back({s.t, EventKind::contact_start, region, node, 0.0});
+  }
+  if (s.contact || was_contact) {
+    // Passivity observer (Hannaford & Ryu 2002): the work of the force rendered in the last step
+    // on the hand's motion since. A passive tissue returns at most what the hand put in.
+    s.energy_out += s.f_prev.dot(x - s.x_prev);
+    if (!s.energy_flagged && s.energy_out > s.energy_threshold) {
+      s.energy_flagged = true;
+      s.events.push_back({s.t, EventKind::energy_injected, region, node, s.energy_out});
+    }
   }
   if (s.contact) {
     s.peak_force = std::max(s.peak_force, f);
@@ -409,6 +457,8 @@ Rendered Scene::step(const Eigen::Vector3d& x) {
   r.audio = s.cues.audio && s.contact && thresholds(region).st > 0.0 && f >= thresholds(region).st;
   r.events = std::span<const Event>(s.events.data(), s.events.size());
   s.last = Sample{s.t, x, r.force, r.contact_node};
+  s.x_prev = x;
+  s.f_prev = force;
   return r;
 }
 

@@ -36,6 +36,12 @@ enum class EventKind {
   st_reached,     // value: force magnitude at the crossing (N); region: contact region
   mpf_reached,
   sft_reached,
+  // Watchdog (value as noted). A contact's force above the device's limit is clamped to it:
+  force_limited,    // value: the unclamped force (N); once per contact
+  divergence,       // value: the offending force (N), -1 if not finite; the model went to rest
+  energy_injected,  // value: energy the scene has returned to the hand beyond what it got (J),
+                    // once per contact (passivity observer; the scene is not passive)
+  device_invalid,   // value: 0; a non-finite or absurd (> 1 km) device position: no contact
 };
 const char* to_string(EventKind k);
 
@@ -113,9 +119,12 @@ struct SceneStats {
   double max_rest_error = 0.0;  // m, largest |x - x_rest| over the simulated nodes now
   long awake_nodes = 0;         // nodes integrated in the last step
   int level = 0;                // current refinement level (0 = coarse)
-  // A non-finite or diverged state (force > 100 N or touched-node displacement > 0.5 m) was
-  // found since reset; the model was put back to rest and that step rendered no force.
+  // A non-finite or diverged state (force > 100 N or touched-node displacement > 0.5 m on a
+  // deformable model) was found since reset; the model was put back to rest and that step
+  // rendered no force (event `divergence`). A rigid model is never reset.
   bool nan_detected = false;
+  long divergences = 0;    // how many times since reset
+  long force_limited = 0;  // steps whose force was clamped to the device limit
 };
 
 struct SceneImpl;

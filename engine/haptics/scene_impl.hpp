@@ -61,6 +61,11 @@ struct SceneImpl {
   // or the touched node's displacement exceed these (or are not finite).
   double divergence_force = 100.0;       // N (palpation forces are a few N)
   double divergence_displacement = 0.5;  // m
+  // The device's peak force (N): a rendered force is clamped to it (event force_limited).
+  double force_limit = 8.5;
+  // Passivity observer: energy the scene returned to the hand beyond what the hand put in
+  // during one contact (J) before the event energy_injected.
+  double energy_threshold = 0.005;
   SceneGeometry geom;
   std::shared_ptr<const spatial::Octree> octree;         // over geom.V (rest)
   std::shared_ptr<const mesh::RingTable> surface_rings;  // first ring of the surface, for walking
@@ -78,6 +83,9 @@ struct SceneImpl {
   int node = -1;         // surface node of the contact
   double peak_force = 0.0;
   bool reached[3] = {false, false, false};  // ST, MPF, SFT in this contact
+  bool limited = false, energy_flagged = false, device_bad = false;
+  double energy_out = 0.0;  // J: work of the rendered force on the hand in this contact
+  Eigen::Vector3d x_prev = Eigen::Vector3d::Zero(), f_prev = Eigen::Vector3d::Zero();
   std::vector<Event> events;
   Sample last;
   SceneStats counters;

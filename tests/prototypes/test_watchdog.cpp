@@ -1,0 +1,130 @@
+// The scene's watchdog: the device force limit, divergence handling that never resets a rigid
+// model, the passivity observer, and non-finite device positions.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "engine/haptics/press.hpp"
+#include "prototypes/factory.hpp"
+
+using namespace palplab;
+using namespace palplab::engine;
+
+namespace {
+
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+
+struct Seen {
+  std::vector<EventKind> kinds;
+  std::vector<double> values;
+  double fmax = 0.0;
+  bool finite = true;
+  int count(EventKind k) const {
+    int n = 0;
+    for (EventKind e : kinds) n += e == k;
+    return n;
+  }
+};
+
+void step(Scene& s, const Eigen::Vector3d& x, Seen& seen) {
+  const Rendered r = s.step(x);
+  seen.fmax = std::max(seen.fmax, r.force.norm());
+  seen.finite = seen.finite && r.force.allFinite() && std::isfinite(r.visible_deformation);
+  for (const Event& e : r.events) {
+    seen.kinds.push_back(e.kind);
+    seen.values.push_back(e.value);
+  }
+}
+
+}  // namespace
+
+TEST(Watchdog, PressToTenTimesTheSftIsClampedAndLoggedOnEveryPrototype) {
+  // SFT is 3 N: ask the press script for 30 N. The device renders at most 8.5 N, says so once
+  // per contact, and a rigid surface is never reset.
+  for (const char* id : {"A", "B", "C"}) {
+    Scene s = prototypes::build_scene(proto(id));
+    const SceneGeometry& g = s.geometry();
+    const int node = g.region_node("body");
+    const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+    Seen seen;
+    for (int k = 0; k < 3000; ++k) step(s, p - (std::min(k, 2000) * 2e-5 - 0.002) * n, seen);
+    EXPECT_TRUE(seen.finite) << id;
+    EXPECT_LE(seen.fmax, 8.5 + 1e-12) << id;
+    EXPECT_NEAR(seen.fmax, 8.5, 1e-9) << id;  // 4 cm deep: the limit is reached
+    EXPECT_EQ(seen.count(EventKind::force_limited), 1) << id;
+    EXPECT_GT(s.stats().force_limited, 0) << id;
+    EXPECT_EQ(seen.count(EventKind::divergence), 0) << id;
+  }
+}
+
+TEST(Watchdog, DivergenceResetsADeformableModelAndIsLogged) {
+  // Symplectic Euler on Model-C at h = 1 ms is unstable: the watchdog catches it, logs it and
+  // puts the model back to rest; nothing non-finite reaches the hand.
+  SceneOverrides ov;
+  ov.integrator = "symplectic_euler";
+  Scene s = prototypes::build_scene(proto("C"), ov);
+  const SceneGeometry& g = s.geometry();
+  const int node = g.region_node("ovary_left");
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  Seen seen;
+  for (int k = 0; k < 1500; ++k) step(s, p - (std::min(k, 500) * 2e-5 - 0.002) * n, seen);
+  EXPECT_TRUE(seen.finite);
+  EXPECT_LE(seen.fmax, 8.5 + 1e-12);
+  EXPECT_GE(seen.count(EventKind::divergence), 1);
+  EXPECT_TRUE(s.stats().nan_detected);
+  EXPECT_GE(s.stats().divergences, 1);
+}
+
+TEST(Watchdog, DeviceJumpIntoTheSurfaceIsSeenAsInjectedEnergy) {
+  // A 3 cm jump in one step puts the hand deep inside without doing any work; the rigid wall
+  // then pushes it out with up to 8.5 N: energy the tissue never received. The observer logs it
+  // once; a slow press of the same depth does not trigger it (the discrete-time leak is small).
+  Scene s = prototypes::build_scene(proto("A"));
+  const SceneGeometry& g = s.geometry();
+  const int node = g.region_node("body");
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  Seen slow;
+  for (int k = 0; k < 1600; ++k) step(s, p - (0.01 - std::abs(k - 800) * 0.01 / 800) * n, slow);
+  EXPECT_EQ(slow.count(EventKind::energy_injected), 0);
+  s.reset();
+  Seen jump;
+  step(s, p + 0.002 * n, jump);
+  step(s, p - 0.01 * n, jump);  // 1.2 cm in one step
+  for (int k = 0; k < 1000; ++k) step(s, p - (0.01 - k * 1.2e-5) * n, jump);
+  ASSERT_EQ(jump.count(EventKind::energy_injected), 1);
+  EXPECT_GT(
+      jump.values[std::find(jump.kinds.begin(), jump.kinds.end(), EventKind::energy_injected) -
+                  jump.kinds.begin()],
+      0.005);
+}
+
+TEST(Watchdog, NonFiniteDeviceInputIsNoContactOnEveryPrototype) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const char* id : {"A", "B", "C"}) {
+    Scene s = prototypes::build_scene(proto(id));
+    const SceneGeometry& g = s.geometry();
+    const int node = g.region_node("body");
+    const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+    Seen seen;
+    for (int k = 0; k < 200; ++k) step(s, p - (k * 2e-5 - 0.002) * n, seen);  // pressing
+    for (const Eigen::Vector3d& bad :
+         {Eigen::Vector3d(nan, 0, 0), Eigen::Vector3d(inf, -inf, 0), Eigen::Vector3d(0, 0, -inf)}) {
+      const Rendered r = s.step(bad);
+      EXPECT_FALSE(r.contact) << id;
+      EXPECT_EQ(r.force.norm(), 0.0) << id;
+      for (const Event& e : r.events) seen.kinds.push_back(e.kind);
+    }
+    for (const Eigen::Vector3d& huge :
+         {Eigen::Vector3d(1e300, 0, 0), Eigen::Vector3d(0, -1e300, 0)})
+      step(s, huge, seen);
+    EXPECT_TRUE(seen.finite) << id;
+    EXPECT_EQ(seen.count(EventKind::device_invalid), 1) << id;  // once per run of bad input
+    for (int k = 0; k < 100; ++k) step(s, p + 0.01 * n, seen);  // and it recovers
+    EXPECT_TRUE(seen.finite) << id;
+  }
+}
