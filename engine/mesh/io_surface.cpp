@@ -729,7 +729,9 @@ void write_ply(const std::string& path, const SurfaceMesh& m, bool binary) {
 
 // ---------------------------------------------------------------- dispatch
 
-SurfaceMesh read_surface(const std::string& path) {
+namespace {
+
+SurfaceMesh read_surface_any(const std::string& path) {
   const std::string e = extension(path);
   if (e == ".obj") return read_obj(path);
   if (e == ".stl") return read_stl(path);
@@ -742,6 +744,19 @@ SurfaceMesh read_surface(const std::string& path) {
   }
   throw InputError("unknown surface format '" + e + "' (expected .obj, .stl, .off, .ply, .vtu)",
                    path);
+}
+
+}  // namespace
+
+SurfaceMesh read_surface(const std::string& path) {
+  SurfaceMesh m = read_surface_any(path);
+  // A file without triangles is no surface: every consumer (check, tetrahedralize, a prototype's
+  // mesh.file, the simulation) needs at least one.
+  if (m.F.rows() == 0)
+    throw InputError("no geometry: the file holds " + std::to_string(m.V.rows()) +
+                         " vertices and no triangles (expected a triangulated surface)",
+                     path);
+  return m;
 }
 
 void write_surface(const std::string& path, const SurfaceMesh& m, const WriteOptions& o) {
