@@ -20,8 +20,19 @@ struct Target {
   Entry entry;
 };
 
-// study, prototype, obj, stl, off, ply, tetgen, vtu, csv.
+// The entries (fuzz_files.cpp: study, prototype, csv; fuzz_mesh.cpp: the mesh formats). The
+// TetGen input is BASE.node text, a line "===", BASE.ele text (optionally "===" and .names).
+void study(const std::uint8_t* data, std::size_t size);
+void prototype(const std::uint8_t* data, std::size_t size);
+void csv(const std::uint8_t* data, std::size_t size);
+void obj(const std::uint8_t* data, std::size_t size);
+void stl(const std::uint8_t* data, std::size_t size);
+void off(const std::uint8_t* data, std::size_t size);
+void ply(const std::uint8_t* data, std::size_t size);
+void vtu(const std::uint8_t* data, std::size_t size);
+void tetgen(const std::uint8_t* data, std::size_t size);
+
+// All of them by corpus name (fuzz_entries.cpp; for the regression test).
 const std::vector<Target>& targets();
-Entry find_target(const std::string& name);
 
 }  // namespace palplab::fuzz
