@@ -12,6 +12,13 @@ namespace palplab::fuzz {
 using namespace detail;
 
 void study(const std::uint8_t* d, std::size_t n) {
+  // Stand-ins for the prototype ids the seeds use, so that resolution succeeds and the fuzzer
+  // reaches the plan (they are not inspected: prototype files have their own target).
+  static const bool stubs = [] {
+    for (const char* id : {"A", "B", "C", "C1", "C2"}) write(std::string(id) + ".json", "{}");
+    return true;
+  }();
+  (void)stubs;
   expect_input_errors_only([&] {
     // No prototype inspection (prototype files have their own target); plan building is part
     // of `validate`, so it runs too.
