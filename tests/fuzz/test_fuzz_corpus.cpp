@@ -8,10 +8,18 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <ostream>
 
 #include "tests/fuzz/fuzz_entries.hpp"
 
 namespace fs = std::filesystem;
+
+namespace palplab::fuzz {
+// Test names and messages show the target's name, not its bytes.
+inline void PrintTo(const Target& t, std::ostream* os) {
+  *os << t.name;
+}
+}  // namespace palplab::fuzz
 
 class FuzzCorpus : public ::testing::TestWithParam<palplab::fuzz::Target> {};
 
