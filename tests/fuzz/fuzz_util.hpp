@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -15,11 +16,19 @@ namespace palplab::fuzz::detail {
 namespace fs = std::filesystem;
 
 // A private scratch directory per process (the mesh and prototype readers take paths).
+inline fs::path base_dir() {
+  fs::path base = fs::exists("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
+  return base / ("palplab_fuzz_" + std::to_string(::getpid()));
+}
+
 inline const fs::path& scratch() {
   static const fs::path d = [] {
-    fs::path base = fs::exists("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
-    fs::path p = base / ("palplab_fuzz_" + std::to_string(::getpid()));
+    fs::path p = base_dir();
     fs::create_directories(p);
+    std::atexit([] {  // leave nothing behind in /dev/shm
+      std::error_code ec;
+      fs::remove_all(base_dir(), ec);
+    });
     return p;
   }();
   return d;
