@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "app/command.hpp"
+#include "common/escape.hpp"
 #include "results/store.hpp"
 
 namespace {
@@ -18,6 +19,8 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--samples", *samples, "Also write samples.csv (every 1 kHz sample; large)");
       cmd->callback([db, dir, samples, code] {
         palplab::results::Store store = palplab::results::Store::open(*db);
+        if (auto w = store.incomplete_warning(); !w.empty())
+          std::cerr << palplab::escape_controls(w, false) << "\n";
         palplab::results::export_csv(store, *dir, *samples);
         std::cout << "wrote " << *dir << "/measures.csv, sessions.csv, events.csv"
                   << (*samples ? ", samples.csv" : "") << "\n";

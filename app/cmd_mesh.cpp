@@ -277,8 +277,8 @@ palplab::app::CommandRegistration reg{
 
       // ---- tetrahedralize
       {
-        auto* c = mesh->add_subcommand("tetrahedralize",
-                                       "Tetrahedralize a closed surface with TetGen (in process)");
+        auto* c = mesh->add_subcommand(
+            "tetrahedralize", "Tetrahedralize a closed surface with TetGen (in a child process)");
         auto in = std::make_shared<std::string>();
         auto out = std::make_shared<std::string>();
         auto regions = std::make_shared<std::string>();
@@ -298,6 +298,9 @@ palplab::app::CommandRegistration reg{
         c->add_option("--materials", *mat,
                       "Material table JSON for the VTU cell data (default: built-in)");
         c->add_flag("--vtu", *vtu, "Also write BASE.vtu");
+        c->add_option("--timeout", opt->timeout_seconds,
+                      "Stop TetGen after this many seconds (it runs in a child process); 0 = none")
+            ->capture_default_str();
         c->callback([=] {
           const SurfaceMesh s = read_surface(*in);
           TetOptions o = *opt;

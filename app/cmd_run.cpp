@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "app/command.hpp"
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
@@ -71,7 +72,8 @@ palplab::app::CommandRegistration reg{
             } else {
               std::fprintf(
                   stderr, "session %ld/%ld done (%s), participants %d/%d, elapsed %.1f s, ETA %s\n",
-                  p.sessions_done, p.sessions_total, p.last.c_str(), p.participants_done,
+                  p.sessions_done, p.sessions_total,
+                  palplab::escape_controls(p.last, false).c_str(), p.participants_done,
                   p.participants_total, p.elapsed, hms(eta).c_str());
             }
             std::fflush(stderr);
@@ -82,8 +84,8 @@ palplab::app::CommandRegistration reg{
           std::printf(
               "%s: %ld sessions run (%ld already in the database), %.1f s simulated in %.1f s "
               "wall (%.1fx real time), %s\n",
-              opt->db.c_str(), r.sessions_run, r.sessions_skipped, r.simulated, r.wall,
-              r.wall > 0 ? r.simulated / r.wall : 0.0,
+              palplab::escape_controls(opt->db, false).c_str(), r.sessions_run, r.sessions_skipped,
+              r.simulated, r.wall, r.wall > 0 ? r.simulated / r.wall : 0.0,
               r.complete ? "complete" : "INCOMPLETE (continue with --resume)");
         }
         *code = 0;

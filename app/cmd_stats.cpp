@@ -14,7 +14,9 @@
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "app/command.hpp"
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
+#include "results/store.hpp"
 
 namespace {
 struct StatsArgs {
@@ -121,6 +123,9 @@ palplab::app::CommandRegistration reg_report{
       cmd->add_option("db", *db, "Results database (palplab run --db)")->required();
       cmd->add_option("--out", *out, "Output directory (created if needed)")->required();
       cmd->callback([db, out, code] {
+        // An INCOMPLETE run still reports, on the sessions stored, but says so (issue 10).
+        const std::string warning = palplab::results::Store::open(*db).incomplete_warning();
+        if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
         auto files = palplab::analysis::write_report(*db, *out);
         std::cout << "report: " << files.analyses << " analyses, " << files.figures.size()
                   << " figures\n  " << files.markdown << "\n  " << files.html << "\n";

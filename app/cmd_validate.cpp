@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "app/command.hpp"
+#include "common/escape.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/study.hpp"
 
@@ -19,7 +20,8 @@ palplab::app::CommandRegistration reg{
         using namespace palplab::protocols;
         Study s = load_study(*study, engine_prototype_inspector());
         Plan p = make_plan(s);
-        std::cout << plan_summary(s, p) << "valid: " << *study << "\n";
+        // Ids and titles come from the file: never echo a terminal escape sequence raw.
+        std::cout << palplab::escape_controls(plan_summary(s, p) + "valid: " + *study) << "\n";
         *code = 0;
       });
     }};

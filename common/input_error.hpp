@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/escape.hpp"
+
 namespace palplab {
 
 struct SourceLocation {
@@ -22,8 +24,10 @@ struct Problem {
   SourceLocation where;
   std::string what;
 
-  // "FILE:LINE:COL: $.path: what" — the parts that are unknown are left out.
-  std::string format() const {
+  // "FILE:LINE:COL: $.path: what" — the parts that are unknown are left out. Control
+  // characters from the input (escape sequences in a name) are shown escaped, never raw.
+  std::string format() const { return escape_controls(format_raw(), false); }
+  std::string format_raw() const {
     std::string s;
     if (!where.file.empty()) s += where.file + ":";
     if (where.line > 0) {

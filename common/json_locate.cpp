@@ -1,5 +1,9 @@
 #include "common/json_locate.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -224,19 +228,55 @@ std::string normalize_path(std::string_view p) {
   return out;
 }
 
+namespace {
+
+// Line/column of many offsets in one pass over the text (one offset_to_pos per value would be
+// quadratic in the file size: validate time grew with the square of the number of groups).
+class PosTable {
+ public:
+  PosTable(std::string_view text, std::vector<long> offsets) {
+    std::sort(offsets.begin(), offsets.end());
+    offsets.erase(std::unique(offsets.begin(), offsets.end()), offsets.end());
+    TextPos p{1, 1, 0};
+    std::size_t i = 0;
+    for (long off : offsets) {
+      const std::size_t target = std::min(static_cast<std::size_t>(off), text.size());
+      for (; i < target; ++i) {
+        if (text[i] == '\n') {
+          ++p.line;
+          p.column = 1;
+        } else if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) {
+          ++p.column;
+        }
+      }
+      p.offset = off;
+      pos_.emplace(off, p);
+    }
+  }
+  TextPos at(long off) const { return pos_.at(off); }
+
+ private:
+  std::unordered_map<long, TextPos> pos_;
+};
+
+}  // namespace
+
 JsonLocator::JsonLocator(std::string_view text) {
   std::unordered_map<std::string, std::pair<long, long>> raw;
   std::vector<std::pair<std::string, std::pair<long, long>>> dups;
-  std::unordered_map<std::string, std::pair<long, long>> first;
   Scanner(text, raw, dups).run();
-  for (auto& [path, offs] : raw)
-    entries_[path] = Entry{offset_to_pos(text, static_cast<std::size_t>(offs.first)),
-                           offset_to_pos(text, static_cast<std::size_t>(offs.second))};
-  for (auto& [path, offs] : dups) {
+  std::vector<long> offs;
+  offs.reserve(2 * raw.size() + 2 * dups.size());
+  for (auto& [path, o] : raw) offs.insert(offs.end(), {o.first, o.second});
+  for (auto& [path, o] : dups) offs.insert(offs.end(), {o.first, o.second});
+  PosTable pos(text, std::move(offs));
+  entries_.reserve(raw.size());
+  for (auto& [path, o] : raw) entries_[path] = Entry{pos.at(o.first), pos.at(o.second)};
+  for (auto& [path, o] : dups) {
     DuplicateKey d;
     d.path = path;
-    d.first = offset_to_pos(text, static_cast<std::size_t>(offs.first));
-    d.second = offset_to_pos(text, static_cast<std::size_t>(offs.second));
+    d.first = pos.at(o.first);
+    d.second = pos.at(o.second);
     duplicates_.push_back(d);
   }
 }
@@ -294,7 +334,54 @@ SourceLocation JsonLocator::locate(const std::string& file, std::string_view pat
   return loc;
 }
 
+namespace {
+
+// Checks made before nlohmann sees the text, so that hostile input ends in a located error:
+// nesting deeper than kMaxDepth (the recursive locator and the DOM would otherwise use memory and
+// stack without bound) and number literals that overflow a double (nlohmann throws an unlocated
+// out_of_range for 1e400). Text that is not JSON is left to the parser's own syntax errors.
+void prescan(std::string_view t, const std::string& file) {
+  auto fail = [&](std::size_t off, const std::string& what) {
+    TextPos p = offset_to_pos(t, off);
+    SourceLocation loc;
+    loc.file = file;
+    loc.line = p.line;
+    loc.column = p.column;
+    throw InputError(loc, what);
+  };
+  int depth = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const char c = t[i];
+    if (c == '"') {  // skip the string
+      for (++i; i < t.size() && t[i] != '"'; ++i)
+        if (t[i] == '\\') ++i;
+    } else if (c == '{' || c == '[') {
+      if (++depth > kMaxDepth)
+        fail(i, "invalid JSON: nested deeper than " + std::to_string(kMaxDepth) +
+                    " levels (palplab files need a few)");
+    } else if (c == '}' || c == ']') {
+      --depth;
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      std::size_t j = i;
+      while (j < t.size() && (std::isdigit(static_cast<unsigned char>(t[j])) || t[j] == '-' ||
+                              t[j] == '+' || t[j] == '.' || t[j] == 'e' || t[j] == 'E'))
+        ++j;
+      const std::string lit(t.substr(i, j - i));
+      if (lit.size() > 1 || std::isdigit(static_cast<unsigned char>(c))) {
+        const double x = std::strtod(lit.c_str(), nullptr);
+        if (std::isinf(x))
+          fail(i, "number " + (lit.size() > 40 ? lit.substr(0, 40) + "..." : lit) +
+                      " is out of range (a JSON number must fit a double, |x| <= 1.8e308)");
+      }
+      i = j - 1;
+    }
+  }
+}
+
+}  // namespace
+
 nlohmann::json parse_located(std::string_view text, const std::string& file) {
+  prescan(text, file);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text.begin(), text.end());
@@ -311,6 +398,8 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
     loc.line = p.line;
     loc.column = p.column;
     throw InputError(loc, "invalid JSON: " + msg);
+  } catch (const nlohmann::json::exception& e) {  // e.g. out_of_range: never an exit 3
+    throw InputError(std::string("invalid JSON: ") + e.what(), file);
   }
   JsonLocator loc(text);
   if (!loc.duplicates().empty()) {

@@ -28,8 +28,12 @@ struct TextPos {
 // Line and column of a byte offset (offsets past the end map to the end of the text).
 TextPos offset_to_pos(std::string_view text, std::size_t offset);
 
+// Deepest nesting of objects/arrays accepted in a palplab JSON file (they need about 6).
+inline constexpr int kMaxDepth = 64;
+
 // Parses JSON text; a syntax error becomes an InputError located at FILE:LINE:COL with what was
-// expected. Duplicate member keys are an error too (nlohmann would silently keep the last).
+// expected. Duplicate member keys are an error too (nlohmann would silently keep the last), and
+// so are nesting deeper than kMaxDepth and numbers that overflow a double (1e400).
 nlohmann::json parse_located(std::string_view text, const std::string& file);
 
 // Reads and parses a file; a missing/unreadable file is an InputError naming it.

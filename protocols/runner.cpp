@@ -15,6 +15,7 @@
 #include "common/seed.hpp"
 #include "engine/scene.hpp"
 #include "palplab/version.hpp"
+#include "protocols/input_pins.hpp"
 #include "protocols/measures.hpp"
 #include "protocols/participants/model.hpp"
 #include "protocols/participants/params.hpp"
@@ -91,10 +92,10 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
   // The scene is built from the file; it must still be the file recorded when the run started,
   // or the database would mix two simulators under one name.
   if (auto it = prototype_sha.find(spec.prototype);
-      it != prototype_sha.end() && results::sha256_hex(slurp(spec.prototype_file)) != it->second)
+      it != prototype_sha.end() && prototype_sha256(spec.prototype_file) != it->second)
     throw InputError(
-        "prototype file changed since the run started (SHA-256 differs from the one "
-        "stored in the database); restore it or start a new run",
+        "prototype file or its mesh.file changed since the run started (SHA-256 differs from "
+        "the one stored in the database); restore it or start a new run",
         spec.prototype_file);
   engine::SceneOverrides ov;
   ov.haptic = spec.cues.haptic;
@@ -264,10 +265,10 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
         "replace it",
         opt.db);
   if (exists && opt.force && !opt.resume) {
-    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(opt.db + suffix);
+    results::Store::remove_existing(opt.db);  // a palplab database only, never any file
   }
   results::Store store =
-      fs::exists(opt.db) ? results::Store::open(opt.db) : results::Store::create(opt.db);
+      fs::exists(opt.db) ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
   std::map<std::string, std::map<int, std::string>> done;  // participant -> ordinal -> state
   std::map<std::string, std::string> prototype_sha;        // id -> SHA-256 at run start
   if (exists && opt.resume) {
@@ -287,10 +288,10 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
     for (const auto& p : store.read_prototypes()) {
       prototype_sha[p.prototype] = p.sha256;
       auto it = study.prototype_files.find(p.prototype);
-      if (it == study.prototype_files.end() || results::sha256_hex(slurp(it->second)) != p.sha256)
+      if (it == study.prototype_files.end() || prototype_sha256(it->second) != p.sha256)
         throw InputError("prototype \"" + p.prototype +
-                             "\" differs from the file the run started with (SHA-256); resume "
-                             "needs identical prototypes",
+                             "\" differs from the file the run started with, or its mesh.file "
+                             "does (SHA-256); resume needs identical prototypes and meshes",
                          it == study.prototype_files.end() ? opt.db : it->second);
     }
   } else {
@@ -306,7 +307,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
     std::vector<results::PrototypeRecord> protos;
     for (const auto& [id, path] : study.prototype_files) {
       std::string text = slurp(path);
-      protos.push_back({id, path, results::sha256_hex(text), text});
+      protos.push_back({id, path, prototype_sha256(path), text});
       prototype_sha[id] = protos.back().sha256;
     }
     std::vector<results::ParticipantRecord> parts;

@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "common/json_locate.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/plan.hpp"
@@ -37,139 +38,26 @@ std::string measure_unit(const std::string& m) {
 
 namespace {
 
-const char* type_name(const json& j) {
-  switch (j.type()) {
-    case json::value_t::null:
-      return "null";
-    case json::value_t::boolean:
-      return "a boolean";
-    case json::value_t::number_integer:
-    case json::value_t::number_unsigned:
-      return "an integer";
-    case json::value_t::number_float:
-      return "a number";
-    case json::value_t::string:
-      return "a string";
-    case json::value_t::array:
-      return "an array";
-    case json::value_t::object:
-      return "an object";
-    default:
-      return "an unsupported value";
-  }
-}
-
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> d(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) d[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t prev = d[0];
-    d[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      std::size_t cur = d[j];
-      d[j] = std::min({d[j] + 1, d[j - 1] + 1, prev + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      prev = cur;
-    }
-  }
-  return d[b.size()];
-}
-
 std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
   return s;
 }
 
-struct Ctx {
-  std::string file;
-  const palplab::json::JsonLocator& loc;
-  std::vector<Problem> problems;
+// Bounds on counts and times: beyond them a study is a typo (or an integer that would wrap).
+constexpr long long kMaxDays = 3650;          // 10 years
+constexpr long long kMaxSessions = 10000;     // per phase
+constexpr double kMaxSessionSeconds = 86400;  // 24 h of 1 kHz samples per session
+constexpr long long kMaxGroupSize = 100000;
+constexpr long long kMaxPlannedSessions = 1000000;  // participants x sessions each
 
-  void err(const std::string& path, const std::string& what, bool at_key = false) {
-    problems.push_back({loc.locate(file, path, at_key), what});
-  }
-  void keys(const json& obj, const std::string& path, const std::vector<std::string>& allowed) {
-    for (auto it = obj.begin(); it != obj.end(); ++it) {
-      if (std::find(allowed.begin(), allowed.end(), it.key()) != allowed.end()) continue;
-      std::string best;
-      std::size_t bd = 3;
-      for (const auto& a : allowed)
-        if (auto d = edit_distance(it.key(), a); d < bd) bd = d, best = a;
-      std::string msg = "unknown key \"" + it.key() + "\"";
-      msg += best.empty() ? "" : " (did you mean \"" + best + "\"?)";
-      msg += "; expected one of: " + join(allowed);
-      err(path_key(path, it.key()), msg, true);
-    }
-  }
-  bool object(const json& j, const std::string& path) {
-    if (j.is_object()) return true;
-    err(path, std::string("expected an object, got ") + type_name(j));
-    return false;
-  }
-  const json* member(const json& obj, const std::string& path, const char* key, bool required,
-                     const char* expected) {
-    auto it = obj.find(key);
-    if (it == obj.end()) {
-      if (required)
-        err(path, std::string("missing required key \"") + key + "\" (" + expected + ")");
-      return nullptr;
-    }
-    return &*it;
-  }
-  std::optional<std::string> str(const json& obj, const std::string& path, const char* key,
-                                 bool required) {
-    const json* v = member(obj, path, key, required, "a string");
-    if (!v) return std::nullopt;
-    if (!v->is_string() || v->get<std::string>().empty()) {
-      err(path_key(path, key), std::string("expected a non-empty string, got ") + type_name(*v));
-      return std::nullopt;
-    }
-    return v->get<std::string>();
-  }
-  std::optional<double> num(const json& obj, const std::string& path, const char* key,
-                            bool required, const char* expected = "a number") {
-    const json* v = member(obj, path, key, required, expected);
-    if (!v) return std::nullopt;
-    if (!v->is_number() || !std::isfinite(v->get<double>())) {
-      err(path_key(path, key), std::string("expected ") + expected + ", got " + type_name(*v));
-      return std::nullopt;
-    }
-    return v->get<double>();
-  }
-  std::optional<long long> integer(const json& obj, const std::string& path, const char* key,
-                                   bool required, const char* expected = "an integer") {
-    const json* v = member(obj, path, key, required, expected);
-    if (!v) return std::nullopt;
-    if (!v->is_number_integer()) {
-      err(path_key(path, key), std::string("expected ") + expected + ", got " + type_name(*v));
-      return std::nullopt;
-    }
-    return v->get<long long>();
-  }
-  std::optional<bool> boolean(const json& obj, const std::string& path, const char* key) {
-    const json* v = member(obj, path, key, false, "true or false");
-    if (!v) return std::nullopt;
-    if (!v->is_boolean()) {
-      err(path_key(path, key), std::string("expected true or false, got ") + type_name(*v));
-      return std::nullopt;
-    }
-    return v->get<bool>();
-  }
-  std::optional<std::string> one_of(const json& obj, const std::string& path, const char* key,
-                                    bool required, const std::vector<std::string>& options) {
-    auto s = str(obj, path, key, required);
-    if (!s) return s;
-    if (std::find(options.begin(), options.end(), *s) == options.end()) {
-      err(path_key(path, key), "\"" + *s + "\" is not one of: " + join(options));
-      return std::nullopt;
-    }
-    return s;
-  }
-};
+// The one validator shared with prototypes (common/json_check.hpp): same wording everywhere.
+using Ctx = palplab::json::Checker;
+using palplab::json::kind_name;
 
 // {"seconds": x} | {"minutes": x} | {"hours": x} | {"days": n}: exactly one key, >= 0.
 std::optional<Interval> parse_interval(Ctx& c, const json& j, const std::string& path) {
-  if (!c.object(j, path)) return std::nullopt;
+  if (!c.expect_object(j, path)) return std::nullopt;
   c.keys(j, path, {"seconds", "minutes", "hours", "days"});
   int n = 0;
   Interval iv;
@@ -183,9 +71,11 @@ std::optional<Interval> parse_interval(Ctx& c, const json& j, const std::string&
         ok = false;
         continue;
       }
-      if (*d < 0) {
-        c.err(path_key(path, k), "expected a whole number of days >= 0, got " + std::to_string(*d));
+      if (*d < 0 || *d > kMaxDays) {
+        c.err(path_key(path, k), "expected a whole number of days in [0, " +
+                                     std::to_string(kMaxDays) + "], got " + std::to_string(*d));
         ok = false;
+        continue;
       }
       iv.calendar = true;
       iv.days = static_cast<int>(*d);
@@ -195,12 +85,12 @@ std::optional<Interval> parse_interval(Ctx& c, const json& j, const std::string&
         ok = false;
         continue;
       }
-      if (*v < 0) {
-        c.err(path_key(path, k),
-              std::string("expected a number >= 0 (") + k + "), got " + json(*v).dump());
+      double scale = std::string(k) == "minutes" ? 60.0 : std::string(k) == "hours" ? 3600.0 : 1.0;
+      if (*v < 0 || *v * scale > kMaxDays * 86400.0) {
+        c.err(path_key(path, k), std::string("expected a number >= 0 (") + k + ") of at most " +
+                                     std::to_string(kMaxDays) + " days, got " + json(*v).dump());
         ok = false;
       }
-      double scale = std::string(k) == "minutes" ? 60.0 : std::string(k) == "hours" ? 3600.0 : 1.0;
       iv.seconds = *v * scale;
     }
   }
@@ -213,7 +103,7 @@ std::optional<Interval> parse_interval(Ctx& c, const json& j, const std::string&
 }
 
 void parse_limits(Ctx& c, const json& j, const std::string& path, ForceLimits& out) {
-  if (!c.object(j, path)) return;
+  if (!c.expect_object(j, path)) return;
   c.keys(j, path, {"ST", "MPF", "SFT"});
   auto st = c.num(j, path, "ST", true, "a force in N > 0");
   auto mpf = c.num(j, path, "MPF", true, "a force in N > 0");
@@ -234,7 +124,7 @@ void parse_limits(Ctx& c, const json& j, const std::string& path, ForceLimits& o
 
 void parse_params(Ctx& c, const json& j, const std::string& path,
                   const std::vector<participants::ParamSpec>& specs, json& out) {
-  if (!c.object(j, path)) return;
+  if (!c.expect_object(j, path)) return;
   std::vector<std::string> names;
   for (const auto& s : specs) names.push_back(s.name);
   c.keys(j, path, names);
@@ -256,13 +146,12 @@ void parse_params(Ctx& c, const json& j, const std::string& path,
 Study parse_study(const std::string& text, const std::string& file,
                   const PrototypeInspector& inspect) {
   json root = palplab::json::parse_located(text, file);
-  palplab::json::JsonLocator loc(text);
-  Ctx c{file, loc, {}};
+  Ctx c(file, text);
   Study s;
   s.file = file;
   s.json_text = text;
   const std::string R = "$";
-  if (!c.object(root, R)) throw InputError(c.problems);
+  if (!c.expect_object(root, R)) c.throw_if_any();
   c.keys(root, R,
          {"palplab_study", "id", "title", "description", "seed", "task", "groups", "assignment",
           "phases", "roles", "measures", "participant_model", "analyses", "prototype_dirs"});
@@ -271,19 +160,13 @@ Study parse_study(const std::string& text, const std::string& file,
     if (*v != kStudyFormatVersion)
       c.err("$.palplab_study", "unsupported study format version " + std::to_string(*v) +
                                    " (this palplab reads version 1)");
-  if (auto v = c.str(root, R, "id", true)) s.id = *v;
-  if (auto v = c.str(root, R, "title", true)) s.title = *v;
-  if (auto v = c.str(root, R, "description", false)) s.description = *v;
-  if (const json* v = c.member(root, R, "seed", true, "an integer >= 0")) {
-    if (v->is_number_unsigned() || (v->is_number_integer() && v->get<long long>() >= 0))
-      s.seed = v->get<std::uint64_t>();
-    else
-      c.err("$.seed", std::string("expected an integer >= 0, got ") +
-                          (v->is_number_integer() ? "a negative integer" : type_name(*v)));
-  }
+  if (auto v = c.nonempty_text(root, R, "id", true)) s.id = *v;
+  if (auto v = c.nonempty_text(root, R, "title", true)) s.title = *v;
+  if (auto v = c.nonempty_text(root, R, "description", false)) s.description = *v;
+  if (auto v = c.uint64(root, R, "seed", true, "an integer >= 0")) s.seed = *v;
   if (const json* v = c.member(root, R, "prototype_dirs", false, "an array of directories")) {
     if (!v->is_array())
-      c.err("$.prototype_dirs", std::string("expected an array of strings, got ") + type_name(*v));
+      c.err("$.prototype_dirs", std::string("expected an array of strings, got ") + kind_name(*v));
     else
       for (std::size_t i = 0; i < v->size(); ++i) {
         if ((*v)[i].is_string())
@@ -298,17 +181,17 @@ Study parse_study(const std::string& text, const std::string& file,
   if (const json* ph = c.member(root, R, "phases", true, "an array of phases")) {
     if (!ph->is_array() || ph->empty()) {
       c.err("$.phases", std::string("expected a non-empty array of phases, got ") +
-                            (ph->is_array() ? "an empty array" : type_name(*ph)));
+                            (ph->is_array() ? "an empty array" : kind_name(*ph)));
     } else {
       for (std::size_t i = 0; i < ph->size(); ++i) {
         std::string P = path_index("$.phases", i);
         const json& pj = (*ph)[i];
         Phase p;
-        if (!c.object(pj, P)) continue;
+        if (!c.expect_object(pj, P)) continue;
         c.keys(pj, P,
                {"id", "kind", "sessions", "session_duration", "start", "gap", "prototype", "cues",
                 "instructed"});
-        if (auto v = c.str(pj, P, "id", true)) {
+        if (auto v = c.nonempty_text(pj, P, "id", true)) {
           p.id = *v;
           if (!phase_ids.insert(*v).second)
             c.err(path_key(P, "id"), "duplicate phase id \"" + *v + "\"");
@@ -317,30 +200,33 @@ Study parse_study(const std::string& text, const std::string& file,
                               {"pre_training", "training", "post_training", "other"}))
           p.kind = *v;
         if (auto v = c.integer(pj, P, "sessions", false, "an integer >= 1")) {
-          if (*v < 1)
-            c.err(path_key(P, "sessions"),
-                  "expected at least 1 session, got " + std::to_string(*v));
+          if (*v < 1 || *v > kMaxSessions)
+            c.err(path_key(P, "sessions"), "expected 1 to " + std::to_string(kMaxSessions) +
+                                               " sessions, got " + std::to_string(*v));
           else
             p.sessions = static_cast<int>(*v);
         }
         if (auto v = c.num(pj, P, "session_duration", true, "a duration in s > 0")) {
-          if (*v <= 0)
+          if (*v <= 0 || *v > kMaxSessionSeconds)
             c.err(path_key(P, "session_duration"),
-                  "expected a duration in s > 0, got " + json(*v).dump());
+                  "expected a duration in s > 0 and at most " +
+                      std::to_string(static_cast<int>(kMaxSessionSeconds)) + " s (24 h), got " +
+                      json(*v).dump());
           else
             p.session_duration = *v;
         }
         if (const json* st = c.member(pj, P, "start", false, "")) {
           std::string SP = path_key(P, "start");
-          if (c.object(*st, SP)) {
+          if (c.expect_object(*st, SP)) {
             c.keys(*st, SP, {"day", "after_previous"});
             if (st->contains("day") == st->contains("after_previous")) {
               c.err(SP, "expected exactly one of \"day\" or \"after_previous\"");
             } else if (st->contains("day")) {
               if (auto d = c.integer(*st, SP, "day", true, "a day number >= 0")) {
-                if (*d < 0)
-                  c.err(path_key(SP, "day"),
-                        "expected a day number >= 0, got " + std::to_string(*d));
+                if (*d < 0 || *d > kMaxDays)
+                  c.err(path_key(SP, "day"), "expected a day number in [0, " +
+                                                 std::to_string(kMaxDays) + "], got " +
+                                                 std::to_string(*d));
                 else
                   p.start_day = static_cast<int>(*d);
               }
@@ -361,10 +247,10 @@ Study parse_study(const std::string& text, const std::string& file,
         if (p.sessions > 1 && !pj.contains("gap"))
           c.err(P, "missing required key \"gap\" (the interval between this phase's " +
                        std::to_string(p.sessions) + " sessions)");
-        if (auto v = c.str(pj, P, "prototype", false)) p.prototype = *v;
+        if (auto v = c.nonempty_text(pj, P, "prototype", false)) p.prototype = *v;
         if (const json* cu = c.member(pj, P, "cues", false, "")) {
           std::string CP = path_key(P, "cues");
-          if (c.object(*cu, CP)) {
+          if (c.expect_object(*cu, CP)) {
             c.keys(*cu, CP, {"haptic", "visual_deformation", "audio"});
             p.cues.haptic = c.boolean(*cu, CP, "haptic");
             p.cues.visual_deformation = c.boolean(*cu, CP, "visual_deformation");
@@ -375,7 +261,7 @@ Study parse_study(const std::string& text, const std::string& file,
         s.phases.push_back(p);
       }
       std::vector<std::pair<int, std::string>> sched_problems;
-      if (c.problems.empty()) schedule(s.phases, &sched_problems);
+      if (c.problems().empty()) schedule(s.phases, &sched_problems);
       for (auto& [pi, msg] : sched_problems)
         c.err(path_key(path_index("$.phases", pi), "start"), msg);
     }
@@ -388,23 +274,23 @@ Study parse_study(const std::string& text, const std::string& file,
   if (const json* gs = c.member(root, R, "groups", true, "an array of groups")) {
     if (!gs->is_array() || gs->empty()) {
       c.err("$.groups", std::string("expected a non-empty array of groups, got ") +
-                            (gs->is_array() ? "an empty array" : type_name(*gs)));
+                            (gs->is_array() ? "an empty array" : kind_name(*gs)));
     } else {
       for (std::size_t i = 0; i < gs->size(); ++i) {
         std::string G = path_index("$.groups", i);
         const json& gj = (*gs)[i];
-        if (!c.object(gj, G)) continue;
+        if (!c.expect_object(gj, G)) continue;
         c.keys(gj, G, {"id", "prototype", "phase_prototypes", "size", "participants"});
         Group g;
-        if (auto v = c.str(gj, G, "id", true)) {
+        if (auto v = c.nonempty_text(gj, G, "id", true)) {
           g.id = *v;
           if (!group_ids.insert(*v).second)
             c.err(path_key(G, "id"), "duplicate group id \"" + *v + "\"");
         }
-        if (auto v = c.str(gj, G, "prototype", true)) g.prototype = *v;
+        if (auto v = c.nonempty_text(gj, G, "prototype", true)) g.prototype = *v;
         if (const json* pp = c.member(gj, G, "phase_prototypes", false, "")) {
           std::string PP = path_key(G, "phase_prototypes");
-          if (c.object(*pp, PP))
+          if (c.expect_object(*pp, PP))
             for (auto it = pp->begin(); it != pp->end(); ++it) {
               if (!phase_ids.count(it.key()))
                 c.err(path_key(PP, it.key()), "unknown phase id \"" + it.key() + "\"", true);
@@ -419,6 +305,10 @@ Study parse_study(const std::string& text, const std::string& file,
           if (*v < 1)
             c.err(path_key(G, "size"),
                   "empty group: expected at least 1 participant, got " + std::to_string(*v));
+          else if (*v > kMaxGroupSize)
+            c.err(path_key(G, "size"), "value " + std::to_string(*v) +
+                                           " out of range: expected a group size in [1, " +
+                                           std::to_string(kMaxGroupSize) + "]");
           else
             g.size = static_cast<int>(*v);
         }
@@ -430,7 +320,7 @@ Study parse_study(const std::string& text, const std::string& file,
           } else if (!pl->is_array() || pl->empty()) {
             c.err(PL,
                   std::string("empty group: expected a non-empty array of participant ids, got ") +
-                      (pl->is_array() ? "an empty array" : type_name(*pl)));
+                      (pl->is_array() ? "an empty array" : kind_name(*pl)));
           } else {
             for (std::size_t k = 0; k < pl->size(); ++k) {
               const json& e = (*pl)[k];
@@ -457,12 +347,12 @@ Study parse_study(const std::string& text, const std::string& file,
   // ---- task
   if (const json* t = c.member(root, R, "task", true, "the task: feature and thresholds")) {
     const std::string T = "$.task";
-    if (c.object(*t, T)) {
+    if (c.expect_object(*t, T)) {
       c.keys(*t, T,
              {"scene", "feature", "thresholds", "accuracy_tolerance", "identify_dwell",
               "palpation_onset"});
-      if (auto v = c.str(*t, T, "scene", false)) s.task.scene = *v;
-      if (auto v = c.str(*t, T, "feature", true)) s.task.feature = *v;
+      if (auto v = c.nonempty_text(*t, T, "scene", false)) s.task.scene = *v;
+      if (auto v = c.nonempty_text(*t, T, "feature", true)) s.task.feature = *v;
       for (auto [key, field] : {std::pair{"accuracy_tolerance", &s.task.accuracy_tolerance},
                                 {"identify_dwell", &s.task.identify_dwell},
                                 {"palpation_onset", &s.task.palpation_onset}})
@@ -474,7 +364,7 @@ Study parse_study(const std::string& text, const std::string& file,
         }
       if (const json* th = c.member(*t, T, "thresholds", true, "region name -> {ST, MPF, SFT}")) {
         std::string TH = path_key(T, "thresholds");
-        if (c.object(*th, TH)) {
+        if (c.expect_object(*th, TH)) {
           if (th->empty()) c.err(TH, "expected at least one region (or \"*\") with ST, MPF, SFT");
           for (auto it = th->begin(); it != th->end(); ++it)
             parse_limits(c, it.value(), path_key(TH, it.key()), s.task.thresholds[it.key()]);
@@ -493,18 +383,18 @@ Study parse_study(const std::string& text, const std::string& file,
     if (p.instructed) instructed_sessions += p.sessions;
   if (const json* ro = c.member(root, R, "roles", false, "")) {
     const std::string RO = "$.roles";
-    if (c.object(*ro, RO)) {
+    if (c.expect_object(*ro, RO)) {
       c.keys(*ro, RO, {"trainee", "instructor"});
       if (const json* tr = c.member(*ro, RO, "trainee", false, "")) {
         std::string TR = "$.roles.trainee";
-        if (c.object(*tr, TR)) {
+        if (c.expect_object(*tr, TR)) {
           c.keys(*tr, TR, {"kind"});
           c.one_of(*tr, TR, "kind", false, {"virtual"});
         }
       }
       if (const json* in = c.member(*ro, RO, "instructor", false, "")) {
         std::string IN = "$.roles.instructor";
-        if (c.object(*in, IN)) {
+        if (c.expect_object(*in, IN)) {
           InstructorRole role;
           c.keys(*in, IN, {"ids", "assignment", "parameters"});
           std::set<std::string> ids;
@@ -525,7 +415,7 @@ Study parse_study(const std::string& text, const std::string& file,
           if (const json* a = c.member(*in, IN, "assignment", true,
                                        "group id -> instructor per instructed session")) {
             std::string A = path_key(IN, "assignment");
-            if (c.object(*a, A)) {
+            if (c.expect_object(*a, A)) {
               for (auto it = a->begin(); it != a->end(); ++it) {
                 std::string AG = path_key(A, it.key());
                 if (!group_ids.count(it.key()))
@@ -587,7 +477,7 @@ Study parse_study(const std::string& text, const std::string& file,
   // ---- participant model
   if (const json* pm = c.member(root, R, "participant_model", false, "")) {
     const std::string PM = "$.participant_model";
-    if (c.object(*pm, PM)) {
+    if (c.expect_object(*pm, PM)) {
       c.keys(*pm, PM, {"model", "parameters"});
       if (auto v = c.one_of(*pm, PM, "model", false, {"pmm1"})) s.participant_model = *v;
       if (const json* pj = c.member(*pm, PM, "parameters", false, ""))
@@ -599,12 +489,12 @@ Study parse_study(const std::string& text, const std::string& file,
   // ---- analyses
   if (const json* an = c.member(root, R, "analyses", false, "")) {
     if (!an->is_array()) {
-      c.err("$.analyses", std::string("expected an array, got ") + type_name(*an));
+      c.err("$.analyses", std::string("expected an array, got ") + kind_name(*an));
     } else {
       for (std::size_t i = 0; i < an->size(); ++i) {
         std::string A = path_index("$.analyses", i);
         const json& aj = (*an)[i];
-        if (!c.object(aj, A)) continue;
+        if (!c.expect_object(aj, A)) continue;
         c.keys(aj, A, {"kind", "measure", "phase", "welch", "pooled"});
         Analysis a;
         if (auto v = c.one_of(aj, A, "kind", true, {"anova_oneway", "pairwise_t", "descriptives"}))
@@ -614,7 +504,7 @@ Study parse_study(const std::string& text, const std::string& file,
           if (std::find(s.measures.begin(), s.measures.end(), *v) == s.measures.end())
             c.err(path_key(A, "measure"), "\"" + *v + "\" is not in $.measures");
         }
-        if (auto v = c.str(aj, A, "phase", true)) {
+        if (auto v = c.nonempty_text(aj, A, "phase", true)) {
           a.phase = *v;
           if (!phase_ids.empty() && !phase_ids.count(*v))
             c.err(path_key(A, "phase"), "unknown phase id \"" + *v + "\"");
@@ -624,6 +514,20 @@ Study parse_study(const std::string& text, const std::string& file,
         s.analyses.push_back(a);
       }
     }
+  }
+
+  // ---- size of the plan: validate builds it, so it must stay bounded (a typo such as a group
+  // of 100000 with 10000 sessions would otherwise take all memory instead of failing).
+  {
+    long long participants = 0, sessions = 0;
+    for (const auto& g : s.groups) participants += g.size;
+    for (const auto& p : s.phases) sessions += p.sessions;
+    if (participants * sessions > kMaxPlannedSessions)
+      c.err("$.groups", "the study plans " + std::to_string(participants) + " participants x " +
+                            std::to_string(sessions) +
+                            " sessions = " + std::to_string(participants * sessions) +
+                            " sessions; palplab runs at most " +
+                            std::to_string(kMaxPlannedSessions) + " per study");
   }
 
   // ---- prototypes: resolve every id, inspect each file once, check region names
@@ -654,7 +558,7 @@ Study parse_study(const std::string& text, const std::string& file,
       infos[id] = inspect ? inspect(f) : PrototypeInfo{};
       s.prototype_files[id] = f;
     } catch (const InputError& e) {
-      for (const auto& p : e.problems()) c.problems.push_back(p);
+      for (const auto& p : e.problems()) c.problems().push_back(p);
       c.err(path, "prototype \"" + id + "\" (" + f +
                       ") is not valid (see the problems reported in that file)");
       failed.insert(id);
@@ -692,15 +596,7 @@ Study parse_study(const std::string& text, const std::string& file,
                                   "\", not \"" + s.task.scene + "\"");
   }
 
-  if (!c.problems.empty()) {
-    // Report in file order.
-    auto key = [&](const Problem& p) {
-      return std::tuple(p.where.file == file ? 0 : 1, p.where.file, p.where.line, p.where.column);
-    };
-    std::stable_sort(c.problems.begin(), c.problems.end(),
-                     [&](const Problem& a, const Problem& b) { return key(a) < key(b); });
-    throw InputError(c.problems);
-  }
+  c.throw_if_any();  // every problem, in file order
   return s;
 }
 

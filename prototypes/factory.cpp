@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "common/json_locate.hpp"
 #include "engine/haptics/scene_impl.hpp"
 #include "engine/mesh/generate.hpp"
@@ -25,137 +26,8 @@ using namespace palplab::engine;
 
 namespace {
 
-// ---------------------------------------------------------------- located validation helpers
-
-class Checker {
- public:
-  Checker(std::string file, const std::string& text) : file_(std::move(file)), loc_(text) {}
-
-  void err(const std::string& path, const std::string& what, bool at_key = false) {
-    problems_.push_back({loc_.locate(file_, path, at_key), what});
-  }
-  void throw_if_any() {
-    if (!problems_.empty()) throw InputError(problems_);
-  }
-  bool ok() const { return problems_.empty(); }
-
-  // Unknown members are errors (a typo must not silently fall back to a default).
-  void keys(const json& o, const std::string& path, std::initializer_list<const char*> allowed) {
-    for (auto it = o.begin(); it != o.end(); ++it) {
-      bool known = false;
-      for (const char* k : allowed) known |= it.key() == k;
-      if (!known) {
-        std::string list;
-        for (const char* k : allowed) list += std::string(list.empty() ? "" : ", ") + k;
-        err(pj::path_key(path, it.key()),
-            "unknown key \"" + it.key() + "\" (expected one of: " + list + ")", true);
-      }
-    }
-  }
-
-  const json* member(const json& o, const std::string& path, const char* key, bool required,
-                     const char* expected) {
-    auto it = o.find(key);
-    if (it == o.end()) {
-      if (required)
-        err(path, std::string("missing required key \"") + key + "\" (" + expected + ")");
-      return nullptr;
-    }
-    return &*it;
-  }
-
-  const json* object(const json& o, const std::string& path, const char* key, bool required) {
-    const json* v = member(o, path, key, required, "an object");
-    if (v && !v->is_object()) {
-      err(pj::path_key(path, key), std::string("expected an object, got ") + v->type_name());
-      return nullptr;
-    }
-    return v;
-  }
-
-  std::optional<double> number(const json& o, const std::string& path, const char* key,
-                               bool required, double lo, double hi, const char* what,
-                               bool lo_open = false) {
-    const json* v = member(o, path, key, required, what);
-    if (!v) return std::nullopt;
-    const std::string p = pj::path_key(path, key);
-    if (!v->is_number()) {
-      err(p, std::string("expected a number: ") + what + ", got " + v->type_name());
-      return std::nullopt;
-    }
-    const double x = v->get<double>();
-    if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo)) {
-      err(p, "value " + v->dump() + " out of range: expected " + what + " in " +
-                 (lo_open ? "(" : "[") + fmt(lo) + ", " + fmt(hi) + "]");
-      return std::nullopt;
-    }
-    return x;
-  }
-
-  std::optional<long> integer(const json& o, const std::string& path, const char* key,
-                              bool required, long lo, long hi, const char* what) {
-    const json* v = member(o, path, key, required, what);
-    if (!v) return std::nullopt;
-    const std::string p = pj::path_key(path, key);
-    if (!v->is_number_integer()) {
-      err(p, std::string("expected an integer: ") + what + ", got " + v->dump());
-      return std::nullopt;
-    }
-    const long x = v->get<long>();
-    if (x < lo || x > hi) {
-      err(p, "value " + v->dump() + " out of range: expected " + what + " in [" +
-                 std::to_string(lo) + ", " + std::to_string(hi) + "]");
-      return std::nullopt;
-    }
-    return x;
-  }
-
-  std::optional<bool> boolean(const json& o, const std::string& path, const char* key,
-                              bool required) {
-    const json* v = member(o, path, key, required, "true or false");
-    if (!v) return std::nullopt;
-    if (!v->is_boolean()) {
-      err(pj::path_key(path, key), std::string("expected true or false, got ") + v->dump());
-      return std::nullopt;
-    }
-    return v->get<bool>();
-  }
-
-  std::optional<std::string> text(const json& o, const std::string& path, const char* key,
-                                  bool required, std::initializer_list<const char*> allowed = {}) {
-    const json* v = member(o, path, key, required, "a string");
-    if (!v) return std::nullopt;
-    const std::string p = pj::path_key(path, key);
-    if (!v->is_string()) {
-      err(p, std::string("expected a string, got ") + v->type_name());
-      return std::nullopt;
-    }
-    std::string s = v->get<std::string>();
-    if (allowed.size()) {
-      bool ok = false;
-      std::string list;
-      for (const char* a : allowed) {
-        ok |= s == a;
-        list += std::string(list.empty() ? "" : ", ") + a;
-      }
-      if (!ok) {
-        err(p, "unknown value \"" + s + "\" (expected one of: " + list + ")");
-        return std::nullopt;
-      }
-    }
-    return s;
-  }
-
- private:
-  static std::string fmt(double x) {
-    if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-    json j = x;
-    return j.dump();
-  }
-  std::string file_;
-  pj::JsonLocator loc_;
-  std::vector<Problem> problems_;
-};
+// Located validation: the one checker shared with study files (common/json_check.hpp).
+using palplab::json::Checker;
 
 // ---------------------------------------------------------------- the parsed prototype
 
@@ -474,14 +346,8 @@ Spec parse(const std::string& path) {
       s.thresholds[it.key()] = read_thresholds(c, it.value(), P);
     }
   }
-  if (const json* sp = c.member(root, R, "start_position", false, "[x, y, z] in m")) {
-    if (!sp->is_array() || sp->size() != 3 || !(*sp)[0].is_number() || !(*sp)[1].is_number() ||
-        !(*sp)[2].is_number())
-      c.err("$.start_position", "expected [x, y, z] (three numbers, m)");
-    else
-      s.start =
-          Eigen::Vector3d((*sp)[0].get<double>(), (*sp)[1].get<double>(), (*sp)[2].get<double>());
-  }
+  if (auto sp = c.vec3(root, R, "start_position", false, -10, 10, "the device start position (m)"))
+    s.start = Eigen::Vector3d((*sp)[0], (*sp)[1], (*sp)[2]);
   c.throw_if_any();
   return s;
 }

@@ -1,6 +1,12 @@
 #include "results/store.hpp"
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <charconv>
 #include <cmath>
@@ -180,24 +186,112 @@ void decode_samples(const std::string& blob, std::size_t n, double t0, double dt
 Store::Store(sqlite3* db, std::string path)
     : db_(db), path_(std::move(path)), mu_(std::make_unique<std::mutex>()) {}
 Store::Store(Store&& o) noexcept
-    : db_(std::exchange(o.db_, nullptr)), path_(std::move(o.path_)), mu_(std::move(o.mu_)) {}
+    : db_(std::exchange(o.db_, nullptr)),
+      path_(std::move(o.path_)),
+      mu_(std::move(o.mu_)),
+      lock_fd_(std::exchange(o.lock_fd_, -1)) {}
 Store& Store::operator=(Store&& o) noexcept {
   if (this != &o) {
     if (db_) sqlite3_close(db_);
+    if (lock_fd_ >= 0) ::close(lock_fd_);
     db_ = std::exchange(o.db_, nullptr);
     path_ = std::move(o.path_);
     mu_ = std::move(o.mu_);
+    lock_fd_ = std::exchange(o.lock_fd_, -1);
   }
   return *this;
 }
 Store::~Store() {
   if (db_) sqlite3_close(db_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the writer's lock
+}
+
+namespace {
+
+// The directory a database's -wal/-shm files go to.
+fs::path dir_of(const std::string& path) {
+  fs::path d = fs::path(path).parent_path();
+  return d.empty() ? fs::path(".") : d;
+}
+
+// Writing needs the file and its directory (SQLite's WAL creates PATH-wal and PATH-shm there).
+void require_writable(const std::string& path, bool file_exists) {
+  const fs::path d = dir_of(path);
+  if (::access(d.c_str(), W_OK) != 0)
+    throw InputError("cannot write the database: its directory " + d.string() +
+                         " is read-only (palplab writes PATH, PATH-wal and PATH-shm there)",
+                     path);
+  if (file_exists && ::access(path.c_str(), W_OK) != 0)
+    throw InputError("cannot write the database: the file is read-only", path);
+}
+
+// An exclusive advisory lock held by the one writer (flock: independent of SQLite's own
+// fcntl locks, released by the kernel when the process ends, even on kill -9).
+int lock_exclusive(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(std::string("cannot open database: ") + std::strerror(errno), path);
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    throw InputError(
+        "the database is in use by another palplab process (a run or resume is writing it); "
+        "wait for it to finish",
+        path);
+  }
+  return fd;
+}
+
+// True when `path` is an SQLite file holding palplab's meta table (read-only look).
+bool looks_like_palplab_db(const std::string& path) {
+  {
+    std::ifstream in(path, std::ios::binary);
+    char magic[16] = {};
+    if (!in.read(magic, 16) || std::string(magic, 15) != "SQLite format 3") return false;
+  }
+  sqlite3* db = nullptr;
+  const std::string uri = "file:" + path + "?mode=ro";
+  if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) !=
+      SQLITE_OK) {
+    sqlite3_close(db);
+    return false;
+  }
+  bool ok = false;
+  sqlite3_stmt* st = nullptr;
+  if (sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'schema_version'", -1, &st,
+                         nullptr) == SQLITE_OK)
+    ok = sqlite3_step(st) == SQLITE_ROW;
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return ok;
+}
+
+}  // namespace
+
+void Store::remove_existing(const std::string& path) {
+  std::error_code ec;
+  const auto st = fs::symlink_status(path, ec);
+  if (ec || !fs::exists(st)) return;
+  if (!fs::is_regular_file(st))
+    throw InputError(
+        "refusing to replace it: not a regular file (--force only replaces a palplab "
+        "results database)",
+        path);
+  if (!looks_like_palplab_db(path))
+    throw InputError(
+        "refusing to replace it: not a palplab results database (--force only "
+        "replaces a database written by palplab run)",
+        path);
+  require_writable(path, true);
+  const int fd = lock_exclusive(path);  // not while another process writes it
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix, ec);
+  ::close(fd);
 }
 
 Store Store::create(const std::string& path) {
   if (fs::exists(path)) throw InputError("database already exists", path);
+  require_writable(path, false);
   sqlite3* db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX);
   Store s(db, path);
+  s.lock_fd_ = lock_exclusive(path);
   exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
   exec(db, "BEGIN;" + schema_sql() + "COMMIT;");
   Stmt(db, "INSERT INTO meta(key, value) VALUES ('schema_version', ?1)")
@@ -207,10 +301,36 @@ Store Store::create(const std::string& path) {
   return s;
 }
 
-Store Store::open(const std::string& path) {
-  if (!fs::exists(path)) throw InputError("no such database", path);
-  sqlite3* db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
+Store Store::open(const std::string& path, bool exclusive) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError("no such database", path);
+  if (fs::is_directory(path, ec))
+    throw InputError("is a directory (expected a results database file)", path);
+  if (::access(path.c_str(), R_OK) != 0)
+    throw InputError(std::string("cannot read the database: ") + std::strerror(errno), path);
+  if (!looks_like_palplab_db(path) && ::access(dir_of(path).c_str(), W_OK) == 0) {
+    // (In a read-only directory a WAL database may be unreadable without its -shm file: the
+    // immutable open below decides then.)
+    throw InputError("not a palplab results database (expected schema version " +
+                         std::to_string(kSchemaVersion) + ")",
+                     path);
+  }
+  sqlite3* db = nullptr;
+  const bool can_write =
+      ::access(dir_of(path).c_str(), W_OK) == 0 && ::access(path.c_str(), W_OK) == 0;
+  if (exclusive) {
+    require_writable(path, true);
+    db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
+  } else if (can_write) {
+    db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
+  } else {
+    // Reading from a read-only place (an archive, a mounted share): no -shm can be created, so
+    // the file is opened as immutable (nobody may write it meanwhile).
+    db = open_db("file:" + path + "?immutable=1",
+                 SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
+  }
   Store s(db, path);
+  if (exclusive) s.lock_fd_ = lock_exclusive(path);
   long long version = -1;
   try {
     Stmt q(db, "PRAGMA user_version");
@@ -226,8 +346,25 @@ Store Store::open(const std::string& path) {
     throw InputError("results schema version " + std::to_string(version) +
                          " is not supported (expected " + std::to_string(kSchemaVersion) + ")",
                      path);
-  exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+  if (exclusive || can_write)
+    exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
   return s;
+}
+
+std::string Store::incomplete_warning() const {
+  StudyRecord st = read_study();
+  if (!st.finished_at.empty()) return "";
+  std::size_t n = 0;
+  {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT COUNT(*) FROM sessions");
+    if (q.step()) n = static_cast<std::size_t>(q.integer(0));
+  }
+  return "warning: " + path_ + " is INCOMPLETE: the run started " + st.started_at +
+         " has not finished (" + std::to_string(n) +
+         " sessions stored); results cover only those sessions. Continue it with "
+         "`palplab run STUDY --db " +
+         path_ + " --resume`.";
 }
 
 void Store::write_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,

@@ -100,10 +100,17 @@ void decode_samples(const std::string& blob, std::size_t n, double t0, double dt
 
 class Store {
  public:
-  // Creates a new database (the file must not exist) with the schema.
+  // Creates a new database (the file must not exist) with the schema, holding the writer's lock.
   static Store create(const std::string& path);
-  // Opens an existing database; InputError if it is not a palplab store of this schema version.
-  static Store open(const std::string& path);
+  // Opens an existing database; InputError if it is not a palplab store of this schema version
+  // (or not readable, or a directory: each said as such). `exclusive` (a run/resume that writes)
+  // takes the one writer's lock: a second writer gets "the database is in use" at once. A
+  // read-only file or directory is opened read-only (immutable) for readers and refused, with
+  // that reason, for writers.
+  static Store open(const std::string& path, bool exclusive = false);
+  // `run --force`: deletes PATH (and PATH-wal, PATH-shm) only when it is a palplab results
+  // database that no other process is writing; any other file is refused (InputError).
+  static void remove_existing(const std::string& path);
   Store(Store&&) noexcept;
   Store& operator=(Store&&) noexcept;
   ~Store();
@@ -122,12 +129,16 @@ class Store {
   std::vector<PrototypeRecord> read_prototypes() const;
 
   const std::string& path() const { return path_; }
+  // "" for a finished run; otherwise a one-paragraph warning that the database is INCOMPLETE
+  // (for report/export, which still work on the sessions stored).
+  std::string incomplete_warning() const;
 
  private:
   Store(sqlite3* db, std::string path);
   sqlite3* db_ = nullptr;
   std::string path_;
   std::unique_ptr<std::mutex> mu_;
+  int lock_fd_ = -1;  // flock(LOCK_EX) of the writer; -1 for readers
 };
 
 // Tidy CSV export: measures.csv (participant,group,phase,session,measure,value,unit),

@@ -10,9 +10,9 @@ namespace palplab::mesh {
 
 const std::vector<std::string>& defect_kinds() {
   static const std::vector<std::string> k{
-      "open_edge",         "non_manifold_edge", "non_manifold_vertex",
-      "duplicate_vertex",  "degenerate_face",   "inconsistent_orientation",
-      "self_intersection", "inverted_tet",      "sliver_tet"};
+      "open_edge",       "non_manifold_edge",        "non_manifold_vertex", "duplicate_vertex",
+      "degenerate_face", "inconsistent_orientation", "self_intersection",   "inverted_tet",
+      "sliver_tet",      "non_finite_vertex",        "empty_mesh"};
   return k;
 }
 
@@ -124,7 +124,11 @@ std::vector<std::pair<int, int>> duplicate_vertex_pairs(const Positions& V, doub
   if (tol < 0 || V.rows() == 0) return out;
   // Cells no smaller than the tolerance (so neighbours cover it) nor than 1e-12 of the
   // coordinates (so cell indices cannot overflow).
-  const double scale = V.allFinite() ? V.cwiseAbs().maxCoeff() : 1.0;
+  // (Over the finite vertices only: one NaN vertex must not shrink the cells of the others to a
+  // size whose indices overflow.)
+  double scale = 0;
+  for (int i = 0; i < V.rows(); ++i)
+    if (V.row(i).allFinite()) scale = std::max(scale, V.row(i).cwiseAbs().maxCoeff());
   const double cell = std::max({tol, 1e-12 * scale, 1e-300});
   auto key = [&](long x, long y, long z) {
     return static_cast<std::uint64_t>(x) * 73856093ULL ^
@@ -176,11 +180,30 @@ std::vector<std::pair<int, int>> self_intersections_brute_force(const Positions&
   return out;
 }
 
+namespace {
+
+// One non_finite_vertex defect per vertex with a NaN/inf coordinate; true when there is any.
+bool report_non_finite(CheckReport& r, const CheckOptions& o, const Positions& V) {
+  bool any = false;
+  for (int v = 0; v < V.rows(); ++v)
+    if (!V.row(v).allFinite()) {
+      add(r, o, {"non_finite_vertex", {v}, {}, {}, {row3(V, v)}, 0});
+      any = true;
+    }
+  return any;
+}
+
+}  // namespace
+
 CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
   CheckReport r;
   const Positions& V = m.V;
   const Faces& F = m.F;
   auto P = [&](int v) { return row3(V, v); };
+  if (F.rows() == 0) add(r, o, {"empty_mesh", {}, {}, {}, {}, static_cast<double>(V.rows())});
+  // Geometry on NaN/inf coordinates means nothing (and hashing them is undefined): only the
+  // topological checks run then.
+  const bool geometric = !report_non_finite(r, o, V);
   // Per edge, its faces (for locating edge defects).
   // Faces of the edges that will be reported (one pass over the half-edges).
   std::vector<char> report(m.E.rows(), 0);
@@ -198,9 +221,10 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
           {"non_manifold_edge", {a, b}, edge_faces[e], {}, {P(a), P(b)}, double(m.edge_faces[e])});
   }
   for (int v : m.non_manifold_vertices) add(r, o, {"non_manifold_vertex", {v}, {}, {}, {P(v)}, 0});
-  for (auto [i, j] : duplicate_vertex_pairs(V, o.duplicate_tolerance))
-    add(r, o, {"duplicate_vertex", {i, j}, {}, {}, {P(i), P(j)}, (P(i) - P(j)).norm()});
-  for (int f = 0; f < F.rows(); ++f) {
+  if (geometric)
+    for (auto [i, j] : duplicate_vertex_pairs(V, o.duplicate_tolerance))
+      add(r, o, {"duplicate_vertex", {i, j}, {}, {}, {P(i), P(j)}, (P(i) - P(j)).norm()});
+  for (int f = 0; geometric && f < F.rows(); ++f) {
     const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
     const double area2 = (P(b) - P(a)).cross(P(c) - P(a)).norm();
     const double lmax = std::max(
@@ -212,7 +236,7 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
     const int a = m.E(e, 0), b = m.E(e, 1);
     add(r, o, {"inconsistent_orientation", {a, b}, edge_faces[e], {}, {P(a), P(b)}, 0});
   }
-  if (o.self_intersections) {
+  if (o.self_intersections && geometric) {
     std::vector<Vec3> pts;
     auto pairs = self_intersections(V, F, &pts);
     for (size_t i = 0; i < pairs.size(); ++i) {
@@ -231,6 +255,8 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
 
 CheckReport check_tets(const TetMesh& m, const CheckOptions& o) {
   CheckReport r;
+  if (m.T.rows() == 0) add(r, o, {"empty_mesh", {}, {}, {}, {}, static_cast<double>(m.V.rows())});
+  if (report_non_finite(r, o, m.V)) return r;  // volumes and shapes of NaN tets mean nothing
   for (int t = 0; t < m.T.rows(); ++t) {
     const Vec3 a = row3(m.V, m.T(t, 0)), b = row3(m.V, m.T(t, 1)), c = row3(m.V, m.T(t, 2)),
                d = row3(m.V, m.T(t, 3));

@@ -10,6 +10,9 @@
 //   self_intersection         two non-adjacent triangles (or two sharing only a vertex) crossing
 //   inverted_tet              tet with negative signed volume
 //   sliver_tet                tet with radius ratio below the threshold (includes zero volume)
+//   non_finite_vertex         vertex with a NaN or infinite coordinate (the geometric checks
+//                             above are skipped then: they mean nothing on such coordinates)
+//   empty_mesh                no faces (surfaces) or no tets (tet meshes)
 #include <map>
 #include <string>
 #include <vector>

@@ -125,7 +125,7 @@ SurfaceMesh read_obj(const std::string& path) {
       for (size_t c = 1; c < t.size(); ++c) {
         const std::string s = t[c].substr(0, t[c].find('/'));
         long i = r.integer(s, "a vertex index");
-        if (i < 0) i = nv + i + 1;  // relative index
+        if (i < 0 && i >= -nv) i = nv + i + 1;  // relative index (-1 = the last vertex)
         if (i < 1 || i > nv)
           r.fail("vertex index " + s + " out of range (" + std::to_string(nv) +
                  " vertices defined so far)");
@@ -646,13 +646,14 @@ SurfaceMesh read_ply(const std::string& path) {
         const PlyProperty& p = e.props[k];
         if (p.list) {
           const double n = body.value(p.count_type);
-          if (n < 0 || n > 1000) body.fail("implausible list length " + std::to_string(n));
+          if (!(n >= 0 && n <= 1000))  // NaN fails too
+            body.fail("implausible list length " + std::to_string(n));
           for (int c = 0; c < static_cast<int>(n); ++c) {
             const double v = body.value(p.type);
             if (static_cast<int>(k) == iv) {
-              if (v < 0 || v >= nv)
-                body.fail("vertex index " + std::to_string(static_cast<long>(v)) +
-                          " out of range [0, " + std::to_string(nv) + ")");
+              if (!(v >= 0 && v < nv) || v != std::floor(v))
+                body.fail("vertex index " + format_exact(v) + " out of range [0, " +
+                          std::to_string(nv) + ")");
               idx.push_back(static_cast<int>(v));
             }
           }
@@ -661,7 +662,12 @@ SurfaceMesh read_ply(const std::string& path) {
           if (is_vertex && static_cast<int>(k) == ix) xyz[0] = v;
           if (is_vertex && static_cast<int>(k) == iy) xyz[1] = v;
           if (is_vertex && static_cast<int>(k) == iz) xyz[2] = v;
-          if (is_face && static_cast<int>(k) == ir) region = static_cast<int>(v);
+          if (is_face && static_cast<int>(k) == ir) {
+            // Ids index the name table: bounded like the header's `comment region` ids.
+            if (!(v >= -1 && v <= 1000000) || v != std::floor(v))
+              body.fail("region id " + format_exact(v) + " is not -1 or an id in [0, 1000000]");
+            region = static_cast<int>(v);
+          }
         }
       }
       body.end_instance();
@@ -729,7 +735,9 @@ void write_ply(const std::string& path, const SurfaceMesh& m, bool binary) {
 
 // ---------------------------------------------------------------- dispatch
 
-SurfaceMesh read_surface(const std::string& path) {
+namespace {
+
+SurfaceMesh read_surface_any(const std::string& path) {
   const std::string e = extension(path);
   if (e == ".obj") return read_obj(path);
   if (e == ".stl") return read_stl(path);
@@ -742,6 +750,19 @@ SurfaceMesh read_surface(const std::string& path) {
   }
   throw InputError("unknown surface format '" + e + "' (expected .obj, .stl, .off, .ply, .vtu)",
                    path);
+}
+
+}  // namespace
+
+SurfaceMesh read_surface(const std::string& path) {
+  SurfaceMesh m = read_surface_any(path);
+  // A file without triangles is no surface: every consumer (check, tetrahedralize, a prototype's
+  // mesh.file, the simulation) needs at least one.
+  if (m.F.rows() == 0)
+    throw InputError("no geometry: the file holds " + std::to_string(m.V.rows()) +
+                         " vertices and no triangles (expected a triangulated surface)",
+                     path);
+  return m;
 }
 
 void write_surface(const std::string& path, const SurfaceMesh& m, const WriteOptions& o) {

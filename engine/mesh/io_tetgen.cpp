@@ -92,13 +92,16 @@ TetMesh read_tetgen(const std::string& path) {
               " attributes");
     record_index(re, t[0], i, ele_base, i == 0);
     for (int k = 0; k < 4; ++k) {
-      const long v = re.integer(t[1 + k], "a node index") - node_base;
-      if (v < 0 || v >= nv) re.fail("node index " + t[1 + k] + " out of range");
+      const long raw = re.integer(t[1 + k], "a node index");
+      if (raw < node_base || raw - node_base >= nv)  // (no subtraction that could overflow)
+        re.fail("node index " + t[1 + k] + " out of range");
+      const long v = raw - node_base;
       T(i, k) = static_cast<int>(v);
     }
     for (long a = 0; a < ta && a < 2; ++a) {
       const double x = re.number(t[1 + npt + a], "an attribute");
-      if (x != std::round(x)) re.fail("attribute " + t[1 + npt + a] + " is not an integer");
+      if (x != std::round(x) || std::abs(x) > 1e9)
+        re.fail("attribute " + t[1 + npt + a] + " is not an integer in [-1e9, 1e9]");
       (a == 0 ? A : R)[i] = static_cast<int>(x);
     }
   }
@@ -199,9 +202,8 @@ Faces read_tetgen_face(const std::string& path, Eigen::VectorXi* markers) {
     if (!r.tokens(t) || static_cast<long>(t.size()) != 4 + nm)
       r.fail("expected `index a b c [marker]`");
     record_index(r, t[0], i, base, i == 0);
-    for (int k = 0; k < 3; ++k)
-      F(i, k) = static_cast<int>(r.integer(t[1 + k], "a node index") - base);
-    if (nm && markers) (*markers)[i] = static_cast<int>(r.integer(t[4], "a marker"));
+    for (int k = 0; k < 3; ++k) F(i, k) = r.int32(t[1 + k], "a node index", base);
+    if (nm && markers) (*markers)[i] = r.int32(t[4], "a marker");
   }
   return F;
 }
@@ -219,7 +221,7 @@ Tets read_tetgen_neigh(const std::string& path) {
     record_index(r, t[0], i, base, i == 0);
     for (int k = 0; k < 4; ++k) {
       const long v = r.integer(t[1 + k], "a neighbour index");
-      N(i, k) = v < 0 ? -1 : static_cast<int>(v - base);
+      N(i, k) = v < 0 ? -1 : r.int32(t[1 + k], "a neighbour index", base);
     }
   }
   return N;

@@ -1,6 +1,7 @@
 // VTK XML unstructured grid (ASCII): writer for ParaView and a reader for palplab's own files.
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -146,6 +147,8 @@ AnyMesh read_mesh(const std::string& path) {
   if (is_tetgen_path(path)) {
     a.is_tet = true;
     a.tet = read_tetgen(path);
+    if (a.tet.T.rows() == 0)
+      throw InputError("no geometry: the TetGen files hold no tetrahedra", path);
     return a;
   }
   if (extension(path) != ".vtu") {
@@ -177,7 +180,7 @@ AnyMesh read_mesh(const std::string& path) {
   }
   if (types.empty() || offs.size() != types.size())
     throw InputError("VTU cells: offsets and types differ in length", path);
-  const int type = static_cast<int>(types[0]);
+  const int type = types[0] == 10 ? 10 : 5;  // checked below (no cast of an arbitrary double)
   for (double t : types)
     if (t != type || (type != 5 && type != 10))
       throw InputError("VTU: only all-triangle (5) or all-tetra (10) cells are supported", path);
@@ -190,19 +193,31 @@ AnyMesh read_mesh(const std::string& path) {
   for (size_t c = 0; c < types.size(); ++c)
     for (int j = 0; j < k; ++j) {
       const double v = conn[c * k + j];
-      if (v < 0 || v >= nv) throw InputError("VTU: connectivity index out of range", path);
+      if (!(v >= 0 && v < nv) || v != std::floor(v))  // NaN fails too
+        throw InputError("VTU: connectivity index " + format_exact(v) + " of cell " +
+                             std::to_string(c) + " is not a vertex index in [0, " +
+                             std::to_string(nv) + ")",
+                         path);
       C(c, j) = static_cast<int>(v);
     }
   Regions regions;
   if (auto p = d.find("<!-- palplab regions:"); p != std::string::npos) {
-    const std::string list = d.substr(p + 21, d.find("-->", p) - p - 21);
+    const auto end = d.find("-->", p);
+    if (end == std::string::npos) throw InputError("VTU: unterminated region list comment", path);
+    const std::string list = d.substr(p + 21, end - p - 21);
     std::istringstream is(list);
     std::string item;
     std::map<int, std::string> names;
     while (is >> item) {
       const auto eq = item.find('=');
       if (eq == std::string::npos) throw InputError("VTU: malformed region list comment", path);
-      names[std::stoi(item.substr(0, eq))] = item.substr(eq + 1);
+      int id = -1;
+      auto rc = std::from_chars(item.data(), item.data() + eq, id);
+      if (rc.ec != std::errc() || rc.ptr != item.data() + eq || id < 0 || id > 100000)
+        throw InputError("VTU: region list entry '" + item.substr(0, 40) +
+                             "' is not <id>=<name> with an id in [0, 100000]",
+                         path);
+      names[id] = item.substr(eq + 1);
     }
     for (auto& [id, n] : names) {
       if (id != static_cast<int>(regions.names.size()))
@@ -213,7 +228,15 @@ AnyMesh read_mesh(const std::string& path) {
       auto r = numbers(path, text, line, "region");
       if (r.size() != types.size()) throw InputError("VTU: region array size mismatch", path);
       regions.id.resize(static_cast<int>(r.size()));
-      for (size_t i = 0; i < r.size(); ++i) regions.id[i] = static_cast<int>(r[i]);
+      const double n = static_cast<double>(regions.names.size());
+      for (size_t i = 0; i < r.size(); ++i) {
+        if (!(r[i] >= -1 && r[i] < n) || r[i] != std::floor(r[i]))
+          throw InputError(SourceLocation{path, line},
+                           "region id " + format_exact(r[i]) + " of cell " + std::to_string(i) +
+                               " is not -1 (none) or one of the " +
+                               std::to_string(regions.names.size()) + " declared regions");
+        regions.id[i] = static_cast<int>(r[i]);
+      }
     } else {
       regions = {};
     }
@@ -226,11 +249,19 @@ AnyMesh read_mesh(const std::string& path) {
       auto r = numbers(path, text, line, "attribute");
       if (r.size() != types.size()) throw InputError("VTU: attribute array size mismatch", path);
       attr.resize(static_cast<int>(r.size()));
-      for (size_t i = 0; i < r.size(); ++i) attr[i] = static_cast<int>(r[i]);
+      for (size_t i = 0; i < r.size(); ++i) {
+        if (!(std::abs(r[i]) <= 1e9) || r[i] != std::floor(r[i]))
+          throw InputError(SourceLocation{path, line},
+                           "attribute " + format_exact(r[i]) + " of cell " + std::to_string(i) +
+                               " is not an integer tissue type (|a| <= 1e9)");
+        attr[i] = static_cast<int>(r[i]);
+      }
     }
     a.is_tet = true;
     a.tet = make_tet_mesh(std::move(V), Tets(C), std::move(attr), std::move(regions));
   }
+  if ((a.is_tet ? a.tet.T.rows() : a.surface.F.rows()) == 0)
+    throw InputError("no geometry: the VTU file holds no cells", path);
   return a;
 }
 

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <set>
 
+#include "common/input_error.hpp"
 #include "engine/mesh/check.hpp"
 
 namespace palplab::mesh {
@@ -39,6 +40,11 @@ int find(std::vector<int>& p, int x) {
 SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* out_log) {
   RepairLog log;
   const int nv = static_cast<int>(in.V.rows());
+  for (int i = 0; i < nv; ++i)
+    if (!in.V.row(i).allFinite())
+      throw InputError("cannot repair: vertex " + std::to_string(i) +
+                       " has a coordinate that is not a finite number (NaN or inf); no safe "
+                       "automatic fix (`palplab mesh check` lists every such vertex)");
   Positions V = in.V;
   // 1. Merge duplicates: every vertex maps to the smallest index of its duplicate group.
   std::vector<int> rep(nv);

@@ -24,6 +24,11 @@ SurfaceMesh make_surface_mesh(Positions V, Faces F, Regions regions) {
   if (!m.regions.empty() && m.regions.id.size() != m.F.rows())
     throw InputError("region table has " + std::to_string(m.regions.id.size()) + " entries for " +
                      std::to_string(m.F.rows()) + " faces");
+  for (int f = 0; f < m.regions.id.size(); ++f)
+    if (m.regions.id[f] < -1 || m.regions.id[f] >= static_cast<int>(m.regions.names.size()))
+      throw InputError("face " + std::to_string(f) + " has region id " +
+                       std::to_string(m.regions.id[f]) + " but the mesh names " +
+                       std::to_string(m.regions.names.size()) + " regions (ids -1 .. n-1)");
   build_connectivity(m);
   return m;
 }

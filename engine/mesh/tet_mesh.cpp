@@ -50,6 +50,11 @@ TetMesh make_tet_mesh(Positions V, Tets T, Eigen::VectorXi attribute, Regions re
   if (!regions.empty() && regions.id.size() != nt)
     throw InputError("region table has " + std::to_string(regions.id.size()) + " entries for " +
                      std::to_string(nt) + " tets");
+  for (int t = 0; t < regions.id.size(); ++t)
+    if (regions.id[t] < -1 || regions.id[t] >= static_cast<int>(regions.names.size()))
+      throw InputError("tet " + std::to_string(t) + " has region id " +
+                       std::to_string(regions.id[t]) + " but the mesh names " +
+                       std::to_string(regions.names.size()) + " regions (ids -1 .. n-1)");
   m.attribute = std::move(attribute);
   m.regions = std::move(regions);
   m.volume.resize(nt);

@@ -2,14 +2,24 @@
 
 #include <tetgen.h>
 
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "engine/mesh/check.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/spatial/octree.hpp"
 
@@ -103,12 +113,39 @@ std::string tetgen_switches(const TetOptions& opt) {
   return s;
 }
 
-TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
-  if (opt.quality < 0 || (opt.quality > 0 && opt.quality < 1.0))
-    throw InputError("--quality must be 0 (off) or a radius-edge ratio >= 1.0, got " +
-                     format_exact(opt.quality));
-  if (opt.max_volume < 0)
-    throw InputError("--max-volume must be > 0, got " + format_exact(opt.max_volume));
+namespace {
+
+// ---- the TetGen run, in a child process
+//
+// TetGen 1.5 aborts (exit(), assert) or crashes on some inputs that pass every check we can
+// afford, and it can loop for a very long time on others. It therefore runs in a forked child
+// that sends its result through a pipe: a crash, abort or timeout of the child becomes an
+// InputError in palplab, never the end of palplab.
+
+struct RawTets {
+  std::vector<double> points;  // 3 per point
+  std::vector<int> tets;       // 4 per tet
+  std::vector<double> attr;    // first tet attribute, when regions were seeded
+};
+
+void write_all(int fd, const void* data, std::size_t n) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) ::_exit(120);  // parent gone: nothing to report to
+    p += w;
+    n -= static_cast<std::size_t>(w);
+  }
+}
+
+template <class T>
+void put(int fd, const T& x) {
+  write_all(fd, &x, sizeof x);
+}
+
+// Child side: run TetGen, then write status (0 = ok, else TetGen's error code) and the result.
+[[noreturn]] void child_run(int fd, const SurfaceMesh& s, const TetOptions& opt) {
   tetgenio in, out;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(s.V.rows());
@@ -144,22 +181,185 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
   std::string sw = tetgen_switches(opt);
   std::vector<char> swbuf(sw.begin(), sw.end());
   swbuf.push_back('\0');
+  int status = 0;
   try {
     ::tetrahedralize(swbuf.data(), &in, &out);
   } catch (int code) {
-    throw InputError(tetgen_error(code));
+    status = code == 0 ? 2 : code;
+  } catch (...) {
+    status = 2;
   }
-  if (out.numberoftetrahedra <= 0) throw InputError("TetGen produced no tetrahedra");
+  put(fd, status);
+  if (status == 0) {
+    const std::int64_t np = out.numberofpoints, nt = out.numberoftetrahedra;
+    const bool attr = !opt.seeds.empty() && out.numberoftetrahedronattributes > 0;
+    put(fd, np);
+    put(fd, nt);
+    put(fd, static_cast<std::int32_t>(attr));
+    write_all(fd, out.pointlist, sizeof(double) * 3 * np);
+    std::vector<int> t(4 * nt);
+    for (std::int64_t i = 0; i < nt; ++i)
+      for (int k = 0; k < 4; ++k) t[4 * i + k] = out.tetrahedronlist[out.numberofcorners * i + k];
+    write_all(fd, t.data(), sizeof(int) * t.size());
+    if (attr) {
+      std::vector<double> a(nt);
+      for (std::int64_t i = 0; i < nt; ++i)
+        a[i] = out.tetrahedronattributelist[out.numberoftetrahedronattributes * i];
+      write_all(fd, a.data(), sizeof(double) * a.size());
+    }
+  }
+  ::close(fd);
+  ::_exit(0);  // no atexit handlers, no flush of the parent's stdio buffers
+}
 
-  Positions V(out.numberofpoints, 3);
-  for (int i = 0; i < out.numberofpoints; ++i)
-    V.row(i) << out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2];
-  Tets T(out.numberoftetrahedra, 4);
-  Eigen::VectorXi A = Eigen::VectorXi::Constant(out.numberoftetrahedra, opt.default_attribute);
-  for (int t = 0; t < out.numberoftetrahedra; ++t) {
-    for (int k = 0; k < 4; ++k) T(t, k) = out.tetrahedronlist[out.numberofcorners * t + k];
-    if (!opt.seeds.empty() && out.numberoftetrahedronattributes > 0) {
-      const double a = out.tetrahedronattributelist[out.numberoftetrahedronattributes * t];
+// Parent side: reads everything the child sends (until EOF or the deadline).
+bool read_all(int fd, std::string& buf, std::chrono::steady_clock::time_point deadline) {
+  char chunk[1 << 16];
+  while (true) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return false;
+    pollfd pfd{fd, POLLIN, 0};
+    const int pr = ::poll(&pfd, 1, static_cast<int>(std::min<long long>(left.count(), 1 << 30)));
+    if (pr < 0 && errno == EINTR) continue;
+    if (pr <= 0) return pr == 0 ? false : true;
+    const ssize_t r = ::read(fd, chunk, sizeof chunk);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return true;  // EOF (or error): the child is done
+    buf.append(chunk, static_cast<std::size_t>(r));
+  }
+}
+
+RawTets run_tetgen_isolated(const SurfaceMesh& s, const TetOptions& opt) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error("tetrahedralize: pipe() failed");
+  std::fflush(nullptr);  // nothing buffered may be written twice
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw std::runtime_error("tetrahedralize: fork() failed");
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    child_run(fds[1], s, opt);
+  }
+  ::close(fds[1]);
+  const double limit = opt.timeout_seconds > 0 ? opt.timeout_seconds : 1e9;
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::milliseconds(static_cast<long long>(limit * 1000));
+  std::string buf;
+  const bool finished = read_all(fds[0], buf, deadline);
+  ::close(fds[0]);
+  if (!finished) ::kill(pid, SIGKILL);
+  int st = 0;
+  while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+  }
+  if (!finished)
+    throw InputError("TetGen did not finish within " + format_exact(limit) +
+                     " s (--timeout); the surface may be nearly degenerate: run `palplab mesh "
+                     "check` and `palplab mesh repair`, or relax --quality/--max-volume");
+  if (WIFSIGNALED(st))
+    throw InputError(std::string("TetGen crashed on this surface (signal ") +
+                     std::to_string(WTERMSIG(st)) + ", " + strsignal(WTERMSIG(st)) +
+                     "); run `palplab mesh check` and `palplab mesh repair` on it");
+  std::size_t pos = 0;
+  auto get = [&](void* dst, std::size_t n) {
+    if (buf.size() - pos < n)
+      throw InputError("TetGen stopped without a result (exit status " +
+                       std::to_string(WIFEXITED(st) ? WEXITSTATUS(st) : -1) +
+                       "); run `palplab mesh check` on the surface");
+    std::memcpy(dst, buf.data() + pos, n);
+    pos += n;
+  };
+  std::int32_t status = 0;
+  get(&status, sizeof status);
+  if (status != 0) throw InputError(tetgen_error(status));
+  std::int64_t np = 0, nt = 0;
+  std::int32_t has_attr = 0;
+  get(&np, sizeof np);
+  get(&nt, sizeof nt);
+  get(&has_attr, sizeof has_attr);
+  if (np < 0 || nt < 0 || np > (1LL << 31) || nt > (1LL << 31))
+    throw InputError("TetGen returned a malformed result");
+  RawTets r;
+  r.points.resize(3 * np);
+  r.tets.resize(4 * nt);
+  get(r.points.data(), sizeof(double) * r.points.size());
+  get(r.tets.data(), sizeof(int) * r.tets.size());
+  if (has_attr) {
+    r.attr.resize(nt);
+    get(r.attr.data(), sizeof(double) * r.attr.size());
+  }
+  return r;
+}
+
+}  // namespace
+
+void check_tetgen_input(const SurfaceMesh& s) {
+  if (s.V.rows() < 4 || s.F.rows() < 4)
+    throw InputError("cannot tetrahedralize: the surface has " + std::to_string(s.V.rows()) +
+                     " vertices and " + std::to_string(s.F.rows()) +
+                     " triangles (a closed surface needs at least 4 of each)");
+  for (int i = 0; i < s.V.rows(); ++i)
+    if (!s.V.row(i).allFinite())
+      throw InputError("cannot tetrahedralize: vertex " + std::to_string(i) +
+                       " has a coordinate that is not a finite number (NaN or inf)");
+  const double extent = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).maxCoeff();
+  if (!(extent > 0) || !std::isfinite(extent) || extent > 1e6)
+    throw InputError("cannot tetrahedralize: the surface's extent is " + format_exact(extent) +
+                     " m (expected a positive size below 1e6 m)");
+  CheckOptions co;
+  co.max_per_kind = 1;
+  const CheckReport rep = check_surface(s, co);
+  // Every kind TetGen cannot take (orientation alone is harmless to it).
+  std::string list, first;
+  for (const auto& [kind, n] : rep.counts) {
+    if (kind == "inconsistent_orientation") continue;
+    list += (list.empty() ? "" : ", ") + std::to_string(n) + " " + kind;
+    if (first.empty())
+      for (const Defect& d : rep.defects)
+        if (d.kind == kind) {
+          first = kind + " at";
+          if (!d.faces.empty()) {
+            first += " face";
+            for (int f : d.faces) first += " " + std::to_string(f);
+          } else {
+            first += " vertex";
+            for (int v : d.vertices) first += " " + std::to_string(v);
+          }
+          break;
+        }
+  }
+  if (!list.empty())
+    throw InputError("cannot tetrahedralize: the surface has " + list + " (first: " + first +
+                     "); run `palplab mesh check` for all of them and `palplab mesh repair` to "
+                     "fix what can be fixed");
+}
+
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
+  if (opt.quality < 0 || (opt.quality > 0 && opt.quality < 1.0) || !std::isfinite(opt.quality))
+    throw InputError("--quality must be 0 (off) or a radius-edge ratio >= 1.0, got " +
+                     format_exact(opt.quality));
+  if (opt.max_volume < 0 || !std::isfinite(opt.max_volume))
+    throw InputError("--max-volume must be > 0, got " + format_exact(opt.max_volume));
+  for (const RegionSeed& g : opt.seeds)
+    if (!g.point.allFinite() || !std::isfinite(g.max_volume))
+      throw InputError("region seed " + std::to_string(g.index) + " is not finite");
+  check_tetgen_input(s);
+  const RawTets out = run_tetgen_isolated(s, opt);
+  const int np = static_cast<int>(out.points.size() / 3),
+            nt = static_cast<int>(out.tets.size() / 4);
+  if (nt <= 0) throw InputError("TetGen produced no tetrahedra");
+  Positions V(np, 3);
+  for (int i = 0; i < np; ++i)
+    V.row(i) << out.points[3 * i], out.points[3 * i + 1], out.points[3 * i + 2];
+  Tets T(nt, 4);
+  Eigen::VectorXi A = Eigen::VectorXi::Constant(nt, opt.default_attribute);
+  for (int t = 0; t < nt; ++t) {
+    for (int k = 0; k < 4; ++k) T(t, k) = out.tets[4 * t + k];
+    if (!out.attr.empty()) {
+      const double a = out.attr[t];
       // Tets in no seeded region get attribute 0 from TetGen: keep the default for them.
       if (a != 0) A[t] = static_cast<int>(std::lround(a));
     }

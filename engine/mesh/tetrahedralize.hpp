@@ -1,5 +1,5 @@
 #pragma once
-// Tetrahedralization of a closed surface through TetGen 1.5 (libtet, in process) — SPEC §4.
+// Tetrahedralization of a closed surface through TetGen 1.5 (libtet, in a child process) — SPEC §4.
 #include <string>
 #include <vector>
 
@@ -36,13 +36,22 @@ struct TetOptions {
   bool keep_surface = true;       // TetGen -Y: no Steiner points on the input surface
   std::vector<RegionSeed> seeds;  // TetGen -A regions; without seeds every tet gets
   int default_attribute = 0;      //   this attribute (SPEC §4: 0-99 = undefined tissue)
+  double timeout_seconds = 300;   // wall-clock limit of the TetGen run; <= 0 = none
 };
+
+// What TetGen needs from its input, checked before it runs: at least 4 vertices and faces, finite
+// coordinates, a sane extent, and none of the defects of `mesh check` that TetGen cannot take
+// (open/non-manifold edges and vertices, duplicate vertices, degenerate faces, self-intersections
+// including duplicated and coincident triangles). Throws InputError naming the first defect.
+void check_tetgen_input(const SurfaceMesh& s);
 
 // Tetrahedralizes the closed surface `s`. The input vertices keep their indices (Steiner points
 // are appended). The surface's named face regions carry over to the tets: a tet takes the region
 // held by most of its surface vertices (ties -> smaller id), or, when it touches no surface
 // vertex, the region of the surface vertex nearest to its centroid.
-// Throws InputError when TetGen rejects the surface (self-intersections, open surface, ...).
+// Throws InputError when the surface fails check_tetgen_input or TetGen rejects it. TetGen runs
+// in a forked child process: its crash, abort or timeout becomes an InputError, never the end
+// of the calling process.
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt = {});
 
 // The TetGen switches used for opt (for reports): e.g. "pzQY q1.414 a1e-06 A".

@@ -1,6 +1,7 @@
 #pragma once
 // Internal helpers of the mesh readers: a line reader that knows where it is, strict number
 // parsing and located errors. Not part of the public API.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -74,6 +75,13 @@ struct TextReader {
       fail(std::string("expected ") + what + " (a finite number), got '" + t + "'");
     return v;
   }
+  // An integer that fits an int after subtracting `base` (indices, markers).
+  int int32(const std::string& t, const char* what, long base = 0) const {
+    const long v = integer(t, what);
+    if (v < -2147483647L + base || v > 2147483647L + base)
+      fail(std::string("expected ") + what + " (an integer that fits 32 bits), got '" + t + "'");
+    return static_cast<int>(v - base);
+  }
   long integer(const std::string& t, const char* what) const {
     long v;
     auto r = std::from_chars(t.data(), t.data() + t.size(), v);
@@ -84,8 +92,13 @@ struct TextReader {
 };
 
 // Guards against absurd counts in headers before allocating.
+// Every record takes at least two bytes ("0\n"), so a count beyond half the bytes left is a lie
+// that would otherwise allocate gigabytes before the first record is read.
 inline void check_count(const TextReader& r, long n, const char* what, long max = 500000000) {
-  if (n < 0 || n > max) r.fail(std::string("implausible ") + what + " count " + std::to_string(n));
+  const long left = static_cast<long>(r.data.size() - std::min(r.pos, r.data.size()));
+  if (n < 0 || n > max || n > left / 2 + 1)
+    r.fail(std::string("implausible ") + what + " count " + std::to_string(n) + " (the file has " +
+           std::to_string(left) + " bytes left)");
 }
 
 }  // namespace palplab::mesh::detail

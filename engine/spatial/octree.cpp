@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -115,7 +116,14 @@ void refit(Octree& tree, const Positions& V) {
 int nearest(const Octree& t, const Positions& V, const Vec3& q, double* d2) {
   int best = -1;
   double bd = std::numeric_limits<double>::infinity();
+  if (d2) *d2 = bd;
   if (t.order.empty()) return -1;
+  // A NaN or infinite query has no nearest node (device glitches produce them); every distance
+  // would compare false and the descent below would have no child to follow.
+  if (!q.allFinite()) return -1;
+  // A finite query so far away that squared distances overflow to inf (|q| ~ 1e155 and beyond):
+  // answer exactly with a scaled linear pass instead of a tree walk that cannot prune.
+  if (q.cwiseAbs().maxCoeff() > 1e150) return linear_nearest(V, q, d2);
   // Depth-first, nearer children first, pruning boxes farther than the best so far. Boxes at
   // exactly the best distance are still visited so ties resolve to the smallest index.
   struct Item {
@@ -140,6 +148,12 @@ int nearest(const Octree& t, const Positions& V, const Vec3& q, double* d2) {
             }
           }
       }
+      if (next < 0)  // every box at distance inf or NaN (node positions not finite)
+        for (int c : node.child)
+          if (c >= 0) {
+            next = c;
+            break;
+          }
       n = next;
     }
     for (int i = t.nodes[n].begin; i < t.nodes[n].end; ++i) {
@@ -189,6 +203,24 @@ int nearest(const Octree& t, const Positions& V, const Vec3& q, double* d2) {
 int linear_nearest(const Positions& V, const Vec3& q, double* d2) {
   int best = -1;
   double bd = std::numeric_limits<double>::infinity();
+  if (d2) *d2 = bd;
+  if (!q.allFinite()) return -1;
+  const double m = q.cwiseAbs().maxCoeff();
+  if (m > 1e150) {
+    // A far query: |V_i - q|^2 = |q|^2 + (|V_i|^2 - 2 V_i.q) overflows, but the bracket orders
+    // the nodes the same way; it is compared scaled by 1/m so that nothing overflows.
+    const Vec3 qs = q / m;
+    for (int p = 0; p < V.rows(); ++p) {
+      const Vec3 v = V.row(p).transpose();
+      const double k = v.squaredNorm() / m - 2.0 * v.dot(qs);
+      if (k < bd) {
+        bd = k;
+        best = p;
+      }
+    }
+    if (d2 && best >= 0) *d2 = (V.row(best).transpose() - q).squaredNorm();  // inf if > DBL_MAX
+    return best;
+  }
   for (int p = 0; p < V.rows(); ++p) {
     const double d = (V.row(p).transpose() - q).squaredNorm();
     if (d < bd) {

@@ -41,9 +41,12 @@ struct Octree {
 Octree build_octree(const Positions& V, int max_depth, int max_points_per_leaf);
 // Recomputes every node's tight box from the current positions V (same #V as at build).
 void refit(Octree& tree, const Positions& V);
-// Nearest node to q (index), its squared distance in *d2 when given. -1 for an empty set.
+// Nearest node to q (index), its squared distance in *d2 when given (m^2). -1 (and *d2 = inf)
+// for an empty set or a query that is not finite (NaN, +-inf): callers must handle -1. A finite
+// but huge query (|q| up to DBL_MAX) still gets its exact nearest node; *d2 is then inf when the
+// squared distance overflows.
 int nearest(const Octree& tree, const Positions& V, const Vec3& q, double* d2 = nullptr);
-// The baseline: one pass over all nodes.
+// The baseline: one pass over all nodes. Same contract for empty sets and non-finite queries.
 int linear_nearest(const Positions& V, const Vec3& q, double* d2 = nullptr);
 // The leaf (octant) holding node i and the nodes it holds.
 inline int leaf_of(const Octree& tree, int i) {

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "engine/mesh/generate.hpp"
@@ -86,4 +88,37 @@ TEST(Octree, TiesResolveToSmallestIndexLikeLinear) {
   EXPECT_EQ(linear_nearest(V, Vec3::Zero()), 0);
   Positions E(0, 3);
   EXPECT_EQ(nearest(build_octree(E, 4, 1), E, Vec3::Zero()), -1);
+}
+
+// Device glitches (issue 10): a NaN/inf query used to loop forever or read nodes[-1]; a +-1e300
+// query overflowed every squared distance to inf.
+TEST(Octree, NonFiniteQueryReturnsMinusOneAndHugeQueryStaysExact) {
+  std::mt19937_64 rng(3);
+  Positions P = random_points(3000, rng);
+  Octree t = build_octree(P, 8, 4);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (Vec3 q : {Vec3(nan, 0, 0), Vec3(0, inf, 0), Vec3(0, 0, -inf), Vec3(nan, nan, nan)}) {
+    double d2 = 0;
+    EXPECT_EQ(nearest(t, P, q, &d2), -1);
+    EXPECT_TRUE(std::isinf(d2));
+    EXPECT_EQ(linear_nearest(P, q), -1);
+  }
+  Eigen::Index ixmax, ixmin, izmin;
+  P.col(0).maxCoeff(&ixmax);
+  P.col(0).minCoeff(&ixmin);
+  P.col(2).minCoeff(&izmin);
+  double d2 = 0;
+  EXPECT_EQ(nearest(t, P, Vec3(1e300, 0, 0), &d2), ixmax);
+  EXPECT_TRUE(std::isinf(d2));  // (1e300)^2 overflows; the index is still exact
+  EXPECT_EQ(nearest(t, P, Vec3(-1e300, 0, 0)), ixmin);
+  EXPECT_EQ(nearest(t, P, Vec3(0, 0, -1.7e308)), izmin);
+  EXPECT_EQ(nearest(t, P, Vec3(1e300, 1e300, 0)), linear_nearest(P, Vec3(1e300, 1e300, 0)));
+  // 1e150 is far but its squares are finite: the ordinary path. Every distance rounds to the
+  // same double there (0.1 m is lost next to 1e150 m), so any node is right; it must be a node,
+  // the one linear_nearest gives, with a finite distance.
+  const int i150 = nearest(t, P, Vec3(1e150, 0, 0), &d2);
+  EXPECT_EQ(i150, linear_nearest(P, Vec3(1e150, 0, 0)));
+  EXPECT_GE(i150, 0);
+  EXPECT_TRUE(std::isfinite(d2));
 }

@@ -1,0 +1,35 @@
+#pragma once
+// Text from user files (ids, names, paths) shown on a terminal: control characters are written
+// as escapes (\x1b, \u009b) so that an escape sequence in a name can never recolour, move the
+// cursor of, or retitle the researcher's terminal. Newlines and tabs are kept when asked to (for
+// whole multi-line outputs); printable text and other UTF-8 pass unchanged.
+#include <cstdio>
+#include <string>
+#include <string_view>
+
+namespace palplab {
+
+inline std::string escape_controls(std::string_view s, bool keep_newlines = true) {
+  std::string out;
+  out.reserve(s.size());
+  char buf[8];
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if ((c == '\n' || c == '\t') && keep_newlines) {
+      out += static_cast<char>(c);
+    } else if (c < 0x20 || c == 0x7f) {
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else if (c == 0xC2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) >= 0x80 &&
+               static_cast<unsigned char>(s[i + 1]) <= 0x9F) {  // C1 controls (U+0080..U+009F)
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned char>(s[i + 1]));
+      out += buf;
+      ++i;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
+}  // namespace palplab

@@ -1,0 +1,505 @@
+// Issue 10, "Hard cases": every reproduced file/JSON/database case, run through the palplab
+// binary. Each must end in exit 2 with a located message (or, where the issue says so, exit 0
+// with a clear warning) — never a signal, a hang or exit 3.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "results/store.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code = -1;   // exit status; -1 when killed by a signal
+  int signal = 0;  // the signal, if any
+  std::string out, err;
+  double seconds = 0;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void spit(const fs::path& p, const std::string& s) {
+  std::ofstream(p, std::ios::binary) << s;
+}
+
+fs::path tmp(const std::string& name) {
+  auto d = fs::temp_directory_path() / ("palplab_hard_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// Runs palplab with a 60 s limit (`timeout` turns a hang into a failure, not a stuck suite),
+// prefixed by `as` (e.g. runuser) when given.
+Result cli_as(const std::string& as, const std::string& args, const fs::path& dir) {
+  Result r;
+  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
+  // The repository's prototypes are found last (after the test's own copies in `dir`).
+  std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
+                    "/prototypes timeout -s KILL 60 " + as + std::string(PALPLAB_BINARY) + " " +
+                    args + " >" + out.string() + " 2>" + err.string();
+  const auto t0 = std::chrono::steady_clock::now();
+  int st = std::system(cmd.c_str());
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  if (WIFSIGNALED(st)) r.signal = WTERMSIG(st);
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+Result cli(const std::string& args, const fs::path& dir) {
+  return cli_as("", args, dir);
+}
+
+bool has(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+#define EXPECT_EXIT2_WITH(r, part)                                                       \
+  do {                                                                                   \
+    EXPECT_EQ((r).code, 2) << (r).err << (r).out;                                        \
+    EXPECT_TRUE(has((r).err, part)) << "expected \"" << (part) << "\" in:\n" << (r).err; \
+  } while (0)
+
+std::string src(const std::string& rel) {
+  return (fs::path(PALPLAB_SOURCE_DIR) / rel).string();
+}
+
+// A small valid study on prototypes A and B with `body` spliced into the top-level object.
+const std::string kGroups = R"([{"id": "G1", "prototype": "A", "size": 1},
+                                {"id": "G2", "prototype": "B", "size": 1}])";
+
+std::string study(const std::string& groups = kGroups, const std::string& extra = "",
+                  double duration = 0.05) {
+  std::ostringstream s;
+  s << R"({"palplab_study": 1, "id": "hard", "title": "hard cases", "seed": 1,)" << extra << R"(
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": )"
+    << groups << R"(,
+  "phases": [{"id": "pre", "kind": "pre_training", "session_duration": )"
+    << duration << R"(, "start": {"day": 0}},
+             {"id": "post", "kind": "post_training", "sessions": 2, "session_duration": )"
+    << duration << R"(, "start": {"after_previous": {"minutes": 1}}, "gap": {"minutes": 1}}]})";
+  return s.str();
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------- JSON
+
+TEST(HardJson, DeepNestingIsALocatedErrorNotACrash) {
+  auto d = tmp("deep");
+  spit(d / "deep.json", std::string(200000, '[') + std::string(200000, ']'));
+  Result r = cli("validate " + (d / "deep.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "deep.json:1:65: invalid JSON: nested deeper than 64 levels");
+  // Inside a valid study too.
+  std::string s = study();
+  s.insert(s.find("\"task\""),
+           "\"description\": " + std::string(5000, '[') + std::string(5000, ']') + ",");
+  spit(d / "deep2.json", s);
+  r = cli("validate " + (d / "deep2.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "nested deeper than 64 levels");
+}
+
+TEST(HardJson, IntegersThatWouldWrapAreRangeErrors) {
+  auto d = tmp("wrap");
+  for (const char* size : {"4294967296", "4294967297", "18446744073709551615",
+                           "18446744073709551616", "-9223372036854775809"}) {
+    std::string s = study(std::string(R"([{"id": "G1", "prototype": "A", "size": )") + size +
+                          R"(}, {"id": "G2", "prototype": "B", "size": 1}])");
+    spit(d / "study.json", s);
+    Result r = cli("validate " + (d / "study.json").string(), d);
+    EXPECT_EQ(r.code, 2) << size << ": " << r.err << r.out;
+    EXPECT_TRUE(has(r.err, "$.groups[0].size:")) << size << ": " << r.err;
+    EXPECT_FALSE(has(r.out, "0 participants")) << r.out;
+  }
+  // The same for prototype integers (mesh vertices).
+  std::string a = slurp(src("prototypes/A.json"));
+  a.replace(a.find("\"vertices\": 1500"), 16, "\"vertices\": 4294968796");
+  spit(d / "A.json", a);
+  spit(d / "study.json", study());
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.mesh.vertices: value 4294968796 out of range");
+}
+
+TEST(HardJson, HugeNumberIsExitTwoNotThree) {
+  auto d = tmp("1e400");
+  std::string s = study();
+  s.replace(s.find("\"seed\": 1"), 9, "\"seed\": 1e400");
+  spit(d / "study.json", s);
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "study.json:1:");
+  EXPECT_TRUE(has(r.err, "number 1e400 is out of range")) << r.err;
+  s = study(kGroups, "", 0.05);
+  s.replace(s.find("\"session_duration\": 0.05"), 24, "\"session_duration\": -1e400");
+  spit(d / "study.json", s);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "number -1e400 is out of range");
+  // An absurd but finite duration is a range error, not a run that never ends.
+  s = study(kGroups, "", 1e300);
+  spit(d / "study.json", s);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.phases[0].session_duration: expected a duration in s > 0 and at most");
+}
+
+TEST(HardJson, AbsurdStartPositionFailsValidateWithItsRange) {
+  auto d = tmp("start");
+  std::string a = slurp(src("prototypes/A.json"));
+  a.replace(a.find("\"haptic_step\""), 0, "\"start_position\": [0, -1e200, 0.1], ");
+  spit(d / "A.json", a);
+  spit(d / "study.json", study());
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "A.json:");
+  EXPECT_TRUE(has(r.err,
+                  "$.start_position[1]: value -1e+200 out of range: expected the device "
+                  "start position (m) in [-10.0, 10.0]"))
+      << r.err;
+  EXPECT_LT(r.seconds, 30);
+}
+
+TEST(HardJson, StudyAndPrototypeWordErrorsTheSameWay) {
+  auto d = tmp("wording");
+  std::string a = slurp(src("prototypes/A.json"));
+  a.replace(a.find("\"haptic_step\""), 0, "\"colour\": 1, ");
+  spit(d / "A.json", a);
+  std::string s = study();
+  s.replace(s.find("\"seed\": 1,"), 10, "\"seed\": 1, \"colour\": 1,");
+  spit(d / "study.json", s);
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EQ(r.code, 2);
+  // One wording for both files: FILE:LINE:COL: $.colour: unknown key "colour"; expected one of:
+  for (const char* f : {"study.json:", "A.json:"}) {
+    const auto at = r.err.find(f);
+    ASSERT_NE(at, std::string::npos) << r.err;
+    const std::string line = r.err.substr(at, r.err.find('\n', at) - at);
+    EXPECT_TRUE(has(line, ": $.colour: unknown key \"colour\"")) << line;
+    EXPECT_TRUE(has(line, "; expected one of: ")) << line;
+  }
+}
+
+TEST(HardJson, ValidateTimeIsLinearInTheNumberOfGroups) {
+  // 4000 groups took minutes when every value's line/column was found by rescanning the text.
+  auto d = tmp("groups");
+  std::string g = "[";
+  for (int i = 0; i < 4000; ++i)
+    g += std::string(i ? "," : "") + "\n{\"id\": \"G" + std::to_string(i) +
+         "\", \"prototype\": \"A\", \"size\": 1}";
+  g += "]";
+  std::string s = study(g);
+  s.replace(s.find("\"seed\": 1,"), 10, "\"seed\": 1, \"sed\": 1,");  // one error: no plan
+  spit(d / "study.json", s);
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.sed: unknown key");
+  EXPECT_LT(r.seconds, 10) << "validate of 4000 groups";
+}
+
+// ------------------------------------------------------------------------------------- meshes
+
+namespace {
+
+// A closed sphere surface as OBJ text (from palplab itself).
+std::string sphere_obj(const fs::path& d) {
+  EXPECT_EQ(cli("mesh generate sphere --vertices 162 --out " + (d / "s.obj").string(), d).code, 0);
+  return slurp(d / "s.obj");
+}
+
+void expect_no_crash_tet(const fs::path& d, const fs::path& in, const std::string& part) {
+  Result r = cli("mesh tetrahedralize " + in.string() + " --out " + (d / "out").string(), d);
+  EXPECT_EQ(r.signal, 0) << in;
+  EXPECT_EXIT2_WITH(r, part);
+}
+
+}  // namespace
+
+TEST(HardMesh, TetrahedralizeRejectsBrokenSurfacesWithoutDying) {
+  auto d = tmp("tet");
+  const std::string obj = sphere_obj(d);
+  // Empty OBJ, an OBJ with vertices only.
+  spit(d / "empty.obj", "");
+  expect_no_crash_tet(d, d / "empty.obj", "empty.obj: no geometry");
+  spit(d / "points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  expect_no_crash_tet(d, d / "points.obj", "no geometry");
+  // A duplicated face.
+  const auto f = obj.find("\nf ");
+  const std::string face = obj.substr(f, obj.find('\n', f + 1) - f);
+  spit(d / "dupface.obj", obj + face.substr(1) + "\n");
+  expect_no_crash_tet(d, d / "dupface.obj", "cannot tetrahedralize: the surface has");
+  // Coincident triangles: a second triangle on new vertices at the same place as face 1.
+  {
+    std::istringstream fs(face.substr(3));
+    int a, b, c;
+    fs >> a >> b >> c;
+    std::istringstream all(obj);
+    std::vector<std::string> v;
+    for (std::string l; std::getline(all, l);)
+      if (l.rfind("v ", 0) == 0) v.push_back(l);
+    const int n = static_cast<int>(v.size());
+    spit(d / "coincident.obj", obj + v[a - 1] + "\n" + v[b - 1] + "\n" + v[c - 1] + "\nf " +
+                                   std::to_string(n + 1) + " " + std::to_string(n + 2) + " " +
+                                   std::to_string(n + 3) + "\n");
+    expect_no_crash_tet(d, d / "coincident.obj", "cannot tetrahedralize: the surface has");
+  }
+  // NaN coordinates.
+  std::string nan = obj;
+  nan.replace(nan.find("\nv ") + 3, 0, "nan ");
+  nan.erase(nan.find("nan ") + 4, nan.find(' ', nan.find("nan ") + 4) - nan.find("nan ") - 4 + 1);
+  spit(d / "nan.obj", nan);
+  Result r =
+      cli("mesh tetrahedralize " + (d / "nan.obj").string() + " --out " + (d / "out").string(), d);
+  EXPECT_EQ(r.signal, 0);
+  EXPECT_EQ(r.code, 2) << r.err;
+  // A degenerate (flat) closed surface: two triangles on top of each other.
+  spit(d / "flat.off",
+       "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 0 2 1\n3 1 3 2\n3 1 2 3\n");
+  expect_no_crash_tet(d, d / "flat.off", "cannot tetrahedralize");
+  // Out-of-range indices.
+  spit(d / "index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99\n");
+  expect_no_crash_tet(d, d / "index.obj", "index.obj:4:");
+}
+
+TEST(HardMesh, BitFlippedBinaryStlNeverKillsPalplab) {
+  auto d = tmp("stl");
+  ASSERT_EQ(
+      cli("mesh generate sphere --vertices 162 --out " + (d / "s.stl").string() + " --binary", d)
+          .code,
+      0);
+  const std::string good = slurp(d / "s.stl");
+  ASSERT_GT(good.size(), 200u);
+  int refused = 0;
+  // Flip single bits in the count, in coordinates (exponent bits make huge/NaN values) and in
+  // the attribute bytes.
+  for (std::size_t off : {80ul, 83ul, 84ul + 12 + 3, 84ul + 12 + 7, 84ul + 50 + 24 + 3,
+                          good.size() - 2, good.size() / 2 + 3, good.size() / 3 + 11}) {
+    for (int bit : {6, 7}) {
+      std::string bad = good;
+      bad[off] = static_cast<char>(bad[off] ^ (1 << bit));
+      spit(d / "flip.stl", bad);
+      Result r = cli(
+          "mesh tetrahedralize " + (d / "flip.stl").string() + " --out " + (d / "out").string(), d);
+      EXPECT_EQ(r.signal, 0) << "offset " << off << " bit " << bit;
+      EXPECT_TRUE(r.code == 0 || r.code == 2) << "offset " << off << " bit " << bit << r.err;
+      if (r.code == 2) {
+        ++refused;
+        EXPECT_FALSE(r.err.empty());
+      }
+      Result c = cli("mesh check " + (d / "flip.stl").string(), d);
+      EXPECT_TRUE(c.code == 0 || c.code == 1 || c.code == 2) << c.err;
+    }
+  }
+  EXPECT_GT(refused, 0);
+}
+
+TEST(HardMesh, ObjWithoutGeometryFailsCheckAndValidate) {
+  auto d = tmp("emptyobj");
+  spit(d / "organ.obj", "# nothing here\ng body\n");
+  Result r = cli("mesh check " + (d / "organ.obj").string(), d);
+  EXPECT_EXIT2_WITH(r, "organ.obj: no geometry");
+  std::string a = slurp(src("prototypes/A.json"));
+  const std::string gen = "{\"generator\": \"tract\", \"vertices\": 1500, \"seed\": 0}";
+  a.replace(a.find(gen), gen.size(), "{\"file\": \"organ.obj\"}");
+  spit(d / "A.json", a);
+  spit(d / "study.json", study());
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "organ.obj: no geometry");
+}
+
+namespace {
+
+// A surface VTU written by palplab, with its regions (Model-A).
+std::string tract_vtu(const fs::path& d) {
+  Result r = cli("mesh generate model-a --out " + (d / "a.vtu").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  return slurp(d / "a.vtu");
+}
+
+// Replaces the first value of the DataArray named `name`.
+std::string set_first(std::string vtu, const std::string& name, const std::string& value) {
+  auto p = vtu.find("Name=\"" + name + "\"");
+  EXPECT_NE(p, std::string::npos) << name;
+  p = vtu.find('>', p) + 1;
+  while (std::isspace(static_cast<unsigned char>(vtu[p]))) ++p;
+  const auto e = vtu.find_first_of(" \n", p);
+  return vtu.replace(p, e - p, value);
+}
+
+}  // namespace
+
+TEST(HardMesh, RepairOfAHugeRegionIdIsAnError) {
+  auto d = tmp("region");
+  const std::string vtu = tract_vtu(d);
+  for (const char* id : {"1000000000", "1e9", "-5", "nan", "2.5"}) {
+    spit(d / "r.vtu", set_first(vtu, "region", id));
+    Result r =
+        cli("mesh repair " + (d / "r.vtu").string() + " --out " + (d / "fixed.obj").string(), d);
+    EXPECT_EQ(r.signal, 0) << id;
+    EXPECT_EXIT2_WITH(r, "r.vtu");
+    EXPECT_TRUE(has(r.err, "region id")) << id << ": " << r.err;
+  }
+}
+
+TEST(HardMesh, NanCoordinatesAreReportedByCheck) {
+  auto d = tmp("nan");
+  const std::string vtu = tract_vtu(d);
+  auto p = vtu.find("<Points>");
+  p = vtu.find('>', vtu.find("<DataArray", p)) + 1;
+  while (std::isspace(static_cast<unsigned char>(vtu[p]))) ++p;
+  std::string bad = vtu;
+  bad.replace(p, bad.find(' ', p) - p, "nan");
+  spit(d / "nan.vtu", bad);
+  Result r = cli("mesh check " + (d / "nan.vtu").string() + " --json", d);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_TRUE(has(r.out, "\"non_finite_vertex\": 1")) << r.out;
+  r = cli("mesh tetrahedralize " + (d / "nan.vtu").string() + " --out " + (d / "t").string(), d);
+  EXPECT_EXIT2_WITH(r, "vertex 0 has a coordinate that is not a finite number");
+  r = cli("mesh repair " + (d / "nan.vtu").string() + " --out " + (d / "f.obj").string(), d);
+  EXPECT_EXIT2_WITH(r, "cannot repair: vertex 0");
+}
+
+TEST(HardMesh, TetGenTimeoutIsAnErrorNotAHang) {
+  auto d = tmp("timeout");
+  ASSERT_EQ(cli("mesh generate sphere --vertices 2562 --out " + (d / "s.obj").string(), d).code, 0);
+  // A tiny max volume makes TetGen work for long; the limit stops it.
+  Result r = cli("mesh tetrahedralize " + (d / "s.obj").string() + " --out " + (d / "t").string() +
+                     " --max-volume 1e-12 --timeout 0.5",
+                 d);
+  EXPECT_EXIT2_WITH(r, "TetGen did not finish within 0.5 s");
+  EXPECT_LT(r.seconds, 20);
+}
+
+// ------------------------------------------------------------------------------------- DB
+
+namespace {
+
+fs::path incomplete_db(const fs::path& d) {
+  spit(d / "study.json", study());
+  const fs::path db = d / "r.db";
+  Result r = cli(
+      "run " + (d / "study.json").string() + " --db " + db.string() + " --max-sessions 1 --quiet",
+      d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  return db;
+}
+
+}  // namespace
+
+TEST(HardDb, SecondWriterIsToldTheDatabaseIsInUse) {
+  auto d = tmp("inuse");
+  const fs::path db = incomplete_db(d);
+  // This process holds the writer's lock as a running `run --resume` would.
+  palplab::results::Store writer = palplab::results::Store::open(db.string(), true);
+  Result r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --resume", d);
+  EXPECT_EXIT2_WITH(r, "the database is in use by another palplab process");
+  r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --force", d);
+  EXPECT_EXIT2_WITH(r, "in use");
+  // Readers still work while it is written.
+  EXPECT_EQ(cli("export " + db.string() + " --csv " + (d / "csv").string(), d).code, 0);
+}
+
+TEST(HardDb, ForceReplacesOnlyAPalplabDatabase) {
+  auto d = tmp("force");
+  spit(d / "study.json", study());
+  spit(d / "notes.txt", "my thesis, chapter 3\n");
+  Result r = cli("run " + (d / "study.json").string() + " --db " + (d / "notes.txt").string() +
+                     " --force --quiet",
+                 d);
+  EXPECT_EXIT2_WITH(r, "refusing to replace it: not a palplab results database");
+  EXPECT_EQ(slurp(d / "notes.txt"), "my thesis, chapter 3\n");
+  fs::create_directories(d / "somedir");
+  r = cli("run " + (d / "study.json").string() + " --db " + (d / "somedir").string() +
+              " --force --quiet",
+          d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(fs::is_directory(d / "somedir"));
+  // A palplab database is replaced.
+  const fs::path db = incomplete_db(d);
+  r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --force --quiet", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
+  // Root ignores permissions: as root, palplab runs as "nobody" for this test (runuser).
+  std::string as = "";
+  if (geteuid() == 0) {
+    if (std::system("runuser -u nobody -- true 2>/dev/null") != 0)
+      GTEST_SKIP() << "root ignores directory permissions and runuser is not available";
+    as = "runuser -u nobody -- ";
+  }
+  auto d = tmp("ro");
+  const fs::path db = incomplete_db(d);
+  fs::create_directories(d / "ro");
+  fs::copy_file(db, d / "ro" / "r.db");
+  fs::create_directories(d / "out");
+  ::chmod((d / "out").c_str(), 0777);  // where "nobody" writes stdout/stderr and the CSVs
+  ::chmod((d / "ro").c_str(), 0555);
+  Result r = cli_as(
+      as,
+      "run " + (d / "study.json").string() + " --db " + (d / "ro" / "r.db").string() + " --resume",
+      d / "out");
+  EXPECT_EXIT2_WITH(r, "is read-only");
+  EXPECT_FALSE(has(r.err, "not a palplab")) << r.err;
+  // Reading from a read-only place works (an archived run).
+  r = cli_as(as,
+             "export " + (d / "ro" / "r.db").string() + " --csv " + (d / "out" / "csv").string(),
+             d / "out");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(d / "out" / "csv" / "measures.csv"));
+  ::chmod((d / "ro").c_str(), 0755);
+}
+
+TEST(HardDb, ReportAndExportOfAnIncompleteDatabaseSaySo) {
+  auto d = tmp("incomplete");
+  const fs::path db = incomplete_db(d);
+  Result r = cli("report " + db.string() + " --out " + (d / "rep").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "is INCOMPLETE")) << r.err;
+  r = cli("export " + db.string() + " --csv " + (d / "csv").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "is INCOMPLETE")) << r.err;
+}
+
+TEST(HardDb, MeshFileChangedBetweenRunAndResumeIsRefused) {
+  auto d = tmp("meshpin");
+  ASSERT_EQ(cli("mesh generate model-a --out " + (d / "organ.obj").string(), d).code, 0);
+  std::string a = slurp(src("prototypes/A.json"));
+  const std::string gen = "{\"generator\": \"tract\", \"vertices\": 1500, \"seed\": 0}";
+  a.replace(a.find(gen), gen.size(), "{\"file\": \"organ.obj\"}");
+  spit(d / "A.json", a);
+  const fs::path db = incomplete_db(d);
+  std::ofstream(d / "organ.obj", std::ios::app) << "# edited after the run started\n";
+  Result r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --resume", d);
+  EXPECT_EXIT2_WITH(r, "differs from the file the run started with, or its mesh.file does");
+}
+
+TEST(HardDb, EscapeSequencesInNamesAreNeverEchoedRaw) {
+  auto d = tmp("esc");
+  const std::string esc = "\\u001b]0;pwned\\u0007\\u001b[31m";
+  // In a valid study: the plan summary shows the group id escaped.
+  std::string s = study(R"([{"id": "G)" + esc + R"(", "prototype": "A", "size": 1},
+                           {"id": "G2", "prototype": "B", "size": 1}])");
+  spit(d / "study.json", s);
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.out, "\x1b")) << r.out;
+  EXPECT_TRUE(has(r.out, "\\x1b[31m")) << r.out;
+  // In an error message: an unknown key with escapes.
+  s.replace(s.find("\"seed\": 1,"), 10, "\"seed\": 1, \"k" + esc + "\": 1,");
+  spit(d / "study.json", s);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(has(r.err, "\x1b")) << r.err;
+  EXPECT_FALSE(has(r.err, "\x07")) << r.err;
+  EXPECT_TRUE(has(r.err, "\\x1b]0;pwned\\x07")) << r.err;
+}

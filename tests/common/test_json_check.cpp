@@ -1,0 +1,102 @@
+// The one JSON validator (common/json_check.hpp) and the hardened parser (json_locate).
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "common/escape.hpp"
+#include "common/json_check.hpp"
+
+using namespace palplab;
+using Json = nlohmann::json;
+namespace pj = palplab::json;
+using palplab::json::Checker;
+
+namespace {
+
+// The problems a check function finds on `text` (parsed with the hardened parser).
+template <class F>
+std::vector<Problem> problems(const std::string& text, F&& f) {
+  const Json j = pj::parse_located(text, "t.json");
+  Checker c("t.json", text);
+  f(c, j);
+  return c.problems();
+}
+
+std::string located_error(const std::string& text) {
+  try {
+    pj::parse_located(text, "t.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(JsonCheck, IntegersOutsideTheirRangeNeverWrap) {
+  for (const char* v : {"4294967296", "18446744073709551615", "18446744073709551616",
+                        "-9223372036854775808", "1e3", "3.0", "-1"}) {
+    auto ps = problems(std::string("{\"n\": ") + v + "}", [](Checker& c, const Json& j) {
+      EXPECT_FALSE(c.integer(j, "$", "n", true, 1, 100000, "a group size").has_value());
+    });
+    ASSERT_EQ(ps.size(), 1u) << v;
+    EXPECT_EQ(ps[0].where.json_path, "$.n");
+    EXPECT_EQ(ps[0].where.line, 1);
+    EXPECT_EQ(ps[0].where.column, 7);
+    EXPECT_NE(ps[0].what.find("a group size in [1, 100000]"), std::string::npos) << ps[0].what;
+  }
+  auto ok = problems("{\"n\": 100000}", [](Checker& c, const Json& j) {
+    EXPECT_EQ(c.integer(j, "$", "n", true, 1, 100000, "a group size"), 100000);
+  });
+  EXPECT_TRUE(ok.empty());
+}
+
+TEST(JsonCheck, NumbersAreFiniteAndInRange) {
+  auto ps = problems("{\"x\": -1e200, \"y\": \"1\"}", [](Checker& c, const Json& j) {
+    EXPECT_FALSE(c.number(j, "$", "x", true, -10, 10, "a position (m)"));
+    EXPECT_FALSE(c.number(j, "$", "y", true, -10, 10, "a position (m)"));
+    EXPECT_FALSE(c.number(j, "$", "z", true, -10, 10, "a position (m)"));
+  });
+  ASSERT_EQ(ps.size(), 3u);
+  EXPECT_EQ(
+      ps[0].format(),
+      "t.json:1:7: $.x: value -1e+200 out of range: expected a position (m) in [-10.0, 10.0]");
+  EXPECT_EQ(ps[1].format(), "t.json:1:20: $.y: expected a number: a position (m), got a string");
+  EXPECT_EQ(ps[2].format(), "t.json:1:1: $: missing required key \"z\" (a position (m))");
+  auto v = problems("{\"p\": [1, 2, 1e9]}", [](Checker& c, const Json& j) {
+    EXPECT_FALSE(c.vec3(j, "$", "p", true, -10, 10, "the start (m)"));
+  });
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_EQ(v[0].where.json_path, "$.p[2]");
+}
+
+TEST(JsonCheck, UnknownKeysAreErrorsAtTheKeyWithAHint) {
+  auto ps = problems("{\n  \"sede\": 1}", [](Checker& c, const Json& j) {
+    c.keys(j, "$", {"seed", "id"});
+  });
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_EQ(ps[0].format(),
+            "t.json:2:3: $.sede: unknown key \"sede\" (did you mean \"seed\"?); expected one of: "
+            "seed, id");
+}
+
+TEST(JsonParse, HostileTextIsALocatedError) {
+  EXPECT_EQ(located_error(std::string(100, '[') + std::string(100, ']')),
+            "t.json:1:65: invalid JSON: nested deeper than 64 levels (palplab files need a few)");
+  EXPECT_EQ(located_error(std::string(64, '[') + std::string(64, ']')), "");
+  EXPECT_NE(located_error("{\"a\":\n [1e400]}").find("t.json:2:3: number 1e400 is out of range"),
+            std::string::npos);
+  EXPECT_NE(located_error("{\"a\": -1e999}").find("t.json:1:7:"), std::string::npos);
+  EXPECT_EQ(located_error("{\"a\": \"1e400 [[[[\"}"), "");  // inside a string: just text
+  EXPECT_EQ(located_error("{\"a\": 1e-400}"), "");          // underflow is 0, not an error
+}
+
+TEST(Escape, ControlCharactersAreShownEscaped) {
+  EXPECT_EQ(escape_controls("G\x1b[31mred\x07\n"), "G\\x1b[31mred\\x07\n");
+  EXPECT_EQ(escape_controls("a\nb", false), "a\\x0ab");
+  EXPECT_EQ(escape_controls("\xc2\x9b"
+                            "2J ovary \xc3\xa9"),
+            "\\u009b2J ovary \xc3\xa9");
+  Problem p{{"s\x1b.json", 1, 1, -1, "$.id"}, "bad \x1b]0;title\x07"};
+  EXPECT_EQ(p.format(), "s\\x1b.json:1:1: $.id: bad \\x1b]0;title\\x07");
+}
