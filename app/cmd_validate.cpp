@@ -20,6 +20,13 @@ palplab::app::CommandRegistration reg{
         Study s = load_study(*study, engine_prototype_inspector());
         Plan p = make_plan(s);
         std::cout << plan_summary(s, p) << "valid: " << *study << "\n";
+        // Valid but questionable: pooling repeated sessions as independent observations.
+        for (std::size_t i = 0; i < s.analyses.size(); ++i)
+          if (s.analyses[i].pooled && s.analyses[i].pool_sessions)
+            std::cerr << *study << ": warning: $.analyses[" << i << "]: pool_sessions: true treats "
+                      << "every session of a participant as an independent observation "
+                      << "(pseudo-replication: df and p-values overstate the evidence); "
+                      << "participant means (the default) or `palplab lmm` are valid\n";
         *code = 0;
       });
     }};

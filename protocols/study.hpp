@@ -81,6 +81,10 @@ struct Analysis {
   std::string phase;    // phase id whose sessions are analysed
   bool welch = true;    // pairwise_t: unequal variances (MINITAB default)
   bool pooled = false;  // pool all sessions of the phase (experiment 1) instead of the last one
+  // pooled: participant means by default; true treats every session as an independent
+  // observation (pseudo-replication; `validate` and the report warn)
+  bool pool_sessions = false;
+  double margin = 0.0;  // equivalence margin ± in the measure's unit; 0 = the report's default
 };
 
 struct Study {

@@ -605,7 +605,7 @@ Study parse_study(const std::string& text, const std::string& file,
         std::string A = path_index("$.analyses", i);
         const json& aj = (*an)[i];
         if (!c.object(aj, A)) continue;
-        c.keys(aj, A, {"kind", "measure", "phase", "welch", "pooled"});
+        c.keys(aj, A, {"kind", "measure", "phase", "welch", "pooled", "pool_sessions", "margin"});
         Analysis a;
         if (auto v = c.one_of(aj, A, "kind", true, {"anova_oneway", "pairwise_t", "descriptives"}))
           a.kind = *v;
@@ -621,6 +621,23 @@ Study parse_study(const std::string& text, const std::string& file,
         }
         if (auto v = c.boolean(aj, A, "welch")) a.welch = *v;
         if (auto v = c.boolean(aj, A, "pooled")) a.pooled = *v;
+        if (auto v = c.boolean(aj, A, "pool_sessions")) {
+          a.pool_sessions = *v;
+          if (*v && !a.pooled)
+            c.err(path_key(A, "pool_sessions"),
+                  "pool_sessions: true needs \"pooled\": true (it says how pooled sessions are "
+                  "analysed)");
+        }
+        if (auto v = c.num(aj, A, "margin", false,
+                           "a positive number (equivalence margin, "
+                           "in the measure's unit)")) {
+          if (*v <= 0)
+            c.err(path_key(A, "margin"),
+                  "expected a positive number (equivalence margin, in the measure's unit), got " +
+                      json(*v).dump());
+          else
+            a.margin = *v;
+        }
         s.analyses.push_back(a);
       }
     }
