@@ -224,19 +224,19 @@ TEST(Study, AnalysisMarginAndPoolSessions) {
     return edit("  ]\n}", "  ],\n  \"analyses\": [\n    " + analysis + "\n  ]\n}");
   };
   std::string f = fixture::study_in_dir(
-      "anaok", with(R"({"kind": "anova_oneway", "measure": "force", "phase": "training", )"
+      "anaok", with(R"({"kind": "anova_oneway", "measure": "palpation_force", "phase": "training", )"
                     R"("pooled": true, "pool_sessions": true, "margin": 0.2})"));
   Study s = load_study(f, fixture::tract_inspector());
   ASSERT_EQ(s.analyses.size(), 1u);
   EXPECT_TRUE(s.analyses[0].pool_sessions);
   EXPECT_DOUBLE_EQ(s.analyses[0].margin, 0.2);
-  expect_one(problems_of("anamargin", with(R"({"kind": "pairwise_t", "measure": "force", )"
+  expect_one(problems_of("anamargin", with(R"({"kind": "pairwise_t", "measure": "palpation_force", )"
                                            R"("phase": "test", "margin": -1})")),
-             "$.analyses[0].margin", 21, "expected a positive number");
-  expect_one(problems_of("anamargin2", with(R"({"kind": "pairwise_t", "measure": "force", )"
+             "$.analyses[0].margin", 22, "expected a positive number");
+  expect_one(problems_of("anamargin2", with(R"({"kind": "pairwise_t", "measure": "palpation_force", )"
                                             R"("phase": "test", "margin": "big"})")),
-             "$.analyses[0].margin", 21, "got a string");
-  expect_one(problems_of("anapool", with(R"({"kind": "pairwise_t", "measure": "force", )"
+             "$.analyses[0].margin", 22, "got a string");
+  expect_one(problems_of("anapool", with(R"({"kind": "pairwise_t", "measure": "palpation_force", )"
                                          R"("phase": "test", "pool_sessions": true})")),
-             "$.analyses[0].pool_sessions", 21, "needs \"pooled\": true");
+             "$.analyses[0].pool_sessions", 22, "needs \"pooled\": true");
 }
