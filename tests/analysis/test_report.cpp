@@ -18,6 +18,7 @@
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "analysis/svg.hpp"
+#include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
 #include "results/store.hpp"
 
@@ -147,7 +148,8 @@ results::StudyStructure fixture_structure() {
   return st;
 }
 
-FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool structure = true) {
+FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool structure = true,
+                       const nlohmann::json& hypotheses = nullptr) {
   FixtureDb f;
   f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
   fs::remove_all(f.dir);
@@ -174,6 +176,7 @@ FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool st
          {"welch", true}},
         {{"kind", "anova_oneway"}, {"measure", "exploration_time"}, {"phase", "post_training"}}}}};
   if (pool_sessions) sj["analyses"][0]["pool_sessions"] = true;
+  if (!hypotheses.is_null()) sj["hypotheses"] = hypotheses;
   auto store = results::Store::create(f.db.string());
   results::StudyRecord st;
   st.study_id = "fixture";
@@ -452,4 +455,54 @@ TEST(Report, WilsonIntervalAndDodgedErrorBars) {
     xs.insert((*it)[1]);
   EXPECT_EQ(bars, 4u);
   EXPECT_EQ(xs.size(), 4u) << svg;
+}
+
+// Declared hypotheses run first, labelled confirmatory, with their own α and correction; the
+// t statistics are those of the two samples (checked against welch_t on the same values); the
+// rest of the report is labelled exploratory. Without hypotheses there is no such label.
+TEST(Report, ConfirmatoryHypothesesFirst) {
+  nlohmann::json hyps = nlohmann::json::array({{{"id", "H1"},
+                                                {"statement", "C presses harder than A"},
+                                                {"measure", "palpation_force"},
+                                                {"phase", "post_training"},
+                                                {"test", "welch_t"},
+                                                {"pairs", nlohmann::json::array({nlohmann::json::array({"C", "A"})})},
+                                                {"alpha", 0.01}},
+                                               {{"id", "H2"},
+                                                {"measure", "palpation_force"},
+                                                {"phase", "post_training"},
+                                                {"test", "tost"},
+                                                {"margins", 5.0},
+                                                {"correction", "bonferroni"}}});
+  FixtureDb f = make_fixture(true, false, true, hyps);
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  std::string md = slurp(files.markdown);
+  const size_t conf = md.find("## Confirmatory analyses (declared hypotheses)");
+  const size_t expl = md.find("## Exploratory analyses");
+  ASSERT_NE(conf, std::string::npos);
+  ASSERT_NE(expl, std::string::npos);
+  EXPECT_LT(conf, expl);
+  EXPECT_LT(expl, md.find("## Analysis: "));
+  EXPECT_NE(md.find("### H1: C presses harder than A"), std::string::npos);
+  TTest t = welch_t(f.post[2], f.post[0]);  // C – A, as declared
+  char row[160];
+  std::snprintf(row, sizeof row, "| C – A | %.4g | %.3f | %.2f |", t.mean_diff, t.t, t.df);
+  EXPECT_NE(md.find(row), std::string::npos) << row << "\n" << md.substr(conf, 1500);
+  EXPECT_NE(md.find("α = 0.01"), std::string::npos);
+  // H2: every pair (3), Bonferroni; a ±5 N margin around differences of < 1 N is equivalent.
+  const size_t h2 = md.find("### H2");
+  ASSERT_NE(h2, std::string::npos);
+  const std::string sec = md.substr(h2, expl - h2);
+  EXPECT_NE(sec.find("p (bonferroni)"), std::string::npos);
+  int eq = 0;
+  for (size_t p = sec.find("| equivalent |"); p != std::string::npos;
+       p = sec.find("| equivalent |", p + 1))
+    ++eq;
+  EXPECT_EQ(eq, 3) << sec;
+  fs::remove_all(f.dir);
+  FixtureDb g = make_fixture();
+  std::string md2 = slurp(write_report(g.db.string(), (g.dir / "report").string()).markdown);
+  EXPECT_EQ(md2.find("Confirmatory"), std::string::npos);
+  EXPECT_EQ(md2.find("Exploratory analyses"), std::string::npos);
+  fs::remove_all(g.dir);
 }
