@@ -19,7 +19,17 @@ palplab::app::CommandRegistration reg{
         using namespace palplab::protocols;
         Study s = load_study(*study, engine_prototype_inspector());
         Plan p = make_plan(s);
-        std::cout << plan_summary(s, p) << "valid: " << *study << "\n";
+        std::cout << plan_summary(s, p);
+        if (!s.hypotheses.empty()) {
+          std::cout << "hypotheses (confirmatory, run first by `palplab report`):";
+          for (const auto& h : s.hypotheses) {
+            std::cout << " " << h.id << "=" << h.test << "(" << h.measure << " @ " << h.phase;
+            for (const auto& [a, b] : h.pairs) std::cout << " " << a << "-" << b;
+            std::cout << ", alpha " << h.alpha << ", " << h.correction << ")";
+          }
+          std::cout << "\n";
+        }
+        std::cout << "valid: " << *study << "\n";
         // Valid but questionable: pooling repeated sessions as independent observations.
         for (std::size_t i = 0; i < s.analyses.size(); ++i)
           if (s.analyses[i].pooled && s.analyses[i].pool_sessions)
