@@ -253,13 +253,18 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
   double pad = markers ? 0.05 * (xhi - xlo) : 0;
   f.x0 = xlo - pad;
   f.x1 = xhi + pad;
-  for (const auto& r : references) {
+  // Labels alternate between the left and the right end so close lines (ST 2.3 N, MPF 2.5 N)
+  // do not print their labels on top of each other.
+  for (size_t ri = 0; ri < references.size(); ++ri) {
+    const auto& r = references[ri];
     if (!std::isfinite(r.y)) continue;
+    const bool right = ri % 2 == 1;
     f.body << "<line x1=\"" << num(f.left) << "\" x2=\"" << num(f.W - f.right) << "\" y1=\""
            << num(f.py(r.y)) << "\" y2=\"" << num(f.py(r.y)) << "\" stroke=\"" << r.colour
-           << "\" stroke-dasharray=\"6 4\"/>\n<text x=\"" << num(f.left + 4) << "\" y=\""
-           << num(f.py(r.y) - 3) << "\" fill=\"" << r.colour << "\">" << xml_escape(r.label)
-           << "</text>\n";
+           << "\" stroke-dasharray=\"6 4\"/>\n<text x=\""
+           << num(right ? f.W - f.right - 4 : f.left + 4) << "\" y=\"" << num(f.py(r.y) - 3) << "\""
+           << (right ? " text-anchor=\"end\"" : "") << " fill=\"" << r.colour << "\">"
+           << xml_escape(r.label) << "</text>\n";
   }
   const double n = static_cast<double>(series.size());
   for (size_t si = 0; si < series.size(); ++si) {
