@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <gsl/gsl_cdf.h>
+
 #include "analysis/distributions.hpp"
 
 namespace palplab::analysis {
@@ -82,6 +84,20 @@ Descriptives describe(const std::vector<double>& x, double offset, double ci_lev
     d.ci_low = d.ci_high = std::numeric_limits<double>::quiet_NaN();
   }
   return d;
+}
+
+ProportionInterval wilson_interval(int k, int n, double level) {
+  ProportionInterval r;
+  if (n <= 0 || k < 0 || k > n) return {NAN, NAN, NAN};
+  const double z = gsl_cdf_ugaussian_Qinv(0.5 * (1 - level));
+  const double p = static_cast<double>(k) / n, z2n = z * z / n;
+  const double centre = (p + 0.5 * z2n) / (1 + z2n);
+  const double half = z / (1 + z2n) * std::sqrt(p * (1 - p) / n + 0.25 * z2n / n);
+  r.p = p;
+  // Clamp only the rounding: the exact bounds are 0 for k = 0 and 1 for k = n.
+  r.low = k == 0 ? 0.0 : std::max(0.0, centre - half);
+  r.high = k == n ? 1.0 : std::min(1.0, centre + half);
+  return r;
 }
 
 }  // namespace palplab::analysis

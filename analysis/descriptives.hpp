@@ -33,4 +33,11 @@ struct Descriptives {
 // caller may pass deviations from a centre (decimal.hpp) and get back the original scale.
 Descriptives describe(const std::vector<double>& x, double offset = 0, double ci_level = 0.95);
 
+// Wilson score interval of a proportion k/n (Wilson 1927): always inside [0, 1], unlike the
+// Wald or t interval, and with near-nominal coverage for small n. n >= 1, 0 <= k <= n.
+struct ProportionInterval {
+  double p = 0, low = 0, high = 0;
+};
+ProportionInterval wilson_interval(int k, int n, double level = 0.95);
+
 }  // namespace palplab::analysis

@@ -9,10 +9,13 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/anova.hpp"
 #include "analysis/descriptives.hpp"
 #include "analysis/distributions.hpp"
+#include "analysis/posthoc.hpp"
 #include "analysis/summary.hpp"
 #include "analysis/svg.hpp"
+#include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
 #include "palplab/version.hpp"
 #include "results/store.hpp"
@@ -117,54 +120,87 @@ std::string slug(const std::string& s) {
   return o;
 }
 
-}  // namespace
+std::string with_unit(const std::string& text, const std::string& unit) {
+  return text + (unit.empty() || unit == "1" ? "" : " (" + unit + ")");
+}
 
-ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
-                         const ReportOptions& options) {
+// Everything the sections read: the store's records and the study structure stored at run time.
+struct Context {
+  std::string db_path, out_dir;
+  ReportOptions options;
+  results::Store store;
+  results::StudyRecord study;
+  results::StudyStructure structure;
+  std::vector<results::ParticipantRecord> participants;
+  std::vector<results::SessionRecord> sessions;
+  std::vector<results::MeasureRow> measures;
+  std::vector<results::PrototypeRecord> prototypes;
+  nlohmann::json declared;  // the stored study JSON: its description and declared analyses only
+  std::vector<std::string> groups, phase_order;
+  std::map<std::string, std::string> unit_of;
+  Doc doc;
+  ReportFiles files;
+
+  int group_index(const std::string& g) const {
+    return static_cast<int>(std::find(groups.begin(), groups.end(), g) - groups.begin());
+  }
+  std::string unit(const std::string& measure) const {
+    auto it = unit_of.find(measure);
+    return it == unit_of.end() ? "" : it->second;
+  }
+  const results::PhaseRecord* phase(const std::string& id) const {
+    for (const auto& p : structure.phases)
+      if (p.phase == id) return &p;
+    return nullptr;
+  }
+  void save_figure(const std::string& name, const std::string& svg, const std::string& caption) {
+    std::ofstream(fs::path(out_dir) / "figures" / name) << svg;
+    files.figures.push_back((fs::path(out_dir) / "figures" / name).string());
+    doc.figure(svg, name, caption);
+  }
+};
+
+Context load(const std::string& db_path, const std::string& out_dir, const ReportOptions& o) {
   if (!fs::exists(db_path)) throw InputError("no such results database", db_path);
-  results::Store store = results::Store::open(db_path);
-  const results::StudyRecord study = store.read_study();
-  const auto participants = store.read_participants();
-  const auto sessions = store.read_sessions();
-  const auto measures = store.read_measures();
-  const auto prototypes = store.read_prototypes();
-
-  nlohmann::json sj;
+  Context c{db_path, out_dir, o, results::Store::open(db_path)};
+  c.structure = c.store.read_structure();
+  // Schema-1 databases (before the structure tables) are refused rather than guessed at: their
+  // phase kinds, cues and thresholds are known only from re-parsing the study file.
+  if (!c.structure.has_structure)
+    throw InputError(
+        "results schema version " + std::to_string(c.store.schema_version()) +
+            " does not store the study structure (phase kinds, cues, thresholds) the report "
+            "needs; re-run the study with this palplab (`palplab run STUDY --db NEW.db`) to get "
+            "a schema-" +
+            std::to_string(results::kSchemaVersion) + " database",
+        db_path);
+  c.study = c.store.read_study();
+  c.participants = c.store.read_participants();
+  c.sessions = c.store.read_sessions();
+  c.measures = c.store.read_measures();
+  c.prototypes = c.store.read_prototypes();
   try {
-    sj = nlohmann::json::parse(study.json);
+    c.declared = nlohmann::json::parse(c.study.json);
   } catch (const std::exception& e) {
     throw InputError(SourceLocation{db_path, 0, 0, -1, "study.json"},
                      std::string("the stored study JSON does not parse: ") + e.what());
   }
-  // Group order: as the study declares them, then any others in participant order.
-  std::vector<std::string> groups;
-  if (sj.contains("groups") && sj["groups"].is_array())
-    for (const auto& g : sj["groups"])
-      if (g.contains("id") && g["id"].is_string()) groups.push_back(g["id"]);
-  std::map<std::string, std::string> group_of;
-  for (const auto& p : participants) {
-    group_of[p.participant] = p.group;
-    if (std::find(groups.begin(), groups.end(), p.group) == groups.end()) groups.push_back(p.group);
-  }
-  auto group_index = [&](const std::string& g) {
-    return static_cast<int>(std::find(groups.begin(), groups.end(), g) - groups.begin());
-  };
-  std::map<std::string, std::string> unit_of;
-  for (const auto& m : measures) unit_of[m.name] = m.unit;
-  std::vector<std::string> phase_order;
-  std::map<std::string, std::string> phase_kind;
-  if (sj.contains("phases") && sj["phases"].is_array())
-    for (const auto& p : sj["phases"])
-      if (p.contains("id") && p["id"].is_string()) {
-        phase_order.push_back(p["id"]);
-        phase_kind[p["id"]] = p.value("kind", std::string("other"));
-      }
-  for (const auto& s : sessions)
-    if (std::find(phase_order.begin(), phase_order.end(), s.phase) == phase_order.end())
-      phase_order.push_back(s.phase);
+  // Group order: as the study declared them, then any others in participant order.
+  for (const auto& g : c.structure.groups) c.groups.push_back(g.group);
+  for (const auto& p : c.participants)
+    if (std::find(c.groups.begin(), c.groups.end(), p.group) == c.groups.end())
+      c.groups.push_back(p.group);
+  for (const auto& m : c.measures) c.unit_of[m.name] = m.unit;
+  for (const auto& p : c.structure.phases) c.phase_order.push_back(p.phase);
+  for (const auto& s : c.sessions)
+    if (std::find(c.phase_order.begin(), c.phase_order.end(), s.phase) == c.phase_order.end())
+      c.phase_order.push_back(s.phase);
+  return c;
+}
 
-  // The analyses the study declares, merged per (measure, phase, pooled); a study without any
-  // gets ANOVA + pairwise t of every measure in its last phase.
+// The analyses the study declares, merged per (measure, phase, pooled); a study without any
+// gets ANOVA + pairwise t of every measure in its last phase.
+std::vector<Unit> analysis_units(const Context& c) {
   std::vector<Unit> units;
   auto unit_for = [&](const std::string& m, const std::string& ph, bool pooled) -> Unit& {
     for (auto& u : units)
@@ -172,6 +208,7 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     units.push_back({m, ph, pooled, true, {}});
     return units.back();
   };
+  const auto& sj = c.declared;
   if (sj.contains("analyses") && sj["analyses"].is_array())
     for (const auto& a : sj["analyses"]) {
       Unit& u = unit_for(a.value("measure", std::string()), a.value("phase", std::string()),
@@ -182,289 +219,500 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
       if (a.contains("margin") && a["margin"].is_number() && a["margin"].get<double>() > 0)
         u.margin = a["margin"].get<double>();
     }
-  if (units.empty() && !phase_order.empty()) {
+  if (units.empty() && !c.phase_order.empty()) {
     std::set<std::string> names;
-    for (const auto& m : measures) names.insert(m.name);
+    for (const auto& m : c.measures) names.insert(m.name);
     for (const auto& n : names) {
-      Unit& u = unit_for(n, phase_order.back(), false);
+      Unit& u = unit_for(n, c.phase_order.back(), false);
       u.kinds = {"descriptives", "anova_oneway", "pairwise_t"};
     }
   }
+  return units;
+}
 
-  fs::create_directories(fs::path(out_dir) / "figures");
-  ReportFiles files;
-  Doc doc;
-  auto save_figure = [&](const std::string& name, const std::string& svg, const std::string& cap) {
-    std::ofstream(fs::path(out_dir) / "figures" / name) << svg;
-    files.figures.push_back((fs::path(out_dir) / "figures" / name).string());
-    doc.figure(svg, name, cap);
-  };
+std::string cue_text(const std::optional<bool>& v) {
+  return v ? (*v ? "on" : "off") : "as prototype";
+}
 
-  // ---- Study and provenance
-  doc.md << "# " << study.title << "\n\n";
-  doc.html << "<h1>" << xml_escape(study.title) << "</h1>\n";
-  if (sj.contains("description") && sj["description"].is_string()) doc.para(sj["description"]);
-  if (study.finished_at.empty())
+// ---- Study and provenance, with the phases as run (kind, cues, thresholds)
+void section_provenance(Context& c) {
+  Doc& doc = c.doc;
+  doc.md << "# " << c.study.title << "\n\n";
+  doc.html << "<h1>" << xml_escape(c.study.title) << "</h1>\n";
+  if (c.declared.contains("description") && c.declared["description"].is_string())
+    doc.para(c.declared["description"]);
+  if (c.study.finished_at.empty())
     doc.para(
         "**Warning: INCOMPLETE database.** The run did not finish (study.finished_at is NULL): "
         "sessions or participants may be missing, and every result below is provisional.");
   doc.heading(2, "Study and provenance");
   std::map<std::string, int> per_group;
-  for (const auto& p : participants) per_group[p.group]++;
+  for (const auto& p : c.participants) per_group[p.group]++;
   std::string design;
-  for (const auto& g : groups)
+  for (const auto& g : c.groups)
     design += (design.empty() ? "" : ", ") + g + ": " + std::to_string(per_group[g]);
   std::string phases_text;
-  for (const auto& ph : phase_order) {
+  for (const auto& ph : c.phase_order) {
     int n = 0;
-    for (const auto& s : sessions) n += s.phase == ph;
+    for (const auto& s : c.sessions) n += s.phase == ph;
     phases_text += (phases_text.empty() ? "" : ", ") + ph + " (" + std::to_string(n) + " sessions)";
   }
-  doc.table({"item", "value"},
-            {{"study id", study.study_id},
-             {"study file SHA-256", study.sha256},
-             {"seed", std::to_string(study.seed)},
-             {"run by palplab", study.palplab_version + " (" + study.git_commit + ")"},
-             {"started", study.started_at},
-             {"finished",
-              study.finished_at.empty() ? "INCOMPLETE (run not finished)" : study.finished_at},
-             {"participants per group", design},
-             {"sessions stored", std::to_string(sessions.size()) + " — " + phases_text},
-             {"report by palplab", std::string(kVersion) + " (" + kGitCommit + ")"},
-             {"database", db_path}});
-  if (!prototypes.empty()) {
-    std::vector<std::vector<std::string>> rows;
-    for (const auto& p : prototypes) rows.push_back({p.prototype, p.path, p.sha256});
+  const auto& st = c.study;
+  doc.table(
+      {"item", "value"},
+      {{"study id", st.study_id},
+       {"study file SHA-256", st.sha256},
+       {"seed", std::to_string(st.seed)},
+       {"run by palplab", st.palplab_version + " (" + st.git_commit + ")"},
+       {"started", st.started_at},
+       {"finished", st.finished_at.empty() ? "INCOMPLETE (run not finished)" : st.finished_at},
+       {"participants per group", design},
+       {"sessions stored", std::to_string(c.sessions.size()) + " — " + phases_text},
+       {"report by palplab", std::string(kVersion) + " (" + kGitCommit + ")"},
+       {"database", c.db_path}});
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& p : c.structure.phases) {
+    std::string th;
+    for (const auto& t : p.thresholds)
+      th += (th.empty() ? "" : "; ") + t.region + ": " + fmt(t.st, "%.3g") + " / " +
+            fmt(t.mpf, "%.3g") + " / " + fmt(t.sft, "%.3g");
+    rows.push_back({p.phase, p.kind, std::to_string(p.sessions), fmt(p.session_duration, "%.4g"),
+                    cue_text(p.haptic), cue_text(p.visual_deformation), cue_text(p.audio),
+                    p.instructed ? "yes" : "no", th});
+  }
+  doc.para("Phases as run (stored with the results):");
+  doc.table({"phase", "kind", "sessions", "duration (s)", "haptic", "visual deformation", "audio",
+             "instructed", "ST / MPF / SFT (N)"},
+            rows);
+  if (!c.prototypes.empty()) {
+    std::vector<std::vector<std::string>> pr;
+    for (const auto& p : c.prototypes) pr.push_back({p.prototype, p.path, p.sha256});
     doc.para("Prototype files used (as stored with the results):");
-    doc.table({"prototype", "file", "SHA-256"}, rows);
+    doc.table({"prototype", "file", "SHA-256"}, pr);
   }
   doc.para(
       "Statistics: palplab analysis (GSL; own studentized range). Pairwise t-tests use "
       "Welch's unequal-variance test unless the study says otherwise; p-values are "
       "Holm-adjusted over the pairs; Hedges' g with a 95 % noncentral-t interval that inverts "
-      "the same t as the test beside it (Welch's t and df for a Welch test). "
-      "APA style: p < .001 below .001.");
+      "the same t as the test beside it (Welch's t and df for a Welch test). Proportions get "
+      "Wilson score intervals (never outside [0, 1]). APA style: p < .001 below .001.");
+}
 
-  // ---- Analyses
-  for (const auto& u : units) {
-    ++files.analyses;
-    const std::string unit = unit_of.count(u.measure) ? unit_of[u.measure] : "";
-    const std::string label = u.measure + (unit.empty() || unit == "1" ? "" : " (" + unit + ")");
-    const bool means = u.pooled && !u.pool_sessions;
-    doc.heading(
-        2, "Analysis: " + u.measure + " — phase " + u.phase +
-               (means ? " (participant means over all sessions)"
-                      : (u.pooled ? " (all sessions pooled)" : " (last session of the phase)")));
-    if (u.pooled && u.pool_sessions)
-      doc.para(
-          "**Warning: pseudo-replication.** The study asks for every session to be pooled as an "
-          "independent observation, but sessions of one participant are not independent: "
-          "degrees of freedom and p-values below overstate the evidence. Participant means "
-          "(the default for pooled analyses) or a mixed model are the valid analyses.");
-    // Values: per participant the last session of the phase, or every session when pooled.
-    std::map<std::string, int> last_index;
-    for (const auto& m : measures)
-      if (m.phase == u.phase && m.name == u.measure)
-        last_index[m.participant] = std::max(
-            last_index.count(m.participant) ? last_index[m.participant] : -1, m.phase_index);
-    GroupedData data;
-    data.names = groups;
-    data.values.assign(groups.size(), {});
-    std::vector<int> undefined(groups.size(), 0);
-    std::vector<ParticipantPoint> points;
-    // Participant means: the defined values of each participant's sessions, averaged in
-    // participant order of first appearance (one value per participant).
-    std::map<std::string, std::pair<long double, int>> sums;
-    std::vector<std::pair<std::string, int>> order;
-    for (const auto& m : measures) {
-      if (m.phase != u.phase || m.name != u.measure) continue;
-      if (!u.pooled && m.phase_index != last_index[m.participant]) continue;
-      int g = group_index(m.group);
-      if (!m.value || !std::isfinite(*m.value)) {
-        undefined[g]++;
-        continue;
-      }
-      if (means) {
-        auto [it, fresh] = sums.emplace(m.participant, std::make_pair(0.0L, 0));
-        if (fresh) order.push_back({m.participant, g});
-        it->second.first += *m.value;
-        it->second.second += 1;
-        continue;
-      }
-      data.values[g].push_back(*m.value);
-      std::string who = m.participant;
-      if (u.pooled) {
-        who += '#';
-        who += std::to_string(m.phase_index + 1);
-      }
-      points.push_back({who, g, *m.value});
+// A measure that is a proportion: unit "1" (0..1) or "%" (0..100); its scale maximum.
+double proportion_scale(const std::string& unit) {
+  return unit == "1" ? 1.0 : unit == "%" ? 100.0 : 0.0;
+}
+
+// The 95 % CI cell of a group's values: Wilson for a binary proportion (every value 0 or the
+// scale maximum), the t interval clipped to [0, scale] for other proportions (a mean of
+// per-session percentages), the t interval otherwise. `note` says which was used.
+std::string ci_cell(const std::vector<double>& v, const Descriptives& d, double scale,
+                    std::set<std::string>& notes) {
+  if (scale > 0) {
+    int k = 0;
+    bool binary = true;
+    for (double x : v) {
+      binary = binary && (x == 0 || x == scale);
+      k += x == scale;
     }
-    for (const auto& [who, g] : order) {
-      const auto& [sum, n] = sums[who];
-      const double v = static_cast<double>(sum / n);
-      data.values[g].push_back(v);
-      points.push_back({who, g, v});
+    if (binary) {
+      auto w = wilson_interval(k, static_cast<int>(v.size()));
+      notes.insert("Wilson score interval of the proportion");
+      return interval(scale * w.low, scale * w.high);
     }
-    int total = 0, excluded = 0;
-    for (size_t g = 0; g < groups.size(); ++g)
-      total += data.values[g].size(), excluded += undefined[g];
-    if (total == 0) {
-      doc.para("No defined values of " + u.measure + " in phase " + u.phase + " (" +
-               std::to_string(excluded) + " undefined).");
+    if (d.n < 2) return "n/a";
+    notes.insert("t interval of the mean proportion, clipped to [0, " + fmt(scale) + "]");
+    return interval(std::max(0.0, d.ci_low), std::min(scale, d.ci_high));
+  }
+  return d.n >= 2 ? interval(d.ci_low, d.ci_high) : std::string("n/a");
+}
+
+// The values of one measure in one phase, per group: each participant's last session of the
+// phase, or (pooled) the participant's mean over the phase's sessions, or (pooled with
+// pool_sessions) every session as its own value. Undefined values are counted per group.
+struct Values {
+  GroupedData data;
+  std::vector<int> undefined;
+  std::vector<ParticipantPoint> points;
+};
+Values collect_values(const Context& c, const std::string& measure, const std::string& phase,
+                      bool pooled, bool pool_sessions) {
+  // Values: per participant the last session of the phase, or every session when pooled.
+  std::map<std::string, int> last_index;
+  for (const auto& m : c.measures)
+    if (m.phase == phase && m.name == measure)
+      last_index[m.participant] =
+          std::max(last_index.count(m.participant) ? last_index[m.participant] : -1, m.phase_index);
+  Values out;
+  GroupedData& data = out.data;
+  data.names = c.groups;
+  data.values.assign(c.groups.size(), {});
+  std::vector<int>& undefined = out.undefined;
+  undefined.assign(c.groups.size(), 0);
+  std::vector<ParticipantPoint>& points = out.points;
+  const bool means = pooled && !pool_sessions;
+  // Participant means: the defined values of each participant's sessions, averaged in
+  // participant order of first appearance (one value per participant).
+  std::map<std::string, std::pair<long double, int>> sums;
+  std::vector<std::pair<std::string, int>> order;
+  for (const auto& m : c.measures) {
+    if (m.phase != phase || m.name != measure) continue;
+    if (!pooled && m.phase_index != last_index[m.participant]) continue;
+    int g = c.group_index(m.group);
+    if (!m.value || !std::isfinite(*m.value)) {
+      undefined[g]++;
       continue;
     }
-    if (excluded > 0) {
-      std::string t =
-          "Undefined values left out (e.g. force when the feature was not identified): ";
-      for (size_t g = 0; g < groups.size(); ++g)
-        t += (g ? ", " : "") + groups[g] + " " + std::to_string(undefined[g]);
-      doc.para(t + ".");
+    if (means) {
+      auto [it, fresh] = sums.emplace(m.participant, std::make_pair(0.0L, 0));
+      if (fresh) order.push_back({m.participant, g});
+      it->second.first += *m.value;
+      it->second.second += 1;
+      continue;
     }
-    // Descriptives (always).
-    doc.heading(3, "Descriptives");
+    data.values[g].push_back(*m.value);
+    std::string who = m.participant;
+    if (pooled) {
+      who += '#';
+      who += std::to_string(m.phase_index + 1);
+    }
+    points.push_back({who, g, *m.value});
+  }
+  for (const auto& [who, g] : order) {
+    const auto& [sum, n] = sums[who];
+    const double v = static_cast<double>(sum / n);
+    data.values[g].push_back(v);
+    points.push_back({who, g, v});
+  }
+  return out;
+}
+
+// A hypothesis the study declared ($.hypotheses, checked by `palplab validate` / the run).
+struct Hypothesis {
+  std::string id, statement, measure, phase, test;
+  std::vector<std::pair<std::string, std::string>> pairs;  // empty: every pair of groups
+  std::optional<std::pair<double, double>> margins;        // tost
+  double alpha = 0.05;
+  std::string correction = "holm";
+  bool pooled = false;
+};
+
+std::vector<Hypothesis> declared_hypotheses(const Context& c) {
+  std::vector<Hypothesis> out;
+  const auto& sj = c.declared;
+  if (!sj.contains("hypotheses") || !sj["hypotheses"].is_array()) return out;
+  for (const auto& hj : sj["hypotheses"]) {
+    Hypothesis h;
+    h.id = hj.value("id", std::string("H") + std::to_string(out.size() + 1));
+    h.statement = hj.value("statement", std::string());
+    h.measure = hj.value("measure", std::string());
+    h.phase = hj.value("phase", std::string());
+    h.test = hj.value("test", std::string());
+    if (hj.contains("pairs") && hj["pairs"].is_array())
+      for (const auto& pr : hj["pairs"])
+        if (pr.is_array() && pr.size() == 2 && pr[0].is_string() && pr[1].is_string())
+          h.pairs.push_back({pr[0], pr[1]});
+    if (hj.contains("margins")) {
+      const auto& m = hj["margins"];
+      if (m.is_number()) h.margins = std::make_pair(-m.get<double>(), m.get<double>());
+      if (m.is_array() && m.size() == 2 && m[0].is_number() && m[1].is_number())
+        h.margins = std::make_pair(m[0].get<double>(), m[1].get<double>());
+    }
+    h.alpha = hj.value("alpha", 0.05);
+    h.correction = hj.value("correction", std::string("holm"));
+    h.pooled = hj.value("pooled", false);
+    out.push_back(h);
+  }
+  return out;
+}
+
+std::vector<double> corrected(const std::vector<double>& p, const std::string& correction) {
+  if (correction == "bonferroni") return bonferroni(p);
+  if (correction == "none") return p;
+  return holm(p);
+}
+
+// ---- Confirmatory analyses: exactly the declared hypotheses, before anything exploratory
+void section_confirmatory(Context& c, const std::vector<Hypothesis>& hyps) {
+  Doc& doc = c.doc;
+  doc.heading(2, "Confirmatory analyses (declared hypotheses)");
+  doc.para("The study declared these " + std::to_string(hyps.size()) +
+           " hypotheses before the run; each is tested exactly as declared (its test, α and "
+           "correction over its own pairs). Every analysis after this section is exploratory.");
+  for (const auto& h : hyps) {
+    const std::string unit = c.unit(h.measure);
+    doc.heading(3, h.id + (h.statement.empty() ? "" : ": " + h.statement));
+    std::string test_name = h.test == "anova_oneway" ? "one-way ANOVA (classical F)"
+                            : h.test == "welch_t"    ? "Welch t-test"
+                            : h.test == "student_t"  ? "Student t-test"
+                                                     : "equivalence, TOST on Welch's t";
+    doc.bullets({"measure " + with_unit(h.measure, unit) + ", phase " + h.phase + " (" +
+                     (h.pooled ? "participant means over the phase's sessions"
+                               : "last session of the phase") +
+                     ")",
+                 "test: " + test_name + ", α = " + fmt(h.alpha, "%.3g") +
+                     (h.test == "anova_oneway" ? std::string()
+                                               : ", correction over its pairs: " + h.correction) +
+                     (h.margins ? ", margins " + interval(h.margins->first, h.margins->second) +
+                                      (unit.empty() || unit == "1" ? "" : " " + unit)
+                                : std::string())});
+    Values v = collect_values(c, h.measure, h.phase, h.pooled, false);
+    bool enough = true;
+    for (const auto& g : v.data.values) enough = enough && g.size() >= 2;
+    if (!enough || v.data.values.size() < 2) {
+      doc.para("Not testable: every group needs at least 2 defined values of " + h.measure +
+               " in phase " + h.phase + ".");
+      continue;
+    }
+    if (h.test == "anova_oneway") {
+      Anova a = oneway_anova(v.data.values);
+      doc.table({"test", "F", "df", "p", "η²", "decision"},
+                {{"one-way ANOVA", fmt(a.F, "%.3f"),
+                  fmt(a.df_between, "%.0f") + ", " + fmt(a.df_within, "%.0f"), format_p(a.p),
+                  fmt(a.eta_squared, "%.3f"),
+                  a.p < h.alpha ? "reject H0 (groups differ)" : "H0 not rejected (inconclusive)"}});
+      doc.para(apa_anova(a) + ".");
+      continue;
+    }
+    // Pairs: the declared ones (in their order and direction), else every pair.
+    std::vector<std::pair<int, int>> pairs;
+    for (const auto& [a, b] : h.pairs) {
+      const int ia = c.group_index(a), ib = c.group_index(b);
+      if (ia < static_cast<int>(c.groups.size()) && ib < static_cast<int>(c.groups.size()))
+        pairs.push_back({ia, ib});
+    }
+    if (h.pairs.empty())
+      for (int a = 0; a < static_cast<int>(c.groups.size()); ++a)
+        for (int b = a + 1; b < static_cast<int>(c.groups.size()); ++b) pairs.push_back({a, b});
     std::vector<std::vector<std::string>> rows;
-    for (size_t g = 0; g < groups.size(); ++g) {
-      if (data.values[g].empty()) {
-        rows.push_back({groups[g], "0", "", "", "", "", "", "", "", ""});
-        continue;
+    std::vector<double> p;
+    std::vector<TTest> tests;
+    std::vector<Equivalence> eqs;
+    for (const auto& [a, b] : pairs) {
+      const auto &va = v.data.values[a], &vb = v.data.values[b];
+      if (h.test == "tost") {
+        eqs.push_back(tost_welch(va, vb, h.margins->first, h.margins->second, h.alpha));
+        p.push_back(eqs.back().p);
+      } else {
+        tests.push_back(h.test == "student_t" ? student_t(va, vb) : welch_t(va, vb));
+        p.push_back(tests.back().p);
       }
-      Descriptives d = describe(data.values[g]);
-      rows.push_back({groups[g], std::to_string(d.n), fmt(d.mean), fmt(d.sd), fmt(d.se),
-                      fmt(d.median), fmt(d.iqr), fmt(d.min), fmt(d.max),
-                      d.n >= 2 ? interval(d.ci_low, d.ci_high) : std::string("n/a")});
     }
-    doc.table({"group", "n", "mean", "SD", "SE", "median", "IQR", "min", "max", "95% CI"}, rows);
-    const std::string base = slug(u.measure + "_" + u.phase + (u.pooled ? "_pooled" : ""));
-    save_figure(base + "_box.svg",
+    const std::vector<double> padj = corrected(p, h.correction);
+    const std::string diff_head = with_unit("mean diff", unit);
+    for (size_t i = 0; i < pairs.size(); ++i) {
+      const auto [a, b] = pairs[i];
+      const std::string pair = c.groups[a] + " – " + c.groups[b];
+      if (h.test == "tost") {
+        const auto& q = eqs[i];
+        rows.push_back({pair, fmt(q.mean_diff), interval(q.ci_low, q.ci_high), format_p(q.p),
+                        format_p(padj[i]),
+                        padj[i] < h.alpha ? "equivalent" : "not shown equivalent"});
+      } else {
+        const auto& t = tests[i];
+        const auto& va = v.data.values[a];
+        const auto& vb = v.data.values[b];
+        EffectSize e = h.test == "student_t" ? cohens_d(va, vb) : cohens_d_welch(va, vb, t);
+        rows.push_back({pair, fmt(t.mean_diff), fmt(t.t, "%.3f"), fmt(t.df, "%.2f"), format_p(t.p),
+                        format_p(padj[i]),
+                        fmt(e.g, "%.2f") + " " + interval(e.g_ci_low, e.g_ci_high, "%.2f"),
+                        padj[i] < h.alpha ? "different" : "not significant (inconclusive)"});
+      }
+    }
+    const std::string padj_head = "p (" + h.correction + ")";
+    if (h.test == "tost")
+      doc.table({"pair", diff_head, fmt(100 * (1 - 2 * h.alpha), "%.3g") + "% CI", "p (TOST)",
+                 padj_head, "decision"},
+                rows);
+    else
+      doc.table({"pair", diff_head, "t", "df", "p", padj_head, "Hedges g [95% CI]", "decision"},
+                rows);
+  }
+}
+
+// ---- One analysis unit: descriptives, figures, tests
+void section_analysis(Context& c, const Unit& u) {
+  Doc& doc = c.doc;
+  const auto& groups = c.groups;
+  ++c.files.analyses;
+  const std::string unit = c.unit(u.measure);
+  const std::string label = with_unit(u.measure, unit);
+  const bool means = u.pooled && !u.pool_sessions;
+  doc.heading(2,
+              "Analysis: " + u.measure + " — phase " + u.phase +
+                  (means ? " (participant means over all sessions)"
+                         : (u.pooled ? " (all sessions pooled)" : " (last session of the phase)")));
+  if (u.pooled && u.pool_sessions)
+    doc.para(
+        "**Warning: pseudo-replication.** The study asks for every session to be pooled as an "
+        "independent observation, but sessions of one participant are not independent: "
+        "degrees of freedom and p-values below overstate the evidence. Participant means "
+        "(the default for pooled analyses) or a mixed model are the valid analyses.");
+  Values vals = collect_values(c, u.measure, u.phase, u.pooled, u.pool_sessions);
+  GroupedData& data = vals.data;
+  const std::vector<int>& undefined = vals.undefined;
+  const std::vector<ParticipantPoint>& points = vals.points;
+  int total = 0, excluded = 0;
+  for (size_t g = 0; g < groups.size(); ++g)
+    total += data.values[g].size(), excluded += undefined[g];
+  if (total == 0) {
+    doc.para("No defined values of " + u.measure + " in phase " + u.phase + " (" +
+             std::to_string(excluded) + " undefined).");
+    return;
+  }
+  if (excluded > 0) {
+    std::string t = "Undefined values left out (e.g. force when the feature was not identified): ";
+    for (size_t g = 0; g < groups.size(); ++g)
+      t += (g ? ", " : "") + groups[g] + " " + std::to_string(undefined[g]);
+    doc.para(t + ".");
+  }
+  // Descriptives (always).
+  doc.heading(3, "Descriptives");
+  std::vector<std::vector<std::string>> rows;
+  std::set<std::string> ci_notes;
+  const double scale = proportion_scale(unit);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    if (data.values[g].empty()) {
+      rows.push_back({groups[g], "0", "", "", "", "", "", "", "", ""});
+      continue;
+    }
+    Descriptives d = describe(data.values[g]);
+    rows.push_back({groups[g], std::to_string(d.n), fmt(d.mean), fmt(d.sd), fmt(d.se),
+                    fmt(d.median), fmt(d.iqr), fmt(d.min), fmt(d.max),
+                    ci_cell(data.values[g], d, scale, ci_notes)});
+  }
+  doc.table(
+      {"group", "n", with_unit("mean", unit), "SD", "SE", "median", "IQR", "min", "max", "95% CI"},
+      rows);
+  for (const auto& n : ci_notes) doc.para("95% CI: " + n + ".");
+  const std::string base = slug(u.measure + "_" + u.phase + (u.pooled ? "_pooled" : ""));
+  c.save_figure(base + "_box.svg",
                 svg_box_plot(groups, data.values, u.measure + " by group, " + u.phase, label),
                 "Range and box plot per group (box: quartiles, line: median, whiskers: min–max; "
                 "dots: every value) of " +
                     u.measure + ", phase " + u.phase + ".");
-    save_figure(
-        base + "_participants.svg",
-        svg_participant_plot(groups, points, u.measure + " per participant, " + u.phase, label),
-        "Individual values per participant of " + u.measure + ", phase " + u.phase + ".");
+  c.save_figure(
+      base + "_participants.svg",
+      svg_participant_plot(groups, points, u.measure + " per participant, " + u.phase, label),
+      "Individual values per participant of " + u.measure + ", phase " + u.phase + ".");
 
-    // Inference needs two groups with two values each.
-    std::vector<int> usable;
-    for (size_t g = 0; g < groups.size(); ++g)
-      if (data.values[g].size() >= 2) usable.push_back(static_cast<int>(g));
-    if (usable.size() < 2 || usable.size() < groups.size()) {
-      doc.para("Not enough data for tests: every group needs at least 2 defined values.");
-      continue;
-    }
-    StatsOptions opt;
-    opt.welch_pairwise = u.welch;
-    // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the grand mean for
-    // a force; other measures without a declared margin get no equivalence test.
-    std::string margin_source;
-    if (u.margin > 0) {
-      opt.margins = std::make_pair(-u.margin, u.margin);
-      margin_source = "declared by the study";
-    } else if (unit == "N") {
-      long double sum = 0;
-      int n = 0;
-      for (const auto& gv : data.values)
-        for (double v : gv) {
-          sum += v + static_cast<long double>(data.offset);
-          ++n;
-        }
-      const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
-      if (m > 0) {
-        opt.margins = std::make_pair(-m, m);
-        margin_source = "default: ±7 % (force Weber fraction) of the grand mean";
-      }
-    }
-    StatsSummary s = summarize(data, opt);
-    const bool want_anova = u.kinds.count("anova_oneway") > 0;
-    const bool want_pairs = u.kinds.count("pairwise_t") > 0 || want_anova;
-    if (want_anova) {
-      doc.heading(3, "One-way ANOVA");
-      const auto& a = s.anova;
-      doc.table({"source", "df", "SS", "MS", "F", "p"},
-                {{"between groups", fmt(a.df_between, "%.0f"), fmt(a.ss_between), fmt(a.ms_between),
-                  fmt(a.F, "%.3f"), format_p(a.p)},
-                 {"within groups", fmt(a.df_within, "%.0f"), fmt(a.ss_within), fmt(a.ms_within), "",
-                  ""}});
-      doc.bullets(
-          {"Classical: " + apa_anova(a) + ", η² = " + fmt(a.eta_squared, "%.3f") +
-               ", ω² = " + fmt(a.omega_squared, "%.3f"),
-           "Welch: " + (s.welch.defined
-                            ? apa_f(s.welch.F, s.welch.df_between, s.welch.df_within, s.welch.p)
-                            : std::string("undefined (a group has zero variance)"))});
-    }
-    if (want_pairs) {
-      doc.heading(3, std::string("Pairwise ") + (u.welch ? "Welch" : "Student") + " t-tests");
-      std::vector<std::vector<std::string>> pr;
-      std::vector<std::string> apa;
-      for (const auto& p : s.pairwise) {
-        pr.push_back({groups[p.a] + " – " + groups[p.b], fmt(p.test.mean_diff),
-                      fmt(p.test.t, "%.3f"), fmt(p.test.df, "%.2f"), format_p(p.test.p),
-                      format_p(p.p_holm),
-                      fmt(p.effect.g, "%.2f") + " " +
-                          interval(p.effect.g_ci_low, p.effect.g_ci_high, "%.2f")});
-        apa.push_back(
-            groups[p.a] + " vs " + groups[p.b] + ": " +
-            (p.test.defined ? apa_t(p.test.t, p.test.df, p.test.p) : std::string("undefined")) +
-            " (Holm " + apa_p(p.p_holm) + "), g = " + fmt(p.effect.g, "%.2f"));
-      }
-      doc.table({"pair", "mean diff" + (unit.empty() || unit == "1" ? "" : " (" + unit + ")"), "t",
-                 "df", "p", "p (Holm)", "Hedges g [95% CI]"},
-                pr);
-      doc.bullets(apa);
-      if (!s.equivalence.empty()) {
-        const auto& q0 = s.equivalence.front();
-        doc.heading(3, "Equivalence (TOST)");
-        doc.para(
-            "Margins ±" + fmt(q0.high) + (unit.empty() || unit == "1" ? "" : " " + unit) + " (" +
-            margin_source +
-            "). A pair is \"equivalent\" when both one-sided tests reject at α = .05 (its 90 % "
-            "interval lies inside the margins), \"different\" when Welch's test rejects, "
-            "and \"inconclusive\" otherwise — a non-significant test is not evidence of no "
-            "difference.");
-        std::vector<std::vector<std::string>> er;
-        for (size_t i = 0; i < s.pairwise.size(); ++i) {
-          const auto& q = s.equivalence[i];
-          er.push_back({groups[s.pairwise[i].a] + " – " + groups[s.pairwise[i].b], fmt(q.mean_diff),
-                        interval(q.ci_low, q.ci_high), format_p(q.p), q.verdict});
-        }
-        doc.table({"pair", "mean diff", "90% CI", "p (TOST)", "verdict"}, er);
-      }
-      if (want_anova) {
-        doc.heading(3, "Post-hoc comparisons");
-        std::vector<std::vector<std::string>> tr;
-        for (size_t i = 0; i < s.tukey.size(); ++i) {
-          const auto& t = s.tukey[i];
-          const auto& g = s.games_howell[i];
-          tr.push_back({groups[t.a] + " – " + groups[t.b], fmt(t.mean_diff), fmt(t.q, "%.3f"),
-                        format_p(t.p), interval(t.ci_low, t.ci_high), fmt(g.q, "%.3f"),
-                        fmt(g.df, "%.2f"), format_p(g.p)});
-        }
-        doc.table({"pair", "mean diff", "Tukey q", "Tukey p", "Tukey 95% CI", "Games–Howell q",
-                   "G–H df", "G–H p"},
-                  tr);
-      }
-    }
-    doc.heading(3, "Assumption checks and nonparametric tests");
-    std::vector<std::string> checks = {
-        "Levene (mean-centred): " + apa_anova(s.levene),
-        "Brown–Forsythe (median-centred): " + apa_anova(s.brown_forsythe)};
-    for (size_t g = 0; g < groups.size(); ++g)
-      checks.push_back("Shapiro–Wilk " + groups[g] + ": " +
-                       (s.shapiro[g].defined
-                            ? "W = " + fmt(s.shapiro[g].W, "%.3f") + ", " + apa_p(s.shapiro[g].p)
-                            : std::string("n/a (n < 3 or constant)")));
-    checks.push_back("Kruskal–Wallis: H(" + fmt(s.kruskal.df, "%.0f") +
-                     ") = " + fmt(s.kruskal.H, "%.2f") + ", " + apa_p(s.kruskal.p));
-    doc.bullets(checks);
+  // Inference needs two groups with two values each.
+  std::vector<int> usable;
+  for (size_t g = 0; g < groups.size(); ++g)
+    if (data.values[g].size() >= 2) usable.push_back(static_cast<int>(g));
+  if (usable.size() < 2 || usable.size() < groups.size()) {
+    doc.para("Not enough data for tests: every group needs at least 2 defined values.");
+    return;
   }
+  StatsOptions opt;
+  opt.welch_pairwise = u.welch;
+  // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the grand mean for
+  // a force; other measures without a declared margin get no equivalence test.
+  std::string margin_source;
+  if (u.margin > 0) {
+    opt.margins = std::make_pair(-u.margin, u.margin);
+    margin_source = "declared by the study";
+  } else if (unit == "N") {
+    long double sum = 0;
+    int n = 0;
+    for (const auto& gv : data.values)
+      for (double v : gv) {
+        sum += v + static_cast<long double>(data.offset);
+        ++n;
+      }
+    const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
+    if (m > 0) {
+      opt.margins = std::make_pair(-m, m);
+      margin_source = "default: ±7 % (force Weber fraction) of the grand mean";
+    }
+  }
+  StatsSummary s = summarize(data, opt);
+  const bool want_anova = u.kinds.count("anova_oneway") > 0;
+  const bool want_pairs = u.kinds.count("pairwise_t") > 0 || want_anova;
+  const std::string diff_head = with_unit("mean diff", unit);
+  if (want_anova) {
+    doc.heading(3, "One-way ANOVA");
+    const auto& a = s.anova;
+    doc.table(
+        {"source", "df", "SS", "MS", "F", "p"},
+        {{"between groups", fmt(a.df_between, "%.0f"), fmt(a.ss_between), fmt(a.ms_between),
+          fmt(a.F, "%.3f"), format_p(a.p)},
+         {"within groups", fmt(a.df_within, "%.0f"), fmt(a.ss_within), fmt(a.ms_within), "", ""}});
+    doc.bullets(
+        {"Classical: " + apa_anova(a) + ", η² = " + fmt(a.eta_squared, "%.3f") +
+             ", ω² = " + fmt(a.omega_squared, "%.3f"),
+         "Welch: " + (s.welch.defined
+                          ? apa_f(s.welch.F, s.welch.df_between, s.welch.df_within, s.welch.p)
+                          : std::string("undefined (a group has zero variance)"))});
+  }
+  if (want_pairs) {
+    doc.heading(3, std::string("Pairwise ") + (u.welch ? "Welch" : "Student") + " t-tests");
+    std::vector<std::vector<std::string>> pr;
+    std::vector<std::string> apa;
+    for (const auto& p : s.pairwise) {
+      pr.push_back({groups[p.a] + " – " + groups[p.b], fmt(p.test.mean_diff), fmt(p.test.t, "%.3f"),
+                    fmt(p.test.df, "%.2f"), format_p(p.test.p), format_p(p.p_holm),
+                    fmt(p.effect.g, "%.2f") + " " +
+                        interval(p.effect.g_ci_low, p.effect.g_ci_high, "%.2f")});
+      apa.push_back(
+          groups[p.a] + " vs " + groups[p.b] + ": " +
+          (p.test.defined ? apa_t(p.test.t, p.test.df, p.test.p) : std::string("undefined")) +
+          " (Holm " + apa_p(p.p_holm) + "), g = " + fmt(p.effect.g, "%.2f"));
+    }
+    doc.table({"pair", diff_head, "t", "df", "p", "p (Holm)", "Hedges g [95% CI]"}, pr);
+    doc.bullets(apa);
+    if (!s.equivalence.empty()) {
+      const auto& q0 = s.equivalence.front();
+      doc.heading(3, "Equivalence (TOST)");
+      doc.para("Margins ±" + fmt(q0.high) + (unit.empty() || unit == "1" ? "" : " " + unit) + " (" +
+               margin_source +
+               "). A pair is \"equivalent\" when both one-sided tests reject at α = .05 (its 90 % "
+               "interval lies inside the margins), \"different\" when Welch's test rejects, "
+               "and \"inconclusive\" otherwise — a non-significant test is not evidence of no "
+               "difference.");
+      std::vector<std::vector<std::string>> er;
+      for (size_t i = 0; i < s.pairwise.size(); ++i) {
+        const auto& q = s.equivalence[i];
+        er.push_back({groups[s.pairwise[i].a] + " – " + groups[s.pairwise[i].b], fmt(q.mean_diff),
+                      interval(q.ci_low, q.ci_high), format_p(q.p), q.verdict});
+      }
+      doc.table({"pair", diff_head, "90% CI", "p (TOST)", "verdict"}, er);
+    }
+    if (want_anova) {
+      doc.heading(3, "Post-hoc comparisons");
+      std::vector<std::vector<std::string>> tr;
+      for (size_t i = 0; i < s.tukey.size(); ++i) {
+        const auto& t = s.tukey[i];
+        const auto& g = s.games_howell[i];
+        tr.push_back({groups[t.a] + " – " + groups[t.b], fmt(t.mean_diff), fmt(t.q, "%.3f"),
+                      format_p(t.p), interval(t.ci_low, t.ci_high), fmt(g.q, "%.3f"),
+                      fmt(g.df, "%.2f"), format_p(g.p)});
+      }
+      doc.table({"pair", diff_head, "Tukey q", "Tukey p", "Tukey 95% CI", "Games–Howell q",
+                 "G–H df", "G–H p"},
+                tr);
+    }
+  }
+  doc.heading(3, "Assumption checks and nonparametric tests");
+  std::vector<std::string> checks = {
+      "Levene (mean-centred): " + apa_anova(s.levene),
+      "Brown–Forsythe (median-centred): " + apa_anova(s.brown_forsythe)};
+  for (size_t g = 0; g < groups.size(); ++g)
+    checks.push_back("Shapiro–Wilk " + groups[g] + ": " +
+                     (s.shapiro[g].defined
+                          ? "W = " + fmt(s.shapiro[g].W, "%.3f") + ", " + apa_p(s.shapiro[g].p)
+                          : std::string("n/a (n < 3 or constant)")));
+  checks.push_back("Kruskal–Wallis: H(" + fmt(s.kruskal.df, "%.0f") +
+                   ") = " + fmt(s.kruskal.H, "%.2f") + ", " + apa_p(s.kruskal.p));
+  doc.bullets(checks);
+}
 
-  // ---- Learning curves over training sessions
-  doc.heading(2, "Learning curves");
+// ---- Learning curves over the phases the study declared as training (stored kind)
+void section_learning_curves(Context& c, const std::vector<Unit>& units) {
+  c.doc.heading(2, "Learning curves");
   std::vector<std::string> training;
-  for (const auto& ph : phase_order)
-    if (phase_kind.count(ph) ? phase_kind[ph] == "training" : ph.find("train") != std::string::npos)
-      training.push_back(ph);
+  for (const auto& p : c.structure.phases)
+    if (p.kind == "training") training.push_back(p.phase);
   std::set<std::string> curve_measures;
   for (const auto& u : units) curve_measures.insert(u.measure);
   bool any_curve = false;
@@ -474,104 +722,151 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
     int offset = 0, max_s = 0;
     for (const auto& ph : training) {
       int top = -1;
-      for (const auto& m : measures)
+      for (const auto& m : c.measures)
         if (m.phase == ph && m.name == mname) {
           top = std::max(top, m.phase_index);
           if (m.value && std::isfinite(*m.value))
-            cell[{group_index(m.group), offset + m.phase_index + 1}].push_back(*m.value);
+            cell[{c.group_index(m.group), offset + m.phase_index + 1}].push_back(*m.value);
         }
       offset += top + 1;
       max_s = offset;
     }
     if (cell.empty()) continue;
     any_curve = true;
+    const std::string unit = c.unit(mname);
+    const double scale = proportion_scale(unit);
+    bool wilson = false;
     std::vector<Series> ser;
-    for (size_t g = 0; g < groups.size(); ++g) {
+    for (size_t g = 0; g < c.groups.size(); ++g) {
       Series s;
-      s.name = groups[g];
+      s.name = c.groups[g];
       s.colour = static_cast<int>(g);
       for (int k = 1; k <= max_s; ++k) {
         auto it = cell.find({static_cast<int>(g), k});
         if (it == cell.end() || it->second.empty()) continue;
+        const auto& v = it->second;
         s.x.push_back(k);
-        s.y.push_back(mean(it->second));
-        s.err.push_back(it->second.size() >= 2 ? sd(it->second) / std::sqrt(it->second.size())
-                                               : NAN);
+        s.y.push_back(mean(v));
+        const double se = v.size() >= 2 ? sd(v) / std::sqrt(v.size()) : NAN;
+        int hits = 0;
+        bool binary = scale > 0;
+        for (double x : v) binary = binary && (x == 0 || x == scale), hits += x == scale;
+        if (binary) {  // a proportion: Wilson interval, inside [0, scale]
+          auto w = wilson_interval(hits, static_cast<int>(v.size()));
+          s.lo.push_back(scale * w.low);
+          s.hi.push_back(scale * w.high);
+          wilson = true;
+        } else if (scale > 0) {  // mean of proportions: ±SE clipped to the scale
+          s.lo.push_back(std::isfinite(se) ? std::max(0.0, s.y.back() - se) : NAN);
+          s.hi.push_back(std::isfinite(se) ? std::min(scale, s.y.back() + se) : NAN);
+        } else {
+          s.lo.push_back(NAN);
+          s.hi.push_back(NAN);
+        }
+        s.err.push_back(se);
       }
       ser.push_back(s);
     }
-    const std::string unit = unit_of.count(mname) ? unit_of[mname] : "";
-    save_figure("learning_" + slug(mname) + ".svg",
-                svg_line_plot(ser, mname + " over training sessions", "training session",
-                              mname + (unit.empty() || unit == "1" ? "" : " (" + unit + ")")),
-                "Learning curve of " + mname + ": group mean ± SE per training session.");
+    c.save_figure("learning_" + slug(mname) + ".svg",
+                  svg_line_plot(ser, mname + " over training sessions", "training session",
+                                with_unit(mname, unit)),
+                  "Learning curve of " + mname + ": group mean " +
+                      (wilson      ? "with its 95 % Wilson interval"
+                       : scale > 0 ? "± SE (clipped to [0, " + fmt(scale) + "])"
+                                   : std::string("± SE")) +
+                      " per training session (groups offset sideways so bars do not overlap).");
   }
-  if (!any_curve) doc.para("No training sessions with analysed measures in this database.");
+  if (!any_curve)
+    c.doc.para(training.empty() ? "The study declares no phase of kind \"training\"."
+                                : "No training sessions with analysed measures in this database.");
+}
 
-  // ---- Example force trace per group
-  doc.heading(2, "Example force traces");
-  {
-    // The first participant of each group with stored samples, in the first phase that has
-    // them: the analysed phases first (in declaration order), then the others from the last.
-    std::vector<std::string> candidates;
-    for (const auto& u : units) candidates.push_back(u.phase);
-    for (auto it = phase_order.rbegin(); it != phase_order.rend(); ++it) candidates.push_back(*it);
-    std::vector<Series> ser;
-    std::string phase;
-    for (const auto& cand : candidates) {
-      phase = cand;
-      for (size_t g = 0; g < groups.size(); ++g) {
-        for (const auto& p : participants) {
-          if (p.group != groups[g]) continue;
-          const results::SessionRecord* pick = nullptr;
-          for (const auto& s : sessions)
-            if (s.participant == p.participant && s.phase == phase) {
-              pick = &s;
-              break;
-            }
-          if (!pick) continue;
-          results::SampleSeries smp = store.read_samples(pick->session);
-          if (smp.size() == 0) continue;
-          Series s;
-          s.name = groups[g] + " (" + pick->participant + ")";
-          s.colour = static_cast<int>(g);
-          // Decimate to max |F| per bin so peaks (the palpation force) survive.
-          const size_t n = smp.size(), bins = std::max<size_t>(1, options.max_trace_points);
-          const size_t per = std::max<size_t>(1, (n + bins - 1) / bins);
-          for (size_t i = 0; i < n; i += per) {
-            double best = 0;
-            for (size_t j = i; j < std::min(n, i + per); ++j)
-              best = std::max(best, std::sqrt(smp.F[3 * j] * smp.F[3 * j] +
-                                              smp.F[3 * j + 1] * smp.F[3 * j + 1] +
-                                              smp.F[3 * j + 2] * smp.F[3 * j + 2]));
-            s.x.push_back(smp.t0 + (i + 1) * smp.dt);
-            s.y.push_back(best);
+// The thresholds of the feature region in a phase (the region's own, else "*").
+const results::ThresholdRecord* feature_thresholds(const results::PhaseRecord& p) {
+  const results::ThresholdRecord* any = nullptr;
+  for (const auto& t : p.thresholds) {
+    if (t.region == p.feature) return &t;
+    if (t.region == "*") any = &t;
+  }
+  return any;
+}
+
+// ---- Example force trace per group, with the phase's ST / MPF / SFT lines
+void section_force_traces(Context& c, const std::vector<Unit>& units) {
+  c.doc.heading(2, "Example force traces");
+  // The first participant of each group with stored samples, in the first phase that has
+  // them: the analysed phases first (in declaration order), then the others from the last.
+  std::vector<std::string> candidates;
+  for (const auto& u : units) candidates.push_back(u.phase);
+  for (auto it = c.phase_order.rbegin(); it != c.phase_order.rend(); ++it)
+    candidates.push_back(*it);
+  std::vector<Series> ser;
+  std::string phase;
+  for (const auto& cand : candidates) {
+    phase = cand;
+    for (size_t g = 0; g < c.groups.size(); ++g) {
+      for (const auto& p : c.participants) {
+        if (p.group != c.groups[g]) continue;
+        const results::SessionRecord* pick = nullptr;
+        for (const auto& s : c.sessions)
+          if (s.participant == p.participant && s.phase == phase) {
+            pick = &s;
+            break;
           }
-          ser.push_back(s);
-          break;  // one participant per group
+        if (!pick) continue;
+        results::SampleSeries smp = c.store.read_samples(pick->session);
+        if (smp.size() == 0) continue;
+        Series s;
+        s.name = c.groups[g] + " (" + pick->participant + ")";
+        s.colour = static_cast<int>(g);
+        // Decimate to max |F| per bin so peaks (the palpation force) survive.
+        const size_t n = smp.size(), bins = std::max<size_t>(1, c.options.max_trace_points);
+        const size_t per = std::max<size_t>(1, (n + bins - 1) / bins);
+        for (size_t i = 0; i < n; i += per) {
+          double best = 0;
+          for (size_t j = i; j < std::min(n, i + per); ++j)
+            best = std::max(
+                best, std::sqrt(smp.F[3 * j] * smp.F[3 * j] + smp.F[3 * j + 1] * smp.F[3 * j + 1] +
+                                smp.F[3 * j + 2] * smp.F[3 * j + 2]));
+          s.x.push_back(smp.t0 + (i + 1) * smp.dt);
+          s.y.push_back(best);
         }
+        ser.push_back(s);
+        break;  // one participant per group
       }
-      if (!ser.empty()) break;
     }
-    if (ser.empty()) {
-      doc.para("No force samples stored in this database (run with --samples full).");
-    } else {
-      save_figure(
-          "force_traces.svg",
-          svg_line_plot(ser, "Force magnitude, first participant of each group (" + phase + ")",
-                        "time (s)", "|F| (N)", false),
-          "Example force trace per group: |F| on the hand during one " + phase +
-              " session (decimated to at most " + std::to_string(options.max_trace_points) +
-              " points, keeping the peak |F| of each bin).");
-    }
+    if (!ser.empty()) break;
   }
+  if (ser.empty()) {
+    c.doc.para("No force samples stored in this database (run with --samples full).");
+    return;
+  }
+  std::vector<ReferenceLine> refs;
+  std::string thresholds_text;
+  if (const auto* ph = c.phase(phase))
+    if (const auto* t = feature_thresholds(*ph)) {
+      refs = {{"ST " + fmt(t->st, "%.3g") + " N", t->st, "#B8860B"},
+              {"MPF " + fmt(t->mpf, "%.3g") + " N", t->mpf, "#007A55"},
+              {"SFT " + fmt(t->sft, "%.3g") + " N", t->sft, "#B22222"}};
+      thresholds_text = " Dashed lines: the phase's thresholds for " + ph->feature +
+                        " (ST sound threshold, MPF maximum palpation force, SFT stopping force).";
+    }
+  c.save_figure(
+      "force_traces.svg",
+      svg_line_plot(ser, "Force magnitude, first participant of each group (" + phase + ")",
+                    "time (s)", "|F| (N)", false, refs),
+      "Example force trace per group: |F| on the hand during one " + phase +
+          " session (decimated to at most " + std::to_string(c.options.max_trace_points) +
+          " points, keeping the peak |F| of each bin)." + thresholds_text);
+}
 
-  files.markdown = (fs::path(out_dir) / "report.md").string();
-  files.html = (fs::path(out_dir) / "report.html").string();
-  std::ofstream(files.markdown) << doc.md.str();
-  std::ofstream html(files.html);
+void write_documents(Context& c) {
+  c.files.markdown = (fs::path(c.out_dir) / "report.md").string();
+  c.files.html = (fs::path(c.out_dir) / "report.html").string();
+  std::ofstream(c.files.markdown) << c.doc.md.str();
+  std::ofstream html(c.files.html);
   html << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
-       << xml_escape(study.title) << "</title>\n<style>\n"
+       << xml_escape(c.study.title) << "</title>\n<style>\n"
        << "body{font-family:Helvetica,Arial,sans-serif;max-width:960px;margin:2em auto;padding:0 "
           "1em;color:#222}\n"
        // Wide tables scroll inside the page instead of being cut at the body width.
@@ -582,9 +877,31 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
        << "figure{margin:1em "
           "0}figcaption{font-size:0.9em;color:#555}svg{max-width:100%;height:auto}\n"
        << "</style>\n</head>\n<body>\n"
-       << doc.html.str() << "</body>\n</html>\n";
-  if (!html) throw InputError("cannot write the report", files.html);
-  return files;
+       << c.doc.html.str() << "</body>\n</html>\n";
+  if (!html) throw InputError("cannot write the report", c.files.html);
+}
+
+}  // namespace
+
+ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
+                         const ReportOptions& options) {
+  Context c = load(db_path, out_dir, options);
+  const std::vector<Unit> units = analysis_units(c);
+  const std::vector<Hypothesis> hypotheses = declared_hypotheses(c);
+  fs::create_directories(fs::path(out_dir) / "figures");
+  section_provenance(c);
+  if (!hypotheses.empty()) {
+    section_confirmatory(c, hypotheses);
+    c.doc.heading(2, "Exploratory analyses");
+    c.doc.para(
+        "Not declared in advance: the analyses below describe the data and generate hypotheses; "
+        "their p-values are not confirmatory evidence.");
+  }
+  for (const auto& u : units) section_analysis(c, u);
+  section_learning_curves(c, units);
+  section_force_traces(c, units);
+  write_documents(c);
+  return c.files;
 }
 
 }  // namespace palplab::analysis

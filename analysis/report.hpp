@@ -1,11 +1,15 @@
 #pragma once
 // The study report: `palplab report DB --out DIR` writes DIR/report.md, a self-contained
 // DIR/report.html (inline CSS and SVG, no scripts, no network) and DIR/figures/*.svg, from a
-// results store (results/). Sections: study description and provenance; per declared analysis
+// results store (results/, schema 2: the study structure — groups, phase kinds, cues,
+// thresholds — comes from its tables; schema-1 databases are refused with InputError).
+// Sections: study description, provenance and the phases as run; the study's declared
+// hypotheses (confirmatory, run first), then, labelled exploratory, per declared analysis
 // (measure × phase, pooled or last session) descriptives, box/range plot, per-participant
 // values, ANOVA (classical and Welch), pairwise t-tests (Holm), Tukey–Kramer / Games–Howell,
 // assumption checks and nonparametric tests with APA lines; learning curves over the training
-// sessions; an example force trace per group.
+// sessions (phases of stored kind "training"); an example force trace per group with the
+// phase's ST / MPF / SFT lines.
 #include <string>
 #include <vector>
 

@@ -221,18 +221,29 @@ std::string svg_participant_plot(const std::vector<std::string>& group_names,
 }
 
 std::string svg_line_plot(const std::vector<Series>& series, const std::string& title,
-                          const std::string& x_label, const std::string& y_label, bool markers) {
+                          const std::string& x_label, const std::string& y_label, bool markers,
+                          const std::vector<ReferenceLine>& references) {
   Frame f;
+  // Error bar of point i: [lo, hi] when given, else y ± err; NaN when there is none.
+  auto bar = [](const Series& s, size_t i) -> std::pair<double, double> {
+    if (i < s.lo.size() && i < s.hi.size() && std::isfinite(s.lo[i]) && std::isfinite(s.hi[i]))
+      return {s.lo[i], s.hi[i]};
+    if (i < s.err.size() && std::isfinite(s.err[i]) && s.err[i] > 0)
+      return {s.y[i] - s.err[i], s.y[i] + s.err[i]};
+    return {NAN, NAN};
+  };
   double ylo = INFINITY, yhi = -INFINITY, xlo = INFINITY, xhi = -INFINITY;
   for (const auto& s : series) {
     range_of(s.x, xlo, xhi);
     for (size_t i = 0; i < s.y.size(); ++i) {
       if (!std::isfinite(s.y[i])) continue;
-      double e = i < s.err.size() && std::isfinite(s.err[i]) ? s.err[i] : 0;
-      ylo = std::min(ylo, s.y[i] - e);
-      yhi = std::max(yhi, s.y[i] + e);
+      auto [lo, hi] = bar(s, i);
+      ylo = std::min({ylo, s.y[i], std::isfinite(lo) ? lo : s.y[i]});
+      yhi = std::max({yhi, s.y[i], std::isfinite(hi) ? hi : s.y[i]});
     }
   }
+  for (const auto& r : references)
+    if (std::isfinite(r.y)) ylo = std::min(ylo, r.y), yhi = std::max(yhi, r.y);
   f.set_y(ylo, yhi);
   f.integer_x = markers;
   for (const auto& s : series)
@@ -242,25 +253,41 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
   double pad = markers ? 0.05 * (xhi - xlo) : 0;
   f.x0 = xlo - pad;
   f.x1 = xhi + pad;
+  // Labels alternate between the left and the right end so close lines (ST 2.3 N, MPF 2.5 N)
+  // do not print their labels on top of each other.
+  for (size_t ri = 0; ri < references.size(); ++ri) {
+    const auto& r = references[ri];
+    if (!std::isfinite(r.y)) continue;
+    const bool right = ri % 2 == 1;
+    f.body << "<line x1=\"" << num(f.left) << "\" x2=\"" << num(f.W - f.right) << "\" y1=\""
+           << num(f.py(r.y)) << "\" y2=\"" << num(f.py(r.y)) << "\" stroke=\"" << r.colour
+           << "\" stroke-dasharray=\"6 4\"/>\n<text x=\""
+           << num(right ? f.W - f.right - 4 : f.left + 4) << "\" y=\"" << num(f.py(r.y) - 3) << "\""
+           << (right ? " text-anchor=\"end\"" : "") << " fill=\"" << r.colour << "\">"
+           << xml_escape(r.label) << "</text>\n";
+  }
+  const double n = static_cast<double>(series.size());
   for (size_t si = 0; si < series.size(); ++si) {
     const auto& s = series[si];
     const std::string col = group_colour(s.colour);
+    const double dodge = markers ? (static_cast<double>(si) - (n - 1) / 2) * kDodgePixels : 0;
     std::ostringstream pts;
     for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i)
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]))
-        pts << num(f.px(s.x[i])) << "," << num(f.py(s.y[i])) << " ";
+        pts << num(f.px(s.x[i]) + dodge) << "," << num(f.py(s.y[i])) << " ";
     f.body << "<polyline fill=\"none\" stroke=\"" << col << "\" stroke-width=\"1.5\" points=\""
            << pts.str() << "\"/>\n";
     if (markers)
       for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
         if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-        double cx = f.px(s.x[i]);
-        if (i < s.err.size() && std::isfinite(s.err[i]) && s.err[i] > 0)
-          f.body << "<line x1=\"" << num(cx) << "\" x2=\"" << num(cx) << "\" y1=\""
-                 << num(f.py(s.y[i] - s.err[i])) << "\" y2=\"" << num(f.py(s.y[i] + s.err[i]))
-                 << "\" stroke=\"" << col << "\"/>\n";
+        double cx = f.px(s.x[i]) + dodge;
+        auto [lo, hi] = bar(s, i);
+        if (std::isfinite(lo) && std::isfinite(hi))
+          f.body << "<line class=\"errorbar\" x1=\"" << num(cx) << "\" x2=\"" << num(cx)
+                 << "\" y1=\"" << num(f.py(lo)) << "\" y2=\"" << num(f.py(hi)) << "\" stroke=\""
+                 << col << "\"/>\n";
         f.body << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(f.py(s.y[i]))
-               << "\" r=\"4\" fill=\"" << col << "\"/>\n";
+               << "\" r=\"3\" fill=\"" << col << "\"/>\n";
       }
     f.body << "<rect x=\"" << num(f.W - 150) << "\" y=\"" << num(f.top + 4 + 16 * si)
            << "\" width=\"10\" height=\"10\" fill=\"" << col << "\"/><text x=\"" << num(f.W - 135)

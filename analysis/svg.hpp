@@ -31,14 +31,25 @@ std::string svg_participant_plot(const std::vector<std::string>& group_names,
                                  const std::vector<ParticipantPoint>& points,
                                  const std::string& title, const std::string& y_label);
 
-// Lines through (x, y) per series with ±err bars (err may be empty or NaN = none).
+// Lines through (x, y) per series with error bars (err may be empty or NaN = none): ±err, or
+// the asymmetric [lo, hi] when lo/hi are given (e.g. a CI).
 struct Series {
   std::string name;
   std::vector<double> x, y, err;
+  std::vector<double> lo, hi;  // optional interval per point (same units as y); overrides err
   int colour = 0;
 };
+// A labelled horizontal line across the plot (e.g. the ST / MPF / SFT force thresholds).
+struct ReferenceLine {
+  std::string label;
+  double y = 0;
+  std::string colour = "#555555";
+};
+// With markers, series are dodged horizontally (kDodgePixels apart, centred on the true x) so
+// error bars of neighbouring groups at the same x never overlap.
+inline constexpr double kDodgePixels = 7.0;
 std::string svg_line_plot(const std::vector<Series>& series, const std::string& title,
                           const std::string& x_label, const std::string& y_label,
-                          bool markers = true);
+                          bool markers = true, const std::vector<ReferenceLine>& references = {});
 
 }  // namespace palplab::analysis

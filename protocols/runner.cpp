@@ -45,6 +45,30 @@ ForceLimits limits_for(const Study& s, const std::string& region) {
   return {};
 }
 
+// The structure the report reads from the database (results/schema.sql: study_groups, phases,
+// thresholds). Thresholds are task-wide in study format 1, so every phase gets the same table.
+results::StudyStructure study_structure(const Study& s) {
+  results::StudyStructure out;
+  out.has_structure = true;
+  for (const auto& g : s.groups) out.groups.push_back({g.id, g.prototype});
+  for (const auto& ph : s.phases) {
+    results::PhaseRecord r;
+    r.phase = ph.id;
+    r.kind = ph.kind.empty() ? "other" : ph.kind;
+    r.sessions = ph.sessions;
+    r.session_duration = ph.session_duration;
+    r.haptic = ph.cues.haptic;
+    r.visual_deformation = ph.cues.visual_deformation;
+    r.audio = ph.cues.audio;
+    r.instructed = ph.instructed;
+    r.feature = s.task.feature;
+    for (const auto& [region, l] : s.task.thresholds)
+      r.thresholds.push_back({region, l.st, l.mpf, l.sft});
+    out.phases.push_back(r);
+  }
+  return out;
+}
+
 // A demonstration press on the feature of this simulator: a slow deliberate press until the
 // force, judged with relative error `eps`, reaches the MPF; what it rendered on the way (the
 // visible deformation at the target, 0 when none is drawn; whether the sound came). The scene
@@ -313,6 +337,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
     std::vector<results::ParticipantRecord> parts;
     for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
     store.write_study(rec, protos, parts);
+    store.write_structure(study_structure(study));
   }
 
   Progress progress;

@@ -81,6 +81,23 @@ struct Analysis {
   std::string phase;    // phase id whose sessions are analysed
   bool welch = true;    // pairwise_t: unequal variances (MINITAB default)
   bool pooled = false;  // pool all sessions of the phase (experiment 1) instead of the last one
+  // pooled: participant means by default; true treats every session as an independent
+  // observation (pseudo-replication; `validate` and the report warn)
+  bool pool_sessions = false;
+  double margin = 0.0;  // equivalence margin ± in the measure's unit; 0 = the report's default
+};
+
+// A declared (confirmatory) hypothesis, $.hypotheses[i]: the report runs exactly these first.
+struct Hypothesis {
+  std::string id;              // label ("H1")
+  std::string statement;       // optional free text
+  std::string measure, phase;  // what and where (as in Analysis)
+  std::string test;            // "anova_oneway" | "welch_t" | "student_t" | "tost"
+  std::vector<std::pair<std::string, std::string>> pairs;  // group pairs; empty = all pairs
+  std::optional<std::pair<double, double>> margins;        // tost: [low, high] in measure units
+  double alpha = 0.05;
+  std::string correction = "holm";  // over the hypothesis's pairs: "holm" | "bonferroni" | "none"
+  bool pooled = false;              // participant means over the phase's sessions, else the last
 };
 
 struct Study {
@@ -97,6 +114,7 @@ struct Study {
   std::string participant_model = "pmm1";
   nlohmann::json participant_parameters = nlohmann::json::object();
   std::vector<Analysis> analyses;
+  std::vector<Hypothesis> hypotheses;
   std::vector<std::string> prototype_dirs;  // extra search dirs, resolved against the study dir
   // Prototype id -> resolved file path (every id the study names).
   std::map<std::string, std::string> prototype_files;

@@ -154,7 +154,8 @@ Study parse_study(const std::string& text, const std::string& file,
   if (!c.expect_object(root, R)) c.throw_if_any();
   c.keys(root, R,
          {"palplab_study", "id", "title", "description", "seed", "task", "groups", "assignment",
-          "phases", "roles", "measures", "participant_model", "analyses", "prototype_dirs"});
+          "phases", "roles", "measures", "participant_model", "analyses", "hypotheses",
+          "prototype_dirs"});
 
   if (auto v = c.integer(root, R, "palplab_study", true, "the study format version, 1"))
     if (*v != kStudyFormatVersion)
@@ -495,7 +496,7 @@ Study parse_study(const std::string& text, const std::string& file,
         std::string A = path_index("$.analyses", i);
         const json& aj = (*an)[i];
         if (!c.expect_object(aj, A)) continue;
-        c.keys(aj, A, {"kind", "measure", "phase", "welch", "pooled"});
+        c.keys(aj, A, {"kind", "measure", "phase", "welch", "pooled", "pool_sessions", "margin"});
         Analysis a;
         if (auto v = c.one_of(aj, A, "kind", true, {"anova_oneway", "pairwise_t", "descriptives"}))
           a.kind = *v;
@@ -511,6 +512,23 @@ Study parse_study(const std::string& text, const std::string& file,
         }
         if (auto v = c.boolean(aj, A, "welch")) a.welch = *v;
         if (auto v = c.boolean(aj, A, "pooled")) a.pooled = *v;
+        if (auto v = c.boolean(aj, A, "pool_sessions")) {
+          a.pool_sessions = *v;
+          if (*v && !a.pooled)
+            c.err(path_key(A, "pool_sessions"),
+                  "pool_sessions: true needs \"pooled\": true (it says how pooled sessions are "
+                  "analysed)");
+        }
+        if (auto v = c.num(aj, A, "margin", false,
+                           "a positive number (equivalence margin, "
+                           "in the measure's unit)")) {
+          if (*v <= 0)
+            c.err(path_key(A, "margin"),
+                  "expected a positive number (equivalence margin, in the measure's unit), got " +
+                      json(*v).dump());
+          else
+            a.margin = *v;
+        }
         s.analyses.push_back(a);
       }
     }
@@ -528,6 +546,104 @@ Study parse_study(const std::string& text, const std::string& file,
                             " sessions = " + std::to_string(participants * sessions) +
                             " sessions; palplab runs at most " +
                             std::to_string(kMaxPlannedSessions) + " per study");
+  }
+
+  // ---- hypotheses (declared, confirmatory analyses)
+  if (const json* hy = c.member(root, R, "hypotheses", false, "")) {
+    if (!hy->is_array()) {
+      c.err("$.hypotheses", std::string("expected an array, got ") + kind_name(*hy));
+    } else {
+      std::set<std::string> ids;
+      for (std::size_t i = 0; i < hy->size(); ++i) {
+        std::string H = path_index("$.hypotheses", i);
+        const json& hj = (*hy)[i];
+        if (!c.expect_object(hj, H)) continue;
+        c.keys(hj, H,
+               {"id", "statement", "measure", "phase", "test", "pairs", "margins", "alpha",
+                "correction", "pooled"});
+        Hypothesis h;
+        if (auto v = c.nonempty_text(hj, H, "id", true)) {
+          h.id = *v;
+          if (!ids.insert(*v).second)
+            c.err(path_key(H, "id"), "duplicate hypothesis id \"" + *v + "\"");
+        }
+        if (auto v = c.text(hj, H, "statement", false)) h.statement = *v;
+        if (auto v = c.one_of(hj, H, "measure", true, known_measures())) {
+          h.measure = *v;
+          if (std::find(s.measures.begin(), s.measures.end(), *v) == s.measures.end())
+            c.err(path_key(H, "measure"), "\"" + *v + "\" is not in $.measures");
+        }
+        if (auto v = c.nonempty_text(hj, H, "phase", true)) {
+          h.phase = *v;
+          if (!phase_ids.empty() && !phase_ids.count(*v))
+            c.err(path_key(H, "phase"), "unknown phase id \"" + *v + "\"");
+        }
+        if (auto v =
+                c.one_of(hj, H, "test", true, {"anova_oneway", "welch_t", "student_t", "tost"}))
+          h.test = *v;
+        if (const json* pj = c.member(hj, H, "pairs", false, "")) {
+          const std::string PP = path_key(H, "pairs");
+          if (h.test == "anova_oneway") {
+            c.err(PP, "an anova_oneway hypothesis is about all groups; pairs apply to t and tost");
+          } else if (!pj->is_array() || pj->empty()) {
+            c.err(PP, "expected a non-empty array of [group, group] pairs, got " +
+                          std::string(kind_name(*pj)));
+          } else {
+            for (std::size_t k = 0; k < pj->size(); ++k) {
+              const json& pr = (*pj)[k];
+              const std::string PK = path_index(PP, k);
+              if (!pr.is_array() || pr.size() != 2 || !pr[0].is_string() || !pr[1].is_string()) {
+                c.err(PK, "expected a pair of group ids [\"B\", \"C\"], got " + pr.dump());
+                continue;
+              }
+              const std::string a = pr[0], b = pr[1];
+              bool ok = true;
+              for (const auto& g : {a, b})
+                if (!group_ids.count(g)) {
+                  c.err(PK, "unknown group id \"" + g + "\"; expected one of: " +
+                                join(std::vector<std::string>(group_ids.begin(), group_ids.end())));
+                  ok = false;
+                }
+              if (ok && a == b)
+                c.err(PK, "a pair needs two different groups, got \"" + a + "\" twice");
+              else if (ok)
+                h.pairs.push_back({a, b});
+            }
+          }
+        }
+        if (const json* mj = c.member(hj, H, "margins", false, "")) {
+          const std::string PM = path_key(H, "margins");
+          if (mj->is_number() && std::isfinite(mj->get<double>()) && mj->get<double>() > 0) {
+            h.margins = std::make_pair(-mj->get<double>(), mj->get<double>());
+          } else if (mj->is_array() && mj->size() == 2 && (*mj)[0].is_number() &&
+                     (*mj)[1].is_number() && (*mj)[0].get<double>() < 0 &&
+                     (*mj)[1].get<double>() > 0) {
+            h.margins = std::make_pair((*mj)[0].get<double>(), (*mj)[1].get<double>());
+          } else {
+            c.err(PM,
+                  "expected a positive number m (margins ±m) or [low < 0, high > 0] in the "
+                  "measure's unit, got " +
+                      mj->dump());
+          }
+          if (h.test != "tost" && h.margins)
+            c.err(PM, "margins apply to a tost hypothesis only (test is \"" + h.test + "\")");
+        } else if (h.test == "tost") {
+          c.err(H,
+                "missing required key \"margins\" (a tost hypothesis needs its equivalence "
+                "margins)");
+        }
+        if (auto v = c.num(hj, H, "alpha", false, "a number in (0, 0.5]")) {
+          if (*v <= 0 || *v > 0.5)
+            c.err(path_key(H, "alpha"), "expected a number in (0, 0.5], got " + json(*v).dump());
+          else
+            h.alpha = *v;
+        }
+        if (auto v = c.one_of(hj, H, "correction", false, {"holm", "bonferroni", "none"}))
+          h.correction = *v;
+        if (auto v = c.boolean(hj, H, "pooled")) h.pooled = *v;
+        s.hypotheses.push_back(h);
+      }
+    }
   }
 
   // ---- prototypes: resolve every id, inspect each file once, check region names

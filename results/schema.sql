@@ -1,7 +1,8 @@
--- palplab results store, schema version 1 (docs/FORMATS.md).
+-- palplab results store, schema version 2 (docs/FORMATS.md; version 1 lacked the study
+-- structure tables study_groups, phases and thresholds).
 -- One database holds one run of one study. Units: s, N, m. Times of day are UTC ISO 8601.
 -- results/schema.cpp embeds this file verbatim (a test checks that they are identical).
-PRAGMA user_version = 1;
+PRAGMA user_version = 2;
 
 CREATE TABLE meta (
   key   TEXT PRIMARY KEY,
@@ -28,6 +29,38 @@ CREATE TABLE prototypes (
   path      TEXT NOT NULL,
   sha256    TEXT NOT NULL,
   json      TEXT NOT NULL
+);
+
+-- The study's structure as run (from the validated study, so the report need not re-parse it):
+-- groups and phases in declaration order, each phase's kind and cue switches as the study
+-- declares them, and the force thresholds that applied in each phase.
+CREATE TABLE study_groups (
+  grp       TEXT PRIMARY KEY,
+  position  INTEGER NOT NULL,             -- 0-based declaration order
+  prototype TEXT NOT NULL                 -- default prototype id
+);
+
+CREATE TABLE phases (
+  phase              TEXT PRIMARY KEY,
+  position           INTEGER NOT NULL,    -- 0-based declaration order
+  kind               TEXT NOT NULL,       -- pre_training | training | post_training | other
+  sessions           INTEGER NOT NULL,
+  session_duration   REAL NOT NULL,       -- s
+  haptic             INTEGER,             -- cue switches: 1 on, 0 off, NULL as the prototype says
+  visual_deformation INTEGER,
+  audio              INTEGER,
+  instructed         INTEGER NOT NULL,    -- 1 when an instructor guides the phase
+  feature            TEXT NOT NULL        -- region to find (task.feature)
+);
+
+-- Force thresholds (N) per phase and region; region '*' applies to every other region.
+CREATE TABLE thresholds (
+  phase  TEXT NOT NULL REFERENCES phases (phase),
+  region TEXT NOT NULL,
+  st     REAL NOT NULL,                   -- sound threshold
+  mpf    REAL NOT NULL,                   -- maximum palpation force (the target)
+  sft    REAL NOT NULL,                   -- stopping force threshold
+  PRIMARY KEY (phase, region)
 );
 
 CREATE TABLE participants (

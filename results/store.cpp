@@ -189,7 +189,8 @@ Store::Store(Store&& o) noexcept
     : db_(std::exchange(o.db_, nullptr)),
       path_(std::move(o.path_)),
       mu_(std::move(o.mu_)),
-      lock_fd_(std::exchange(o.lock_fd_, -1)) {}
+      lock_fd_(std::exchange(o.lock_fd_, -1)),
+      version_(o.version_) {}
 Store& Store::operator=(Store&& o) noexcept {
   if (this != &o) {
     if (db_) sqlite3_close(db_);
@@ -198,6 +199,7 @@ Store& Store::operator=(Store&& o) noexcept {
     path_ = std::move(o.path_);
     mu_ = std::move(o.mu_);
     lock_fd_ = std::exchange(o.lock_fd_, -1);
+    version_ = o.version_;
   }
   return *this;
 }
@@ -342,10 +344,13 @@ Store Store::open(const std::string& path, bool exclusive) {
                          std::to_string(kSchemaVersion) + ")",
                      path);
   }
-  if (version != kSchemaVersion)
+  if (version < kOldestReadableSchemaVersion || version > kSchemaVersion)
     throw InputError("results schema version " + std::to_string(version) +
-                         " is not supported (expected " + std::to_string(kSchemaVersion) + ")",
+                         " is not supported (expected " +
+                         std::to_string(kOldestReadableSchemaVersion) + " to " +
+                         std::to_string(kSchemaVersion) + ")",
                      path);
+  s.version_ = static_cast<int>(version);
   if (exclusive || can_write)
     exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
   return s;
@@ -484,6 +489,78 @@ std::vector<PrototypeRecord> Store::read_prototypes() const {
   Stmt q(db_, "SELECT prototype, path, sha256, json FROM prototypes ORDER BY prototype");
   std::vector<PrototypeRecord> out;
   while (q.step()) out.push_back({q.text(0), q.text(1), q.text(2), q.text(3)});
+  return out;
+}
+
+void Store::write_structure(const StudyStructure& st) {
+  std::lock_guard lock(*mu_);
+  if (version_ < 2)
+    throw InputError("results schema version " + std::to_string(version_) +
+                         " has no study structure tables; a run needs a new database",
+                     path_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    Stmt g(db_, "INSERT INTO study_groups(grp, position, prototype) VALUES (?1, ?2, ?3)");
+    for (std::size_t i = 0; i < st.groups.size(); ++i)
+      g.bind(1, st.groups[i].group)
+          .bind(2, static_cast<int>(i))
+          .bind(3, st.groups[i].prototype)
+          .run();
+    Stmt p(db_,
+           "INSERT INTO phases(phase, position, kind, sessions, session_duration, haptic, "
+           "visual_deformation, audio, instructed, feature) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, "
+           "?8, ?9, ?10)");
+    Stmt t(db_, "INSERT INTO thresholds(phase, region, st, mpf, sft) VALUES (?1, ?2, ?3, ?4, ?5)");
+    auto cue = [&](int i, const std::optional<bool>& c) -> Stmt& {
+      return c ? p.bind(i, *c ? 1 : 0) : p.bind_null(i);
+    };
+    for (std::size_t i = 0; i < st.phases.size(); ++i) {
+      const PhaseRecord& ph = st.phases[i];
+      p.bind(1, ph.phase).bind(2, static_cast<int>(i)).bind(3, ph.kind).bind(4, ph.sessions);
+      p.bind(5, ph.session_duration);
+      cue(6, ph.haptic);
+      cue(7, ph.visual_deformation);
+      cue(8, ph.audio);
+      p.bind(9, ph.instructed ? 1 : 0).bind(10, ph.feature).run();
+      for (const auto& r : ph.thresholds)
+        t.bind(1, ph.phase).bind(2, r.region).bind(3, r.st).bind(4, r.mpf).bind(5, r.sft).run();
+    }
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+StudyStructure Store::read_structure() const {
+  std::lock_guard lock(*mu_);
+  StudyStructure out;
+  if (version_ < 2) return out;
+  out.has_structure = true;
+  Stmt g(db_, "SELECT grp, prototype FROM study_groups ORDER BY position");
+  while (g.step()) out.groups.push_back({g.text(0), g.text(1)});
+  Stmt p(db_,
+         "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, audio, "
+         "instructed, feature FROM phases ORDER BY position");
+  auto cue = [&](int c) { return p.null(c) ? std::optional<bool>() : p.integer(c) != 0; };
+  while (p.step()) {
+    PhaseRecord r;
+    r.phase = p.text(0);
+    r.kind = p.text(1);
+    r.sessions = static_cast<int>(p.integer(2));
+    r.session_duration = p.real(3);
+    r.haptic = cue(4);
+    r.visual_deformation = cue(5);
+    r.audio = cue(6);
+    r.instructed = p.integer(7) != 0;
+    r.feature = p.text(8);
+    out.phases.push_back(r);
+  }
+  Stmt t(db_, "SELECT phase, region, st, mpf, sft FROM thresholds ORDER BY phase, region");
+  while (t.step())
+    for (auto& r : out.phases)
+      if (r.phase == t.text(0))
+        r.thresholds.push_back({t.text(1), t.real(2), t.real(3), t.real(4)});
   return out;
 }
 

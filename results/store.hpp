@@ -16,7 +16,10 @@ struct sqlite3;
 
 namespace palplab::results {
 
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
+// Oldest version `Store::open` still reads: version 1 lacks the study structure tables
+// (read_structure() reports has_structure = false for it).
+inline constexpr int kOldestReadableSchemaVersion = 1;
 
 std::string schema_sql();  // the text of results/schema.sql
 
@@ -24,6 +27,29 @@ struct StudyRecord {
   std::string study_id, title, json, sha256, palplab_version, git_commit;
   std::uint64_t seed = 0;
   std::string started_at, finished_at;  // UTC ISO 8601; finished_at empty while incomplete
+};
+
+// The study's structure as run (tables study_groups, phases, thresholds).
+struct GroupRecord {
+  std::string group, prototype;
+};
+struct ThresholdRecord {
+  std::string region;               // "*" = every region without its own entry
+  double st = 0, mpf = 0, sft = 0;  // N
+};
+struct PhaseRecord {
+  std::string phase, kind;  // kind: pre_training | training | post_training | other
+  int sessions = 1;
+  double session_duration = 0;                            // s
+  std::optional<bool> haptic, visual_deformation, audio;  // unset = as the prototype says
+  bool instructed = false;
+  std::string feature;                      // region to find
+  std::vector<ThresholdRecord> thresholds;  // by region
+};
+struct StudyStructure {
+  bool has_structure = false;       // false: a schema-1 database, which did not store it
+  std::vector<GroupRecord> groups;  // declaration order
+  std::vector<PhaseRecord> phases;  // declaration order
 };
 
 struct PrototypeRecord {
@@ -117,7 +143,8 @@ class Store {
 
   void write_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
                    const std::vector<ParticipantRecord>& participants);
-  void write_session(SessionData& d);  // one transaction; sets d.session.session
+  void write_structure(const StudyStructure& s);  // once, after write_study
+  void write_session(SessionData& d);             // one transaction; sets d.session.session
   void set_finished(const std::string& finished_at);
 
   StudyRecord read_study() const;
@@ -127,6 +154,8 @@ class Store {
   std::vector<EventRecord> read_events(long long session) const;
   SampleSeries read_samples(long long session) const;
   std::vector<PrototypeRecord> read_prototypes() const;
+  StudyStructure read_structure() const;
+  int schema_version() const { return version_; }
 
   const std::string& path() const { return path_; }
   // "" for a finished run; otherwise a one-paragraph warning that the database is INCOMPLETE
@@ -139,6 +168,7 @@ class Store {
   std::string path_;
   std::unique_ptr<std::mutex> mu_;
   int lock_fd_ = -1;  // flock(LOCK_EX) of the writer; -1 for readers
+  int version_ = kSchemaVersion;
 };
 
 // Tidy CSV export: measures.csv (participant,group,phase,session,measure,value,unit),

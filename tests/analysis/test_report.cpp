@@ -8,11 +8,17 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <set>
+
+#include <sqlite3.h>
 #include <sstream>
 
 #include "analysis/anova.hpp"
+#include "analysis/descriptives.hpp"
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
+#include "analysis/svg.hpp"
+#include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
 #include "results/store.hpp"
 
@@ -118,7 +124,32 @@ struct FixtureDb {
   std::vector<double> post[3];  // post-training palpation_force per group (defined values)
 };
 
-FixtureDb make_fixture(bool finished = true, bool pool_sessions = false) {
+// The structure the runner stores: phases with kinds, cues, thresholds. The phase ids are
+// deliberately not "train…": the report must read the kind, not guess it from the name.
+results::StudyStructure fixture_structure() {
+  results::StudyStructure st;
+  st.has_structure = true;
+  st.groups = {{"A", "A"}, {"B", "B"}, {"C", "C"}};
+  results::PhaseRecord tr;
+  tr.phase = "training";
+  tr.kind = "training";
+  tr.sessions = 3;
+  tr.session_duration = 2;
+  tr.audio = true;
+  tr.feature = "ovary_left";
+  tr.thresholds = {{"ovary_left", 2.3, 2.5, 3.5}};
+  results::PhaseRecord post = tr;
+  post.phase = "post_training";
+  post.kind = "post_training";
+  post.sessions = 1;
+  post.audio = false;
+  post.visual_deformation = false;
+  st.phases = {tr, post};
+  return st;
+}
+
+FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool structure = true,
+                       const nlohmann::json& hypotheses = nullptr) {
   FixtureDb f;
   f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
   fs::remove_all(f.dir);
@@ -145,6 +176,7 @@ FixtureDb make_fixture(bool finished = true, bool pool_sessions = false) {
          {"welch", true}},
         {{"kind", "anova_oneway"}, {"measure", "exploration_time"}, {"phase", "post_training"}}}}};
   if (pool_sessions) sj["analyses"][0]["pool_sessions"] = true;
+  if (!hypotheses.is_null()) sj["hypotheses"] = hypotheses;
   auto store = results::Store::create(f.db.string());
   results::StudyRecord st;
   st.study_id = "fixture";
@@ -167,6 +199,7 @@ FixtureDb make_fixture(bool finished = true, bool pool_sessions = false) {
       ps.push_back(p);
     }
   store.write_study(st, {{"A", "prototypes/A.json", "aa", "{}"}}, ps);
+  if (structure) store.write_structure(fixture_structure());
   for (const auto& p : ps) {
     int g = p.number / 5, i = p.number % 5;
     for (int s = 0; s < 4; ++s) {
@@ -327,4 +360,149 @@ TEST(Report, PooledAnalysesUseParticipantMeans) {
         << g << " n=" << n << "\n"
         << section.substr(0, 800);
   fs::remove_all(f.dir);
+}
+
+// The study structure comes from the database: the phases table (kind, cues, thresholds) is in
+// the provenance section, the learning curve covers exactly the phases of kind "training", and
+// the force trace carries the stored ST / MPF / SFT as labelled lines.
+TEST(Report, StructureFromTheDatabase) {
+  FixtureDb f = make_fixture();
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  std::string md = slurp(files.markdown);
+  EXPECT_NE(md.find("| training | training | 3 | 2 | as prototype | as prototype | on | no | "
+                    "ovary_left: 2.3 / 2.5 / 3.5 |"),
+            std::string::npos)
+      << md.substr(0, 2500);
+  EXPECT_NE(md.find("| post_training | post_training | 1 | 2 | as prototype | off | off |"),
+            std::string::npos);
+  std::string traces;
+  for (const auto& fig : files.figures)
+    if (fig.find("force_traces.svg") != std::string::npos) traces = slurp(fig);
+  ASSERT_FALSE(traces.empty());
+  for (const char* line : {">ST 2.3 N<", ">MPF 2.5 N<", ">SFT 3.5 N<"})
+    EXPECT_NE(traces.find(line), std::string::npos) << line;
+  EXPECT_NE(md.find("Dashed lines: the phase's thresholds"), std::string::npos);
+  fs::remove_all(f.dir);
+}
+
+// A database without the structure tables' contents is not guessed at by phase names: with
+// no phase of kind training stored, there is no learning curve, whatever the phase is called.
+TEST(Report, NoNameGuessingOfTrainingPhases) {
+  FixtureDb f = make_fixture(true, false, /*structure=*/false);
+  {
+    auto store = results::Store::open(f.db.string());
+    results::StudyStructure st = fixture_structure();
+    st.phases[0].kind = "other";  // called "training", declared other
+    store.write_structure(st);
+  }
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  std::string md = slurp(files.markdown);
+  EXPECT_NE(md.find("The study declares no phase of kind \"training\"."), std::string::npos);
+  for (const auto& fig : files.figures) EXPECT_EQ(fig.find("learning_"), std::string::npos) << fig;
+  fs::remove_all(f.dir);
+}
+
+// A schema-1 database (before the structure tables) is refused with a message that says why
+// and what to do, never reported from guessed phase kinds.
+TEST(Report, SchemaOneDatabaseIsRefusedClearly) {
+  FixtureDb f = make_fixture();
+  { auto store = results::Store::open(f.db.string()); }
+  // Downgrade the file to what palplab wrote before: version 1, no structure tables.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(f.db.string().c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "DROP TABLE thresholds; DROP TABLE phases; DROP TABLE study_groups; "
+                         "UPDATE meta SET value = '1' WHERE key = 'schema_version'; "
+                         "PRAGMA user_version = 1;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  try {
+    write_report(f.db.string(), (f.dir / "report").string());
+    ADD_FAILURE() << "a schema-1 database was reported";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("schema version 1 does not store the study structure"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find("re-run the study"), std::string::npos) << what;
+  }
+  fs::remove_all(f.dir);
+}
+
+// Proportions get Wilson intervals inside [0, 1]; neighbouring groups' error bars are offset.
+TEST(Report, WilsonIntervalAndDodgedErrorBars) {
+  // Wilson (1927) 95 % for 0/10, 10/10 and 3/10: the closed form (p + z²/2n ± z·sqrt(p(1-p)/n
+  // + z²/4n²)) / (1 + z²/n) evaluated separately, = R's prop.test(k, n, correct = FALSE).
+  auto w0 = wilson_interval(0, 10), w10 = wilson_interval(10, 10), w3 = wilson_interval(3, 10);
+  EXPECT_EQ(w0.low, 0.0);
+  EXPECT_NEAR(w0.high, 0.2775328, 1e-6);
+  EXPECT_NEAR(w10.low, 0.7224672, 1e-6);
+  EXPECT_EQ(w10.high, 1.0);
+  EXPECT_NEAR(w3.low, 0.1077913, 1e-6);
+  EXPECT_NEAR(w3.high, 0.6032219, 1e-6);
+  // Two series at the same x: their error bars are drawn at different x positions.
+  Series a, b;
+  a.x = b.x = {1, 2};
+  a.y = {1, 2};
+  b.y = {1.1, 2.1};
+  a.err = b.err = {0.5, 0.5};
+  b.colour = 1;
+  std::string svg = svg_line_plot({a, b}, "t", "x", "y");
+  std::regex bar("class=\"errorbar\" x1=\"([0-9.]+)\"");
+  std::set<std::string> xs;
+  size_t bars = 0;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), bar), end; it != end; ++it, ++bars)
+    xs.insert((*it)[1]);
+  EXPECT_EQ(bars, 4u);
+  EXPECT_EQ(xs.size(), 4u) << svg;
+}
+
+// Declared hypotheses run first, labelled confirmatory, with their own α and correction; the
+// t statistics are those of the two samples (checked against welch_t on the same values); the
+// rest of the report is labelled exploratory. Without hypotheses there is no such label.
+TEST(Report, ConfirmatoryHypothesesFirst) {
+  nlohmann::json hyps = nlohmann::json::array({{{"id", "H1"},
+                                                {"statement", "C presses harder than A"},
+                                                {"measure", "palpation_force"},
+                                                {"phase", "post_training"},
+                                                {"test", "welch_t"},
+                                                {"pairs", nlohmann::json::array({nlohmann::json::array({"C", "A"})})},
+                                                {"alpha", 0.01}},
+                                               {{"id", "H2"},
+                                                {"measure", "palpation_force"},
+                                                {"phase", "post_training"},
+                                                {"test", "tost"},
+                                                {"margins", 5.0},
+                                                {"correction", "bonferroni"}}});
+  FixtureDb f = make_fixture(true, false, true, hyps);
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  std::string md = slurp(files.markdown);
+  const size_t conf = md.find("## Confirmatory analyses (declared hypotheses)");
+  const size_t expl = md.find("## Exploratory analyses");
+  ASSERT_NE(conf, std::string::npos);
+  ASSERT_NE(expl, std::string::npos);
+  EXPECT_LT(conf, expl);
+  EXPECT_LT(expl, md.find("## Analysis: "));
+  EXPECT_NE(md.find("### H1: C presses harder than A"), std::string::npos);
+  TTest t = welch_t(f.post[2], f.post[0]);  // C – A, as declared
+  char row[160];
+  std::snprintf(row, sizeof row, "| C – A | %.4g | %.3f | %.2f |", t.mean_diff, t.t, t.df);
+  EXPECT_NE(md.find(row), std::string::npos) << row << "\n" << md.substr(conf, 1500);
+  EXPECT_NE(md.find("α = 0.01"), std::string::npos);
+  // H2: every pair (3), Bonferroni; a ±5 N margin around differences of < 1 N is equivalent.
+  const size_t h2 = md.find("### H2");
+  ASSERT_NE(h2, std::string::npos);
+  const std::string sec = md.substr(h2, expl - h2);
+  EXPECT_NE(sec.find("p (bonferroni)"), std::string::npos);
+  int eq = 0;
+  for (size_t p = sec.find("| equivalent |"); p != std::string::npos;
+       p = sec.find("| equivalent |", p + 1))
+    ++eq;
+  EXPECT_EQ(eq, 3) << sec;
+  fs::remove_all(f.dir);
+  FixtureDb g = make_fixture();
+  std::string md2 = slurp(write_report(g.db.string(), (g.dir / "report").string()).markdown);
+  EXPECT_EQ(md2.find("Confirmatory"), std::string::npos);
+  EXPECT_EQ(md2.find("Exploratory analyses"), std::string::npos);
+  fs::remove_all(g.dir);
 }

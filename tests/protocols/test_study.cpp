@@ -217,3 +217,62 @@ TEST(Study, ReferenceStudiesAreValid) {
     }) << f;
   }
 }
+
+// Analysis keys the report reads (margin, pool_sessions) are accepted and checked.
+TEST(Study, AnalysisMarginAndPoolSessions) {
+  auto with = [](const std::string& analysis) {
+    return edit("  ]\n}", "  ],\n  \"analyses\": [\n    " + analysis + "\n  ]\n}");
+  };
+  std::string f = fixture::study_in_dir(
+      "anaok",
+      with(R"({"kind": "anova_oneway", "measure": "palpation_force", "phase": "training", )"
+           R"("pooled": true, "pool_sessions": true, "margin": 0.2})"));
+  Study s = load_study(f, fixture::tract_inspector());
+  ASSERT_EQ(s.analyses.size(), 1u);
+  EXPECT_TRUE(s.analyses[0].pool_sessions);
+  EXPECT_DOUBLE_EQ(s.analyses[0].margin, 0.2);
+  expect_one(
+      problems_of("anamargin", with(R"({"kind": "pairwise_t", "measure": "palpation_force", )"
+                                    R"("phase": "test", "margin": -1})")),
+      "$.analyses[0].margin", 22, "expected a positive number");
+  expect_one(
+      problems_of("anamargin2", with(R"({"kind": "pairwise_t", "measure": "palpation_force", )"
+                                     R"("phase": "test", "margin": "big"})")),
+      "$.analyses[0].margin", 22, "got a string");
+  expect_one(problems_of("anapool", with(R"({"kind": "pairwise_t", "measure": "palpation_force", )"
+                                         R"("phase": "test", "pool_sessions": true})")),
+             "$.analyses[0].pool_sessions", 22, "needs \"pooled\": true");
+}
+
+// Declared hypotheses: checked keys, tests, pairs of known groups, margins for tost, α range.
+TEST(Study, HypothesesChecked) {
+  auto with = [](const std::string& h) {
+    return edit("  ]\n}", "  ],\n  \"hypotheses\": [\n    " + h + "\n  ]\n}");
+  };
+  std::string f = fixture::study_in_dir(
+      "hyok",
+      with(R"({"id": "H1", "measure": "palpation_force", "phase": "test", )"
+           R"("test": "tost", "pairs": [["B", "A"]], "margins": [-0.1, 0.2], "alpha": 0.025})"));
+  Study s = load_study(f, fixture::tract_inspector());
+  ASSERT_EQ(s.hypotheses.size(), 1u);
+  EXPECT_EQ(s.hypotheses[0].pairs.at(0), std::make_pair(std::string("B"), std::string("A")));
+  EXPECT_DOUBLE_EQ(s.hypotheses[0].margins->first, -0.1);
+  EXPECT_DOUBLE_EQ(s.hypotheses[0].alpha, 0.025);
+  EXPECT_EQ(s.hypotheses[0].correction, "holm");
+  const std::string base = R"({"id": "H1", "measure": "palpation_force", "phase": "test", )";
+  expect_one(problems_of("hypair", with(base + R"("test": "welch_t", "pairs": [["B", "Z"]]})")),
+             "$.hypotheses[0].pairs[0]", 22, "unknown group id \"Z\"");
+  expect_one(problems_of("hysame", with(base + R"("test": "welch_t", "pairs": [["B", "B"]]})")),
+             "$.hypotheses[0].pairs[0]", 22, "two different groups");
+  expect_one(problems_of("hytost", with(base + R"("test": "tost"})")), "$.hypotheses[0]", 22,
+             "missing required key \"margins\"");
+  expect_one(problems_of("hyalpha", with(base + R"("test": "welch_t", "alpha": 0.9})")),
+             "$.hypotheses[0].alpha", 22, "expected a number in (0, 0.5]");
+  expect_one(problems_of("hytest", with(base + R"("test": "t"})")), "$.hypotheses[0].test", 22,
+             "not one of");
+  expect_one(
+      problems_of("hyanova", with(base + R"("test": "anova_oneway", "pairs": [["A", "B"]]})")),
+      "$.hypotheses[0].pairs", 22, "about all groups");
+  expect_one(problems_of("hycorr", with(base + R"("test": "welch_t", "correction": "fdr"})")),
+             "$.hypotheses[0].correction", 22, "not one of");
+}

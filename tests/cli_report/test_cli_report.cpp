@@ -1,0 +1,186 @@
+// The report as a reader sees it: `palplab run` a small study (declared hypotheses, a training
+// phase, force samples), `palplab validate` warnings, `palplab report`, then the HTML rendered
+// in headless Chromium (Debian `chromium`, installed by .ci/install-deps) at a narrow 700 px
+// window: no element may stick out to the right of the page (no horizontal cut; wide tables
+// must scroll inside themselves) and every figure must be drawn (an <svg>/<img> of real size
+// in each <figure>, images loaded). A negative control renders the same page without the
+// table-scrolling CSS and must see the cut, so the check can fail.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result shell(const std::string& cmd_line, const fs::path& dir) {
+  const fs::path errf = dir / "stderr.txt";
+  std::string cmd = cmd_line + " 2>" + errf.string();
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  std::ifstream e(errf);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  return r;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string chromium_binary() {
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    std::string cmd = std::string("command -v ") + name + " >/dev/null 2>&1";
+    if (std::system(cmd.c_str()) == 0) return name;
+  }
+  return "";
+}
+
+// Appended to a copy of report.html (the report itself has no scripts): measures the page
+// after load and writes the result into the DOM, which --dump-dom prints.
+const char* kProbe = R"(<script>
+window.addEventListener('load', () => {
+  const de = document.documentElement, W = de.clientWidth;
+  const cut = [];
+  for (const el of document.body.querySelectorAll('*')) {
+    // Inside a table the table scrolls; inside an SVG the SVG box counts.
+    if (el.closest('table') || (el.closest('svg') && el.tagName.toLowerCase() !== 'svg')) continue;
+    const r = el.getBoundingClientRect();
+    if (r.width > 0 && r.right > W + 0.5) cut.push(el.tagName + ':' + Math.round(r.right));
+  }
+  const figs = [...document.querySelectorAll('figure')];
+  const drawn = figs.filter(f => {
+    const s = f.querySelector('svg, img');
+    if (!s) return false;
+    const r = s.getBoundingClientRect();
+    return r.width > 10 && r.height > 10 &&
+        (s.tagName.toLowerCase() !== 'img' || (s.complete && s.naturalWidth > 0));
+  }).length;
+  const m = {scrollWidth: de.scrollWidth, clientWidth: W, figures: figs.length, drawn, cut};
+  const pre = document.createElement('pre');
+  pre.textContent = 'PALPLAB_' + 'METRICS ' + JSON.stringify(m);
+  document.body.appendChild(pre);
+});
+</script>)";
+
+nlohmann::json render_metrics(const std::string& chromium, const fs::path& html,
+                              const fs::path& dir) {
+  const fs::path probe = html.parent_path() / ("probe_" + html.filename().string());
+  std::string page = slurp(html);
+  page.insert(page.rfind("</body>"), kProbe);
+  std::ofstream(probe) << page;
+  Result r = shell(chromium +
+                       " --headless --no-sandbox --disable-gpu --hide-scrollbars "
+                       "--window-size=700,900 --virtual-time-budget=3000 --dump-dom 'file://" +
+                       probe.string() + "'",
+                   dir);
+  std::smatch m;
+  const std::regex re("PALPLAB_METRICS (\\{[^<]*\\})");
+  if (r.code != 0 || !std::regex_search(r.out, m, re)) {
+    ADD_FAILURE() << "chromium failed (exit " << r.code << "): " << r.err.substr(0, 2000);
+    return nullptr;
+  }
+  return nlohmann::json::parse(m[1].str());
+}
+
+const char* kStudy = R"({
+  "palplab_study": 1,
+  "id": "cli_report",
+  "title": "Report rendering check",
+  "seed": 5,
+  "prototype_dirs": ["@PROTOTYPES@"],
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [
+    {"id": "A", "prototype": "A", "size": 3},
+    {"id": "B", "prototype": "B", "size": 3}
+  ],
+  "phases": [
+    {"id": "practice", "kind": "training", "sessions": 2, "session_duration": 6,
+     "gap": {"minutes": 5}},
+    {"id": "test", "kind": "post_training", "sessions": 1, "session_duration": 6,
+     "start": {"after_previous": {"minutes": 10}}, "prototype": "A",
+     "cues": {"visual_deformation": false, "audio": false}}
+  ],
+  "analyses": [
+    {"kind": "anova_oneway", "measure": "palpation_force", "phase": "test"},
+    {"kind": "descriptives", "measure": "feature_identified", "phase": "practice",
+     "pooled": true, "pool_sessions": true}
+  ],
+  "hypotheses": [
+    {"id": "H1", "measure": "palpation_force", "phase": "test", "test": "welch_t",
+     "pairs": [["B", "A"]]}
+  ]
+})";
+}  // namespace
+
+TEST(CliReport, RendersInChromiumWithoutCutAndWithEveryFigure) {
+  const std::string chromium = chromium_binary();
+  if (chromium.empty())
+    GTEST_SKIP() << "chromium not installed (.ci/install-deps installs Debian's `chromium`): "
+                    "the report rendering check did not run";
+  const fs::path dir =
+      fs::temp_directory_path() / ("palplab_cli_report_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string study = kStudy;
+  study.replace(study.find("@PROTOTYPES@"), 12, std::string(PALPLAB_SOURCE_DIR) + "/prototypes");
+  std::ofstream(dir / "study.json") << study;
+  const std::string bin = PALPLAB_BINARY;
+
+  Result v = shell(bin + " validate " + (dir / "study.json").string(), dir);
+  ASSERT_EQ(v.code, 0) << v.err;
+  EXPECT_NE(v.err.find("warning: $.analyses[1]: pool_sessions: true"), std::string::npos) << v.err;
+  Result run = shell(
+      bin + " run " + (dir / "study.json").string() + " --quiet --db " + (dir / "s.db").string(),
+      dir);
+  ASSERT_EQ(run.code, 0) << run.err;
+  Result rep =
+      shell(bin + " report " + (dir / "s.db").string() + " --out " + (dir / "rep").string(), dir);
+  ASSERT_EQ(rep.code, 0) << rep.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(rep.out, m, std::regex("([0-9]+) figures"))) << rep.out;
+  const int figures = std::stoi(m[1].str());
+  EXPECT_GE(figures, 6);  // 2 per analysis, learning curves, force traces
+  const std::string md = slurp(dir / "rep" / "report.md");
+  EXPECT_NE(md.find("## Confirmatory analyses (declared hypotheses)"), std::string::npos);
+  EXPECT_NE(md.find("| practice | training |"), std::string::npos);
+
+  nlohmann::json ok = render_metrics(chromium, dir / "rep" / "report.html", dir);
+  ASSERT_FALSE(ok.is_null());
+  EXPECT_LE(ok["scrollWidth"].get<int>(), ok["clientWidth"].get<int>()) << ok.dump();
+  EXPECT_TRUE(ok["cut"].empty()) << ok.dump();
+  EXPECT_EQ(ok["figures"].get<int>(), figures) << ok.dump();
+  EXPECT_EQ(ok["drawn"].get<int>(), figures) << ok.dump();
+
+  // Negative control: without the scrolling tables the wide tables stick out of the page.
+  std::string page = slurp(dir / "rep" / "report.html");
+  const std::string css = "display:block;max-width:100%;overflow-x:auto";
+  const size_t at = page.find(css);
+  ASSERT_NE(at, std::string::npos) << "the report's table CSS changed; update this control";
+  page.erase(at, css.size());
+  std::ofstream(dir / "rep" / "unscrolled.html") << page;
+  nlohmann::json bad = render_metrics(chromium, dir / "rep" / "unscrolled.html", dir);
+  ASSERT_FALSE(bad.is_null());
+  EXPECT_GT(bad["scrollWidth"].get<int>(), bad["clientWidth"].get<int>()) << bad.dump();
+  fs::remove_all(dir);
+}
