@@ -356,12 +356,16 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
   return proj(s[b]);
 }
 
-// Central difference with one Richardson step (error O(h^4)).
+// Central differences at h, h/2, h/4 with two Richardson steps (truncation error O(h^6)), so
+// that h can be large enough to keep the round-off of the deviance (~1e-16 * |dev|) negligible.
 template <class F>
 auto richardson(F&& central, double h) {
   auto d1 = central(h);
   auto d2 = central(h / 2);
-  return ((4.0 * d2 - d1) / 3.0).eval();
+  auto d3 = central(h / 4);
+  auto r1 = ((4.0 * d2 - d1) / 3.0).eval();
+  auto r2 = ((4.0 * d3 - d2) / 3.0).eval();
+  return ((16.0 * r2 - r1) / 15.0).eval();
 }
 
 struct Column {
@@ -617,7 +621,8 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   std::vector<double> vp = th;
   vp.push_back(fit.sigma);
   const size_t nv = vp.size();
-  auto hstep = [&](size_t j) { return 1e-3 * std::max(std::abs(vp[j]), 1e-2); };
+  // Steps on the scale of each parameter: theta is relative to sigma (order 1), sigma absolute.
+  auto hstep = [&](size_t j) { return 1e-2 * std::max(std::abs(vp[j]), j + 1 < nv ? 0.1 : 0.0); };
   MatrixXd H(nv, nv);
   for (size_t a = 0; a < nv; ++a)
     for (size_t b = a; b < nv; ++b) {
