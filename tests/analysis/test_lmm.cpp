@@ -38,8 +38,8 @@ std::map<std::string, Ref> load_reference() {
 }
 
 void expect_rel(double got, double want, double tol, const std::string& what) {
-  EXPECT_LE(std::abs(got - want), tol * std::abs(want)) << what << ": got " << got << " want "
-                                                        << want;
+  EXPECT_LE(std::abs(got - want), tol * std::abs(want))
+      << what << ": got " << got << " want " << want;
 }
 
 struct Case {
@@ -97,14 +97,30 @@ const Case kStudySlope{"study_slope", "study.csv",
 
 }  // namespace
 
-TEST(LmmVsLme4, SleepstudySlopeReml) { check_case(kSleepSlope, true); }
-TEST(LmmVsLme4, SleepstudySlopeMl) { check_case(kSleepSlope, false); }
-TEST(LmmVsLme4, SleepstudyInterceptReml) { check_case(kSleepInt, true); }
-TEST(LmmVsLme4, SleepstudyInterceptMl) { check_case(kSleepInt, false); }
-TEST(LmmVsLme4, StudyGroupBySessionReml) { check_case(kStudyInt, true); }
-TEST(LmmVsLme4, StudyGroupBySessionMl) { check_case(kStudyInt, false); }
-TEST(LmmVsLme4, StudyRandomSlopeReml) { check_case(kStudySlope, true); }
-TEST(LmmVsLme4, StudyRandomSlopeMl) { check_case(kStudySlope, false); }
+TEST(LmmVsLme4, SleepstudySlopeReml) {
+  check_case(kSleepSlope, true);
+}
+TEST(LmmVsLme4, SleepstudySlopeMl) {
+  check_case(kSleepSlope, false);
+}
+TEST(LmmVsLme4, SleepstudyInterceptReml) {
+  check_case(kSleepInt, true);
+}
+TEST(LmmVsLme4, SleepstudyInterceptMl) {
+  check_case(kSleepInt, false);
+}
+TEST(LmmVsLme4, StudyGroupBySessionReml) {
+  check_case(kStudyInt, true);
+}
+TEST(LmmVsLme4, StudyGroupBySessionMl) {
+  check_case(kStudyInt, false);
+}
+TEST(LmmVsLme4, StudyRandomSlopeReml) {
+  check_case(kStudySlope, true);
+}
+TEST(LmmVsLme4, StudyRandomSlopeMl) {
+  check_case(kStudySlope, false);
+}
 
 // At theta = 0 the random effects vanish: the ML profiled deviance is the OLS one,
 // n (1 + log(2 pi RSS / n)), and REML adds log|X'X| with n - p in place of n.
@@ -126,8 +142,7 @@ TEST(LmmDeviance, ThetaZeroIsOrdinaryLeastSquares) {
   double rss = 0;
   for (int i = 0; i < 8; ++i) rss += std::pow(ys[i] - b0 - b1 * xs[i], 2);
   const double two_pi = 2 * std::numbers::pi;
-  EXPECT_NEAR(lmm_profiled_deviance(d, {0.0}, false), 8 * (1 + std::log(two_pi * rss / 8)),
-              1e-12);
+  EXPECT_NEAR(lmm_profiled_deviance(d, {0.0}, false), 8 * (1 + std::log(two_pi * rss / 8)), 1e-12);
   const double logdet_xtx = std::log(8 * sxx - sx * sx);
   EXPECT_NEAR(lmm_profiled_deviance(d, {0.0}, true),
               logdet_xtx + 6 * (1 + std::log(two_pi * rss / 6)), 1e-12);
