@@ -29,7 +29,8 @@ std::string trim(const std::string& s) {
 }
 
 [[noreturn]] void formula_error(int pos, const std::string& what) {
-  throw InputError(SourceLocation{"--formula", 0, pos + 1}, what);
+  throw InputError(SourceLocation{"--formula", 0, pos + 1},
+                   what + " (at character " + std::to_string(pos + 1) + ")");
 }
 
 struct Token {
