@@ -1,5 +1,6 @@
 // Linear mixed models (analysis/lmm.hpp) against lme4 1.1 + lmerTest 3.1 (reference.csv made by
-// tests/data/lmm/make_reference.R on the committed fixtures sleepstudy.csv and study.csv, with a
+// tests/data/lmm/make_reference.R on the committed fixtures sleepstudy.csv, study.csv and
+// study_blocks.csv, with a
 // tightened optimiser tolerance), plus analytic checks of the profiled deviance.
 // Tolerances: fixed effects, SEs, t, variance components, theta, F and Sum Sq 1e-6 relative;
 // log-likelihood, REML criterion/deviance, AIC, BIC 1e-8 absolute (values ~1e2..1e3); Satterthwaite
@@ -95,6 +96,9 @@ const Case kStudyInt{"study_int", "study.csv", "value ~ group * session + (1 | p
 const Case kStudySlope{"study_slope", "study.csv",
                        "value ~ group * session + (1 + session | participant)"};
 
+const Case kStudyBlocks{"study_blocks", "study_blocks.csv",
+                        "value ~ group * block + (1 | participant)"};
+
 }  // namespace
 
 TEST(LmmVsLme4, SleepstudySlopeReml) {
@@ -120,6 +124,13 @@ TEST(LmmVsLme4, StudyRandomSlopeReml) {
 }
 TEST(LmmVsLme4, StudyRandomSlopeMl) {
   check_case(kStudySlope, false);
+}
+// Factor x factor (3 x 5): column order groupB:blockS2, groupC:blockS2, ... and an 8-df F.
+TEST(LmmVsLme4, StudyFactorByFactorReml) {
+  check_case(kStudyBlocks, true);
+}
+TEST(LmmVsLme4, StudyFactorByFactorMl) {
+  check_case(kStudyBlocks, false);
 }
 
 // At theta = 0 the random effects vanish: the ML profiled deviance is the OLS one,

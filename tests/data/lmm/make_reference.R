@@ -35,8 +35,17 @@ if (!file.exists(file.path(dir, "study.csv"))) {
   write.csv(d, file.path(dir, "study.csv"), row.names = FALSE, quote = FALSE, na = "NA")
 }
 
+# The same study with the session as a factor (S1..S5): a factor-by-factor interaction.
+if (!file.exists(file.path(dir, "study_blocks.csv"))) {
+  d <- read.csv(file.path(dir, "study.csv"))
+  d$block <- paste0("S", d$session)
+  d$session <- NULL
+  write.csv(d, file.path(dir, "study_blocks.csv"), row.names = FALSE, quote = FALSE, na = "NA")
+}
+
 sleep <- read.csv(file.path(dir, "sleepstudy.csv"))
 study <- read.csv(file.path(dir, "study.csv"))
+blocks <- read.csv(file.path(dir, "study_blocks.csv"))
 ctrl <- lmerControl(optimizer = "bobyqa", calc.derivs = FALSE,
                     optCtrl = list(rhobeg = 0.2, rhoend = 1e-12, maxfun = 1e5))
 
@@ -45,7 +54,8 @@ models <- list(
   list(name = "sleep_int", data = sleep, formula = Reaction ~ Days + (1 | Subject)),
   list(name = "study_int", data = study, formula = value ~ group * session + (1 | participant)),
   list(name = "study_slope", data = study,
-       formula = value ~ group * session + (1 + session | participant)))
+       formula = value ~ group * session + (1 + session | participant)),
+  list(name = "study_blocks", data = blocks, formula = value ~ group * block + (1 | participant)))
 
 out <- data.frame(model = character(), method = character(), quantity = character(),
                   term = character(), value = character())
