@@ -4,8 +4,8 @@
 // tightened optimiser tolerance), plus analytic checks of the profiled deviance.
 // Tolerances: fixed effects, SEs, t, variance components, theta, F and Sum Sq 1e-6 relative;
 // log-likelihood, REML criterion/deviance, AIC, BIC 1e-8 absolute (values ~1e2..1e3); Satterthwaite
-// df and p-values 2e-5 relative (lmerTest's own numerical Hessian differs from the exact value by
-// ~3e-7 relative: its df for sleepstudy is 17.0000052 where 17 is exact).
+// df and p-values 2e-5 relative (both lmerTest and we differentiate numerically: lmerTest's df for
+// sleepstudy is 17.0000052, ours 17.0000017); multi-df F denominator df 1e-4 (see below).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -84,7 +84,11 @@ void check_case(const Case& c, bool reml) {
     ASSERT_TRUE(ref.has("F", a.term)) << tag << ": lmerTest has no term " << a.term;
     expect_rel(a.f, ref.at("F", a.term), 1e-6, tag + " F " + a.term);
     EXPECT_EQ(a.num_df, static_cast<int>(ref.at("NumDF", a.term))) << tag << " " << a.term;
-    expect_rel(a.den_df, ref.at("DenDF", a.term), 2e-5, tag + " DenDF " + a.term);
+    // A multi-df denominator df combines the df of q one-df contrasts and depends slightly on
+    // the basis of the hypothesis (ours: sum-coded rows; lmerTest: its own type III L with the
+    // same row space, same F to 1e-7): up to 1.9e-5 relative observed, hence 1e-4 there.
+    expect_rel(a.den_df, ref.at("DenDF", a.term), a.num_df == 1 ? 2e-5 : 1e-4,
+               tag + " DenDF " + a.term);
     expect_rel(a.p, ref.at("F_p", a.term), 2e-5, tag + " F p " + a.term);
     expect_rel(a.sum_sq, ref.at("SumSq", a.term), 1e-6, tag + " Sum Sq " + a.term);
   }
