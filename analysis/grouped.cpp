@@ -100,3 +100,22 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
 }
 
 }  // namespace palplab::analysis
+
+namespace palplab::analysis {
+std::vector<int> filter_rows(const CsvTable& t, const std::vector<WhereFilter>& where) {
+  std::map<int, std::vector<std::string>> filters;
+  for (const auto& w : where) filters[column_index(t, w.column)].push_back(w.value);
+  std::vector<int> kept;
+  for (size_t r = 0; r < t.rows.size(); ++r) {
+    bool keep = true;
+    for (const auto& [col, accepted] : filters) {
+      std::string v = trim(t.rows[r][col]);
+      bool any = false;
+      for (const auto& a : accepted) any = any || v == a;
+      keep = keep && any;
+    }
+    if (keep) kept.push_back(static_cast<int>(r));
+  }
+  return kept;
+}
+}  // namespace palplab::analysis

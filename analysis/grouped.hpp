@@ -39,3 +39,9 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
                         int min_per_group = 2, int min_groups = 2, bool skip_empty = false);
 
 }  // namespace palplab::analysis
+
+namespace palplab::analysis {
+// Indices of the rows of `t` that pass the --where filters (same rules as group_table); a
+// filter on a missing column is an InputError listing the columns.
+std::vector<int> filter_rows(const CsvTable& t, const std::vector<WhereFilter>& where);
+}  // namespace palplab::analysis

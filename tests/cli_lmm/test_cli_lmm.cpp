@@ -1,0 +1,151 @@
+// `palplab lmm` end to end: the JSON contract (docs/FORMATS.md), --where, --ml, the text tables,
+// and exit 2 with a located message for bad input. Numerical agreement with lme4/lmerTest is
+// tested in tests/analysis/test_lmm.cpp.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  static int counter = 0;
+  auto dir = std::filesystem::temp_directory_path();
+  std::string errf = (dir / ("palplab_cli_lmm_err_" + std::to_string(::getpid()) + "_" +
+                             std::to_string(counter++)))
+                         .string();
+  std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>" + errf;
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  std::ifstream e(errf);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  std::filesystem::remove(errf);
+  return r;
+}
+
+std::string fixture(const std::string& name) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/tests/data/lmm/" + name;
+}
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  auto path = std::filesystem::temp_directory_path() /
+              ("palplab_cli_lmm_" + std::to_string(::getpid()) + "_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+const std::string kStudy = "--formula \"value ~ group * session + (1 | participant)\"";
+
+}  // namespace
+
+TEST(CliLmm, JsonContract) {
+  Result r = run("lmm --csv " + fixture("study.csv") + " " + kStudy + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "REML");
+  EXPECT_EQ(j["n_obs"], 114);  // 115 rows, one NA value dropped
+  EXPECT_EQ(j["rows_dropped_na"], 1);
+  EXPECT_EQ(j["n_groups"], 23);
+  EXPECT_EQ(j["df"], 8);
+  for (const char* k : {"reml_criterion", "loglik", "aic", "bic", "sigma"})
+    EXPECT_TRUE(j[k].is_number()) << k;
+  EXPECT_NEAR(j["reml_criterion"].get<double>(), 212.98425454266803, 1e-8);
+  EXPECT_EQ(j["random_effects"]["group"], "participant");
+  EXPECT_NEAR(j["random_effects"]["sd_intercept"].get<double>(), 0.95469556839512704, 1e-6);
+  const char* names[] = {"(Intercept)", "groupB",         "groupC",
+                         "session",     "groupB:session", "groupC:session"};
+  ASSERT_EQ(j["fixed_effects"].size(), 6u);
+  for (int i = 0; i < 6; ++i) {
+    const auto& fe = j["fixed_effects"][i];
+    EXPECT_EQ(fe["term"], names[i]);
+    for (const char* k : {"estimate", "se", "df", "t", "p"}) EXPECT_TRUE(fe[k].is_number()) << k;
+  }
+  ASSERT_EQ(j["anova"].size(), 3u);
+  EXPECT_EQ(j["anova"][2]["term"], "group:session");
+  EXPECT_EQ(j["anova"][2]["num_df"], 2);
+  EXPECT_NEAR(j["anova"][2]["f"].get<double>(), 5.1393722244601863, 1e-5);
+  EXPECT_EQ(j["vcov"].size(), 6u);
+}
+
+TEST(CliLmm, MlReportsDevianceAndLogLik) {
+  Result r = run("lmm --csv " + fixture("sleepstudy.csv") +
+                 " --formula \"Reaction ~ Days + (Days | Subject)\" --ml --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "ML");
+  EXPECT_FALSE(j.contains("reml_criterion"));
+  EXPECT_NEAR(j["deviance"].get<double>(), -2 * j["loglik"].get<double>(), 1e-9);
+  EXPECT_EQ(j["random_effects"]["slope"], "Days");
+  EXPECT_TRUE(j["random_effects"]["correlation"].is_number());
+}
+
+// --where keeps the same rows as a CSV that contains only those rows.
+TEST(CliLmm, WhereEqualsPreFilteredFile) {
+  std::ifstream in(fixture("study.csv"));
+  std::string line, kept;
+  std::getline(in, line);
+  kept = line + "\n";
+  while (std::getline(in, line))
+    if (line.find(",C,") == std::string::npos) kept += line + "\n";
+  std::string ab = write_temp("ab.csv", kept);
+  Result a = run("lmm --csv " + fixture("study.csv") + " " + kStudy +
+                 " --where group=A --where group=B --json");
+  Result b = run("lmm --csv " + ab + " " + kStudy + " --json");
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  auto ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  EXPECT_EQ(ja["n_obs"], jb["n_obs"]);
+  ASSERT_EQ(ja["fixed_effects"].size(), 4u);
+  EXPECT_EQ(ja["fixed_effects"][1]["term"], "groupB");
+  for (int i = 0; i < 4; ++i)
+    EXPECT_DOUBLE_EQ(ja["fixed_effects"][i]["estimate"].get<double>(),
+                     jb["fixed_effects"][i]["estimate"].get<double>());
+}
+
+TEST(CliLmm, TextTables) {
+  Result r = run("lmm --csv " + fixture("study.csv") + " " + kStudy);
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* s : {"REML criterion at convergence: 212.98", "Random effects:", "participant",
+                        "Residual", "Fixed effects:", "groupC:session",
+                        "Type III Analysis of Variance Table with Satterthwaite's method",
+                        "Number of obs: 114, groups:  participant, 23"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+}
+
+TEST(CliLmm, BadInputExitsTwoWithLocation) {
+  Result r = run("lmm --csv " + fixture("study.csv") +
+                 " --formula \"value ~ group + (1 | participant) + (1 | group)\"");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--formula"), std::string::npos) << r.err;
+  r = run("lmm --csv " + fixture("study.csv") + " --formula \"value ~ grp + (1 | participant)\"");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("grp"), std::string::npos) << r.err;
+  std::string bad = write_temp("bad.csv", "y,g,x\n1,a,1\n2,a,2\nabc,b,1\n3,b,2\n");
+  r = run("lmm --csv " + bad + " --formula \"y ~ x + (1 | g)\"");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(":4:"), std::string::npos) << r.err;  // CSV line of 'abc'
+  r = run("lmm --csv " + bad + " --formula \"x ~ y + (1 + g | g)\"");
+  EXPECT_EQ(r.code, 2);
+  r = run("lmm --csv /nonexistent.csv " + kStudy);
+  EXPECT_EQ(r.code, 2);
+  r = run("lmm --csv " + fixture("study.csv") + " " + kStudy + " --where nosuch=1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("nosuch"), std::string::npos) << r.err;
+}
