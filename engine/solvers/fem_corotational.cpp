@@ -46,13 +46,15 @@ void corotational_element(const Matrix43d& grad, const Matrix12d& Ke, const Vect
   const Vector12d g = Ke * (y - X0);  // force of the unrotated displacement, element frame
   f_e = -rotate_blocks(R, g);
   if (!K_e_t) return;
-  // Warped part R K_e R^T.
-  Eigen::Matrix<double, 12, 12> RB = Eigen::Matrix<double, 12, 12>::Zero();
-  for (int r = 0; r < 4; ++r) RB.block<3, 3>(3 * r, 3 * r) = R;
-  Matrix12d Kt = RB * Ke * RB.transpose();
+  // Warped part R K_e R^T, block by block (R acts per node).
+  Matrix12d Kt;
+  for (int q = 0; q < 4; ++q)
+    for (int r = 0; r < 4; ++r)
+      Kt.block<3, 3>(3 * r, 3 * q).noalias() = R * Ke.block<3, 3>(3 * r, 3 * q) * R.transpose();
   if (jac == CorotJacobian::exact) {
     // (tr S I - S)^-1 through the eigen-decomposition of S, eigenvalue sums clamped.
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+    es.computeDirect(S);
     const Eigen::Vector3d l = es.eigenvalues();
     const double scale = std::max(l.cwiseAbs().maxCoeff(), 1e-300);
     Eigen::Vector3d inv;
@@ -62,18 +64,20 @@ void corotational_element(const Matrix43d& grad, const Matrix12d& Ke, const Vect
       inv[k] = 1.0 / m;
     }
     const Eigen::Matrix3d G = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+    // Column k (dx = e_k): R (W_k g' - K_e W_k y) with W_k = [w_k]x.
+    Matrix12d H, Q;
+    const Eigen::Matrix3d GRt = G;  // w_k = G axial(A - A^T), A = (R^T e_c) grad N_node^T
     for (int k = 0; k < 12; ++k) {
       const int node = k / 3, c = k % 3;
-      // R^T dF for dx = e_k: (R^T e_c) grad N_node^T.
       const Eigen::Matrix3d A = R.transpose().col(c) * grad.row(node);
-      const Eigen::Vector3d w = G * axial(A - A.transpose());
-      Vector12d h, q;
+      const Eigen::Vector3d w = GRt * axial(A - A.transpose());
       for (int r = 0; r < 4; ++r) {
-        h.segment<3>(3 * r) = w.cross(g.segment<3>(3 * r));
-        q.segment<3>(3 * r) = w.cross(y.segment<3>(3 * r));
+        H.block<3, 1>(3 * r, k) = w.cross(g.segment<3>(3 * r));
+        Q.block<3, 1>(3 * r, k) = w.cross(y.segment<3>(3 * r));
       }
-      Kt.col(k) += rotate_blocks(R, h - Ke * q);
     }
+    H.noalias() -= Ke * Q;
+    for (int r = 0; r < 4; ++r) Kt.middleRows<3>(3 * r).noalias() += R * H.middleRows<3>(3 * r);
     Kt = 0.5 * (Kt + Kt.transpose()).eval();
   }
   *K_e_t = Kt;
