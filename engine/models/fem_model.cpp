@@ -159,6 +159,10 @@ void FemModel::reset() {
   time_ = 0;
 }
 
+Eigen::Vector3d FemModel::node_position(int v) const {
+  return impl_->sys.X0.row(v).transpose() + impl_->u.segment<3>(3 * v);
+}
+
 double FemModel::penetration() const {
   if (contact_node < 0) return 0.0;
   const Eigen::Vector3d x =

@@ -66,6 +66,9 @@ class FemModel {
   // #V by 3 current positions (m) of every node.
   const mesh::Positions& positions();
   const Eigen::VectorXd& displacement();  // 3#V (m)
+  // Current position of one node (m) without recovering the condensed interior: exact for
+  // nodes the step solves (solves_node) and fixed nodes — what the haptic contact needs.
+  Eigen::Vector3d node_position(int v) const;
   double time() const { return time_; }
 
   // Penalty contact (see top). contact_node = -1: no contact.
