@@ -57,10 +57,11 @@ int main() {
     if (vreg[i] == 0 && !fixed[i]) touch.push_back(static_cast<int>(i));
   long nfixed = 0;
   for (auto f : fixed) nfixed += f;
-  std::printf("Model-C: %ld nodes, %ld tets, %ld pinned nodes, %ld dofs; operational tets %ld; "
-              "touchable (ovary) nodes %zu\n",
-              n, static_cast<long>(m.T.rows()), nfixed, 3 * n,
-              static_cast<long>(std::count(op.begin(), op.end(), 1)), touch.size());
+  std::printf(
+      "Model-C: %ld nodes, %ld tets, %ld pinned nodes, %ld dofs; operational tets %ld; "
+      "touchable (ovary) nodes %zu\n",
+      n, static_cast<long>(m.T.rows()), nfixed, 3 * n,
+      static_cast<long>(std::count(op.begin(), op.end(), 1)), touch.size());
   std::printf("%-46s %6s %12s %12s\n", "item", "reps", "median_ms", "p99_ms");
 
   FemSystem sys;
@@ -93,8 +94,7 @@ int main() {
          [&] { condense_precompute(sys.K, m.T, fixed_dof, op, cond); });
   std::printf("  condensed: %zu reduced dofs (%zu operational, %zu interface), %zu condensed\n",
               cond.reduced.size(), cond.dofs_I.size(), cond.dofs_s.size(), cond.dofs_i.size());
-  report("condensed static solve, no interior", 100,
-         [&] { u = condensed_solve(cond, f, false); });
+  report("condensed static solve, no interior", 100, [&] { u = condensed_solve(cond, f, false); });
   report("condensed static solve + interior recovery", 20,
          [&] { u = condensed_solve(cond, f, true); });
 
