@@ -23,6 +23,28 @@ bool richardson(double q0, double q1, double q2, double r, double& order, double
   return true;
 }
 
+bool richardson_sizes(const double q[3], const double h[3], double& order, double& extrapolated) {
+  const double d1 = q[1] - q[0], d2 = q[2] - q[1];
+  order = std::nan("");
+  extrapolated = q[2];
+  if (!(d1 != 0) || d1 * d2 <= 0 || !(h[0] > h[1] && h[1] > h[2] && h[2] > 0)) return false;
+  // g(p) = d1 (h1^p - h2^p) - d2 (h0^p - h1^p) = 0, scaled by h0^-p for range.
+  const auto g = [&](double p) {
+    const double a = std::pow(h[1] / h[0], p), b = std::pow(h[2] / h[0], p);
+    return d1 * (a - b) - d2 * (1 - a);
+  };
+  double lo = 0.05, hi = 12;
+  if (g(lo) * g(hi) > 0) return false;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (g(lo) * g(mid) <= 0 ? hi : lo) = mid;
+  }
+  order = 0.5 * (lo + hi);
+  const double C = d2 / (std::pow(h[2], order) - std::pow(h[1], order));
+  extrapolated = q[2] - C * std::pow(h[2], order);
+  return true;
+}
+
 FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   if (opt.levels < 3) throw InputError("fem reference: --levels must be >= 3");
   if (!opt.mesher && !(opt.max_volume > 0))
@@ -102,6 +124,7 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     lv.tets = m.T.rows();
     lv.dofs = static_cast<long>(ss.split.free.size());
     lv.patch_area = area;
+    lv.mesh_size = std::cbrt(m.volume.sum() / static_cast<double>(m.T.rows()));
     lv.displacement = delta;
     lv.stiffness = opt.force / delta;
     lv.solve_ms =
@@ -110,9 +133,18 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     if (!opt.mesher) surface_u.push_back(u.head(3 * ns));
   }
   const int L = opt.levels;
-  const double r = opt.refinement_ratio > 0 ? opt.refinement_ratio : std::cbrt(2.0);
-  richardson(res.levels[L - 3].stiffness, res.levels[L - 2].stiffness, res.levels[L - 1].stiffness,
-             r, res.observed_order, res.stiffness);
+  const double q[3] = {res.levels[L - 3].stiffness, res.levels[L - 2].stiffness,
+                       res.levels[L - 1].stiffness};
+  double r = opt.refinement_ratio;
+  if (opt.mesher) {
+    if (!(r > 1)) r = std::cbrt(2.0);
+    richardson(q[0], q[1], q[2], r, res.observed_order, res.stiffness);
+  } else {
+    const double h[3] = {res.levels[L - 3].mesh_size, res.levels[L - 2].mesh_size,
+                         res.levels[L - 1].mesh_size};
+    richardson_sizes(q, h, res.observed_order, res.stiffness);
+    r = h[1] / h[2];  // for the field: the last pair
+  }
   res.displacement = opt.force / res.stiffness;
   // Field: the same order, vertex by vertex (a per-vertex order would be noise).
   const double p = std::isfinite(res.observed_order) ? res.observed_order : 1.0;
@@ -123,6 +155,7 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     res.field = unflatten(uf);
     umax = uf.cwiseAbs().maxCoeff();
   }
+  res.order_plausible = res.observed_order >= 0.5 && res.observed_order <= 4.0;
   res.monotone = true;
   for (int l = 0; l < L; ++l) {
     auto& lv = res.levels[l];

@@ -53,6 +53,7 @@ struct FemReferenceLevel {
   double stiffness = 0;     // N/m
   double est_error = 0;     // |stiffness - extrapolated| / extrapolated
   double field_error = 0;   // max over surface vertices |u - u_extrapolated| / max |u_extrapolated|
+  double mesh_size = 0;     // (volume / #tets)^(1/3) (m)
   double solve_ms = 0;
 };
 
@@ -63,6 +64,10 @@ struct FemReferenceResult {
   double displacement = 0;    // extrapolated (m)
   mesh::Positions field;      // #surface vertices by 3: extrapolated displacement (m)
   bool monotone = false;      // est_error strictly decreasing over the levels
+  // observed_order within [0.5, 4] (linear elements: 2 for smooth problems, less with corner
+  // singularities). Outside it the levels are not in the asymptotic range or their sizes are
+  // not what was assumed, and the extrapolation should not be trusted.
+  bool order_plausible = false;
 };
 
 // Richardson extrapolation from three values on meshes refined by ratio r: the observed order
@@ -74,6 +79,12 @@ bool richardson(double q0, double q1, double q2, double r, double& order, double
 // nominal, so on coarse unstructured meshes the differences between levels can fail to shrink;
 // then observed_order is NaN, `monotone` is false and the finest level is reported unextrapolated.
 // On nested structured refinements the estimate is monotone with a clean order.
+// With TetGen levels the mesh size of a level is measured, h = (volume / #tets)^(1/3), and the
+// extrapolation uses those sizes (richardson_sizes), not the nominal ratio.
+// The same for arbitrary mesh sizes h0 > h1 > h2: q(h) = q + C h^p through the three points
+// (p by bisection in [0.05, 12]). Reduces to richardson() for a constant ratio.
+bool richardson_sizes(const double q[3], const double h[3], double& order, double& extrapolated);
+
 // Throws InputError for bad options (no fixed node, empty patch, levels < 3, ...).
 FemReferenceResult fem_reference(const FemReferenceOptions& opt);
 
