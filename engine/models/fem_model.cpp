@@ -49,6 +49,7 @@ struct FemModel::Impl {
   std::vector<int> local;  // 3#V -> index in act or -1
   SparseMatrixd K_c;
   Eigen::VectorXd m_c;
+  SparseMatrixd M_c;  // consistent mass on act (empty when lumped)
   SparseLdlt ldlt;
   double h_factored = -1;
   int cached_node = -1;
@@ -91,7 +92,10 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
     static_precompute(m.sys.K, m.fixed_dof, check);
     m.act = check.split.free;
     m.K_c = check.K_ff;
+    if (!opt_.lumped_mass) m.M_c = submatrix(m.sys.M, m.act, m.act);
   } else if (opt_.formulation == FemFormulation::condensed) {
+    if (!opt_.lumped_mass)
+      throw InputError("fem: the condensed formulation uses lumped mass (lumped_mass = true)");
     if (static_cast<long>(opt_.operational_tet.size()) != mesh.T.rows())
       throw InputError("fem: condensed formulation needs one operational flag per tet (" +
                        std::to_string(mesh.T.rows()) + ")");
@@ -216,7 +220,13 @@ void FemModel::step(double h) {
     const auto t0 = Clock::now();
     m.A = m.K_t * (h * beta + h * h);
     double* a = m.A.valuePtr();
-    for (long i = 0; i < m.A.rows(); ++i) a[m.diag_slot[i]] += (1 + h * alpha) * m.sys.m_lumped[i];
+    if (opt_.lumped_mass) {
+      for (long i = 0; i < m.A.rows(); ++i)
+        a[m.diag_slot[i]] += (1 + h * alpha) * m.sys.m_lumped[i];
+    } else {  // M has the pattern of K: add value by value
+      const double* mv = m.sys.M.valuePtr();
+      for (long q = 0; q < m.A.nonZeros(); ++q) a[q] += (1 + h * alpha) * mv[q];
+    }
     if (implicit_contact) {
       const Eigen::Matrix3d J = h * h * contact_k * contact_normal * contact_normal.transpose();
       for (int c = 0; c < 3; ++c)
@@ -225,7 +235,9 @@ void FemModel::step(double h) {
     }
     for (int s : m.zero_slot) a[s] = 0.0;
     for (int s : m.fixed_diag_slot) a[s] = 1.0;
-    Eigen::VectorXd b = m.sys.m_lumped.cwiseProduct(m.v) + h * (m.f_int + f_ext);
+    Eigen::VectorXd b = (opt_.lumped_mass ? Eigen::VectorXd(m.sys.m_lumped.cwiseProduct(m.v))
+                                          : Eigen::VectorXd(m.sys.M * m.v)) +
+                        h * (m.f_int + f_ext);
     if (touching) b.segment<3>(3 * contact_node) += h * fc;
     for (long i = 0; i < b.size(); ++i)
       if (m.fixed_dof[i]) b[i] = 0.0;
@@ -243,7 +255,10 @@ void FemModel::step(double h) {
     if (h != m.h_factored) {
       const auto t0 = Clock::now();
       SparseMatrixd A = (h * beta + h * h) * m.K_c;
-      for (long i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += (1 + h * alpha) * m.m_c[i];
+      if (m.M_c.size())
+        A += (1 + h * alpha) * m.M_c;
+      else
+        for (long i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += (1 + h * alpha) * m.m_c[i];
       m.ldlt.compute(A);
       if (m.ldlt.info() != Eigen::Success)
         throw std::runtime_error("FemModel::step: factorisation failed");
@@ -263,7 +278,9 @@ void FemModel::step(double h) {
       lp = m.local[3 * contact_node];
       fa.segment<3>(lp) += fc;  // the three dofs of a node are consecutive in act
     }
-    Eigen::VectorXd y = m.ldlt.solve(m.m_c.cwiseProduct(va) + h * fa);
+    const Eigen::VectorXd Mv =
+        m.M_c.size() ? Eigen::VectorXd(m.M_c * va) : Eigen::VectorXd(m.m_c.cwiseProduct(va));
+    Eigen::VectorXd y = m.ldlt.solve(Mv + h * fa);
     if (implicit_contact) {
       // (A + h^2 k e e^T)^-1 b by Sherman–Morrison, e = n on the node's dofs.
       if (m.cached_node != contact_node) {

@@ -20,7 +20,9 @@
 //                 interior positions are recovered only when positions() is called (graphics
 //                 rate), so a step costs a solve of the reduced system. The contact node must be
 //                 operational (solves_node()).
-// Mass is lumped (diagonal); damping is Rayleigh C = alpha M + beta K (K = tangent for
+// Mass is lumped (diagonal) by default; options.lumped_mass = false uses the consistent mass
+// (linear and corotational; the condensed model is always lumped: its Guyan reduction keeps
+// the mass on the solved nodes). Damping is Rayleigh C = alpha M + beta K (K = tangent for
 // corotational). Units: m, s, kg, N.
 #include <Eigen/Core>
 #include <cstdint>
@@ -44,6 +46,7 @@ struct FemModelOptions {
   double rayleigh_alpha = 1.0;                    // mass-proportional damping (1/s)
   double rayleigh_beta = 0.001;                   // stiffness-proportional damping (s)
   CorotJacobian jacobian = CorotJacobian::exact;  // corotational tangent
+  bool lumped_mass = true;                        // false: consistent mass (not condensed)
   std::vector<std::uint8_t> operational_tet;      // #T, condensed only (1 = operational)
 };
 

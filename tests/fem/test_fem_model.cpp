@@ -71,6 +71,27 @@ TEST(FemModel, LinearAndCondensedSettleOnTheStaticSolution) {
     EXPECT_LT(rel(model.displacement(), u_static), 1e-8) << to_string(form);
     EXPECT_NEAR(model.positions()(s.top, 2), s.m.V(s.top, 2) + u_static[3 * s.top + 2], 1e-12);
   }
+  // Consistent mass: same equilibrium; and the first step from rest under the same load equals
+  // the co-rotational one (tangent = K at rest) with consistent mass.
+  FemModelOptions oc = options(FemFormulation::linear, s);
+  oc.lumped_mass = false;
+  FemModel consistent(s.m, s.mat, s.fixed, oc);
+  consistent.f_ext = f;
+  for (int i = 0; i < 3000; ++i) consistent.step(1e-3);
+  EXPECT_LT(rel(consistent.displacement(), u_static), 1e-8);
+  oc.formulation = FemFormulation::corotational;
+  FemModel c1(s.m, s.mat, s.fixed, oc);
+  oc.formulation = FemFormulation::linear;
+  FemModel l1(s.m, s.mat, s.fixed, oc);
+  c1.f_ext = l1.f_ext = 1e-3 * f;
+  c1.step(1e-3);
+  l1.step(1e-3);
+  EXPECT_LT(rel(c1.displacement(), l1.displacement()), 1e-9);
+  // Consistent and lumped mass give different transients.
+  FemModel lumped1(s.m, s.mat, s.fixed, options(FemFormulation::linear, s));
+  lumped1.f_ext = l1.f_ext;
+  lumped1.step(1e-3);
+  EXPECT_GT(rel(lumped1.displacement(), l1.displacement()), 1e-3);
   FemModel cond(s.m, s.mat, s.fixed, options(FemFormulation::condensed, s));
   FemModel lin(s.m, s.mat, s.fixed, options(FemFormulation::linear, s));
   EXPECT_LT(cond.dofs(), lin.dofs());
@@ -139,6 +160,9 @@ TEST(FemModel, InputErrors) {
   FemModelOptions o;
   o.formulation = FemFormulation::condensed;
   EXPECT_THROW(FemModel(s.m, s.mat, s.fixed, o), InputError);  // no operational flags
+  FemModelOptions oc = options(FemFormulation::condensed, s);
+  oc.lumped_mass = false;
+  EXPECT_THROW(FemModel(s.m, s.mat, s.fixed, oc), InputError);  // Guyan model is lumped
   FemModel cond(s.m, s.mat, s.fixed, options(FemFormulation::condensed, s));
   EXPECT_FALSE(cond.solves_node(1 + 3 * (1 + 3 * 1)));  // interior of the condensed part
   cond.contact_node = 1 + 3 * (1 + 3 * 1);
