@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "common/input_error.hpp"
@@ -43,6 +44,51 @@ bool richardson_sizes(const double q[3], const double h[3], double& order, doubl
   const double C = d2 / (std::pow(h[2], order) - std::pow(h[1], order));
   extrapolated = q[2] - C * std::pow(h[2], order);
   return true;
+}
+
+FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int press_node,
+                                                double force, double press_radius) {
+  if (press_node < 0 || press_node >= m.V.rows())
+    throw InputError("fem reference: press node " + std::to_string(press_node) + " out of range");
+  const mesh::BoundaryFaces bf = mesh::boundary_faces(m);
+  std::vector<int> map(m.V.rows(), -1);
+  std::vector<int> verts;
+  mesh::Faces F(bf.F.rows(), 3);
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (long f = 0; f < bf.F.rows(); ++f) {
+    const Eigen::Vector3d a = mesh::row3(m.V, bf.F(f, 0)), b = mesh::row3(m.V, bf.F(f, 1)),
+                          c = mesh::row3(m.V, bf.F(f, 2));
+    for (int k = 0; k < 3; ++k) {
+      int& v = map[bf.F(f, k)];
+      if (v < 0) {
+        v = static_cast<int>(verts.size());
+        verts.push_back(bf.F(f, k));
+      }
+      F(f, k) = v;
+      if (bf.F(f, k) == press_node) normal += 0.5 * (b - a).cross(c - a);
+    }
+  }
+  if (map[press_node] < 0)
+    throw InputError("fem reference: press node " + std::to_string(press_node) +
+                     " is not on the surface");
+  mesh::Positions V(static_cast<long>(verts.size()), 3);
+  for (size_t i = 0; i < verts.size(); ++i) V.row(static_cast<long>(i)) = m.V.row(verts[i]);
+  FemReferenceOptions o;
+  o.surface = mesh::make_surface_mesh(std::move(V), std::move(F));
+  std::map<int, long> count;
+  for (long t = 0; t < m.attribute.size(); ++t) ++count[m.attribute[t]];
+  long best = -1;
+  for (const auto& [a, c] : count)
+    if (c > best) {
+      best = c;
+      o.default_attribute = a;
+    }
+  o.max_volume = m.volume.sum() / static_cast<double>(m.T.rows());
+  o.press_point = mesh::row3(m.V, press_node);
+  o.press_direction = -normal.normalized();
+  o.force = force;
+  o.press_radius = press_radius;
+  return o;
 }
 
 FemReferenceResult fem_reference(const FemReferenceOptions& opt) {

@@ -85,6 +85,14 @@ bool richardson(double q0, double q1, double q2, double r, double& order, double
 // (p by bisection in [0.05, 12]). Reduces to richardson() for a constant ratio.
 bool richardson_sizes(const double q[3], const double h[3], double& order, double& extrapolated);
 
+// Options for the press of node `press_node` of an existing tet mesh (a prototype's): the
+// surface is the mesh's outer boundary, every tet gets the mesh's most common attribute (a
+// single-tissue body such as Model-C; multi-tissue bodies need seeds), level 0 uses the mesh's
+// mean tet volume as max volume, the press direction is the inward area-weighted normal at the
+// node. The caller still sets is_fixed (e.g. the prototype's pinned region) and may edit the rest.
+FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int press_node,
+                                                double force, double press_radius);
+
 // Throws InputError for bad options (no fixed node, empty patch, levels < 3, ...).
 FemReferenceResult fem_reference(const FemReferenceOptions& opt);
 

@@ -120,3 +120,21 @@ TEST(FemReference, TetgenLevelsOnBoxSurface) {
   o.levels = 2;
   EXPECT_THROW(fem_reference(o), InputError);
 }
+
+TEST(FemReference, OptionsFromAnExistingMesh) {
+  const mesh::TetMesh b = fem_block_mesh(4, 4, 2, Eigen::Vector3d(0.04, 0.04, 0.02), 101);
+  const int top = 2 + 5 * (2 + 5 * 2);  // node (2, 2, 2): centre of the top face
+  FemReferenceOptions o = reference_options_from_mesh(b, top, 0.5, 0.012);
+  EXPECT_EQ(o.surface.V.rows(), 5 * 5 * 3 - 3 * 3);  // all 75 nodes but the 9 interior ones
+  EXPECT_LT((o.press_direction + Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  EXPECT_NEAR(o.max_volume, 0.04 * 0.04 * 0.02 / 192, 1e-15);
+  EXPECT_EQ(o.default_attribute, 101);
+  o.is_fixed = [](const Eigen::Vector3d& p) { return p.z() < 1e-9; };
+  o.quality = 1.414;
+  o.max_volume /= 4;
+  const FemReferenceResult r = fem_reference(o);
+  EXPECT_EQ(r.levels.size(), 3u);
+  EXPECT_GT(r.levels[0].stiffness, r.levels[2].stiffness);
+  const int interior = 2 + 5 * (2 + 5 * 1);  // node (2, 2, 1)
+  EXPECT_THROW(reference_options_from_mesh(b, interior, 0.5, 0.01), InputError);
+}
