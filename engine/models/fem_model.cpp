@@ -50,6 +50,11 @@ struct FemModel::Impl {
   SparseMatrixd K_c;
   Eigen::VectorXd m_c;
   SparseMatrixd M_c;  // consistent mass on act (empty when lumped)
+  // K_c u kept up to date without a product per step (see step()); re-synchronised with an
+  // exact product every kResync steps; age -1 = stale.
+  Eigen::VectorXd Ku;
+  int Ku_age = -1;
+  static constexpr int kResync = 256;
   SparseLdlt ldlt;
   double h_factored = -1;
   int cached_node = -1;
@@ -157,6 +162,7 @@ bool FemModel::solves_node(int v) const {
 }
 
 void FemModel::reset() {
+  impl_->Ku_age = -1;
   impl_->u.setZero();
   impl_->v.setZero();
   impl_->positions_valid = false;
@@ -267,7 +273,12 @@ void FemModel::step(double h) {
       factor_ms_ = ms_since(t0);
     }
     const Eigen::VectorXd ua = gather(m.u, m.act), va = gather(m.v, m.act);
-    Eigen::VectorXd fa = gather(f_ext, m.act) - m.K_c * ua;
+    const bool lumped = m.M_c.size() == 0;
+    if (!lumped || m.Ku_age < 0 || m.Ku_age >= Impl::kResync) {
+      m.Ku = m.K_c * ua;
+      m.Ku_age = 0;
+    }
+    Eigen::VectorXd fa = gather(f_ext, m.act) - m.Ku;
     if (opt_.formulation == FemFormulation::condensed && !m.cond.dofs_i.empty()) {
       const Eigen::VectorXd fi = gather(f_ext, m.cond.dofs_i);
       if (fi.cwiseAbs().maxCoeff() > 0)  // interior loads reach the interface through P*
@@ -280,7 +291,9 @@ void FemModel::step(double h) {
     }
     const Eigen::VectorXd Mv =
         m.M_c.size() ? Eigen::VectorXd(m.M_c * va) : Eigen::VectorXd(m.m_c.cwiseProduct(va));
-    Eigen::VectorXd y = m.ldlt.solve(Mv + h * fa);
+    const Eigen::VectorXd b = Mv + h * fa;
+    Eigen::VectorXd y = m.ldlt.solve(b);
+    double s_ey = 0;  // s e^T y of the contact term, for the K y update below
     if (implicit_contact) {
       // (A + h^2 k e e^T)^-1 b by Sherman–Morrison, e = n on the node's dofs.
       if (m.cached_node != contact_node) {
@@ -294,6 +307,15 @@ void FemModel::step(double h) {
       const double ey = contact_normal.dot(y.segment<3>(lp));
       const double ez = contact_normal.dot(z.segment<3>(lp));
       y -= z * (s * ey / (1 + s * ez));
+      s_ey = s * contact_normal.dot(y.segment<3>(lp));
+    }
+    if (lumped) {
+      // K y without a sparse product: A y = b - s e (e^T y) and A = (1 + h alpha) M +
+      // (h beta + h^2) K with M diagonal, so K y = (A y - (1 + h alpha) M y) / (h beta + h^2).
+      Eigen::VectorXd Ay = b;
+      if (implicit_contact) Ay.segment<3>(lp) -= s_ey * contact_normal;
+      m.Ku += h * (Ay - (1 + h * alpha) * m.m_c.cwiseProduct(y)) / (h * beta + h * h);
+      ++m.Ku_age;
     }
     Eigen::VectorXd u_new = ua + h * y;
     scatter(y, m.act, m.v);
