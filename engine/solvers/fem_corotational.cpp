@@ -65,12 +65,12 @@ void corotational_element(const Matrix43d& grad, const Matrix12d& Ke, const Vect
     }
     const Eigen::Matrix3d G = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
     // Column k (dx = e_k): R (W_k g' - K_e W_k y) with W_k = [w_k]x.
+    // w_k = G axial(A - A^T), A = R^T dF = (R^T e_c) grad N_node^T.
     Matrix12d H, Q;
-    const Eigen::Matrix3d GRt = G;  // w_k = G axial(A - A^T), A = (R^T e_c) grad N_node^T
     for (int k = 0; k < 12; ++k) {
       const int node = k / 3, c = k % 3;
       const Eigen::Matrix3d A = R.transpose().col(c) * grad.row(node);
-      const Eigen::Vector3d w = GRt * axial(A - A.transpose());
+      const Eigen::Vector3d w = G * axial(A - A.transpose());
       for (int r = 0; r < 4; ++r) {
         H.block<3, 1>(3 * r, k) = w.cross(g.segment<3>(3 * r));
         Q.block<3, 1>(3 * r, k) = w.cross(y.segment<3>(3 * r));
