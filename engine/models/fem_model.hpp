@@ -1,0 +1,104 @@
+#pragma once
+// FemModel: the tissue FEM of a haptic scene (prototype D, issue 12). A tet mesh with per-tet
+// materials (tissue table, SI units) and fixed nodes (rigid tissue is always fixed; the caller
+// adds a pinned region), integrated with linearised backward Euler, touched by the device through
+// the same penalty contact as the mass-spring model (mass_spring.hpp):
+//   penetration d = (x_p - contact_point) . contact_normal at node p = contact_node;
+//   while d > 0 the node gets -contact_k d n and the device feels +contact_k d n.
+// The contact Jacobian -k n n^T enters the implicit step, so a stiff coupling stays stable.
+//
+// Formulations:
+//   linear        small-strain FEM, A = M + h C + h^2 K factorised once per time step size;
+//                 the rank-1 contact term is added with Sherman–Morrison on 3 cached columns
+//                 A^-1 E_p, so a step is ONE sparse back-substitution.
+//   corotational  co-rotational FEM (fem_corotational.hpp): per step the tangent and forces
+//                 are re-assembled on the fixed pattern and refactorised (pattern analysed once).
+//   condensed     the hybrid condensed FEM (fem_condensation.hpp) as a dynamic model: the
+//                 operational region (options.operational_tet) and its interface are integrated;
+//                 the rest is statically condensed onto the interface (Guyan: its interior is
+//                 massless and follows quasi-statically). Exact at equilibrium (== linear);
+//                 interior positions are recovered only when positions() is called (graphics
+//                 rate), so a step costs a solve of the reduced system. The contact node must be
+//                 operational (solves_node()).
+// Mass is lumped (diagonal) by default; options.lumped_mass = false uses the consistent mass
+// (linear and corotational; the condensed model is always lumped: its Guyan reduction keeps
+// the mass on the solved nodes). Damping is Rayleigh C = alpha M + beta K (K = tangent for
+// corotational). Units: m, s, kg, N.
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/mesh/tet_mesh.hpp"
+#include "engine/solvers/fem_assembly.hpp"
+#include "engine/solvers/fem_corotational.hpp"
+
+namespace palplab::engine {
+
+enum class FemFormulation { linear, corotational, condensed };
+// Throws InputError naming the accepted values.
+FemFormulation fem_formulation_from_string(const std::string& s);
+const char* to_string(FemFormulation f);
+
+struct FemModelOptions {
+  FemFormulation formulation = FemFormulation::linear;
+  double rayleigh_alpha = 1.0;                    // mass-proportional damping (1/s)
+  double rayleigh_beta = 0.001;                   // stiffness-proportional damping (s)
+  CorotJacobian jacobian = CorotJacobian::exact;  // corotational tangent
+  bool lumped_mass = true;                        // false: consistent mass (not condensed)
+  std::vector<std::uint8_t> operational_tet;      // #T, condensed only (1 = operational)
+};
+
+class FemModel {
+ public:
+  // fixed_node: #V (empty = none); nodes of rigid tets are fixed in addition.
+  // Throws InputError for bad meshes/materials/options, std::runtime_error when the
+  // constraints leave the body free (singular stiffness).
+  FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
+           std::vector<std::uint8_t> fixed_node, FemModelOptions options = {});
+  ~FemModel();
+  FemModel(const FemModel&) = delete;
+  FemModel& operator=(const FemModel&) = delete;
+
+  // Advances by h seconds (h > 0).
+  void step(double h);
+  // Back to rest (u = v = 0, t = 0).
+  void reset();
+
+  // #V by 3 current positions (m) of every node.
+  const mesh::Positions& positions();
+  const Eigen::VectorXd& displacement();  // 3#V (m)
+  // Current position of one node (m) without recovering the condensed interior: exact for
+  // nodes the step solves (solves_node) and fixed nodes — what the haptic contact needs.
+  Eigen::Vector3d node_position(int v) const;
+  double time() const { return time_; }
+
+  // Penalty contact (see top). contact_node = -1: no contact.
+  int contact_node = -1;
+  Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
+  double contact_k = 0.0;                // N/m
+  double penetration() const;            // d (m), 0 without contact
+  Eigen::Vector3d device_force() const;  // +k d n (N), what the device feels
+  // External nodal forces (N), 3#V, constant over a step; zero after construction.
+  Eigen::VectorXd f_ext;
+
+  FemFormulation formulation() const { return opt_.formulation; }
+  long dofs() const;                               // unknowns of the per-step solve
+  long total_dofs() const;                         // 3#V
+  std::string solver() const;                      // the linear solver used per step
+  double factor_ms() const { return factor_ms_; }  // last factorisation (ms)
+  bool solves_node(int v) const;                   // node v moves in the per-step solve
+  const FemSystem& system() const;
+  const std::vector<std::uint8_t>& fixed_nodes() const { return fixed_node_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  FemModelOptions opt_;
+  std::vector<std::uint8_t> fixed_node_;
+  double time_ = 0, factor_ms_ = 0;
+};
+
+}  // namespace palplab::engine
