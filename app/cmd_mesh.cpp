@@ -289,7 +289,7 @@ palplab::app::CommandRegistration reg{
         c->add_option("--out", *out, "Output: BASE (TetGen .node/.ele/.face/.neigh) or BASE.vtu")
             ->required();
         c->add_option("--regions", *regions,
-                      "SPEC §4 .regions file (default: IN's stem + .regions when present)");
+                      ".regions file (default: IN's stem + .regions when present)");
         c->add_option("--quality", opt->quality,
                       "Radius-edge ratio bound (TetGen -q), >= 1.0; 0 = off");
         c->add_option("--max-volume", opt->max_volume, "Maximum tet volume (m^3, TetGen -a)");

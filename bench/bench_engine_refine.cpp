@@ -1,4 +1,4 @@
-// Adaptive area-based refinement vs its baselines (SPEC §3 comparisons):
+// Adaptive area-based refinement vs its baselines (the original work's comparisons):
 //  1. new masses (nodes) and springs: area-based vs conventional adaptive subdivision to the same
 //     finest level, on the stomach (192 nodes, 372 faces, 564 springs) and on Model-C's surface
 //     (published: stomach 81 vs 91 masses, 214 vs 234 springs);

@@ -1,4 +1,4 @@
-// Lock-step haptic step cost per prototype during a typical press (SPEC cost budget: 10–20 us
+// Lock-step haptic step cost per prototype during a typical press (published cost budget: 10–20 us
 // median), and what local integration buys: prototype C with its scope + sleeping vs the same
 // model integrating every node every step (speed-up and the force/deformation error it costs).
 //
@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
                   pct(r.us, 0.9), pct(r.us, 0.99), pct(r.us, 1.0), r.awake_max);
     }
 
-  // Prototype B's haptic-loop scope (SPEC §2; published: two rings 0.90 us at 1442 vertices to
+  // Prototype B's haptic-loop scope (published: two rings 0.90 us at 1442 vertices to
   // 2.70 us at 8664, whole model 3.8 to 21.5 us): the same press with each scope on tracts of
   // several sizes.
   std::printf(

@@ -1,4 +1,4 @@
-// Boundary-face extraction of tet meshes (SPEC §4 "triangle reduction"): vertex->tets map
+// Boundary-face extraction of tet meshes ("triangle reduction"): vertex->tets map
 // (O(n)) vs comparing every pair of tets (O(n^2), what took hours in the original work).
 // Kuhn-subdivided cube grids and Model-C; medians over repetitions, side by side, and the ratio.
 #include <algorithm>

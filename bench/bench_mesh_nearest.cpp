@@ -1,4 +1,4 @@
-// Touched-node search: octree vs linear scan (SPEC §3 published figures: 994 vertices
+// Touched-node search: octree vs linear scan (published figures: 994 vertices
 // 1.05 vs 0.17 ms, 14392 vertices 14.84 vs 1.10 ms on a Pentium IV 2.0 GHz).
 // Tract surfaces of 994 ... 14392 vertices; queries are surface points displaced by up to 5 mm
 // (where a haptic contact point is). Prints the median time per query over 11 repetitions,

@@ -1,5 +1,5 @@
 #pragma once
-// The two clocks (DESIGN.md). Both call the same Scene::step.
+// The two clocks (docs/ARCHITECTURE.md). Both call the same Scene::step.
 //
 // Lock-step: one thread, simulated time, as fast as the CPU allows, deterministic. A graphics
 // frame is taken every frame_period seconds of SIMULATED time.

@@ -70,7 +70,7 @@ struct Rendered {
   std::span<const Event> events;
 };
 
-// One logged sample per step (DESIGN.md's Sample{t, x, F, contact_node}).
+// One logged sample per step (the architecture's Sample{t, x, F, contact_node}).
 struct Sample {
   double t = 0.0;                               // s
   Eigen::Vector3d x = Eigen::Vector3d::Zero();  // m, device position given to step()

@@ -1,5 +1,5 @@
 #pragma once
-// Mesh defects that stop tetrahedralization or simulation (SPEC §4), each located by indices and
+// Mesh defects that stop tetrahedralization or simulation, each located by indices and
 // coordinates. Kinds (the JSON contract of `palplab mesh check`):
 //   open_edge                 edge with one face where a closed surface is expected
 //   non_manifold_edge         edge with more than two faces

@@ -1,5 +1,5 @@
 #pragma once
-// Procedural meshes (SPEC §1, §3): the bovine reproductive tract (Model-A/B surfaces, the
+// Procedural meshes: the bovine reproductive tract (Model-A/B surfaces, the
 // surface of Model-C), the stomach tube and geodesic spheres. All sizes in metres; the output
 // depends only on the arguments (same arguments -> same arrays, bit for bit).
 //
@@ -30,7 +30,7 @@ struct TractOptions {
 SurfaceMesh generate_tract(const TractOptions& opt);
 
 // Open stomach tube, 6 vertices around x 32 rings: 192 vertices, 372 faces, 564 edges, two
-// boundary loops (SPEC §1). J-shaped, 0.33 m along the centreline, fundus radius 0.045 m narrowing
+// boundary loops. J-shaped, 0.33 m along the centreline, fundus radius 0.045 m narrowing
 // to 0.012 m at the pylorus. seed != 0 perturbs the radii by up to +-5 %.
 SurfaceMesh generate_stomach(std::uint64_t seed = 0);
 
@@ -54,8 +54,8 @@ int sphere_frequency_for(int target_vertices);
 // region of its boundary face (the smaller id if it has two faces of different regions), an
 // interior tet the majority region of its surface vertices (see tetrahedralize).
 // Default (seed 0, 1604 surface vertices): 2426 nodes (822 interior), 9264 tets, 3204 boundary
-// faces (SPEC: 2487 / 8744 / 4974 — 3.5 tets per node, a ratio only a skin mesh reaches; the
-// previous generated Model-C was such a skin, with 2 interior nodes), min dihedral 7.7°,
+// faces (the original: 2487 / 8744 / 4974 — 3.5 tets per node, a ratio only a skin mesh reaches;
+// the previous generated Model-C was such a skin, with 2 interior nodes), min dihedral 7.7°,
 // radius-edge <= 1.95, lumped node-mass ratio 217:1 (the old skin mesh: 36 000:1).
 struct ModelCOptions {
   int surface_vertices = 1600;  // target surface vertex count (generate_tract)

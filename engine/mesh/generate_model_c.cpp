@@ -70,7 +70,7 @@ TetMesh generate_model_c(const ModelCOptions& opt) {
     throw InputError("Model-C volume factor must be >= 0, got " + format_exact(opt.volume_factor));
   const SurfaceMesh s = generate_tract({opt.surface_vertices, opt.seed});
   TetOptions o;
-  o.default_attribute = 101;  // SPEC §4: soft tissue
+  o.default_attribute = 101;  // soft tissue
   o.keep_surface = true;
   o.quality = opt.radius_edge;
   o.min_dihedral = opt.radius_edge > 0 ? opt.min_dihedral : 0;

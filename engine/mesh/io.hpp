@@ -12,7 +12,7 @@
 //   STL   ASCII only: one `solid <name>` block per run of faces of a region (a file with a single
 //         solid has no regions: its name is just the file's name). Binary STL carries none.
 //   OFF   none
-//   TetGen  .ele attribute 1 = tissue attribute (SPEC §4), attribute 2 = region id; the names
+//   TetGen  .ele attribute 1 = tissue attribute, attribute 2 = region id; the names
 //         in the side table BASE.names (`<count>` then `<id> <name>` per line)
 //   VTU   cell data `region` (id) and `attribute`; names in a FieldData string array.
 // STL stores every triangle with its own corners: identical corners (bitwise) are merged on

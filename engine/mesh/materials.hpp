@@ -1,5 +1,5 @@
 #pragma once
-// Tissue types and materials (SPEC §4). A tet's integer attribute names its tissue type:
+// Tissue types and materials. A tet's integer attribute names its tissue type:
 // 0-99 undefined, 100 skin, 101 soft tissue, 102 veins, 103 arteries, 104 nerves, 105 lung,
 // 106 heart, 107 membrane, 200-299 bones (rigid), 300-399 muscles. Each type carries Young's
 // modulus E (Pa), Poisson ratio nu, density (kg/m^3) and a display colour (RGB in [0, 1]).

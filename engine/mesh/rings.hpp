@@ -1,5 +1,5 @@
 #pragma once
-// First- and second-ring tables (SPEC §2) as compact CSR arrays, precomputed once per mesh.
+// First- and second-ring tables as compact CSR arrays, precomputed once per mesh.
 //   first.row(v)   nodes sharing an edge with v (ascending)
 //   second.row(v)  neighbours of the first ring, excluding v and the first ring (ascending)
 #include "engine/mesh/types.hpp"

@@ -59,7 +59,7 @@ TetMesh make_tet_mesh(Positions V, Tets T, Eigen::VectorXi attribute, Regions re
   m.regions = std::move(regions);
   m.volume.resize(nt);
   for (int t = 0; t < nt; ++t) {
-    // SPEC §4: V = |(d − a)·((d − b) × (d − c))| / 6.
+    // V = |(d − a)·((d − b) × (d − c))| / 6.
     Vec3 a = row3(m.V, m.T(t, 0)), b = row3(m.V, m.T(t, 1)), c = row3(m.V, m.T(t, 2)),
          d = row3(m.V, m.T(t, 3));
     m.volume[t] = std::abs((d - a).dot((d - b).cross(d - c))) / 6.0;

@@ -1,6 +1,6 @@
 #pragma once
 // TetMesh: a tetrahedral mesh (V, T) with a per-tet region attribute, stored volumes, the
-// vertex -> tets map, and boundary-face extraction in O(n) (SPEC §4).
+// vertex -> tets map, and boundary-face extraction in O(n).
 //
 // Orientation (same as TetGen's output): tet (a,b,c,d) is positive when
 // (b-a)·((c-a)×(d-a)) > 0. Its faces, oriented outwards, are
@@ -15,7 +15,7 @@ namespace palplab::mesh {
 struct TetMesh {
   Positions V;                // #V by 3 positions (m)
   Tets T;                     // #T by 4 tetrahedra
-  Eigen::VectorXi attribute;  // #T region attribute = tissue type (SPEC §4 table), 0 if none
+  Eigen::VectorXi attribute;  // #T region attribute = tissue type (tissue table), 0 if none
   Regions regions;            // optional named regions per tet (ovary_left, ...)
   Eigen::VectorXd volume;     // #T unsigned volumes |(d−a)·((d−b)×(d−c))|/6 (m^3)
   Csr vertex_tets;            // #V rows: the tets incident to each vertex (ascending)
@@ -57,7 +57,7 @@ struct BoundaryFaces {
 // it are among the tets of its smallest vertex. O(#T · valence) — linear in the mesh size.
 // Faces come out in (tet, local face) order.
 BoundaryFaces boundary_faces(const TetMesh& m, const BoundaryOptions& opt = {});
-// The same by comparing every pair of tets, O(#T^2): the baseline (SPEC §4) for tests and
+// The same by comparing every pair of tets, O(#T^2): the baseline for tests and
 // benchmarks only.
 BoundaryFaces boundary_faces_brute_force(const TetMesh& m, const BoundaryOptions& opt = {});
 

@@ -1,5 +1,5 @@
 #pragma once
-// Tetrahedralization of a closed surface through TetGen 1.5 (libtet, in a child process) — SPEC §4.
+// Tetrahedralization of a closed surface through TetGen 1.5 (libtet, in a child process).
 #include <string>
 #include <vector>
 
@@ -8,8 +8,8 @@
 
 namespace palplab::mesh {
 
-// One line of a SPEC §4 `.regions` file: `index x y z region_id attribute`.
-// (x, y, z) is a point inside the region; region_id becomes the attribute (tissue type, SPEC §4
+// One line of a `.regions` file: `index x y z region_id attribute`.
+// (x, y, z) is a point inside the region; region_id becomes the attribute (tissue type,
 // table) of every tet of the region; `attribute` is TetGen's region attribute, the maximum tet
 // volume in that region (m^3; <= 0 = no constraint), as in TetGen's .poly region list.
 struct RegionSeed {
@@ -35,7 +35,7 @@ struct TetOptions {
   double max_volume = 0;          // global maximum tet volume (m^3, TetGen -a); 0 = none
   bool keep_surface = true;       // TetGen -Y: no Steiner points on the input surface
   std::vector<RegionSeed> seeds;  // TetGen -A regions; without seeds every tet gets
-  int default_attribute = 0;      //   this attribute (SPEC §4: 0-99 = undefined tissue)
+  int default_attribute = 0;      //   this attribute (0-99 = undefined tissue)
   double timeout_seconds = 300;   // wall-clock limit of the TetGen run; <= 0 = none
 };
 

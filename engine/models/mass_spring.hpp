@@ -1,6 +1,7 @@
 #pragma once
-// Mass-spring (Voigt) model data and forces, SPEC §3 Eq 5.3, plus damped zero-rest-length home
-// springs (Eq 4.11). Everything is a plain array so any function can be tested on 2 nodes.
+// Mass-spring (Voigt) model data and forces, Eq 5.3 of the original work, plus damped
+// zero-rest-length home springs (Eq 4.11). Everything is a plain array so any function can be
+// tested on 2 nodes.
 //
 //   X, V      #V by 3 positions (m) and velocities (m/s)
 //   X_rest    #V by 3 rest positions (m); also the anchors of the home springs

@@ -1,5 +1,5 @@
 #pragma once
-// Adaptive area-based refinement of a mass-spring surface (SPEC §3), its two baselines, and the
+// Adaptive area-based refinement of a mass-spring surface, its two baselines, and the
 // parameter identification of Eq 5.10–5.18.
 //
 // The coarse surface faces F0 (#F0 by 3, indices into the model's nodes; on a tet model these
@@ -12,8 +12,8 @@
 // Level and SLoD, per coarse face: l = depth to which its tree is complete, SLoD = how many
 // quarters of the next level are split (ceil(4·fraction), 1..3; 4 when nothing is partial);
 // time step h = h_coarse / 2^l_max (Eq 5.18). The refinement policy (which faces split) is the
-// SPEC's; the parameter identification is not Eq 5.10–5.17, which change the press force by
-// 23–51 % and the patch mass x3 to x11.7 (measured): instead
+// the original work's; the parameter identification is not Eq 5.10–5.17, which change the press
+// force by 23–51 % and the patch mass x3 to x11.7 (measured): instead
 //   masses and support: each coarse node's value q_v is split over its surface faces by area
 //     (q_v A_f / A_v); a refined coarse face gathers its corners' shares and lumps them over its
 //     leaf triangles by area — the patch's total mass is conserved exactly;

@@ -1,5 +1,5 @@
 #pragma once
-// Vertex-based visio-haptic ring model (SPEC §2, prototype B).
+// Vertex-based visio-haptic ring model (prototype B).
 //
 // Fixed nodes X_fixed (rest, never move) and deformable nodes X. While the haptic contact point
 // pushes node p with force F_push (N, the force the hand applies, pointing into the organ):
@@ -10,7 +10,7 @@
 //   f = ks (x_fixed - x) - kd v, integrated per node by backward Euler (unconditionally stable).
 // The haptic force is computed by the scene (Hooke's law on the penetration, as in A).
 //
-// Scope (which nodes the haptic loop updates, SPEC §2): rings = only displaced/moving nodes
+// Scope (which nodes the haptic loop updates): rings = only displaced/moving nodes
 // (tracked in an active list), octant = also every node of the touched node's octree leaf,
 // whole = every node every step (the original's "whole model" mode).
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// Assembly of the linear tetrahedral FEM (SPEC §4): per-tet materials from the tissue table,
+// Assembly of the linear tetrahedral FEM: per-tet materials from the tissue table,
 // the sparse pattern built once (element entry -> value slot), global stiffness K, consistent
 // and lumped mass and Rayleigh damping C = alpha M + beta K.
 //

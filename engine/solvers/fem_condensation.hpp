@@ -1,5 +1,5 @@
 #pragma once
-// Hybrid condensed FEM (SPEC §4): static condensation of the non-operational region.
+// Hybrid condensed FEM: static condensation of the non-operational region.
 //
 // The tets are split into an operational region (where the tool acts) and the rest. The free
 // dofs fall into three sets: I (nodes touching only operational tets), s (interface: nodes

@@ -1,13 +1,14 @@
 #pragma once
-// Inverse-stiffness contact (SPEC §4). With C = K_ff^-1 (the compliance of the constrained
+// Inverse-stiffness contact. With C = K_ff^-1 (the compliance of the constrained
 // body), the columns of C for the touchable surface nodes are precomputed (3 sparse solves per
 // node). At run time a contact prescribes the displacement of some touchable nodes along given
 // directions n_k (a whole node = its three axes); the contact forces f_k n_k solve the small
 // dense system
 //   (N^T C_bb N) lambda = d - N^T u0_b,   u = u0 + C_:b N lambda,
-// which is SPEC's f_contact = (K^-1_bb)^-1 (d_contact - K^-1_ab^T f_nocontact) with u0 = C f_nc
-// the displacement of the non-contact load. The body stays free (no friction) in the directions
-// not prescribed. Costs O(k^3 + 3#V k) for k prescribed directions instead of a sparse solve.
+// which is the original work's f_contact = (K^-1_bb)^-1 (d_contact - K^-1_ab^T f_nocontact) with u0
+// = C f_nc the displacement of the non-contact load. The body stays free (no friction) in the
+// directions not prescribed. Costs O(k^3 + 3#V k) for k prescribed directions instead of a sparse
+// solve.
 #include <Eigen/Core>
 #include <vector>
 

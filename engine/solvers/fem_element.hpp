@@ -1,5 +1,5 @@
 #pragma once
-// Linear tetrahedral finite element (SPEC §4): shape-function gradients, strain-displacement
+// Linear tetrahedral finite element: shape-function gradients, strain-displacement
 // matrix B, isotropic elasticity D(E, nu), element stiffness K_e = V B^T D B and element masses.
 //
 // Node ordering of a tet is (a, b, c, d) as in tet_mesh.hpp; element vectors have 12 entries,

@@ -1,5 +1,5 @@
 #pragma once
-// Dirichlet constraints and the static solve K u = f of the linear FEM (SPEC §4).
+// Dirichlet constraints and the static solve K u = f of the linear FEM.
 // Constrained (fixed) dofs carry a prescribed displacement; the system on the free dofs
 //   K_ff u_f = f_f - K_fc u_c
 // is factorised once with a sparse LDL^T (Eigen SimplicialLDLT, AMD ordering) and reused for any

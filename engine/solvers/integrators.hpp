@@ -1,5 +1,5 @@
 #pragma once
-// Time integrators for MassSpringSystem (SPEC §3 "do better"):
+// Time integrators for MassSpringSystem (improving on the original's semi-implicit step):
 //   symplectic_euler  v += h F/m, x += h v — what the original called "implicit"; first order,
 //                     stable only for h < 2/omega_max.
 //   backward_euler    linearised backward Euler (Baraff & Witkin 1998), one sparse solve per step:

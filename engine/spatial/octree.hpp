@@ -1,5 +1,5 @@
 #pragma once
-// Octree over mesh nodes for the touched-node search (SPEC §2, §3).
+// Octree over mesh nodes for the touched-node search.
 //
 // Built once over the rest positions: the root cube is split into octants until a cell holds at
 // most max_points_per_leaf nodes or reaches max_depth. Leaves own contiguous runs of `order`.

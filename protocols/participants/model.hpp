@@ -1,5 +1,5 @@
 #pragma once
-// The virtual trainee and instructor (SPEC §5, docs/PARTICIPANTS.md): a perception–memory–motor
+// The virtual trainee and instructor (docs/PARTICIPANTS.md): a perception–memory–motor
 // model whose ONLY inputs are what the simulator renders in each haptic step (force on the hand,
 // contact and the touched region, visible deformation, audio cue) plus the instructor's spoken
 // call. Nothing here knows a prototype's id or name; group differences can arise only from what

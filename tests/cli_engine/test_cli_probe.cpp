@@ -68,7 +68,7 @@ TEST(CliProbe, BadInputExitsTwo) {
 }
 
 TEST(CliProbe, ExplicitIntegratorsDivergeOnModelCAndAreCaught) {
-  // SPEC §3: symplectic Euler (and RK4) are unstable at h = 1 ms on stiff tissue; the scene
+  // symplectic Euler (and RK4) are unstable at h = 1 ms on stiff tissue; the scene
   // detects the blow-up, renders no force for it and the probe exits 1.
   for (const char* integ : {"symplectic_euler", "rk4"}) {
     const Result r =

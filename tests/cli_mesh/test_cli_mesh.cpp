@@ -77,8 +77,8 @@ TEST(CliMesh, ModelCAndRegionsSurviveTetrahedralization) {
   const json j = json::parse(r.out);
   EXPECT_NEAR(j["vertices"].get<double>(), 2487, 248.7);
   EXPECT_NEAR(j["tets"].get<double>(), 8744, 874.4);
-  // A quality mesh (issue 9): fewer surface faces than the SPEC's skin mesh (4974), interior
-  // nodes, bounded angles and mass spread.
+  // A quality mesh (issue 9): fewer surface faces than the original work's skin mesh (4974),
+  // interior nodes, bounded angles and mass spread.
   EXPECT_EQ(j["boundary_faces"], 3204);
   EXPECT_GT(j["interior_nodes"].get<double>(), 0.25 * j["vertices"].get<double>());
   EXPECT_GT(j["dihedral_angle"]["min"].get<double>(), 7.0);
@@ -170,7 +170,7 @@ TEST(CliMesh, RepairMakesTheMeshClean) {
 TEST(CliMesh, TetrahedralizeWithRegionsFile) {
   ASSERT_EQ(run("mesh generate sphere --out " + p("ball.stl")).code, 0);
   {
-    std::ofstream f(p("ball.regions"));  // SPEC §4 side file next to the STL: picked up
+    std::ofstream f(p("ball.regions"));  // side file next to the STL: picked up
     f << "1\n1 0 0 0 103 0\n";
   }
   Result r =

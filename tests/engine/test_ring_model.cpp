@@ -1,4 +1,4 @@
-// Prototype B's ring model (SPEC §2): displacement pattern of Eq 4.2–4.4, every node back at rest
+// Prototype B's ring model: displacement pattern of Eq 4.2–4.4, every node back at rest
 // after release through the home springs (Eq 4.11), in every scope mode; octree touched-node
 // search equals the linear search.
 #include <gtest/gtest.h>

@@ -121,8 +121,8 @@ TEST(ModelCQuality, InteriorNodesAnglesAndMassRatio) {
   EXPECT_LT(q.max_dihedral_deg, 166.0);
   EXPECT_LE(q.max_radius_edge, 2.0);
   EXPECT_LT(q.node_mass_ratio, 250.0);
-  EXPECT_NEAR(m.V.rows(), 2487, 0.05 * 2487);  // SPEC's node count
-  EXPECT_NEAR(m.T.rows(), 8744, 0.1 * 8744);   // SPEC's tet count
+  EXPECT_NEAR(m.V.rows(), 2487, 0.05 * 2487);  // the original work's node count
+  EXPECT_NEAR(m.T.rows(), 8744, 0.1 * 8744);   // the original work's tet count
 }
 
 TEST(ModelCQuality, TheSurfaceSkinMeshIsWhatTheQualitySwitchesFix) {

@@ -104,8 +104,8 @@ TEST(Tetrahedralize, ModelCMatchesTheReferenceAndKeepsRegions) {
   const TetMesh m = generate_model_c();
   EXPECT_NEAR(m.V.rows(), 2487, 0.1 * 2487);
   EXPECT_NEAR(m.T.rows(), 8744, 0.1 * 8744);
-  // The surface is kept (-Y): its faces are the boundary (the SPEC's skin mesh had 4974; the
-  // quality mesh trades surface faces for interior nodes, see test_model_c_quality.cpp).
+  // The surface is kept (-Y): its faces are the boundary (the original work's skin mesh had 4974;
+  // the quality mesh trades surface faces for interior nodes, see test_model_c_quality.cpp).
   EXPECT_EQ(boundary_faces(m).F.rows(), generate_tract({kModelCSurfaceVertices, 0}).F.rows());
   ASSERT_EQ(m.regions.names, tract_region_names());
   for (int r = 0; r < 6; ++r) EXPECT_GT((m.regions.id.array() == r).count(), 100) << r;

@@ -1,4 +1,4 @@
-// Planner: deterministic, balanced, derived seeds, the schedules of SPEC §1.
+// Planner: deterministic, balanced, derived seeds, the schedules of the original work.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

@@ -97,7 +97,7 @@ TEST(Prototypes, EveryShippedFileBuilds) {
     EXPECT_EQ(sum.id, id);
     EXPECT_EQ(sum.region_names, g.region_names);
   }
-  // SPEC §1 table: mesh sizes and C2 = half of C1's threshold area.
+  // the original work table: mesh sizes and C2 = half of C1's threshold area.
   EXPECT_NEAR(prototypes::build_scene(proto("A")).geometry().V.rows(), 1500, 30);
   EXPECT_NEAR(prototypes::build_scene(proto("B")).geometry().V.rows(), 6000, 120);
   auto c1 = prototypes::build_scene(proto("C1")), c2 = prototypes::build_scene(proto("C2"));
