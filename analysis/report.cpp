@@ -10,7 +10,9 @@
 #include <sstream>
 
 #include "analysis/anova.hpp"
+#include "analysis/csv.hpp"
 #include "analysis/descriptives.hpp"
+#include "analysis/lmm.hpp"
 #include "analysis/distributions.hpp"
 #include "analysis/posthoc.hpp"
 #include "analysis/summary.hpp"
@@ -707,6 +709,116 @@ void section_analysis(Context& c, const Unit& u) {
   doc.bullets(checks);
 }
 
+// ---- Mixed model of a learning curve: value ~ group * session + (1 [+ session] | participant)
+struct CurveObs {
+  std::string participant;
+  int group = 0, session = 0;
+  double value = 0;
+};
+struct CurveModel {
+  bool ok = false;
+  std::string why_not;   // when !ok: why there is no fit
+  std::string formula;   // the model that was kept
+  std::string fallback;  // why the random-slope model was not kept ("" when it was)
+  LmmFit fit;
+  std::vector<int> levels;  // group indices present in the data, reference first
+};
+
+// Fits the model to the observations the section already collected. Group levels are coded
+// "G000", "G001", ... in declaration order so the first declared group is the reference and a
+// group called "1" is never read as a number. Never throws: a failure is returned with its reason.
+CurveModel fit_learning_curve(const std::vector<CurveObs>& obs, const std::vector<std::string>& groups) {
+  CurveModel cm;
+  std::map<int, std::set<std::string>> people;
+  std::set<int> sessions;
+  for (const auto& o : obs) people[o.group].insert(o.participant), sessions.insert(o.session);
+  for (const auto& [g, ps] : people) {
+    cm.levels.push_back(g);
+    if (ps.size() < 2) {
+      cm.why_not = "group " + groups[g] + " has " + std::to_string(ps.size()) +
+                   " participant with training data, so group and participant are confounded "
+                   "(the model needs at least 2 participants per group)";
+      return cm;
+    }
+  }
+  if (sessions.size() < 2) {
+    cm.why_not = "there is only one training session, so there is no slope to fit";
+    return cm;
+  }
+  CsvTable t;
+  t.file = "learning curve";
+  t.header = {"value", "group", "session", "participant"};
+  char code[16], val[32];
+  for (const auto& o : obs) {
+    std::snprintf(code, sizeof code, "G%03d", o.group);
+    std::snprintf(val, sizeof val, "%.17g", o.value);
+    t.rows.push_back({val, code, std::to_string(o.session), "p:" + o.participant});
+    t.line.push_back(static_cast<int>(t.rows.size()) + 1);
+  }
+  const std::string fixed = cm.levels.size() >= 2 ? "value ~ group * session" : "value ~ session";
+  const std::string slope_model = fixed + " + (1 + session | participant)";
+  const std::string icpt_model = fixed + " + (1 | participant)";
+  try {
+    cm.fit = fit_lmm(t, parse_lmm_formula(slope_model), {}, true);
+    cm.formula = slope_model;
+    for (const auto& w : cm.fit.warnings)
+      if (w.rfind("singular fit", 0) == 0) cm.fallback = "its fit is singular (" + w + ")";
+  } catch (const std::exception& e) {
+    cm.fallback = std::string("it could not be fitted (") + e.what() + ")";
+  }
+  if (!cm.fallback.empty()) {
+    try {
+      cm.fit = fit_lmm(t, parse_lmm_formula(icpt_model), {}, true);
+      cm.formula = icpt_model;
+    } catch (const std::exception& e) {
+      cm.why_not = std::string("the mixed model could not be fitted: ") + e.what();
+      return cm;
+    }
+  }
+  for (const auto& fe : cm.fit.fixed)
+    if (!std::isfinite(fe.estimate) || !std::isfinite(fe.se)) {
+      cm.why_not = "the mixed model's fixed effects are not finite (" + fe.name + ")";
+      return cm;
+    }
+  cm.ok = true;
+  return cm;
+}
+
+// "groupG001:session" -> "groupB:session" (the coded levels back to the group names).
+std::string curve_term_name(std::string name, const std::vector<std::string>& groups) {
+  const size_t at = name.find("groupG");
+  if (at != std::string::npos && at + 9 <= name.size()) {
+    const int g = std::atoi(name.substr(at + 6, 3).c_str());
+    if (g >= 0 && g < static_cast<int>(groups.size()))
+      name.replace(at + 5, 4, groups[static_cast<size_t>(g)]);
+  }
+  return name;
+}
+
+// Contrast vector of the fitted mean of group g at session x (x = NaN: the slope of group g).
+std::vector<double> curve_contrast(const CurveModel& cm, int g, double x) {
+  char code[16];
+  std::snprintf(code, sizeof code, "G%03d", g);
+  const std::string lvl = std::string("group") + code;
+  std::vector<double> l(cm.fit.fixed.size(), 0.0);
+  const bool slope_only = std::isnan(x);
+  for (size_t j = 0; j < l.size(); ++j) {
+    const std::string& n = cm.fit.fixed[j].name;
+    if (n == "(Intercept)" || n == lvl) l[j] = slope_only ? 0 : 1;
+    else if (n == "session" || n == lvl + ":session") l[j] = slope_only ? 1 : x;
+  }
+  return l;
+}
+
+std::pair<double, double> curve_estimate(const CurveModel& cm, const std::vector<double>& l) {
+  double est = 0, var = 0;
+  for (size_t a = 0; a < l.size(); ++a) {
+    est += l[a] * cm.fit.fixed[a].estimate;
+    for (size_t b = 0; b < l.size(); ++b) var += l[a] * cm.fit.vcov[a][b] * l[b];
+  }
+  return {est, std::sqrt(std::max(0.0, var))};
+}
+
 // ---- Learning curves over the phases the study declared as training (stored kind)
 void section_learning_curves(Context& c, const std::vector<Unit>& units) {
   c.doc.heading(2, "Learning curves");
@@ -719,14 +831,18 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
   for (const auto& mname : curve_measures) {
     // session number across the training phases (1-based) per group
     std::map<std::pair<int, int>, std::vector<double>> cell;  // (group, session) -> values
+    std::vector<CurveObs> obs;                                // the same values, per row
     int offset = 0, max_s = 0;
     for (const auto& ph : training) {
       int top = -1;
       for (const auto& m : c.measures)
         if (m.phase == ph && m.name == mname) {
           top = std::max(top, m.phase_index);
-          if (m.value && std::isfinite(*m.value))
+          if (m.value && std::isfinite(*m.value)) {
             cell[{c.group_index(m.group), offset + m.phase_index + 1}].push_back(*m.value);
+            obs.push_back({m.participant, c.group_index(m.group), offset + m.phase_index + 1,
+                           *m.value});
+          }
         }
       offset += top + 1;
       max_s = offset;
@@ -767,14 +883,83 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
       }
       ser.push_back(s);
     }
+    const CurveModel cm = fit_learning_curve(obs, c.groups);
+    std::vector<FittedLine> fits;
+    // Pointwise 95 % band of the fixed-effects prediction, normal quantile (Wald).
+    const double z = 1.959963984540054;
+    if (cm.ok) {
+      int min_s = max_s;
+      for (const auto& o : obs) min_s = std::min(min_s, o.session);
+      for (int g : cm.levels) {
+        FittedLine fl;
+        fl.colour = g;
+        const int steps = 24;
+        for (int i = 0; i <= steps; ++i) {
+          const double x = min_s + (max_s - min_s) * static_cast<double>(i) / steps;
+          auto [est, se] = curve_estimate(cm, curve_contrast(cm, g, x));
+          fl.x.push_back(x);
+          fl.y.push_back(est);
+          fl.lo.push_back(est - z * se);
+          fl.hi.push_back(est + z * se);
+        }
+        fits.push_back(fl);
+      }
+    }
     c.save_figure("learning_" + slug(mname) + ".svg",
                   svg_line_plot(ser, mname + " over training sessions", "training session",
-                                with_unit(mname, unit)),
+                                with_unit(mname, unit), true, {}, fits),
                   "Learning curve of " + mname + ": group mean " +
                       (wilson      ? "with its 95 % Wilson interval"
                        : scale > 0 ? "± SE (clipped to [0, " + fmt(scale) + "])"
                                    : std::string("± SE")) +
-                      " per training session (groups offset sideways so bars do not overlap).");
+                      " per training session (groups offset sideways so bars do not overlap)" +
+                      (cm.ok ? "; dashed: the mixed model's fitted line per group (fixed effects) "
+                               "with its pointwise 95 % confidence band (normal quantile)."
+                             : "."));
+    c.doc.heading(3, "Mixed model of the learning curve: " + mname);
+    if (!cm.ok) {
+      c.doc.para("No mixed model fitted: " + cm.why_not +
+                 ". The figure shows the observed group means only.");
+      continue;
+    }
+    const LmmFit& fit = cm.fit;
+    std::string model = "`" + cm.formula + "`, REML, " + std::to_string(fit.n) +
+                        " observations of " + std::to_string(fit.n_groups) +
+                        " participants; session = training session number (1-based), reference "
+                        "group " + c.groups[static_cast<size_t>(cm.levels.front())] +
+                        ". Residual SD " + fmt(fit.sigma) + ", participant intercept SD " +
+                        fmt(fit.sd_intercept);
+    if (cm.fallback.empty())
+      model += ", session slope SD " + fmt(fit.sd_slope) + " (correlation " +
+               fmt(fit.correlation, "%.2f") + ").";
+    else
+      model += ". The random-slope model `(1 + session | participant)` was not kept: " +
+               cm.fallback + "; the random-intercept model is reported.";
+    c.doc.para(model);
+    for (const auto& w : fit.warnings) c.doc.para("Warning: " + w + ".");
+    std::vector<std::vector<std::string>> fe;
+    for (const auto& f : fit.fixed)
+      fe.push_back({curve_term_name(f.name, c.groups), fmt(f.estimate), fmt(f.se),
+                    fmt(f.df, "%.2f"), fmt(f.t, "%.3f"), format_p(f.p)});
+    c.doc.table({"fixed effect", "estimate", "SE", "df", "t", "p"}, fe);
+    std::vector<std::vector<std::string>> sl;
+    for (int g : cm.levels) {
+      auto [est, se] = curve_estimate(cm, curve_contrast(cm, g, NAN));
+      sl.push_back({c.groups[static_cast<size_t>(g)], fmt(est), fmt(se),
+                    interval(est - z * se, est + z * se)});
+    }
+    c.doc.table({"group", "slope per session", "SE", "95% CI (normal)"}, sl);
+    std::vector<std::vector<std::string>> an;
+    for (const auto& a : fit.anova)
+      an.push_back({a.term, std::to_string(a.num_df), fmt(a.den_df, "%.2f"), fmt(a.f, "%.3f"),
+                    format_p(a.p)});
+    c.doc.table({"type III F test", "num df", "den df (Satterthwaite)", "F", "p"}, an);
+    if (cm.levels.size() >= 2)
+      for (const auto& a : fit.anova)
+        if (a.term == "group:session")
+          c.doc.para("Do the groups learn differently? The group × session interaction: F(" +
+                     std::to_string(a.num_df) + ", " + fmt(a.den_df, "%.2f") + ") = " +
+                     fmt(a.f, "%.2f") + ", " + apa_p(a.p) + ".");
   }
   if (!any_curve)
     c.doc.para(training.empty() ? "The study declares no phase of kind \"training\"."

@@ -222,7 +222,8 @@ std::string svg_participant_plot(const std::vector<std::string>& group_names,
 
 std::string svg_line_plot(const std::vector<Series>& series, const std::string& title,
                           const std::string& x_label, const std::string& y_label, bool markers,
-                          const std::vector<ReferenceLine>& references) {
+                          const std::vector<ReferenceLine>& references,
+                          const std::vector<FittedLine>& fits) {
   Frame f;
   // Error bar of point i: [lo, hi] when given, else y ± err; NaN when there is none.
   auto bar = [](const Series& s, size_t i) -> std::pair<double, double> {
@@ -244,6 +245,12 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
   }
   for (const auto& r : references)
     if (std::isfinite(r.y)) ylo = std::min(ylo, r.y), yhi = std::max(yhi, r.y);
+  for (const auto& ft : fits) {
+    range_of(ft.x, xlo, xhi);
+    range_of(ft.y, ylo, yhi);
+    range_of(ft.lo, ylo, yhi);
+    range_of(ft.hi, ylo, yhi);
+  }
   f.set_y(ylo, yhi);
   f.integer_x = markers;
   for (const auto& s : series)
@@ -265,6 +272,23 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
            << num(right ? f.W - f.right - 4 : f.left + 4) << "\" y=\"" << num(f.py(r.y) - 3) << "\""
            << (right ? " text-anchor=\"end\"" : "") << " fill=\"" << r.colour << "\">"
            << xml_escape(r.label) << "</text>\n";
+  }
+  // Fitted lines first so the observed means and their bars stay visible on top.
+  for (const auto& ft : fits) {
+    const std::string col = group_colour(ft.colour);
+    const size_t m = std::min(ft.x.size(), ft.y.size());
+    if (ft.lo.size() >= m && ft.hi.size() >= m && m >= 2) {
+      std::ostringstream band;
+      for (size_t i = 0; i < m; ++i) band << num(f.px(ft.x[i])) << "," << num(f.py(ft.hi[i])) << " ";
+      for (size_t i = m; i-- > 0;) band << num(f.px(ft.x[i])) << "," << num(f.py(ft.lo[i])) << " ";
+      f.body << "<polygon class=\"fitband\" fill=\"" << col
+             << "\" fill-opacity=\"0.15\" stroke=\"none\" points=\"" << band.str() << "\"/>\n";
+    }
+    std::ostringstream pts;
+    for (size_t i = 0; i < m; ++i) pts << num(f.px(ft.x[i])) << "," << num(f.py(ft.y[i])) << " ";
+    f.body << "<polyline class=\"fit\" fill=\"none\" stroke=\"" << col
+           << "\" stroke-width=\"1.5\" stroke-dasharray=\"5 3\" points=\"" << pts.str()
+           << "\"/>\n";
   }
   const double n = static_cast<double>(series.size());
   for (size_t si = 0; si < series.size(); ++si) {

@@ -39,6 +39,12 @@ struct Series {
   std::vector<double> lo, hi;  // optional interval per point (same units as y); overrides err
   int colour = 0;
 };
+// A model's fitted line with a pointwise confidence band (drawn under the series, dashed line,
+// translucent band, in the colour of group `colour`); x sorted ascending, lo/hi optional.
+struct FittedLine {
+  std::vector<double> x, y, lo, hi;
+  int colour = 0;
+};
 // A labelled horizontal line across the plot (e.g. the ST / MPF / SFT force thresholds).
 struct ReferenceLine {
   std::string label;
@@ -50,6 +56,7 @@ struct ReferenceLine {
 inline constexpr double kDodgePixels = 7.0;
 std::string svg_line_plot(const std::vector<Series>& series, const std::string& title,
                           const std::string& x_label, const std::string& y_label,
-                          bool markers = true, const std::vector<ReferenceLine>& references = {});
+                          bool markers = true, const std::vector<ReferenceLine>& references = {},
+                          const std::vector<FittedLine>& fits = {});
 
 }  // namespace palplab::analysis
