@@ -12,8 +12,8 @@
 #include "analysis/anova.hpp"
 #include "analysis/csv.hpp"
 #include "analysis/descriptives.hpp"
-#include "analysis/lmm.hpp"
 #include "analysis/distributions.hpp"
+#include "analysis/lmm.hpp"
 #include "analysis/posthoc.hpp"
 #include "analysis/summary.hpp"
 #include "analysis/svg.hpp"
@@ -727,7 +727,8 @@ struct CurveModel {
 // Fits the model to the observations the section already collected. Group levels are coded
 // "G000", "G001", ... in declaration order so the first declared group is the reference and a
 // group called "1" is never read as a number. Never throws: a failure is returned with its reason.
-CurveModel fit_learning_curve(const std::vector<CurveObs>& obs, const std::vector<std::string>& groups) {
+CurveModel fit_learning_curve(const std::vector<CurveObs>& obs,
+                              const std::vector<std::string>& groups) {
   CurveModel cm;
   std::map<int, std::set<std::string>> people;
   std::set<int> sessions;
@@ -804,8 +805,10 @@ std::vector<double> curve_contrast(const CurveModel& cm, int g, double x) {
   const bool slope_only = std::isnan(x);
   for (size_t j = 0; j < l.size(); ++j) {
     const std::string& n = cm.fit.fixed[j].name;
-    if (n == "(Intercept)" || n == lvl) l[j] = slope_only ? 0 : 1;
-    else if (n == "session" || n == lvl + ":session") l[j] = slope_only ? 1 : x;
+    if (n == "(Intercept)" || n == lvl)
+      l[j] = slope_only ? 0 : 1;
+    else if (n == "session" || n == lvl + ":session")
+      l[j] = slope_only ? 1 : x;
   }
   return l;
 }
@@ -840,8 +843,8 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
           top = std::max(top, m.phase_index);
           if (m.value && std::isfinite(*m.value)) {
             cell[{c.group_index(m.group), offset + m.phase_index + 1}].push_back(*m.value);
-            obs.push_back({m.participant, c.group_index(m.group), offset + m.phase_index + 1,
-                           *m.value});
+            obs.push_back(
+                {m.participant, c.group_index(m.group), offset + m.phase_index + 1, *m.value});
           }
         }
       offset += top + 1;
@@ -923,18 +926,21 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
       continue;
     }
     const LmmFit& fit = cm.fit;
-    std::string model = "`" + cm.formula + "`, REML, " + std::to_string(fit.n) +
-                        " observations of " + std::to_string(fit.n_groups) +
+    std::string shown = cm.formula;  // the response under its measure name
+    shown.replace(0, 5, mname);
+    std::string model = "`" + shown + "`, REML, " + std::to_string(fit.n) + " observations of " +
+                        std::to_string(fit.n_groups) +
                         " participants; session = training session number (1-based), reference "
-                        "group " + c.groups[static_cast<size_t>(cm.levels.front())] +
-                        ". Residual SD " + fmt(fit.sigma) + ", participant intercept SD " +
-                        fmt(fit.sd_intercept);
+                        "group " +
+                        c.groups[static_cast<size_t>(cm.levels.front())] + ". Residual SD " +
+                        fmt(fit.sigma) + ", participant intercept SD " + fmt(fit.sd_intercept);
     if (cm.fallback.empty())
       model += ", session slope SD " + fmt(fit.sd_slope) + " (correlation " +
                fmt(fit.correlation, "%.2f") + ").";
     else
-      model += ". The random-slope model `(1 + session | participant)` was not kept: " +
-               cm.fallback + "; the random-intercept model is reported.";
+      model +=
+          ". The random-slope model `(1 + session | participant)` was not kept: " + cm.fallback +
+          "; the random-intercept model is reported.";
     c.doc.para(model);
     for (const auto& w : fit.warnings) c.doc.para("Warning: " + w + ".");
     std::vector<std::vector<std::string>> fe;
@@ -958,8 +964,8 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
       for (const auto& a : fit.anova)
         if (a.term == "group:session")
           c.doc.para("Do the groups learn differently? The group × session interaction: F(" +
-                     std::to_string(a.num_df) + ", " + fmt(a.den_df, "%.2f") + ") = " +
-                     fmt(a.f, "%.2f") + ", " + apa_p(a.p) + ".");
+                     std::to_string(a.num_df) + ", " + fmt(a.den_df, "%.2f") +
+                     ") = " + fmt(a.f, "%.2f") + ", " + apa_p(a.p) + ".");
   }
   if (!any_curve)
     c.doc.para(training.empty() ? "The study declares no phase of kind \"training\"."

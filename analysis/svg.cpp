@@ -279,7 +279,8 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
     const size_t m = std::min(ft.x.size(), ft.y.size());
     if (ft.lo.size() >= m && ft.hi.size() >= m && m >= 2) {
       std::ostringstream band;
-      for (size_t i = 0; i < m; ++i) band << num(f.px(ft.x[i])) << "," << num(f.py(ft.hi[i])) << " ";
+      for (size_t i = 0; i < m; ++i)
+        band << num(f.px(ft.x[i])) << "," << num(f.py(ft.hi[i])) << " ";
       for (size_t i = m; i-- > 0;) band << num(f.px(ft.x[i])) << "," << num(f.py(ft.lo[i])) << " ";
       f.body << "<polygon class=\"fitband\" fill=\"" << col
              << "\" fill-opacity=\"0.15\" stroke=\"none\" points=\"" << band.str() << "\"/>\n";
@@ -287,8 +288,7 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
     std::ostringstream pts;
     for (size_t i = 0; i < m; ++i) pts << num(f.px(ft.x[i])) << "," << num(f.py(ft.y[i])) << " ";
     f.body << "<polyline class=\"fit\" fill=\"none\" stroke=\"" << col
-           << "\" stroke-width=\"1.5\" stroke-dasharray=\"5 3\" points=\"" << pts.str()
-           << "\"/>\n";
+           << "\" stroke-width=\"1.5\" stroke-dasharray=\"5 3\" points=\"" << pts.str() << "\"/>\n";
   }
   const double n = static_cast<double>(series.size());
   for (size_t si = 0; si < series.size(); ++si) {

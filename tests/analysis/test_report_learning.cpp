@@ -1,10 +1,12 @@
 // The learning-curve mixed model of the report: on a database with a planted linear trend per
 // group, value = a_g + b_g * session + u_participant + e, the report's table recovers b_g and the
 // figure carries one fitted line with its band per group; with one participant per group the
-// section says why there is no fit and keeps the plain curves.
+// section says why there is no fit and keeps the plain curves. KEEP=1 keeps the databases and
+// reports in the temporary directory for inspection.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -27,16 +29,16 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-constexpr double kSlope[2] = {-0.30, -0.10};    // N per session, groups A and B
-constexpr double kIntercept[2] = {3.0, 2.6};    // N at session 0
+constexpr double kSlope[2] = {-0.30, -0.10};  // N per session, groups A and B
+constexpr double kIntercept[2] = {3.0, 2.6};  // N at session 0
 constexpr int kSessions = 5;
 
 // Two groups of `per_group` participants, kSessions training sessions and one post-training
 // test. Participant offsets and the residuals are fixed, small and balanced so the planted slopes
 // are recovered to well within their standard errors.
-fs::path make_db(const std::string& tag, int per_group) {
-  fs::path dir = fs::temp_directory_path() /
-                 ("palplab_lcurve_" + tag + "_" + std::to_string(::getpid()));
+fs::path make_db(const std::string& tag, int per_group, bool slope_spread = false) {
+  fs::path dir =
+      fs::temp_directory_path() / ("palplab_lcurve_" + tag + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   fs::path db = dir / "study.db";
@@ -88,6 +90,9 @@ fs::path make_db(const std::string& tag, int per_group) {
   for (const auto& p : ps) {
     const int g = p.number / per_group, i = p.number % per_group;
     const double u = 0.2 * (i - (per_group - 1) / 2.0);  // participant offset, mean 0
+    // Participant slope deviations (mean 0 over 6 participants, not collinear with u).
+    static const double dv[6] = {0.06, -0.04, 0.0, -0.06, 0.05, -0.01};
+    const double v = slope_spread && per_group == 6 ? dv[i] : 0.0;
     for (int s = 0; s <= kSessions; ++s) {
       results::SessionData d;
       d.session.participant = p.participant;
@@ -103,7 +108,7 @@ fs::path make_db(const std::string& tag, int per_group) {
       const int session = s + 1;
       const double e = 0.04 * (((i + 2 * s) % 5) - 2);  // small residual, ~uncorrelated with s
       d.measures.push_back(
-          {"palpation_force", kIntercept[g] + kSlope[g] * session + u + e, "N"});
+          {"palpation_force", kIntercept[g] + (kSlope[g] + v) * session + u + e, "N"});
       store.write_session(d);
     }
   }
@@ -132,7 +137,12 @@ TEST(ReportLearningCurve, MixedModelRecoversPlantedSlopesAndDrawsFittedLines) {
   const size_t sec = md.find("### Mixed model of the learning curve: palpation_force");
   ASSERT_NE(sec, std::string::npos) << md;
   const std::string s = md.substr(sec);
-  EXPECT_NE(s.find("value ~ group * session"), std::string::npos) << s.substr(0, 1500);
+  // No participant slope variation planted: the random-slope fit is singular, the random-
+  // intercept model is kept and the report says so.
+  EXPECT_NE(s.find("`palpation_force ~ group * session + (1 | participant)`, REML"),
+            std::string::npos)
+      << s.substr(0, 1500);
+  EXPECT_NE(s.find("was not kept: its fit is singular"), std::string::npos);
   EXPECT_EQ(s.find("No mixed model fitted"), std::string::npos);
   // Per-group slopes (fixed effects) near the planted values; the residuals are ±0.08 N at most,
   // so 0.02 N per session is a tight but safe tolerance.
@@ -161,7 +171,7 @@ TEST(ReportLearningCurve, MixedModelRecoversPlantedSlopesAndDrawsFittedLines) {
   EXPECT_EQ(count("class=\"fit\""), 2u);
   EXPECT_EQ(count("class=\"fitband\""), 2u);
   EXPECT_EQ(count("class=\"errorbar\""), 2u * kSessions);
-  fs::remove_all(db.parent_path());
+  if (!std::getenv("KEEP")) fs::remove_all(db.parent_path());
 }
 
 TEST(ReportLearningCurve, OneParticipantPerGroupReportsWhyThereIsNoFit) {
@@ -178,5 +188,27 @@ TEST(ReportLearningCurve, OneParticipantPerGroupReportsWhyThereIsNoFit) {
   ASSERT_FALSE(svg.empty());
   EXPECT_EQ(svg.find("class=\"fit\""), std::string::npos);
   EXPECT_NE(svg.find("<circle"), std::string::npos);  // the plain curves are still drawn
-  fs::remove_all(db.parent_path());
+  if (!std::getenv("KEEP")) fs::remove_all(db.parent_path());
+}
+
+// With planted participant slope deviations (sample SD 0.048 N per session) the random-slope model
+// fits without a singular fit and is the one reported; the group slopes are still recovered.
+TEST(ReportLearningCurve, RandomSlopeModelKeptWhenItFits) {
+  fs::path db = make_db("slope", 6, /*slope_spread=*/true);
+  ReportFiles files = write_report(db.string(), (db.parent_path() / "report").string());
+  const std::string md = slurp(files.markdown);
+  const size_t sec = md.find("### Mixed model of the learning curve: palpation_force");
+  ASSERT_NE(sec, std::string::npos) << md;
+  const std::string s = md.substr(sec);
+  EXPECT_NE(s.find("`palpation_force ~ group * session + (1 + session | participant)`, REML"),
+            std::string::npos)
+      << s.substr(0, 1500);
+  EXPECT_EQ(s.find("was not kept"), std::string::npos);
+  const double sd_slope = std::stod(s.substr(s.find("session slope SD ") + 17));
+  EXPECT_GT(sd_slope, 0.02);
+  EXPECT_LT(sd_slope, 0.09);
+  // The planted deviations average to zero within each group, so the slopes stay on target.
+  EXPECT_NEAR(table_number(s, "| A |", 1), kSlope[0], 0.02) << s.substr(0, 2500);
+  EXPECT_NEAR(table_number(s, "| B |", 1), kSlope[1], 0.02);
+  if (!std::getenv("KEEP")) fs::remove_all(db.parent_path());
 }
