@@ -66,9 +66,6 @@ constexpr ld kInnerTol = 1e-10L, kOuterTol = 1e-10L;
 constexpr ld kSqrt2 = 1.414213562373095048801688724209698079L;
 constexpr double kSqrt2d = 1.4142135623730951;
 
-ld upper_normal(ld x) {
-  return 0.5L * std::erfc(x / kSqrt2);
-}  // Q(x) = 1 - Φ(x)
 // The inner integrand of the range distribution runs ~10^5 times per CDF value: it is
 // evaluated in double (relative error ~1e-15, well inside the 1e-11 target) and summed in
 // long double.

@@ -69,7 +69,9 @@ TEST(CliRecheck, PlantedErrorsAreFound) {
       EXPECT_EQ(p["verdict"], "inconsistent");
       EXPECT_EQ(p["recomputed"], 13);
     }
-    if (p["part"] == "p") EXPECT_EQ(p["verdict"], "inconsistent");  // .0016 is not < .001
+    if (p["part"] == "p") {
+      EXPECT_EQ(p["verdict"], "inconsistent");  // .0016 is not < .001
+    }
   }
   EXPECT_NEAR(s[0]["parts"][2]["recomputed"].get<double>(), 11.045142662145704, 1e-9);
   EXPECT_EQ(s[0]["recomputed"], "F(2, 13) = 11.05, p = .002");
