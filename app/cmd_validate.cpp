@@ -24,8 +24,8 @@ palplab::app::CommandRegistration reg{
         if (!s.hypotheses.empty()) {
           std::cout << "hypotheses (confirmatory, run first by `palplab report`):";
           for (const auto& h : s.hypotheses) {
-            std::cout << " " << palplab::escape_controls(h.id) << "=" << h.test << "(" << h.measure << " @ "
-                      << palplab::escape_controls(h.phase);
+            std::cout << " " << palplab::escape_controls(h.id) << "=" << h.test << "(" << h.measure
+                      << " @ " << palplab::escape_controls(h.phase);
             for (const auto& [a, b] : h.pairs)
               std::cout << " " << palplab::escape_controls(a) << "-" << palplab::escape_controls(b);
             std::cout << ", alpha " << h.alpha << ", " << h.correction << ")";
@@ -36,7 +36,8 @@ palplab::app::CommandRegistration reg{
         // Valid but questionable: pooling repeated sessions as independent observations.
         for (std::size_t i = 0; i < s.analyses.size(); ++i)
           if (s.analyses[i].pooled && s.analyses[i].pool_sessions)
-            std::cerr << palplab::escape_controls(*study) << ": warning: $.analyses[" << i << "]: pool_sessions: true treats "
+            std::cerr << palplab::escape_controls(*study) << ": warning: $.analyses[" << i
+                      << "]: pool_sessions: true treats "
                       << "every session of a participant as an independent observation "
                       << "(pseudo-replication: df and p-values overstate the evidence); "
                       << "participant means (the default) or `palplab lmm` are valid\n";

@@ -461,19 +461,20 @@ TEST(Report, WilsonIntervalAndDodgedErrorBars) {
 // t statistics are those of the two samples (checked against welch_t on the same values); the
 // rest of the report is labelled exploratory. Without hypotheses there is no such label.
 TEST(Report, ConfirmatoryHypothesesFirst) {
-  nlohmann::json hyps = nlohmann::json::array({{{"id", "H1"},
-                                                {"statement", "C presses harder than A"},
-                                                {"measure", "palpation_force"},
-                                                {"phase", "post_training"},
-                                                {"test", "welch_t"},
-                                                {"pairs", nlohmann::json::array({nlohmann::json::array({"C", "A"})})},
-                                                {"alpha", 0.01}},
-                                               {{"id", "H2"},
-                                                {"measure", "palpation_force"},
-                                                {"phase", "post_training"},
-                                                {"test", "tost"},
-                                                {"margins", 5.0},
-                                                {"correction", "bonferroni"}}});
+  nlohmann::json hyps =
+      nlohmann::json::array({{{"id", "H1"},
+                              {"statement", "C presses harder than A"},
+                              {"measure", "palpation_force"},
+                              {"phase", "post_training"},
+                              {"test", "welch_t"},
+                              {"pairs", nlohmann::json::array({nlohmann::json::array({"C", "A"})})},
+                              {"alpha", 0.01}},
+                             {{"id", "H2"},
+                              {"measure", "palpation_force"},
+                              {"phase", "post_training"},
+                              {"test", "tost"},
+                              {"margins", 5.0},
+                              {"correction", "bonferroni"}}});
   FixtureDb f = make_fixture(true, false, true, hyps);
   ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
   std::string md = slurp(files.markdown);
