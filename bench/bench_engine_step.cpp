@@ -14,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include "engine/haptics/scene_impl.hpp"
 #include "prototypes/factory.hpp"
 
 using namespace palplab;
@@ -138,8 +137,9 @@ int main(int argc, char** argv) {
     int k = 0;
     long nv = 0;
     for (Scope sc : {Scope::rings, Scope::octant, Scope::whole}) {
-      Scene s = prototypes::build_scene(file);
-      s.impl().ring.scope = sc;
+      engine::SceneConfig cfg = prototypes::load_prototype(file);
+      cfg.scope.rings = sc;
+      Scene s = engine::make_scene(cfg);
       nv = s.geometry().V.rows();
       press(s, "ovary_left");
       s.reset();
@@ -169,11 +169,11 @@ int main(int argc, char** argv) {
     Run ref;
     double ref_median = 0.0;
     for (const Mode& m : modes) {
-      Scene s = prototypes::build_scene(dir + "C.json");
-      s.impl().ms.scope_radius = m.radius;
-      s.impl().ms.scope_max_nodes = m.cap;
-      s.impl().ms.sleep.enabled = m.sleep;
-      s.reset();
+      engine::SceneConfig cfg = prototypes::load_prototype(dir + "C.json");
+      cfg.scope.radius = m.radius;
+      cfg.scope.max_nodes = m.cap;
+      cfg.sleeping.enabled = m.sleep;
+      Scene s = engine::make_scene(cfg);
       const Run r = fixed_press(s, region, 0.006);
       const double med = pct(r.us, 0.5);
       if (&m == &modes[0]) {

@@ -13,15 +13,14 @@
 #include <string>
 #include <vector>
 
+#include "engine/haptics/scene.hpp"
+
 namespace palplab::protocols {
 
 inline constexpr int kStudyFormatVersion = 1;
 
-struct ForceLimits {
-  double st = 0.0;   // sound threshold (N): the audio cue sounds from here on
-  double mpf = 0.0;  // maximum palpation force (N): the target, not to be exceeded
-  double sft = 0.0;  // stopping force threshold (N): hard upper bound
-};
+// Force limits of a region: the engine's type (ST, MPF, SFT in N).
+using ForceLimits = engine::Thresholds;
 
 struct CueSwitches {
   std::optional<bool> haptic, visual_deformation, audio;  // unset = as the prototype says

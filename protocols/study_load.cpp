@@ -15,6 +15,7 @@
 #include "protocols/plan.hpp"
 #include "protocols/resolve.hpp"
 #include "protocols/study.hpp"
+#include "prototypes/factory.hpp"
 
 namespace palplab::protocols {
 
@@ -102,24 +103,10 @@ std::optional<Interval> parse_interval(Ctx& c, const json& j, const std::string&
   return iv;
 }
 
-void parse_limits(Ctx& c, const json& j, const std::string& path, ForceLimits& out) {
+// The one reader of force limits, shared with prototype files (prototypes/factory.hpp).
+void parse_limits(Ctx& c, const json& j, const std::string& path, engine::Thresholds& out) {
   if (!c.expect_object(j, path)) return;
-  c.keys(j, path, {"ST", "MPF", "SFT"});
-  auto st = c.num(j, path, "ST", true, "a force in N > 0");
-  auto mpf = c.num(j, path, "MPF", true, "a force in N > 0");
-  auto sft = c.num(j, path, "SFT", true, "a force in N > 0");
-  for (auto [v, k] : {std::pair{st, "ST"}, {mpf, "MPF"}, {sft, "SFT"}})
-    if (v && *v <= 0)
-      c.err(path_key(path, k), std::string("expected a force in N > 0, got ") + json(*v).dump());
-  if (st && sft && *st >= *sft)
-    c.err(path_key(path, "ST"),
-          "ST (" + json(*st).dump() + " N) must be below SFT (" + json(*sft).dump() + " N)");
-  if (mpf && sft && *mpf > *sft)
-    c.err(path_key(path, "MPF"),
-          "MPF (" + json(*mpf).dump() + " N) must not exceed SFT (" + json(*sft).dump() + " N)");
-  if (st) out.st = *st;
-  if (mpf) out.mpf = *mpf;
-  if (sft) out.sft = *sft;
+  out = prototypes::read_thresholds(c, j, path);
 }
 
 void parse_params(Ctx& c, const json& j, const std::string& path,

@@ -4,15 +4,30 @@
 // description, so building a fresh scene for every session is cheap; Scene::reset() is cheaper
 // still. Thread-safe (the cache is locked). Bad files throw palplab::InputError located at
 // FILE:LINE:COL and JSON path, listing every problem found.
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
-#include "engine/haptics/scene.hpp"
+#include "engine/haptics/scene_config.hpp"
+
+namespace palplab::json {
+class Checker;
+}
 
 namespace palplab::prototypes {
 
+// Reads and validates a prototype file into the scene configuration (every problem located at
+// FILE:LINE:COL and JSON path, thrown together as one InputError). Edit the result for a variant
+// and build it with engine::make_scene.
+engine::SceneConfig load_prototype(const std::string& prototype_json_path);
+
+// = make_scene(load_prototype(path) with the study phase's overrides applied).
 engine::Scene build_scene(const std::string& prototype_json_path,
                           const engine::SceneOverrides& overrides = {});
+
+// The force limits of one region, {"ST", "MPF", "SFT"} in N (the spelling of study files too).
+engine::Thresholds read_thresholds(json::Checker& c, const nlohmann::json& o,
+                                   const std::string& path);
 
 // Validates a prototype file without building the simulator and returns what a study needs to
 // know of it. Region names come from the mesh generator (no mesh is generated).

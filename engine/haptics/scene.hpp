@@ -2,7 +2,8 @@
 // THE SCENE CONTRACT: what a study runner (protocols) and a virtual or real participant see of a
 // simulator prototype. Names here are stable: fields and functions may be added, never renamed.
 //
-// A Scene is built by palplab::prototypes::build_scene(prototype_json_path, overrides). It is
+// A Scene is built by engine::make_scene(SceneConfig) (engine/haptics/scene_config.hpp), usually
+// through palplab::prototypes::build_scene(prototype_json_path, overrides). It is
 // driven in lock-step: step(device_position) advances exactly one haptic step (1 ms of simulated
 // time by default; the model may sub-step internally) and returns what the simulator RENDERS —
 // everything a participant may perceive and nothing else — plus the events of that step for
@@ -20,7 +21,13 @@
 #include <string>
 #include <vector>
 
+namespace palplab::spatial {
+struct Octree;
+}
+
 namespace palplab::engine {
+
+struct SceneConfig;
 
 // Force limits of one anatomical part (N). ST < SFT; the audio cue sounds from ST on, MPF is the
 // target not to exceed, SFT the hard stopping threshold.
@@ -95,7 +102,7 @@ struct SceneGeometry {
   // Surface node of the region nearest to its centroid (the "press here" node).
   int region_node(const std::string& name) const;
 
-  std::shared_ptr<const void> search_index;  // octree over V (owned, opaque)
+  std::shared_ptr<const spatial::Octree> octree;  // search structure over V (shared, immutable)
 };
 
 // What a study phase may change of a prototype without editing its file.
@@ -131,6 +138,7 @@ struct SceneImpl;
 
 class Scene {
  public:
+  // Scenes are made by engine::make_scene (SceneImpl is private to the engine).
   explicit Scene(std::unique_ptr<SceneImpl> impl);
   Scene(Scene&&) noexcept;
   Scene& operator=(Scene&&) noexcept;
@@ -149,14 +157,13 @@ class Scene {
   const SceneGeometry& geometry() const;
   const std::string& prototype() const;  // "A", "B", "C", "C1", "C2", ...
   const char* model_kind() const;        // "penalty", "ring", "mass_spring", ...
+  const SceneConfig& config() const;     // what the scene was built from (copy it for a variant)
   Thresholds thresholds(int region) const;
   SceneStats stats() const;
   // Current (deformed) positions of the simulated surface nodes, #V(now) by 3 (m), and faces of
   // the current (possibly refined) surface — for a renderer. Not part of the perception contract.
   void current_surface(Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
                        Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& F) const;
-
-  SceneImpl& impl() { return *impl_; }
 
  private:
   std::unique_ptr<SceneImpl> impl_;

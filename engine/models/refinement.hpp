@@ -41,9 +41,9 @@ enum class RefinePolicy {
 
 struct RefineParams {
   RefinePolicy policy = RefinePolicy::area_based;
-  double threshold_area = 0.0;  // m^2 (area_based)
-  int level = 1;                // fixed level (conventional, whole)
-  int max_level = 4;            // hard cap on the depth (area_based)
+  double threshold_area = 1e-4;  // m^2 (area_based)
+  int level = 1;                 // fixed level (conventional, whole)
+  int max_level = 3;             // hard cap on the depth (area_based)
 };
 
 struct RefineTri {

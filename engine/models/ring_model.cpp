@@ -1,6 +1,11 @@
 #include "engine/models/ring_model.hpp"
 
+#include <nlohmann/json.hpp>
 #include <stdexcept>
+
+#include "common/input_error.hpp"
+#include "common/json_check.hpp"
+#include "engine/models/model.hpp"
 
 namespace palplab::engine {
 
@@ -123,6 +128,96 @@ void ring_reset(RingModel& m) {
 
 double ring_max_displacement(const RingModel& m) {
   return (m.X - m.X_fixed).rowwise().norm().maxCoeff();
+}
+
+// ---------------------------------------------------------------- model "ring" of a scene
+
+namespace {
+
+class RingSceneModel final : public SceneModel {
+ public:
+  RingSceneModel(const SceneConfig& cfg, const SceneMesh& m)
+      : mesh_(m), k_(cfg.contact.stiffness), model_(make_ring_model(m.V, m.E, cfg.ring)) {
+    model_.scope = cfg.scope.rings;
+    model_.octree = m.octree.get();
+  }
+  const char* kind() const override { return "ring"; }
+  ModelOutput step(const ContactInput& c, double dt) override {
+    // The haptic force is Hooke's law on the penetration, as in prototype A; the rings show the
+    // push of the hand (the opposite force).
+    ModelOutput o;
+    if (c.node >= 0) o.force = k_ * (mesh_.V.row(c.node).transpose() - c.x).dot(c.n) * c.n;
+    ring_step(model_, c.node, -o.force, dt);
+    if (c.node >= 0) o.deformation = (model_.X.row(c.node) - model_.X_fixed.row(c.node)).norm();
+    return o;
+  }
+  void reset() override { ring_reset(model_); }
+  void stats(SceneStats& s) const override {
+    s.nodes = s.coarse_nodes = model_.X.rows();
+    s.springs = s.coarse_springs = model_.X.rows();  // one home spring per node
+    s.max_rest_error = ring_max_displacement(model_);
+    s.awake_nodes = model_.last_updated;
+  }
+  void surface(mesh::Positions& V, mesh::Faces& F) const override {
+    V = model_.X;
+    F = mesh_.F;
+  }
+
+ private:
+  const SceneMesh& mesh_;
+  double k_;
+  RingModel model_;
+};
+
+void read_ring(json::Checker& c, const nlohmann::json& m, const std::string& P, SceneConfig& cfg,
+               const std::vector<std::string>&) {
+  c.keys(m, P, {"kind", "m1", "m2", "m3", "node_mass", "home_stiffness", "home_damping", "scope"});
+  RingParams& r = cfg.ring;
+  r.m1 = c.number(m, P, "m1", true, 0, 1, "the touched node's step size |m1| (m/N)", true)
+             .value_or(r.m1);
+  r.m2 = c.number(m, P, "m2", true, 0, 1, "the first ring's step size |m2| (m/N)").value_or(r.m2);
+  r.m3 = c.number(m, P, "m3", true, 0, 1, "the second ring's step size |m3| (m/N)").value_or(r.m3);
+  if (c.ok() && !(r.m1 > r.m2 && r.m2 > r.m3))
+    c.err(P, "expected |m1| > |m2| > |m3| (displacement deepest at the touched node)");
+  r.node_mass =
+      c.number(m, P, "node_mass", false, 0, 10, "the node mass (kg)", true).value_or(r.node_mass);
+  r.home_ks = c.number(m, P, "home_stiffness", false, 0, 1e6, "home-spring stiffness (N/m)", true)
+                  .value_or(r.home_ks);
+  r.home_kd = c.number(m, P, "home_damping", false, 0, 1e4, "home-spring damping (N s/m)")
+                  .value_or(r.home_kd);
+  if (auto sc = c.text(m, P, "scope", false, {"rings", "octant", "whole"}))
+    cfg.scope.rings = scope_from_string(*sc);
+}
+
+void check_ring(json::Checker& c, const SceneConfig& cfg) {
+  if (cfg.ring.m1 * cfg.contact.stiffness > 1.0 + 1e-12)
+    c.err("$.model.m1", "m1 = " + nlohmann::json(cfg.ring.m1).dump() +
+                            " m/N shows the touched node " +
+                            nlohmann::json(cfg.ring.m1 * cfg.contact.stiffness).dump() +
+                            " times deeper than the penetration it renders (contact stiffness " +
+                            nlohmann::json(cfg.contact.stiffness).dump() +
+                            " N/m): expected m1 <= 1 / contact stiffness");
+}
+
+std::unique_ptr<SceneModel> make_ring(const SceneConfig& cfg, const SceneMesh& m) {
+  // The rings must not show more than the penetration the force renders (|m1| k <= 1).
+  if (cfg.ring.m1 * cfg.contact.stiffness > 1.0 + 1e-12)
+    throw InputError("m1 = " + std::to_string(cfg.ring.m1) + " m/N shows the touched node " +
+                         std::to_string(cfg.ring.m1 * cfg.contact.stiffness) +
+                         " times deeper than the penetration it renders (contact stiffness " +
+                         std::to_string(cfg.contact.stiffness) +
+                         " N/m): expected m1 <= 1 / contact stiffness",
+                     cfg.source);
+  return std::make_unique<RingSceneModel>(cfg, m);
+}
+
+}  // namespace
+
+const ModelKind& ring_model_kind() {
+  static const ModelKind k{"ring",
+                           "vertex-based visio-haptic ring model, force as in A (prototype B)",
+                           &read_ring, &check_ring, &make_ring};
+  return k;
 }
 
 }  // namespace palplab::engine

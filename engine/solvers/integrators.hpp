@@ -64,11 +64,18 @@ struct CompactCg {
   Eigen::VectorXd x, r, z, p, ap;
 };
 
-struct IntegratorWorkspace {
+// How backward Euler solves its system: the settings a scene configures (engine::SceneConfig
+// holds one of these; its defaults are the scene defaults).
+struct SolverConfig {
   LinearSolver solver = LinearSolver::cg;
-  double cg_tolerance = 1e-8;        // relative residual
-  double cg_force_tolerance = 1e-9;  // N: absolute floor of the residual (as a force)
+  double cg_tolerance = 1e-6;        // relative residual
+  double cg_force_tolerance = 1e-6;  // N: absolute floor of the residual (as a force)
   int cg_max_iterations = 500;
+  SpringJacobian jacobian = SpringJacobian::definite;  // spring tangent used by the solve
+};
+
+// The settings plus the buffers of one integrated system.
+struct IntegratorWorkspace : SolverConfig {
   SolverStats last;
   // buffers (sized on first use)
   RowMatX3d F, X1, V1, kx[4], kv[4], R, P, Z, AP, DV;
@@ -88,7 +95,6 @@ struct IntegratorWorkspace {
   // Backward-Euler system blocks of the probe contact, one per penetrating patch node.
   std::vector<Eigen::Matrix3d> contact_blocks;
   std::vector<int> contact_block_node;
-  SpringJacobian jacobian = SpringJacobian::definite;
 };
 
 // Advances sys by h seconds (one step of `method`) on the nodes of `act`.

@@ -5,7 +5,6 @@
 
 #include <cstdlib>
 
-#include "engine/haptics/scene_impl.hpp"
 #include "prototypes/factory.hpp"
 
 // Sanitizers bring their own allocator: no counting there (the test skips).
@@ -100,8 +99,9 @@ TEST(Allocation, SteadyStateStepsDoNotAllocate) {
     // ... and holding it afterwards does not allocate.
     EXPECT_EQ(press_allocations(s, region, 600, 1000), 0) << region;
     // The same without refinement, from the first contact on.
-    Scene q = prototypes::build_scene(proto("C"));
-    q.impl().ms.refine = false;
+    engine::SceneConfig cfg = prototypes::load_prototype(proto("C"));
+    cfg.refinement.enabled = false;
+    Scene q = engine::make_scene(cfg);
     press_allocations(q, region, 0, 1000);
     q.reset();
     EXPECT_EQ(press_allocations(q, region, 0, 1000), 0) << region << " (no refinement)";

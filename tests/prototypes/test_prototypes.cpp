@@ -7,7 +7,6 @@
 #include <fstream>
 
 #include "common/input_error.hpp"
-#include "engine/haptics/scene_impl.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
@@ -100,9 +99,9 @@ TEST(Prototypes, EveryShippedFileBuilds) {
   // the original work table: mesh sizes and C2 = half of C1's threshold area.
   EXPECT_NEAR(prototypes::build_scene(proto("A")).geometry().V.rows(), 1500, 30);
   EXPECT_NEAR(prototypes::build_scene(proto("B")).geometry().V.rows(), 6000, 120);
-  auto c1 = prototypes::build_scene(proto("C1")), c2 = prototypes::build_scene(proto("C2"));
-  EXPECT_DOUBLE_EQ(c2.impl().ms.refine_params.threshold_area,
-                   0.5 * c1.impl().ms.refine_params.threshold_area);
+  const auto c1 = prototypes::load_prototype(proto("C1")),
+             c2 = prototypes::load_prototype(proto("C2"));
+  EXPECT_DOUBLE_EQ(c2.refinement.params.threshold_area, 0.5 * c1.refinement.params.threshold_area);
 }
 
 TEST(Prototypes, PressRendersWhatEachPrototypeShows) {
@@ -234,8 +233,12 @@ TEST(Prototypes, BadFilesGiveLocatedErrors) {
   EXPECT_NE(e.find("$.model.m1"), std::string::npos) << e;
   EXPECT_NE(e.find("penetration"), std::string::npos) << e;
   // ST must be below SFT; unknown region in thresholds; unknown integrator.
-  e = error_of(mutated("A", "\"st\": 2.0", "\"st\": 4.0"));
-  EXPECT_NE(e.find("ST < SFT"), std::string::npos) << e;
+  e = error_of(mutated("A", "\"ST\": 2.0", "\"ST\": 4.0"));
+  EXPECT_NE(e.find("must be below SFT"), std::string::npos) << e;
+  EXPECT_NE(e.find("$.thresholds[\"*\"].ST"), std::string::npos) << e;
+  // The study spelling only: a lower-case cue name is a typo.
+  e = error_of(mutated("A", "\"ST\": 2.0", "\"st\": 2.0"));
+  EXPECT_NE(e.find("unknown"), std::string::npos) << e;
   e = error_of(mutated("A", "\"*\":", "\"liver\":"));
   EXPECT_NE(e.find("$.thresholds.liver"), std::string::npos) << e;
   e = error_of(mutated("C", "\"backward_euler\"", "\"forward_euler\""));

@@ -1,0 +1,119 @@
+#pragma once
+// engine::SceneConfig: everything a scene is built from, with every default in one place (the
+// member initialisers here and in the parameter structs they hold). A prototype file is read into
+// one (prototypes::load_prototype, docs/FORMATS.md), a study phase edits it
+// (apply(SceneOverrides)), engine::make_scene builds the Scene. A tool or test that wants a variant
+// (another scope, sleeping off, another integrator) edits the config: there is no other door into
+// a scene.
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/haptics/scene.hpp"
+#include "engine/models/refinement.hpp"
+#include "engine/models/ring_model.hpp"
+#include "engine/solvers/integrators.hpp"
+#include "engine/solvers/sleeping.hpp"
+
+namespace palplab::engine {
+
+// Where the mesh comes from: a generator of engine/mesh or a mesh file.
+struct MeshSource {
+  std::string generator = "tract";  // tract | model_c | stomach | sphere
+  int vertices = 1500;
+  std::uint64_t seed = 0;  // 0 = the reference shape
+  std::string file;        // absolute path of a mesh file (instead of a generator)
+  std::string key() const;
+};
+
+// The tissue of a deformable model (engine/mesh/materials.json).
+struct MaterialConfig {
+  std::string tissue;  // empty: the mesh's tissue attribute (tet meshes) or "soft tissue"
+  std::optional<double> youngs_modulus;  // Pa, overrides the table
+  std::optional<double> density;         // kg/m^3, overrides the table
+  double thickness = 0.005;              // m, membrane thickness of a surface model
+  double rayleigh_beta = 0.002;          // s, stiffness-proportional damping kd = beta ks
+};
+
+// What holds the organ: an elastic foundation per unit area and pinned nodes.
+struct SupportConfig {
+  double modulus = 0.0;        // N/m^3, foundation stiffness per area of the surface it holds
+  double damping = 0.0;        // N s/m^3
+  std::string fixed_region;    // every node of this region is pinned
+  double fixed_z_below = 0.0;  // m above the lowest point: nodes below are pinned (0 = none)
+};
+
+// The device–tissue coupling.
+struct ContactConfig {
+  double stiffness = 500.0;    // N/m: penalty (A, B) or the device coupling (deformable models)
+  double radius = 0.0;         // m, capture radius of a new contact; 0 = 1.5 mean edge lengths
+  double patch_radius = 0.01;  // m, radius of the probe face (deformable models)
+  double force_limit = 8.5;    // N, the device's peak force (a common desktop device)
+};
+
+// Which nodes a deformable model integrates.
+struct ScopeConfig {
+  Scope rings = Scope::rings;  // ring model: rings | octant | whole
+  double radius = 0.0;         // m, integration scope around the contact (0 = whole model)
+  int max_nodes = 1 << 30;     // cap on the scope (nearest rings first)
+};
+
+struct RefinementConfig {
+  bool enabled = false;
+  RefineParams params;
+  double threshold_force = 1.0;  // N: refine around the touched node from this force on
+  bool substep = true;           // sub-step h / 2^level while refined
+};
+
+// The scene's numerical safety net (hard-cases issue): beyond these a step is a divergence.
+struct WatchdogConfig {
+  double divergence_force = 100.0;       // N (palpation forces are a few N)
+  double divergence_displacement = 0.5;  // m
+  double energy_threshold = 0.005;       // J returned to the hand beyond what it put in
+};
+
+struct Cues {
+  bool haptic = true;
+  bool visual_deformation = true;
+  bool audio = false;
+};
+
+struct SceneConfig {
+  std::string id;           // "A", "C1", ...
+  std::string scene;        // e.g. "bovine_reproductive_tract"
+  std::string description;  // free text
+  std::string source;       // the file it was read from ("" when built in code), for messages
+  MeshSource mesh;
+  std::string model = "penalty";  // a registered model kind (engine/models/model.hpp)
+  RingParams ring;                // model "ring"
+  MaterialConfig material;        // deformable models
+  SupportConfig support;
+  Integrator integrator = Integrator::backward_euler;
+  SolverConfig solver;
+  SleepParams sleeping;
+  ScopeConfig scope;
+  RefinementConfig refinement;
+  ContactConfig contact;
+  WatchdogConfig watchdog;
+  Cues cues;
+  double dt = 1e-3;                               // s, haptic step
+  Thresholds default_thresholds{2.0, 2.5, 3.0};   // N, for regions the file does not list
+  std::map<std::string, Thresholds> thresholds;   // region -> limits; "*" = every region
+  std::optional<Eigen::Vector3d> start_position;  // m; default 5 cm in front of the organ
+};
+
+// Applies a study phase's overrides (cues, thresholds, integrator). Throws palplab::InputError
+// (naming cfg.source) for an unknown region or integrator.
+void apply(SceneConfig& cfg, const SceneOverrides& overrides);
+
+// Builds the scene (meshes and their precomputation are cached per process and mesh source).
+// Throws palplab::InputError for a config that cannot be built (unknown model kind, bad mesh).
+Scene make_scene(const SceneConfig& cfg);
+
+// Region names of a mesh source without building a scene (generators: fixed; files: read).
+const std::vector<std::string>& mesh_region_names(const MeshSource& m);
+
+}  // namespace palplab::engine

@@ -1,0 +1,131 @@
+// The prepared meshes of scenes, cached per process and mesh source: generating Model-C or
+// reading a mesh file, normals, regions, lumped areas, the octree and the ring tables are done
+// once; every scene built from the same source shares them (they are immutable).
+#include <map>
+#include <mutex>
+
+#include "common/input_error.hpp"
+#include "engine/haptics/scene_config.hpp"
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/io.hpp"
+#include "engine/mesh/tet_mesh.hpp"
+#include "engine/models/model.hpp"
+#include "engine/spatial/octree.hpp"
+
+namespace palplab::engine {
+
+std::string MeshSource::key() const {
+  if (!file.empty()) return "file:" + file;
+  return generator + "/" + std::to_string(vertices) + "/" + std::to_string(seed);
+}
+
+namespace {
+
+// A tet mesh: the surface the participant sees is its boundary (compact surface node indices);
+// the model keeps every node.
+void build_tet(SceneMesh& c, mesh::SurfaceMesh& sm, const mesh::TetMesh& tm) {
+  const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
+  const long n = tm.V.rows();
+  std::vector<int> m2s(n, -1);
+  for (long f = 0; f < bf.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = bf.F(f, k);
+      if (m2s[v] < 0) {
+        m2s[v] = static_cast<int>(c.surface_to_model.size());
+        c.surface_to_model.push_back(v);
+      }
+    }
+  mesh::Positions Vs(c.surface_to_model.size(), 3);
+  for (size_t i = 0; i < c.surface_to_model.size(); ++i)
+    Vs.row(i) = tm.V.row(c.surface_to_model[i]);
+  mesh::Faces Fs(bf.F.rows(), 3);
+  for (long f = 0; f < bf.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) Fs(f, k) = m2s[bf.F(f, k)];
+  mesh::Regions reg;
+  if (!tm.regions.empty()) {
+    reg.names = tm.regions.names;
+    reg.id.resize(bf.F.rows());
+    for (long f = 0; f < bf.F.rows(); ++f) reg.id[f] = tm.regions.id[bf.tet[f]];
+  }
+  sm = mesh::make_surface_mesh(std::move(Vs), std::move(Fs), std::move(reg));
+  c.tet = true;
+  c.model_V = tm.V;
+  c.model_E = mesh::tet_edges(tm.T);
+  c.model_F = bf.F;
+  c.model_T = tm.T;
+  c.tet_attribute = tm.attribute;
+  if (c.tet_attribute.size() != tm.T.rows()) c.tet_attribute.setZero(tm.T.rows());
+  c.boundary_tet = bf.tet;
+}
+
+std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
+  auto c = std::make_shared<SceneMesh>();
+  mesh::SurfaceMesh sm;
+  if (!m.file.empty()) {
+    mesh::AnyMesh am = mesh::read_mesh(m.file);
+    if (am.is_tet)
+      build_tet(*c, sm, am.tet);
+    else
+      sm = std::move(am.surface);
+  } else if (m.generator == "tract") {
+    sm = mesh::generate_tract({m.vertices, m.seed});
+  } else if (m.generator == "stomach") {
+    sm = mesh::generate_stomach(m.seed);
+  } else if (m.generator == "sphere") {
+    sm = mesh::generate_sphere(m.vertices);
+  } else if (m.generator == "model_c") {
+    build_tet(*c, sm, mesh::generate_model_c(m.seed, m.vertices));
+  } else {
+    throw InputError("unknown mesh generator \"" + m.generator +
+                     "\" (expected tract, model_c, stomach or sphere)");
+  }
+  c->V = sm.V;
+  c->F = sm.F;
+  c->E = sm.E;
+  c->region_names = sm.regions.names;
+  c->N = mesh::vertex_normals(sm.V, sm.F);
+  const Eigen::VectorXi vr = mesh::vertex_regions(sm);
+  c->vertex_region.assign(sm.V.rows(), -1);
+  for (long i = 0; i < vr.size(); ++i) c->vertex_region[i] = vr[i];
+  const Eigen::VectorXd fa = mesh::face_areas(sm.V, sm.F);
+  c->vertex_area.setZero(sm.V.rows());
+  for (long f = 0; f < sm.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) c->vertex_area[sm.F(f, k)] += fa[f] / 3.0;
+  double sum = 0.0;
+  for (long e = 0; e < sm.E.rows(); ++e)
+    sum += (sm.V.row(sm.E(e, 0)) - sm.V.row(sm.E(e, 1))).norm();
+  c->mean_edge = sm.E.rows() ? sum / sm.E.rows() : 0.01;
+  c->octree = std::make_shared<const spatial::Octree>(spatial::build_octree(sm.V, 12, 8));
+  c->rings = std::make_shared<const mesh::RingTable>(
+      mesh::compute_rings(static_cast<int>(sm.V.rows()), sm.E));
+  if (!c->tet) {
+    c->model_V = sm.V;
+    c->model_E = sm.E;
+    c->model_F = sm.F;
+    c->surface_to_model.resize(sm.V.rows());
+    for (long i = 0; i < sm.V.rows(); ++i) c->surface_to_model[i] = static_cast<int>(i);
+  }
+  return c;
+}
+
+}  // namespace
+
+std::shared_ptr<const SceneMesh> scene_mesh(const MeshSource& m) {
+  static std::mutex mu;
+  static std::map<std::string, std::shared_ptr<const SceneMesh>> cache;
+  std::lock_guard<std::mutex> lock(mu);
+  auto it = cache.find(m.key());
+  if (it != cache.end()) return it->second;
+  auto c = prepare(m);
+  cache.emplace(m.key(), c);
+  return c;
+}
+
+const std::vector<std::string>& mesh_region_names(const MeshSource& m) {
+  static const std::vector<std::string> none;
+  if (m.file.empty())
+    return m.generator == "tract" || m.generator == "model_c" ? mesh::tract_region_names() : none;
+  return scene_mesh(m)->region_names;
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,443 @@
+// Model "mass_spring" (prototype C and its variants): the adaptive area-based mass-spring model
+// of the tissue, integrated only where the contact needs it (sleeping, integration scope), with
+// the probe face as a contact patch and area-based refinement around the touched node.
+#include <algorithm>
+#include <nlohmann/json.hpp>
+
+#include "common/input_error.hpp"
+#include "common/json_check.hpp"
+#include "engine/mesh/materials.hpp"
+#include "engine/models/mass_spring_material.hpp"
+#include "engine/models/model.hpp"
+#include "engine/models/refinement.hpp"
+#include "engine/solvers/integrators.hpp"
+#include "engine/solvers/sleeping.hpp"
+
+namespace palplab::engine {
+
+namespace {
+
+// The state of a mass-spring scene model (settings come from the SceneConfig).
+struct MassSpringScene {
+  AdaptiveMassSpring model;
+  Integrator integrator = Integrator::backward_euler;
+  IntegratorWorkspace ws;
+  ActiveSet act;
+  SleepParams sleep;
+  std::vector<std::uint8_t> scratch;
+  bool refine = true;  // adaptive refinement on
+  RefineParams refine_params;
+  double refine_force = 1.0;          // N: refine around the touched node from this force on
+  bool substep = true;                // sub-step h/2^l while refined (Eq 5.18)
+  int refined_node = -1;              // model node last refined around
+  std::vector<int> surface_to_model;  // surface node -> model node (identity for surfaces)
+  // Integration scope: only nodes within scope_radius (m, rest distance, reached through springs)
+  // of the contact node may wake; 0 = whole model. Held nodes act as fixed boundary.
+  double scope_radius = 0.0;
+  int scope_max_nodes = 1 << 30;  // cap on the scope (nearest rings first)
+  double patch_radius = 0.01;     // m, radius of the probe face (the contact patch)
+  double contact_k = 500.0;       // N/m, device coupling
+  int patch_center = -1;          // model node the patch was built around
+  long patch_nodes_version = -1;  // model node count the patch was built for
+  std::vector<std::uint8_t> patch_mark;
+  int scope_center = -1;
+  std::vector<std::uint8_t> in_scope;
+  std::vector<int> scope_nodes, bfs;
+  long new_nodes_max = 0, new_springs_max = 0;  // since reset
+};
+
+// Marks the nodes within scope_radius of `center` (rest positions, breadth-first through springs
+// so that the scope never jumps across a gap to another part of the organ), nearest rings first,
+// at most scope_max_nodes of them (a fine region such as an ovary would otherwise hold hundreds).
+void compute_scope(MassSpringScene& ms, int center) {
+  const MassSpringSystem& s = ms.model.sys;
+  const long n = s.nodes();
+  if (static_cast<long>(ms.in_scope.size()) != n) {
+    ms.in_scope.assign(n, 0);
+  } else {
+    for (int i : ms.scope_nodes) ms.in_scope[i] = 0;
+  }
+  ms.scope_nodes.clear();
+  ms.scope_center = center;
+  if (center < 0) return;
+  const Eigen::Vector3d c = s.X_rest.row(center).transpose();
+  const double r2 = ms.scope_radius * ms.scope_radius;
+  ms.in_scope[center] = 1;
+  ms.scope_nodes.push_back(center);
+  for (size_t q = 0; q < ms.scope_nodes.size(); ++q) {
+    const int i = ms.scope_nodes[q];
+    for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k) {
+      const int e = s.adj_spring[k];
+      const int j = s.springs.E(e, 0) == i ? s.springs.E(e, 1) : s.springs.E(e, 0);
+      if (ms.in_scope[j] || (s.X_rest.row(j).transpose() - c).squaredNorm() > r2) continue;
+      if (static_cast<int>(ms.scope_nodes.size()) >= ms.scope_max_nodes) return;
+      ms.in_scope[j] = 1;
+      ms.scope_nodes.push_back(j);
+    }
+  }
+}
+
+// The contact patch: surface nodes within patch_radius (rest distance, reached through surface
+// springs from the centre) with their share of the probe face (lumped surface area).
+void compute_patch(MassSpringScene& ms, int center) {
+  MassSpringSystem& s = ms.model.sys;
+  const Eigen::VectorXd& area = ms.model.surface_area;
+  s.contact_nodes.clear();
+  s.contact_weights.clear();
+  ms.patch_center = center;
+  ms.patch_nodes_version = s.nodes();
+  const Eigen::Vector3d c = s.X_rest.row(center).transpose();
+  const double r2 = ms.patch_radius * ms.patch_radius;
+  s.contact_nodes.push_back(center);
+  if (static_cast<long>(ms.patch_mark.size()) != s.nodes()) ms.patch_mark.assign(s.nodes(), 0);
+  ms.patch_mark[center] = 1;
+  for (size_t q = 0; q < s.contact_nodes.size(); ++q) {
+    const int i = s.contact_nodes[q];
+    for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k) {
+      const int e = s.adj_spring[k];
+      const int j = s.springs.E(e, 0) == i ? s.springs.E(e, 1) : s.springs.E(e, 0);
+      if (ms.patch_mark[j] || !(area[j] > 0.0) ||
+          (s.X_rest.row(j).transpose() - c).squaredNorm() > r2)
+        continue;
+      ms.patch_mark[j] = 1;
+      s.contact_nodes.push_back(j);
+    }
+  }
+  double sum = 0.0;
+  for (int i : s.contact_nodes) sum += area[i];
+  for (int i : s.contact_nodes) s.contact_weights.push_back(sum > 0 ? area[i] / sum : 1.0);
+  for (int i : s.contact_nodes) ms.patch_mark[i] = 0;
+}
+
+const std::vector<std::uint8_t>* scope_mask(const MassSpringScene& ms) {
+  return ms.scope_radius > 0.0 ? &ms.in_scope : nullptr;
+}
+
+void reset_mass_spring(MassSpringScene& ms) {
+  simplify(ms.model);
+  MassSpringSystem& s = ms.model.sys;
+  s.X = s.X_rest;
+  s.V.setZero();
+  s.F_ext.setZero();
+  s.contact_node = -1;
+  ms.ws.DV.setZero(s.nodes(), 3);
+  ms.refined_node = -1;
+  ms.in_scope.assign(s.nodes(), 0);
+  ms.scope_nodes.clear();
+  ms.scope_center = -1;
+  ms.patch_center = -1;
+  s.contact_nodes.clear();
+  s.contact_weights.clear();
+  if (ms.sleep.enabled)
+    sleep_all(s, ms.act);
+  else
+    activate_all(s, ms.act);
+}
+
+// After the node count changed (refine/simplify): resize the active set, keep who was awake,
+// wake every new node.
+void resync_active(MassSpringScene& ms) {
+  const MassSpringSystem& s = ms.model.sys;
+  const long n = s.nodes();
+  if (!ms.sleep.enabled) {
+    activate_all(s, ms.act);
+    return;
+  }
+  // Keep the backward-Euler warm start of the coarse nodes; new nodes start from 0.
+  const long dv_rows = ms.ws.DV.rows();
+  ms.ws.DV.conservativeResize(n, 3);
+  if (n > dv_rows) ms.ws.DV.bottomRows(n - dv_rows).setZero();
+  if (ms.scope_radius > 0.0) {
+    ms.scope_nodes.clear();  // the node count changed: rebuild the marks from scratch
+    ms.in_scope.assign(n, 0);
+    compute_scope(ms, ms.scope_center < n ? ms.scope_center : -1);
+  }
+  // New nodes start awake, but only inside the integration scope (the scope's cap holds after
+  // refinement too).
+  const long old = static_cast<long>(ms.act.is_active.size());
+  ms.act.is_active.resize(n, 0);
+  for (long i = old; i < n; ++i) ms.act.is_active[i] = ms.scope_radius > 0.0 ? ms.in_scope[i] : 1;
+  ms.act.nodes.clear();
+  for (long i = 0; i < n; ++i)
+    if (ms.act.is_active[i] && (s.fixed.empty() || !s.fixed[i]))
+      ms.act.nodes.push_back(static_cast<int>(i));
+    else
+      ms.act.is_active[i] = 0;
+  rebuild_active_springs(s, ms.act);
+  ms.scratch.assign(n, 0);
+}
+
+class MassSpringModel final : public SceneModel {
+ public:
+  const char* kind() const override { return "mass_spring"; }
+
+  ModelOutput step(const ContactInput& c, double dt) override {
+    MassSpringScene& ms = ms_;
+    MassSpringSystem& sys = ms.model.sys;
+    const int mnode = c.node >= 0 ? ms.surface_to_model[c.node] : -1;
+    if (mnode >= 0) {
+      sys.contact_node = mnode;
+      sys.contact_point = c.x;
+      sys.contact_normal = c.n;
+      sys.contact_k = ms.contact_k;
+      if (ms.scope_radius > 0.0 && mnode != ms.scope_center) compute_scope(ms, mnode);
+      if (mnode != ms.patch_center || ms.patch_nodes_version != sys.nodes())
+        compute_patch(ms, mnode);
+      if (ms.sleep.enabled)
+        for (size_t q = 0; q < sys.contact_nodes.size(); ++q) {
+          const int i = sys.contact_nodes[q];
+          if (!ms.act.is_active[i] && (i == mnode || contact_node_penetration(sys, sys.X, q) > 0))
+            wake_around(sys, ms.act, i, scope_mask(ms));
+        }
+    } else {
+      sys.contact_node = -1;
+      if (ms.model.refined() && ms.refine) {
+        simplify(ms.model);
+        ms.refined_node = -1;
+        resync_active(ms);
+      }
+    }
+    const int sub = ms.substep ? (1 << ms.model.level) : 1;
+    const double h = dt / sub;
+    for (int k = 0; k < sub; ++k) {
+      integrate(sys, ms.act, h, ms.integrator, ms.ws);
+      update_sleeping(sys, ms.act, ms.sleep, mnode, &ms.ws.DV, ms.scratch, scope_mask(ms));
+    }
+    ModelOutput o;
+    if (mnode >= 0) {
+      o.force = ms.contact_k * contact_penetration(sys, sys.X) * c.n;
+      o.deformation = (sys.X.row(mnode) - sys.X_rest.row(mnode)).norm();
+      if (ms.refine && mnode != ms.refined_node && o.force.norm() >= ms.refine_force) {
+        if (refine_around(ms.model, mnode, ms.refine_params)) resync_active(ms);
+        ms.refined_node = mnode;
+        ms.new_nodes_max = std::max(ms.new_nodes_max, ms.model.new_nodes);
+        ms.new_springs_max = std::max(ms.new_springs_max, ms.model.new_springs);
+      }
+    }
+    return o;
+  }
+
+  void reset() override {
+    reset_mass_spring(ms_);
+    ms_.new_nodes_max = ms_.new_springs_max = 0;
+  }
+
+  void stats(SceneStats& st) const override {
+    const MassSpringSystem& sys = ms_.model.sys;
+    st.nodes = sys.nodes();
+    st.springs = sys.springs.size();
+    st.coarse_nodes = ms_.model.coarse_nodes();
+    st.coarse_springs = ms_.model.coarse_springs();
+    st.total_mass = sys.mass.sum();
+    st.max_rest_error = (sys.X - sys.X_rest).rowwise().norm().maxCoeff();
+    st.level = ms_.model.level;
+    st.awake_nodes = static_cast<long>(ms_.act.nodes.size());
+    st.new_nodes_max = ms_.new_nodes_max;
+    st.new_springs_max = ms_.new_springs_max;
+  }
+
+  void surface(mesh::Positions& V, mesh::Faces& F) const override {
+    V = ms_.model.sys.X;
+    F = ms_.model.F;
+  }
+
+  MassSpringScene ms_;  // filled by make_mass_spring (not movable: solver factorisations)
+};
+
+// The "model" object of a mass-spring prototype (docs/FORMATS.md). Defaults are the config's.
+void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::string& P,
+                      SceneConfig& cfg, const std::vector<std::string>& regions) {
+  c.keys(m, P,
+         {"kind", "material", "thickness", "rayleigh_beta", "support_modulus", "support_damping",
+          "jacobian", "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
+          "scope_radius", "scope_max_nodes", "cg_tolerance", "fixed_z_below"});
+  MaterialConfig& mc = cfg.material;
+  if (const nlohmann::json* mat = c.member(m, P, "material", false, "a tissue name or an object")) {
+    const std::string Q = P + ".material";
+    if (mat->is_string()) {
+      mc.tissue = mat->get<std::string>();
+    } else if (mat->is_object()) {
+      c.keys(*mat, Q, {"tissue", "youngs_modulus", "density"});
+      mc.tissue = c.text(*mat, Q, "tissue", false).value_or("");
+      mc.youngs_modulus =
+          c.number(*mat, Q, "youngs_modulus", false, 0, 1e11, "Young's modulus E (Pa)", true);
+      mc.density = c.number(*mat, Q, "density", false, 0, 1e5, "the density (kg/m^3)", true);
+    } else {
+      c.err(Q, std::string("expected a tissue name or an object, got ") + json::kind_name(*mat));
+    }
+    if (!mc.tissue.empty()) {
+      std::string names;
+      bool known = false;
+      for (const auto& e : mesh::default_materials().materials) {
+        known |= e.name == mc.tissue;
+        names += (names.empty() ? "" : ", ") + e.name;
+      }
+      if (!known) c.err(Q, "unknown tissue \"" + mc.tissue + "\" (expected one of: " + names + ")");
+    }
+  }
+  mc.thickness = c.number(m, P, "thickness", false, 0, 1,
+                          "the membrane thickness of a surface model (m)", true)
+                     .value_or(mc.thickness);
+  mc.rayleigh_beta =
+      c.number(m, P, "rayleigh_beta", false, 0, 10, "the stiffness-proportional damping kd/ks (s)")
+          .value_or(mc.rayleigh_beta);
+  SupportConfig& sp = cfg.support;
+  sp.modulus = c.number(m, P, "support_modulus", false, 0, 1e9,
+                        "the elastic foundation under the surface (N/m^3)")
+                   .value_or(sp.modulus);
+  sp.damping =
+      c.number(m, P, "support_damping", false, 0, 1e9, "the damping of the foundation (N s/m^3)")
+          .value_or(sp.damping);
+  if (auto jc = c.text(m, P, "jacobian", false, {"definite", "exact"}))
+    cfg.solver.jacobian = *jc == "exact" ? SpringJacobian::exact : SpringJacobian::definite;
+  cfg.scope.radius = c.number(m, P, "scope_radius", false, 0, 10,
+                              "the integration scope radius around the contact (m, 0 = whole)")
+                         .value_or(cfg.scope.radius);
+  cfg.solver.cg_tolerance =
+      c.number(m, P, "cg_tolerance", false, 0, 0.1, "the relative residual of the CG solve", true)
+          .value_or(cfg.solver.cg_tolerance);
+  cfg.scope.max_nodes = static_cast<int>(
+      c.integer(m, P, "scope_max_nodes", false, 1, 1L << 30, "the most nodes in the scope")
+          .value_or(cfg.scope.max_nodes));
+  sp.fixed_z_below = c.number(m, P, "fixed_z_below", false, 0, 10,
+                              "the height above the mesh's lowest point below which nodes are "
+                              "pinned (m)")
+                         .value_or(sp.fixed_z_below);
+  if (auto fr = c.text(m, P, "fixed_region", false)) {
+    if (std::find(regions.begin(), regions.end(), *fr) == regions.end())
+      c.err(P + ".fixed_region", "unknown region \"" + *fr + "\" of the mesh");
+    else
+      sp.fixed_region = *fr;
+  }
+  if (auto in = c.text(m, P, "integrator", false, {"symplectic_euler", "backward_euler", "rk4"}))
+    cfg.integrator = integrator_from_string(*in);
+  if (auto ls = c.text(m, P, "linear_solver", false, {"cg", "ldlt_refactor", "ldlt_frozen"}))
+    cfg.solver.solver = linear_solver_from_string(*ls);
+  if (const nlohmann::json* sl = c.object(m, P, "sleeping", false)) {
+    const std::string Q = P + ".sleeping";
+    SleepParams& s = cfg.sleeping;
+    c.keys(*sl, Q, {"enabled", "position_tolerance", "velocity_tolerance"});
+    s.enabled = c.boolean(*sl, Q, "enabled", false).value_or(true);
+    s.x_tol = c.number(*sl, Q, "position_tolerance", false, 0, 0.01, "the rest tolerance (m)", true)
+                  .value_or(s.x_tol);
+    s.v_tol = c.number(*sl, Q, "velocity_tolerance", false, 0, 1,
+                       "the rest velocity tolerance (m/s)", true)
+                  .value_or(s.v_tol);
+  }
+  if (const nlohmann::json* rf = c.object(m, P, "refinement", false)) {
+    const std::string Q = P + ".refinement";
+    RefinementConfig& r = cfg.refinement;
+    c.keys(*rf, Q,
+           {"enabled", "policy", "threshold_area", "threshold_force", "level", "max_level",
+            "substep"});
+    r.enabled = c.boolean(*rf, Q, "enabled", false).value_or(true);
+    if (auto po = c.text(*rf, Q, "policy", false, {"area_based", "conventional", "whole"}))
+      r.params.policy = *po == "area_based"     ? RefinePolicy::area_based
+                        : *po == "conventional" ? RefinePolicy::conventional
+                                                : RefinePolicy::whole;
+    r.params.threshold_area =
+        c.number(*rf, Q, "threshold_area", r.params.policy == RefinePolicy::area_based && r.enabled,
+                 0, 1, "the threshold area A_t (m^2)", true)
+            .value_or(r.params.threshold_area);
+    r.threshold_force =
+        c.number(*rf, Q, "threshold_force", false, 0, 1e3, "the force that triggers refinement (N)")
+            .value_or(r.threshold_force);
+    r.params.level =
+        static_cast<int>(c.integer(*rf, Q, "level", false, 1, 5, "the fixed level of the baselines")
+                             .value_or(r.params.level));
+    r.params.max_level =
+        static_cast<int>(c.integer(*rf, Q, "max_level", false, 1, 5, "the deepest level")
+                             .value_or(r.params.max_level));
+    r.substep = c.boolean(*rf, Q, "substep", false).value_or(r.substep);
+  }
+}
+
+// Every stiffness, mass and support from the material and the rest geometry
+// (engine/models/mass_spring_material.hpp): nothing per vertex.
+std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {
+  const long nm = cm.model_V.rows();
+  const mesh::MaterialTable& table = mesh::default_materials();
+  const MaterialConfig& mc = cfg.material;
+  auto material_of = [&](int attribute) {
+    mesh::Material mat;
+    const mesh::Material* named = nullptr;
+    for (const auto& e : table.materials)
+      if (!mc.tissue.empty() && e.name == mc.tissue) named = &e;
+    if (!mc.tissue.empty() && !named)
+      throw InputError("unknown tissue \"" + mc.tissue + "\"", cfg.source);
+    if (!named) named = table.find(mc.tissue.empty() ? attribute : 101);
+    if (named) mat = *named;
+    if (mc.youngs_modulus) mat.youngs_modulus = *mc.youngs_modulus;
+    if (mc.density) mat.density = *mc.density;
+    return mat;
+  };
+  MassSpringSystem sys;
+  sys.X_rest = cm.model_V;
+  sys.X = cm.model_V;
+  sys.V.setZero(nm, 3);
+  sys.F_ext.setZero(nm, 3);
+  Eigen::VectorXd face_membrane;
+  if (cm.tet) {
+    const long nt = cm.model_T.rows();
+    Eigen::VectorXd E(nt), rho(nt);
+    for (long t = 0; t < nt; ++t) {
+      const mesh::Material mat = material_of(cm.tet_attribute[t]);
+      E[t] = mat.youngs_modulus;
+      rho[t] = mat.density;
+    }
+    sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta);
+    sys.mass = tet_lumped_mass(cm.model_V, cm.model_T, rho);
+    face_membrane = boundary_membrane(cm.model_V, cm.model_T, cm.model_F, cm.boundary_tet, E);
+  } else {
+    const mesh::Material mat = material_of(101);
+    face_membrane = Eigen::VectorXd::Constant(cm.model_F.rows(), mat.youngs_modulus * mc.thickness);
+    sys.springs = membrane_springs(cm.model_V, cm.model_F, face_membrane, mc.rayleigh_beta);
+    sys.mass = lumped_area(cm.model_V, cm.model_F) * (mat.density * mc.thickness);
+  }
+  // The support: an elastic foundation per unit area of the surface it holds.
+  const Eigen::VectorXd area = lumped_area(cm.model_V, cm.model_F);
+  sys.home_ks = cfg.support.modulus * area;
+  sys.home_kd = cfg.support.damping * area;
+  sys.fixed.assign(nm, 0);
+  if (!cfg.support.fixed_region.empty()) {
+    const auto& names = cm.region_names;
+    const auto it = std::find(names.begin(), names.end(), cfg.support.fixed_region);
+    if (it == names.end())
+      throw InputError("unknown fixed region \"" + cfg.support.fixed_region + "\"", cfg.source);
+    const int r = static_cast<int>(it - names.begin());
+    for (size_t i = 0; i < cm.vertex_region.size(); ++i)
+      if (cm.vertex_region[i] == r) sys.fixed[cm.surface_to_model[i]] = 1;
+  }
+  if (cfg.support.fixed_z_below > 0.0) {
+    const double z0 = cm.model_V.col(2).minCoeff();
+    for (long i = 0; i < nm; ++i)
+      if (cm.model_V(i, 2) < z0 + cfg.support.fixed_z_below) sys.fixed[i] = 1;
+  }
+  auto model = std::make_unique<MassSpringModel>();
+  MassSpringScene& ms = model->ms_;
+  ms.model = make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt);
+  static_cast<SolverConfig&>(ms.ws) = cfg.solver;
+  ms.patch_radius = cfg.contact.patch_radius;
+  ms.contact_k = cfg.contact.stiffness;
+  ms.integrator = cfg.integrator;
+  ms.sleep = cfg.sleeping;
+  ms.refine = cfg.refinement.enabled;
+  ms.refine_params = cfg.refinement.params;
+  ms.refine_force = cfg.refinement.threshold_force;
+  ms.substep = cfg.refinement.substep;
+  ms.scope_radius = cfg.scope.radius;
+  ms.scope_max_nodes = cfg.scope.max_nodes;
+  ms.surface_to_model = cm.surface_to_model;
+  return model;
+}
+
+}  // namespace
+
+const ModelKind& mass_spring_model_kind() {
+  static const ModelKind k{"mass_spring",
+                           "adaptive mass-spring tissue from the material (prototype C)",
+                           &read_mass_spring, nullptr, &make_mass_spring};
+  return k;
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,103 @@
+#pragma once
+// The one interface between a Scene and the model that makes its force: Scene::step tracks the
+// contact on the rest surface, asks the model for one step, then runs the watchdog and the events
+// (engine/haptics/scene.cpp). Adding a model kind is one file under engine/models that implements
+// SceneModel, plus one line in engine/models/registry.cpp naming its JSON reader and its factory.
+#include <Eigen/Core>
+#include <memory>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "engine/haptics/scene.hpp"
+#include "engine/haptics/scene_config.hpp"
+#include "engine/mesh/rings.hpp"
+#include "engine/mesh/types.hpp"
+
+namespace palplab::json {
+class Checker;
+}
+namespace palplab::spatial {
+struct Octree;
+}
+
+namespace palplab::engine {
+
+// The prepared mesh of a scene (cached per MeshSource): the surface the participant sees, with
+// its search structures, and the model mesh (the tets of a volume mesh, or the surface itself).
+struct SceneMesh {
+  mesh::Positions V;                              // #V surface rest positions (m)
+  mesh::Positions N;                              // #V unit outward normals
+  mesh::Faces F;                                  // #F surface faces (ccw outside)
+  mesh::Edges E;                                  // surface edges
+  std::vector<int> vertex_region;                 // #V, -1 = unlabelled
+  std::vector<std::string> region_names;          //
+  Eigen::VectorXd vertex_area;                    // #V lumped surface area (m^2)
+  double mean_edge = 0.0;                         // m
+  std::shared_ptr<const spatial::Octree> octree;  // over V
+  std::shared_ptr<const mesh::RingTable> rings;   // first/second rings of the surface
+  // Model mesh: a tet mesh (tet == true) or the surface again.
+  bool tet = false;
+  mesh::Positions model_V;            // #M nodes (m)
+  mesh::Edges model_E;                // edges of the model
+  mesh::Tets model_T;                 // #T tets (tet models)
+  Eigen::VectorXi tet_attribute;      // #T tissue attribute
+  mesh::Faces model_F;                // boundary faces in model node indices
+  Eigen::VectorXi boundary_tet;       // #model_F owning tet (tet models)
+  std::vector<int> surface_to_model;  // #V surface node -> model node
+};
+
+// The prepared mesh of a source, built once per process (thread-safe cache). A bad mesh file
+// throws its own located InputError.
+std::shared_ptr<const SceneMesh> scene_mesh(const MeshSource& m);
+
+// One step's input from the contact tracking: the touched surface node (-1 = no contact), the
+// device position and the outward normal there.
+struct ContactInput {
+  int node = -1;
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+};
+
+// What the model makes of it: the force on the hand (N) and the visible deformation at the
+// contact node (m).
+struct ModelOutput {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  double deformation = 0.0;
+};
+
+class SceneModel {
+ public:
+  virtual ~SceneModel() = default;
+  virtual const char* kind() const = 0;
+  // A rigid model cannot diverge and shows no deformation.
+  virtual bool deformable() const { return true; }
+  // One haptic step of dt seconds.
+  virtual ModelOutput step(const ContactInput& c, double dt) = 0;
+  // Back to rest (cheap: no precomputation).
+  virtual void reset() = 0;
+  // Fills the model's counters (nodes, springs, mass, rest error, level, awake nodes).
+  virtual void stats(SceneStats& s) const = 0;
+  // Current surface for a renderer (#V(now) by 3, faces of the current surface).
+  virtual void surface(mesh::Positions& V, mesh::Faces& F) const = 0;
+};
+
+// A registered model kind: its name in prototype files, the reader of its "model" object (every
+// key of the object, the "kind" included, into the config; problems go to the checker), an
+// optional check of the whole config once every section is read (problems located in the file),
+// and its factory (throws InputError for a config it cannot build).
+struct ModelKind {
+  const char* name;
+  const char* summary;  // one line for --help and docs
+  void (*read)(json::Checker& c, const nlohmann::json& model, const std::string& path,
+               SceneConfig& cfg, const std::vector<std::string>& regions);
+  void (*check)(json::Checker& c, const SceneConfig& cfg);  // may be nullptr
+  std::unique_ptr<SceneModel> (*make)(const SceneConfig& cfg, const SceneMesh& mesh);
+};
+
+// Every registered kind, in registration order.
+const std::vector<ModelKind>& model_kinds();
+// nullptr if unknown.
+const ModelKind* find_model_kind(const std::string& name);
+
+}  // namespace palplab::engine

@@ -1,0 +1,51 @@
+// Model "penalty" (prototype A): a rigid organ; the force on the hand is Hooke's law on the
+// penetration of the device below the touched node's tangent plane, f = k d n.
+#include <nlohmann/json.hpp>
+
+#include "common/json_check.hpp"
+#include "engine/models/model.hpp"
+
+namespace palplab::engine {
+
+namespace {
+
+class PenaltyModel final : public SceneModel {
+ public:
+  PenaltyModel(const SceneMesh& m, double k) : mesh_(m), k_(k) {}
+  const char* kind() const override { return "penalty"; }
+  bool deformable() const override { return false; }
+  ModelOutput step(const ContactInput& c, double) override {
+    ModelOutput o;
+    if (c.node >= 0) o.force = k_ * (mesh_.V.row(c.node).transpose() - c.x).dot(c.n) * c.n;
+    return o;
+  }
+  void reset() override {}
+  void stats(SceneStats& s) const override { s.nodes = s.coarse_nodes = mesh_.V.rows(); }
+  void surface(mesh::Positions& V, mesh::Faces& F) const override {
+    V = mesh_.V;
+    F = mesh_.F;
+  }
+
+ private:
+  const SceneMesh& mesh_;  // owned by the scene (shared cache entry)
+  double k_;
+};
+
+void read(json::Checker& c, const nlohmann::json& m, const std::string& path, SceneConfig&,
+          const std::vector<std::string>&) {
+  c.keys(m, path, {"kind"});
+}
+
+std::unique_ptr<SceneModel> make(const SceneConfig& cfg, const SceneMesh& m) {
+  return std::make_unique<PenaltyModel>(m, cfg.contact.stiffness);
+}
+
+}  // namespace
+
+const ModelKind& penalty_model_kind() {
+  static const ModelKind k{"penalty", "rigid organ, Hooke's law on the penetration (prototype A)",
+                           &read, nullptr, &make};
+  return k;
+}
+
+}  // namespace palplab::engine
