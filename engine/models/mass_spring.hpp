@@ -16,12 +16,15 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/mesh/types.hpp"
+
 namespace palplab::engine {
 
-using RowMatX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatX4i = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
-using RowMatX2i = Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>;
+// The mesh toolkit's array types (engine/mesh/types.hpp) under the engine's names.
+using RowMatX3d = mesh::Positions;
+using RowMatX3i = mesh::Faces;
+using RowMatX4i = mesh::Tets;
+using RowMatX2i = mesh::Edges;
 
 struct Springs {
   RowMatX2i E;           // #S by 2 node indices
