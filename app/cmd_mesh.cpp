@@ -107,18 +107,23 @@ palplab::app::CommandRegistration reg{
       // ---- generate
       {
         auto* c = mesh->add_subcommand(
-            "generate", "Generate a procedural mesh (model-a, model-b, model-c, stomach, sphere)");
+            "generate",
+            "Generate a procedural mesh (model-a, model-b, model-c, stomach, sphere, shoulder)");
         auto name = std::make_shared<std::string>();
         auto out = std::make_shared<std::string>();
         auto vertices = std::make_shared<int>(0);
         auto seed = std::make_shared<std::uint64_t>(0);
         auto binary = std::make_shared<bool>(false);
         auto vtu = std::make_shared<bool>(false);
-        c->add_option("NAME", *name, "model-a | model-b | model-c | stomach | sphere")->required();
-        c->add_option("--out", *out, "Output file; the extension picks the format")->required();
-        c->add_option(
-            "--vertices", *vertices,
-            "Target vertex count (tract models: surface vertices; sphere: 642 ... 23522)");
+        c->add_option("NAME", *name, "model-a | model-b | model-c | stomach | sphere | shoulder")
+            ->required();
+        c->add_option("--out", *out,
+                      "Output file; the extension picks the format (shoulder: BASE -> BASE.obj + "
+                      "BASE.regions)")
+            ->required();
+        c->add_option("--vertices", *vertices,
+                      "Target vertex count (tract models: surface vertices; sphere: 642 ... 23522; "
+                      "shoulder: per skin layer, default 2562)");
         c->add_option("--seed", *seed,
                       "0 = reference shape; other seeds perturb the tract/stomach by up to 5 %");
         c->add_flag("--binary", *binary, "Binary STL/PLY");
@@ -126,6 +131,27 @@ palplab::app::CommandRegistration reg{
         c->callback([=] {
           const std::string& n = *name;
           if (*vertices < 0) throw palplab::InputError("--vertices must be positive");
+          if (n == "shoulder") {
+            // Nested tissue surfaces + BASE.regions for `mesh tetrahedralize` (issue 16).
+            ShoulderOptions so;
+            if (*vertices) so.layer_vertices = *vertices;
+            const Shoulder sh = generate_shoulder(so);
+            const std::string e = extension(*out);
+            const bool surface_ext = e == ".obj" || e == ".stl" || e == ".off" || e == ".ply";
+            const std::string file = surface_ext ? *out : *out + ".obj";
+            const std::filesystem::path fp(file);
+            const std::string regions = (fp.parent_path() / fp.stem()).string() + ".regions";
+            write_surface(file, sh.surface, {*binary});
+            write_region_seeds(regions, sh.seeds);
+            std::cout << "shoulder: " << sh.parts.size() << " closed surfaces (";
+            for (size_t i = 0; i < sh.parts.size(); ++i)
+              std::cout << (i ? ", " : "") << sh.parts[i].name;
+            std::cout << "), " << sh.surface.V.rows() << " vertices, " << sh.surface.F.rows()
+                      << " faces, " << sh.seeds.size() << " tissue regions -> " << file << ", "
+                      << regions << "\n";
+            *code = 0;
+            return;
+          }
           if (n == "model-c") {
             const TetMesh m =
                 generate_model_c(*seed, *vertices ? *vertices : kModelCSurfaceVertices);
@@ -149,8 +175,9 @@ palplab::app::CommandRegistration reg{
           } else if (n == "sphere")
             m = generate_sphere(*vertices ? *vertices : 642);
           else
-            throw palplab::InputError("unknown mesh '" + n +
-                                      "' (expected model-a, model-b, model-c, stomach, sphere)");
+            throw palplab::InputError(
+                "unknown mesh '" + n +
+                "' (expected model-a, model-b, model-c, stomach, sphere, shoulder)");
           if (is_tetgen_path(*out))
             throw palplab::InputError(n + " is a surface: write .obj, .stl, .off, .ply or .vtu",
                                       *out);

@@ -16,6 +16,7 @@
 
 #include "engine/mesh/surface_mesh.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/mesh/tetrahedralize.hpp"
 
 namespace palplab::mesh {
 
@@ -85,5 +86,47 @@ TetMesh generate_model_c(std::uint64_t seed = 0, int surface_vertices = kModelCS
 
 // The names of the regions of the tract, in id order.
 const std::vector<std::string>& tract_region_names();
+
+// ---- the shoulder of the needle-insertion scene (issue 16, SPEC §4)
+//
+// A procedural right shoulder (x lateral, y anterior, z superior; metres), made of nested closed
+// surfaces written as ONE surface (several components) plus a `.regions` seed file, so that
+// `palplab mesh tetrahedralize` fills it with one conforming tet mesh whose tets carry their
+// tissue type. Components, outside in:
+//   skin_outer   rounded box |x/a|^3 + |y/b|^3 + |z/c|^3 = 1, a = 0.075, b = 0.070, c = 0.080
+//   skin_inner   the same surface moved 2 mm inwards along the ray from the origin
+//   fat_inner    moved 12 mm inwards (10 mm subcutaneous fat); inside it the deltoid muscle
+//   humerus      head: sphere of radius 24 mm around c_h = (0.022, 0, 0)
+//   membrane     joint capsule, the target: a 2 mm thick spherical shell cap around c_h,
+//                radii 25.5-27.5 mm, half angle 40° about the medial axis (-x)
+//   glenoid      scapula at the joint: a shell cap around c_h, radii 29-41 mm, half angle 32°
+//   acromion     scapula above the head: ellipsoid at (0.020, 0, 0.041), semi-axes 25/15/5 mm
+// Gaps of 1.5 mm (muscle) separate the head, the membrane and the glenoid, so no two
+// surfaces touch. Tissues (seeds): skin 100, subcutaneous fat 101 (soft tissue), deltoid 300
+// (muscle), humerus 200, scapula 201 (glenoid and acromion), membrane 107.
+struct ShoulderOptions {
+  // Vertex target of each skin/fat layer surface (an icosphere mapped onto it: 642 coarse,
+  // 2562 default); the bones and the membrane scale with it.
+  int layer_vertices = 2562;
+};
+
+struct ShoulderPart {
+  std::string name;    // skin_outer, skin_inner, fat_inner, humerus, membrane, glenoid, acromion
+  int first_face = 0;  // the part's faces are [first_face, first_face + faces)
+  int faces = 0;
+  int first_vertex = 0;  // and its vertices [first_vertex, first_vertex + vertices)
+  int vertices = 0;
+  int parent = -1;  // the part whose surface directly encloses this one (-1: none)
+  int inside = 0;   // tissue attribute just inside this surface
+};
+
+struct Shoulder {
+  SurfaceMesh surface;  // all parts, outward oriented, in the order above
+  std::vector<ShoulderPart> parts;
+  std::vector<RegionSeed> seeds;  // one per tissue region (the .regions file)
+};
+
+// Throws InputError when layer_vertices is out of [162, 40962].
+Shoulder generate_shoulder(const ShoulderOptions& opt = {});
 
 }  // namespace palplab::mesh

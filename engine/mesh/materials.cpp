@@ -20,18 +20,19 @@ const std::string& default_materials_json() {
   "format": "palplab-materials",
   "version": 1,
   "note": "Order-of-magnitude defaults for soft-tissue simulation; E in Pa, density in kg/m^3. Edit for your study.",
+  "needle_note": "needle: puncture_force N, puncture_stiffness N/m, cutting_force N, friction N/m of shaft in the tissue. Model form (spring until puncture, constant cutting force, shaft friction) after Okamura, Simone & O'Leary 2004, IEEE Trans Biomed Eng 51(10):1707-1716; magnitudes are palplab estimates chosen inside the ranges surveyed by Abolhassani, Patel & Moallem 2007, Med Eng Phys 29(4):413-431, not values copied from a table of either paper: calibrate them for a study.",
   "materials": [
-    {"first": 0, "last": 99, "name": "undefined", "youngs_modulus": 10000.0, "poisson_ratio": 0.45, "density": 1000.0, "colour": [0.7, 0.7, 0.7], "rigid": false},
-    {"first": 100, "last": 100, "name": "skin", "youngs_modulus": 150000.0, "poisson_ratio": 0.48, "density": 1100.0, "colour": [0.94, 0.76, 0.64], "rigid": false},
-    {"first": 101, "last": 101, "name": "soft tissue", "youngs_modulus": 10000.0, "poisson_ratio": 0.45, "density": 1000.0, "colour": [0.9, 0.55, 0.55], "rigid": false},
-    {"first": 102, "last": 102, "name": "veins", "youngs_modulus": 500000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.25, 0.3, 0.8], "rigid": false},
-    {"first": 103, "last": 103, "name": "arteries", "youngs_modulus": 1000000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.85, 0.1, 0.1], "rigid": false},
-    {"first": 104, "last": 104, "name": "nerves", "youngs_modulus": 500000.0, "poisson_ratio": 0.45, "density": 1040.0, "colour": [0.95, 0.9, 0.3], "rigid": false},
-    {"first": 105, "last": 105, "name": "lung", "youngs_modulus": 3000.0, "poisson_ratio": 0.3, "density": 300.0, "colour": [0.95, 0.7, 0.75], "rigid": false},
-    {"first": 106, "last": 106, "name": "heart", "youngs_modulus": 100000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.6, 0.1, 0.15], "rigid": false},
-    {"first": 107, "last": 107, "name": "membrane", "youngs_modulus": 1000000.0, "poisson_ratio": 0.45, "density": 1100.0, "colour": [0.3, 0.8, 0.4], "rigid": false},
-    {"first": 200, "last": 299, "name": "bone", "youngs_modulus": 15000000000.0, "poisson_ratio": 0.3, "density": 1900.0, "colour": [0.95, 0.93, 0.85], "rigid": true},
-    {"first": 300, "last": 399, "name": "muscle", "youngs_modulus": 50000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.7, 0.2, 0.2], "rigid": false}
+    {"first": 0, "last": 99, "name": "undefined", "youngs_modulus": 10000.0, "poisson_ratio": 0.45, "density": 1000.0, "colour": [0.7, 0.7, 0.7], "rigid": false, "needle": {"puncture_force": 0.5, "puncture_stiffness": 200.0, "cutting_force": 0.2, "friction": 10.0, "source": "palplab estimate (generic soft tissue)"}},
+    {"first": 100, "last": 100, "name": "skin", "youngs_modulus": 150000.0, "poisson_ratio": 0.48, "density": 1100.0, "colour": [0.94, 0.76, 0.64], "rigid": false, "needle": {"puncture_force": 1.5, "puncture_stiffness": 300.0, "cutting_force": 0.4, "friction": 30.0, "source": "palplab estimate of the order of the skin puncture forces surveyed by Abolhassani et al. 2007 (figure not taken from a table)"}},
+    {"first": 101, "last": 101, "name": "soft tissue", "youngs_modulus": 10000.0, "poisson_ratio": 0.45, "density": 1000.0, "colour": [0.9, 0.55, 0.55], "rigid": false, "needle": {"puncture_force": 0.3, "puncture_stiffness": 150.0, "cutting_force": 0.1, "friction": 10.0, "source": "palplab estimate (fat punctures far more easily than skin; cf. Abolhassani et al. 2007)"}},
+    {"first": 102, "last": 102, "name": "veins", "youngs_modulus": 500000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.25, 0.3, 0.8], "rigid": false, "needle": {"puncture_force": 0.5, "puncture_stiffness": 300.0, "cutting_force": 0.1, "friction": 10.0, "source": "palplab estimate"}},
+    {"first": 103, "last": 103, "name": "arteries", "youngs_modulus": 1000000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.85, 0.1, 0.1], "rigid": false, "needle": {"puncture_force": 0.8, "puncture_stiffness": 400.0, "cutting_force": 0.15, "friction": 10.0, "source": "palplab estimate"}},
+    {"first": 104, "last": 104, "name": "nerves", "youngs_modulus": 500000.0, "poisson_ratio": 0.45, "density": 1040.0, "colour": [0.95, 0.9, 0.3], "rigid": false, "needle": {"puncture_force": 0.6, "puncture_stiffness": 300.0, "cutting_force": 0.15, "friction": 10.0, "source": "palplab estimate"}},
+    {"first": 105, "last": 105, "name": "lung", "youngs_modulus": 3000.0, "poisson_ratio": 0.3, "density": 300.0, "colour": [0.95, 0.7, 0.75], "rigid": false, "needle": {"puncture_force": 0.3, "puncture_stiffness": 100.0, "cutting_force": 0.05, "friction": 5.0, "source": "palplab estimate"}},
+    {"first": 106, "last": 106, "name": "heart", "youngs_modulus": 100000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.6, 0.1, 0.15], "rigid": false, "needle": {"puncture_force": 1.0, "puncture_stiffness": 300.0, "cutting_force": 0.3, "friction": 20.0, "source": "palplab estimate"}},
+    {"first": 107, "last": 107, "name": "membrane", "youngs_modulus": 1000000.0, "poisson_ratio": 0.45, "density": 1100.0, "colour": [0.3, 0.8, 0.4], "rigid": false, "needle": {"puncture_force": 1.0, "puncture_stiffness": 500.0, "cutting_force": 0.2, "friction": 15.0, "source": "palplab estimate of the order of the capsule-puncture peak of Okamura et al. 2004 (figure not taken from a table)"}},
+    {"first": 200, "last": 299, "name": "bone", "youngs_modulus": 15000000000.0, "poisson_ratio": 0.3, "density": 1900.0, "colour": [0.95, 0.93, 0.85], "rigid": true, "needle": {"puncture_stiffness": 20000.0, "source": "palplab choice: a stiff haptic wall (bone is rigid and not punctured)"}},
+    {"first": 300, "last": 399, "name": "muscle", "youngs_modulus": 50000.0, "poisson_ratio": 0.45, "density": 1060.0, "colour": [0.7, 0.2, 0.2], "rigid": false, "needle": {"puncture_force": 0.8, "puncture_stiffness": 250.0, "cutting_force": 0.25, "friction": 25.0, "source": "palplab estimate (muscle fascia between fat and skin; cf. Abolhassani et al. 2007)"}}
   ]
 }
 )JSON";
@@ -107,6 +108,25 @@ MaterialTable parse_materials(const std::string& text, const std::string& source
       if (!e["rigid"].is_boolean()) bad(source, p + ".rigid", "expected true or false");
       m.rigid = e["rigid"].get<bool>();
     }
+    if (e.contains("needle")) {
+      const auto& n = e["needle"];
+      const std::string q = p + ".needle";
+      if (!n.is_object()) bad(source, q, "expected an object");
+      NeedleParams& np = m.needle;
+      np.defined = true;
+      np.puncture_stiffness = number(n, source, q, "puncture_stiffness", 0, 1e9, true, false);
+      // A rigid tissue is never punctured: the other values are optional there.
+      if (!m.rigid || n.contains("puncture_force"))
+        np.puncture_force = number(n, source, q, "puncture_force", 0, 1e4, true, false);
+      if (!m.rigid || n.contains("cutting_force"))
+        np.cutting_force = number(n, source, q, "cutting_force", 0, 1e4, false, false);
+      if (!m.rigid || n.contains("friction"))
+        np.friction = number(n, source, q, "friction", 0, 1e6, false, false);
+      if (n.contains("source")) {
+        if (!n["source"].is_string()) bad(source, q + ".source", "expected a string");
+        np.source = n["source"].get<std::string>();
+      }
+    }
     for (size_t k = 0; k < t.materials.size(); ++k)
       if (m.first <= t.materials[k].last && t.materials[k].first <= m.last)
         bad(source, p, "attribute range overlaps $.materials[" + std::to_string(k) + "]");
@@ -138,6 +158,15 @@ std::string materials_to_json(const MaterialTable& t) {
     e["density"] = m.density;
     e["colour"] = m.colour;
     e["rigid"] = m.rigid;
+    if (m.needle.defined) {
+      nlohmann::ordered_json n;
+      if (!m.rigid || m.needle.puncture_force > 0) n["puncture_force"] = m.needle.puncture_force;
+      n["puncture_stiffness"] = m.needle.puncture_stiffness;
+      if (!m.rigid || m.needle.cutting_force > 0) n["cutting_force"] = m.needle.cutting_force;
+      if (!m.rigid || m.needle.friction > 0) n["friction"] = m.needle.friction;
+      if (!m.needle.source.empty()) n["source"] = m.needle.source;
+      e["needle"] = n;
+    }
     j["materials"].push_back(e);
   }
   return j.dump(2) + "\n";

@@ -11,6 +11,21 @@
 
 namespace palplab::mesh {
 
+// Needle-insertion parameters of a tissue (issue 16; engine/models/needle.hpp uses them).
+// Model form after Okamura, Simone & O'Leary 2004: before puncture the tissue boundary deflects
+// like a spring (puncture_stiffness) until the force reaches puncture_force; after puncture the
+// tip cuts with a constant cutting_force while it advances into fresh tissue, and the shaft
+// feels friction proportional to the length inside the tissue. For a rigid tissue (bone) only
+// puncture_stiffness is used: the contact stiffness of the unpunctured bone surface.
+struct NeedleParams {
+  bool defined = false;           // false: the entry has no "needle" object
+  double puncture_force = 0;      // N, > 0 (unused for rigid tissue)
+  double puncture_stiffness = 0;  // N/m, > 0
+  double cutting_force = 0;       // N, >= 0
+  double friction = 0;            // N/m: shaft friction per metre of shaft in the tissue, >= 0
+  std::string source;             // where the values come from
+};
+
 struct Material {
   int first = 0, last = 0;  // attribute range [first, last] this entry covers
   std::string name;
@@ -19,6 +34,7 @@ struct Material {
   double density = 0;         // kg/m^3
   std::array<double, 3> colour{0.5, 0.5, 0.5};
   bool rigid = false;
+  NeedleParams needle;  // optional JSON object "needle"
 };
 
 struct MaterialTable {

@@ -1,0 +1,79 @@
+// End-to-end: `palplab mesh generate shoulder` -> `mesh tetrahedralize` -> `mesh check` (issue 16).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+fs::path dir() {
+  static const fs::path d = [] {
+    fs::path p = fs::temp_directory_path() / ("palplab_cli_needle_" + std::to_string(::getpid()));
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Result run(const std::string& args) {
+  const fs::path o = dir() / "stdout.txt", e = dir() / "stderr.txt";
+  const std::string cmd =
+      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
+  const int st = std::system(cmd.c_str());
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+std::string p(const std::string& name) {
+  return (dir() / name).string();
+}
+
+TEST(CliShoulder, GenerateTetrahedralizeCheck) {
+  ASSERT_EQ(run("mesh generate shoulder --vertices 642 --out " + p("sh")).code, 0);
+  ASSERT_TRUE(fs::exists(p("sh.obj")));
+  ASSERT_TRUE(fs::exists(p("sh.regions")));
+  EXPECT_EQ(run("mesh check " + p("sh.obj")).code, 0);
+  // Same arguments, same bytes.
+  ASSERT_EQ(run("mesh generate shoulder --vertices 642 --out " + p("sh2.obj")).code, 0);
+  EXPECT_EQ(slurp(p("sh.obj")), slurp(p("sh2.obj")));
+  EXPECT_EQ(slurp(p("sh.regions")), slurp(p("sh2.regions")));
+  // The .regions side file is found next to the surface.
+  const Result t = run("mesh tetrahedralize " + p("sh.obj") + " --out " + p("tet"));
+  ASSERT_EQ(t.code, 0) << t.err;
+  EXPECT_NE(t.out.find("with regions from"), std::string::npos) << t.out;
+  EXPECT_EQ(run("mesh check " + p("tet.node")).code, 0);
+  const Result i = run("mesh info " + p("tet.node") + " --json");
+  ASSERT_EQ(i.code, 0);
+  const json j = json::parse(i.out);
+  for (const char* tissue : {"100", "101", "107", "200", "201", "300"})
+    EXPECT_TRUE(j["tissues"].contains(tissue)) << tissue;
+  EXPECT_EQ(j["tissues"].size(), 6u);
+}
+
+TEST(CliShoulder, BadVertexCountIsExit2) {
+  const Result r = run("mesh generate shoulder --vertices 50 --out " + p("bad"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("between 162 and 40962"), std::string::npos) << r.err;
+}
+
+}  // namespace
