@@ -737,6 +737,10 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     ft.p = f_upper_p(ft.f, q, ft.den_df);
     ft.mean_sq = ft.f * s2;
     ft.sum_sq = ft.mean_sq * q;
+    if (std::isfinite(ft.f) && std::isfinite(ft.den_df) && ft.den_df > 0) {
+      ft.partial_eta_squared = ft.f * q / (ft.f * q + ft.den_df);
+      ft.partial_eta_squared_ci = f_effect_ci(ft.f, q, ft.den_df);
+    }
     fit.anova.push_back(ft);
   }
   return fit;
@@ -805,6 +809,12 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
         << pad(fmt("%.6g", a.mean_sq), 12) << pad(std::to_string(a.num_df), 6)
         << pad(fmt("%.3f", a.den_df), 10) << pad(fmt("%.4f", a.f), 10) << pad(pfmt(a.p), 12)
         << "\n";
+    o << "\nPartial eta^2 [95% CI, noncentral F with the Satterthwaite df]\n";
+    for (auto& a : fit.anova)
+      if (a.partial_eta_squared_ci.defined)
+        o << pad(a.term, tw, true) << fmt("%.3f", a.partial_eta_squared) << " ["
+          << fmt("%.3f", a.partial_eta_squared_ci.pve_low) << ", "
+          << fmt("%.3f", a.partial_eta_squared_ci.pve_high) << "]\n";
   }
   for (auto& w : fit.warnings) o << "\nwarning: " << w << "\n";
   return o.str();
@@ -854,7 +864,11 @@ nlohmann::json to_json(const LmmFit& fit) {
                   {"num_df", a.num_df},
                   {"den_df", num(a.den_df)},
                   {"f", a.f},
-                  {"p", num(a.p)}});
+                  {"p", num(a.p)},
+                  {"partial_eta_squared", num(a.partial_eta_squared)}});
+  for (size_t i = 0; i < fit.anova.size(); ++i)
+    if (const auto& c = fit.anova[i].partial_eta_squared_ci; c.defined)
+      an[i]["partial_eta_squared_ci"] = {num(c.pve_low), num(c.pve_high)};
   j["anova"] = an;
   j["warnings"] = fit.warnings;
   return j;

@@ -468,10 +468,12 @@ void section_confirmatory(Context& c, const std::vector<Hypothesis>& hyps) {
     }
     if (h.test == "anova_oneway") {
       Anova a = oneway_anova(v.data.values);
-      doc.table({"test", "F", "df", "p", "η²", "decision"},
+      const FEffectCi ci = a.defined ? f_effect_ci(a.F, a.df_between, a.df_within) : FEffectCi{};
+      doc.table({"test", "F", "df", "p", "η² [95% CI]", "decision"},
                 {{"one-way ANOVA", fmt(a.F, "%.3f"),
                   fmt(a.df_between, "%.0f") + ", " + fmt(a.df_within, "%.0f"), format_p(a.p),
-                  fmt(a.eta_squared, "%.3f"),
+                  fmt(a.eta_squared, "%.3f") +
+                      (ci.defined ? " " + interval(ci.pve_low, ci.pve_high, "%.3f") : ""),
                   a.p < h.alpha ? "reject H0 (groups differ)" : "H0 not rejected (inconclusive)"}});
       doc.para(apa_anova(a) + ".");
       continue;
@@ -642,7 +644,12 @@ void section_analysis(Context& c, const Unit& u) {
          {"within groups", fmt(a.df_within, "%.0f"), fmt(a.ss_within), fmt(a.ms_within), "", ""}});
     doc.bullets(
         {"Classical: " + apa_anova(a) + ", η² = " + fmt(a.eta_squared, "%.3f") +
-             ", ω² = " + fmt(a.omega_squared, "%.3f"),
+             ", ω² = " + fmt(a.omega_squared, "%.3f") +
+             (s.anova_effect_ci.defined
+                  ? "; 95 % CI of the population η² (= ω²) " +
+                        interval(s.anova_effect_ci.pve_low, s.anova_effect_ci.pve_high, "%.3f") +
+                        " (noncentral F, Steiger 2004)"
+                  : std::string()),
          "Welch: " + (s.welch.defined
                           ? apa_f(s.welch.F, s.welch.df_between, s.welch.df_within, s.welch.p)
                           : std::string("undefined (a group has zero variance)"))});
@@ -958,8 +965,19 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
     std::vector<std::vector<std::string>> an;
     for (const auto& a : fit.anova)
       an.push_back({a.term, std::to_string(a.num_df), fmt(a.den_df, "%.2f"), fmt(a.f, "%.3f"),
-                    format_p(a.p)});
-    c.doc.table({"type III F test", "num df", "den df (Satterthwaite)", "F", "p"}, an);
+                    format_p(a.p),
+                    a.partial_eta_squared_ci.defined
+                        ? fmt(a.partial_eta_squared, "%.3f") + " " +
+                              interval(a.partial_eta_squared_ci.pve_low,
+                                       a.partial_eta_squared_ci.pve_high, "%.3f")
+                        : std::string("—")});
+    c.doc.table(
+        {"type III F test", "num df", "den df (Satterthwaite)", "F", "p", "partial η² [95% CI]"},
+        an);
+    c.doc.para(
+        "Partial η² = F·num df / (F·num df + den df), its 95 % interval from the "
+        "noncentral F inverted at the Satterthwaite den df (Steiger 2004; approximate, "
+        "as the F of a mixed model is only approximately F-distributed).");
     if (cm.levels.size() >= 2)
       for (const auto& a : fit.anova)
         if (a.term == "group:session")

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@
 
 #include "analysis/anova.hpp"
 #include "analysis/descriptives.hpp"
+#include "analysis/distributions.hpp"
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "analysis/svg.hpp"
@@ -257,6 +259,13 @@ TEST(Report, FixtureDatabaseHasEverySectionValidSvgAndNoNaN) {
   Anova a = oneway_anova({f.post[0], f.post[1], f.post[2]});
   std::string apa = apa_f(a.F, a.df_between, a.df_within, a.p);
   EXPECT_NE(md.find("Classical: " + apa), std::string::npos) << apa;
+  // ... and its η²/ω² interval is the noncentral-F one of the same F and df.
+  FEffectCi ci = f_effect_ci(a.F, a.df_between, a.df_within);
+  ASSERT_TRUE(ci.defined);
+  char ci_text[96];
+  std::snprintf(ci_text, sizeof ci_text, "95 %% CI of the population η² (= ω²) [%.3f, %.3f]",
+                ci.pve_low, ci.pve_high);
+  EXPECT_NE(md.find(ci_text), std::string::npos) << ci_text;
   EXPECT_EQ(a.df_within, 11);  // 14 defined values (one undefined left out) - 3 groups
   EXPECT_NE(html.find("Fixture study &lt;with &amp; special&gt; characters"), std::string::npos);
   EXPECT_EQ(html.find("<script"), std::string::npos);
