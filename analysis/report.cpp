@@ -101,6 +101,16 @@ struct Doc {
   }
 };
 
+// The thresholds of the feature region in a phase (the region's own, else "*").
+const results::ThresholdRecord* feature_thresholds(const results::PhaseRecord& p) {
+  const results::ThresholdRecord* any = nullptr;
+  for (const auto& t : p.thresholds) {
+    if (t.region == p.feature) return &t;
+    if (t.region == "*") any = &t;
+  }
+  return any;
+}
+
 struct Unit {  // one analysis: a measure in a phase, pooled over its sessions or the last one
   std::string measure, phase;
   bool pooled = false, welch = true;
@@ -610,24 +620,39 @@ void section_analysis(Context& c, const Unit& u) {
   }
   StatsOptions opt;
   opt.welch_pairwise = u.welch;
-  // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the grand mean for
-  // a force; other measures without a declared margin get no equivalence test.
+  // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the target force —
+  // the MPF the database stores for the phase's feature region — for a force; the grand mean
+  // stands in only when no MPF is stored (a schema-1 database). Other measures without a
+  // declared margin get no equivalence test.
   std::string margin_source;
   if (u.margin > 0) {
     opt.margins = std::make_pair(-u.margin, u.margin);
     margin_source = "declared by the study";
   } else if (unit == "N") {
-    long double sum = 0;
-    int n = 0;
-    for (const auto& gv : data.values)
-      for (double v : gv) {
-        sum += v + static_cast<long double>(data.offset);
-        ++n;
-      }
-    const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
-    if (m > 0) {
+    const results::PhaseRecord* ph = c.phase(u.phase);
+    const results::ThresholdRecord* t = ph ? feature_thresholds(*ph) : nullptr;
+    if (t && t->mpf > 0) {
+      const double m = kForceWeberFraction * t->mpf;
       opt.margins = std::make_pair(-m, m);
-      margin_source = "default: ±7 % (force Weber fraction) of the grand mean";
+      margin_source =
+          "default: ±7 % (force Weber fraction) of the target force, MPF = " + fmt(t->mpf, "%.4g") +
+          " N for region " + t->region + " in phase " + u.phase + ", from the study database";
+    } else {
+      long double sum = 0;
+      int n = 0;
+      for (const auto& gv : data.values)
+        for (double v : gv) {
+          sum += v + static_cast<long double>(data.offset);
+          ++n;
+        }
+      const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
+      if (m > 0) {
+        opt.margins = std::make_pair(-m, m);
+        margin_source =
+            "default: ±7 % (force Weber fraction) of the grand mean, as the database stores no "
+            "MPF for phase " +
+            u.phase;
+      }
     }
   }
   StatsSummary s = summarize(data, opt);
@@ -988,16 +1013,6 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
   if (!any_curve)
     c.doc.para(training.empty() ? "The study declares no phase of kind \"training\"."
                                 : "No training sessions with analysed measures in this database.");
-}
-
-// The thresholds of the feature region in a phase (the region's own, else "*").
-const results::ThresholdRecord* feature_thresholds(const results::PhaseRecord& p) {
-  const results::ThresholdRecord* any = nullptr;
-  for (const auto& t : p.thresholds) {
-    if (t.region == p.feature) return &t;
-    if (t.region == "*") any = &t;
-  }
-  return any;
 }
 
 // ---- Example force trace per group, with the phase's ST / MPF / SFT lines
