@@ -318,9 +318,13 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
     auto s2 = s;
     auto f2 = fv;
     for (size_t j = 0; j <= d; ++j) s[j] = s2[idx[j]], fv[j] = f2[idx[j]];
+    // Size relative to the coordinate's magnitude (absolute below 1): a theta of 8e6 (a
+    // random-intercept SD far above the residual SD) has ulps of 2e-9 and could never meet an
+    // absolute 1e-11.
     double size = 0;
     for (size_t j = 1; j <= d; ++j)
-      for (size_t c = 0; c < d; ++c) size = std::max(size, std::abs(s[j][c] - s[0][c]));
+      for (size_t c = 0; c < d; ++c)
+        size = std::max(size, std::abs(s[j][c] - s[0][c]) / std::max(1.0, std::abs(s[0][c])));
     // Stall: the best value has not fallen by more than its rounding for 50·(d + 1) iterations.
     // On a singular fit the simplex collapses to a few ulps of theta while the deviance there
     // still differs by ~5e-15 relative between neighbouring doubles (rounding of the
@@ -596,7 +600,8 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     double fnew;
     auto x = nelder_mead(obj, th, lower, step, &fnew);
     double moved = 0;
-    for (size_t j = 0; j < x.size(); ++j) moved = std::max(moved, std::abs(x[j] - th[j]));
+    for (size_t j = 0; j < x.size(); ++j)
+      moved = std::max(moved, std::abs(x[j] - th[j]) / std::max(1.0, std::abs(th[j])));
     bool improved = fnew < fbest - 1e-14 * std::abs(fbest);
     if (fnew <= fbest) th = x, fbest = fnew;
     if (!improved && moved < 1e-9 && restart > 0) break;
