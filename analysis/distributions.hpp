@@ -47,6 +47,34 @@ double noncentral_t_cdf(double t, double df, double delta);
 // invert a t statistic into a confidence interval for its noncentrality.
 double noncentral_t_delta_for_cdf(double t, double df, double p);
 
+// Noncentral F(d1, d2, λ) (d1, d2 > 0, need not be integers; λ >= 0): P(F <= x), as the
+// Poisson(λ/2)-weighted sum of regularized incomplete beta functions
+//   Σ_j e^{-λ/2} (λ/2)^j / j! · I_y(d1/2 + j, d2/2),  y = d1 x / (d1 x + d2),
+// summed outward from the Poisson mode and truncated when the bound on the omitted terms
+// (upward: I_y(d1/2 + j + 1, d2/2) · P(J > j), since I_y falls with j; downward: P(J < j))
+// is below 1e-17 of the sum. Absolute accuracy ~1e-15 (tests/analysis: λ = 0 against the
+// central F, truncation against the untruncated sum, R's pf(ncp =) on a grid).
+double noncentral_f_cdf(double x, double d1, double d2, double lambda);
+// The λ >= 0 with noncentral_f_cdf(f, d1, d2, λ) = p (the CDF falls as λ grows); 0 when even
+// λ = 0 gives a CDF <= p (the interval bound then sits at its lower limit, Steiger 2004).
+double noncentral_f_lambda_for_cdf(double f, double d1, double d2, double p);
+
+// Confidence interval for the effect size of an F test by inverting the noncentral F in its
+// noncentrality λ (Steiger 2004, Psychological Methods 9:164; Smithson 2003): the two-sided
+// `level` interval [λ_lo, λ_hi] solves CDF(F; λ_lo) = (1 + level)/2, CDF(F; λ_hi) = (1 -
+// level)/2 (a bound is 0 when λ = 0 already gives less). λ converts to the population
+// proportion of variance explained, λ / (λ + n), with n = df1 + df2 + 1 (the number of
+// observations of a one-way design; for a term of a larger model, Smithson's convention for
+// partial η²). The sample η² and ω² both estimate this one population quantity, so it is the
+// interval for both (and for partial η²).
+struct FEffectCi {
+  double level = 0.95;
+  double lambda_low = 0, lambda_high = 0;  // noncentrality bounds
+  double pve_low = 0, pve_high = 0;  // population η² (= ω², partial η²) bounds, in [0, 1)
+  bool defined = false;  // false for a non-finite F or df, or F·df1 > 1e7 (too many terms)
+};
+FEffectCi f_effect_ci(double F, double df1, double df2, double level = 0.95);
+
 // Root of a continuous f on [a, b] with f(a), f(b) of opposite signs (Illinois method).
 template <class F>
 double find_root(const F& f, double a, double b, double fa, double fb, double rel_tol = 1e-14) {

@@ -309,6 +309,8 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
   for (size_t j = 0; j < d; ++j) s[j + 1][j] += step;
   std::vector<double> fv(d + 1);
   for (size_t j = 0; j <= d; ++j) fv[j] = f(s[j]);
+  double best_seen = *std::min_element(fv.begin(), fv.end());
+  int stall = 0;
   for (int it = 0; it < 20000; ++it) {
     std::vector<size_t> idx(d + 1);
     for (size_t j = 0; j <= d; ++j) idx[j] = j;
@@ -316,10 +318,27 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
     auto s2 = s;
     auto f2 = fv;
     for (size_t j = 0; j <= d; ++j) s[j] = s2[idx[j]], fv[j] = f2[idx[j]];
+    // Size relative to the coordinate's magnitude (absolute below 1): a theta of 8e6 (a
+    // random-intercept SD far above the residual SD) has ulps of 2e-9 and could never meet an
+    // absolute 1e-11.
     double size = 0;
     for (size_t j = 1; j <= d; ++j)
-      for (size_t c = 0; c < d; ++c) size = std::max(size, std::abs(s[j][c] - s[0][c]));
-    if (fv[d] - fv[0] <= 1e-15 * std::abs(fv[0]) && size < 1e-11) break;
+      for (size_t c = 0; c < d; ++c)
+        size = std::max(size, std::abs(s[j][c] - s[0][c]) / std::max(1.0, std::abs(s[0][c])));
+    // Stall: the best value has not fallen by more than its rounding for 50·(d + 1) iterations.
+    // On a singular fit the simplex collapses to a few ulps of theta while the deviance there
+    // still differs by ~5e-15 relative between neighbouring doubles (rounding of the
+    // evaluation), so the value-spread test below can never pass and the search used to run to
+    // its 20000-iteration cap (0.6 s per fit). Only the termination changes, not the path.
+    if (fv[0] < best_seen - 1e-15 * std::abs(best_seen)) {
+      best_seen = fv[0];
+      stall = 0;
+    } else {
+      ++stall;
+    }
+    if (size < 1e-11 &&
+        (fv[d] - fv[0] <= 1e-15 * std::abs(fv[0]) || stall > 50 * static_cast<int>(d + 1)))
+      break;
     std::vector<double> cen(d, 0);
     for (size_t j = 0; j < d; ++j)
       for (size_t c = 0; c < d; ++c) cen[c] += s[j][c] / d;
@@ -581,7 +600,8 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     double fnew;
     auto x = nelder_mead(obj, th, lower, step, &fnew);
     double moved = 0;
-    for (size_t j = 0; j < x.size(); ++j) moved = std::max(moved, std::abs(x[j] - th[j]));
+    for (size_t j = 0; j < x.size(); ++j)
+      moved = std::max(moved, std::abs(x[j] - th[j]) / std::max(1.0, std::abs(th[j])));
     bool improved = fnew < fbest - 1e-14 * std::abs(fbest);
     if (fnew <= fbest) th = x, fbest = fnew;
     if (!improved && moved < 1e-9 && restart > 0) break;
@@ -737,6 +757,10 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     ft.p = f_upper_p(ft.f, q, ft.den_df);
     ft.mean_sq = ft.f * s2;
     ft.sum_sq = ft.mean_sq * q;
+    if (std::isfinite(ft.f) && std::isfinite(ft.den_df) && ft.den_df > 0) {
+      ft.partial_eta_squared = ft.f * q / (ft.f * q + ft.den_df);
+      ft.partial_eta_squared_ci = f_effect_ci(ft.f, q, ft.den_df);
+    }
     fit.anova.push_back(ft);
   }
   return fit;
@@ -805,6 +829,12 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
         << pad(fmt("%.6g", a.mean_sq), 12) << pad(std::to_string(a.num_df), 6)
         << pad(fmt("%.3f", a.den_df), 10) << pad(fmt("%.4f", a.f), 10) << pad(pfmt(a.p), 12)
         << "\n";
+    o << "\nPartial eta^2 [95% CI, noncentral F with the Satterthwaite df]\n";
+    for (auto& a : fit.anova)
+      if (a.partial_eta_squared_ci.defined)
+        o << pad(a.term, tw, true) << fmt("%.3f", a.partial_eta_squared) << " ["
+          << fmt("%.3f", a.partial_eta_squared_ci.pve_low) << ", "
+          << fmt("%.3f", a.partial_eta_squared_ci.pve_high) << "]\n";
   }
   for (auto& w : fit.warnings) o << "\nwarning: " << w << "\n";
   return o.str();
@@ -854,7 +884,11 @@ nlohmann::json to_json(const LmmFit& fit) {
                   {"num_df", a.num_df},
                   {"den_df", num(a.den_df)},
                   {"f", a.f},
-                  {"p", num(a.p)}});
+                  {"p", num(a.p)},
+                  {"partial_eta_squared", num(a.partial_eta_squared)}});
+  for (size_t i = 0; i < fit.anova.size(); ++i)
+    if (const auto& c = fit.anova[i].partial_eta_squared_ci; c.defined)
+      an[i]["partial_eta_squared_ci"] = {num(c.pve_low), num(c.pve_high)};
   j["anova"] = an;
   j["warnings"] = fit.warnings;
   return j;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "analysis/csv.hpp"
+#include "analysis/distributions.hpp"
 #include "analysis/grouped.hpp"
 
 namespace palplab::analysis {
@@ -37,6 +38,11 @@ struct LmmFTest {
   int num_df = 0;
   double den_df = 0, f = 0, p = 0;
   double sum_sq = 0, mean_sq = 0;  // lmerTest's Sum Sq = F * num_df * sigma^2
+  // Partial η² implied by the test, F·num_df / (F·num_df + den_df) (as R's effectsize does
+  // for lmer), and its 95 % noncentral-F interval with the Satterthwaite den_df (f_effect_ci;
+  // approximate: the F of a mixed model is only approximately noncentral F).
+  double partial_eta_squared = 0;
+  FEffectCi partial_eta_squared_ci;
 };
 struct LmmFit {
   bool reml = true;

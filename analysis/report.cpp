@@ -101,6 +101,16 @@ struct Doc {
   }
 };
 
+// The thresholds of the feature region in a phase (the region's own, else "*").
+const results::ThresholdRecord* feature_thresholds(const results::PhaseRecord& p) {
+  const results::ThresholdRecord* any = nullptr;
+  for (const auto& t : p.thresholds) {
+    if (t.region == p.feature) return &t;
+    if (t.region == "*") any = &t;
+  }
+  return any;
+}
+
 struct Unit {  // one analysis: a measure in a phase, pooled over its sessions or the last one
   std::string measure, phase;
   bool pooled = false, welch = true;
@@ -468,10 +478,12 @@ void section_confirmatory(Context& c, const std::vector<Hypothesis>& hyps) {
     }
     if (h.test == "anova_oneway") {
       Anova a = oneway_anova(v.data.values);
-      doc.table({"test", "F", "df", "p", "η²", "decision"},
+      const FEffectCi ci = a.defined ? f_effect_ci(a.F, a.df_between, a.df_within) : FEffectCi{};
+      doc.table({"test", "F", "df", "p", "η² [95% CI]", "decision"},
                 {{"one-way ANOVA", fmt(a.F, "%.3f"),
                   fmt(a.df_between, "%.0f") + ", " + fmt(a.df_within, "%.0f"), format_p(a.p),
-                  fmt(a.eta_squared, "%.3f"),
+                  fmt(a.eta_squared, "%.3f") +
+                      (ci.defined ? " " + interval(ci.pve_low, ci.pve_high, "%.3f") : ""),
                   a.p < h.alpha ? "reject H0 (groups differ)" : "H0 not rejected (inconclusive)"}});
       doc.para(apa_anova(a) + ".");
       continue;
@@ -608,24 +620,39 @@ void section_analysis(Context& c, const Unit& u) {
   }
   StatsOptions opt;
   opt.welch_pairwise = u.welch;
-  // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the grand mean for
-  // a force; other measures without a declared margin get no equivalence test.
+  // Equivalence margins: the study's, else ±7 % (force Weber fraction) of the target force —
+  // the MPF the database stores for the phase's feature region — for a force; the grand mean
+  // stands in only when no MPF is stored (a schema-1 database). Other measures without a
+  // declared margin get no equivalence test.
   std::string margin_source;
   if (u.margin > 0) {
     opt.margins = std::make_pair(-u.margin, u.margin);
     margin_source = "declared by the study";
   } else if (unit == "N") {
-    long double sum = 0;
-    int n = 0;
-    for (const auto& gv : data.values)
-      for (double v : gv) {
-        sum += v + static_cast<long double>(data.offset);
-        ++n;
-      }
-    const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
-    if (m > 0) {
+    const results::PhaseRecord* ph = c.phase(u.phase);
+    const results::ThresholdRecord* t = ph ? feature_thresholds(*ph) : nullptr;
+    if (t && t->mpf > 0) {
+      const double m = kForceWeberFraction * t->mpf;
       opt.margins = std::make_pair(-m, m);
-      margin_source = "default: ±7 % (force Weber fraction) of the grand mean";
+      margin_source =
+          "default: ±7 % (force Weber fraction) of the target force, MPF = " + fmt(t->mpf, "%.4g") +
+          " N for region " + t->region + " in phase " + u.phase + ", from the study database";
+    } else {
+      long double sum = 0;
+      int n = 0;
+      for (const auto& gv : data.values)
+        for (double v : gv) {
+          sum += v + static_cast<long double>(data.offset);
+          ++n;
+        }
+      const double m = kForceWeberFraction * std::fabs(static_cast<double>(sum / n));
+      if (m > 0) {
+        opt.margins = std::make_pair(-m, m);
+        margin_source =
+            "default: ±7 % (force Weber fraction) of the grand mean, as the database stores no "
+            "MPF for phase " +
+            u.phase;
+      }
     }
   }
   StatsSummary s = summarize(data, opt);
@@ -642,7 +669,12 @@ void section_analysis(Context& c, const Unit& u) {
          {"within groups", fmt(a.df_within, "%.0f"), fmt(a.ss_within), fmt(a.ms_within), "", ""}});
     doc.bullets(
         {"Classical: " + apa_anova(a) + ", η² = " + fmt(a.eta_squared, "%.3f") +
-             ", ω² = " + fmt(a.omega_squared, "%.3f"),
+             ", ω² = " + fmt(a.omega_squared, "%.3f") +
+             (s.anova_effect_ci.defined
+                  ? "; 95 % CI of the population η² (= ω²) " +
+                        interval(s.anova_effect_ci.pve_low, s.anova_effect_ci.pve_high, "%.3f") +
+                        " (noncentral F, Steiger 2004)"
+                  : std::string()),
          "Welch: " + (s.welch.defined
                           ? apa_f(s.welch.F, s.welch.df_between, s.welch.df_within, s.welch.p)
                           : std::string("undefined (a group has zero variance)"))});
@@ -958,8 +990,19 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
     std::vector<std::vector<std::string>> an;
     for (const auto& a : fit.anova)
       an.push_back({a.term, std::to_string(a.num_df), fmt(a.den_df, "%.2f"), fmt(a.f, "%.3f"),
-                    format_p(a.p)});
-    c.doc.table({"type III F test", "num df", "den df (Satterthwaite)", "F", "p"}, an);
+                    format_p(a.p),
+                    a.partial_eta_squared_ci.defined
+                        ? fmt(a.partial_eta_squared, "%.3f") + " " +
+                              interval(a.partial_eta_squared_ci.pve_low,
+                                       a.partial_eta_squared_ci.pve_high, "%.3f")
+                        : std::string("—")});
+    c.doc.table(
+        {"type III F test", "num df", "den df (Satterthwaite)", "F", "p", "partial η² [95% CI]"},
+        an);
+    c.doc.para(
+        "Partial η² = F·num df / (F·num df + den df), its 95 % interval from the "
+        "noncentral F inverted at the Satterthwaite den df (Steiger 2004; approximate, "
+        "as the F of a mixed model is only approximately F-distributed).");
     if (cm.levels.size() >= 2)
       for (const auto& a : fit.anova)
         if (a.term == "group:session")
@@ -970,16 +1013,6 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
   if (!any_curve)
     c.doc.para(training.empty() ? "The study declares no phase of kind \"training\"."
                                 : "No training sessions with analysed measures in this database.");
-}
-
-// The thresholds of the feature region in a phase (the region's own, else "*").
-const results::ThresholdRecord* feature_thresholds(const results::PhaseRecord& p) {
-  const results::ThresholdRecord* any = nullptr;
-  for (const auto& t : p.thresholds) {
-    if (t.region == p.feature) return &t;
-    if (t.region == "*") any = &t;
-  }
-  return any;
 }
 
 // ---- Example force trace per group, with the phase's ST / MPF / SFT lines

@@ -76,6 +76,8 @@ StatsSummary summarize(const GroupedData& data, const StatsOptions& options) {
     s.shapiro.push_back(sw);
   }
   s.anova = oneway_anova(g);
+  if (s.anova.defined)
+    s.anova_effect_ci = f_effect_ci(s.anova.F, s.anova.df_between, s.anova.df_within);
   s.welch = welch_anova(g);
   s.pairwise = pairwise_t(g, options.welch_pairwise, options.df_mode);
   for (const auto& pr : s.pairwise) s.mann_whitney.push_back(mann_whitney(g[pr.a], g[pr.b]));
@@ -128,6 +130,17 @@ nlohmann::json to_json(const StatsSummary& s) {
                 {"ms_within", a.ms_within},
                 {"p_is_bound", p_is_bound(a.p)},
                 {"apa", apa_anova(a)}};
+  if (const auto& c = s.anova_effect_ci; c.defined) {
+    // One interval for η² and ω²: both estimate the population proportion of variance.
+    j["anova"]["effect_size_ci"] = {
+        {"level", c.level},
+        {"lambda", {num(c.lambda_low), num(c.lambda_high)}},
+        {"eta_squared", {num(c.pve_low), num(c.pve_high)}},
+        {"omega_squared", {num(c.pve_low), num(c.pve_high)}},
+        {"method",
+         "noncentral F inverted in lambda (Steiger 2004); bound = lambda / (lambda + "
+         "df_between + df_within + 1)"}};
+  }
   const auto& w = s.welch;
   j["welch_anova"] = {{"df_between", w.df_between},
                       {"df_within", num(w.df_within)},
@@ -240,6 +253,10 @@ std::string to_text(const StatsSummary& s) {
   o << "  " << apa_f(a.F, a.df_between, a.df_within, a.p)
     << ", eta^2 = " << num_text(a.eta_squared, "%.3f")
     << ", omega^2 = " << num_text(a.omega_squared, "%.3f") << "\n";
+  if (const auto& c = s.anova_effect_ci; c.defined)
+    o << "  95% CI of the population eta^2 (= omega^2), noncentral F: ["
+      << num_text(c.pve_low, "%.3f") << ", " << num_text(c.pve_high, "%.3f") << "] (lambda ["
+      << num_text(c.lambda_low, "%.4g") << ", " << num_text(c.lambda_high, "%.4g") << "])\n";
   const auto& w = s.welch;
   o << "\nWelch ANOVA\n  ";
   if (w.defined)

@@ -12,6 +12,7 @@
 
 #include "analysis/anova.hpp"
 #include "analysis/descriptives.hpp"
+#include "analysis/distributions.hpp"
 #include "analysis/grouped.hpp"
 #include "analysis/normality.hpp"
 #include "analysis/posthoc.hpp"
@@ -34,6 +35,10 @@ struct StatsSummary {
   std::vector<Descriptives> groups;
   std::vector<ShapiroWilk> shapiro;  // per group; defined = false when n < 3 or constant
   Anova anova;
+  // 95 % interval of the population proportion of variance explained (the η² and ω² of the
+  // classical ANOVA), by inverting the noncentral F (f_effect_ci); defined = false when the
+  // ANOVA is undefined.
+  FEffectCi anova_effect_ci;
   WelchAnova welch;
   std::vector<PairwiseT> pairwise;
   std::vector<MannWhitney> mann_whitney;  // same order as pairwise

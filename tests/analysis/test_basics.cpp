@@ -2,6 +2,8 @@
 // distribution identities.
 #include <gtest/gtest.h>
 
+#include <gsl/gsl_sf_gamma.h>
+
 #include <cmath>
 
 #include "analysis/csv.hpp"
@@ -144,4 +146,53 @@ TEST(NoncentralT, ReducesToCentralAndIsMonotone) {
   EXPECT_GT(noncentral_t_cdf(1.0, 10, 0.5), noncentral_t_cdf(1.0, 10, 1.0));
   double d = noncentral_t_delta_for_cdf(2.0, 15, 0.3);
   EXPECT_NEAR(noncentral_t_cdf(2.0, 15, d), 0.3, 1e-12);
+}
+
+// The noncentral F sum: λ = 0 is the central F (GSL, 5e-15: a few ulps of 1 - p); the truncated
+// sum equals the untruncated one (every Poisson term from j = 0 to far beyond the mode, in long
+// double) to 5e-15 absolute (GSL beta rounding), so the truncation bound holds; the CDF falls with
+// λ; the λ root reproduces its probability.
+TEST(NoncentralF, CentralLimitTruncationAndInversion) {
+  for (double d1 : {1.0, 3.0, 9.5})
+    for (double d2 : {2.5, 30.0, 4000.0})
+      for (double x : {0.01, 0.7, 3.0, 25.0})
+        EXPECT_NEAR(noncentral_f_cdf(x, d1, d2, 0), 1 - f_upper_p(x, d1, d2), 5e-15)
+            << d1 << " " << d2 << " " << x;
+  double worst = 0;
+  for (double d1 : {1.0, 4.0, 17.0})
+    for (double d2 : {3.0, 60.0})
+      for (double lambda : {0.3, 9.0, 150.0, 2500.0})
+        for (double x : {0.2, 1.0, 4.0, 60.0}) {
+          const double mu = lambda / 2, y = d1 * x / (d1 * x + d2);
+          long double full = 0;
+          const int jmax = static_cast<int>(mu + 60 * std::sqrt(mu) + 300);
+          for (int j = 0; j <= jmax; ++j)
+            full +=
+                std::exp(static_cast<long double>(j * std::log(mu) - mu - std::lgamma(j + 1.0))) *
+                gsl_sf_beta_inc(d1 / 2 + j, d2 / 2, y);
+          const double got = noncentral_f_cdf(x, d1, d2, lambda);
+          worst = std::max(worst, std::fabs(got - static_cast<double>(full)));
+          EXPECT_NEAR(got, static_cast<double>(full), 5e-15)
+              << d1 << " " << d2 << " " << lambda << " " << x;
+        }
+  std::printf("[ ncF      ] truncated vs full sum: max abs difference %.2e\n", worst);
+  double prev = 1;
+  for (double lambda = 0; lambda < 200; lambda += 7.5) {
+    const double c = noncentral_f_cdf(2.5, 3, 40, lambda);
+    EXPECT_LT(c, prev);
+    prev = c;
+  }
+  const double l = noncentral_f_lambda_for_cdf(4.2, 2, 27, 0.025);
+  EXPECT_NEAR(noncentral_f_cdf(4.2, 2, 27, l), 0.025, 1e-13);
+  EXPECT_EQ(noncentral_f_lambda_for_cdf(0.3, 2, 27, 0.975), 0);  // λ = 0 already below
+  // A small F: the lower bound sits at 0, the interval still has a positive upper bound.
+  FEffectCi c = f_effect_ci(0.3, 2, 27);
+  ASSERT_TRUE(c.defined);
+  EXPECT_EQ(c.lambda_low, 0);
+  EXPECT_EQ(c.pve_low, 0);
+  EXPECT_GT(c.pve_high, 0);
+  EXPECT_LT(c.pve_high, 1);
+  EXPECT_FALSE(f_effect_ci(INFINITY, 2, 27).defined);
+  EXPECT_FALSE(f_effect_ci(1e18, 2, 27).defined);
+  EXPECT_THROW(noncentral_f_cdf(1, 0, 3, 1), std::invalid_argument);
 }

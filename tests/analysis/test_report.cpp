@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@
 
 #include "analysis/anova.hpp"
 #include "analysis/descriptives.hpp"
+#include "analysis/distributions.hpp"
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "analysis/svg.hpp"
@@ -257,6 +259,13 @@ TEST(Report, FixtureDatabaseHasEverySectionValidSvgAndNoNaN) {
   Anova a = oneway_anova({f.post[0], f.post[1], f.post[2]});
   std::string apa = apa_f(a.F, a.df_between, a.df_within, a.p);
   EXPECT_NE(md.find("Classical: " + apa), std::string::npos) << apa;
+  // ... and its η²/ω² interval is the noncentral-F one of the same F and df.
+  FEffectCi ci = f_effect_ci(a.F, a.df_between, a.df_within);
+  ASSERT_TRUE(ci.defined);
+  char ci_text[96];
+  std::snprintf(ci_text, sizeof ci_text, "95 %% CI of the population η² (= ω²) [%.3f, %.3f]",
+                ci.pve_low, ci.pve_high);
+  EXPECT_NE(md.find(ci_text), std::string::npos) << ci_text;
   EXPECT_EQ(a.df_within, 11);  // 14 defined values (one undefined left out) - 3 groups
   EXPECT_NE(html.find("Fixture study &lt;with &amp; special&gt; characters"), std::string::npos);
   EXPECT_EQ(html.find("<script"), std::string::npos);
@@ -310,8 +319,8 @@ TEST(Report, XmlCheckerRejectsBrokenSvg) {
 }
 
 // An unfinished run (study.finished_at NULL) is flagged at the top of the report; a finished
-// one is not. Force analyses carry an equivalence section (default margin ±7 % of the grand
-// mean, the force Weber fraction) whose verdicts are the three words, never "no difference",
+// one is not. Force analyses carry an equivalence section (default margin ±7 % of the stored
+// MPF, the force Weber fraction) whose verdicts are the three words, never "no difference",
 // and the pairwise table states the unit of the mean difference.
 TEST(Report, IncompleteWarningEquivalenceAndUnits) {
   for (bool finished : {false, true}) {
@@ -325,7 +334,13 @@ TEST(Report, IncompleteWarningEquivalenceAndUnits) {
       EXPECT_LT(md.find("Warning: INCOMPLETE database"), md.find("## Study and provenance"));
     }
     ASSERT_NE(md.find("### Equivalence (TOST)"), std::string::npos);
-    EXPECT_NE(md.find("force Weber fraction"), std::string::npos);
+    // The default margin: 7 % of the target force the database stores (MPF 2.5 N of the
+    // feature region), named with its source.
+    EXPECT_NE(md.find("Margins ±0.175 N (default: ±7 % (force Weber fraction) of the target "
+                      "force, MPF = 2.5 N for region ovary_left in phase post_training, from the "
+                      "study database)"),
+              std::string::npos)
+        << md;
     EXPECT_NE(md.find("mean diff (N)"), std::string::npos);
     const size_t eq = md.find("### Equivalence (TOST)");
     const std::string section = md.substr(eq, md.find("###", eq + 5) - eq);
@@ -426,6 +441,31 @@ TEST(Report, SchemaOneDatabaseIsRefusedClearly) {
         << what;
     EXPECT_NE(what.find("re-run the study"), std::string::npos) << what;
   }
+  fs::remove_all(f.dir);
+}
+
+// Without a stored MPF for the phase, the default margin falls back to 7 % of the grand mean,
+// and says so; a margin the study declares wins over both.
+TEST(Report, EquivalenceMarginWithoutStoredMpf) {
+  FixtureDb f = make_fixture();
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(f.db.string().c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "DELETE FROM thresholds WHERE phase = 'post_training';", nullptr,
+                         nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  const std::string md = slurp(files.markdown);
+  long double sum = 0;
+  int n = 0;
+  for (const auto& g : f.post)
+    for (double v : g) sum += v, ++n;
+  char want[160];
+  std::snprintf(want, sizeof want,
+                "Margins ±%.4g N (default: ±7 %% (force Weber fraction) of the grand mean, as the "
+                "database stores no MPF for phase post_training)",
+                0.07 * static_cast<double>(sum / n));
+  EXPECT_NE(md.find(want), std::string::npos) << want << "\n" << md;
   fs::remove_all(f.dir);
 }
 

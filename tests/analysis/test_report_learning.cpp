@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -164,6 +165,21 @@ TEST(ReportLearningCurve, MixedModelRecoversPlantedSlopesAndDrawsFittedLines) {
     EXPECT_NE(s.find(term), std::string::npos) << term;
   EXPECT_NE(s.find("Do the groups learn differently?"), std::string::npos);
   EXPECT_NE(s.find("p < .001"), std::string::npos) << s.substr(0, 3000);
+  // Partial η² with its noncentral-F interval beside each type III F test: the interval holds
+  // the point estimate, and a clearly significant interaction has a lower bound above 0.
+  EXPECT_NE(s.find("partial η² [95% CI]"), std::string::npos);
+  {
+    const size_t row = s.find("| group:session |");
+    ASSERT_NE(row, std::string::npos);
+    const std::string line = s.substr(row, s.find('\n', row) - row);
+    double pes = NAN, lo = NAN, hi = NAN;
+    const size_t last = line.rfind("| ", line.size() - 3);
+    ASSERT_EQ(std::sscanf(line.c_str() + last, "| %lf [%lf, %lf]", &pes, &lo, &hi), 3) << line;
+    EXPECT_GT(lo, 0) << line;
+    EXPECT_LE(lo, pes);
+    EXPECT_GE(hi, pes);
+    EXPECT_LT(hi, 1);
+  }
   // The figure: one dashed fitted line and one band per group, plus the observed means.
   std::string svg;
   for (const auto& f : files.figures)

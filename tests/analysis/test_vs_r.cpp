@@ -205,6 +205,69 @@ TEST(VersusR, FUpperTailGrid) {
               g.rows.size(), worst);
 }
 
+// The noncentral-F interval of the ANOVA's η² / ω² (population proportion of variance) against
+// base R (tests/data/r/make_effect_ci.R -> effect_ci.csv: pf(ncp =) inverted by uniroot).
+// R's pnbeta is accurate to its errmax 1e-9 absolute; divided by dCDF/dλ (~1e-2) that allows
+// ~1e-7 in λ, hence 1e-6 relative (1e-7 absolute near a bound of 0) on λ and on λ/(λ + n).
+TEST(VsR, AnovaEffectSizeCi) {
+  CsvTable ref = read_csv(kDir + "effect_ci.csv");
+  std::map<std::string, std::map<std::string, double>> r;
+  for (const auto& row : ref.rows) r[row[0]][row[1]] = std::strtod(row[2].c_str(), nullptr);
+  int compared = 0;
+  for (const Fixture& f :
+       {Fixture{"unequal", "unequal.csv", "force", {}},
+        Fixture{"unequal_post", "unequal.csv", "force", {{"phase", "post"}}},
+        Fixture{"ties", "ties.csv", "score", {}}, Fixture{"large", "large.csv", "value", {}},
+        Fixture{"close", "close.csv", "value", {}}, Fixture{"n2", "n2.csv", "value", {}}}) {
+    CsvTable t = read_csv(kDir + f.file);
+    StatsSummary s = summarize(group_table(t, f.value, "group", f.where));
+    const auto& e = r.at(f.id);
+    ASSERT_NEAR(s.anova.F, e.at("F"), 1e-10 * e.at("F")) << f.id;
+    ASSERT_TRUE(s.anova_effect_ci.defined) << f.id;
+    auto near = [&](double got, const std::string& key) {
+      const double want = e.at(key);
+      EXPECT_NEAR(got, want, 1e-6 * want + 1e-7) << f.id << " " << key;
+      ++compared;
+    };
+    for (const auto& [level, tag] :
+         {std::pair{0.95, std::string("")}, std::pair{0.90, std::string("90")}}) {
+      FEffectCi c = level == 0.95
+                        ? s.anova_effect_ci
+                        : f_effect_ci(s.anova.F, s.anova.df_between, s.anova.df_within, level);
+      near(c.lambda_low, "lambda" + tag + ".lo");
+      near(c.lambda_high, "lambda" + tag + ".hi");
+      near(c.pve_low, "pve" + tag + ".lo");
+      near(c.pve_high, "pve" + tag + ".hi");
+      // The interval contains the (less biased) point estimate ω² whenever ω² > 0.
+      if (s.anova.omega_squared > 0) {
+        EXPECT_LE(c.pve_low, s.anova.omega_squared) << f.id;
+        EXPECT_GE(c.pve_high, s.anova.omega_squared) << f.id;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 6 * 8);
+}
+
+// The noncentral F CDF against R's pf(x, d1, d2, ncp) on 400 points (effect_ci.csv, fixture
+// "grid"): 2e-9 absolute (R's pnbeta errmax is 1e-9).
+TEST(VsR, NoncentralFGrid) {
+  CsvTable ref = read_csv(kDir + "effect_ci.csv");
+  int n = 0;
+  double worst = 0;
+  for (const auto& row : ref.rows) {
+    if (row[0] != "grid") continue;
+    double d1, d2, ncp, x;
+    ASSERT_EQ(std::sscanf(row[1].c_str(), "cdf:%lf:%lf:%lf:%lf", &d1, &d2, &ncp, &x), 4) << row[1];
+    ++n;
+    const double want = std::strtod(row[2].c_str(), nullptr);  // may be subnormal
+    const double got = noncentral_f_cdf(x, d1, d2, ncp);
+    worst = std::max(worst, std::fabs(got - want));
+    EXPECT_NEAR(got, want, 2e-9) << row[1];
+  }
+  EXPECT_EQ(n, 400);
+  std::printf("[ R        ] noncentral F CDF, %d grid points: max abs difference %.2e\n", n, worst);
+}
+
 // Welch-consistent interval of d and TOST equivalence tests against base R
 // (tests/data/r/make_equivalence.R -> equivalence.csv: t.test with mu and one-sided
 // alternatives, pt with ncp inverted by uniroot). Margins ±7 % of the fixture's grand mean (the

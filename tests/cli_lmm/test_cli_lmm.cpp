@@ -81,6 +81,20 @@ TEST(CliLmm, JsonContract) {
   EXPECT_EQ(j["anova"][2]["term"], "group:session");
   EXPECT_EQ(j["anova"][2]["num_df"], 2);
   EXPECT_NEAR(j["anova"][2]["f"].get<double>(), 5.1393722244601863, 1e-5);
+  // Partial η² = F·q / (F·q + den_df) and its noncentral-F interval, which contains it.
+  for (const auto& a : j["anova"]) {
+    const double f = a["f"].get<double>(), q = a["num_df"].get<double>(),
+                 den = a["den_df"].get<double>(), pes = a["partial_eta_squared"].get<double>();
+    EXPECT_NEAR(pes, f * q / (f * q + den), 1e-12) << a["term"];
+    ASSERT_TRUE(a.contains("partial_eta_squared_ci")) << a["term"];
+    const double lo = a["partial_eta_squared_ci"][0].get<double>(),
+                 hi = a["partial_eta_squared_ci"][1].get<double>();
+    EXPECT_GE(lo, 0);
+    EXPECT_LT(lo, hi);
+    EXPECT_LT(hi, 1);
+    // A two-sided 95 % interval's lower bound leaves 0 exactly when the F test's p < .025.
+    EXPECT_EQ(lo > 0, a["p"].get<double>() < 0.025) << a["term"];
+  }
   EXPECT_EQ(j["vcov"].size(), 6u);
 }
 

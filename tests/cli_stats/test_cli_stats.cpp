@@ -74,6 +74,21 @@ TEST(CliStats, JsonContract) {
   EXPECT_EQ(j["pairwise"][0]["a"], "A");
   EXPECT_EQ(j["pairwise"][0]["b"], "B");
   EXPECT_EQ(j["anova"]["apa"], "F(2, 29) = 4.74, p = .017");
+  // The noncentral-F interval of η² / ω²: R's pf(ncp =) + uniroot (tests/data/r/effect_ci.csv).
+  const auto& ci = j["anova"]["effect_size_ci"];
+  EXPECT_EQ(ci["level"], 0.95);
+  EXPECT_NEAR(ci["lambda"][0].get<double>(), 0.26973809888161715, 1e-6 * 0.27);
+  EXPECT_NEAR(ci["lambda"][1].get<double>(), 25.469016096535871, 1e-6 * 25.5);
+  for (const char* k : {"eta_squared", "omega_squared"}) {
+    EXPECT_NEAR(ci[k][0].get<double>(), 0.0083588561535603394, 1e-7) << k;
+    EXPECT_NEAR(ci[k][1].get<double>(), 0.44317821717624811, 1e-6) << k;
+  }
+  EXPECT_NE(r.out.find("effect_size_ci"), std::string::npos);
+  Result text = run("stats --csv " + fixture("unequal.csv") + " --value force --group group");
+  EXPECT_NE(
+      text.out.find("95% CI of the population eta^2 (= omega^2), noncentral F: [0.008, 0.443]"),
+      std::string::npos)
+      << text.out;
 }
 
 TEST(CliStats, WhereAndFloorDf) {
