@@ -101,6 +101,7 @@ int run_reference(const ReferenceArgs& a) {
   engine::FemReferenceOptions o =
       engine::reference_options_from_mesh(tm, cm->surface_to_model[node], a.force, radius);
   o.levels = a.levels;
+  o.support_modulus = cfg.support.modulus;  // the foundation of C and D
   // The prototype's tissue: its E/density overrides apply to the (single) body attribute.
   const engine::MaterialConfig& mc = cfg.material;
   for (auto& e : o.materials.materials) {
@@ -173,6 +174,7 @@ int run_reference(const ReferenceArgs& a) {
       {"press_direction", {o.press_direction.x(), o.press_direction.y(), o.press_direction.z()}},
       {"load", "smooth pressure (1 - (r/a)^2)^2 over the surface within press_radius"},
       {"analysis", "static, linear elasticity"},
+      {"support_modulus", o.support_modulus},
       {"refinement", "TetGen, max tet volume halved per level (meshes not nested)"},
       {"levels", levels},
       {"observed_order", num(r.observed_order)},

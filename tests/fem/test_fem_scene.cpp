@@ -133,13 +133,17 @@ TEST(FemScene, HeldPressSettlesOnTheStaticFemSolution) {
   std::vector<std::uint8_t> fixed(nm, 0);
   const double z0 = cm->model_V.col(2).minCoeff();
   for (long i = 0; i < nm; ++i) fixed[i] = cm->model_V(i, 2) < z0 + cfg.support.fixed_z_below;
-  StaticSolver ss;
-  static_precompute(sys.K, node_to_dof_flags(fixed), ss);
-
-  // The patch, by its definition (fem_scene_model.cpp).
+  // The patch, by its definition (fem_scene_model.cpp), and the foundation (kappa x area).
   Eigen::VectorXd area = Eigen::VectorXd::Zero(nm);
   for (size_t i = 0; i < cm->surface_to_model.size(); ++i)
     area[cm->surface_to_model[i]] = cm->vertex_area[static_cast<long>(i)];
+  ASSERT_GT(cfg.support.modulus, 0);
+  SparseMatrixd K = sys.K;
+  for (long i = 0; i < nm; ++i)
+    for (int c = 0; c < 3; ++c) K.coeffRef(3 * i + c, 3 * i + c) += cfg.support.modulus * area[i];
+  StaticSolver ss;
+  static_precompute(K, node_to_dof_flags(fixed), ss);
+
   const int p = cm->surface_to_model[node];
   const Eigen::Vector3d c0 = cm->model_V.row(p).transpose();
   std::vector<int> patch = {p};
@@ -199,6 +203,7 @@ TEST(FemScene, CondensedEqualsFullAtEquilibriumThroughTheScene) {
               1e-8 * sf.stats().max_rest_error);
   // Outside the operational region the condensed model has no compliance: a rigid touch.
   const int far = press_node(sc.geometry(), "cervix");
+  sc.reset();
   const Eigen::Vector3d Fr = hold(sc, far, 0.001, 2);
   EXPECT_NEAR(Fr.norm(), cond.contact.stiffness * 0.001, 1e-9);
   EXPECT_EQ(fem_info(sc).at("outside_contacts").get<long>(), 2);
@@ -211,7 +216,8 @@ TEST(FemScene, BadConfigsAreInputErrors) {
   c.fem.operational_region = "no_such_region";
   EXPECT_THROW(make_scene(c), InputError);
   SceneConfig free = prototypes::load_prototype(proto("D"));
-  free.support.fixed_z_below = 0;  // nothing pinned: the body floats
+  free.support.fixed_z_below = 0;  // nothing pinned and no foundation: the body floats
+  free.support.modulus = 0;
   EXPECT_THROW(make_scene(free), InputError);
   SceneConfig surf = prototypes::load_prototype(proto("D"));
   surf.mesh.generator = "tract";  // a surface mesh
