@@ -220,7 +220,7 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
       f.operational_region = *r;
   }
   if (f.formulation == FemFormulation::condensed) {
-    if (f.operational_region.empty())
+    if (!m.contains("operational_region"))  // (a bad name is reported above)
       c.err(P, "the condensed formulation needs \"operational_region\" (a region of the mesh)");
     if (!f.lumped_mass) c.err(P + ".lumped_mass", "the condensed formulation uses lumped mass");
   }
