@@ -133,8 +133,9 @@ void scene_steps(const std::string& dir) {
       const auto pos = st.model_info.find("\"dofs\":");
       if (pos != std::string::npos) dofs = std::stol(st.model_info.substr(pos + 7));
     }
-    std::printf("%-34s %6ld %8zu %10.1f %10.1f %10.1f %10.3f\n", v.name.c_str(), dofs, r.us.size(),
-                pct(r.us, 0.5), pct(r.us, 0.99), pct(r.us, 1.0),
+    const std::string dofs_s = v.fem ? std::to_string(dofs) : "-";
+    std::printf("%-34s %6s %8zu %10.1f %10.1f %10.1f %10.3f\n", v.name.c_str(), dofs_s.c_str(),
+                r.us.size(), pct(r.us, 0.5), pct(r.us, 0.99), pct(r.us, 1.0),
                 *std::max_element(r.force.begin(), r.force.end()));
     if (linear) force_full = r.force;
     if (cond) {
