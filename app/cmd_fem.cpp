@@ -1,15 +1,25 @@
 // `palplab fem verify [--json] [--levels N]`: the FEM verification cases (issue 12). For each
 // case the computed value, the analytic value, the relative error, its tolerance and the
 // observed convergence order. Exit 0 when every case is within tolerance, 1 otherwise.
+// `palplab fem reference PROTOTYPE.json --press REGION --force N [--levels 3] --out FILE.json`:
+// the accuracy reference (engine/models/fem_reference.hpp) of one press on the prototype's tet
+// mesh: the static response on `levels` TetGen meshes (max tet volume halved per level), the
+// Richardson-extrapolated contact stiffness and surface displacement field, and the estimated
+// discretisation error of each level (docs/FORMATS.md "FEM reference").
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "engine/haptics/press.hpp"
+#include "engine/models/fem_reference.hpp"
 #include "engine/models/fem_verify.hpp"
+#include "engine/models/model.hpp"
+#include "prototypes/factory.hpp"
 
 namespace {
 
@@ -52,9 +62,154 @@ int run_verify(bool as_json, int levels) {
   return ok ? 0 : 1;
 }
 
+struct ReferenceArgs {
+  std::string prototype, press, out;
+  double force = 0;
+  int levels = 3;
+};
+
+json num(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
+
+int run_reference(const ReferenceArgs& a) {
+  using namespace palplab;
+  if (!(a.force > 0) || !std::isfinite(a.force) || a.force > 1e3)
+    throw InputError("--force: expected a force in N in (0, 1000], got " + std::to_string(a.force));
+  if (a.levels < 3 || a.levels > 6)
+    throw InputError("--levels: expected 3 to 6 levels (3 are needed for an extrapolation), got " +
+                     std::to_string(a.levels));
+  if (a.out.empty()) throw InputError("--out: expected an output file name");
+  const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
+  const auto cm = engine::scene_mesh(cfg.mesh);
+  if (!cm->tet)
+    throw InputError("prototype " + cfg.id +
+                         ": fem reference needs a tetrahedral mesh (generator model_c or a tet "
+                         "mesh file)",
+                     a.prototype);
+  // The press node and its region, as `palplab probe` picks them (the scene's geometry).
+  const engine::Scene scene = engine::make_scene(cfg);
+  const engine::SceneGeometry& g = scene.geometry();
+  int node = -1;
+  try {
+    node = engine::press_node(g, a.press);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("--press: ") + e.what());
+  }
+  const mesh::TetMesh tm = mesh::make_tet_mesh(cm->model_V, cm->model_T, cm->tet_attribute);
+  const double radius = cfg.contact.patch_radius;
+  engine::FemReferenceOptions o =
+      engine::reference_options_from_mesh(tm, cm->surface_to_model[node], a.force, radius);
+  o.levels = a.levels;
+  o.support_modulus = cfg.support.modulus;  // the foundation of C and D
+  // The prototype's tissue: its E/density overrides apply to the (single) body attribute.
+  const engine::MaterialConfig& mc = cfg.material;
+  for (auto& e : o.materials.materials) {
+    if (o.default_attribute < e.first || o.default_attribute > e.last) continue;
+    if (!mc.tissue.empty())
+      for (const auto& n : mesh::default_materials().materials)
+        if (n.name == mc.tissue) {
+          e.youngs_modulus = n.youngs_modulus;
+          e.poisson_ratio = n.poisson_ratio;
+          e.density = n.density;
+        }
+    if (mc.youngs_modulus) e.youngs_modulus = *mc.youngs_modulus;
+    if (mc.density) e.density = *mc.density;
+  }
+  // The prototype's pinned nodes, by rest position so that they hold on every level: below
+  // fixed_z_below, and within half a mean edge of a surface node of the fixed region.
+  const double z0 = cm->model_V.col(2).minCoeff(), zf = cfg.support.fixed_z_below;
+  std::vector<Eigen::Vector3d> region_pts;
+  if (!cfg.support.fixed_region.empty())
+    for (size_t i = 0; i < cm->vertex_region.size(); ++i)
+      if (cm->vertex_region[i] >= 0 &&
+          cm->region_names[cm->vertex_region[i]] == cfg.support.fixed_region)
+        region_pts.push_back(cm->V.row(static_cast<long>(i)).transpose());
+  const double tol2 = 0.25 * cm->mean_edge * cm->mean_edge;
+  o.is_fixed = [=](const Eigen::Vector3d& p) {
+    if (zf > 0 && p.z() < z0 + zf) return true;
+    for (const auto& q : region_pts)
+      if ((p - q).squaredNorm() <= tol2) return true;
+    return false;
+  };
+  if (zf <= 0 && region_pts.empty())
+    throw InputError("prototype " + cfg.id +
+                         " pins no node (fixed_z_below / fixed_region): the static press has no "
+                         "unique solution",
+                     a.prototype);
+  const engine::FemReferenceResult r = engine::fem_reference(o);
+
+  json levels = json::array();
+  for (size_t l = 0; l < r.levels.size(); ++l) {
+    const auto& lv = r.levels[l];
+    levels.push_back({{"level", l},
+                      {"max_volume", lv.max_volume},
+                      {"nodes", lv.nodes},
+                      {"tets", lv.tets},
+                      {"dofs", lv.dofs},
+                      {"mesh_size", lv.mesh_size},
+                      {"patch_area", lv.patch_area},
+                      {"displacement", lv.displacement},
+                      {"stiffness", lv.stiffness},
+                      {"est_error", num(lv.est_error)},
+                      {"field_error", num(lv.field_error)},
+                      {"solve_ms", lv.solve_ms}});
+  }
+  json field_x = json::array(), field_u = json::array();
+  for (long i = 0; i < r.field.rows(); ++i) {
+    field_x.push_back({o.surface.V(i, 0), o.surface.V(i, 1), o.surface.V(i, 2)});
+    field_u.push_back({r.field(i, 0), r.field(i, 1), r.field(i, 2)});
+  }
+  const bool trusted = r.monotone && r.order_plausible;
+  json out = {
+      {"format", "palplab-fem-reference/1"},
+      {"prototype", cfg.id},
+      {"prototype_file", a.prototype},
+      {"press", a.press},
+      {"node", node},
+      {"region", g.vertex_region[node] >= 0 ? g.region_names[g.vertex_region[node]] : ""},
+      {"force", a.force},
+      {"press_radius", radius},
+      {"press_point", {o.press_point.x(), o.press_point.y(), o.press_point.z()}},
+      {"press_direction", {o.press_direction.x(), o.press_direction.y(), o.press_direction.z()}},
+      {"load", "smooth pressure (1 - (r/a)^2)^2 over the surface within press_radius"},
+      {"analysis", "static, linear elasticity"},
+      {"support_modulus", o.support_modulus},
+      {"refinement", "TetGen, max tet volume halved per level (meshes not nested)"},
+      {"levels", levels},
+      {"observed_order", num(r.observed_order)},
+      {"stiffness", num(r.stiffness)},
+      {"displacement", num(r.displacement)},
+      {"monotone", r.monotone},
+      {"order_plausible", r.order_plausible},
+      {"trusted", trusted},
+      {"field", {{"positions", field_x}, {"displacement", field_u}}}};
+  std::ofstream f(a.out);
+  if (!f) throw InputError("--out: cannot write \"" + a.out + "\"");
+  f << out.dump(1) << "\n";
+  if (!f) throw InputError("--out: writing \"" + a.out + "\" failed");
+  std::printf("%5s %8s %8s %12s %12s %12s %10s\n", "level", "tets", "dofs", "h (m)", "k (N/m)",
+              "u (m)", "est_error");
+  for (size_t l = 0; l < r.levels.size(); ++l) {
+    const auto& lv = r.levels[l];
+    std::printf("%5zu %8ld %8ld %12.5g %12.6g %12.6g %10.3g\n", l, lv.tets, lv.dofs, lv.mesh_size,
+                lv.stiffness, lv.displacement, lv.est_error);
+  }
+  std::printf("extrapolated stiffness %.6g N/m, displacement %.6g m, observed order %.3g\n",
+              r.stiffness, r.displacement, r.observed_order);
+  if (!trusted)
+    std::printf(
+        "WARNING: the levels are not in the asymptotic range (monotone %s, order %s): the "
+        "extrapolation is not trustworthy; add a level or refine the base mesh\n",
+        r.monotone ? "yes" : "no", r.order_plausible ? "plausible" : "implausible");
+  std::printf("written %s\n", a.out.c_str());
+  return 0;
+}
+
 palplab::app::CommandRegistration reg{
     "fem", [](CLI::App& root, int* code) {
-      auto* fem = root.add_subcommand("fem", "Tissue finite element model: verification");
+      auto* fem = root.add_subcommand(
+          "fem", "Tissue finite element model: verification and the accuracy reference");
       fem->require_subcommand(1);
       auto* verify = fem->add_subcommand(
           "verify", "Run the FEM verification cases (exit 1 if any is outside its tolerance)");
@@ -67,6 +222,18 @@ palplab::app::CommandRegistration reg{
                        "1, 2, ..., 2^(levels-1); 5 takes minutes)")
           ->capture_default_str();
       verify->callback([=] { *code = run_verify(*json_out, *levels); });
+      auto* ref = fem->add_subcommand(
+          "reference",
+          "Static press on uniformly refined tet meshes of a prototype with the Richardson-"
+          "extrapolated contact stiffness and displacement field");
+      auto ra = std::make_shared<ReferenceArgs>();
+      ref->add_option("prototype", ra->prototype, "Prototype JSON file (a tet mesh)")->required();
+      ref->add_option("--press", ra->press, "Region name or surface node index to press")
+          ->required();
+      ref->add_option("--force", ra->force, "Press force (N)")->required();
+      ref->add_option("--levels", ra->levels, "Refinement levels (3-6)")->capture_default_str();
+      ref->add_option("--out", ra->out, "Output JSON file")->required();
+      ref->callback([=] { *code = run_reference(*ra); });
     }};
 
 }  // namespace

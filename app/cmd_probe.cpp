@@ -117,6 +117,8 @@ int run_probe(const ProbeArgs& a) {
       {"divergences", s1.divergences},
       {"force_limited_steps", s1.force_limited},
       {"events", events}};
+  // Model-specific sections (model "fem": "fem": {formulation, dofs, solver, factor_ms, ...}).
+  if (!s1.model_info.empty()) out.update(nlohmann::json::parse(s1.model_info));
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {
@@ -130,6 +132,12 @@ int run_probe(const ProbeArgs& a) {
               << s1.new_nodes_max << ", new springs " << s1.new_springs_max << "\n"
               << "  step time median " << st.median << " us, p99 " << st.p99 << " us"
               << (nan ? ", NaN detected" : "") << "\n";
+    if (out.contains("fem")) {
+      const auto& f = out["fem"];
+      std::cout << "  fem " << f["formulation"].get<std::string>() << ", " << f["dofs"]
+                << " dofs per step, factorisation " << f["factor_ms"] << " ms ("
+                << f["solver"].get<std::string>() << ")\n";
+    }
   }
   return nan ? 1 : 0;
 }

@@ -2,7 +2,11 @@
 // table, cervix end pinned): assembly, factorisation, a static solve, one backward-Euler step
 // of FemModel for each formulation (with the penalty contact active), the condensed model's
 // interior recovery, and the inverse-stiffness contact. Prints median and p99 (ms) per item.
-// Build: cmake --build build --target bench_fem; run: build/bench/bench_fem.
+// Then the haptic loop itself: Scene::step of prototype D (linear, condensed, co-rotational)
+// against prototype C during the same press (median and p99 of the steps in contact), and the
+// force error of the condensed model against the full linear one on that press.
+// Build: cmake --build build --target bench_fem; run: build/bench/bench_fem [PROTOTYPES_DIR]
+// (`--scene-only` skips the component items).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -17,6 +21,7 @@
 #include "engine/solvers/fem_contact_compliance.hpp"
 #include "engine/solvers/fem_corotational.hpp"
 #include "engine/solvers/fem_static.hpp"
+#include "prototypes/factory.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
@@ -36,9 +41,126 @@ void report(const std::string& name, int reps, const std::function<void()>& fn) 
   std::printf("%-46s %6d %12.4f %12.4f\n", name.c_str(), reps, t[t.size() / 2], p99);
 }
 
+double pct(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(q * (v.size() - 1) + 0.5)];
+}
+
+struct PressRun {
+  std::vector<double> us;     // Scene::step time of the steps in contact
+  std::vector<double> force;  // N, every step
+};
+
+// The press of bench_engine_step: 2 mm outside the region's node, in along the inward normal at
+// 2 cm/s to `target` N, hold `hold_steps`, withdraw at 5 cm/s. With `depth_of` given, the device
+// follows that depth trajectory instead (same input for two models).
+PressRun scene_press(Scene& s, const std::string& region, double target, int hold_steps,
+                     std::vector<double>* depth_log, const std::vector<double>* depth_of) {
+  PressRun r;
+  const auto& g = s.geometry();
+  const int node = g.region_node(region);
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  double depth = -0.002;
+  int phase = 0, hold = 0;
+  for (int k = 0; k < 20000 && phase < 3; ++k) {
+    if (depth_of) {
+      if (k >= static_cast<int>(depth_of->size())) break;
+      depth = (*depth_of)[k];
+    }
+    if (depth_log) depth_log->push_back(depth);
+    const auto t0 = Clock::now();
+    const Rendered out = s.step(p - depth * n);
+    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    if (out.contact) r.us.push_back(us);
+    r.force.push_back(out.force.norm());
+    if (depth_of) continue;
+    if (phase == 0) {
+      depth += 0.02 * s.dt();
+      if (out.force.norm() >= target) phase = 1;
+    } else if (phase == 1) {
+      if (++hold >= hold_steps) phase = 2;
+    } else {
+      depth -= 0.05 * s.dt();
+      if (depth < -0.002) phase = 3;
+    }
+  }
+  return r;
+}
+
+std::string prototypes_dir(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--", 0) != 0) return std::string(argv[i]) + "/";
+  std::string d(__FILE__);
+  d.erase(d.rfind('/'));
+  d.erase(d.rfind('/'));
+  return d + "/prototypes/";
+}
+
+// Scene::step per prototype in contact, and the condensed model's error on the same press.
+void scene_steps(const std::string& dir) {
+  std::printf("\nScene::step in contact (press on ovary_left to 2.5 N, hold, withdraw)\n");
+  std::printf("%-34s %6s %8s %10s %10s %10s %10s\n", "prototype", "dofs", "steps", "median_us",
+              "p99_us", "max_us", "peak_N");
+  struct Variant {
+    std::string name, file;
+    FemFormulation form;
+    bool fem;
+    int hold;
+  };
+  const std::vector<Variant> vs = {
+      {"C (mass_spring)", "C.json", FemFormulation::linear, false, 1000},
+      {"D (fem linear)", "D.json", FemFormulation::linear, true, 1000},
+      {"D condensed (ovary_left+15 mm)", "D.json", FemFormulation::condensed, true, 1000},
+      {"D_corot (fem corotational)", "D_corot.json", FemFormulation::corotational, true, 200}};
+  std::vector<double> depth_full;
+  std::vector<double> force_full;
+  for (const auto& v : vs) {
+    SceneConfig cfg = prototypes::load_prototype(dir + v.file);
+    if (v.form == FemFormulation::condensed) {
+      cfg.fem.formulation = FemFormulation::condensed;
+      cfg.fem.operational_region = "ovary_left";
+      cfg.fem.operational_radius = 0.015;
+    }
+    Scene s = make_scene(cfg);
+    const bool linear = v.fem && v.form == FemFormulation::linear;
+    const bool cond = v.form == FemFormulation::condensed;
+    const PressRun r = scene_press(s, "ovary_left", 2.5, v.hold, linear ? &depth_full : nullptr,
+                                   cond ? &depth_full : nullptr);
+    long dofs = 0;
+    const SceneStats st = s.stats();
+    if (!st.model_info.empty()) {
+      const auto pos = st.model_info.find("\"dofs\":");
+      if (pos != std::string::npos) dofs = std::stol(st.model_info.substr(pos + 7));
+    }
+    const std::string dofs_s = v.fem ? std::to_string(dofs) : "-";
+    std::printf("%-34s %6s %8zu %10.1f %10.1f %10.1f %10.3f\n", v.name.c_str(), dofs_s.c_str(),
+                r.us.size(), pct(r.us, 0.5), pct(r.us, 0.99), pct(r.us, 1.0),
+                *std::max_element(r.force.begin(), r.force.end()));
+    if (linear) force_full = r.force;
+    if (cond) {
+      double e = 0, fmax = 0;
+      for (size_t k = 0; k < std::min(r.force.size(), force_full.size()); ++k) {
+        e = std::max(e, std::abs(r.force[k] - force_full[k]));
+        fmax = std::max(fmax, force_full[k]);
+      }
+      std::printf(
+          "  condensed vs full linear, same device trajectory: max |F - F_full| = %.4g N "
+          "(%.3g%% of the peak %.3g N; Guyan: the condensed interior is massless)\n",
+          e, 100 * e / fmax, fmax);
+    }
+  }
+}
+
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  bool scene_only = false;
+  for (int i = 1; i < argc; ++i) scene_only |= std::string(argv[i]) == "--scene-only";
+  if (scene_only) {
+    scene_steps(prototypes_dir(argc, argv));
+    return 0;
+  }
   const mesh::TetMesh m = mesh::generate_model_c();
   const TetMaterials mat = tet_materials(m, mesh::default_materials());
   const long n = m.V.rows();
@@ -171,5 +293,6 @@ int main() {
         "%.4g N), max pressed-node displacement difference %.4g m (max %.4g m)\n",
         max_diff, max_force, max_disp_diff, max_disp);
   }
+  scene_steps(prototypes_dir(argc, argv));
   return 0;
 }

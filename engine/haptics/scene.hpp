@@ -132,6 +132,9 @@ struct SceneStats {
   bool nan_detected = false;
   long divergences = 0;    // how many times since reset
   long force_limited = 0;  // steps whose force was clamped to the device limit
+  // Model-specific facts as a JSON object text ("" = none), e.g. {"fem": {"formulation", "dofs",
+  // "solver", "factor_ms"}} for model "fem"; `palplab probe` merges it into its output.
+  std::string model_info;
 };
 
 struct SceneImpl;

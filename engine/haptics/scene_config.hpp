@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "engine/haptics/scene.hpp"
+#include "engine/models/fem_formulation.hpp"
 #include "engine/models/refinement.hpp"
 #include "engine/models/ring_model.hpp"
 #include "engine/solvers/integrators.hpp"
@@ -75,6 +76,18 @@ struct WatchdogConfig {
   double energy_threshold = 0.005;       // J returned to the hand beyond what it put in
 };
 
+// Model "fem" (prototype D; engine/models/fem_scene_model.cpp, docs/FORMATS.md). The tissue
+// comes from MaterialConfig (per tet from the tissue table), the pinned nodes from SupportConfig.
+struct FemConfig {
+  FemFormulation formulation = FemFormulation::linear;
+  double rayleigh_alpha = 1.0;       // 1/s, mass-proportional damping
+  double rayleigh_beta = 0.001;      // s, stiffness-proportional damping
+  bool lumped_mass = true;           // false: consistent mass (linear, corotational)
+  bool exact_jacobian = true;        // corotational: consistent tangent; false: stiffness warping
+  std::string operational_region;    // condensed: the region the device works on (required)
+  double operational_radius = 0.01;  // m: tets within this distance of the region are solved
+};
+
 struct Cues {
   bool haptic = true;
   bool visual_deformation = true;
@@ -89,6 +102,7 @@ struct SceneConfig {
   MeshSource mesh;
   std::string model = "penalty";  // a registered model kind (engine/models/model.hpp)
   RingParams ring;                // model "ring"
+  FemConfig fem;                  // model "fem"
   MaterialConfig material;        // deformable models
   SupportConfig support;
   Integrator integrator = Integrator::backward_euler;

@@ -58,7 +58,16 @@ struct FemModel::Impl {
   SparseLdlt ldlt;
   double h_factored = -1;
   int cached_node = -1;
-  Eigen::Matrix<double, Eigen::Dynamic, 3> Z;  // A^-1 E_p
+  Eigen::Matrix<double, Eigen::Dynamic, 3> Z;  // A^-1 G of the cached patch
+  std::vector<int> cached_nodes;
+  std::vector<double> cached_weights;
+  // The patch of this step: first dof (in the solve's numbering) and weight of every solved
+  // patch node.
+  struct Tap {
+    int dof;
+    double w;
+  };
+  std::vector<Tap> taps;
   CondensedFem cond;
 
   // corotational: full-size system with identity rows on fixed dofs.
@@ -83,6 +92,12 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
     throw InputError("fem: Rayleigh damping coefficients must be >= 0");
   Impl& m = *impl_;
   m.sys = fem_precompute(mesh.V, mesh.T, materials);
+  if (opt_.support_stiffness.size()) {
+    if (opt_.support_stiffness.size() != 3 * n || !(opt_.support_stiffness.minCoeff() >= 0))
+      throw InputError("fem: support stiffness needs 3#V values >= 0");
+    // The diagonal is in the pattern (each node's 3x3 block): no insertion.
+    for (long i = 0; i < 3 * n; ++i) m.sys.K.coeffRef(i, i) += opt_.support_stiffness[i];
+  }
   const auto rigid = rigid_nodes(mesh, materials);
   for (long i = 0; i < n; ++i) fixed_node_[i] = fixed_node_[i] || rigid[i];
   m.fixed_dof = node_to_dof_flags(fixed_node_);
@@ -175,9 +190,24 @@ Eigen::Vector3d FemModel::node_position(int v) const {
 
 double FemModel::penetration() const {
   if (contact_node < 0) return 0.0;
-  const Eigen::Vector3d x =
-      impl_->sys.X0.row(contact_node).transpose() + impl_->u.segment<3>(3 * contact_node);
-  return std::max(0.0, (x - contact_point).dot(contact_normal));
+  const Impl& m = *impl_;
+  if (contact_nodes.empty()) {
+    const Eigen::Vector3d x =
+        m.sys.X0.row(contact_node).transpose() + m.u.segment<3>(3 * contact_node);
+    return std::max(0.0, (x - contact_point).dot(contact_normal));
+  }
+  if (contact_weights.size() != contact_nodes.size())
+    throw std::logic_error("FemModel: one contact weight per patch node");
+  const Eigen::Vector3d xp = m.sys.X0.row(contact_node).transpose();
+  double d = 0.0;
+  for (size_t k = 0; k < contact_nodes.size(); ++k) {
+    const int i = contact_nodes[k];
+    const Eigen::Vector3d x0 = m.sys.X0.row(i).transpose();
+    const double above = std::max(0.0, (x0 - xp).dot(contact_normal));
+    d += contact_weights[k] *
+         ((x0 + m.u.segment<3>(3 * i) - contact_point).dot(contact_normal) - above);
+  }
+  return std::max(0.0, d);
 }
 
 Eigen::Vector3d FemModel::device_force() const {
@@ -212,17 +242,40 @@ void FemModel::step(double h) {
   const double alpha = opt_.rayleigh_alpha, beta = opt_.rayleigh_beta;
   const double d = penetration();
   const bool touching = d > 0 && contact_k > 0;
-  if (touching && !solves_node(contact_node)) {
-    if (!fixed_node_[contact_node])
-      throw std::logic_error("FemModel::step: contact node " + std::to_string(contact_node) +
-                             " is outside the operational region of the condensed model");
+  const bool corot = opt_.formulation == FemFormulation::corotational;
+  m.taps.clear();
+  if (touching) {
+    const bool single = contact_nodes.empty();
+    const size_t np = single ? 1 : contact_nodes.size();
+    for (size_t k = 0; k < np; ++k) {
+      const int i = single ? contact_node : contact_nodes[k];
+      const double w = single ? 1.0 : contact_weights[k];
+      if (fixed_node_[i]) continue;  // a pinned node takes its share into the support
+      const int dof = corot ? 3 * i : m.local[3 * i];
+      if (dof < 0)
+        throw std::logic_error("FemModel::step: contact node " + std::to_string(i) +
+                               " is outside the operational region of the condensed model");
+      m.taps.push_back({dof, w});
+    }
   }
-  const bool implicit_contact = touching && solves_node(contact_node);
-  const Eigen::Vector3d fc = -contact_k * d * contact_normal;  // on the node
+  const bool implicit_contact = !m.taps.empty();
+  const Eigen::Vector3d fc = -contact_k * d * contact_normal;  // total on the patch
+  const Eigen::Vector3d nrm = contact_normal;
+  // e^T y for e = sum_i w_i e_i n.
+  auto e_dot = [&](const Eigen::VectorXd& y) {
+    double r = 0;
+    for (const auto& t : m.taps) r += t.w * nrm.dot(y.segment<3>(t.dof));
+    return r;
+  };
 
   if (opt_.formulation == FemFormulation::corotational) {
     const Eigen::VectorXd x = flatten(m.sys.X0) + m.u;
     corotational_stiffness(m.sys, x, opt_.jacobian, m.Ke_t, m.K_t, &m.f_int);
+    if (opt_.support_stiffness.size()) {  // the foundation is linear: not rotated
+      double* kt = m.K_t.valuePtr();
+      for (long i = 0; i < m.K_t.rows(); ++i) kt[m.diag_slot[i]] += opt_.support_stiffness[i];
+      m.f_int -= opt_.support_stiffness.cwiseProduct(m.u);
+    }
     const auto t0 = Clock::now();
     m.A = m.K_t * (h * beta + h * h);
     double* a = m.A.valuePtr();
@@ -233,18 +286,12 @@ void FemModel::step(double h) {
       const double* mv = m.sys.M.valuePtr();
       for (long q = 0; q < m.A.nonZeros(); ++q) a[q] += (1 + h * alpha) * mv[q];
     }
-    if (implicit_contact) {
-      const Eigen::Matrix3d J = h * h * contact_k * contact_normal * contact_normal.transpose();
-      for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r)
-          m.A.coeffRef(3 * contact_node + r, 3 * contact_node + c) += J(r, c);
-    }
     for (int s : m.zero_slot) a[s] = 0.0;
     for (int s : m.fixed_diag_slot) a[s] = 1.0;
     Eigen::VectorXd b = (opt_.lumped_mass ? Eigen::VectorXd(m.sys.m_lumped.cwiseProduct(m.v))
                                           : Eigen::VectorXd(m.sys.M * m.v)) +
                         h * (m.f_int + f_ext);
-    if (touching) b.segment<3>(3 * contact_node) += h * fc;
+    for (const auto& t : m.taps) b.segment<3>(t.dof) += (h * t.w) * fc;
     for (long i = 0; i < b.size(); ++i)
       if (m.fixed_dof[i]) b[i] = 0.0;
     if (!m.analysed) {
@@ -256,6 +303,15 @@ void FemModel::step(double h) {
       throw std::runtime_error("FemModel::step: factorisation failed");
     factor_ms_ = ms_since(t0);
     m.v = m.ldlt.solve(b);
+    if (implicit_contact) {
+      // (A + h^2 k e e^T)^-1 b by Sherman–Morrison: A changes every step, so z = A^-1 e is one
+      // more back-substitution.
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(b.size());
+      for (const auto& t : m.taps) e.segment<3>(t.dof) += t.w * nrm;
+      const Eigen::VectorXd z = m.ldlt.solve(e);
+      const double s = h * h * contact_k;
+      m.v -= z * (s * e_dot(m.v) / (1 + s * e_dot(z)));
+    }
     m.u += h * m.v;
   } else {
     if (h != m.h_factored) {
@@ -284,36 +340,36 @@ void FemModel::step(double h) {
       if (fi.cwiseAbs().maxCoeff() > 0)  // interior loads reach the interface through P*
         fa.tail(m.cond.dofs_s.size()) -= m.cond.K_si * m.cond.ldlt_ii.solve(fi);
     }
-    int lp = -1;
-    if (implicit_contact) {
-      lp = m.local[3 * contact_node];
-      fa.segment<3>(lp) += fc;  // the three dofs of a node are consecutive in act
-    }
+    for (const auto& t : m.taps)  // the three dofs of a node are consecutive in act
+      fa.segment<3>(t.dof) += t.w * fc;
     const Eigen::VectorXd Mv =
         m.M_c.size() ? Eigen::VectorXd(m.M_c * va) : Eigen::VectorXd(m.m_c.cwiseProduct(va));
     const Eigen::VectorXd b = Mv + h * fa;
     Eigen::VectorXd y = m.ldlt.solve(b);
     double s_ey = 0;  // s e^T y of the contact term, for the K y update below
     if (implicit_contact) {
-      // (A + h^2 k e e^T)^-1 b by Sherman–Morrison, e = n on the node's dofs.
-      if (m.cached_node != contact_node) {
-        Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m.act.size(), 3);
-        for (int c = 0; c < 3; ++c) E(lp + c, c) = 1.0;
-        m.Z = m.ldlt.solve(E);
+      // (A + h^2 k e e^T)^-1 b by Sherman–Morrison, e = G n with G = sum_i w_i E_i (E_i: the
+      // three dofs of patch node i); A^-1 G is cached per patch.
+      if (m.cached_node != contact_node || m.cached_nodes != contact_nodes ||
+          m.cached_weights != contact_weights) {
+        Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m.act.size(), 3);
+        for (const auto& t : m.taps)
+          for (int c = 0; c < 3; ++c) G(t.dof + c, c) += t.w;
+        m.Z = m.ldlt.solve(G);
         m.cached_node = contact_node;
+        m.cached_nodes = contact_nodes;
+        m.cached_weights = contact_weights;
       }
-      const Eigen::VectorXd z = m.Z * contact_normal;
+      const Eigen::VectorXd z = m.Z * nrm;
       const double s = h * h * contact_k;
-      const double ey = contact_normal.dot(y.segment<3>(lp));
-      const double ez = contact_normal.dot(z.segment<3>(lp));
-      y -= z * (s * ey / (1 + s * ez));
-      s_ey = s * contact_normal.dot(y.segment<3>(lp));
+      y -= z * (s * e_dot(y) / (1 + s * e_dot(z)));
+      s_ey = s * e_dot(y);
     }
     if (lumped) {
       // K y without a sparse product: A y = b - s e (e^T y) and A = (1 + h alpha) M +
       // (h beta + h^2) K with M diagonal, so K y = (A y - (1 + h alpha) M y) / (h beta + h^2).
       Eigen::VectorXd Ay = b;
-      if (implicit_contact) Ay.segment<3>(lp) -= s_ey * contact_normal;
+      for (const auto& t : m.taps) Ay.segment<3>(t.dof) -= (s_ey * t.w) * nrm;
       m.Ku += h * (Ay - (1 + h * alpha) * m.m_c.cwiseProduct(y)) / (h * beta + h * h);
       ++m.Ku_age;
     }

@@ -2,24 +2,31 @@
 // FemModel: the tissue FEM of a haptic scene (prototype D, issue 12). A tet mesh with per-tet
 // materials (tissue table, SI units) and fixed nodes (rigid tissue is always fixed; the caller
 // adds a pinned region), integrated with linearised backward Euler, touched by the device through
-// the same penalty contact as the mass-spring model (mass_spring.hpp):
-//   penetration d = (x_p - contact_point) . contact_normal at node p = contact_node;
-//   while d > 0 the node gets -contact_k d n and the device feels +contact_k d n.
-// The contact Jacobian -k n n^T enters the implicit step, so a stiff coupling stays stable.
+// the same penalty contact as the mass-spring model (mass_spring.hpp), on a contact patch:
+//   patch nodes i with area weights w_i (sum 1; default: the contact node alone, w = 1), rest
+//   offsets o_i = max(0, (X0_i - X0_p) . n) above the tangent plane at p = contact_node,
+//   penetration d = max(0, sum_i w_i ((x_i - contact_point) . n - o_i));
+//   while d > 0 patch node i gets -w_i contact_k d n and the device feels +contact_k d n.
+// The patch is a rigid flat probe face whose force is shared by area: a finite pressure patch,
+// so the response converges under mesh refinement (a single-node point load does not in 3D).
+// The contact Jacobian -k g g^T (g = sum_i w_i e_i n) enters the implicit step as a rank-1 term
+// (Sherman–Morrison), so a stiff coupling stays stable and costs one extra cached solve.
 //
 // Formulations:
 //   linear        small-strain FEM, A = M + h C + h^2 K factorised once per time step size;
 //                 the rank-1 contact term is added with Sherman–Morrison on 3 cached columns
-//                 A^-1 E_p, so a step is ONE sparse back-substitution.
+//                 A^-1 G (G = sum_i w_i E_i, cached per patch), so a step is ONE sparse
+//                 back-substitution.
 //   corotational  co-rotational FEM (fem_corotational.hpp): per step the tangent and forces
-//                 are re-assembled on the fixed pattern and refactorised (pattern analysed once).
+//                 are re-assembled on the fixed pattern and refactorised (pattern analysed once);
+//                 the contact term by Sherman–Morrison (one more back-substitution).
 //   condensed     the hybrid condensed FEM (fem_condensation.hpp) as a dynamic model: the
 //                 operational region (options.operational_tet) and its interface are integrated;
 //                 the rest is statically condensed onto the interface (Guyan: its interior is
 //                 massless and follows quasi-statically). Exact at equilibrium (== linear);
 //                 interior positions are recovered only when positions() is called (graphics
-//                 rate), so a step costs a solve of the reduced system. The contact node must be
-//                 operational (solves_node()).
+//                 rate), so a step costs a solve of the reduced system. The contact node and
+//                 every patch node must be operational (solves_node()) or fixed.
 // Mass is lumped (diagonal) by default; options.lumped_mass = false uses the consistent mass
 // (linear and corotational; the condensed model is always lumped: its Guyan reduction keeps
 // the mass on the solved nodes). Damping is Rayleigh C = alpha M + beta K (K = tangent for
@@ -31,15 +38,11 @@
 #include <vector>
 
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/models/fem_formulation.hpp"
 #include "engine/solvers/fem_assembly.hpp"
 #include "engine/solvers/fem_corotational.hpp"
 
 namespace palplab::engine {
-
-enum class FemFormulation { linear, corotational, condensed };
-// Throws InputError naming the accepted values.
-FemFormulation fem_formulation_from_string(const std::string& s);
-const char* to_string(FemFormulation f);
 
 struct FemModelOptions {
   FemFormulation formulation = FemFormulation::linear;
@@ -48,6 +51,10 @@ struct FemModelOptions {
   CorotJacobian jacobian = CorotJacobian::exact;  // corotational tangent
   bool lumped_mass = true;                        // false: consistent mass (not condensed)
   std::vector<std::uint8_t> operational_tet;      // #T, condensed only (1 = operational)
+  // 3#V diagonal elastic foundation (N/m per dof; empty = none): zero-rest-length springs that
+  // hold nodes to their rest position (the surrounding tissue; the scene model gives each
+  // surface node support_modulus x its lumped area, as the mass-spring model does). Part of K.
+  Eigen::VectorXd support_stiffness;
 };
 
 class FemModel {
@@ -76,6 +83,8 @@ class FemModel {
 
   // Penalty contact (see top). contact_node = -1: no contact.
   int contact_node = -1;
+  std::vector<int> contact_nodes;       // the patch (contact_node among them); empty = the node
+  std::vector<double> contact_weights;  // one per patch node, summing to 1
   Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
   double contact_k = 0.0;                // N/m

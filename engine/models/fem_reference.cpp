@@ -98,6 +98,8 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   if (!(opt.force > 0)) throw InputError("fem reference: --force must be > 0 N");
   if (!(opt.press_radius > 0)) throw InputError("fem reference: press radius must be > 0 m");
   if (!opt.is_fixed) throw InputError("fem reference: no fixed (pinned) region given");
+  if (!(opt.support_modulus >= 0))
+    throw InputError("fem reference: support modulus must be >= 0 N/m^3");
   const Eigen::Vector3d dir = opt.press_direction.normalized();
   const long ns = opt.surface.V.rows();
   FemReferenceResult res;
@@ -160,8 +162,20 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
       throw InputError("fem reference: no surface within the press radius of the point");
     for (long i = 0; i < m.V.rows(); ++i)
       if (w[i] > 0) f.segment<3>(3 * i) = opt.force * dir * (w[i] / total);
+    SparseMatrixd K = sys.K;
+    if (opt.support_modulus > 0) {
+      Eigen::VectorXd node_area = Eigen::VectorXd::Zero(m.V.rows());
+      for (long k = 0; k < bf.F.rows(); ++k) {
+        const Eigen::Vector3d a = mesh::row3(m.V, bf.F(k, 0)), b = mesh::row3(m.V, bf.F(k, 1)),
+                              c = mesh::row3(m.V, bf.F(k, 2));
+        for (int j = 0; j < 3; ++j) node_area[bf.F(k, j)] += (b - a).cross(c - a).norm() / 6;
+      }
+      for (long i = 0; i < m.V.rows(); ++i)
+        for (int c = 0; c < 3; ++c)  // the diagonal is in the pattern: no insertion
+          K.coeffRef(3 * i + c, 3 * i + c) += opt.support_modulus * node_area[i];
+    }
     StaticSolver ss;
-    static_precompute(sys.K, node_to_dof_flags(fixed), ss);
+    static_precompute(K, node_to_dof_flags(fixed), ss);
     const Eigen::VectorXd u = static_solve(ss, f);
     const double delta = f.dot(u) / opt.force;  // work-conjugate contact displacement
     FemReferenceLevel lv;

@@ -34,9 +34,12 @@ struct FemReferenceOptions {
   Eigen::Vector3d press_direction = -Eigen::Vector3d::UnitZ();
   double force = 1.0;          // N
   double press_radius = 0.01;  // m
-  double max_volume = 0;       // level-0 maximum tet volume (m^3), > 0
-  double quality = 2.0;        // TetGen radius-edge bound at every level
-  int levels = 3;              // >= 3 for an extrapolation
+  // Elastic foundation (N/m^3) on the whole boundary surface, lumped per node (a third of the
+  // area of its boundary faces, all three directions): the support of prototypes C and D.
+  double support_modulus = 0;
+  double max_volume = 0;  // level-0 maximum tet volume (m^3), > 0
+  double quality = 2.0;   // TetGen radius-edge bound at every level
+  int levels = 3;         // >= 3 for an extrapolation
   // Optional: the mesh of each level instead of TetGen (e.g. structured blocks refined by 2);
   // refinement_ratio is then the ratio of mesh sizes between levels. The default (TetGen,
   // max volume halved) has the nominal ratio 2^(1/3). With a mesher the displacement field is

@@ -1,0 +1,348 @@
+// Model "fem" (prototype D, issue 12): the tissue finite element model (FemModel) of a tet scene
+// mesh behind the SceneModel interface. Per-tet materials come from the tissue table (the mesh's
+// tissue attribute, or the prototype's tissue with optional E/density overrides; rigid tissue is
+// fixed), the pinned nodes from the support (fixed_region, fixed_z_below) as for prototype C.
+// The device couples through the same proxy contact as C: Scene::step gives the touched surface
+// node, this model puts the probe face there as a contact patch (surface nodes within
+// contact.patch_radius, weighted by their lumped surface area) and FemModel renders the patch's
+// penalty force (fem_model.hpp).
+//
+// Condensed formulation: the solved (operational) tets are those whose centroid lies within
+// fem.operational_radius of a surface node of fem.operational_region. A touch whose centre node
+// lies outside them is rendered as a press on a rigid surface (the condensed model has no
+// compliance there) and counted in model_info ("outside_contacts"); patch nodes outside the
+// operational tets are dropped from the patch.
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "common/input_error.hpp"
+#include "common/json_check.hpp"
+#include "engine/mesh/materials.hpp"
+#include "engine/models/fem_model.hpp"
+#include "engine/models/model.hpp"
+
+namespace palplab::engine {
+
+namespace {
+
+const mesh::Material* find_tissue(const std::string& name) {
+  for (const auto& e : mesh::default_materials().materials)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+class FemSceneModel final : public SceneModel {
+ public:
+  FemSceneModel(const SceneConfig& cfg, const SceneMesh& cm, const mesh::TetMesh& tm,
+                const TetMaterials& mat, std::vector<std::uint8_t> fixed, FemModelOptions opt)
+      : fem_(tm, mat, std::move(fixed), std::move(opt)),
+        surface_to_model_(cm.surface_to_model),
+        F_(cm.F),
+        X0_(cm.model_V),
+        patch_radius_(cfg.contact.patch_radius),
+        contact_k_(cfg.contact.stiffness) {
+    const long n = cm.model_V.rows();
+    area_.setZero(n);
+    for (size_t i = 0; i < cm.surface_to_model.size(); ++i)
+      area_[cm.surface_to_model[i]] = cm.vertex_area[static_cast<long>(i)];
+    // Node adjacency through the tet edges (for the patch's breadth-first walk).
+    adj_start_.assign(n + 1, 0);
+    for (long e = 0; e < cm.model_E.rows(); ++e) {
+      ++adj_start_[cm.model_E(e, 0) + 1];
+      ++adj_start_[cm.model_E(e, 1) + 1];
+    }
+    for (long i = 0; i < n; ++i) adj_start_[i + 1] += adj_start_[i];
+    adj_.resize(adj_start_[n]);
+    std::vector<int> fill(adj_start_.begin(), adj_start_.end() - 1);
+    for (long e = 0; e < cm.model_E.rows(); ++e) {
+      const int a = cm.model_E(e, 0), b = cm.model_E(e, 1);
+      adj_[fill[a]++] = b;
+      adj_[fill[b]++] = a;
+    }
+    mark_.assign(n, 0);
+    mass_ = fem_.system().m_lumped.sum() / 3.0;
+  }
+
+  const char* kind() const override { return "fem"; }
+
+  ModelOutput step(const ContactInput& c, double dt) override {
+    const int mnode = c.node >= 0 ? surface_to_model_[c.node] : -1;
+    ModelOutput o;
+    const bool solved = mnode >= 0 && (fem_.solves_node(mnode) || fem_.fixed_nodes()[mnode]);
+    if (mnode >= 0 && solved) {
+      if (mnode != patch_center_) compute_patch(mnode);
+      fem_.contact_node = mnode;
+      fem_.contact_point = c.x;
+      fem_.contact_normal = c.n;
+      fem_.contact_k = contact_k_;
+    } else {
+      fem_.contact_node = -1;
+    }
+    fem_.step(dt);
+    if (mnode >= 0 && solved) {
+      o.force = fem_.device_force();
+      o.deformation = (fem_.node_position(mnode) - X0_.row(mnode).transpose()).norm();
+    } else if (mnode >= 0) {
+      // Outside the operational region of a condensed model: a rigid surface (see top).
+      const double d = (X0_.row(mnode).transpose() - c.x).dot(c.n);
+      if (d > 0) ++outside_contacts_;
+      o.force = contact_k_ * std::max(0.0, d) * c.n;
+    }
+    return o;
+  }
+
+  void reset() override {
+    fem_.reset();
+    fem_.contact_node = -1;
+    outside_contacts_ = 0;
+  }
+
+  void stats(SceneStats& st) const override {
+    // The condensed interior is recovered on demand (graphics rate): positions() is not const.
+    FemModel& f = const_cast<FemModel&>(fem_);
+    st.nodes = X0_.rows();
+    st.springs = 0;
+    st.coarse_nodes = st.nodes;
+    st.total_mass = mass_;
+    st.max_rest_error = (f.positions() - X0_).rowwise().norm().maxCoeff();
+    st.awake_nodes = f.dofs() / 3;
+    nlohmann::json info = {{"fem",
+                            {{"formulation", to_string(f.formulation())},
+                             {"dofs", f.dofs()},
+                             {"total_dofs", f.total_dofs()},
+                             {"solver", f.solver()},
+                             {"factor_ms", f.factor_ms()},
+                             {"patch_nodes", static_cast<long>(f.contact_nodes.size())},
+                             {"outside_contacts", outside_contacts_}}}};
+    st.model_info = info.dump();
+  }
+
+  void surface(mesh::Positions& V, mesh::Faces& F) const override {
+    FemModel& f = const_cast<FemModel&>(fem_);
+    const mesh::Positions& X = f.positions();
+    V.resize(static_cast<long>(surface_to_model_.size()), 3);
+    for (size_t i = 0; i < surface_to_model_.size(); ++i)
+      V.row(static_cast<long>(i)) = X.row(surface_to_model_[i]);
+    F = F_;
+  }
+
+ private:
+  // The probe face: surface nodes within patch_radius of the centre (rest distance, reached
+  // through tet edges between surface nodes so that it never jumps a gap), weighted by their
+  // lumped surface area — the rule of the mass-spring model (mass_spring_model.cpp).
+  void compute_patch(int center) {
+    std::vector<int>& nodes = fem_.contact_nodes;
+    std::vector<double>& w = fem_.contact_weights;
+    nodes.clear();
+    w.clear();
+    patch_center_ = center;
+    const Eigen::Vector3d c = X0_.row(center).transpose();
+    const double r2 = patch_radius_ * patch_radius_;
+    nodes.push_back(center);
+    mark_[center] = 1;
+    for (size_t q = 0; q < nodes.size(); ++q) {
+      const int i = nodes[q];
+      for (int k = adj_start_[i]; k < adj_start_[i + 1]; ++k) {
+        const int j = adj_[k];
+        if (mark_[j] || !(area_[j] > 0.0) || (X0_.row(j).transpose() - c).squaredNorm() > r2)
+          continue;
+        mark_[j] = 1;
+        if (fem_.solves_node(j) || fem_.fixed_nodes()[j]) nodes.push_back(j);
+      }
+    }
+    double sum = 0.0;
+    for (int i : nodes) sum += area_[i];
+    for (int i : nodes) w.push_back(sum > 0 ? area_[i] / sum : 1.0 / nodes.size());
+    std::fill(mark_.begin(), mark_.end(), 0);
+  }
+
+  FemModel fem_;
+  std::vector<int> surface_to_model_;
+  mesh::Faces F_;
+  mesh::Positions X0_;
+  Eigen::VectorXd area_;  // #M lumped surface area (m^2), 0 inside
+  std::vector<int> adj_start_, adj_;
+  std::vector<std::uint8_t> mark_;
+  double patch_radius_, contact_k_, mass_ = 0;
+  int patch_center_ = -1;
+  long outside_contacts_ = 0;
+};
+
+// The "model" object of a FEM prototype (docs/FORMATS.md). Defaults are the config's.
+void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, SceneConfig& cfg,
+              const std::vector<std::string>& regions) {
+  c.keys(m, P,
+         {"kind", "formulation", "material", "rayleigh_alpha", "rayleigh_beta", "lumped_mass",
+          "jacobian", "operational_region", "operational_radius", "fixed_region", "fixed_z_below",
+          "support_modulus"});
+  FemConfig& f = cfg.fem;
+  if (auto fo = c.text(m, P, "formulation", false, {"linear", "corotational", "condensed"}))
+    f.formulation = fem_formulation_from_string(*fo);
+  MaterialConfig& mc = cfg.material;
+  if (const nlohmann::json* mat = c.member(m, P, "material", false, "a tissue name or an object")) {
+    const std::string Q = P + ".material";
+    if (mat->is_string()) {
+      mc.tissue = mat->get<std::string>();
+    } else if (mat->is_object()) {
+      c.keys(*mat, Q, {"tissue", "youngs_modulus", "density"});
+      mc.tissue = c.text(*mat, Q, "tissue", false).value_or("");
+      mc.youngs_modulus =
+          c.number(*mat, Q, "youngs_modulus", false, 0, 1e11, "Young's modulus E (Pa)", true);
+      mc.density = c.number(*mat, Q, "density", false, 0, 1e5, "the density (kg/m^3)", true);
+    } else {
+      c.err(Q, std::string("expected a tissue name or an object, got ") + json::kind_name(*mat));
+    }
+    if (!mc.tissue.empty() && !find_tissue(mc.tissue)) {
+      std::string names;
+      for (const auto& e : mesh::default_materials().materials)
+        names += (names.empty() ? "" : ", ") + e.name;
+      c.err(Q, "unknown tissue \"" + mc.tissue + "\" (expected one of: " + names + ")");
+    }
+  }
+  f.rayleigh_alpha =
+      c.number(m, P, "rayleigh_alpha", false, 0, 1e4, "the mass-proportional damping (1/s)")
+          .value_or(f.rayleigh_alpha);
+  f.rayleigh_beta =
+      c.number(m, P, "rayleigh_beta", false, 0, 10, "the stiffness-proportional damping (s)")
+          .value_or(f.rayleigh_beta);
+  f.lumped_mass = c.boolean(m, P, "lumped_mass", false).value_or(f.lumped_mass);
+  if (auto j = c.text(m, P, "jacobian", false, {"exact", "warped"}))
+    f.exact_jacobian = *j == "exact";
+  f.operational_radius =
+      c.number(m, P, "operational_radius", false, 0, 10,
+               "the distance from the operational region within which tets are solved (m)")
+          .value_or(f.operational_radius);
+  if (auto r = c.text(m, P, "operational_region", false)) {
+    if (std::find(regions.begin(), regions.end(), *r) == regions.end())
+      c.err(P + ".operational_region", "unknown region \"" + *r + "\" of the mesh");
+    else
+      f.operational_region = *r;
+  }
+  if (f.formulation == FemFormulation::condensed) {
+    if (!m.contains("operational_region"))  // (a bad name is reported above)
+      c.err(P, "the condensed formulation needs \"operational_region\" (a region of the mesh)");
+    if (!f.lumped_mass) c.err(P + ".lumped_mass", "the condensed formulation uses lumped mass");
+  }
+  SupportConfig& sp = cfg.support;
+  sp.modulus = c.number(m, P, "support_modulus", false, 0, 1e9,
+                        "the elastic foundation under the surface (N/m^3)")
+                   .value_or(sp.modulus);
+  sp.fixed_z_below = c.number(m, P, "fixed_z_below", false, 0, 10,
+                              "the height above the mesh's lowest point below which nodes are "
+                              "pinned (m)")
+                         .value_or(sp.fixed_z_below);
+  if (auto fr = c.text(m, P, "fixed_region", false)) {
+    if (std::find(regions.begin(), regions.end(), *fr) == regions.end())
+      c.err(P + ".fixed_region", "unknown region \"" + *fr + "\" of the mesh");
+    else
+      sp.fixed_region = *fr;
+  }
+}
+
+std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm) {
+  if (!cm.tet)
+    throw InputError(
+        "model \"fem\" needs a tetrahedral mesh (generator model_c or a tet mesh "
+        "file); mesh " +
+            cfg.mesh.key() + " is a surface",
+        cfg.source);
+  const long nm = cm.model_V.rows(), nt = cm.model_T.rows();
+  mesh::TetMesh tm = mesh::make_tet_mesh(cm.model_V, cm.model_T, cm.tet_attribute);
+  const mesh::MaterialTable& table = mesh::default_materials();
+  TetMaterials mat = tet_materials(tm, table);  // per tet from the attribute (tissue table)
+  const MaterialConfig& mc = cfg.material;
+  if (!mc.tissue.empty() || mc.youngs_modulus || mc.density) {
+    const mesh::Material* named = mc.tissue.empty() ? nullptr : find_tissue(mc.tissue);
+    if (!mc.tissue.empty() && !named)
+      throw InputError("unknown tissue \"" + mc.tissue + "\"", cfg.source);
+    for (long t = 0; t < nt; ++t) {
+      if (mat.rigid[t]) continue;  // bone stays bone
+      if (named) {
+        mat.youngs_modulus[t] = named->youngs_modulus;
+        mat.poisson_ratio[t] = named->poisson_ratio;
+        mat.density[t] = named->density;
+      }
+      if (mc.youngs_modulus) mat.youngs_modulus[t] = *mc.youngs_modulus;
+      if (mc.density) mat.density[t] = *mc.density;
+    }
+  }
+  // Pinned nodes: the fixed region and everything below fixed_z_below (as the mass-spring
+  // model); rigid tissue is fixed by FemModel.
+  std::vector<std::uint8_t> fixed(nm, 0);
+  const auto region_index = [&](const std::string& name, const char* what) {
+    const auto it = std::find(cm.region_names.begin(), cm.region_names.end(), name);
+    if (it == cm.region_names.end())
+      throw InputError(std::string("unknown ") + what + " \"" + name + "\"", cfg.source);
+    return static_cast<int>(it - cm.region_names.begin());
+  };
+  if (!cfg.support.fixed_region.empty()) {
+    const int r = region_index(cfg.support.fixed_region, "fixed region");
+    for (size_t i = 0; i < cm.vertex_region.size(); ++i)
+      if (cm.vertex_region[i] == r) fixed[cm.surface_to_model[i]] = 1;
+  }
+  if (cfg.support.fixed_z_below > 0.0) {
+    const double z0 = cm.model_V.col(2).minCoeff();
+    for (long i = 0; i < nm; ++i)
+      if (cm.model_V(i, 2) < z0 + cfg.support.fixed_z_below) fixed[i] = 1;
+  }
+  const FemConfig& fc = cfg.fem;
+  FemModelOptions opt;
+  opt.formulation = fc.formulation;
+  opt.rayleigh_alpha = fc.rayleigh_alpha;
+  opt.rayleigh_beta = fc.rayleigh_beta;
+  opt.lumped_mass = fc.lumped_mass;
+  opt.jacobian = fc.exact_jacobian ? CorotJacobian::exact : CorotJacobian::warped;
+  if (cfg.support.modulus > 0) {  // per unit area of the surface it holds, as for C
+    opt.support_stiffness.setZero(3 * nm);
+    for (size_t i = 0; i < cm.surface_to_model.size(); ++i)
+      opt.support_stiffness.segment<3>(3 * cm.surface_to_model[i])
+          .setConstant(cfg.support.modulus * cm.vertex_area[static_cast<long>(i)]);
+  }
+  if (fc.formulation == FemFormulation::condensed) {
+    if (fc.operational_region.empty())
+      throw InputError("the condensed FEM needs an operational region", cfg.source);
+    const int r = region_index(fc.operational_region, "operational region");
+    std::vector<int> rn;
+    for (size_t i = 0; i < cm.vertex_region.size(); ++i)
+      if (cm.vertex_region[i] == r) rn.push_back(static_cast<int>(i));
+    const double r2 = fc.operational_radius * fc.operational_radius;
+    opt.operational_tet.assign(nt, 0);
+    long count = 0;
+    for (long t = 0; t < nt; ++t) {
+      Eigen::RowVector3d ctr = Eigen::RowVector3d::Zero();
+      for (int k = 0; k < 4; ++k) ctr += cm.model_V.row(cm.model_T(t, k));
+      ctr /= 4.0;
+      for (int i : rn)
+        if ((cm.V.row(i) - ctr).squaredNorm() <= r2) {
+          opt.operational_tet[t] = 1;
+          ++count;
+          break;
+        }
+    }
+    if (count == 0)
+      throw InputError(
+          "no tet lies within operational_radius of region \"" + fc.operational_region + "\"",
+          cfg.source);
+  }
+  try {
+    return std::make_unique<FemSceneModel>(cfg, cm, tm, mat, std::move(fixed), std::move(opt));
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const InputError*>(&e)) throw;
+    throw InputError(std::string("model \"fem\": ") + e.what() +
+                         " (pin the body: fixed_region or fixed_z_below)",
+                     cfg.source);
+  }
+}
+
+}  // namespace
+
+const ModelKind& fem_model_kind() {
+  static const ModelKind k{"fem",
+                           "linear, co-rotational or condensed tetrahedral FEM of the tissue "
+                           "(prototype D)",
+                           &read_fem, nullptr, &make_fem};
+  return k;
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,177 @@
+// End-to-end: prototype D with `palplab probe` (the "fem" section), in a study (`validate`,
+// `run`, `export`), and `palplab fem reference` on a small case (issue 12).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+fs::path tmp(const std::string& name) {
+  const fs::path d =
+      fs::temp_directory_path() / ("palplab_cli_fem_d_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+Result run(const std::string& args, const fs::path& d) {
+  const fs::path o = d / "stdout.txt", e = d / "stderr.txt";
+  const std::string cmd =
+      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
+  const int st = std::system(cmd.c_str());
+  return Result{WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+
+// Prototype D with another id and mesh resolution, written into `d`.
+fs::path d_variant(const fs::path& d, const std::string& id, int vertices) {
+  std::string t = slurp(proto("D"));
+  auto replace = [&](const std::string& from, const std::string& to) {
+    const auto k = t.find(from);
+    EXPECT_NE(k, std::string::npos) << from;
+    if (k != std::string::npos) t.replace(k, from.size(), to);
+  };
+  replace("\"id\": \"D\"", "\"id\": \"" + id + "\"");
+  replace("\"vertices\": 1600", "\"vertices\": " + std::to_string(vertices));
+  const fs::path p = d / (id + ".json");
+  std::ofstream(p) << t;
+  return p;
+}
+
+}  // namespace
+
+TEST(CliFemD, ProbeReportsTheFemSection) {
+  const fs::path d = tmp("probe");
+  const Result r = run("probe " + proto("D") +
+                           " --press ovary_left --force 2 --duration 0.05 --release 0.2 "
+                           "--json",
+                       d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j.at("model"), "fem");
+  EXPECT_EQ(j.at("prototype"), "D");
+  EXPECT_TRUE(j.at("force_reached").get<bool>());
+  EXPECT_NEAR(j.at("peak_force").get<double>(), 2.0, 0.3);
+  EXPECT_FALSE(j.at("nan_detected").get<bool>());
+  const json& f = j.at("fem");
+  EXPECT_EQ(f.at("formulation"), "linear");
+  EXPECT_GT(f.at("dofs").get<long>(), 1000);
+  EXPECT_FALSE(f.at("solver").get<std::string>().empty());
+  EXPECT_GT(f.at("factor_ms").get<double>(), 0.0);
+  EXPECT_GT(f.at("patch_nodes").get<long>(), 3);  // the probe face, not a point
+  fs::remove_all(d);
+}
+
+TEST(CliFemD, AStudyCanUsePrototypeD) {
+  const fs::path d = tmp("study");
+  d_variant(d, "Dsmall", 600);
+  std::ofstream(d / "s.json") << R"({"palplab_study": 1, "id": "fem_d", "title": "D in a study",
+  "seed": 7,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 1.5, "MPF": 2.0, "SFT": 3.0}}},
+  "groups": [{"id": "GA", "prototype": "A", "size": 1}, {"id": "GD", "prototype": "Dsmall",
+              "size": 1}],
+  "phases": [{"id": "training", "kind": "training", "sessions": 1, "session_duration": 1.5},
+             {"id": "test", "kind": "post_training", "sessions": 1, "session_duration": 1.5,
+              "start": {"after_previous": {"minutes": 10}},
+              "cues": {"visual_deformation": false, "audio": false}}]})";
+  const Result v = run("validate " + (d / "s.json").string(), d);
+  ASSERT_EQ(v.code, 0) << v.out << v.err;
+  EXPECT_NE(v.out.find("Dsmall"), std::string::npos) << v.out;
+  const Result r =
+      run("run " + (d / "s.json").string() + " --db " + (d / "r.db").string() + " --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const Result e = run("export " + (d / "r.db").string() + " --csv " + (d / "csv").string(), d);
+  ASSERT_EQ(e.code, 0) << e.err;
+  const std::string m = slurp(d / "csv" / "measures.csv");
+  long rows_d = 0;
+  std::istringstream in(m);
+  for (std::string line; std::getline(in, line);) rows_d += line.find(",GD,") != std::string::npos;
+  EXPECT_GT(rows_d, 0) << m.substr(0, 400);
+  fs::remove_all(d);
+}
+
+TEST(CliFemD, ReferenceOnASmallCase) {
+  const fs::path d = tmp("reference");
+  const fs::path p = d_variant(d, "Dcoarse", 400);
+  const fs::path out = d / "ref.json";
+  const Result r = run("fem reference " + p.string() +
+                           " --press ovary_left --force 1 --levels 3 "
+                           "--out " +
+                           out.string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j.at("format"), "palplab-fem-reference/1");
+  EXPECT_EQ(j.at("prototype"), "Dcoarse");
+  EXPECT_EQ(j.at("region"), "ovary_left");
+  EXPECT_DOUBLE_EQ(j.at("force").get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j.at("press_radius").get<double>(), 0.01);
+  const json& lv = j.at("levels");
+  ASSERT_EQ(lv.size(), 3u);
+  for (size_t l = 0; l < lv.size(); ++l) {
+    const double k = lv[l].at("stiffness").get<double>();
+    EXPECT_TRUE(std::isfinite(k) && k > 0) << l;
+    // Work-conjugate displacement times stiffness is the force.
+    EXPECT_NEAR(k * lv[l].at("displacement").get<double>(), 1.0, 1e-9);
+    if (l > 0) {
+      // Max volume halved: about twice the tets, a smaller mean size.
+      EXPECT_NEAR(lv[l].at("max_volume").get<double>(),
+                  0.5 * lv[l - 1].at("max_volume").get<double>(),
+                  1e-12 * lv[l - 1].at("max_volume").get<double>());
+      EXPECT_GT(lv[l].at("tets").get<long>(), 1.4 * lv[l - 1].at("tets").get<long>());
+      EXPECT_LT(lv[l].at("mesh_size").get<double>(), lv[l - 1].at("mesh_size").get<double>());
+    }
+  }
+  // The flags are consistent with the levels, whatever this coarse case gives.
+  bool mono = true;
+  for (size_t l = 1; l < lv.size(); ++l)
+    mono = mono && lv[l].at("est_error").get<double>() < lv[l - 1].at("est_error").get<double>();
+  EXPECT_EQ(j.at("monotone").get<bool>(), mono);
+  EXPECT_EQ(j.at("trusted").get<bool>(),
+            j.at("monotone").get<bool>() && j.at("order_plausible").get<bool>());
+  ASSERT_TRUE(j.at("field").at("positions").is_array());
+  EXPECT_EQ(j.at("field").at("positions").size(), j.at("field").at("displacement").size());
+  EXPECT_GT(j.at("field").at("positions").size(), 100u);
+  fs::remove_all(d);
+}
+
+TEST(CliFemD, ReferenceBadInputsExitTwo) {
+  const fs::path d = tmp("bad");
+  const std::string o = " --out " + (d / "x.json").string();
+  EXPECT_EQ(
+      run("fem reference " + proto("D") + " --press ovary_left --force 1 --levels 2" + o, d).code,
+      2);
+  EXPECT_EQ(run("fem reference " + proto("D") + " --press nowhere --force 1" + o, d).code, 2);
+  EXPECT_EQ(run("fem reference " + proto("D") + " --press ovary_left --force -1" + o, d).code, 2);
+  // Prototype A is a surface model: no tets to refine.
+  const Result a = run("fem reference " + proto("A") + " --press ovary_left --force 1" + o, d);
+  EXPECT_EQ(a.code, 2);
+  EXPECT_NE(a.err.find("tetrahedral"), std::string::npos) << a.err;
+  fs::remove_all(d);
+}
