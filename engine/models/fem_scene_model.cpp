@@ -179,27 +179,7 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
   FemConfig& f = cfg.fem;
   if (auto fo = c.text(m, P, "formulation", false, {"linear", "corotational", "condensed"}))
     f.formulation = fem_formulation_from_string(*fo);
-  MaterialConfig& mc = cfg.material;
-  if (const nlohmann::json* mat = c.member(m, P, "material", false, "a tissue name or an object")) {
-    const std::string Q = P + ".material";
-    if (mat->is_string()) {
-      mc.tissue = mat->get<std::string>();
-    } else if (mat->is_object()) {
-      c.keys(*mat, Q, {"tissue", "youngs_modulus", "density"});
-      mc.tissue = c.text(*mat, Q, "tissue", false).value_or("");
-      mc.youngs_modulus =
-          c.number(*mat, Q, "youngs_modulus", false, 0, 1e11, "Young's modulus E (Pa)", true);
-      mc.density = c.number(*mat, Q, "density", false, 0, 1e5, "the density (kg/m^3)", true);
-    } else {
-      c.err(Q, std::string("expected a tissue name or an object, got ") + json::kind_name(*mat));
-    }
-    if (!mc.tissue.empty() && !find_tissue(mc.tissue)) {
-      std::string names;
-      for (const auto& e : mesh::default_materials().materials)
-        names += (names.empty() ? "" : ", ") + e.name;
-      c.err(Q, "unknown tissue \"" + mc.tissue + "\" (expected one of: " + names + ")");
-    }
-  }
+  read_material(c, m, P, cfg.material);
   f.rayleigh_alpha =
       c.number(m, P, "rayleigh_alpha", false, 0, 1e4, "the mass-proportional damping (1/s)")
           .value_or(f.rayleigh_alpha);

@@ -252,29 +252,7 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
           "jacobian", "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
           "scope_radius", "scope_max_nodes", "cg_tolerance", "fixed_z_below"});
   MaterialConfig& mc = cfg.material;
-  if (const nlohmann::json* mat = c.member(m, P, "material", false, "a tissue name or an object")) {
-    const std::string Q = P + ".material";
-    if (mat->is_string()) {
-      mc.tissue = mat->get<std::string>();
-    } else if (mat->is_object()) {
-      c.keys(*mat, Q, {"tissue", "youngs_modulus", "density"});
-      mc.tissue = c.text(*mat, Q, "tissue", false).value_or("");
-      mc.youngs_modulus =
-          c.number(*mat, Q, "youngs_modulus", false, 0, 1e11, "Young's modulus E (Pa)", true);
-      mc.density = c.number(*mat, Q, "density", false, 0, 1e5, "the density (kg/m^3)", true);
-    } else {
-      c.err(Q, std::string("expected a tissue name or an object, got ") + json::kind_name(*mat));
-    }
-    if (!mc.tissue.empty()) {
-      std::string names;
-      bool known = false;
-      for (const auto& e : mesh::default_materials().materials) {
-        known |= e.name == mc.tissue;
-        names += (names.empty() ? "" : ", ") + e.name;
-      }
-      if (!known) c.err(Q, "unknown tissue \"" + mc.tissue + "\" (expected one of: " + names + ")");
-    }
-  }
+  read_material(c, m, P, mc);
   mc.thickness = c.number(m, P, "thickness", false, 0, 1,
                           "the membrane thickness of a surface model (m)", true)
                      .value_or(mc.thickness);

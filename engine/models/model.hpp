@@ -95,6 +95,10 @@ struct ModelKind {
   std::unique_ptr<SceneModel> (*make)(const SceneConfig& cfg, const SceneMesh& mesh);
 };
 
+// Reads the optional "material" member of a model object into mc (engine/models/material_json.cpp).
+void read_material(json::Checker& c, const nlohmann::json& model, const std::string& path,
+                   MaterialConfig& mc);
+
 // Every registered kind, in registration order.
 const std::vector<ModelKind>& model_kinds();
 // nullptr if unknown.
