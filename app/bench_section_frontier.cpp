@@ -12,7 +12,11 @@
 // body: E = 100 kPa (prototype C's material), nu = 0.45, base 2 cm pinned, the press a smooth
 // 1 cm pressure patch (prototype C's pad radius) along the inward normal of the node nearest the
 // region's centroid; three TetGen levels (the prototype's own mesh size, then max tet volume
-// halved twice), Richardson-extrapolated. Two controls make the error measure auditable: a
+// halved twice), Richardson-extrapolated when the observed order is plausible (else the finest
+// level; metric ref_extrapolated). NOT modelled by the reference: the elastic foundation
+// (support_modulus) that holds prototype C's surface — FemReferenceOptions has no such support —
+// so the reference body is a cantilever pinned at its base and far softer than every prototype
+// at the horns and ovaries; the errors below are dominated by that difference. Two controls make the error measure auditable: a
 // planted model with exactly 20 % too much displacement (curve and field) must show 0.2 on both;
 // and the linear FEM on the coarsest level is placed with its own discretisation error (its
 // time is one static solve, not a haptic step). Prototype D (FEM model in the haptic loop) and
@@ -38,8 +42,8 @@ struct Reference {
   double k = 0;             // N/m, extrapolated contact stiffness
   mesh::Positions surf;     // reference surface vertices (rest), m
   mesh::Positions u_unit;   // displacement field per newton (m/N)
-  double order = 0, level0_rel_k = 0, level0_field = 0, level0_solve_s = 0;
-  bool plausible = false;
+  double order = 0, k0 = 0, level0_field = 0, level0_solve_s = 0;
+  bool plausible = false;  // extrapolated (observed order plausible), else the finest level
 };
 
 Reference reference_for(const mesh::TetMesh& tm, const Eigen::Vector3d& p, bool quick) {
@@ -54,12 +58,14 @@ Reference reference_for(const mesh::TetMesh& tm, const Eigen::Vector3d& p, bool 
   if (quick) o.max_volume *= 2;  // coarser levels: a cheaper, less converged reference
   const engine::FemReferenceResult r = engine::fem_reference(o);
   Reference ref;
-  ref.k = r.stiffness;
-  ref.surf = o.surface.V;
-  ref.u_unit = r.field;  // force 1 N
   ref.order = r.observed_order;
-  ref.plausible = r.order_plausible;
-  ref.level0_rel_k = std::abs(r.levels[0].stiffness - r.stiffness) / r.stiffness;
+  ref.plausible = r.order_plausible && r.stiffness > 0;
+  // An implausible extrapolation (non-nested TetGen levels, fem_reference.hpp) is not used:
+  // the finest level stands in, and ref_extrapolated = 0 says so.
+  ref.k = ref.plausible ? r.stiffness : r.levels.back().stiffness;
+  ref.surf = o.surface.V;
+  ref.u_unit = r.field;  // force 1 N (extrapolated field; fem_reference's only field output)
+  ref.k0 = r.levels[0].stiffness;
   ref.level0_field = r.levels[0].field_error;
   ref.level0_solve_s = r.levels[0].solve_ms * 1e-3;
   return ref;
@@ -235,8 +241,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
                    {"force_at_field_N", f_at},
                    {"peak_force_N", *std::max_element(first.force.begin(), first.force.end())},
                    {"k_ref_N_per_m", ref.k},
-                   {"ref_order", ref.order},
-                   {"ref_order_plausible", ref.plausible ? 1.0 : 0.0}};
+                   {"ref_order", std::isfinite(ref.order) ? ref.order : -1.0},
+                   {"ref_extrapolated", ref.plausible ? 1.0 : 0.0}};
       out.push_back(r);
       points.push_back({region + " " + models[k].name, r.median_s * 1e6, err_a, field_err});
     }
@@ -258,7 +264,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       f.what = region + ": linear FEM on the coarsest reference level (time = one static solve)";
       f.reps = 1;
       f.median_s = f.min_s = f.max_s = f.cold_s = ref.level0_solve_s;
-      f.metrics = {{"force_curve_rel_err", ref.level0_rel_k / (1 - ref.level0_rel_k)},
+      // A linear model of stiffness k0: d = F / k0, so the curve error is |k_ref / k0 - 1|.
+      f.metrics = {{"force_curve_rel_err", std::abs(ref.k / ref.k0 - 1)},
                    {"field_rel_err", ref.level0_field}};
       out.push_back(f);
       points.push_back({region + " FEM level 0 (static)", ref.level0_solve_s * 1e6,
