@@ -16,12 +16,12 @@
 // level; metric ref_extrapolated). NOT modelled by the reference: the elastic foundation
 // (support_modulus) that holds prototype C's surface — FemReferenceOptions has no such support —
 // so the reference body is a cantilever pinned at its base and far softer than every prototype
-// at the horns and ovaries; the errors below are dominated by that difference. Two controls make the error measure auditable: a
-// planted model with exactly 20 % too much displacement (curve and field) must show 0.2 on both;
-// and the linear FEM on the coarsest level is placed with its own discretisation error (its
-// time is one static solve, not a haptic step). Prototype D (FEM model in the haptic loop) and
-// its condensed / co-rotational variants are not wired into scenes yet and are missing here.
-// Presses follow a fixed trajectory (2 cm/s ramp, hold), the same for every model.
+// at the horns and ovaries; the errors below are dominated by that difference. Two controls make
+// the error measure auditable: a planted model with exactly 20 % too much displacement (curve and
+// field) must show 0.2 on both; and the linear FEM on the coarsest level is placed with its own
+// discretisation error (its time is one static solve, not a haptic step). Prototype D (FEM model in
+// the haptic loop) and its condensed / co-rotational variants are not wired into scenes yet and are
+// missing here. Presses follow a fixed trajectory (2 cm/s ramp, hold), the same for every model.
 #include <chrono>
 #include <cmath>
 
@@ -39,9 +39,9 @@ using palplab::app::BenchOptions;
 using palplab::app::BenchResult;
 
 struct Reference {
-  double k = 0;             // N/m, extrapolated contact stiffness
-  mesh::Positions surf;     // reference surface vertices (rest), m
-  mesh::Positions u_unit;   // displacement field per newton (m/N)
+  double k = 0;            // N/m, extrapolated contact stiffness
+  mesh::Positions surf;    // reference surface vertices (rest), m
+  mesh::Positions u_unit;  // displacement field per newton (m/N)
   double order = 0, k0 = 0, level0_field = 0, level0_solve_s = 0;
   bool plausible = false;  // extrapolated (observed order plausible), else the finest level
 };
@@ -128,8 +128,8 @@ std::string frontier_svg(const std::vector<Point>& pts, bool field) {
   for (const auto& s : series) {
     bool dominated = false;
     for (const auto& t : series)
-      dominated = dominated || (t.x[0] <= s.x[0] && t.y[0] <= s.y[0] &&
-                                (t.x[0] < s.x[0] || t.y[0] < s.y[0]));
+      dominated = dominated ||
+                  (t.x[0] <= s.x[0] && t.y[0] <= s.y[0] && (t.x[0] < s.x[0] || t.y[0] < s.y[0]));
     if (!dominated) front.push_back({s.x[0], s.y[0]});
   }
   std::sort(front.begin(), front.end());
@@ -144,12 +144,11 @@ std::string frontier_svg(const std::vector<Point>& pts, bool field) {
   budget.x = {3.0, 3.0};
   budget.y = {std::min(ymin, std::log10(0.07)) - 0.2, std::max(ymax, 0.0) + 0.2};
   series.push_back(budget);
-  return analysis::svg_line_plot(
-      series,
-      field ? "Speed vs displacement-field error (FEM reference)"
-            : "Speed vs force-displacement error (FEM reference)",
-      "log10 time per haptic step (us)", "log10 relative error", true,
-      {{"force Weber fraction 7 %", std::log10(0.07), "#aa0000"}});
+  return analysis::svg_line_plot(series,
+                                 field ? "Speed vs displacement-field error (FEM reference)"
+                                       : "Speed vs force-displacement error (FEM reference)",
+                                 "log10 time per haptic step (us)", "log10 relative error", true,
+                                 {{"force Weber fraction 7 %", std::log10(0.07), "#aa0000"}});
 }
 
 std::vector<BenchResult> run(const BenchOptions& o) {
@@ -202,7 +201,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
           const double d = std::min(depth, -0.002 + 0.02 * i * s.dt());
           const auto t0 = std::chrono::steady_clock::now();
           const engine::Rendered r = s.step(p - d * n);
-          const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          const double dt =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           if (r.contact) t.contact_step_s.push_back(dt);
           t.force.push_back(r.force.norm());
           t.depth.push_back(d);
@@ -216,8 +216,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
             const long nv = g.V.rows();
             for (long v = 0; v < ref.surf.rows(); ++v) {
               const int j = g.nearest_node(ref.surf.row(v).transpose());
-              if (j >= 0 && j < nv && V.rows() >= nv)
-                u_at_ref.row(v) = V.row(j) - g.V.row(j);
+              if (j >= 0 && j < nv && V.rows() >= nv) u_at_ref.row(v) = V.row(j) - g.V.row(j);
             }
           }
         }
@@ -231,10 +230,10 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       }
       const double err_a = curve_error(first.force, first.depth, ref.k);
       if (models[k].name == "C") c_force = first.force, c_force_at = f_at;
-      BenchResult r = app::result_from_samples(
-          region + "_" + models[k].name,
-          region + " press: " + models[k].what + " (s per contact step)", med,
-          app::bench_median(first.contact_step_s));
+      BenchResult r =
+          app::result_from_samples(region + "_" + models[k].name,
+                                   region + " press: " + models[k].what + " (s per contact step)",
+                                   med, app::bench_median(first.contact_step_s));
       r.metrics = {{"p99_step_s", app::bench_quantile(all, 0.99)},
                    {"force_curve_rel_err", err_a},
                    {"field_rel_err", field_err},

@@ -15,10 +15,11 @@ using palplab::app::BenchOptions;
 using palplab::app::BenchResult;
 
 std::vector<BenchResult> run(const BenchOptions& o) {
-  const std::vector<int> sizes = o.quick ? std::vector<int>{1500, 6000}
-                                         : std::vector<int>{1442, 3000, 8664, 14392, 23000};
+  const std::vector<int> sizes =
+      o.quick ? std::vector<int>{1500, 6000} : std::vector<int>{1442, 3000, 8664, 14392, 23000};
   const std::vector<std::string> scopes = {"rings", "octant", "whole"};
-  const int reps = o.quick ? 5 : 7, steps = o.quick ? 400 : 700;  // the ramp to 5 mm takes 350 steps
+  const int reps = o.quick ? 5 : 7,
+            steps = o.quick ? 400 : 700;  // the ramp to 5 mm takes 350 steps
   std::vector<BenchResult> out;
   std::vector<analysis::Series> series(scopes.size());
   for (size_t k = 0; k < scopes.size(); ++k) series[k].name = scopes[k], series[k].colour = k;
@@ -48,11 +49,11 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       }
     const double whole = app::bench_median(med[2]);
     for (size_t k = 0; k < scopes.size(); ++k) {
-      BenchResult r = app::result_from_samples(
-          "B" + std::to_string(nv) + "_" + scopes[k],
-          "prototype B, " + std::to_string(nv) + " vertices, scope " + scopes[k] +
-              " (s per contact step)",
-          med[k], cold[k]);
+      BenchResult r =
+          app::result_from_samples("B" + std::to_string(nv) + "_" + scopes[k],
+                                   "prototype B, " + std::to_string(nv) + " vertices, scope " +
+                                       scopes[k] + " (s per contact step)",
+                                   med[k], cold[k]);
       r.metrics = {{"vertices", static_cast<double>(nv)},
                    {"p99_s", app::bench_quantile(all[k], 0.99)},
                    {"whole_over_this", whole / r.median_s},

@@ -164,7 +164,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
         if (first.stable) r.metrics.push_back({"rel_error", err});  // none for a diverged run
         r.metrics.push_back({"ref_self_err", ref_err});
         r.metrics.push_back({"ref_h_s", h_ref});
-        if (me.m == Integrator::backward_euler) r.metrics.push_back({"cg_iters", first.mean_cg_iters});
+        if (me.m == Integrator::backward_euler)
+          r.metrics.push_back({"cg_iters", first.mean_cg_iters});
         if (first.stable) {
           sr.x.push_back(std::log10(h * 1e3));
           sr.y.push_back(std::log10(std::max(err, 1e-12)));
@@ -179,10 +180,10 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       out.push_back(sum);
       series.push_back(sr);
     }
-    app::write_figure(o, "integrators_" + tissue + ".svg",
-                      analysis::svg_line_plot(series,
-                                              "Integrator error vs step, " + tissue + " tissue",
-                                              "log10 h (ms)", "log10 relative error"));
+    app::write_figure(
+        o, "integrators_" + tissue + ".svg",
+        analysis::svg_line_plot(series, "Integrator error vs step, " + tissue + " tissue",
+                                "log10 h (ms)", "log10 relative error"));
   }
   return out;
 }

@@ -128,9 +128,9 @@ void compare(const std::string& name, const std::string& what, AdaptiveMassSprin
           " m^2, mean new nodes/springs vs conventional over " + std::to_string(nodes.size()) +
           " touched nodes (s per event)",
       event_s);
-  ev.metrics = {{"area_new_nodes", an / k},  {"area_new_springs", as / k},
-                {"conv_new_nodes", cn / k},  {"conv_new_springs", cs / k},
-                {"nodes_ratio", an / cn},    {"springs_ratio", as / cs},
+  ev.metrics = {{"area_new_nodes", an / k},       {"area_new_springs", as / k},
+                {"conv_new_nodes", cn / k},       {"conv_new_springs", cs / k},
+                {"nodes_ratio", an / cn},         {"springs_ratio", as / cs},
                 {"max_level", double(level_max)}, {"coarse_nodes", double(m.coarse_nodes())}};
   out.push_back(ev);
   // 2. Haptic and graphics step after adaptive refinement (at the middle touched node) vs
@@ -144,8 +144,8 @@ void compare(const std::string& name, const std::string& what, AdaptiveMassSprin
   std::vector<double> ha, hw, ga, gw;
   double cold[4];
   for (int rep = 0; rep <= reps; ++rep) {
-    double x[4] = {haptic_step_s(m, steps), haptic_step_s(whole, steps),
-                   graphics_step_s(m, frames), graphics_step_s(whole, frames)};
+    double x[4] = {haptic_step_s(m, steps), haptic_step_s(whole, steps), graphics_step_s(m, frames),
+                   graphics_step_s(whole, frames)};
     if (rep == 0) {
       std::copy(x, x + 4, cold);
       continue;
@@ -154,8 +154,8 @@ void compare(const std::string& name, const std::string& what, AdaptiveMassSprin
   }
   const double hr = app::bench_median(hw) / app::bench_median(ha);
   const double gr = app::bench_median(gw) / app::bench_median(ga);
-  auto add = [&](const std::string& id, const std::string& desc, std::vector<double>& s,
-                 double c, const AdaptiveMassSpring& sys, double ratio) {
+  auto add = [&](const std::string& id, const std::string& desc, std::vector<double>& s, double c,
+                 const AdaptiveMassSpring& sys, double ratio) {
     BenchResult r = app::result_from_samples(name + "_" + id, what + ": " + desc, s, c);
     r.metrics = {{"nodes", double(sys.sys.nodes())},
                  {"springs", double(sys.sys.springs.size())},
@@ -175,8 +175,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   std::vector<BenchResult> out;
   compare("stomach", "stomach surface (SPEC: 81 vs 91 masses, 214 vs 234 springs)",
           surface_model(mesh::generate_stomach(0)), 5e-5, o, out);
-  compare("tract_surface", "tract surface, Model-A",
-          surface_model(mesh::generate_tract({1500, 0})), 4e-6, o, out);
+  compare("tract_surface", "tract surface, Model-A", surface_model(mesh::generate_tract({1500, 0})),
+          4e-6, o, out);
   if (!o.quick) compare("tract_tet", "Model-C tet model", tet_model(), 4e-6, o, out);
   return out;
 }

@@ -9,10 +9,10 @@
 #include <chrono>
 #include <random>
 
+#include "analysis/svg.hpp"
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
 #include "engine/mesh/generate.hpp"
-#include "analysis/svg.hpp"
 #include "engine/spatial/octree.hpp"
 
 namespace {
@@ -104,14 +104,14 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     const double lin = app::bench_median(per_query[0]);
     for (size_t k = 0; k < variants.size(); ++k) {
       const Variant& v = variants[k];
-      BenchResult r = app::result_from_samples(
-          c.name + "_" + v.name,
-          c.what + ": " +
-              (v.depth ? "octree depth " + std::to_string(v.depth) + ", <= " +
-                             std::to_string(v.leaf) + " per leaf"
-                       : std::string("linear scan")) +
-              " (s per query)",
-          per_query[k], cold[k]);
+      BenchResult r =
+          app::result_from_samples(c.name + "_" + v.name,
+                                   c.what + ": " +
+                                       (v.depth ? "octree depth " + std::to_string(v.depth) +
+                                                      ", <= " + std::to_string(v.leaf) + " per leaf"
+                                                : std::string("linear scan")) +
+                                       " (s per query)",
+                                   per_query[k], cold[k]);
       r.metrics = {{"vertices", static_cast<double>(c.V.rows())},
                    {"linear_over_this", lin / r.median_s},
                    {"mismatches", static_cast<double>(mismatches[k])}};
@@ -129,8 +129,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     s.name = variants[k].name;
     s.colour = static_cast<int>(k);
     for (const BenchResult& r : out)
-      if (r.name.rfind("sphere", 0) == 0 &&
-          r.name.size() > variants[k].name.size() &&
+      if (r.name.rfind("sphere", 0) == 0 && r.name.size() > variants[k].name.size() &&
           r.name.compare(r.name.size() - variants[k].name.size(), std::string::npos,
                          variants[k].name) == 0) {
         s.x.push_back(std::log10(r.metrics[0].second));

@@ -74,12 +74,13 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       double dd = 0;
       for (size_t i = 0; i < first[k].deformation.size(); ++i)
         dd = std::max(dd, std::abs(first[k].deformation[i] - first[0].deformation[i]));
-      r.metrics = {{"speedup", full / r.median_s},
-                   {"awake_max", static_cast<double>(first[k].awake_max)},
-                   {"peak_force_N", *std::max_element(first[k].force.begin(), first[k].force.end())},
-                   {"force_rel_err", app::max_rel_diff(first[k].force, first[0].force)},
-                   {"deformation_err_m", dd},
-                   {"p99_step_s", app::bench_quantile(first[k].step_s, 0.99)}};
+      r.metrics = {
+          {"speedup", full / r.median_s},
+          {"awake_max", static_cast<double>(first[k].awake_max)},
+          {"peak_force_N", *std::max_element(first[k].force.begin(), first[k].force.end())},
+          {"force_rel_err", app::max_rel_diff(first[k].force, first[0].force)},
+          {"deformation_err_m", dd},
+          {"p99_step_s", app::bench_quantile(first[k].step_s, 0.99)}};
       out.push_back(r);
     }
   }
