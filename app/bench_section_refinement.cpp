@@ -142,7 +142,7 @@ void compare(const std::string& name, const std::string& what, AdaptiveMassSprin
   refine_whole(whole, level);
   const int steps = o.quick ? 3 : 10, frames = o.quick ? 5 : 20;
   std::vector<double> ha, hw, ga, gw;
-  double cold[4];
+  double cold[4] = {0, 0, 0, 0};
   for (int rep = 0; rep <= reps; ++rep) {
     double x[4] = {haptic_step_s(m, steps), haptic_step_s(whole, steps), graphics_step_s(m, frames),
                    graphics_step_s(whole, frames)};
