@@ -7,6 +7,7 @@
 // caches (e.g. the studentized range tables) make later runs faster than a fresh process.
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace palplab::app {
@@ -14,6 +15,9 @@ namespace palplab::app {
 struct BenchOptions {
   bool quick = false;    // fewer repetitions / smaller cases, for CI
   std::string data_dir;  // the repository's tests/data (NIST sets and other fixtures)
+  std::string svg_dir;   // "" = no figures; else sections write <section>*.svg here
+  // The repository's prototypes/ (data_dir/../../prototypes): sections build variants of them.
+  std::string prototypes_dir() const;
 };
 
 struct BenchResult {
@@ -22,7 +26,18 @@ struct BenchResult {
   double median_s = 0, min_s = 0, max_s = 0, cold_s = 0;  // wall time
   double median_cpu_s = 0;  // process CPU time: on a shared machine wall time includes waiting
   double goal_s = 0;        // 0 = no stated goal
+  // Further measured quantities of this case (errors, counts, ratios measured in the same run),
+  // name -> value; the name carries the unit (e.g. "force_rel_err", "new_nodes", "ratio").
+  std::vector<std::pair<std::string, double>> metrics;
 };
+
+// A result from per-repetition values already measured by the section (seconds per unit of
+// work, e.g. per haptic step): median, min, max over `samples`; cold_s = the first run, which
+// the caller measured separately (NaN-free: pass 0 when there was none).
+BenchResult result_from_samples(const std::string& name, const std::string& what,
+                                std::vector<double> samples_s, double cold_s = 0);
+double bench_median(std::vector<double> v);
+double bench_quantile(std::vector<double> v, double q);  // nearest rank, q in [0, 1]
 
 // Runs `work` once (cold) and then `reps` times; the median, min and max are over the reps.
 BenchResult time_reps(const std::string& name, const std::string& what, int reps,

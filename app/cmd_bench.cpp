@@ -1,6 +1,7 @@
-// `palplab bench [SECTION...] [--quick] [--json FILE] [--md FILE] [--data DIR]`: runs the named
-// benchmark sections (all when none is named) and prints one table; --json writes one key per
-// section ({"stats": {"results": [...]}}), --md a Markdown table. Sections: app/bench.hpp.
+// `palplab bench [SECTION...] [--quick] [--json FILE] [--md FILE] [--svg DIR] [--data DIR]`: runs
+// the named benchmark sections (all when none is named) and prints one table; --json writes one
+// key per section ({"stats": {"results": [...]}}; a result's further measured quantities under
+// "metrics"), --md a Markdown table, --svg the sections' figures. Sections: app/bench.hpp.
 // An unknown section name is an input error (exit 2).
 #include <algorithm>
 #include <chrono>
@@ -57,13 +58,44 @@ BenchResult time_reps(const std::string& name, const std::string& what, int reps
   return r;
 }
 
+double bench_median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+double bench_quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1) + 0.5)];
+}
+
+BenchResult result_from_samples(const std::string& name, const std::string& what,
+                                std::vector<double> samples_s, double cold_s) {
+  BenchResult r;
+  r.name = name;
+  r.what = what;
+  r.reps = static_cast<int>(samples_s.size());
+  r.cold_s = cold_s;
+  if (samples_s.empty()) return r;
+  r.median_s = bench_median(samples_s);
+  r.min_s = *std::min_element(samples_s.begin(), samples_s.end());
+  r.max_s = *std::max_element(samples_s.begin(), samples_s.end());
+  r.median_cpu_s = r.median_s;  // single-threaded work timed by the section
+  return r;
+}
+
+std::string BenchOptions::prototypes_dir() const {
+  return (std::filesystem::path(data_dir) / ".." / ".." / "prototypes").lexically_normal().string();
+}
+
 }  // namespace palplab::app
 
 namespace {
 struct BenchArgs {
   std::vector<std::string> sections;
   bool quick = false;
-  std::string json, md, data = "tests/data";
+  std::string json, md, svg, data = "tests/data";
 };
 
 std::string fmt_s(double s) {
@@ -80,6 +112,7 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--quick", a->quick, "Fewer repetitions and smaller cases");
       cmd->add_option("--json", a->json, "Write results as JSON (one key per section)");
       cmd->add_option("--md", a->md, "Write results as a Markdown table");
+      cmd->add_option("--svg", a->svg, "Write each section's figures (SVG) into this directory");
       cmd->add_option("--data", a->data,
                       "The repository's tests/data directory (default: tests/data, i.e. run "
                       "from the repository root)");
@@ -104,12 +137,19 @@ palplab::app::CommandRegistration reg{
           throw palplab::InputError(
               palplab::SourceLocation{"--data"},
               "no directory '" + a->data + "' (run from the repository root or pass --data)");
-        BenchOptions opt{a->quick, a->data};
+        if (!a->svg.empty()) {
+          std::error_code ec;
+          std::filesystem::create_directories(a->svg, ec);
+          if (!std::filesystem::is_directory(a->svg))
+            throw palplab::InputError(palplab::SourceLocation{"--svg"},
+                                      "cannot create the directory '" + a->svg + "'");
+        }
+        BenchOptions opt{a->quick, a->data, a->svg};
         nlohmann::json j = nlohmann::json::object();
         std::string md =
             "| section | case | reps | median s | min s | max s | cold s | median CPU s | goal s "
-            "|\n"
-            "|---|---|---|---|---|---|---|---|---|\n";
+            "| measured |\n"
+            "|---|---|---|---|---|---|---|---|---|---|\n";
         for (const auto* s : run) {
           auto results = s->run(opt);
           nlohmann::json arr = nlohmann::json::array();
@@ -120,6 +160,13 @@ palplab::app::CommandRegistration reg{
                         fmt_s(r.max_s).c_str(), fmt_s(r.cold_s).c_str(),
                         fmt_s(r.median_cpu_s).c_str(), r.reps,
                         r.goal_s > 0 ? ("  goal <= " + fmt_s(r.goal_s) + " s").c_str() : "");
+            std::string mtext;
+            nlohmann::json metrics = nlohmann::json::object();
+            for (const auto& [k, v] : r.metrics) {
+              metrics[k] = v;
+              mtext += (mtext.empty() ? "" : ", ") + k + " " + fmt_s(v);
+            }
+            if (!mtext.empty()) std::printf("  %-20s %s\n", "", mtext.c_str());
             std::fflush(stdout);
             nlohmann::json e = {{"name", r.name},     {"what", r.what},
                                 {"reps", r.reps},     {"median_s", r.median_s},
@@ -129,11 +176,12 @@ palplab::app::CommandRegistration reg{
               e["goal_s"] = r.goal_s;
               e["meets_goal"] = r.cold_s <= r.goal_s;
             }
+            if (!r.metrics.empty()) e["metrics"] = metrics;
             arr.push_back(e);
             md += "| " + s->name + " | " + r.what + " | " + std::to_string(r.reps) + " | " +
                   fmt_s(r.median_s) + " | " + fmt_s(r.min_s) + " | " + fmt_s(r.max_s) + " | " +
                   fmt_s(r.cold_s) + " | " + fmt_s(r.median_cpu_s) + " | " +
-                  (r.goal_s > 0 ? fmt_s(r.goal_s) : "") + " |\n";
+                  (r.goal_s > 0 ? fmt_s(r.goal_s) : "") + " | " + mtext + " |\n";
           }
           j[s->name] = {{"description", s->description}, {"quick", a->quick}, {"results", arr}};
         }

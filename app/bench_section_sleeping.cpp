@@ -1,0 +1,95 @@
+// `palplab bench sleeping`: integrating only what the scene needs (sleeping of nodes at rest,
+// a local integration scope) against integrating every node every step, on prototype C with the
+// same fixed presses (ramp at 2 cm/s to 6 mm — 4 mm in --quick — then hold; the trajectory does
+// not depend on the force, so every variant sees the same device positions at the same times).
+// Per variant: time per haptic step (one repetition = one press, its sample = the mean step
+// time), the speed-up over the full integration measured in the same run, and the error it costs
+// against the full integration of the same model: the largest force difference relative to
+// the peak force, and the largest difference of the visible deformation (m). (The error
+// against the continuum — the FEM reference — is the frontier section's.)
+#include "app/bench.hpp"
+#include "app/bench_scene.hpp"
+#include "prototypes/factory.hpp"
+
+namespace {
+using namespace palplab;
+using palplab::app::BenchOptions;
+using palplab::app::BenchResult;
+
+struct Variant {
+  std::string name, what;
+  double radius;
+  int cap;  // 0 = no cap
+  bool sleep;
+  double x_tol;
+};
+
+std::vector<BenchResult> run(const BenchOptions& o) {
+  const std::vector<Variant> variants = {
+      {"full", "every node every step (reference)", 0, 0, false, 0},
+      {"sleeping", "sleeping only (10 um)", 0, 0, true, 1e-5},
+      {"sleeping_1um", "sleeping only (1 um)", 0, 0, true, 1e-6},
+      {"scope3cm_sleeping", "scope 3 cm + sleeping (prototype C)", 0.03, 0, true, 1e-5},
+      {"scope2cm_sleeping", "scope 2 cm + sleeping", 0.02, 0, true, 1e-5},
+      {"scope3cm_cap64", "scope 3 cm, <= 64 nodes + sleeping", 0.03, 64, true, 1e-5}};
+  const std::vector<std::string> regions =
+      o.quick ? std::vector<std::string>{"ovary_left"}
+              : std::vector<std::string>{"ovary_left", "horn_right", "body"};
+  const double depth = o.quick ? 0.004 : 0.006;
+  const int steps = o.quick ? 400 : 600;
+  const int reps = 5;
+  std::vector<engine::Scene> scenes;
+  for (const Variant& v : variants)
+    scenes.push_back(prototypes::build_scene(
+        app::prototype_variant(o, "C", "sleep_" + v.name, [&](nlohmann::json& j) {
+          auto& m = j["model"];
+          m["scope_radius"] = v.radius;
+          if (v.cap > 0) m["scope_max_nodes"] = v.cap;
+          m["sleeping"]["enabled"] = v.sleep;
+          if (v.sleep) m["sleeping"]["position_tolerance"] = v.x_tol;
+        })));
+  std::vector<BenchResult> out;
+  for (const std::string& region : regions) {
+    std::vector<std::vector<double>> t(variants.size());
+    std::vector<app::PressTrace> first(variants.size());
+    for (int rep = 0; rep <= reps; ++rep)
+      for (size_t k = 0; k < variants.size(); ++k) {
+        scenes[k].reset();
+        app::PressTrace p = app::fixed_press(scenes[k], region, depth, steps);
+        double sum = 0;
+        for (double s : p.step_s) sum += s;
+        if (rep == 0)
+          first[k] = std::move(p);
+        else
+          t[k].push_back(sum / steps);
+      }
+    const double full = app::bench_median(t[0]);
+    for (size_t k = 0; k < variants.size(); ++k) {
+      double cold = 0;
+      for (double s : first[k].step_s) cold += s;
+      BenchResult r = app::result_from_samples(
+          region + "_" + variants[k].name,
+          "prototype C, " + region + " press: " + variants[k].what + " (s per haptic step)", t[k],
+          cold / steps);
+      double dd = 0;
+      for (size_t i = 0; i < first[k].deformation.size(); ++i)
+        dd = std::max(dd, std::abs(first[k].deformation[i] - first[0].deformation[i]));
+      r.metrics = {
+          {"speedup", full / r.median_s},
+          {"awake_max", static_cast<double>(first[k].awake_max)},
+          {"peak_force_N", *std::max_element(first[k].force.begin(), first[k].force.end())},
+          {"force_rel_err", app::max_rel_diff(first[k].force, first[0].force)},
+          {"deformation_err_m", dd},
+          {"p99_step_s", app::bench_quantile(first[k].step_s, 0.99)}};
+      out.push_back(r);
+    }
+  }
+  return out;
+}
+
+palplab::app::BenchSectionRegistration reg{
+    "sleeping",
+    "prototype C: sleeping / local scope vs integrating every node: speed-up and the error it "
+    "costs",
+    run};
+}  // namespace
