@@ -34,7 +34,7 @@ engine::Thresholds read_thresholds(json::Checker& c, const nlohmann::json& o,
 struct PrototypeSummary {
   std::string id;     // "A", "C1", ...
   std::string scene;  // e.g. "bovine_reproductive_tract"
-  std::string model;  // "penalty" | "ring" | "mass_spring"
+  std::string model;  // a registered model kind: "penalty", "ring", "mass_spring", "fem", ...
   std::vector<std::string> region_names;
 };
 PrototypeSummary inspect_prototype(const std::string& prototype_json_path);
