@@ -3,32 +3,34 @@
 // `palplab run STUDY.json --db FILE --human --participant ID [--device udp:PORT|trace:FILE]`:
 // runs that participant's due sessions with a person (or a device stream) at the device, in real
 // time (protocols::run_human; docs/DEVICES.md).
-#include <csignal>
 #include <unistd.h>
+#include <csignal>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
-#include <atomic>
 #include <cstdlib>
 #include <ctime>
+#include <iostream>
 #include <memory>
 
 #include "app/command.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
-#include "protocols/plan.hpp"
-#include "protocols/runner.hpp"
-#include "protocols/study.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
 #include "engine/haptics/devices/self_test.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
 #include "engine/haptics/devices/udp_device.hpp"
+#include "protocols/plan.hpp"
+#include "protocols/runner.hpp"
+#include "protocols/study.hpp"
 
 namespace {
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted = true; }
+extern "C" void on_sigint(int) {
+  g_interrupted = true;
+}
 
 struct HumanArgs {
   bool human = false;
@@ -92,11 +94,9 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   std::printf("%s: participant %s: %d session(s) completed, %d aborted, %d remaining%s\n",
-              palplab::escape_controls(ro.db, false).c_str(), h.participant.c_str(),
-              r.sessions_run, r.aborted, r.remaining,
-              r.remaining > 0 && !r.next_due.empty()
-                  ? ("; next due " + r.next_due).c_str()
-                  : "");
+              palplab::escape_controls(ro.db, false).c_str(), h.participant.c_str(), r.sessions_run,
+              r.aborted, r.remaining,
+              r.remaining > 0 && !r.next_due.empty() ? ("; next due " + r.next_due).c_str() : "");
   // An aborted session is kept in the database, flagged; the exit code says it happened.
   return r.aborted > 0 ? 3 : 0;
 }

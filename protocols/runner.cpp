@@ -14,8 +14,8 @@
 
 #include "common/input_error.hpp"
 #include "common/seed.hpp"
-#include "engine/scene.hpp"
 #include "engine/haptics/clock.hpp"
+#include "engine/scene.hpp"
 #include "palplab/version.hpp"
 #include "protocols/input_pins.hpp"
 #include "protocols/measures.hpp"
@@ -291,25 +291,25 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
 // A new database: the study, its prototypes (with their SHA-256), participants and structure.
 void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
                      results::Store& store, std::map<std::string, std::string>& prototype_sha) {
-    results::StudyRecord rec;
-    rec.study_id = study.id;
-    rec.title = study.title;
-    rec.json = study.json_text;
-    rec.sha256 = sha;
-    rec.palplab_version = kVersion;
-    rec.git_commit = kGitCommit;
-    rec.seed = study.seed;
-    rec.started_at = results::utc_now();
-    std::vector<results::PrototypeRecord> protos;
-    for (const auto& [id, path] : study.prototype_files) {
-      std::string text = slurp(path);
-      protos.push_back({id, path, prototype_sha256(path), text});
-      prototype_sha[id] = protos.back().sha256;
-    }
-    std::vector<results::ParticipantRecord> parts;
-    for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
-    store.write_study(rec, protos, parts);
-    store.write_structure(study_structure(study));
+  results::StudyRecord rec;
+  rec.study_id = study.id;
+  rec.title = study.title;
+  rec.json = study.json_text;
+  rec.sha256 = sha;
+  rec.palplab_version = kVersion;
+  rec.git_commit = kGitCommit;
+  rec.seed = study.seed;
+  rec.started_at = results::utc_now();
+  std::vector<results::PrototypeRecord> protos;
+  for (const auto& [id, path] : study.prototype_files) {
+    std::string text = slurp(path);
+    protos.push_back({id, path, prototype_sha256(path), text});
+    prototype_sha[id] = protos.back().sha256;
+  }
+  std::vector<results::ParticipantRecord> parts;
+  for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
+  store.write_study(rec, protos, parts);
+  store.write_structure(study_structure(study));
 }
 
 }  // namespace
@@ -378,8 +378,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   progress.participants_total = static_cast<int>(plan.participants.size());
   progress.sessions_total = static_cast<long>(plan.session_count());
   for (const auto& p : plan.participants)
-    if (human.count(p.id))
-      progress.sessions_total -= static_cast<long>(p.sessions.size());
+    if (human.count(p.id)) progress.sessions_total -= static_cast<long>(p.sessions.size());
   for (const auto& [p, m] : done)
     if (!human.count(p)) progress.sessions_resumed += static_cast<long>(m.size());
   progress.sessions_done = progress.sessions_resumed;
@@ -524,8 +523,8 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     write_new_study(study, plan, sha, store, prototype_sha);
   }
   if (int n = store.abort_stale_sessions(pp->id))
-    say("note: " + std::to_string(n) +
-        " session(s) of " + pp->id + " left running by an ended process are marked aborted");
+    say("note: " + std::to_string(n) + " session(s) of " + pp->id +
+        " left running by an ended process are marked aborted");
 
   std::map<int, int> attempts;  // ordinal -> attempts so far
   std::set<int> complete;
@@ -541,9 +540,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     const std::int64_t t = parse_utc(r.started_at);
     if (t >= 0 && (first_start < 0 || t < first_start)) first_start = t;
   }
-  auto now = [&] {
-    return opt.now >= 0 ? opt.now : static_cast<std::int64_t>(std::time(nullptr));
-  };
+  auto now = [&] { return opt.now >= 0 ? opt.now : static_cast<std::int64_t>(std::time(nullptr)); };
   auto day_of = [](std::int64_t t) { return t >= 0 ? t / 86400 : 0; };
   const std::int64_t day0 = day_of(first_start >= 0 ? first_start : now());
 
@@ -554,8 +551,8 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     if (due_day > day_of(now())) {
       sum.next_due = utc_date(due_day * 86400);
       if (sum.sessions_run == 0 && sum.aborted == 0)
-        throw InputError("participant " + pp->id + ": nothing is due today (" +
-                         utc_date(now()) + "); the next session (" + spec.phase_id + " #" +
+        throw InputError("participant " + pp->id + ": nothing is due today (" + utc_date(now()) +
+                         "); the next session (" + spec.phase_id + " #" +
                          std::to_string(spec.index + 1) + ", day " + std::to_string(spec.day) +
                          " of the study) is due on " + sum.next_due);
       break;
@@ -575,9 +572,8 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
           spec.prototype_file);
     std::unique_ptr<engine::Device> dev = opt.make_device();
     engine::TraceRecorder recorder(*dev);
-    engine::Device& device = opt.record_trace_dir.empty()
-                                 ? static_cast<engine::Device&>(*dev)
-                                 : static_cast<engine::Device&>(recorder);
+    engine::Device& device = opt.record_trace_dir.empty() ? static_cast<engine::Device&>(*dev)
+                                                          : static_cast<engine::Device&>(recorder);
 
     results::SessionData data;
     results::SessionRecord& rec = data.session;
@@ -706,16 +702,16 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       tr.meta["participant"] = pp->id;
       tr.meta["ordinal"] = std::to_string(spec.ordinal);
       tr.meta["prototype"] = spec.prototype;
-      engine::write_trace((fs::path(opt.record_trace_dir) /
-                           (pp->id + "_" + std::to_string(spec.ordinal) + "_" +
-                            std::to_string(rec.attempt) + ".trace"))
-                              .string(),
-                          tr);
+      engine::write_trace(
+          (fs::path(opt.record_trace_dir) / (pp->id + "_" + std::to_string(spec.ordinal) + "_" +
+                                             std::to_string(rec.attempt) + ".trace"))
+              .string(),
+          tr);
     }
     say("session " + spec.phase_id + " #" + std::to_string(spec.index + 1) + " " + rec.status +
         (reason.empty() ? "" : " (" + reason + ")") + ", loop period median " +
-        std::to_string(stats.period_median_us) + " us, p99 " +
-        std::to_string(stats.period_p99_us) + " us");
+        std::to_string(stats.period_median_us) + " us, p99 " + std::to_string(stats.period_p99_us) +
+        " us");
     if (!reason.empty()) {
       ++sum.aborted;
       break;

@@ -638,7 +638,8 @@ std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool comp
   sql += " FROM sessions s JOIN participants p ON p.participant = s.participant WHERE 1";
   if (version >= 3 && complete_only) sql += " AND s.status = 'complete'";
   if (!participant.empty()) sql += " AND s.participant = ?1";
-  sql += version >= 3 ? " ORDER BY p.number, s.ordinal, s.attempt" : " ORDER BY p.number, s.ordinal";
+  sql +=
+      version >= 3 ? " ORDER BY p.number, s.ordinal, s.attempt" : " ORDER BY p.number, s.ordinal";
   Stmt q(db, sql.c_str());
   if (!participant.empty()) q.bind(1, participant);
   std::vector<SessionRecord> out;

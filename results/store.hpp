@@ -78,7 +78,7 @@ struct SessionRecord {
   double wall_duration = 0.0;                // s
   double loop_median = 0.0, loop_p99 = 0.0;  // s per haptic step
   std::uint64_t seed = 0;
-  std::string state_after;  // JSON
+  std::string state_after;   // JSON
   std::string completed_at;  // "" while running or when aborted
   // Schema 3 (human sessions; defaults describe every virtual session).
   int attempt = 0;                  // 0-based try of this ordinal (aborted tries are kept)
