@@ -142,7 +142,7 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--device-lost", human->device_lost,
                       "Abort the session after this long without device samples (s; default 2)");
       cmd->add_option("--record-trace", human->record_trace,
-                      "Write each human session's device track to DIR (trace files)");
+                      "Write each session's device track to DIR (trace files)");
       cmd->callback([study, opt, quiet, samples, code, human] {
         using namespace palplab::protocols;
         if (opt->resume && opt->force)
@@ -154,10 +154,8 @@ palplab::app::CommandRegistration reg{
           *code = run_human_cmd(s, plan, *opt, *human, *quiet);
           return;
         }
-        if (!human->participant.empty() || !human->record_trace.empty())
-          throw palplab::InputError(
-              "--participant and --record-trace need --human (virtual runs record every "
-              "session's samples in the database; export a trace with `palplab export`)");
+        if (!human->participant.empty()) throw palplab::InputError("--participant needs --human");
+        opt->record_trace_dir = human->record_trace;
         const bool tty = isatty(2);
         if (!*quiet) {
           opt->progress = [tty](const Progress& p) {

@@ -416,8 +416,23 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             stop = true;
             break;
           }
-          SessionOutcome o =
-              run_session(study, mp, pp, pp.sessions[k], state, opt.samples, prototype_sha);
+          const bool tracing = !opt.record_trace_dir.empty();
+          SessionOutcome o = run_session(study, mp, pp, pp.sessions[k], state,
+                                         opt.samples || tracing, prototype_sha);
+          if (tracing) {
+            engine::Trace tr = trace_from_samples(o.data.samples);
+            tr.meta = {{"participant", pp.id},
+                       {"ordinal", std::to_string(pp.sessions[k].ordinal)},
+                       {"prototype", pp.sessions[k].prototype},
+                       {"source", "virtual participant (exact positions)"}};
+            fs::create_directories(opt.record_trace_dir);
+            engine::write_trace(
+                (fs::path(opt.record_trace_dir) /
+                 (pp.id + "_" + std::to_string(pp.sessions[k].ordinal) + "_0.trace"))
+                    .string(),
+                tr);
+            if (!opt.samples) o.data.samples = results::SampleSeries{};
+          }
           store.write_session(o.data);
           state = o.state_after;
           std::lock_guard lock(mu);

@@ -41,6 +41,9 @@ struct RunOptions {
   bool samples = true;  // store every 1 kHz sample
   // Stop (cleanly, as an interruption would) after this many sessions of this run; 0 = no limit.
   long max_sessions = 0;
+  // "" = none; else every session's device track (exact positions) as
+  // DIR/<participant>_<ordinal>_0.trace (replay: `run --human --device trace:FILE`).
+  std::string record_trace_dir;
   std::function<void(const Progress&)> progress;  // called after every session (serialised)
 };
 
