@@ -36,6 +36,8 @@ struct SimArgs {
   std::string script;
   double rate = 1000.0, duration = -1.0, stop_after = -1.0, linger = 0.1;
   bool json = false;
+  bool start_on_force = false;  // hold the first waypoint until palplab's forces arrive
+  double wait = 30.0;           // s, the most to wait for them
 };
 
 std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& path) {
@@ -121,8 +123,18 @@ int run_device_sim(const SimArgs& a) {
     }
   };
   // Send phase: bounded by `stop` seconds.
+  // With --start-on-force the script's clock starts at the first force datagram (palplab's
+  // session start: its device self-test reads without writing), so a scripted press lines up
+  // with the session's time 0 to within a step and the delivery delay.
+  bool started = !a.start_on_force;
+  auto s0 = t0;
   while (true) {
-    const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!started && received > 0) {
+      started = true;
+      s0 = Clock::now();
+    }
+    if (!started && Clock::now() - t0 > std::chrono::duration<double>(a.wait)) break;
+    const double t = started ? std::chrono::duration<double>(Clock::now() - s0).count() : 0.0;
     if (t >= stop) break;
     const Eigen::Vector3d x = hand.read(t).position;
     engine::UdpPosition m;
@@ -182,6 +194,9 @@ palplab::app::CommandRegistration reg{
                       "Stop sending after S seconds and measure the force-off latency");
       cmd->add_option("--linger", a->linger, "Seconds to listen after --stop-after (default 0.1)");
       cmd->add_flag("--json", a->json, "Print the summary as JSON");
+      cmd->add_flag("--start-on-force", a->start_on_force,
+                    "Hold the first waypoint until forces arrive, then start the script");
+      cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)");
       cmd->callback([a, code] { *code = run_device_sim(*a); });
     }};
 

@@ -8,11 +8,13 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "common/input_error.hpp"
 #include "common/seed.hpp"
+#include "engine/haptics/clock.hpp"
 #include "engine/scene.hpp"
 #include "palplab/version.hpp"
 #include "protocols/input_pins.hpp"
@@ -94,6 +96,40 @@ pm::Demonstration demonstrate(engine::Scene& scene, int node, double mpf, double
   return d;
 }
 
+// The scene of one session: the session's prototype with the phase's cue switches and the
+// study's thresholds.
+engine::Scene session_scene(const Study& study, const SessionSpec& spec) {
+  engine::SceneOverrides ov;
+  ov.haptic = spec.cues.haptic;
+  ov.visual_deformation = spec.cues.visual_deformation;
+  ov.audio = spec.cues.audio;
+  for (const auto& [region, l] : study.task.thresholds) {
+    engine::Thresholds t;
+    t.st = l.st;
+    t.mpf = l.mpf;
+    t.sft = l.sft;
+    ov.thresholds[region] = t;
+  }
+  return prototypes::build_scene(spec.prototype_file, ov);
+}
+
+// The measures of a session from its log, exactly as `run` computes them for every trainee.
+std::vector<results::MeasureRecord> session_measures(const Study& study,
+                                                     const engine::SceneGeometry& g,
+                                                     const results::SampleSeries& samples,
+                                                     const std::vector<results::EventRecord>& ev) {
+  MeasureInputs mi;
+  mi.samples = &samples;
+  mi.events = &ev;
+  mi.vertex_region = &g.vertex_region;
+  mi.feature_region = g.region_index(study.task.feature);
+  mi.mpf = limits_for(study, study.task.feature).mpf;
+  mi.accuracy_tolerance = study.task.accuracy_tolerance;
+  mi.identify_dwell = study.task.identify_dwell;
+  mi.palpation_onset = study.task.palpation_onset;
+  return compute_measures(mi);
+}
+
 struct SessionOutcome {
   results::SessionData data;
   pm::TraineeState state_after;
@@ -121,18 +157,7 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
         "prototype file or its mesh.file changed since the run started (SHA-256 differs from "
         "the one stored in the database); restore it or start a new run",
         spec.prototype_file);
-  engine::SceneOverrides ov;
-  ov.haptic = spec.cues.haptic;
-  ov.visual_deformation = spec.cues.visual_deformation;
-  ov.audio = spec.cues.audio;
-  for (const auto& [region, l] : study.task.thresholds) {
-    engine::Thresholds t;
-    t.st = l.st;
-    t.mpf = l.mpf;
-    t.sft = l.sft;
-    ov.thresholds[region] = t;
-  }
-  engine::Scene scene = prototypes::build_scene(spec.prototype_file, ov);
+  engine::Scene scene = session_scene(study, spec);
   const engine::SceneGeometry& g = scene.geometry();
   const int feature = g.region_index(study.task.feature);
   if (feature < 0)
@@ -263,6 +288,30 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
   return o;
 }
 
+// A new database: the study, its prototypes (with their SHA-256), participants and structure.
+void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
+                     results::Store& store, std::map<std::string, std::string>& prototype_sha) {
+  results::StudyRecord rec;
+  rec.study_id = study.id;
+  rec.title = study.title;
+  rec.json = study.json_text;
+  rec.sha256 = sha;
+  rec.palplab_version = kVersion;
+  rec.git_commit = kGitCommit;
+  rec.seed = study.seed;
+  rec.started_at = results::utc_now();
+  std::vector<results::PrototypeRecord> protos;
+  for (const auto& [id, path] : study.prototype_files) {
+    std::string text = slurp(path);
+    protos.push_back({id, path, prototype_sha256(path), text});
+    prototype_sha[id] = protos.back().sha256;
+  }
+  std::vector<results::ParticipantRecord> parts;
+  for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
+  store.write_study(rec, protos, parts);
+  store.write_structure(study_structure(study));
+}
+
 }  // namespace
 
 std::vector<results::SessionData> simulate_participant(const Study& study,
@@ -295,6 +344,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
       fs::exists(opt.db) ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
   std::map<std::string, std::map<int, std::string>> done;  // participant -> ordinal -> state
   std::map<std::string, std::string> prototype_sha;        // id -> SHA-256 at run start
+  std::set<std::string> human;  // participants run with people (`run --human`): not simulated
   if (exists && opt.resume) {
     results::StudyRecord rec = store.read_study();
     if (rec.sha256 != sha)
@@ -309,6 +359,8 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
              parts[i].group == plan.participants[i].group;
     if (!same) throw InputError("the database's participants differ from the plan", opt.db);
     for (const auto& s : store.read_sessions()) done[s.participant][s.ordinal] = s.state_after;
+    for (const auto& s : store.read_attempts())
+      if (s.trainee == "human") human.insert(s.participant);
     for (const auto& p : store.read_prototypes()) {
       prototype_sha[p.prototype] = p.sha256;
       auto it = study.prototype_files.find(p.prototype);
@@ -319,31 +371,16 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
                          it == study.prototype_files.end() ? opt.db : it->second);
     }
   } else {
-    results::StudyRecord rec;
-    rec.study_id = study.id;
-    rec.title = study.title;
-    rec.json = study.json_text;
-    rec.sha256 = sha;
-    rec.palplab_version = kVersion;
-    rec.git_commit = kGitCommit;
-    rec.seed = study.seed;
-    rec.started_at = results::utc_now();
-    std::vector<results::PrototypeRecord> protos;
-    for (const auto& [id, path] : study.prototype_files) {
-      std::string text = slurp(path);
-      protos.push_back({id, path, prototype_sha256(path), text});
-      prototype_sha[id] = protos.back().sha256;
-    }
-    std::vector<results::ParticipantRecord> parts;
-    for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
-    store.write_study(rec, protos, parts);
-    store.write_structure(study_structure(study));
+    write_new_study(study, plan, sha, store, prototype_sha);
   }
 
   Progress progress;
   progress.participants_total = static_cast<int>(plan.participants.size());
   progress.sessions_total = static_cast<long>(plan.session_count());
-  for (const auto& [p, m] : done) progress.sessions_resumed += static_cast<long>(m.size());
+  for (const auto& p : plan.participants)
+    if (human.count(p.id)) progress.sessions_total -= static_cast<long>(p.sessions.size());
+  for (const auto& [p, m] : done)
+    if (!human.count(p)) progress.sessions_resumed += static_cast<long>(m.size());
   progress.sessions_done = progress.sessions_resumed;
   for (const auto& p : plan.participants)
     if (done.count(p.id) && done[p.id].size() == p.sessions.size()) ++progress.participants_done;
@@ -362,6 +399,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
       const std::size_t i = next++;
       if (i >= plan.participants.size()) return;
       const ParticipantPlan& pp = plan.participants[i];
+      if (human.count(pp.id)) continue;
       try {
         pm::TraineeState state;
         std::size_t k = 0;
@@ -378,8 +416,23 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             stop = true;
             break;
           }
-          SessionOutcome o =
-              run_session(study, mp, pp, pp.sessions[k], state, opt.samples, prototype_sha);
+          const bool tracing = !opt.record_trace_dir.empty();
+          SessionOutcome o = run_session(study, mp, pp, pp.sessions[k], state,
+                                         opt.samples || tracing, prototype_sha);
+          if (tracing) {
+            engine::Trace tr = trace_from_samples(o.data.samples);
+            tr.meta = {{"participant", pp.id},
+                       {"ordinal", std::to_string(pp.sessions[k].ordinal)},
+                       {"prototype", pp.sessions[k].prototype},
+                       {"source", "virtual participant (exact positions)"}};
+            fs::create_directories(opt.record_trace_dir);
+            engine::write_trace(
+                (fs::path(opt.record_trace_dir) /
+                 (pp.id + "_" + std::to_string(pp.sessions[k].ordinal) + "_0.trace"))
+                    .string(),
+                tr);
+            if (!opt.samples) o.data.samples = results::SampleSeries{};
+          }
           store.write_session(o.data);
           state = o.state_after;
           std::lock_guard lock(mu);
@@ -407,8 +460,285 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   if (error) std::rethrow_exception(error);
 
   sum.wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  sum.complete = static_cast<long>(store.read_sessions().size()) == progress.sessions_total;
+  long virtual_done = 0;
+  for (const auto& r : store.read_sessions()) virtual_done += human.count(r.participant) ? 0 : 1;
+  // Human participants finish on their own schedule; the virtual part is complete here.
+  sum.complete = virtual_done == progress.sessions_total && human.empty();
   if (sum.complete) store.set_finished(results::utc_now());
+  return sum;
+}
+
+namespace {
+
+std::int64_t parse_utc(const std::string& iso) {
+  std::tm tm{};
+  if (!strptime(iso.c_str(), "%Y-%m-%dT%H:%M:%SZ", &tm)) return -1;
+  return static_cast<std::int64_t>(timegm(&tm));
+}
+
+std::string utc_date(std::int64_t t) {
+  const std::time_t tt = static_cast<std::time_t>(t);
+  std::tm tm{};
+  gmtime_r(&tt, &tm);
+  char buf[16];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d", &tm);
+  return buf;
+}
+
+std::string utc_iso(std::int64_t t) {
+  const std::time_t tt = static_cast<std::time_t>(t);
+  std::tm tm{};
+  gmtime_r(&tt, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+}  // namespace
+
+engine::Trace trace_from_samples(const results::SampleSeries& s) {
+  engine::Trace tr;
+  tr.meta["source"] = "database samples (positions quantised to 1 um)";
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    engine::TraceSample ts;
+    ts.t = s.t0 + static_cast<double>(i) * s.dt;
+    ts.in.position = Eigen::Vector3d(s.x[3 * i], s.x[3 * i + 1], s.x[3 * i + 2]);
+    tr.samples.push_back(ts);
+  }
+  return tr;
+}
+
+HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
+  auto say = [&](const std::string& m) {
+    if (opt.say) opt.say(m);
+  };
+  const ParticipantPlan* pp = nullptr;
+  for (const auto& p : plan.participants)
+    if (p.id == opt.participant) pp = &p;
+  if (!pp) {
+    std::string ids;
+    for (const auto& p : plan.participants) ids += (ids.empty() ? "" : ", ") + p.id;
+    throw InputError("--participant: no participant \"" + opt.participant +
+                     "\" in the study's plan (expected one of: " + ids + ")");
+  }
+  const std::string sha = results::sha256_hex(study.json_text);
+  std::map<std::string, std::string> prototype_sha;
+  const bool exists = fs::exists(opt.db);
+  results::Store store =
+      exists ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
+  if (exists) {
+    results::StudyRecord rec = store.read_study();
+    if (rec.sha256 != sha)
+      throw InputError("the database holds a run of another study file (SHA-256 " +
+                           rec.sha256.substr(0, 12) + "…, this file " + sha.substr(0, 12) +
+                           "…); human sessions need the identical study",
+                       opt.db);
+    for (const auto& p : store.read_prototypes()) prototype_sha[p.prototype] = p.sha256;
+  } else {
+    write_new_study(study, plan, sha, store, prototype_sha);
+  }
+  if (int n = store.abort_stale_sessions(pp->id))
+    say("note: " + std::to_string(n) + " session(s) of " + pp->id +
+        " left running by an ended process are marked aborted");
+
+  std::map<int, int> attempts;  // ordinal -> attempts so far
+  std::set<int> complete;
+  std::int64_t first_start = -1;
+  for (const auto& r : store.read_attempts(pp->id)) {
+    if (r.trainee != "human")
+      throw InputError("participant " + pp->id +
+                           " was simulated (virtual) in this database; a participant is either "
+                           "human or virtual",
+                       opt.db);
+    attempts[r.ordinal] = std::max(attempts[r.ordinal], r.attempt + 1);
+    if (r.status == "complete") complete.insert(r.ordinal);
+    const std::int64_t t = parse_utc(r.started_at);
+    if (t >= 0 && (first_start < 0 || t < first_start)) first_start = t;
+  }
+  auto now = [&] { return opt.now >= 0 ? opt.now : static_cast<std::int64_t>(std::time(nullptr)); };
+  auto day_of = [](std::int64_t t) { return t >= 0 ? t / 86400 : 0; };
+  const std::int64_t day0 = day_of(first_start >= 0 ? first_start : now());
+
+  HumanSummary sum;
+  for (const SessionSpec& spec : pp->sessions) {
+    if (complete.count(spec.ordinal)) continue;
+    const std::int64_t due_day = day0 + spec.day;
+    if (due_day > day_of(now())) {
+      sum.next_due = utc_date(due_day * 86400);
+      if (sum.sessions_run == 0 && sum.aborted == 0)
+        throw InputError("participant " + pp->id + ": nothing is due today (" + utc_date(now()) +
+                         "); the next session (" + spec.phase_id + " #" +
+                         std::to_string(spec.index + 1) + ", day " + std::to_string(spec.day) +
+                         " of the study) is due on " + sum.next_due);
+      break;
+    }
+    if (auto it = prototype_sha.find(spec.prototype);
+        it != prototype_sha.end() && prototype_sha256(spec.prototype_file) != it->second)
+      throw InputError(
+          "prototype file or its mesh.file changed since the study's database was created "
+          "(SHA-256 differs); restore it or start a new database",
+          spec.prototype_file);
+    if (opt.before_session && !opt.before_session(spec)) break;
+    engine::Scene scene = session_scene(study, spec);
+    const engine::SceneGeometry& g = scene.geometry();
+    if (g.region_index(study.task.feature) < 0)
+      throw InputError(
+          "prototype \"" + spec.prototype + "\" has no region \"" + study.task.feature + "\"",
+          spec.prototype_file);
+    std::unique_ptr<engine::Device> dev = opt.make_device();
+    engine::TraceRecorder recorder(*dev);
+    engine::Device& device = opt.record_trace_dir.empty() ? static_cast<engine::Device&>(*dev)
+                                                          : static_cast<engine::Device&>(recorder);
+
+    results::SessionData data;
+    results::SessionRecord& rec = data.session;
+    rec.participant = pp->id;
+    rec.ordinal = spec.ordinal;
+    rec.phase = spec.phase_id;
+    rec.phase_index = spec.index;
+    rec.prototype = spec.prototype;
+    rec.instructor = spec.instructor;
+    rec.study_offset = spec.offset;
+    rec.day = spec.day;
+    rec.seed = spec.seed;
+    rec.state_after = "{\"trainee\":\"human\"}";
+    rec.attempt = attempts[spec.ordinal];
+    rec.trainee = "human";
+    rec.device = opt.device_text;
+    rec.started_at = utc_iso(now());
+    store.begin_session(rec);
+    say("session " + spec.phase_id + " #" + std::to_string(spec.index + 1) + " (" +
+        std::to_string(std::lround(spec.duration)) + " s, prototype " + spec.prototype +
+        ") started");
+
+    // The haptic thread appends to `pending`; this thread moves whole seconds to the store.
+    std::mutex mu;
+    results::SampleSeries pending;
+    pending.dt = scene.dt();
+    std::vector<results::EventRecord> pending_events;
+    results::SampleSeries all;  // the whole log, for the measures
+    all.dt = scene.dt();
+    std::vector<results::EventRecord> all_events;
+    std::atomic<bool> stop{false};
+    std::atomic<bool> finished{false};
+    engine::RealtimeOptions ro;
+    ro.duration = spec.duration;
+    ro.frame_period = 0.05;
+    ro.stop = &stop;
+    const auto names = g.region_names;
+    ro.on_step = [&](const engine::Rendered& r, const engine::Sample& smp) {
+      std::lock_guard lock(mu);
+      pending.x.insert(pending.x.end(), {smp.x.x(), smp.x.y(), smp.x.z()});
+      pending.F.insert(pending.F.end(), {smp.F.x(), smp.F.y(), smp.F.z()});
+      pending.node.push_back(smp.contact_node);
+      for (const auto& e : r.events)
+        pending_events.push_back(
+            {e.t, engine::to_string(e.kind), e.value,
+             e.region >= 0 && e.region < static_cast<int>(names.size()) ? names[e.region] : ""});
+    };
+    const auto wall0 = Clock::now();
+    engine::RealtimeStats stats;
+    std::thread loop([&] {
+      stats = engine::run_realtime(scene, device, ro);
+      finished = true;
+    });
+    std::string reason;
+    long long second = 0;
+    long last_samples = dev->samples_received();
+    auto last_fresh = Clock::now();
+    auto flush = [&](bool final) {
+      results::SampleSeries chunk;
+      std::vector<results::EventRecord> ev;
+      {
+        std::lock_guard lock(mu);
+        const std::size_t per = static_cast<std::size_t>(std::llround(1.0 / pending.dt));
+        const std::size_t n = final ? pending.size() : pending.size() / per * per;
+        chunk.dt = pending.dt;
+        chunk.t0 = static_cast<double>(second) * 1.0;
+        chunk.x.assign(pending.x.begin(), pending.x.begin() + 3 * n);
+        chunk.F.assign(pending.F.begin(), pending.F.begin() + 3 * n);
+        chunk.node.assign(pending.node.begin(), pending.node.begin() + n);
+        pending.x.erase(pending.x.begin(), pending.x.begin() + 3 * n);
+        pending.F.erase(pending.F.begin(), pending.F.begin() + 3 * n);
+        pending.node.erase(pending.node.begin(), pending.node.begin() + n);
+        ev.swap(pending_events);
+      }
+      for (auto& e : dev->take_events()) ev.push_back({e.t, e.kind, e.value, ""});
+      if (chunk.size() == 0 && ev.empty()) return;
+      store.append_session_data(rec.session, ev, opt.samples ? chunk : results::SampleSeries{},
+                                second);
+      all.x.insert(all.x.end(), chunk.x.begin(), chunk.x.end());
+      all.F.insert(all.F.end(), chunk.F.begin(), chunk.F.end());
+      all.node.insert(all.node.end(), chunk.node.begin(), chunk.node.end());
+      all_events.insert(all_events.end(), ev.begin(), ev.end());
+      second += static_cast<long long>((chunk.size() + 999) / 1000);
+    };
+    while (!finished) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (opt.stop && opt.stop->load() && !stop) {
+        reason = opt.stop_reason;
+        stop = true;
+      }
+      const long got = dev->samples_received();
+      if (got >= 0) {
+        if (got != last_samples) {
+          last_samples = got;
+          last_fresh = Clock::now();
+        } else if (!stop && std::chrono::duration<double>(Clock::now() - last_fresh).count() >
+                                opt.device_lost) {
+          reason = "device " + opt.device_text + " lost: no position for " +
+                   std::to_string(opt.device_lost) + " s";
+          stop = true;
+        }
+      }
+      flush(false);
+    }
+    loop.join();
+    flush(true);
+    const long planned = std::lround(spec.duration / scene.dt());
+    if (reason.empty() && stats.steps < planned)
+      reason = "the device stream ended after " + std::to_string(stats.steps) + " of " +
+               std::to_string(planned) + " steps";
+    // Event times are the scene's; the device's events use the same simulated time.
+    std::stable_sort(all_events.begin(), all_events.end(),
+                     [](const auto& a, const auto& b) { return a.t < b.t; });
+    data.measures = session_measures(study, g, all, all_events);
+    rec.duration = static_cast<double>(stats.steps) * scene.dt();
+    rec.steps = stats.steps;
+    rec.wall_duration = std::chrono::duration<double>(Clock::now() - wall0).count();
+    rec.loop_median = stats.period_median_us * 1e-6;
+    rec.loop_p99 = stats.period_p99_us * 1e-6;
+    rec.status = reason.empty() ? "complete" : "aborted";
+    rec.abort_reason = reason;
+    store.finish_session(data);
+    if (!opt.record_trace_dir.empty()) {
+      fs::create_directories(opt.record_trace_dir);
+      engine::Trace tr = recorder.trace();
+      tr.meta["participant"] = pp->id;
+      tr.meta["ordinal"] = std::to_string(spec.ordinal);
+      tr.meta["prototype"] = spec.prototype;
+      engine::write_trace(
+          (fs::path(opt.record_trace_dir) / (pp->id + "_" + std::to_string(spec.ordinal) + "_" +
+                                             std::to_string(rec.attempt) + ".trace"))
+              .string(),
+          tr);
+    }
+    say("session " + spec.phase_id + " #" + std::to_string(spec.index + 1) + " " + rec.status +
+        (reason.empty() ? "" : " (" + reason + ")") + ", loop period median " +
+        std::to_string(stats.period_median_us) + " us, p99 " + std::to_string(stats.period_p99_us) +
+        " us");
+    if (!reason.empty()) {
+      ++sum.aborted;
+      break;
+    }
+    ++sum.sessions_run;
+    complete.insert(spec.ordinal);
+  }
+  for (const auto& spec : pp->sessions)
+    if (!complete.count(spec.ordinal)) {
+      ++sum.remaining;
+      if (sum.next_due.empty()) sum.next_due = utc_date((day0 + spec.day) * 86400);
+    }
   return sum;
 }
 

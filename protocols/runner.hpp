@@ -11,9 +11,13 @@
 // resumed after an interruption (kill -9 included) ends with exactly the measures of an
 // uninterrupted one, and the number of threads does not change any result.
 #include <atomic>
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 
+#include "engine/haptics/device.hpp"
+#include "engine/haptics/devices/trace_device.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/study.hpp"
 #include "results/store.hpp"
@@ -37,6 +41,9 @@ struct RunOptions {
   bool samples = true;  // store every 1 kHz sample
   // Stop (cleanly, as an interruption would) after this many sessions of this run; 0 = no limit.
   long max_sessions = 0;
+  // "" = none; else every session's device track (exact positions) as
+  // DIR/<participant>_<ordinal>_0.trace (replay: `run --human --device trace:FILE`).
+  std::string record_trace_dir;
   std::function<void(const Progress&)> progress;  // called after every session (serialised)
 };
 
@@ -55,5 +62,40 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
 std::vector<results::SessionData> simulate_participant(const Study& study,
                                                        const ParticipantPlan& pp,
                                                        bool keep_samples = false);
+
+// `run --human`: one participant's due sessions with a person (or a device stream) at the
+// device, the haptic loop at 1 kHz on its own thread (engine::run_realtime). Sessions are due by
+// calendar day (UTC) counted from the participant's first human session (day 0 = the first
+// run); sessions of earlier days still pending run first; when nothing is due, InputError with
+// the date of the next one. Every session is written as it goes (results::Store::begin_session
+// ...): samples and events every second; stop / device lost / device finished early mark it
+// aborted (kept, flagged) and the next run repeats it as a new attempt.
+struct HumanOptions {
+  std::string db;  // created when missing (the same study file otherwise, SHA-256 checked)
+  std::string participant;
+  std::string device_text;  // stored with each session ("udp:5005")
+  // A fresh device per session (a trace replays from its start; a UDP socket is re-bound).
+  std::function<std::unique_ptr<engine::Device>()> make_device;
+  const std::atomic<bool>* stop = nullptr;  // Ctrl-C / window closed: abort the session
+  std::string stop_reason = "interrupted (Ctrl-C)";
+  double device_lost = 2.0;  // s without a fresh hardware sample: the session is aborted
+  bool samples = true;
+  std::string record_trace_dir;  // "" = none; else DIR/<participant>_<ordinal>_<attempt>.trace
+  std::int64_t now = -1;         // Unix time "now" (s); -1 = the system clock (tests set it)
+  std::function<void(const std::string&)> say;  // instructions, progress (stdout)
+  // Before each session (after its instructions are said); false = stop here.
+  std::function<bool(const SessionSpec&)> before_session;
+};
+
+struct HumanSummary {
+  int sessions_run = 0, aborted = 0, remaining = 0;
+  std::string next_due;  // "YYYY-MM-DD" of the next pending session; "" when all are done
+};
+
+HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt);
+
+// The device track of a stored session from its samples (quantised: 1 um positions, so a
+// replay reproduces the measures within that quantisation, not bit for bit).
+engine::Trace trace_from_samples(const results::SampleSeries& s);
 
 }  // namespace palplab::protocols

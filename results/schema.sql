@@ -1,8 +1,9 @@
--- palplab results store, schema version 2 (docs/FORMATS.md; version 1 lacked the study
--- structure tables study_groups, phases and thresholds).
+-- palplab results store, schema version 3 (docs/FORMATS.md; version 1 lacked the study
+-- structure tables study_groups, phases and thresholds; version 2 lacked the session columns
+-- attempt, status, trainee, device, started_at and abort_reason of human sessions).
 -- One database holds one run of one study. Units: s, N, m. Times of day are UTC ISO 8601.
 -- results/schema.cpp embeds this file verbatim (a test checks that they are identical).
-PRAGMA user_version = 2;
+PRAGMA user_version = 3;
 
 CREATE TABLE meta (
   key   TEXT PRIMARY KEY,
@@ -70,8 +71,13 @@ CREATE TABLE participants (
   seed        TEXT NOT NULL               -- derived seed, unsigned 64-bit decimal
 );
 
--- One row per completed session (written in the same transaction as its measures, events
--- and samples, so a row here means the session is complete).
+-- One row per session attempt. A virtual session is written in one transaction with its
+-- measures, events and samples (status 'complete'). A human session (`run --human`) is written
+-- as it goes: the row first (status 'running'), samples and events every second, then the
+-- measures and status 'complete' -- or 'aborted' (window closed, Ctrl-C, device lost; a
+-- 'running' row left by a killed process becomes 'aborted' at the next run). Aborted attempts
+-- are kept with their data; the participant's next run repeats the session as attempt + 1.
+-- Analyses read the 'complete' rows only.
 CREATE TABLE sessions (
   session       INTEGER PRIMARY KEY,
   participant   TEXT NOT NULL REFERENCES participants (participant),
@@ -89,8 +95,14 @@ CREATE TABLE sessions (
   loop_p99      REAL NOT NULL,            -- s, 99th percentile of the same
   seed          TEXT NOT NULL,            -- derived session seed, unsigned 64-bit decimal
   state_after   TEXT NOT NULL,            -- participant model state after the session (JSON)
-  completed_at  TEXT NOT NULL,
-  UNIQUE (participant, ordinal)
+  completed_at  TEXT NOT NULL,           -- '' while running or when aborted
+  attempt       INTEGER NOT NULL DEFAULT 0,           -- 0-based try of this ordinal
+  status        TEXT NOT NULL DEFAULT 'complete',     -- complete | running | aborted
+  trainee       TEXT NOT NULL DEFAULT 'virtual',      -- virtual | human
+  device        TEXT,                     -- human sessions: "udp:5005", "mouse", "trace:FILE"
+  started_at    TEXT,                     -- human sessions: UTC wall-clock start
+  abort_reason  TEXT,                     -- aborted sessions: why
+  UNIQUE (participant, ordinal, attempt)
 );
 
 CREATE TABLE measures (

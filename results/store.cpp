@@ -288,6 +288,50 @@ void Store::remove_existing(const std::string& path) {
   ::close(fd);
 }
 
+namespace {
+
+// Schema 1/2 -> 3: the sessions table gains the attempt/status/trainee/device/started_at/
+// abort_reason columns and its UNIQUE key becomes (participant, ordinal, attempt). SQLite cannot
+// change a table constraint in place, so the table is rebuilt (the documented 12-step
+// procedure: foreign keys off, new table, copy, drop, rename), all in one transaction; session
+// ids are kept, so measures/events/samples still refer to the same rows.
+void migrate_sessions_to_v3(sqlite3* db) {
+  exec(db, "PRAGMA foreign_keys=OFF");
+  exec(db, "BEGIN IMMEDIATE");
+  try {
+    exec(db,
+         "CREATE TABLE sessions_v3 (session INTEGER PRIMARY KEY, participant TEXT NOT NULL "
+         "REFERENCES participants (participant), ordinal INTEGER NOT NULL, phase TEXT NOT NULL, "
+         "phase_index INTEGER NOT NULL, prototype TEXT NOT NULL, instructor TEXT, study_offset "
+         "REAL NOT NULL, day INTEGER NOT NULL, duration REAL NOT NULL, steps INTEGER NOT NULL, "
+         "wall_duration REAL NOT NULL, loop_median REAL NOT NULL, loop_p99 REAL NOT NULL, seed "
+         "TEXT NOT NULL, state_after TEXT NOT NULL, completed_at TEXT NOT NULL, attempt INTEGER "
+         "NOT NULL DEFAULT 0, status TEXT NOT NULL DEFAULT 'complete', trainee TEXT NOT NULL "
+         "DEFAULT 'virtual', device TEXT, started_at TEXT, abort_reason TEXT, UNIQUE "
+         "(participant, ordinal, attempt));"
+         "INSERT INTO sessions_v3 (session, participant, ordinal, phase, phase_index, prototype, "
+         "instructor, study_offset, day, duration, steps, wall_duration, loop_median, loop_p99, "
+         "seed, state_after, completed_at) SELECT session, participant, ordinal, phase, "
+         "phase_index, prototype, instructor, study_offset, day, duration, steps, wall_duration, "
+         "loop_median, loop_p99, seed, state_after, completed_at FROM sessions;"
+         "DROP TABLE sessions;"
+         "ALTER TABLE sessions_v3 RENAME TO sessions;"
+         "UPDATE meta SET value = '3' WHERE key = 'schema_version';"
+         "INSERT OR REPLACE INTO meta(key, value) VALUES ('migrated_to_3_at', '" +
+             utc_now() +
+             "');"
+             "PRAGMA user_version = 3;");
+    exec(db, "COMMIT");
+  } catch (...) {
+    exec(db, "ROLLBACK");
+    exec(db, "PRAGMA foreign_keys=ON");
+    throw;
+  }
+  exec(db, "PRAGMA foreign_keys=ON");
+}
+
+}  // namespace
+
 Store Store::create(const std::string& path) {
   if (fs::exists(path)) throw InputError("database already exists", path);
   require_writable(path, false);
@@ -351,6 +395,10 @@ Store Store::open(const std::string& path, bool exclusive) {
                          std::to_string(kSchemaVersion) + ")",
                      path);
   s.version_ = static_cast<int>(version);
+  if (exclusive && s.version_ < 3) {
+    migrate_sessions_to_v3(db);
+    s.version_ = 3;
+  }
   if (exclusive || can_write)
     exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
   return s;
@@ -362,7 +410,8 @@ std::string Store::incomplete_warning() const {
   std::size_t n = 0;
   {
     std::lock_guard lock(*mu_);
-    Stmt q(db_, "SELECT COUNT(*) FROM sessions");
+    Stmt q(db_, version_ >= 3 ? "SELECT COUNT(*) FROM sessions WHERE status = 'complete'"
+                              : "SELECT COUNT(*) FROM sessions");
     if (q.step()) n = static_cast<std::size_t>(q.integer(0));
   }
   return "warning: " + path_ + " is INCOMPLETE: the run started " + st.started_at +
@@ -416,8 +465,11 @@ void Store::write_session(SessionData& d) {
     Stmt s(db_,
            "INSERT INTO sessions(participant, ordinal, phase, phase_index, prototype, instructor, "
            "study_offset, day, duration, steps, wall_duration, loop_median, loop_p99, seed, "
-           "state_after, completed_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, "
-           "?13, ?14, ?15, ?16)");
+           "state_after, completed_at, attempt, status, trainee, device, started_at, "
+           "abort_reason) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, "
+           "?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22)");
+    s.bind(17, r.attempt).bind(18, r.status).bind(19, r.trainee).bind_opt_text(20, r.device);
+    s.bind_opt_text(21, r.started_at).bind_opt_text(22, r.abort_reason);
     s.bind(1, r.participant).bind(2, r.ordinal).bind(3, r.phase).bind(4, r.phase_index);
     s.bind(5, r.prototype).bind_opt_text(6, r.instructor).bind(7, r.study_offset).bind(8, r.day);
     s.bind(9, r.duration).bind(10, r.steps).bind(11, r.wall_duration).bind(12, r.loop_median);
@@ -573,13 +625,23 @@ std::vector<ParticipantRecord> Store::read_participants() const {
   return out;
 }
 
-std::vector<SessionRecord> Store::read_sessions() const {
-  std::lock_guard lock(*mu_);
-  Stmt q(db_,
-         "SELECT s.session, s.participant, s.ordinal, s.phase, s.phase_index, s.prototype, "
-         "s.instructor, s.study_offset, s.day, s.duration, s.steps, s.wall_duration, "
-         "s.loop_median, s.loop_p99, s.seed, s.state_after, s.completed_at FROM sessions s JOIN "
-         "participants p ON p.participant = s.participant ORDER BY p.number, s.ordinal");
+namespace {
+
+std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool complete_only,
+                                             const std::string& participant) {
+  std::string sql =
+      "SELECT s.session, s.participant, s.ordinal, s.phase, s.phase_index, s.prototype, "
+      "s.instructor, s.study_offset, s.day, s.duration, s.steps, s.wall_duration, "
+      "s.loop_median, s.loop_p99, s.seed, s.state_after, s.completed_at";
+  if (version >= 3)
+    sql += ", s.attempt, s.status, s.trainee, s.device, s.started_at, s.abort_reason";
+  sql += " FROM sessions s JOIN participants p ON p.participant = s.participant WHERE 1";
+  if (version >= 3 && complete_only) sql += " AND s.status = 'complete'";
+  if (!participant.empty()) sql += " AND s.participant = ?1";
+  sql +=
+      version >= 3 ? " ORDER BY p.number, s.ordinal, s.attempt" : " ORDER BY p.number, s.ordinal";
+  Stmt q(db, sql.c_str());
+  if (!participant.empty()) q.bind(1, participant);
   std::vector<SessionRecord> out;
   while (q.step()) {
     SessionRecord r;
@@ -600,17 +662,124 @@ std::vector<SessionRecord> Store::read_sessions() const {
     r.seed = parse_u64(q.text(14));
     r.state_after = q.text(15);
     r.completed_at = q.text(16);
+    if (version >= 3) {
+      r.attempt = static_cast<int>(q.integer(17));
+      r.status = q.text(18);
+      r.trainee = q.text(19);
+      r.device = q.null(20) ? "" : q.text(20);
+      r.started_at = q.null(21) ? "" : q.text(21);
+      r.abort_reason = q.null(22) ? "" : q.text(22);
+    }
     out.push_back(std::move(r));
   }
   return out;
 }
 
+}  // namespace
+
+std::vector<SessionRecord> Store::read_sessions() const {
+  std::lock_guard lock(*mu_);
+  return read_session_rows(db_, version_, true, "");
+}
+
+std::vector<SessionRecord> Store::read_attempts(const std::string& participant) const {
+  std::lock_guard lock(*mu_);
+  return read_session_rows(db_, version_, false, participant);
+}
+
+void Store::begin_session(SessionRecord& r) {
+  std::lock_guard lock(*mu_);
+  Stmt s(db_,
+         "INSERT INTO sessions(participant, ordinal, phase, phase_index, prototype, instructor, "
+         "study_offset, day, duration, steps, wall_duration, loop_median, loop_p99, seed, "
+         "state_after, completed_at, attempt, status, trainee, device, started_at) VALUES (?1, "
+         "?2, ?3, ?4, ?5, ?6, ?7, ?8, 0, 0, 0, 0, 0, ?9, ?10, '', ?11, 'running', ?12, ?13, ?14)");
+  s.bind(1, r.participant).bind(2, r.ordinal).bind(3, r.phase).bind(4, r.phase_index);
+  s.bind(5, r.prototype).bind_opt_text(6, r.instructor).bind(7, r.study_offset).bind(8, r.day);
+  s.bind(9, std::to_string(r.seed)).bind(10, r.state_after).bind(11, r.attempt);
+  s.bind(12, r.trainee).bind_opt_text(13, r.device).bind_opt_text(14, r.started_at).run();
+  r.session = sqlite3_last_insert_rowid(db_);
+  r.status = "running";
+}
+
+void Store::append_session_data(long long id, const std::vector<EventRecord>& events,
+                                const SampleSeries& ss, long long first_second) {
+  std::lock_guard lock(*mu_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    Stmt e(db_, "INSERT INTO events(session, t, kind, value, region) VALUES (?1, ?2, ?3, ?4, ?5)");
+    for (const auto& x : events)
+      e.bind(1, id).bind(2, x.t).bind(3, x.kind).bind(4, x.value).bind_opt_text(5, x.region).run();
+    if (ss.size() > 0) {
+      Stmt b(db_,
+             "INSERT INTO samples(session, second, t0, dt, n, encoding, data) VALUES (?1, ?2, ?3, "
+             "?4, ?5, 'qdv1', ?6)");
+      const std::size_t per =
+          std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(1.0 / ss.dt)));
+      long long sec = first_second;
+      for (std::size_t i = 0; i < ss.size(); i += per, ++sec) {
+        std::size_t end = std::min(ss.size(), i + per);
+        b.bind(1, id).bind(2, sec).bind(3, ss.t0 + i * ss.dt).bind(4, ss.dt);
+        b.bind(5, static_cast<long long>(end - i)).bind_blob(6, encode_samples(ss, i, end)).run();
+      }
+    }
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+void Store::finish_session(const SessionData& d) {
+  std::lock_guard lock(*mu_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    const SessionRecord& r = d.session;
+    Stmt s(db_,
+           "UPDATE sessions SET duration = ?2, steps = ?3, wall_duration = ?4, loop_median = ?5, "
+           "loop_p99 = ?6, state_after = ?7, completed_at = ?8, status = ?9, abort_reason = ?10 "
+           "WHERE session = ?1");
+    s.bind(1, r.session).bind(2, r.duration).bind(3, r.steps).bind(4, r.wall_duration);
+    s.bind(5, r.loop_median).bind(6, r.loop_p99).bind(7, r.state_after);
+    s.bind(8, r.status == "complete" ? (r.completed_at.empty() ? utc_now() : r.completed_at)
+                                     : std::string());
+    s.bind(9, r.status).bind_opt_text(10, r.abort_reason).run();
+    Stmt m(db_, "INSERT INTO measures(session, name, value, unit) VALUES (?1, ?2, ?3, ?4)");
+    for (const auto& x : d.measures) {
+      m.bind(1, r.session).bind(2, x.name).bind(4, x.unit);
+      if (x.value && std::isfinite(*x.value))
+        m.bind(3, *x.value);
+      else
+        m.bind_null(3);
+      m.run();
+    }
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+int Store::abort_stale_sessions(const std::string& participant) {
+  std::lock_guard lock(*mu_);
+  Stmt(db_,
+       "UPDATE sessions SET status = 'aborted', abort_reason = 'the process ended during the "
+       "session (killed or crashed); the data written up to then is kept' WHERE status = "
+       "'running' AND participant = ?1")
+      .bind(1, participant)
+      .run();
+  return sqlite3_changes(db_);
+}
+
 std::vector<MeasureRow> Store::read_measures() const {
   std::lock_guard lock(*mu_);
-  Stmt q(db_,
-         "SELECT s.participant, p.grp, s.phase, s.ordinal, s.phase_index, s.session, m.name, "
-         "m.value, m.unit FROM measures m JOIN sessions s ON s.session = m.session JOIN "
-         "participants p ON p.participant = s.participant ORDER BY p.number, s.ordinal, m.name");
+  const std::string sql =
+      "SELECT s.participant, p.grp, s.phase, s.ordinal, s.phase_index, s.session, m.name, "
+      "m.value, m.unit FROM measures m JOIN sessions s ON s.session = m.session JOIN "
+      "participants p ON p.participant = s.participant" +
+      std::string(version_ >= 3 ? " WHERE s.status = 'complete'" : "") +
+      " ORDER BY p.number, s.ordinal, m.name";
+  Stmt q(db_, sql.c_str());
   std::vector<MeasureRow> out;
   while (q.step()) {
     MeasureRow r;

@@ -16,9 +16,11 @@ struct sqlite3;
 
 namespace palplab::results {
 
-inline constexpr int kSchemaVersion = 2;
+inline constexpr int kSchemaVersion = 3;
 // Oldest version `Store::open` still reads: version 1 lacks the study structure tables
-// (read_structure() reports has_structure = false for it).
+// (read_structure() reports has_structure = false for it); versions 1 and 2 lack the session
+// attempt/status/trainee columns (every row reads as a complete virtual session). A writer
+// (`open(path, true)`) migrates an older database to version 3 in place, in one transaction.
 inline constexpr int kOldestReadableSchemaVersion = 1;
 
 std::string schema_sql();  // the text of results/schema.sql
@@ -76,8 +78,15 @@ struct SessionRecord {
   double wall_duration = 0.0;                // s
   double loop_median = 0.0, loop_p99 = 0.0;  // s per haptic step
   std::uint64_t seed = 0;
-  std::string state_after;  // JSON
-  std::string completed_at;
+  std::string state_after;   // JSON
+  std::string completed_at;  // "" while running or when aborted
+  // Schema 3 (human sessions; defaults describe every virtual session).
+  int attempt = 0;                  // 0-based try of this ordinal (aborted tries are kept)
+  std::string status = "complete";  // complete | running | aborted
+  std::string trainee = "virtual";  // virtual | human
+  std::string device;               // human: the --device text ("udp:5005"); "" for virtual
+  std::string started_at;           // human: UTC ISO 8601 wall-clock start; "" for virtual
+  std::string abort_reason;         // aborted: why ("window closed", "interrupted (Ctrl-C)", ...)
 };
 
 struct MeasureRecord {
@@ -147,10 +156,27 @@ class Store {
   void write_session(SessionData& d);             // one transaction; sets d.session.session
   void set_finished(const std::string& finished_at);
 
+  // Human sessions, written as they go (docs/FORMATS.md): begin_session inserts the row with
+  // status "running" (sets r.session); append_session_data stores events and whole seconds of
+  // samples (chunk.t0 on a second boundary: its first row is second `first_second`);
+  // finish_session updates the row from d.session (status "complete" or "aborted", durations,
+  // loop timing, completed_at) and writes d.measures. Each call is one transaction.
+  void begin_session(SessionRecord& r);
+  void append_session_data(long long session, const std::vector<EventRecord>& events,
+                           const SampleSeries& chunk, long long first_second);
+  void finish_session(const SessionData& d);
+  // Marks `participant`'s sessions left "running" by a process that ended (kill -9, power loss)
+  // as aborted; returns how many.
+  int abort_stale_sessions(const std::string& participant);
+
   StudyRecord read_study() const;
   std::vector<ParticipantRecord> read_participants() const;
-  std::vector<SessionRecord> read_sessions() const;  // ordered by participant number, ordinal
-  std::vector<MeasureRow> read_measures() const;     // same order, then measure name
+  // Complete sessions only (what analyses use), ordered by participant number, ordinal.
+  std::vector<SessionRecord> read_sessions() const;
+  // Every attempt of every session, aborted and running ones included (same order, then
+  // attempt); `participant` "" = all participants.
+  std::vector<SessionRecord> read_attempts(const std::string& participant = "") const;
+  std::vector<MeasureRow> read_measures() const;  // complete sessions; same order, then name
   std::vector<EventRecord> read_events(long long session) const;
   SampleSeries read_samples(long long session) const;
   std::vector<PrototypeRecord> read_prototypes() const;

@@ -101,11 +101,13 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
   periods.reserve(n);
   step_us.reserve(n);
   long overruns = 0;
+  long steps = 0;
 
   std::thread haptic([&] {
     auto next = Clock::now();
     auto last_start = next;
     for (long k = 1; k <= n; ++k) {
+      if ((opt.stop && opt.stop->load(std::memory_order_relaxed)) || device.finished()) break;
       std::this_thread::sleep_until(next);
       const auto start = Clock::now();
       if (k > 1)
@@ -115,6 +117,8 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
       const DeviceInput in = device.read(scene.time());
       const Rendered r = scene.step(in.position);
       device.write(r);
+      if (opt.on_step) opt.on_step(r, scene.last_sample());
+      steps = k;
       step_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
       if (k % frame_every == 0) {
         take_frame(scene, r, in.position, k, back);
@@ -156,7 +160,8 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
   });
   haptic.join();
   graphics.join();
-  st.steps = n;
+  st.steps = steps;
+  st.stopped = steps < n;
   st.frames_published = frames_published;
   st.frames_drawn = drawn;
   st.period_median_us = pct(periods, 0.5);

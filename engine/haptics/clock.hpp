@@ -9,6 +9,7 @@
 // buffer; a graphics thread picks up the newest frame at its own rate (60 Hz) and hands it to the
 // renderer callback. The scene and the device are touched by the haptic thread only; frames are
 // the only shared state (mutex-protected swap), so the pair is data-race free (ThreadSanitizer).
+#include <atomic>
 #include <chrono>
 #include <functional>
 #include <vector>
@@ -68,6 +69,11 @@ class TimedDevice : public Device {
 struct RealtimeOptions {
   double duration = 1.0;             // s of wall time (= simulated time when on schedule)
   double frame_period = 1.0 / 60.0;  // s, frame publication and graphics rate
+  // Runs on the haptic thread after every step (keep it short: copy what you log). Optional.
+  std::function<void(const Rendered&, const Sample&)> on_step;
+  // Set by another thread (window closed, Ctrl-C, device lost): the haptic loop ends after the
+  // current step. The loop also ends when device.finished() (a replayed trace ran out).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 struct RealtimeStats {
@@ -76,6 +82,7 @@ struct RealtimeStats {
   double period_median_us = 0, period_p99_us = 0, period_max_us = 0;
   double step_median_us = 0, step_p99_us = 0;  // wall time inside Scene::step
   long overruns = 0;                           // steps that started more than one period late
+  bool stopped = false;  // ended early by opt.stop or device.finished() (steps < duration/dt)
 };
 
 // Blocks for opt.duration; on_frame runs on the graphics thread.

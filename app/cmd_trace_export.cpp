@@ -1,0 +1,57 @@
+// `palplab trace-export DB --session N --out FILE.trace`: the device track of a stored session
+// (its 1 kHz samples) as a trace file for `--device trace:FILE` (docs/DEVICES.md). Positions in
+// the database are quantised to 1 um, so a replay reproduces the session within that, not bit
+// for bit (a `--record-trace` file is exact).
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "app/command.hpp"
+#include "common/escape.hpp"
+#include "common/input_error.hpp"
+#include "engine/haptics/devices/trace_device.hpp"
+#include "protocols/runner.hpp"
+#include "results/store.hpp"
+
+namespace {
+struct Args {
+  std::string db, out;
+  long long session = 0;
+};
+
+palplab::app::CommandRegistration reg{
+    "trace-export", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand(
+          "trace-export", "Write a stored session's device track (samples) as a trace file");
+      auto a = std::make_shared<Args>();
+      cmd->add_option("DB", a->db, "Results database")->required();
+      cmd->add_option("--session", a->session, "Session id (sessions.session)")->required();
+      cmd->add_option("--out", a->out, "Trace file to write")->required();
+      cmd->callback([a, code] {
+        using namespace palplab;
+        results::Store store = results::Store::open(a->db);
+        bool found = false;
+        std::string who;
+        for (const auto& s : store.read_attempts())
+          if (s.session == a->session) {
+            found = true;
+            who = s.participant + " " + s.phase + " #" + std::to_string(s.phase_index + 1);
+          }
+        if (!found)
+          throw InputError(
+              "--session: no session " + std::to_string(a->session) + " in the database", a->db);
+        const results::SampleSeries ss = store.read_samples(a->session);
+        if (ss.size() == 0)
+          throw InputError("session " + std::to_string(a->session) +
+                               " has no stored samples (run with --samples full)",
+                           a->db);
+        engine::Trace tr = protocols::trace_from_samples(ss);
+        tr.meta["session"] = std::to_string(a->session);
+        engine::write_trace(a->out, tr);
+        std::printf("%s: %zu samples of session %lld (%s)\n",
+                    escape_controls(a->out, false).c_str(), tr.samples.size(), a->session,
+                    escape_controls(who, false).c_str());
+        *code = 0;
+      });
+    }};
+}  // namespace
