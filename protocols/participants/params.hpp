@@ -56,6 +56,10 @@ struct TraineeParams {
   double miss_probability = 0.2;         // 1, chance the feature is not recognised on a touch
   double practice_exponent = 0.3;        // 1, power law of practice for recognition
   double individual_cv = 0.15;           // 1, between-person SD of speed (log scale)
+  // orienting on landmarks before the search (blind haptic navigation along the organ)
+  double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
+  double landmark_time = 2.0;      // s, median novice judgement time at one landmark
+  double trace_speed = 0.02;       // m/s, hand speed from one landmark to the next
 };
 
 struct InstructorParams {
