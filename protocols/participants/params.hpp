@@ -51,14 +51,14 @@ struct TraineeParams {
   double marker_wait_overshoot = 0.3;  // 1, press beyond the intended force awaiting a marker
   // visual learning and search
   double visual_spatial_sd = 0.004;      // m, SD of locating the touched point by eye
-  double visual_recognition_gain = 1.0;  // 1, recognition speed-up when the part deforms
+  double visual_recognition_gain = 1.10938;  // 1, recognition speed-up when the part deforms
   double recognition_cv = 0.3;           // 1, trial-to-trial SD / mean of a recognition time
   double miss_probability = 0.2;         // 1, chance the feature is not recognised on a touch
   double practice_exponent = 0.3;        // 1, power law of practice for recognition
   double individual_cv = 0.15;           // 1, between-person SD of speed (log scale)
   // orienting on landmarks before the search (blind haptic navigation along the organ)
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
-  double landmark_time = 2.0;      // s, median novice judgement time at one landmark
+  double landmark_time = 11.6562;      // s, median novice judgement time at one landmark
   double trace_speed = 0.02;       // m/s, hand speed from one landmark to the next
 };
 
