@@ -55,7 +55,8 @@ nlohmann::json TraineeState::to_json() const {
           {"finds", finds},
           {"speed_factor", speed_factor},
           {"k_log_sum", k_log_sum},
-          {"k_log_sq", k_log_sq}};
+          {"k_log_sq", k_log_sq},
+          {"landmark_practice", landmark_practice}};
 }
 
 TraineeState TraineeState::from_json(const nlohmann::json& j) {
@@ -82,6 +83,7 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   s.speed_factor = j.value("speed_factor", 1.0);
   s.k_log_sum = j.value("k_log_sum", 0.0);
   s.k_log_sq = j.value("k_log_sq", 0.0);
+  s.landmark_practice = j.value("landmark_practice", 0.0);
   return s;
 }
 
@@ -140,6 +142,61 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
   release_at_ = -1.0;
   t_prev_ = 0.0;
   last_ = Percept{};
+  plan_route();
+  next_probe();
+}
+
+int Trainee::nearest_node(const Eigen::Vector3d& q) const {
+  const auto& V = *view_.V;
+  int node = 0;
+  double bd = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < V.rows(); ++i) {
+    const double d = (V.row(i).transpose() - q).squaredNorm();
+    if (d < bd) bd = d, node = i;
+  }
+  return node;
+}
+
+void Trainee::plan_route() {
+  // Orienting before the search (landmark-based haptic navigation): without seeing where the
+  // hand is on the organ, a palpator first finds a place it can identify by touch — where the
+  // hand meets the organ — and works its way from there, landmark by landmark, towards where
+  // memory puts the feature, judging at each landmark by touch where the hand is (Lederman &
+  // Klatzky 1987: a shape is learnt by contour following, the slowest exploratory procedure).
+  // The route is the straight line from the first landmark to the believed feature position,
+  // one landmark every landmark_spacing, each projected to the nearest surface node. Exploration
+  // time thus comes out of the route's length, the time each landmark takes to judge (faster
+  // with practice and for faster people) and the search misses after it.
+  route_.clear();
+  route_i_ = 0;
+  if (!(p_.landmark_spacing > 0)) return;
+  const int first = nearest_node(view_.start_position);
+  const Eigen::Vector3d a = view_.V->row(first).transpose();
+  const double len = (s_.place - a).norm();
+  const int n = static_cast<int>(std::floor(len / p_.landmark_spacing));
+  route_.push_back(first);
+  for (int i = 1; i < n; ++i) {
+    const int node = nearest_node(a + (s_.place - a) * (static_cast<double>(i) / n));
+    if (node != route_.back()) route_.push_back(node);
+  }
+}
+
+void Trainee::next_probe() {
+  if (route_i_ < route_.size()) {
+    // The next landmark: reached at explore_speed from the start (a reach), then traced at
+    // trace_speed from landmark to landmark.
+    const int node = route_[route_i_];
+    const Eigen::Vector3d n = view_.N->row(node).transpose().normalized();
+    press_dir_ = -n;
+    const double speed = route_i_ == 0 ? p_.explore_speed : p_.trace_speed;
+    ++route_i_;
+    orienting_ = true;
+    target_node_ = node;
+    start_travel(view_.V->row(node).transpose() + n * p_.lift_height, Mode::descend);
+    travel_speed_ = speed;
+    return;
+  }
+  orienting_ = false;
   choose_search_target();
 }
 
@@ -157,12 +214,7 @@ void Trainee::choose_search_target() {
   for (int attempt = 0; attempt < 8; ++attempt) {
     Eigen::Vector3d q =
         s_.place + Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal()) * sd;
-    int node = 0;
-    double bd = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < V.rows(); ++i) {
-      double d = (V.row(i).transpose() - q).squaredNorm();
-      if (d < bd) bd = d, node = i;
-    }
+    const int node = nearest_node(q);
     fallback = node;
     if (std::find(probed_.begin(), probed_.end(), node) != probed_.end()) continue;
     const Eigen::Vector3d x = V.row(node).transpose();
@@ -179,12 +231,15 @@ void Trainee::choose_search_target() {
   Eigen::Vector3d n = view_.N->row(best).transpose();
   press_dir_ = -n.normalized();
   start_travel(V.row(best).transpose() + n.normalized() * p_.lift_height, Mode::descend);
+  travel_speed_ = p_.explore_speed;
 }
 
 void Trainee::start_travel(const Eigen::Vector3d& to, Mode next) {
   goal_ = to;
   after_travel_ = next;
   mode_ = Mode::travel;
+  mode_start_ = t_prev_;
+  travel_len_ = (to - pos_).norm();
 }
 
 // Cue reliabilities scale with the stimulus (Weber), not with the noisy sample: a sample that
@@ -226,6 +281,19 @@ double Trainee::draw_recognition_time() {
          std::exp(p_.recognition_cv * rng_.normal());
 }
 
+double Trainee::draw_landmark_time() {
+  // Median landmark_time for a novice of average speed, shortened by the power law of practice
+  // (Newell & Rosenbloom 1981) over the landmark judgements made so far; lognormal spread. A
+  // judgement during which the touched part visibly deformed counts 1 + visual_recognition_gain
+  // times: seeing where one touches confirms the felt landmark and teaches the layout faster
+  // (a second, visual cue: Ernst & Banks 2002; vision localises the hand better than
+  // proprioception: van Beers et al. 1999). This is how training with visible deformation
+  // shortens the later haptic-only search.
+  return p_.landmark_time / s_.speed_factor *
+         std::pow(1.0 + s_.landmark_practice, -p_.practice_exponent) *
+         std::exp(p_.recognition_cv * rng_.normal());
+}
+
 void Trainee::learn_target(double observed, double variance, double gain_scale) {
   // Kalman update of the target belief from a cue that marks "target reached"; gain_scale < 1
   // when part of the learning is withheld (guidance).
@@ -262,8 +330,14 @@ Eigen::Vector3d Trainee::command(double t) {
     case Mode::travel:
       // A person lifts the hand when the organ is in the way: move with the felt force.
       if (last_.contact && last_.force.norm() > 1e-9)
-        pos_ += last_.force.normalized() * p_.explore_speed * s_.speed_factor * dt;
-      if (move_towards(goal_, p_.explore_speed * s_.speed_factor)) {
+        pos_ += last_.force.normalized() * travel_speed_ * s_.speed_factor * dt;
+      // A goal the organ keeps the hand from (behind another part of it) is given up after
+      // three times the straight-line travel time plus 2 s: the next landmark or probe.
+      if (t - mode_start_ > 3.0 * travel_len_ / (travel_speed_ * s_.speed_factor) + 2.0) {
+        next_probe();
+        break;
+      }
+      if (move_towards(goal_, travel_speed_ * s_.speed_factor)) {
         mode_ = after_travel_;
         mode_start_ = t;
       }
@@ -271,7 +345,7 @@ Eigen::Vector3d Trainee::command(double t) {
     case Mode::descend:
       pos_ += press_dir_ * 0.5 * p_.explore_speed * s_.speed_factor * dt;
       if (t - mode_start_ > 3.0 * p_.lift_height / (0.5 * p_.explore_speed * s_.speed_factor))
-        choose_search_target();  // nothing to touch here
+        next_probe();  // nothing to touch here
       break;
     case Mode::dwell:
       // Keep a light touch while recognising what is under the finger.
@@ -297,8 +371,11 @@ Eigen::Vector3d Trainee::command(double t) {
           mode_start_ = t;
           start_press();
         } else {
-          // Not the feature: probe elsewhere (travel lifts off the surface on the way).
-          choose_search_target();
+          if (orienting_)
+            s_.landmark_practice += dwell_saw_d_ ? 1.0 + p_.visual_recognition_gain : 1.0;
+          // Not the feature (or a landmark passed): the next landmark, or probe elsewhere
+          // (travel lifts off the surface on the way).
+          next_probe();
         }
       }
       break;
@@ -399,7 +476,7 @@ void Trainee::perceive(const Percept& p, bool call) {
   if (mode_ == Mode::descend && p.contact) {
     mode_ = Mode::dwell;
     mode_start_ = p.t;
-    rec_time_ = draw_recognition_time();
+    rec_time_ = orienting_ ? draw_landmark_time() : draw_recognition_time();
     dwell_saw_d_ = false;
   }
   if (mode_ == Mode::dwell && ch_.visual && p.contact && p.visible_deformation > 0)

@@ -92,6 +92,9 @@ struct TraineeState {
   int finds = 0;              // sessions in which the feature was found (practice)
   double speed_factor = 1.0;  // individual speed (>1 faster), drawn at the briefing
   double k_log_sum = 0.0, k_log_sq = 0.0;  // Σ log(felt/seen), Σ log² over calibrating presses
+  // Landmark judgements practised so far; one confirmed by seeing the touched part deform
+  // counts 1 + visual_recognition_gain (orienting practice, see draw_landmark_time).
+  double landmark_practice = 0.0;
   nlohmann::json to_json() const;
   static TraineeState from_json(const nlohmann::json& j);
 };
@@ -125,11 +128,17 @@ class Trainee {
  private:
   enum class Mode { travel, descend, dwell, press, hold, release, rest };
   void choose_search_target();
+  // Orienting: the landmarks on the route to the believed feature position (plan_route, at the
+  // session start), touched one after the other before the search proper (next_probe).
+  void plan_route();
+  void next_probe();
+  int nearest_node(const Eigen::Vector3d& q) const;
   void start_travel(const Eigen::Vector3d& to, Mode next);
   double perceived_force(const Percept& p) const;
   double perceived_variance(const Percept& p) const;
   void learn_target(double observed, double variance, double gain_scale = 1.0);
   double draw_recognition_time();
+  double draw_landmark_time();
   void start_press();
   void begin_release(double t);
 
@@ -145,7 +154,12 @@ class Trainee {
   Mode after_travel_ = Mode::descend;
   int target_node_ = -1;
   int search_k_ = 0;
-  std::vector<int> probed_;  // surface nodes probed this session
+  std::vector<int> probed_;    // surface nodes probed this session
+  std::vector<int> route_;     // landmark nodes of this session's orienting route
+  std::size_t route_i_ = 0;    // next landmark to touch
+  bool orienting_ = false;     // the current touch is a landmark, not a search probe
+  double travel_speed_ = 0.0;  // m/s of the current travel (before the speed factor)
+  double travel_len_ = 0.0;    // m, straight-line length of the current travel
   bool identified_ = false;
   double dwell_start_ = -1.0, mode_start_ = 0.0, release_at_ = -1.0;
   double intended_ = 0.0, eps_h_ = 0.0, eps_v_ = 0.0, rt_scale_ = 1.0;

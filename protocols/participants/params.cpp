@@ -151,6 +151,21 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       tspec("individual_cv", &T::individual_cv, 0.0, 2.0, "1",
             "between-person SD (log scale) of a speed factor on exploration and recognition",
             "model assumption (individual differences in motor speed)"),
+      tspec("landmark_spacing", &T::landmark_spacing, 0.0, 1.0, "m",
+            "orienting: distance between the landmarks touched on the route from where the hand "
+            "first meets the organ to the believed feature position (0: no orienting, the "
+            "search starts at the believed position)",
+            "landmark-based haptic navigation (Lederman & Klatzky 1987: without vision a scene "
+            "is learnt by following its contours; Klatzky & Lederman 2003); value to be fitted"),
+      tspec("landmark_time", &T::landmark_time, 0.0, 60.0, "s",
+            "median time a novice of average speed needs to judge where the hand is at one "
+            "landmark (light touch; shortened by practice like recognition_time)",
+            "Lederman & Klatzky 1987 (an exploratory procedure takes ~1-10 s, contour following "
+            "the longest); Klatzky, Lederman & Metzger 1985 (1-2 s per object); value fitted"),
+      tspec("trace_speed", &T::trace_speed, 1e-4, 1.0, "m/s",
+            "hand speed from one landmark to the next while orienting (slower than a seen reach)",
+            "Lederman & Klatzky 1987 (deliberate exploratory movements of a few cm/s); value "
+            "an assumption"),
   };
   return specs;
 }

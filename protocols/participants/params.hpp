@@ -45,17 +45,21 @@ struct TraineeParams {
   double lift_height = 0.01;           // m
   double max_force = 10.0;             // N
   // guidance: reliance on a binary "target reached" marker (sound, call)
-  double guidance_dependence = 0.6;    // 1, share of marker learning withheld at full reliance
-  double guidance_rate = 0.2;          // 1, reliance gained per press with a marker
-  double extinction_rate = 0.3;        // 1, reliance lost per press whose expected marker failed
-  double marker_wait_overshoot = 0.3;  // 1, press beyond the intended force awaiting a marker
+  double guidance_dependence = 0.6;  // 1, share of marker learning withheld at full reliance
+  double guidance_rate = 0.2;        // 1, reliance gained per press with a marker
+  double extinction_rate = 0.3;      // 1, reliance lost per press whose expected marker failed
+  double marker_wait_overshoot = 0.133333;  // 1, press beyond the intended force awaiting a marker
   // visual learning and search
-  double visual_spatial_sd = 0.004;      // m, SD of locating the touched point by eye
-  double visual_recognition_gain = 1.0;  // 1, recognition speed-up when the part deforms
-  double recognition_cv = 0.3;           // 1, trial-to-trial SD / mean of a recognition time
-  double miss_probability = 0.2;         // 1, chance the feature is not recognised on a touch
-  double practice_exponent = 0.3;        // 1, power law of practice for recognition
-  double individual_cv = 0.15;           // 1, between-person SD of speed (log scale)
+  double visual_spatial_sd = 0.004;         // m, SD of locating the touched point by eye
+  double visual_recognition_gain = 1.7257;  // 1, recognition speed-up when the part deforms
+  double recognition_cv = 0.3;              // 1, trial-to-trial SD / mean of a recognition time
+  double miss_probability = 0.2;            // 1, chance the feature is not recognised on a touch
+  double practice_exponent = 0.3;           // 1, power law of practice for recognition
+  double individual_cv = 0.15;              // 1, between-person SD of speed (log scale)
+  // orienting on landmarks before the search (blind haptic navigation along the organ)
+  double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
+  double landmark_time = 12.9513;  // s, median novice judgement time at one landmark
+  double trace_speed = 0.02;       // m/s, hand speed from one landmark to the next
 };
 
 struct InstructorParams {

@@ -105,6 +105,7 @@ TEST(TraineeRelease, ForceAboveTheLimitMakesTheHandYield) {
   tissue.st = 1e9;       // no sound
   auto params = trainee_params(nlohmann::json::object());
   params.max_force = 4.0;
+  params.landmark_spacing = 0.0;  // no orienting: this checks the force bound, not the search
   Trainee tr(params, TraineeState{});
   tr.begin_session(tissue.view(), 20.0, 0.0, 60.0, 1, 2, Channels{});
   double fmax = 0.0;
