@@ -587,6 +587,28 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   }
   md.XtX = md.X.transpose() * md.X;
   md.Xty = md.X.transpose() * md.y;
+  {
+    // A response the fixed effects reproduce exactly (e.g. constant) leaves no variance to
+    // split between participants and residual: the model is not estimable.
+    const VectorXd resid = md.y - md.X * qr.solve(md.y);
+    const double scale = std::max(md.y.cwiseAbs().maxCoeff(), 1e-300);
+    if (!(resid.cwiseAbs().maxCoeff() > 1e-12 * scale))
+      throw InputError("the response '" + f.response +
+                           "' is fitted exactly by the fixed effects (e.g. it is constant): no "
+                           "variance is left to estimate",
+                       t.file);
+  }
+  {
+    // A response the fixed effects reproduce exactly (e.g. constant) leaves no variance to
+    // split between participants and residual: the model is not estimable.
+    const VectorXd resid = md.y - md.X * qr.solve(md.y);
+    const double scale = std::max(md.y.cwiseAbs().maxCoeff(), 1e-300);
+    if (!(resid.cwiseAbs().maxCoeff() > 1e-12 * scale))
+      throw InputError("the response '" + f.response +
+                           "' is fitted exactly by the fixed effects (e.g. it is constant): no "
+                           "variance is left to estimate",
+                       t.file);
+  }
 
   // --- optimise theta (lme4's start: identity Lambda)
   std::vector<double> th0 = md.k == 1 ? std::vector<double>{1} : std::vector<double>{1, 0, 1};
@@ -736,8 +758,11 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     }
     const int q = static_cast<int>(nu.size());
     ft.num_df = q;
-    ft.f = t2sum / q;
-    if (q == 1) {
+    ft.f = q > 0 ? t2sum / q : std::numeric_limits<double>::quiet_NaN();
+    if (q == 0) {
+      // No estimable contrast (a zero covariance of the estimates): no test.
+      ft.den_df = std::numeric_limits<double>::quiet_NaN();
+    } else if (q == 1) {
       ft.den_df = nu[0];
     } else {
       bool same = true;

@@ -115,9 +115,11 @@ TEST(CliBench, QuickRunHasEverySectionFiniteAndFindsPlantedError) {
   EXPECT_DOUBLE_EQ((*find(f, "ovary_left_A"))["metrics"]["field_rel_err"].get<double>(), 1.0);
 
   // The integrators' reference agrees with itself at twice its step.
-  for (const auto& r : j["integrators"]["results"])
-    if (r["metrics"].contains("ref_self_err"))
+  for (const auto& r : j["integrators"]["results"]) {
+    if (r["metrics"].contains("ref_self_err")) {
       EXPECT_LT(r["metrics"]["ref_self_err"].get<double>(), 1e-6) << r["name"];
+    }
+  }
 }
 
 TEST(CliBench, UnknownSectionIsAnInputError) {

@@ -162,4 +162,16 @@ TEST(CliLmm, BadInputExitsTwoWithLocation) {
   r = run("lmm --csv " + fixture("study.csv") + " " + kStudy + " --where nosuch=1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("nosuch"), std::string::npos) << r.err;
+  // A constant response (a learning curve of a measure nobody ever scored) was a crash.
+  std::string flat = "value,group,session,participant\n";
+  for (int g = 0; g < 2; ++g)
+    for (int p = 0; p < 3; ++p)
+      for (int s = 0; s < 3; ++s)
+        flat += "0,G" + std::to_string(g) + "," + std::to_string(s) + ",p" + std::to_string(g) +
+                std::to_string(p) + "\n";
+  const std::string flat_csv = write_temp("flat.csv", flat);
+  r = run("lmm --csv " + flat_csv +
+          " --formula \"value ~ group * session + (1 + session | participant)\"");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("fitted exactly by the fixed effects"), std::string::npos) << r.err;
 }

@@ -109,6 +109,7 @@ const char* kStudy = R"({
   "title": "Report rendering check",
   "seed": 5,
   "prototype_dirs": ["@PROTOTYPES@"],
+  "participant_model": {"model": "pmm1", "parameters": {"landmark_spacing": 0}},
   "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
   "groups": [
     {"id": "A", "prototype": "A", "size": 3},

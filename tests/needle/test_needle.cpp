@@ -76,8 +76,12 @@ TEST(NeedleSlab, StraightInsertionEmitsTheLayerSequenceAndTheTargetDistance) {
   EXPECT_EQ(model.insertions(), 1);
   // Events sit on the interfaces (depth below the entry point at z = 0).
   for (auto& e : r.events) {
-    if (e.kind == Kind::tissue_entered && e.tissue == 107) EXPECT_NEAR(e.depth, 0.025, 1e-12);
-    if (e.kind == Kind::bone_contact) EXPECT_NEAR(e.depth, 0.030, 1e-12);
+    if (e.kind == Kind::tissue_entered && e.tissue == 107) {
+      EXPECT_NEAR(e.depth, 0.025, 1e-12);
+    }
+    if (e.kind == Kind::bone_contact) {
+      EXPECT_NEAR(e.depth, 0.030, 1e-12);
+    }
   }
   // Tip-to-target: 25 mm - depth above the membrane, 0 inside, depth - 27 mm below it, for
   // every step where the tip moves freely (not pressing an interface).

@@ -173,8 +173,9 @@ TEST(Shoulder, NeedleThroughTheCapsuleHitsTheHumeralHead) {
     for (auto& e : s.events) {
       if (e.kind == engine::NeedleEvent::Kind::tissue_entered) entered.push_back(e.tissue);
       if (e.kind == engine::NeedleEvent::Kind::bone_contact) bone = e.tissue;
-      if (e.kind == engine::NeedleEvent::Kind::target_reached)
+      if (e.kind == engine::NeedleEvent::Kind::target_reached) {
         EXPECT_NEAR((e.position - head).norm(), 0.0275, 3e-4);
+      }
     }
   }
   EXPECT_EQ(entered, (std::vector<int>{100, 101, 300, 107, 300}));
