@@ -1,7 +1,9 @@
 // End-to-end tests of `palplab fem verify`: exit codes and the JSON contract (issue 12).
 #include <gtest/gtest.h>
+
 #include <sys/wait.h>
 #include <unistd.h>
+#include "tests/cli_support.hpp"
 
 #include <cstdlib>
 #include <filesystem>
@@ -15,26 +17,11 @@ using json = nlohmann::json;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = palplab::testing::CliResult;
 
 Result run(const std::string& args) {
-  const fs::path d = fs::temp_directory_path() / ("palplab_cli_fem_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  const fs::path o = d / "stdout.txt", e = d / "stderr.txt";
-  const std::string cmd =
-      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
-  const int st = std::system(cmd.c_str());
-  Result r{WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+  const fs::path d = palplab::testing::scratch_dir("cli_fem");
+  Result r = palplab::testing::run_palplab(args, d);
   fs::remove_all(d);
   return r;
 }

@@ -1,8 +1,10 @@
 // End-to-end: prototype D with `palplab probe` (the "fem" section), in a study (`validate`,
 // `run`, `export`), and `palplab fem reference` on a small case (issue 12).
 #include <gtest/gtest.h>
+
 #include <sys/wait.h>
 #include <unistd.h>
+#include "tests/cli_support.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -17,32 +19,15 @@ using json = nlohmann::json;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::slurp;
 
 fs::path tmp(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("palplab_cli_fem_d_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return palplab::testing::scratch_dir("cli_fem_d_" + name);
 }
 
 Result run(const std::string& args, const fs::path& d) {
-  const fs::path o = d / "stdout.txt", e = d / "stderr.txt";
-  const std::string cmd =
-      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
-  const int st = std::system(cmd.c_str());
-  return Result{WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+  return palplab::testing::run_palplab(args, d);
 }
 
 std::string proto(const std::string& id) {

@@ -1,7 +1,9 @@
 // End-to-end tests of `palplab mesh ...`: exit codes, JSON keys, files written.
 #include <gtest/gtest.h>
+
 #include <sys/wait.h>
 #include <unistd.h>
+#include "tests/cli_support.hpp"
 
 #include <cstdlib>
 #include <filesystem>
@@ -15,33 +17,16 @@ using json = nlohmann::json;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
+using Result = palplab::testing::CliResult;
+using palplab::testing::slurp;
 
 fs::path dir() {
-  static const fs::path d = [] {
-    fs::path p = fs::temp_directory_path() / ("palplab_cli_mesh_" + std::to_string(::getpid()));
-    fs::create_directories(p);
-    return p;
-  }();
+  static const fs::path d = palplab::testing::scratch_dir("cli_mesh");
   return d;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 Result run(const std::string& args) {
-  const fs::path o = dir() / "stdout.txt", e = dir() / "stderr.txt";
-  const std::string cmd =
-      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
-  const int st = std::system(cmd.c_str());
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+  return palplab::testing::run_palplab(args, dir());
 }
 
 std::string p(const std::string& name) {

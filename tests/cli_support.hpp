@@ -1,0 +1,45 @@
+#pragma once
+// What the end-to-end tests (tests/cli_*) share: run the palplab binary with arguments and
+// capture its exit code, stdout and stderr; read a file; a fresh per-process scratch directory.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace palplab::testing {
+
+struct CliResult {
+  int code = -1;  // exit code, -1 if killed by a signal
+  std::string out, err;
+};
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A fresh directory <tmp>/palplab_<name>_<pid> (emptied if it exists).
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() /
+                 ("palplab_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// Runs `PALPLAB_BINARY args` through the shell with stdout/stderr captured in files of `dir`.
+inline CliResult run_palplab(const std::string& args, const std::filesystem::path& dir) {
+  const auto o = dir / "stdout.txt", e = dir / "stderr.txt";
+  const std::string cmd =
+      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
+  const int st = std::system(cmd.c_str());
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+}  // namespace palplab::testing
