@@ -204,20 +204,7 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
       c.err(P, "the condensed formulation needs \"operational_region\" (a region of the mesh)");
     if (!f.lumped_mass) c.err(P + ".lumped_mass", "the condensed formulation uses lumped mass");
   }
-  SupportConfig& sp = cfg.support;
-  sp.modulus = c.number(m, P, "support_modulus", false, 0, 1e9,
-                        "the elastic foundation under the surface (N/m^3)")
-                   .value_or(sp.modulus);
-  sp.fixed_z_below = c.number(m, P, "fixed_z_below", false, 0, 10,
-                              "the height above the mesh's lowest point below which nodes are "
-                              "pinned (m)")
-                         .value_or(sp.fixed_z_below);
-  if (auto fr = c.text(m, P, "fixed_region", false)) {
-    if (std::find(regions.begin(), regions.end(), *fr) == regions.end())
-      c.err(P + ".fixed_region", "unknown region \"" + *fr + "\" of the mesh");
-    else
-      sp.fixed_region = *fr;
-  }
+  read_support(c, m, P, cfg.support, regions);
 }
 
 std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm) {

@@ -260,9 +260,7 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
       c.number(m, P, "rayleigh_beta", false, 0, 10, "the stiffness-proportional damping kd/ks (s)")
           .value_or(mc.rayleigh_beta);
   SupportConfig& sp = cfg.support;
-  sp.modulus = c.number(m, P, "support_modulus", false, 0, 1e9,
-                        "the elastic foundation under the surface (N/m^3)")
-                   .value_or(sp.modulus);
+  read_support(c, m, P, sp, regions);
   sp.damping =
       c.number(m, P, "support_damping", false, 0, 1e9, "the damping of the foundation (N s/m^3)")
           .value_or(sp.damping);
@@ -277,16 +275,6 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
   cfg.scope.max_nodes = static_cast<int>(
       c.integer(m, P, "scope_max_nodes", false, 1, 1L << 30, "the most nodes in the scope")
           .value_or(cfg.scope.max_nodes));
-  sp.fixed_z_below = c.number(m, P, "fixed_z_below", false, 0, 10,
-                              "the height above the mesh's lowest point below which nodes are "
-                              "pinned (m)")
-                         .value_or(sp.fixed_z_below);
-  if (auto fr = c.text(m, P, "fixed_region", false)) {
-    if (std::find(regions.begin(), regions.end(), *fr) == regions.end())
-      c.err(P + ".fixed_region", "unknown region \"" + *fr + "\" of the mesh");
-    else
-      sp.fixed_region = *fr;
-  }
   if (auto in = c.text(m, P, "integrator", false, {"symplectic_euler", "backward_euler", "rk4"}))
     cfg.integrator = integrator_from_string(*in);
   if (auto ls = c.text(m, P, "linear_solver", false, {"cg", "ldlt_refactor", "ldlt_frozen"}))

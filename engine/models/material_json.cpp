@@ -1,5 +1,7 @@
-// The "material" member of a deformable model's "model" object (docs/FORMATS.md): a tissue name
-// of the table, or {"tissue", "youngs_modulus", "density"}. Shared by every deformable model kind.
+// The members every deformable model kind reads the same way (docs/FORMATS.md): "material" (a
+// tissue name of the table, or {"tissue", "youngs_modulus", "density"}) and the support
+// ("support_modulus", "fixed_z_below", "fixed_region").
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "common/json_check.hpp"
@@ -32,6 +34,23 @@ void read_material(json::Checker& c, const nlohmann::json& m, const std::string&
     names += (names.empty() ? "" : ", ") + e.name;
   }
   if (!known) c.err(Q, "unknown tissue \"" + mc.tissue + "\" (expected one of: " + names + ")");
+}
+
+void read_support(json::Checker& c, const nlohmann::json& m, const std::string& P,
+                  SupportConfig& sp, const std::vector<std::string>& regions) {
+  sp.modulus = c.number(m, P, "support_modulus", false, 0, 1e9,
+                        "the elastic foundation under the surface (N/m^3)")
+                   .value_or(sp.modulus);
+  sp.fixed_z_below = c.number(m, P, "fixed_z_below", false, 0, 10,
+                              "the height above the mesh's lowest point below which nodes are "
+                              "pinned (m)")
+                         .value_or(sp.fixed_z_below);
+  if (auto fr = c.text(m, P, "fixed_region", false)) {
+    if (std::find(regions.begin(), regions.end(), *fr) == regions.end())
+      c.err(P + ".fixed_region", "unknown region \"" + *fr + "\" of the mesh");
+    else
+      sp.fixed_region = *fr;
+  }
 }
 
 }  // namespace palplab::engine

@@ -99,6 +99,10 @@ struct ModelKind {
 void read_material(json::Checker& c, const nlohmann::json& model, const std::string& path,
                    MaterialConfig& mc);
 
+// Reads "support_modulus", "fixed_z_below" and "fixed_region" of a model object into sp.
+void read_support(json::Checker& c, const nlohmann::json& model, const std::string& path,
+                  SupportConfig& sp, const std::vector<std::string>& regions);
+
 // Every registered kind, in registration order.
 const std::vector<ModelKind>& model_kinds();
 // nullptr if unknown.
