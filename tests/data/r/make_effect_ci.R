@@ -26,7 +26,10 @@ lambda_for <- function(f, d1, d2, p) {
   if (g(0) <= 0) return(0)
   hi <- max(1, d1 * f)
   while (g(hi) > 0) hi <- hi * 2
-  uniroot(g, c(0, hi), tol = 1e-13)$root
+  root <- uniroot(g, c(0, hi), tol = 1e-13)$root
+  # The bound must solve its equation (R's pnbeta is good to about 1e-9 absolute).
+  stopifnot(abs(g(root)) < 1e-8)
+  root
 }
 for (f in fixtures) {
   d <- read.csv(f$file, stringsAsFactors = FALSE)
@@ -41,10 +44,16 @@ for (f in fixtures) {
     lo <- lambda_for(F, d1, d2, 1 - (1 - lev) / 2)
     hi <- lambda_for(F, d1, d2, (1 - lev) / 2)
     n <- d1 + d2 + 1
+    stopifnot(lo <= hi, hi > 0)  # an interval, and the observed F is above its lower tail
     out(f$id, paste0("lambda", tag, ".lo"), lo); out(f$id, paste0("lambda", tag, ".hi"), hi)
     out(f$id, paste0("pve", tag, ".lo"), lo / (lo + n)); out(f$id, paste0("pve", tag, ".hi"), hi / (hi + n))
   }
 }
 for (d1 in c(1, 2, 3.5, 9)) for (d2 in c(2.5, 12, 117, 4000)) for (ncp in c(0, 0.5, 7, 60, 800))
   for (x in c(0.05, 0.8, 2.5, 9, 40))
-    out("grid", sprintf("cdf:%g:%g:%g:%g", d1, d2, ncp, x), pf(x, d1, d2, ncp = ncp))
+    {
+      p <- pf(x, d1, d2, ncp = ncp)
+      # A CDF value, and at ncp 0 R's noncentral code agrees with its central F.
+      stopifnot(p >= 0, p <= 1, ncp > 0 || abs(p - pf(x, d1, d2)) < 1e-9)
+      out("grid", sprintf("cdf:%g:%g:%g:%g", d1, d2, ncp, x), p)
+    }
