@@ -4,6 +4,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -40,6 +42,18 @@ inline CliResult run_palplab(const std::string& args, const std::filesystem::pat
       std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
   const int st = std::system(cmd.c_str());
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+// Runs any shell command line; `out` holds its stdout and stderr interleaved, `err` is empty.
+inline CliResult run_command(const std::string& cmdline) {
+  FILE* p = popen((cmdline + " 2>&1").c_str(), "r");
+  CliResult r;
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
+  const int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
 }
 
 }  // namespace palplab::testing

@@ -2,8 +2,10 @@
 // protocol while the real-time clock runs the scene here; then it goes silent and must get the
 // force switched off. Bounded: the simulator runs 0.45 s.
 #include <gtest/gtest.h>
+
 #include <sys/wait.h>
 #include <unistd.h>
+#include "tests/cli_support.hpp"
 
 #include <array>
 #include <cstdio>
@@ -21,17 +23,9 @@
 namespace e = palplab::engine;
 
 namespace {
-struct Result {
-  int code;
-  std::string out;
-};
+using Result = palplab::testing::CliResult;
 Result run(const std::string& cmdline) {
-  FILE* p = popen((cmdline + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+  return palplab::testing::run_command(cmdline);
 }
 std::string proto(const std::string& id) {
   return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";

@@ -2,7 +2,9 @@
 // nowhere far from it; the view window renders frames under Xvfb; bad input exits 2. Skipped only
 // when the machine has no EGL device (render exits 3) or no xvfb-run (view).
 #include <gtest/gtest.h>
+
 #include <sys/wait.h>
+#include "tests/cli_support.hpp"
 
 #include <array>
 #include <cmath>
@@ -20,17 +22,9 @@ namespace fs = std::filesystem;
 namespace pr = palplab::render;
 
 namespace {
-struct Result {
-  int code;
-  std::string out;
-};
+using Result = palplab::testing::CliResult;
 Result run(const std::string& cmdline) {
-  FILE* p = popen((cmdline + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+  return palplab::testing::run_command(cmdline);
 }
 Result cli(const std::string& args) {
   return run(std::string(PALPLAB_BINARY) + " " + args);

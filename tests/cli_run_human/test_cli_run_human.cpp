@@ -4,9 +4,11 @@
 // measures are those of the lock-step run of the script), the recorded track replayed again,
 // the refusal of a session that is not due yet, and a device that goes silent mid-session.
 #include <gtest/gtest.h>
+
 #include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "tests/cli_support.hpp"
 
 #include <array>
 #include <cmath>
@@ -26,17 +28,9 @@ namespace fs = std::filesystem;
 namespace e = palplab::engine;
 
 namespace {
-struct Result {
-  int code;
-  std::string out;
-};
+using Result = palplab::testing::CliResult;
 Result run(const std::string& cmdline) {
-  FILE* p = popen((cmdline + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+  return palplab::testing::run_command(cmdline);
 }
 const std::string kDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_run_human/";
 
