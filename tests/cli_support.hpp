@@ -35,13 +35,35 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return d;
 }
 
-// Runs `PALPLAB_BINARY args` through the shell with stdout/stderr captured in files of `dir`.
-inline CliResult run_palplab(const std::string& args, const std::filesystem::path& dir) {
+// Runs a shell command line with stdout/stderr captured in files of `dir`.
+inline CliResult run_shell(const std::string& cmdline, const std::filesystem::path& dir) {
   const auto o = dir / "stdout.txt", e = dir / "stderr.txt";
-  const std::string cmd =
-      std::string(PALPLAB_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
+  const std::string cmd = cmdline + " > " + o.string() + " 2> " + e.string();
   const int st = std::system(cmd.c_str());
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+// Runs `PALPLAB_BINARY args` (stdout/stderr captured in files of `dir`).
+inline CliResult run_palplab(const std::string& args, const std::filesystem::path& dir) {
+  return run_shell(std::string(PALPLAB_BINARY) + " " + args, dir);
+}
+
+// The test process's own scratch directory, made once.
+inline const std::filesystem::path& process_scratch() {
+  static const std::filesystem::path d = scratch_dir("cli");
+  return d;
+}
+
+// Runs `PALPLAB_BINARY args` in the process's scratch directory.
+inline CliResult run_palplab(const std::string& args) {
+  return run_palplab(args, process_scratch());
+}
+
+// Writes `text` to a file `name` in the process's scratch directory and returns its path.
+inline std::string write_temp(const std::string& name, const std::string& text) {
+  const auto p = process_scratch() / name;
+  std::ofstream(p, std::ios::binary) << text;
+  return p.string();
 }
 
 // Runs any shell command line; `out` holds its stdout and stderr interleaved, `err` is empty.

@@ -18,31 +18,15 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "../cli_support.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-Result cli(const std::string& args, const fs::path& dir) {
-  Result r;
-  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
-  std::string cmd =
-      std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
-  int st = std::system(cmd.c_str());
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::scratch_dir;
+using palplab::testing::slurp;
 
 fs::path data(const std::string& f) {
   return fs::path(PALPLAB_SOURCE_DIR) / "tests" / "data" / "calibration" / f;
@@ -51,9 +35,7 @@ fs::path data(const std::string& f) {
 }  // namespace
 
 TEST(Calibrate, RecoversKnownParameters) {
-  auto d = fs::temp_directory_path() / ("palplab_calibrate_" + std::to_string(getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
+  auto d = scratch_dir("calibrate");
   const double true_cv = 0.15, true_speed = 0.03;
   // The "human" data: the study with known parameters, 12 per group.
   auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
@@ -62,22 +44,24 @@ TEST(Calibrate, RecoversKnownParameters) {
   study["participant_model"]["parameters"]["explore_speed"] = true_speed;
   study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
   std::ofstream(d / "truth.json") << study.dump(1);
-  ASSERT_EQ(cli("run " + (d / "truth.json").string() + " --db " + (d / "truth.db").string() +
-                    " --samples none --quiet",
-                d)
+  ASSERT_EQ(run_palplab("run " + (d / "truth.json").string() + " --db " +
+                            (d / "truth.db").string() + " --samples none --quiet",
+                        d)
                 .code,
             0);
-  ASSERT_EQ(cli("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
-            0);
+  ASSERT_EQ(
+      run_palplab("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
+      0);
   // --write-defaults edits a copy of the real params.hpp.
   fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "params.hpp",
                 d / "params.hpp");
-  auto r = cli("calibrate " + data("recovery_study.json").string() + " --human " +
-                   (d / "csv" / "measures.csv").string() +
-                   " --params prior_target_cv explore_speed --budget 40 --sim-n 12 --jobs 2 "
-                   "--quiet --out " +
-                   (d / "fit.json").string() + " --write-defaults " + (d / "params.hpp").string(),
-               d);
+  auto r = run_palplab(
+      "calibrate " + data("recovery_study.json").string() + " --human " +
+          (d / "csv" / "measures.csv").string() +
+          " --params prior_target_cv explore_speed --budget 40 --sim-n 12 --jobs 2 "
+          "--quiet --out " +
+          (d / "fit.json").string() + " --write-defaults " + (d / "params.hpp").string(),
+      d);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("loss before"), std::string::npos);
   auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
@@ -109,20 +93,19 @@ TEST(Calibrate, RecoversKnownParameters) {
 }
 
 TEST(Calibrate, BadInputIsExit2) {
-  auto d = fs::temp_directory_path() / ("palplab_calibrate_bad_" + std::to_string(getpid()));
-  fs::create_directories(d);
-  EXPECT_EQ(cli("calibrate " + data("recovery_study.json").string() + " --human " +
-                    data("exp2_human.csv").string() + " --params weber_fracton --out " +
-                    (d / "x.json").string(),
-                d)
+  auto d = scratch_dir("calibrate_bad");
+  EXPECT_EQ(run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                            data("exp2_human.csv").string() + " --params weber_fracton --out " +
+                            (d / "x.json").string(),
+                        d)
                 .code,
             2);
   std::ofstream(d / "bad.csv") << "participant,group,phase,session,measure,value\nP1,G1,test,1,"
                                   "palpation_force,abc\n";
-  EXPECT_EQ(cli("calibrate " + data("recovery_study.json").string() + " --human " +
-                    (d / "bad.csv").string() + " --params weber_fraction --out " +
-                    (d / "x.json").string(),
-                d)
+  EXPECT_EQ(run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                            (d / "bad.csv").string() + " --params weber_fraction --out " +
+                            (d / "x.json").string(),
+                        d)
                 .code,
             2);
   fs::remove_all(d);

@@ -13,42 +13,15 @@
 #include <sstream>
 #include <string>
 
+#include "../cli_support.hpp"
+
 namespace {
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result run(const std::string& args) {
-  static int counter = 0;
-  auto dir = std::filesystem::temp_directory_path();
-  std::string errf = (dir / ("palplab_cli_lmm_err_" + std::to_string(::getpid()) + "_" +
-                             std::to_string(counter++)))
-                         .string();
-  std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>" + errf;
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  std::ifstream e(errf);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  std::filesystem::remove(errf);
-  return r;
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::write_temp;
 
 std::string fixture(const std::string& name) {
   return std::string(PALPLAB_SOURCE_DIR) + "/tests/data/lmm/" + name;
-}
-
-std::string write_temp(const std::string& name, const std::string& text) {
-  auto path = std::filesystem::temp_directory_path() /
-              ("palplab_cli_lmm_" + std::to_string(::getpid()) + "_" + name);
-  std::ofstream(path) << text;
-  return path.string();
 }
 
 const std::string kStudy = "--formula \"value ~ group * session + (1 | participant)\"";
@@ -56,7 +29,7 @@ const std::string kStudy = "--formula \"value ~ group * session + (1 | participa
 }  // namespace
 
 TEST(CliLmm, JsonContract) {
-  Result r = run("lmm --csv " + fixture("study.csv") + " " + kStudy + " --json");
+  Result r = run_palplab("lmm --csv " + fixture("study.csv") + " " + kStudy + " --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["method"], "REML");
@@ -99,8 +72,8 @@ TEST(CliLmm, JsonContract) {
 }
 
 TEST(CliLmm, MlReportsDevianceAndLogLik) {
-  Result r = run("lmm --csv " + fixture("sleepstudy.csv") +
-                 " --formula \"Reaction ~ Days + (Days | Subject)\" --ml --json");
+  Result r = run_palplab("lmm --csv " + fixture("sleepstudy.csv") +
+                         " --formula \"Reaction ~ Days + (Days | Subject)\" --ml --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["method"], "ML");
@@ -119,9 +92,9 @@ TEST(CliLmm, WhereEqualsPreFilteredFile) {
   while (std::getline(in, line))
     if (line.find(",C,") == std::string::npos) kept += line + "\n";
   std::string ab = write_temp("ab.csv", kept);
-  Result a = run("lmm --csv " + fixture("study.csv") + " " + kStudy +
-                 " --where group=A --where group=B --json");
-  Result b = run("lmm --csv " + ab + " " + kStudy + " --json");
+  Result a = run_palplab("lmm --csv " + fixture("study.csv") + " " + kStudy +
+                         " --where group=A --where group=B --json");
+  Result b = run_palplab("lmm --csv " + ab + " " + kStudy + " --json");
   ASSERT_EQ(a.code, 0) << a.err;
   ASSERT_EQ(b.code, 0) << b.err;
   auto ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
@@ -134,7 +107,7 @@ TEST(CliLmm, WhereEqualsPreFilteredFile) {
 }
 
 TEST(CliLmm, TextTables) {
-  Result r = run("lmm --csv " + fixture("study.csv") + " " + kStudy);
+  Result r = run_palplab("lmm --csv " + fixture("study.csv") + " " + kStudy);
   ASSERT_EQ(r.code, 0) << r.err;
   for (const char* s : {"REML criterion at convergence: 212.98", "Random effects:", "participant",
                         "Residual", "Fixed effects:", "groupC:session",
@@ -144,22 +117,23 @@ TEST(CliLmm, TextTables) {
 }
 
 TEST(CliLmm, BadInputExitsTwoWithLocation) {
-  Result r = run("lmm --csv " + fixture("study.csv") +
-                 " --formula \"value ~ group + (1 | participant) + (1 | group)\"");
+  Result r = run_palplab("lmm --csv " + fixture("study.csv") +
+                         " --formula \"value ~ group + (1 | participant) + (1 | group)\"");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--formula"), std::string::npos) << r.err;
-  r = run("lmm --csv " + fixture("study.csv") + " --formula \"value ~ grp + (1 | participant)\"");
+  r = run_palplab("lmm --csv " + fixture("study.csv") +
+                  " --formula \"value ~ grp + (1 | participant)\"");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("grp"), std::string::npos) << r.err;
   std::string bad = write_temp("bad.csv", "y,g,x\n1,a,1\n2,a,2\nabc,b,1\n3,b,2\n");
-  r = run("lmm --csv " + bad + " --formula \"y ~ x + (1 | g)\"");
+  r = run_palplab("lmm --csv " + bad + " --formula \"y ~ x + (1 | g)\"");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find(":4:"), std::string::npos) << r.err;  // CSV line of 'abc'
-  r = run("lmm --csv " + bad + " --formula \"x ~ y + (1 + g | g)\"");
+  r = run_palplab("lmm --csv " + bad + " --formula \"x ~ y + (1 + g | g)\"");
   EXPECT_EQ(r.code, 2);
-  r = run("lmm --csv /nonexistent.csv " + kStudy);
+  r = run_palplab("lmm --csv /nonexistent.csv " + kStudy);
   EXPECT_EQ(r.code, 2);
-  r = run("lmm --csv " + fixture("study.csv") + " " + kStudy + " --where nosuch=1");
+  r = run_palplab("lmm --csv " + fixture("study.csv") + " " + kStudy + " --where nosuch=1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("nosuch"), std::string::npos) << r.err;
   // A constant response (a learning curve of a measure nobody ever scored) was a crash.
@@ -170,8 +144,8 @@ TEST(CliLmm, BadInputExitsTwoWithLocation) {
         flat += "0,G" + std::to_string(g) + "," + std::to_string(s) + ",p" + std::to_string(g) +
                 std::to_string(p) + "\n";
   const std::string flat_csv = write_temp("flat.csv", flat);
-  r = run("lmm --csv " + flat_csv +
-          " --formula \"value ~ group * session + (1 + session | participant)\"");
+  r = run_palplab("lmm --csv " + flat_csv +
+                  " --formula \"value ~ group * session + (1 + session | participant)\"");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("fitted exactly by the fixed effects"), std::string::npos) << r.err;
 }

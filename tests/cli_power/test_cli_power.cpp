@@ -12,41 +12,16 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "../cli_support.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-fs::path tmp(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("palplab_power_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-Result run(const std::string& prefix, const std::string& args, const fs::path& dir) {
-  Result r;
-  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
-  std::string cmd = prefix + std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() +
-                    " 2>" + err.string();
-  int st = std::system(cmd.c_str());
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
-Result cli(const std::string& args, const fs::path& dir) {
-  return run("", args, dir);
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::run_shell;
+using palplab::testing::scratch_dir;
+using palplab::testing::slurp;
 
 std::string null_study() {
   return (fs::path(PALPLAB_SOURCE_DIR) / "tests" / "data" / "power" / "null_study.json").string();
@@ -59,8 +34,8 @@ nlohmann::json power_json(const fs::path& dir) {
 }  // namespace
 
 TEST(Power, NoEffectGivesAlpha) {
-  auto d = tmp("null");
-  auto r = cli(
+  auto d = scratch_dir("null");
+  auto r = run_palplab(
       "power " + null_study() + " --replicates 60 --jobs 2 --quiet --out " + (d / "out").string(),
       d);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -83,26 +58,26 @@ TEST(Power, NoEffectGivesAlpha) {
 }
 
 TEST(Power, ResumeAndShardsGiveTheSingleRunResult) {
-  auto d = tmp("shard");
+  auto d = scratch_dir("shard");
   const std::string base = "power " + null_study() + " --n 2,3 --quiet";
-  auto single = cli(base + " --replicates 3 --out " + (d / "single").string(), d);
+  auto single = run_palplab(base + " --replicates 3 --out " + (d / "single").string(), d);
   ASSERT_EQ(single.code, 0) << single.err;
   // Resume: 2 replicates first, then 3 in the same directory runs only the missing ones.
-  ASSERT_EQ(cli(base + " --replicates 2 --out " + (d / "resumed").string(), d).code, 0);
-  auto resumed = cli(base + " --replicates 3 --out " + (d / "resumed").string(), d);
+  ASSERT_EQ(run_palplab(base + " --replicates 2 --out " + (d / "resumed").string(), d).code, 0);
+  auto resumed = run_palplab(base + " --replicates 3 --out " + (d / "resumed").string(), d);
   ASSERT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_NE(resumed.out.find("(2 replicates run now)"), std::string::npos) << resumed.out;
   EXPECT_EQ(power_json(d / "resumed"), power_json(d / "single"));
   // Shards 1/2 and 2/2 into separate directories, then merged.
   for (int i = 1; i <= 2; ++i) {
-    auto s = cli(base + " --replicates 3 --shard " + std::to_string(i) + "/2 --out " +
-                     (d / ("s" + std::to_string(i))).string(),
-                 d);
+    auto s = run_palplab(base + " --replicates 3 --shard " + std::to_string(i) + "/2 --out " +
+                             (d / ("s" + std::to_string(i))).string(),
+                         d);
     ASSERT_EQ(s.code, 0) << s.err;
   }
-  auto m = cli("merge " + (d / "s1").string() + " " + (d / "s2").string() + " --out " +
-                   (d / "merged").string(),
-               d);
+  auto m = run_palplab("merge " + (d / "s1").string() + " " + (d / "s2").string() + " --out " +
+                           (d / "merged").string(),
+                       d);
   ASSERT_EQ(m.code, 0) << m.err;
   EXPECT_EQ(power_json(d / "merged"), power_json(d / "single"));
   // A shard alone is not the whole result.
@@ -111,10 +86,12 @@ TEST(Power, ResumeAndShardsGiveTheSingleRunResult) {
 }
 
 TEST(Power, BadArgumentsAreInputErrors) {
-  auto d = tmp("bad");
+  auto d = scratch_dir("bad");
   EXPECT_EQ(
-      cli("power " + null_study() + " --replicates 2 --shard 3/2 --out " + d.string(), d).code, 2);
-  EXPECT_EQ(cli("merge " + (d / "nothing").string() + " --out " + d.string(), d).code, 2);
+      run_palplab("power " + null_study() + " --replicates 2 --shard 3/2 --out " + d.string(), d)
+          .code,
+      2);
+  EXPECT_EQ(run_palplab("merge " + (d / "nothing").string() + " --out " + d.string(), d).code, 2);
   fs::remove_all(d);
 }
 
@@ -122,27 +99,27 @@ TEST(Power, MpiEqualsSingleProcess) {
 #ifndef PALPLAB_MPIEXEC
   GTEST_SKIP() << "built without PALPLAB_MPI";
 #else
-  auto d = tmp("mpi");
+  auto d = scratch_dir("mpi");
   const std::string base = "power " + null_study() + " --n 2,3 --replicates 3 --quiet --out ";
-  ASSERT_EQ(cli(base + (d / "single").string(), d).code, 0);
+  ASSERT_EQ(run_palplab(base + (d / "single").string(), d).code, 0);
   // Root in containers: OpenMPI refuses unless told; --oversubscribe for 2 ranks on 1 core.
   const std::string mpirun =
       std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") + PALPLAB_MPIEXEC +
       " -np 2 --oversubscribe ";
-  auto r = run(mpirun, base + (d / "mpi").string(), d);
+  auto r = run_shell(mpirun + PALPLAB_BINARY + " " + base + (d / "mpi").string(), d);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_EQ(power_json(d / "mpi"), power_json(d / "single"));
   // Shards under MPI (each shard's replicates shared by the ranks), merged.
   for (int i = 1; i <= 2; ++i) {
-    auto s = run(
-        mpirun,
-        base + (d / ("m" + std::to_string(i))).string() + " --shard " + std::to_string(i) + "/2",
-        d);
+    auto s =
+        run_shell(mpirun + PALPLAB_BINARY + " " + base + (d / ("m" + std::to_string(i))).string() +
+                      " --shard " + std::to_string(i) + "/2",
+                  d);
     ASSERT_EQ(s.code, 0) << s.out << s.err;
   }
-  ASSERT_EQ(cli("merge " + (d / "m1").string() + " " + (d / "m2").string() + " --out " +
-                    (d / "mmerged").string(),
-                d)
+  ASSERT_EQ(run_palplab("merge " + (d / "m1").string() + " " + (d / "m2").string() + " --out " +
+                            (d / "mmerged").string(),
+                        d)
                 .code,
             0);
   EXPECT_EQ(power_json(d / "mmerged"), power_json(d / "single"));

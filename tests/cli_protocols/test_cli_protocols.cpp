@@ -14,39 +14,16 @@
 
 #include "results/store.hpp"
 
+#include "../cli_support.hpp"
+
 namespace fs = std::filesystem;
 using palplab::results::Store;
 
 namespace {
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-fs::path tmp(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("palplab_cli_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-Result cli(const std::string& args, const fs::path& dir) {
-  Result r;
-  auto out = dir / "stdout.txt", err = dir / "stderr.txt";
-  std::string cmd =
-      std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
-  int st = std::system(cmd.c_str());
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::scratch_dir;
+using palplab::testing::slurp;
 
 std::string ref(const std::string& f) {
   return (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / f).string();
@@ -100,10 +77,10 @@ void copy_prototype(const std::string& id, const fs::path& to, const std::string
 }  // namespace
 
 TEST(CliValidate, ReferenceStudiesAreValid) {
-  auto d = tmp("valid");
+  auto d = scratch_dir("valid");
   for (const char* f : {"exp1_instructor.json", "exp2_short_term.json", "exp3_long_term.json",
                         "exp4_visual_extent.json", "example_minimal.json"}) {
-    Result r = cli("validate " + ref(f), d);
+    Result r = run_palplab("validate " + ref(f), d);
     EXPECT_EQ(r.code, 0) << f << "\n" << r.err;
     EXPECT_NE(r.out.find("valid: "), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("timeline per participant"), std::string::npos);
@@ -111,14 +88,14 @@ TEST(CliValidate, ReferenceStudiesAreValid) {
 }
 
 TEST(CliValidate, AllProblemsLocatedExitTwo) {
-  auto d = tmp("invalid");
+  auto d = scratch_dir("invalid");
   std::string s = small_study("A", "B", 2, 10);
   s.replace(s.find("\"seed\": 42"), 10, "\"seed\": \"x\"");
   s.replace(s.find("\"MPF\": 2.5"), 10, "\"MPF\": 9.5");
   s.replace(s.find("\"prototype\": \"B\""), 16, "\"prototype\": \"NoSuch\"");
   s.replace(s.find("\"feature\": \"ovary_left\""), 23, "\"feature\": \"spleen\"");
   std::ofstream(d / "bad.json") << s;
-  Result r = cli("validate " + (d / "bad.json").string(), d);
+  Result r = run_palplab("validate " + (d / "bad.json").string(), d);
   EXPECT_EQ(r.code, 2);
   const std::string f = (d / "bad.json").string();
   for (const char* path : {": $.seed: expected an integer", ": $.task.feature: region \"spleen\"",
@@ -136,31 +113,31 @@ TEST(CliValidate, AllProblemsLocatedExitTwo) {
   }
   EXPECT_EQ(n, 4) << r.err;
   // a prototype that is broken is reported inside the prototype file
-  auto d2 = tmp("badproto");
+  auto d2 = scratch_dir("badproto");
   std::ofstream(d2 / "Broken.json") << "{\"format\": \"palplab-prototype/1\", \"id\": \"Broken\",";
   std::ofstream(d2 / "s.json") << small_study("A", "Broken", 1, 10);
-  Result r2 = cli("validate " + (d2 / "s.json").string(), d2);
+  Result r2 = run_palplab("validate " + (d2 / "s.json").string(), d2);
   EXPECT_EQ(r2.code, 2);
   EXPECT_NE(r2.err.find((d2 / "Broken.json").string() + ":1:"), std::string::npos) << r2.err;
 }
 
 TEST(CliRun, SameSeedIdenticalMeasuresAnyJobs) {
-  auto d = tmp("determinism");
+  auto d = scratch_dir("determinism");
   std::ofstream(d / "s.json") << small_study("A", "B", 2, 20);
-  Result a = cli(
+  Result a = run_palplab(
       "run " + (d / "s.json").string() + " --db " + (d / "a.db").string() + " --jobs 1 --quiet", d);
   ASSERT_EQ(a.code, 0) << a.err;
-  Result b = cli(
+  Result b = run_palplab(
       "run " + (d / "s.json").string() + " --db " + (d / "b.db").string() + " --jobs 2 --quiet", d);
   ASSERT_EQ(b.code, 0) << b.err;
   std::string ta = measures_table(d / "a.db");
   EXPECT_EQ(std::count(ta.begin(), ta.end(), '\n'), 4 * 4 * 6);
   EXPECT_EQ(ta, measures_table(d / "b.db"));
   // refuses to overwrite; --force replaces
-  Result c = cli("run " + (d / "s.json").string() + " --db " + (d / "a.db").string(), d);
+  Result c = run_palplab("run " + (d / "s.json").string() + " --db " + (d / "a.db").string(), d);
   EXPECT_EQ(c.code, 2);
   EXPECT_NE(c.err.find("already exists; use --resume"), std::string::npos) << c.err;
-  Result f = cli(
+  Result f = run_palplab(
       "run " + (d / "s.json").string() + " --db " + (d / "a.db").string() + " --force --quiet", d);
   EXPECT_EQ(f.code, 0) << f.err;
   EXPECT_EQ(ta, measures_table(d / "a.db"));
@@ -172,11 +149,12 @@ TEST(CliRun, SameSeedIdenticalMeasuresAnyJobs) {
 }
 
 TEST(CliRun, InterruptedThenResumedEqualsUninterrupted) {
-  auto d = tmp("resume");
+  auto d = scratch_dir("resume");
   std::ofstream(d / "s.json") << small_study("A", "B", 2, 20);
   const std::string study = (d / "s.json").string();
-  ASSERT_EQ(cli("run " + study + " --db " + (d / "full.db").string() + " --quiet", d).code, 0);
-  Result part = cli(
+  ASSERT_EQ(run_palplab("run " + study + " --db " + (d / "full.db").string() + " --quiet", d).code,
+            0);
+  Result part = run_palplab(
       "run " + study + " --db " + (d / "part.db").string() + " --jobs 2 --max-sessions 5 --quiet",
       d);
   ASSERT_EQ(part.code, 0) << part.err;
@@ -185,25 +163,26 @@ TEST(CliRun, InterruptedThenResumedEqualsUninterrupted) {
     EXPECT_LT(s.read_sessions().size(), 16u);
     EXPECT_TRUE(s.read_study().finished_at.empty());
   }
-  Result res = cli("run " + study + " --db " + (d / "part.db").string() + " --resume", d);
+  Result res = run_palplab("run " + study + " --db " + (d / "part.db").string() + " --resume", d);
   ASSERT_EQ(res.code, 0) << res.err;
   EXPECT_NE(res.out.find("already in the database"), std::string::npos);
   EXPECT_EQ(measures_table(d / "full.db"), measures_table(d / "part.db"));
   // resuming with a different study file is refused
   std::string other = small_study("A", "B", 2, 21);
   std::ofstream(d / "other.json") << other;
-  Result bad = cli(
+  Result bad = run_palplab(
       "run " + (d / "other.json").string() + " --db " + (d / "part.db").string() + " --resume", d);
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("another study"), std::string::npos) << bad.err;
 }
 
 TEST(CliRun, KillNineThenResumeEqualsUninterrupted) {
-  auto d = tmp("kill");
+  auto d = scratch_dir("kill");
   // Long enough to be killed mid-run: 8 participants, 4 sessions of 60 s each.
   std::ofstream(d / "s.json") << small_study("A", "B", 4, 60);
   const std::string study = (d / "s.json").string();
-  ASSERT_EQ(cli("run " + study + " --db " + (d / "full.db").string() + " --quiet", d).code, 0);
+  ASSERT_EQ(run_palplab("run " + study + " --db " + (d / "full.db").string() + " --quiet", d).code,
+            0);
   const std::string db = (d / "killed.db").string();
   pid_t pid = fork();
   if (pid == 0) {
@@ -232,13 +211,13 @@ TEST(CliRun, KillNineThenResumeEqualsUninterrupted) {
     EXPECT_LT(s.read_sessions().size(), 32u);
     EXPECT_TRUE(s.read_study().finished_at.empty());
   }
-  Result res = cli("run " + study + " --db " + db + " --resume --jobs 2 --quiet", d);
+  Result res = run_palplab("run " + study + " --db " + db + " --resume --jobs 2 --quiet", d);
   ASSERT_EQ(res.code, 0) << res.err;
   EXPECT_EQ(measures_table(d / "full.db"), measures_table(db));
 }
 
 TEST(CliRun, RenamedPrototypeCopiesGiveIdenticalResults) {
-  auto d = tmp("renamed");
+  auto d = scratch_dir("renamed");
   copy_prototype("A", d, "A");
   copy_prototype("B", d, "B");
   copy_prototype("A", d, "Rigid7");
@@ -246,10 +225,11 @@ TEST(CliRun, RenamedPrototypeCopiesGiveIdenticalResults) {
   std::ofstream(d / "orig.json") << small_study("A", "B", 2, 20);
   std::ofstream(d / "renamed.json") << small_study("Rigid7", "Zeta", 2, 20);
   ASSERT_EQ(
-      cli("run " + (d / "orig.json").string() + " --db " + (d / "o.db").string() + " --quiet", d)
+      run_palplab(
+          "run " + (d / "orig.json").string() + " --db " + (d / "o.db").string() + " --quiet", d)
           .code,
       0);
-  Result r = cli(
+  Result r = run_palplab(
       "run " + (d / "renamed.json").string() + " --db " + (d / "r.db").string() + " --quiet", d);
   ASSERT_EQ(r.code, 0) << r.err;
   std::string o = measures_table(d / "o.db");
@@ -260,11 +240,12 @@ TEST(CliRun, RenamedPrototypeCopiesGiveIdenticalResults) {
 }
 
 TEST(CliRun, LongTermScheduleInTheDatabase) {
-  auto d = tmp("longterm");
+  auto d = scratch_dir("longterm");
   std::ofstream(d / "s.json") << small_study("A", "B", 1, 5, true);
-  ASSERT_EQ(
-      cli("run " + (d / "s.json").string() + " --db " + (d / "l.db").string() + " --quiet", d).code,
-      0);
+  ASSERT_EQ(run_palplab(
+                "run " + (d / "s.json").string() + " --db " + (d / "l.db").string() + " --quiet", d)
+                .code,
+            0);
   Store s = Store::open((d / "l.db").string());
   auto sessions = s.read_sessions();
   ASSERT_EQ(sessions.size(), 8u);
@@ -276,13 +257,14 @@ TEST(CliRun, LongTermScheduleInTheDatabase) {
 }
 
 TEST(CliExport, TidyCsv) {
-  auto d = tmp("export");
+  auto d = scratch_dir("export");
   std::ofstream(d / "s.json") << small_study("A", "B", 1, 5);
-  ASSERT_EQ(
-      cli("run " + (d / "s.json").string() + " --db " + (d / "e.db").string() + " --quiet", d).code,
-      0);
-  Result r =
-      cli("export " + (d / "e.db").string() + " --csv " + (d / "out").string() + " --samples", d);
+  ASSERT_EQ(run_palplab(
+                "run " + (d / "s.json").string() + " --db " + (d / "e.db").string() + " --quiet", d)
+                .code,
+            0);
+  Result r = run_palplab(
+      "export " + (d / "e.db").string() + " --csv " + (d / "out").string() + " --samples", d);
   ASSERT_EQ(r.code, 0) << r.err;
   std::string m = slurp(d / "out" / "measures.csv");
   EXPECT_EQ(m.substr(0, m.find('\n')), "participant,group,phase,session,measure,value,unit");
@@ -292,19 +274,20 @@ TEST(CliExport, TidyCsv) {
   EXPECT_EQ(std::count(smp.begin(), smp.end(), '\n'), 1 + 2 * 4 * 5000);
   EXPECT_TRUE(fs::exists(d / "out" / "events.csv"));
   EXPECT_TRUE(fs::exists(d / "out" / "sessions.csv"));
-  Result bad = cli("export " + (d / "missing.db").string() + " --csv " + (d / "o2").string(), d);
+  Result bad =
+      run_palplab("export " + (d / "missing.db").string() + " --csv " + (d / "o2").string(), d);
   EXPECT_EQ(bad.code, 2);
 }
 
 TEST(CliRun, ResumeRefusesAChangedPrototype) {
-  auto d = tmp("changed");
+  auto d = scratch_dir("changed");
   copy_prototype("A", d, "A");
   copy_prototype("B", d, "B");
   std::ofstream(d / "s.json") << small_study("A", "B", 1, 5);
   const std::string study = (d / "s.json").string(), db = (d / "c.db").string();
-  ASSERT_EQ(cli("run " + study + " --db " + db + " --max-sessions 2 --quiet", d).code, 0);
+  ASSERT_EQ(run_palplab("run " + study + " --db " + db + " --max-sessions 2 --quiet", d).code, 0);
   std::ofstream(d / "B.json", std::ios::app) << "\n";  // any byte counts
-  Result r = cli("run " + study + " --db " + db + " --resume", d);
+  Result r = run_palplab("run " + study + " --db " + db + " --resume", d);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("differs from the file the run started with"), std::string::npos) << r.err;
 }

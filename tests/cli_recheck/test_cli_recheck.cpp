@@ -12,46 +12,22 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace {
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+#include "../cli_support.hpp"
 
-Result run(const std::string& args) {
-  static int counter = 0;
-  auto errf =
-      std::filesystem::temp_directory_path() /
-      ("palplab_cli_recheck_err_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-  std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>" + errf.string();
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  std::ifstream e(errf);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  std::filesystem::remove(errf);
-  return r;
-}
+namespace {
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::write_temp;
 
 std::string src(const std::string& rel) {
   return std::string(PALPLAB_SOURCE_DIR) + "/" + rel;
 }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-  auto path = std::filesystem::temp_directory_path() /
-              ("palplab_cli_recheck_" + std::to_string(::getpid()) + "_" + name);
-  std::ofstream(path) << text;
-  return path.string();
-}
 }  // namespace
 
 TEST(CliRecheck, PlantedErrorsAreFound) {
-  Result r = run("recheck " + src("tests/data/recheck/planted.json") + " --csv " +
-                 src("tests/data/r/unequal.csv") + " --json");
+  Result r = run_palplab("recheck " + src("tests/data/recheck/planted.json") + " --csv " +
+                         src("tests/data/r/unequal.csv") + " --json");
   EXPECT_EQ(r.code, 1) << r.err;  // something is inconsistent
   auto j = nlohmann::json::parse(r.out);
   const auto& s = j["statistics"];
@@ -78,8 +54,8 @@ TEST(CliRecheck, PlantedErrorsAreFound) {
   // "p < .05" for p = .051 claims a significance that is not there.
   EXPECT_EQ(s[5]["parts"][2]["verdict"], "inconsistent");
   // Text output names the inconsistent part.
-  r = run("recheck " + src("tests/data/recheck/planted.json") + " --csv " +
-          src("tests/data/r/unequal.csv"));
+  r = run_palplab("recheck " + src("tests/data/recheck/planted.json") + " --csv " +
+                  src("tests/data/r/unequal.csv"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.out.find("A-C-transposed: \"t(3.02) = -3.20, p = .049\" -> inconsistent"),
             std::string::npos)
@@ -91,7 +67,7 @@ TEST(CliRecheck, AllConsistentExitsZero) {
   std::string f = write_temp("ok.json", R"({"value": "force", "group": "group", "statistics": [
       {"text": "F(2, 13) = 11.05, p = .002", "where": ["phase=post"]},
       {"text": "t(3.59) = -2.88, p = .051", "pair": ["B", "C"], "where": ["phase=post"]}]})");
-  Result r = run("recheck " + f + " --csv " + src("tests/data/r/unequal.csv"));
+  Result r = run_palplab("recheck " + f + " --csv " + src("tests/data/r/unequal.csv"));
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   std::filesystem::remove(f);
 }
@@ -107,7 +83,7 @@ TEST(CliRecheck, BadInputIsExitTwo) {
        R"({"statistics": [{"text": "F(2, 13) = 1.2, p = .3", "test": "chi2", "value": "force", "group": "group"}]})",
        R"({"stats": []})", "not json"}) {
     std::string f = write_temp("bad.json", bad);
-    Result r = run("recheck " + f + csv);
+    Result r = run_palplab("recheck " + f + csv);
     EXPECT_EQ(r.code, 2) << bad << "\n" << r.out << r.err;
     EXPECT_FALSE(r.err.empty()) << bad;
     std::filesystem::remove(f);

@@ -18,35 +18,15 @@
 #include <sstream>
 #include <string>
 
+#include "../cli_support.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result shell(const std::string& cmd_line, const fs::path& dir) {
-  const fs::path errf = dir / "stderr.txt";
-  std::string cmd = cmd_line + " 2>" + errf.string();
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  std::ifstream e(errf);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  return r;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_shell;
+using palplab::testing::scratch_dir;
+using palplab::testing::slurp;
 
 std::string chromium_binary() {
   for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
@@ -89,11 +69,11 @@ nlohmann::json render_metrics(const std::string& chromium, const fs::path& html,
   std::string page = slurp(html);
   page.insert(page.rfind("</body>"), kProbe);
   std::ofstream(probe) << page;
-  Result r = shell(chromium +
-                       " --headless --no-sandbox --disable-gpu --hide-scrollbars "
-                       "--window-size=700,900 --virtual-time-budget=3000 --dump-dom 'file://" +
-                       probe.string() + "'",
-                   dir);
+  Result r = run_shell(chromium +
+                           " --headless --no-sandbox --disable-gpu --hide-scrollbars "
+                           "--window-size=700,900 --virtual-time-budget=3000 --dump-dom 'file://" +
+                           probe.string() + "'",
+                       dir);
   std::smatch m;
   const std::regex re("PALPLAB_METRICS (\\{[^<]*\\})");
   if (r.code != 0 || !std::regex_search(r.out, m, re)) {
@@ -139,24 +119,21 @@ TEST(CliReport, RendersInChromiumWithoutCutAndWithEveryFigure) {
   if (chromium.empty())
     GTEST_SKIP() << "chromium not installed (.ci/install-deps installs Debian's `chromium`): "
                     "the report rendering check did not run";
-  const fs::path dir =
-      fs::temp_directory_path() / ("palplab_cli_report_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = scratch_dir("cli_report_html");
   std::string study = kStudy;
   study.replace(study.find("@PROTOTYPES@"), 12, std::string(PALPLAB_SOURCE_DIR) + "/prototypes");
   std::ofstream(dir / "study.json") << study;
   const std::string bin = PALPLAB_BINARY;
 
-  Result v = shell(bin + " validate " + (dir / "study.json").string(), dir);
+  Result v = run_shell(bin + " validate " + (dir / "study.json").string(), dir);
   ASSERT_EQ(v.code, 0) << v.err;
   EXPECT_NE(v.err.find("warning: $.analyses[1]: pool_sessions: true"), std::string::npos) << v.err;
-  Result run = shell(
+  Result run = run_shell(
       bin + " run " + (dir / "study.json").string() + " --quiet --db " + (dir / "s.db").string(),
       dir);
   ASSERT_EQ(run.code, 0) << run.err;
-  Result rep =
-      shell(bin + " report " + (dir / "s.db").string() + " --out " + (dir / "rep").string(), dir);
+  Result rep = run_shell(
+      bin + " report " + (dir / "s.db").string() + " --out " + (dir / "rep").string(), dir);
   ASSERT_EQ(rep.code, 0) << rep.err;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(rep.out, m, std::regex("([0-9]+) figures"))) << rep.out;

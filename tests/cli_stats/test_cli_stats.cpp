@@ -13,48 +13,22 @@
 
 #include "results/store.hpp"
 
+#include "../cli_support.hpp"
+
 namespace {
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result run(const std::string& args) {
-  static int counter = 0;
-  auto dir = std::filesystem::temp_directory_path();
-  std::string errf = (dir / ("palplab_cli_stats_err_" + std::to_string(::getpid()) + "_" +
-                             std::to_string(counter++)))
-                         .string();
-  std::string cmd = std::string(PALPLAB_BINARY) + " " + args + " 2>" + errf;
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  std::ifstream e(errf);
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  std::filesystem::remove(errf);
-  return r;
-}
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::write_temp;
 
 std::string fixture(const std::string& name) {
   return std::string(PALPLAB_SOURCE_DIR) + "/tests/data/r/" + name;
 }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-  auto path = std::filesystem::temp_directory_path() /
-              ("palplab_cli_stats_" + std::to_string(::getpid()) + "_" + name);
-  std::ofstream(path) << text;
-  return path.string();
-}
-
 }  // namespace
 
 TEST(CliStats, JsonContract) {
-  Result r = run("stats --csv " + fixture("unequal.csv") + " --value force --group group --json");
+  Result r =
+      run_palplab("stats --csv " + fixture("unequal.csv") + " --value force --group group --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["groups"].size(), 3u);
@@ -84,7 +58,8 @@ TEST(CliStats, JsonContract) {
     EXPECT_NEAR(ci[k][1].get<double>(), 0.44317821717624811, 1e-6) << k;
   }
   EXPECT_NE(r.out.find("effect_size_ci"), std::string::npos);
-  Result text = run("stats --csv " + fixture("unequal.csv") + " --value force --group group");
+  Result text =
+      run_palplab("stats --csv " + fixture("unequal.csv") + " --value force --group group");
   EXPECT_NE(
       text.out.find("95% CI of the population eta^2 (= omega^2), noncentral F: [0.008, 0.443]"),
       std::string::npos)
@@ -92,8 +67,8 @@ TEST(CliStats, JsonContract) {
 }
 
 TEST(CliStats, WhereAndFloorDf) {
-  Result r = run("stats --csv " + fixture("unequal.csv") +
-                 " --value force --group group --where phase=post --df-mode floor --json");
+  Result r = run_palplab("stats --csv " + fixture("unequal.csv") +
+                         " --value force --group group --where phase=post --df-mode floor --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["input"]["rows_used"], 16);
@@ -105,7 +80,7 @@ TEST(CliStats, WhereAndFloorDf) {
 }
 
 TEST(CliStats, TextHasTablesAndApaLines) {
-  Result r = run("stats --csv " + fixture("unequal.csv") + " --value force --group group");
+  Result r = run_palplab("stats --csv " + fixture("unequal.csv") + " --value force --group group");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("F(2, 29) = 4.74, p = .017"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("A vs B: t(17.92) = 1.01, p = .325"), std::string::npos) << r.out;
@@ -115,10 +90,10 @@ TEST(CliStats, TextHasTablesAndApaLines) {
 
 TEST(CliStats, SkipEmptyLeavesOutUndefinedValues) {
   std::string path = write_temp("empty.csv", "g,v\nA,1\nA,\nA,2\nA,1.5\nB,NA\nB,3\nB,4\nB,3.5\n");
-  Result r = run("stats --csv " + path + " --value v --group g --json");
+  Result r = run_palplab("stats --csv " + path + " --value v --group g --json");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find(":3:"), std::string::npos) << r.err;  // the empty value's line
-  r = run("stats --csv " + path + " --value v --group g --skip-empty --json");
+  r = run_palplab("stats --csv " + path + " --value v --group g --skip-empty --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["input"]["rows_skipped_empty"], 2);
@@ -127,7 +102,7 @@ TEST(CliStats, SkipEmptyLeavesOutUndefinedValues) {
   std::filesystem::remove(path);
   // Other text is still an error with --skip-empty.
   path = write_temp("text.csv", "g,v\nA,1\nA,2\nB,x\nB,3\nB,4\n");
-  r = run("stats --csv " + path + " --value v --group g --skip-empty");
+  r = run_palplab("stats --csv " + path + " --value v --group g --skip-empty");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find(":4:"), std::string::npos) << r.err;
   std::filesystem::remove(path);
@@ -135,12 +110,12 @@ TEST(CliStats, SkipEmptyLeavesOutUndefinedValues) {
 
 TEST(CliStats, ConstantDataGiveUndefinedNotNaN) {
   std::string path = write_temp("const.csv", "g,v\nA,1\nA,1\nA,1\nB,1\nB,1\nC,1\nC,1\n");
-  Result r = run("stats --csv " + path + " --value v --group g");
+  Result r = run_palplab("stats --csv " + path + " --value v --group g");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("inf"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("undefined"), std::string::npos);
-  r = run("stats --csv " + path + " --value v --group g --json");
+  r = run_palplab("stats --csv " + path + " --value v --group g --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);  // NaN would not parse
   EXPECT_TRUE(j["anova"]["F"].is_null());
@@ -154,14 +129,14 @@ TEST(CliStats, UnderflowingPIsABound) {
   for (int i = 0; i < 60; ++i) csv += "A," + std::to_string(1.0 + 0.001 * (i % 7)) + "\n";
   for (int i = 0; i < 60; ++i) csv += "B," + std::to_string(50.0 + 0.001 * (i % 5)) + "\n";
   std::string path = write_temp("sep.csv", csv);
-  Result r = run("stats --csv " + path + " --value v --group g --json");
+  Result r = run_palplab("stats --csv " + path + " --value v --group g --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["anova"]["p"].get<double>(), 1e-300);
   EXPECT_TRUE(j["anova"]["p_is_bound"].get<bool>());
   EXPECT_TRUE(j["pairwise"][0]["p_is_bound"].get<bool>());
   EXPECT_GT(j["pairwise"][0]["p"].get<double>(), 0);
-  r = run("stats --csv " + path + " --value v --group g");
+  r = run_palplab("stats --csv " + path + " --value v --group g");
   EXPECT_NE(r.out.find("< 1e-300"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("p < .001"), std::string::npos);
   std::filesystem::remove(path);
@@ -188,13 +163,13 @@ TEST(CliStats, BadInputExitsTwoWithTheLine) {
   int i = 0;
   for (const auto& c : cases) {
     std::string path = write_temp("bad" + std::to_string(i++) + ".csv", c.csv);
-    Result r = run("stats --csv " + path + " " + c.args);
+    Result r = run_palplab("stats --csv " + path + " " + c.args);
     EXPECT_EQ(r.code, 2) << c.args << "\n" << c.csv << r.err;
     EXPECT_NE(r.err.find(c.expect), std::string::npos)
         << "expected '" << c.expect << "' in: " << r.err;
     std::filesystem::remove(path);
   }
-  Result r = run("stats --csv /nonexistent.csv --value v --group g");
+  Result r = run_palplab("stats --csv /nonexistent.csv --value v --group g");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("cannot open"), std::string::npos);
 }
@@ -202,9 +177,7 @@ TEST(CliStats, BadInputExitsTwoWithTheLine) {
 TEST(CliReport, WritesReportAndRejectsBadDatabases) {
   namespace fs = std::filesystem;
   using namespace palplab::results;
-  auto dir = fs::temp_directory_path() / ("palplab_cli_report_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  auto dir = palplab::testing::scratch_dir("cli_stats_report");
   const std::string db = (dir / "r.db").string();
   {
     auto store = Store::create(db);
@@ -233,18 +206,18 @@ TEST(CliReport, WritesReportAndRejectsBadDatabases) {
     }
   }
   const std::string out = (dir / "out").string();
-  Result r = run("report " + db + " --out " + out);
+  Result r = run_palplab("report " + db + " --out " + out);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::exists(out + "/report.md"));
   EXPECT_TRUE(fs::exists(out + "/report.html"));
   EXPECT_TRUE(fs::exists(out + "/figures/palpation_force_test_box.svg"));
   std::ofstream(dir / "junk.db") << "not sqlite";
-  r = run("report " + (dir / "junk.db").string() + " --out " + out);
+  r = run_palplab("report " + (dir / "junk.db").string() + " --out " + out);
   EXPECT_EQ(r.code, 2) << r.err;
-  r = run("report " + (dir / "missing.db").string() + " --out " + out);
+  r = run_palplab("report " + (dir / "missing.db").string() + " --out " + out);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("missing.db"), std::string::npos);
-  r = run("report " + db);
+  r = run_palplab("report " + db);
   EXPECT_EQ(r.code, 2);  // --out is required
   fs::remove_all(dir);
 }
@@ -253,7 +226,7 @@ TEST(CliReport, WritesReportAndRejectsBadDatabases) {
 // Welch-consistent one; bad margins are input errors (exit 2).
 TEST(CliStats, EquivalenceMarginsAndVerdicts) {
   std::string csv = std::string(PALPLAB_SOURCE_DIR) + "/tests/data/r/close.csv";
-  Result r = run("stats --csv " + csv + " --value value --group group --margin 0.7 --json");
+  Result r = run_palplab("stats --csv " + csv + " --value value --group group --margin 0.7 --json");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["pairwise"].size(), 3u);
@@ -267,13 +240,13 @@ TEST(CliStats, EquivalenceMarginsAndVerdicts) {
   }
   EXPECT_TRUE(verdicts.count("equivalent"));
   EXPECT_TRUE(verdicts.count("different"));
-  r = run("stats --csv " + csv + " --value value --group group --margin 0.7");
+  r = run_palplab("stats --csv " + csv + " --value value --group group --margin 0.7");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("Equivalence (TOST"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("no difference"), std::string::npos);
   for (const char* bad :
        {"--margin -1", "--margins 1,0", "--margin 1 --margins -1,1", "--margin 0.5 --alpha 0.7"}) {
-    r = run("stats --csv " + csv + " --value value --group group " + bad);
+    r = run_palplab("stats --csv " + csv + " --value value --group group " + bad);
     EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
   }
 }
