@@ -12,7 +12,7 @@
 //     8   u32       format version (kSceneFileVersion)
 //     12  u32       header size (128)
 //     16  u64       payload size (bytes)
-//     24  u8[32]    SHA-256 of the payload
+//     24  u8[32]    checksum of the payload (256-bit, scene_file.cpp payload_checksum)
 //     56  u8[32]    SHA-256 of the sources list (the fingerprint of what the scene is built from)
 //     88  char[32]  palplab version "VERSION+COMMIT", NUL padded
 //     120 u8[8]     first 8 bytes of the SHA-256 of header bytes 0..119

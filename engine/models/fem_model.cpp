@@ -113,8 +113,23 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
     throw InputError("fem: Rayleigh damping coefficients must be >= 0");
   Impl& m = *impl_;
   m.inputs = fem_inputs_digest(mesh, materials, fixed_node_, opt_);
-  m.sys = fem_precompute(mesh.V, mesh.T, materials);
-  if (opt_.support_stiffness.size()) {
+  // A .psim file's linear model made from these very inputs (stored_factor.hpp): its matrices,
+  // lumped masses and factorisation are restored, the assembly and its checks (which the stored
+  // model passed) are skipped; system() then holds X0, T, material and m_lumped only.
+  StoredLinearFem stored;
+  m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass &&
+             !opt_.precomputed.empty() &&
+             load_linear_fem(opt_.precomputed, m.inputs, 3 * n, stored, m.ldlt);
+  if (m.loaded) {
+    m.sys.X0 = mesh.V;
+    m.sys.T = mesh.T;
+    m.sys.material = materials;
+    m.sys.m_lumped = std::move(stored.m_lumped);
+    m.h_factored = stored.h;
+  } else {
+    m.sys = fem_precompute(mesh.V, mesh.T, materials);
+  }
+  if (opt_.support_stiffness.size() && !m.loaded) {
     if (opt_.support_stiffness.size() != 3 * n || !(opt_.support_stiffness.minCoeff() >= 0))
       throw InputError("fem: support stiffness needs 3#V values >= 0");
     // The diagonal is in the pattern (each node's 3x3 block): no insertion.
@@ -129,18 +144,15 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   m.local.assign(3 * n, -1);
 
   const auto t0 = Clock::now();
-  if (opt_.formulation == FemFormulation::linear) {
-    m.act = split_dofs(m.fixed_dof).free;
-    m.K_c = submatrix(m.sys.K, m.act, m.act);
+  if (opt_.formulation == FemFormulation::linear && m.loaded) {
+    m.act = std::move(stored.act);
+    m.K_c = std::move(stored.K_c);
+  } else if (opt_.formulation == FemFormulation::linear) {
+    StaticSolver check;  // fails early (with a clear message) on a free-floating body
+    static_precompute(m.sys.K, m.fixed_dof, check);
+    m.act = check.split.free;
+    m.K_c = check.K_ff;
     if (!opt_.lumped_mass) m.M_c = submatrix(m.sys.M, m.act, m.act);
-    // A stored factorisation made from these very inputs passed the check below when it was
-    // made (stored_factor.hpp); otherwise check now.
-    m.loaded = !opt_.precomputed.empty() &&
-               load_fem_factor(opt_.precomputed, m.inputs, m.act.size(), m.ldlt, m.h_factored);
-    if (!m.loaded) {
-      StaticSolver check;  // fails early (with a clear message) on a free-floating body
-      static_precompute(m.sys.K, m.fixed_dof, check);
-    }
   } else if (opt_.formulation == FemFormulation::condensed) {
     if (!opt_.lumped_mass)
       throw InputError("fem: the condensed formulation uses lumped mass (lumped_mass = true)");
@@ -400,9 +412,9 @@ void FemModel::step(double h) {
 
 std::string FemModel::save_precomputation(double h) {
   Impl& m = *impl_;
-  if (opt_.formulation != FemFormulation::linear || !(h > 0)) return {};
+  if (opt_.formulation != FemFormulation::linear || !opt_.lumped_mass || !(h > 0)) return {};
   if (h != m.h_factored) m.factor(h, opt_.rayleigh_alpha, opt_.rayleigh_beta, factor_ms_);
-  return save_fem_factor(m.inputs, m.ldlt, h);
+  return save_linear_fem(m.inputs, m.act, m.K_c, m.sys.m_lumped, m.ldlt, h);
 }
 
 bool FemModel::precomputation_loaded() const {

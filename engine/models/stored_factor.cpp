@@ -97,19 +97,61 @@ FemInputsDigest fem_inputs_digest(const mesh::TetMesh& mesh, const TetMaterials&
   return h.digest();
 }
 
-std::string save_fem_factor(const FemInputsDigest& d, const SparseLdlt& ldlt, double h) {
+namespace {
+
+void put_sparse(std::string& s, const SparseMatrixd& M) {
+  const std::int64_t r = M.rows(), c = M.cols();
+  put(s, &r, sizeof r);
+  put(s, &c, sizeof c);
+  put_vec(s, M.outerIndexPtr(), c + 1);
+  put_vec(s, M.innerIndexPtr(), static_cast<std::int64_t>(M.nonZeros()));
+  put_vec(s, M.valuePtr(), static_cast<std::int64_t>(M.nonZeros()));
+}
+
+// A compressed column matrix with valid, ascending-per-column row indices, or false.
+bool get_sparse(In& in, std::int64_t rows, SparseMatrixd& M) {
+  const auto r = in.get<std::int64_t>(), c = in.get<std::int64_t>();
+  if (!in.ok || r != rows || c < 0 || c > (1 << 30)) return false;
+  std::vector<int> outer(c + 1);
+  in.vec(outer.data(), c + 1);
+  if (!in.ok || outer[0] != 0) return false;
+  for (std::int64_t j = 0; j < c; ++j)
+    if (outer[j + 1] < outer[j]) return false;
+  const std::int64_t nnz = outer[c];
+  if (static_cast<std::uint64_t>(nnz) > in.b.size()) return false;
+  SparseMatrixd A(r, c);
+  A.resizeNonZeros(nnz);
+  std::memcpy(A.outerIndexPtr(), outer.data(), sizeof(int) * (c + 1));
+  in.vec(A.innerIndexPtr(), nnz);
+  in.vec(A.valuePtr(), nnz);
+  if (!in.ok) return false;
+  for (std::int64_t j = 0; j < c; ++j)
+    for (int q = outer[j]; q < outer[j + 1]; ++q) {
+      const int i = A.innerIndexPtr()[q];
+      if (i < 0 || i >= r || (q > outer[j] && i <= A.innerIndexPtr()[q - 1])) return false;
+    }
+  M = std::move(A);
+  return true;
+}
+
+}  // namespace
+
+std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& act,
+                            const SparseMatrixd& K_c, const Eigen::VectorXd& m_lumped,
+                            const SparseLdlt& ldlt, double h) {
   using A = LdltAccess;
   const auto& L = ldlt.*A::L;
   if (!(ldlt.*A::factorized) || !L.isCompressed()) return {};
+  SparseMatrixd K = K_c;
+  K.makeCompressed();  // the same entries in the same order
   std::string s;
   put(s, kTag, 8);
   put(s, d.data(), d.size());
   put(s, &h, sizeof h);
-  const std::int64_t n = L.rows();
-  put(s, &n, sizeof n);
-  put_vec(s, L.outerIndexPtr(), n + 1);
-  put_vec(s, L.innerIndexPtr(), static_cast<std::int64_t>(L.nonZeros()));
-  put_vec(s, L.valuePtr(), static_cast<std::int64_t>(L.nonZeros()));
+  put_vec(s, act.data(), static_cast<std::int64_t>(act.size()));
+  put_sparse(s, K);
+  put_vec(s, m_lumped.data(), m_lumped.size());
+  put_sparse(s, L);
   put_vec(s, (ldlt.*A::D).data(), (ldlt.*A::D).size());
   put_vec(s, (ldlt.*A::parent).data(), (ldlt.*A::parent).size());
   put_vec(s, (ldlt.*A::nnz_col).data(), (ldlt.*A::nnz_col).size());
@@ -121,26 +163,27 @@ std::string save_fem_factor(const FemInputsDigest& d, const SparseLdlt& ldlt, do
   return s;
 }
 
-bool load_fem_factor(const std::string& blob, const FemInputsDigest& d, std::size_t dofs,
-                     SparseLdlt& ldlt, double& h_out) {
+bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long total_dofs,
+                     StoredLinearFem& out, SparseLdlt& ldlt) {
   using A = LdltAccess;
-  if (blob.size() < 8 + 32 + 16 || std::memcmp(blob.data(), kTag, 8) != 0 ||
+  if (blob.size() < 8 + 32 + 8 || std::memcmp(blob.data(), kTag, 8) != 0 ||
       std::memcmp(blob.data() + 8, d.data(), 32) != 0)
     return false;
   In in{blob, 40};
-  const double h = in.get<double>();
-  const auto n = in.get<std::int64_t>();
-  if (!in.ok || n != static_cast<std::int64_t>(dofs) || !(h > 0)) return false;
-  SparseMatrixd L(n, n);
-  std::vector<int> outer(n + 1);
-  in.vec(outer.data(), n + 1);
-  if (!in.ok || outer[0] != 0 || outer[n] < 0) return false;
-  for (std::int64_t i = 0; i < n; ++i)
-    if (outer[i + 1] < outer[i]) return false;
-  L.resizeNonZeros(outer[n]);
-  std::memcpy(L.outerIndexPtr(), outer.data(), sizeof(int) * (n + 1));
-  in.vec(L.innerIndexPtr(), outer[n]);
-  in.vec(L.valuePtr(), outer[n]);
+  StoredLinearFem st;
+  st.h = in.get<double>();
+  const auto n = in.get<std::int64_t>();  // the count of act, read again below
+  if (!in.ok || !(st.h > 0) || n < 0 || n > total_dofs) return false;
+  in.at -= sizeof n;
+  st.act.resize(n);
+  in.vec(st.act.data(), n);
+  for (std::int64_t k = 0; k < n; ++k)
+    if (st.act[k] < 0 || st.act[k] >= total_dofs || (k && st.act[k] <= st.act[k - 1])) return false;
+  if (!get_sparse(in, n, st.K_c) || st.K_c.cols() != n) return false;
+  st.m_lumped.resize(total_dofs);
+  in.vec(st.m_lumped.data(), total_dofs);
+  SparseMatrixd L;
+  if (!in.ok || !get_sparse(in, n, L) || L.cols() != n) return false;
   Eigen::VectorXd D(n);
   in.vec(D.data(), n);
   Eigen::VectorXi parent(n), nnz(n), P(n), Pinv(n);
@@ -150,12 +193,10 @@ bool load_fem_factor(const std::string& blob, const FemInputsDigest& d, std::siz
   in.vec(Pinv.data(), n);
   const double off = in.get<double>(), scale = in.get<double>();
   if (!in.ok || in.at != blob.size()) return false;
-  for (std::int64_t q = 0; q < outer[n]; ++q)
-    if (L.innerIndexPtr()[q] < 0 || L.innerIndexPtr()[q] >= n) return false;
   for (std::int64_t i = 0; i < n; ++i)
     if (P[i] < 0 || P[i] >= n || Pinv[i] < 0 || Pinv[i] >= n || Pinv[P[i]] != i) return false;
   // A 1x1 factorisation sets the solver's private "initialised" flag (not reachable like the
-  // members above); everything it computed is replaced below.
+  // members below); everything it computed is replaced.
   SparseMatrixd one(1, 1);
   one.insert(0, 0) = 1.0;
   ldlt.compute(one);
@@ -170,7 +211,7 @@ bool load_fem_factor(const std::string& blob, const FemInputsDigest& d, std::siz
   ldlt.*A::info = Eigen::Success;
   ldlt.*A::factorized = true;
   ldlt.*A::analysed = true;
-  h_out = h;
+  out = std::move(st);
   return true;
 }
 

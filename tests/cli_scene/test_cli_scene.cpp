@@ -144,10 +144,10 @@ TEST(CliScene, DamagedFilesAreRejectedWithExit2) {
   expect_rejected(h, "header checksum", "flipped header byte");
   std::string p = b;
   p[b.size() - 100] ^= 0x01;
-  expect_rejected(p, "payload SHA-256", "flipped payload byte");
+  expect_rejected(p, "payload checksum", "flipped payload byte");
   std::string q = b;
   q[200] ^= 0x80;
-  expect_rejected(q, "payload SHA-256", "flipped early payload byte");
+  expect_rejected(q, "payload checksum", "flipped early payload byte");
   // Another format version.
   std::string v = b;
   const std::uint32_t two = 2;

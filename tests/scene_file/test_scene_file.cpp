@@ -11,6 +11,8 @@
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "engine/haptics/scene_file.hpp"
+#include "engine/models/fem_block_mesh.hpp"
+#include "engine/models/fem_model.hpp"
 #include "engine/models/model.hpp"
 #include "engine/spatial/octree.hpp"
 #include "prototypes/factory.hpp"
@@ -153,7 +155,7 @@ TEST(SceneFile, EveryTruncationAndSampledByteFlipIsAnInputError) {
     write(bytes.substr(0, n));
     EXPECT_THROW(engine::read_scene_file(bad.string()), InputError) << "truncated at " << n;
   }
-  for (size_t at = 0; at < bytes.size(); at += 997) {
+  for (size_t at = 0; at < bytes.size(); at += bytes.size() / 61 + 1) {
     std::string b = bytes;
     b[at] ^= 0x20;
     write(b);
@@ -165,6 +167,74 @@ TEST(SceneFile, EveryTruncationAndSampledByteFlipIsAnInputError) {
   EXPECT_NO_THROW(engine::read_scene_file(bad.string()));
   fs::remove(file);
   fs::remove(bad);
+}
+
+}  // namespace
+
+namespace {
+
+// The FEM hook on its own: a linear model built from the stored precomputation restores it
+// (no assembly, no factorisation) and steps bit-identically under a stiff contact; a model with
+// other inputs (another Young's modulus, another step) ignores it and computes.
+TEST(SceneFileFem, StoredLinearPrecomputationRestoresExactlyAndOnlyForTheSameInputs) {
+  using namespace palplab;
+  using namespace palplab::engine;
+  const mesh::TetMesh tm = fem_block_mesh(4, 4, 3, Eigen::Vector3d(0.04, 0.04, 0.03));
+  const TetMaterials mat = uniform_materials(tm.T.rows(), 5e4, 0.45, 1000.0);
+  std::vector<std::uint8_t> fixed(tm.V.rows(), 0);
+  for (long i = 0; i < tm.V.rows(); ++i) fixed[i] = tm.V(i, 2) < 1e-9;
+  int top = 0;  // the node nearest to the centre of the top face
+  const Eigen::RowVector3d centre(0.02, 0.02, 0.03);
+  for (long i = 0; i < tm.V.rows(); ++i)
+    if ((tm.V.row(i) - centre).norm() < (tm.V.row(top) - centre).norm()) top = static_cast<int>(i);
+  FemModelOptions opt;
+  opt.rayleigh_alpha = 1.0;
+  opt.rayleigh_beta = 0.002;
+  const double h = 1e-3;
+  FemModel built(tm, mat, fixed, opt);
+  const std::string blob = built.save_precomputation(h);
+  ASSERT_FALSE(blob.empty());
+  EXPECT_FALSE(built.precomputation_loaded());
+
+  FemModelOptions with = opt;
+  with.precomputed = blob;
+  FemModel loaded(tm, mat, fixed, with);
+  EXPECT_TRUE(loaded.precomputation_loaded());
+  FemModel fresh(tm, mat, fixed, opt);
+  for (FemModel* m : {&loaded, &fresh}) {
+    m->contact_node = top;
+    m->contact_normal = Eigen::Vector3d::UnitZ();
+    m->contact_k = 2000.0;
+  }
+  double peak = 0;
+  for (int s = 0; s < 300; ++s) {
+    const Eigen::Vector3d x = tm.V.row(top).transpose() - Eigen::Vector3d(0, 0, 1e-5 * s);
+    loaded.contact_point = fresh.contact_point = x;
+    loaded.step(h);
+    fresh.step(h);
+    ASSERT_TRUE(loaded.device_force() == fresh.device_force()) << "step " << s;
+    peak = std::max(peak, fresh.device_force().norm());
+  }
+  EXPECT_TRUE(loaded.displacement() == fresh.displacement());
+  EXPECT_GT(peak, 1.0);  // it pressed (3 mm at 2000 N/m, minus the tissue's give)
+
+  // Other inputs: the blob is ignored, the model computes (and still works).
+  const TetMaterials stiffer = uniform_materials(tm.T.rows(), 6e4, 0.45, 1000.0);
+  FemModel other(tm, stiffer, fixed, with);
+  EXPECT_FALSE(other.precomputation_loaded());
+  FemModelOptions damped = with;
+  damped.rayleigh_beta = 0.003;
+  EXPECT_FALSE(FemModel(tm, mat, fixed, damped).precomputation_loaded());
+  // A damaged blob is ignored, never trusted.
+  FemModelOptions bad = opt;
+  bad.precomputed = blob.substr(0, blob.size() - 3);
+  EXPECT_FALSE(FemModel(tm, mat, fixed, bad).precomputation_loaded());
+  // A different step size refactorises on the first step (correct, just not from the file).
+  FemModel loaded2(tm, mat, fixed, with);
+  FemModel fresh2(tm, mat, fixed, opt);
+  loaded2.step(2e-3);
+  fresh2.step(2e-3);
+  EXPECT_TRUE(loaded2.displacement() == fresh2.displacement());
 }
 
 }  // namespace
