@@ -546,8 +546,10 @@ SceneFileData read_scene_file(const std::string& path) {
       d.model_blob = s.str("model data");
       d.info.model_blob = !d.model_blob.empty();
       have_model = true;
-    }  // unknown sections are skipped (a later minor addition)
-    if (s.at() != s.size() && t != tag("SRCS"))
+    } else {
+      continue;  // an unknown section is skipped (a later minor addition)
+    }
+    if (s.at() != s.size())
       throw InputError("corrupted scene file: section has trailing bytes", path);
   }
   if (!have_src || !have_mesh || !have_model)
