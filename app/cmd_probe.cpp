@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/command.hpp"
+#include "app/scene_option.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
@@ -24,6 +25,7 @@ namespace {
 
 struct ProbeArgs {
   std::string file, press, integrator;
+  std::vector<std::string> scene;  // --scene FILE.psim | KEY (app/scene_option.hpp)
   double force = 0.0, duration = 0.0, release = 1.0;
   bool json = false;
 };
@@ -44,7 +46,7 @@ int run_probe(const ProbeArgs& a) {
                        "\" (expected symplectic_euler, backward_euler or rk4)");
     ov.integrator = a.integrator;
   }
-  engine::Scene scene = prototypes::build_scene(a.file, ov);
+  engine::Scene scene = prototypes::build_scene(app::scene_prototype(a.file, a.scene), ov);
   if (!a.integrator.empty() && std::string(scene.model_kind()) != "mass_spring")
     throw InputError("--integrator: prototype " + scene.prototype() + " has a " +
                      scene.model_kind() +
@@ -147,7 +149,8 @@ palplab::app::CommandRegistration reg{
       auto* cmd =
           root.add_subcommand("probe", "Scripted press and release on a prototype (sanity check)");
       auto a = std::make_shared<ProbeArgs>();
-      cmd->add_option("prototype", a->file, "Prototype JSON file")->required();
+      cmd->add_option("prototype", a->file, "Prototype JSON file (or --scene)");
+      palplab::app::add_scene_option(cmd, a->scene, false);
       cmd->add_option("--press", a->press, "Region name or surface node index to press")
           ->required();
       cmd->add_option("--force", a->force, "Target device force (N)")->required();

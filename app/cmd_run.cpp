@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "app/command.hpp"
+#include "app/scene_option.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
@@ -122,6 +123,8 @@ palplab::app::CommandRegistration reg{
       auto samples = std::make_shared<std::string>("full");
       cmd->add_option("STUDY", *study, "Study file (JSON)")->required();
       cmd->add_option("--db", opt->db, "Results database to create (SQLite)")->required();
+      auto scenes = std::make_shared<std::vector<std::string>>();
+      palplab::app::add_scene_option(cmd, *scenes, true);
       cmd->add_option("--jobs", opt->jobs, "Participants simulated in parallel (threads)")
           ->check(CLI::Range(1, 1024));
       cmd->add_flag("--resume", opt->resume, "Continue an interrupted run in the same database");
@@ -143,8 +146,9 @@ palplab::app::CommandRegistration reg{
                       "Abort the session after this long without device samples (s; default 2)");
       cmd->add_option("--record-trace", human->record_trace,
                       "Write each session's device track to DIR (trace files)");
-      cmd->callback([study, opt, quiet, samples, code, human] {
+      cmd->callback([study, opt, quiet, samples, code, human, scenes] {
         using namespace palplab::protocols;
+        palplab::app::preload_scenes(*scenes);
         if (opt->resume && opt->force)
           throw palplab::InputError("--resume and --force exclude each other");
         Study s = load_study(*study, engine_prototype_inspector());

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "app/command.hpp"
+#include "app/scene_option.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
@@ -52,6 +53,7 @@ struct ViewArgs {
   std::string file, screenshot, size = "1280x800", device = "mouse", record_trace;
   long frames = 0;
   double min_rate = 900.0;
+  std::vector<std::string> scene;  // --scene FILE.psim | KEY (app/scene_option.hpp)
 };
 
 // The newest frame published by the real-time clock, handed to the window thread.
@@ -134,7 +136,7 @@ int run_view(const ViewArgs& a) {
   const engine::DeviceSpec spec = engine::parse_device_spec(a.device);
   if (!(a.min_rate >= 0.0) || a.min_rate > 100000.0)
     throw InputError("--min-device-rate: expected a rate in [0, 100000] Hz");
-  engine::Scene scene = prototypes::build_scene(a.file);
+  engine::Scene scene = prototypes::build_scene(app::scene_prototype(a.file, a.scene));
   const engine::SceneGeometry& g = scene.geometry();
   std::vector<engine::Thresholds> th;
   for (int r = 0; r < static_cast<int>(g.region_names.size()); ++r)
@@ -321,7 +323,8 @@ palplab::app::CommandRegistration reg{
       auto* cmd = root.add_subcommand(
           "view", "Palpate a prototype in a window with the mouse as the haptic device");
       auto a = std::make_shared<ViewArgs>();
-      cmd->add_option("prototype", a->file, "Prototype JSON file")->required();
+      cmd->add_option("prototype", a->file, "Prototype JSON file (or --scene)");
+      palplab::app::add_scene_option(cmd, a->scene, false);
       cmd->add_option("--frames", a->frames, "Close after N frames (0 = run until closed)");
       cmd->add_option("--screenshot", a->screenshot, "Save the last frame as PNG (with --frames)");
       cmd->add_option("--size", a->size, "Window size WIDTHxHEIGHT (default 1280x800)");

@@ -110,15 +110,38 @@ std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
 
 }  // namespace
 
-std::shared_ptr<const SceneMesh> scene_mesh(const MeshSource& m) {
-  static std::mutex mu;
-  static std::map<std::string, std::shared_ptr<const SceneMesh>> cache;
-  std::lock_guard<std::mutex> lock(mu);
-  auto it = cache.find(m.key());
-  if (it != cache.end()) return it->second;
-  auto c = prepare(m);
-  cache.emplace(m.key(), c);
+namespace {
+struct Cache {
+  std::mutex mu;
+  std::map<std::string, std::shared_ptr<const SceneMesh>> meshes;
+};
+Cache& cache() {
+  static Cache c;
   return c;
+}
+}  // namespace
+
+std::shared_ptr<const SceneMesh> scene_mesh(const MeshSource& m) {
+  Cache& c = cache();
+  std::lock_guard<std::mutex> lock(c.mu);
+  auto it = c.meshes.find(m.key());
+  if (it != c.meshes.end()) return it->second;
+  auto p = prepare(m);
+  c.meshes.emplace(m.key(), p);
+  return p;
+}
+
+std::shared_ptr<const SceneMesh> build_scene_mesh(const MeshSource& m) {
+  return prepare(m);
+}
+
+void install_scene_mesh(const MeshSource& m, std::shared_ptr<const SceneMesh> mesh) {
+  Cache& c = cache();
+  std::lock_guard<std::mutex> lock(c.mu);
+  if (mesh)
+    c.meshes[m.key()] = std::move(mesh);
+  else
+    c.meshes.erase(m.key());
 }
 
 const std::vector<std::string>& mesh_region_names(const MeshSource& m) {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include "engine/models/stored_factor.hpp"
 #include "engine/solvers/fem_condensation.hpp"
 #include "engine/solvers/fem_static.hpp"
 
@@ -76,6 +77,26 @@ struct FemModel::Impl {
   Eigen::VectorXd f_int;
   std::vector<int> diag_slot, zero_slot, fixed_diag_slot;
   bool analysed = false;
+
+  // .psim (stored_factor.hpp): digest of the constructor's inputs; a stored factorisation used.
+  FemInputsDigest inputs{};
+  bool loaded = false;
+
+  // linear / condensed: factorises A = (1 + h alpha) M + (h beta + h^2) K_c for step size h.
+  void factor(double h, double alpha, double beta, double& ms) {
+    const auto t0 = Clock::now();
+    SparseMatrixd A = (h * beta + h * h) * K_c;
+    if (M_c.size())
+      A += (1 + h * alpha) * M_c;
+    else
+      for (long i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += (1 + h * alpha) * m_c[i];
+    ldlt.compute(A);
+    if (ldlt.info() != Eigen::Success)
+      throw std::runtime_error("FemModel::step: factorisation failed");
+    h_factored = h;
+    cached_node = -1;
+    ms = ms_since(t0);
+  }
 };
 
 FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
@@ -91,8 +112,24 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   if (!(opt_.rayleigh_alpha >= 0) || !(opt_.rayleigh_beta >= 0))
     throw InputError("fem: Rayleigh damping coefficients must be >= 0");
   Impl& m = *impl_;
-  m.sys = fem_precompute(mesh.V, mesh.T, materials);
-  if (opt_.support_stiffness.size()) {
+  m.inputs = fem_inputs_digest(mesh, materials, fixed_node_, opt_);
+  // A .psim file's linear model made from these very inputs (stored_factor.hpp): its matrices,
+  // lumped masses and factorisation are restored, the assembly and its checks (which the stored
+  // model passed) are skipped; system() then holds X0, T, material and m_lumped only.
+  StoredLinearFem stored;
+  m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass &&
+             !opt_.precomputed.empty() &&
+             load_linear_fem(opt_.precomputed, m.inputs, 3 * n, stored, m.ldlt);
+  if (m.loaded) {
+    m.sys.X0 = mesh.V;
+    m.sys.T = mesh.T;
+    m.sys.material = materials;
+    m.sys.m_lumped = std::move(stored.m_lumped);
+    m.h_factored = stored.h;
+  } else {
+    m.sys = fem_precompute(mesh.V, mesh.T, materials);
+  }
+  if (opt_.support_stiffness.size() && !m.loaded) {
     if (opt_.support_stiffness.size() != 3 * n || !(opt_.support_stiffness.minCoeff() >= 0))
       throw InputError("fem: support stiffness needs 3#V values >= 0");
     // The diagonal is in the pattern (each node's 3x3 block): no insertion.
@@ -107,7 +144,10 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   m.local.assign(3 * n, -1);
 
   const auto t0 = Clock::now();
-  if (opt_.formulation == FemFormulation::linear) {
+  if (opt_.formulation == FemFormulation::linear && m.loaded) {
+    m.act = std::move(stored.act);
+    m.K_c = std::move(stored.K_c);
+  } else if (opt_.formulation == FemFormulation::linear) {
     StaticSolver check;  // fails early (with a clear message) on a free-floating body
     static_precompute(m.sys.K, m.fixed_dof, check);
     m.act = check.split.free;
@@ -314,20 +354,7 @@ void FemModel::step(double h) {
     }
     m.u += h * m.v;
   } else {
-    if (h != m.h_factored) {
-      const auto t0 = Clock::now();
-      SparseMatrixd A = (h * beta + h * h) * m.K_c;
-      if (m.M_c.size())
-        A += (1 + h * alpha) * m.M_c;
-      else
-        for (long i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += (1 + h * alpha) * m.m_c[i];
-      m.ldlt.compute(A);
-      if (m.ldlt.info() != Eigen::Success)
-        throw std::runtime_error("FemModel::step: factorisation failed");
-      m.h_factored = h;
-      m.cached_node = -1;
-      factor_ms_ = ms_since(t0);
-    }
+    if (h != m.h_factored) m.factor(h, alpha, beta, factor_ms_);
     const Eigen::VectorXd ua = gather(m.u, m.act), va = gather(m.v, m.act);
     const bool lumped = m.M_c.size() == 0;
     if (!lumped || m.Ku_age < 0 || m.Ku_age >= Impl::kResync) {
@@ -379,6 +406,19 @@ void FemModel::step(double h) {
   }
   m.positions_valid = false;
   time_ += h;
+}
+
+// ---- .psim precomputation (issue 16; the format in stored_factor.cpp) -------------------
+
+std::string FemModel::save_precomputation(double h) {
+  Impl& m = *impl_;
+  if (opt_.formulation != FemFormulation::linear || !opt_.lumped_mass || !(h > 0)) return {};
+  if (h != m.h_factored) m.factor(h, opt_.rayleigh_alpha, opt_.rayleigh_beta, factor_ms_);
+  return save_linear_fem(m.inputs, m.act, m.K_c, m.sys.m_lumped, m.ldlt, h);
+}
+
+bool FemModel::precomputation_loaded() const {
+  return impl_->loaded;
 }
 
 }  // namespace palplab::engine

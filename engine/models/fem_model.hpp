@@ -55,6 +55,10 @@ struct FemModelOptions {
   // hold nodes to their rest position (the surrounding tissue; the scene model gives each
   // surface node support_modulus x its lumped area, as the mass-spring model does). Part of K.
   Eigen::VectorXd support_stiffness;
+  // A .psim file's stored precomputation (save_precomputation; engine/haptics/scene_file.hpp):
+  // used when it was made from the same inputs (mesh, materials, fixed nodes, options, step),
+  // otherwise ignored and everything is computed. Linear formulation only.
+  std::string precomputed;
 };
 
 class FemModel {
@@ -101,6 +105,11 @@ class FemModel {
   bool solves_node(int v) const;                   // node v moves in the per-step solve
   const FemSystem& system() const;
   const std::vector<std::uint8_t>& fixed_nodes() const { return fixed_node_; }
+  // For a .psim file: the linear model's factorisation for step size h (factorised now if
+  // needed) with a digest of the inputs it was made from; "" for the other formulations (they
+  // recompute). A model built from it steps bit-identically.
+  std::string save_precomputation(double h);
+  bool precomputation_loaded() const;  // options.precomputed was used
 
  private:
   struct Impl;

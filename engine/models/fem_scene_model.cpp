@@ -65,6 +65,8 @@ class FemSceneModel final : public SceneModel {
   }
 
   const char* kind() const override { return "fem"; }
+  // The model's precomputation for a .psim file (FemModel::save_precomputation).
+  std::string save(double h) { return fem_.save_precomputation(h); }
 
   ModelOutput step(const ContactInput& c, double dt) override {
     const int mnode = c.node >= 0 ? surface_to_model_[c.node] : -1;
@@ -260,6 +262,7 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
   opt.rayleigh_beta = fc.rayleigh_beta;
   opt.lumped_mass = fc.lumped_mass;
   opt.jacobian = fc.exact_jacobian ? CorotJacobian::exact : CorotJacobian::warped;
+  if (cm.model_blob_kind == "fem") opt.precomputed = cm.model_blob;  // a .psim file's
   if (cfg.support.modulus > 0) {  // per unit area of the surface it holds, as for C
     opt.support_stiffness.setZero(3 * nm);
     for (size_t i = 0; i < cm.surface_to_model.size(); ++i)
@@ -302,13 +305,22 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
   }
 }
 
+// The .psim hook (ModelKind::save): the linear model's factorisation at the haptic step.
+std::string save_fem(const SceneConfig& cfg, const SceneMesh& cm) {
+  auto m = make_fem(cfg, cm);
+  return static_cast<FemSceneModel&>(*m).save(cfg.dt);
+}
+
 }  // namespace
 
 const ModelKind& fem_model_kind() {
   static const ModelKind k{"fem",
                            "linear, co-rotational or condensed tetrahedral FEM of the tissue "
                            "(prototype D)",
-                           &read_fem, nullptr, &make_fem};
+                           &read_fem,
+                           nullptr,
+                           &make_fem,
+                           &save_fem};
   return k;
 }
 

@@ -45,11 +45,21 @@ struct SceneMesh {
   mesh::Faces model_F;                // boundary faces in model node indices
   Eigen::VectorXi boundary_tet;       // #model_F owning tet (tet models)
   std::vector<int> surface_to_model;  // #V surface node -> model node
+  // A model's stored precomputation (loaded from a .psim file, engine/haptics/scene_file.hpp;
+  // empty when the mesh was built here): ModelKind::save's bytes for kind model_blob_kind. The
+  // model's make uses it only when the inputs it records equal the config's (else recomputes).
+  std::string model_blob;
+  std::string model_blob_kind;
 };
 
 // The prepared mesh of a source, built once per process (thread-safe cache). A bad mesh file
 // throws its own located InputError.
 std::shared_ptr<const SceneMesh> scene_mesh(const MeshSource& m);
+// The same, always built afresh and not cached (what a .psim file saves; benchmarks).
+std::shared_ptr<const SceneMesh> build_scene_mesh(const MeshSource& m);
+// Puts a prepared mesh (a loaded .psim file) into the cache for m, replacing what is there;
+// nullptr removes m from the cache (the next scene_mesh(m) builds it again).
+void install_scene_mesh(const MeshSource& m, std::shared_ptr<const SceneMesh> mesh);
 
 // One step's input from the contact tracking: the touched surface node (-1 = no contact), the
 // device position and the outward normal there.
@@ -93,6 +103,10 @@ struct ModelKind {
                SceneConfig& cfg, const std::vector<std::string>& regions);
   void (*check)(json::Checker& c, const SceneConfig& cfg);  // may be nullptr
   std::unique_ptr<SceneModel> (*make)(const SceneConfig& cfg, const SceneMesh& mesh);
+  // Optional (nullptr = the kind stores nothing beyond the mesh): the model's precomputation for
+  // a .psim file. make() finds it again in mesh.model_blob and must produce a model that steps
+  // bit-identically to one built without it.
+  std::string (*save)(const SceneConfig& cfg, const SceneMesh& mesh) = nullptr;
 };
 
 // Reads the optional "material" member of a model object into mc (engine/models/material_json.cpp).

@@ -1,0 +1,161 @@
+// `palplab scene build PROTOTYPE.json --out FILE.psim [--repeat N] [--json]`: writes the
+// scene's precomputation to a simulation file (engine/haptics/scene_file.hpp) and reports how
+// long a scene takes to become ready from it versus rebuilt from the sources (median of N, each
+// timed from nothing cached to the first haptic step done).
+// `palplab scene info FILE.psim [--json]`: verifies a simulation file and prints what it holds.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+#include "engine/haptics/scene_file.hpp"
+#include "engine/models/model.hpp"
+#include "prototypes/factory.hpp"
+
+namespace {
+
+using namespace palplab;
+using Clock = std::chrono::steady_clock;
+
+struct BuildArgs {
+  std::string prototype, out;
+  int repeat = 5;
+  bool json = false;
+};
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// A scene is ready when it has taken its first haptic step (a FEM model factorises its system
+// for the step size there).
+void first_step(const engine::SceneConfig& cfg) {
+  engine::Scene s = engine::make_scene(cfg);
+  s.step(s.geometry().start_position);
+}
+
+nlohmann::json sources_json(const engine::SceneFileInfo& info) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& s : info.sources) {
+    static const char* d = "0123456789abcdef";
+    std::string h;
+    for (auto b : s.sha256) h += std::string{d[b >> 4], d[b & 15]};
+    a.push_back({{"role", s.role}, {"path", s.path}, {"sha256", h}});
+  }
+  return a;
+}
+
+int run_build(const BuildArgs& a) {
+  if (a.repeat < 1 || a.repeat > 1000) throw InputError("--repeat: expected 1..1000");
+  const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
+  // Rebuild: nothing cached, everything from the sources.
+  std::vector<double> rebuild, load;
+  for (int i = 0; i < a.repeat; ++i) {
+    engine::install_scene_mesh(cfg.mesh, nullptr);
+    const auto t0 = Clock::now();
+    first_step(prototypes::load_prototype(a.prototype));
+    rebuild.push_back(ms_since(t0));
+  }
+  // The file is written from the cached, freshly built mesh.
+  const engine::SceneFileInfo info = engine::write_scene_file(a.out, cfg);
+  for (int i = 0; i < a.repeat; ++i) {
+    engine::install_scene_mesh(cfg.mesh, nullptr);
+    const auto t0 = Clock::now();
+    first_step(engine::load_scene_file(a.out, prototypes::load_prototype));
+    load.push_back(ms_since(t0));
+  }
+  const double rb = median(rebuild), ld = median(load);
+  nlohmann::json out = {{"file", a.out},
+                        {"prototype", info.prototype},
+                        {"format_version", info.format_version},
+                        {"palplab_version", info.tool_version},
+                        {"bytes", info.bytes},
+                        {"model", info.model_kind},
+                        {"model_precomputation_stored", info.model_blob},
+                        {"sources", sources_json(info)},
+                        {"repeat", a.repeat},
+                        {"rebuild_ms", {{"median", rb}, {"all", rebuild}}},
+                        {"load_ms", {{"median", ld}, {"all", load}}},
+                        {"speedup", ld > 0 ? rb / ld : 0.0}};
+  if (a.json) {
+    std::cout << out.dump(2) << "\n";
+  } else {
+    std::cout << std::fixed << std::setprecision(1) << "wrote " << a.out << " (" << info.bytes
+              << " bytes, format " << info.format_version << ", model " << info.model_kind
+              << (info.model_blob ? " with its precomputation" : ", mesh precomputation only")
+              << ")\n"
+              << "  ready to step (median of " << a.repeat << "): rebuilt from sources " << rb
+              << " ms, loaded from the file " << ld << " ms (" << (ld > 0 ? rb / ld : 0.0)
+              << "x faster)\n";
+  }
+  return 0;
+}
+
+int run_info(const std::string& file, bool json) {
+  const engine::SceneFileData d = engine::read_scene_file(file);
+  const engine::SceneMesh& m = *d.mesh;
+  nlohmann::json out = {{"file", file},
+                        {"format_version", d.info.format_version},
+                        {"palplab_version", d.info.tool_version},
+                        {"bytes", d.info.bytes},
+                        {"prototype", d.info.prototype},
+                        {"model", d.info.model_kind},
+                        {"model_precomputation_bytes", d.model_blob.size()},
+                        {"surface_vertices", m.V.rows()},
+                        {"surface_faces", m.F.rows()},
+                        {"tet", m.tet},
+                        {"model_nodes", m.model_V.rows()},
+                        {"tets", m.model_T.rows()},
+                        {"regions", m.region_names},
+                        {"sources", sources_json(d.info)}};
+  if (json) {
+    std::cout << out.dump(2) << "\n";
+  } else {
+    std::cout << file << ": palplab scene file, format " << d.info.format_version << ", built by "
+              << d.info.tool_version << ", " << d.info.bytes << " bytes, checksums ok\n"
+              << "  prototype " << d.info.prototype << " (model " << d.info.model_kind << ", "
+              << d.model_blob.size() << " bytes of model precomputation)\n"
+              << "  surface " << m.V.rows() << " vertices, " << m.F.rows() << " faces; model "
+              << m.model_V.rows() << " nodes, " << m.model_T.rows() << " tets\n";
+    for (const auto& s : out["sources"])
+      std::cout << "  source " << s["role"].get<std::string>() << " "
+                << s["path"].get<std::string>() << " sha256 "
+                << s["sha256"].get<std::string>().substr(0, 16) << "...\n";
+  }
+  return 0;
+}
+
+palplab::app::CommandRegistration reg{
+    "scene", [](CLI::App& root, int* code) {
+      auto* cmd = root.add_subcommand("scene", "Simulation files (.psim): precomputed scenes");
+      cmd->require_subcommand(1);
+      auto* b = cmd->add_subcommand(
+          "build", "Write a prototype's precomputation to a .psim file; report load vs rebuild");
+      auto a = std::make_shared<BuildArgs>();
+      b->add_option("prototype", a->prototype, "Prototype JSON file")->required();
+      b->add_option("--out", a->out, "Simulation file to write (.psim)")->required();
+      b->add_option("--repeat", a->repeat, "Timed repetitions of rebuild and load (median; 5)");
+      b->add_flag("--json", a->json, "Print JSON");
+      b->callback([a, code] { *code = run_build(*a); });
+      auto* i = cmd->add_subcommand("info", "Verify a .psim file and print what it holds");
+      auto file = std::make_shared<std::string>();
+      auto json = std::make_shared<bool>(false);
+      i->add_option("file", *file, "Simulation file (.psim)")->required();
+      i->add_flag("--json", *json, "Print JSON");
+      i->callback([file, json, code] { *code = run_info(*file, *json); });
+    }};
+
+}  // namespace

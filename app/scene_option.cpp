@@ -1,0 +1,77 @@
+#include "app/scene_option.hpp"
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "common/input_error.hpp"
+#include "engine/haptics/scene_file.hpp"
+#include "protocols/resolve.hpp"
+#include "prototypes/factory.hpp"
+
+namespace palplab::app {
+
+namespace fs = std::filesystem;
+
+CLI::Option* add_scene_option(CLI::App* cmd, std::vector<std::string>& scenes, bool many) {
+  auto* o = cmd->add_option("--scene", scenes,
+                            many ? "Simulation file (.psim, `palplab scene build`) whose "
+                                   "precomputation the study's scenes start from (repeatable)"
+                                 : "Simulation file (.psim, `palplab scene build`) or prototype "
+                                   "key (A, B, C, D, ...) instead of the prototype file");
+  if (!many) o->expected(1);
+  return o;
+}
+
+bool is_scene_file(const std::string& value) {
+  if (fs::path(value).extension() == ".psim") return true;
+  std::ifstream in(value, std::ios::binary);
+  char magic[8] = {};
+  return in.read(magic, 8) && std::memcmp(magic, "PALPSIM\0", 8) == 0;
+}
+
+namespace {
+
+std::string load_psim(const std::string& file) {
+  return engine::load_scene_file(file, prototypes::load_prototype).source;
+}
+
+std::string canonical(const std::string& p) {
+  std::error_code ec;
+  const fs::path c = fs::weakly_canonical(fs::absolute(p), ec);
+  return ec ? fs::absolute(p).lexically_normal().string() : c.string();
+}
+
+}  // namespace
+
+std::string scene_prototype(const std::string& positional, const std::vector<std::string>& scenes) {
+  if (scenes.empty()) {
+    if (positional.empty()) throw InputError("give a prototype file or --scene FILE.psim|KEY");
+    return positional;
+  }
+  const std::string& v = scenes.front();
+  std::string proto;
+  if (is_scene_file(v)) {
+    proto = load_psim(v);
+  } else {
+    proto = protocols::resolve_prototype(v, protocols::prototype_search_dirs("", {}));
+    if (proto.empty())
+      throw InputError("--scene \"" + v +
+                       "\": neither a .psim file nor a known prototype key (A, B, C, D, ...)");
+  }
+  if (!positional.empty() && canonical(positional) != canonical(proto))
+    throw InputError("--scene " + v + " is prototype " + proto + ", not " + positional +
+                     " (give one of them)");
+  return proto;
+}
+
+void preload_scenes(const std::vector<std::string>& scenes) {
+  for (const auto& v : scenes) {
+    if (!is_scene_file(v))
+      throw InputError("--scene \"" + v +
+                       "\": run takes simulation files (.psim); the study names its prototypes");
+    load_psim(v);
+  }
+}
+
+}  // namespace palplab::app

@@ -1,0 +1,30 @@
+#pragma once
+// The `--scene` option of probe, run and view (issue 16), resolved in one place:
+//   --scene FILE.psim  a simulation file written by `palplab scene build`: it is verified
+//                      (version, checksums, sources unchanged) and its precomputation is
+//                      installed in the process caches, so every scene of that prototype starts
+//                      from it; the prototype is the one the file was built from.
+//   --scene KEY        a prototype key ("A", "C", "D", ...): the shipped prototype KEY.json
+//                      (searched as a study's prototype ids are, protocols/resolve.hpp).
+// Every problem is an InputError (exit 2).
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+namespace palplab::app {
+
+// Registers --scene on cmd (repeatable when `many`: run may use several prototypes).
+CLI::Option* add_scene_option(CLI::App* cmd, std::vector<std::string>& scenes, bool many);
+
+// The prototype file of a command that builds one scene: the positional file, or what --scene
+// names (both given: they must name the same prototype). Installs a .psim's precomputation.
+std::string scene_prototype(const std::string& positional, const std::vector<std::string>& scenes);
+
+// Installs the precomputation of every --scene file (run: the study's prototypes then start from
+// them); a prototype key is refused here (a study names its prototypes itself).
+void preload_scenes(const std::vector<std::string>& scenes);
+
+// True when `value` names a .psim file (by extension or by its magic bytes).
+bool is_scene_file(const std::string& value);
+
+}  // namespace palplab::app

@@ -1,0 +1,607 @@
+// The .psim simulation file (scene_file.hpp): a bounds-checked binary writer/reader of the
+// prepared SceneMesh and the model's stored precomputation, with the header checks in the
+// order a user needs them (what the file is, which version, whether it is intact, whether its
+// sources changed).
+#include "engine/haptics/scene_file.hpp"
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <type_traits>
+
+#include "common/input_error.hpp"
+#include "engine/mesh/io.hpp"
+#include "engine/mesh/materials.hpp"
+#include "engine/models/model.hpp"
+#include "engine/spatial/octree.hpp"
+#include "palplab/version.hpp"
+#include "results/sha256.hpp"
+
+namespace palplab::engine {
+
+namespace fs = std::filesystem;
+using Digest = std::array<std::uint8_t, 32>;
+
+namespace {
+
+constexpr char kMagic[8] = {'P', 'A', 'L', 'P', 'S', 'I', 'M', '\0'};
+constexpr std::size_t kHeaderCheckAt = 120;
+
+std::string hex(const std::uint8_t* p, std::size_t n) {
+  static const char* d = "0123456789abcdef";
+  std::string s;
+  for (std::size_t i = 0; i < n; ++i) {
+    s += d[p[i] >> 4];
+    s += d[p[i] & 15];
+  }
+  return s;
+}
+
+Digest sha256(const void* p, std::size_t n) {
+  results::Sha256 h;
+  h.update(p, n);
+  return h.digest();
+}
+
+std::string read_all(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) throw InputError(std::string("cannot read ") + what, path);
+  const std::streamoff n = in.tellg();
+  std::string s(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
+  in.seekg(0);
+  if (n > 0 && !in.read(s.data(), n)) throw InputError(std::string("cannot read ") + what, path);
+  return s;
+}
+
+// The payload checksum: 256 bits from four independent 64-bit multiply-rotate lanes over 32-byte
+// blocks (the structure of xxHash64, not its exact output). A lane's update is a bijection of
+// its state for a given word and of the word for a given state, so any change confined to one
+// block always changes the result; truncation is caught by the stored size first. It guards
+// against damage, not against an adversary (the sources fingerprint is SHA-256), and runs at
+// memory speed: SHA-256 over a FEM factorisation of several MB cost more than loading it.
+Digest payload_checksum(const char* p, std::size_t n) {
+  constexpr std::uint64_t P1 = 0x9E3779B185EBCA87ULL, P2 = 0xC2B2AE3D27D4EB4FULL,
+                          P3 = 0x165667B19E3779F9ULL, P5 = 0x27D4EB2F165667C5ULL;
+  auto rotl = [](std::uint64_t x, int r) { return (x << r) | (x >> (64 - r)); };
+  auto avalanche = [](std::uint64_t h) {
+    h ^= h >> 33;
+    h *= P2;
+    h ^= h >> 29;
+    h *= P3;
+    h ^= h >> 32;
+    return h;
+  };
+  std::uint64_t v[4] = {P1 + P2, P2, 0, 0 - P1};
+  auto block = [&](const char* b) {
+    for (int k = 0; k < 4; ++k) {
+      std::uint64_t w;
+      std::memcpy(&w, b + 8 * k, 8);
+      v[k] = rotl(v[k] + w * P2, 31) * P1;
+    }
+  };
+  std::size_t i = 0;
+  for (; i + 32 <= n; i += 32) block(p + i);
+  char tail[32] = {};
+  std::memcpy(tail, p + i, n - i);
+  block(tail);
+  Digest d;
+  for (int k = 0; k < 4; ++k) {
+    const std::uint64_t h =
+        avalanche(v[k] + rotl(v[(k + 1) % 4], 17) + static_cast<std::uint64_t>(n) * P5 + k);
+    std::memcpy(d.data() + 8 * k, &h, 8);
+  }
+  return d;
+}
+
+// ---- writer / reader --------------------------------------------------------------------
+
+class Writer {
+ public:
+  template <class T>
+  void put(T v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    raw(&v, sizeof v);
+  }
+  void raw(const void* p, std::size_t n) {
+    const auto* c = static_cast<const char*>(p);
+    buf_.append(c, n);
+  }
+  void str(const std::string& s) {
+    put<std::uint64_t>(s.size());
+    raw(s.data(), s.size());
+  }
+  template <class T>
+  void vec(const std::vector<T>& v) {
+    put<std::uint64_t>(v.size());
+    raw(v.data(), v.size() * sizeof(T));
+  }
+  template <class M>
+  void mat(const M& m) {
+    put<std::int64_t>(m.rows());
+    put<std::int64_t>(m.cols());
+    raw(m.data(), static_cast<std::size_t>(m.size()) * sizeof(typename M::Scalar));
+  }
+  std::string& bytes() { return buf_; }
+
+ private:
+  std::string buf_;
+};
+
+// Every read is bounds-checked: a payload that passed its checksum but does not parse (a bug, or
+// a file written by hand) is a located InputError, never a read past the end.
+class Reader {
+ public:
+  Reader(const std::string& file, const char* p, std::size_t n) : file_(file), p_(p), n_(n) {}
+  void need(std::size_t k, const char* what) {
+    if (k > n_ - at_)
+      throw InputError(std::string("corrupted scene file: ") + what + " at payload offset " +
+                           std::to_string(at_) + " runs past the end (" + std::to_string(n_) +
+                           " bytes)",
+                       file_);
+  }
+  template <class T>
+  T get(const char* what) {
+    need(sizeof(T), what);
+    T v;
+    std::memcpy(&v, p_ + at_, sizeof v);
+    at_ += sizeof v;
+    return v;
+  }
+  std::size_t count(std::size_t elem, const char* what) {
+    const auto n = get<std::uint64_t>(what);
+    if (elem && n > (n_ - at_) / elem) need(n_ + 1, what);  // throws
+    return static_cast<std::size_t>(n);
+  }
+  std::string str(const char* what) {
+    const std::size_t n = count(1, what);
+    std::string s(p_ + at_, n);
+    at_ += n;
+    return s;
+  }
+  template <class T>
+  std::vector<T> vec(const char* what) {
+    const std::size_t n = count(sizeof(T), what);
+    std::vector<T> v(n);
+    if (n) std::memcpy(v.data(), p_ + at_, n * sizeof(T));
+    at_ += n * sizeof(T);
+    return v;
+  }
+  template <class M>
+  void mat(M& m, const char* what) {
+    const auto r = get<std::int64_t>(what), c = get<std::int64_t>(what);
+    const bool fixed_cols = M::ColsAtCompileTime != Eigen::Dynamic;
+    if (r < 0 || c < 0 || (fixed_cols && c != M::ColsAtCompileTime) ||
+        (M::ColsAtCompileTime == 1 && c != 1))
+      throw InputError(std::string("corrupted scene file: bad shape of ") + what, file_);
+    const std::size_t bytes = sizeof(typename M::Scalar);
+    if (c && static_cast<std::uint64_t>(r) > (n_ - at_) / bytes / static_cast<std::uint64_t>(c))
+      need(n_ + 1, what);
+    m.resize(r, c);
+    std::memcpy(m.data(), p_ + at_, static_cast<std::size_t>(r * c) * bytes);
+    at_ += static_cast<std::size_t>(r * c) * bytes;
+  }
+  std::size_t at() const { return at_; }
+  std::size_t size() const { return n_; }
+  void skip(std::size_t k) {
+    need(k, "section");
+    at_ += k;
+  }
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+  const char* p_;
+  std::size_t n_, at_ = 0;
+};
+
+// ---- the prepared mesh ------------------------------------------------------------------
+
+void put_csr(Writer& w, const mesh::Csr& c) {
+  w.vec(c.offset);
+  w.vec(c.index);
+}
+mesh::Csr get_csr(Reader& r, int rows, const char* what) {
+  mesh::Csr c;
+  c.offset = r.vec<int>(what);
+  c.index = r.vec<int>(what);
+  bool ok = static_cast<int>(c.offset.size()) == rows + 1 && c.offset.front() == 0 &&
+            c.offset.back() == static_cast<int>(c.index.size());
+  for (std::size_t i = 1; ok && i < c.offset.size(); ++i) ok = c.offset[i] >= c.offset[i - 1];
+  for (int v : c.index) ok = ok && v >= 0 && v < rows;
+  if (!ok) throw InputError(std::string("corrupted scene file: inconsistent ") + what, r.file());
+  return c;
+}
+
+void put_mesh(Writer& w, const SceneMesh& m) {
+  w.mat(m.V);
+  w.mat(m.N);
+  w.mat(m.F);
+  w.mat(m.E);
+  w.vec(m.vertex_region);
+  w.put<std::uint64_t>(m.region_names.size());
+  for (const auto& s : m.region_names) w.str(s);
+  w.mat(m.vertex_area);
+  w.put(m.mean_edge);
+  const spatial::Octree& o = *m.octree;
+  w.put<std::int32_t>(o.max_depth);
+  w.put<std::int32_t>(o.max_points_per_leaf);
+  w.put<std::uint64_t>(o.nodes.size());
+  for (const auto& n : o.nodes) {
+    w.raw(n.cell.min().data(), 3 * sizeof(double));
+    w.raw(n.cell.max().data(), 3 * sizeof(double));
+    w.raw(n.box.min().data(), 3 * sizeof(double));
+    w.raw(n.box.max().data(), 3 * sizeof(double));
+    w.raw(n.child, sizeof n.child);
+    w.put<std::int32_t>(n.begin);
+    w.put<std::int32_t>(n.end);
+    w.put<std::int32_t>(n.depth);
+    w.put<std::uint8_t>(n.leaf);
+  }
+  w.vec(o.order);
+  w.vec(o.leaf_of);
+  put_csr(w, m.rings->first);
+  put_csr(w, m.rings->second);
+  w.put<std::uint8_t>(m.tet);
+  w.mat(m.model_V);
+  w.mat(m.model_E);
+  w.mat(m.model_T);
+  w.mat(m.tet_attribute);
+  w.mat(m.model_F);
+  w.mat(m.boundary_tet);
+  w.vec(m.surface_to_model);
+}
+
+template <class M>
+void check_indices(const Reader& r, const M& m, long n, const char* what) {
+  if (m.size() && (m.minCoeff() < 0 || m.maxCoeff() >= n))
+    throw InputError(std::string("corrupted scene file: ") + what + " index out of range",
+                     r.file());
+}
+
+std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
+  auto m = std::make_shared<SceneMesh>();
+  r.mat(m->V, "surface positions");
+  r.mat(m->N, "normals");
+  r.mat(m->F, "faces");
+  r.mat(m->E, "edges");
+  m->vertex_region = r.vec<int>("vertex regions");
+  const std::size_t nr = r.count(8, "region names");
+  for (std::size_t i = 0; i < nr; ++i) m->region_names.push_back(r.str("region name"));
+  r.mat(m->vertex_area, "vertex areas");
+  m->mean_edge = r.get<double>("mean edge");
+  const long nv = m->V.rows();
+  check_indices(r, m->F, nv, "face");
+  check_indices(r, m->E, nv, "edge");
+  if (m->N.rows() != nv || m->vertex_area.size() != nv ||
+      static_cast<long>(m->vertex_region.size()) != nv)
+    throw InputError("corrupted scene file: per-vertex arrays disagree in size", r.file());
+  for (int v : m->vertex_region)
+    if (v < -1 || v >= static_cast<int>(nr))
+      throw InputError("corrupted scene file: vertex region out of range", r.file());
+
+  auto o = std::make_shared<spatial::Octree>();
+  o->max_depth = r.get<std::int32_t>("octree depth");
+  o->max_points_per_leaf = r.get<std::int32_t>("octree leaf size");
+  const std::size_t nn = r.count(4 * 3 * 8 + 8 * 4 + 3 * 4 + 1, "octree nodes");
+  o->nodes.resize(nn);
+  for (auto& n : o->nodes) {
+    Eigen::Vector3d a, b, c, d;
+    for (Eigen::Vector3d* v : {&a, &b, &c, &d})
+      for (int k = 0; k < 3; ++k) (*v)[k] = r.get<double>("octree box");
+    n.cell = Eigen::AlignedBox3d(a, b);
+    n.box = Eigen::AlignedBox3d(c, d);
+    for (int& ch : n.child) ch = r.get<std::int32_t>("octree child");
+    n.begin = r.get<std::int32_t>("octree run");
+    n.end = r.get<std::int32_t>("octree run");
+    n.depth = r.get<std::int32_t>("octree depth");
+    n.leaf = r.get<std::uint8_t>("octree leaf") != 0;
+    for (int ch : n.child)
+      if (ch < -1 || ch >= static_cast<long>(nn))
+        throw InputError("corrupted scene file: octree child out of range", r.file());
+  }
+  o->order = r.vec<int>("octree order");
+  o->leaf_of = r.vec<int>("octree leaves");
+  if (nn == 0 || static_cast<long>(o->order.size()) != nv ||
+      static_cast<long>(o->leaf_of.size()) != nv)
+    throw InputError("corrupted scene file: octree does not match the surface", r.file());
+  for (const auto& n : o->nodes)
+    if (n.begin < 0 || n.end < n.begin || n.end > nv)
+      throw InputError("corrupted scene file: octree run out of range", r.file());
+  for (std::size_t i = 0; i < o->order.size(); ++i)
+    if (o->order[i] < 0 || o->order[i] >= nv || o->leaf_of[i] < 0 ||
+        o->leaf_of[i] >= static_cast<long>(nn))
+      throw InputError("corrupted scene file: octree index out of range", r.file());
+  m->octree = o;
+  auto rings = std::make_shared<mesh::RingTable>();
+  rings->first = get_csr(r, static_cast<int>(nv), "first rings");
+  rings->second = get_csr(r, static_cast<int>(nv), "second rings");
+  m->rings = rings;
+  m->tet = r.get<std::uint8_t>("mesh kind") != 0;
+  r.mat(m->model_V, "model positions");
+  r.mat(m->model_E, "model edges");
+  r.mat(m->model_T, "tets");
+  r.mat(m->tet_attribute, "tet attributes");
+  r.mat(m->model_F, "boundary faces");
+  r.mat(m->boundary_tet, "boundary tets");
+  m->surface_to_model = r.vec<int>("surface-to-model map");
+  const long nm = m->model_V.rows();
+  check_indices(r, m->model_E, nm, "model edge");
+  check_indices(r, m->model_T, nm, "tet");
+  check_indices(r, m->model_F, nm, "boundary face");
+  check_indices(r, m->boundary_tet, std::max<long>(m->model_T.rows(), 1), "boundary tet");
+  if (static_cast<long>(m->surface_to_model.size()) != nv ||
+      m->tet_attribute.size() != m->model_T.rows())
+    throw InputError("corrupted scene file: model arrays disagree in size", r.file());
+  for (int v : m->surface_to_model)
+    if (v < 0 || v >= nm) throw InputError("corrupted scene file: bad surface map", r.file());
+  return m;
+}
+
+// ---- sections ---------------------------------------------------------------------------
+
+constexpr std::uint32_t tag(const char (&s)[5]) {
+  return static_cast<std::uint32_t>(s[0]) | static_cast<std::uint32_t>(s[1]) << 8 |
+         static_cast<std::uint32_t>(s[2]) << 16 | static_cast<std::uint32_t>(s[3]) << 24;
+}
+
+void section(Writer& out, std::uint32_t t, const std::string& body) {
+  out.put(t);
+  out.str(body);
+}
+
+std::string sources_bytes(const std::vector<SceneSource>& s) {
+  Writer w;
+  w.put<std::uint64_t>(s.size());
+  for (const auto& x : s) {
+    w.str(x.role);
+    w.str(x.path);
+    w.raw(x.sha256.data(), 32);
+  }
+  return std::move(w.bytes());
+}
+
+std::vector<SceneSource> get_sources(Reader& r) {
+  std::vector<SceneSource> s(r.count(8 + 8 + 32, "sources"));
+  for (auto& x : s) {
+    x.role = r.str("source role");
+    x.path = r.str("source path");
+    for (auto& b : x.sha256) b = r.get<std::uint8_t>("source digest");
+  }
+  return s;
+}
+
+}  // namespace
+
+std::string scene_file_tool_version() {
+  return std::string(kVersion) + "+" + kGitCommit;
+}
+
+std::vector<SceneSource> scene_sources(const SceneConfig& cfg) {
+  if (cfg.source.empty())
+    throw InputError("a scene file is built from a prototype file (the config names none)");
+  std::vector<SceneSource> out;
+  auto add = [&](const char* role, const std::string& path) {
+    const std::string bytes = read_all(path, "a source of the scene");
+    out.push_back({role, path, sha256(bytes.data(), bytes.size())});
+  };
+  add("prototype", fs::absolute(cfg.source).lexically_normal().string());
+  if (!cfg.mesh.file.empty()) {
+    if (mesh::is_tetgen_path(cfg.mesh.file)) {
+      // read_tetgen reads .node, .ele and, when present, .names.
+      const std::string base = mesh::tetgen_base(cfg.mesh.file);
+      add("mesh", base + ".node");
+      add("mesh", base + ".ele");
+      std::error_code ec;
+      if (fs::is_regular_file(base + ".names", ec)) add("mesh", base + ".names");
+    } else {
+      add("mesh", cfg.mesh.file);
+    }
+  }
+  const std::string& mat = mesh::default_materials_json();
+  out.push_back({"materials", "<built-in materials table>", sha256(mat.data(), mat.size())});
+  return out;
+}
+
+SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
+  const ModelKind* kind = find_model_kind(cfg.model);
+  if (!kind) throw InputError("unknown model kind \"" + cfg.model + "\"", cfg.source);
+  SceneFileInfo info;
+  info.format_version = kSceneFileVersion;
+  info.tool_version = scene_file_tool_version();
+  info.sources = scene_sources(cfg);
+  info.prototype = info.sources.front().path;
+  info.model_kind = cfg.model;
+  const std::shared_ptr<const SceneMesh> mesh = scene_mesh(cfg.mesh);
+  std::string blob;
+  if (kind->save) blob = kind->save(cfg, *mesh);
+  info.model_blob = !blob.empty();
+
+  Writer payload;
+  const std::string src = sources_bytes(info.sources);
+  {
+    Writer s;
+    s.str(info.prototype);
+    s.raw(src.data(), src.size());
+    section(payload, tag("SRCS"), s.bytes());
+  }
+  {
+    Writer s;
+    put_mesh(s, *mesh);
+    section(payload, tag("MESH"), s.bytes());
+  }
+  {
+    Writer s;
+    s.str(cfg.model);
+    s.str(blob);
+    section(payload, tag("MODL"), s.bytes());
+  }
+  const std::string& p = payload.bytes();
+
+  std::array<char, kSceneFileHeaderBytes> h{};
+  std::memcpy(h.data(), kMagic, 8);
+  const std::uint32_t version = kSceneFileVersion, hsize = kSceneFileHeaderBytes;
+  const std::uint64_t psize = p.size();
+  std::memcpy(h.data() + 8, &version, 4);
+  std::memcpy(h.data() + 12, &hsize, 4);
+  std::memcpy(h.data() + 16, &psize, 8);
+  const Digest pd = payload_checksum(p.data(), p.size()), sd = sha256(src.data(), src.size());
+  std::memcpy(h.data() + 24, pd.data(), 32);
+  std::memcpy(h.data() + 56, sd.data(), 32);
+  if (info.tool_version.size() > 31)
+    throw std::logic_error("palplab version string too long for the .psim header");
+  std::memcpy(h.data() + 88, info.tool_version.data(), info.tool_version.size());
+  const Digest hd = sha256(h.data(), kHeaderCheckAt);
+  std::memcpy(h.data() + kHeaderCheckAt, hd.data(), 8);
+
+  // Written next to the target and renamed: a failed write never leaves a half file behind.
+  const std::string tmp = out + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw InputError("cannot write the scene file", out);
+    f.write(h.data(), static_cast<std::streamsize>(h.size()));
+    f.write(p.data(), static_cast<std::streamsize>(p.size()));
+    if (!f) throw InputError("error while writing the scene file", out);
+  }
+  std::error_code ec;
+  fs::rename(tmp, out, ec);
+  if (ec) throw InputError("cannot write the scene file: " + ec.message(), out);
+  info.bytes = h.size() + p.size();
+  return info;
+}
+
+SceneFileData read_scene_file(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError("no such scene file", path);
+  const std::string bytes = read_all(path, "the scene file");
+  const std::string rebuild = " (rebuild it with `palplab scene build`)";
+  if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
+    throw InputError("not a palplab scene file (.psim): bad magic bytes", path);
+  if (bytes.size() < kSceneFileHeaderBytes)
+    throw InputError("truncated scene file: " + std::to_string(bytes.size()) +
+                         " bytes, shorter than the " + std::to_string(kSceneFileHeaderBytes) +
+                         "-byte header" + rebuild,
+                     path);
+  const char* h = bytes.data();
+  std::uint32_t version, hsize;
+  std::uint64_t psize;
+  std::memcpy(&version, h + 8, 4);
+  std::memcpy(&hsize, h + 12, 4);
+  std::memcpy(&psize, h + 16, 8);
+  if (version != kSceneFileVersion)
+    throw InputError("scene file format version " + std::to_string(version) +
+                         ", this palplab reads version " + std::to_string(kSceneFileVersion) +
+                         rebuild,
+                     path);
+  const Digest hd = sha256(h, kHeaderCheckAt);
+  if (std::memcmp(hd.data(), h + kHeaderCheckAt, 8) != 0 || hsize != kSceneFileHeaderBytes)
+    throw InputError("corrupted scene file: the header checksum does not match" + rebuild, path);
+  SceneFileData d;
+  d.info.format_version = version;
+  d.info.tool_version = std::string(h + 88, strnlen(h + 88, 32));
+  d.info.bytes = bytes.size();
+  if (d.info.tool_version != scene_file_tool_version())
+    throw InputError("scene file built by palplab " + d.info.tool_version + ", this is palplab " +
+                         scene_file_tool_version() + ": precomputation may differ between builds" +
+                         rebuild,
+                     path);
+  const std::uint64_t have = bytes.size() - kSceneFileHeaderBytes;
+  if (have < psize)
+    throw InputError("truncated scene file: " + std::to_string(have) + " of " +
+                         std::to_string(psize) + " payload bytes" + rebuild,
+                     path);
+  if (have > psize)
+    throw InputError("corrupted scene file: " + std::to_string(have - psize) +
+                         " bytes after the payload" + rebuild,
+                     path);
+  const char* p = h + kSceneFileHeaderBytes;
+  const Digest pd = payload_checksum(p, psize);
+  if (std::memcmp(pd.data(), h + 24, 32) != 0)
+    throw InputError("corrupted scene file: payload checksum " + hex(pd.data(), 8) +
+                         "... does not match the header's " +
+                         hex(reinterpret_cast<const std::uint8_t*>(h + 24), 8) + "..." + rebuild,
+                     path);
+
+  Reader r(path, p, psize);
+  bool have_src = false, have_mesh = false, have_model = false;
+  while (r.at() < r.size()) {
+    const auto t = r.get<std::uint32_t>("section tag");
+    const std::size_t len = r.count(1, "section");
+    Reader s(path, p + r.at(), len);  // a view: the payload is not copied
+    r.skip(len);
+    if (t == tag("SRCS")) {
+      d.info.prototype = s.str("prototype path");
+      const std::size_t start = s.at();
+      d.info.sources = get_sources(s);
+      const Digest sd = sha256(p + (r.at() - len) + start, s.at() - start);
+      if (std::memcmp(sd.data(), h + 56, 32) != 0)
+        throw InputError("corrupted scene file: the sources fingerprint does not match", path);
+      have_src = true;
+    } else if (t == tag("MESH")) {
+      d.mesh = get_mesh(s);
+      have_mesh = true;
+    } else if (t == tag("MODL")) {
+      d.info.model_kind = s.str("model kind");
+      d.model_blob = s.str("model data");
+      d.info.model_blob = !d.model_blob.empty();
+      have_model = true;
+    } else {
+      continue;  // an unknown section is skipped (a later minor addition)
+    }
+    if (s.at() != s.size())
+      throw InputError("corrupted scene file: section has trailing bytes", path);
+  }
+  if (!have_src || !have_mesh || !have_model)
+    throw InputError("corrupted scene file: a section (sources, mesh or model) is missing", path);
+  return d;
+}
+
+SceneConfig load_scene_file(const std::string& path,
+                            const std::function<SceneConfig(const std::string&)>& load_config) {
+  SceneFileData d = read_scene_file(path);
+  std::error_code ec;
+  if (!fs::is_regular_file(d.info.prototype, ec))
+    throw InputError("the prototype this scene file was built from is gone: " + d.info.prototype +
+                         " (rebuild it with `palplab scene build`)",
+                     path);
+  SceneConfig cfg = load_config(d.info.prototype);
+  const std::vector<SceneSource> now = scene_sources(cfg);
+  auto same = [](const SceneSource& a, const SceneSource& b) {
+    return a.role == b.role && a.path == b.path;
+  };
+  for (const auto& s : d.info.sources) {
+    const SceneSource* cur = nullptr;
+    for (const auto& n : now)
+      if (same(n, s)) cur = &n;
+    if (!cur)
+      throw InputError("stale scene file: " + s.role + " " + s.path +
+                           " is no longer a source of the prototype (rebuild it with `palplab "
+                           "scene build`)",
+                       path);
+    if (cur->sha256 != s.sha256)
+      throw InputError("stale scene file: " + s.role + " " + s.path +
+                           " changed since the file was built (rebuild it with `palplab scene "
+                           "build`)",
+                       path);
+  }
+  for (const auto& n : now) {
+    bool found = false;
+    for (const auto& s : d.info.sources) found = found || same(n, s);
+    if (!found)
+      throw InputError("stale scene file: the prototype now uses " + n.role + " " + n.path +
+                           " (rebuild it with `palplab scene build`)",
+                       path);
+  }
+  if (d.info.model_kind != cfg.model)
+    throw InputError("corrupted scene file: stored model \"" + d.info.model_kind +
+                         "\" but the prototype's is \"" + cfg.model + "\"",
+                     path);
+  auto mesh = std::const_pointer_cast<SceneMesh>(d.mesh);
+  mesh->model_blob = std::move(d.model_blob);
+  mesh->model_blob_kind = d.info.model_kind;
+  install_scene_mesh(cfg.mesh, mesh);
+  return cfg;
+}
+
+}  // namespace palplab::engine

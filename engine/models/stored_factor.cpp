@@ -1,0 +1,218 @@
+#include "engine/models/stored_factor.hpp"
+
+#include <cstring>
+
+#include "engine/models/fem_model.hpp"
+#include "results/sha256.hpp"
+
+namespace palplab::engine {
+
+namespace {
+
+constexpr char kTag[8] = {'F', 'E', 'M', 'L', 'D', 'L', 'T', '1'};
+
+// Eigen keeps the factors of SimplicialLDLT protected; a pointer to member formed through a
+// derived class reads and writes them on any SparseLdlt (the standard-conforming way, no cast).
+struct LdltAccess : SparseLdlt {
+  using Base = Eigen::SimplicialCholeskyBase<SparseLdlt>;
+  using Solver = Eigen::SparseSolverBase<SparseLdlt>;
+  static constexpr auto L = &LdltAccess::m_matrix;
+  static constexpr auto D = &LdltAccess::m_diag;
+  static constexpr auto parent = &LdltAccess::m_parent;
+  static constexpr auto nnz_col = &LdltAccess::m_nonZerosPerCol;
+  static constexpr auto P = &LdltAccess::m_P;
+  static constexpr auto Pinv = &LdltAccess::m_Pinv;
+  static constexpr auto info = &LdltAccess::m_info;
+  static constexpr auto factorized = &LdltAccess::m_factorizationIsOk;
+  static constexpr auto analysed = &LdltAccess::m_analysisIsOk;
+  static constexpr auto shift_offset = &LdltAccess::m_shiftOffset;
+  static constexpr auto shift_scale = &LdltAccess::m_shiftScale;
+};
+
+void put(std::string& s, const void* p, std::size_t n) {
+  s.append(static_cast<const char*>(p), n);
+}
+template <class T>
+void put_vec(std::string& s, const T* p, std::int64_t n) {
+  put(s, &n, sizeof n);
+  put(s, p, static_cast<std::size_t>(n) * sizeof(T));
+}
+
+struct In {
+  const std::string& b;
+  std::size_t at = 0;
+  bool ok = true;
+  template <class T>
+  T get() {
+    T v{};
+    if (b.size() - at < sizeof v) {
+      ok = false;
+      return v;
+    }
+    std::memcpy(&v, b.data() + at, sizeof v);
+    at += sizeof v;
+    return v;
+  }
+  template <class T>
+  std::int64_t vec(T* out, std::int64_t expect) {  // out == nullptr: only the count
+    const auto n = get<std::int64_t>();
+    if (!ok || n < 0 || (expect >= 0 && n != expect) ||
+        static_cast<std::uint64_t>(n) > (b.size() - at) / sizeof(T)) {
+      ok = false;
+      return 0;
+    }
+    if (out) std::memcpy(out, b.data() + at, static_cast<std::size_t>(n) * sizeof(T));
+    at += static_cast<std::size_t>(n) * sizeof(T);
+    return n;
+  }
+};
+
+}  // namespace
+
+FemInputsDigest fem_inputs_digest(const mesh::TetMesh& mesh, const TetMaterials& mat,
+                                  const std::vector<std::uint8_t>& fixed,
+                                  const FemModelOptions& o) {
+  results::Sha256 h;
+  auto add = [&](const void* p, std::size_t n) {
+    const std::uint64_t len = n;
+    h.update(&len, sizeof len);  // lengths keep the fields apart
+    h.update(p, n);
+  };
+  add(mesh.V.data(), sizeof(double) * mesh.V.size());
+  add(mesh.T.data(), sizeof(int) * mesh.T.size());
+  add(mat.youngs_modulus.data(), sizeof(double) * mat.youngs_modulus.size());
+  add(mat.poisson_ratio.data(), sizeof(double) * mat.poisson_ratio.size());
+  add(mat.density.data(), sizeof(double) * mat.density.size());
+  add(mat.rigid.data(), mat.rigid.size());
+  add(fixed.data(), fixed.size());
+  const int f = static_cast<int>(o.formulation), j = static_cast<int>(o.jacobian);
+  const std::uint8_t lumped = o.lumped_mass;
+  add(&f, sizeof f);
+  add(&j, sizeof j);
+  add(&lumped, 1);
+  add(&o.rayleigh_alpha, sizeof(double));
+  add(&o.rayleigh_beta, sizeof(double));
+  add(o.operational_tet.data(), o.operational_tet.size());
+  add(o.support_stiffness.data(), sizeof(double) * o.support_stiffness.size());
+  return h.digest();
+}
+
+namespace {
+
+void put_sparse(std::string& s, const SparseMatrixd& M) {
+  const std::int64_t r = M.rows(), c = M.cols();
+  put(s, &r, sizeof r);
+  put(s, &c, sizeof c);
+  put_vec(s, M.outerIndexPtr(), c + 1);
+  put_vec(s, M.innerIndexPtr(), static_cast<std::int64_t>(M.nonZeros()));
+  put_vec(s, M.valuePtr(), static_cast<std::int64_t>(M.nonZeros()));
+}
+
+// A compressed column matrix with valid, ascending-per-column row indices, or false.
+bool get_sparse(In& in, std::int64_t rows, SparseMatrixd& M) {
+  const auto r = in.get<std::int64_t>(), c = in.get<std::int64_t>();
+  if (!in.ok || r != rows || c < 0 || c > (1 << 30)) return false;
+  std::vector<int> outer(c + 1);
+  in.vec(outer.data(), c + 1);
+  if (!in.ok || outer[0] != 0) return false;
+  for (std::int64_t j = 0; j < c; ++j)
+    if (outer[j + 1] < outer[j]) return false;
+  const std::int64_t nnz = outer[c];
+  if (static_cast<std::uint64_t>(nnz) > in.b.size()) return false;
+  SparseMatrixd A(r, c);
+  A.resizeNonZeros(nnz);
+  std::memcpy(A.outerIndexPtr(), outer.data(), sizeof(int) * (c + 1));
+  in.vec(A.innerIndexPtr(), nnz);
+  in.vec(A.valuePtr(), nnz);
+  if (!in.ok) return false;
+  for (std::int64_t j = 0; j < c; ++j)
+    for (int q = outer[j]; q < outer[j + 1]; ++q) {
+      const int i = A.innerIndexPtr()[q];
+      if (i < 0 || i >= r || (q > outer[j] && i <= A.innerIndexPtr()[q - 1])) return false;
+    }
+  M = std::move(A);
+  return true;
+}
+
+}  // namespace
+
+std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& act,
+                            const SparseMatrixd& K_c, const Eigen::VectorXd& m_lumped,
+                            const SparseLdlt& ldlt, double h) {
+  using A = LdltAccess;
+  const auto& L = ldlt.*A::L;
+  if (!(ldlt.*A::factorized) || !L.isCompressed()) return {};
+  SparseMatrixd K = K_c;
+  K.makeCompressed();  // the same entries in the same order
+  std::string s;
+  put(s, kTag, 8);
+  put(s, d.data(), d.size());
+  put(s, &h, sizeof h);
+  put_vec(s, act.data(), static_cast<std::int64_t>(act.size()));
+  put_sparse(s, K);
+  put_vec(s, m_lumped.data(), m_lumped.size());
+  put_sparse(s, L);
+  put_vec(s, (ldlt.*A::D).data(), (ldlt.*A::D).size());
+  put_vec(s, (ldlt.*A::parent).data(), (ldlt.*A::parent).size());
+  put_vec(s, (ldlt.*A::nnz_col).data(), (ldlt.*A::nnz_col).size());
+  put_vec(s, (ldlt.*A::P).indices().data(), (ldlt.*A::P).indices().size());
+  put_vec(s, (ldlt.*A::Pinv).indices().data(), (ldlt.*A::Pinv).indices().size());
+  const double off = ldlt.*A::shift_offset, scale = ldlt.*A::shift_scale;
+  put(s, &off, sizeof off);
+  put(s, &scale, sizeof scale);
+  return s;
+}
+
+bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long total_dofs,
+                     StoredLinearFem& out, SparseLdlt& ldlt) {
+  using A = LdltAccess;
+  if (blob.size() < 8 + 32 + 8 || std::memcmp(blob.data(), kTag, 8) != 0 ||
+      std::memcmp(blob.data() + 8, d.data(), 32) != 0)
+    return false;
+  In in{blob, 40};
+  StoredLinearFem st;
+  st.h = in.get<double>();
+  const auto n = in.get<std::int64_t>();  // the count of act, read again below
+  if (!in.ok || !(st.h > 0) || n < 0 || n > total_dofs) return false;
+  in.at -= sizeof n;
+  st.act.resize(n);
+  in.vec(st.act.data(), n);
+  for (std::int64_t k = 0; k < n; ++k)
+    if (st.act[k] < 0 || st.act[k] >= total_dofs || (k && st.act[k] <= st.act[k - 1])) return false;
+  if (!get_sparse(in, n, st.K_c) || st.K_c.cols() != n) return false;
+  st.m_lumped.resize(total_dofs);
+  in.vec(st.m_lumped.data(), total_dofs);
+  SparseMatrixd L;
+  if (!in.ok || !get_sparse(in, n, L) || L.cols() != n) return false;
+  Eigen::VectorXd D(n);
+  in.vec(D.data(), n);
+  Eigen::VectorXi parent(n), nnz(n), P(n), Pinv(n);
+  in.vec(parent.data(), n);
+  in.vec(nnz.data(), n);
+  in.vec(P.data(), n);
+  in.vec(Pinv.data(), n);
+  const double off = in.get<double>(), scale = in.get<double>();
+  if (!in.ok || in.at != blob.size()) return false;
+  for (std::int64_t i = 0; i < n; ++i)
+    if (P[i] < 0 || P[i] >= n || Pinv[i] < 0 || Pinv[i] >= n || Pinv[P[i]] != i) return false;
+  // A 1x1 factorisation sets the solver's private "initialised" flag (not reachable like the
+  // members below); everything it computed is replaced.
+  SparseMatrixd one(1, 1);
+  one.insert(0, 0) = 1.0;
+  ldlt.compute(one);
+  ldlt.*A::L = std::move(L);
+  ldlt.*A::D = std::move(D);
+  ldlt.*A::parent = std::move(parent);
+  ldlt.*A::nnz_col = std::move(nnz);
+  (ldlt.*A::P).indices() = std::move(P);
+  (ldlt.*A::Pinv).indices() = std::move(Pinv);
+  ldlt.*A::shift_offset = off;
+  ldlt.*A::shift_scale = scale;
+  ldlt.*A::info = Eigen::Success;
+  ldlt.*A::factorized = true;
+  ldlt.*A::analysed = true;
+  out = std::move(st);
+  return true;
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,228 @@
+// `palplab scene build|info` and `--scene` of probe/run/view end to end: a probe through a
+// .psim file prints the same numbers as through the prototype, and every damaged file (truncated,
+// flipped byte in header or payload, wrong version, stale source) is a clear error, exit 2.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "tests/cli_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using palplab::testing::run_palplab;
+using palplab::testing::scratch_dir;
+using palplab::testing::slurp;
+
+void write_bytes(const fs::path& p, const std::string& b) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(b.data(), static_cast<std::streamsize>(b.size()));
+}
+
+// A copy of prototype A in the scratch directory (so the stale test may edit it) and its .psim.
+struct Fixture {
+  fs::path dir, proto, psim;
+  std::string bytes;
+};
+
+const Fixture& fixture() {
+  static Fixture f = [] {
+    Fixture x;
+    x.dir = scratch_dir("cli_scene");
+    x.proto = x.dir / "A.json";
+    fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "A.json", x.proto);
+    x.psim = x.dir / "A.psim";
+    const auto r = run_palplab(
+        "scene build " + x.proto.string() + " --out " + x.psim.string() + " --repeat 1 --json",
+        x.dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    x.bytes = slurp(x.psim);
+    return x;
+  }();
+  return f;
+}
+
+// Probe output without the wall-clock fields.
+nlohmann::json probe_numbers(const std::string& out) {
+  nlohmann::json j = nlohmann::json::parse(out);
+  j.erase("step_time_us");
+  return j;
+}
+
+const char* kProbe = " --press body --force 1 --duration 0.05 --release 0.05 --json";
+
+TEST(CliScene, BuildReportsLoadAndRebuildTimes) {
+  const Fixture& f = fixture();
+  const fs::path out = f.dir / "again.psim";
+  const auto r = run_palplab(
+      "scene build " + f.proto.string() + " --out " + out.string() + " --repeat 3", f.dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("rebuilt from sources"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("loaded from the file"), std::string::npos) << r.out;
+  EXPECT_EQ(slurp(out), f.bytes) << "scene build is deterministic";
+  const auto j = run_palplab(
+      "scene build " + f.proto.string() + " --out " + out.string() + " --repeat 3 --json", f.dir);
+  ASSERT_EQ(j.code, 0) << j.err;
+  const auto o = nlohmann::json::parse(j.out);
+  EXPECT_EQ(o["rebuild_ms"]["all"].size(), 3u);
+  EXPECT_GT(o["rebuild_ms"]["median"].get<double>(), 0.0);
+  EXPECT_GT(o["load_ms"]["median"].get<double>(), 0.0);
+  EXPECT_EQ(o["format_version"], 1);
+  const auto info = run_palplab("scene info " + out.string() + " --json", f.dir);
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["prototype"], fs::absolute(f.proto).string());
+}
+
+TEST(CliScene, ProbeThroughTheFileEqualsProbeThroughThePrototype) {
+  const Fixture& f = fixture();
+  const auto a = run_palplab("probe " + f.proto.string() + kProbe, f.dir);
+  ASSERT_EQ(a.code, 0) << a.err;
+  const auto b = run_palplab("probe --scene " + f.psim.string() + kProbe, f.dir);
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_EQ(probe_numbers(a.out), probe_numbers(b.out));  // every number, exactly
+  const auto c =
+      run_palplab("probe " + f.proto.string() + " --scene " + f.psim.string() + kProbe, f.dir);
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_EQ(probe_numbers(a.out), probe_numbers(c.out));
+  // A prototype key resolves to the shipped prototype.
+  const auto k = run_palplab(std::string("probe --scene A") + kProbe, f.dir);
+  ASSERT_EQ(k.code, 0) << k.err;
+  EXPECT_EQ(probe_numbers(a.out), probe_numbers(k.out));
+}
+
+TEST(CliScene, MismatchedOrMissingSceneIsAnInputError) {
+  const Fixture& f = fixture();
+  auto r =
+      run_palplab("probe " + (fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "B.json").string() +
+                      " --scene " + f.psim.string() + kProbe,
+                  f.dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("not"), std::string::npos) << r.err;
+  r = run_palplab("probe --scene " + (f.dir / "missing.psim").string() + kProbe, f.dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("no such scene file"), std::string::npos) << r.err;
+  r = run_palplab(std::string("probe --scene NO_SUCH_KEY") + kProbe, f.dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("neither a .psim file nor a known prototype key"), std::string::npos)
+      << r.err;
+  r = run_palplab(std::string("probe") + kProbe, f.dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--scene"), std::string::npos) << r.err;
+}
+
+// Runs probe --scene on a damaged copy; expects exit 2 and `message` on stderr.
+void expect_rejected(const std::string& bytes, const std::string& message, const char* what) {
+  const Fixture& f = fixture();
+  const fs::path bad = f.dir / "bad.psim";
+  write_bytes(bad, bytes);
+  const auto r = run_palplab("probe --scene " + bad.string() + kProbe, f.dir);
+  EXPECT_EQ(r.code, 2) << what << ": " << r.err;
+  EXPECT_NE(r.err.find(message), std::string::npos) << what << ": " << r.err;
+  EXPECT_EQ(r.err.find("terminate"), std::string::npos) << what;
+}
+
+TEST(CliScene, DamagedFilesAreRejectedWithExit2) {
+  const Fixture& f = fixture();
+  const std::string& b = f.bytes;
+  ASSERT_GT(b.size(), 4096u);
+  // Truncated: inside the magic, inside the header, right after it, mid-payload, last byte.
+  expect_rejected(b.substr(0, 5), "not a palplab scene file", "truncated at 5");
+  expect_rejected(b.substr(0, 64), "truncated scene file", "truncated at 64");
+  expect_rejected(b.substr(0, 128), "truncated scene file", "truncated at 128");
+  expect_rejected(b.substr(0, b.size() / 2), "truncated scene file", "truncated at half");
+  expect_rejected(b.substr(0, b.size() - 1), "truncated scene file", "truncated by one byte");
+  expect_rejected(b + "extra", "bytes after the payload", "trailing bytes");
+  // A flipped byte: in the magic, in the header's payload digest, in the payload.
+  std::string m = b;
+  m[1] ^= 0x01;
+  expect_rejected(m, "not a palplab scene file", "flipped magic byte");
+  std::string h = b;
+  h[40] ^= 0x01;
+  expect_rejected(h, "header checksum", "flipped header byte");
+  std::string p = b;
+  p[b.size() - 100] ^= 0x01;
+  expect_rejected(p, "payload checksum", "flipped payload byte");
+  std::string q = b;
+  q[200] ^= 0x80;
+  expect_rejected(q, "payload checksum", "flipped early payload byte");
+  // Another format version.
+  std::string v = b;
+  const std::uint32_t two = 2;
+  std::memcpy(v.data() + 8, &two, 4);
+  expect_rejected(v, "format version 2, this palplab reads version 1", "wrong version");
+  // Not a scene file at all.
+  expect_rejected("{\"format\": \"palplab-prototype/1\"}", "not a palplab scene file", "json");
+}
+
+TEST(CliScene, StaleSourceIsRejectedWithExit2) {
+  const fs::path dir = scratch_dir("cli_scene_stale");
+  const fs::path proto = dir / "A.json", psim = dir / "A.psim";
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "A.json", proto);
+  auto r =
+      run_palplab("scene build " + proto.string() + " --out " + psim.string() + " --repeat 1", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string text = slurp(proto);
+  const auto at = text.find("\"stiffness\": 500.0");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 18, "\"stiffness\": 600.0");
+  write_bytes(proto, text);
+  r = run_palplab("probe --scene " + psim.string() + kProbe, dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("stale scene file: prototype " + fs::absolute(proto).string() +
+                       " changed since the file was built"),
+            std::string::npos)
+      << r.err;
+  fs::remove(proto);
+  r = run_palplab("probe --scene " + psim.string() + kProbe, dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("is gone"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+TEST(CliScene, RunRefusesAPrototypeKeyAsScene) {
+  const Fixture& f = fixture();
+  const auto r =
+      run_palplab("run " + (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies").string() +
+                      "/none.json --db " + (f.dir / "x.db").string() + " --scene A",
+                  f.dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("run takes simulation files"), std::string::npos) << r.err;
+}
+
+// A study run whose scenes start from .psim files stores exactly the measures and events of a
+// run built from the prototypes (example_minimal: prototypes A and B, two phases with overrides).
+TEST(CliScene, RunWithSceneFilesStoresTheSameResults) {
+  const fs::path dir = scratch_dir("cli_scene_run");
+  const std::string study =
+      (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / "example_minimal.json").string();
+  for (const char* id : {"A", "B"}) {
+    const auto r = run_palplab(std::string("scene build ") + PALPLAB_SOURCE_DIR + "/prototypes/" +
+                                   id + ".json --out " +
+                                   (dir / (std::string(id) + ".psim")).string() + " --repeat 1",
+                               dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  auto r = run_palplab("run " + study + " --db " + (dir / "plain.db").string() + " --quiet", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run_palplab("run " + study + " --db " + (dir / "psim.db").string() + " --quiet --scene " +
+                      (dir / "A.psim").string() + " --scene " + (dir / "B.psim").string(),
+                  dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* db : {"plain", "psim"}) {
+    r = run_palplab(std::string("export ") + (dir / (std::string(db) + ".db")).string() +
+                        " --csv " + (dir / db).string(),
+                    dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  for (const char* csv : {"measures.csv", "events.csv"}) {
+    const std::string a = slurp(dir / "plain" / csv), b = slurp(dir / "psim" / csv);
+    EXPECT_GT(a.size(), 100u) << csv;
+    EXPECT_EQ(a, b) << csv;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace

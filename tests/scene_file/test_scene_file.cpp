@@ -1,0 +1,240 @@
+// Simulation files (.psim, engine/haptics/scene_file.hpp): the prepared mesh survives the round
+// trip bit for bit, and a scripted press through a scene loaded from the file renders exactly
+// (==) the forces of a scene built from the sources, for prototypes A, B, C and D.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
+#include "engine/haptics/scene_file.hpp"
+#include "engine/models/fem_block_mesh.hpp"
+#include "engine/models/fem_model.hpp"
+#include "engine/models/model.hpp"
+#include "engine/spatial/octree.hpp"
+#include "prototypes/factory.hpp"
+
+namespace {
+
+using namespace palplab;
+namespace fs = std::filesystem;
+
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+
+fs::path scratch() {
+  const fs::path d = fs::temp_directory_path() / ("palplab_scene_file_" + std::to_string(getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+// Forces, contact nodes and deformations of a press-hold-release at the region node of "body"
+// (or node 0 without that region).
+struct Track {
+  std::vector<Eigen::Vector3d> force;
+  std::vector<int> node;
+  std::vector<double> deformation;
+};
+
+Track press(const engine::SceneConfig& cfg) {
+  engine::Scene s = engine::make_scene(cfg);
+  const auto& g = s.geometry();
+  const int node = g.region_index("body") >= 0 ? g.region_node("body") : 0;
+  engine::PressDevice dev(engine::press_at(g, node, 1.0, 0.05, 0.05));
+  engine::LockstepOptions opt;
+  opt.duration = 5.0;
+  opt.frame_period = 0.0;
+  Track t;
+  engine::run_lockstep(s, dev, opt, [&](const engine::Rendered& r, const engine::Sample&) {
+    t.force.push_back(r.force);
+    t.node.push_back(r.contact_node);
+    t.deformation.push_back(r.visible_deformation);
+  });
+  return t;
+}
+
+template <class M>
+void expect_same(const M& a, const M& b, const char* what) {
+  ASSERT_EQ(a.rows(), b.rows()) << what;
+  ASSERT_EQ(a.cols(), b.cols()) << what;
+  EXPECT_TRUE(a.size() == 0 ||
+              std::memcmp(a.data(), b.data(), sizeof(typename M::Scalar) * a.size()) == 0)
+      << what;
+}
+
+void expect_same_mesh(const engine::SceneMesh& a, const engine::SceneMesh& b) {
+  expect_same(a.V, b.V, "V");
+  expect_same(a.N, b.N, "N");
+  expect_same(a.F, b.F, "F");
+  expect_same(a.E, b.E, "E");
+  EXPECT_EQ(a.vertex_region, b.vertex_region);
+  EXPECT_EQ(a.region_names, b.region_names);
+  expect_same(a.vertex_area, b.vertex_area, "vertex_area");
+  EXPECT_EQ(a.mean_edge, b.mean_edge);
+  EXPECT_EQ(a.octree->order, b.octree->order);
+  EXPECT_EQ(a.octree->leaf_of, b.octree->leaf_of);
+  ASSERT_EQ(a.octree->nodes.size(), b.octree->nodes.size());
+  for (size_t i = 0; i < a.octree->nodes.size(); ++i) {
+    const auto &x = a.octree->nodes[i], &y = b.octree->nodes[i];
+    EXPECT_TRUE(x.cell.min() == y.cell.min() && x.cell.max() == y.cell.max() &&
+                x.box.min() == y.box.min() && x.box.max() == y.box.max() &&
+                std::equal(x.child, x.child + 8, y.child) && x.begin == y.begin && x.end == y.end &&
+                x.depth == y.depth && x.leaf == y.leaf)
+        << "octree node " << i;
+  }
+  EXPECT_EQ(a.rings->first.offset, b.rings->first.offset);
+  EXPECT_EQ(a.rings->first.index, b.rings->first.index);
+  EXPECT_EQ(a.rings->second.offset, b.rings->second.offset);
+  EXPECT_EQ(a.rings->second.index, b.rings->second.index);
+  EXPECT_EQ(a.tet, b.tet);
+  expect_same(a.model_V, b.model_V, "model_V");
+  expect_same(a.model_E, b.model_E, "model_E");
+  expect_same(a.model_T, b.model_T, "model_T");
+  expect_same(a.tet_attribute, b.tet_attribute, "tet_attribute");
+  expect_same(a.model_F, b.model_F, "model_F");
+  expect_same(a.boundary_tet, b.boundary_tet, "boundary_tet");
+  EXPECT_EQ(a.surface_to_model, b.surface_to_model);
+}
+
+class SceneFileRoundTrip : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SceneFileRoundTrip, LoadedSceneIsBitIdentical) {
+  const engine::SceneConfig cfg = prototypes::load_prototype(proto(GetParam()));
+  engine::install_scene_mesh(cfg.mesh, nullptr);  // built from the sources
+  const auto built = engine::scene_mesh(cfg.mesh);
+  ASSERT_TRUE(built->model_blob.empty());
+  const Track a = press(cfg);
+
+  const fs::path file = scratch() / (std::string(GetParam()) + ".psim");
+  const engine::SceneFileInfo info = engine::write_scene_file(file.string(), cfg);
+  EXPECT_EQ(info.model_kind, cfg.model);
+  engine::install_scene_mesh(cfg.mesh, nullptr);
+  const engine::SceneConfig loaded_cfg =
+      engine::load_scene_file(file.string(), prototypes::load_prototype);
+  const auto loaded = engine::scene_mesh(cfg.mesh);
+  ASSERT_NE(loaded.get(), built.get()) << "the scene must come from the file";
+  EXPECT_EQ(loaded->model_blob_kind, cfg.model);
+  EXPECT_EQ(!loaded->model_blob.empty(), info.model_blob);
+  expect_same_mesh(*built, *loaded);
+  const Track b = press(loaded_cfg);
+
+  ASSERT_EQ(a.force.size(), b.force.size());
+  ASSERT_GT(a.force.size(), 50u);
+  double peak = 0;
+  for (size_t i = 0; i < a.force.size(); ++i) {
+    ASSERT_TRUE(a.force[i] == b.force[i]) << "step " << i;  // bit-identical, not close
+    ASSERT_EQ(a.node[i], b.node[i]) << "step " << i;
+    ASSERT_EQ(a.deformation[i], b.deformation[i]) << "step " << i;
+    peak = std::max(peak, a.force[i].norm());
+  }
+  EXPECT_GT(peak, 0.9);  // the press really pressed (target 1 N)
+  fs::remove(file);
+}
+
+INSTANTIATE_TEST_SUITE_P(Prototypes, SceneFileRoundTrip, ::testing::Values("A", "B", "C", "D"));
+
+// The reader never trusts the file: every prefix of a valid file and every single flipped byte
+// is an InputError (never a crash or a silently different scene).
+TEST(SceneFile, EveryTruncationAndSampledByteFlipIsAnInputError) {
+  const engine::SceneConfig cfg = prototypes::load_prototype(proto("A"));
+  const fs::path file = scratch() / "A_corrupt.psim", bad = scratch() / "bad.psim";
+  engine::write_scene_file(file.string(), cfg);
+  std::ifstream in(file, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), engine::kSceneFileHeaderBytes + 1000);
+  auto write = [&](const std::string& b) {
+    std::ofstream out(bad, std::ios::binary | std::ios::trunc);
+    out.write(b.data(), static_cast<std::streamsize>(b.size()));
+  };
+  for (size_t n : {size_t{0}, size_t{4}, size_t{8}, size_t{100}, size_t{127}, size_t{128},
+                   size_t{129}, bytes.size() / 2, bytes.size() - 1}) {
+    write(bytes.substr(0, n));
+    EXPECT_THROW(engine::read_scene_file(bad.string()), InputError) << "truncated at " << n;
+  }
+  for (size_t at = 0; at < bytes.size(); at += bytes.size() / 61 + 1) {
+    std::string b = bytes;
+    b[at] ^= 0x20;
+    write(b);
+    EXPECT_THROW(engine::read_scene_file(bad.string()), InputError) << "flipped byte " << at;
+  }
+  write(bytes + "x");
+  EXPECT_THROW(engine::read_scene_file(bad.string()), InputError);
+  write(bytes);
+  EXPECT_NO_THROW(engine::read_scene_file(bad.string()));
+  fs::remove(file);
+  fs::remove(bad);
+}
+
+}  // namespace
+
+namespace {
+
+// The FEM hook on its own: a linear model built from the stored precomputation restores it
+// (no assembly, no factorisation) and steps bit-identically under a stiff contact; a model with
+// other inputs (another Young's modulus, another step) ignores it and computes.
+TEST(SceneFileFem, StoredLinearPrecomputationRestoresExactlyAndOnlyForTheSameInputs) {
+  using namespace palplab;
+  using namespace palplab::engine;
+  const mesh::TetMesh tm = fem_block_mesh(4, 4, 3, Eigen::Vector3d(0.04, 0.04, 0.03));
+  const TetMaterials mat = uniform_materials(tm.T.rows(), 5e4, 0.45, 1000.0);
+  std::vector<std::uint8_t> fixed(tm.V.rows(), 0);
+  for (long i = 0; i < tm.V.rows(); ++i) fixed[i] = tm.V(i, 2) < 1e-9;
+  int top = 0;  // the node nearest to the centre of the top face
+  const Eigen::RowVector3d centre(0.02, 0.02, 0.03);
+  for (long i = 0; i < tm.V.rows(); ++i)
+    if ((tm.V.row(i) - centre).norm() < (tm.V.row(top) - centre).norm()) top = static_cast<int>(i);
+  FemModelOptions opt;
+  opt.rayleigh_alpha = 1.0;
+  opt.rayleigh_beta = 0.002;
+  const double h = 1e-3;
+  FemModel built(tm, mat, fixed, opt);
+  const std::string blob = built.save_precomputation(h);
+  ASSERT_FALSE(blob.empty());
+  EXPECT_FALSE(built.precomputation_loaded());
+
+  FemModelOptions with = opt;
+  with.precomputed = blob;
+  FemModel loaded(tm, mat, fixed, with);
+  EXPECT_TRUE(loaded.precomputation_loaded());
+  FemModel fresh(tm, mat, fixed, opt);
+  for (FemModel* m : {&loaded, &fresh}) {
+    m->contact_node = top;
+    m->contact_normal = Eigen::Vector3d::UnitZ();
+    m->contact_k = 2000.0;
+  }
+  double peak = 0;
+  for (int s = 0; s < 300; ++s) {
+    const Eigen::Vector3d x = tm.V.row(top).transpose() - Eigen::Vector3d(0, 0, 1e-5 * s);
+    loaded.contact_point = fresh.contact_point = x;
+    loaded.step(h);
+    fresh.step(h);
+    ASSERT_TRUE(loaded.device_force() == fresh.device_force()) << "step " << s;
+    peak = std::max(peak, fresh.device_force().norm());
+  }
+  EXPECT_TRUE(loaded.displacement() == fresh.displacement());
+  EXPECT_GT(peak, 1.0);  // it pressed (3 mm at 2000 N/m, minus the tissue's give)
+
+  // Other inputs: the blob is ignored, the model computes (and still works).
+  const TetMaterials stiffer = uniform_materials(tm.T.rows(), 6e4, 0.45, 1000.0);
+  FemModel other(tm, stiffer, fixed, with);
+  EXPECT_FALSE(other.precomputation_loaded());
+  FemModelOptions damped = with;
+  damped.rayleigh_beta = 0.003;
+  EXPECT_FALSE(FemModel(tm, mat, fixed, damped).precomputation_loaded());
+  // A damaged blob is ignored, never trusted.
+  FemModelOptions bad = opt;
+  bad.precomputed = blob.substr(0, blob.size() - 3);
+  EXPECT_FALSE(FemModel(tm, mat, fixed, bad).precomputation_loaded());
+  // A different step size refactorises on the first step (correct, just not from the file).
+  FemModel loaded2(tm, mat, fixed, with);
+  FemModel fresh2(tm, mat, fixed, opt);
+  loaded2.step(2e-3);
+  fresh2.step(2e-3);
+  EXPECT_TRUE(loaded2.displacement() == fresh2.displacement());
+}
+
+}  // namespace
