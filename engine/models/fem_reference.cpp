@@ -176,8 +176,9 @@ namespace {
 
 // Quasi-static ramp of the dead load f (total force `force`) in `steps` steps on the
 // co-rotational FEM (plus the linear foundation `support`, 3#V diagonal), from rest. ss is the
-// factorised linear K (with the foundation) of the same constraints: modified Newton on it,
-// the exact co-rotational tangent when that stalls. Fills the level's curve.
+// factorised linear K (with the foundation) of the same constraints: modified Newton on it (or
+// on the last exact tangent once one was needed), a full Newton step with the exact
+// co-rotational tangent when that stalls. Fills the level's curve.
 void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
                         const Eigen::VectorXd& support, const Eigen::VectorXd& f, double force,
                         int steps, double tol, FemReferenceLevel& lv) {
@@ -203,6 +204,8 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
            du.cwiseAbs().maxCoeff() <= tol * u.cwiseAbs().maxCoeff() ||
            (res >= prev && res <= 1e-6 * scale * force);
   };
+  StaticSolver st;               // the last exact tangent, factorised
+  const StaticSolver* mn = &ss;  // the matrix of the modified Newton iterations
   for (int k = 1; k <= steps; ++k) {
     const double scale = static_cast<double>(k) / steps;
     const Eigen::VectorXd fk = scale * f;
@@ -213,7 +216,7 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
     // Modified Newton: linear convergence at the rate of |1 - K^-1 K_t|, cheap (one
     // back-substitution per iteration); left for the full Newton when it contracts too slowly.
     for (double prev = res; !done && it < 200; ++it) {
-      const Eigen::VectorXd du = static_solve(ss, r);
+      const Eigen::VectorXd du = static_solve(*mn, r);
       u += du;
       prev = res;
       res = residual(fk);
@@ -224,8 +227,8 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
       corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
       for (long d = 0; d < support.size(); ++d)
         if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
-      StaticSolver st;
       static_precompute(K_t, fixed_dof, st);
+      mn = &st;  // the latest tangent drives the modified Newton of the next steps
       const Eigen::VectorXd du = static_solve(st, r);
       u += du;
       const double prev = res;
