@@ -117,6 +117,12 @@ int run_reference(const ReferenceArgs& a) {
                        std::to_string(static_cast<long>(finest)) +
                        " tets on the finest level (limit 2e6): use fewer levels or a coarser "
                        "copy of the prototype (mesh \"vertices\")");
+    if (finest > 2e5)
+      std::fprintf(stderr,
+                   "note: the finest nested level has %.0f tets (8x per level): this takes "
+                   "minutes and GBs of memory; a coarser copy of the prototype (mesh "
+                   "\"vertices\": 400) runs in about a minute\n",
+                   finest);
   }
   const double radius = cfg.contact.patch_radius;
   engine::FemReferenceOptions o =
