@@ -1,11 +1,15 @@
 // `palplab fem verify [--json] [--levels N]`: the FEM verification cases (issue 12). For each
 // case the computed value, the analytic value, the relative error, its tolerance and the
 // observed convergence order. Exit 0 when every case is within tolerance, 1 otherwise.
-// `palplab fem reference PROTOTYPE.json --press REGION --force N [--levels 3] --out FILE.json`:
+// `palplab fem reference PROTOTYPE.json --press REGION --force N [--levels 3] --out FILE.json
+//  [--refinement nested|tetgen] [--steps 5]`:
 // the accuracy reference (engine/models/fem_reference.hpp) of one press on the prototype's tet
-// mesh: the static response on `levels` TetGen meshes (max tet volume halved per level), the
-// Richardson-extrapolated contact stiffness and surface displacement field, and the estimated
-// discretisation error of each level (docs/FORMATS.md "FEM reference").
+// mesh: the static response on `levels` meshes — by default the prototype's mesh and its
+// nested red refinements (1 -> 8 tets, h halved); --refinement tetgen: TetGen meshes of its
+// surface with max tet volume halved per level (not nested) — the Richardson-extrapolated
+// contact stiffness and surface displacement field, the estimated discretisation error of each
+// level, and the quasi-static force-displacement curve of a slow press (`--steps` load steps,
+// co-rotational FEM; 0 = none) (docs/FORMATS.md "FEM reference").
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -64,8 +68,10 @@ int run_verify(bool as_json, int levels) {
 
 struct ReferenceArgs {
   std::string prototype, press, out;
+  std::string refinement = "nested";
   double force = 0;
   int levels = 3;
+  int steps = 5;
 };
 
 json num(double v) {
@@ -80,6 +86,10 @@ int run_reference(const ReferenceArgs& a) {
     throw InputError("--levels: expected 3 to 6 levels (3 are needed for an extrapolation), got " +
                      std::to_string(a.levels));
   if (a.out.empty()) throw InputError("--out: expected an output file name");
+  if (a.refinement != "nested" && a.refinement != "tetgen")
+    throw InputError("--refinement: expected nested or tetgen, got \"" + a.refinement + "\"");
+  if (a.steps < 0 || a.steps > 100)
+    throw InputError("--steps: expected 0 to 100 load steps, got " + std::to_string(a.steps));
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
   const auto cm = engine::scene_mesh(cfg.mesh);
   if (!cm->tet)
@@ -97,10 +107,30 @@ int run_reference(const ReferenceArgs& a) {
     throw InputError(std::string("--press: ") + e.what());
   }
   const mesh::TetMesh tm = mesh::make_tet_mesh(cm->model_V, cm->model_T, cm->tet_attribute);
+  if (a.refinement == "nested") {
+    // The finest nested level has 8^(levels-1) times the prototype's tets; a sparse Cholesky
+    // of millions of tets needs tens of GB.
+    const double finest = static_cast<double>(tm.T.rows()) * std::pow(8.0, a.levels - 1);
+    if (finest > 2e6)
+      throw InputError("--levels: " + std::to_string(a.levels) + " nested levels of " + cfg.id +
+                       "'s " + std::to_string(tm.T.rows()) + " tets give " +
+                       std::to_string(static_cast<long>(finest)) +
+                       " tets on the finest level (limit 2e6): use fewer levels or a coarser "
+                       "copy of the prototype (mesh \"vertices\")");
+    if (finest > 2e5)
+      std::fprintf(stderr,
+                   "note: the finest nested level has %.0f tets (8x per level): this takes "
+                   "minutes and GBs of memory; a coarser copy of the prototype (mesh "
+                   "\"vertices\": 400) runs in about a minute\n",
+                   finest);
+  }
   const double radius = cfg.contact.patch_radius;
   engine::FemReferenceOptions o =
       engine::reference_options_from_mesh(tm, cm->surface_to_model[node], a.force, radius);
   o.levels = a.levels;
+  const bool nested = a.refinement == "nested";
+  o.refinement = nested ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
+  o.curve_steps = a.steps;
   o.support_modulus = cfg.support.modulus;  // the foundation of C and D
   // The prototype's tissue: its E/density overrides apply to the (single) body attribute.
   const engine::MaterialConfig& mc = cfg.material;
@@ -175,7 +205,12 @@ int run_reference(const ReferenceArgs& a) {
       {"load", "smooth pressure (1 - (r/a)^2)^2 over the surface within press_radius"},
       {"analysis", "static, linear elasticity"},
       {"support_modulus", o.support_modulus},
-      {"refinement", "TetGen, max tet volume halved per level (meshes not nested)"},
+      {"refinement", nested ? "nested red refinement of the prototype's mesh (1 -> 8 tets, h "
+                              "halved per level; the surface stays the level-0 polyhedron)"
+                            : "TetGen, max tet volume halved per level (meshes not nested)"},
+      {"refinement_kind", a.refinement},
+      {"refinement_ratio", r.refinement_ratio},
+      {"plausible_order", {engine::kPlausibleOrder[0], engine::kPlausibleOrder[1]}},
       {"levels", levels},
       {"observed_order", num(r.observed_order)},
       {"stiffness", num(r.stiffness)},
@@ -184,6 +219,32 @@ int run_reference(const ReferenceArgs& a) {
       {"order_plausible", r.order_plausible},
       {"trusted", trusted},
       {"field", {{"positions", field_x}, {"displacement", field_u}}}};
+  if (a.steps > 0) {
+    json pts = json::array();
+    for (size_t k = 0; k < r.curve.size(); ++k) {
+      json per_level = json::array();
+      for (const auto& lv : r.levels) per_level.push_back(lv.curve_displacement[k]);
+      pts.push_back({{"force", r.curve[k].force},
+                     {"displacement", num(r.curve[k].displacement)},
+                     {"linear_displacement", num(r.curve[k].linear_displacement)},
+                     {"secant_stiffness", num(r.curve[k].secant_stiffness)},
+                     {"observed_order", num(r.curve[k].observed_order)},
+                     {"extrapolated", r.curve[k].extrapolated},
+                     {"level_displacement", per_level}});
+    }
+    json iters = json::array(), ms = json::array();
+    for (const auto& lv : r.levels) {
+      iters.push_back(lv.curve_iterations);
+      ms.push_back(lv.curve_ms);
+    }
+    out["curve"] = {{"analysis",
+                     "quasi-static: dead load ramped in equal steps, each an equilibrium of the "
+                     "co-rotational FEM (large rotations, linear material)"},
+                    {"steps", a.steps},
+                    {"points", pts},
+                    {"newton_iterations", iters},
+                    {"solve_ms", ms}};
+  }
   std::ofstream f(a.out);
   if (!f) throw InputError("--out: cannot write \"" + a.out + "\"");
   f << out.dump(1) << "\n";
@@ -195,8 +256,18 @@ int run_reference(const ReferenceArgs& a) {
     std::printf("%5zu %8ld %8ld %12.5g %12.6g %12.6g %10.3g\n", l, lv.tets, lv.dofs, lv.mesh_size,
                 lv.stiffness, lv.displacement, lv.est_error);
   }
-  std::printf("extrapolated stiffness %.6g N/m, displacement %.6g m, observed order %.3g\n",
-              r.stiffness, r.displacement, r.observed_order);
+  std::printf(
+      "extrapolated stiffness %.6g N/m, displacement %.6g m, observed order %.3g (ratio %.3g; "
+      "asymptotic range [%.2g, %.2g])\n",
+      r.stiffness, r.displacement, r.observed_order, r.refinement_ratio, engine::kPlausibleOrder[0],
+      engine::kPlausibleOrder[1]);
+  if (!r.curve.empty()) {
+    std::printf("quasi-static press (co-rotational):\n%10s %14s %14s %14s\n", "F (N)", "u (m)",
+                "u_linear (m)", "k_secant (N/m)");
+    for (const auto& c : r.curve)
+      std::printf("%10.4g %14.6g %14.6g %14.6g\n", c.force, c.displacement, c.linear_displacement,
+                  c.secant_stiffness);
+  }
   if (!trusted)
     std::printf(
         "WARNING: the levels are not in the asymptotic range (monotone %s, order %s): the "
@@ -233,6 +304,13 @@ palplab::app::CommandRegistration reg{
       ref->add_option("--force", ra->force, "Press force (N)")->required();
       ref->add_option("--levels", ra->levels, "Refinement levels (3-6)")->capture_default_str();
       ref->add_option("--out", ra->out, "Output JSON file")->required();
+      ref->add_option("--refinement", ra->refinement,
+                      "nested: red 1->8 refinements of the prototype's mesh (nested, h halved); "
+                      "tetgen: TetGen meshes with max tet volume halved (not nested)")
+          ->capture_default_str();
+      ref->add_option("--steps", ra->steps,
+                      "Load steps of the quasi-static (co-rotational) press curve; 0 = none")
+          ->capture_default_str();
       ref->callback([=] { *code = run_reference(*ra); });
     }};
 

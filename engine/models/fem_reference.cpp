@@ -1,13 +1,17 @@
 #include "engine/models/fem_reference.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <string>
 
 #include "common/input_error.hpp"
+#include "engine/models/fem_refine.hpp"
 #include "engine/solvers/fem_assembly.hpp"
+#include "engine/solvers/fem_corotational.hpp"
 #include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
@@ -44,6 +48,81 @@ bool richardson_sizes(const double q[3], const double h[3], double& order, doubl
   const double C = d2 / (std::pow(h[2], order) - std::pow(h[1], order));
   extrapolated = q[2] - C * std::pow(h[2], order);
   return true;
+}
+
+PressLoad smooth_press_load(const mesh::Positions& V, const mesh::Faces& F,
+                            const Eigen::Vector3d& point, const Eigen::Vector3d& direction,
+                            double force, double radius) {
+  // Degree-4 rule (Dunavant 1985, 6 points): barycentric (a, a, 1-2a) and permutations.
+  static constexpr double kA[2] = {0.445948490915965, 0.091576213509771};
+  static constexpr double kW[2] = {0.223381589678011, 0.109951743655322};
+  PressLoad out;
+  out.f = Eigen::VectorXd::Zero(3 * V.rows());
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(V.rows());
+  const double a2 = radius * radius;
+  for (long k = 0; k < F.rows(); ++k) {
+    const Eigen::Vector3d a = mesh::row3(V, F(k, 0)), b = mesh::row3(V, F(k, 1)),
+                          c = mesh::row3(V, F(k, 2));
+    const double reach = std::max({(b - a).norm(), (c - a).norm(), (c - b).norm()});
+    if ((a - point).norm() > radius + reach) continue;
+    const double ak = 0.5 * (b - a).cross(c - a).norm();
+    // n x n sub-triangles of edge <= radius / 8: the profile is a quartic on a flat face
+    // (exact for the rule) except across the rim r = a, where it is only C1; sub-triangles
+    // that may straddle the rim are split 1 -> 4 recursively (depth 6) so the rim error is far
+    // below the discretisation error (flat face: relative error < 1e-6, tests/fem).
+    const int n = std::max(2, static_cast<int>(std::ceil(8 * reach / radius)));
+    bool in = false;
+    const auto at = [&](const Eigen::Vector2d& st) {
+      return a + st[0] * (b - a) + st[1] * (c - a);
+    };
+    // One sub-triangle with face coordinates (s, t) of its corners; area `sub` (m^2).
+    std::function<void(const Eigen::Vector2d&, const Eigen::Vector2d&, const Eigen::Vector2d&,
+                       double, int)>
+        tri = [&](const Eigen::Vector2d& p0, const Eigen::Vector2d& p1, const Eigen::Vector2d& p2,
+                  double sub, int depth) {
+          const Eigen::Vector3d x0 = at(p0), x1 = at(p1), x2 = at(p2);
+          const double d0 = (x0 - point).norm(), d1 = (x1 - point).norm(), d2 = (x2 - point).norm();
+          const double diam = std::max({(x1 - x0).norm(), (x2 - x0).norm(), (x2 - x1).norm()});
+          if (std::min({d0, d1, d2}) - diam >= radius) return;        // wholly outside
+          if (depth < 6 && std::max({d0, d1, d2}) + diam > radius) {  // may straddle the rim
+            const Eigen::Vector2d m01 = 0.5 * (p0 + p1), m02 = 0.5 * (p0 + p2),
+                                  m12 = 0.5 * (p1 + p2);
+            tri(p0, m01, m02, sub / 4, depth + 1);
+            tri(m01, p1, m12, sub / 4, depth + 1);
+            tri(m02, m12, p2, sub / 4, depth + 1);
+            tri(m01, m12, m02, sub / 4, depth + 1);
+            return;
+          }
+          for (int g = 0; g < 2; ++g)
+            for (int perm = 0; perm < 3; ++perm) {
+              double l[3] = {kA[g], kA[g], kA[g]};
+              l[perm] = 1 - 2 * kA[g];
+              const Eigen::Vector2d st = l[0] * p0 + l[1] * p1 + l[2] * p2;
+              const double rr = (at(st) - point).squaredNorm() / a2;
+              if (rr >= 1) continue;
+              const double pw = (1 - rr) * (1 - rr) * kW[g] * sub;
+              w[F(k, 0)] += pw * (1 - st[0] - st[1]);
+              w[F(k, 1)] += pw * st[0];
+              w[F(k, 2)] += pw * st[1];
+              out.profile_integral += pw;
+              in = true;
+            }
+        };
+    const double h = 1.0 / n, sub = ak / (n * n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        tri({i * h, j * h}, {(i + 1) * h, j * h}, {i * h, (j + 1) * h}, sub, 0);
+        if (i + j < n - 1)
+          tri({(i + 1) * h, j * h}, {(i + 1) * h, (j + 1) * h}, {i * h, (j + 1) * h}, sub, 0);
+      }
+    if (in) out.patch_area += ak;
+  }
+  if (!(out.profile_integral > 0))
+    throw InputError("fem reference: no surface within the press radius of the point");
+  const Eigen::Vector3d dir = direction.normalized();
+  for (long i = 0; i < V.rows(); ++i)
+    if (w[i] > 0) out.f.segment<3>(3 * i) = force * dir * (w[i] / out.profile_integral);
+  return out;
 }
 
 FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int press_node,
@@ -88,22 +167,117 @@ FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int pres
   o.press_direction = -normal.normalized();
   o.force = force;
   o.press_radius = press_radius;
+  o.base = m;
+  o.base_surface_nodes = std::move(verts);
   return o;
 }
 
+namespace {
+
+// Quasi-static ramp of the dead load f (total force `force`) in `steps` steps on the
+// co-rotational FEM (plus the linear foundation `support`, 3#V diagonal), from rest. ss is the
+// factorised linear K (with the foundation) of the same constraints: modified Newton on it (or
+// on the last exact tangent once one was needed), a full Newton step with the exact
+// co-rotational tangent when that stalls. Fills the level's curve.
+void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
+                        const Eigen::VectorXd& support, const Eigen::VectorXd& f, double force,
+                        int steps, double tol, FemReferenceLevel& lv) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Eigen::VectorXd X0 = flatten(sys.X0);
+  const std::vector<int>& fixed = ss.split.fixed;
+  std::vector<std::uint8_t> fixed_dof(static_cast<size_t>(sys.dofs()), 0);
+  for (int d : fixed) fixed_dof[static_cast<size_t>(d)] = 1;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(sys.dofs()), fint, r;
+  std::vector<Matrix12d> Ke_t;
+  SparseMatrixd K_t;
+  const auto residual = [&](const Eigen::VectorXd& fk) {
+    corotational_forces(sys, X0 + u, fint);
+    r = fk + fint - support.cwiseProduct(u);
+    for (int d : fixed) r[d] = 0;
+    return r.norm();
+  };
+  // Converged: residual below tol x the step's force, or the update below tol x max |u|, or
+  // the residual at its round-off floor (eps |K| |x| from forces computed on positions; it no
+  // longer decreases and is below 1e-6 of the step's force).
+  const auto converged = [&](const Eigen::VectorXd& du, double res, double prev, double scale) {
+    return res <= tol * scale * force ||
+           du.cwiseAbs().maxCoeff() <= tol * u.cwiseAbs().maxCoeff() ||
+           (res >= prev && res <= 1e-6 * scale * force);
+  };
+  StaticSolver st;               // the last exact tangent, factorised
+  const StaticSolver* mn = &ss;  // the matrix of the modified Newton iterations
+  for (int k = 1; k <= steps; ++k) {
+    const double scale = static_cast<double>(k) / steps;
+    const Eigen::VectorXd fk = scale * f;
+    const double target = tol * scale * force;
+    double res = residual(fk);
+    int it = 0;
+    bool done = res <= target;
+    // Modified Newton: linear convergence at the rate of |1 - K^-1 K_t|, cheap (one
+    // back-substitution per iteration); left for the full Newton when it contracts too slowly.
+    for (double prev = res; !done && it < 200; ++it) {
+      const Eigen::VectorXd du = static_solve(*mn, r);
+      u += du;
+      prev = res;
+      res = residual(fk);
+      done = converged(du, res, prev, scale);
+      if (!done && res > 0.9 * prev) break;
+    }
+    for (int newton = 0; !done && newton < 30; ++newton, ++it) {
+      corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
+      for (long d = 0; d < support.size(); ++d)
+        if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
+      static_precompute(K_t, fixed_dof, st);
+      mn = &st;  // the latest tangent drives the modified Newton of the next steps
+      const Eigen::VectorXd du = static_solve(st, r);
+      u += du;
+      const double prev = res;
+      res = residual(fk);
+      done = converged(du, res, prev, scale);
+    }
+    if (!done)
+      throw std::runtime_error("fem reference: the quasi-static step " + std::to_string(k) +
+                               " did not converge (residual " + std::to_string(res) + " N)");
+    lv.curve_displacement.push_back(f.dot(u) / force);
+    lv.curve_iterations.push_back(it);
+  }
+  lv.curve_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
 FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   if (opt.levels < 3) throw InputError("fem reference: --levels must be >= 3");
-  if (!opt.mesher && !(opt.max_volume > 0))
+  const bool nested = !opt.mesher && opt.refinement == FemRefinement::nested;
+  const bool have_base = nested && opt.base.T.rows() > 0;
+  if (!opt.mesher && !have_base && !(opt.max_volume > 0))
     throw InputError("fem reference: max_volume must be > 0");
   if (!(opt.force > 0)) throw InputError("fem reference: --force must be > 0 N");
   if (!(opt.press_radius > 0)) throw InputError("fem reference: press radius must be > 0 m");
   if (!opt.is_fixed) throw InputError("fem reference: no fixed (pinned) region given");
   if (!(opt.support_modulus >= 0))
     throw InputError("fem reference: support modulus must be >= 0 N/m^3");
-  const Eigen::Vector3d dir = opt.press_direction.normalized();
+  if (opt.curve_steps < 0 || !(opt.curve_tolerance > 0))
+    throw InputError("fem reference: curve steps must be >= 0 and the tolerance > 0");
   const long ns = opt.surface.V.rows();
+  // Node of each surface vertex in every level's mesh (TetGen and nested keep them).
+  std::vector<int> surface_node(static_cast<size_t>(ns));
+  for (long i = 0; i < ns; ++i) surface_node[i] = static_cast<int>(i);
+  if (have_base) {
+    if (static_cast<long>(opt.base_surface_nodes.size()) != ns)
+      throw InputError("fem reference: base_surface_nodes must have one node per surface vertex");
+    for (long i = 0; i < ns; ++i) {
+      const int v = opt.base_surface_nodes[i];
+      if (v < 0 || v >= opt.base.V.rows())
+        throw InputError("fem reference: base_surface_nodes out of range");
+      surface_node[i] = v;
+    }
+  }
   FemReferenceResult res;
   std::vector<Eigen::VectorXd> surface_u;
+  mesh::TetMesh m;
+  std::vector<std::uint8_t> fixed_prev;  // nested: the fixed flags of the previous level
   for (int l = 0; l < opt.levels; ++l) {
     const auto t0 = std::chrono::steady_clock::now();
     mesh::TetOptions to;
@@ -112,7 +286,18 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     to.keep_surface = false;  // uniform refinement includes the surface
     to.seeds = opt.seeds;
     to.default_attribute = opt.default_attribute;
-    const mesh::TetMesh m = opt.mesher ? opt.mesher(l) : mesh::tetrahedralize(opt.surface, to);
+    std::vector<std::array<int, 2>> parent;
+    if (opt.mesher) {
+      m = opt.mesher(l);
+    } else if (!nested) {
+      m = mesh::tetrahedralize(opt.surface, to);
+    } else if (l == 0) {
+      m = have_base ? opt.base : mesh::tetrahedralize(opt.surface, to);
+    } else {
+      RedRefinement rr = refine_red(m);
+      m = std::move(rr.mesh);
+      parent = std::move(rr.parent);
+    }
     if (!opt.mesher && m.V.rows() < ns)
       throw InputError("fem reference: a level lost surface vertices");
     const TetMaterials mat = tet_materials(m, opt.materials);
@@ -120,83 +305,64 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     std::vector<std::uint8_t> fixed = rigid_nodes(m, mat);
     long nfixed = 0;
     for (long i = 0; i < m.V.rows(); ++i) {
-      fixed[i] = fixed[i] || opt.is_fixed(mesh::row3(m.V, i));
+      if (!parent.empty())  // nested: the Dirichlet set of level 0, refined
+        fixed[i] = fixed[i] || (fixed_prev[parent[i][0]] && fixed_prev[parent[i][1]]);
+      else
+        fixed[i] = fixed[i] || opt.is_fixed(mesh::row3(m.V, i));
       nfixed += fixed[i];
     }
     if (nfixed == 0) throw InputError("fem reference: the fixed region contains no node");
-    // Press: a smooth pressure profile (1 - (r/a)^2)^2 within radius a, as the consistent
-    // load f_j = int p N_j dA (16-point sub-triangle rule per face), scaled to the total force.
-    // The load functional is then (nearly) the same at every level, so nested refinements give
-    // a monotone compliance and the differences between levels are discretisation error only.
+    fixed_prev = fixed;
+    // Press: the smooth pressure profile as the consistent load (smooth_press_load): the load
+    // functional is (to quadrature accuracy) the same at every level, so on nested levels the
+    // compliance grows monotonically and the differences are discretisation error only.
     const mesh::BoundaryFaces bf = mesh::boundary_faces(m);
-    Eigen::VectorXd f = Eigen::VectorXd::Zero(sys.dofs());
-    Eigen::VectorXd w = Eigen::VectorXd::Zero(m.V.rows());
-    double area = 0, total = 0;
-    constexpr int kSub = 4;
-    for (long k = 0; k < bf.F.rows(); ++k) {
-      const Eigen::Vector3d a = mesh::row3(m.V, bf.F(k, 0)), b = mesh::row3(m.V, bf.F(k, 1)),
-                            c = mesh::row3(m.V, bf.F(k, 2));
-      const double ak = 0.5 * (b - a).cross(c - a).norm();
-      const double reach = std::max({(b - a).norm(), (c - a).norm(), (c - b).norm()});
-      if ((a - opt.press_point).norm() > opt.press_radius + reach) continue;
-      bool in = false;
-      const auto add = [&](double s1, double t1) {
-        const Eigen::Vector3d x = a + s1 * (b - a) + t1 * (c - a);
-        const double rr = (x - opt.press_point).norm() / opt.press_radius;
-        if (rr >= 1) return;
-        const double pw = (1 - rr * rr) * (1 - rr * rr) * ak / (kSub * kSub);
-        w[bf.F(k, 0)] += pw * (1 - s1 - t1);
-        w[bf.F(k, 1)] += pw * s1;
-        w[bf.F(k, 2)] += pw * t1;
-        total += pw;
-        in = true;
-      };
-      for (int i = 0; i < kSub; ++i)
-        for (int j = 0; i + j < kSub; ++j) {
-          add((i + 1.0 / 3) / kSub, (j + 1.0 / 3) / kSub);
-          if (i + j < kSub - 1) add((i + 2.0 / 3) / kSub, (j + 2.0 / 3) / kSub);
-        }
-      if (in) area += ak;
-    }
-    if (!(total > 0))
-      throw InputError("fem reference: no surface within the press radius of the point");
-    for (long i = 0; i < m.V.rows(); ++i)
-      if (w[i] > 0) f.segment<3>(3 * i) = opt.force * dir * (w[i] / total);
+    const PressLoad load = smooth_press_load(m.V, bf.F, opt.press_point, opt.press_direction,
+                                             opt.force, opt.press_radius);
+    const Eigen::VectorXd& f = load.f;
     SparseMatrixd K = sys.K;
+    Eigen::VectorXd support = Eigen::VectorXd::Zero(sys.dofs());
     if (opt.support_modulus > 0) {
-      Eigen::VectorXd node_area = Eigen::VectorXd::Zero(m.V.rows());
       for (long k = 0; k < bf.F.rows(); ++k) {
         const Eigen::Vector3d a = mesh::row3(m.V, bf.F(k, 0)), b = mesh::row3(m.V, bf.F(k, 1)),
                               c = mesh::row3(m.V, bf.F(k, 2));
-        for (int j = 0; j < 3; ++j) node_area[bf.F(k, j)] += (b - a).cross(c - a).norm() / 6;
+        const double share = opt.support_modulus * (b - a).cross(c - a).norm() / 6;
+        for (int j = 0; j < 3; ++j) support.segment<3>(3 * bf.F(k, j)).array() += share;
       }
-      for (long i = 0; i < m.V.rows(); ++i)
-        for (int c = 0; c < 3; ++c)  // the diagonal is in the pattern: no insertion
-          K.coeffRef(3 * i + c, 3 * i + c) += opt.support_modulus * node_area[i];
+      for (long d = 0; d < sys.dofs(); ++d)  // the diagonal is in the pattern: no insertion
+        K.coeffRef(d, d) += support[d];
     }
     StaticSolver ss;
     static_precompute(K, node_to_dof_flags(fixed), ss);
     const Eigen::VectorXd u = static_solve(ss, f);
     const double delta = f.dot(u) / opt.force;  // work-conjugate contact displacement
     FemReferenceLevel lv;
-    lv.max_volume = opt.mesher ? 0.0 : to.max_volume;
+    lv.max_volume = opt.mesher ? 0.0 : m.volume.maxCoeff();
+    if (!opt.mesher && !nested) lv.max_volume = to.max_volume;
     lv.nodes = m.V.rows();
     lv.tets = m.T.rows();
     lv.dofs = static_cast<long>(ss.split.free.size());
-    lv.patch_area = area;
+    lv.patch_area = load.patch_area;
     lv.mesh_size = std::cbrt(m.volume.sum() / static_cast<double>(m.T.rows()));
     lv.displacement = delta;
     lv.stiffness = opt.force / delta;
     lv.solve_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    res.levels.push_back(lv);
-    if (!opt.mesher) surface_u.push_back(u.head(3 * ns));
+    if (opt.curve_steps > 0)
+      quasi_static_curve(sys, ss, support, f, opt.force, opt.curve_steps, opt.curve_tolerance, lv);
+    res.levels.push_back(std::move(lv));
+    if (!opt.mesher) {
+      Eigen::VectorXd us(3 * ns);
+      for (long i = 0; i < ns; ++i) us.segment<3>(3 * i) = u.segment<3>(3 * surface_node[i]);
+      surface_u.push_back(std::move(us));
+    }
   }
   const int L = opt.levels;
   const double q[3] = {res.levels[L - 3].stiffness, res.levels[L - 2].stiffness,
                        res.levels[L - 1].stiffness};
   double r = opt.refinement_ratio;
-  if (opt.mesher) {
+  if (opt.mesher || nested) {
+    if (nested) r = 2;
     if (!(r > 1)) r = std::cbrt(2.0);
     richardson(q[0], q[1], q[2], r, res.observed_order, res.stiffness);
   } else {
@@ -205,17 +371,40 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     richardson_sizes(q, h, res.observed_order, res.stiffness);
     r = h[1] / h[2];  // for the field: the last pair
   }
+  res.refinement_ratio = r;
   res.displacement = opt.force / res.stiffness;
-  // Field: the same order, vertex by vertex (a per-vertex order would be noise).
+  res.order_plausible =
+      res.observed_order >= kPlausibleOrder[0] && res.observed_order <= kPlausibleOrder[1];
+  // Field and curve: the same order, vertex by vertex / point by point (a per-vertex order
+  // would be noise); unextrapolated (finest level) when the order is not plausible.
   const double p = std::isfinite(res.observed_order) ? res.observed_order : 1.0;
+  const double factor = res.order_plausible ? 1 / (std::pow(r, p) - 1) : 0.0;
   Eigen::VectorXd uf;
   double umax = 1;
   if (!surface_u.empty()) {
-    uf = surface_u[L - 1] + (surface_u[L - 1] - surface_u[L - 2]) / (std::pow(r, p) - 1);
+    uf = surface_u[L - 1] + (surface_u[L - 1] - surface_u[L - 2]) * factor;
     res.field = unflatten(uf);
     umax = uf.cwiseAbs().maxCoeff();
   }
-  res.order_plausible = res.observed_order >= 0.5 && res.observed_order <= 4.0;
+  for (int k = 0; k < opt.curve_steps; ++k) {
+    FemCurvePoint c;
+    c.force = opt.force * (k + 1) / opt.curve_steps;
+    const double d2 = res.levels[L - 1].curve_displacement[k],
+                 d1 = res.levels[L - 2].curve_displacement[k],
+                 d0 = res.levels[L - 3].curve_displacement[k];
+    // The point's own convergence: Richardson on its secant stiffness F/u on the three finest
+    // levels (the quantity the static value extrapolates: compliance and stiffness have
+    // different orders before the asymptotic range); extrapolated only when that order is
+    // plausible too.
+    double pk = std::nan(""), ext = c.force / d2;
+    richardson(c.force / d0, c.force / d1, c.force / d2, r, pk, ext);
+    c.observed_order = pk;
+    c.extrapolated = res.order_plausible && pk >= kPlausibleOrder[0] && pk <= kPlausibleOrder[1];
+    c.displacement = c.extrapolated ? c.force / ext : d2;
+    c.linear_displacement = c.force / res.stiffness;
+    c.secant_stiffness = c.force / c.displacement;
+    res.curve.push_back(c);
+  }
   res.monotone = true;
   for (int l = 0; l < L; ++l) {
     auto& lv = res.levels[l];

@@ -15,6 +15,29 @@
 //
 // The input surface vertices keep their indices at every level (tetrahedralize() appends Steiner
 // points), so the displacement field is compared and extrapolated at those vertices.
+//
+// Refinement (FemRefinement):
+//   tetgen  each level is a new TetGen mesh of the surface, max tet volume halved per level.
+//           Levels are NOT nested and their size ratio is only nominal: the differences between
+//           levels mix discretisation error with mesh noise and the observed order is often
+//           meaningless (measured on D: 622/614/607 N/m, order 0.38).
+//   nested  level 0 is `base` (or TetGen of the surface at max_volume); level l+1 is the red
+//           1 -> 8 refinement of level l (fem_refine.hpp): h halves exactly, the FE spaces are
+//           nested, the Dirichlet set is the same at every level (a midpoint is fixed iff both
+//           its parents are: the pinned part of the boundary is that of level 0), so the
+//           compliance f.u grows monotonically towards the limit and Richardson extrapolation
+//           with ratio 2 applies. Geometric approximation: every level has the boundary of the
+//           level-0 polyhedron (midpoints stay on the straight coarse edges); the extrapolated
+//           value is the exact solution on that polyhedron, not on the smooth tissue surface,
+//           an O(h0^2) geometric difference that no refinement removes.
+//
+// Quasi-static curve (curve_steps > 0): the same press applied as a slow ramp of dead load
+// F_k = force k / curve_steps, k = 1..curve_steps, each step an equilibrium of the
+// co-rotational FEM (geometrically nonlinear: large rotations; linear material), solved by
+// Newton from the previous step (modified Newton on the factorised linear K, the exact
+// co-rotational tangent when that stalls). On every level; each point is Richardson-
+// extrapolated with its own observed order (ratio as for the static value) when both it and
+// the static order are plausible, else it is the finest level's value.
 #include <functional>
 #include <vector>
 
@@ -23,6 +46,16 @@
 #include "engine/mesh/tetrahedralize.hpp"
 
 namespace palplab::engine {
+
+enum class FemRefinement { tetgen, nested };
+
+// The range of observed orders (in h) taken as asymptotic. The contact compliance f.u is an
+// energy functional: for linear tets its error is the squared energy-norm error, O(h^2) for a
+// regular solution and O(h^(2 lambda)) with the strongest singularity of exponent lambda — at
+// the rim of the pinned region (Dirichlet meets free boundary) lambda is about 1/2, at the
+// re-entrant edges of a polyhedral body between 1/2 and 1. So 1 <= p <= 2 asymptotically;
+// the range leaves a margin for the pre-asymptotic approach.
+inline constexpr double kPlausibleOrder[2] = {0.8, 2.5};
 
 struct FemReferenceOptions {
   mesh::SurfaceMesh surface;            // closed surface of the body (m)
@@ -46,6 +79,17 @@ struct FemReferenceOptions {
   // not extrapolated (node numbering is the mesher's; `field` stays empty).
   std::function<mesh::TetMesh(int level)> mesher;
   double refinement_ratio = 0;  // 0 = 2^(1/3)
+  // Nested refinement (see top; ignored when mesher is set). base: the level-0 mesh (empty =
+  // TetGen of `surface` at max_volume); base_surface_nodes[i]: the node of `base` at surface
+  // vertex i (needed with base; reference_options_from_mesh fills both). is_fixed is evaluated
+  // on level 0 only.
+  FemRefinement refinement = FemRefinement::tetgen;
+  mesh::TetMesh base;
+  std::vector<int> base_surface_nodes;
+  // Quasi-static curve: number of load steps (0 = none); a step has converged when its residual
+  // is below tolerance x the step's force or its last update below tolerance x max |u|.
+  int curve_steps = 0;
+  double curve_tolerance = 1e-10;
 };
 
 struct FemReferenceLevel {
@@ -58,6 +102,20 @@ struct FemReferenceLevel {
   double field_error = 0;   // max over surface vertices |u - u_extrapolated| / max |u_extrapolated|
   double mesh_size = 0;     // (volume / #tets)^(1/3) (m)
   double solve_ms = 0;
+  // Quasi-static curve on this level (curve_steps entries): work-conjugate contact
+  // displacement (m) at force F_k, and the Newton iterations of the step.
+  std::vector<double> curve_displacement;
+  std::vector<int> curve_iterations;
+  double curve_ms = 0;
+};
+
+struct FemCurvePoint {
+  double force = 0;                // N
+  double displacement = 0;         // m, extrapolated (finest level if not extrapolated)
+  double observed_order = 0;       // of this point's displacement over the 3 finest levels
+  bool extrapolated = false;       // static and this point's order both plausible
+  double linear_displacement = 0;  // m, force / static extrapolated stiffness
+  double secant_stiffness = 0;     // force / displacement (N/m)
 };
 
 struct FemReferenceResult {
@@ -67,11 +125,27 @@ struct FemReferenceResult {
   double displacement = 0;    // extrapolated (m)
   mesh::Positions field;      // #surface vertices by 3: extrapolated displacement (m)
   bool monotone = false;      // est_error strictly decreasing over the levels
-  // observed_order within [0.5, 4] (linear elements: 2 for smooth problems, less with corner
-  // singularities). Outside it the levels are not in the asymptotic range or their sizes are
-  // not what was assumed, and the extrapolation should not be trusted.
+  // observed_order within kPlausibleOrder (see there). Outside it the levels are not in the
+  // asymptotic range or their sizes are not what was assumed, and the extrapolation should not
+  // be trusted (the field and curve are then the finest level's, unextrapolated).
   bool order_plausible = false;
+  double refinement_ratio = 0;       // the ratio used for the extrapolation (nested: 2)
+  std::vector<FemCurvePoint> curve;  // quasi-static curve (curve_steps points), extrapolated
 };
+
+// The consistent nodal load of the smooth press on a triangulated boundary (faces F of the
+// positions V): pressure p(x) = p0 (1 - (|x - point| / radius)^2)^2 within `radius`, along
+// `direction` (unit), f_j = int p N_j dA by a degree-4 six-point rule on sub-triangles no larger
+// than radius / 16 (per face), with p0 such that the total is `force` (N) exactly: p0 = force /
+// profile_integral. f is 3#V.
+struct PressLoad {
+  Eigen::VectorXd f;
+  double profile_integral = 0;  // int (1 - (r/a)^2)^2 dA over the boundary (m^2); pi a^2/3 flat
+  double patch_area = 0;        // m^2, faces that carry load
+};
+PressLoad smooth_press_load(const mesh::Positions& V, const mesh::Faces& F,
+                            const Eigen::Vector3d& point, const Eigen::Vector3d& direction,
+                            double force, double radius);
 
 // Richardson extrapolation from three values on meshes refined by ratio r: the observed order
 // p = ln((q0 - q1)/(q1 - q2)) / ln r and q = q2 + (q2 - q1)/(r^p - 1). Returns false (and the
@@ -89,10 +163,12 @@ bool richardson(double q0, double q1, double q2, double r, double& order, double
 bool richardson_sizes(const double q[3], const double h[3], double& order, double& extrapolated);
 
 // Options for the press of node `press_node` of an existing tet mesh (a prototype's): the
-// surface is the mesh's outer boundary, every tet gets the mesh's most common attribute (a
-// single-tissue body such as Model-C; multi-tissue bodies need seeds), level 0 uses the mesh's
-// mean tet volume as max volume, the press direction is the inward area-weighted normal at the
-// node. The caller still sets is_fixed (e.g. the prototype's pinned region) and may edit the rest.
+// surface is the mesh's outer boundary, `base` / base_surface_nodes the mesh itself (for nested
+// refinement; the refinement stays tetgen unless the caller sets it), every tet gets the mesh's
+// most common attribute (a single-tissue body such as Model-C; multi-tissue bodies need seeds),
+// level 0 uses the mesh's mean tet volume as max volume, the press direction is the inward
+// area-weighted normal at the node. The caller still sets is_fixed (e.g. the prototype's pinned
+// region) and may edit the rest.
 FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int press_node,
                                                 double force, double press_radius);
 

@@ -8,12 +8,19 @@
 // penalty force (fem_model.hpp).
 //
 // Condensed formulation: the solved (operational) tets are those whose centroid lies within
-// fem.operational_radius of a surface node of fem.operational_region. A touch whose centre node
-// lies outside them is rendered as a press on a rigid surface (the condensed model has no
-// compliance there) and counted in model_info ("outside_contacts"); patch nodes outside the
-// operational tets are dropped from the patch.
+// fem.operational_radius of a surface node of fem.operational_region; patch nodes outside the
+// operational tets are dropped from the patch. A touch whose centre node lies outside them is
+// rendered by inverse-stiffness contact with the full linear model (SPEC §4): the patch (all
+// its surface nodes) has the 3x3 compliance C = G^T K^-1 G (G = sum_i w_i E_i, K the full
+// stiffness with foundation and constraints, factorised once at construction; the three
+// columns K^-1 G are solved at the first touch of each centre node and cached), and the force
+// is the quasi-static equilibrium of the penalty spring in series with the tissue,
+// F = k d / (1 + k n^T C n) n — the force the full model settles on. No dynamics there and the
+// rendered surface does not deform (the interior of the condensed part is not advanced); such
+// touches are counted in model_info ("outside_contacts").
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.hpp"
@@ -21,6 +28,7 @@
 #include "engine/mesh/materials.hpp"
 #include "engine/models/fem_model.hpp"
 #include "engine/models/model.hpp"
+#include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
 
@@ -62,6 +70,10 @@ class FemSceneModel final : public SceneModel {
     }
     mark_.assign(n, 0);
     mass_ = fem_.system().m_lumped.sum() / 3.0;
+    if (fem_.formulation() == FemFormulation::condensed) {
+      full_ = std::make_unique<StaticSolver>();
+      static_precompute(fem_.system().K, node_to_dof_flags(fem_.fixed_nodes()), *full_);
+    }
   }
 
   const char* kind() const override { return "fem"; }
@@ -86,10 +98,21 @@ class FemSceneModel final : public SceneModel {
       o.force = fem_.device_force();
       o.deformation = (fem_.node_position(mnode) - X0_.row(mnode).transpose()).norm();
     } else if (mnode >= 0) {
-      // Outside the operational region of a condensed model: a rigid surface (see top).
-      const double d = (X0_.row(mnode).transpose() - c.x).dot(c.n);
-      if (d > 0) ++outside_contacts_;
-      o.force = contact_k_ * std::max(0.0, d) * c.n;
+      // Outside the operational region of a condensed model: inverse-stiffness contact (top).
+      if (mnode != outside_center_) outside_patch(mnode);
+      const Eigen::Vector3d xp = X0_.row(mnode).transpose();
+      double d = 0;
+      for (size_t q = 0; q < outside_nodes_.size(); ++q) {
+        const Eigen::Vector3d xi = X0_.row(outside_nodes_[q]).transpose();
+        d += outside_w_[q] * ((xi - c.x).dot(c.n) - std::max(0.0, (xi - xp).dot(c.n)));
+      }
+      if (d > 0) {
+        ++outside_contacts_;
+        const double compliance = c.n.dot(outside_C_ * c.n);
+        const double f = contact_k_ * d / (1 + contact_k_ * compliance);
+        o.force = f * c.n;
+        o.deformation = (outside_Y_.middleRows<3>(3 * mnode) * (-f * c.n)).norm();
+      }
     }
     return o;
   }
@@ -134,11 +157,27 @@ class FemSceneModel final : public SceneModel {
   // through tet edges between surface nodes so that it never jumps a gap), weighted by their
   // lumped surface area — the rule of the mass-spring model (mass_spring_model.cpp).
   void compute_patch(int center) {
-    std::vector<int>& nodes = fem_.contact_nodes;
-    std::vector<double>& w = fem_.contact_weights;
+    patch_center_ = center;
+    patch_nodes(center, false, fem_.contact_nodes, fem_.contact_weights);
+  }
+  // The patch of an outside touch (every surface node in reach) and its compliance columns.
+  void outside_patch(int center) {
+    outside_center_ = center;
+    patch_nodes(center, true, outside_nodes_, outside_w_);
+    const long n3 = 3 * X0_.rows();
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n3, 3);
+    for (size_t q = 0; q < outside_nodes_.size(); ++q)
+      G.middleRows<3>(3 * outside_nodes_[q]) += outside_w_[q] * Eigen::Matrix3d::Identity();
+    outside_Y_.resize(n3, 3);
+    for (int k = 0; k < 3; ++k) outside_Y_.col(k) = static_solve(*full_, G.col(k));
+    outside_C_ = G.transpose() * outside_Y_;
+    outside_C_ = 0.5 * (outside_C_ + outside_C_.transpose()).eval();
+  }
+  // Surface nodes within patch_radius of the centre; all = false keeps only the nodes the
+  // per-step solve moves (or fixed ones).
+  void patch_nodes(int center, bool all, std::vector<int>& nodes, std::vector<double>& w) {
     nodes.clear();
     w.clear();
-    patch_center_ = center;
     const Eigen::Vector3d c = X0_.row(center).transpose();
     const double r2 = patch_radius_ * patch_radius_;
     nodes.push_back(center);
@@ -150,7 +189,7 @@ class FemSceneModel final : public SceneModel {
         if (mark_[j] || !(area_[j] > 0.0) || (X0_.row(j).transpose() - c).squaredNorm() > r2)
           continue;
         mark_[j] = 1;
-        if (fem_.solves_node(j) || fem_.fixed_nodes()[j]) nodes.push_back(j);
+        if (all || fem_.solves_node(j) || fem_.fixed_nodes()[j]) nodes.push_back(j);
       }
     }
     double sum = 0.0;
@@ -169,6 +208,13 @@ class FemSceneModel final : public SceneModel {
   double patch_radius_, contact_k_, mass_ = 0;
   int patch_center_ = -1;
   long outside_contacts_ = 0;
+  // Outside touches of a condensed model (inverse-stiffness contact, see top).
+  std::unique_ptr<StaticSolver> full_;  // the full linear K, factorised
+  int outside_center_ = -1;
+  std::vector<int> outside_nodes_;
+  std::vector<double> outside_w_;
+  Eigen::MatrixXd outside_Y_;                            // 3#V by 3: K^-1 G (m/N)
+  Eigen::Matrix3d outside_C_ = Eigen::Matrix3d::Zero();  // G^T K^-1 G (m/N)
 };
 
 // The "model" object of a FEM prototype (docs/FORMATS.md). Defaults are the config's.

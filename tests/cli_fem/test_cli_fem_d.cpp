@@ -106,8 +106,8 @@ TEST(CliFemD, ReferenceOnASmallCase) {
   const fs::path p = d_variant(d, "Dcoarse", 400);
   const fs::path out = d / "ref.json";
   const Result r = run("fem reference " + p.string() +
-                           " --press ovary_left --force 1 --levels 3 "
-                           "--out " +
+                           " --press ovary_left --force 1 --levels 3 --refinement tetgen "
+                           "--steps 2 --out " +
                            out.string(),
                        d);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
@@ -143,6 +143,16 @@ TEST(CliFemD, ReferenceOnASmallCase) {
   ASSERT_TRUE(j.at("field").at("positions").is_array());
   EXPECT_EQ(j.at("field").at("positions").size(), j.at("field").at("displacement").size());
   EXPECT_GT(j.at("field").at("positions").size(), 100u);
+  EXPECT_EQ(j.at("refinement_kind"), "tetgen");
+  // The quasi-static curve: 2 load steps up to the force, one displacement per level each.
+  const json& c = j.at("curve");
+  ASSERT_EQ(c.at("points").size(), 2u);
+  EXPECT_DOUBLE_EQ(c.at("points")[1].at("force").get<double>(), 1.0);
+  EXPECT_EQ(c.at("points")[0].at("level_displacement").size(), 3u);
+  for (const auto& p : c.at("points"))
+    EXPECT_NEAR(p.at("level_displacement")[2].get<double>() /
+                    (p.at("force").get<double>() * lv[2].at("displacement").get<double>()),
+                1.0, 0.05);  // 1 N on ~600 N/m: nearly linear
   fs::remove_all(d);
 }
 
@@ -154,6 +164,18 @@ TEST(CliFemD, ReferenceBadInputsExitTwo) {
       2);
   EXPECT_EQ(run("fem reference " + proto("D") + " --press nowhere --force 1" + o, d).code, 2);
   EXPECT_EQ(run("fem reference " + proto("D") + " --press ovary_left --force -1" + o, d).code, 2);
+  EXPECT_EQ(
+      run("fem reference " + proto("D") + " --press ovary_left --force 1 --refinement x" + o, d)
+          .code,
+      2);
+  EXPECT_EQ(
+      run("fem reference " + proto("D") + " --press ovary_left --force 1 --steps -1" + o, d).code,
+      2);
+  // Nested levels of D's 9k tets: 4 levels would be 4.7M tets on the finest.
+  const Result big =
+      run("fem reference " + proto("D") + " --press ovary_left --force 1 --levels 4" + o, d);
+  EXPECT_EQ(big.code, 2);
+  EXPECT_NE(big.err.find("finest level"), std::string::npos) << big.err;
   // Prototype A is a surface model: no tets to refine.
   const Result a = run("fem reference " + proto("A") + " --press ovary_left --force 1" + o, d);
   EXPECT_EQ(a.code, 2);
