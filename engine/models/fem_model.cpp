@@ -56,7 +56,8 @@ struct FemModel::Impl {
   Eigen::VectorXd Ku;
   int Ku_age = -1;
   static constexpr int kResync = 256;
-  SparseLdlt ldlt;
+  SparseLdlt ldlt;  // corotational: refactorised every step on a fixed pattern
+  LdltFactor lin;   // linear / condensed: the factor of the step matrix (see factor())
   double h_factored = -1;
   int cached_node = -1;
   Eigen::Matrix<double, Eigen::Dynamic, 3> Z;  // A^-1 G of the cached patch
@@ -90,9 +91,10 @@ struct FemModel::Impl {
       A += (1 + h * alpha) * M_c;
     else
       for (long i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += (1 + h * alpha) * m_c[i];
-    ldlt.compute(A);
-    if (ldlt.info() != Eigen::Success)
+    SparseLdlt f(A);
+    if (f.info() != Eigen::Success)
       throw std::runtime_error("FemModel::step: factorisation failed");
+    lin = LdltFactor::from(f);
     h_factored = h;
     cached_node = -1;
     ms = ms_since(t0);
@@ -119,7 +121,7 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   StoredLinearFem stored;
   m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass &&
              !opt_.precomputed.empty() &&
-             load_linear_fem(opt_.precomputed, m.inputs, 3 * n, stored, m.ldlt);
+             load_linear_fem(opt_.precomputed, m.inputs, 3 * n, stored, m.lin);
   if (m.loaded) {
     m.sys.X0 = mesh.V;
     m.sys.T = mesh.T;
@@ -372,7 +374,7 @@ void FemModel::step(double h) {
     const Eigen::VectorXd Mv =
         m.M_c.size() ? Eigen::VectorXd(m.M_c * va) : Eigen::VectorXd(m.m_c.cwiseProduct(va));
     const Eigen::VectorXd b = Mv + h * fa;
-    Eigen::VectorXd y = m.ldlt.solve(b);
+    Eigen::VectorXd y = m.lin.solve(b);
     double s_ey = 0;  // s e^T y of the contact term, for the K y update below
     if (implicit_contact) {
       // (A + h^2 k e e^T)^-1 b by Sherman–Morrison, e = G n with G = sum_i w_i E_i (E_i: the
@@ -382,7 +384,7 @@ void FemModel::step(double h) {
         Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m.act.size(), 3);
         for (const auto& t : m.taps)
           for (int c = 0; c < 3; ++c) G(t.dof + c, c) += t.w;
-        m.Z = m.ldlt.solve(G);
+        m.Z = m.lin.solve(G);
         m.cached_node = contact_node;
         m.cached_nodes = contact_nodes;
         m.cached_weights = contact_weights;
@@ -414,7 +416,7 @@ std::string FemModel::save_precomputation(double h) {
   Impl& m = *impl_;
   if (opt_.formulation != FemFormulation::linear || !opt_.lumped_mass || !(h > 0)) return {};
   if (h != m.h_factored) m.factor(h, opt_.rayleigh_alpha, opt_.rayleigh_beta, factor_ms_);
-  return save_linear_fem(m.inputs, m.act, m.K_c, m.sys.m_lumped, m.ldlt, h);
+  return save_linear_fem(m.inputs, m.act, m.K_c, m.sys.m_lumped, m.lin, h);
 }
 
 bool FemModel::precomputation_loaded() const {

@@ -9,25 +9,7 @@ namespace palplab::engine {
 
 namespace {
 
-constexpr char kTag[8] = {'F', 'E', 'M', 'L', 'D', 'L', 'T', '1'};
-
-// Eigen keeps the factors of SimplicialLDLT protected; a pointer to member formed through a
-// derived class reads and writes them on any SparseLdlt (the standard-conforming way, no cast).
-struct LdltAccess : SparseLdlt {
-  using Base = Eigen::SimplicialCholeskyBase<SparseLdlt>;
-  using Solver = Eigen::SparseSolverBase<SparseLdlt>;
-  static constexpr auto L = &LdltAccess::m_matrix;
-  static constexpr auto D = &LdltAccess::m_diag;
-  static constexpr auto parent = &LdltAccess::m_parent;
-  static constexpr auto nnz_col = &LdltAccess::m_nonZerosPerCol;
-  static constexpr auto P = &LdltAccess::m_P;
-  static constexpr auto Pinv = &LdltAccess::m_Pinv;
-  static constexpr auto info = &LdltAccess::m_info;
-  static constexpr auto factorized = &LdltAccess::m_factorizationIsOk;
-  static constexpr auto analysed = &LdltAccess::m_analysisIsOk;
-  static constexpr auto shift_offset = &LdltAccess::m_shiftOffset;
-  static constexpr auto shift_scale = &LdltAccess::m_shiftScale;
-};
+constexpr char kTag[8] = {'F', 'E', 'M', 'L', 'D', 'L', 'T', '2'};
 
 void put(std::string& s, const void* p, std::size_t n) {
   s.append(static_cast<const char*>(p), n);
@@ -138,10 +120,8 @@ bool get_sparse(In& in, std::int64_t rows, SparseMatrixd& M) {
 
 std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& act,
                             const SparseMatrixd& K_c, const Eigen::VectorXd& m_lumped,
-                            const SparseLdlt& ldlt, double h) {
-  using A = LdltAccess;
-  const auto& L = ldlt.*A::L;
-  if (!(ldlt.*A::factorized) || !L.isCompressed()) return {};
+                            const LdltFactor& factor, double h) {
+  if (!factor.L.isCompressed() || factor.size() != static_cast<long>(act.size())) return {};
   SparseMatrixd K = K_c;
   K.makeCompressed();  // the same entries in the same order
   std::string s;
@@ -151,21 +131,15 @@ std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& ac
   put_vec(s, act.data(), static_cast<std::int64_t>(act.size()));
   put_sparse(s, K);
   put_vec(s, m_lumped.data(), m_lumped.size());
-  put_sparse(s, L);
-  put_vec(s, (ldlt.*A::D).data(), (ldlt.*A::D).size());
-  put_vec(s, (ldlt.*A::parent).data(), (ldlt.*A::parent).size());
-  put_vec(s, (ldlt.*A::nnz_col).data(), (ldlt.*A::nnz_col).size());
-  put_vec(s, (ldlt.*A::P).indices().data(), (ldlt.*A::P).indices().size());
-  put_vec(s, (ldlt.*A::Pinv).indices().data(), (ldlt.*A::Pinv).indices().size());
-  const double off = ldlt.*A::shift_offset, scale = ldlt.*A::shift_scale;
-  put(s, &off, sizeof off);
-  put(s, &scale, sizeof scale);
+  put_sparse(s, factor.L);
+  put_vec(s, factor.D.data(), factor.D.size());
+  put_vec(s, factor.P.indices().data(), factor.P.indices().size());
+  put_vec(s, factor.Pinv.indices().data(), factor.Pinv.indices().size());
   return s;
 }
 
 bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long total_dofs,
-                     StoredLinearFem& out, SparseLdlt& ldlt) {
-  using A = LdltAccess;
+                     StoredLinearFem& out, LdltFactor& factor) {
   if (blob.size() < 8 + 32 + 8 || std::memcmp(blob.data(), kTag, 8) != 0 ||
       std::memcmp(blob.data() + 8, d.data(), 32) != 0)
     return false;
@@ -186,31 +160,20 @@ bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long tot
   if (!in.ok || !get_sparse(in, n, L) || L.cols() != n) return false;
   Eigen::VectorXd D(n);
   in.vec(D.data(), n);
-  Eigen::VectorXi parent(n), nnz(n), P(n), Pinv(n);
-  in.vec(parent.data(), n);
-  in.vec(nnz.data(), n);
+  Eigen::VectorXi P(n), Pinv(n);
   in.vec(P.data(), n);
   in.vec(Pinv.data(), n);
-  const double off = in.get<double>(), scale = in.get<double>();
   if (!in.ok || in.at != blob.size()) return false;
   for (std::int64_t i = 0; i < n; ++i)
     if (P[i] < 0 || P[i] >= n || Pinv[i] < 0 || Pinv[i] >= n || Pinv[P[i]] != i) return false;
-  // A 1x1 factorisation sets the solver's private "initialised" flag (not reachable like the
-  // members below); everything it computed is replaced.
-  SparseMatrixd one(1, 1);
-  one.insert(0, 0) = 1.0;
-  ldlt.compute(one);
-  ldlt.*A::L = std::move(L);
-  ldlt.*A::D = std::move(D);
-  ldlt.*A::parent = std::move(parent);
-  ldlt.*A::nnz_col = std::move(nnz);
-  (ldlt.*A::P).indices() = std::move(P);
-  (ldlt.*A::Pinv).indices() = std::move(Pinv);
-  ldlt.*A::shift_offset = off;
-  ldlt.*A::shift_scale = scale;
-  ldlt.*A::info = Eigen::Success;
-  ldlt.*A::factorized = true;
-  ldlt.*A::analysed = true;
+  for (std::int64_t j = 0; j < n; ++j)  // L: strictly lower entries only, D nonzero
+    if (!(D[j] != 0) || (L.outerIndexPtr()[j] < L.outerIndexPtr()[j + 1] &&
+                         L.innerIndexPtr()[L.outerIndexPtr()[j]] <= j))
+      return false;
+  factor.L = std::move(L);
+  factor.D = std::move(D);
+  factor.P.indices() = std::move(P);
+  factor.Pinv.indices() = std::move(Pinv);
   out = std::move(st);
   return true;
 }

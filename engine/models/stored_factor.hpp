@@ -2,11 +2,11 @@
 // A FemModel's precomputation in a .psim file (issue 16, engine/haptics/scene_file.hpp), for the
 // linear formulation with lumped mass: the solved dofs, the stiffness K_c on them (support
 // included), the lumped masses and the sparse LDL^T factorisation of the step matrix
-// A = (1 + h alpha) M + (h beta + h^2) K_c (its L, D and fill-reducing permutation, exactly as
-// Eigen computed them), tagged with a SHA-256 digest of everything the model was built from
-// (nodes, tets, per-tet materials, fixed nodes, every option). A model built from the same
-// inputs restores them instead of assembling and factorising (and skips the checks the stored
-// model passed), so it steps bit-identically; any difference and the blob is ignored.
+// A = (1 + h alpha) M + (h beta + h^2) K_c (its L, D and fill-reducing permutation as an
+// LdltFactor, engine/solvers/ldlt_factor.hpp), tagged with a SHA-256 digest of everything the model
+// was built from (nodes, tets, per-tet materials, fixed nodes, every option). A model built from
+// the same inputs restores them instead of assembling and factorising (and skips the checks the
+// stored model passed), so it steps bit-identically; any difference and the blob is ignored.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -15,6 +15,7 @@
 #include "engine/mesh/tet_mesh.hpp"
 #include "engine/solvers/fem_assembly.hpp"
 #include "engine/solvers/fem_static.hpp"
+#include "engine/solvers/ldlt_factor.hpp"
 
 namespace palplab::engine {
 
@@ -36,11 +37,11 @@ struct StoredLinearFem {
 // The linear model's precomputation made from inputs `d`, as bytes.
 std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& act,
                             const SparseMatrixd& K_c, const Eigen::VectorXd& m_lumped,
-                            const SparseLdlt& ldlt, double h);
+                            const LdltFactor& factor, double h);
 
-// Restores `out` and ldlt from `blob` when it was made from inputs `d` for a model of
-// `total_dofs` (3#V); false (ldlt untouched) otherwise, including for a malformed blob.
+// Restores `out` and factor from `blob` when it was made from inputs `d` for a model of
+// `total_dofs` (3#V); false (factor untouched) otherwise, including for a malformed blob.
 bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long total_dofs,
-                     StoredLinearFem& out, SparseLdlt& ldlt);
+                     StoredLinearFem& out, LdltFactor& factor);
 
 }  // namespace palplab::engine
