@@ -490,7 +490,22 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
   ms.scope_radius = cfg.scope.radius;
   ms.scope_max_nodes = cfg.scope.max_nodes;
   ms.linear_exterior = cfg.scope.radius > 0.0 && cfg.sleeping.enabled && cfg.scope.linear_exterior;
-  if (ms.linear_exterior) far_field_build(ms.model.sys, ms.far);
+  if (ms.linear_exterior) {
+    far_field_build(ms.model.sys, ms.far);
+    // A press wakes the whole scope at once: room for every coarse node and spring up front,
+    // so that the steps of a press without refinement do not allocate.
+    const long n = ms.model.sys.nodes(), ns = ms.model.sys.springs.size();
+    ms.exterior_nodes.reserve(n);
+    ms.scope_nodes.reserve(n);
+    ms.act.nodes.reserve(n);
+    ms.act.springs.reserve(ns);
+    ms.ws.S.reserve(ns + ns / 2);
+    ms.ws.compact.prev_nodes.reserve(n);
+    ms.ws.compact.inner.reserve(ns);
+    ms.ws.compact.held.reserve(ns);
+    ms.ws.compact.D.reserve(n);
+    ms.ws.compact.Dinv.reserve(n);
+  }
   ms.surface_to_model = cm.surface_to_model;
   return model;
 }

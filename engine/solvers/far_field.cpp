@@ -45,6 +45,7 @@ void far_field_build(const MassSpringSystem& sys, FarField& ff) {
         "far field: the model's stiffness at rest is singular (a part without support)");
   ff.load.setZero(3 * m);
   ff.g.setZero(3 * m);
+  ff.tmp.setZero(3 * m);
   ff.nodes = n;
   ff.factor_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -63,7 +64,15 @@ void far_field_solve(FarField& ff, const std::vector<int>& nodes,
   for (size_t k = 0; k < nodes.size(); ++k)
     if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0)
       ff.load.segment<3>(ff.dof[nodes[k]]) += (weights[k] / sum) * dir;
-  ff.g = ff.ldlt.solve(ff.load);
+  // ldlt.solve() with the permutations written out: Eigen's in-place permutation allocates, and
+  // this solve runs inside a haptic step.
+  const auto& perm = ff.ldlt.permutationP().indices();
+  const bool permuted = perm.size() == ff.load.size();
+  for (Eigen::Index i = 0; i < ff.load.size(); ++i) ff.tmp[permuted ? perm[i] : i] = ff.load[i];
+  ff.ldlt.matrixL().solveInPlace(ff.tmp);
+  ff.tmp.array() /= ff.ldlt.vectorD().array();
+  ff.ldlt.matrixU().solveInPlace(ff.tmp);
+  for (Eigen::Index i = 0; i < ff.g.size(); ++i) ff.g[i] = ff.tmp[permuted ? perm[i] : i];
 }
 
 }  // namespace palplab::engine

@@ -26,6 +26,7 @@ struct FarField {
   std::vector<int> dof;  // #nodes: first dof of a node, -1 = fixed
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   Eigen::VectorXd load, g;  // #dofs: the unit load and its displacement (m/N)
+  Eigen::VectorXd tmp;      // #dofs: solve buffer
   double factor_ms = 0.0;   // time the factorisation took
   bool ready() const { return nodes > 0; }
 };
