@@ -46,6 +46,7 @@ void far_field_build(const MassSpringSystem& sys, FarField& ff) {
   ff.load.setZero(3 * m);
   ff.g.setZero(3 * m);
   ff.tmp.setZero(3 * m);
+  ff.d = ff.ldlt.vectorD();  // vectorD() returns a copy
   ff.nodes = n;
   ff.factor_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -64,14 +65,19 @@ void far_field_solve(FarField& ff, const std::vector<int>& nodes,
   for (size_t k = 0; k < nodes.size(); ++k)
     if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0)
       ff.load.segment<3>(ff.dof[nodes[k]]) += (weights[k] / sum) * dir;
-  // ldlt.solve() with the permutations written out: Eigen's in-place permutation allocates, and
-  // this solve runs inside a haptic step.
+  // ldlt.solve() written out (permutation, unit-lower L, D, L^T): Eigen's in-place permutation
+  // and triangular solves allocate a temporary, and this solve runs inside a haptic step.
   const auto& perm = ff.ldlt.permutationP().indices();
   const bool permuted = perm.size() == ff.load.size();
   for (Eigen::Index i = 0; i < ff.load.size(); ++i) ff.tmp[permuted ? perm[i] : i] = ff.load[i];
-  ff.ldlt.matrixL().solveInPlace(ff.tmp);
-  ff.tmp.array() /= ff.ldlt.vectorD().array();
-  ff.ldlt.matrixU().solveInPlace(ff.tmp);
+  const auto& L = ff.ldlt.matrixL().nestedExpression();  // strictly lower part, column-major
+  for (Eigen::Index j = 0; j < L.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
+      if (it.row() > j) ff.tmp[it.row()] -= it.value() * ff.tmp[j];
+  ff.tmp.array() /= ff.d.array();
+  for (Eigen::Index j = L.outerSize() - 1; j >= 0; --j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
+      if (it.row() > j) ff.tmp[j] -= it.value() * ff.tmp[it.row()];
   for (Eigen::Index i = 0; i < ff.g.size(); ++i) ff.g[i] = ff.tmp[permuted ? perm[i] : i];
 }
 

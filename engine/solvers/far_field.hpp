@@ -27,6 +27,7 @@ struct FarField {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   Eigen::VectorXd load, g;  // #dofs: the unit load and its displacement (m/N)
   Eigen::VectorXd tmp;      // #dofs: solve buffer
+  Eigen::VectorXd d;        // #dofs: D of the LDLT
   double factor_ms = 0.0;   // time the factorisation took
   bool ready() const { return nodes > 0; }
 };
