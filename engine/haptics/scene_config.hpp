@@ -60,6 +60,9 @@ struct ScopeConfig {
   Scope rings = Scope::rings;  // ring model: rings | octant | whole
   double radius = 0.0;         // m, integration scope around the contact (0 = whole model)
   int max_nodes = 1 << 30;     // cap on the scope (nearest rings first)
+  // Mass-spring: outside the scope, the whole model's linear static response to the contact
+  // force (engine/solvers/far_field.hpp) instead of rest.
+  bool linear_exterior = true;
 };
 
 struct RefinementConfig {

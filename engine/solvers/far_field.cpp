@@ -1,0 +1,84 @@
+#include "engine/solvers/far_field.hpp"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace palplab::engine {
+
+void far_field_build(const MassSpringSystem& sys, FarField& ff) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const long n = sys.nodes();
+  ff.dof.assign(n, -1);
+  int m = 0;
+  for (long i = 0; i < n; ++i)
+    if (sys.fixed.empty() || !sys.fixed[i]) ff.dof[i] = 3 * m++;
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(9 * 4 * sys.springs.size() + 3 * m);
+  for (long i = 0; i < n; ++i)
+    if (ff.dof[i] >= 0)
+      for (int r = 0; r < 3; ++r) t.emplace_back(ff.dof[i] + r, ff.dof[i] + r, sys.home_ks[i]);
+  for (long s = 0; s < sys.springs.size(); ++s) {
+    const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
+    const Eigen::Vector3d du = (sys.X_rest.row(a) - sys.X_rest.row(b)).transpose();
+    const double len = du.norm();
+    if (!(len > 0.0)) continue;
+    // At rest the lateral term ks (1 - l/|du|) of spring_eval's Jacobian is 0: -Kx = ks d d^T.
+    const Eigen::Matrix3d k = sys.springs.ks[s] * (du / len) * (du / len).transpose();
+    const int da = ff.dof[a], db = ff.dof[b];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        if (da >= 0) t.emplace_back(da + r, da + c, k(r, c));
+        if (db >= 0) t.emplace_back(db + r, db + c, k(r, c));
+        if (da >= 0 && db >= 0) {
+          t.emplace_back(da + r, db + c, -k(r, c));
+          t.emplace_back(db + r, da + c, -k(r, c));
+        }
+      }
+  }
+  Eigen::SparseMatrix<double> K(3 * m, 3 * m);
+  K.setFromTriplets(t.begin(), t.end());
+  ff.ldlt.compute(K);
+  // A zero pivot shows up as rounding noise: compare it with the largest one.
+  const Eigen::VectorXd& D = ff.ldlt.vectorD();
+  if (ff.ldlt.info() != Eigen::Success || D.size() == 0 || !(D.minCoeff() > 1e-10 * D.maxCoeff()))
+    throw std::runtime_error(
+        "far field: the model's stiffness at rest is singular (a part without support)");
+  ff.load.setZero(3 * m);
+  ff.g.setZero(3 * m);
+  ff.tmp.setZero(3 * m);
+  ff.d = ff.ldlt.vectorD();  // vectorD() returns a copy
+  ff.nodes = n;
+  ff.factor_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void far_field_solve(FarField& ff, const std::vector<int>& nodes,
+                     const std::vector<double>& weights, const Eigen::Vector3d& dir) {
+  ff.load.setZero();
+  double sum = 0.0;
+  for (size_t k = 0; k < nodes.size(); ++k)
+    if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0) sum += weights[k];
+  if (!(sum > 0.0)) {
+    ff.g.setZero();
+    return;
+  }
+  for (size_t k = 0; k < nodes.size(); ++k)
+    if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0)
+      ff.load.segment<3>(ff.dof[nodes[k]]) += (weights[k] / sum) * dir;
+  // ldlt.solve() written out (permutation, unit-lower L, D, L^T): Eigen's in-place permutation
+  // and triangular solves allocate a temporary, and this solve runs inside a haptic step.
+  const auto& perm = ff.ldlt.permutationP().indices();
+  const bool permuted = perm.size() == ff.load.size();
+  for (Eigen::Index i = 0; i < ff.load.size(); ++i) ff.tmp[permuted ? perm[i] : i] = ff.load[i];
+  const auto& L = ff.ldlt.matrixL().nestedExpression();  // strictly lower part, column-major
+  for (Eigen::Index j = 0; j < L.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
+      if (it.row() > j) ff.tmp[it.row()] -= it.value() * ff.tmp[j];
+  ff.tmp.array() /= ff.d.array();
+  for (Eigen::Index j = L.outerSize() - 1; j >= 0; --j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
+      if (it.row() > j) ff.tmp[j] -= it.value() * ff.tmp[it.row()];
+  for (Eigen::Index i = 0; i < ff.g.size(); ++i) ff.g[i] = ff.tmp[permuted ? perm[i] : i];
+}
+
+}  // namespace palplab::engine

@@ -1,0 +1,69 @@
+// Prototype C integrates only a local scope around the contact (the rest of the organ at rest).
+// What it renders must not differ from integrating the whole model by more than the force Weber
+// fraction (7 %): the same fixed press (the device path does not depend on the force) on three
+// regions, prototype C as shipped against the same model with every node integrated every step.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "prototypes/factory.hpp"
+
+using namespace palplab;
+
+namespace {
+
+std::string proto(const std::string& id) {
+  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
+}
+
+// Prototype C with every node integrated every step (no scope, no sleeping).
+std::string whole_model_c() {
+  std::ifstream in(proto("C"));
+  nlohmann::json j = nlohmann::json::parse(in);
+  j["model"]["scope_radius"] = 0.0;
+  j["model"]["sleeping"]["enabled"] = false;
+  const auto p = std::filesystem::temp_directory_path() / "palplab_scope_accuracy_whole_C.json";
+  std::ofstream(p) << j.dump(2);
+  return p.string();
+}
+
+// Forces (N) of a press at the region's node along its inward normal: 2 mm out, in at 2 cm/s to
+// `depth`, then held (`steps` haptic steps in all).
+std::vector<double> press(engine::Scene& s, const std::string& region, double depth, int steps) {
+  const auto& g = s.geometry();
+  const int node = g.region_node(region);
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  std::vector<double> f;
+  for (int k = 0; k < steps; ++k) {
+    const double d = std::min(depth, -0.002 + 0.02 * k * s.dt());
+    f.push_back(s.step(p - d * n).force.norm());
+  }
+  return f;
+}
+
+}  // namespace
+
+TEST(ScopeAccuracy, ScopedPrototypeCIsWithinTheWeberFractionOfTheWholeModel) {
+  engine::Scene scoped = prototypes::build_scene(proto("C"));
+  engine::Scene whole = prototypes::build_scene(whole_model_c());
+  for (const std::string region : {"ovary_left", "horn_right", "body"}) {
+    scoped.reset();
+    whole.reset();
+    const std::vector<double> a = press(scoped, region, 0.005, 450);
+    const std::vector<double> b = press(whole, region, 0.005, 450);
+    double err = 0, peak = 0;
+    for (size_t k = 0; k < a.size(); ++k) {
+      err = std::max(err, std::abs(a[k] - b[k]));
+      peak = std::max(peak, b[k]);
+    }
+    ASSERT_GT(peak, 0.5) << region;  // the press loads the tissue
+    EXPECT_LT(err, 0.07 * peak) << region << ": scoped " << a.back() << " N, whole " << b.back()
+                                << " N";
+    std::printf("%s: peak %.3f N, largest |F_scope - F_whole| %.4f N (%.1f %%)\n", region.c_str(),
+                peak, err, 100 * err / peak);
+  }
+}
