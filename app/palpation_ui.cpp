@@ -44,7 +44,7 @@ PalpationUi::PalpationUi(int width, int height, const std::string& title,
   ImGui_ImplGlfw_InitForOpenGL(win_->handle(), true);
   ImGui_ImplOpenGL3_Init("#version 330 core");
   tone_ = std::make_unique<render::ToneCue>();
-  t_prev_ = now_s();
+  t_prev_ = stage_t0_ = now_s();
 }
 
 PalpationUi::~PalpationUi() {
@@ -74,21 +74,13 @@ void PalpationUi::request_close() {
 }
 
 void PalpationUi::begin_frame() {
-  render::WindowInput real = win_->poll();
-  if (script_) {
-    in_ = script_->input_at(now_s() - stage_t0_, script_close_);
-    if (script_close_) win_->request_close();
-  } else {
-    in_ = real;
+  in_ = win_->poll();
+  for (int k = 0; k < in_.n_keys; ++k) {
+    if (in_.keys_pressed[k] == GLFW_KEY_W) wireframe_ = !wireframe_;
+    if (in_.keys_pressed[k] == GLFW_KEY_T) transparent_ = !transparent_;
+    if (in_.keys_pressed[k] == GLFW_KEY_R && control_) control_->release();
+    if (in_.keys_pressed[k] == GLFW_KEY_ESCAPE) win_->request_close();
   }
-  for (int k = 0; k < real.n_keys; ++k) {
-    if (real.keys_pressed[k] == GLFW_KEY_W) wireframe_ = !wireframe_;
-    if (real.keys_pressed[k] == GLFW_KEY_T) transparent_ = !transparent_;
-    if (real.keys_pressed[k] == GLFW_KEY_R && control_) control_->release();
-    if (real.keys_pressed[k] == GLFW_KEY_ESCAPE) win_->request_close();
-  }
-  in_.n_keys = real.n_keys;
-  std::copy(std::begin(real.keys_pressed), std::end(real.keys_pressed), in_.keys_pressed);
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -100,6 +92,11 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   const UiScene& sc = *scene_;
   const engine::SceneGeometry& g = sc.geometry;
   const render::CameraMatrices m = renderer_->matrices(cam_, fw, fh);
+  // A script drives the mouse only while a scene is shown; its clock starts with the scene.
+  if (script_) {
+    in_ = script_->input_at(now_s() - stage_t0_, script_close_);
+    if (script_close_) win_->request_close();
+  }
   const bool ui_mouse = !script_ && ImGui::GetIO().WantCaptureMouse;
   if (mouse) {
     control_->update(in_, m, cam_, ui_mouse, *mouse);

@@ -77,7 +77,7 @@ class PalpationUi {
   std::unique_ptr<render::ToneCue> tone_;
   std::optional<render::MouseScript> script_;
   render::Camera cam_;
-  render::WindowInput in_;
+  render::WindowInput in_;  // this frame's: the window's, or the script's during a scene
   bool script_close_ = false;
   double stage_t0_ = 0.0;  // s (steady clock) when the current scene or message started
   bool in_message_ = false;

@@ -74,7 +74,7 @@ TEST(StudyInstructions, BadValuesAreLocatedProblemsAllAtOnce) {
   EXPECT_NE(ps[0].what.find("expected one text per session (2), got 1"), std::string::npos)
       << ps[0].format();
   EXPECT_EQ(ps[1].where.json_path, "$.phases[1].instructions");
-  EXPECT_NE(ps[1].what.find("expected a text (string), got a number"), std::string::npos)
+  EXPECT_NE(ps[1].what.find("expected a text (string), got an integer"), std::string::npos)
       << ps[1].format();
   EXPECT_GT(ps[1].where.line, 0);
 
