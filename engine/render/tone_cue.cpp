@@ -55,6 +55,7 @@ ToneCue::~ToneCue() {
   if (pcm_) {
     snd_pcm_drop(static_cast<snd_pcm_t*>(pcm_));
     snd_pcm_close(static_cast<snd_pcm_t*>(pcm_));
+    snd_config_update_free_global();  // ALSA's configuration cache (palplab opens no other PCM)
   }
 }
 
