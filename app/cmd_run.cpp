@@ -53,10 +53,12 @@ struct HumanArgs {
 // The mouse device of one session in the window: owns the MouseDevice the window drives and the
 // MonitoredDevice that hands what the haptic loop rendered back to the window.
 struct WindowMouseDevice : palplab::engine::Device {
+  explicit WindowMouseDevice(palplab::render::ToneCue& tone) : cued(monitor, tone) {}
   palplab::engine::MouseDevice mouse{Eigen::Vector3d::Zero()};
   palplab::engine::MonitoredDevice monitor{mouse};
-  palplab::engine::DeviceInput read(double t) override { return monitor.read(t); }
-  void write(const palplab::engine::Rendered& r) override { monitor.write(r); }
+  palplab::app::ToneSwitch cued;  // the ST tone switched at every haptic step
+  palplab::engine::DeviceInput read(double t) override { return cued.read(t); }
+  void write(const palplab::engine::Rendered& r) override { cued.write(r); }
 };
 
 // `run --human --device mouse`: protocols::run_human on a worker thread, the window here. The
@@ -103,7 +105,7 @@ palplab::protocols::HumanSummary run_in_window(const palplab::protocols::Study& 
   };
   WindowMouseDevice* made = nullptr;
   o.make_device = [&]() -> std::unique_ptr<engine::Device> {
-    auto d = std::make_unique<WindowMouseDevice>();
+    auto d = std::make_unique<WindowMouseDevice>(ui->tone());
     made = d.get();
     return d;
   };

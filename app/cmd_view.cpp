@@ -102,6 +102,7 @@ int run_view(const ViewArgs& a) {
     return 3;
   }
   ui->set_scene(app::UiScene::of(scene));
+  app::ToneSwitch cued(monitor, ui->tone());
 
   FrameSlot slot;
   std::thread haptic([&] {
@@ -113,7 +114,7 @@ int run_view(const ViewArgs& a) {
     ro.stop = &stop;
     while (!stop.load()) {
       const engine::RealtimeStats st =
-          engine::run_realtime(scene, monitor, ro, [&](const engine::Frame& f) {
+          engine::run_realtime(scene, cued, ro, [&](const engine::Frame& f) {
             std::lock_guard<std::mutex> lock(slot.mu);
             slot.frame = f;
             slot.fresh = true;
@@ -147,6 +148,12 @@ int run_view(const ViewArgs& a) {
   stop = true;
   mouse.stop();
   haptic.join();
+  const render::ToneCue& tone = ui->tone();
+  if (tone.available())
+    std::cout << "ST tone: " << std::lround(1000.0 * tone.tone_frames() / render::ToneCue::kRate)
+              << " ms on ALSA device \"" << tone.device() << "\"\n";
+  else
+    std::cout << "ST tone: none (" << tone.error() << "); the flash only\n";
   if (!a.record_trace.empty()) {
     recorder.trace().meta["prototype"] = scene.prototype();
     recorder.trace().meta["device"] = spec.text;

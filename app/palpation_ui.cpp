@@ -124,9 +124,9 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
     renderer_->overlay_rect(fw, fh, 0, 0, b, fh, c);
     renderer_->overlay_rect(fw, fh, fw - b, 0, fw, fh, c);
   }
-  tone_->set_on(s.audio);
+  // (The tone is switched by the haptic thread: ToneSwitch.)
   if (!tone_->available() && !tone_reported_ && sc.cues.audio) {
-    std::cerr << "palplab: the ST cue is shown as a flash only: " << tone_->error() << "\n";
+    std::cerr << "palplab: no ST tone (" << tone_->error() << "); the flash shows the cue\n";
     tone_reported_ = true;
   }
 

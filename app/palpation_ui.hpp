@@ -40,6 +40,25 @@ struct UiStatus {
   double timer = -1.0, timer_total = 0.0;  // s elapsed / planned; < 0 = no timer
 };
 
+// Switches the ST tone from the haptic thread at every step (an atomic store), so the tone
+// follows the force within a step and the tone's 5 ms block, not a window frame.
+class ToneSwitch : public engine::Device {
+ public:
+  ToneSwitch(engine::Device& inner, render::ToneCue& tone) : inner_(inner), tone_(tone) {}
+  engine::DeviceInput read(double t) override { return inner_.read(t); }
+  void write(const engine::Rendered& r) override {
+    inner_.write(r);
+    tone_.set_on(r.audio);
+  }
+  bool finished() const override { return inner_.finished(); }
+  std::vector<engine::DeviceEvent> take_events() override { return inner_.take_events(); }
+  long samples_received() const override { return inner_.samples_received(); }
+
+ private:
+  engine::Device& inner_;
+  render::ToneCue& tone_;
+};
+
 class PalpationUi {
  public:
   // Throws render::NoWindowError without a display. `script`: scripted input in place of the
@@ -67,7 +86,7 @@ class PalpationUi {
   bool closed() const;  // the window's close button, Esc, or the script's close
   void request_close();
   long frames() const { return frame_no_; }
-  const render::ToneCue& tone() const { return *tone_; }
+  render::ToneCue& tone() { return *tone_; }
 
  private:
   std::unique_ptr<render::Window> win_;

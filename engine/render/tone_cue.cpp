@@ -41,7 +41,7 @@ ToneCue::ToneCue(std::string device, double frequency, double volume)
     rc = snd_pcm_set_params(pcm, SND_PCM_FORMAT_S16_LE, SND_PCM_ACCESS_RW_INTERLEAVED, 1, kRate, 1,
                             30000 /* us latency */);
   if (rc < 0) {
-    error_ = "no tone (ALSA device \"" + device_ + "\": " + snd_strerror(rc) + ")";
+    error_ = "ALSA device \"" + device_ + "\": " + snd_strerror(rc);
     if (pcm) snd_pcm_close(pcm);
     return;
   }

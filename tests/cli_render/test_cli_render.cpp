@@ -194,6 +194,7 @@ TEST(CliView, StCueFlashesTheBorderWhenTheForceCrossesSt) {
   // Where the surface faces the camera: the press along the view ray goes straight in.
   const auto px = pr::head_on_pixel(g, pr::camera_matrices(pr::Camera{}, c, rad, W, H));
   ASSERT_TRUE(px && px->cosine > 0.95);
+  long tone_ms = -1;
   auto shot_with = [&](int notches, const std::string& name) {
     const fs::path script = tmp(name + ".json"), shot = tmp(name + ".png");
     {
@@ -207,6 +208,10 @@ TEST(CliView, StCueFlashesTheBorderWhenTheForceCrossesSt) {
                          std::to_string(W) + "x" + std::to_string(H) + " --mouse-script " +
                          script.string() + " --frames 20 --screenshot " + shot.string());
     EXPECT_EQ(r.code, 0) << r.out << r.err;
+    // How long the tone sounded (the haptic thread switches it; ALSA's null device plays it).
+    const auto at = r.out.find("ST tone: ");
+    EXPECT_NE(at, std::string::npos) << r.out;
+    tone_ms = at == std::string::npos ? -1 : std::atol(r.out.c_str() + at + 9);
     return pr::read_png(shot.string());
   };
   // The bottom border strip (12 px), right of the panel: flash yellow (255, 217, 26) at 85%.
@@ -220,7 +225,10 @@ TEST(CliView, StCueFlashesTheBorderWhenTheForceCrossesSt) {
     return static_cast<double>(yellow) / n;
   };
   const pr::Image pressed = shot_with(8, "st_pressed");  // 6 mm in, head-on: ~3 N > ST
-  const pr::Image light = shot_with(0, "st_light");      // 2 mm outside: no force
+  const long pressed_tone_ms = tone_ms;
+  const pr::Image light = shot_with(0, "st_light");  // 2 mm outside: no force
+  EXPECT_GT(pressed_tone_ms, 50);  // the press lasts from ~0.05 s to the last of 20 frames
+  EXPECT_EQ(tone_ms, 0);
   ASSERT_EQ(pressed.width, W);
   ASSERT_EQ(light.width, W);
   EXPECT_GT(flash_share(pressed), 0.95);
