@@ -3,7 +3,7 @@
 // the session with the 1 kHz haptic loop on its own thread) and the database holds it exactly as
 // a virtual participant's session is held (the same tables, the same measure names and units,
 // one sample per haptic step); closing the window mid-session aborts the session, kept and
-// flagged, and the next run repeats it. Skipped only without xvfb-run.
+// flagged. Skipped only without xvfb-run.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 #include <unistd.h>
@@ -143,7 +143,7 @@ TEST(CliRunMouse, ClosingTheWindowMidSessionAbortsItKeptAndFlagged) {
   if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
   const fs::path dir = palplab::testing::scratch_dir("run_mouse_close");
   const fs::path db = dir / "human.db";
-  Result r = human(db, write_script(dir, 0.6), dir);
+  const Result r = human(db, write_script(dir, 0.6), dir);
   ASSERT_EQ(r.code, 3) << r.out << r.err;
   auto s = rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(s.size(), 1u);
@@ -155,12 +155,6 @@ TEST(CliRunMouse, ClosingTheWindowMidSessionAbortsItKeptAndFlagged) {
   EXPECT_EQ(s[0]["steps"], std::to_string(n));
   EXPECT_GT(n, 20);
   EXPECT_LT(n, 1900);
-  // The next run repeats the session as attempt 1.
-  r = human(db, write_script(dir, 0), dir);
-  ASSERT_EQ(r.code, 0) << r.out << r.err;
-  s = rows(db, "SELECT attempt, status FROM sessions ORDER BY session");
-  ASSERT_EQ(s.size(), 2u);
-  EXPECT_EQ(s[1]["attempt"], "1");
-  EXPECT_EQ(s[1]["status"], "complete");
+  // (That the next run repeats it as attempt 1 is run_human's, tested with a silent UDP device.)
   fs::remove_all(dir);
 }
