@@ -158,3 +158,24 @@ TEST(CliRunMouse, ClosingTheWindowMidSessionAbortsItKeptAndFlagged) {
   // (That the next run repeats it as attempt 1 is run_human's, tested with a silent UDP device.)
   fs::remove_all(dir);
 }
+
+TEST(CliRunMouse, NoDisplayOrBadScriptExits2) {
+  const fs::path dir = palplab::testing::scratch_dir("run_mouse_bad");
+  const fs::path db = dir / "human.db";
+  const std::string base = "env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(PALPLAB_BINARY) +
+                           " run " + kDir + "mouse_study.json --db " + db.string() +
+                           " --human --participant P01 ";
+  Result r = palplab::testing::run_command(base + "--device mouse");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--device mouse needs a window"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(db));  // refused before anything was stored
+  r = palplab::testing::run_command(base + "--device udp:5999 --mouse-script x.json");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--mouse-script needs --device mouse"), std::string::npos) << r.out;
+  const fs::path bad = dir / "bad.json";
+  std::ofstream(bad) << R"({"palplab_mouse_script": 1, "events": [{"t": 1}, {"t": 0}]})";
+  r = palplab::testing::run_command(base + "--device mouse --mouse-script " + bad.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("$.events[1].t"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
