@@ -9,6 +9,7 @@
 #include <csignal>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
@@ -158,6 +159,7 @@ palplab::protocols::HumanSummary run_in_window(const palplab::protocols::Study& 
   });
   engine::Frame frame;
   app::UiStatus status;
+  auto session_wall0 = std::chrono::steady_clock::now();
   while (true) {
     if (ui->closed() || g_interrupted.load()) {
       std::lock_guard lock(sh.mu);
@@ -185,11 +187,19 @@ palplab::protocols::HumanSummary run_in_window(const palplab::protocols::Study& 
         ui->set_scene(std::move(*sh.new_scene));
         sh.new_scene.reset();
         frame = engine::Frame{};  // the previous session's last frame is not this one's
+        session_wall0 = std::chrono::steady_clock::now();
       }
       const bool fresh = sh.fresh;
       if (fresh) std::swap(frame, sh.frame);
       sh.fresh = false;
       status.lines = {sh.session_line};
+      // The haptic loop's rate so far (its period statistics come with the session's end).
+      const double wall =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - session_wall0).count();
+      char rate[96];
+      std::snprintf(rate, sizeof rate, "haptic loop: %ld steps, %.0f steps/s", frame.step,
+                    wall > 0.05 ? frame.step / wall : 0.0);
+      status.lines.push_back(rate);
       status.timer = frame.t;
       status.timer_total = sh.duration;
       ui->draw_palpation(&sh.device->mouse, &sh.device->monitor, fresh ? &frame : nullptr, status);
