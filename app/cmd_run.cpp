@@ -1,27 +1,40 @@
 // `palplab run STUDY.json --db FILE [--jobs N] [--resume] [--force] [--quiet]`: runs every
 // planned session with virtual participants (lock-step) and stores the results.
-// `palplab run STUDY.json --db FILE --human --participant ID [--device udp:PORT|trace:FILE]`:
+// `palplab run STUDY.json --db FILE --human --participant ID [--device mouse|udp:PORT|trace:FILE]`:
 // runs that participant's due sessions with a person (or a device stream) at the device, in real
-// time (protocols::run_human; docs/DEVICES.md).
+// time (protocols::run_human; docs/DEVICES.md). With the mouse the sessions run in the palpation
+// window (app/palpation_ui.hpp): run_human on a worker thread, the window on the main thread
+// (GLFW), instructions between sessions, closing the window mid-session aborts it.
 #include <unistd.h>
 #include <csignal>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <exception>
 #include <iostream>
 #include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
 
 #include "app/command.hpp"
+#include "app/palpation_ui.hpp"
 #include "app/scene_option.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
+#include "engine/haptics/devices/monitored_device.hpp"
+#include "engine/haptics/devices/mouse_device.hpp"
 #include "engine/haptics/devices/self_test.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
 #include "engine/haptics/devices/udp_device.hpp"
+#include "engine/render/mouse_control.hpp"
+#include "engine/render/mouse_script.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
 #include "protocols/study.hpp"
@@ -35,9 +48,173 @@ extern "C" void on_sigint(int) {
 
 struct HumanArgs {
   bool human = false;
-  std::string participant, device = "mouse", record_trace;
+  std::string participant, device = "mouse", record_trace, mouse_script, size = "1280x800";
   double min_rate = 900.0, device_lost = 2.0;
 };
+
+// The mouse device of one session in the window: owns the MouseDevice the window drives and the
+// MonitoredDevice that hands what the haptic loop rendered back to the window.
+struct WindowMouseDevice : palplab::engine::Device {
+  explicit WindowMouseDevice(palplab::render::ToneCue& tone) : cued(monitor, tone) {}
+  palplab::engine::MouseDevice mouse{Eigen::Vector3d::Zero()};
+  palplab::engine::MonitoredDevice monitor{mouse};
+  palplab::app::ToneSwitch cued;  // the ST tone switched at every haptic step
+  palplab::engine::DeviceInput read(double t) override { return cued.read(t); }
+  void write(const palplab::engine::Rendered& r) override { cued.write(r); }
+};
+
+// `run --human --device mouse`: protocols::run_human on a worker thread, the window here. The
+// two meet in `Shared` (one mutex): the worker waits in before_session until the person starts
+// the session; the window draws the session's scene from on_session_start to on_session_end.
+palplab::protocols::HumanSummary run_in_window(const palplab::protocols::Study& s,
+                                               const palplab::protocols::Plan& plan,
+                                               palplab::protocols::HumanOptions o,
+                                               const HumanArgs& h) {
+  using namespace palplab;
+  int W = 1280, H = 800;
+  if (std::sscanf(h.size.c_str(), "%dx%d", &W, &H) != 2 || W < 64 || H < 64 || W > 8192 || H > 8192)
+    throw InputError("--size: \"" + h.size + "\": expected WIDTHxHEIGHT, 64..8192 px per side");
+  std::optional<render::MouseScript> script;
+  if (!h.mouse_script.empty()) script = render::MouseScript::load(h.mouse_script);
+  std::unique_ptr<app::PalpationUi> ui;
+  try {
+    ui = std::make_unique<app::PalpationUi>(W, H, "palplab - participant " + h.participant,
+                                            std::move(script));
+  } catch (const render::NoWindowError& e) {
+    throw InputError(std::string("--device mouse needs a window: ") + e.what());
+  }
+  struct Shared {
+    std::mutex mu;
+    std::condition_variable cv;
+    enum Stage { kIdle, kInstructions, kSession } stage = kIdle;
+    std::string title, text, last_message;
+    bool start = false, closed = false, done = false;
+    std::optional<app::UiScene> new_scene;
+    WindowMouseDevice* device = nullptr;
+    double duration = 0.0;
+    std::string session_line;
+    engine::Frame frame;
+    bool fresh = false;
+  } sh;
+  std::atomic<bool> stop{false};  // the window closed (or Ctrl-C): the session is aborted
+  o.stop = &stop;
+  o.stop_reason = "window closed";
+  auto outer_say = o.say;
+  o.say = [&](const std::string& m) {
+    if (outer_say) outer_say(m);
+    std::lock_guard lock(sh.mu);
+    sh.last_message = m;
+  };
+  WindowMouseDevice* made = nullptr;
+  o.make_device = [&]() -> std::unique_ptr<engine::Device> {
+    auto d = std::make_unique<WindowMouseDevice>(ui->tone());
+    made = d.get();
+    return d;
+  };
+  auto outer_before = o.before_session;
+  o.before_session = [&](const protocols::SessionSpec& sp) {
+    if (outer_before && !outer_before(sp)) return false;
+    std::unique_lock lock(sh.mu);
+    sh.stage = Shared::kInstructions;
+    sh.title = sp.phase_id + " #" + std::to_string(sp.index + 1) + " (day " +
+               std::to_string(sp.day) + ", " + std::to_string(std::lround(sp.duration)) + " s)";
+    sh.text = protocols::session_instructions(s, sp);
+    sh.start = false;
+    sh.cv.wait(lock, [&] { return sh.start || sh.closed; });
+    sh.stage = Shared::kIdle;
+    return !sh.closed;
+  };
+  o.on_session_start = [&](const protocols::SessionSpec& sp, const engine::Scene& scene) {
+    // Hold the contact point outside the surface until the window's first frame moves it.
+    made->mouse.set_position(render::MouseControl::start_position(scene.geometry()), false);
+    std::lock_guard lock(sh.mu);
+    sh.new_scene = app::UiScene::of(scene);
+    sh.device = made;
+    sh.duration = sp.duration;
+    sh.session_line = "participant " + h.participant + ": " + sp.phase_id + " #" +
+                      std::to_string(sp.index + 1) + " (day " + std::to_string(sp.day) + ")";
+    sh.fresh = false;
+    sh.stage = Shared::kSession;
+  };
+  o.on_frame = [&](const engine::Frame& f) {
+    std::lock_guard lock(sh.mu);
+    sh.frame = f;
+    sh.fresh = true;
+  };
+  o.on_session_end = [&](const results::SessionRecord&) {
+    std::lock_guard lock(sh.mu);
+    sh.stage = Shared::kIdle;
+    sh.device = nullptr;
+  };
+
+  protocols::HumanSummary result;
+  std::exception_ptr failure;
+  std::thread worker([&] {
+    try {
+      result = protocols::run_human(s, plan, o);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    std::lock_guard lock(sh.mu);
+    sh.done = true;
+  });
+  engine::Frame frame;
+  app::UiStatus status;
+  auto session_wall0 = std::chrono::steady_clock::now();
+  while (true) {
+    if (ui->closed() || g_interrupted.load()) {
+      std::lock_guard lock(sh.mu);
+      if (!sh.closed) {
+        sh.closed = true;
+        stop = true;
+        sh.cv.notify_all();
+      }
+    }
+    std::unique_lock lock(sh.mu);
+    if (sh.done) break;
+    if (sh.closed) {  // the window is gone: wait for the worker to store the aborted session
+      lock.unlock();
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    ui->begin_frame();
+    if (sh.stage == Shared::kInstructions) {
+      if (ui->draw_message(sh.title, sh.text, "Start the session")) {
+        sh.start = true;
+        sh.cv.notify_all();
+      }
+    } else if (sh.stage == Shared::kSession && (sh.new_scene || ui->has_scene())) {
+      if (sh.new_scene) {
+        ui->set_scene(std::move(*sh.new_scene));
+        sh.new_scene.reset();
+        frame = engine::Frame{};  // the previous session's last frame is not this one's
+        session_wall0 = std::chrono::steady_clock::now();
+      }
+      const bool fresh = sh.fresh;
+      if (fresh) std::swap(frame, sh.frame);
+      sh.fresh = false;
+      status.lines = {sh.session_line};
+      // The haptic loop's rate so far (its period statistics come with the session's end).
+      const double wall =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - session_wall0).count();
+      char rate[96];
+      std::snprintf(rate, sizeof rate, "haptic loop: %ld steps, %.0f steps/s", frame.step,
+                    wall > 0.05 ? frame.step / wall : 0.0);
+      status.lines.push_back(rate);
+      status.timer = frame.t;
+      status.timer_total = sh.duration;
+      ui->draw_palpation(&sh.device->mouse, &sh.device->monitor, fresh ? &frame : nullptr, status);
+    } else {
+      ui->draw_message("palplab", sh.last_message.empty() ? "..." : sh.last_message, "OK");
+    }
+    lock.unlock();
+    ui->end_frame();
+  }
+  worker.join();
+  ui.reset();
+  if (failure) std::rethrow_exception(failure);
+  return result;
+}
 
 int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::Plan& plan,
                   const palplab::protocols::RunOptions& ro, const HumanArgs& h, bool quiet) {
@@ -46,10 +223,8 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   if (ro.resume || ro.force)
     throw InputError("--human continues or creates the database by itself; drop --resume/--force");
   const engine::DeviceSpec spec = engine::parse_device_spec(h.device);
-  if (spec.kind == "mouse")
-    throw InputError(
-        "--device mouse: sessions in the window are not built yet for `run --human`; use "
-        "--device udp:PORT (a bridge or `palplab device-sim`) or trace:FILE");
+  if (!h.mouse_script.empty() && spec.kind != "mouse")
+    throw InputError("--mouse-script needs --device mouse");
   if (!(h.min_rate >= 0.0 && h.min_rate <= 100000.0))
     throw InputError("--min-device-rate: expected 0..100000 Hz");
   if (!(h.device_lost > 0.0 && h.device_lost <= 3600.0))
@@ -91,7 +266,8 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   };
   std::signal(SIGINT, on_sigint);
   std::signal(SIGTERM, on_sigint);
-  const protocols::HumanSummary r = protocols::run_human(s, plan, o);
+  const protocols::HumanSummary r =
+      spec.kind == "mouse" ? run_in_window(s, plan, o, h) : protocols::run_human(s, plan, o);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   std::printf("%s: participant %s: %d session(s) completed, %d aborted, %d remaining%s\n",
@@ -139,7 +315,12 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--human", human->human,
                     "Run one participant's due sessions with a person at the device (real time)");
       cmd->add_option("--participant", human->participant, "Participant id (with --human)");
-      cmd->add_option("--device", human->device, "udp:PORT or trace:FILE (with --human)");
+      cmd->add_option(
+          "--device", human->device,
+          "mouse (the palpation window; default), udp:PORT or trace:FILE (with --human)");
+      cmd->add_option("--mouse-script", human->mouse_script,
+                      "Scripted mouse input for --device mouse (JSON, docs/DEVICES.md; tests)");
+      cmd->add_option("--size", human->size, "Window size WIDTHxHEIGHT for --device mouse");
       cmd->add_option("--min-device-rate", human->min_rate,
                       "Refuse a device below this rate (Hz; default 900)");
       cmd->add_option("--device-lost", human->device_lost,

@@ -11,12 +11,8 @@
 // The scene is stepped at 1 kHz by the real-time clock (engine/haptics/clock.hpp) on its own
 // threads; the window thread draws the newest published frame and never blocks the haptic loop.
 // The ST cue (force >= the contact region's ST with the audio cue on) is shown as a flash of the
-// window border and the force bar; no tone is played (no audio library among the dependencies).
-#define GLFW_INCLUDE_NONE
-#include <GLFW/glfw3.h>
-#include <imgui.h>
-#include <imgui_impl_glfw.h>
-#include <imgui_impl_opengl3.h>
+// window border and played as a tone where there is a sound card (app/palpation_ui.hpp).
+// --mouse-script FILE feeds scripted mouse input instead of the window's (tests under Xvfb).
 
 #include <algorithm>
 #include <atomic>
@@ -31,6 +27,7 @@
 #include <vector>
 
 #include "app/command.hpp"
+#include "app/palpation_ui.hpp"
 #include "app/scene_option.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
@@ -40,9 +37,8 @@
 #include "engine/haptics/devices/self_test.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
 #include "engine/haptics/devices/udp_device.hpp"
-#include "engine/render/pick.hpp"
-#include "engine/render/renderer.hpp"
-#include "engine/render/window.hpp"
+#include "engine/render/mouse_control.hpp"
+#include "engine/render/mouse_script.hpp"
 #include "prototypes/factory.hpp"
 
 namespace {
@@ -50,7 +46,7 @@ namespace {
 using namespace palplab;
 
 struct ViewArgs {
-  std::string file, screenshot, size = "1280x800", device = "mouse", record_trace;
+  std::string file, screenshot, size = "1280x800", device = "mouse", record_trace, mouse_script;
   long frames = 0;
   double min_rate = 900.0;
   std::vector<std::string> scene;  // --scene FILE.psim | KEY (app/scene_option.hpp)
@@ -65,67 +61,6 @@ struct FrameSlot {
   bool have_stats = false;
 };
 
-void draw_panel(const engine::Scene& scene, const engine::RenderedSummary& s,
-                const std::vector<engine::Thresholds>& th, const FrameSlot& slot_copy_stats,
-                bool have_stats, double frame_ms_median, double frame_ms_max, double depth,
-                bool& wireframe, bool& transparent) {
-  const auto& g = scene.geometry();
-  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_Always);
-  ImGui::SetNextWindowSize(ImVec2(380, 0), ImGuiCond_Always);
-  ImGui::Begin("palplab", nullptr,
-               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
-  ImGui::Text("prototype %s", scene.prototype().c_str());
-  const int r = s.contact_region;
-  const std::string region =
-      r >= 0 && r < static_cast<int>(g.region_names.size()) ? g.region_names[r] : "-";
-  ImGui::Text("contact: %s   region: %s", s.contact ? "yes" : "no", region.c_str());
-  const engine::Thresholds t = r >= 0 && r < static_cast<int>(th.size())
-                                   ? th[r]
-                                   : (th.empty() ? engine::Thresholds{} : th[0]);
-  const double f = s.force.norm();
-  ImGui::Text("force %.2f N (peak %.2f N)   depth %.1f mm", f, s.peak_force, depth * 1e3);
-  // Force bar against ST / MPF / SFT of the contact region: full scale 1.25 x SFT.
-  const float full = static_cast<float>(std::max(1.25 * t.sft, 1e-3));
-  const ImVec2 p0 = ImGui::GetCursorScreenPos();
-  const float w = 300.0f, h = 22.0f;
-  ImDrawList* dl = ImGui::GetWindowDrawList();
-  dl->AddRectFilled(p0, ImVec2(p0.x + w, p0.y + h), IM_COL32(40, 40, 40, 255));
-  const float fx = std::min(1.0f, static_cast<float>(f) / full) * w;
-  const ImU32 col = f >= t.sft   ? IM_COL32(220, 30, 30, 255)
-                    : f >= t.mpf ? IM_COL32(240, 140, 20, 255)
-                    : f >= t.st  ? IM_COL32(240, 220, 40, 255)
-                                 : IM_COL32(60, 180, 90, 255);
-  dl->AddRectFilled(p0, ImVec2(p0.x + fx, p0.y + h), col);
-  const struct {
-    double v;
-    const char* name;
-  } marks[] = {{t.st, "ST"}, {t.mpf, "MPF"}, {t.sft, "SFT"}};
-  for (const auto& m : marks) {
-    const float x = p0.x + static_cast<float>(m.v) / full * w;
-    dl->AddLine(ImVec2(x, p0.y - 2), ImVec2(x, p0.y + h + 2), IM_COL32(255, 255, 255, 255), 2.0f);
-    dl->AddText(ImVec2(x - 8, p0.y + h + 2), IM_COL32(255, 255, 255, 255), m.name);
-  }
-  ImGui::Dummy(ImVec2(w, h + 18));
-  ImGui::Text("ST %.2f  MPF %.2f  SFT %.2f N", t.st, t.mpf, t.sft);
-  ImGui::Separator();
-  ImGui::Text("frame %.1f ms median, %.1f ms max", frame_ms_median, frame_ms_max);
-  if (have_stats) {
-    const auto& st = slot_copy_stats.stats;
-    ImGui::Text("haptic loop %.0f Hz: period %.0f us median,",
-                1e6 / std::max(st.period_median_us, 1.0), st.period_median_us);
-    ImGui::Text("  %.0f us p99, step %.0f us median, %ld overruns", st.period_p99_us,
-                st.step_median_us, st.overruns);
-  } else {
-    ImGui::Text("haptic loop: measuring ...");
-  }
-  ImGui::Separator();
-  ImGui::Checkbox("wireframe (W)", &wireframe);
-  ImGui::SameLine();
-  ImGui::Checkbox("transparent (T)", &transparent);
-  ImGui::TextDisabled("L-drag move, wheel/R-drag press, M-drag orbit");
-  ImGui::End();
-}
-
 int run_view(const ViewArgs& a) {
   int W = 1280, H = 800;
   if (std::sscanf(a.size.c_str(), "%dx%d", &W, &H) != 2 || W < 64 || H < 64 || W > 8192 || H > 8192)
@@ -137,18 +72,10 @@ int run_view(const ViewArgs& a) {
   if (!(a.min_rate >= 0.0) || a.min_rate > 100000.0)
     throw InputError("--min-device-rate: expected a rate in [0, 100000] Hz");
   engine::Scene scene = prototypes::build_scene(app::scene_prototype(a.file, a.scene));
+  std::optional<render::MouseScript> script;
+  if (!a.mouse_script.empty()) script = render::MouseScript::load(a.mouse_script);
   const engine::SceneGeometry& g = scene.geometry();
-  std::vector<engine::Thresholds> th;
-  for (int r = 0; r < static_cast<int>(g.region_names.size()); ++r)
-    th.push_back(scene.thresholds(r));
-  const long coarse_nodes = scene.stats().coarse_nodes;
-
-  // Start 2 mm outside the surface point nearest to the scene's start position.
-  const int n0 = g.nearest_node(g.start_position);
-  Eigen::Vector3d hit = g.V.row(n0).transpose();
-  Eigen::Vector3d ray_dir = -g.N.row(n0).transpose();
-  double depth = -0.002;  // m along the ray past the surface point (negative = outside)
-  engine::MouseDevice mouse(hit + depth * ray_dir);
+  engine::MouseDevice mouse(render::MouseControl::start_position(g));
   engine::Device* inner = &mouse;
   std::unique_ptr<engine::UdpDevice> udp;
   std::unique_ptr<engine::TraceDevice> replay;
@@ -168,19 +95,16 @@ int run_view(const ViewArgs& a) {
                                                          : static_cast<engine::Device&>(recorder));
   std::atomic<bool> stop{false};
 
-  std::unique_ptr<render::Window> win;
+  std::unique_ptr<app::PalpationUi> ui;
   try {
-    win = std::make_unique<render::Window>(W, H, "palplab view - prototype " + scene.prototype());
+    ui = std::make_unique<app::PalpationUi>(W, H, "palplab view - prototype " + scene.prototype(),
+                                            std::move(script));
   } catch (const render::NoWindowError& e) {
     std::cerr << "palplab view: " << e.what() << "\n";
     return 3;
   }
-  render::Renderer renderer(g);
-  IMGUI_CHECKVERSION();
-  ImGui::CreateContext();
-  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
-  ImGui_ImplGlfw_InitForOpenGL(win->handle(), true);
-  ImGui_ImplOpenGL3_Init("#version 330 core");
+  ui->set_scene(app::UiScene::of(scene));
+  app::ToneSwitch cued(monitor, ui->tone());
 
   FrameSlot slot;
   std::thread haptic([&] {
@@ -189,9 +113,10 @@ int run_view(const ViewArgs& a) {
     engine::RealtimeOptions ro;
     ro.duration = 0.5;
     ro.frame_period = 1.0 / 60.0;
+    ro.stop = &stop;
     while (!stop.load()) {
       const engine::RealtimeStats st =
-          engine::run_realtime(scene, monitor, ro, [&](const engine::Frame& f) {
+          engine::run_realtime(scene, cued, ro, [&](const engine::Frame& f) {
             std::lock_guard<std::mutex> lock(slot.mu);
             slot.frame = f;
             slot.fresh = true;
@@ -202,108 +127,35 @@ int run_view(const ViewArgs& a) {
     }
   });
 
-  render::Camera cam;
-  bool wireframe = false, transparent = false;
-  double last_x = 0, last_y = 0;
-  bool have_last = false;
-  std::deque<double> frame_ms;
-  auto t_prev = std::chrono::steady_clock::now();
-  long frame_no = 0;
-  int rc = 0;
   engine::Frame frame;
-  FrameSlot stats_copy;
-  while (!win->should_close()) {
-    const render::WindowInput in = win->poll();
-    const int fw = win->width(), fh = win->height();
-    ImGui_ImplOpenGL3_NewFrame();
-    ImGui_ImplGlfw_NewFrame();
-    ImGui::NewFrame();
-    const bool ui_mouse = ImGui::GetIO().WantCaptureMouse;
-    for (int k = 0; k < in.n_keys; ++k) {
-      if (in.keys_pressed[k] == GLFW_KEY_W) wireframe = !wireframe;
-      if (in.keys_pressed[k] == GLFW_KEY_T) transparent = !transparent;
-      if (in.keys_pressed[k] == GLFW_KEY_R) depth = -0.002;
-      if (in.keys_pressed[k] == GLFW_KEY_ESCAPE) win->request_close();
-    }
-    const render::CameraMatrices m = renderer.matrices(cam, fw, fh);
-    const double dx = have_last ? in.mouse_x - last_x : 0.0,
-                 dy = have_last ? in.mouse_y - last_y : 0.0;
-    if (!ui_mouse) {
-      if (in.left) {
-        Eigen::Vector3d o, d;
-        m.unproject(in.mouse_x, in.mouse_y, o, d);
-        if (auto h = render::pick_surface(g, o, d)) {
-          hit = h->point;
-          ray_dir = d;
-        }
-      }
-      if (in.right) depth += dy * 1e-4;
-      if (in.middle) {
-        cam.azimuth_deg -= dx * 0.3;
-        cam.elevation_deg = std::clamp(cam.elevation_deg + dy * 0.3, -89.0, 89.0);
-      }
-      depth += in.scroll * 1e-3;
-    }
-    depth = std::clamp(depth, -0.01, 0.05);
-    last_x = in.mouse_x;
-    last_y = in.mouse_y;
-    have_last = true;
-    mouse.set_position(hit + depth * ray_dir, in.left);
-    const Eigen::Vector3d hcp = monitor.last_position();  // what the haptic loop used
-
+  app::UiStatus status;
+  while (!ui->closed()) {
+    ui->begin_frame();
+    bool fresh = false;
     {
       std::lock_guard<std::mutex> lock(slot.mu);
       if (slot.fresh) {
         std::swap(frame, slot.frame);
         slot.fresh = false;
+        fresh = true;
       }
-      stats_copy.stats = slot.stats;
-      stats_copy.have_stats = slot.have_stats;
+      if (slot.have_stats) status.loop = slot.stats;
     }
-    if (frame.V.rows() > 0) renderer.update_surface(frame.V, frame.F, coarse_nodes);
-    const engine::RenderedSummary s = monitor.last_rendered();
-    render::DrawOptions opt;
-    opt.wireframe = wireframe;
-    if (transparent) opt.region_alpha.assign(g.region_names.size(), 0.45f);
-    opt.device_position = hcp;
-    opt.contact = s.contact;
-    renderer.draw(cam, fw, fh, opt);
-    if (s.audio) {  // the ST cue: a yellow border flash while the force is at or above ST
-      const double b = 12.0;
-      const std::array<float, 4> c = {1.0f, 0.85f, 0.1f, 0.85f};
-      renderer.overlay_rect(fw, fh, 0, 0, fw, b, c);
-      renderer.overlay_rect(fw, fh, 0, fh - b, fw, fh, c);
-      renderer.overlay_rect(fw, fh, 0, 0, b, fh, c);
-      renderer.overlay_rect(fw, fh, fw - b, 0, fw, fh, c);
-    }
-    std::vector<double> sorted(frame_ms.begin(), frame_ms.end());
-    std::sort(sorted.begin(), sorted.end());
-    draw_panel(scene, s, th, stats_copy, stats_copy.have_stats,
-               sorted.empty() ? 0.0 : sorted[sorted.size() / 2],
-               sorted.empty() ? 0.0 : sorted.back(), depth, wireframe, transparent);
-    ImGui::Render();
-    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-    ++frame_no;
-    if (a.frames > 0 && frame_no >= a.frames) {
-      if (!a.screenshot.empty()) {
-        render::write_png(a.screenshot, win->read_back_buffer());
-        std::cout << "wrote " << a.screenshot << " (frame " << frame_no << ", " << fw << "x" << fh
-                  << ")\n";
-      }
-      win->request_close();
-    }
-    win->swap();
-    // At most 60 frames/s even where swap does not wait for a vertical blank (Xvfb, some
-    // drivers): the frames of a busy window would take the CPU from the haptic thread.
-    std::this_thread::sleep_until(t_prev + std::chrono::microseconds(16667));
-    const auto t_now = std::chrono::steady_clock::now();
-    frame_ms.push_back(std::chrono::duration<double, std::milli>(t_now - t_prev).count());
-    if (frame_ms.size() > 120) frame_ms.pop_front();
-    t_prev = t_now;
+    ui->draw_palpation(spec.kind == "mouse" ? &mouse : nullptr, &monitor, fresh ? &frame : nullptr,
+                       status);
+    const bool last = a.frames > 0 && ui->frames() + 1 >= a.frames;
+    ui->end_frame(last ? a.screenshot : "");
+    if (last) ui->request_close();
   }
   stop = true;
   mouse.stop();
   haptic.join();
+  const render::ToneCue& tone = ui->tone();
+  if (tone.available())
+    std::cout << "ST tone: " << std::lround(1000.0 * tone.tone_frames() / render::ToneCue::kRate)
+              << " ms on ALSA device \"" << tone.device() << "\"\n";
+  else
+    std::cout << "ST tone: none (" << tone.error() << "); the flash only\n";
   if (!a.record_trace.empty()) {
     recorder.trace().meta["prototype"] = scene.prototype();
     recorder.trace().meta["device"] = spec.text;
@@ -312,10 +164,7 @@ int run_view(const ViewArgs& a) {
     std::cout << "wrote " << a.record_trace << " (" << recorder.trace().samples.size()
               << " samples)\n";
   }
-  ImGui_ImplOpenGL3_Shutdown();
-  ImGui_ImplGlfw_Shutdown();
-  ImGui::DestroyContext();
-  return rc;
+  return 0;
 }
 
 palplab::app::CommandRegistration reg{
@@ -334,6 +183,8 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--min-device-rate", a->min_rate,
                       "Refuse a hardware device slower than this (Hz, default 900)");
       cmd->add_option("--record-trace", a->record_trace, "Write the device track to FILE");
+      cmd->add_option("--mouse-script", a->mouse_script,
+                      "Scripted mouse input instead of the window's (JSON, docs/DEVICES.md)");
       cmd->callback([a, code] { *code = run_view(*a); });
     }};
 

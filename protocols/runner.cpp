@@ -508,6 +508,13 @@ engine::Trace trace_from_samples(const results::SampleSeries& s) {
   return tr;
 }
 
+std::string session_instructions(const Study& study, const SessionSpec& spec) {
+  if (spec.phase >= 0 && spec.phase < static_cast<int>(study.phases.size()))
+    if (const std::string* t = study.phases[spec.phase].instructions_for(spec.index)) return *t;
+  return "Palpate the model and find the " + study.task.feature + ". The session lasts " +
+         std::to_string(std::lround(spec.duration)) + " s.";
+}
+
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
@@ -578,6 +585,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
           "prototype file or its mesh.file changed since the study's database was created "
           "(SHA-256 differs); restore it or start a new database",
           spec.prototype_file);
+    say("instructions: " + session_instructions(study, spec));
     if (opt.before_session && !opt.before_session(spec)) break;
     engine::Scene scene = session_scene(study, spec);
     const engine::SceneGeometry& g = scene.geometry();
@@ -623,7 +631,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     std::atomic<bool> finished{false};
     engine::RealtimeOptions ro;
     ro.duration = spec.duration;
-    ro.frame_period = 0.05;
+    ro.frame_period = opt.on_frame ? 1.0 / 60.0 : 0.05;  // a window draws at 60 Hz
     ro.stop = &stop;
     const auto names = g.region_names;
     ro.on_step = [&](const engine::Rendered& r, const engine::Sample& smp) {
@@ -636,10 +644,11 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
             {e.t, engine::to_string(e.kind), e.value,
              e.region >= 0 && e.region < static_cast<int>(names.size()) ? names[e.region] : ""});
     };
+    if (opt.on_session_start) opt.on_session_start(spec, scene);
     const auto wall0 = Clock::now();
     engine::RealtimeStats stats;
     std::thread loop([&] {
-      stats = engine::run_realtime(scene, device, ro);
+      stats = engine::run_realtime(scene, device, ro, opt.on_frame);
       finished = true;
     });
     std::string reason;
@@ -711,6 +720,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     rec.status = reason.empty() ? "complete" : "aborted";
     rec.abort_reason = reason;
     store.finish_session(data);
+    if (opt.on_session_end) opt.on_session_end(rec);
     if (!opt.record_trace_dir.empty()) {
       fs::create_directories(opt.record_trace_dir);
       engine::Trace tr = recorder.trace();

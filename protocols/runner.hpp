@@ -16,6 +16,7 @@
 #include <memory>
 #include <string>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/haptics/device.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
 #include "protocols/plan.hpp"
@@ -85,7 +86,17 @@ struct HumanOptions {
   std::function<void(const std::string&)> say;  // instructions, progress (stdout)
   // Before each session (after its instructions are said); false = stop here.
   std::function<bool(const SessionSpec&)> before_session;
+  // For a window (`run --human --device mouse`): the session's scene, built and about to start
+  // (valid until on_session_end returns); every graphics frame (on the clock's graphics thread);
+  // the session's record once stored (status complete or aborted).
+  std::function<void(const SessionSpec&, const engine::Scene&)> on_session_start;
+  std::function<void(const engine::Frame&)> on_frame;
+  std::function<void(const results::SessionRecord&)> on_session_end;
 };
+
+// What a person is told before the session: the phase's `instructions` (docs/FORMATS.md), or
+// else a default naming the feature to find and the session's length.
+std::string session_instructions(const Study& study, const SessionSpec& spec);
 
 struct HumanSummary {
   int sessions_run = 0, aborted = 0, remaining = 0;

@@ -57,6 +57,13 @@ struct Phase {
   std::optional<std::string> prototype;  // the same prototype for every group in this phase
   CueSwitches cues;
   bool instructed = false;  // an instructor guides this phase's sessions (roles.instructor)
+  // What a person is told before each session (`run --human`): empty = a default from the task,
+  // one text = every session of the phase, else one per session.
+  std::vector<std::string> instructions;
+  const std::string* instructions_for(int session_index) const {
+    if (instructions.empty()) return nullptr;
+    return &instructions[instructions.size() == 1 ? 0 : static_cast<std::size_t>(session_index)];
+  }
 };
 
 struct Group {

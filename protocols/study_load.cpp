@@ -130,6 +130,43 @@ void parse_params(Ctx& c, const json& j, const std::string& path,
 
 }  // namespace
 
+// $.phases[i].instructions: one text for every session of the phase or one per session
+// (`run --human` shows it before the session).
+static std::vector<std::string> parse_instructions(Ctx& c, const json& j, const std::string& P,
+                                                   int sessions) {
+  constexpr std::size_t kMaxChars = 4000;
+  auto text = [&](const json& t, const std::string& tp) -> std::optional<std::string> {
+    if (!t.is_string()) {
+      c.err(tp, std::string("expected a text (string), got ") + kind_name(t));
+      return std::nullopt;
+    }
+    std::string v = t.get<std::string>();
+    if (v.find_first_not_of(" \t\r\n") == std::string::npos) {
+      c.err(tp, "expected a non-empty text");
+      return std::nullopt;
+    }
+    if (v.size() > kMaxChars) {
+      c.err(tp, "expected at most " + std::to_string(kMaxChars) + " characters, got " +
+                    std::to_string(v.size()));
+      return std::nullopt;
+    }
+    return v;
+  };
+  std::vector<std::string> out;
+  if (j.is_array()) {
+    if (static_cast<long long>(j.size()) != sessions) {
+      c.err(P, "expected one text per session (" + std::to_string(sessions) + "), got " +
+                   std::to_string(j.size()) + " (or a single text for every session)");
+      return {};
+    }
+    for (std::size_t k = 0; k < j.size(); ++k)
+      if (auto v = text(j[k], path_index(P, k))) out.push_back(*v);
+    return out.size() == j.size() ? out : std::vector<std::string>{};
+  }
+  if (auto v = text(j, P)) out.push_back(*v);
+  return out;
+}
+
 Study parse_study(const std::string& text, const std::string& file,
                   const PrototypeInspector& inspect) {
   json root = palplab::json::parse_located(text, file);
@@ -178,7 +215,7 @@ Study parse_study(const std::string& text, const std::string& file,
         if (!c.expect_object(pj, P)) continue;
         c.keys(pj, P,
                {"id", "kind", "sessions", "session_duration", "start", "gap", "prototype", "cues",
-                "instructed"});
+                "instructed", "instructions"});
         if (auto v = c.nonempty_text(pj, P, "id", true)) {
           p.id = *v;
           if (!phase_ids.insert(*v).second)
@@ -246,6 +283,8 @@ Study parse_study(const std::string& text, const std::string& file,
           }
         }
         if (auto v = c.boolean(pj, P, "instructed")) p.instructed = *v;
+        if (const json* in = c.member(pj, P, "instructions", false, ""))
+          p.instructions = parse_instructions(c, *in, path_key(P, "instructions"), p.sessions);
         s.phases.push_back(p);
       }
       std::vector<std::pair<int, std::string>> sched_problems;

@@ -32,4 +32,21 @@ std::optional<SurfaceHit> pick_surface(const engine::SceneGeometry& g,
   return best;
 }
 
+std::optional<HeadOnPixel> head_on_pixel(const engine::SceneGeometry& g, const CameraMatrices& m,
+                                         int step, int margin) {
+  std::optional<HeadOnPixel> best;
+  for (int y = margin; y < m.height - margin; y += step)
+    for (int x = margin; x < m.width - margin; x += step) {
+      Eigen::Vector3d o, d;
+      m.unproject(x, y, o, d);
+      const auto h = pick_surface(g, o, d);
+      if (!h) continue;
+      const Eigen::Vector3d a = g.V.row(g.F(h->face, 0)), b = g.V.row(g.F(h->face, 1)),
+                            c = g.V.row(g.F(h->face, 2));
+      const double cs = std::abs((b - a).cross(c - a).normalized().dot(d));
+      if (!best || cs > best->cosine) best = HeadOnPixel{x, y, cs};
+    }
+  return best;
+}
+
 }  // namespace palplab::render

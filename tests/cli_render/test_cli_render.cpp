@@ -11,11 +11,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "engine/haptics/press.hpp"
 #include "engine/render/camera.hpp"
 #include "engine/render/image.hpp"
+#include "engine/render/pick.hpp"
 #include "prototypes/factory.hpp"
 
 namespace fs = std::filesystem;
@@ -175,4 +177,60 @@ TEST(CliView, RecordTraceThenReplayItUnderXvfb) {
           trace.string() + " --screenshot " + shot.string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(pr::read_png(shot.string()).width, 320);
+}
+
+// The ST cue is always a visible flash: prototype A (audio cue on, ST 2 N, 500 N/m) pressed
+// through the scripted mouse past ST lights the window border; the same window without the press
+// leaves it as drawn. The tone goes to ALSA's null device (no sound card needed).
+TEST(CliView, StCueFlashesTheBorderWhenTheForceCrossesSt) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  const int W = 400, H = 300;
+  const auto scene = palplab::prototypes::build_scene(proto("A"));
+  const auto& g = scene.geometry();
+  Eigen::Vector3d c;
+  double rad = 0;
+  pr::bounding_sphere(g.V, c, rad);
+  // Where the surface faces the camera: the press along the view ray goes straight in.
+  const auto px = pr::head_on_pixel(g, pr::camera_matrices(pr::Camera{}, c, rad, W, H));
+  ASSERT_TRUE(px && px->cosine > 0.95);
+  long tone_ms = -1;
+  auto shot_with = [&](int notches, const std::string& name) {
+    const fs::path script = tmp(name + ".json"), shot = tmp(name + ".png");
+    {
+      std::ofstream o(script);
+      o << "{\"palplab_mouse_script\": 1, \"events\": [{\"t\": 0, \"x\": " << px->x
+        << ", \"y\": " << px->y << ", \"left\": true}, {\"t\": 0.05, \"wheel\": " << notches
+        << "}]}";
+    }
+    const Result r = run("PALPLAB_AUDIO_DEVICE=null xvfb-run -a -s '-screen 0 640x480x24' " +
+                         std::string(PALPLAB_BINARY) + " view " + proto("A") + " --size " +
+                         std::to_string(W) + "x" + std::to_string(H) + " --mouse-script " +
+                         script.string() + " --frames 20 --screenshot " + shot.string());
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    // How long the tone sounded (the haptic thread switches it; ALSA's null device plays it).
+    const auto at = r.out.find("ST tone: ");
+    EXPECT_NE(at, std::string::npos) << r.out;
+    tone_ms = at == std::string::npos ? -1 : std::atol(r.out.c_str() + at + 9);
+    return pr::read_png(shot.string());
+  };
+  // The bottom border strip (12 px), right of the panel: flash yellow (255, 217, 26) at 85%.
+  auto flash_share = [&](const pr::Image& img) {
+    long n = 0, yellow = 0;
+    for (int y = img.height - 10; y < img.height; ++y)
+      for (int x = img.width / 2; x < img.width; ++x, ++n) {
+        const auto* p = img.pixel(x, y);
+        yellow += p[0] > 200 && p[1] > 160 && p[2] < 110;
+      }
+    return static_cast<double>(yellow) / n;
+  };
+  const pr::Image pressed = shot_with(8, "st_pressed");  // 6 mm in, head-on: ~3 N > ST
+  const long pressed_tone_ms = tone_ms;
+  const pr::Image light = shot_with(0, "st_light");  // 2 mm outside: no force
+  EXPECT_GT(pressed_tone_ms, 50);  // the press lasts from ~0.05 s to the last of 20 frames
+  EXPECT_EQ(tone_ms, 0);
+  ASSERT_EQ(pressed.width, W);
+  ASSERT_EQ(light.width, W);
+  EXPECT_GT(flash_share(pressed), 0.95);
+  EXPECT_LT(flash_share(light), 0.05);
 }
