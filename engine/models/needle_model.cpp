@@ -3,8 +3,8 @@
 //
 //  * "finger": palpates the skin surface only (the scene's contact tracking gives the touched
 //    skin node). The force is that of a flat fingertip of radius a indenting the soft layers
-//    above the first bone along the inward normal (thickness h, Young's modulus E of the layers
-//    in series: h / E = sum h_i / E_i from the material table):
+//    above the first bone along the inward normal (thickness h; Young's modulus E of the layers
+//    within 3 a of the skin in series, z / E = sum z_i / E_i, from the material table):
 //       k(h) = 2 E a / (1 - nu^2) + E pi a^2 / h        (half-space + layer on a rigid base)
 //       F    = k(h) (h / beta) (exp(beta d / h) - 1) + k_bone max(0, d - 0.7 h)
 //    d = indentation. The first term has the limits of Hayes et al. 1972 (thick layer: the
@@ -33,6 +33,7 @@ namespace {
 
 constexpr double kCompressionLimit = 0.7;  // share of h beyond which the bone is felt
 constexpr double kPoisson = 0.45;          // soft tissue (the table's value for fat and muscle)
+constexpr double kStressDepth = 3.0;       // finger radii of tissue that set the modulus
 
 class NeedleSceneModel final : public SceneModel {
  public:
@@ -117,13 +118,17 @@ class NeedleSceneModel final : public SceneModel {
         h = std::max(l.enter - eps, 1e-4);
         break;
       }
+      // The modulus is that of the tissue within kStressDepth finger radii of the skin: the
+      // stress under a flat punch decays within a few radii (Boussinesq), deeper layers only
+      // matter through h.
       const mesh::Material* m = mesh::default_materials().find(l.tissue);
-      const double len = std::min(l.exit, 0.2) - l.enter;  // beyond 20 cm nothing is felt
+      const double window = kStressDepth * cfg_.finger_radius;
+      const double len = std::min(l.exit, window) - std::max(l.enter, 0.0);
       if (len > 0) {
         compliance += len / m->youngs_modulus;
         soft += len;
       }
-      if (l.exit >= 0.2) break;
+      if (l.exit >= 0.2) break;  // beyond 20 cm: no bone under this point
     }
     finger_h_[v] = h;
     finger_E_[v] = soft > 0 ? soft / compliance : 1e4;
@@ -225,7 +230,7 @@ class NeedleSceneModel final : public SceneModel {
   int insertions_ = 0, bone_contacts_ = 0;
   double last_logged_ = -1.0;
   std::vector<Event> events_;
-  bool delivered_ = false;  // events_ went to the scene with the last step
+  bool delivered_ = false;                   // events_ went to the scene with the last step
   std::vector<double> finger_h_, finger_E_;  // per skin node, -1 = not computed yet
 };
 

@@ -22,6 +22,7 @@
 //
 // Units: m, N, s. The trainee knows its own hand position (proprioception) and the skin surface.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 

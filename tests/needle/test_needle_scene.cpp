@@ -121,7 +121,8 @@ TEST(NeedleScene, ScriptedPosteriorInsertionReachesTheCapsule) {
 TEST(NeedleScene, DistanceIsLoggedAsEventsAndHiddenWithoutTransparency) {
   Scene s = palplab::prototypes::build_scene(kN, {});
   std::vector<std::pair<double, double>> dist;
-  const auto ev = insert(s, -0.002, -0.09, -0.030, 0.005, &dist);
+  // Ends at y = -19 mm, where the direction from the head centre is 38 deg from -x (in the cap).
+  const auto ev = insert(s, -0.002, -0.09, -0.019, 0.005, &dist);
   for (const auto& [y, d] : dist) EXPECT_EQ(d, -1.0);  // nothing shown
   // tip_to_target events: one per log_resolution (0.1 mm) of change, values decreasing here.
   std::vector<double> logged;
@@ -151,7 +152,7 @@ TEST(NeedleScene, WithdrawingLeavesTheTissuesInReverseAndANewInsertionCounts) {
   EXPECT_EQ(left[left.size() - 1], "skin");
   EXPECT_EQ(left[left.size() - 2], "soft tissue");
   EXPECT_EQ(left[left.size() - 3], "muscle");
-  ev = insert(s, 0.0, -0.09, -0.07, 0.005);
+  ev = insert(s, 0.0, -0.09, -0.06, 0.005);
   int starts = 0;
   for (const auto& e : ev) starts += e.kind == EventKind::insertion_start;
   EXPECT_EQ(starts, 1);
@@ -181,14 +182,15 @@ TEST(NeedleScene, LateralInsertionHitsTheHumerus) {
 }
 
 // The finger's force law (engine/models/needle_model.cpp) evaluated by hand for a skin point
-// above the humeral head's lateral pole: skin 2 mm, fat 10 mm, muscle down to the head at
-// x = 22 + 24 = 46 mm.
+// above the humeral head's lateral pole (bone at x = 22 + 24 = 46 mm).
 double finger_closed_form(double h, double d, const palplab::engine::NeedleSceneConfig& c) {
   const auto& t = palplab::mesh::default_materials();
-  const double skin = 0.002, fat = 0.010, muscle = h - skin - fat;
+  // The modulus is that of the first 3 finger radii (24 mm) of tissue: skin, fat, muscle.
+  const double window = 3 * c.finger_radius;
+  const double skin = 0.002, fat = 0.010, muscle = window - skin - fat;
   const double compliance = skin / t.find(100)->youngs_modulus + fat / t.find(101)->youngs_modulus +
                             muscle / t.find(300)->youngs_modulus;
-  const double E = h / compliance, a = c.finger_radius, nu = 0.45;
+  const double E = window / compliance, a = c.finger_radius, nu = 0.45;
   const double k = 2 * E * a / (1 - nu * nu) + E * M_PI * a * a / h;
   return k * h / c.stiffening * std::expm1(c.stiffening * d / h) +
          c.bone_stiffness * std::max(0.0, d - 0.7 * h);
