@@ -52,8 +52,10 @@ json reduced_study() {
   s["phases"][0]["sessions"] = 1;
   s["phases"][0].erase("gap");
   s["prototype_dirs"] = json::array({kSrc + "/prototypes"});
-  s["analyses"] =
-      json::array({{{"kind", "descriptives"}, {"measure", "tip_to_target_mm"}, {"phase", "test"}}});
+  s["analyses"] = json::array();
+  for (const char* m : {"insertion_attempts", "layers_passed", "tip_to_target_mm", "bone_contacts",
+                        "procedure_time"})
+    s["analyses"].push_back({{"kind", "descriptives"}, {"measure", m}, {"phase", "test"}});
   return s;
 }
 
@@ -102,9 +104,10 @@ TEST(CliNeedleStudy, ReducedRunStoresEveryNeedleMeasureAndReports) {
   }
   EXPECT_TRUE(tool);
   EXPECT_TRUE(entered);
-  const Result rep = run("report " + p("n.db"));
+  const Result rep = run("report " + p("n.db") + " --out " + p("report"));
   ASSERT_EQ(rep.code, 0) << rep.err;
-  EXPECT_NE(rep.out.find("tip_to_target_mm"), std::string::npos) << rep.out;
+  const std::string md = slurp(p("report") + "/report.md");
+  for (const auto& m : wanted) EXPECT_NE(md.find(m), std::string::npos) << m;
 }
 
 json n_proto() {
