@@ -195,8 +195,8 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
         spec.prototype_file);
   engine::Scene scene = session_scene(study, spec);
   if (study.task.kind == "needle_insertion") {
-    NeedleSessionRun nr = run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene,
-                                             keep_samples);
+    NeedleSessionRun nr =
+        run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene, keep_samples);
     return finish_session(pp, spec, std::move(nr.data), nr.steps, scene.dt(), nr.wall,
                           std::move(nr.loop), nr.state_after.to_json());
   }
@@ -525,9 +525,10 @@ engine::Trace trace_from_samples(const results::SampleSeries& s) {
 
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
   if (study.task.kind == "needle_insertion")
-    throw InputError("human sessions of a needle_insertion task are not supported yet (the "
-                     "device would need the tool switch; see docs/FORMATS.md \"Needle insertion\")",
-                     study.file);
+    throw InputError(
+        "human sessions of a needle_insertion task are not supported yet (the "
+        "device would need the tool switch; see docs/FORMATS.md \"Needle insertion\")",
+        study.file);
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
   };

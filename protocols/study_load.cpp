@@ -25,18 +25,17 @@ using palplab::json::path_key;
 
 const std::vector<std::string>& known_measures() {
   static const std::vector<std::string> m = {
-      "palpation_force",    "exploration_time", "feature_identified", "accuracy",
-      "insertion_attempts", "layers_passed",    "tip_to_target_mm",   "bone_contacts",
-      "procedure_time"};
+      "palpation_force",  "exploration_time",   "feature_identified",
+      "accuracy",         "insertion_attempts", "layers_passed",
+      "tip_to_target_mm", "bone_contacts",      "procedure_time"};
   return m;
 }
 
 const std::vector<std::string>& default_measures(const std::string& task_kind) {
   static const std::vector<std::string> palpation = {"palpation_force", "exploration_time",
                                                      "feature_identified", "accuracy"};
-  static const std::vector<std::string> needle = {"insertion_attempts", "layers_passed",
-                                                  "tip_to_target_mm", "bone_contacts",
-                                                  "procedure_time"};
+  static const std::vector<std::string> needle = {
+      "insertion_attempts", "layers_passed", "tip_to_target_mm", "bone_contacts", "procedure_time"};
   return task_kind == "needle_insertion" ? needle : palpation;
 }
 

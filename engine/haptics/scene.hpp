@@ -181,8 +181,8 @@ class Scene {
   // effect from the next step; an event tool_changed is logged when the tool changes. A real
   // device calls it whenever its stylus turns. InputError for a tool the model does not have.
   void set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis);
-  std::string tool() const;  // "probe" for single-tool models
-  const SceneConfig& config() const;     // what the scene was built from (copy it for a variant)
+  std::string tool() const;           // "probe" for single-tool models
+  const SceneConfig& config() const;  // what the scene was built from (copy it for a variant)
   Thresholds thresholds(int region) const;
   SceneStats stats() const;
   // Current (deformed) positions of the simulated surface nodes, #V(now) by 3 (m), and faces of

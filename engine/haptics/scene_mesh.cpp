@@ -10,8 +10,8 @@
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/materials.hpp"
-#include "engine/mesh/tetrahedralize.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/mesh/tetrahedralize.hpp"
 #include "engine/models/model.hpp"
 #include "engine/spatial/octree.hpp"
 
