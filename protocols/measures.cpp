@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <optional>
+#include <set>
 
 namespace palplab::protocols {
 
@@ -69,6 +70,35 @@ std::vector<results::MeasureRecord> compute_measures(const MeasureInputs& in) {
           {"accuracy", accuracy, "%"},
           {"palpations", static_cast<double>(palpations), "1"},
           {"sft_reached", static_cast<double>(sft), "1"}};
+}
+
+std::vector<results::MeasureRecord> compute_needle_measures(
+    const std::vector<results::EventRecord>& events) {
+  int attempts = 0, bones = 0;
+  std::set<std::string> layers;  // tissues (by name, else attribute) of the last insertion
+  std::optional<double> distance, last_t;
+  for (const auto& e : events) {
+    const std::string& k = e.kind;
+    const bool needle = k == "insertion_start" || k == "tissue_entered" || k == "tissue_left" ||
+                        k == "bone_contact" || k == "target_reached" || k == "tip_to_target";
+    if (!needle) continue;
+    last_t = e.t;
+    if (k == "insertion_start") {
+      ++attempts;
+      layers.clear();
+    } else if (k == "tissue_entered") {
+      layers.insert(e.region.empty() ? std::to_string(static_cast<int>(e.value)) : e.region);
+    } else if (k == "bone_contact") {
+      ++bones;
+    } else if (k == "tip_to_target") {
+      distance = 1000.0 * e.value;
+    }
+  }
+  return {{"insertion_attempts", static_cast<double>(attempts), "1"},
+          {"layers_passed", static_cast<double>(layers.size()), "1"},
+          {"tip_to_target_mm", distance, "mm"},
+          {"bone_contacts", static_cast<double>(bones), "1"},
+          {"procedure_time", last_t, "s"}};
 }
 
 }  // namespace palplab::protocols

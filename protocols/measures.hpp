@@ -28,4 +28,15 @@ struct MeasureInputs {
 
 std::vector<results::MeasureRecord> compute_measures(const MeasureInputs& in);
 
+// Needle-insertion measures from the logged events of a session (docs/FORMATS.md "Needle"):
+//   insertion_attempts  number of insertion_start events (the tip passed the skin surface)
+//   layers_passed       distinct tissues entered (tissue_entered) in the last insertion
+//   tip_to_target_mm    mm, the last logged tip_to_target of the session (undefined if none)
+//   bone_contacts       number of bone_contact events
+//   procedure_time      s from the session start to the last needle event (insertion_start,
+//                       tissue_entered/left, bone_contact, target_reached, tip_to_target): when
+//                       the needle last moved in the tissue (undefined without an insertion)
+std::vector<results::MeasureRecord> compute_needle_measures(
+    const std::vector<results::EventRecord>& events);
+
 }  // namespace palplab::protocols

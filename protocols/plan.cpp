@@ -170,6 +170,7 @@ std::string plan_summary(const Study& study, const Plan& plan) {
     cue("haptic", p.cues.haptic);
     cue("visual", p.cues.visual_deformation);
     cue("audio", p.cues.audio);
+    cue("transparency", p.cues.transparency);
     if (!cues.empty()) o << "  cues: " << cues;
     if (p.instructed) o << "  instructed";
     o << "\n";

@@ -19,6 +19,7 @@
 #include "palplab/version.hpp"
 #include "protocols/input_pins.hpp"
 #include "protocols/measures.hpp"
+#include "protocols/needle_session.hpp"
 #include "protocols/participants/model.hpp"
 #include "protocols/participants/params.hpp"
 #include "prototypes/factory.hpp"
@@ -103,6 +104,7 @@ engine::Scene session_scene(const Study& study, const SessionSpec& spec) {
   ov.haptic = spec.cues.haptic;
   ov.visual_deformation = spec.cues.visual_deformation;
   ov.audio = spec.cues.audio;
+  ov.transparency = spec.cues.transparency;
   for (const auto& [region, l] : study.task.thresholds) {
     engine::Thresholds t;
     t.st = l.st;
@@ -118,6 +120,7 @@ std::vector<results::MeasureRecord> session_measures(const Study& study,
                                                      const engine::SceneGeometry& g,
                                                      const results::SampleSeries& samples,
                                                      const std::vector<results::EventRecord>& ev) {
+  if (study.task.kind == "needle_insertion") return compute_needle_measures(ev);
   MeasureInputs mi;
   mi.samples = &samples;
   mi.events = &ev;
@@ -145,6 +148,39 @@ struct ModelParams {
             s.instructor ? s.instructor->parameters : nlohmann::json::object(), s.file)) {}
 };
 
+// The session record around a session's log (both task kinds); the trainee's state goes through
+// JSON exactly as a resumed run reads it back.
+SessionOutcome finish_session(const ParticipantPlan& pp, const SessionSpec& spec,
+                              results::SessionData out, long steps, double dt, double wall,
+                              std::vector<float> loop, const nlohmann::json& state) {
+  results::SessionRecord& rec = out.session;
+  rec.participant = pp.id;
+  rec.ordinal = spec.ordinal;
+  rec.phase = spec.phase_id;
+  rec.phase_index = spec.index;
+  rec.prototype = spec.prototype;
+  rec.instructor = spec.instructor;
+  rec.study_offset = spec.offset;
+  rec.day = spec.day;
+  rec.duration = steps * dt;
+  rec.steps = steps;
+  rec.wall_duration = wall;
+  if (!loop.empty()) {
+    auto mid = loop.begin() + loop.size() / 2;
+    std::nth_element(loop.begin(), mid, loop.end());
+    rec.loop_median = *mid;
+    auto p99 = loop.begin() + std::min(loop.size() - 1, loop.size() * 99 / 100);
+    std::nth_element(loop.begin(), p99, loop.end());
+    rec.loop_p99 = *p99;
+  }
+  rec.seed = spec.seed;
+  rec.state_after = state.dump();
+  SessionOutcome o;
+  o.state_after = pm::TraineeState::from_json(nlohmann::json::parse(rec.state_after));
+  o.data = std::move(out);
+  return o;
+}
+
 SessionOutcome run_session(const Study& study, const ModelParams& mp, const ParticipantPlan& pp,
                            const SessionSpec& spec, const pm::TraineeState& state_before,
                            bool keep_samples,
@@ -158,6 +194,12 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
         "the one stored in the database); restore it or start a new run",
         spec.prototype_file);
   engine::Scene scene = session_scene(study, spec);
+  if (study.task.kind == "needle_insertion") {
+    NeedleSessionRun nr =
+        run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene, keep_samples);
+    return finish_session(pp, spec, std::move(nr.data), nr.steps, scene.dt(), nr.wall,
+                          std::move(nr.loop), nr.state_after.to_json());
+  }
   const engine::SceneGeometry& g = scene.geometry();
   const int feature = g.region_index(study.task.feature);
   if (feature < 0)
@@ -256,36 +298,9 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
   mi.identify_dwell = study.task.identify_dwell;
   mi.palpation_onset = study.task.palpation_onset;
   out.measures = compute_measures(mi);
-
-  results::SessionRecord& rec = out.session;
-  rec.participant = pp.id;
-  rec.ordinal = spec.ordinal;
-  rec.phase = spec.phase_id;
-  rec.phase_index = spec.index;
-  rec.prototype = spec.prototype;
-  rec.instructor = spec.instructor;
-  rec.study_offset = spec.offset;
-  rec.day = spec.day;
-  rec.duration = steps * dt;
-  rec.steps = steps;
-  rec.wall_duration = wall;
-  if (!loop.empty()) {
-    auto mid = loop.begin() + loop.size() / 2;
-    std::nth_element(loop.begin(), mid, loop.end());
-    rec.loop_median = *mid;
-    auto p99 = loop.begin() + std::min(loop.size() - 1, loop.size() * 99 / 100);
-    std::nth_element(loop.begin(), p99, loop.end());
-    rec.loop_p99 = *p99;
-  }
-  rec.seed = spec.seed;
-  // The state goes through JSON exactly as a resumed run reads it back.
-  const nlohmann::json st = trainee.state().to_json();
-  rec.state_after = st.dump();
-  SessionOutcome o;
-  o.state_after = pm::TraineeState::from_json(nlohmann::json::parse(rec.state_after));
   if (keep_samples) out.samples = std::move(samples);
-  o.data = std::move(out);
-  return o;
+  return finish_session(pp, spec, std::move(out), steps, dt, wall, std::move(loop),
+                        trainee.state().to_json());
 }
 
 // A new database: the study, its prototypes (with their SHA-256), participants and structure.
@@ -516,6 +531,11 @@ std::string session_instructions(const Study& study, const SessionSpec& spec) {
 }
 
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
+  if (study.task.kind == "needle_insertion")
+    throw InputError(
+        "human sessions of a needle_insertion task are not supported yet (the "
+        "device would need the tool switch; see docs/FORMATS.md \"Needle insertion\")",
+        study.file);
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
   };

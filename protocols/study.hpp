@@ -24,11 +24,20 @@ using ForceLimits = engine::Thresholds;
 
 struct CueSwitches {
   std::optional<bool> haptic, visual_deformation, audio;  // unset = as the prototype says
+  std::optional<bool> transparency;  // needle scenes: soft tissue see-through (tip visible)
 };
 
 struct Task {
+  // "palpation" (find the feature, press to its MPF) or "needle_insertion" (palpate the skin
+  // with the finger, choose the entry point, insert the needle to the target tissue `feature`;
+  // docs/FORMATS.md "Needle insertion studies").
+  std::string kind = "palpation";
   std::string scene;    // informational; checked against the prototype's "scene" when it has one
   std::string feature;  // region name of the feature to find (e.g. "ovary_left")
+  // needle_insertion: what the briefing tells the trainee (an atlas description): the entry
+  // point on the skin (m, the prototype's frame) and the depth of the target below it (m).
+  Eigen::Vector3d entry_hint = Eigen::Vector3d::Zero();
+  double target_depth_hint = 0.0;
   // Region name -> limits; "*" applies to every region without its own entry.
   std::map<std::string, ForceLimits> thresholds;
   double accuracy_tolerance = 0.25;  // N: a palpation is accurate if |peak - MPF| <= this
@@ -126,8 +135,10 @@ struct Study {
   std::map<std::string, std::string> prototype_files;
 };
 
-// The measure names palplab computes (units: N, s, 0/1, %).
+// The measure names palplab computes (units: N, s, 0/1, %, mm), and the default set of a task
+// kind (palpation / needle_insertion) when a study lists none.
 const std::vector<std::string>& known_measures();
+const std::vector<std::string>& default_measures(const std::string& task_kind);
 std::string measure_unit(const std::string& measure);
 
 // What the validator needs to know about a prototype beyond "the file exists and is JSON":

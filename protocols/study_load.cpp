@@ -24,9 +24,19 @@ using palplab::json::path_index;
 using palplab::json::path_key;
 
 const std::vector<std::string>& known_measures() {
-  static const std::vector<std::string> m = {"palpation_force", "exploration_time",
-                                             "feature_identified", "accuracy"};
+  static const std::vector<std::string> m = {
+      "palpation_force",  "exploration_time",   "feature_identified",
+      "accuracy",         "insertion_attempts", "layers_passed",
+      "tip_to_target_mm", "bone_contacts",      "procedure_time"};
   return m;
+}
+
+const std::vector<std::string>& default_measures(const std::string& task_kind) {
+  static const std::vector<std::string> palpation = {"palpation_force", "exploration_time",
+                                                     "feature_identified", "accuracy"};
+  static const std::vector<std::string> needle = {
+      "insertion_attempts", "layers_passed", "tip_to_target_mm", "bone_contacts", "procedure_time"};
+  return task_kind == "needle_insertion" ? needle : palpation;
 }
 
 std::string measure_unit(const std::string& m) {
@@ -34,6 +44,9 @@ std::string measure_unit(const std::string& m) {
   if (m == "exploration_time") return "s";
   if (m == "feature_identified") return "1";
   if (m == "accuracy") return "%";
+  if (m == "insertion_attempts" || m == "layers_passed" || m == "bone_contacts") return "1";
+  if (m == "tip_to_target_mm") return "mm";
+  if (m == "procedure_time") return "s";
   return "";
 }
 
@@ -276,7 +289,8 @@ Study parse_study(const std::string& text, const std::string& file,
         if (const json* cu = c.member(pj, P, "cues", false, "")) {
           std::string CP = path_key(P, "cues");
           if (c.expect_object(*cu, CP)) {
-            c.keys(*cu, CP, {"haptic", "visual_deformation", "audio"});
+            c.keys(*cu, CP, {"haptic", "visual_deformation", "audio", "transparency"});
+            p.cues.transparency = c.boolean(*cu, CP, "transparency");
             p.cues.haptic = c.boolean(*cu, CP, "haptic");
             p.cues.visual_deformation = c.boolean(*cu, CP, "visual_deformation");
             p.cues.audio = c.boolean(*cu, CP, "audio");
@@ -376,8 +390,20 @@ Study parse_study(const std::string& text, const std::string& file,
     const std::string T = "$.task";
     if (c.expect_object(*t, T)) {
       c.keys(*t, T,
-             {"scene", "feature", "thresholds", "accuracy_tolerance", "identify_dwell",
-              "palpation_onset"});
+             {"kind", "scene", "feature", "thresholds", "accuracy_tolerance", "identify_dwell",
+              "palpation_onset", "entry_hint", "target_depth_hint"});
+      if (auto v = c.text(*t, T, "kind", false, {"palpation", "needle_insertion"}))
+        s.task.kind = *v;
+      const bool needle = s.task.kind == "needle_insertion";
+      if (auto v = c.vec3(*t, T, "entry_hint", needle, -10, 10, "the briefed entry point (m)"))
+        s.task.entry_hint = Eigen::Vector3d((*v)[0], (*v)[1], (*v)[2]);
+      if (auto v = c.number(*t, T, "target_depth_hint", needle, 0, 1,
+                            "the briefed depth of the target below the skin (m)", true))
+        s.task.target_depth_hint = *v;
+      if (!needle)
+        for (const char* k : {"entry_hint", "target_depth_hint"})
+          if (t->contains(k))
+            c.err(path_key(T, k), std::string("\"") + k + "\" applies to needle_insertion tasks");
       if (auto v = c.nonempty_text(*t, T, "scene", false)) s.task.scene = *v;
       if (auto v = c.nonempty_text(*t, T, "feature", true)) s.task.feature = *v;
       for (auto [key, field] : {std::pair{"accuracy_tolerance", &s.task.accuracy_tolerance},
@@ -498,7 +524,7 @@ Study parse_study(const std::string& text, const std::string& file,
       }
     }
   } else {
-    s.measures = known_measures();
+    s.measures = default_measures(s.task.kind);
   }
 
   // ---- participant model

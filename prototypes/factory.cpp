@@ -38,9 +38,10 @@ void read_mesh(Checker& c, const json& m, const std::string& path, MeshSource& o
   c.keys(m, P, {"generator", "vertices", "seed", "file"});
   const bool has_file = m.contains("file"), has_gen = m.contains("generator");
   if (has_file == has_gen) {
-    c.err(P, has_file ? "give either \"generator\" or \"file\", not both"
-                      : "missing \"generator\" (tract, model_c, stomach, sphere) or \"file\" "
-                        "(a mesh file)");
+    c.err(P, has_file
+                 ? "give either \"generator\" or \"file\", not both"
+                 : "missing \"generator\" (tract, model_c, stomach, sphere, shoulder) or \"file\" "
+                   "(a mesh file)");
   } else if (has_file) {
     if (auto f = c.text(m, P, "file", true)) {
       namespace fs = std::filesystem;
@@ -59,8 +60,9 @@ void read_mesh(Checker& c, const json& m, const std::string& path, MeshSource& o
       if (m.contains(k))
         c.err(pj::path_key(P, k), std::string("\"") + k + "\" applies to generators only", true);
   } else {
-    out.generator = c.text(m, P, "generator", true, {"tract", "model_c", "stomach", "sphere"})
-                        .value_or(out.generator);
+    out.generator =
+        c.text(m, P, "generator", true, {"tract", "model_c", "stomach", "sphere", "shoulder"})
+            .value_or(out.generator);
     out.vertices = static_cast<int>(
         c.integer(m, P, "vertices", false, 12, 200000, "the vertex count").value_or(out.vertices));
     out.seed = static_cast<std::uint64_t>(
@@ -138,7 +140,8 @@ SceneConfig load_prototype(const std::string& path) {
   if (kind && kind->check && c.ok()) kind->check(c, s);
   if (const json* cu = c.object(root, R, "cues", false)) {
     const std::string P = "$.cues";
-    c.keys(*cu, P, {"haptic", "visual_deformation", "audio"});
+    c.keys(*cu, P, {"haptic", "visual_deformation", "audio", "transparency"});
+    s.cues.transparency = c.boolean(*cu, P, "transparency", false).value_or(s.cues.transparency);
     s.cues.haptic = c.boolean(*cu, P, "haptic", false).value_or(s.cues.haptic);
     s.cues.visual_deformation =
         c.boolean(*cu, P, "visual_deformation", false).value_or(s.cues.visual_deformation);

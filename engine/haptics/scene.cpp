@@ -30,6 +30,20 @@ const char* to_string(EventKind k) {
       return "energy_injected";
     case EventKind::device_invalid:
       return "device_invalid";
+    case EventKind::tool_changed:
+      return "tool_changed";
+    case EventKind::insertion_start:
+      return "insertion_start";
+    case EventKind::tissue_entered:
+      return "tissue_entered";
+    case EventKind::tissue_left:
+      return "tissue_left";
+    case EventKind::bone_contact:
+      return "bone_contact";
+    case EventKind::target_reached:
+      return "target_reached";
+    case EventKind::tip_to_target:
+      return "tip_to_target";
   }
   return "?";
 }
@@ -100,6 +114,7 @@ struct SceneImpl {
   double energy_out = 0.0;  // J: work of the rendered force on the hand in this contact
   Eigen::Vector3d x_prev = Eigen::Vector3d::Zero(), f_prev = Eigen::Vector3d::Zero();
   std::vector<Event> events;
+  int pending_tool_event = -1;  // a tool_changed event for the next step (value), -1 = none
   Sample last;
   SceneStats counters;
 };
@@ -131,6 +146,19 @@ const char* Scene::model_kind() const {
 }
 const SceneConfig& Scene::config() const {
   return impl_->cfg;
+}
+std::string Scene::tool() const {
+  return impl_->model->tool();
+}
+void Scene::set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis) {
+  SceneImpl& s = *impl_;
+  const std::string before = s.model->tool();
+  if (!stylus_axis.allFinite() || !(stylus_axis.norm() > 0.0))
+    throw InputError("set_tool: the stylus axis must be finite and non-zero", s.cfg.source);
+  if (!s.model->set_tool(tool, stylus_axis.normalized()))
+    throw InputError("model \"" + std::string(s.model->kind()) + "\" has no tool \"" + tool + "\"",
+                     s.cfg.source);
+  if (tool != before) s.pending_tool_event = tool == "needle" ? 1 : 0;
 }
 Sample Scene::last_sample() const {
   return impl_->last;
@@ -169,6 +197,7 @@ void Scene::reset() {
   s.x_prev = s.geom.start_position;
   s.f_prev.setZero();
   s.counters = SceneStats{};
+  s.pending_tool_event = -1;
   s.model->reset();
 }
 
@@ -177,6 +206,9 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   s.events.clear();
   ++s.step_index;
   s.t = static_cast<double>(s.step_index) * s.cfg.dt;
+  if (s.pending_tool_event >= 0)
+    s.events.push_back({s.t, EventKind::tool_changed, -1, -1, double(s.pending_tool_event)});
+  s.pending_tool_event = -1;
   const SceneGeometry& g = s.geom;
   // A non-finite or absurd device position (a broken driver, a NaN from a bridge; no device
   // reaches a kilometre) is no contact: the hand is taken to be where it last was valid,
@@ -234,6 +266,11 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   const ModelOutput out = s.model->step({node, x, n}, s.cfg.dt);
   Eigen::Vector3d force = out.force;
   double deformation = out.deformation;
+  if (out.events)
+    for (Event e : *out.events) {
+      e.t = s.t;
+      s.events.push_back(e);
+    }
   // --- watchdog ---
   const double f_model = force.norm();
   const WatchdogConfig& wd = s.cfg.watchdog;
@@ -300,6 +337,10 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
       (s.cfg.cues.visual_deformation && s.model->deformable() && s.contact) ? deformation : 0.0;
   r.audio =
       s.cfg.cues.audio && s.contact && thresholds(region).st > 0.0 && f >= thresholds(region).st;
+  if (s.cfg.cues.transparency) {
+    r.visible_tip_to_target = out.tip_to_target;
+    r.visible_tip_tissue = out.tip_tissue;
+  }
   r.events = std::span<const Event>(s.events.data(), s.events.size());
   s.last = Sample{s.t, x, r.force, r.contact_node};
   s.x_prev = x;
@@ -324,6 +365,7 @@ void apply(SceneConfig& cfg, const SceneOverrides& ov) {
   if (ov.haptic) cfg.cues.haptic = *ov.haptic;
   if (ov.visual_deformation) cfg.cues.visual_deformation = *ov.visual_deformation;
   if (ov.audio) cfg.cues.audio = *ov.audio;
+  if (ov.transparency) cfg.cues.transparency = *ov.transparency;
   if (!ov.thresholds.empty()) {
     const auto& regions = mesh_region_names(cfg.mesh);
     for (const auto& [k, v] : ov.thresholds) {

@@ -49,6 +49,17 @@ enum class EventKind {
   energy_injected,  // value: energy the scene has returned to the hand beyond what it got (J),
                     // once per contact (passivity observer; the scene is not passive)
   device_invalid,   // value: 0; a non-finite or absurd (> 1 km) device position: no contact
+  // Tools and the needle (model "needle", prototype N; docs/FORMATS.md "Needle"). Tissue events:
+  // region = the tissue's region index (region names of a needle scene are its tissue names),
+  // value = the tissue attribute (100 skin, 101 soft tissue, 107 membrane, 200+ bone, 300+ muscle).
+  tool_changed,     // value: 0 finger, 1 needle (Scene::set_tool)
+  insertion_start,  // value: the insertion's number (1, 2, ...): the tip passed the skin surface
+  tissue_entered,   // the needle tip entered the tissue (puncture, or re-entry on withdrawal)
+  tissue_left,      // the tip left the tissue
+  bone_contact,     // the tip started pressing on bone (region/value: the bone)
+  target_reached,   // the tip entered the target tissue (once per insertion)
+  tip_to_target,    // value: distance of the tip to the target (m), logged when it changed by
+                    //   the scene's needle.log_resolution since the last such event
 };
 const char* to_string(EventKind k);
 
@@ -73,6 +84,10 @@ struct Rendered {
   // from its rest position as drawn. 0 for prototype A or when the visual-deformation cue is off.
   double visible_deformation = 0.0;
   bool audio = false;  // the audio cue sounds (force >= ST of the contact region, cue on)
+  // Needle scenes with the transparency cue on (soft tissue drawn see-through): the distance of
+  // the needle tip to the target (m) and the tissue attribute at the tip; -1 when not shown.
+  double visible_tip_to_target = -1.0;
+  int visible_tip_tissue = -1;
   // Events of this step; the span stays valid until the next call to step() or reset().
   std::span<const Event> events;
 };
@@ -110,6 +125,7 @@ struct SceneOverrides {
   std::optional<bool> haptic;                    // render the force on the hand
   std::optional<bool> visual_deformation;        // draw the live deformation
   std::optional<bool> audio;                     // sound at ST
+  std::optional<bool> transparency;              // needle scenes: soft tissue see-through
   std::map<std::string, Thresholds> thresholds;  // region name -> limits (N); "*" = every region
   std::optional<std::string> integrator;         // "symplectic_euler" | "backward_euler" | "rk4"
 };
@@ -160,7 +176,13 @@ class Scene {
   const SceneGeometry& geometry() const;
   const std::string& prototype() const;  // "A", "B", "C", "C1", "C2", ...
   const char* model_kind() const;        // "penalty", "ring", "mass_spring", ...
-  const SceneConfig& config() const;     // what the scene was built from (copy it for a variant)
+  // Multi-tool scenes (model "needle": "finger" palpates the skin, "needle" inserts along the
+  // stylus axis, a unit vector pointing from the handle to the tip, in the organ's frame). Takes
+  // effect from the next step; an event tool_changed is logged when the tool changes. A real
+  // device calls it whenever its stylus turns. InputError for a tool the model does not have.
+  void set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis);
+  std::string tool() const;           // "probe" for single-tool models
+  const SceneConfig& config() const;  // what the scene was built from (copy it for a variant)
   Thresholds thresholds(int region) const;
   SceneStats stats() const;
   // Current (deformed) positions of the simulated surface nodes, #V(now) by 3 (m), and faces of

@@ -91,10 +91,23 @@ struct FemConfig {
   double operational_radius = 0.01;  // m: tets within this distance of the region are solved
 };
 
+// Model "needle" (prototype N; engine/models/needle_model.cpp, docs/FORMATS.md). Needle
+// parameters per tissue come from the material table (engine/mesh/materials.json).
+struct NeedleSceneConfig {
+  std::string tool = "finger";          // the tool at the start and after reset: finger | needle
+  Eigen::Vector3d axis{0.0, 1.0, 0.0};  // stylus axis at the start (unit after reading)
+  int target_tissue = 107;              // tissue attribute of the target (membrane)
+  double finger_radius = 0.008;         // m, radius of the fingertip's contact
+  double stiffening = 3.0;              // 1, exponential strain stiffening of soft tissue
+  double bone_stiffness = 20000.0;      // N/m, the finger on bone through squeezed tissue
+  double log_resolution = 1e-4;         // m, a tip_to_target event when it changed this much
+};
+
 struct Cues {
   bool haptic = true;
   bool visual_deformation = true;
   bool audio = false;
+  bool transparency = false;  // needle scenes: soft tissue drawn see-through (tip visible)
 };
 
 struct SceneConfig {
@@ -106,6 +119,7 @@ struct SceneConfig {
   std::string model = "penalty";  // a registered model kind (engine/models/model.hpp)
   RingParams ring;                // model "ring"
   FemConfig fem;                  // model "fem"
+  NeedleSceneConfig needle;       // model "needle"
   MaterialConfig material;        // deformable models
   SupportConfig support;
   Integrator integrator = Integrator::backward_euler;

@@ -1,6 +1,7 @@
 // The prepared meshes of scenes, cached per process and mesh source: generating Model-C or
 // reading a mesh file, normals, regions, lumped areas, the octree and the ring tables are done
 // once; every scene built from the same source shares them (they are immutable).
+#include <algorithm>
 #include <map>
 #include <mutex>
 
@@ -8,7 +9,9 @@
 #include "engine/haptics/scene_config.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
+#include "engine/mesh/materials.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/mesh/tetrahedralize.hpp"
 #include "engine/models/model.hpp"
 #include "engine/spatial/octree.hpp"
 
@@ -58,6 +61,29 @@ void build_tet(SceneMesh& c, mesh::SurfaceMesh& sm, const mesh::TetMesh& tm) {
   c.boundary_tet = bf.tet;
 }
 
+// The needle scene's shoulder (prototype N): the procedural surfaces tetrahedralized with their
+// tissue seeds; the tets' regions are their tissues by name (so needle events name them), and the
+// surface the participant sees is the skin.
+mesh::TetMesh shoulder_tets(int layer_vertices) {
+  const mesh::Shoulder sh = mesh::generate_shoulder({layer_vertices});
+  mesh::TetOptions to;
+  to.seeds = sh.seeds;
+  mesh::TetMesh tm = mesh::tetrahedralize(sh.surface, to);
+  std::vector<int> tissues(tm.attribute.data(), tm.attribute.data() + tm.attribute.size());
+  std::sort(tissues.begin(), tissues.end());
+  tissues.erase(std::unique(tissues.begin(), tissues.end()), tissues.end());
+  tm.regions.names.clear();
+  for (int a : tissues) {
+    const mesh::Material* mat = mesh::default_materials().find(a);
+    tm.regions.names.push_back(mat ? mat->name : "tissue " + std::to_string(a));
+  }
+  tm.regions.id.resize(tm.T.rows());
+  for (long t = 0; t < tm.T.rows(); ++t)
+    tm.regions.id[t] = static_cast<int>(
+        std::lower_bound(tissues.begin(), tissues.end(), tm.attribute[t]) - tissues.begin());
+  return tm;
+}
+
 std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
   auto c = std::make_shared<SceneMesh>();
   mesh::SurfaceMesh sm;
@@ -75,9 +101,11 @@ std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
     sm = mesh::generate_sphere(m.vertices);
   } else if (m.generator == "model_c") {
     build_tet(*c, sm, mesh::generate_model_c(m.seed, m.vertices));
+  } else if (m.generator == "shoulder") {
+    build_tet(*c, sm, shoulder_tets(m.vertices));
   } else {
     throw InputError("unknown mesh generator \"" + m.generator +
-                     "\" (expected tract, model_c, stomach or sphere)");
+                     "\" (expected tract, model_c, stomach, sphere or shoulder)");
   }
   c->V = sm.V;
   c->F = sm.F;
@@ -146,6 +174,7 @@ void install_scene_mesh(const MeshSource& m, std::shared_ptr<const SceneMesh> me
 
 const std::vector<std::string>& mesh_region_names(const MeshSource& m) {
   static const std::vector<std::string> none;
+  if (m.file.empty() && m.generator == "shoulder") return scene_mesh(m)->region_names;
   if (m.file.empty())
     return m.generator == "tract" || m.generator == "model_c" ? mesh::tract_region_names() : none;
   return scene_mesh(m)->region_names;

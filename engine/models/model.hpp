@@ -74,6 +74,11 @@ struct ContactInput {
 struct ModelOutput {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   double deformation = 0.0;
+  // Multi-tool models: events of this step (t filled in by the scene; nullptr = none), the tip's
+  // distance to the target (m) and the tissue at the tip (-1 = none; shown with transparency).
+  const std::vector<Event>* events = nullptr;
+  double tip_to_target = -1.0;
+  int tip_tissue = -1;
 };
 
 class SceneModel {
@@ -90,6 +95,12 @@ class SceneModel {
   virtual void stats(SceneStats& s) const = 0;
   // Current surface for a renderer (#V(now) by 3, faces of the current surface).
   virtual void surface(mesh::Positions& V, mesh::Faces& F) const = 0;
+  // Tool selection (Scene::set_tool); single-tool models have the one tool "probe".
+  virtual std::string tool() const { return "probe"; }
+  virtual bool set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis) {
+    (void)stylus_axis;
+    return tool == "probe";
+  }
 };
 
 // A registered model kind: its name in prototype files, the reader of its "model" object (every

@@ -7,6 +7,7 @@ const ModelKind& penalty_model_kind();      // penalty_model.cpp
 const ModelKind& ring_model_kind();         // ring_model.cpp
 const ModelKind& mass_spring_model_kind();  // mass_spring_model.cpp
 const ModelKind& fem_model_kind();          // fem_scene_model.cpp
+const ModelKind& needle_model_kind();       // needle_model.cpp
 
 const std::vector<ModelKind>& model_kinds() {
   static const std::vector<ModelKind> kinds = {
@@ -14,6 +15,7 @@ const std::vector<ModelKind>& model_kinds() {
       ring_model_kind(),
       mass_spring_model_kind(),
       fem_model_kind(),
+      needle_model_kind(),
   };
   return kinds;
 }

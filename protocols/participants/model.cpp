@@ -56,7 +56,9 @@ nlohmann::json TraineeState::to_json() const {
           {"speed_factor", speed_factor},
           {"k_log_sum", k_log_sum},
           {"k_log_sq", k_log_sq},
-          {"landmark_practice", landmark_practice}};
+          {"landmark_practice", landmark_practice},
+          {"depth_mean", depth_mean},
+          {"depth_var", depth_var}};
 }
 
 TraineeState TraineeState::from_json(const nlohmann::json& j) {
@@ -84,6 +86,8 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   s.k_log_sum = j.value("k_log_sum", 0.0);
   s.k_log_sq = j.value("k_log_sq", 0.0);
   s.landmark_practice = j.value("landmark_practice", 0.0);
+  s.depth_mean = j.value("depth_mean", 0.0);  // added with the needle task
+  s.depth_var = j.value("depth_var", 0.0);
   return s;
 }
 

@@ -35,6 +35,10 @@ struct Percept {
   int contact_region = -1;
   double visible_deformation = 0.0;  // m, 0 when nothing is drawn
   bool audio = false;
+  // Needle scenes with transparency: the tip's distance to the target (m) and the tissue at the
+  // tip as drawn; -1 when not shown.
+  double visible_tip_to_target = -1.0;
+  int visible_tip_tissue = -1;
 };
 
 // The rest surface the trainee explores (what a person sees of the organ before touching it).
@@ -95,6 +99,8 @@ struct TraineeState {
   // Landmark judgements practised so far; one confirmed by seeing the touched part deform
   // counts 1 + visual_recognition_gain (orienting practice, see draw_landmark_time).
   double landmark_practice = 0.0;
+  // Needle task: belief about the target's depth below the skin (m, m^2; 0 = not briefed yet).
+  double depth_mean = 0.0, depth_var = 0.0;
   nlohmann::json to_json() const;
   static TraineeState from_json(const nlohmann::json& j);
 };

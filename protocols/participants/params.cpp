@@ -166,6 +166,52 @@ const std::vector<ParamSpec>& trainee_param_specs() {
             "hand speed from one landmark to the next while orienting (slower than a seen reach)",
             "Lederman & Klatzky 1987 (deliberate exploratory movements of a few cm/s); value "
             "an assumption"),
+      // ---- needle insertion
+      tspec("palpation_grid", &T::palpation_grid, 1, 15, "1",
+            "needle task: points per side of the square grid palpated around the believed entry "
+            "point (rounded to an integer)",
+            "model assumption (landmark palpation before a joint injection: feel the bony "
+            "prominences around the soft spot; Sibbitt et al. 2011 on blind injection technique)"),
+      tspec("palpation_spacing", &T::palpation_spacing, 0.001, 0.05, "m",
+            "needle task: distance between palpated points (about a fingertip's width or less)",
+            "model assumption (two-point discrimination of the fingertip is 2-3 mm; Johnson & "
+            "Phillips 1981)"),
+      tspec("palpation_depth", &T::palpation_depth, 0.001, 0.03, "m",
+            "needle task: how deep each palpation presses the skin in",
+            "model assumption (a firm clinical palpation indents soft tissue by some mm)"),
+      tspec("palpation_speed", &T::palpation_speed, 1e-3, 0.5, "m/s",
+            "needle task: finger speed into and out of the skin", "model assumption"),
+      tspec("aim_angle_sd", &T::aim_angle_sd, 0.0, 0.5, "rad",
+            "needle task: SD of the needle direction about the intended one (per insertion)",
+            "model assumption of the order of free-hand needle angle errors of a few degrees "
+            "(e.g. 2-5 deg in free-hand insertion studies); value to be fitted"),
+      tspec("aim_position_sd", &T::aim_position_sd, 0.0, 0.02, "m",
+            "needle task: SD of the skin entry point about the chosen one (per insertion, "
+            "tangential)",
+            "model assumption (free-hand positioning error of about a millimetre)"),
+      tspec("needle_speed", &T::needle_speed, 1e-4, 0.1, "m/s",
+            "needle task: insertion speed along the needle",
+            "Okamura, Simone & O'Leary 2004 (insertions at about 3 mm/s); a clinician's pace "
+            "of a few mm/s"),
+      tspec("depth_prior_cv", &T::depth_prior_cv, 0.0, 1.0, "1",
+            "needle task: relative SD of the target depth belief left by the briefing (the "
+            "belief is updated only where the tip is seen reaching the target)",
+            "model assumption (analogous to prior_target_cv)"),
+      tspec("bone_stop_force", &T::bone_stop_force, 0.1, 8.0, "N",
+            "needle task: an axial force this high without a pop is taken for bone: the trainee "
+            "withdraws and inserts again",
+            "model assumption (above the puncture forces of skin and capsule, ~1-1.5 N; "
+            "Abolhassani et al. 2007)"),
+      tspec("pop_drop", &T::pop_drop, 0.01, 5.0, "N",
+            "needle task: a drop of the felt axial force this large is a felt puncture (pop)",
+            "model assumption (several times the haptic JND of ~0.1 N at 1 N; Jones 1989)"),
+      tspec("pop_window", &T::pop_window, 0.0, 1.0, "1",
+            "needle task: a pop felt within this share of the believed target depth is taken "
+            "for the capsule (loss of resistance) and the insertion stops there",
+            "model assumption (clinicians stop at the capsule pop near the expected depth)"),
+      tspec("max_insertions", &T::max_insertions, 1, 20, "1",
+            "needle task: insertions (after bone contact) before the trainee stops trying",
+            "model assumption (clinical practice limits redirections)"),
   };
   return specs;
 }

@@ -60,6 +60,19 @@ struct TraineeParams {
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
   double landmark_time = 12.9513;  // s, median novice judgement time at one landmark
   double trace_speed = 0.02;       // m/s, hand speed from one landmark to the next
+  // needle insertion (task kind needle_insertion; docs/PARTICIPANTS.md "Needle insertion")
+  double palpation_grid = 5;         // 1, palpated points per side of the square grid
+  double palpation_spacing = 0.005;  // m, between palpated points
+  double palpation_depth = 0.005;    // m, indentation of each palpation
+  double palpation_speed = 0.05;     // m/s, finger speed in and out of the skin
+  double aim_angle_sd = 0.035;       // rad, SD of the needle direction from the intended one
+  double aim_position_sd = 0.001;    // m, SD of the entry point from the chosen one
+  double needle_speed = 0.005;       // m/s, insertion speed
+  double depth_prior_cv = 0.25;      // 1, relative SD of the briefed target depth belief
+  double bone_stop_force = 2.5;      // N, a steady force this high is taken for bone
+  double pop_drop = 0.3;             // N, force drop felt as a puncture ("pop")
+  double pop_window = 0.2;           // 1, a pop within this share of the believed depth ends it
+  double max_insertions = 3;         // 1, insertions before the trainee gives up
 };
 
 struct InstructorParams {
