@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/contact.hpp"
 
 #include "engine/haptics/scene_config.hpp"
 #include "engine/models/model.hpp"
@@ -30,6 +31,8 @@ const char* to_string(EventKind k) {
       return "energy_injected";
     case EventKind::device_invalid:
       return "device_invalid";
+    case EventKind::contact_inside:
+      return "contact_inside";
   }
   return "?";
 }
@@ -84,14 +87,13 @@ struct SceneImpl {
   std::shared_ptr<const SceneMesh> mesh;
   std::unique_ptr<SceneModel> model;
   SceneGeometry geom;
-  double contact_radius = 0.0;         // m
-  std::vector<Thresholds> thresholds;  // per region
-  Thresholds default_thresholds;       // for unlabelled contacts
+  std::unique_ptr<ContactTracker> tracker;  // god-object proxy on the rest surface
+  std::vector<Thresholds> thresholds;       // per region
+  Thresholds default_thresholds;            // for unlabelled contacts
 
   // --- state ---
   long step_index = 0;
   double t = 0.0;
-  bool engaged = false;  // tracking a contact node (device below the rest tangent plane)
   bool contact = false;  // force is being exchanged
   int node = -1;         // surface node of the contact
   double peak_force = 0.0;
@@ -158,8 +160,9 @@ void Scene::reset() {
   SceneImpl& s = *impl_;
   s.step_index = 0;
   s.t = 0.0;
-  s.engaged = s.contact = false;
+  s.contact = false;
   s.node = -1;
+  s.tracker->reset();
   s.peak_force = 0.0;
   s.reached[0] = s.reached[1] = s.reached[2] = false;
   s.events.clear();
@@ -184,54 +187,34 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   const bool valid = x_in.allFinite() && x_in.cwiseAbs().maxCoeff() < 1e3;
   if (!valid && !s.device_bad) s.events.push_back({s.t, EventKind::device_invalid, -1, -1, 0.0});
   s.device_bad = !valid;
-  if (!valid) s.engaged = false;
   const Eigen::Vector3d x = valid ? x_in : s.last.x;
 
-  // --- contact tracking on the rest surface (a god-object proxy walks over the surface from
-  // the last contact node, so pushing through a thin part cannot jump to its far side) ---
-  if (!valid) {
-    // stay disengaged
-  } else if (!s.engaged) {
-    const int p = g.nearest_node(x);
-    if (p >= 0) {
-      const Eigen::Vector3d vp = g.V.row(p).transpose();
-      const double pen = (vp - x).dot(g.N.row(p).transpose());
-      if (pen > 0.0 && (x - vp).norm() < s.contact_radius) {
-        s.engaged = true;
-        s.node = p;
-      }
-    }
-  } else {
-    // The proxy follows the device's TANGENTIAL motion only: among the node and its first ring,
-    // take the node with the smallest lateral offset of the device from its normal line. A
-    // straight push keeps the node; sliding moves it; depth never makes it jump.
-    auto lateral = [&](int q) {
-      const Eigen::Vector3d d = x - g.V.row(q).transpose();
-      const Eigen::Vector3d nq = g.N.row(q).transpose();
-      return (d - d.dot(nq) * nq).squaredNorm();
-    };
-    for (int it = 0; it < 16; ++it) {
-      int best = s.node;
-      double bd = lateral(s.node);
-      for (int q : s.mesh->rings->first.row(s.node)) {
-        const double d = lateral(q);
-        if (d < bd) {
-          bd = d;
-          best = q;
-        }
-      }
-      if (best == s.node) break;
-      s.node = best;
-    }
-    const double pen = (g.V.row(s.node).transpose() - x).dot(g.N.row(s.node).transpose());
-    if (!(pen > 0.0)) s.engaged = false;
+  // --- contact tracking: a god-object proxy on the rest surface (engine/haptics/contact.hpp).
+  // The device's path since the last valid step is tested against the surface, so no speed
+  // tunnels through it, and the proxy cannot cross it, so depth never jumps to the far side.
+  ContactTracker& tr = *s.tracker;
+  if (valid)
+    tr.update(s.x_prev, x);
+  else
+    tr.invalidate();
+  ContactInput ci;
+  ci.x = x;
+  if (tr.engaged()) {
+    ci.node = tr.node();
+    ci.n = tr.normal();
+    ci.face = tr.proxy().face;
+    ci.w = tr.proxy().w;
+    ci.proxy = tr.proxy().p;
+    ci.depth = tr.depth();
+    s.node = ci.node;
+    if (tr.started_inside())
+      s.events.push_back(
+          {s.t, EventKind::contact_inside, g.vertex_region[ci.node], ci.node, tr.depth()});
   }
-  const int node = s.engaged ? s.node : -1;
-  const Eigen::Vector3d n =
-      node >= 0 ? Eigen::Vector3d(g.N.row(node).transpose()) : Eigen::Vector3d::UnitZ();
+  const int node = ci.node;
 
   // --- the model ---
-  const ModelOutput out = s.model->step({node, x, n}, s.cfg.dt);
+  const ModelOutput out = s.model->step(ci, s.cfg.dt);
   Eigen::Vector3d force = out.force;
   double deformation = out.deformation;
   // --- watchdog ---
@@ -356,7 +339,7 @@ Scene make_scene(const SceneConfig& cfg) {
   sc.cfg = cfg;
   sc.mesh = scene_mesh(cfg.mesh);
   const SceneMesh& m = *sc.mesh;
-  sc.contact_radius = cfg.contact.radius > 0 ? cfg.contact.radius : 1.5 * m.mean_edge;
+  sc.tracker = std::make_unique<ContactTracker>(m.V, m.N, m.F);
 
   SceneGeometry& g = sc.geom;
   g.V = m.V;

@@ -49,6 +49,9 @@ enum class EventKind {
   energy_injected,  // value: energy the scene has returned to the hand beyond what it got (J),
                     // once per contact (passivity observer; the scene is not passive)
   device_invalid,   // value: 0; a non-finite or absurd (> 1 km) device position: no contact
+  // A contact that began with the device already inside the organ (its first position after
+  // reset, or after device_invalid, is inside): the proxy starts at the closest surface point.
+  contact_inside,  // value: the depth (m) the force starts from
 };
 const char* to_string(EventKind k);
 
