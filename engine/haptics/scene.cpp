@@ -207,6 +207,17 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
     ci.proxy = tr.proxy().p;
     ci.depth = tr.depth();
     s.node = ci.node;
+    // Device saturation: the coupling is stretched at most twice as far as the device's force
+    // limit needs (d_max = 2 F_max / k). Deeper, the device position given to the model is
+    // moved back along the normal, so no model is ever pushed with more than about twice what the
+    // hand can feel: a jump of the device deep into the organ cannot drive a deformable model
+    // into an inverted state it never leaves. The factor 2 keeps the rendered force pinned at
+    // the limit while the tissue yields under the probe.
+    const double d_max = 2.0 * s.cfg.contact.force_limit / s.cfg.contact.stiffness;
+    if (ci.depth > d_max) {
+      ci.x += (ci.depth - d_max) * ci.n;
+      ci.depth = d_max;
+    }
     if (tr.started_inside())
       s.events.push_back(
           {s.t, EventKind::contact_inside, g.vertex_region[ci.node], ci.node, tr.depth()});
