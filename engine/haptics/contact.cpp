@@ -78,6 +78,23 @@ ContactTracker::ContactTracker(const mesh::Positions& V, const mesh::Positions& 
   std::vector<int> fill(vf_offset_.begin(), vf_offset_.end() - 1);
   for (long f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) vf_[fill[F(f, k)]++] = static_cast<int>(f);
+  // Face across each edge: edge_face_[3 f + k] is the face sharing the edge opposite corner k.
+  edge_face_.assign(3 * nf, -1);
+  for (long f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int u = F(f, (k + 1) % 3), v = F(f, (k + 2) % 3);
+      for (int j = vf_offset_[u]; j < vf_offset_[u + 1] && edge_face_[3 * f + k] < 0; ++j) {
+        const int g = vf_[j];
+        if (g == f) continue;
+        for (int m = 0; m < 3; ++m)
+          if (F(g, m) == v) edge_face_[3 * f + k] = g;
+      }
+    }
+  double edges = 0.0;
+  for (long f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k)
+      edges += (mesh::row3(V, F(f, k)) - mesh::row3(V, F(f, (k + 1) % 3))).norm();
+  mean_edge_ = nf > 0 ? edges / (3.0 * nf) : 0.0;
   face_box_.resize(nf);
   for (long f = 0; f < nf; ++f) {
     face_box_[f].setEmpty();
@@ -226,41 +243,62 @@ bool ContactTracker::first_entry(const Vec3& a, const Vec3& b, SurfacePoint& hit
 }
 
 SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x) const {
-  SurfacePoint cur = closest_on_face(from.face, x);
-  double cd = (cur.p - x).squaredNorm();
-  // Each move is to a face sharing a vertex with the current one and strictly closer, so the
-  // walk ends; the cap only bounds the work of a step (a long jump continues next step).
+  // Phong projection: the proxy p on the surface whose shaded normal passes through x,
+  // x = p - d n(p). Under a straight push along a node's normal the proxy stays on the node (a
+  // deformable tissue keeps its contact node); sliding moves it continuously, since n is
+  // continuous over edges. Per face a few fixed-point steps (n from the current weights, x
+  // projected onto the face plane along n); a weight below 0 walks to the face across that edge.
+  int f = from.face, prev = -1;
+  Vec3 w = from.w;
+  Vec3 p = from.p;
   for (int it = 0; it < 64; ++it) {
-    if (cur.w.minCoeff() > 0.0) break;  // x projects inside the face: the proxy stays
-    SurfacePoint best = cur;
-    double bd = cd * (1.0 - 1e-12);
-    for (int k = 0; k < 3; ++k) {
-      if (cur.w[k] == 0.0) continue;  // only faces around the boundary part the point is on
-      const int v = F_(cur.face, k);
-      for (int j = vf_offset_[v]; j < vf_offset_[v + 1]; ++j) {
-        const int g = vf_[j];
-        if (g == cur.face) continue;
-        // The face must contain the closest point's support (its edge or vertex).
-        bool shares = true;
-        for (int m = 0; m < 3; ++m)
-          if (cur.w[m] > 0.0) {
-            const int u = F_(cur.face, m);
-            shares = shares && (F_(g, 0) == u || F_(g, 1) == u || F_(g, 2) == u);
-          }
-        if (!shares) continue;
-        const SurfacePoint s = closest_on_face(g, x);
-        const double d = (s.p - x).squaredNorm();
-        if (d < bd) {
-          bd = d;
-          best = s;
-        }
-      }
+    const Vec3 a = mesh::row3(V_, F_(f, 0)), b = mesh::row3(V_, F_(f, 1)),
+               c = mesh::row3(V_, F_(f, 2));
+    const Vec3 nf = (b - a).cross(c - a);
+    const double area2 = nf.squaredNorm();
+    if (!(area2 > 0.0)) break;  // degenerate face: keep the last point
+    Vec3 wu = w;
+    for (int j = 0; j < 4; ++j) {
+      SurfacePoint q{f, wu.cwiseMax(0.0) / std::max(wu.cwiseMax(0.0).sum(), 1e-300), p};
+      const Vec3 n = shaded_normal(q);
+      const double den = n.dot(nf);
+      if (!(std::abs(den) > 1e-3 * std::sqrt(area2))) break;  // n nearly in the face plane
+      p = x + ((a - x).dot(nf) / den) * n;
+      wu = Vec3((b - p).cross(c - p).dot(nf), (c - p).cross(a - p).dot(nf),
+                (a - p).cross(b - p).dot(nf)) /
+           area2;
     }
-    if (best.face == cur.face) break;
-    cur = best;
-    cd = (cur.p - x).squaredNorm();
+    int k = 0;
+    const double wmin = wu.minCoeff(&k);
+    if (wmin >= -1e-12) {
+      w = wu.cwiseMax(0.0) / wu.cwiseMax(0.0).sum();
+      break;
+    }
+    const int g = edge_face_[3 * f + k];
+    if (g < 0 || g == prev) {  // a boundary, or back and forth over one edge: stay on the edge
+      w = wu.cwiseMax(0.0);
+      w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+      break;
+    }
+    // Weights of the same point in the neighbour (a starting guess for its fixed point).
+    prev = f;
+    f = g;
+    const Vec3 a2 = mesh::row3(V_, F_(f, 0)), b2 = mesh::row3(V_, F_(f, 1)),
+               c2 = mesh::row3(V_, F_(f, 2));
+    const Vec3 n2 = (b2 - a2).cross(c2 - a2);
+    const double ar2 = std::max(n2.squaredNorm(), 1e-300);
+    w = Vec3((b2 - p).cross(c2 - p).dot(n2), (c2 - p).cross(a2 - p).dot(n2),
+             (a2 - p).cross(b2 - p).dot(n2)) /
+        ar2;
+    w = w.cwiseMax(0.0);
+    w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
   }
-  return cur;
+  SurfacePoint out;
+  out.face = f;
+  out.w = w;
+  out.p = w[0] * mesh::row3(V_, F_(f, 0)) + w[1] * mesh::row3(V_, F_(f, 1)) +
+          w[2] * mesh::row3(V_, F_(f, 2));
+  return out;
 }
 
 Vec3 ContactTracker::shaded_normal(const SurfacePoint& s) const {
@@ -289,7 +327,17 @@ void ContactTracker::update(const Vec3& from, const Vec3& x) {
   started_inside_ = false;
   if (F_.rows() == 0) return;
   if (engaged_) {
-    set_contact(walk(proxy_, x), x);
+    // Near a focal point of the surface (deeper than its local radius of curvature, e.g. past
+    // the middle of a small ovary whose soft tissue lets the hand that deep) the projection is
+    // no longer unique and the walk may run off. The proxy then stays where it is, on the side
+    // of entry: when the walk ends on the outside while the device is still below the old
+    // proxy, or moves more than 4 times the device's step plus a tenth of a mean edge (sliding
+    // at a few mm depth moves it about 1.2 times the device's step).
+    const SurfacePoint q = walk(proxy_, x);
+    const double d_new = (q.p - x).dot(shaded_normal(q)), d_old = (proxy_.p - x).dot(n_);
+    const bool run_off = (d_new <= 0.0 && d_old > 0.0) ||
+                         (q.p - proxy_.p).norm() > 4.0 * (x - from).norm() + 0.1 * mean_edge_;
+    set_contact(run_off ? proxy_ : q, x);
     return;
   }
   if (!outside_known_) {

@@ -6,10 +6,10 @@
 //   * While free, the device's PATH from its last position to the current one is tested against
 //     the surface (continuous collision): the first face the path enters from outside becomes the
 //     proxy's face, however fast the device moves. No step is too long to be caught.
-//   * While in contact, the proxy walks face to face towards the device: it stays on its face
-//     while the device projects inside it, and crosses an edge or a vertex only to a face that
-//     is strictly closer. It moves continuously over the surface and never jumps to the far
-//     side of a thin part, however deep the device goes.
+//   * While in contact, the proxy walks face to face over edges to the point p whose shaded
+//     normal passes through the device (Phong projection, x = p - d n(p)): a straight push
+//     along a node's normal keeps the node, sliding moves p continuously, and p never jumps to
+//     the far side of a thin part, however deep the device goes.
 //   * Penetration depth is measured along the shaded normal n(p) = normalize(sum_i w_i N_i) of
 //     the proxy's face (w the barycentric weights of the proxy, N the vertex normals): at a
 //     vertex it is that vertex's normal, on an edge a blend of its two ends. The contact ends
@@ -63,7 +63,7 @@ class ContactTracker {
   double winding_number(const Eigen::Vector3d& x) const;
   // First face the segment a -> b enters from outside (smallest parameter); false if none.
   bool first_entry(const Eigen::Vector3d& a, const Eigen::Vector3d& b, SurfacePoint& hit) const;
-  // The proxy's walk from `from` towards x (see the top); returns the new proxy.
+  // The proxy's walk from `from` to the Phong projection of x (see the top).
   SurfacePoint walk(const SurfacePoint& from, const Eigen::Vector3d& x) const;
   Eigen::Vector3d shaded_normal(const SurfacePoint& s) const;
 
@@ -80,6 +80,8 @@ class ContactTracker {
   const mesh::Positions& N_;
   const mesh::Faces& F_;
   std::vector<int> vf_offset_, vf_;  // vertex -> incident faces (CSR)
+  double mean_edge_ = 0.0;           // m
+  std::vector<int> edge_face_;       // 3 #F: face across the edge opposite each corner, -1
   std::vector<BvhNode> bvh_;
   std::vector<int> order_;  // faces grouped by leaf
   std::vector<Eigen::AlignedBox3d> face_box_;

@@ -101,6 +101,8 @@ struct SceneImpl {
   bool limited = false, energy_flagged = false, device_bad = false;
   double energy_out = 0.0;  // J: work of the rendered force on the hand in this contact
   Eigen::Vector3d x_prev = Eigen::Vector3d::Zero(), f_prev = Eigen::Vector3d::Zero();
+  double model_depth = 0.0;  // m, depth given to the model last step (0 without contact)
+  double model_force = 0.0;  // N, the model's unclamped force last step
   std::vector<Event> events;
   Sample last;
   SceneStats counters;
@@ -171,6 +173,7 @@ void Scene::reset() {
   s.energy_out = 0.0;
   s.x_prev = s.geom.start_position;
   s.f_prev.setZero();
+  s.model_depth = s.model_force = 0.0;
   s.counters = SceneStats{};
   s.model->reset();
 }
@@ -207,22 +210,24 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
     ci.proxy = tr.proxy().p;
     ci.depth = tr.depth();
     s.node = ci.node;
-    // Device saturation: the coupling is stretched at most twice as far as the device's force
-    // limit needs (d_max = 2 F_max / k). Deeper, the device position given to the model is
-    // moved back along the normal, so no model is ever pushed with more than about twice what the
-    // hand can feel: a jump of the device deep into the organ cannot drive a deformable model
-    // into an inverted state it never leaves. The factor 2 keeps the rendered force pinned at
-    // the limit while the tissue yields under the probe.
-    const double d_max = 2.0 * s.cfg.contact.force_limit / s.cfg.contact.stiffness;
-    if (ci.depth > d_max) {
-      ci.x += (ci.depth - d_max) * ci.n;
-      ci.depth = d_max;
+    // Device saturation: the device renders at most force_limit, so no model is pushed with
+    // more than twice that. The tissue's surface under the probe was last step at
+    // depth_model - f_model / k (the coupling's stretch); the device position given to the model
+    // is held at most 2 force_limit / k below it. A jump of the device deep into the organ then
+    // pushes a deformable model with a bounded force instead of a 3 cm step of the coupling (it
+    // drove prototype C into an inverted state it never left); the rendered force stays pinned
+    // at the limit (force_limited).
+    const double k = s.cfg.contact.stiffness, fmax = s.cfg.contact.force_limit;
+    const double surface =
+        s.model_depth > 0.0 ? std::max(0.0, s.model_depth - s.model_force / k) : 0.0;
+    const double cap = surface + 2.0 * fmax / k;
+    if (ci.depth > cap) {
+      ci.x += (ci.depth - cap) * ci.n;
+      ci.depth = cap;
     }
-    if (tr.started_inside())
-      s.events.push_back(
-          {s.t, EventKind::contact_inside, g.vertex_region[ci.node], ci.node, tr.depth()});
   }
   const int node = ci.node;
+  s.model_depth = node >= 0 ? ci.depth : 0.0;
 
   // --- the model ---
   const ModelOutput out = s.model->step(ci, s.cfg.dt);
@@ -230,6 +235,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   double deformation = out.deformation;
   // --- watchdog ---
   const double f_model = force.norm();
+  s.model_force = std::isfinite(f_model) ? f_model : 0.0;
   const WatchdogConfig& wd = s.cfg.watchdog;
   if (s.model->deformable() &&
       (!std::isfinite(f_model) || !std::isfinite(deformation) || f_model > wd.divergence_force ||

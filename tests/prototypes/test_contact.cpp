@@ -4,12 +4,18 @@
 // The god-object tracker itself is checked on an octahedron (engine/haptics/contact.hpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <vector>
 
+#include "common/input_error.hpp"
 #include "engine/haptics/contact.hpp"
 #include "engine/haptics/scene_config.hpp"
+#include "engine/mesh/generate.hpp"
+#include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
 
 using namespace palplab;
@@ -147,13 +153,12 @@ TEST(ContactTracker, StartInsideEngagesAtTheClosestPoint) {
   EXPECT_FALSE(t.started_inside());  // only the first step
 }
 
-TEST(ContactTracker, ProxyHoldsItsFaceThenCrossesTheRidgeOnce) {
+TEST(ContactTracker, ProxyMovesContinuouslyOverARidge) {
   // Slide under the ridge between faces (+,+,+) and (+,-,+). Inside a ridge the closest face
-  // changes at the bisector (y = 0 here) and a closest-point contact would flip there; the
-  // god-object stays on its face while the device projects inside it (down to y = -0.25 for
-  // this path) and only then moves over, once. Every other step moves it no more than the
-  // device, and the one move over the ridge is bounded by the distance to the device (the two
-  // proxies are both within it).
+  // changes at the bisector (y = 0 here) and a closest-point contact jumps there (by 0.41 on
+  // this path). The proxy is the point whose shaded normal passes through the device: it
+  // crosses the edge continuously, each step moving it by at most a few device steps (the
+  // shaded normal turns fast on this coarse shape: 90 degrees over one face).
   Octa o;
   ContactTracker t(o.V, o.N, o.F);
   t.reset();
@@ -164,26 +169,19 @@ TEST(ContactTracker, ProxyHoldsItsFaceThenCrossesTheRidgeOnce) {
   t.update(prev, x);
   ASSERT_TRUE(t.engaged());
   Eigen::Vector3d p = t.proxy().p;
-  int big = 0;
+  double worst = 0;
   for (int k = 1; k <= 600; ++k) {
     prev = x;
     x = Eigen::Vector3d(0.3, 0.3 - k * 1e-3, 0.2);
     t.update(prev, x);
     ASSERT_TRUE(t.engaged()) << k;
-    const double jump = (t.proxy().p - p).norm(), before = (p - x).norm();
-    if (jump > 1.5e-3) {
-      ++big;
-      EXPECT_LT((t.proxy().p - x).norm(), before);  // only to a strictly closer point
-      EXPECT_LE(jump, 2.0 * before);
-      EXPECT_NEAR(x.y(), -0.25, 1.5e-3);  // when the projection leaves the first face
-    }
-    if (x.y() > -0.249) {
-      EXPECT_GE(t.proxy().p.y(), -1e-12) << "left its face early, y " << x.y();
-    }
+    EXPECT_NEAR((t.proxy().p - x).cross(t.normal()).norm(), 0.0, 1e-9) << k;  // x on p's normal
+    worst = std::max(worst, (t.proxy().p - p).norm());
     p = t.proxy().p;
   }
-  EXPECT_EQ(big, 1);
   EXPECT_LT(p.y(), -0.1);  // it did cross to the other face
+  std::printf("largest proxy move per 1e-3 device step: %.4g\n", worst);
+  EXPECT_LE(worst, 5e-3);
 }
 
 // --- scenes, every prototype ---
@@ -354,5 +352,64 @@ TEST(ContactHard, StiffTissueTenThousandTimesAtOneMillisecond) {
     EXPECT_GE(r.count(EventKind::force_limited), 1) << id;  // 1 cm into 10^4 x stiff tissue
     EXPECT_EQ(r.F.back().norm(), 0.0) << id;
     EXPECT_LT(s.stats().max_rest_error, 1e-4) << id;
+  }
+}
+
+namespace {
+
+// Prototype `id` with its mesh replaced by a file (path relative to the prototype file).
+std::string with_mesh_file(const std::string& id, const std::string& file, const std::string& dir) {
+  std::ifstream in(proto(id));
+  std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto a = s.find("\"mesh\":"), b = s.find('}', a);
+  s.replace(a, b - a + 1, "\"mesh\": {\"file\": \"" + file + "\"}");
+  const std::string p = dir + "/" + id + "_" + file + ".json";
+  std::ofstream(p) << s;
+  return p;
+}
+
+}  // namespace
+
+TEST(ContactHard, InvertedTetInTheInput) {
+  // A tet mesh with the tet nearest the press point inverted (two vertices swapped): either the
+  // file is refused with its location, or the scene runs bounded and returns to rest.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "palplab_test_contact_tets";
+  fs::create_directories(dir);
+  mesh::TetMesh tm = mesh::generate_model_c(0, 1600);
+  // The tets nearest the body's press point.
+  Scene ref = make("C");
+  const Site w = site(ref);
+  std::vector<std::pair<double, int>> near;
+  for (long t = 0; t < tm.T.rows(); ++t) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += tm.V.row(tm.T(t, k)).transpose() / 4.0;
+    near.push_back({(c - w.p).norm(), static_cast<int>(t)});
+  }
+  std::sort(near.begin(), near.end());
+  std::swap(tm.T(near[0].second, 0), tm.T(near[0].second, 1));  // inverted
+  mesh::write_tetgen((dir / "bad").string(), tm);
+  for (const char* id : {"C", "D"}) {
+    const std::string p = with_mesh_file(id, "bad.node", dir.string());
+    try {
+      Scene s = prototypes::build_scene(p);
+      Track r;
+      for (int i = 0; i <= 600; ++i) step(s, w.p - (-0.002 + 1e-5 * i) * w.n, r);
+      for (int i = 0; i < 1000; ++i) step(s, w.p + 0.01 * w.n, r);
+      std::printf("%s: built; fmax %.3f, divergences %ld, rest error %.3g\n", id, r.fmax(),
+                  s.stats().divergences, s.stats().max_rest_error);
+      EXPECT_TRUE(r.finite()) << id;
+      EXPECT_LE(r.fmax(), s.config().contact.force_limit + 1e-12) << id;
+      EXPECT_LT(s.stats().max_rest_error, 1e-4) << id;
+    } catch (const InputError& e) {
+      // D refuses it (measured: "fem: tet 5172: inverted tetrahedron"; the message names the tet
+      // but not the file: engine/models/fem_*, reported to its owner). C builds it and stays
+      // bounded, which the branch above checks (measured: 0.95 N peak, back at rest).
+      std::printf("%s: refused: %s\n", id, e.what());
+      EXPECT_EQ(std::string(id), "D");
+      EXPECT_NE(std::string(e.what()).find("inverted"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(std::to_string(near[0].second)), std::string::npos)
+          << e.what();
+    }
   }
 }
