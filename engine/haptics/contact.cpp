@@ -138,6 +138,7 @@ int ContactTracker::build(int begin, int end) {
 
 void ContactTracker::reset() {
   engaged_ = outside_known_ = started_inside_ = false;
+  node_ = -1;
   proxy_ = SurfacePoint{};
   depth_ = 0.0;
 }
@@ -147,10 +148,7 @@ void ContactTracker::invalidate() {
 }
 
 int ContactTracker::node() const {
-  if (!engaged_) return -1;
-  int k = 0;
-  proxy_.w.maxCoeff(&k);
-  return F_(proxy_.face, k);
+  return engaged_ ? node_ : -1;
 }
 
 SurfacePoint ContactTracker::closest_on_face(int f, const Vec3& x) const {
@@ -258,15 +256,17 @@ SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x) const
     const double area2 = nf.squaredNorm();
     if (!(area2 > 0.0)) break;  // degenerate face: keep the last point
     Vec3 wu = w;
-    for (int j = 0; j < 4; ++j) {
+    for (int j = 0; j < 16; ++j) {  // converges linearly, fast for d |dn/dp| < 1
       SurfacePoint q{f, wu.cwiseMax(0.0) / std::max(wu.cwiseMax(0.0).sum(), 1e-300), p};
       const Vec3 n = shaded_normal(q);
       const double den = n.dot(nf);
       if (!(std::abs(den) > 1e-3 * std::sqrt(area2))) break;  // n nearly in the face plane
       p = x + ((a - x).dot(nf) / den) * n;
+      const Vec3 w_old = wu;
       wu = Vec3((b - p).cross(c - p).dot(nf), (c - p).cross(a - p).dot(nf),
                 (a - p).cross(b - p).dot(nf)) /
            area2;
+      if ((wu - w_old).cwiseAbs().maxCoeff() < 1e-14) break;
     }
     int k = 0;
     const double wmin = wu.minCoeff(&k);
@@ -320,7 +320,18 @@ void ContactTracker::set_contact(const SurfacePoint& s, const Vec3& x) {
   if (!engaged_) {
     depth_ = 0.0;
     outside_known_ = true;
+    node_ = -1;
+    return;
   }
+  // The node for node-based models: the face vertex of the largest weight, with hysteresis (the
+  // last node is kept while it is a vertex of the face within 0.2 of the largest weight), so a
+  // contact point running along an edge does not flicker between its two ends.
+  int k = 0;
+  const double wmax = s.w.maxCoeff(&k);
+  int keep = -1;
+  for (int m = 0; m < 3; ++m)
+    if (F_(s.face, m) == node_ && s.w[m] >= wmax - 0.2) keep = node_;
+  node_ = keep >= 0 ? keep : F_(s.face, k);
 }
 
 void ContactTracker::update(const Vec3& from, const Vec3& x) {

@@ -52,7 +52,8 @@ class ContactTracker {
   const SurfacePoint& proxy() const { return proxy_; }
   Eigen::Vector3d normal() const { return n_; }  // shaded outward normal at the proxy
   double depth() const { return depth_; }        // m, (proxy - x) . normal, > 0 in contact
-  int node() const;                              // face vertex of the largest weight, -1 free
+  // Face vertex of the largest weight (with hysteresis, see set_contact); -1 without contact.
+  int node() const;
 
   // --- queries (exposed for tests) ---
   // Closest point of face f to x.
@@ -91,6 +92,7 @@ class ContactTracker {
   SurfacePoint proxy_;
   Eigen::Vector3d n_ = Eigen::Vector3d::UnitZ();
   double depth_ = 0.0;
+  int node_ = -1;
 };
 
 }  // namespace palplab::engine

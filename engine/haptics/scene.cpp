@@ -210,6 +210,9 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
     ci.proxy = tr.proxy().p;
     ci.depth = tr.depth();
     s.node = ci.node;
+    if (tr.started_inside())
+      s.events.push_back(
+          {s.t, EventKind::contact_inside, g.vertex_region[ci.node], ci.node, tr.depth()});
     // Device saturation: the device renders at most force_limit, so no model is pushed with
     // more than twice that. The tissue's surface under the probe was last step at
     // depth_model - f_model / k (the coupling's stretch); the device position given to the model
