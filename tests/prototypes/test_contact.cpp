@@ -250,9 +250,9 @@ TEST(ContactHard, SlidingAcrossNodesChangesTheForceBoundedly) {
   // old node-based contact jumped by up to 1 N when the nearest node changed. Now, for a rigid
   // surface, f = k d n(p) with the proxy p moving with the device and the shaded normal n
   // continuous: a step changes f by about k |dx| (1 + d |dn/dp|) — the bound below is 4 k |dx|
-  // = 0.1 N for A and B (500 N/m), a tenth of the old jumps (measured: 0.09 and 0.04 N). C and D
-  // still centre their probe patch on a node (engine/models/mass_spring*, fem_*: node-based):
-  // measured 0.67 and 0.64 N at the switch, bounded here at 1 N so it cannot get worse.
+  // = 0.1 N for A and B (500 N/m), a tenth of the old jumps (measured: 0.0018 and 0.0009 N). C
+  // and D still centre their probe patch on a node (engine/models/mass_spring*, fem_*: node-
+  // based): measured 0.69 and 0.70 N at the one switch, bounded here at 1 N so it cannot grow.
   for (const char* id : kAll) {
     Scene s = make(id);
     const Site w = site(s);
