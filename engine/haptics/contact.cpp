@@ -293,6 +293,13 @@ SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x) const
     w = w.cwiseMax(0.0);
     w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
   }
+  // A device exactly on a vertex's normal line is exactly at that vertex (the fixed point only
+  // approaches it linearly; a straight push at a node must render that node's normal).
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 v = mesh::row3(V_, F_(f, k)), nv = mesh::row3(N_, F_(f, k));
+    if ((x - v).cross(nv).norm() <= 1e-12 * (1.0 + (x - v).norm()) && (v - x).dot(nv) > 0.0)
+      w = Vec3::Unit(k);
+  }
   SurfacePoint out;
   out.face = f;
   out.w = w;
@@ -343,11 +350,13 @@ void ContactTracker::update(const Vec3& from, const Vec3& x) {
     // no longer unique and the walk may run off. The proxy then stays where it is, on the side
     // of entry: when the walk ends on the outside while the device is still below the old
     // proxy, or moves more than 4 times the device's step plus a tenth of a mean edge (sliding
-    // at a few mm depth moves it about 1.2 times the device's step).
+    // at a few mm depth moves it about 1.2 times the device's step). A device that holds still
+    // lets the walk finish converging (e.g. after a jump onto a node's normal line).
     const SurfacePoint q = walk(proxy_, x);
     const double d_new = (q.p - x).dot(shaded_normal(q)), d_old = (proxy_.p - x).dot(n_);
-    const bool run_off = (d_new <= 0.0 && d_old > 0.0) ||
-                         (q.p - proxy_.p).norm() > 4.0 * (x - from).norm() + 0.1 * mean_edge_;
+    const double moved = (x - from).norm();
+    const bool run_off = moved > 0.0 && ((d_new <= 0.0 && d_old > 0.0) ||
+                                         (q.p - proxy_.p).norm() > 4.0 * moved + 0.1 * mean_edge_);
     set_contact(run_off ? proxy_ : q, x);
     return;
   }
