@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/contact.hpp"
 
 #include "engine/haptics/scene_config.hpp"
 #include "engine/models/model.hpp"
@@ -44,6 +45,8 @@ const char* to_string(EventKind k) {
       return "target_reached";
     case EventKind::tip_to_target:
       return "tip_to_target";
+    case EventKind::contact_inside:
+      return "contact_inside";
   }
   return "?";
 }
@@ -98,14 +101,13 @@ struct SceneImpl {
   std::shared_ptr<const SceneMesh> mesh;
   std::unique_ptr<SceneModel> model;
   SceneGeometry geom;
-  double contact_radius = 0.0;         // m
-  std::vector<Thresholds> thresholds;  // per region
-  Thresholds default_thresholds;       // for unlabelled contacts
+  std::unique_ptr<ContactTracker> tracker;  // god-object proxy on the rest surface
+  std::vector<Thresholds> thresholds;       // per region
+  Thresholds default_thresholds;            // for unlabelled contacts
 
   // --- state ---
   long step_index = 0;
   double t = 0.0;
-  bool engaged = false;  // tracking a contact node (device below the rest tangent plane)
   bool contact = false;  // force is being exchanged
   int node = -1;         // surface node of the contact
   double peak_force = 0.0;
@@ -113,6 +115,8 @@ struct SceneImpl {
   bool limited = false, energy_flagged = false, device_bad = false;
   double energy_out = 0.0;  // J: work of the rendered force on the hand in this contact
   Eigen::Vector3d x_prev = Eigen::Vector3d::Zero(), f_prev = Eigen::Vector3d::Zero();
+  double model_depth = 0.0;  // m, depth given to the model last step (0 without contact)
+  double model_force = 0.0;  // N, the model's unclamped force last step
   std::vector<Event> events;
   int pending_tool_event = -1;  // a tool_changed event for the next step (value), -1 = none
   Sample last;
@@ -186,8 +190,9 @@ void Scene::reset() {
   SceneImpl& s = *impl_;
   s.step_index = 0;
   s.t = 0.0;
-  s.engaged = s.contact = false;
+  s.contact = false;
   s.node = -1;
+  s.tracker->reset();
   s.peak_force = 0.0;
   s.reached[0] = s.reached[1] = s.reached[2] = false;
   s.events.clear();
@@ -196,6 +201,7 @@ void Scene::reset() {
   s.energy_out = 0.0;
   s.x_prev = s.geom.start_position;
   s.f_prev.setZero();
+  s.model_depth = s.model_force = 0.0;
   s.counters = SceneStats{};
   s.pending_tool_event = -1;
   s.model->reset();
@@ -216,54 +222,50 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   const bool valid = x_in.allFinite() && x_in.cwiseAbs().maxCoeff() < 1e3;
   if (!valid && !s.device_bad) s.events.push_back({s.t, EventKind::device_invalid, -1, -1, 0.0});
   s.device_bad = !valid;
-  if (!valid) s.engaged = false;
   const Eigen::Vector3d x = valid ? x_in : s.last.x;
 
-  // --- contact tracking on the rest surface (a god-object proxy walks over the surface from
-  // the last contact node, so pushing through a thin part cannot jump to its far side) ---
-  if (!valid) {
-    // stay disengaged
-  } else if (!s.engaged) {
-    const int p = g.nearest_node(x);
-    if (p >= 0) {
-      const Eigen::Vector3d vp = g.V.row(p).transpose();
-      const double pen = (vp - x).dot(g.N.row(p).transpose());
-      if (pen > 0.0 && (x - vp).norm() < s.contact_radius) {
-        s.engaged = true;
-        s.node = p;
-      }
+  // --- contact tracking: a god-object proxy on the rest surface (engine/haptics/contact.hpp).
+  // The device's path since the last valid step is tested against the surface, so no speed
+  // tunnels through it, and the proxy cannot cross it, so depth never jumps to the far side.
+  ContactTracker& tr = *s.tracker;
+  if (valid)
+    tr.update(s.x_prev, x);
+  else
+    tr.invalidate();
+  ContactInput ci;
+  ci.x = x;
+  if (tr.engaged()) {
+    ci.node = tr.node();
+    ci.n = tr.normal();
+    ci.face = tr.proxy().face;
+    ci.w = tr.proxy().w;
+    ci.proxy = tr.proxy().p;
+    ci.depth = tr.depth();
+    s.node = ci.node;
+    if (tr.started_inside())
+      s.events.push_back(
+          {s.t, EventKind::contact_inside, g.vertex_region[ci.node], ci.node, tr.depth()});
+    // Device saturation: the device renders at most force_limit, so no model is pushed with
+    // more than twice that. The tissue's surface under the probe was last step at
+    // depth_model - f_model / k (the coupling's stretch); the device position given to the model
+    // is held at most 2 force_limit / k below it. A jump of the device deep into the organ then
+    // pushes a deformable model with a bounded force instead of a 3 cm step of the coupling (it
+    // drove prototype C into an inverted state it never left); the rendered force stays pinned
+    // at the limit (force_limited).
+    const double k = s.cfg.contact.stiffness, fmax = s.cfg.contact.force_limit;
+    const double surface =
+        s.model_depth > 0.0 ? std::max(0.0, s.model_depth - s.model_force / k) : 0.0;
+    const double cap = surface + 2.0 * fmax / k;
+    if (ci.depth > cap) {
+      ci.x += (ci.depth - cap) * ci.n;
+      ci.depth = cap;
     }
-  } else {
-    // The proxy follows the device's TANGENTIAL motion only: among the node and its first ring,
-    // take the node with the smallest lateral offset of the device from its normal line. A
-    // straight push keeps the node; sliding moves it; depth never makes it jump.
-    auto lateral = [&](int q) {
-      const Eigen::Vector3d d = x - g.V.row(q).transpose();
-      const Eigen::Vector3d nq = g.N.row(q).transpose();
-      return (d - d.dot(nq) * nq).squaredNorm();
-    };
-    for (int it = 0; it < 16; ++it) {
-      int best = s.node;
-      double bd = lateral(s.node);
-      for (int q : s.mesh->rings->first.row(s.node)) {
-        const double d = lateral(q);
-        if (d < bd) {
-          bd = d;
-          best = q;
-        }
-      }
-      if (best == s.node) break;
-      s.node = best;
-    }
-    const double pen = (g.V.row(s.node).transpose() - x).dot(g.N.row(s.node).transpose());
-    if (!(pen > 0.0)) s.engaged = false;
   }
-  const int node = s.engaged ? s.node : -1;
-  const Eigen::Vector3d n =
-      node >= 0 ? Eigen::Vector3d(g.N.row(node).transpose()) : Eigen::Vector3d::UnitZ();
+  const int node = ci.node;
+  s.model_depth = node >= 0 ? ci.depth : 0.0;
 
   // --- the model ---
-  const ModelOutput out = s.model->step({node, x, n}, s.cfg.dt);
+  const ModelOutput out = s.model->step(ci, s.cfg.dt);
   Eigen::Vector3d force = out.force;
   double deformation = out.deformation;
   if (out.events)
@@ -273,6 +275,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
     }
   // --- watchdog ---
   const double f_model = force.norm();
+  s.model_force = std::isfinite(f_model) ? f_model : 0.0;
   const WatchdogConfig& wd = s.cfg.watchdog;
   if (s.model->deformable() &&
       (!std::isfinite(f_model) || !std::isfinite(deformation) || f_model > wd.divergence_force ||
@@ -398,7 +401,7 @@ Scene make_scene(const SceneConfig& cfg) {
   sc.cfg = cfg;
   sc.mesh = scene_mesh(cfg.mesh);
   const SceneMesh& m = *sc.mesh;
-  sc.contact_radius = cfg.contact.radius > 0 ? cfg.contact.radius : 1.5 * m.mean_edge;
+  sc.tracker = std::make_unique<ContactTracker>(m.V, m.N, m.F);
 
   SceneGeometry& g = sc.geom;
   g.V = m.V;

@@ -60,6 +60,9 @@ enum class EventKind {
   target_reached,   // the tip entered the target tissue (once per insertion)
   tip_to_target,    // value: distance of the tip to the target (m), logged when it changed by
                     //   the scene's needle.log_resolution since the last such event
+  // A contact that began with the device already inside the organ (its first position after
+  // reset, or after device_invalid, is inside): the proxy starts at the closest surface point.
+  contact_inside,  // value: the depth (m) the force starts from
 };
 const char* to_string(EventKind k);
 

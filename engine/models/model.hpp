@@ -61,12 +61,19 @@ std::shared_ptr<const SceneMesh> build_scene_mesh(const MeshSource& m);
 // nullptr removes m from the cache (the next scene_mesh(m) builds it again).
 void install_scene_mesh(const MeshSource& m, std::shared_ptr<const SceneMesh> mesh);
 
-// One step's input from the contact tracking: the touched surface node (-1 = no contact), the
-// device position and the outward normal there.
+// One step's input from the contact tracking (engine/haptics/contact.hpp): the god-object proxy
+// on the REST surface, its face and barycentric weights, and the device position. Node-based
+// models use `node` (the proxy face's vertex of the largest weight); models that interpolate use
+// face/w, which change continuously as the contact slides from node to node.
 struct ContactInput {
-  int node = -1;
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  int node = -1;                                // touched surface node; -1 = no contact
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // m, device position
+  // Shaded outward normal at the proxy: normalize(sum_k w_k N(face_k)); at a node its normal.
   Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  int face = -1;                                    // surface face of the proxy
+  Eigen::Vector3d w = Eigen::Vector3d(1, 0, 0);     // barycentric weights on face (>= 0, sum 1)
+  Eigen::Vector3d proxy = Eigen::Vector3d::Zero();  // m, contact point on the rest surface
+  double depth = 0.0;  // m, penetration (proxy - x) . n, > 0 in contact
 };
 
 // What the model makes of it: the force on the hand (N) and the visible deformation at the

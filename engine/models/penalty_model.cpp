@@ -1,5 +1,8 @@
 // Model "penalty" (prototype A): a rigid organ; the force on the hand is Hooke's law on the
-// penetration of the device below the touched node's tangent plane, f = k d n.
+// penetration of the device below the god-object proxy, along the shaded normal there:
+// f = k d n, d = (proxy - x) . n (engine/haptics/contact.hpp). n and d are continuous as the
+// proxy slides from face to face, so is f.
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "common/json_check.hpp"
@@ -16,7 +19,7 @@ class PenaltyModel final : public SceneModel {
   bool deformable() const override { return false; }
   ModelOutput step(const ContactInput& c, double) override {
     ModelOutput o;
-    if (c.node >= 0) o.force = k_ * (mesh_.V.row(c.node).transpose() - c.x).dot(c.n) * c.n;
+    if (c.node >= 0) o.force = k_ * std::max(0.0, c.depth) * c.n;
     return o;
   }
   void reset() override {}

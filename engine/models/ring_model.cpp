@@ -1,5 +1,6 @@
 #include "engine/models/ring_model.hpp"
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -36,7 +37,9 @@ RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingPa
   m.params = p;
   m.is_active.assign(V.rows(), 0);
   m.pressed.assign(V.rows(), 0);
+  m.coef.assign(V.rows(), 0.0);
   m.active.reserve(256);
+  m.placed.reserve(V.rows());
   return m;
 }
 
@@ -69,19 +72,53 @@ inline bool home_step(RingModel& m, int i, double h) {
 }  // namespace
 
 void ring_step(RingModel& m, int node, const Eigen::Vector3d& push, double h) {
+  const int nodes[3] = {node, -1, -1};
+  const double w[3] = {1.0, 0.0, 0.0};
+  ring_step(m, nodes, w, push, h);
+}
+
+void ring_step(RingModel& m, const int nodes[3], const double w[3], const Eigen::Vector3d& push,
+               double h) {
   long visited = 0;
-  // 1. Kinematic placement of the pressed node and its two rings (Eq 4.2–4.4).
+  int node = -1;  // the heaviest touched node (the octant of Scope::octant)
+  double wmax = 0.0;
+  for (int k = 0; k < 3; ++k)
+    if (nodes[k] >= 0 && w[k] > wmax) {
+      wmax = w[k];
+      node = nodes[k];
+    }
+  // 1. Kinematic placement of the pressed nodes and their two rings (Eq 4.2–4.4), weighted.
+  std::vector<int>& placed = m.placed;
+  placed.clear();
   if (node >= 0) {
-    auto place = [&](int i, double step) {
-      m.X.row(i) = m.X_fixed.row(i) + step * push.transpose();
+    auto add = [&](int i, double c) {
+      if (!m.pressed[i]) {
+        m.pressed[i] = 1;
+        m.coef[i] = 0.0;
+        placed.push_back(i);
+      }
+      m.coef[i] += c;
+    };
+    for (int k = 0; k < 3; ++k) {
+      if (nodes[k] < 0 || !(w[k] > 0.0)) continue;
+      const int p = nodes[k];
+      add(p, w[k] * m.params.m1);
+      for (int q : m.rings.first.row(p)) add(q, w[k] * m.params.m2);
+      for (int r : m.rings.second.row(p)) add(r, w[k] * m.params.m3);
+    }
+    // The weighted sum of the rings dents the contact point by less than m1 between nodes (the
+    // face's vertices are in each other's first ring, m2 < m1): scale it so the point itself is
+    // displaced by exactly m1 F, as at a node. The scale is 1 at a node and continuous in w.
+    double at_point = 0.0;
+    for (int k = 0; k < 3; ++k)
+      if (nodes[k] >= 0 && w[k] > 0.0) at_point += w[k] * m.coef[nodes[k]];
+    const double scale = at_point > 0.0 ? m.params.m1 / at_point : 1.0;
+    for (int i : placed) {
+      m.X.row(i) = m.X_fixed.row(i) + scale * m.coef[i] * push.transpose();
       m.V.row(i).setZero();
-      m.pressed[i] = 1;
       activate(m, i);
       ++visited;
-    };
-    place(node, m.params.m1);
-    for (int q : m.rings.first.row(node)) place(q, m.params.m2);
-    for (int r : m.rings.second.row(node)) place(r, m.params.m3);
+    }
   }
   // 2. Home springs for every other node in scope.
   if (m.scope == Scope::whole) {
@@ -111,11 +148,7 @@ void ring_step(RingModel& m, int node, const Eigen::Vector3d& push, double h) {
     m.active.resize(w);
   }
   // 3. Clear the pressed marks (only the nodes just placed).
-  if (node >= 0) {
-    m.pressed[node] = 0;
-    for (int q : m.rings.first.row(node)) m.pressed[q] = 0;
-    for (int r : m.rings.second.row(node)) m.pressed[r] = 0;
-  }
+  for (int i : placed) m.pressed[i] = 0;
   m.last_updated = visited;
 }
 
@@ -145,10 +178,28 @@ class RingSceneModel final : public SceneModel {
   ModelOutput step(const ContactInput& c, double dt) override {
     // The haptic force is Hooke's law on the penetration, as in prototype A; the rings show the
     // push of the hand (the opposite force).
+    // The push is shared by the proxy face's vertices with its barycentric weights, so sliding
+    // from node to node moves the dent continuously; the visible deformation is the displacement
+    // interpolated at the contact point.
     ModelOutput o;
-    if (c.node >= 0) o.force = k_ * (mesh_.V.row(c.node).transpose() - c.x).dot(c.n) * c.n;
-    ring_step(model_, c.node, -o.force, dt);
-    if (c.node >= 0) o.deformation = (model_.X.row(c.node) - model_.X_fixed.row(c.node)).norm();
+    if (c.node < 0) {
+      ring_step(model_, c.node, Eigen::Vector3d::Zero(), dt);
+      return o;
+    }
+    o.force = k_ * std::max(0.0, c.depth) * c.n;
+    int nodes[3] = {c.node, -1, -1};
+    double w[3] = {1.0, 0.0, 0.0};
+    if (c.face >= 0)
+      for (int k = 0; k < 3; ++k) {
+        nodes[k] = mesh_.F(c.face, k);
+        w[k] = c.w[k];
+      }
+    ring_step(model_, nodes, w, -o.force, dt);
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k)
+      if (nodes[k] >= 0)
+        u += w[k] * (model_.X.row(nodes[k]) - model_.X_fixed.row(nodes[k])).transpose();
+    o.deformation = u.norm();
     return o;
   }
   void reset() override { ring_reset(model_); }

@@ -42,7 +42,9 @@ struct RingModel {
   const spatial::Octree* octree = nullptr;  // for Scope::octant (owned by the scene)
   std::vector<int> active;                  // displaced or moving nodes
   std::vector<std::uint8_t> is_active, pressed;
-  long last_updated = 0;  // nodes visited in the last step (for benchmarks)
+  std::vector<double> coef;  // scratch: the placement coefficient of each pressed node (m/N)
+  std::vector<int> placed;   // scratch: the nodes placed in this step
+  long last_updated = 0;     // nodes visited in the last step (for benchmarks)
 };
 
 RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingParams& p);
@@ -50,6 +52,13 @@ RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingPa
 // One haptic step of h seconds. node = touched node (-1 without contact); push = force of the
 // hand on the organ (N).
 void ring_step(RingModel& m, int node, const Eigen::Vector3d& push, double h);
+// The same with the push shared by up to three touched nodes (a contact point on a face):
+// nodes[k] with weight w[k] (>= 0, sum 1; node -1 or weight 0 = unused). Each node's rings are
+// placed as above and the displacements add with the weights, scaled so the contact point
+// (sum_k w_k x_k) moves by exactly m1 push, as a touched node does. When the contact point slides
+// across an edge (the weight of the vertex it leaves goes to 0) the shape changes continuously.
+void ring_step(RingModel& m, const int nodes[3], const double w[3], const Eigen::Vector3d& push,
+               double h);
 
 // Back to rest (all nodes home, nothing active).
 void ring_reset(RingModel& m);

@@ -45,7 +45,7 @@ void step(Scene& s, const Eigen::Vector3d& x, Seen& seen) {
 TEST(Watchdog, PressToTenTimesTheSftIsClampedAndLoggedOnEveryPrototype) {
   // SFT is 3 N: ask the press script for 30 N. The device renders at most 8.5 N, says so once
   // per contact, and a rigid surface is never reset.
-  for (const char* id : {"A", "B", "C"}) {
+  for (const char* id : {"A", "B", "C", "D"}) {
     Scene s = prototypes::build_scene(proto(id));
     const SceneGeometry& g = s.geometry();
     const int node = g.region_node("body");
@@ -105,7 +105,7 @@ TEST(Watchdog, DeviceJumpIntoTheSurfaceIsSeenAsInjectedEnergy) {
 TEST(Watchdog, NonFiniteDeviceInputIsNoContactOnEveryPrototype) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  for (const char* id : {"A", "B", "C"}) {
+  for (const char* id : {"A", "B", "C", "D"}) {
     Scene s = prototypes::build_scene(proto(id));
     const SceneGeometry& g = s.geometry();
     const int node = g.region_node("body");

@@ -1,0 +1,98 @@
+#pragma once
+// Contact tracking on the rest surface of a scene: a god-object proxy (Zilles & Salisbury 1995;
+// Ruspini et al. 1997) that lives on the surface and cannot cross it, with force shading
+// (Morgenbesser & Srinivasan 1996) so the rendered normal is continuous from face to face.
+//
+//   * While free, the device's PATH from its last position to the current one is tested against
+//     the surface (continuous collision): the first face the path enters from outside becomes the
+//     proxy's face, however fast the device moves. No step is too long to be caught.
+//   * While in contact, the proxy walks face to face over edges to the point p whose shaded
+//     normal passes through the device (Phong projection, x = p - d n(p)): a straight push
+//     along a node's normal keeps the node, sliding moves p continuously, and p never jumps to
+//     the far side of a thin part, however deep the device goes.
+//   * Penetration depth is measured along the shaded normal n(p) = normalize(sum_i w_i N_i) of
+//     the proxy's face (w the barycentric weights of the proxy, N the vertex normals): at a
+//     vertex it is that vertex's normal, on an edge a blend of its two ends. The contact ends
+//     when the depth is <= 0 (the device is back on the outside).
+//   * When the side of the device is unknown (the first step after reset, or after a non-finite
+//     device position), the inside test is the generalized winding number (Jacobson et al.
+//     2013) of the surface at the device; inside, the proxy starts at the closest surface point.
+//
+// Shapes: V #V by 3 rest positions (m), N #V by 3 unit outward vertex normals, F #F by 3 faces
+// (ccw seen from outside).
+#include <Eigen/Core>
+#include <vector>
+
+#include "engine/mesh/types.hpp"
+
+namespace palplab::engine {
+
+// A point on a surface face.
+struct SurfacePoint {
+  int face = -1;
+  Eigen::Vector3d w = Eigen::Vector3d(1, 0, 0);  // barycentric weights (>= 0, sum 1)
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();   // m
+};
+
+class ContactTracker {
+ public:
+  ContactTracker(const mesh::Positions& V, const mesh::Positions& N, const mesh::Faces& F);
+
+  // Disengaged, side of the device unknown.
+  void reset();
+  // A device position that cannot be used (non-finite, absurd): disengaged, side unknown.
+  void invalidate();
+  // One step: the device moved from `from` (its last valid position) to `x` (m).
+  void update(const Eigen::Vector3d& from, const Eigen::Vector3d& x);
+
+  bool engaged() const { return engaged_; }
+  // This step's contact began with the device already inside (side unknown before: the start
+  // position, or the return of a valid device position); its depth in *depth (m).
+  bool started_inside() const { return started_inside_; }
+  const SurfacePoint& proxy() const { return proxy_; }
+  Eigen::Vector3d normal() const { return n_; }  // shaded outward normal at the proxy
+  double depth() const { return depth_; }        // m, (proxy - x) . normal, > 0 in contact
+  // Face vertex of the largest weight (with hysteresis, see set_contact); -1 without contact.
+  int node() const;
+
+  // --- queries (exposed for tests) ---
+  // Closest point of face f to x.
+  SurfacePoint closest_on_face(int f, const Eigen::Vector3d& x) const;
+  // Closest surface point to x (all faces).
+  SurfacePoint closest_point(const Eigen::Vector3d& x) const;
+  // Generalized winding number of the surface at x (1 inside a closed surface, 0 outside).
+  double winding_number(const Eigen::Vector3d& x) const;
+  // First face the segment a -> b enters from outside (smallest parameter); false if none.
+  bool first_entry(const Eigen::Vector3d& a, const Eigen::Vector3d& b, SurfacePoint& hit) const;
+  // The proxy's walk from `from` to the Phong projection of x (see the top).
+  SurfacePoint walk(const SurfacePoint& from, const Eigen::Vector3d& x) const;
+  Eigen::Vector3d shaded_normal(const SurfacePoint& s) const;
+
+ private:
+  struct BvhNode {
+    Eigen::AlignedBox3d box;
+    int left = -1, right = -1;  // children (-1: leaf)
+    int begin = 0, end = 0;     // run of order_ (leaves)
+  };
+  int build(int begin, int end);
+  void set_contact(const SurfacePoint& s, const Eigen::Vector3d& x);
+
+  const mesh::Positions& V_;
+  const mesh::Positions& N_;
+  const mesh::Faces& F_;
+  std::vector<int> vf_offset_, vf_;  // vertex -> incident faces (CSR)
+  double mean_edge_ = 0.0;           // m
+  std::vector<int> edge_face_;       // 3 #F: face across the edge opposite each corner, -1
+  std::vector<BvhNode> bvh_;
+  std::vector<int> order_;  // faces grouped by leaf
+  std::vector<Eigen::AlignedBox3d> face_box_;
+  mutable std::vector<int> stack_;
+
+  bool engaged_ = false, outside_known_ = false, started_inside_ = false;
+  SurfacePoint proxy_;
+  Eigen::Vector3d n_ = Eigen::Vector3d::UnitZ();
+  double depth_ = 0.0;
+  int node_ = -1;
+};
+
+}  // namespace palplab::engine
