@@ -167,43 +167,20 @@ void check_same_problem(const engine::SceneConfig& ref, const engine::SceneConfi
                              "frontier's reference would not describe it");
 }
 
-// The reference problem of `palplab fem reference D.json --press REGION` (app/cmd_fem.cpp,
-// run_reference: the same rules), direction = the scene's inward normal at the node.
+// The reference problem of `palplab fem reference D.json --press REGION` (the one rule set,
+// engine::reference_options_for_prototype), direction = the scene's inward normal at the node.
 Reference reference_for(const engine::Scene& d_scene, const std::string& region, bool quick) {
   const engine::SceneConfig& cfg = d_scene.config();
-  const auto cm = engine::scene_mesh(cfg.mesh);
   const engine::SceneGeometry& g = d_scene.geometry();
   Reference ref;
   ref.node = g.region_node(region);
   ref.p = g.V.row(ref.node).transpose();
   ref.dir = -g.N.row(ref.node).transpose();
   const double a = cfg.contact.patch_radius;
-  const mesh::TetMesh tm = mesh::make_tet_mesh(cm->model_V, cm->model_T, cm->tet_attribute);
-  engine::FemReferenceOptions o =
-      engine::reference_options_from_mesh(tm, cm->surface_to_model[ref.node], 1.0, a);
+  engine::FemReferenceOptions o = engine::reference_options_for_prototype(cfg, ref.node, 1.0);
   o.press_direction = ref.dir;
   o.levels = 3;
   if (quick) o.max_volume *= 2;  // coarser levels: a cheaper, less converged reference
-  o.support_modulus = cfg.support.modulus;
-  const engine::MaterialConfig& mc = cfg.material;
-  for (auto& e : o.materials.materials) {
-    if (o.default_attribute < e.first || o.default_attribute > e.last) continue;
-    if (!mc.tissue.empty())
-      for (const auto& n : mesh::default_materials().materials)
-        if (n.name == mc.tissue) {
-          e.youngs_modulus = n.youngs_modulus;
-          e.poisson_ratio = n.poisson_ratio;
-          e.density = n.density;
-        }
-    if (mc.youngs_modulus) e.youngs_modulus = *mc.youngs_modulus;
-    if (mc.density) e.density = *mc.density;
-  }
-  if (!cfg.support.fixed_region.empty() || !(cfg.support.fixed_z_below > 0))
-    throw std::runtime_error(
-        "bench frontier: prototype D is expected to be pinned by "
-        "fixed_z_below only");
-  const double z0 = cm->model_V.col(2).minCoeff(), zf = cfg.support.fixed_z_below;
-  o.is_fixed = [=](const Eigen::Vector3d& x) { return x.z() < z0 + zf; };
   const auto t0 = std::chrono::steady_clock::now();
   const engine::FemReferenceResult r = engine::fem_reference(o);
   ref.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -106,14 +106,14 @@ int run_reference(const ReferenceArgs& a) {
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("--press: ") + e.what());
   }
-  const mesh::TetMesh tm = mesh::make_tet_mesh(cm->model_V, cm->model_T, cm->tet_attribute);
+  const long tets = cm->model_T.rows();
   if (a.refinement == "nested") {
     // The finest nested level has 8^(levels-1) times the prototype's tets; a sparse Cholesky
     // of millions of tets needs tens of GB.
-    const double finest = static_cast<double>(tm.T.rows()) * std::pow(8.0, a.levels - 1);
+    const double finest = static_cast<double>(tets) * std::pow(8.0, a.levels - 1);
     if (finest > 2e6)
       throw InputError("--levels: " + std::to_string(a.levels) + " nested levels of " + cfg.id +
-                       "'s " + std::to_string(tm.T.rows()) + " tets give " +
+                       "'s " + std::to_string(tets) + " tets give " +
                        std::to_string(static_cast<long>(finest)) +
                        " tets on the finest level (limit 2e6): use fewer levels or a coarser "
                        "copy of the prototype (mesh \"vertices\")");
@@ -124,49 +124,11 @@ int run_reference(const ReferenceArgs& a) {
                    "\"vertices\": 400) runs in about a minute\n",
                    finest);
   }
-  const double radius = cfg.contact.patch_radius;
-  engine::FemReferenceOptions o =
-      engine::reference_options_from_mesh(tm, cm->surface_to_model[node], a.force, radius);
+  engine::FemReferenceOptions o = engine::reference_options_for_prototype(cfg, node, a.force);
   o.levels = a.levels;
   const bool nested = a.refinement == "nested";
   o.refinement = nested ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
   o.curve_steps = a.steps;
-  o.support_modulus = cfg.support.modulus;  // the foundation of C and D
-  // The prototype's tissue: its E/density overrides apply to the (single) body attribute.
-  const engine::MaterialConfig& mc = cfg.material;
-  for (auto& e : o.materials.materials) {
-    if (o.default_attribute < e.first || o.default_attribute > e.last) continue;
-    if (!mc.tissue.empty())
-      for (const auto& n : mesh::default_materials().materials)
-        if (n.name == mc.tissue) {
-          e.youngs_modulus = n.youngs_modulus;
-          e.poisson_ratio = n.poisson_ratio;
-          e.density = n.density;
-        }
-    if (mc.youngs_modulus) e.youngs_modulus = *mc.youngs_modulus;
-    if (mc.density) e.density = *mc.density;
-  }
-  // The prototype's pinned nodes, by rest position so that they hold on every level: below
-  // fixed_z_below, and within half a mean edge of a surface node of the fixed region.
-  const double z0 = cm->model_V.col(2).minCoeff(), zf = cfg.support.fixed_z_below;
-  std::vector<Eigen::Vector3d> region_pts;
-  if (!cfg.support.fixed_region.empty())
-    for (size_t i = 0; i < cm->vertex_region.size(); ++i)
-      if (cm->vertex_region[i] >= 0 &&
-          cm->region_names[cm->vertex_region[i]] == cfg.support.fixed_region)
-        region_pts.push_back(cm->V.row(static_cast<long>(i)).transpose());
-  const double tol2 = 0.25 * cm->mean_edge * cm->mean_edge;
-  o.is_fixed = [=](const Eigen::Vector3d& p) {
-    if (zf > 0 && p.z() < z0 + zf) return true;
-    for (const auto& q : region_pts)
-      if ((p - q).squaredNorm() <= tol2) return true;
-    return false;
-  };
-  if (zf <= 0 && region_pts.empty())
-    throw InputError("prototype " + cfg.id +
-                         " pins no node (fixed_z_below / fixed_region): the static press has no "
-                         "unique solution",
-                     a.prototype);
   const engine::FemReferenceResult r = engine::fem_reference(o);
 
   json levels = json::array();
@@ -199,7 +161,7 @@ int run_reference(const ReferenceArgs& a) {
       {"node", node},
       {"region", g.vertex_region[node] >= 0 ? g.region_names[g.vertex_region[node]] : ""},
       {"force", a.force},
-      {"press_radius", radius},
+      {"press_radius", cfg.contact.patch_radius},
       {"press_point", {o.press_point.x(), o.press_point.y(), o.press_point.z()}},
       {"press_direction", {o.press_direction.x(), o.press_direction.y(), o.press_direction.z()}},
       {"load", "smooth pressure (1 - (r/a)^2)^2 over the surface within press_radius"},

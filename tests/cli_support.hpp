@@ -59,6 +59,11 @@ inline CliResult run_palplab(const std::string& args) {
   return run_palplab(args, process_scratch());
 }
 
+// The path of a file `name` in the process's scratch directory.
+inline std::string scratch_file(const std::string& name) {
+  return (process_scratch() / name).string();
+}
+
 // Writes `text` to a file `name` in the process's scratch directory and returns its path.
 inline std::string write_temp(const std::string& name, const std::string& text) {
   const auto p = process_scratch() / name;

@@ -372,7 +372,14 @@ void ContactTracker::update(const Vec3& from, const Vec3& x) {
     return;
   }
   SurfacePoint hit;
-  if (first_entry(from, x, hit)) set_contact(walk(hit, x), x);
+  if (!first_entry(from, x, hit)) return;
+  SurfacePoint q = walk(hit, x);
+  // A long jump in one step (a device that was parked somewhere and reports a point deep in the
+  // organ; a bridge's first datagram) can leave the walk from the entry point on a face whose
+  // normal line does not reach the device. The device did enter: if it is inside, the proxy
+  // goes to the closest surface point, as for a device found inside.
+  if (!((q.p - x).dot(shaded_normal(q)) > 0.0) && winding_number(x) > 0.5) q = closest_point(x);
+  set_contact(q, x);
 }
 
 }  // namespace palplab::engine

@@ -9,7 +9,9 @@
 #include <string>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/scene_config.hpp"
 #include "engine/models/fem_refine.hpp"
+#include "engine/models/model.hpp"
 #include "engine/solvers/fem_assembly.hpp"
 #include "engine/solvers/fem_corotational.hpp"
 #include "engine/solvers/fem_static.hpp"
@@ -413,6 +415,53 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     if (l > 0) res.monotone = res.monotone && lv.est_error < res.levels[l - 1].est_error;
   }
   return res;
+}
+
+FemReferenceOptions reference_options_for_prototype(const SceneConfig& cfg, int surface_node,
+                                                    double force) {
+  const auto cm = scene_mesh(cfg.mesh);
+  if (!cm->tet)
+    throw InputError("prototype " + cfg.id +
+                         ": the FEM reference needs a tetrahedral mesh (generator model_c or a tet "
+                         "mesh file)",
+                     cfg.source);
+  const mesh::TetMesh tm = mesh::make_tet_mesh(cm->model_V, cm->model_T, cm->tet_attribute);
+  FemReferenceOptions o = reference_options_from_mesh(tm, cm->surface_to_model.at(surface_node),
+                                                      force, cfg.contact.patch_radius);
+  o.support_modulus = cfg.support.modulus;  // the foundation of C and D
+  const MaterialConfig& mc = cfg.material;
+  for (auto& e : o.materials.materials) {
+    if (o.default_attribute < e.first || o.default_attribute > e.last) continue;
+    if (!mc.tissue.empty())
+      for (const auto& n : mesh::default_materials().materials)
+        if (n.name == mc.tissue) {
+          e.youngs_modulus = n.youngs_modulus;
+          e.poisson_ratio = n.poisson_ratio;
+          e.density = n.density;
+        }
+    if (mc.youngs_modulus) e.youngs_modulus = *mc.youngs_modulus;
+    if (mc.density) e.density = *mc.density;
+  }
+  const double z0 = cm->model_V.col(2).minCoeff(), zf = cfg.support.fixed_z_below;
+  std::vector<Eigen::Vector3d> region_pts;
+  if (!cfg.support.fixed_region.empty())
+    for (size_t i = 0; i < cm->vertex_region.size(); ++i)
+      if (cm->vertex_region[i] >= 0 &&
+          cm->region_names[cm->vertex_region[i]] == cfg.support.fixed_region)
+        region_pts.push_back(cm->V.row(static_cast<long>(i)).transpose());
+  if (zf <= 0 && region_pts.empty())
+    throw InputError("prototype " + cfg.id +
+                         " pins no node (fixed_z_below / fixed_region): the static press has no "
+                         "unique solution",
+                     cfg.source);
+  const double tol2 = 0.25 * cm->mean_edge * cm->mean_edge;
+  o.is_fixed = [=](const Eigen::Vector3d& p) {
+    if (zf > 0 && p.z() < z0 + zf) return true;
+    for (const auto& q : region_pts)
+      if ((p - q).squaredNorm() <= tol2) return true;
+    return false;
+  };
+  return o;
 }
 
 }  // namespace palplab::engine

@@ -172,6 +172,16 @@ bool richardson_sizes(const double q[3], const double h[3], double& order, doubl
 FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int press_node,
                                                 double force, double press_radius);
 
+struct SceneConfig;
+// The reference problem of a prototype (`palplab fem reference`, `palplab bench frontier`): its
+// tet mesh (reference_options_from_mesh at the model node of surface node `surface_node`), its
+// tissue (the material table's entry, then the prototype's E / density overrides, on the body
+// attribute), its elastic foundation (support modulus) and its pinned nodes by rest position so
+// that they hold on every level (below fixed_z_below; within half a mean edge of a surface node
+// of fixed_region). Throws InputError for a surface-mesh prototype or one that pins nothing.
+FemReferenceOptions reference_options_for_prototype(const SceneConfig& cfg, int surface_node,
+                                                    double force);
+
 // Throws InputError for bad options (no fixed node, empty patch, levels < 3, ...).
 FemReferenceResult fem_reference(const FemReferenceOptions& opt);
 

@@ -25,17 +25,11 @@ namespace {
 using Result = palplab::testing::CliResult;
 using palplab::testing::slurp;
 
-fs::path dir() {
-  static const fs::path d = palplab::testing::scratch_dir("cli_needle_study");
-  return d;
-}
-
 Result run(const std::string& args) {
-  return palplab::testing::run_palplab(args, dir());
+  return palplab::testing::run_palplab(args);
 }
-
 std::string p(const std::string& name) {
-  return (dir() / name).string();
+  return palplab::testing::scratch_file(name);
 }
 
 const std::string kSrc = PALPLAB_SOURCE_DIR;
