@@ -11,11 +11,8 @@ const ModelKind& needle_model_kind();       // needle_model.cpp
 
 const std::vector<ModelKind>& model_kinds() {
   static const std::vector<ModelKind> kinds = {
-      penalty_model_kind(),
-      ring_model_kind(),
-      mass_spring_model_kind(),
-      fem_model_kind(),
-      needle_model_kind(),
+      penalty_model_kind(), ring_model_kind(),   mass_spring_model_kind(),
+      fem_model_kind(),     needle_model_kind(),
   };
   return kinds;
 }

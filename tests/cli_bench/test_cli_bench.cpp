@@ -4,8 +4,8 @@
 // much displacement) is found at 0.2, and no prototype shows the zero error a comparison with
 // itself would give; the FEM prototype D against the reference of its own problem shows a
 // discretisation error, not ~100 %. No timing is asserted. The --quick run needs about 60 s of
-// CPU time (the budget is 3 minutes on 2 cores): it runs once, in one test (ctest runs every TEST as its own
-// process, so a shared fixture would run it once per test).
+// CPU time (the budget is 3 minutes on 2 cores): it runs once, in one test (ctest runs
+// every TEST as its own process, so a shared fixture would run it once per test).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
