@@ -179,7 +179,7 @@ class Reader {
     if (c && static_cast<std::uint64_t>(r) > (n_ - at_) / bytes / static_cast<std::uint64_t>(c))
       need(n_ + 1, what);
     m.resize(r, c);
-    if (r * c) std::memcpy(m.data(), p_ + at_, static_cast<std::size_t>(r * c) * bytes);
+    if (r > 0 && c > 0) std::memcpy(m.data(), p_ + at_, static_cast<std::size_t>(r * c) * bytes);
     at_ += static_cast<std::size_t>(r * c) * bytes;
   }
   std::size_t at() const { return at_; }
