@@ -1,5 +1,6 @@
 // `palplab render PROTOTYPE.json [--press REGION --force N] [--camera az,el[,dist]]
-//  [--size WxH] [--wireframe] [--alpha REGION=A ...] --out FILE.png`: a headless (EGL) still of
+//  [--size WxH] [--wireframe] [--alpha REGION=A ...] [--transparent TISSUE[,..]] --out FILE.png`: a
+//  headless (EGL) still of
 // a prototype's organ, shaded with per-region colours.
 #include <cmath>
 #include <iostream>
@@ -47,6 +48,8 @@ struct RenderArgs {
   double force = 0.0, hold = 0.5;
   bool wireframe = false;
   std::vector<std::string> alpha;
+  std::string transparent;
+  double transparent_alpha = 0.3;
 };
 
 std::vector<double> parse_numbers(const std::string& flag, const std::string& text, char sep,
@@ -139,6 +142,34 @@ int run_render(const RenderArgs& a) {
     const auto v = parse_numbers("--alpha", s.substr(eq + 1), ',', 1, 1, "an opacity in [0, 1]");
     opt.region_alpha[s.substr(0, eq)] = static_cast<float>(v[0]);
   }
+  // --transparent TISSUE[,..]: those regions see-through ("soft" = a needle scene's soft
+  // tissues, what the transparency cue shows), so bone and target show through (--alpha wins).
+  if (!a.transparent.empty()) {
+    if (!(a.transparent_alpha >= 0.0 && a.transparent_alpha < 1.0))
+      throw InputError("--transparent-alpha: expected an opacity in [0, 1), got " +
+                       std::to_string(a.transparent_alpha));
+    const auto& g = scene.geometry();
+    std::stringstream ss(a.transparent);
+    std::string name;
+    while (std::getline(ss, name, ',')) {
+      if (name == "soft") {
+        if (!g.tissues)
+          throw InputError("--transparent soft: prototype " + scene.prototype() +
+                           " is not a layered tissue scene (model \"" + scene.model_kind() +
+                           "\"); name its regions instead");
+        for (int r : g.tissues->soft_regions)
+          opt.region_alpha.emplace(g.region_names[r], static_cast<float>(a.transparent_alpha));
+        continue;
+      }
+      if (g.region_index(name) < 0) {
+        std::string names;
+        for (const auto& n : g.region_names) names += (names.empty() ? "" : ", ") + n;
+        throw InputError("--transparent: unknown tissue/region \"" + name +
+                         "\" (regions: " + names + (g.tissues ? ", or soft" : "") + ")");
+      }
+      opt.region_alpha.emplace(name, static_cast<float>(a.transparent_alpha));
+    }
+  }
   render::Image img;
   try {
     img = render::render_still(scene, cam, static_cast<int>(wh[0]), static_cast<int>(wh[1]), opt);
@@ -168,6 +199,11 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--alpha", a->alpha,
                       "REGION=OPACITY (0..1, '*' = every region); transparent regions are drawn "
                       "back to front. Repeatable");
+      cmd->add_option("--transparent", a->transparent,
+                      "TISSUE[,TISSUE..]: draw these regions see-through (needle scenes: 'soft' "
+                      "= the soft tissues), so the bone and target inside show");
+      cmd->add_option("--transparent-alpha", a->transparent_alpha,
+                      "Opacity of the --transparent regions (default 0.3)");
       cmd->add_option("--press", a->press, "Region name or surface node index to press");
       cmd->add_option("--force", a->force, "Target device force of the press (N)");
       cmd->add_option("--hold", a->hold,

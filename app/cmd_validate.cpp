@@ -6,10 +6,45 @@
 
 #include "app/command.hpp"
 #include "common/escape.hpp"
+#include "common/input_error.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/study.hpp"
+#include "prototypes/factory.hpp"
 
 namespace {
+
+// A needle-insertion study: the scene each group meets in each phase, with its tools and whether
+// the soft tissue is drawn see-through (the prototype's cue, overridden by the phase's switch).
+// A prototype whose model has no finger and needle tools cannot run the task: exit 2 here
+// rather than when its first session starts.
+std::string needle_scenes(const palplab::protocols::Study& s, const std::string& file) {
+  using namespace palplab;
+  std::string out = "needle scenes (group / phase: prototype, model, tools, transparency):\n";
+  for (const auto& g : s.groups)
+    for (const auto& ph : s.phases) {
+      std::string id = g.prototype;
+      if (auto it = g.by_phase.find(ph.id); it != g.by_phase.end())
+        id = it->second;
+      else if (ph.prototype)
+        id = *ph.prototype;
+      const auto f = s.prototype_files.find(id);
+      if (f == s.prototype_files.end()) continue;
+      const engine::SceneConfig cfg = prototypes::load_prototype(f->second);
+      if (cfg.model != "needle")
+        throw InputError("prototype \"" + id + "\" (model \"" + cfg.model + "\", group \"" + g.id +
+                             "\", phase \"" + ph.id +
+                             "\") has no finger and needle tools; a needle_insertion task needs "
+                             "model \"needle\"",
+                         file);
+      const bool transparent = ph.cues.transparency.value_or(cfg.cues.transparency);
+      out += "  " + g.id + " / " + ph.id + ": " + id + ", model needle, tools finger+needle, " +
+             (transparent ? "soft tissue transparent (tip and tip-to-target visible)"
+                          : "opaque (tip not visible)") +
+             (ph.cues.transparency ? " [phase switch]" : " [prototype]") + "\n";
+    }
+  return out;
+}
+
 palplab::app::CommandRegistration reg{
     "validate", [](CLI::App& root, int* code) {
       auto* cmd =
@@ -21,6 +56,8 @@ palplab::app::CommandRegistration reg{
         Study s = load_study(*study, engine_prototype_inspector());
         Plan p = make_plan(s);
         std::cout << palplab::escape_controls(plan_summary(s, p));
+        if (s.task.kind == "needle_insertion")
+          std::cout << palplab::escape_controls(needle_scenes(s, *study));
         if (!s.hypotheses.empty()) {
           std::cout << "hypotheses (confirmatory, run first by `palplab report`):";
           for (const auto& h : s.hypotheses) {

@@ -31,6 +31,14 @@ UiScene UiScene::of(const engine::Scene& s) {
     u.thresholds.push_back(s.thresholds(r));
   u.cues = s.config().cues;
   u.coarse_nodes = s.stats().coarse_nodes;
+  const std::size_t nr = u.geometry.region_names.size();
+  if (u.geometry.tissues) {
+    u.see_through.assign(nr, 1.0f);
+    for (int r : u.geometry.tissues->soft_regions)
+      if (r >= 0 && r < static_cast<int>(nr)) u.see_through[r] = 0.3f;
+  } else {
+    u.see_through.assign(nr, 0.45f);
+  }
   return u;
 }
 
@@ -61,6 +69,7 @@ void PalpationUi::set_scene(UiScene scene) {
   scene_ = std::make_unique<UiScene>(std::move(scene));
   renderer_ = std::make_unique<render::Renderer>(scene_->geometry);
   control_ = std::make_unique<render::MouseControl>(scene_->geometry);
+  transparent_ = scene_->cues.transparency;  // the session's cue; T still toggles it
   stage_t0_ = now_s();
   in_message_ = false;
   if (script_) script_->restart();
@@ -110,7 +119,7 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   const engine::RenderedSummary s = monitor ? monitor->last_rendered() : engine::RenderedSummary{};
   render::DrawOptions opt;
   opt.wireframe = wireframe_;
-  if (transparent_) opt.region_alpha.assign(g.region_names.size(), 0.45f);
+  if (transparent_) opt.region_alpha = sc.see_through;
   opt.device_position = monitor ? monitor->last_position() : control_->position();
   opt.contact = s.contact;
   renderer_->draw(cam_, fw, fh, opt);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <utility>
 
 #include "common/seed.hpp"
 #include "protocols/rng.hpp"
@@ -148,9 +149,26 @@ std::string plan_summary(const Study& study, const Plan& plan) {
   o << "seed " << study.seed << ", " << plan.participants.size() << " participants, "
     << plan.session_count() << " sessions, " << plan.simulated_seconds() / 3600.0
     << " h simulated (1 kHz lock-step)\n";
-  o << "task: find \"" << study.task.feature << "\"";
+  const bool needle = study.task.kind == "needle_insertion";
+  if (needle) {
+    // What a needle session does (protocols/needle_session.hpp): two tool phases in one session.
+    const Eigen::Vector3d& e = study.task.entry_hint;
+    o << "task: needle insertion into \"" << study.task.feature << "\"";
+    if (!study.task.scene.empty()) o << " (scene " << study.task.scene << ")";
+    o << "\n  1. tool finger: palpate the skin around the briefed entry point [" << e.x() << ", "
+      << e.y() << ", " << e.z()
+      << "] m, choose the entry point between the bony landmarks\n"
+         "  2. tool needle: insert along the stylus axis to the target (briefed depth "
+      << 1e3 * study.task.target_depth_hint
+      << " mm); events tissue_entered/left, bone_contact, target_reached, tip_to_target\n"
+         "  force limits (finger)";
+  } else {
+    o << "task: find \"" << study.task.feature << "\"";
+  }
+  bool first = true;
   for (auto& [r, l] : study.task.thresholds)
-    o << "; " << r << " ST " << l.st << " MPF " << l.mpf << " SFT " << l.sft << " N";
+    o << (needle && std::exchange(first, false) ? ": " : "; ") << r << " ST " << l.st << " MPF "
+      << l.mpf << " SFT " << l.sft << " N";
   o << "\ngroups (" << study.assignment << "):";
   for (const auto& g : study.groups) {
     o << " " << g.id << " n=" << g.size << " on " << g.prototype;
@@ -186,7 +204,10 @@ std::string plan_summary(const Study& study, const Plan& plan) {
   o << "prototypes:";
   for (auto& [id, f] : study.prototype_files) o << " " << id << "=" << f;
   o << "\nmeasures:";
-  for (auto& m : study.measures) o << " " << m;
+  for (auto& m : study.measures) {
+    o << " " << m;
+    if (needle) o << " [" << measure_unit(m) << "]";
+  }
   o << "\nanalyses:";
   for (auto& a : study.analyses) o << " " << a.kind << "(" << a.measure << " @ " << a.phase << ")";
   o << "\n";

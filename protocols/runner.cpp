@@ -63,6 +63,7 @@ results::StudyStructure study_structure(const Study& s) {
     r.haptic = ph.cues.haptic;
     r.visual_deformation = ph.cues.visual_deformation;
     r.audio = ph.cues.audio;
+    r.transparency = ph.cues.transparency;
     r.instructed = ph.instructed;
     r.feature = s.task.feature;
     for (const auto& [region, l] : s.task.thresholds)
@@ -197,6 +198,7 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
   if (study.task.kind == "needle_insertion") {
     NeedleSessionRun nr =
         run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene, keep_samples);
+    nr.data.session.transparency = scene.config().cues.transparency;
     return finish_session(pp, spec, std::move(nr.data), nr.steps, scene.dt(), nr.wall,
                           std::move(nr.loop), nr.state_after.to_json());
   }
@@ -299,6 +301,7 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
   mi.palpation_onset = study.task.palpation_onset;
   out.measures = compute_measures(mi);
   if (keep_samples) out.samples = std::move(samples);
+  out.session.transparency = scene.config().cues.transparency;
   return finish_session(pp, spec, std::move(out), steps, dt, wall, std::move(loop),
                         trainee.state().to_json());
 }
@@ -533,8 +536,10 @@ std::string session_instructions(const Study& study, const SessionSpec& spec) {
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
   if (study.task.kind == "needle_insertion")
     throw InputError(
-        "human sessions of a needle_insertion task are not supported yet (the "
-        "device would need the tool switch; see docs/FORMATS.md \"Needle insertion\")",
+        "run --human: human sessions of a needle_insertion task are not supported: the "
+        "real-time session loop cannot switch the tool (finger -> needle) or set the stylus "
+        "axis from the device; virtual sessions run (palplab run without --human); see "
+        "docs/FORMATS.md \"Needle insertion\"",
         study.file);
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
@@ -633,6 +638,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     rec.attempt = attempts[spec.ordinal];
     rec.trainee = "human";
     rec.device = opt.device_text;
+    rec.transparency = scene.config().cues.transparency;
     rec.started_at = utc_iso(now());
     store.begin_session(rec);
     say("session " + spec.phase_id + " #" + std::to_string(spec.index + 1) + " (" +

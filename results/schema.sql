@@ -1,9 +1,10 @@
--- palplab results store, schema version 3 (docs/FORMATS.md; version 1 lacked the study
+-- palplab results store, schema version 4 (docs/FORMATS.md; version 1 lacked the study
 -- structure tables study_groups, phases and thresholds; version 2 lacked the session columns
--- attempt, status, trainee, device, started_at and abort_reason of human sessions).
+-- attempt, status, trainee, device, started_at and abort_reason of human sessions; version 3
+-- lacked the transparency columns of phases and sessions).
 -- One database holds one run of one study. Units: s, N, m. Times of day are UTC ISO 8601.
 -- results/schema.cpp embeds this file verbatim (a test checks that they are identical).
-PRAGMA user_version = 3;
+PRAGMA user_version = 4;
 
 CREATE TABLE meta (
   key   TEXT PRIMARY KEY,
@@ -51,7 +52,8 @@ CREATE TABLE phases (
   visual_deformation INTEGER,
   audio              INTEGER,
   instructed         INTEGER NOT NULL,    -- 1 when an instructor guides the phase
-  feature            TEXT NOT NULL        -- region to find (task.feature)
+  feature            TEXT NOT NULL,       -- region to find (task.feature)
+  transparency       INTEGER              -- needle scenes' see-through soft tissue switch (v4)
 );
 
 -- Force thresholds (N) per phase and region; region '*' applies to every other region.
@@ -102,6 +104,7 @@ CREATE TABLE sessions (
   device        TEXT,                     -- human sessions: "udp:5005", "mouse", "trace:FILE"
   started_at    TEXT,                     -- human sessions: UTC wall-clock start
   abort_reason  TEXT,                     -- aborted sessions: why
+  transparency  INTEGER,                  -- transparency cue as run: 1 on, 0 off, NULL before v4
   UNIQUE (participant, ordinal, attempt)
 );
 

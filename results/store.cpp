@@ -330,6 +330,32 @@ void migrate_sessions_to_v3(sqlite3* db) {
   exec(db, "PRAGMA foreign_keys=ON");
 }
 
+// Schema 3 -> 4: phases and sessions gain their (nullable) transparency column; old rows read
+// NULL (not recorded). Adding a nullable column needs no table rebuild.
+// (A database begun as version 1 has no phases table: only sessions change.)
+void migrate_to_v4(sqlite3* db) {
+  bool phases = false;
+  {
+    Stmt q(db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'phases'");
+    phases = q.step();
+  }
+  exec(db, "BEGIN IMMEDIATE");
+  try {
+    if (phases) exec(db, "ALTER TABLE phases ADD COLUMN transparency INTEGER;");
+    exec(db,
+         "ALTER TABLE sessions ADD COLUMN transparency INTEGER;"
+         "UPDATE meta SET value = '4' WHERE key = 'schema_version';"
+         "INSERT OR REPLACE INTO meta(key, value) VALUES ('migrated_to_4_at', '" +
+             utc_now() +
+             "');"
+             "PRAGMA user_version = 4;");
+    exec(db, "COMMIT");
+  } catch (...) {
+    exec(db, "ROLLBACK");
+    throw;
+  }
+}
+
 }  // namespace
 
 Store Store::create(const std::string& path) {
@@ -399,6 +425,10 @@ Store Store::open(const std::string& path, bool exclusive) {
     migrate_sessions_to_v3(db);
     s.version_ = 3;
   }
+  if (exclusive && s.version_ == 3) {
+    migrate_to_v4(db);
+    s.version_ = 4;
+  }
   if (exclusive || can_write)
     exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
   return s;
@@ -466,8 +496,12 @@ void Store::write_session(SessionData& d) {
            "INSERT INTO sessions(participant, ordinal, phase, phase_index, prototype, instructor, "
            "study_offset, day, duration, steps, wall_duration, loop_median, loop_p99, seed, "
            "state_after, completed_at, attempt, status, trainee, device, started_at, "
-           "abort_reason) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, "
-           "?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22)");
+           "abort_reason, transparency) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, "
+           "?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23)");
+    if (r.transparency)
+      s.bind(23, *r.transparency ? 1 : 0);
+    else
+      s.bind_null(23);
     s.bind(17, r.attempt).bind(18, r.status).bind(19, r.trainee).bind_opt_text(20, r.device);
     s.bind_opt_text(21, r.started_at).bind_opt_text(22, r.abort_reason);
     s.bind(1, r.participant).bind(2, r.ordinal).bind(3, r.phase).bind(4, r.phase_index);
@@ -559,9 +593,13 @@ void Store::write_structure(const StudyStructure& st) {
           .bind(3, st.groups[i].prototype)
           .run();
     Stmt p(db_,
-           "INSERT INTO phases(phase, position, kind, sessions, session_duration, haptic, "
-           "visual_deformation, audio, instructed, feature) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, "
-           "?8, ?9, ?10)");
+           version_ >= 4
+               ? "INSERT INTO phases(phase, position, kind, sessions, session_duration, haptic, "
+                 "visual_deformation, audio, instructed, feature, transparency) VALUES (?1, ?2, "
+                 "?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"
+               : "INSERT INTO phases(phase, position, kind, sessions, session_duration, haptic, "
+                 "visual_deformation, audio, instructed, feature) VALUES (?1, ?2, ?3, ?4, ?5, ?6, "
+                 "?7, ?8, ?9, ?10)");
     Stmt t(db_, "INSERT INTO thresholds(phase, region, st, mpf, sft) VALUES (?1, ?2, ?3, ?4, ?5)");
     auto cue = [&](int i, const std::optional<bool>& c) -> Stmt& {
       return c ? p.bind(i, *c ? 1 : 0) : p.bind_null(i);
@@ -573,6 +611,7 @@ void Store::write_structure(const StudyStructure& st) {
       cue(6, ph.haptic);
       cue(7, ph.visual_deformation);
       cue(8, ph.audio);
+      if (version_ >= 4) cue(11, ph.transparency);
       p.bind(9, ph.instructed ? 1 : 0).bind(10, ph.feature).run();
       for (const auto& r : ph.thresholds)
         t.bind(1, ph.phase).bind(2, r.region).bind(3, r.st).bind(4, r.mpf).bind(5, r.sft).run();
@@ -591,9 +630,11 @@ StudyStructure Store::read_structure() const {
   out.has_structure = true;
   Stmt g(db_, "SELECT grp, prototype FROM study_groups ORDER BY position");
   while (g.step()) out.groups.push_back({g.text(0), g.text(1)});
-  Stmt p(db_,
-         "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, audio, "
-         "instructed, feature FROM phases ORDER BY position");
+  Stmt p(db_, version_ >= 4
+                  ? "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
+                    "audio, instructed, feature, transparency FROM phases ORDER BY position"
+                  : "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
+                    "audio, instructed, feature FROM phases ORDER BY position");
   auto cue = [&](int c) { return p.null(c) ? std::optional<bool>() : p.integer(c) != 0; };
   while (p.step()) {
     PhaseRecord r;
@@ -606,6 +647,7 @@ StudyStructure Store::read_structure() const {
     r.audio = cue(6);
     r.instructed = p.integer(7) != 0;
     r.feature = p.text(8);
+    if (version_ >= 4) r.transparency = cue(9);
     out.phases.push_back(r);
   }
   Stmt t(db_, "SELECT phase, region, st, mpf, sft FROM thresholds ORDER BY phase, region");
@@ -635,6 +677,7 @@ std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool comp
       "s.loop_median, s.loop_p99, s.seed, s.state_after, s.completed_at";
   if (version >= 3)
     sql += ", s.attempt, s.status, s.trainee, s.device, s.started_at, s.abort_reason";
+  if (version >= 4) sql += ", s.transparency";
   sql += " FROM sessions s JOIN participants p ON p.participant = s.participant WHERE 1";
   if (version >= 3 && complete_only) sql += " AND s.status = 'complete'";
   if (!participant.empty()) sql += " AND s.participant = ?1";
@@ -670,6 +713,7 @@ std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool comp
       r.started_at = q.null(21) ? "" : q.text(21);
       r.abort_reason = q.null(22) ? "" : q.text(22);
     }
+    if (version >= 4 && !q.null(23)) r.transparency = q.integer(23) != 0;
     out.push_back(std::move(r));
   }
   return out;
@@ -692,8 +736,13 @@ void Store::begin_session(SessionRecord& r) {
   Stmt s(db_,
          "INSERT INTO sessions(participant, ordinal, phase, phase_index, prototype, instructor, "
          "study_offset, day, duration, steps, wall_duration, loop_median, loop_p99, seed, "
-         "state_after, completed_at, attempt, status, trainee, device, started_at) VALUES (?1, "
-         "?2, ?3, ?4, ?5, ?6, ?7, ?8, 0, 0, 0, 0, 0, ?9, ?10, '', ?11, 'running', ?12, ?13, ?14)");
+         "state_after, completed_at, attempt, status, trainee, device, started_at, "
+         "transparency) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, 0, 0, 0, 0, 0, ?9, ?10, '', ?11, "
+         "'running', ?12, ?13, ?14, ?15)");
+  if (r.transparency)
+    s.bind(15, *r.transparency ? 1 : 0);
+  else
+    s.bind_null(15);
   s.bind(1, r.participant).bind(2, r.ordinal).bind(3, r.phase).bind(4, r.phase_index);
   s.bind(5, r.prototype).bind_opt_text(6, r.instructor).bind(7, r.study_offset).bind(8, r.day);
   s.bind(9, std::to_string(r.seed)).bind(10, r.state_after).bind(11, r.attempt);

@@ -16,7 +16,7 @@ struct sqlite3;
 
 namespace palplab::results {
 
-inline constexpr int kSchemaVersion = 3;
+inline constexpr int kSchemaVersion = 4;
 // Oldest version `Store::open` still reads: version 1 lacks the study structure tables
 // (read_structure() reports has_structure = false for it); versions 1 and 2 lack the session
 // attempt/status/trainee columns (every row reads as a complete virtual session). A writer
@@ -44,6 +44,7 @@ struct PhaseRecord {
   int sessions = 1;
   double session_duration = 0;                            // s
   std::optional<bool> haptic, visual_deformation, audio;  // unset = as the prototype says
+  std::optional<bool> transparency;  // schema 4: needle scenes' see-through soft tissue
   bool instructed = false;
   std::string feature;                      // region to find
   std::vector<ThresholdRecord> thresholds;  // by region
@@ -87,6 +88,9 @@ struct SessionRecord {
   std::string device;               // human: the --device text ("udp:5005"); "" for virtual
   std::string started_at;           // human: UTC ISO 8601 wall-clock start; "" for virtual
   std::string abort_reason;         // aborted: why ("window closed", "interrupted (Ctrl-C)", ...)
+  // Schema 4: the transparency cue as the session ran (its prototype's, or the phase's switch);
+  // unset = not recorded (a database from before version 4).
+  std::optional<bool> transparency;
 };
 
 struct MeasureRecord {

@@ -428,6 +428,7 @@ Scene make_scene(const SceneConfig& cfg) {
     if (it != cfg.thresholds.end()) sc.thresholds[r] = it->second;
   }
   sc.model = kind->make(cfg, m);
+  g.tissues = sc.model->tissue_surfaces();
   return Scene(std::move(impl));
 }
 

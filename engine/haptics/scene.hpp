@@ -104,6 +104,19 @@ struct Sample {
 };
 
 // Rest geometry for the participant's exploration (surface only; the tet interior is hidden).
+// The closed surface of every tissue of a layered tet scene (needle scenes), so that a renderer
+// can draw bone and target through a transparent skin: own vertices per tissue (#S by 3, m, at
+// rest), faces (#G by 3, ccw seen from outside the tissue) and each vertex's region index (the
+// tissue's region in SceneGeometry::region_names, -1 = unnamed).
+struct TissueSurfaces {
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V;
+  Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> F;
+  std::vector<int> vertex_region;
+  // Regions of the soft tissues (neither rigid nor the target): what the transparency cue makes
+  // see-through.
+  std::vector<int> soft_regions;
+};
+
 struct SceneGeometry {
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V;  // #V by 3 rest positions (m)
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> N;  // #V by 3 unit outward normals
@@ -121,6 +134,8 @@ struct SceneGeometry {
   int region_node(const std::string& name) const;
 
   std::shared_ptr<const spatial::Octree> octree;  // search structure over V (shared, immutable)
+  // Needle scenes: the tissues' surfaces inside the skin (static); nullptr for other models.
+  std::shared_ptr<const TissueSurfaces> tissues;
 };
 
 // What a study phase may change of a prototype without editing its file.

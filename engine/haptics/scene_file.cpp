@@ -428,6 +428,11 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
   }
   {
     Writer s;
+    s.str(cfg.mesh.key());
+    section(payload, tag("MKEY"), s.bytes());
+  }
+  {
+    Writer s;
     put_mesh(s, *mesh);
     section(payload, tag("MESH"), s.bytes());
   }
@@ -524,7 +529,7 @@ SceneFileData read_scene_file(const std::string& path) {
                      path);
 
   Reader r(path, p, psize);
-  bool have_src = false, have_mesh = false, have_model = false;
+  bool have_src = false, have_mesh = false, have_model = false, have_key = false;
   while (r.at() < r.size()) {
     const auto t = r.get<std::uint32_t>("section tag");
     const std::size_t len = r.count(1, "section");
@@ -538,6 +543,9 @@ SceneFileData read_scene_file(const std::string& path) {
       if (std::memcmp(sd.data(), h + 56, 32) != 0)
         throw InputError("corrupted scene file: the sources fingerprint does not match", path);
       have_src = true;
+    } else if (t == tag("MKEY")) {
+      d.mesh_key = s.str("mesh key");
+      have_key = true;
     } else if (t == tag("MESH")) {
       d.mesh = get_mesh(s);
       have_mesh = true;
@@ -552,21 +560,20 @@ SceneFileData read_scene_file(const std::string& path) {
     if (s.at() != s.size())
       throw InputError("corrupted scene file: section has trailing bytes", path);
   }
-  if (!have_src || !have_mesh || !have_model)
-    throw InputError("corrupted scene file: a section (sources, mesh or model) is missing", path);
+  if (!have_src || !have_key || !have_mesh || !have_model)
+    throw InputError(
+        "corrupted scene file: a section (sources, mesh key, mesh or model) is missing", path);
   return d;
 }
 
-SceneConfig load_scene_file(const std::string& path,
-                            const std::function<SceneConfig(const std::string&)>& load_config) {
-  SceneFileData d = read_scene_file(path);
-  std::error_code ec;
-  if (!fs::is_regular_file(d.info.prototype, ec))
-    throw InputError("the prototype this scene file was built from is gone: " + d.info.prototype +
-                         " (rebuild it with `palplab scene build`)",
-                     path);
+namespace {
+
+// load_scene_file's checks of the sources (stale) and the model kind; the configuration.
+SceneConfig checked_config(const std::string& path, const SceneFileData& d,
+                           const std::function<SceneConfig(const std::string&)>& load_config) {
   SceneConfig cfg = load_config(d.info.prototype);
   const std::vector<SceneSource> now = scene_sources(cfg);
+
   auto same = [](const SceneSource& a, const SceneSource& b) {
     return a.role == b.role && a.path == b.path;
   };
@@ -597,11 +604,40 @@ SceneConfig load_scene_file(const std::string& path,
     throw InputError("corrupted scene file: stored model \"" + d.info.model_kind +
                          "\" but the prototype's is \"" + cfg.model + "\"",
                      path);
+  return cfg;
+}
+
+}  // namespace
+
+SceneConfig load_scene_file(const std::string& path,
+                            const std::function<SceneConfig(const std::string&)>& load_config) {
+  SceneFileData d = read_scene_file(path);
+  std::error_code ec;
+  if (!fs::is_regular_file(d.info.prototype, ec))
+    throw InputError("the prototype this scene file was built from is gone: " + d.info.prototype +
+                         " (rebuild it with `palplab scene build`)",
+                     path);
+  // The stored mesh goes into the cache before the prototype is read: reading it validates the
+  // prototype's region names against its mesh, and a generated tet mesh (the shoulder) would
+  // otherwise be regenerated (TetGen) just for its names -- the whole cost the file saves. It
+  // comes out again unless every check below passes.
   auto mesh = std::const_pointer_cast<SceneMesh>(d.mesh);
   mesh->model_blob = std::move(d.model_blob);
   mesh->model_blob_kind = d.info.model_kind;
-  install_scene_mesh(cfg.mesh, mesh);
-  return cfg;
+  const std::shared_ptr<const SceneMesh> before = cached_scene_mesh(d.mesh_key);
+  install_scene_mesh_key(d.mesh_key, mesh);
+  try {
+    const SceneConfig cfg = checked_config(path, d, load_config);
+    if (cfg.mesh.key() != d.mesh_key)
+      throw InputError("stale scene file: built for mesh " + d.mesh_key +
+                           ", the prototype now uses " + cfg.mesh.key() +
+                           " (rebuild it with `palplab scene build`)",
+                       path);
+    return cfg;
+  } catch (...) {
+    install_scene_mesh_key(d.mesh_key, before);
+    throw;
+  }
 }
 
 }  // namespace palplab::engine

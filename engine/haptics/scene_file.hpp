@@ -17,7 +17,8 @@
 //     88  char[32]  palplab version "VERSION+COMMIT", NUL padded
 //     120 u8[8]     first 8 bytes of the SHA-256 of header bytes 0..119
 //   payload: sections {u32 tag, u64 length, bytes}: "SRCS" (the prototype path and each source
-//   file with its SHA-256), "MESH" (the prepared mesh), "MODL" (model kind and its blob).
+//   file with its SHA-256), "MKEY" (the mesh source's cache key, MeshSource::key), "MESH" (the
+//   prepared mesh), "MODL" (model kind and its blob).
 //
 // Every check fails with a palplab::InputError naming the file and what is wrong (exit 2):
 // not a .psim, wrong format version, built by another palplab build, corrupted header or
@@ -35,7 +36,8 @@ namespace palplab::engine {
 
 struct SceneMesh;
 
-inline constexpr std::uint32_t kSceneFileVersion = 1;
+// Version 2: the MKEY section (the mesh's cache key) and the needle model's precomputation.
+inline constexpr std::uint32_t kSceneFileVersion = 2;
 inline constexpr std::size_t kSceneFileHeaderBytes = 128;
 
 // One source a scene is built from: the prototype file, a mesh file, the materials table.
@@ -71,6 +73,7 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg);
 struct SceneFileData {
   SceneFileInfo info;
   std::shared_ptr<const SceneMesh> mesh;
+  std::string mesh_key;    // MeshSource::key() of the mesh it was built from
   std::string model_blob;  // empty = none stored
 };
 SceneFileData read_scene_file(const std::string& path);

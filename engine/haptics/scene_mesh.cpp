@@ -164,12 +164,23 @@ std::shared_ptr<const SceneMesh> build_scene_mesh(const MeshSource& m) {
 }
 
 void install_scene_mesh(const MeshSource& m, std::shared_ptr<const SceneMesh> mesh) {
+  install_scene_mesh_key(m.key(), std::move(mesh));
+}
+
+void install_scene_mesh_key(const std::string& key, std::shared_ptr<const SceneMesh> mesh) {
   Cache& c = cache();
   std::lock_guard<std::mutex> lock(c.mu);
   if (mesh)
-    c.meshes[m.key()] = std::move(mesh);
+    c.meshes[key] = std::move(mesh);
   else
-    c.meshes.erase(m.key());
+    c.meshes.erase(key);
+}
+
+std::shared_ptr<const SceneMesh> cached_scene_mesh(const std::string& key) {
+  Cache& c = cache();
+  std::lock_guard<std::mutex> lock(c.mu);
+  auto it = c.meshes.find(key);
+  return it == c.meshes.end() ? nullptr : it->second;
 }
 
 const std::vector<std::string>& mesh_region_names(const MeshSource& m) {

@@ -60,6 +60,10 @@ std::shared_ptr<const SceneMesh> build_scene_mesh(const MeshSource& m);
 // Puts a prepared mesh (a loaded .psim file) into the cache for m, replacing what is there;
 // nullptr removes m from the cache (the next scene_mesh(m) builds it again).
 void install_scene_mesh(const MeshSource& m, std::shared_ptr<const SceneMesh> mesh);
+// The same by cache key (MeshSource::key(); a .psim file stores it), and what the cache holds for
+// a key (nullptr = nothing).
+void install_scene_mesh_key(const std::string& key, std::shared_ptr<const SceneMesh> mesh);
+std::shared_ptr<const SceneMesh> cached_scene_mesh(const std::string& key);
 
 // One step's input from the contact tracking (engine/haptics/contact.hpp): the god-object proxy
 // on the REST surface, its face and barycentric weights, and the device position. Node-based
@@ -103,6 +107,8 @@ class SceneModel {
   // Current surface for a renderer (#V(now) by 3, faces of the current surface).
   virtual void surface(mesh::Positions& V, mesh::Faces& F) const = 0;
   // Tool selection (Scene::set_tool); single-tool models have the one tool "probe".
+  // The tissues' surfaces inside the body (layered tet models that draw them; nullptr = none).
+  virtual std::shared_ptr<const TissueSurfaces> tissue_surfaces() const { return nullptr; }
   virtual std::string tool() const { return "probe"; }
   virtual bool set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis) {
     (void)stylus_axis;

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include "results/sha256.hpp"
 
 namespace palplab::engine {
 
@@ -71,7 +73,18 @@ const char* to_string(NeedleEvent::Kind k) {
 
 NeedleModel::NeedleModel(const mesh::TetMesh& m, const mesh::MaterialTable& materials,
                          const NeedleOptions& opt)
-    : V_(m.V), T_(m.T), A_(m.attribute), opt_(opt) {
+    : NeedleModel(m.V, m.T, m.attribute, materials, opt) {}
+
+NeedleModel::NeedleModel(const mesh::Positions& V, const mesh::Tets& T,
+                         const Eigen::VectorXi& attribute, const mesh::MaterialTable& materials,
+                         const NeedleOptions& opt, std::string_view precomputed)
+    : V_(V), T_(T), A_(attribute), opt_(opt) {
+  check_tissues(materials);
+  restored_ = !precomputed.empty() && restore(precomputed);
+  if (!restored_) precompute();
+}
+
+void NeedleModel::check_tissues(const mesh::MaterialTable& materials) {
   const int nt = static_cast<int>(T_.rows());
   if (nt == 0) throw InputError("needle: the mesh has no tetrahedra");
   if (A_.size() != nt) A_ = Eigen::VectorXi::Zero(nt);
@@ -89,8 +102,15 @@ NeedleModel::NeedleModel(const mesh::TetMesh& m, const mesh::MaterialTable& mate
                        ") has no \"needle\" parameters");
     tissues_.push_back({a, mat->name, mat->rigid, mat->needle});
   }
+  for (long i = 0; i < T_.size(); ++i)
+    if (T_.data()[i] < 0 || T_.data()[i] >= V_.rows())
+      throw InputError("needle: a tet refers to a missing node");
+}
+
+void NeedleModel::precompute() {
+  const int nt = static_cast<int>(T_.rows());
   // Interfaces and the target's surface.
-  const mesh::Tets N = mesh::tet_neighbours(m);
+  const mesh::Tets N = mesh::tet_neighbours(mesh::make_tet_mesh(V_, T_, A_));
   auto tri = [&](int t, int k) {
     const int* f = mesh::kTetFace[k];
     return Tri{mesh::row3(V_, T_(t, f[0])), mesh::row3(V_, T_(t, f[1])),
@@ -102,6 +122,10 @@ NeedleModel::NeedleModel(const mesh::TetMesh& m, const mesh::MaterialTable& mate
       if (nb < 0 || (A_[nb] != A_[t] && t < nb)) interfaces_.push_back(tri(t, k));
       if (A_[t] == opt_.target_tissue && (nb < 0 || A_[nb] != opt_.target_tissue))
         target_faces_.push_back(tri(t, k));
+      if (nb < 0 || A_[nb] != A_[t]) {
+        const int* f = mesh::kTetFace[k];
+        tissue_faces_.push_back({A_[t], {T_(t, f[0]), T_(t, f[1]), T_(t, f[2])}});
+      }
     }
   // Point-location grid: about two tets per cell.
   lo_ = V_.colwise().minCoeff().transpose();
@@ -146,6 +170,124 @@ NeedleModel::NeedleModel(const mesh::TetMesh& m, const mesh::MaterialTable& mate
       grid_.index.resize(count[ncell]);
     }
   }
+}
+
+namespace {
+
+constexpr char kBlobTag[8] = {'N', 'E', 'E', 'D', 'L', 'E', 'P', '1'};
+
+struct BlobIn {
+  std::string_view b;
+  std::size_t at = 0;
+  bool ok = true;
+  void raw(void* p, std::size_t n) {
+    if (!ok || b.size() - at < n) {
+      ok = false;
+      return;
+    }
+    std::memcpy(p, b.data() + at, n);
+    at += n;
+  }
+  template <class T>
+  T get() {
+    T v{};
+    raw(&v, sizeof v);
+    return v;
+  }
+  // A counted array of T, at most `limit` elements.
+  template <class T>
+  std::vector<T> vec(std::uint64_t limit) {
+    const auto n = get<std::uint64_t>();
+    if (!ok || n > limit || n > (b.size() - at) / sizeof(T)) {
+      ok = false;
+      return {};
+    }
+    std::vector<T> v(n);
+    raw(v.data(), n * sizeof(T));
+    return v;
+  }
+};
+
+template <class T>
+void put(std::string& s, const T& v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void put_vec(std::string& s, const std::vector<T>& v) {
+  put<std::uint64_t>(s, v.size());
+  s.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+}  // namespace
+
+std::array<std::uint8_t, 32> NeedleModel::inputs_digest() const {
+  results::Sha256 h;
+  auto add = [&](const void* p, std::size_t n) {
+    const std::uint64_t len = n;
+    h.update(&len, sizeof len);  // lengths keep the fields apart
+    h.update(p, n);
+  };
+  add(V_.data(), sizeof(double) * V_.size());
+  add(T_.data(), sizeof(int) * T_.size());
+  add(A_.data(), sizeof(int) * A_.size());
+  add(&opt_.target_tissue, sizeof opt_.target_tissue);
+  return h.digest();
+}
+
+std::string NeedleModel::save() const {
+  static_assert(sizeof(Tri) == 9 * sizeof(double));
+  std::string s(kBlobTag, 8);
+  const auto d = inputs_digest();
+  s.append(reinterpret_cast<const char*>(d.data()), d.size());
+  put_vec(s, interfaces_);
+  put_vec(s, target_faces_);
+  put(s, lo_);
+  put(s, cell_);
+  put(s, nx_);
+  put(s, ny_);
+  put(s, nz_);
+  put_vec(s, grid_.offset);
+  put_vec(s, grid_.index);
+  put_vec(s, tissue_faces_);
+  return s;
+}
+
+bool NeedleModel::restore(std::string_view blob) {
+  if (blob.size() < 40 || std::memcmp(blob.data(), kBlobTag, 8) != 0) return false;
+  const auto d = inputs_digest();
+  if (std::memcmp(blob.data() + 8, d.data(), d.size()) != 0) return false;
+  BlobIn in{blob, 40};
+  const std::uint64_t faces = 4 * static_cast<std::uint64_t>(T_.rows());
+  auto interfaces = in.vec<Tri>(faces);
+  auto target = in.vec<Tri>(faces);
+  const auto lo = in.get<Vec3>(), cell = in.get<Vec3>();
+  const int nx = in.get<int>(), ny = in.get<int>(), nz = in.get<int>();
+  if (!in.ok || nx < 1 || ny < 1 || nz < 1 || nx > 256 || ny > 256 || nz > 256) return false;
+  mesh::Csr grid;
+  const std::uint64_t cells = static_cast<std::uint64_t>(nx) * ny * nz;
+  grid.offset = in.vec<int>(cells + 1);
+  grid.index = in.vec<int>(std::numeric_limits<std::uint32_t>::max());
+  auto tissue_faces = in.vec<TissueFace>(faces);
+  for (const TissueFace& f : tissue_faces)
+    for (int v : f.v)
+      if (v < 0 || v >= V_.rows()) return false;
+  if (!in.ok || in.at != blob.size() || grid.offset.size() != cells + 1 || grid.offset[0] != 0 ||
+      grid.offset.back() != static_cast<int>(grid.index.size()))
+    return false;
+  for (std::size_t c = 0; c + 1 < grid.offset.size(); ++c)
+    if (grid.offset[c + 1] < grid.offset[c]) return false;
+  for (int t : grid.index)
+    if (t < 0 || t >= T_.rows()) return false;
+  interfaces_ = std::move(interfaces);
+  target_faces_ = std::move(target);
+  lo_ = lo;
+  cell_ = cell;
+  nx_ = nx;
+  ny_ = ny;
+  nz_ = nz;
+  grid_ = std::move(grid);
+  tissue_faces_ = std::move(tissue_faces);
+  return true;
 }
 
 const NeedleTissue& NeedleModel::tissue(int attribute) const {

@@ -20,7 +20,10 @@
 //     pulling the tip out of the body ends the insertion (a new contact starts a new one).
 // Force convention: axial_force >= 0 resists insertion; the force on the hand is
 // force = -axial_force · a (N). Lengths in m.
+#include <array>
+#include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "engine/mesh/materials.hpp"
@@ -83,6 +86,19 @@ class NeedleModel {
   // mesh has no tet of the target tissue.
   NeedleModel(const mesh::TetMesh& m, const mesh::MaterialTable& materials,
               const NeedleOptions& opt = {});
+  // The same from the tet arrays alone (#N by 3 nodes in m, #T by 4 tets, #T tissue attributes).
+  // `precomputed` (empty = none) = a save() of a model built from the same arrays and target
+  // tissue (a .psim
+  // file's): restored instead of recomputed, so the model steps bit-identically; a blob made
+  // from other inputs, or malformed, is ignored (recomputed). A .psim file's checksum guards the
+  // bytes; the digest here guards against a blob meant for another mesh.
+  NeedleModel(const mesh::Positions& V, const mesh::Tets& T, const Eigen::VectorXi& attribute,
+              const mesh::MaterialTable& materials, const NeedleOptions& opt,
+              std::string_view precomputed = {});
+  // The precomputation (interface faces, target surface, point-location grid) as bytes, tagged
+  // with a SHA-256 digest of the inputs (nodes, tets, attributes, target tissue).
+  std::string save() const;
+  bool restored() const { return restored_; }  // built from a precomputed blob
 
   // One haptic/simulation step: the device's tip position and needle axis (need not be unit).
   NeedleStep step(const Vec3& tip, const Vec3& axis);
@@ -96,6 +112,14 @@ class NeedleModel {
   double distance_to_target(const Vec3& p) const;   // m, 0 inside the target
   const NeedleTissue& tissue(int attribute) const;  // throws std::out_of_range
 
+  // Faces of each tissue's closed surface: faces of its tets whose neighbour is another tissue
+  // or none (node indices of the mesh, in the tet's own face order), with the tissue.
+  struct TissueFace {
+    int tissue = -1;
+    std::array<int, 3> v{};
+  };
+  const std::vector<TissueFace>& tissue_faces() const { return tissue_faces_; }
+
   int insertions() const { return insertions_; }  // contacts started (attempts)
   int bone_contacts() const { return bone_contacts_; }
   // Tissues entered in the current insertion, in order (one entry per entering).
@@ -105,6 +129,11 @@ class NeedleModel {
   struct Tri {
     Vec3 a, b, c;
   };
+  void check_tissues(const mesh::MaterialTable& materials);
+  void precompute();
+  bool restore(std::string_view blob);
+  std::array<std::uint8_t, 32> inputs_digest() const;
+  bool restored_ = false;
   mesh::Positions V_;  // copies: the model does not keep a reference to the mesh
   mesh::Tets T_;
   Eigen::VectorXi A_;
@@ -112,6 +141,7 @@ class NeedleModel {
   std::vector<NeedleTissue> tissues_;  // one per distinct attribute
   std::vector<Tri> interfaces_;        // faces between different tissues or on the boundary
   std::vector<Tri> target_faces_;      // the target tissue's surface
+  std::vector<TissueFace> tissue_faces_;
   // Uniform grid over the mesh's bounding box: tets per cell (point location).
   Vec3 lo_, cell_;
   int nx_ = 1, ny_ = 1, nz_ = 1;

@@ -18,6 +18,7 @@
 //    to the target is logged as tip_to_target events (every log_resolution of change).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
 
@@ -37,15 +38,43 @@ constexpr double kStressDepth = 3.0;       // finger radii of tissue that set th
 
 class NeedleSceneModel final : public SceneModel {
  public:
-  NeedleSceneModel(const SceneConfig& cfg, const SceneMesh& m, const mesh::TetMesh& tm)
-      : cfg_(cfg.needle), mesh_(m), needle_(tm, mesh::default_materials(), needle_options(cfg)) {
+  // `stored`: the model's part of a .psim file (save_blob), or nullptr.
+  NeedleSceneModel(const SceneConfig& cfg, const SceneMesh& m, const std::string* stored)
+      : cfg_(cfg.needle),
+        mesh_(m),
+        needle_(m.model_V, m.model_T, m.tet_attribute, mesh::default_materials(),
+                needle_options(cfg), stored ? stored_needle(*stored) : std::string_view()) {
     finger_h_.assign(m.V.rows(), -1.0);
     finger_E_.assign(m.V.rows(), 0.0);
+    if (stored && needle_.restored()) restore_finger(*stored);
     reset();
+  }
+
+  // The .psim blob: the needle model's precomputation and the finger's layer table of every
+  // skin node (what layer_under computes on first touch), for this finger radius:
+  //   u64 n, n bytes NeedleModel::save; f64 finger_radius; u64 #V; #V f64 h; #V f64 E.
+  std::string save_blob() {
+    for (long v = 0; v < mesh_.V.rows(); ++v) layer_under(static_cast<int>(v));
+    const std::string n = needle_.save();
+    std::string s;
+    auto put = [&](const void* p, std::size_t k) { s.append(static_cast<const char*>(p), k); };
+    const std::uint64_t len = n.size(), nv = finger_h_.size();
+    put(&len, 8);
+    s += n;
+    put(&cfg_.finger_radius, 8);
+    put(&nv, 8);
+    put(finger_h_.data(), 8 * nv);
+    put(finger_E_.data(), 8 * nv);
+    return s;
   }
   const char* kind() const override { return "needle"; }
   // Rigid bone walls and popping membranes: no divergence watchdog on this model.
   bool deformable() const override { return false; }
+
+  std::shared_ptr<const TissueSurfaces> tissue_surfaces() const override {
+    if (!tissues_) tissues_ = build_tissue_surfaces();
+    return tissues_;
+  }
 
   std::string tool() const override { return needle_tool_ ? "needle" : "finger"; }
   bool set_tool(const std::string& tool, const Eigen::Vector3d& axis) override {
@@ -147,6 +176,72 @@ class NeedleSceneModel final : public SceneModel {
   }
 
  private:
+  // Each tissue's closed surface with its own vertices (shared within the tissue, so the
+  // renderer's vertex normals are smooth), labelled with the tissue's region.
+  std::shared_ptr<const TissueSurfaces> build_tissue_surfaces() const {
+    auto out = std::make_shared<TissueSurfaces>();
+    const auto& tf = needle_.tissue_faces();
+    std::vector<int> tissues;
+    for (const auto& f : tf) tissues.push_back(f.tissue);
+    std::sort(tissues.begin(), tissues.end());
+    tissues.erase(std::unique(tissues.begin(), tissues.end()), tissues.end());
+    const long nn = mesh_.model_V.rows();
+    std::vector<int> vertex(tissues.size() * nn, -1);  // (tissue, mesh node) -> vertex
+    std::vector<std::array<int, 3>> faces;
+    std::vector<int> node;
+    faces.reserve(tf.size());
+    for (const NeedleModel::TissueFace& f : tf) {
+      const long ti = std::lower_bound(tissues.begin(), tissues.end(), f.tissue) - tissues.begin();
+      std::array<int, 3> g{};
+      for (int k = 0; k < 3; ++k) {
+        int& v = vertex[ti * nn + f.v[k]];
+        if (v < 0) {
+          v = static_cast<int>(node.size());
+          node.push_back(f.v[k]);
+          out->vertex_region.push_back(region_of(f.tissue));
+        }
+        g[k] = v;
+      }
+      faces.push_back(g);
+    }
+    for (int t : tissues) {
+      const int r = region_of(t);
+      if (r >= 0 && !needle_.tissue(t).rigid && t != cfg_.target_tissue &&
+          std::find(out->soft_regions.begin(), out->soft_regions.end(), r) ==
+              out->soft_regions.end())
+        out->soft_regions.push_back(r);
+    }
+    out->V.resize(static_cast<long>(node.size()), 3);
+    for (std::size_t i = 0; i < node.size(); ++i) out->V.row(i) = mesh_.model_V.row(node[i]);
+    out->F.resize(static_cast<long>(faces.size()), 3);
+    for (std::size_t i = 0; i < faces.size(); ++i)
+      for (int k = 0; k < 3; ++k) out->F(i, k) = faces[i][k];
+    return out;
+  }
+
+  // The NeedleModel part of a stored blob (empty when malformed: the model then recomputes).
+  static std::string_view stored_needle(const std::string& b) {
+    std::uint64_t n = 0;
+    if (b.size() >= 8) std::memcpy(&n, b.data(), 8);
+    return b.size() >= 8 && n <= b.size() - 8 ? std::string_view(b).substr(8, n)
+                                              : std::string_view();
+  }
+  // The finger table of a stored blob when it was made for this mesh and finger radius.
+  void restore_finger(const std::string& b) {
+    std::uint64_t n = 0, nv = 0;
+    std::memcpy(&n, b.data(), 8);
+    std::size_t at = 8 + n;
+    double radius = 0;
+    if (b.size() - at < 16) return;
+    std::memcpy(&radius, b.data() + at, 8);
+    std::memcpy(&nv, b.data() + at + 8, 8);
+    at += 16;
+    if (radius != cfg_.finger_radius || nv != finger_h_.size() || (b.size() - at) != 16 * nv)
+      return;
+    std::memcpy(finger_h_.data(), b.data() + at, 8 * nv);
+    std::memcpy(finger_E_.data(), b.data() + at + 8 * nv, 8 * nv);
+  }
+
   static NeedleOptions needle_options(const SceneConfig& cfg) {
     NeedleOptions o;
     o.target_tissue = cfg.needle.target_tissue;
@@ -232,6 +327,7 @@ class NeedleSceneModel final : public SceneModel {
   std::vector<Event> events_;
   bool delivered_ = false;                   // events_ went to the scene with the last step
   std::vector<double> finger_h_, finger_E_;  // per skin node, -1 = not computed yet
+  mutable std::shared_ptr<const TissueSurfaces> tissues_;  // built on first request
 };
 
 // The "model" object of a needle prototype (docs/FORMATS.md "Needle").
@@ -272,8 +368,14 @@ std::unique_ptr<SceneModel> make(const SceneConfig& cfg, const SceneMesh& cm) {
         "shoulder or a tet mesh file); mesh " +
             cfg.mesh.key() + " is a surface",
         cfg.source);
-  const mesh::TetMesh tm = mesh::make_tet_mesh(cm.model_V, cm.model_T, cm.tet_attribute);
-  return std::make_unique<NeedleSceneModel>(cfg, cm, tm);
+  const bool stored = cm.model_blob_kind == "needle" && !cm.model_blob.empty();
+  return std::make_unique<NeedleSceneModel>(cfg, cm, stored ? &cm.model_blob : nullptr);
+}
+
+std::string save(const SceneConfig& cfg, const SceneMesh& cm) {
+  if (!cm.tet) return {};
+  NeedleSceneModel m(cfg, cm, nullptr);
+  return m.save_blob();
 }
 
 }  // namespace
@@ -282,7 +384,10 @@ const ModelKind& needle_model_kind() {
   static const ModelKind k{"needle",
                            "needle insertion through tissue layers with a palpating finger "
                            "(prototype N)",
-                           &read, nullptr, &make};
+                           &read,
+                           nullptr,
+                           &make,
+                           &save};
   return k;
 }
 

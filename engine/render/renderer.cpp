@@ -143,6 +143,7 @@ struct Renderer::Gl {
 Renderer::Renderer(const engine::SceneGeometry& rest) : gl_(std::make_unique<Gl>()), rest_(rest) {
   bounding_sphere(rest.V, centre_, radius_);
   rest_faces_ = rest.F.rows();
+  if (rest.tissues) inner_ = rest.tissues;
   Gl& g = *gl_;
   g.program = glCreateProgram();
   const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader);
@@ -232,11 +233,18 @@ void Renderer::upload_topology(long nV) {
   // numbering, and right for refinement nodes, which lie inside the faces they split.
   vertex_region_.assign(nV, -1);
   vertex_refined_.assign(nV, 0);
-  const bool same = nV == rest_.V.rows() && F_.rows() == rest_.F.rows() && F_ == rest_.F;
+  // The tissues' surfaces (needle scenes) follow the scene's surface, with their own regions.
+  const long outer_faces = F_.rows() - (inner_ ? inner_->F.rows() : 0);
+  const bool same = outer_vertices_ == rest_.V.rows() && outer_faces == rest_.F.rows() &&
+                    F_.topRows(outer_faces) == rest_.F;
   std::vector<char> used(nV, 0);
   for (long f = 0; f < F_.rows(); ++f)
     for (int k = 0; k < 3; ++k) used[F_(f, k)] = 1;
   for (long v = 0; v < nV; ++v) {
+    if (v >= outer_vertices_) {
+      vertex_region_[v] = inner_->vertex_region[v - outer_vertices_];
+      continue;
+    }
     if (!used[v]) continue;
     const int node = same ? static_cast<int>(v) : rest_.nearest_node(V_.row(v).transpose());
     vertex_region_[v] = node >= 0 && node < static_cast<int>(rest_.vertex_region.size())
@@ -286,9 +294,21 @@ void Renderer::upload_topology(long nV) {
   ++faces_uploaded_;
 }
 
-void Renderer::update_surface(const RowMatX3d& V, const RowMatX3i& F, long coarse_nodes) {
-  if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows()))
+void Renderer::update_surface(const RowMatX3d& V_in, const RowMatX3i& F_in, long coarse_nodes) {
+  if (F_in.size() > 0 && (F_in.minCoeff() < 0 || F_in.maxCoeff() >= V_in.rows()))
     throw std::invalid_argument("Renderer::update_surface: a face refers to a missing vertex");
+  outer_vertices_ = V_in.rows();
+  outer_faces_ = F_in.rows();
+  RowMatX3d V_all;
+  RowMatX3i F_all;
+  if (inner_) {  // the tissues' surfaces after the scene's, numbered after its vertices
+    V_all.resize(V_in.rows() + inner_->V.rows(), 3);
+    V_all << V_in, inner_->V;
+    F_all.resize(F_in.rows() + inner_->F.rows(), 3);
+    F_all << F_in, (inner_->F.array() + static_cast<int>(V_in.rows())).matrix();
+  }
+  const RowMatX3d& V = inner_ ? V_all : V_in;
+  const RowMatX3i& F = inner_ ? F_all : F_in;
   const long nV = V.rows();
   V_ = V;
   const bool topology = F.rows() != F_.rows() || F != F_ || nV > vertex_capacity_ ||
@@ -349,7 +369,7 @@ void Renderer::draw(const Camera& cam, int width, int height, const DrawOptions&
     colours[4 * r + 3] = reg >= 0 ? alpha_of(reg) : 1.0f;
   }
   glUniform4fv(g.u_colour, kMaxRegions + 1, colours.data());
-  glUniform1i(g.u_highlight, opt.highlight_refined && F_.rows() > rest_faces_ ? 1 : 0);
+  glUniform1i(g.u_highlight, opt.highlight_refined && outer_faces_ > rest_faces_ ? 1 : 0);
 
   // Split faces into opaque and transparent by their region's alpha.
   std::vector<unsigned> opaque, transparent_faces;
@@ -411,6 +431,23 @@ void Renderer::draw(const Camera& cam, int width, int height, const DrawOptions&
     glDrawElements(GL_TRIANGLES, g.marker_count, GL_UNSIGNED_INT, nullptr);
     glDisable(GL_BLEND);
     glEnable(GL_DEPTH_TEST);
+    glUniform4f(g.u_model, 0, 0, 0, 1);
+  }
+  // The needle (its tool in a needle scene): a row of small spheres from the tip back along the
+  // shaft, opaque, so that it shows through transparent tissue.
+  if (opt.device_position && opt.needle_axis && opt.needle_axis->norm() > 0) {
+    const Eigen::Vector3d a = opt.needle_axis->normalized();
+    const double r = 0.004 * radius_;
+    const int n = std::max(2, static_cast<int>(std::ceil(opt.needle_length / r)));
+    glUniform1i(g.u_mode, 2);
+    glUniform4f(g.u_solid, 0.35f, 0.37f, 0.42f, 1.0f);
+    glBindVertexArray(g.marker_vao);
+    for (int i = 0; i <= n; ++i) {
+      const Eigen::Vector3d p = *opt.device_position - (opt.needle_length * i / n) * a;
+      glUniform4f(g.u_model, static_cast<float>(p.x()), static_cast<float>(p.y()),
+                  static_cast<float>(p.z()), static_cast<float>(r));
+      glDrawElements(GL_TRIANGLES, g.marker_count, GL_UNSIGNED_INT, nullptr);
+    }
     glUniform4f(g.u_model, 0, 0, 0, 1);
   }
   // Transparent regions, back to front (face centroids by eye depth), without depth writes.

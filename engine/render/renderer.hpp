@@ -6,9 +6,11 @@
 // The surface is uploaded once; per frame only positions and normals are streamed (faces are
 // re-uploaded only when the topology changed, i.e. after adaptive refinement). Faces are coloured
 // by region; faces touching refinement nodes are highlighted while the surface has more faces than
-// at rest; regions with alpha < 1 are drawn after the opaque ones, sorted back to front. The
-// contact point (HCP) is drawn as a small sphere. Needs a current OpenGL 3.3 core context for its
-// whole life (construction, drawing, destruction).
+// at rest; regions with alpha < 1 are drawn after the opaque ones, sorted back to front. Needle
+// scenes add each tissue's surface inside the skin (SceneGeometry::tissues, in the tissues'
+// regions) and the needle, so a transparent skin and soft tissue show bone, target and needle.
+// The contact point (HCP) is drawn as a small sphere. Needs a current OpenGL 3.3 core context for
+// its whole life (construction, drawing, destruction).
 #include <Eigen/Core>
 #include <array>
 #include <memory>
@@ -33,6 +35,10 @@ struct DrawOptions {
   bool contact = false;                            // marker colour: magenta in contact, blue not
   double marker_radius = 0.0;                      // m; 0 = 1.2% of the rest bounding radius
   bool highlight_refined = true;
+  // Needle scenes with the needle in hand: the stylus axis (tip at device_position, the shaft
+  // drawn back along -axis for needle_length m); none = no needle.
+  std::optional<Eigen::Vector3d> needle_axis;
+  double needle_length = 0.06;
   std::array<float, 3> background = {1.0f, 1.0f, 1.0f};
 };
 
@@ -77,6 +83,10 @@ class Renderer {
   long vertex_capacity_ = 0;
   long faces_uploaded_ = 0;
   long coarse_nodes_ = 0;
+  // Needle scenes: the tissues' surfaces (SceneGeometry::tissues) drawn after the scene's
+  // surface in the same buffers, so transparency sorts them together.
+  std::shared_ptr<const engine::TissueSurfaces> inner_;
+  long outer_vertices_ = 0, outer_faces_ = 0;  // the scene's surface in V_, F_
   RowMatX3d V_;
   void upload_topology(long nV);
 };

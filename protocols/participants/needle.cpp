@@ -76,6 +76,8 @@ void NeedleTrainee::begin_session(const SurfaceView& view, const NeedleBriefing&
   tool_ = "finger";
   insertions_ = 0;
   seen_target_ = false;
+  closest_ = -1.0;
+  misses_.clear();
   chosen_ = -1;
   last_t_ = 0.0;
   next_palpation();
@@ -96,7 +98,13 @@ void NeedleTrainee::next_palpation() {
   mode_ = Mode::travel;
 }
 
+void NeedleTrainee::end_insertion() {
+  if (closest_ >= 0.0 && !seen_target_) misses_.push_back({closest_depth_, closest_});
+  closest_ = -1.0;
+}
+
 void NeedleTrainee::start_insertion() {
+  end_insertion();
   if (insertions_ >= static_cast<int>(std::lround(p_.max_insertions))) {
     stop();
     return;
@@ -117,6 +125,7 @@ void NeedleTrainee::start_insertion() {
 }
 
 void NeedleTrainee::stop() {
+  end_insertion();
   mode_ = Mode::done;
 }
 
@@ -178,6 +187,10 @@ void NeedleTrainee::perceive(const Percept& p) {
   if (mode_ != Mode::insert) return;
   const double felt = -p.force.dot(axis_);  // N, resisting the insertion
   const bool visible = p.visible_tip_to_target >= 0.0;
+  if (visible && depth_ > 0.0 && (closest_ < 0.0 || p.visible_tip_to_target < closest_)) {
+    closest_ = p.visible_tip_to_target;
+    closest_depth_ = depth_;
+  }
   if (visible) {
     if (p.visible_tip_to_target == 0.0) {  // the tip is seen inside the target
       seen_target_ = true;
@@ -206,14 +219,19 @@ void NeedleTrainee::perceive(const Percept& p) {
 }
 
 void NeedleTrainee::end_session(double study_time) {
-  if (seen_target_) {
-    // The depth at which the tip was seen to reach the target, merged into the belief.
-    const double obs_var = p_.visual_spatial_sd * p_.visual_spatial_sd;
-    const double obs = seen_depth_ + p_.visual_spatial_sd * rng_.normal();
+  if (mode_ != Mode::done) end_insertion();  // the session ended during an insertion
+  auto merge = [&](double depth, double extra_var) {
+    const double obs_var = p_.visual_spatial_sd * p_.visual_spatial_sd + extra_var;
+    const double obs = depth + p_.visual_spatial_sd * rng_.normal();
     const double k = s_.depth_var / (s_.depth_var + obs_var);
     s_.depth_mean += k * (obs - s_.depth_mean);
     s_.depth_var *= (1.0 - k);
-  }
+  };
+  // Visible misses: the closest approach's depth, less certain the wider the miss.
+  for (const auto& [depth, r] : misses_) merge(depth, r * r);
+  misses_.clear();
+  // The depth at which the tip was seen to reach the target.
+  if (seen_target_) merge(seen_depth_, 0.0);
   s_.last_session_end = study_time;
 }
 

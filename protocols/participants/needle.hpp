@@ -18,12 +18,16 @@
 //    bone: pull out and insert again (new aim), at most max_insertions times.
 // 3. Learning: a target seen reached gives the depth at which it was reached (visual error
 //    visual_spatial_sd), merged into the depth belief like the force belief (Kalman update).
-//    Without the tip visible nothing about the depth is learnt.
+//    A visible miss is knowledge of results too: the depth at which the drawn tip passed
+//    closest to the target is an observation of the target's depth whose error grows with the
+//    miss distance r (variance visual_spatial_sd^2 + r^2). Without the tip visible nothing about
+//    the depth is learnt.
 //
 // Units: m, N, s. The trainee knows its own hand position (proprioception) and the skin surface.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "protocols/participants/model.hpp"
@@ -87,6 +91,11 @@ class NeedleTrainee {
   int insertions_ = 0;
   bool seen_target_ = false;
   double seen_depth_ = 0.0;
+  // Knowledge of results of a visible miss: per insertion with the tip visible, the depth at
+  // which the drawn tip came closest to the target and that distance (m).
+  double closest_ = -1.0, closest_depth_ = 0.0;
+  std::vector<std::pair<double, double>> misses_;  // (depth, distance) per insertion
+  void end_insertion();
   double last_t_ = 0.0;
 };
 

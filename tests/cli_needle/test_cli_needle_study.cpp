@@ -57,9 +57,46 @@ TEST(CliNeedleStudy, ReducedRunStoresEveryNeedleMeasureAndReports) {
   write(p("study.json"), reduced_study());
   const Result v = run("validate " + p("study.json"));
   ASSERT_EQ(v.code, 0) << v.err << v.out;
+  // The summary describes the needle task, not a palpation one.
+  EXPECT_EQ(v.out.find("task: find"), std::string::npos) << v.out;
+  for (const char* want :
+       {"task: needle insertion into \"membrane\"", "tool finger: palpate the skin",
+        "tool needle: insert along the stylus axis", "briefed depth 50 mm", "tip_to_target_mm [mm]",
+        "insertion_attempts [1]",
+        "transparent / training: N_transparent, model needle, tools finger+needle, soft tissue "
+        "transparent",
+        "transparent / test: N, model needle, tools finger+needle, opaque (tip not visible) [phase "
+        "switch]",
+        "opaque / training: N, model needle, tools finger+needle, opaque (tip not visible) "
+        "[prototype]"})
+    EXPECT_NE(v.out.find(want), std::string::npos) << want << "\n" << v.out;
   const Result r = run("run " + p("study.json") + " --db " + p("n.db") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.err << r.out;
   const auto store = palplab::results::Store::open(p("n.db"));
+  // Each session stores the transparency it ran with, each phase its declared switch.
+  {
+    const auto parts = store.read_participants();
+    std::map<std::string, std::string> group;
+    for (const auto& pr : parts) group[pr.participant] = pr.group;
+    int seen = 0;
+    for (const auto& ss : store.read_sessions()) {
+      ASSERT_TRUE(ss.transparency.has_value()) << ss.session;
+      const bool expect = group[ss.participant] == "transparent" && ss.phase == "training";
+      EXPECT_EQ(*ss.transparency, expect) << ss.participant << " " << ss.phase;
+      ++seen;
+    }
+    EXPECT_EQ(seen, 4);
+    const auto st = store.read_structure();
+    ASSERT_EQ(st.phases.size(), 2u);
+    EXPECT_FALSE(st.phases[0].transparency.has_value());  // training: as the prototype says
+    ASSERT_TRUE(st.phases[1].transparency.has_value());   // test: switched off
+    EXPECT_FALSE(*st.phases[1].transparency);
+  }
+  // Human needle sessions are refused with what is missing (exit 2), before any window opens.
+  const Result h = run("run " + p("study.json") + " --db " + p("h.db") +
+                       " --human --participant P01 --device trace:" + p("none.trace"));
+  EXPECT_EQ(h.code, 2) << h.err << h.out;
+  EXPECT_NE(h.err.find("cannot switch the tool"), std::string::npos) << h.err;
   const auto rows = store.read_measures();
   const std::set<std::string> wanted = {"insertion_attempts", "layers_passed", "tip_to_target_mm",
                                         "bone_contacts", "procedure_time"};

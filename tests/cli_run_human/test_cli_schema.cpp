@@ -43,11 +43,11 @@ TEST(CliSchema, V2IsExportedAsItIsAndAnUnknownVersionExits2) {
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   const std::string measures = palplab::testing::slurp(dir / "csv" / "measures.csv");
   EXPECT_NE(measures.find("2.4375"), std::string::npos) << measures;
-  exec(db, "UPDATE meta SET value = '4' WHERE key = 'schema_version'; PRAGMA user_version = 4;");
+  exec(db, "UPDATE meta SET value = '99' WHERE key = 'schema_version'; PRAGMA user_version = 99;");
   r = palplab::testing::run_palplab("export " + db.string() + " --csv " + (dir / "csv4").string(),
                                     dir);
   EXPECT_EQ(r.code, 2) << r.out << r.err;
-  EXPECT_NE(r.err.find("results schema version 4 is not supported (expected 1 to 3)"),
+  EXPECT_NE(r.err.find("results schema version 99 is not supported (expected 1 to 4)"),
             std::string::npos)
       << r.err;
   fs::remove_all(dir);
@@ -104,7 +104,7 @@ TEST(CliSchema, RunHumanContinuesAV2DatabaseMigratingIt) {
     sqlite3_finalize(q);
     return out;
   };
-  EXPECT_EQ(one("PRAGMA user_version"), "3");
+  EXPECT_EQ(one("PRAGMA user_version"), "4");
   EXPECT_NE(one("SELECT value FROM meta WHERE key = 'migrated_to_3_at'"), "<none>");
   EXPECT_EQ(one("SELECT status || ' ' || trainee || ' ' || steps FROM sessions"),
             "complete human 2000");

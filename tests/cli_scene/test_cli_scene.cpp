@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "engine/haptics/scene_file.hpp"
 #include "tests/cli_support.hpp"
 
 namespace {
@@ -70,7 +71,7 @@ TEST(CliScene, BuildReportsLoadAndRebuildTimes) {
   EXPECT_EQ(o["rebuild_ms"]["all"].size(), 3u);
   EXPECT_GT(o["rebuild_ms"]["median"].get<double>(), 0.0);
   EXPECT_GT(o["load_ms"]["median"].get<double>(), 0.0);
-  EXPECT_EQ(o["format_version"], 1);
+  EXPECT_EQ(o["format_version"], palplab::engine::kSceneFileVersion);
   const auto info = run_palplab("scene info " + out.string() + " --json", f.dir);
   ASSERT_EQ(info.code, 0) << info.err;
   EXPECT_EQ(nlohmann::json::parse(info.out)["prototype"], fs::absolute(f.proto).string());
@@ -148,11 +149,14 @@ TEST(CliScene, DamagedFilesAreRejectedWithExit2) {
   std::string q = b;
   q[200] ^= 0x80;
   expect_rejected(q, "payload checksum", "flipped early payload byte");
-  // Another format version.
+  // Another format version (the previous one: a file from before the needle precomputation).
   std::string v = b;
-  const std::uint32_t two = 2;
-  std::memcpy(v.data() + 8, &two, 4);
-  expect_rejected(v, "format version 2, this palplab reads version 1", "wrong version");
+  const std::uint32_t old = palplab::engine::kSceneFileVersion - 1;
+  std::memcpy(v.data() + 8, &old, 4);
+  expect_rejected(v,
+                  "format version " + std::to_string(old) + ", this palplab reads version " +
+                      std::to_string(palplab::engine::kSceneFileVersion),
+                  "wrong version");
   // Not a scene file at all.
   expect_rejected("{\"format\": \"palplab-prototype/1\"}", "not a palplab scene file", "json");
 }

@@ -4,6 +4,7 @@
 // .ci/install-deps installs Mesa's llvmpipe so CI always has one.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -159,6 +160,53 @@ TEST_F(RenderTest, TransparentRegionShowsWhatIsBehindIt) {
   const std::uint8_t* o = opaque.pixel(W / 2, H / 2 - 30);
   EXPECT_GT(t[1] + t[2], o[1] + o[2] + 40);
   EXPECT_EQ(coverage(see).count, full);
+}
+
+// Needle scenes (SceneGeometry::tissues): a "bone" sphere of radius 0.02 m inside the 0.05 m
+// skin sphere. Opaque skin hides it exactly (the image equals one without the tissue surfaces);
+// with the skin see-through it changes the pixels of its own projected disc, about
+// (tan asin(0.02/0.3) / tan asin(0.05/0.3))^2 = 0.156 of the skin's silhouette at 0.3 m.
+TEST_F(RenderTest, BoneInsideTransparentSkinShowsOnlyWhenTheSkinIsTransparent) {
+  SceneGeometry skin = g_;
+  skin.region_names = {"skin", "bone"};
+  std::fill(skin.vertex_region.begin(), skin.vertex_region.end(), 0);
+  SceneGeometry with_bone = skin;
+  auto bone = std::make_shared<palplab::engine::TissueSurfaces>();
+  const auto m = palplab::mesh::generate_sphere(642);
+  bone->V = m.V * 0.4;  // radius 0.02 m
+  bone->F = m.F;
+  bone->vertex_region.assign(m.V.rows(), 1);
+  with_bone.tissues = bone;
+  pr::Renderer plain(skin), layered(with_bone);
+  pr::Camera cam;
+  cam.azimuth_deg = 20;
+  cam.elevation_deg = 10;
+  cam.distance = 0.3;
+  auto differing = [](const pr::Image& a, const pr::Image& b) {
+    long n = 0;
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x) {
+        const std::uint8_t *p = a.pixel(x, y), *q = b.pixel(x, y);
+        n += std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]) + std::abs(p[2] - q[2]) > 6;
+      }
+    return n;
+  };
+  // Opaque: the bone is hidden, pixel for pixel.
+  const pr::Image o_plain = draw(plain, cam), o_layered = draw(layered, cam);
+  EXPECT_EQ(differing(o_plain, o_layered), 0);
+  // Transparent skin: the bone shows where it projects, nowhere else.
+  pr::DrawOptions see;
+  see.region_alpha = {0.3f, 1.0f};
+  const pr::Image t_plain = draw(plain, cam, see), t_layered = draw(layered, cam, see);
+  const long full = coverage(o_plain).count;
+  const double share = static_cast<double>(differing(t_plain, t_layered)) / full;
+  EXPECT_GT(share, 0.13);
+  EXPECT_LT(share, 0.18);
+  EXPECT_GT(differing(t_layered, o_layered), full / 2);  // the skin itself changed too
+  // The centre pixel (the bone) is darker/less white than through the empty skin.
+  const std::uint8_t *c_bone = t_layered.pixel(W / 2, H / 2),
+                     *c_empty = t_plain.pixel(W / 2, H / 2);
+  EXPECT_NE(c_bone[0] + c_bone[1] + c_bone[2], c_empty[0] + c_empty[1] + c_empty[2]);
 }
 
 TEST_F(RenderTest, DeformationChangesPixelsOnlyNearIt) {

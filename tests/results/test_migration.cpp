@@ -123,24 +123,30 @@ TEST(Migration, V2IsReadAsItIsAndMigratedByAWriterKeepingEveryRow) {
                    "SELECT count(*) FROM pragma_table_info('sessions') WHERE name IN "
                    "('attempt','status','trainee','device','started_at','abort_reason')"),
             "6");
+  EXPECT_NE(scalar(db, "SELECT value FROM meta WHERE key = 'migrated_to_4_at'"), "<none>");
+  EXPECT_EQ(scalar(db,
+                   "SELECT count(*) FROM pragma_table_info('sessions') WHERE name = "
+                   "'transparency'"),
+            "1");
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM sessions WHERE transparency IS NULL"), "2");
   EXPECT_EQ(scalar(db, "PRAGMA foreign_key_check"), "<none>");
   fs::remove_all(d);
 }
 
 TEST(Migration, AVersionThisBuildDoesNotKnowIsRefusedClearly) {
-  const fs::path d = tmpdir("v4");
-  const fs::path db = d / "v4.db";
+  const fs::path d = tmpdir("v99");
+  const fs::path db = d / "v99.db";
   { Store s = Store::create(db.string()); }
   sqlite3* h = nullptr;
   ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
-  exec(h, "UPDATE meta SET value = '4' WHERE key = 'schema_version'; PRAGMA user_version = 4;");
+  exec(h, "UPDATE meta SET value = '99' WHERE key = 'schema_version'; PRAGMA user_version = 99;");
   sqlite3_close(h);
   for (bool writer : {false, true}) {
     try {
       Store::open(db.string(), writer);
-      FAIL() << "a version-4 database opened";
+      FAIL() << "a version-99 database opened";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("results schema version 4 is not supported (expected "
+      EXPECT_NE(std::string(e.what()).find("results schema version 99 is not supported (expected "
                                            "1 to " +
                                            std::to_string(kSchemaVersion) + ")"),
                 std::string::npos)
@@ -148,6 +154,6 @@ TEST(Migration, AVersionThisBuildDoesNotKnowIsRefusedClearly) {
       EXPECT_NE(std::string(e.what()).find(db.string()), std::string::npos) << e.what();
     }
   }
-  EXPECT_EQ(scalar(db, "PRAGMA user_version"), "4");  // untouched
+  EXPECT_EQ(scalar(db, "PRAGMA user_version"), "99");  // untouched
   fs::remove_all(d);
 }

@@ -238,3 +238,105 @@ TEST(SceneFileFem, StoredLinearPrecomputationRestoresExactlyAndOnlyForTheSameInp
 }
 
 }  // namespace
+
+namespace {
+
+// Prototype N (needle, issue 16): the file stores the needle model's precomputation (interface
+// faces, target surface, point-location grid, tissue surfaces) and the finger's layer table.
+// A scene loaded from it palpates with the finger at several skin nodes and then inserts the
+// needle through the layers with bit-identical forces, events and tip-to-target distances.
+struct NeedleTrack {
+  std::vector<Eigen::Vector3d> force;
+  std::vector<double> tip_to_target;
+  std::vector<std::pair<int, double>> events;  // kind, value
+};
+
+NeedleTrack palpate_then_insert(const engine::SceneConfig& cfg) {
+  engine::Scene s = engine::make_scene(cfg);
+  const auto& g = s.geometry();
+  NeedleTrack t;
+  auto record = [&](const engine::Rendered& r) {
+    t.force.push_back(r.force);
+    t.tip_to_target.push_back(r.visible_tip_to_target);
+    for (const auto& e : r.events) t.events.push_back({static_cast<int>(e.kind), e.value});
+  };
+  // The finger: press 4 mm into every 40th skin node.
+  for (long v = 0; v < g.V.rows(); v += 40) {
+    const Eigen::Vector3d p = g.V.row(v).transpose(), n = g.N.row(v).transpose();
+    for (int i = 0; i <= 40; ++i) record(s.step(p + (0.005 - 0.009 * i / 40.0) * n));
+    for (int i = 0; i < 20; ++i) record(s.step(p + 0.01 * n));
+  }
+  // The needle: straight along +y at x = -2 mm, z = 0 (skin, fat, muscle, capsule).
+  s.set_tool("needle", Eigen::Vector3d::UnitY());
+  for (double y = -0.09; y <= -0.01; y += 2e-5) record(s.step(Eigen::Vector3d(-0.002, y, 0.0)));
+  return t;
+}
+
+TEST(SceneFileNeedle, StoredNeedlePrecomputationLoadsAndStepsBitIdentically) {
+  const engine::SceneConfig cfg = prototypes::load_prototype(proto("N"));
+  engine::install_scene_mesh(cfg.mesh, nullptr);
+  const auto built = engine::scene_mesh(cfg.mesh);
+  const NeedleTrack a = palpate_then_insert(cfg);
+  std::shared_ptr<const engine::TissueSurfaces> tissues_built;
+  {
+    engine::Scene s = engine::make_scene(cfg);
+    tissues_built = s.geometry().tissues;
+  }
+
+  const fs::path file = scratch() / "N.psim";
+  const engine::SceneFileInfo info = engine::write_scene_file(file.string(), cfg);
+  EXPECT_TRUE(info.model_blob) << "the needle model's precomputation must be stored";
+  engine::install_scene_mesh(cfg.mesh, nullptr);
+  const engine::SceneConfig loaded_cfg =
+      engine::load_scene_file(file.string(), prototypes::load_prototype);
+  const auto loaded = engine::scene_mesh(cfg.mesh);
+  ASSERT_NE(loaded.get(), built.get()) << "the scene must come from the file";
+  EXPECT_EQ(loaded->model_blob_kind, "needle");
+  ASSERT_FALSE(loaded->model_blob.empty());
+  expect_same_mesh(*built, *loaded);
+  const NeedleTrack b = palpate_then_insert(loaded_cfg);
+
+  ASSERT_EQ(a.force.size(), b.force.size());
+  double finger_peak = 0;
+  for (size_t i = 0; i < a.force.size(); ++i) {
+    ASSERT_TRUE(a.force[i] == b.force[i]) << "step " << i;
+    ASSERT_EQ(a.tip_to_target[i], b.tip_to_target[i]) << "step " << i;
+    finger_peak = std::max(finger_peak, a.force[i].norm());
+  }
+  EXPECT_GT(finger_peak, 0.5);  // the finger really pressed
+  EXPECT_EQ(a.events, b.events);
+  int entered = 0;
+  for (const auto& [k, v] : a.events)
+    entered += k == static_cast<int>(engine::EventKind::tissue_entered);
+  EXPECT_GE(entered, 4);  // the needle really went through the layers to the capsule
+
+  engine::Scene s = engine::make_scene(loaded_cfg);
+  ASSERT_TRUE(s.geometry().tissues && tissues_built);
+  expect_same(tissues_built->V, s.geometry().tissues->V, "tissue surface V");
+  expect_same(tissues_built->F, s.geometry().tissues->F, "tissue surface F");
+  EXPECT_EQ(tissues_built->vertex_region, s.geometry().tissues->vertex_region);
+  EXPECT_EQ(tissues_built->soft_regions, s.geometry().tissues->soft_regions);
+  fs::remove(file);
+}
+
+// A file's mesh goes into the cache before the prototype is read (so reading it does not
+// regenerate the mesh); a stale file must not leave that mesh behind.
+TEST(SceneFileNeedle, AStaleFileLeavesTheCacheAsItWas) {
+  const fs::path dir = scratch() / "stale_n";
+  fs::create_directories(dir);
+  const fs::path p = dir / "N.json";
+  fs::copy_file(proto("N"), p, fs::copy_options::overwrite_existing);
+  const engine::SceneConfig cfg = prototypes::load_prototype(p.string());
+  const fs::path file = dir / "N.psim";
+  engine::write_scene_file(file.string(), cfg);
+  engine::install_scene_mesh(cfg.mesh, nullptr);
+  {
+    std::ofstream out(p, std::ios::app);
+    out << "\n";  // the prototype changed: the file is stale
+  }
+  EXPECT_THROW(engine::load_scene_file(file.string(), prototypes::load_prototype), InputError);
+  EXPECT_EQ(engine::cached_scene_mesh(cfg.mesh.key()), nullptr);
+  fs::remove_all(dir);
+}
+
+}  // namespace
