@@ -49,7 +49,7 @@ struct RenderArgs {
   bool wireframe = false;
   std::vector<std::string> alpha;
   std::string transparent;
-  double transparent_alpha = 0.3;
+  double transparent_alpha = 0.15;
 };
 
 std::vector<double> parse_numbers(const std::string& flag, const std::string& text, char sep,
@@ -203,7 +203,7 @@ palplab::app::CommandRegistration reg{
                       "TISSUE[,TISSUE..]: draw these regions see-through (needle scenes: 'soft' "
                       "= the soft tissues), so the bone and target inside show");
       cmd->add_option("--transparent-alpha", a->transparent_alpha,
-                      "Opacity of the --transparent regions (default 0.3)");
+                      "Opacity of the --transparent regions (default 0.15)");
       cmd->add_option("--press", a->press, "Region name or surface node index to press");
       cmd->add_option("--force", a->force, "Target device force of the press (N)");
       cmd->add_option("--hold", a->hold,

@@ -35,7 +35,7 @@ UiScene UiScene::of(const engine::Scene& s) {
   if (u.geometry.tissues) {
     u.see_through.assign(nr, 1.0f);
     for (int r : u.geometry.tissues->soft_regions)
-      if (r >= 0 && r < static_cast<int>(nr)) u.see_through[r] = 0.3f;
+      if (r >= 0 && r < static_cast<int>(nr)) u.see_through[r] = 0.15f;
   } else {
     u.see_through.assign(nr, 0.45f);
   }

@@ -31,7 +31,8 @@ struct UiScene {
   engine::Cues cues;
   long coarse_nodes = 0;
   // Opacity per region with transparency on (T, or the scene's transparency cue): a needle
-  // scene's soft tissues 0.3 (bone, target and needle show through), else every region 0.45.
+  // scene's soft tissues 0.15 (bone, target and needle show through; each soft interface is drawn
+  // from both sides), else every region 0.45.
   std::vector<float> see_through;
   static UiScene of(const engine::Scene& s);
 };
