@@ -31,6 +31,8 @@ UiScene UiScene::of(const engine::Scene& s) {
     u.thresholds.push_back(s.thresholds(r));
   u.cues = s.config().cues;
   u.coarse_nodes = s.stats().coarse_nodes;
+  u.tool = s.tool();
+  u.axis = s.config().needle.axis;
   const std::size_t nr = u.geometry.region_names.size();
   if (u.geometry.tissues) {
     u.see_through.assign(nr, 1.0f);
@@ -122,6 +124,7 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   if (transparent_) opt.region_alpha = sc.see_through;
   opt.device_position = monitor ? monitor->last_position() : control_->position();
   opt.contact = s.contact;
+  if (sc.tool == "needle") opt.needle_axis = sc.axis;
   renderer_->draw(cam_, fw, fh, opt);
   // The ST cue (the scene's audio cue: force >= ST of the contact region, cue on): always a
   // yellow border flash, and a tone where there is a sound card.

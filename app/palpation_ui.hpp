@@ -34,6 +34,10 @@ struct UiScene {
   // scene's soft tissues 0.15 (bone, target and needle show through; each soft interface is drawn
   // from both sides), else every region 0.45.
   std::vector<float> see_through;
+  // The tool at the start ("needle": the needle is drawn from the contact point back along
+  // `axis`, the stylus axis).
+  std::string tool;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
   static UiScene of(const engine::Scene& s);
 };
 

@@ -437,7 +437,7 @@ void Renderer::draw(const Camera& cam, int width, int height, const DrawOptions&
   // shaft, opaque, so that it shows through transparent tissue.
   if (opt.device_position && opt.needle_axis && opt.needle_axis->norm() > 0) {
     const Eigen::Vector3d a = opt.needle_axis->normalized();
-    const double r = 0.004 * radius_;
+    const double r = 0.008 * radius_;  // about an 18 G needle at the shoulder scale
     const int n = std::max(2, static_cast<int>(std::ceil(opt.needle_length / r)));
     glUniform1i(g.u_mode, 2);
     glUniform4f(g.u_solid, 0.35f, 0.37f, 0.42f, 1.0f);

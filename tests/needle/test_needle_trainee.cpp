@@ -19,12 +19,12 @@ using Mat = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 // A flat skin patch in the plane y = 0 (outward normal -y), 5 x 5 nodes 5 mm apart. The target
 // lies at depth 40 mm, 3 mm beside every straight track: the drawn distance is
 // sqrt((depth - 0.040)^2 + 0.003^2) once the tip is in (never 0: always a miss).
-struct Run {
+struct Outcome {
   pm::TraineeState before, after;
   double closest = 1.0;  // m, smallest drawn distance fed
 };
 
-Run session(bool visible) {
+Outcome session(bool visible) {
   Mat V(25, 3), N(25, 3);
   std::vector<int> region(25, 0);
   for (int i = 0; i < 25; ++i) {
@@ -44,7 +44,7 @@ Run session(bool visible) {
   p.aim_position_sd = 0.0;
   pm::NeedleTrainee t(p, pm::TraineeState{});
   t.begin_session(view, brief, 11, 22);
-  Run r;
+  Outcome r;
   r.before = t.state();
   double time = 0.0;
   for (int i = 0; i < 200000 && !t.done(); ++i) {
@@ -69,7 +69,7 @@ Run session(bool visible) {
 }
 
 TEST(NeedleTrainee, AVisibleMissTeachesTheDepthByItsClosestApproach) {
-  const Run seen = session(true);
+  const Outcome seen = session(true);
   const pm::TraineeParams p;
   ASSERT_NEAR(seen.closest, 0.003, 1e-5);
   const double obs_var = p.visual_spatial_sd * p.visual_spatial_sd + 0.003 * 0.003;
@@ -78,7 +78,7 @@ TEST(NeedleTrainee, AVisibleMissTeachesTheDepthByItsClosestApproach) {
   // The belief moves from the briefed ~60 mm towards the 40 mm seen.
   EXPECT_LT(std::abs(seen.after.depth_mean - 0.040), std::abs(seen.before.depth_mean - 0.040));
 
-  const Run blind = session(false);
+  const Outcome blind = session(false);
   EXPECT_EQ(blind.after.depth_mean, blind.before.depth_mean);
   EXPECT_EQ(blind.after.depth_var, blind.before.depth_var);
 }

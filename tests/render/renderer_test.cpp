@@ -209,6 +209,31 @@ TEST_F(RenderTest, BoneInsideTransparentSkinShowsOnlyWhenTheSkinIsTransparent) {
   EXPECT_NE(c_bone[0] + c_bone[1] + c_bone[2], c_empty[0] + c_empty[1] + c_empty[2]);
 }
 
+// The needle (DrawOptions::needle_axis): drawn from the device position back along the axis, in
+// front of the sphere here, so pixels change along its projected shaft and nowhere else.
+TEST_F(RenderTest, NeedleIsDrawnAlongItsAxisFromTheTip) {
+  pr::Renderer r(g_);
+  pr::Camera cam;
+  cam.azimuth_deg = 0;
+  cam.elevation_deg = 0;
+  cam.distance = 0.3;
+  pr::DrawOptions opt;
+  opt.device_position = Eigen::Vector3d(0.06, 0.0, 0.0);  // 1 cm in front (the eye is at +x)
+  const pr::Image without = draw(r, cam, opt);
+  opt.needle_axis = Eigen::Vector3d(0.0, 0.0, -1.0);  // the shaft goes up (+z) from the tip
+  opt.needle_length = 0.04;
+  const pr::Image with = draw(r, cam, opt);
+  long above = 0, below = 0;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const std::uint8_t *p = with.pixel(x, y), *q = without.pixel(x, y);
+      if (std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]) + std::abs(p[2] - q[2]) > 6)
+        (y < H / 2 - 3 ? above : below) += 1;
+    }
+  EXPECT_GT(above, 40);  // the shaft (~40 px long, >= 1 px wide), above the tip in the image
+  EXPECT_LT(below, above / 10);
+}
+
 TEST_F(RenderTest, DeformationChangesPixelsOnlyNearIt) {
   pr::Renderer r(g_);
   pr::Camera cam;
