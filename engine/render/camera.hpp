@@ -36,7 +36,7 @@ struct CameraMatrices {
 
 // Bounding sphere of a point set: centre of the bounding box and the largest distance to it (m).
 void bounding_sphere(
-    const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>& V,
+    const Eigen::Ref<const mesh::Positions>& V,
     Eigen::Vector3d& centre, double& radius);
 
 // The matrices of `cam` for an image of width x height pixels over a surface whose rest bounding

@@ -10,9 +10,13 @@
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/press_run.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
+using palplab::engine::testing::depth_press;
+using palplab::engine::testing::Rec;
+using palplab::engine::testing::run_press;
 
 namespace {
 
@@ -54,29 +58,9 @@ std::string error_of(const std::string& path) {
   return "";
 }
 
-// What a step rendered, with its events copied (Rendered::events is only valid until the next
-// step).
-struct Rec : Rendered {
-  std::vector<Event> ev;
-};
-
-// A scripted press: approach the node of `region` along its inward normal, push 8 mm, withdraw.
+// The press of these tests: in to 8 mm at 2 cm/s, held 0.4 s, out at 3 cm/s (`steps` steps).
 std::vector<Rec> press(Scene& s, const std::string& region, int steps = 1500) {
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  std::vector<Rec> out;
-  for (int k = 0; k < steps; ++k) {
-    const double t = k * s.dt();
-    const double depth =
-        std::max(-0.002, -0.002 + 0.02 * std::min(t, 0.5) - 0.03 * std::max(0.0, t - 0.9));
-    Rec r;
-    static_cast<Rendered&>(r) = s.step(p - depth * n);
-    r.ev.assign(r.events.begin(), r.events.end());
-    r.events = {};
-    out.push_back(std::move(r));
-  }
-  return out;
+  return run_press(s, depth_press(s, region, 0.008, 0.4, 0.03), steps);
 }
 
 }  // namespace
