@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "engine/mesh/generate.hpp"
-#include "engine/mesh/unique_edges.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "engine/solvers/integrators.hpp"
 
 using namespace palplab;

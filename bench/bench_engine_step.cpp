@@ -90,10 +90,11 @@ Run fixed_press(Scene& s, const std::string& region, double depth_max) {
   return run(s, p, 1.5);
 }
 
-// Unit vector along the longest extent of `region` (principal axis of its vertices), in the
-// tangent plane of `n`.
-Eigen::Vector3d long_axis(const SceneGeometry& g, const std::string& region,
-                          const Eigen::Vector3d& n) {
+// A press that crosses `region` along its longest extent (the principal axis of its vertices):
+// it starts at the surface node nearest the point 10 % along that axis and, while holding
+// `force`, slides at `speed` over 80 % of the region's length.
+PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
+                        double speed, double* length) {
   const int id = g.region_index(region);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   long count = 0;
@@ -106,9 +107,19 @@ Eigen::Vector3d long_axis(const SceneGeometry& g, const std::string& region,
       const Eigen::Vector3d d = g.V.row(i).transpose() - mean;
       C += d * d.transpose();
     }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-  const Eigen::Vector3d a = es.eigenvectors().col(2);  // largest eigenvalue last
-  return (a - a.dot(n) * n).normalized();
+  const Eigen::Vector3d axis =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(2);  // largest
+  double lo = 1e300, hi = -1e300;
+  for (long i = 0; i < g.V.rows(); ++i)
+    if (g.vertex_region[i] == id) {
+      const double a = axis.dot(g.V.row(i).transpose() - mean);
+      lo = std::min(lo, a), hi = std::max(hi, a);
+    }
+  *length = hi - lo;
+  const int node = g.nearest_node(mean + (lo + 0.1 * (hi - lo)) * axis);
+  PressSpec p = press_at(g, node, force, 0.8 * (hi - lo) / speed, 0.0);
+  p.slide = speed * (axis - axis.dot(p.normal) * p.normal).normalized();
+  return p;
 }
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
@@ -220,17 +231,18 @@ int main(int argc, char** argv) {
     const int reps = 5;
     const double speed = 0.02;  // m/s across the ovary
     Scene s = prototypes::build_scene(dir + "C.json");
-    const PressSpec still = press_spec(s, "ovary_left");
-    PressSpec slide = still;
-    slide.slide = speed * long_axis(s.geometry(), "ovary_left", still.normal);
+    double length = 0.0;
+    const PressSpec slide = sliding_press(s.geometry(), "ovary_left", 2.5, speed, &length);
+    PressSpec still = slide;  // the same press without the slide
+    still.slide.setZero();
     std::vector<double> still_med, slide_med, still_all, slide_all, move_all, solve_all;
     long moves = 0;
     double peak_still = 0, peak_slide = 0;
     for (int rep = 0; rep <= reps; ++rep) {  // rep 0 warms up
       s.reset();
-      const Run a = run(s, still, 4.0, true);
+      const Run a = run(s, still, slide.hold + 2.0, true);
       s.reset();
-      const Run b = run(s, slide, 4.0, true);
+      const Run b = run(s, slide, slide.hold + 2.0, true);
       if (rep == 0) continue;
       still_med.push_back(median_of(a.us));
       slide_med.push_back(median_of(b.us));
@@ -245,13 +257,13 @@ int main(int argc, char** argv) {
     const TimingSummary ts = summarize_times(still_all), tl = summarize_times(slide_all),
                         tm = summarize_times(move_all), tv = summarize_times(solve_all);
     std::printf(
-        "\nprototype C, ovary_left, 2.5 N held 1 s: still vs sliding at %.0f cm/s (%d alternating"
-        " reps; step times over the contact steps)\n",
-        100 * speed, reps);
+        "\nprototype C, ovary_left (%.1f cm long), 2.5 N held %.2f s: still vs sliding %.1f cm at"
+        " %.0f cm/s (%d alternating reps; step times over the contact steps)\n",
+        100 * length, slide.hold, 100 * speed * slide.hold, 100 * speed, reps);
     std::printf("%-8s %10s %10s %10s %8s %10s\n", "press", "median", "p99", "max", "peak F",
                 "scope moves");
-    std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10s\n", "still", median_of(still_med),
-                ts.p99, ts.max, peak_still, "-");
+    std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10s\n", "still", median_of(still_med), ts.p99,
+                ts.max, peak_still, "-");
     std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10.1f\n", "sliding", median_of(slide_med),
                 tl.p99, tl.max, peak_slide, static_cast<double>(moves) / reps);
     std::printf("sliding / still: median %.2fx, p99 %.2fx\n",

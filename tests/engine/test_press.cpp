@@ -80,7 +80,7 @@ TEST(Press, JudgedForceStopsWhereTheJudgementSaysSo) {
   // Ends on the first step whose judged force reaches the target, and not one step later.
   EXPECT_GE(s.back().f * 1.25, 2.5);
   EXPECT_LT(s[s.size() - 2].f * 1.25, 2.5);
-  EXPECT_NEAR(s.back().f, 2.0, kK * 0.02 * kDt);   // within one step's force increment
+  EXPECT_NEAR(s.back().f, 2.0, kK * 0.02 * kDt);  // within one step's force increment
   EXPECT_EQ(d.time_to_force(), s.back().t);       // no hold, no withdrawal
   EXPECT_NEAR(d.depth(), 0.004, 0.02 * kDt + 1e-12);
 }

@@ -13,10 +13,10 @@
 #include "common/input_error.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/info.hpp"
-#include "engine/mesh/unique_edges.hpp"
 #include "engine/mesh/surface_mesh.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "fixtures.hpp"
 
 using namespace palplab::mesh;

@@ -3,8 +3,8 @@
 #include "common/input_error.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/materials.hpp"
-#include "engine/mesh/unique_edges.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "fixtures.hpp"
 
 #include <fstream>

@@ -30,7 +30,8 @@ std::set<std::pair<int, int>> rows_of(const Edges& E) {
   std::set<std::pair<int, int>> e;
   for (long k = 0; k < E.rows(); ++k) {
     EXPECT_LT(E(k, 0), E(k, 1)) << k;
-    if (k > 0) EXPECT_TRUE(std::make_pair(E(k - 1, 0), E(k - 1, 1)) < std::make_pair(E(k, 0), E(k, 1)));
+    if (k > 0)
+      EXPECT_TRUE(std::make_pair(E(k - 1, 0), E(k - 1, 1)) < std::make_pair(E(k, 0), E(k, 1)));
     e.insert({E(k, 0), E(k, 1)});
   }
   return e;
@@ -59,20 +60,20 @@ TEST(UniqueEdges, TwoTrianglesShareOneEdge) {
 }
 
 TEST(UniqueEdges, ClosedSurfaceSatisfiesEulerAndMatchesHalfEdges) {
-  const SurfaceMesh m = testing::cube();
+  const SurfaceMesh m = palplab::mesh::testing::cube();
   const Edges E = unique_edges(m.F);
   // V - E + F = 2 for a closed genus-0 surface: 8 - 18 + 12.
   EXPECT_EQ(E.rows(), 18);
   EXPECT_EQ(m.V.rows() - E.rows() + m.F.rows(), 2);
   // The half-edge connectivity's edge list is the same set in the same order.
   EXPECT_EQ(E, m.E);
-  const SurfaceMesh g = testing::grid(7, 5);
+  const SurfaceMesh g = palplab::mesh::testing::grid(7, 5);
   EXPECT_EQ(unique_edges(g.F), g.E);
   EXPECT_EQ(rows_of(unique_edges(g.F)), pairs_of(g.F));
 }
 
 TEST(UniqueEdges, TetMeshEdgesAreEveryPairOnce) {
-  const TetMesh tm = testing::kuhn_grid(3, [](double, double, double) { return 0; });
+  const TetMesh tm = palplab::mesh::testing::kuhn_grid(3, [](double, double, double) { return 0; });
   const Edges E = unique_edges(tm.T);
   const auto brute = pairs_of(tm.T);
   EXPECT_EQ(static_cast<size_t>(E.rows()), brute.size());

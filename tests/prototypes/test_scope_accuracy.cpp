@@ -36,8 +36,8 @@ std::string whole_model_c() {
 // `depth`, then held (`steps` haptic steps in all).
 std::vector<double> press(engine::Scene& s, const std::string& region, double depth, int steps) {
   std::vector<double> f;
-  for (const auto& r : engine::testing::run_press(
-           s, engine::testing::depth_press(s, region, depth, 1e3), steps))
+  for (const auto& r :
+       engine::testing::run_press(s, engine::testing::depth_press(s, region, depth, 1e3), steps))
     f.push_back(r.force.norm());
   return f;
 }
