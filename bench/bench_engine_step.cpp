@@ -39,6 +39,9 @@ struct Run {
   // With track_scope: the contact steps that moved the scope (one exterior solve each), their
   // step times (us) and the solve's own time (us).
   std::vector<double> move_step_us, solve_us;
+  std::vector<int> contact_nodes;  // distinct contact nodes in the order touched
+  Eigen::Vector3d first_x = Eigen::Vector3d::Zero(),
+                  last_x = Eigen::Vector3d::Zero();  // in contact
 };
 
 long exterior_solves(const Scene& s, double* last_ms) {
@@ -59,8 +62,15 @@ Run run(Scene& s, const PressSpec& spec, double duration, bool track_scope = fal
   TimedDevice timed(press, us);
   long solves = track_scope ? exterior_solves(s, nullptr) : 0;
   run_lockstep(s, timed, {.duration = duration, .frame_period = 0.0},
-               [&](const Rendered& out, const Sample&) {
-                 if (out.contact) r.us.push_back(us.back());
+               [&](const Rendered& out, const Sample& x) {
+                 if (out.contact) {
+                   if (r.us.empty()) r.first_x = x.x;
+                   r.last_x = x.x;
+                   r.us.push_back(us.back());
+                 }
+                 if (out.contact_node >= 0 &&
+                     (r.contact_nodes.empty() || r.contact_nodes.back() != out.contact_node))
+                   r.contact_nodes.push_back(out.contact_node);
                  r.force.push_back(out.force.norm());
                  r.defo.push_back(out.visible_deformation);
                  r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
@@ -142,8 +152,78 @@ std::string prototypes_dir(int argc, char** argv) {
   return d;
 }
 
+// Sliding press on prototype C: still and sliding presses alternate (same machine load).
+void sliding_press_on_c(const std::string& dir) {
+  const int reps = 5;
+  const double speed = 0.02;  // m/s across the ovary
+  Scene s = prototypes::build_scene(dir + "C.json");
+  double length = 0.0;
+  const PressSpec slide = sliding_press(s.geometry(), "ovary_left", 2.5, speed, &length);
+  PressSpec still = slide;  // the same press without the slide
+  still.slide.setZero();
+  std::vector<double> still_med, slide_med, still_all, slide_all, move_all, solve_all;
+  long moves = 0;
+  double peak_still = 0, peak_slide = 0, travel = 0, device_travel = 0;
+  size_t nodes_touched = 0;
+  for (int rep = 0; rep <= reps; ++rep) {  // rep 0 warms up
+    s.reset();
+    const Run a = run(s, still, slide.hold + 2.0, true);
+    s.reset();
+    const Run b = run(s, slide, slide.hold + 2.0, true);
+    if (rep == 0) continue;
+    still_med.push_back(median_of(a.us));
+    slide_med.push_back(median_of(b.us));
+    still_all.insert(still_all.end(), a.us.begin(), a.us.end());
+    slide_all.insert(slide_all.end(), b.us.begin(), b.us.end());
+    move_all.insert(move_all.end(), b.move_step_us.begin(), b.move_step_us.end());
+    solve_all.insert(solve_all.end(), b.solve_us.begin(), b.solve_us.end());
+    moves += static_cast<long>(b.solve_us.size());
+    nodes_touched = b.contact_nodes.size();
+    const auto& g = s.geometry();
+    travel = (g.V.row(b.contact_nodes.back()) - g.V.row(b.contact_nodes.front())).norm();
+    device_travel = (b.last_x - b.first_x).norm();
+    peak_still = std::max(peak_still, *std::max_element(a.force.begin(), a.force.end()));
+    peak_slide = std::max(peak_slide, *std::max_element(b.force.begin(), b.force.end()));
+  }
+  const TimingSummary ts = summarize_times(still_all), tl = summarize_times(slide_all),
+                      tm = summarize_times(move_all), tv = summarize_times(solve_all);
+  std::printf(
+      "\nprototype C, ovary_left (%.1f cm long), 2.5 N held %.2f s: still vs sliding %.1f cm at"
+      " %.0f cm/s (%d alternating reps; step times over the contact steps)\n",
+      100 * length, slide.hold, 100 * speed * slide.hold, 100 * speed, reps);
+  std::printf("%-8s %10s %10s %10s %8s %10s\n", "press", "median", "p99", "max", "peak F",
+              "scope moves");
+  std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10s\n", "still", median_of(still_med), ts.p99,
+              ts.max, peak_still, "-");
+  std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10.1f\n", "sliding", median_of(slide_med),
+              tl.p99, tl.max, peak_slide, static_cast<double>(moves) / reps);
+  std::printf(
+      "sliding: the device moved %.1f cm in contact; the contact node changed %zu times, %.1f cm"
+      " from the first to the last\n",
+      100 * device_travel, nodes_touched - 1, 100 * travel);
+  std::printf("sliding / still: median %.2fx, p99 %.2fx\n",
+              median_of(slide_med) / median_of(still_med), tl.p99 / ts.p99);
+  std::printf("scope move (exterior solve alone): median %.1fus p99 %.1fus max %.1fus (%ld)\n",
+              tv.median, tv.p99, tv.max, tv.count);
+  std::printf("step with a scope move (solve included): median %.1fus p99 %.1fus max %.1fus\n",
+              tm.median, tm.p99, tm.max);
+}
+
+// Arguments: [PROTOTYPES_PARENT_DIR] [--sliding] (only the sliding-press section).
 int main(int argc, char** argv) {
-  const std::string dir = prototypes_dir(argc, argv);
+  bool only_sliding = false;
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    if (std::string(argv[i]) == "--sliding")
+      only_sliding = true;
+    else
+      args.push_back(argv[i]);
+  }
+  const std::string dir = prototypes_dir(static_cast<int>(args.size()), args.data());
+  if (only_sliding) {
+    sliding_press_on_c(dir);
+    return 0;
+  }
   std::printf("haptic step cost during a 2.5 N press (wall time of Scene::step, contact steps)\n");
   std::printf("%-4s %-11s %8s %8s %8s %7s\n", "id", "region", "median", "p99", "max", "awake");
   for (const char* id : {"A", "B", "C", "C1", "C2"})
@@ -226,52 +306,6 @@ int main(int argc, char** argv) {
     }
   }
 
-  // Sliding press on prototype C: still and sliding presses alternate (same machine load).
-  {
-    const int reps = 5;
-    const double speed = 0.02;  // m/s across the ovary
-    Scene s = prototypes::build_scene(dir + "C.json");
-    double length = 0.0;
-    const PressSpec slide = sliding_press(s.geometry(), "ovary_left", 2.5, speed, &length);
-    PressSpec still = slide;  // the same press without the slide
-    still.slide.setZero();
-    std::vector<double> still_med, slide_med, still_all, slide_all, move_all, solve_all;
-    long moves = 0;
-    double peak_still = 0, peak_slide = 0;
-    for (int rep = 0; rep <= reps; ++rep) {  // rep 0 warms up
-      s.reset();
-      const Run a = run(s, still, slide.hold + 2.0, true);
-      s.reset();
-      const Run b = run(s, slide, slide.hold + 2.0, true);
-      if (rep == 0) continue;
-      still_med.push_back(median_of(a.us));
-      slide_med.push_back(median_of(b.us));
-      still_all.insert(still_all.end(), a.us.begin(), a.us.end());
-      slide_all.insert(slide_all.end(), b.us.begin(), b.us.end());
-      move_all.insert(move_all.end(), b.move_step_us.begin(), b.move_step_us.end());
-      solve_all.insert(solve_all.end(), b.solve_us.begin(), b.solve_us.end());
-      moves += static_cast<long>(b.solve_us.size());
-      peak_still = std::max(peak_still, *std::max_element(a.force.begin(), a.force.end()));
-      peak_slide = std::max(peak_slide, *std::max_element(b.force.begin(), b.force.end()));
-    }
-    const TimingSummary ts = summarize_times(still_all), tl = summarize_times(slide_all),
-                        tm = summarize_times(move_all), tv = summarize_times(solve_all);
-    std::printf(
-        "\nprototype C, ovary_left (%.1f cm long), 2.5 N held %.2f s: still vs sliding %.1f cm at"
-        " %.0f cm/s (%d alternating reps; step times over the contact steps)\n",
-        100 * length, slide.hold, 100 * speed * slide.hold, 100 * speed, reps);
-    std::printf("%-8s %10s %10s %10s %8s %10s\n", "press", "median", "p99", "max", "peak F",
-                "scope moves");
-    std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10s\n", "still", median_of(still_med), ts.p99,
-                ts.max, peak_still, "-");
-    std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10.1f\n", "sliding", median_of(slide_med),
-                tl.p99, tl.max, peak_slide, static_cast<double>(moves) / reps);
-    std::printf("sliding / still: median %.2fx, p99 %.2fx\n",
-                median_of(slide_med) / median_of(still_med), tl.p99 / ts.p99);
-    std::printf("scope move (exterior solve alone): median %.1fus p99 %.1fus max %.1fus (%ld)\n",
-                tv.median, tv.p99, tv.max, tv.count);
-    std::printf("step with a scope move (solve included): median %.1fus p99 %.1fus max %.1fus\n",
-                tm.median, tm.p99, tm.max);
-  }
+  sliding_press_on_c(dir);
   return 0;
 }
