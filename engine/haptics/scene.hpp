@@ -107,9 +107,9 @@ struct Sample {
 
 // Rest geometry for the participant's exploration (surface only; the tet interior is hidden).
 struct SceneGeometry {
-  mesh::Positions V;  // #V by 3 rest positions (m)
-  mesh::Positions N;  // #V by 3 unit outward normals
-  mesh::Faces F;      // #F by 3 faces (ccw outside)
+  mesh::Positions V;                      // #V by 3 rest positions (m)
+  mesh::Positions N;                      // #V by 3 unit outward normals
+  mesh::Faces F;                          // #F by 3 faces (ccw outside)
   std::vector<int> vertex_region;         // #V region index per vertex, -1 = unlabelled
   std::vector<std::string> region_names;  // e.g. "ovary_left", "body", "cervix"
   Eigen::Vector3d start_position = Eigen::Vector3d::Zero();  // m, where the HCP starts
