@@ -2,12 +2,13 @@
 
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
 
 namespace palplab::app {
 
@@ -27,25 +28,26 @@ std::string prototype_variant(const BenchOptions& o, const std::string& id, cons
 }
 
 PressTrace fixed_press(engine::Scene& s, const std::string& region, double depth_max, int steps) {
-  using Clock = std::chrono::steady_clock;
   PressTrace r;
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  for (int k = 0; k < steps; ++k) {
-    const double depth = std::min(depth_max, -0.002 + 0.02 * k * s.dt());
-    const auto t0 = Clock::now();
-    const engine::Rendered out = s.step(p - depth * n);
-    const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
-    r.step_s.push_back(dt);
-    if (out.contact) r.contact_step_s.push_back(dt);
-    r.force.push_back(out.force.norm());
-    r.deformation.push_back(out.visible_deformation);
-    r.depth.push_back(depth);
-    const auto st = s.stats();
-    r.awake_max = std::max(r.awake_max, st.awake_nodes);
-    r.diverged = r.diverged || st.nan_detected;
-  }
+  engine::PressSpec spec =
+      engine::press_at(s.geometry(), s.geometry().region_node(region), 1.0, 1e3, 0.0);
+  spec.depth = depth_max;  // position control: the same trajectory for every model
+  engine::PressDevice press(spec);
+  std::vector<double> us;
+  us.reserve(steps);
+  engine::TimedDevice timed(press, us);
+  engine::run_lockstep(s, timed, {.duration = steps * s.dt(), .frame_period = 0.0},
+                       [&](const engine::Rendered& out, const engine::Sample& x) {
+                         const double dt = 1e-6 * us.back();
+                         r.step_s.push_back(dt);
+                         if (out.contact) r.contact_step_s.push_back(dt);
+                         r.force.push_back(out.force.norm());
+                         r.deformation.push_back(out.visible_deformation);
+                         r.depth.push_back(spec.normal.dot(spec.point - x.x));
+                         const auto st = s.stats();
+                         r.awake_max = std::max(r.awake_max, st.awake_nodes);
+                         r.diverged = r.diverged || st.nan_detected;
+                       });
   return r;
 }
 

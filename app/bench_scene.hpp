@@ -20,7 +20,8 @@ std::string prototype_variant(const BenchOptions& o, const std::string& id, cons
 // One press whose trajectory does not depend on the force (so runs of different models are
 // compared at the same device positions and times): the HCP starts 2 mm outside the node of
 // `region` nearest its centroid and moves along the inward normal at 2 cm/s to `depth` (m),
-// holds until `steps` haptic steps have passed. Per step: wall time (s), force magnitude (N),
+// holds until `steps` haptic steps have passed (the one press script, engine/haptics/press.hpp,
+// under position control, in lock-step). Per step: wall time (s), force magnitude (N),
 // visible deformation (m), depth (m).
 struct PressTrace {
   std::vector<double> step_s, contact_step_s, force, deformation, depth;

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "engine/mesh/generate.hpp"
-#include "engine/mesh/rings.hpp"
 #include "engine/mesh/tet_mesh.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "engine/solvers/integrators.hpp"
 
 using namespace palplab;
@@ -38,7 +38,7 @@ MassSpringSystem model_c() {
   s.home_ks = Eigen::VectorXd::Constant(n, 150.0);
   s.home_kd = Eigen::VectorXd::Constant(n, 0.1);
   s.fixed.assign(n, 0);
-  s.springs = springs_from_edges(tm.V, mesh::tet_edges(tm.T), 150.0, 0.15);
+  s.springs = springs_from_edges(tm.V, mesh::unique_edges(tm.T), 150.0, 0.15);
   build_adjacency(s);
   return s;
 }

@@ -2,23 +2,33 @@
 // median), and what local integration buys: prototype C with its scope + sleeping vs the same
 // model integrating every node every step (speed-up and the force/deformation error it costs).
 //
+// Every press is the one press script (engine/haptics/press.hpp) in the one lock-step loop,
+// Scene::step timed by TimedDevice; percentiles by engine::summarize_times (nearest rank).
 // Press: the contact point starts 2 mm outside the node nearest the region's centroid, pushes
 // along the inward normal at 2 cm/s until 2.5 N, holds 1 s, withdraws. Only steps in contact
 // are timed (a participant spends the expensive part of a session there).
+//
+// Sliding press (prototype C): the same press, but while holding 2.5 N the contact point moves
+// across the ovary at 2 cm/s (along the ovary's long axis). It moves C's integration scope; each
+// move costs one solve of the linear exterior (`scope_exterior: linear`, engine/solvers/
+// far_field.*), timed on its own (FarField::solve_ms). Still and sliding presses alternate so
+// that both see the same machine load; quote their ratio.
+#include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
-using Clock = std::chrono::steady_clock;
 
 namespace {
 
@@ -26,70 +36,110 @@ struct Run {
   std::vector<double> us;           // per contact step
   std::vector<double> force, defo;  // per step (all steps)
   long awake_max = 0;
+  // With track_scope: the contact steps that moved the scope (one exterior solve each), their
+  // step times (us) and the solve's own time (us).
+  std::vector<double> move_step_us, solve_us;
+  std::vector<int> contact_nodes;  // distinct contact nodes in the order touched
+  Eigen::Vector3d first_x = Eigen::Vector3d::Zero(),
+                  last_x = Eigen::Vector3d::Zero();  // in contact
 };
 
-double pct(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(q * (v.size() - 1) + 0.5)];
+long exterior_solves(const Scene& s, double* last_ms) {
+  const std::string info = s.stats().model_info;
+  if (info.empty()) return 0;
+  const auto j = nlohmann::json::parse(info);
+  if (!j.contains("mass_spring")) return 0;
+  const auto& m = j["mass_spring"];
+  if (last_ms) *last_ms = m.value("exterior_solve_ms", 0.0);
+  return m.value("exterior_solves", 0L);
 }
 
-// One timed Scene::step, recorded into `r` (step time only while in contact).
-Rendered timed_step(Scene& s, const Eigen::Vector3d& x, Run& r) {
-  const auto t0 = Clock::now();
-  const Rendered out = s.step(x);
-  const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
-  if (out.contact) r.us.push_back(us);
-  r.force.push_back(out.force.norm());
-  r.defo.push_back(out.visible_deformation);
-  r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
-  return out;
-}
-
-Run press(Scene& s, const std::string& region, double target = 2.5) {
+// `spec` on s in lock-step for at most `duration` s; step times of the contact steps.
+Run run(Scene& s, const PressSpec& spec, double duration, bool track_scope = false) {
   Run r;
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  double depth = -0.002;
-  int phase = 0, hold = 0;
-  for (int k = 0; k < 4000 && phase < 3; ++k) {
-    const Rendered out = timed_step(s, p - depth * n, r);
-    if (phase == 0) {
-      depth += 0.02 * s.dt();
-      if (out.force.norm() >= target) phase = 1;
-    } else if (phase == 1) {
-      if (++hold >= 1000) phase = 2;
-    } else {
-      depth -= 0.05 * s.dt();
-      if (depth < -0.002) phase = 3;
-    }
-  }
+  PressDevice press(spec);
+  std::vector<double> us;
+  TimedDevice timed(press, us);
+  long solves = track_scope ? exterior_solves(s, nullptr) : 0;
+  run_lockstep(s, timed, {.duration = duration, .frame_period = 0.0},
+               [&](const Rendered& out, const Sample& x) {
+                 if (out.contact) {
+                   if (r.us.empty()) r.first_x = x.x;
+                   r.last_x = x.x;
+                   r.us.push_back(us.back());
+                 }
+                 if (out.contact_node >= 0 &&
+                     (r.contact_nodes.empty() || r.contact_nodes.back() != out.contact_node))
+                   r.contact_nodes.push_back(out.contact_node);
+                 r.force.push_back(out.force.norm());
+                 r.defo.push_back(out.visible_deformation);
+                 r.awake_max = std::max(r.awake_max, s.stats().awake_nodes);
+                 if (!track_scope) return;
+                 double ms = 0.0;
+                 const long now = exterior_solves(s, &ms);
+                 if (now > solves) {
+                   r.move_step_us.push_back(us.back());
+                   r.solve_us.push_back(1e3 * ms);
+                 }
+                 solves = now;
+               });
   return r;
+}
+
+PressSpec press_spec(const Scene& s, const std::string& region, double target = 2.5) {
+  return press_at(s.geometry(), s.geometry().region_node(region), target, 1.0, 0.0);
 }
 
 // A press that does not depend on the force: ramp to `depth_max` at 2 cm/s, hold 0.7 s,
 // withdraw at 5 cm/s.
 Run fixed_press(Scene& s, const std::string& region, double depth_max) {
-  Run r;
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  const double t_in = (depth_max + 0.002) / 0.02, t_hold = t_in + 0.7;
-  for (int k = 0; k < 1500; ++k) {
-    const double t = k * s.dt();
-    const double depth = t < t_in     ? -0.002 + 0.02 * t
-                         : t < t_hold ? depth_max
-                                      : std::max(-0.002, depth_max - 0.05 * (t - t_hold));
-    timed_step(s, p - depth * n, r);
-  }
-  return r;
+  PressSpec p = press_spec(s, region);
+  p.depth = depth_max;
+  p.hold = 0.7;
+  p.release = 10.0;
+  return run(s, p, 1.5);
+}
+
+// A press that crosses `region` along its longest extent (the principal axis of its vertices):
+// it starts at the surface node nearest the point 10 % along that axis and, while holding
+// `force`, slides at `speed` over 80 % of the region's length.
+PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
+                        double speed, double* length) {
+  const int id = g.region_index(region);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  long count = 0;
+  for (long i = 0; i < g.V.rows(); ++i)
+    if (g.vertex_region[i] == id) mean += g.V.row(i).transpose(), ++count;
+  mean /= std::max(count, 1L);
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (long i = 0; i < g.V.rows(); ++i)
+    if (g.vertex_region[i] == id) {
+      const Eigen::Vector3d d = g.V.row(i).transpose() - mean;
+      C += d * d.transpose();
+    }
+  const Eigen::Vector3d axis =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(2);  // largest
+  double lo = 1e300, hi = -1e300;
+  for (long i = 0; i < g.V.rows(); ++i)
+    if (g.vertex_region[i] == id) {
+      const double a = axis.dot(g.V.row(i).transpose() - mean);
+      lo = std::min(lo, a), hi = std::max(hi, a);
+    }
+  *length = hi - lo;
+  const int node = g.nearest_node(mean + (lo + 0.1 * (hi - lo)) * axis);
+  PressSpec p = press_at(g, node, force, 0.8 * (hi - lo) / speed, 0.0);
+  p.slide = speed * (axis - axis.dot(p.normal) * p.normal).normalized();
+  return p;
 }
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
   double m = 0.0;
   for (size_t k = 0; k < std::min(a.size(), b.size()); ++k) m = std::max(m, std::abs(a[k] - b[k]));
   return m;
+}
+
+double median_of(const std::vector<double>& v) {
+  return summarize_times(v).median;
 }
 
 }  // namespace
@@ -102,19 +152,89 @@ std::string prototypes_dir(int argc, char** argv) {
   return d;
 }
 
+// Sliding press on prototype C: still and sliding presses alternate (same machine load).
+void sliding_press_on_c(const std::string& dir) {
+  const int reps = 5;
+  const double speed = 0.02;  // m/s across the ovary
+  Scene s = prototypes::build_scene(dir + "C.json");
+  double length = 0.0;
+  const PressSpec slide = sliding_press(s.geometry(), "ovary_left", 2.5, speed, &length);
+  PressSpec still = slide;  // the same press without the slide
+  still.slide.setZero();
+  std::vector<double> still_med, slide_med, still_all, slide_all, move_all, solve_all;
+  long moves = 0;
+  double peak_still = 0, peak_slide = 0, travel = 0, device_travel = 0;
+  size_t nodes_touched = 0;
+  for (int rep = 0; rep <= reps; ++rep) {  // rep 0 warms up
+    s.reset();
+    const Run a = run(s, still, slide.hold + 2.0, true);
+    s.reset();
+    const Run b = run(s, slide, slide.hold + 2.0, true);
+    if (rep == 0) continue;
+    still_med.push_back(median_of(a.us));
+    slide_med.push_back(median_of(b.us));
+    still_all.insert(still_all.end(), a.us.begin(), a.us.end());
+    slide_all.insert(slide_all.end(), b.us.begin(), b.us.end());
+    move_all.insert(move_all.end(), b.move_step_us.begin(), b.move_step_us.end());
+    solve_all.insert(solve_all.end(), b.solve_us.begin(), b.solve_us.end());
+    moves += static_cast<long>(b.solve_us.size());
+    nodes_touched = b.contact_nodes.size();
+    const auto& g = s.geometry();
+    travel = (g.V.row(b.contact_nodes.back()) - g.V.row(b.contact_nodes.front())).norm();
+    device_travel = (b.last_x - b.first_x).norm();
+    peak_still = std::max(peak_still, *std::max_element(a.force.begin(), a.force.end()));
+    peak_slide = std::max(peak_slide, *std::max_element(b.force.begin(), b.force.end()));
+  }
+  const TimingSummary ts = summarize_times(still_all), tl = summarize_times(slide_all),
+                      tm = summarize_times(move_all), tv = summarize_times(solve_all);
+  std::printf(
+      "\nprototype C, ovary_left (%.1f cm long), 2.5 N held %.2f s: still vs sliding %.1f cm at"
+      " %.0f cm/s (%d alternating reps; step times over the contact steps)\n",
+      100 * length, slide.hold, 100 * speed * slide.hold, 100 * speed, reps);
+  std::printf("%-8s %10s %10s %10s %8s %10s\n", "press", "median", "p99", "max", "peak F",
+              "scope moves");
+  std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10s\n", "still", median_of(still_med), ts.p99,
+              ts.max, peak_still, "-");
+  std::printf("%-8s %8.2fus %8.2fus %8.0fus %7.3fN %10.1f\n", "sliding", median_of(slide_med),
+              tl.p99, tl.max, peak_slide, static_cast<double>(moves) / reps);
+  std::printf(
+      "sliding: the device moved %.1f cm in contact; the contact node changed %zu times, %.1f cm"
+      " from the first to the last\n",
+      100 * device_travel, nodes_touched - 1, 100 * travel);
+  std::printf("sliding / still: median %.2fx, p99 %.2fx\n",
+              median_of(slide_med) / median_of(still_med), tl.p99 / ts.p99);
+  std::printf("scope move (exterior solve alone): median %.1fus p99 %.1fus max %.1fus (%ld)\n",
+              tv.median, tv.p99, tv.max, tv.count);
+  std::printf("step with a scope move (solve included): median %.1fus p99 %.1fus max %.1fus\n",
+              tm.median, tm.p99, tm.max);
+}
+
+// Arguments: [PROTOTYPES_PARENT_DIR] [--sliding] (only the sliding-press section).
 int main(int argc, char** argv) {
-  const std::string dir = prototypes_dir(argc, argv);
+  bool only_sliding = false;
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    if (std::string(argv[i]) == "--sliding")
+      only_sliding = true;
+    else
+      args.push_back(argv[i]);
+  }
+  const std::string dir = prototypes_dir(static_cast<int>(args.size()), args.data());
+  if (only_sliding) {
+    sliding_press_on_c(dir);
+    return 0;
+  }
   std::printf("haptic step cost during a 2.5 N press (wall time of Scene::step, contact steps)\n");
-  std::printf("%-4s %-11s %8s %8s %8s %8s %7s\n", "id", "region", "median", "p90", "p99", "max",
-              "awake");
+  std::printf("%-4s %-11s %8s %8s %8s %7s\n", "id", "region", "median", "p99", "max", "awake");
   for (const char* id : {"A", "B", "C", "C1", "C2"})
     for (const char* region : {"ovary_left", "horn_right", "body"}) {
       Scene s = prototypes::build_scene(dir + id + ".json");
-      press(s, region);  // warm-up (caches, buffers)
+      run(s, press_spec(s, region), 4.0);  // warm-up (caches, buffers)
       s.reset();
-      const Run r = press(s, region);
-      std::printf("%-4s %-11s %7.2fus %7.2fus %7.2fus %7.0fus %7ld\n", id, region, pct(r.us, 0.5),
-                  pct(r.us, 0.9), pct(r.us, 0.99), pct(r.us, 1.0), r.awake_max);
+      const Run r = run(s, press_spec(s, region), 4.0);
+      const TimingSummary t = summarize_times(r.us);
+      std::printf("%-4s %-11s %7.2fus %7.2fus %7.0fus %7ld\n", id, region, t.median, t.p99, t.max,
+                  r.awake_max);
     }
 
   // Prototype B's haptic-loop scope (published: two rings 0.90 us at 1442 vertices to
@@ -141,9 +261,9 @@ int main(int argc, char** argv) {
       cfg.scope.rings = sc;
       Scene s = engine::make_scene(cfg);
       nv = s.geometry().V.rows();
-      press(s, "ovary_left");
+      run(s, press_spec(s, "ovary_left"), 4.0);
       s.reset();
-      med[k++] = pct(press(s, "ovary_left").us, 0.5);
+      med[k++] = median_of(run(s, press_spec(s, "ovary_left"), 4.0).us);
     }
     std::printf("%-9ld %8.2fus %8.2fus %8.2fus %11.1fx\n", nv, med[0], med[1], med[2],
                 med[2] / med[0]);
@@ -175,7 +295,7 @@ int main(int argc, char** argv) {
       cfg.sleeping.enabled = m.sleep;
       Scene s = engine::make_scene(cfg);
       const Run r = fixed_press(s, region, 0.006);
-      const double med = pct(r.us, 0.5);
+      const double med = median_of(r.us);
       if (&m == &modes[0]) {
         ref = r;
         ref_median = med;
@@ -185,5 +305,7 @@ int main(int argc, char** argv) {
                   max_abs_diff(r.force, ref.force), 1e6 * max_abs_diff(r.defo, ref.defo));
     }
   }
+
+  sliding_press_on_c(dir);
   return 0;
 }

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/materials.hpp"
 #include "engine/models/fem_model.hpp"
@@ -36,15 +38,8 @@ void report(const std::string& name, int reps, const std::function<void()>& fn) 
     fn();
     t[i] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
-  std::sort(t.begin(), t.end());
-  const double p99 = t[std::min<size_t>(t.size() - 1, static_cast<size_t>(0.99 * t.size()))];
-  std::printf("%-46s %6d %12.4f %12.4f\n", name.c_str(), reps, t[t.size() / 2], p99);
-}
-
-double pct(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(q * (v.size() - 1) + 0.5)];
+  const TimingSummary ts = summarize_times(t);
+  std::printf("%-46s %6d %12.4f %12.4f\n", name.c_str(), reps, ts.median, ts.p99);
 }
 
 struct PressRun {
@@ -52,39 +47,29 @@ struct PressRun {
   std::vector<double> force;  // N, every step
 };
 
-// The press of bench_engine_step: 2 mm outside the region's node, in along the inward normal at
-// 2 cm/s to `target` N, hold `hold_steps`, withdraw at 5 cm/s. With `depth_of` given, the device
-// follows that depth trajectory instead (same input for two models).
-PressRun scene_press(Scene& s, const std::string& region, double target, int hold_steps,
-                     std::vector<double>* depth_log, const std::vector<double>* depth_of) {
+// The press of bench_engine_step (the one press script, engine/haptics/press.hpp): 2 mm outside
+// the region's node, in along the inward normal at 2 cm/s to `target` N, hold `hold` s, withdraw
+// at 5 cm/s. With `replay` given, the device follows those positions instead (one per step: the
+// same input for two models); `log` receives the positions this run used.
+PressRun scene_press(Scene& s, const std::string& region, double target, double hold,
+                     std::vector<Eigen::Vector3d>* log,
+                     const std::vector<Eigen::Vector3d>* replay) {
   PressRun r;
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  double depth = -0.002;
-  int phase = 0, hold = 0;
-  for (int k = 0; k < 20000 && phase < 3; ++k) {
-    if (depth_of) {
-      if (k >= static_cast<int>(depth_of->size())) break;
-      depth = (*depth_of)[k];
-    }
-    if (depth_log) depth_log->push_back(depth);
-    const auto t0 = Clock::now();
-    const Rendered out = s.step(p - depth * n);
-    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
-    if (out.contact) r.us.push_back(us);
-    r.force.push_back(out.force.norm());
-    if (depth_of) continue;
-    if (phase == 0) {
-      depth += 0.02 * s.dt();
-      if (out.force.norm() >= target) phase = 1;
-    } else if (phase == 1) {
-      if (++hold >= hold_steps) phase = 2;
-    } else {
-      depth -= 0.05 * s.dt();
-      if (depth < -0.002) phase = 3;
-    }
-  }
+  PressDevice press(press_at(s.geometry(), s.geometry().region_node(region), target, hold, 0.0));
+  std::vector<std::pair<double, Eigen::Vector3d>> path;
+  if (replay)
+    for (size_t k = 0; k < replay->size(); ++k) path.push_back({k * s.dt(), (*replay)[k]});
+  if (path.empty()) path.push_back({0.0, Eigen::Vector3d::Zero()});
+  ScriptedDevice scripted(path);  // at the step times exactly the logged positions
+  std::vector<double> us;
+  TimedDevice timed(replay ? static_cast<Device&>(scripted) : press, us);
+  const double duration = replay ? replay->size() * s.dt() : 20.0;
+  run_lockstep(s, timed, {.duration = duration, .frame_period = 0.0},
+               [&](const Rendered& out, const Sample& x) {
+                 if (out.contact) r.us.push_back(us.back());
+                 r.force.push_back(out.force.norm());
+                 if (log) log->push_back(x.x);
+               });
   return r;
 }
 
@@ -106,14 +91,14 @@ void scene_steps(const std::string& dir) {
     std::string name, file;
     FemFormulation form;
     bool fem;
-    int hold;
+    double hold;  // s
   };
   const std::vector<Variant> vs = {
-      {"C (mass_spring)", "C.json", FemFormulation::linear, false, 1000},
-      {"D (fem linear)", "D.json", FemFormulation::linear, true, 1000},
-      {"D condensed (ovary_left+15 mm)", "D.json", FemFormulation::condensed, true, 1000},
-      {"D_corot (fem corotational)", "D_corot.json", FemFormulation::corotational, true, 200}};
-  std::vector<double> depth_full;
+      {"C (mass_spring)", "C.json", FemFormulation::linear, false, 1.0},
+      {"D (fem linear)", "D.json", FemFormulation::linear, true, 1.0},
+      {"D condensed (ovary_left+15 mm)", "D.json", FemFormulation::condensed, true, 1.0},
+      {"D_corot (fem corotational)", "D_corot.json", FemFormulation::corotational, true, 0.2}};
+  std::vector<Eigen::Vector3d> path_full;
   std::vector<double> force_full;
   for (const auto& v : vs) {
     SceneConfig cfg = prototypes::load_prototype(dir + v.file);
@@ -125,8 +110,8 @@ void scene_steps(const std::string& dir) {
     Scene s = make_scene(cfg);
     const bool linear = v.fem && v.form == FemFormulation::linear;
     const bool cond = v.form == FemFormulation::condensed;
-    const PressRun r = scene_press(s, "ovary_left", 2.5, v.hold, linear ? &depth_full : nullptr,
-                                   cond ? &depth_full : nullptr);
+    const PressRun r = scene_press(s, "ovary_left", 2.5, v.hold, linear ? &path_full : nullptr,
+                                   cond ? &path_full : nullptr);
     long dofs = 0;
     const SceneStats st = s.stats();
     if (!st.model_info.empty()) {
@@ -135,8 +120,8 @@ void scene_steps(const std::string& dir) {
     }
     const std::string dofs_s = v.fem ? std::to_string(dofs) : "-";
     std::printf("%-34s %6s %8zu %10.1f %10.1f %10.1f %10.3f\n", v.name.c_str(), dofs_s.c_str(),
-                r.us.size(), pct(r.us, 0.5), pct(r.us, 0.99), pct(r.us, 1.0),
-                *std::max_element(r.force.begin(), r.force.end()));
+                r.us.size(), summarize_times(r.us).median, summarize_times(r.us).p99,
+                summarize_times(r.us).max, *std::max_element(r.force.begin(), r.force.end()));
     if (linear) force_full = r.force;
     if (cond) {
       double e = 0, fmax = 0;

@@ -15,6 +15,7 @@
 #include "common/input_error.hpp"
 #include "common/seed.hpp"
 #include "engine/haptics/clock.hpp"
+#include "engine/haptics/press.hpp"
 #include "engine/scene.hpp"
 #include "palplab/version.hpp"
 #include "protocols/input_pins.hpp"
@@ -80,20 +81,24 @@ results::StudyStructure study_structure(const Study& s) {
 // Weber fraction) and for the briefing's demonstration to the trainee (eps 0: the trainee
 // watches an exact demonstration).
 pm::Demonstration demonstrate(engine::Scene& scene, int node, double mpf, double eps) {
-  const auto& g = scene.geometry();
-  Eigen::Vector3d n = g.N.row(node).transpose().normalized();
-  Eigen::Vector3d x = g.V.row(node).transpose() + n * 0.01;
-  const double dt = scene.dt(), speed = 0.004;  // m/s, a slow deliberate press
+  engine::PressSpec spec = engine::press_at(scene.geometry(), node, mpf, 0.0, 0.0);
+  spec.approach_speed = 0.004;  // m/s, a slow deliberate press
+  // 1 cm outside; its first step is already one step in (as the studies' reference results were
+  // made: the demonstration reaches the MPF at the same device positions).
+  spec.start_offset = 0.01 - spec.approach_speed * scene.dt();  // m
+  spec.force_error = eps;
+  spec.stop_at_target = true;
+  spec.max_depth = 1.0;  // never given up for depth: only the 20 s below end it
+  spec.max_approach_time = 20.0;
+  engine::PressDevice press(spec);
   pm::Demonstration d;
-  for (int i = 0; i < static_cast<int>(20.0 / dt); ++i) {
-    x -= n * speed * dt;
-    engine::Rendered r = scene.step(x);
-    d.sound = d.sound || r.audio;
-    if (r.force.norm() * (1.0 + eps) >= mpf) {
-      d.deformation = r.visible_deformation;
-      break;
-    }
-  }
+  double deformation = 0.0;
+  engine::run_lockstep(scene, press, {.duration = 20.0, .frame_period = 0.0},
+                       [&](const engine::Rendered& r, const engine::Sample&) {
+                         d.sound = d.sound || r.audio;
+                         deformation = r.visible_deformation;
+                       });
+  if (press.force_reached()) d.deformation = deformation;
   scene.reset();
   return d;
 }
@@ -167,12 +172,9 @@ SessionOutcome finish_session(const ParticipantPlan& pp, const SessionSpec& spec
   rec.steps = steps;
   rec.wall_duration = wall;
   if (!loop.empty()) {
-    auto mid = loop.begin() + loop.size() / 2;
-    std::nth_element(loop.begin(), mid, loop.end());
-    rec.loop_median = *mid;
-    auto p99 = loop.begin() + std::min(loop.size() - 1, loop.size() * 99 / 100);
-    std::nth_element(loop.begin(), p99, loop.end());
-    rec.loop_p99 = *p99;
+    const engine::TimingSummary ts = engine::summarize_times({loop.begin(), loop.end()});
+    rec.loop_median = ts.median;
+    rec.loop_p99 = ts.p99;
   }
   rec.seed = spec.seed;
   rec.state_after = state.dump();

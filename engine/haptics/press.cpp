@@ -23,14 +23,34 @@ const char* to_string(PressPhase p) {
 }
 
 PressDevice::PressDevice(const PressSpec& spec) : spec_(spec), depth_(-spec.start_offset) {
-  if (!(spec.force > 0.0) || !std::isfinite(spec.force))
+  if (!(spec.depth >= 0.0) || !std::isfinite(spec.depth))
+    throw std::invalid_argument("press: the target depth must be >= 0 m (0 = force control)");
+  if (spec.depth == 0.0 && (!(spec.force > 0.0) || !std::isfinite(spec.force)))
     throw std::invalid_argument("press: the target force must be a positive number of N");
+  if (!(spec.force_error > -1.0) || !std::isfinite(spec.force_error))
+    throw std::invalid_argument("press: the force judgement error must be > -1");
   if (!(spec.hold >= 0.0) || !(spec.release >= 0.0) || !std::isfinite(spec.hold + spec.release))
     throw std::invalid_argument("press: hold and release times must be >= 0 s");
   if (!(spec.approach_speed > 0.0) || !(spec.withdraw_speed > 0.0))
     throw std::invalid_argument("press: speeds must be > 0 m/s");
   if (!spec.point.allFinite() || !(std::abs(spec.normal.norm() - 1.0) < 1e-6))
     throw std::invalid_argument("press: point must be finite and the normal a unit vector");
+  if (!spec.slide.allFinite()) throw std::invalid_argument("press: slide must be finite (m/s)");
+}
+
+bool PressDevice::target_reached(double f) const {
+  if (spec_.depth > 0.0) return depth_ >= spec_.depth;
+  return f * (1.0 + spec_.force_error) >= spec_.force;
+}
+
+void PressDevice::reach_target(double t, double f) {
+  time_to_force_ = t;
+  // Integral gain: a fifth of the inverse secant stiffness measured on the way in (stable
+  // for any stiffness up to 10x that secant), per step.
+  const double k = f / std::max(depth_ - std::max(contact_depth_, 0.0), 1e-5);
+  gain_ = 0.2 / std::max(k, 1.0);
+  phase_ = spec_.stop_at_target ? PressPhase::done : PressPhase::hold;
+  phase_start_ = t;
 }
 
 DeviceInput PressDevice::read(double t) {
@@ -46,19 +66,15 @@ void PressDevice::write(const Rendered& r) {
   switch (phase_) {
     case PressPhase::approach:
       if (f > 0.0 && contact_depth_ < 0.0) contact_depth_ = std::max(depth_, 0.0);
-      if (f >= spec_.force) {
-        time_to_force_ = r.t;
-        // Integral gain: a fifth of the inverse secant stiffness measured on the way in (stable
-        // for any stiffness up to 10x that secant), per step.
-        const double k = f / std::max(depth_ - std::max(contact_depth_, 0.0), 1e-5);
-        gain_ = 0.2 / std::max(k, 1.0);
-        phase_ = PressPhase::hold;
-        phase_start_ = r.t;
+      if (target_reached(f)) {
+        reach_target(r.t, f);
         break;
       }
       depth_ += spec_.approach_speed * dt;
+      if (spec_.depth > 0.0) depth_ = std::min(depth_, spec_.depth);
       if (depth_ > spec_.max_depth || r.t > spec_.max_approach_time) {
-        phase_ = PressPhase::withdraw;  // target not reachable: give up, withdraw
+        // target not reachable: give up, withdraw (or end a script that stops at the target)
+        phase_ = spec_.stop_at_target ? PressPhase::done : PressPhase::withdraw;
         phase_start_ = r.t;
       }
       break;
@@ -68,7 +84,8 @@ void PressDevice::write(const Rendered& r) {
         phase_start_ = r.t;
         break;
       }
-      depth_ += gain_ * (spec_.force - f);
+      if (spec_.depth == 0.0) depth_ += gain_ * (spec_.force - f);
+      offset_ += spec_.slide * dt;
       break;
     case PressPhase::withdraw:
       depth_ -= spec_.withdraw_speed * dt;

@@ -6,6 +6,13 @@
 // withdraws at `withdraw_speed` to the start point and stays there for `release` seconds.
 // It is a Device, so the lock-step and the real-time clocks drive it the same way; it reports
 // finished() when the script is over.
+//
+// Variants (every scripted press of palplab is one of these, never a loop of its own):
+//   depth > 0          position control: in to that depth, held there (no force target)
+//   force_error != 0   the force is judged with that relative error (a person's Weber noise)
+//   stop_at_target     the script ends on the step the target is reached (a demonstration)
+//   slide != 0         the contact point moves tangentially at that velocity while holding
+//                      (a sliding press across an organ)
 #include <Eigen/Core>
 #include <string>
 
@@ -24,6 +31,17 @@ struct PressSpec {
   double withdraw_speed = 0.05;                       // m/s
   double max_depth = 0.06;                            // m: give up pressing deeper than this
   double max_approach_time = 10.0;                    // s: give up pressing after this
+  // Position control instead of a force target: press to this depth (m below the rest surface,
+  // > 0) at approach_speed and hold it; `force` is then ignored. 0 = force control.
+  double depth = 0.0;
+  // Relative error of the force judgement: the target counts as reached when
+  // |F| (1 + force_error) >= force (> -1; 0 = exact).
+  double force_error = 0.0;
+  // End the script on the step the target is reached (or given up): no hold, no withdrawal.
+  bool stop_at_target = false;
+  // m/s, velocity of the contact point along the surface during the hold (the depth stays
+  // along `normal`); zero = a still press. Its offset is kept while withdrawing.
+  Eigen::Vector3d slide = Eigen::Vector3d::Zero();
 };
 
 enum class PressPhase { approach, hold, withdraw, release, done };
@@ -37,13 +55,16 @@ class PressDevice : public Device {
   bool finished() const override { return phase_ == PressPhase::done; }
 
   PressPhase phase() const { return phase_; }
+  // The target (force, or depth under position control) was reached.
   bool force_reached() const { return time_to_force_ >= 0.0; }
-  double time_to_force() const { return time_to_force_; }  // s from the start, -1 if never
+  double time_to_force() const { return time_to_force_; }  // s (scene time), -1 if never
   double depth() const { return depth_; }                  // m below the rest surface now
   const PressSpec& spec() const { return spec_; }
 
  private:
-  Eigen::Vector3d position() const { return spec_.point - depth_ * spec_.normal; }
+  Eigen::Vector3d position() const { return spec_.point + offset_ - depth_ * spec_.normal; }
+  bool target_reached(double f) const;
+  void reach_target(double t, double f);
   PressSpec spec_;
   PressPhase phase_ = PressPhase::approach;
   double depth_ = 0.0;
@@ -52,6 +73,7 @@ class PressDevice : public Device {
   double time_to_force_ = -1.0;
   double contact_depth_ = -1.0;  // depth at which force first appeared (m), -1 before
   double gain_ = 0.0;            // m/N per step of the hold controller
+  Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();  // m, slid along the surface so far
 };
 
 // The press node of a region (the node nearest the region's centroid) or a node index given

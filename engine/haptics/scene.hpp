@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/mesh/types.hpp"
+
 namespace palplab::spatial {
 struct Octree;
 }
@@ -118,9 +120,9 @@ struct TissueSurfaces {
 };
 
 struct SceneGeometry {
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> V;  // #V by 3 rest positions (m)
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> N;  // #V by 3 unit outward normals
-  Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> F;     // #F by 3 faces (ccw outside)
+  mesh::Positions V;                      // #V by 3 rest positions (m)
+  mesh::Positions N;                      // #V by 3 unit outward normals
+  mesh::Faces F;                          // #F by 3 faces (ccw outside)
   std::vector<int> vertex_region;         // #V region index per vertex, -1 = unlabelled
   std::vector<std::string> region_names;  // e.g. "ovary_left", "body", "cervix"
   Eigen::Vector3d start_position = Eigen::Vector3d::Zero();  // m, where the HCP starts
@@ -205,8 +207,7 @@ class Scene {
   SceneStats stats() const;
   // Current (deformed) positions of the simulated surface nodes, #V(now) by 3 (m), and faces of
   // the current (possibly refined) surface — for a renderer. Not part of the perception contract.
-  void current_surface(Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
-                       Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& F) const;
+  void current_surface(mesh::Positions& V, mesh::Faces& F) const;
 
  private:
   std::unique_ptr<SceneImpl> impl_;

@@ -12,6 +12,7 @@
 #include "engine/mesh/materials.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "engine/models/model.hpp"
 #include "engine/spatial/octree.hpp"
 
@@ -53,7 +54,7 @@ void build_tet(SceneMesh& c, mesh::SurfaceMesh& sm, const mesh::TetMesh& tm) {
   sm = mesh::make_surface_mesh(std::move(Vs), std::move(Fs), std::move(reg));
   c.tet = true;
   c.model_V = tm.V;
-  c.model_E = mesh::tet_edges(tm.T);
+  c.model_E = mesh::unique_edges(tm.T);
   c.model_F = bf.F;
   c.model_T = tm.T;
   c.tet_attribute = tm.attribute;

@@ -6,7 +6,7 @@
 #include <map>
 #include <numbers>
 
-#include "engine/mesh/rings.hpp"
+#include "engine/mesh/unique_edges.hpp"
 
 namespace palplab::mesh {
 
@@ -169,7 +169,7 @@ nlohmann::ordered_json surface_info(const SurfaceMesh& m) {
 nlohmann::ordered_json tet_info(const TetMesh& m, const MaterialTable& materials) {
   nlohmann::ordered_json j;
   const BoundaryFaces b = boundary_faces(m);
-  const Edges E = tet_edges(m.T);
+  const Edges E = unique_edges(m.T);
   j["kind"] = "tet";
   j["vertices"] = m.V.rows();
   j["faces"] = (4 * m.T.rows() + b.F.rows()) / 2;  // every interior face is shared by two tets

@@ -46,20 +46,4 @@ RingTable compute_rings(int nV, const Edges& E) {
   return r;
 }
 
-Edges tet_edges(const Tets& T) {
-  std::vector<std::array<int, 2>> e;
-  e.reserve(6 * T.rows());
-  static const int pairs[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  for (int t = 0; t < T.rows(); ++t)
-    for (auto& p : pairs) {
-      int a = T(t, p[0]), b = T(t, p[1]);
-      e.push_back({std::min(a, b), std::max(a, b)});
-    }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  Edges E(static_cast<int>(e.size()), 2);
-  for (size_t i = 0; i < e.size(); ++i) E.row(i) << e[i][0], e[i][1];
-  return E;
-}
-
 }  // namespace palplab::mesh

@@ -11,10 +11,7 @@ struct RingTable {
   Csr second;
 };
 
-// nV  number of nodes; E  #E by 2 edges (any mesh: surface edges or tet edges).
+// nV  number of nodes; E  #E by 2 edges (any mesh: surface edges or tet edges, unique_edges).
 RingTable compute_rings(int nV, const Edges& E);
-
-// #E by 2 unique edges of a tet mesh (T #T by 4), sorted, E(e,0) < E(e,1).
-Edges tet_edges(const Tets& T);
 
 }  // namespace palplab::mesh

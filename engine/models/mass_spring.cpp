@@ -106,39 +106,6 @@ Springs springs_from_edges(const RowMatX3d& X, const RowMatX2i& edges, double ks
   return s;
 }
 
-namespace {
-RowMatX2i sorted_unique(std::vector<std::pair<int, int>>& e) {
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  RowMatX2i E(e.size(), 2);
-  for (size_t i = 0; i < e.size(); ++i) E.row(i) << e[i].first, e[i].second;
-  return E;
-}
-}  // namespace
-
-RowMatX2i unique_edges(const RowMatX3i& F) {
-  std::vector<std::pair<int, int>> e;
-  e.reserve(F.rows() * 3);
-  for (long f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      int a = F(f, k), b = F(f, (k + 1) % 3);
-      e.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  return sorted_unique(e);
-}
-
-RowMatX2i unique_edges(const RowMatX4i& T) {
-  std::vector<std::pair<int, int>> e;
-  e.reserve(T.rows() * 6);
-  for (long t = 0; t < T.rows(); ++t)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) {
-        int a = T(t, i), b = T(t, j);
-        e.emplace_back(std::min(a, b), std::max(a, b));
-      }
-  return sorted_unique(e);
-}
-
 double total_mass(const MassSpringSystem& sys) {
   return sys.mass.sum();
 }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "engine/mesh/types.hpp"
+#include "engine/mesh/unique_edges.hpp"
 
 namespace palplab::engine {
 
@@ -97,11 +98,11 @@ void compute_forces(const MassSpringSystem& sys, const RowMatX3d& X, const RowMa
                     RowMatX3d& F, const std::vector<int>* nodes = nullptr,
                     const std::vector<int>* springs = nullptr);
 
-// Springs of the edges of a triangle mesh F (#F by 3) and of a tet mesh T (#T by 4), each edge
-// once, sorted (i < j, lexicographic), rest lengths from X (m), uniform ks, kd.
+// Springs on `edges` (e.g. mesh::unique_edges of a triangle or tet mesh), rest lengths from X
+// (m), uniform ks, kd.
 Springs springs_from_edges(const RowMatX3d& X, const RowMatX2i& edges, double ks, double kd);
-RowMatX2i unique_edges(const RowMatX3i& F);
-RowMatX2i unique_edges(const RowMatX4i& T);
+// The mesh toolkit's edge extraction (engine/mesh/unique_edges.hpp) under the engine's name.
+using mesh::unique_edges;
 
 double total_mass(const MassSpringSystem& sys);
 

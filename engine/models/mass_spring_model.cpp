@@ -326,6 +326,7 @@ class MassSpringModel final : public SceneModel {
         {"cg_iterations_max", ms_.cg_iterations_max},
         {"exterior", ms_.linear_exterior ? "linear" : "held"},
         {"exterior_factor_ms", ms_.far.factor_ms},
+        {"exterior_solve_ms", ms_.far.solve_ms},  // the last solve (one per scope move)
         {"exterior_solves", ms_.far_solves}};
     st.model_info = info.dump();
   }

@@ -10,9 +10,8 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 }
 
-void bounding_sphere(
-    const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>& V,
-    Eigen::Vector3d& centre, double& radius) {
+void bounding_sphere(const Eigen::Ref<const mesh::Positions>& V, Eigen::Vector3d& centre,
+                     double& radius) {
   if (V.rows() == 0) {
     centre.setZero();
     radius = 1.0;

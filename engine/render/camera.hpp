@@ -35,9 +35,8 @@ struct CameraMatrices {
 };
 
 // Bounding sphere of a point set: centre of the bounding box and the largest distance to it (m).
-void bounding_sphere(
-    const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>& V,
-    Eigen::Vector3d& centre, double& radius);
+void bounding_sphere(const Eigen::Ref<const mesh::Positions>& V, Eigen::Vector3d& centre,
+                     double& radius);
 
 // The matrices of `cam` for an image of width x height pixels over a surface whose rest bounding
 // sphere is (centre, radius). A distance of 0 places the camera so the sphere fills ~90% of the

@@ -22,8 +22,8 @@
 
 namespace palplab::render {
 
-using RowMatX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using RowMatX3d = mesh::Positions;  // the one V/F types (engine/mesh/types.hpp)
+using RowMatX3i = mesh::Faces;
 
 constexpr int kMaxRegions = 32;  // regions beyond this share the unlabelled colour
 

@@ -29,6 +29,7 @@ struct FarField {
   Eigen::VectorXd tmp;      // #dofs: solve buffer
   Eigen::VectorXd d;        // #dofs: D of the LDLT
   double factor_ms = 0.0;   // time the factorisation took
+  double solve_ms = 0.0;    // time the last far_field_solve took (wall, ms)
   bool ready() const { return nodes > 0; }
 };
 

@@ -13,10 +13,10 @@
 #include "common/input_error.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/info.hpp"
-#include "engine/mesh/rings.hpp"
 #include "engine/mesh/surface_mesh.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "fixtures.hpp"
 
 using namespace palplab::mesh;
@@ -220,7 +220,7 @@ TEST(ModelCQuality, ResolutionFamily) {
     EXPECT_LT(q.node_mass_ratio, 250.0);
     for (int r = 0; r < 6; ++r) EXPECT_GT((m.regions.id.array() == r).count(), 10) << r;
     // Finer at every level: more nodes, shorter mean tet edge.
-    const Edges E = tet_edges(m.T);
+    const Edges E = unique_edges(m.T);
     double edge = 0;
     for (int e = 0; e < E.rows(); ++e) edge += (m.V.row(E(e, 0)) - m.V.row(E(e, 1))).norm();
     edge /= static_cast<double>(E.rows());

@@ -3,8 +3,8 @@
 #include "common/input_error.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/materials.hpp"
-#include "engine/mesh/rings.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
+#include "engine/mesh/unique_edges.hpp"
 #include "fixtures.hpp"
 
 #include <fstream>
@@ -121,7 +121,7 @@ TEST(Tetrahedralize, ModelCMatchesTheReferenceAndKeepsRegions) {
   }
   EXPECT_EQ(generate_model_c().T, m.T);  // deterministic
   // Euler characteristic of the tet complex of a ball: V - E + F - T = 1; of its boundary: 2.
-  const long V = m.V.rows(), E = tet_edges(m.T).rows(), T = m.T.rows();
+  const long V = m.V.rows(), E = unique_edges(m.T).rows(), T = m.T.rows();
   const BoundaryFaces b = boundary_faces(m);
   const long F = (4 * T + b.F.rows()) / 2;
   EXPECT_EQ(V - E + F - T, 1);

@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/press_run.hpp"
 
 // Sanitizers bring their own allocator: no counting there (the test skips).
 #if defined(__has_feature)
@@ -51,22 +52,45 @@ std::string proto(const std::string& id) {
   return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
 }
 
-// Press `region` 8 mm deep and hold; counts allocations in steps [count_from, count_to).
-// Steps are numbered from the last reset (continuing calls resume where the last one stopped).
-long press_allocations(Scene& s, const std::string& region, int count_from, int count_to) {
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  long counted = 0;
-  for (int k = static_cast<int>(std::lround(s.time() / s.dt())); k < count_to; ++k) {
-    const double depth = std::min(-0.002 + 0.02 * k * s.dt(), 0.008);
+// Counts the allocations inside each Scene::step of the device it wraps (between the read
+// that hands the position over and the write that gets the rendered force back).
+class CountingDevice : public Device {
+ public:
+  CountingDevice(Device& inner, std::vector<long>& per_step) : inner_(inner), out_(per_step) {}
+  DeviceInput read(double t) override {
+    const DeviceInput in = inner_.read(t);
     g_allocations = 0;
-    g_counting = k >= count_from;
-    s.step(p - depth * n);
-    g_counting = false;
-    counted += g_allocations;
+    g_counting = true;
+    return in;
   }
-  return counted;
+  void write(const Rendered& r) override {
+    g_counting = false;
+    out_.push_back(g_allocations);
+    inner_.write(r);
+  }
+  bool finished() const override { return inner_.finished(); }
+
+ private:
+  Device& inner_;
+  std::vector<long>& out_;
+};
+
+// Press `region` 8 mm deep and hold for 1000 steps from the last reset; the allocations of each
+// step.
+std::vector<long> press_allocations(Scene& s, const std::string& region) {
+  std::vector<long> per_step;
+  per_step.reserve(1000);
+  PressDevice press(engine::testing::depth_press(s, region, 0.008, 1e3));
+  CountingDevice counting(press, per_step);
+  run_lockstep(s, counting, {.duration = 1000 * s.dt(), .frame_period = 0.0});
+  return per_step;
+}
+
+// Allocations in steps [from, to).
+long sum(const std::vector<long>& v, int from, int to) {
+  long n = 0;
+  for (int k = from; k < to && k < static_cast<int>(v.size()); ++k) n += v[k];
+  return n;
 }
 }  // namespace
 
@@ -85,25 +109,28 @@ TEST(Allocation, SteadyStateStepsDoNotAllocate) {
   if (!PALPLAB_COUNT_ALLOCATIONS) GTEST_SKIP() << "sanitizer build";
   for (const char* id : {"A", "B"}) {
     Scene s = prototypes::build_scene(proto(id));
-    press_allocations(s, "ovary_left", 0, 1000);  // warm-up: buffers reach their size
+    press_allocations(s, "ovary_left");  // warm-up: buffers reach their size
     s.reset();
-    EXPECT_EQ(press_allocations(s, "ovary_left", 0, 1000), 0) << id;  // approach, press, hold
+    const auto n = press_allocations(s, "ovary_left");
+    ASSERT_EQ(n.size(), 1000u);
+    EXPECT_EQ(sum(n, 0, 1000), 0) << id;  // approach, press, hold
   }
   // C: after the press has refined (an allocating event), holding the press must not allocate.
   for (const char* region : {"ovary_left", "body"}) {
     Scene s = prototypes::build_scene(proto("C"));
-    press_allocations(s, region, 0, 1000);
+    press_allocations(s, region);
     s.reset();
+    const auto n = press_allocations(s, region);
     // The press refines (an event that allocates: proves the counter sees inside step()) ...
-    EXPECT_GT(press_allocations(s, region, 0, 600), 0) << region;
+    EXPECT_GT(sum(n, 0, 600), 0) << region;
     // ... and holding it afterwards does not allocate.
-    EXPECT_EQ(press_allocations(s, region, 600, 1000), 0) << region;
+    EXPECT_EQ(sum(n, 600, 1000), 0) << region;
     // The same without refinement, from the first contact on.
     engine::SceneConfig cfg = prototypes::load_prototype(proto("C"));
     cfg.refinement.enabled = false;
     Scene q = engine::make_scene(cfg);
-    press_allocations(q, region, 0, 1000);
+    press_allocations(q, region);
     q.reset();
-    EXPECT_EQ(press_allocations(q, region, 0, 1000), 0) << region << " (no refinement)";
+    EXPECT_EQ(sum(press_allocations(q, region), 0, 1000), 0) << region << " (no refinement)";
   }
 }

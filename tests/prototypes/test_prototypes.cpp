@@ -10,9 +10,13 @@
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/press_run.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
+using palplab::engine::testing::depth_press;
+using palplab::engine::testing::Rec;
+using palplab::engine::testing::run_press;
 
 namespace {
 
@@ -54,29 +58,9 @@ std::string error_of(const std::string& path) {
   return "";
 }
 
-// What a step rendered, with its events copied (Rendered::events is only valid until the next
-// step).
-struct Rec : Rendered {
-  std::vector<Event> ev;
-};
-
-// A scripted press: approach the node of `region` along its inward normal, push 8 mm, withdraw.
+// The press of these tests: in to 8 mm at 2 cm/s, held 0.4 s, out at 3 cm/s (`steps` steps).
 std::vector<Rec> press(Scene& s, const std::string& region, int steps = 1500) {
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  std::vector<Rec> out;
-  for (int k = 0; k < steps; ++k) {
-    const double t = k * s.dt();
-    const double depth =
-        std::max(-0.002, -0.002 + 0.02 * std::min(t, 0.5) - 0.03 * std::max(0.0, t - 0.9));
-    Rec r;
-    static_cast<Rendered&>(r) = s.step(p - depth * n);
-    r.ev.assign(r.events.begin(), r.events.end());
-    r.events = {};
-    out.push_back(std::move(r));
-  }
-  return out;
+  return run_press(s, depth_press(s, region, 0.008, 0.4, 0.03), steps);
 }
 
 }  // namespace
@@ -190,18 +174,26 @@ TEST(Prototypes, LockStepIsBitIdenticalAcrossRunsAndReset) {
 TEST(Prototypes, MassConservedAndRestoredThroughRefinement) {
   Scene s = prototypes::build_scene(proto("C2"));
   const double m0 = s.stats().total_mass;
-  const auto& g = s.geometry();
-  const int node = g.region_node("body");
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  // 2 mm out to 18 mm in at 5 cm/s, held to 0.6 s; then out at 5 cm/s and left 2 mm outside.
+  PressSpec spec = depth_press(s, "body", 0.018, 0.2);
+  spec.approach_speed = 0.05;
+  PressDevice press(spec);
   long max_new = 0;
-  for (int k = 0; k < 600; ++k) {
-    s.step(p + (0.002 - 0.05 * std::min(k * 1e-3, 0.4)) * n);
-    const auto st = s.stats();
-    max_new = std::max(max_new, st.nodes - st.coarse_nodes);
-    ASSERT_NEAR(st.total_mass, m0, 1e-12 * m0);
-  }
+  bool mass_kept = true;
+  run_lockstep(s, press, {.duration = 0.6, .frame_period = 0.0},
+               [&](const Rendered&, const Sample&) {
+                 const auto st = s.stats();
+                 max_new = std::max(max_new, st.nodes - st.coarse_nodes);
+                 mass_kept = mass_kept && std::abs(st.total_mass - m0) <= 1e-12 * m0;
+               });
+  EXPECT_TRUE(mass_kept);
   EXPECT_GT(max_new, 0);  // refined while pressing
-  for (int k = 0; k < 1500; ++k) s.step(p + 0.01 * n);
+  run_lockstep(s, press, {.duration = 1.5, .frame_period = 0.0},
+               [&](const Rendered&, const Sample&) {
+                 mass_kept = mass_kept && std::abs(s.stats().total_mass - m0) <= 1e-12 * m0;
+               });
+  EXPECT_TRUE(mass_kept);
+  EXPECT_EQ(press.phase(), PressPhase::release);  // back outside, at rest
   const auto st = s.stats();
   EXPECT_EQ(st.nodes, st.coarse_nodes);  // simplified after release
   EXPECT_EQ(st.total_mass, m0);
@@ -265,12 +257,17 @@ TEST(Prototypes, ProxyDoesNotSlipThroughThinParts) {
   // would jump to the far wall half way and flip the force; the proxy keeps the near wall.
   Scene s = prototypes::build_scene(proto("A"));
   const auto& g = s.geometry();
-  const int node = g.region_node("horn_left");
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  const PressSpec spec = depth_press(s, "horn_left", 0.04, 1e3);  // to 4 cm at 2 cm/s
+  const Eigen::Vector3d p = spec.point, n = spec.normal;
+  std::vector<std::pair<double, Rendered>> steps;  // (depth of the device, what it rendered)
+  PressDevice press(spec);
+  run_lockstep(s, press, {.duration = 2.101, .frame_period = 0.0},
+               [&](const Rendered& r, const Sample& x) {
+                 steps.push_back({n.dot(p - x.x), r});
+               });
+  ASSERT_EQ(steps.size(), 2101u);
   double last = 0.0, at15mm = 0.0;
-  for (int k = 0; k <= 2100; ++k) {
-    const double depth = -0.002 + 0.02 * k * s.dt();  // to 4 cm
-    const Rendered r = s.step(p - depth * n);
+  for (const auto& [depth, r] : steps) {
     if (depth <= 0.0) continue;
     if (std::abs(depth - 0.015) < 1e-9) at15mm = r.force.norm();
     ASSERT_TRUE(r.contact) << depth;
@@ -280,6 +277,7 @@ TEST(Prototypes, ProxyDoesNotSlipThroughThinParts) {
     ASSERT_GT(r.force.dot(n), 0.0);                   // and keeps pushing the hand out
     last = r.force.norm();
   }
+  EXPECT_NEAR(steps.back().first, 0.04, 1e-12);
   EXPECT_NEAR(at15mm, 500.0 * 0.015, 0.3);  // Hooke: 500 N/m x 1.5 cm
   EXPECT_NEAR(last, 8.5, 1e-9);             // 20 N at 4 cm, clamped to the device's 8.5 N
   // The scenario is a real thin part: at 4 cm the nearest surface node faces the other way.

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/press_run.hpp"
 
 using namespace palplab;
 
@@ -34,14 +35,10 @@ std::string whole_model_c() {
 // Forces (N) of a press at the region's node along its inward normal: 2 mm out, in at 2 cm/s to
 // `depth`, then held (`steps` haptic steps in all).
 std::vector<double> press(engine::Scene& s, const std::string& region, double depth, int steps) {
-  const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
   std::vector<double> f;
-  for (int k = 0; k < steps; ++k) {
-    const double d = std::min(depth, -0.002 + 0.02 * k * s.dt());
-    f.push_back(s.step(p - d * n).force.norm());
-  }
+  for (const auto& r :
+       engine::testing::run_press(s, engine::testing::depth_press(s, region, depth, 1e3), steps))
+    f.push_back(r.force.norm());
   return f;
 }
 

@@ -1,0 +1,162 @@
+// The one press script (engine/haptics/press.hpp) against an analytic tissue: a half-space
+// spring F = k max(depth, 0) along the normal, stepped at 1 kHz. Every variant the runner, the
+// benchmarks and the tests use: force control, a judged force (Weber error), stop at the target
+// (the demonstration), position control and a sliding hold.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "engine/haptics/press.hpp"
+
+using namespace palplab::engine;
+
+namespace {
+
+constexpr double kDt = 1e-3;  // s
+constexpr double kK = 500.0;  // N/m
+
+struct Step {
+  double t;
+  Eigen::Vector3d x;
+  double f;
+  PressPhase phase;  // after the step
+};
+
+// Runs the press against the half-space below spec.point (normal spec.normal) for at most
+// `steps` steps, the way run_lockstep calls a device (read at the step's start time, write
+// with the end time); t kept as step_index * dt, as Scene does.
+std::vector<Step> drive(PressDevice& d, int steps) {
+  const PressSpec& s = d.spec();
+  std::vector<Step> out;
+  for (int k = 0; k < steps && !d.finished(); ++k) {
+    const Eigen::Vector3d x = d.read(k * kDt).position;
+    const double depth = s.normal.dot(s.point - x);
+    Rendered r;
+    r.t = (k + 1) * kDt;
+    r.force = kK * std::max(depth, 0.0) * s.normal;
+    r.contact = depth > 0.0;
+    d.write(r);
+    out.push_back({r.t, x, r.force.norm(), d.phase()});
+  }
+  return out;
+}
+
+PressSpec base() {
+  PressSpec p;
+  p.point = Eigen::Vector3d(0.01, -0.02, 0.03);
+  p.normal = Eigen::Vector3d(1, 2, 2).normalized();
+  p.force = 2.5;
+  p.hold = 0.5;
+  p.release = 0.2;
+  return p;
+}
+
+}  // namespace
+
+TEST(Press, ForceControlReachesHoldsAndReleases) {
+  PressDevice d(base());
+  const auto s = drive(d, 5000);
+  ASSERT_TRUE(d.finished());
+  // 2 mm outside to 5 mm deep (2.5 N at 500 N/m) at 2 cm/s: 0.35 s, to one step.
+  EXPECT_NEAR(d.time_to_force(), 0.35, 1.5 * kDt);
+  // The hold keeps the force within 1 % of the target after 0.1 s of settling.
+  for (const auto& x : s)
+    if (x.phase == PressPhase::hold && x.t > d.time_to_force() + 0.1) EXPECT_NEAR(x.f, 2.5, 0.025);
+  // Withdrawn to the start point and released: the last force is 0 at the start position.
+  EXPECT_EQ(s.back().f, 0.0);
+  EXPECT_NEAR((s.back().x - (base().point + 0.002 * base().normal)).norm(), 0.0, 1e-12);
+}
+
+TEST(Press, JudgedForceStopsWhereTheJudgementSaysSo) {
+  PressSpec p = base();
+  p.force_error = 0.25;  // judges 2 N as 2.5 N
+  p.stop_at_target = true;
+  PressDevice d(p);
+  const auto s = drive(d, 5000);
+  ASSERT_TRUE(d.finished());
+  ASSERT_TRUE(d.force_reached());
+  // Ends on the first step whose judged force reaches the target, and not one step later.
+  EXPECT_GE(s.back().f * 1.25, 2.5);
+  EXPECT_LT(s[s.size() - 2].f * 1.25, 2.5);
+  EXPECT_NEAR(s.back().f, 2.0, kK * 0.02 * kDt);  // within one step's force increment
+  EXPECT_EQ(d.time_to_force(), s.back().t);       // no hold, no withdrawal
+  EXPECT_NEAR(d.depth(), 0.004, 0.02 * kDt + 1e-12);
+}
+
+TEST(Press, StopAtTargetGivesUpAfterTheApproachTime) {
+  PressSpec p = base();
+  p.force = 1e3;  // unreachable within the time allowed
+  p.stop_at_target = true;
+  p.max_approach_time = 0.2;
+  p.max_depth = 1.0;
+  PressDevice d(p);
+  const auto s = drive(d, 5000);
+  EXPECT_TRUE(d.finished());
+  EXPECT_FALSE(d.force_reached());
+  EXPECT_NEAR(s.back().t, 0.2, 1.5 * kDt);
+}
+
+TEST(Press, PositionControlFollowsTheDepthWhateverTheForce) {
+  PressSpec p = base();
+  p.depth = 0.008;
+  p.hold = 0.3;
+  p.withdraw_speed = 0.03;
+  PressDevice d(p);
+  const auto s = drive(d, 5000);
+  ASSERT_TRUE(d.force_reached());
+  // (2 mm + 8 mm) at 2 cm/s = 0.5 s to the depth.
+  EXPECT_NEAR(d.time_to_force(), 0.5, 1.5 * kDt);
+  double deepest = -1;
+  for (const auto& x : s) {
+    const double depth = p.normal.dot(p.point - x.x);
+    deepest = std::max(deepest, depth);
+    if (x.phase == PressPhase::hold) EXPECT_NEAR(depth, 0.008, 1e-12);
+  }
+  EXPECT_NEAR(deepest, 0.008, 1e-12);  // never deeper than asked
+  // Hold 0.3 s, then 10 mm out at 3 cm/s, then the release.
+  EXPECT_NEAR(s.back().t, 0.5 + 0.3 + 0.010 / 0.03 + 0.2, 4 * kDt);
+}
+
+TEST(Press, SlidingHoldMovesAlongTheSurfaceAtTheGivenSpeed) {
+  PressSpec p = base();
+  const Eigen::Vector3d tangent = Eigen::Vector3d(2, -1, 0).normalized();  // ⟂ normal
+  ASSERT_NEAR(tangent.dot(p.normal), 0.0, 1e-15);
+  p.slide = 0.02 * tangent;
+  p.hold = 1.0;
+  PressDevice d(p);
+  const auto s = drive(d, 5000);
+  ASSERT_TRUE(d.finished());
+  // Along the tangent: 0 before the hold, then 2 cm/s while the force is held.
+  std::vector<std::pair<double, double>> hold;  // (t, along)
+  for (const auto& x : s) {
+    const double along = tangent.dot(x.x - p.point);
+    if (x.phase == PressPhase::approach) EXPECT_NEAR(along, 0.0, 1e-15);
+    if (x.phase == PressPhase::hold) {
+      hold.push_back({x.t, along});
+      EXPECT_NEAR(x.f, 2.5, 0.05);  // the force is still held
+    }
+  }
+  ASSERT_GT(hold.size(), 900u);
+  const double speed = (hold.back().second - hold[1].second) / (hold.back().first - hold[1].first);
+  EXPECT_NEAR(speed, 0.02, 1e-9);
+  // ... and 2 cm along after it (kept while withdrawing).
+  EXPECT_NEAR(tangent.dot(s.back().x - p.point), 0.02, 2 * 0.02 * kDt);
+}
+
+TEST(Press, BadSpecsAreRefused) {
+  auto bad = [](auto edit) {
+    PressSpec p = base();
+    edit(p);
+    EXPECT_THROW(PressDevice{p}, std::invalid_argument);
+  };
+  bad([](PressSpec& p) { p.depth = -0.001; });
+  bad([](PressSpec& p) { p.force = 0.0; });  // force control needs a force
+  bad([](PressSpec& p) { p.force_error = -1.0; });
+  bad([](PressSpec& p) { p.slide = Eigen::Vector3d(NAN, 0, 0); });
+  PressSpec depth_only = base();
+  depth_only.force = 0.0;
+  depth_only.depth = 0.005;  // position control does not need one
+  EXPECT_NO_THROW(PressDevice{depth_only});
+}
