@@ -30,7 +30,7 @@ UiScene UiScene::of(const engine::Scene& s) {
   for (int r = 0; r < static_cast<int>(u.geometry.region_names.size()); ++r)
     u.thresholds.push_back(s.thresholds(r));
   u.cues = s.config().cues;
-  u.coarse_nodes = s.stats().coarse_nodes;
+  u.coarse_nodes = s.stats().surface_coarse_nodes;
   u.tool = s.tool();
   u.axis = s.config().needle.axis;
   const std::size_t nr = u.geometry.region_names.size();

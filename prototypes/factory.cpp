@@ -134,8 +134,15 @@ SceneConfig load_prototype(const std::string& path) {
             .value_or(k.patch_radius);
     k.stiffness = c.number(*ct, P, "stiffness", false, 0, 1e6, "the contact stiffness (N/m)", true)
                       .value_or(k.stiffness);
-    k.radius = c.number(*ct, P, "radius", false, 0, 1, "the contact capture radius (m)", true)
-                   .value_or(k.radius);
+    // Removed (issue 10): it was the capture radius of the old nearest-node contact, which the
+    // god-object contact made meaningless; the size of the probe is contact.patch_radius.
+    if (ct->contains("radius"))
+      c.err(P + ".radius",
+            "\"radius\" is no longer a key: it was the capture radius of the old nearest-node "
+            "contact (a contact now starts where the device's path crosses the surface); the "
+            "probe's size is \"patch_radius\" (m, radius of the probe face of deformable "
+            "models) — delete \"radius\", or rename it to \"patch_radius\" if it meant the probe",
+            true);
   }
   if (kind && kind->check && c.ok()) kind->check(c, s);
   if (const json* cu = c.object(root, R, "cues", false)) {

@@ -355,6 +355,7 @@ SceneStats Scene::stats() const {
   const SceneImpl& s = *impl_;
   SceneStats st = s.counters;
   s.model->stats(st);
+  if (st.surface_coarse_nodes == 0) st.surface_coarse_nodes = st.coarse_nodes;
   return st;
 }
 

@@ -156,6 +156,10 @@ struct SceneStats {
   long springs = 0;  // springs now
   long coarse_nodes = 0;
   long coarse_springs = 0;
+  // Rows of current_surface() that are coarse surface vertices (in the geometry's order); the
+  // refinement nodes follow them (a renderer marks those). Models that leave it 0 get
+  // coarse_nodes.
+  long surface_coarse_nodes = 0;
   long new_nodes_max = 0;       // most refinement nodes present at once since reset
   long new_springs_max = 0;     // most refinement springs present at once since reset
   double total_mass = 0.0;      // kg, now

@@ -50,7 +50,6 @@ struct SupportConfig {
 // The device–tissue coupling.
 struct ContactConfig {
   double stiffness = 500.0;    // N/m: penalty (A, B) or the device coupling (deformable models)
-  double radius = 0.0;         // m, capture radius of a new contact; 0 = 1.5 mean edge lengths
   double patch_radius = 0.01;  // m, radius of the probe face (deformable models)
   double force_limit = 8.5;    // N, the device's peak force (a common desktop device)
 };

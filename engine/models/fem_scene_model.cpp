@@ -2,10 +2,12 @@
 // mesh behind the SceneModel interface. Per-tet materials come from the tissue table (the mesh's
 // tissue attribute, or the prototype's tissue with optional E/density overrides; rigid tissue is
 // fixed), the pinned nodes from the support (fixed_region, fixed_z_below) as for prototype C.
-// The device couples through the same proxy contact as C: Scene::step gives the touched surface
-// node, this model puts the probe face there as a contact patch (surface nodes within
-// contact.patch_radius, weighted by their lumped surface area) and FemModel renders the patch's
-// penalty force (fem_model.hpp).
+// The device couples through the same proxy contact as C: Scene::step gives the contact point's
+// surface face and barycentric weights, this model puts the probe face there as a contact patch
+// (the pads of the face's three vertices — surface nodes within contact.patch_radius, weighted
+// by their lumped surface area — blended by the barycentric weights, so the force is continuous
+// as the contact slides from node to node) and FemModel renders the patch's penalty force
+// (fem_model.hpp).
 //
 // Condensed formulation: the solved (operational) tets are those whose centroid lies within
 // fem.operational_radius of a surface node of fem.operational_region; patch nodes outside the
@@ -20,12 +22,15 @@
 // touches are counted in model_info ("outside_contacts").
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
 #include "engine/mesh/materials.hpp"
+#include "engine/mesh/tet_mesh.hpp"
 #include "engine/models/fem_model.hpp"
 #include "engine/models/model.hpp"
 #include "engine/solvers/fem_static.hpp"
@@ -69,6 +74,10 @@ class FemSceneModel final : public SceneModel {
       adj_[fill[b]++] = a;
     }
     mark_.assign(n, 0);
+    slot_.assign(n, -1);
+    faces_.resize(cm.F.rows(), 3);
+    for (long f = 0; f < cm.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) faces_(f, k) = cm.surface_to_model[cm.F(f, k)];
     mass_ = fem_.system().m_lumped.sum() / 3.0;
     if (fem_.formulation() == FemFormulation::condensed) {
       full_ = std::make_unique<StaticSolver>();
@@ -85,9 +94,10 @@ class FemSceneModel final : public SceneModel {
     ModelOutput o;
     const bool solved = mnode >= 0 && (fem_.solves_node(mnode) || fem_.fixed_nodes()[mnode]);
     if (mnode >= 0 && solved) {
-      if (mnode != patch_center_) compute_patch(mnode);
+      const int face = pad_face(c.face);
+      if ((face >= 0 ? face : -1 - mnode) != pad_key_) compute_pad(face, mnode);
       fem_.contact_node = mnode;
-      fem_.contact_point = c.x;
+      fem_.contact_point = c.x + blend_pad(face, c.w, c.n, mnode) * c.n;
       fem_.contact_normal = c.n;
       fem_.contact_k = contact_k_;
     } else {
@@ -120,6 +130,7 @@ class FemSceneModel final : public SceneModel {
   void reset() override {
     fem_.reset();
     fem_.contact_node = -1;
+    pad_key_ = kNoPad;
     outside_contacts_ = 0;
   }
 
@@ -153,12 +164,60 @@ class FemSceneModel final : public SceneModel {
   }
 
  private:
-  // The probe face: surface nodes within patch_radius of the centre (rest distance, reached
-  // through tet edges between surface nodes so that it never jumps a gap), weighted by their
-  // lumped surface area — the rule of the mass-spring model (mass_spring_model.cpp).
-  void compute_patch(int center) {
-    patch_center_ = center;
-    patch_nodes(center, false, fem_.contact_nodes, fem_.contact_weights);
+  // The face whose vertex pads make the probe face, or -1 (the node's pad alone): a face every
+  // vertex of which the per-step solve moves (or holds fixed).
+  int pad_face(int face) const {
+    if (face < 0 || face >= faces_.rows()) return -1;
+    for (int k = 0; k < 3; ++k) {
+      const int v = faces_(face, k);
+      if (!fem_.solves_node(v) && !fem_.fixed_nodes()[v]) return -1;
+    }
+    return face;
+  }
+  // The pads of the face's three vertices (surface nodes within patch_radius of the vertex,
+  // reached through tet edges between surface nodes so that a pad never jumps a gap, weighted
+  // by their lumped surface area — the rule of the mass-spring model, mass_spring_model.cpp),
+  // or of `node` alone when face < 0.
+  void compute_pad(int face, int node) {
+    pad_key_ = face >= 0 ? face : -1 - node;
+    pad_.clear();
+    for (int k = 0; k < (face >= 0 ? 3 : 1); ++k) {
+      patch_nodes(face >= 0 ? faces_(face, k) : node, false, tmp_nodes_, tmp_w_);
+      for (size_t q = 0; q < tmp_nodes_.size(); ++q) pad_.push_back({tmp_nodes_[q], k, tmp_w_[q]});
+    }
+  }
+  // This step's patch on the FemModel: the vertex pads weighted by the barycentric weights w
+  // (each node once), so the patch moves continuously with the contact point. Each vertex pad
+  // yields to nodes above ITS vertex's tangent plane (offset o = max(0, (X0_i - X0_v) . n));
+  // FemModel measures offsets from contact_node, so the difference of the weighted offset sums
+  // is returned (m): the caller moves the contact plane by it along n, which makes FemModel's
+  // penetration exactly sum_v w_v sum_i s_vi ((x_i - x) . n - o_vi).
+  double blend_pad(int face, const Eigen::Vector3d& w, const Eigen::Vector3d& n, int node) {
+    std::vector<int>& nodes = fem_.contact_nodes;
+    std::vector<double>& wt = fem_.contact_weights;
+    nodes.clear();
+    wt.clear();
+    const auto offset = [&](int i, int v) {
+      return std::max(0.0, (X0_.row(i) - X0_.row(v)).dot(n.transpose()));
+    };
+    double own = 0.0;
+    for (const PadEntry& e : pad_) {
+      const double we = (face >= 0 ? w[e.slot] : 1.0) * e.w;
+      if (!(we > 0.0)) continue;
+      own += we * offset(e.node, face >= 0 ? faces_(face, e.slot) : node);
+      if (slot_[e.node] < 0) {
+        slot_[e.node] = static_cast<int>(nodes.size());
+        nodes.push_back(e.node);
+        wt.push_back(0.0);
+      }
+      wt[slot_[e.node]] += we;
+    }
+    double fem = 0.0;
+    for (size_t q = 0; q < nodes.size(); ++q) {
+      fem += wt[q] * offset(nodes[q], node);
+      slot_[nodes[q]] = -1;
+    }
+    return own - fem;
   }
   // The patch of an outside touch (every surface node in reach) and its compliance columns.
   void outside_patch(int center) {
@@ -206,7 +265,17 @@ class FemSceneModel final : public SceneModel {
   std::vector<int> adj_start_, adj_;
   std::vector<std::uint8_t> mark_;
   double patch_radius_, contact_k_, mass_ = 0;
-  int patch_center_ = -1;
+  // The probe pad (compute_pad): one entry per (face vertex, pad node).
+  struct PadEntry {
+    int node, slot;  // pad node; face vertex 0..2
+    double w;        // its share of that vertex's pad
+  };
+  static constexpr int kNoPad = 1 << 30;
+  mesh::Faces faces_;     // surface faces in model nodes
+  int pad_key_ = kNoPad;  // face, or -1 - node, the pad was built for
+  std::vector<PadEntry> pad_;
+  std::vector<int> tmp_nodes_, slot_;  // slot_: node -> its index in the patch, -1
+  std::vector<double> tmp_w_;
   long outside_contacts_ = 0;
   // Outside touches of a condensed model (inverse-stiffness contact, see top).
   std::unique_ptr<StaticSolver> full_;  // the full linear K, factorised
@@ -263,6 +332,34 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
             cfg.mesh.key() + " is a surface",
         cfg.source);
   const long nm = cm.model_V.rows(), nt = cm.model_T.rows();
+  // An inverted tet has no element stiffness (the FEM needs every tet positively oriented):
+  // refused, naming the file (a TetGen mesh's .ele, where the tets are) and the element.
+  for (long t = 0; t < nt; ++t) {
+    const double v = mesh::signed_volume(cm.model_V, cm.model_T, static_cast<int>(t));
+    if (v < 0) {
+      std::string file = cfg.mesh.file, where = "mesh " + cfg.mesh.key() + ": ";
+      if (!file.empty()) {
+        const std::filesystem::path fp(file);
+        if (fp.extension() == ".node" || fp.extension() == ".ele")
+          file = std::filesystem::path(fp).replace_extension(".ele").string();
+        where.clear();
+      } else {
+        file = cfg.source;
+      }
+      std::string nodes;
+      for (int k = 0; k < 4; ++k) {
+        if (k) nodes += ' ';
+        nodes += std::to_string(cm.model_T(t, k));
+      }
+      char vol[32];
+      std::snprintf(vol, sizeof vol, "%.3g", v);
+      throw InputError(where + "tet " + std::to_string(t) + " (in file order from 0; nodes " +
+                           nodes + "): inverted tetrahedron (signed volume " + vol +
+                           " m^3): model \"fem\" needs every tet positively oriented (swap two "
+                           "of its nodes; `palplab mesh check` lists every inverted tet)",
+                       file);
+    }
+  }
   mesh::TetMesh tm = mesh::make_tet_mesh(cm.model_V, cm.model_T, cm.tet_attribute);
   const mesh::MaterialTable& table = mesh::default_materials();
   TetMaterials mat = tet_materials(tm, table);  // per tet from the attribute (tissue table)

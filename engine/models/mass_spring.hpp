@@ -52,9 +52,13 @@ struct MassSpringSystem {
   // the pad (lumped surface area, the weights sum to 1). The device feels the sum,
   // contact_k * sum_k w_k d_k+. The Jacobian blocks -contact_k w_k n n^T enter backward Euler,
   // so a stiff coupling stays stable. contact_node = -1: no contact.
+  // A pad blended from several centres (the contact point inside a face: the three vertex pads
+  // weighted by its barycentric weights, so the force is continuous from node to node) lists a
+  // node once per centre, with that centre in contact_refs[k] in place of c above.
   int contact_node = -1;           // the centre node of the contact
-  std::vector<int> contact_nodes;  // the patch (contains contact_node)
+  std::vector<int> contact_nodes;  // the patch (contains contact_node); a node may repeat
   std::vector<double> contact_weights;
+  std::vector<int> contact_refs;  // per entry its pad's centre; empty = contact_node for all
   Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
   double contact_k = 0.0;  // N/m, total coupling stiffness of the probe face

@@ -8,6 +8,7 @@
 #include "common/json_check.hpp"
 #include "engine/mesh/materials.hpp"
 #include "engine/models/mass_spring_material.hpp"
+#include "engine/models/mass_spring_model.hpp"
 #include "engine/models/model.hpp"
 #include "engine/models/refinement.hpp"
 #include "engine/solvers/far_field.hpp"
@@ -32,18 +33,28 @@ struct MassSpringScene {
   bool substep = true;                // sub-step h/2^l while refined (Eq 5.18)
   int refined_node = -1;              // model node last refined around
   std::vector<int> surface_to_model;  // surface node -> model node (identity for surfaces)
+  std::vector<int> surface_row;       // coarse model node -> surface node, -1 inside
   // Integration scope: only nodes within scope_radius (m, rest distance, reached through springs)
   // of the contact node may wake; 0 = whole model. Held nodes act as fixed boundary.
   double scope_radius = 0.0;
   int scope_max_nodes = 1 << 30;  // cap on the scope (nearest rings first)
   double patch_radius = 0.01;     // m, radius of the probe face (the contact patch)
   double contact_k = 500.0;       // N/m, device coupling
-  int patch_center = -1;          // model node the patch was built around
-  long patch_nodes_version = -1;  // model node count the patch was built for
+  // The probe pad of the contact face: the pads of its three vertices (see compute_pad), one
+  // entry per (vertex, pad node); each step weights them by the contact's barycentric weights.
+  struct PadEntry {
+    int node, slot;  // pad node; which face vertex (0..2) it is a pad of
+    double w;        // its share of that vertex's pad
+  };
+  RowMatX3i faces;                // surface faces in model nodes (the tracker's faces)
+  int patch_face = -1;            // surface face (or -1 - node) the pad was built for
+  long patch_nodes_version = -1;  // model node count the pad was built for
+  std::vector<PadEntry> pad;
+  std::vector<int> vertex_pad;  // scratch: one vertex's pad
   std::vector<std::uint8_t> patch_mark;
   int scope_center = -1;
   std::vector<std::uint8_t> in_scope;
-  std::vector<int> scope_nodes, bfs;
+  std::vector<int> scope_nodes;
   long new_nodes_max = 0, new_springs_max = 0;  // since reset
   // The exterior of the scope (engine/solvers/far_field.hpp): the whole model's linear static
   // response to the last contact force, prescribed on every coarse node outside the scope.
@@ -127,22 +138,21 @@ void wake_scope(MassSpringScene& ms) {
   rebuild_active_springs(s, ms.act);
 }
 
-// The contact patch: surface nodes within patch_radius (rest distance, reached through surface
-// springs from the centre) with their share of the probe face (lumped surface area).
-void compute_patch(MassSpringScene& ms, int center) {
-  MassSpringSystem& s = ms.model.sys;
+// The pad of one node: surface nodes within patch_radius of `center` (rest distance, reached
+// through surface springs from the centre) with their share of the probe face (lumped surface
+// area); appended to ms.pad as face vertex `slot`.
+void add_vertex_pad(MassSpringScene& ms, int center, int slot) {
+  const MassSpringSystem& s = ms.model.sys;
   const Eigen::VectorXd& area = ms.model.surface_area;
-  s.contact_nodes.clear();
-  s.contact_weights.clear();
-  ms.patch_center = center;
-  ms.patch_nodes_version = s.nodes();
+  std::vector<int>& nodes = ms.vertex_pad;
+  nodes.clear();
   const Eigen::Vector3d c = s.X_rest.row(center).transpose();
   const double r2 = ms.patch_radius * ms.patch_radius;
-  s.contact_nodes.push_back(center);
+  nodes.push_back(center);
   if (static_cast<long>(ms.patch_mark.size()) != s.nodes()) ms.patch_mark.assign(s.nodes(), 0);
   ms.patch_mark[center] = 1;
-  for (size_t q = 0; q < s.contact_nodes.size(); ++q) {
-    const int i = s.contact_nodes[q];
+  for (size_t q = 0; q < nodes.size(); ++q) {
+    const int i = nodes[q];
     for (int k = s.adj_start[i]; k < s.adj_start[i + 1]; ++k) {
       const int e = s.adj_spring[k];
       const int j = s.springs.E(e, 0) == i ? s.springs.E(e, 1) : s.springs.E(e, 0);
@@ -150,13 +160,44 @@ void compute_patch(MassSpringScene& ms, int center) {
           (s.X_rest.row(j).transpose() - c).squaredNorm() > r2)
         continue;
       ms.patch_mark[j] = 1;
-      s.contact_nodes.push_back(j);
+      nodes.push_back(j);
     }
   }
   double sum = 0.0;
-  for (int i : s.contact_nodes) sum += area[i];
-  for (int i : s.contact_nodes) s.contact_weights.push_back(sum > 0 ? area[i] / sum : 1.0);
-  for (int i : s.contact_nodes) ms.patch_mark[i] = 0;
+  for (int i : nodes) sum += area[i];
+  for (int i : nodes) ms.pad.push_back({i, slot, sum > 0 ? area[i] / sum : 1.0});
+  for (int i : nodes) ms.patch_mark[i] = 0;
+}
+
+// The contact pad of a contact point on surface face `face` (or at model node `node` when the
+// face is unknown): the pads of the face's three vertices. Blending them by the barycentric
+// weights (set_pad_weights) moves the pad continuously with the contact point: on an edge only
+// its two ends count, at a vertex only its own pad — the same on every face around it — so the
+// force does not jump when the nearest node changes (issue 10).
+void compute_pad(MassSpringScene& ms, int face, int node) {
+  ms.pad.clear();
+  ms.patch_face = face >= 0 ? face : -1 - node;
+  ms.patch_nodes_version = ms.model.sys.nodes();
+  if (face >= 0)
+    for (int k = 0; k < 3; ++k) add_vertex_pad(ms, ms.faces(face, k), k);
+  else
+    add_vertex_pad(ms, node, 0);
+}
+
+// This step's pad on the system: entry weights w[slot] * share (summing to 1), each measured
+// from its own vertex's tangent plane (MassSpringSystem::contact_refs).
+void set_pad_weights(MassSpringScene& ms, int face, const Eigen::Vector3d& w) {
+  MassSpringSystem& s = ms.model.sys;
+  s.contact_nodes.clear();
+  s.contact_weights.clear();
+  s.contact_refs.clear();
+  for (const auto& e : ms.pad) {
+    const double wk = face >= 0 ? w[e.slot] : 1.0;
+    if (!(wk > 0.0)) continue;  // the far vertex on an edge: no share
+    s.contact_nodes.push_back(e.node);
+    s.contact_weights.push_back(wk * e.w);
+    s.contact_refs.push_back(face >= 0 ? ms.faces(face, e.slot) : s.contact_node);
+  }
 }
 
 const std::vector<std::uint8_t>* scope_mask(const MassSpringScene& ms) {
@@ -179,9 +220,11 @@ void reset_mass_spring(MassSpringScene& ms) {
   ms.far_force = 0.0;
   ms.far_applied = -1.0;
   ms.far_solve_pending = false;
-  ms.patch_center = -1;
+  ms.patch_face = -1;
+  ms.pad.clear();
   s.contact_nodes.clear();
   s.contact_weights.clear();
+  s.contact_refs.clear();
   if (ms.sleep.enabled)
     sleep_all(s, ms.act);
   else
@@ -244,8 +287,10 @@ class MassSpringModel final : public SceneModel {
                               0.25 * ms.scope_radius;
         if (!keep) compute_scope(ms, mnode);
       }
-      if (mnode != ms.patch_center || ms.patch_nodes_version != sys.nodes())
-        compute_patch(ms, mnode);
+      const int face = c.face >= 0 && c.face < ms.faces.rows() ? c.face : -1;
+      if ((face >= 0 ? face : -1 - mnode) != ms.patch_face || ms.patch_nodes_version != sys.nodes())
+        compute_pad(ms, face, mnode);
+      set_pad_weights(ms, face, c.w);
       if (ms.linear_exterior) {
         if (ms.far_solve_pending) {
           far_field_solve(ms.far, sys.contact_nodes, sys.contact_weights, -c.n);
@@ -312,6 +357,7 @@ class MassSpringModel final : public SceneModel {
     st.springs = sys.springs.size();
     st.coarse_nodes = ms_.model.coarse_nodes();
     st.coarse_springs = ms_.model.coarse_springs();
+    st.surface_coarse_nodes = static_cast<long>(ms_.surface_to_model.size());
     st.total_mass = sys.mass.sum();
     st.max_rest_error = (sys.X - sys.X_rest).rowwise().norm().maxCoeff();
     st.level = ms_.model.level;
@@ -331,9 +377,23 @@ class MassSpringModel final : public SceneModel {
     st.model_info = info.dump();
   }
 
+  // The surface vertices only (Scene::current_surface): the coarse surface vertices in the
+  // geometry's order, then the refinement nodes (all on the surface) in model order; a tet
+  // mesh's interior nodes are left out.
   void surface(mesh::Positions& V, mesh::Faces& F) const override {
-    V = ms_.model.sys.X;
-    F = ms_.model.F;
+    const MassSpringSystem& s = ms_.model.sys;
+    const long ns = static_cast<long>(ms_.surface_to_model.size());
+    const long nc = ms_.model.coarse_nodes(), nn = s.nodes() - nc;
+    V.resize(ns + nn, 3);
+    for (long i = 0; i < ns; ++i) V.row(i) = s.X.row(ms_.surface_to_model[i]);
+    V.bottomRows(nn) = s.X.bottomRows(nn);
+    const RowMatX3i& Fm = ms_.model.F;
+    F.resize(Fm.rows(), 3);
+    for (long f = 0; f < Fm.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int m = Fm(f, k);
+        F(f, k) = m < nc ? ms_.surface_row[m] : static_cast<int>(ns + m - nc);
+      }
   }
 
   MassSpringScene ms_;  // filled by make_mass_spring (not movable: solver factorisations)
@@ -415,9 +475,11 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
   }
 }
 
+}  // namespace
+
 // Every stiffness, mass and support from the material and the rest geometry
 // (engine/models/mass_spring_material.hpp): nothing per vertex.
-std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {
+AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh& cm) {
   const long nm = cm.model_V.rows();
   const mesh::MaterialTable& table = mesh::default_materials();
   const MaterialConfig& mc = cfg.material;
@@ -476,9 +538,16 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     for (long i = 0; i < nm; ++i)
       if (cm.model_V(i, 2) < z0 + cfg.support.fixed_z_below) sys.fixed[i] = 1;
   }
+  return make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt);
+}
+
+namespace {
+
+std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {
   auto model = std::make_unique<MassSpringModel>();
   MassSpringScene& ms = model->ms_;
-  ms.model = make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt);
+  ms.model = mass_spring_adaptive(cfg, cm);
+  const long nm = cm.model_V.rows();
   static_cast<SolverConfig&>(ms.ws) = cfg.solver;
   ms.patch_radius = cfg.contact.patch_radius;
   ms.contact_k = cfg.contact.stiffness;
@@ -511,6 +580,13 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     ms.ws.compact.Dinv.reserve(n);
   }
   ms.surface_to_model = cm.surface_to_model;
+  ms.surface_row.assign(nm, -1);
+  for (size_t i = 0; i < cm.surface_to_model.size(); ++i)
+    ms.surface_row[cm.surface_to_model[i]] = static_cast<int>(i);
+  ms.faces.resize(cm.F.rows(), 3);
+  for (long f = 0; f < cm.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ms.faces(f, k) = cm.surface_to_model[cm.F(f, k)];
+  ms.pad.reserve(256);
   return model;
 }
 

@@ -53,7 +53,7 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   // The current surface as Scene::current_surface gives it. `coarse_nodes` = SceneStats::
-  // coarse_nodes: vertex indices at or above it are refinement nodes.
+  // surface_coarse_nodes: vertex indices at or above it are refinement nodes.
   void update_surface(const RowMatX3d& V, const RowMatX3i& F, long coarse_nodes);
   // Draws into the bound framebuffer (viewport 0,0,width,height), clearing it first.
   void draw(const Camera& cam, int width, int height, const DrawOptions& opt);

@@ -41,7 +41,7 @@ Image render_still(const engine::Scene& scene, const Camera& camera, int width, 
     RowMatX3d V;
     RowMatX3i F;
     scene.current_surface(V, F);
-    r.update_surface(V, F, scene.stats().coarse_nodes);
+    r.update_surface(V, F, scene.stats().surface_coarse_nodes);
     DrawOptions d;
     d.wireframe = options.wireframe;
     d.region_alpha = region_alpha_vector(scene.geometry(), options.region_alpha);

@@ -246,54 +246,90 @@ TEST(ContactHard, TenMetresPerSecondDoesNotTunnel) {
 }
 
 TEST(ContactHard, SlidingAcrossNodesChangesTheForceBoundedly) {
-  // At 4 mm depth, slide 1 cm sideways at 5 cm/s (50 um per step) across several nodes. The
-  // old node-based contact jumped by up to 1 N when the nearest node changed. Now, for a rigid
-  // surface, f = k d n(p) with the proxy p moving with the device and the shaded normal n
-  // continuous: a step changes f by about k |dx| (1 + d |dn/dp|) — the bound below is 4 k |dx|
-  // = 0.1 N for A and B (500 N/m), a tenth of the old jumps (measured: 0.0018 and 0.0009 N). C
-  // and D still centre their probe patch on a node (engine/models/mass_spring*, fem_*: node-
-  // based): measured 0.69 and 0.70 N at the one switch, bounded here at 1 N so it cannot grow.
-  for (const char* id : kAll) {
-    Scene s = make(id);
+  // At 4 mm depth, slide 2 cm sideways at 5 cm/s (50 um per step) across faces and nodes. The
+  // old node-based contact jumped by ~1 N when the nearest node changed (A, B); C and D centred
+  // their probe pad on that node and jumped by 0.69 N (C) and 0.70 N (D) over 1 cm of this path
+  // (2.02 N for C over these 2 cm).
+  //   A, B: f = k d n(p) with the proxy p moving with the device and the shaded normal n
+  //   continuous: a step changes f by about k |dx| (1 + d |dn/dp|) — bound 4 k |dx| = 0.1 N
+  //   (500 N/m).
+  //   C, D: the pad is the face's three vertex pads blended by the barycentric weights, so it
+  //   moves continuously with the contact point and a step changes f by what the tissue changes
+  //   over 50 um. Bound: half the Weber fraction for force (7 %) of the smallest force of the
+  //   slide, so no single step is a perceptible jump (the old jumps were 25 % and more). C as
+  //   shipped refines around each new contact node while the contact slides: inserting nodes
+  //   into the pressed mesh is itself a step of the model (measured 0.30 N, 0.38 of the force;
+  //   refinement.cpp), bounded at 0.4 of the force here so it cannot grow; C without
+  //   refinement isolates the contact (measured 2.8 %: re-centring the integration scope).
+  for (const char* id : {"A", "B", "C", "C without refinement", "D"}) {
+    const bool norefine = std::string(id) == "C without refinement";
+    Scene s = make(norefine ? "C" : id, [&](SceneConfig& c) {
+      if (norefine) c.refinement.enabled = false;
+    });
     const Site w = site(s);
+    const SceneGeometry& g = s.geometry();
     const double k = s.config().contact.stiffness;
-    const double dx = 5e-5, depth = 0.004;
+    const double dx = 5e-5, depth = 0.004, length = 0.02;
+    const int n_steps = static_cast<int>(std::lround(length / dx));
     // The body is curved: slide in the tangent direction along which the rest surface stays
-    // within 1 mm of the start's tangent plane for 1 cm (checked on the rest geometry).
+    // closest to the start's tangent plane for 2 cm (checked on the rest geometry).
     const Eigen::Vector3d t0 = w.n.unitOrthogonal(), t1 = w.n.cross(t0);
     Eigen::Vector3d t = t0;
     double flattest = INFINITY;
-    for (const Eigen::Vector3d& c : {t0, Eigen::Vector3d(-t0), t1, Eigen::Vector3d(-t1)}) {
+    for (int a = 0; a < 16; ++a) {
+      const double phi = a * M_PI / 8;
+      const Eigen::Vector3d c = std::cos(phi) * t0 + std::sin(phi) * t1;
       double dev = 0;
-      for (int i = 0; i <= 10; ++i) {
+      for (int i = 0; i <= 20; ++i) {
         const Eigen::Vector3d q = w.p + i * 1e-3 * c;
-        const int m = s.geometry().nearest_node(q);
-        dev = std::max(dev, std::abs((s.geometry().V.row(m).transpose() - w.p).dot(w.n)));
+        const int m = g.nearest_node(q);
+        dev = std::max(dev, std::abs((g.V.row(m).transpose() - w.p).dot(w.n)));
       }
       if (dev < flattest) {
         flattest = dev;
         t = c;
       }
     }
-    ASSERT_LT(flattest, 1e-3) << id;
+    ASSERT_LT(flattest, 2e-3) << id;
     Track r;
     for (int i = 0; i <= 600; ++i)  // press to 4 mm at 1 cm/s
       step(s, w.p - (-0.002 + 1e-5 * i) * w.n, r);
+    // The faces the contact point crosses: the same tracker on the same path.
+    ContactTracker tr(g.V, g.N, g.F);
+    Eigen::Vector3d last = w.p + 0.002 * w.n;
+    for (int i = 0; i <= 600; ++i) {
+      const Eigen::Vector3d x = w.p - (-0.002 + 1e-5 * i) * w.n;
+      tr.update(last, x);
+      last = x;
+    }
     const size_t start = r.F.size();
-    for (int i = 1; i <= 200; ++i) step(s, w.p - depth * w.n + i * dx * t, r);
+    std::vector<int> faces = {tr.proxy().face};
+    for (int i = 1; i <= n_steps; ++i) {
+      const Eigen::Vector3d x = w.p - depth * w.n + i * dx * t;
+      step(s, x, r);
+      tr.update(last, x);
+      last = x;
+      if (tr.proxy().face != faces.back()) faces.push_back(tr.proxy().face);
+    }
     ASSERT_TRUE(r.finite()) << id;
     int switches = 0;
-    double worst = 0;
+    double worst = 0, fmin = INFINITY;
     for (size_t i = start; i < r.F.size(); ++i) {
       ASSERT_TRUE(r.contact[i]) << id;
       switches += r.node[i] != r.node[i - 1];
       worst = std::max(worst, (r.F[i] - r.F[i - 1]).norm());
+      fmin = std::min(fmin, r.F[i].norm());
     }
-    EXPECT_GE(switches, 1) << id << ": the slide must cross a node boundary";
+    std::printf(
+        "%s: %zu faces, %d node switches over %.0f mm; force %.3f .. %.3f N; largest change per "
+        "step %.4f N (%.2f %% of the smallest force)\n",
+        id, faces.size() - 1, switches, 1e3 * length, fmin, r.fmax(), worst, 100 * worst / fmin);
+    EXPECT_GE(faces.size(), 3u) << id << ": the slide must cross faces";
+    EXPECT_GE(switches, 2) << id << ": the slide must cross node boundaries";
     const bool rigid = std::string(id) == "A" || std::string(id) == "B";
-    EXPECT_LE(worst, rigid ? 4.0 * k * dx : 1.0) << id;
-    std::printf("%s: %d node switches, largest force change per step %.4f N\n", id, switches,
-                worst);
+    EXPECT_GT(fmin, 0.5) << id;  // a real press throughout
+    const double bound = rigid ? 4.0 * k * dx : std::string(id) == "C" ? 0.4 * fmin : 0.035 * fmin;
+    EXPECT_LE(worst, bound) << id;
   }
 }
 
@@ -403,14 +439,226 @@ TEST(ContactHard, InvertedTetInTheInput) {
       EXPECT_LE(r.fmax(), s.config().contact.force_limit + 1e-12) << id;
       EXPECT_LT(s.stats().max_rest_error, 1e-4) << id;
     } catch (const InputError& e) {
-      // D refuses it (measured: "fem: tet 5172: inverted tetrahedron"; the message names the tet
-      // but not the file: engine/models/fem_*, reported to its owner). C builds it and stays
-      // bounded, which the branch above checks (measured: 0.95 N peak, back at rest).
+      // D refuses it, naming the file where the tets are (bad.ele) and the tet; C builds it and
+      // stays bounded, which the branch above checks (measured: 0.95 N peak, back at rest).
       std::printf("%s: refused: %s\n", id, e.what());
+      const std::string what = e.what();
       EXPECT_EQ(std::string(id), "D");
-      EXPECT_NE(std::string(e.what()).find("inverted"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(std::to_string(near[0].second)), std::string::npos)
-          << e.what();
+      EXPECT_NE(what.find("inverted"), std::string::npos) << what;
+      EXPECT_EQ(
+          what.rfind((dir / "bad.ele").string() + ": tet " + std::to_string(near[0].second) + " ",
+                     0),
+          0u)
+          << what;
     }
   }
+}
+
+namespace {
+
+// Splits face f of a surface 1-to-3 at the point m (the new vertex): the faces (a,b,m), (b,c,m),
+// (c,a,m) keep the outside orientation and the parent's region; no T-junction.
+void split_face(mesh::SurfaceMesh& s, int f, const Eigen::Vector3d& m) {
+  const long v = s.V.rows(), nf = s.F.rows();
+  s.V.conservativeResize(v + 1, 3);
+  s.V.row(v) = m.transpose();
+  const int a = s.F(f, 0), b = s.F(f, 1), c = s.F(f, 2);
+  s.F.conservativeResize(nf + 2, 3);
+  s.F.row(f) << a, b, static_cast<int>(v);
+  s.F.row(nf) << b, c, static_cast<int>(v);
+  s.F.row(nf + 1) << c, a, static_cast<int>(v);
+  if (s.regions.id.size() == nf) {
+    s.regions.id.conservativeResize(nf + 2);
+    s.regions.id[nf] = s.regions.id[nf + 1] = s.regions.id[f];
+  }
+}
+
+// Splits tet t 1-to-4 at the point p (the new vertex), each child oriented as its parent.
+void split_tet(mesh::TetMesh& m, int t, const Eigen::Vector3d& p) {
+  const long v = m.V.rows(), nt = m.T.rows();
+  m.V.conservativeResize(v + 1, 3);
+  m.V.row(v) = p.transpose();
+  const Eigen::Vector4i q = m.T.row(t).transpose();
+  m.T.conservativeResize(nt + 3, 4);
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Vector4i c = q;
+    c[k] = static_cast<int>(v);
+    m.T.row(k == 0 ? t : nt + k - 1) = c.transpose();
+  }
+  auto grow = [&](Eigen::VectorXi& a) {
+    if (a.size() != nt) return;
+    a.conservativeResize(nt + 3);
+    a.tail(3).setConstant(a[t]);
+  };
+  grow(m.attribute);
+  grow(m.regions.id);
+}
+
+}  // namespace
+
+TEST(ContactHard, SliverTetsAndNeedleTrianglesInTheInput) {
+  // Near-degenerate elements right under the press point, in a mesh file for every prototype
+  // that takes one. A, B (surfaces): two faces around the press node split 1-to-3, one at a
+  // point 1e-6 of its edge off the edge's midpoint (a cap: an angle of ~180 deg, area ~1e-6 of
+  // its neighbours'), one at a point 1e-6 of an edge from a vertex (two needles with a 1e-6
+  // short edge). C, D (tets): the two tets nearest the press point split 1-to-4 at a point 1e-6
+  // of the height above a face's centroid (a flat tet, radius ratio ~1e-6; and three normal
+  // ones) and 1e-6 off an edge's midpoint (two flat tets). Each file is either refused with exit
+  // 2 naming the file and the element, or simulates bounded: a press to 6 mm, a 5 mm slide, a
+  // release and 1 s of rest — no NaN, force <= the device limit, no divergence or force limit
+  // event (nothing in this press warrants one), back at rest, and no energy growth at rest.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "palplab_test_contact_slivers";
+  fs::create_directories(dir);
+  for (const char* id : kAll) {
+    Scene ref = make(id);
+    const Site w = site(ref);
+    const SceneConfig rc = ref.config();
+    std::string file;
+    if (rc.mesh.generator == "tract") {
+      mesh::SurfaceMesh sm = mesh::generate_tract({rc.mesh.vertices, rc.mesh.seed});
+      const int v = ref.geometry().nearest_node(w.p);
+      std::vector<int> fan;
+      mesh::vertex_faces(sm, v, fan);
+      ASSERT_GE(fan.size(), 3u) << id;
+      {  // a cap: off the midpoint of the face's edge opposite v, towards v
+        const int f = fan[0];
+        int k = 0;
+        while (sm.F(f, k) != v) ++k;
+        const Eigen::Vector3d a = sm.V.row(sm.F(f, (k + 1) % 3)).transpose(),
+                              b = sm.V.row(sm.F(f, (k + 2) % 3)).transpose(),
+                              c = sm.V.row(v).transpose();
+        const Eigen::Vector3d mid = 0.5 * (a + b);
+        split_face(sm, f, mid + 1e-6 * (c - mid));
+      }
+      {  // needles: next to v on an edge of the face
+        const int f = fan[2];
+        int k = 0;
+        while (sm.F(f, k) != v) ++k;
+        const Eigen::Vector3d c = sm.V.row(v).transpose(),
+                              a = sm.V.row(sm.F(f, (k + 1) % 3)).transpose(),
+                              b = sm.V.row(sm.F(f, (k + 2) % 3)).transpose();
+        split_face(sm, f, c + 1e-6 * (a - c) + 1e-9 * (b - c));
+      }
+      build_connectivity(sm);
+      file = (dir / (std::string(id) + "_slivers.obj")).string();
+      mesh::write_obj(file, sm);
+    } else {
+      mesh::TetMesh tm = mesh::generate_model_c(rc.mesh.seed, rc.mesh.vertices);
+      std::vector<std::pair<double, int>> near;
+      for (long t = 0; t < tm.T.rows(); ++t) {
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 4; ++k) c += tm.V.row(tm.T(t, k)).transpose() / 4.0;
+        near.push_back({(c - w.p).norm(), static_cast<int>(t)});
+      }
+      std::sort(near.begin(), near.end());
+      const auto corner = [&](int t, int k) { return Eigen::Vector3d(tm.V.row(tm.T(t, k))); };
+      {
+        const int t = near[0].second;
+        const Eigen::Vector3d c = (corner(t, 1) + corner(t, 2) + corner(t, 3)) / 3.0;
+        split_tet(tm, t, c + 1e-6 * (corner(t, 0) - c));
+      }
+      {
+        const int t = near[1].second;
+        const Eigen::Vector3d mid = 0.5 * (corner(t, 0) + corner(t, 1));
+        const Eigen::Vector3d off = 0.5 * (corner(t, 2) + corner(t, 3)) - mid;
+        split_tet(tm, t, mid + 1e-6 * off);
+      }
+      tm = mesh::make_tet_mesh(tm.V, tm.T, tm.attribute, tm.regions);
+      file = (dir / (std::string(id) + "_slivers.node")).string();
+      mesh::write_tetgen((dir / (std::string(id) + "_slivers")).string(), tm);
+    }
+    const std::string p = with_mesh_file(id, fs::path(file).filename().string(), dir.string());
+    try {
+      Scene s = prototypes::build_scene(p);
+      const double limit = s.config().contact.force_limit;
+      const Eigen::Vector3d t = w.n.unitOrthogonal();
+      Track r;
+      for (int i = 0; i <= 800; ++i) step(s, w.p - (-0.002 + 1e-5 * i) * w.n, r);   // to 6 mm
+      for (int i = 1; i <= 100; ++i) step(s, w.p - 0.006 * w.n + i * 5e-5 * t, r);  // 5 mm
+      const double pressed = r.F.back().norm();
+      for (int i = 0; i < 500; ++i) step(s, w.p + 0.01 * w.n, r);  // withdraw, rest 0.5 s
+      const double rest_half = s.stats().max_rest_error;
+      for (int i = 0; i < 500; ++i) step(s, w.p + 0.01 * w.n, r);  // 1 s
+      const SceneStats st = s.stats();
+      std::printf("%s: built; force %.3f N at 6 mm, fmax %.3f, rest error %.3g -> %.3g m\n", id,
+                  pressed, r.fmax(), rest_half, st.max_rest_error);
+      ASSERT_TRUE(r.finite()) << id;
+      EXPECT_GT(pressed, 0.1) << id;  // it was felt
+      EXPECT_LE(r.fmax(), limit + 1e-12) << id;
+      EXPECT_EQ(r.count(EventKind::divergence), 0) << id;
+      EXPECT_EQ(r.count(EventKind::force_limited), 0) << id;
+      EXPECT_FALSE(r.contact.back()) << id;
+      EXPECT_LT(st.max_rest_error, 1e-4) << id;
+      EXPECT_LE(st.max_rest_error, rest_half + 1e-9) << id;  // no growth without input
+    } catch (const InputError& e) {
+      std::printf("%s: refused: %s\n", id, e.what());
+      const std::string what = e.what();
+      EXPECT_NE(what.find(fs::path(file).stem().string()), std::string::npos) << what;
+      EXPECT_TRUE(what.find("tet ") != std::string::npos || what.find("face ") != std::string::npos)
+          << what;
+    }
+  }
+}
+
+TEST(ContactHard, ContactRadiusIsRefusedWithWhatToDoInstead) {
+  // contact.radius was the capture radius of the old nearest-node contact; the god-object
+  // contact has none, so an old file is told to delete it (or to rename it to patch_radius, the
+  // probe's size) instead of having it silently ignored.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "palplab_test_contact_radius";
+  fs::create_directories(dir);
+  std::ifstream in(proto("C"));
+  std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto a = s.find("\"contact\": {");
+  ASSERT_NE(a, std::string::npos);
+  s.insert(a + 12, "\"radius\": 0.02, ");
+  const std::string p = (dir / "C_radius.json").string();
+  std::ofstream(p) << s;
+  try {
+    prototypes::load_prototype(p);
+    FAIL() << "contact.radius accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(p), std::string::npos) << what;
+    EXPECT_NE(what.find("$.contact.radius"), std::string::npos) << what;
+    EXPECT_NE(what.find("patch_radius"), std::string::npos) << what;
+  }
+  // Every shipped prototype is free of it (they all load).
+  for (const char* id : {"A", "B", "C", "C1", "C2", "D", "D_corot", "N", "N_transparent"})
+    EXPECT_NO_THROW(prototypes::load_prototype(proto(id))) << id;
+}
+
+TEST(ContactHard, CurrentSurfaceOfATetMassSpringModelIsItsSurface) {
+  // Scene::current_surface promises the surface: for C (mass-spring on a tet mesh) the rows are
+  // the surface vertices in the geometry's order, then the refinement nodes; no interior node.
+  Scene s = make("C");
+  const SceneGeometry& g = s.geometry();
+  mesh::Positions V;
+  mesh::Faces F;
+  s.current_surface(V, F);
+  ASSERT_EQ(V.rows(), g.V.rows());
+  EXPECT_EQ(V, g.V);  // at rest, bit for bit
+  EXPECT_EQ(F, g.F);
+  EXPECT_EQ(s.stats().surface_coarse_nodes, g.V.rows());
+  EXPECT_GT(s.stats().coarse_nodes, g.V.rows());  // the tet mesh has interior nodes
+  // Pressed to 6 mm (past the refinement force): refinement nodes follow the surface vertices,
+  // every face refers to an existing row, and every row is used by a face.
+  const Site w = site(s);
+  Track r;
+  for (int i = 0; i <= 800; ++i) step(s, w.p - (-0.002 + 1e-5 * i) * w.n, r);
+  const SceneStats st = s.stats();
+  ASSERT_GT(st.nodes, st.coarse_nodes) << "the press refined";
+  s.current_surface(V, F);
+  EXPECT_EQ(V.rows(), g.V.rows() + (st.nodes - st.coarse_nodes));
+  ASSERT_GE(F.minCoeff(), 0);
+  ASSERT_LT(F.maxCoeff(), V.rows());
+  std::vector<int> used(V.rows(), 0);
+  for (long f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) used[F(f, k)] = 1;
+  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);
+  // The surface moved under the probe: the press node's row is pushed in by about the depth
+  // the tissue shows (more than 1 mm at 6 mm of device depth).
+  const int node = g.nearest_node(w.p);
+  EXPECT_GT((g.V.row(node) - V.row(node)).dot(w.n.transpose()), 1e-3);
 }
