@@ -10,6 +10,7 @@
 #include <numeric>
 #include <regex>
 #include <sstream>
+#include <tuple>
 
 #include "analysis/csv.hpp"
 #include "common/input_error.hpp"
@@ -248,18 +249,37 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   };
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
-  auto loss = [&](const std::vector<double>& x) {
-    const double l = moment_loss(with(x), used, opt.jobs);
+  // Common random numbers make a simulation a deterministic function of x, so a point already
+  // simulated (the start, which the optimiser evaluates again; the optimum, whose fit is
+  // reported) is looked up, not simulated again: with exp2 at full size one simulation takes
+  // minutes.
+  std::map<std::vector<double>, std::pair<double, std::vector<CellFit>>> memo;
+  auto simulate =
+      [&](const std::vector<double>& x) -> const std::pair<double, std::vector<CellFit>>& {
+    auto it = memo.find(x);
+    if (it != memo.end()) return it->second;
+    std::vector<CellFit> fit;
+    const double l = moment_loss(with(x), used, opt.jobs, &fit);
     ++evaluations;
     best = std::min(best, l);
-    if (opt.progress) opt.progress(evaluations, l, best);
-    return l;
+    if (opt.progress) opt.progress(evaluations, l, best, x);
+    return memo.emplace(x, std::make_pair(l, std::move(fit))).first->second;
   };
-  r.loss_before = moment_loss(with(r.start), used, opt.jobs, &r.fit_before);
+  auto loss = [&](const std::vector<double>& x) { return simulate(x).first; };
+  std::tie(r.loss_before, r.fit_before) = simulate(r.start);
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
   r.restarts = nm.restarts;
-  r.loss_after = moment_loss(with(r.fitted), used, opt.jobs, &r.fit_after);
+  std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
+  r.se.assign(r.fitted.size(), kNaN);
+  r.se_computed = opt.standard_errors;
+  if (!opt.standard_errors) {
+    r.evaluations = evaluations;
+    r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
+                                                            : nlohmann::json::object();
+    for (std::size_t i = 0; i < r.keys.size(); ++i) r.parameters[r.keys[i]] = r.fitted[i];
+    return r;
+  }
 
   // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
   // starting value): wide enough to average over the small steps that common random numbers
@@ -290,7 +310,6 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
       H(i, j) = H(j, i) = v;
     }
   }
-  r.se.assign(d, kNaN);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
   if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
     const Eigen::MatrixXd cov = 2.0 * H.inverse();
@@ -363,6 +382,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"start", start},
           {"loss_before", r.loss_before},
           {"loss_after", r.loss_after},
+          {"standard_errors_computed", r.se_computed},
           {"evaluations", r.evaluations},
           {"restarts", r.restarts},
           {"fit_before", fits(r.fit_before)},
@@ -375,9 +395,12 @@ std::string to_text(const CalibrationResult& r) {
   char buf[256];
   o << "fitted parameters (SE from the loss curvature):\n";
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
-    std::snprintf(
-        buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g)\n", r.keys[i].c_str(), r.fitted[i],
-        std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str() : "not estimable", r.start[i]);
+    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g)\n", r.keys[i].c_str(),
+                  r.fitted[i],
+                  std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str()
+                  : r.se_computed        ? "not estimable"
+                                         : "not computed (--no-se)",
+                  r.start[i]);
     o << buf;
   }
   std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n\n",
