@@ -51,7 +51,7 @@ palplab::app::CommandRegistration reg{
                       "(protocols/participants/params.hpp; rebuild afterwards)");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->add_flag("--no-se", a->no_se,
-                    "Skip the standard errors (saves the 2p²+1 simulations of the curvature)");
+                    "Skip the standard errors (saves the 2p² simulations of the curvature)");
       cmd->callback([a, code] {
         using namespace palplab::protocols;
         Study s = load_study(a->study, engine_prototype_inspector());

@@ -66,13 +66,13 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
 
 struct CalibrateOptions {
   std::vector<std::string> keys;  // trainee parameter names to fit
-  int budget = 200;               // loss evaluations for the optimiser (SEs need 2p² + 1 more)
+  int budget = 200;               // loss evaluations for the optimiser (the SEs need 2p² more)
   int jobs = 1;
   int sim_n = 0;  // simulated participants per group; 0 = the study's group sizes
   // Measures to fit (cells of other measures in the CSV are ignored); empty = the study's
   // declared "measures".
   std::vector<std::string> measures;
-  // false: skip the curvature stencil (2p² + 1 extra simulations) when time is short; the
+  // false: skip the curvature stencil (2p² extra simulations) when time is short; the
   // SEs are then reported as not computed.
   bool standard_errors = true;
   // Called after every simulation (a point simulated once is not simulated again).

@@ -114,7 +114,8 @@ TEST(Calibrate, BadInputIsExit2) {
 // Common random numbers make a simulation a deterministic function of the parameters, so
 // calibrate simulates each point once: the start (which Nelder–Mead evaluates again) and the
 // optimum (whose fit is reported) are looked up. With --no-se the curvature stencil is skipped,
-// so a budget of B optimiser evaluations costs at most B simulations (before: B + 2 + 2p² + 1).
+// so a budget of B optimiser evaluations costs at most B simulations (before: B + 2, plus 2p² + 1
+// for the SEs).
 TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   auto d = scratch_dir("calibrate_nose");
   std::ofstream(d / "human.csv") << "participant,group,phase,session,measure,value\n"
