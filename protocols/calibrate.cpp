@@ -208,6 +208,51 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
   return res;
 }
 
+namespace {
+
+// Standard errors from the curvature of the loss at r.fitted (loss ≈ -2 log L, Cov ≈ 2 H⁻¹);
+// r.se stays NaN where H is not positive definite.
+void standard_errors(CalibrationResult& r, const std::vector<double>& step,
+                     const std::vector<double>& lo, const std::vector<double>& hi,
+                     const std::function<double(const std::vector<double>&)>& loss) {
+  // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
+  // starting value): wide enough to average over the small steps that common random numbers
+  // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
+  const std::size_t d = r.fitted.size();
+  Eigen::MatrixXd H(d, d);
+  std::vector<double> h(d);
+  for (std::size_t i = 0; i < d; ++i) {
+    h[i] = 0.2 * step[i];
+    // Keep the stencil inside the bounds.
+    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
+    if (room > 0) h[i] = std::min(h[i], room);
+  }
+  auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
+    std::vector<double> x = r.fitted;
+    x[i] += di;
+    x[j] += dj;
+    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
+    return loss(x);
+  };
+  const double f0 = r.loss_after;
+  for (std::size_t i = 0; i < d; ++i) {
+    H(i, i) = (at(i, h[i], i, 0) - 2 * f0 + at(i, -h[i], i, 0)) / (h[i] * h[i]);
+    for (std::size_t j = 0; j < i; ++j) {
+      const double v = (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) +
+                        at(i, -h[i], j, -h[j])) /
+                       (4 * h[i] * h[j]);
+      H(i, j) = H(j, i) = v;
+    }
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
+    const Eigen::MatrixXd cov = 2.0 * H.inverse();
+    for (std::size_t i = 0; i < d; ++i) r.se[i] = std::sqrt(cov(i, i));
+  }
+}
+
+}  // namespace
+
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
                             const CalibrateOptions& opt) {
   namespace pm = participants;
@@ -273,52 +318,11 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
   r.se.assign(r.fitted.size(), kNaN);
   r.se_computed = opt.standard_errors;
-  if (!opt.standard_errors) {
-    r.evaluations = evaluations;
-    r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
-                                                            : nlohmann::json::object();
-    for (std::size_t i = 0; i < r.keys.size(); ++i) r.parameters[r.keys[i]] = r.fitted[i];
-    return r;
-  }
-
-  // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
-  // starting value): wide enough to average over the small steps that common random numbers
-  // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
-  const std::size_t d = r.fitted.size();
-  Eigen::MatrixXd H(d, d);
-  std::vector<double> h(d);
-  for (std::size_t i = 0; i < d; ++i) {
-    h[i] = 0.2 * step[i];
-    // Keep the stencil inside the bounds.
-    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
-    if (room > 0) h[i] = std::min(h[i], room);
-  }
-  auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
-    std::vector<double> x = r.fitted;
-    x[i] += di;
-    x[j] += dj;
-    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
-    return loss(x);
-  };
-  const double f0 = r.loss_after;
-  for (std::size_t i = 0; i < d; ++i) {
-    H(i, i) = (at(i, h[i], i, 0) - 2 * f0 + at(i, -h[i], i, 0)) / (h[i] * h[i]);
-    for (std::size_t j = 0; j < i; ++j) {
-      const double v = (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) +
-                        at(i, -h[i], j, -h[j])) /
-                       (4 * h[i] * h[j]);
-      H(i, j) = H(j, i) = v;
-    }
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-  if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
-    const Eigen::MatrixXd cov = 2.0 * H.inverse();
-    for (std::size_t i = 0; i < d; ++i) r.se[i] = std::sqrt(cov(i, i));
-  }
+  if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
   r.evaluations = evaluations;
   r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
                                                           : nlohmann::json::object();
-  for (std::size_t i = 0; i < d; ++i) r.parameters[r.keys[i]] = r.fitted[i];
+  for (std::size_t i = 0; i < r.keys.size(); ++i) r.parameters[r.keys[i]] = r.fitted[i];
   return r;
 }
 
