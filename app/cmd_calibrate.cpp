@@ -19,6 +19,7 @@ struct CalibrateArgs {
   std::string study, human, out, write_defaults;
   palplab::protocols::CalibrateOptions opt;
   bool quiet = false;
+  bool no_se = false;
 };
 
 palplab::app::CommandRegistration reg{
@@ -49,13 +50,21 @@ palplab::app::CommandRegistration reg{
                       "Also write the fitted values as the defaults into this params.hpp "
                       "(protocols/participants/params.hpp; rebuild afterwards)");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
+      cmd->add_flag("--no-se", a->no_se,
+                    "Skip the standard errors (saves the 2p² simulations of the curvature)");
       cmd->callback([a, code] {
         using namespace palplab::protocols;
         Study s = load_study(a->study, engine_prototype_inspector());
         auto cells = read_human_cells(a->human);
+        a->opt.standard_errors = !a->no_se;
         if (!a->quiet)
-          a->opt.progress = [](int e, double l, double best) {
-            std::fprintf(stderr, "evaluation %d: loss %.4g (best %.4g)\n", e, l, best);
+          a->opt.progress = [keys = a->opt.keys](int e, double l, double best,
+                                                 const std::vector<double>& x) {
+            std::string at;
+            for (std::size_t i = 0; i < x.size(); ++i)
+              at += " " + keys[i] + "=" + std::to_string(x[i]);
+            std::fprintf(stderr, "evaluation %d: loss %.4g (best %.4g) at%s\n", e, l, best,
+                         at.c_str());
           };
         CalibrationResult r = calibrate(s, cells, a->opt);
         auto j = to_json(r);

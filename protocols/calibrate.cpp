@@ -10,6 +10,7 @@
 #include <numeric>
 #include <regex>
 #include <sstream>
+#include <tuple>
 
 #include "analysis/csv.hpp"
 #include "common/input_error.hpp"
@@ -207,6 +208,51 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
   return res;
 }
 
+namespace {
+
+// Standard errors from the curvature of the loss at r.fitted (loss ≈ -2 log L, Cov ≈ 2 H⁻¹);
+// r.se stays NaN where H is not positive definite.
+void standard_errors(CalibrationResult& r, const std::vector<double>& step,
+                     const std::vector<double>& lo, const std::vector<double>& hi,
+                     const std::function<double(const std::vector<double>&)>& loss) {
+  // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
+  // starting value): wide enough to average over the small steps that common random numbers
+  // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
+  const std::size_t d = r.fitted.size();
+  Eigen::MatrixXd H(d, d);
+  std::vector<double> h(d);
+  for (std::size_t i = 0; i < d; ++i) {
+    h[i] = 0.2 * step[i];
+    // Keep the stencil inside the bounds.
+    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
+    if (room > 0) h[i] = std::min(h[i], room);
+  }
+  auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
+    std::vector<double> x = r.fitted;
+    x[i] += di;
+    x[j] += dj;
+    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
+    return loss(x);
+  };
+  const double f0 = r.loss_after;
+  for (std::size_t i = 0; i < d; ++i) {
+    H(i, i) = (at(i, h[i], i, 0) - 2 * f0 + at(i, -h[i], i, 0)) / (h[i] * h[i]);
+    for (std::size_t j = 0; j < i; ++j) {
+      const double v = (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) +
+                        at(i, -h[i], j, -h[j])) /
+                       (4 * h[i] * h[j]);
+      H(i, j) = H(j, i) = v;
+    }
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
+    const Eigen::MatrixXd cov = 2.0 * H.inverse();
+    for (std::size_t i = 0; i < d; ++i) r.se[i] = std::sqrt(cov(i, i));
+  }
+}
+
+}  // namespace
+
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
                             const CalibrateOptions& opt) {
   namespace pm = participants;
@@ -248,58 +294,35 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   };
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
-  auto loss = [&](const std::vector<double>& x) {
-    const double l = moment_loss(with(x), used, opt.jobs);
+  // Common random numbers make a simulation a deterministic function of x, so a point already
+  // simulated (the start, which the optimiser evaluates again; the optimum, whose fit is
+  // reported) is looked up, not simulated again: with exp2 at full size one simulation takes
+  // minutes.
+  std::map<std::vector<double>, std::pair<double, std::vector<CellFit>>> memo;
+  auto simulate =
+      [&](const std::vector<double>& x) -> const std::pair<double, std::vector<CellFit>>& {
+    auto it = memo.find(x);
+    if (it != memo.end()) return it->second;
+    std::vector<CellFit> fit;
+    const double l = moment_loss(with(x), used, opt.jobs, &fit);
     ++evaluations;
     best = std::min(best, l);
-    if (opt.progress) opt.progress(evaluations, l, best);
-    return l;
+    if (opt.progress) opt.progress(evaluations, l, best, x);
+    return memo.emplace(x, std::make_pair(l, std::move(fit))).first->second;
   };
-  r.loss_before = moment_loss(with(r.start), used, opt.jobs, &r.fit_before);
+  auto loss = [&](const std::vector<double>& x) { return simulate(x).first; };
+  std::tie(r.loss_before, r.fit_before) = simulate(r.start);
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
   r.restarts = nm.restarts;
-  r.loss_after = moment_loss(with(r.fitted), used, opt.jobs, &r.fit_after);
-
-  // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
-  // starting value): wide enough to average over the small steps that common random numbers
-  // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
-  const std::size_t d = r.fitted.size();
-  Eigen::MatrixXd H(d, d);
-  std::vector<double> h(d);
-  for (std::size_t i = 0; i < d; ++i) {
-    h[i] = 0.2 * step[i];
-    // Keep the stencil inside the bounds.
-    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
-    if (room > 0) h[i] = std::min(h[i], room);
-  }
-  auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
-    std::vector<double> x = r.fitted;
-    x[i] += di;
-    x[j] += dj;
-    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
-    return loss(x);
-  };
-  const double f0 = r.loss_after;
-  for (std::size_t i = 0; i < d; ++i) {
-    H(i, i) = (at(i, h[i], i, 0) - 2 * f0 + at(i, -h[i], i, 0)) / (h[i] * h[i]);
-    for (std::size_t j = 0; j < i; ++j) {
-      const double v = (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) +
-                        at(i, -h[i], j, -h[j])) /
-                       (4 * h[i] * h[j]);
-      H(i, j) = H(j, i) = v;
-    }
-  }
-  r.se.assign(d, kNaN);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-  if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
-    const Eigen::MatrixXd cov = 2.0 * H.inverse();
-    for (std::size_t i = 0; i < d; ++i) r.se[i] = std::sqrt(cov(i, i));
-  }
+  std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
+  r.se.assign(r.fitted.size(), kNaN);
+  r.se_computed = opt.standard_errors;
+  if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
   r.evaluations = evaluations;
   r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
                                                           : nlohmann::json::object();
-  for (std::size_t i = 0; i < d; ++i) r.parameters[r.keys[i]] = r.fitted[i];
+  for (std::size_t i = 0; i < r.keys.size(); ++i) r.parameters[r.keys[i]] = r.fitted[i];
   return r;
 }
 
@@ -363,6 +386,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"start", start},
           {"loss_before", r.loss_before},
           {"loss_after", r.loss_after},
+          {"standard_errors_computed", r.se_computed},
           {"evaluations", r.evaluations},
           {"restarts", r.restarts},
           {"fit_before", fits(r.fit_before)},
@@ -375,9 +399,12 @@ std::string to_text(const CalibrationResult& r) {
   char buf[256];
   o << "fitted parameters (SE from the loss curvature):\n";
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
-    std::snprintf(
-        buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g)\n", r.keys[i].c_str(), r.fitted[i],
-        std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str() : "not estimable", r.start[i]);
+    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g)\n", r.keys[i].c_str(),
+                  r.fitted[i],
+                  std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str()
+                  : r.se_computed        ? "not estimable"
+                                         : "not computed (--no-se)",
+                  r.start[i]);
     o << buf;
   }
   std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n\n",

@@ -66,18 +66,24 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
 
 struct CalibrateOptions {
   std::vector<std::string> keys;  // trainee parameter names to fit
-  int budget = 200;               // loss evaluations for the optimiser (SEs need 2p² + 1 more)
+  int budget = 200;               // loss evaluations for the optimiser (the SEs need 2p² more)
   int jobs = 1;
   int sim_n = 0;  // simulated participants per group; 0 = the study's group sizes
   // Measures to fit (cells of other measures in the CSV are ignored); empty = the study's
   // declared "measures".
   std::vector<std::string> measures;
-  std::function<void(int evaluation, double loss, double best)> progress;
+  // false: skip the curvature stencil (2p² extra simulations) when time is short; the
+  // SEs are then reported as not computed.
+  bool standard_errors = true;
+  // Called after every simulation (a point simulated once is not simulated again).
+  std::function<void(int evaluation, double loss, double best, const std::vector<double>& x)>
+      progress;
 };
 
 struct CalibrationResult {
   std::vector<std::string> keys;
   std::vector<double> start, fitted, se;  // se NaN when the curvature is not positive definite
+  bool se_computed = true;                // false with CalibrateOptions::standard_errors off
   double loss_before = 0.0, loss_after = 0.0;
   int evaluations = 0, restarts = 0;
   std::vector<CellFit> fit_before, fit_after;

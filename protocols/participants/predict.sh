@@ -4,7 +4,9 @@
 # defaults, exports it and prints a Markdown table of the group means ± SD of palpation force
 # and exploration time per phase's last session. Nothing here feeds back into the parameters.
 # Usage (from the repository root, after building): protocols/participants/predict.sh [OUTDIR]
-#   PALPLAB (default build/palplab), JOBS (default 2), STUDIES (default exp1 exp3 exp4).
+#   PALPLAB (default build/palplab), JOBS (default 2), STUDIES (default exp1 exp3 exp4),
+#   SIZE (every group resized to SIZE participants: a reduced run when time is short; same seed,
+#   design and timing — the study copy is written to OUTDIR and says so in the table).
 set -euo pipefail
 out=${1:-predictions}
 palplab=${PALPLAB:-build/palplab}
@@ -14,10 +16,15 @@ mkdir -p "$out"
 echo "| study | phase | session | group | measure | n | mean | SD |"
 echo "|---|---|---|---|---|---|---|---|"
 for s in $studies; do
-  "$palplab" run "protocols/studies/$s.json" --db "$out/$s.db" --jobs "$jobs" --samples none \
-    --quiet --force
+  file="protocols/studies/$s.json"
+  if [ -n "${SIZE:-}" ]; then
+    sed -E "s/\"size\": *[0-9]+/\"size\": $SIZE/" "$file" >"$out/$s.json"
+    file="$out/$s.json"
+  fi
+  PALPLAB_PROTOTYPE_PATH="$PWD/prototypes" \
+    "$palplab" run "$file" --db "$out/$s.db" --jobs "$jobs" --samples none --quiet --force
   "$palplab" export "$out/$s.db" --csv "$out/$s" >/dev/null
-  awk -F, -v study="$s" 'NR > 1 && ($5 == "palpation_force" || $5 == "exploration_time") &&
+  awk -F, -v study="$s${SIZE:+ (n=$SIZE per group)}" 'NR > 1 && ($5 == "palpation_force" || $5 == "exploration_time") &&
       $6 != "" && $6 != "NA" {
         k = $3 SUBSEP $4 SUBSEP $2 SUBSEP $5; n[k]++; s1[k] += $6; s2[k] += $6 * $6 }
     END { for (k in n) { split(k, f, SUBSEP); m = s1[k] / n[k];

@@ -110,3 +110,38 @@ TEST(Calibrate, BadInputIsExit2) {
             2);
   fs::remove_all(d);
 }
+
+// Common random numbers make a simulation a deterministic function of the parameters, so
+// calibrate simulates each point once: the start (which Nelder–Mead evaluates again) and the
+// optimum (whose fit is reported) are looked up. With --no-se the curvature stencil is skipped,
+// so a budget of B optimiser evaluations costs at most B simulations (before: B + 2, plus 2p² + 1
+// for the SEs).
+TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
+  auto d = scratch_dir("calibrate_nose");
+  std::ofstream(d / "human.csv") << "participant,group,phase,session,measure,value\n"
+                                    "H1,G1,test,1,palpation_force,2.4\n"
+                                    "H2,G1,test,1,palpation_force,2.9\n"
+                                    "H3,G1,test,1,palpation_force,2.6\n"
+                                    "H4,G2,test,1,palpation_force,2.2\n"
+                                    "H5,G2,test,1,palpation_force,2.8\n"
+                                    "H6,G2,test,1,palpation_force,2.5\n";
+  auto r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                           (d / "human.csv").string() +
+                           " --params prior_target_cv --budget 5 --sim-n 3 --no-se --out " +
+                           (d / "fit.json").string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("not computed (--no-se)"), std::string::npos) << r.out;
+  // Progress lines name the point simulated.
+  EXPECT_NE(r.err.find("evaluation 1: loss"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("prior_target_cv=0.3"), std::string::npos) << r.err;
+  auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_FALSE(fit["standard_errors_computed"].get<bool>());
+  EXPECT_TRUE(fit["standard_errors"]["prior_target_cv"].is_null()) << fit.dump(1);
+  // At most the budget (a point the projection into the bounds repeats is also looked up);
+  // without the look-up it would be 7 (the start twice, the optimum again).
+  EXPECT_LE(fit["evaluations"].get<int>(), 5) << fit.dump(1);
+  EXPECT_GE(fit["evaluations"].get<int>(), 2) << fit.dump(1);
+  EXPECT_LE(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
+  fs::remove_all(d);
+}
