@@ -371,7 +371,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
   if (!c.options.stills) return skip(c.options.no_stills_reason);
   const auto t0 = std::chrono::steady_clock::now();
   if (const std::string why = c.options.stills->unavailable(); !why.empty())
-    return skip("no OpenGL context for headless rendering here (" + why + ")");
+    return skip(why);
 
   // The groups that use each prototype: their own and their sessions' (phase prototypes).
   std::map<std::string, std::string> group_of;

@@ -79,7 +79,7 @@ TEST_F(ReportStills, EveryPrototypeUnderTheSamePressSideBySide) {
   const int W = 240, H = 180;
   const CliResult r = report("rep", "--still-size 240x180");
   ASSERT_EQ(r.code, 0) << r.err;
-  if (r.err.find("stills skipped: no OpenGL context") != std::string::npos)
+  if (r.err.find("stills skipped: no headless OpenGL") != std::string::npos)
     GTEST_SKIP() << "no EGL device on this machine: " << r.err;
   EXPECT_NE(r.out.find(", 2 stills"), std::string::npos) << r.out;
   EXPECT_EQ(r.err.find("still"), std::string::npos) << r.err;  // nothing skipped
@@ -179,12 +179,11 @@ TEST_F(ReportStills, SwitchedOffOrWithoutEglTheReportSaysWhy) {
   // No EGL vendor for libglvnd: rendering cannot start, the report is written all the same.
   r = report("noegl", "", "__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json ");
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("palplab report: stills skipped: no OpenGL context for headless "
-                       "rendering here ("),
+  EXPECT_NE(r.err.find("palplab report: stills skipped: no headless OpenGL 3.3 core context (EGL)"),
             std::string::npos)
       << r.err;
   const std::string md = slurp(dir_ / "noegl" / "report.md");
-  EXPECT_NE(md.find("Stills skipped: no OpenGL context for headless rendering here ("),
+  EXPECT_NE(md.find("Stills skipped: no headless OpenGL 3.3 core context (EGL)"),
             std::string::npos);
   EXPECT_NE(md.find("## Example force traces"), std::string::npos);  // the rest is there
 
