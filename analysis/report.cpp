@@ -370,8 +370,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
   if (!ph) return skip("no phase stores a feature region with a target force (MPF)");
   if (!c.options.stills) return skip(c.options.no_stills_reason);
   const auto t0 = std::chrono::steady_clock::now();
-  if (const std::string why = c.options.stills->unavailable(); !why.empty())
-    return skip(why);
+  if (const std::string why = c.options.stills->unavailable(); !why.empty()) return skip(why);
 
   // The groups that use each prototype: their own and their sessions' (phase prototypes).
   std::map<std::string, std::string> group_of;
@@ -387,9 +386,8 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     auto it = users.find(p->prototype);
     return it == users.end() || it->second.empty() ? 1 << 30 : *it->second.begin();
   };
-  std::stable_sort(protos.begin(), protos.end(), [&](const auto* a, const auto* b) {
-    return first_user(a) < first_user(b);
-  });
+  std::stable_sort(protos.begin(), protos.end(),
+                   [&](const auto* a, const auto* b) { return first_user(a) < first_user(b); });
 
   const fs::path dir = fs::path(c.out_dir) / "stills";
   fs::create_directories(dir);
@@ -401,17 +399,17 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     StillResult r;
   };
   std::vector<Done> done;
-  nlohmann::json side = {{"press",
-                          {{"phase", ph->phase},
-                           {"region", ph->feature},
-                           {"force", th->mpf},
-                           {"force_source", "MPF of region " + th->region + " in phase " +
-                                                ph->phase},
-                           {"hold", c.options.still_hold}}},
-                         {"width", W},
-                         {"height", H},
-                         {"camera_convention", c.options.stills->camera_convention()},
-                         {"stills", nlohmann::json::array()}};
+  nlohmann::json side = {
+      {"press",
+       {{"phase", ph->phase},
+        {"region", ph->feature},
+        {"force", th->mpf},
+        {"force_source", "MPF of region " + th->region + " in phase " + ph->phase},
+        {"hold", c.options.still_hold}}},
+      {"width", W},
+      {"height", H},
+      {"camera_convention", c.options.stills->camera_convention()},
+      {"stills", nlohmann::json::array()}};
   std::vector<std::string> missing;
   for (const auto* p : protos) {
     std::string groups;
@@ -423,6 +421,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     q.prototype = p->prototype;
     q.path = p->path;
     q.sha256 = p->sha256;
+    q.json = p->json;
     q.region = ph->feature;
     q.force = th->mpf;
     q.hold = c.options.still_hold;
@@ -445,6 +444,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     }
     js["pressed"] = "stills/" + fs::path(q.pressed_png).filename().string();
     js["rest"] = "stills/" + fs::path(q.rest_png).filename().string();
+    if (!r.note.empty()) js["note"] = r.note;
     js["node"] = r.node;
     js["force_at_still"] = r.force;
     js["force_reached"] = r.force_reached;
@@ -455,16 +455,18 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     c.files.stills.push_back(q.rest_png);
     done.push_back({p, groups, q.pressed_png, q.rest_png, r});
   }
-  c.doc.para("Each prototype the study used, pressed at its surface node nearest the centroid "
-             "of region " + ph->feature + " (the feature of phase " + ph->phase +
-             ") with the target force " + force_text + " (that phase's MPF for " +
-             (th->region == "*" ? std::string("every region, \"*\"") : th->region) +
-             "), held " + fmt(c.options.still_hold, "%.3g") +
-             " s on the lock-step clock; each prototype draws as its file defines (the phases' "
-             "cue switches are not applied). " + c.options.stills->camera_convention() + " " +
-             std::to_string(W) + "×" + std::to_string(H) +
-             " px; top: under the press, below: the same view at rest. Files: stills/*.png, "
-             "the press and cameras in stills/stills.json.");
+  c.doc.para(
+      "Each prototype the study used, pressed at its surface node nearest the centroid "
+      "of region " +
+      ph->feature + " (the feature of phase " + ph->phase + ") with the target force " +
+      force_text + " (that phase's MPF for " +
+      (th->region == "*" ? std::string("every region, \"*\"") : th->region) + "), held " +
+      fmt(c.options.still_hold, "%.3g") +
+      " s on the lock-step clock; each prototype draws as its file defines (the phases' "
+      "cue switches are not applied). " +
+      c.options.stills->camera_convention() + " " + std::to_string(W) + "×" + std::to_string(H) +
+      " px; top: under the press, below: the same view at rest. Files: stills/*.png, "
+      "the press and cameras in stills/stills.json.");
   for (const auto& m : missing) c.doc.para("No still of prototype " + m + ".");
   c.files.stills_missing = missing;
   std::ofstream(dir / "stills.json") << side.dump(2) << "\n";
@@ -479,6 +481,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
                              : ": the press did not reach " + force_text + " (" +
                                    fmt(d.r.force, "%.3g") + " N at the still)";
       t += ", visible deformation " + fmt(d.r.visible_deformation * 1e3, "%.2g") + " mm";
+      if (!d.r.note.empty()) t += " (" + d.r.note + ")";
       return t;
     };
     // Markdown: a table, one column per prototype (pressed, rest, caption rows).
@@ -492,15 +495,14 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
       row_r += " ![" + md_cell(d.proto->prototype) + " at rest](" + rf + ") |";
       row_c += " " + md_cell(caption(d)) + " |";
     }
-    c.doc.md << head << "\n" << rule << "\n" << row_p << "\n" << row_r << "\n" << row_c
-             << "\n\n";
+    c.doc.md << head << "\n" << rule << "\n" << row_p << "\n" << row_r << "\n" << row_c << "\n\n";
     // HTML: one <figure> per prototype in a wrapping row, the PNGs inline (data URIs), so the
     // page stays self-contained.
     c.doc.html << "<div class=\"stills\">\n";
     for (const auto& d : done) {
       c.doc.html << "<figure class=\"still\">\n";
-      for (const auto& [file, what] : {std::pair{d.pressed, "under " + force_text},
-                                       std::pair{d.rest, std::string("at rest")}})
+      for (const auto& [file, what] :
+           {std::pair{d.pressed, "under " + force_text}, std::pair{d.rest, std::string("at rest")}})
         c.doc.html << "<img src=\"data:image/png;base64," << base64(read_bytes(file))
                    << "\" width=\"" << W << "\" height=\"" << H << "\" alt=\""
                    << xml_escape(d.proto->prototype + " " + what) << "\">\n";

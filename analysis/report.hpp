@@ -22,6 +22,7 @@ namespace palplab::analysis {
 // One prototype under the report's press: what a StillMaker is asked to draw.
 struct StillRequest {
   std::string prototype, path, sha256;  // as stored with the results (table prototypes)
+  std::string json;                     // the prototype file's text as stored with the results
   std::string region;                   // pressed at its node nearest the region's centroid
   double force = 0.0;                   // N, target device force of the press
   double hold = 0.5;                    // s the press holds the force before the still
@@ -31,6 +32,7 @@ struct StillRequest {
 
 struct StillResult {
   std::string skipped;  // non-empty: no still of this prototype, and why
+  std::string note;     // drawn, with a remark for the caption (e.g. from the stored JSON)
   int node = -1;        // surface node pressed
   bool force_reached = false;
   double force = 0.0;                // N on the hand at the still
@@ -64,8 +66,8 @@ struct ReportFiles {
   int still_figures = 0;            // <figure>s of stills in report.html (one per prototype)
   std::string stills_skipped;       // non-empty: why the report has no stills (one line)
   std::vector<std::string> stills_missing;  // "PROTOTYPE: why" of each prototype not drawn
-  double stills_seconds = 0.0;      // wall time spent on the stills
-  int analyses = 0;                 // analysis units written
+  double stills_seconds = 0.0;              // wall time spent on the stills
+  int analyses = 0;                         // analysis units written
 };
 
 // Reads the store at `db_path` (InputError if it is not a palplab results database) and writes

@@ -1,7 +1,11 @@
 #include "app/stills.hpp"
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <stdexcept>
 
@@ -10,11 +14,13 @@
 #include "engine/render/still.hpp"
 #include "protocols/input_pins.hpp"
 #include "prototypes/factory.hpp"
+#include "results/sha256.hpp"
 
 namespace palplab::app {
 
 std::pair<int, int> parse_image_size(const std::string& flag, const std::string& text) {
-  const std::string bad = flag + ": \"" + text + "\": expected WIDTHxHEIGHT in pixels, e.g. 800x600";
+  const std::string bad =
+      flag + ": \"" + text + "\": expected WIDTHxHEIGHT in pixels, e.g. 800x600";
   const auto x = text.find('x');
   if (x == std::string::npos) throw InputError(bad);
   int side[2] = {0, 0};
@@ -55,7 +61,8 @@ class EglStillMaker : public analysis::StillMaker {
     return "Same camera convention for every prototype: aimed at the pressed point (the image "
            "centre), from outside along its outward normal turned by +30° azimuth and +25° "
            "elevation (less, down to none, where another part of the organ would hide the "
-           "point), close up: the pressed region and its surroundings (1.5 times the region's reach "
+           "point), close up: the pressed region and its surroundings (1.5 times the region's "
+           "reach "
            "from the pressed point, at least 2 cm) fill the image.";
   }
 
@@ -65,39 +72,62 @@ class EglStillMaker : public analysis::StillMaker {
       r.skipped = why_;
       return r;
     }
-    // The file as run: stills of an edited prototype would misrepresent the study.
-    if (!std::filesystem::exists(q.path)) {
-      r.skipped = "its file " + q.path + " no longer exists";
+    // The prototype as run: its file if unchanged (SHA-256, mesh files included), else the JSON
+    // stored with the results when that alone defines it (no mesh.file: then its SHA-256 is the
+    // text's). An edited prototype would misrepresent the study: no still then.
+    std::string file = q.path;
+    const bool same_file =
+        std::filesystem::exists(q.path) && protocols::prototype_sha256(q.path) == q.sha256;
+    if (!same_file) {
+      const std::string what = std::filesystem::exists(q.path)
+                                   ? "its file " + q.path + " (or its mesh) changed since the run"
+                                   : "its file " + q.path + " no longer exists";
+      if (q.json.empty() || results::sha256_hex(q.json) != q.sha256) {
+        r.skipped = what + " (SHA-256 differs) and the stored copy does not define it alone";
+        return r;
+      }
+      file = (stored_dir() / (q.prototype + ".json")).string();
+      std::ofstream(file, std::ios::binary) << q.json;
+      r.note = "drawn from the prototype JSON stored with the results: " + what;
+    }
+    std::optional<engine::Scene> scene, rest;
+    try {
+      scene.emplace(prototypes::build_scene(file));
+      rest.emplace(prototypes::build_scene(file));
+    } catch (const InputError& e) {
+      // e.g. a stored copy in a format this palplab no longer reads: its first problem.
+      std::string what = e.what();
+      const auto nl = what.find('\n');
+      const long more = std::count(what.begin(), what.end(), '\n');
+      if (nl != std::string::npos) what = what.substr(0, nl);
+      r.skipped = "it does not load in this palplab: " + what +
+                  (more > 0 ? " (and " + std::to_string(more) + " more problems)" : "");
       return r;
     }
-    if (protocols::prototype_sha256(q.path) != q.sha256) {
-      r.skipped = "its file " + q.path + " (or its mesh) changed since the run (SHA-256 differs)";
-      return r;
-    }
-    engine::Scene scene = prototypes::build_scene(q.path);
     render::PressedStill p;
     try {
-      p = render::press_for_still(scene, q.region, q.force, q.hold);
+      p = render::press_for_still(*scene, q.region, q.force, q.hold);
     } catch (const std::invalid_argument& e) {
       r.skipped = std::string("cannot press it: ") + e.what();
       return r;
     }
-    const engine::Scene rest = prototypes::build_scene(q.path);
-    const render::PressCamera pc = render::camera_facing_press(rest.geometry(), p, q.width, q.height);
+    const render::PressCamera pc =
+        render::camera_facing_press(rest->geometry(), p, q.width, q.height);
     const render::Camera& cam = pc.camera;
     render::StillOptions opt;
     opt.device_position = p.device;
     opt.contact = p.contact;
-    render::write_png(q.pressed_png, render::render_still(*ctx_, scene, cam, q.width, q.height, opt));
+    render::write_png(q.pressed_png,
+                      render::render_still(*ctx_, *scene, cam, q.width, q.height, opt));
     // The same view of the same prototype at rest (a fresh scene: nothing pressed, no marker).
-    render::write_png(q.rest_png, render::render_still(*ctx_, rest, cam, q.width, q.height));
+    render::write_png(q.rest_png, render::render_still(*ctx_, *rest, cam, q.width, q.height));
     r.node = p.node;
     r.force_reached = p.force_reached;
     r.force = p.force;
     r.visible_deformation = p.visible_deformation;
     Eigen::Vector3d centre;
     double radius = 0.0;
-    render::bounding_sphere(rest.geometry().V, centre, radius);
+    render::bounding_sphere(rest->geometry().V, centre, radius);
     const render::CameraMatrices m =
         render::camera_matrices(cam, centre, radius, q.width, q.height);
     r.camera = {{"azimuth_deg", cam.azimuth_deg},
@@ -112,9 +142,23 @@ class EglStillMaker : public analysis::StillMaker {
     return r;
   }
 
+  ~EglStillMaker() override {
+    if (!stored_.empty()) std::filesystem::remove_all(stored_);
+  }
+
  private:
+  // A scratch directory for stored prototype copies (removed with the maker).
+  const std::filesystem::path& stored_dir() {
+    if (stored_.empty()) {
+      stored_ =
+          std::filesystem::temp_directory_path() / ("palplab_stills_" + std::to_string(::getpid()));
+      std::filesystem::create_directories(stored_);
+    }
+    return stored_;
+  }
   std::optional<render::HeadlessContext> ctx_;
   std::string why_;
+  std::filesystem::path stored_;
 };
 
 }  // namespace

@@ -130,7 +130,8 @@ PressCamera camera_facing_press(const engine::SceneGeometry& g, const PressedSti
   PressCamera pc;
   // The default camera's offsets show the surface's relief; nearer the normal when another part
   // of the organ (a horn curling over an ovary) would hide the pressed point.
-  for (const auto& [daz, del] : {std::pair{30.0, 25.0}, std::pair{15.0, 12.0}, std::pair{0.0, 0.0}}) {
+  for (const auto& [daz, del] :
+       {std::pair{30.0, 25.0}, std::pair{15.0, 12.0}, std::pair{0.0, 0.0}}) {
     Camera cam;
     cam.target = press.point;
     cam.azimuth_deg = az0 + daz;

@@ -34,14 +34,14 @@ Image render_still(HeadlessContext& ctx, const engine::Scene& scene, const Camer
 // a surface node, run on the lock-step clock until the end of its hold, so the scene then shows
 // the organ under the target force.
 struct PressedStill {
-  int node = -1;                                       // surface node pressed
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();     // m, its rest position
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   // outward unit normal there
-  Eigen::Vector3d device = Eigen::Vector3d::Zero();    // m, the HCP at the still
-  bool contact = false;                                // in contact at the still
-  bool force_reached = false;                          // the press reached `force`
-  double force = 0.0;                                  // N, |F| on the hand at the still
-  double visible_deformation = 0.0;                    // m, as the scene reports it
+  int node = -1;                                      // surface node pressed
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // m, its rest position
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // outward unit normal there
+  Eigen::Vector3d device = Eigen::Vector3d::Zero();   // m, the HCP at the still
+  bool contact = false;                               // in contact at the still
+  bool force_reached = false;                         // the press reached `force`
+  double force = 0.0;                                 // N, |F| on the hand at the still
+  double visible_deformation = 0.0;                   // m, as the scene reports it
   double region_reach = 0.0;  // m, farthest rest vertex of the pressed region from `point`
 };
 // `what` is a region name (its node nearest the region's centroid) or a surface node index

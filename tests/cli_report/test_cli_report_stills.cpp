@@ -54,8 +54,7 @@ class ReportStills : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = palplab::testing::scratch_dir("cli_report_stills");
     std::string study = kStudy;
-    study.replace(study.find("@PROTOTYPES@"), 12,
-                  std::string(PALPLAB_SOURCE_DIR) + "/prototypes");
+    study.replace(study.find("@PROTOTYPES@"), 12, std::string(PALPLAB_SOURCE_DIR) + "/prototypes");
     std::ofstream(dir_ / "study.json") << study;
     run_ = run_shell(std::string(PALPLAB_BINARY) + " run " + (dir_ / "study.json").string() +
                          " --quiet --db " + (dir_ / "s.db").string(),
@@ -99,9 +98,8 @@ TEST_F(ReportStills, EveryPrototypeUnderTheSamePressSideBySide) {
   // report.html stays self-contained: the four PNGs inline, in one row of two figures.
   const std::string html = slurp(rep / "report.html");
   long inline_png = 0;
-  for (size_t at = 0; (at = html.find("src=\"data:image/png;base64,iVBORw0KGgo", at)) !=
-                      std::string::npos;
-       ++at)
+  for (size_t at = 0;
+       (at = html.find("src=\"data:image/png;base64,iVBORw0KGgo", at)) != std::string::npos; ++at)
     ++inline_png;
   EXPECT_EQ(inline_png, 4);
   EXPECT_NE(html.find("<div class=\"stills\">\n<figure class=\"still\">"), std::string::npos);
@@ -157,8 +155,11 @@ TEST_F(ReportStills, EveryPrototypeUnderTheSamePressSideBySide) {
     const auto changed = palplab::testing::changed_pixels(a, p, at, px_3cm);
     EXPECT_GT(changed.near, id == "B" ? 10 : 0);
     EXPECT_EQ(changed.far, 0) << "pixels changed more than 3 cm (" << px_3cm << " px) away";
-    if (id == "A") EXPECT_EQ(s["visible_deformation"], 0.0);  // A draws no deformation
-    if (id == "B") EXPECT_GT(s["visible_deformation"].get<double>(), 1e-3);
+    if (id == "A") {
+      EXPECT_EQ(s["visible_deformation"], 0.0);  // A draws no deformation
+    } else {
+      EXPECT_GT(s["visible_deformation"].get<double>(), 1e-3);
+    }
     pressed[id] = p;
   }
   // The prototypes' stills are not the same picture.

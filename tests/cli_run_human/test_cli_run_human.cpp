@@ -110,23 +110,49 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   const auto m_script = measures(ref, 1);
   ASSERT_EQ(m_script.at("feature_identified"), 1.0) << "the script must find the feature";
 
-  // The same script from device-sim over UDP, real time; the track is recorded.
-  const fs::path db = tmp.dir / "h.db";
-  const int port = free_port();
-  auto sim = std::async(std::launch::async, [&] {
-    return run(std::string(PALPLAB_BINARY) + " device-sim --port " + std::to_string(port) +
-               " --script " + kDir + "press_script.json --start-on-force --duration 2.3 --wait 10");
-  });
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  auto r1 = run(human(db, "udp:" + std::to_string(port), "2026-11-24T10:00:00Z",
-                      "--record-trace " + (tmp.dir / "tr").string()));
-  auto s1 = sim.get();
-  ASSERT_EQ(r1.code, 0) << r1.out << s1.out;
+  // The same script from device-sim over UDP, real time; the track is recorded. device-sim
+  // plays 2.3 s of script for the 2 s session: 0.3 s of slack for the real-time clock's drift
+  // (below). A session whose clock drifted more has run past the end of the script: the machine
+  // starved the haptic loop (at load 18-22 on 2 cores we saw 1.3-2.3 s, and then the feature
+  // unidentified), and the comparison says nothing about palplab. Such a session is repeated
+  // (a fresh database), up to 3 times; the loop's MEDIAN period, which is palplab's own speed
+  // and not the machine's load, must be on time in every one.
+  const double dt = 0.001;  // the prototype's haptic step
+  const double kScriptSlack = 0.3;
+  fs::path db;
+  std::string trace_dir, drifts;
+  int port = free_port();
+  for (int attempt = 1;; ++attempt) {
+    db = tmp.dir / ("h" + std::to_string(attempt) + ".db");
+    trace_dir = (tmp.dir / ("tr" + std::to_string(attempt))).string();
+    auto sim = std::async(std::launch::async, [&] {
+      return run(std::string(PALPLAB_BINARY) + " device-sim --port " + std::to_string(port) +
+                 " --script " + kDir +
+                 "press_script.json --start-on-force --duration 2.3 --wait 10");
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    auto r1 = run(human(db, "udp:" + std::to_string(port), "2026-11-24T10:00:00Z",
+                        "--record-trace " + trace_dir));
+    auto s1 = sim.get();
+    ++port;
+    // 0, or 3 for a session aborted because the stream ended (a starved loop); never a crash.
+    ASSERT_TRUE(r1.code == 0 || r1.code == 3) << r1.code << "\n" << r1.out << s1.out;
+    auto row = query(db, "SELECT wall_duration, steps, loop_median FROM sessions");
+    ASSERT_EQ(row.size(), 1u) << r1.out;
+    EXPECT_NEAR(std::stod(row[0].at("loop_median")), dt, 0.05 * dt) << r1.out;
+    const double drift = std::stod(row[0].at("wall_duration")) - 2000 * dt;
+    if (r1.code == 0 && drift <= kScriptSlack) break;
+    drifts += (drifts.empty() ? "" : ", ") + std::to_string(drift) + " s";
+    if (attempt == 3)
+      GTEST_SKIP() << "the machine starved the real-time loop in 3 sessions (drift bounds "
+                   << drifts << " > " << kScriptSlack
+                   << " s of script slack): no comparison possible here";
+  }
   auto rows = query(db, "SELECT * FROM sessions");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["status"], "complete");
   EXPECT_EQ(rows[0]["trainee"], "human");
-  EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port));
+  EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port - 1));
   EXPECT_EQ(rows[0]["steps"], "2000");
   EXPECT_GT(std::stoi(query(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
   const auto m_udp = measures(db, 1);
@@ -148,7 +174,6 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   // as the run's own timing permits and still fails for any error that is not timing (a wrong
   // identification, a force computed from another track, time measured on the wall clock).
   const auto row = query(db, "SELECT steps, wall_duration, loop_p99 FROM sessions")[0];
-  const double dt = 0.001;  // the prototype's haptic step
   const double drift = std::max(0.0, std::stod(row.at("wall_duration")) - 2000 * dt);
   const double p99 = std::stod(row.at("loop_p99"));
   const double J = 3.0 * std::max(dt, p99) + 0.002;
@@ -177,15 +202,15 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   EXPECT_NEAR(m_udp.at("palpation_force"), m_script.at("palpation_force"), force_tol)
       << "p99 " << p99 << " s";
   EXPECT_EQ(m_udp.at("palpations"), m_script.at("palpations"));
-  std::cout << "real time vs lock-step: exploration_time " << d_explore << " s in ["
-            << -(drift + J) << ", " << J << "], palpation_force "
+  std::cout << "real time vs lock-step: exploration_time " << d_explore << " s in [" << -(drift + J)
+            << ", " << J << "], palpation_force "
             << m_udp.at("palpation_force") - m_script.at("palpation_force") << " N within "
             << force_tol << "\n";
 
   // The recorded track replayed: identical measures (replay by step index, deterministic scene).
   const fs::path rep = tmp.dir / "rep.db";
-  auto r2 = run(
-      human(rep, "trace:" + (tmp.dir / "tr" / "P01_0_0.trace").string(), "2026-11-24T10:00:00Z"));
+  auto r2 = run(human(rep, "trace:" + (fs::path(trace_dir) / "P01_0_0.trace").string(),
+                      "2026-11-24T10:00:00Z"));
   ASSERT_EQ(r2.code, 0) << r2.out;
   const auto m_rep = measures(rep, 1);
   for (const auto& [k, v] : m_udp) {
