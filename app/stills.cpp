@@ -79,11 +79,14 @@ class EglStillMaker : public analysis::StillMaker {
     const bool same_file =
         std::filesystem::exists(q.path) && protocols::prototype_sha256(q.path) == q.sha256;
     if (!same_file) {
-      const std::string what = std::filesystem::exists(q.path)
-                                   ? "its file " + q.path + " (or its mesh) changed since the run"
-                                   : "its file " + q.path + " no longer exists";
+      const std::string what =
+          std::filesystem::exists(q.path)
+              ? "its file " + q.path + " (or its mesh) changed since the run (SHA-256 differs)"
+              : "its file " + q.path + " no longer exists";
       if (q.json.empty() || results::sha256_hex(q.json) != q.sha256) {
-        r.skipped = what + " (SHA-256 differs) and the stored copy does not define it alone";
+        r.skipped = what +
+                    ", and the JSON stored with the results is not the whole prototype as run "
+                    "(its SHA-256 is not the run's, e.g. it names a mesh file)";
         return r;
       }
       file = (stored_dir() / (q.prototype + ".json")).string();

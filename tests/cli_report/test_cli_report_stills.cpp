@@ -4,6 +4,7 @@
 // differs from the same view at rest near the contact and nowhere far from it. Without EGL (or
 // with --no-stills) the report is still written and says in one line why it has no stills.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
@@ -190,4 +191,49 @@ TEST_F(ReportStills, SwitchedOffOrWithoutEglTheReportSaysWhy) {
 
   EXPECT_EQ(report("bad", "--still-size 10x10").code, 2);
   EXPECT_EQ(report("bad", "--still-size wide").code, 2);
+}
+
+// A prototype file that is gone since the run is drawn from the JSON stored with the results
+// (it alone defines prototype A: no mesh file); a stored copy that is not the file the run used
+// (its SHA-256 differs) is not drawn, and the report says why.
+TEST_F(ReportStills, PrototypeFileGoneIsDrawnFromTheStoredCopyOrSkippedWithWhy) {
+  const fs::path db = dir_ / "moved.db";
+  fs::copy_file(dir_ / "s.db", db, fs::copy_options::overwrite_existing);
+  auto sql = [&](const std::string& q) {
+    sqlite3* h = nullptr;
+    ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
+    char* err = nullptr;
+    EXPECT_EQ(sqlite3_exec(h, q.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
+    sqlite3_free(err);
+    sqlite3_close(h);
+  };
+  sql("UPDATE prototypes SET path = '/nonexistent/A.json' WHERE prototype = 'A'");
+  CliResult r = run_shell(std::string(PALPLAB_BINARY) + " report " + db.string() + " --out " +
+                              (dir_ / "moved").string() + " --still-size 160x120",
+                          dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  if (r.err.find("stills skipped: no headless OpenGL") != std::string::npos)
+    GTEST_SKIP() << "no EGL device on this machine: " << r.err;
+  EXPECT_NE(r.out.find(", 2 stills"), std::string::npos) << r.out << r.err;
+  auto side = nlohmann::json::parse(slurp(dir_ / "moved" / "stills" / "stills.json"));
+  ASSERT_EQ(side["stills"].size(), 2u);
+  EXPECT_EQ(side["stills"][0]["note"],
+            "drawn from the prototype JSON stored with the results: its file /nonexistent/A.json "
+            "no longer exists");
+  EXPECT_EQ(pr::read_png((dir_ / "moved" / "stills" / "A_pressed.png").string()).width, 160);
+
+  sql("UPDATE prototypes SET json = json || ' ' WHERE prototype = 'A'");
+  r = run_shell(std::string(PALPLAB_BINARY) + " report " + db.string() + " --out " +
+                    (dir_ / "moved2").string() + " --still-size 160x120",
+                dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(", 1 stills"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("palplab report: no still of prototype A: its file /nonexistent/A.json no "
+                       "longer exists, and the JSON stored with the results is not the whole "
+                       "prototype as run"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(slurp(dir_ / "moved2" / "report.md").find("No still of prototype A: its file"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(dir_ / "moved2" / "stills" / "A_pressed.png"));
 }
