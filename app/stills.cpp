@@ -62,8 +62,7 @@ class EglStillMaker : public analysis::StillMaker {
            "centre), from outside along its outward normal turned by +30° azimuth and +25° "
            "elevation (less, down to none, where another part of the organ would hide the "
            "point), close up: the pressed region and its surroundings (1.5 times the region's "
-           "reach "
-           "from the pressed point, at least 2 cm) fill the image.";
+           "reach from the pressed point, at least 2 cm) fill the image.";
   }
 
   analysis::StillResult make(const analysis::StillRequest& q) override {

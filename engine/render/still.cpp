@@ -138,6 +138,7 @@ PressCamera camera_facing_press(const engine::SceneGeometry& g, const PressedSti
     cam.elevation_deg = std::clamp(el0 + del, -85.0, 85.0);
     cam.distance = fit_distance(cam, std::max(0.02, 1.5 * press.region_reach), width, height);
     pc = {cam, daz, del};
+    // Only the eye is used (the depth range of a zero-radius scene is meaningless).
     const CameraMatrices m = camera_matrices(cam, press.point, 0.0, width, height);
     const double to_point = (press.point - m.eye).norm();
     const auto hit = pick_surface(g, m.eye, (press.point - m.eye) / to_point);
