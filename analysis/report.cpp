@@ -1,6 +1,7 @@
 #include "analysis/report.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -308,6 +309,210 @@ void section_provenance(Context& c) {
       "Holm-adjusted over the pairs; Hedges' g with a 95 % noncentral-t interval that inverts "
       "the same t as the test beside it (Welch's t and df for a Welch test). Proportions get "
       "Wilson score intervals (never outside [0, 1]). APA style: p < .001 below .001.");
+}
+
+// Standard base64 (RFC 4648, padded): the PNG stills inline in report.html as data URIs.
+std::string base64(const std::string& bytes) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string o;
+  o.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16 |
+                       static_cast<unsigned char>(bytes[i + 1]) << 8 |
+                       static_cast<unsigned char>(bytes[i + 2]);
+    o += k[v >> 18 & 63];
+    o += k[v >> 12 & 63];
+    o += k[v >> 6 & 63];
+    o += k[v & 63];
+  }
+  if (i < bytes.size()) {
+    const bool two = i + 1 < bytes.size();
+    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16 |
+                       (two ? static_cast<unsigned char>(bytes[i + 1]) << 8 : 0u);
+    o += k[v >> 18 & 63];
+    o += k[v >> 12 & 63];
+    o += two ? k[v >> 6 & 63] : '=';
+    o += '=';
+  }
+  return o;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// ---- Every prototype the study used under the same press, side by side (PNG stills)
+void section_stills(Context& c, const std::vector<std::string>& phase_candidates) {
+  c.doc.heading(2, "Prototypes under the same press");
+  auto skip = [&](const std::string& why) {
+    c.files.stills_skipped = why;
+    c.doc.para("Stills skipped: " + why + ".");
+  };
+  if (c.prototypes.empty()) return skip("the database stores no prototype files");
+  // The press: the feature region of the first analysed phase (then the others, last first)
+  // with a stored target force, the MPF of that region in that phase.
+  const results::PhaseRecord* ph = nullptr;
+  const results::ThresholdRecord* th = nullptr;
+  for (const auto& cand : phase_candidates) {
+    const auto* p = c.phase(cand);
+    if (!p || p->feature.empty()) continue;
+    const auto* t = feature_thresholds(*p);
+    if (t && std::isfinite(t->mpf) && t->mpf > 0) {
+      ph = p;
+      th = t;
+      break;
+    }
+  }
+  if (!ph) return skip("no phase stores a feature region with a target force (MPF)");
+  if (!c.options.stills) return skip(c.options.no_stills_reason);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (const std::string why = c.options.stills->unavailable(); !why.empty()) return skip(why);
+
+  // The groups that use each prototype: their own and their sessions' (phase prototypes).
+  std::map<std::string, std::string> group_of;
+  for (const auto& p : c.participants) group_of[p.participant] = p.group;
+  std::map<std::string, std::set<int>> users;
+  for (const auto& g : c.structure.groups) users[g.prototype].insert(c.group_index(g.group));
+  for (const auto& s : c.sessions)
+    if (auto it = group_of.find(s.participant); it != group_of.end())
+      users[s.prototype].insert(c.group_index(it->second));
+  std::vector<const results::PrototypeRecord*> protos;
+  for (const auto& p : c.prototypes) protos.push_back(&p);
+  auto first_user = [&](const results::PrototypeRecord* p) {
+    auto it = users.find(p->prototype);
+    return it == users.end() || it->second.empty() ? 1 << 30 : *it->second.begin();
+  };
+  std::stable_sort(protos.begin(), protos.end(),
+                   [&](const auto* a, const auto* b) { return first_user(a) < first_user(b); });
+
+  const fs::path dir = fs::path(c.out_dir) / "stills";
+  fs::create_directories(dir);
+  const int W = c.options.still_width, H = c.options.still_height;
+  const std::string force_text = fmt(th->mpf, "%.3g") + " N";
+  struct Done {
+    const results::PrototypeRecord* proto;
+    std::string groups, pressed, rest;
+    StillResult r;
+  };
+  std::vector<Done> done;
+  nlohmann::json side = {
+      {"press",
+       {{"phase", ph->phase},
+        {"region", ph->feature},
+        {"force", th->mpf},
+        {"force_source", "MPF of region " + th->region + " in phase " + ph->phase},
+        {"hold", c.options.still_hold}}},
+      {"width", W},
+      {"height", H},
+      {"camera_convention", c.options.stills->camera_convention()},
+      {"stills", nlohmann::json::array()}};
+  std::vector<std::string> missing;
+  for (const auto* p : protos) {
+    std::string groups;
+    if (auto it = users.find(p->prototype); it != users.end())
+      for (int g : it->second)
+        if (g >= 0 && g < static_cast<int>(c.groups.size()))
+          groups += (groups.empty() ? "" : ", ") + c.groups[static_cast<size_t>(g)];
+    StillRequest q;
+    q.prototype = p->prototype;
+    q.path = p->path;
+    q.sha256 = p->sha256;
+    q.json = p->json;
+    q.region = ph->feature;
+    q.force = th->mpf;
+    q.hold = c.options.still_hold;
+    q.width = W;
+    q.height = H;
+    q.pressed_png = (dir / (slug(p->prototype) + "_pressed.png")).string();
+    q.rest_png = (dir / (slug(p->prototype) + "_rest.png")).string();
+    StillResult r;
+    try {
+      r = c.options.stills->make(q);
+    } catch (const std::exception& e) {
+      r.skipped = e.what();
+    }
+    nlohmann::json js = {{"prototype", p->prototype}, {"groups", groups}};
+    if (!r.skipped.empty()) {
+      missing.push_back(p->prototype + ": " + r.skipped);
+      js["skipped"] = r.skipped;
+      side["stills"].push_back(js);
+      continue;
+    }
+    js["pressed"] = "stills/" + fs::path(q.pressed_png).filename().string();
+    js["rest"] = "stills/" + fs::path(q.rest_png).filename().string();
+    if (!r.note.empty()) js["note"] = r.note;
+    js["node"] = r.node;
+    js["force_at_still"] = r.force;
+    js["force_reached"] = r.force_reached;
+    js["visible_deformation"] = r.visible_deformation;
+    js["camera"] = r.camera;
+    side["stills"].push_back(js);
+    c.files.stills.push_back(q.pressed_png);
+    c.files.stills.push_back(q.rest_png);
+    done.push_back({p, groups, q.pressed_png, q.rest_png, r});
+  }
+  c.doc.para(
+      "Each prototype the study used, pressed at its surface node nearest the centroid "
+      "of region " +
+      ph->feature + " (the feature of phase " + ph->phase + ") with the target force " +
+      force_text + " (that phase's MPF for " +
+      (th->region == "*" ? std::string("every region, \"*\"") : th->region) + "), held " +
+      fmt(c.options.still_hold, "%.3g") +
+      " s on the lock-step clock; each prototype draws as its file defines (the phases' "
+      "cue switches are not applied). " +
+      c.options.stills->camera_convention() + " " + std::to_string(W) + "×" + std::to_string(H) +
+      " px; top: under the press, below: the same view at rest. Files: stills/*.png, "
+      "the press and cameras in stills/stills.json.");
+  for (const auto& m : missing) c.doc.para("No still of prototype " + m + ".");
+  c.files.stills_missing = missing;
+  std::ofstream(dir / "stills.json") << side.dump(2) << "\n";
+  if (done.empty()) {
+    c.files.stills_skipped = "no prototype could be drawn";
+  } else {
+    auto caption = [&](const Done& d) {
+      std::string t = d.proto->prototype;
+      if (!d.groups.empty())
+        t += (d.groups.find(',') == std::string::npos ? " (group " : " (groups ") + d.groups + ")";
+      t += d.r.force_reached ? ": " + fmt(d.r.force, "%.3g") + " N at the still"
+                             : ": the press did not reach " + force_text + " (" +
+                                   fmt(d.r.force, "%.3g") + " N at the still)";
+      t += ", visible deformation " + fmt(d.r.visible_deformation * 1e3, "%.2g") + " mm";
+      if (!d.r.note.empty()) t += " (" + d.r.note + ")";
+      return t;
+    };
+    // Markdown: a table, one column per prototype (pressed, rest, caption rows).
+    std::string head = "|", rule = "|", row_p = "|", row_r = "|", row_c = "|";
+    for (const auto& d : done) {
+      const std::string pf = "stills/" + fs::path(d.pressed).filename().string();
+      const std::string rf = "stills/" + fs::path(d.rest).filename().string();
+      head += " " + md_cell(d.proto->prototype) + " |";
+      rule += "---|";
+      row_p += " ![" + md_cell(d.proto->prototype) + " under " + force_text + "](" + pf + ") |";
+      row_r += " ![" + md_cell(d.proto->prototype) + " at rest](" + rf + ") |";
+      row_c += " " + md_cell(caption(d)) + " |";
+    }
+    c.doc.md << head << "\n" << rule << "\n" << row_p << "\n" << row_r << "\n" << row_c << "\n\n";
+    // HTML: one <figure> per prototype in a wrapping row, the PNGs inline (data URIs), so the
+    // page stays self-contained.
+    c.doc.html << "<div class=\"stills\">\n";
+    for (const auto& d : done) {
+      c.doc.html << "<figure class=\"still\">\n";
+      for (const auto& [file, what] :
+           {std::pair{d.pressed, "under " + force_text}, std::pair{d.rest, std::string("at rest")}})
+        c.doc.html << "<img src=\"data:image/png;base64," << base64(read_bytes(file))
+                   << "\" width=\"" << W << "\" height=\"" << H << "\" alt=\""
+                   << xml_escape(d.proto->prototype + " " + what) << "\">\n";
+      c.doc.html << "<figcaption>" << xml_escape(caption(d)) << "</figcaption>\n</figure>\n";
+      ++c.files.still_figures;
+    }
+    c.doc.html << "</div>\n";
+  }
+  c.files.stills_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // A measure that is a proportion: unit "1" (0..1) or "%" (0..100); its scale maximum.
@@ -1100,6 +1305,10 @@ void write_documents(Context& c) {
           "text-align:right}th:first-child,td:first-child{text-align:left}th{background:#f3f3f3}\n"
        << "figure{margin:1em "
           "0}figcaption{font-size:0.9em;color:#555}svg{max-width:100%;height:auto}\n"
+       // Stills side by side, wrapping to the next line on a narrow page.
+       << ".stills{display:flex;flex-wrap:wrap;gap:12px}.stills figure{flex:1 1 220px;"
+          "max-width:480px;margin:0.5em 0}.stills img{display:block;width:100%;height:auto;"
+          "border:1px solid #ddd;margin-bottom:4px}\n"
        << "</style>\n</head>\n<body>\n"
        << c.doc.html.str() << "</body>\n</html>\n";
   if (!html) throw InputError("cannot write the report", c.files.html);
@@ -1114,6 +1323,13 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
   const std::vector<Hypothesis> hypotheses = declared_hypotheses(c);
   fs::create_directories(fs::path(out_dir) / "figures");
   section_provenance(c);
+  {
+    // The stills' press comes from the analysed phases first, then the others from the last.
+    std::vector<std::string> phases;
+    for (const auto& u : units) phases.push_back(u.phase);
+    phases.insert(phases.end(), c.phase_order.rbegin(), c.phase_order.rend());
+    section_stills(c, phases);
+  }
   if (!hypotheses.empty()) {
     section_confirmatory(c, hypotheses);
     c.doc.heading(2, "Exploratory analyses");

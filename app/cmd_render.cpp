@@ -10,38 +10,13 @@
 #include <vector>
 
 #include "app/command.hpp"
+#include "app/stills.hpp"
 #include "common/input_error.hpp"
-#include "engine/haptics/clock.hpp"
-#include "engine/haptics/press.hpp"
 #include "engine/render/headless.hpp"
 #include "engine/render/still.hpp"
 #include "prototypes/factory.hpp"
 
 namespace {
-
-// Runs the one press script (engine/haptics/press.hpp) and stops at the end of its hold, so the
-// still shows the organ under the target force.
-class UntilHoldEnds : public palplab::engine::Device {
- public:
-  explicit UntilHoldEnds(palplab::engine::PressDevice& p) : press_(p) {}
-  palplab::engine::DeviceInput read(double t) override { return press_.read(t); }
-  void write(const palplab::engine::Rendered& r) override {
-    press_.write(r);
-    contact_ = r.contact;
-    force_ = r.force.norm();
-    deformation_ = r.visible_deformation;
-  }
-  bool finished() const override {
-    return press_.phase() == palplab::engine::PressPhase::withdraw ||
-           press_.phase() == palplab::engine::PressPhase::release ||
-           press_.phase() == palplab::engine::PressPhase::done;
-  }
-  bool contact_ = false;
-  double force_ = 0.0, deformation_ = 0.0;
-
- private:
-  palplab::engine::PressDevice& press_;
-};
 
 struct RenderArgs {
   std::string file, out, camera, size = "800x600", press, look_at;
@@ -76,11 +51,7 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
 
 int run_render(const RenderArgs& a) {
   using namespace palplab;
-  const auto wh =
-      parse_numbers("--size", a.size, 'x', 2, 2, "WIDTHxHEIGHT in pixels, e.g. 800x600");
-  for (double x : wh)
-    if (x < 16 || x > 8192 || x != std::floor(x))
-      throw InputError("--size: \"" + a.size + "\": each side must be a whole number in 16..8192");
+  const auto [width, height] = app::parse_image_size("--size", a.size);
   render::Camera cam;
   if (!a.camera.empty()) {
     const auto c = parse_numbers("--camera", a.camera, ',', 2, 3,
@@ -105,25 +76,19 @@ int run_render(const RenderArgs& a) {
   engine::Scene scene = prototypes::build_scene(a.file);
   render::StillOptions opt;
   if (!a.press.empty()) {
-    int node = -1;
+    render::PressedStill p;
     try {
-      node = engine::press_node(scene.geometry(), a.press);
+      p = render::press_for_still(scene, a.press, a.force, a.hold);
     } catch (const std::invalid_argument& e) {
       throw InputError(std::string("--press: ") + e.what());
     }
-    engine::PressDevice press(engine::press_at(scene.geometry(), node, a.force, a.hold, 0.0));
-    UntilHoldEnds dev(press);
-    engine::LockstepOptions lo;
-    lo.duration = press.spec().max_approach_time + a.hold + 1.0;
-    lo.frame_period = 0.0;
-    engine::run_lockstep(scene, dev, lo);
-    opt.device_position = scene.last_sample().x;
-    opt.contact = dev.contact_;
-    if (!press.force_reached())
+    opt.device_position = p.device;
+    opt.contact = p.contact;
+    if (!p.force_reached)
       std::cerr << "palplab render: warning: the press did not reach " << a.force
-                << " N (force at the still " << dev.force_ << " N)\n";
-    std::cout << "pressed node " << node << " to " << dev.force_ << " N for " << a.hold
-              << " s; visible deformation " << dev.deformation_ * 1e3 << " mm\n";
+                << " N (force at the still " << p.force << " N)\n";
+    std::cout << "pressed node " << p.node << " to " << p.force << " N for " << a.hold
+              << " s; visible deformation " << p.visible_deformation * 1e3 << " mm\n";
   }
   if (!a.look_at.empty()) {
     const auto& g = scene.geometry();
@@ -172,7 +137,7 @@ int run_render(const RenderArgs& a) {
   }
   render::Image img;
   try {
-    img = render::render_still(scene, cam, static_cast<int>(wh[0]), static_cast<int>(wh[1]), opt);
+    img = render::render_still(scene, cam, width, height, opt);
   } catch (const render::NoDisplayError& e) {
     std::cerr << "palplab render: " << e.what() << "\n";
     return 3;

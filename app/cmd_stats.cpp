@@ -14,6 +14,7 @@
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "app/command.hpp"
+#include "app/stills.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "results/store.hpp"
@@ -109,26 +110,55 @@ palplab::app::CommandRegistration reg{
     }};
 }  // namespace
 
-// `palplab report DB --out DIR`: report.md, self-contained report.html and figures/*.svg from a
-// results database (analysis/report.hpp). Registered here because it is the statistics' front
-// end; bad input (missing or foreign database) → exit 2.
+// `palplab report DB --out DIR [--no-stills] [--still-size WxH]`: report.md, self-contained
+// report.html, figures/*.svg and stills/*.png from a results database (analysis/report.hpp).
+// Registered here because it is the statistics' front end; bad input (missing or foreign
+// database, bad size) → exit 2. Stills need EGL: without it the report is written all the same
+// and says in one line why it has none.
 namespace {
+struct ReportArgs {
+  std::string db, out, still_size = "480x360";
+  bool no_stills = false;
+};
+
 palplab::app::CommandRegistration reg_report{
     "report", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "report",
-          "Write report.md, a self-contained report.html and SVG figures from a results DB");
-      auto db = std::make_shared<std::string>();
-      auto out = std::make_shared<std::string>();
-      cmd->add_option("db", *db, "Results database (palplab run --db)")->required();
-      cmd->add_option("--out", *out, "Output directory (created if needed)")->required();
-      cmd->callback([db, out, code] {
+          "Write report.md, a self-contained report.html, SVG figures and PNG stills of the "
+          "prototypes from a results DB");
+      auto a = std::make_shared<ReportArgs>();
+      cmd->add_option("db", a->db, "Results database (palplab run --db)")->required();
+      cmd->add_option("--out", a->out, "Output directory (created if needed)")->required();
+      cmd->add_flag("--no-stills", a->no_stills,
+                    "Leave out the stills of the prototypes under the same press (they need "
+                    "headless OpenGL and take about a second per prototype)");
+      cmd->add_option("--still-size", a->still_size,
+                      "Size of each still, WIDTHxHEIGHT in pixels (default 480x360)");
+      cmd->callback([a, code] {
+        palplab::analysis::ReportOptions opt;
+        const auto [w, h] = palplab::app::parse_image_size("--still-size", a->still_size);
+        opt.still_width = w;
+        opt.still_height = h;
+        if (a->no_stills)
+          opt.no_stills_reason = "switched off (--no-stills)";
+        else
+          opt.stills = palplab::app::make_still_maker();
         // An INCOMPLETE run still reports, on the sessions stored, but says so (issue 10).
-        const std::string warning = palplab::results::Store::open(*db).incomplete_warning();
+        const std::string warning = palplab::results::Store::open(a->db).incomplete_warning();
         if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
-        auto files = palplab::analysis::write_report(*db, *out);
+        auto files = palplab::analysis::write_report(a->db, a->out, opt);
+        if (!files.stills_skipped.empty())
+          std::cerr << "palplab report: stills skipped: "
+                    << palplab::escape_controls(files.stills_skipped, false) << "\n";
+        for (const auto& m : files.stills_missing)
+          std::cerr << "palplab report: no still of prototype "
+                    << palplab::escape_controls(m, false) << "\n";
         std::cout << "report: " << files.analyses << " analyses, " << files.figures.size()
-                  << " figures\n  " << files.markdown << "\n  " << files.html << "\n";
+                  << " figures, " << files.still_figures << " stills";
+        if (files.still_figures > 0)
+          std::cout << " (" << std::lround(files.stills_seconds * 1000) << " ms)";
+        std::cout << "\n  " << files.markdown << "\n  " << files.html << "\n";
         *code = 0;
       });
     }};

@@ -24,6 +24,13 @@ void bounding_sphere(const Eigen::Ref<const mesh::Positions>& V, Eigen::Vector3d
   if (!(radius > 0.0)) radius = 1e-3;
 }
 
+double fit_distance(const Camera& cam, double radius, int width, int height) {
+  const double aspect = static_cast<double>(std::max(width, 1)) / std::max(height, 1);
+  const double fovy = cam.fov_y_deg * kPi / 180.0;
+  const double half_min = std::atan(std::tan(fovy / 2) * std::min(aspect, 1.0));
+  return radius / std::sin(half_min) / 0.9;
+}
+
 CameraMatrices camera_matrices(const Camera& cam, const Eigen::Vector3d& centre, double radius,
                                int width, int height) {
   CameraMatrices m;
@@ -31,11 +38,10 @@ CameraMatrices camera_matrices(const Camera& cam, const Eigen::Vector3d& centre,
   m.height = std::max(height, 1);
   const double aspect = static_cast<double>(m.width) / m.height;
   const double fovy = cam.fov_y_deg * kPi / 180.0;
-  const double half_min = std::atan(std::tan(fovy / 2) * std::min(aspect, 1.0));
   m.target = cam.target.value_or(centre);
   m.distance = cam.distance > 0.0
                    ? cam.distance
-                   : (radius + (m.target - centre).norm()) / std::sin(half_min) / 0.9;
+                   : fit_distance(cam, radius + (m.target - centre).norm(), width, height);
   const double az = cam.azimuth_deg * kPi / 180.0, el = cam.elevation_deg * kPi / 180.0;
   const Eigen::Vector3d back(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                              std::sin(el));

@@ -38,6 +38,10 @@ struct CameraMatrices {
 void bounding_sphere(const Eigen::Ref<const mesh::Positions>& V, Eigen::Vector3d& centre,
                      double& radius);
 
+// The camera distance (m) at which a sphere of `radius` around the target fills ~90% of the
+// smaller side of a width x height image (what a distance of 0 means below).
+double fit_distance(const Camera& cam, double radius, int width, int height);
+
 // The matrices of `cam` for an image of width x height pixels over a surface whose rest bounding
 // sphere is (centre, radius). A distance of 0 places the camera so the sphere fills ~90% of the
 // smaller image side.

@@ -19,6 +19,7 @@
 #include "engine/render/image.hpp"
 #include "engine/render/pick.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/render_support.hpp"
 
 namespace fs = std::filesystem;
 namespace pr = palplab::render;
@@ -38,9 +39,6 @@ fs::path tmp(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("palplab_cli_render_" + std::to_string(getpid()));
   fs::create_directories(d);
   return d / name;
-}
-bool background(const std::uint8_t* p) {
-  return p[0] > 250 && p[1] > 250 && p[2] > 250;
 }
 }  // namespace
 
@@ -70,26 +68,15 @@ TEST(CliRender, PressChangesTheStillOnlyNearTheContact) {
   c.elevation_deg = 20;
   const pr::CameraMatrices m = pr::camera_matrices(c, centre, radius, a.width, a.height);
   const Eigen::Vector2d at = m.project(p);
-  const Eigen::Vector3d side = m.view.block<1, 3>(0, 0).transpose();  // camera right, world
-  const double px_3cm = (m.project(p + 0.03 * side) - at).norm();
+  const double px_3cm = palplab::testing::pixels_spanned(m, p, 0.03);
   ASSERT_GT(px_3cm, 5.0);
 
   // The organ is in view; the press point is on it.
-  long organ = 0;
-  for (int y = 0; y < a.height; ++y)
-    for (int x = 0; x < a.width; ++x) organ += !background(a.pixel(x, y));
-  EXPECT_GT(organ, 2000);
-  long near = 0, far = 0;
-  for (int y = 0; y < a.height; ++y)
-    for (int x = 0; x < a.width; ++x) {
-      const auto* u = a.pixel(x, y);
-      const auto* v = b.pixel(x, y);
-      if (std::abs(u[0] - v[0]) + std::abs(u[1] - v[1]) + std::abs(u[2] - v[2]) <= 24) continue;
-      const double d = std::hypot(x + 0.5 - at.x(), y + 0.5 - at.y());
-      (d <= px_3cm ? near : far) += 1;
-    }
-  EXPECT_GT(near, 10) << "no visible change at the contact (" << at.transpose() << ")";
-  EXPECT_EQ(far, 0) << "pixels changed more than 3 cm (" << px_3cm << " px) from the contact";
+  EXPECT_GT(palplab::testing::coverage(a).count, 2000);
+  const auto changed = palplab::testing::changed_pixels(a, b, at, px_3cm);
+  EXPECT_GT(changed.near, 10) << "no visible change at the contact (" << at.transpose() << ")";
+  EXPECT_EQ(changed.far, 0) << "pixels changed more than 3 cm (" << px_3cm
+                            << " px) from the contact";
 }
 
 TEST(CliRender, PrototypeAShowsOnlyTheMarkerWhenPressed) {
@@ -103,9 +90,7 @@ TEST(CliRender, PrototypeAShowsOnlyTheMarkerWhenPressed) {
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("visible deformation 0 mm"), std::string::npos) << r.out;
   const pr::Image a = pr::read_png(still.string()), b = pr::read_png(pressed.string());
-  long changed = 0;
-  for (size_t i = 0; i < a.rgba.size(); i += 4)
-    changed += std::abs(a.rgba[i] - b.rgba[i]) + std::abs(a.rgba[i + 1] - b.rgba[i + 1]) > 24;
+  const long changed = palplab::testing::changed_pixels(a, b).total();
   EXPECT_GT(changed, 0);
   EXPECT_LT(changed, 60);  // a marker of 1.2% of the organ's radius
 }

@@ -110,39 +110,107 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   const auto m_script = measures(ref, 1);
   ASSERT_EQ(m_script.at("feature_identified"), 1.0) << "the script must find the feature";
 
-  // The same script from device-sim over UDP, real time; the track is recorded.
-  const fs::path db = tmp.dir / "h.db";
-  const int port = free_port();
-  auto sim = std::async(std::launch::async, [&] {
-    return run(std::string(PALPLAB_BINARY) + " device-sim --port " + std::to_string(port) +
-               " --script " + kDir + "press_script.json --start-on-force --duration 2.3 --wait 10");
-  });
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  auto r1 = run(human(db, "udp:" + std::to_string(port), "2026-11-24T10:00:00Z",
-                      "--record-trace " + (tmp.dir / "tr").string()));
-  auto s1 = sim.get();
-  ASSERT_EQ(r1.code, 0) << r1.out << s1.out;
+  // The same script from device-sim over UDP, real time; the track is recorded. device-sim
+  // plays 2.3 s of script for the 2 s session: 0.3 s of slack for the real-time clock's drift
+  // (below). A session whose clock drifted more has run past the end of the script: the machine
+  // starved the haptic loop (at load 18-22 on 2 cores we saw 1.3-2.3 s, and then the feature
+  // unidentified), and the comparison says nothing about palplab. Such a session is repeated
+  // (a fresh database), up to 3 times; the loop's MEDIAN period, which is palplab's own speed
+  // and not the machine's load, must be on time in every one.
+  const double dt = 0.001;  // the prototype's haptic step
+  const double kScriptSlack = 0.3;
+  fs::path db;
+  std::string trace_dir, drifts;
+  int port = free_port();
+  for (int attempt = 1;; ++attempt) {
+    db = tmp.dir / ("h" + std::to_string(attempt) + ".db");
+    trace_dir = (tmp.dir / ("tr" + std::to_string(attempt))).string();
+    auto sim = std::async(std::launch::async, [&] {
+      return run(std::string(PALPLAB_BINARY) + " device-sim --port " + std::to_string(port) +
+                 " --script " + kDir +
+                 "press_script.json --start-on-force --duration 2.3 --wait 10");
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    auto r1 = run(human(db, "udp:" + std::to_string(port), "2026-11-24T10:00:00Z",
+                        "--record-trace " + trace_dir));
+    auto s1 = sim.get();
+    ++port;
+    // 0, or 3 for a session aborted because the stream ended (a starved loop); never a crash.
+    ASSERT_TRUE(r1.code == 0 || r1.code == 3) << r1.code << "\n" << r1.out << s1.out;
+    auto row = query(db, "SELECT wall_duration, steps, loop_median FROM sessions");
+    ASSERT_EQ(row.size(), 1u) << r1.out;
+    EXPECT_NEAR(std::stod(row[0].at("loop_median")), dt, 0.05 * dt) << r1.out;
+    const double drift = std::stod(row[0].at("wall_duration")) - 2000 * dt;
+    if (r1.code == 0 && drift <= kScriptSlack) break;
+    drifts += (drifts.empty() ? "" : ", ") + std::to_string(drift) + " s";
+    if (attempt == 3)
+      GTEST_SKIP() << "the machine starved the real-time loop in 3 sessions (drift bounds "
+                   << drifts << " > " << kScriptSlack
+                   << " s of script slack): no comparison possible here";
+  }
   auto rows = query(db, "SELECT * FROM sessions");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["status"], "complete");
   EXPECT_EQ(rows[0]["trainee"], "human");
-  EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port));
+  EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port - 1));
   EXPECT_EQ(rows[0]["steps"], "2000");
   EXPECT_GT(std::stoi(query(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
   const auto m_udp = measures(db, 1);
-  // Real time: the script starts when the first force arrives (one step plus delivery, and the
-  // loop's jitter: p99 period of a few ms on a loaded 2-core machine): times within 30 ms; the
-  // peak force is taken at the turning point of the press, sampled every step at 11.7 mm/s, so
-  // it differs by at most one step's travel (12 um, ~0.01 N here) plus timing: 0.05 N.
+  // What the real-time clock allows, from this session's own loop timing (sessions row). The
+  // lock-step reference sees the script at simulated time t exactly; the UDP session differs by
+  //  - drift: a step that starts more than a period late re-anchors the clock instead of
+  //    bursting through the missed ticks (engine/haptics/clock.cpp), so simulated time falls
+  //    behind wall time, on which device-sim plays the script: script events show up EARLIER in
+  //    simulated time by the lag accumulated so far. The lag only grows, and at the end it is
+  //    at most the session's wall time minus its simulated time (wall_duration also counts the
+  //    last store write, so this bounds it from above). On an idle machine it is a few ms; at
+  //    load 16 on 2 cores we measured 0.07-0.11 s of lag within 0.16-0.31 s of this bound.
+  //  - delay: the script starts when device-sim sees the first force datagram (after step 1),
+  //    and a position is read at the first step after it arrives: script events show up LATER
+  //    by the start delay plus the position's age, each about one loop period and a wake-up of
+  //    device-sim's 1 kHz loop. Bounded by J = 3 periods at the loop's p99 + 2 ms (delivery and
+  //    device-sim's tick); ~5 ms on an idle machine.
+  // A fixed window cannot be right for both an idle and a loaded machine; this one is as tight
+  // as the run's own timing permits and still fails for any error that is not timing (a wrong
+  // identification, a force computed from another track, time measured on the wall clock).
+  const auto row = query(db, "SELECT steps, wall_duration, loop_p99 FROM sessions")[0];
+  const double drift = std::max(0.0, std::stod(row.at("wall_duration")) - 2000 * dt);
+  const double p99 = std::stod(row.at("loop_p99"));
+  const double J = 3.0 * std::max(dt, p99) + 0.002;
   EXPECT_EQ(m_udp.at("feature_identified"), m_script.at("feature_identified"));
-  EXPECT_NEAR(m_udp.at("exploration_time"), m_script.at("exploration_time"), 0.03);
-  EXPECT_NEAR(m_udp.at("palpation_force"), m_script.at("palpation_force"), 0.05);
+  const double d_explore = m_udp.at("exploration_time") - m_script.at("exploration_time");
+  EXPECT_GE(d_explore, -(drift + J)) << "drift bound " << drift << " s, J " << J << " s";
+  EXPECT_LE(d_explore, J) << "J " << J << " s";
+  // The peak force is taken at the turning point of the press. A constant delay only moves the
+  // peak in time; what lowers it is the gap g between the two script times the loop samples on
+  // either side of the turn (one loop period, plus device-sim's own tick): the nearer sample is
+  // then short of the turn by at most min(v_in a, v_out b) with a + b = g, i.e. at most
+  // g v_in v_out / (v_in + v_out) in depth (11.7 mm/s in, 35 mm/s out: 8.8 mm/s x g), and the
+  // force (prototype A: Hooke's law on the penetration, 500 N/m) by that times the stiffness.
+  // g is taken as 2 loop periods at the run's p99 + 1 ms (a longer stall exactly at the turn is
+  // rarer than 1 %), plus one step's travel of the reference: 0.01 N. Idle machine: 0.024 N;
+  // at load 16 (p99 ~5 ms): ~0.06 N; observed differences there were below 0.02 N.
+  double stiffness = 0.0;
+  {
+    std::ifstream in(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/A.json");
+    stiffness = nlohmann::json::parse(in)["contact"]["stiffness"].get<double>();
+  }
+  const double v_in = (w[2].second - w[1].second).norm() / (w[2].first - w[1].first);
+  const double v_out = (w[3].second - w[2].second).norm() / (w[3].first - w[2].first);
+  const double gap = 2.0 * std::max(dt, p99) + 0.001;
+  const double force_tol = 0.01 + stiffness * gap * v_in * v_out / (v_in + v_out);
+  EXPECT_NEAR(m_udp.at("palpation_force"), m_script.at("palpation_force"), force_tol)
+      << "p99 " << p99 << " s";
   EXPECT_EQ(m_udp.at("palpations"), m_script.at("palpations"));
+  std::cout << "real time vs lock-step: exploration_time " << d_explore << " s in [" << -(drift + J)
+            << ", " << J << "], palpation_force "
+            << m_udp.at("palpation_force") - m_script.at("palpation_force") << " N within "
+            << force_tol << "\n";
 
   // The recorded track replayed: identical measures (replay by step index, deterministic scene).
   const fs::path rep = tmp.dir / "rep.db";
-  auto r2 = run(
-      human(rep, "trace:" + (tmp.dir / "tr" / "P01_0_0.trace").string(), "2026-11-24T10:00:00Z"));
+  auto r2 = run(human(rep, "trace:" + (fs::path(trace_dir) / "P01_0_0.trace").string(),
+                      "2026-11-24T10:00:00Z"));
   ASSERT_EQ(r2.code, 0) << r2.out;
   const auto m_rep = measures(rep, 1);
   for (const auto& [k, v] : m_udp) {

@@ -15,6 +15,7 @@
 #include "engine/render/headless.hpp"
 #include "engine/render/image.hpp"
 #include "engine/render/renderer.hpp"
+#include "tests/render_support.hpp"
 
 namespace pr = palplab::render;
 using palplab::engine::SceneGeometry;
@@ -24,29 +25,8 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int W = 320, H = 240;
 
-// Pixel statistics of the pixels that differ from the white background.
-struct Coverage {
-  long count = 0;
-  double cx = 0.0, cy = 0.0;
-};
-bool is_background(const std::uint8_t* p) {
-  return p[0] > 250 && p[1] > 250 && p[2] > 250;
-}
-Coverage coverage(const pr::Image& img) {
-  Coverage c;
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x)
-      if (!is_background(img.pixel(x, y))) {
-        ++c.count;
-        c.cx += x + 0.5;
-        c.cy += y + 0.5;
-      }
-  if (c.count) {
-    c.cx /= c.count;
-    c.cy /= c.count;
-  }
-  return c;
-}
+using palplab::testing::coverage;
+using palplab::testing::Coverage;
 
 class RenderTest : public ::testing::Test {
  protected:
@@ -253,20 +233,10 @@ TEST_F(RenderTest, DeformationChangesPixelsOnlyNearIt) {
   const pr::Image after = draw(r, cam);
   EXPECT_EQ(r.faces_uploaded(), uploads);  // positions streamed, faces not re-uploaded
   const Eigen::Vector2d c = r.matrices(cam, W, H).project(pole);
-  long changed = 0, far_changed = 0;
   // The dent spans 1 cm at 0.25 m: ~ 0.01/0.25/tan(17.5 deg)*120 = 15 px around its centre.
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const auto* p = before.pixel(x, y);
-      const auto* q = after.pixel(x, y);
-      const int diff = std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]) + std::abs(p[2] - q[2]);
-      if (diff > 24) {
-        ++changed;
-        if (std::hypot(x + 0.5 - c.x(), y + 0.5 - c.y()) > 25.0) ++far_changed;
-      }
-    }
-  EXPECT_GT(changed, 50);
-  EXPECT_EQ(far_changed, 0);
+  const auto changed = palplab::testing::changed_pixels(before, after, c, 25.0);
+  EXPECT_GT(changed.total(), 50);
+  EXPECT_EQ(changed.far, 0);
 }
 
 TEST_F(RenderTest, RefinedFacesAreHighlightedAndTheMarkerDrawn) {
