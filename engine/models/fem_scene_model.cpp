@@ -229,7 +229,7 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
   c.keys(m, P,
          {"kind", "formulation", "material", "rayleigh_alpha", "rayleigh_beta", "lumped_mass",
           "jacobian", "operational_region", "operational_radius", "fixed_region", "fixed_z_below",
-          "support_modulus", "update_rate_hz"});
+          "support_modulus", "update_rate_hz", "deterministic_update"});
   FemConfig& f = cfg.fem;
   if (auto fo = c.text(m, P, "formulation", false,
                        {"linear", "corotational", "condensed", "corotational_multirate"}))
@@ -246,6 +246,10 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
       c.number(m, P, "update_rate_hz", false, 1, 1e4,
                "the deformation updates per second of the multi-rate co-rotational model (Hz)")
           .value_or(f.update_rate_hz);
+  f.multirate_deterministic =
+      c.boolean(m, P, "deterministic_update", false).value_or(f.multirate_deterministic);
+  if (m.contains("deterministic_update") && f.formulation != FemFormulation::corotational_multirate)
+    c.err(P + ".deterministic_update", "only the corotational_multirate formulation has updates");
   if (m.contains("update_rate_hz") && f.formulation != FemFormulation::corotational_multirate)
     c.err(P + ".update_rate_hz", "only the corotational_multirate formulation has an update rate");
   if (auto j = c.text(m, P, "jacobian", false, {"exact", "warped"}))

@@ -251,7 +251,8 @@ TEST(FemScene, BadConfigsAreInputErrors) {
   // update_rate_hz belongs to the multi-rate formulation only, and must be in range.
   for (const std::string& bad :
        {std::string("\"formulation\": \"linear\", \"update_rate_hz\": 60"),
-        std::string("\"formulation\": \"corotational_multirate\", \"update_rate_hz\": 0")}) {
+        std::string("\"formulation\": \"corotational_multirate\", \"update_rate_hz\": 0"),
+        std::string("\"formulation\": \"linear\", \"deterministic_update\": true")}) {
     const std::string path = testing::TempDir() + "/bad_multirate.json";
     std::ifstream in(proto("D_multirate"));
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
