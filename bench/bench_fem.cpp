@@ -6,12 +6,14 @@
 // against prototype C during the same press (median and p99 of the steps in contact), and the
 // force error of the condensed model against the full linear one on that press.
 // Build: cmake --build build --target bench_fem; run: build/bench/bench_fem [PROTOTYPES_DIR]
-// (`--scene-only` skips the component items).
+// (`--scene-only` skips the component items; `--multirate` runs only the multi-rate D against
+// the full co-rotational D on presses to 1, 2.5 and 4 N and a sliding press).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "engine/haptics/clock.hpp"
@@ -75,7 +77,8 @@ PressRun scene_press(Scene& s, const std::string& region, double target, double 
 
 std::string prototypes_dir(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]).rfind("--", 0) != 0) return std::string(argv[i]) + "/";
+    if (std::string(argv[i]).rfind("--", 0) != 0 && std::string(argv[i - 1]) != "--case")
+      return std::string(argv[i]) + "/";
   std::string d(__FILE__);
   d.erase(d.rfind('/'));
   d.erase(d.rfind('/'));
@@ -97,7 +100,9 @@ void scene_steps(const std::string& dir) {
       {"C (mass_spring)", "C.json", FemFormulation::linear, false, 1.0},
       {"D (fem linear)", "D.json", FemFormulation::linear, true, 1.0},
       {"D condensed (ovary_left+15 mm)", "D.json", FemFormulation::condensed, true, 1.0},
-      {"D_corot (fem corotational)", "D_corot.json", FemFormulation::corotational, true, 0.2}};
+      {"D_corot (fem corotational)", "D_corot.json", FemFormulation::corotational, true, 0.2},
+      {"D_multirate (corot, 60 Hz update)", "D_multirate.json",
+       FemFormulation::corotational_multirate, true, 1.0}};
   std::vector<Eigen::Vector3d> path_full;
   std::vector<double> force_full;
   for (const auto& v : vs) {
@@ -137,11 +142,162 @@ void scene_steps(const std::string& dir) {
   }
 }
 
+// One device trajectory on a scene: positions, the force of every step, the step time (us) of
+// the steps in contact, and the surface at the steps listed in `snap`.
+struct Recorded {
+  std::vector<Eigen::Vector3d> x, force;
+  std::vector<double> us;
+  std::vector<int> snap;
+  std::vector<mesh::Positions> surface;
+};
+
+using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+void record_step(Scene& s, const Eigen::Vector3d& x, Recorded& r) {
+  const auto t0 = Clock::now();
+  const Rendered out = s.step(x);
+  const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+  r.x.push_back(x);
+  r.force.push_back(out.force);
+  if (out.contact) r.us.push_back(us);
+}
+
+void snapshot(Scene& s, Recorded& r) {
+  RowMatX3 V;
+  Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> F;
+  s.current_surface(V, F);
+  r.snap.push_back(static_cast<int>(r.x.size()) - 1);
+  r.surface.push_back(V);
+}
+
+// The press of scene_press on the full model (2 cm/s in to `target` N, hold 100 steps, out at
+// 5 cm/s), with `slide` m of tangential travel at 2 cm/s after the first hold (then hold again):
+// the full co-rotational model decides where the holds are; the other model replays it.
+Recorded corot_press(Scene& s, const std::string& region, double target, double slide) {
+  Recorded r;
+  const auto& g = s.geometry();
+  const int node = g.region_node(region);
+  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+  const Eigen::Vector3d t = n.unitOrthogonal();
+  double depth = -0.002, along = 0;
+  const auto at = [&] { return Eigen::Vector3d(p - depth * n + along * t); };
+  for (int k = 0; k < 5000; ++k) {
+    record_step(s, at(), r);
+    if (r.force.back().norm() >= target) break;
+    depth += 0.02 * s.dt();
+  }
+  for (int k = 0; k < 100; ++k) record_step(s, at(), r);
+  snapshot(s, r);
+  if (slide > 0) {
+    while (along < slide) {
+      along += 0.02 * s.dt();
+      record_step(s, at(), r);
+    }
+    for (int k = 0; k < 100; ++k) record_step(s, at(), r);
+    snapshot(s, r);
+  }
+  while (depth > -0.002) {
+    depth -= 0.05 * s.dt();
+    record_step(s, at(), r);
+  }
+  return r;
+}
+
+// paced: at the haptic rate in wall time (the multi-rate worker runs beside it, as in a study).
+Recorded replay(Scene& s, const Recorded& ref, bool paced) {
+  Recorded r;
+  size_t q = 0;
+  auto next = Clock::now();
+  for (size_t k = 0; k < ref.x.size(); ++k) {
+    if (paced) {
+      next += std::chrono::microseconds(static_cast<long>(1e6 * s.dt()));
+      std::this_thread::sleep_until(next);
+    }
+    record_step(s, ref.x[k], r);
+    if (q < ref.snap.size() && static_cast<int>(k) == ref.snap[q]) {
+      snapshot(s, r);
+      ++q;
+    }
+  }
+  return r;
+}
+
+// Multi-rate D against the full co-rotational D on the same device trajectories (issue 12):
+// force error at the end of every hold (quasi-static) and over the whole trajectory (includes
+// the full model's viscous and inertial force, which the quasi-static multi-rate model does not
+// render), surface displacement error at the end of every hold, step times of both.
+void multirate_error(const std::string& dir, int only) {
+  std::printf(
+      "\nD_multirate vs D_corot (full co-rotational, dynamic) on the same device trajectory, "
+      "press on ovary_left\n");
+  std::printf("%-22s %-13s %7s %6s %9s %9s %9s %9s %9s %10s %10s %10s %10s\n", "press", "mode",
+              "steps", "relin", "F_hold_N", "dF_hold%", "dx_hold%", "maxdF_N", "maxdF%pk",
+              "corot_med", "corot_p99", "mr_med_us", "mr_p99_us");
+  struct Case {
+    std::string name;
+    double target, slide;
+  };
+  const std::vector<Case> cases = {
+      {"1 N", 1.0, 0.0}, {"2.5 N", 2.5, 0.0}, {"4 N", 4.0, 0.0}, {"2.5 N + 1 cm slide", 2.5, 0.01}};
+  for (size_t ci = 0; ci < cases.size(); ++ci) {
+    if (only >= 0 && static_cast<int>(ci) != only) continue;
+    const Case& c = cases[ci];
+    Scene co = make_scene(prototypes::load_prototype(dir + "D_corot.json"));
+    const Recorded a = corot_press(co, "ovary_left", c.target, c.slide);
+    for (bool det : {false, true}) {
+      SceneConfig mc = prototypes::load_prototype(dir + "D_multirate.json");
+      mc.fem.multirate_deterministic = det;
+      Scene mr = make_scene(mc);
+      const Recorded b = replay(mr, a, !det);
+      long relin = 0;
+      {
+        const std::string info = mr.stats().model_info;
+        const auto pos = info.find("\"relinearisations\":");
+        if (pos != std::string::npos) relin = std::stol(info.substr(pos + 19));
+      }
+      double hold_err = 0, disp_err = 0, f_hold = 0, max_df = 0, peak = 0;
+      for (size_t q = 0; q < a.snap.size(); ++q) {
+        const int k = a.snap[q];
+        f_hold = a.force[k].norm();
+        hold_err = std::max(hold_err, (b.force[k] - a.force[k]).norm() / a.force[k].norm());
+        const RowMatX3 V0 = co.geometry().V;
+        const double umax = (a.surface[q] - V0).rowwise().norm().maxCoeff();
+        disp_err =
+            std::max(disp_err, (b.surface[q] - a.surface[q]).rowwise().norm().maxCoeff() / umax);
+      }
+      for (size_t k = 0; k < a.force.size(); ++k) {
+        max_df = std::max(max_df, (b.force[k] - a.force[k]).norm());
+        peak = std::max(peak, a.force[k].norm());
+      }
+      std::printf(
+          "%-22s %-13s %7zu %6ld %9.3f %9.3f %9.3f %9.4f %9.3f %10.0f %10.0f %10.1f %10.1f\n",
+          c.name.c_str(), det ? "deterministic" : "real time", a.x.size(), relin, f_hold,
+          100 * hold_err, 100 * disp_err, max_df, 100 * max_df / peak, pct(a.us, 0.5),
+          pct(a.us, 0.99), pct(b.us, 0.5), pct(b.us, 0.99));
+      std::fflush(stdout);
+    }
+  }
+  std::printf(
+      "  dF_hold: |F_mr - F_corot| / |F_corot| at the end of each 100-step hold (max over the "
+      "holds); dx_hold: max surface-node distance / max surface displacement there; maxdF: over "
+      "every step (the full model's viscous force while moving is in it)\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool scene_only = false;
-  for (int i = 1; i < argc; ++i) scene_only |= std::string(argv[i]) == "--scene-only";
+  bool scene_only = false, multirate = false;
+  for (int i = 1; i < argc; ++i) {
+    scene_only |= std::string(argv[i]) == "--scene-only";
+    multirate |= std::string(argv[i]) == "--multirate";
+  }
+  if (multirate) {
+    int only = -1;  // --case K: only the K-th press (0..3)
+    for (int i = 1; i + 1 < argc; ++i)
+      if (std::string(argv[i]) == "--case") only = std::stoi(argv[i + 1]);
+    multirate_error(prototypes_dir(argc, argv), only);
+    return 0;
+  }
   if (scene_only) {
     scene_steps(prototypes_dir(argc, argv));
     return 0;

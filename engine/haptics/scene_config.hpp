@@ -88,6 +88,8 @@ struct FemConfig {
   bool exact_jacobian = true;        // corotational: consistent tangent; false: stiffness warping
   std::string operational_region;    // condensed: the region the device works on (required)
   double operational_radius = 0.01;  // m: tets within this distance of the region are solved
+  double update_rate_hz = 60.0;      // corotational_multirate: deformation updates per second
+  bool multirate_deterministic = false;  // wait for the worker: reproducible, may block
 };
 
 // Model "needle" (prototype N; engine/models/needle_model.cpp, docs/FORMATS.md). Needle

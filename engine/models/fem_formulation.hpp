@@ -5,7 +5,7 @@
 
 namespace palplab::engine {
 
-enum class FemFormulation { linear, corotational, condensed };
+enum class FemFormulation { linear, corotational, condensed, corotational_multirate };
 // Throws InputError naming the accepted values.
 FemFormulation fem_formulation_from_string(const std::string& s);
 const char* to_string(FemFormulation f);

@@ -7,6 +7,7 @@
 #include "common/input_error.hpp"
 #include "engine/models/stored_factor.hpp"
 #include "engine/solvers/fem_condensation.hpp"
+#include "engine/solvers/fem_multirate.hpp"
 #include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
@@ -22,8 +23,9 @@ FemFormulation fem_formulation_from_string(const std::string& s) {
   if (s == "linear") return FemFormulation::linear;
   if (s == "corotational") return FemFormulation::corotational;
   if (s == "condensed") return FemFormulation::condensed;
+  if (s == "corotational_multirate") return FemFormulation::corotational_multirate;
   throw InputError("unknown FEM formulation '" + s +
-                   "' (expected linear, corotational or condensed)");
+                   "' (expected linear, corotational, condensed or corotational_multirate)");
 }
 
 const char* to_string(FemFormulation f) {
@@ -34,6 +36,8 @@ const char* to_string(FemFormulation f) {
       return "corotational";
     case FemFormulation::condensed:
       return "condensed";
+    case FemFormulation::corotational_multirate:
+      return "corotational_multirate";
   }
   return "?";
 }
@@ -82,6 +86,12 @@ struct FemModel::Impl {
   // .psim (stored_factor.hpp): digest of the constructor's inputs; a stored factorisation used.
   FemInputsDigest inputs{};
   bool loaded = false;
+
+  // corotational_multirate (declared after sys: it refers to it): the linearisations, the
+  // force of the last step (N, along contact_normal), time since the last update (s).
+  std::unique_ptr<CorotMultirate> mr;
+  std::vector<PatchTap> mr_taps;
+  double mr_force = 0, since_update = 0;
 
   // linear / condensed: factorises A = (1 + h alpha) M + (h beta + h^2) K_c for step size h.
   void factor(double h, double alpha, double beta, double& ms) {
@@ -164,6 +174,16 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
     condense_precompute(m.sys.K, m.sys.T, m.fixed_dof, opt_.operational_tet, m.cond);
     m.act = m.cond.reduced;
     m.K_c = m.cond.K_r;
+  } else if (opt_.formulation == FemFormulation::corotational_multirate) {
+    if (!(opt_.update_interval > 0))
+      throw InputError("fem: the multi-rate update interval must be > 0 s");
+    StaticSolver check;
+    static_precompute(m.sys.K, m.fixed_dof, check);
+    m.act = check.split.free;
+    m.mr =
+        std::make_unique<CorotMultirate>(m.sys, m.fixed_dof, opt_.support_stiffness, opt_.jacobian,
+                                         opt_.multirate_background, opt_.multirate_deterministic);
+    m.mr->relinearise_now(m.u, f_ext, {});
   } else {
     // Slots of the diagonal, of entries coupling a fixed dof, of the fixed diagonal.
     const SparseMatrixd& P = m.sys.pattern.matrix;
@@ -210,8 +230,18 @@ std::string FemModel::solver() const {
              "contact by Sherman-Morrison";
     case FemFormulation::corotational:
       return "SimplicialLDLT (AMD), pattern analysed once, refactorised every step";
+    case FemFormulation::corotational_multirate:
+      return std::string(
+                 "SimplicialLDLT (AMD) of the co-rotational tangent, refactorised at the "
+                 "update rate") +
+             (opt_.multirate_background ? " in a worker thread" : "") +
+             "; haptic steps: patch compliance about the last linearisation (no sparse solve)";
   }
   return "";
+}
+
+long FemModel::relinearisations() const {
+  return impl_->mr ? impl_->mr->relinearisations() : 0;
 }
 
 bool FemModel::solves_node(int v) const {
@@ -223,20 +253,38 @@ void FemModel::reset() {
   impl_->u.setZero();
   impl_->v.setZero();
   impl_->positions_valid = false;
+  if (impl_->mr) {
+    impl_->mr->relinearise_now(impl_->u, f_ext, {});
+    impl_->mr_force = 0;
+    impl_->since_update = 0;
+  }
   time_ = 0;
 }
 
 Eigen::Vector3d FemModel::node_position(int v) const {
-  return impl_->sys.X0.row(v).transpose() + impl_->u.segment<3>(3 * v);
+  const Impl& m = *impl_;
+  if (m.mr) {
+    // Multi-rate: the haptic-rate prediction u_L + delta0 - f Y n at this node.
+    const CorotLinearisation& L = m.mr->current();
+    Eigen::Vector3d p =
+        m.sys.X0.row(v).transpose() + L.u.segment<3>(3 * v) + L.delta0.segment<3>(3 * v);
+    if (m.mr_force > 0 && !L.patch.empty() && L.patch == m.mr_taps)
+      p -= m.mr_force * (L.Y.middleRows<3>(3 * v) * contact_normal);
+    return p;
+  }
+  return m.sys.X0.row(v).transpose() + m.u.segment<3>(3 * v);
 }
 
-double FemModel::penetration() const {
-  if (contact_node < 0) return 0.0;
+double FemModel::patch_gap(const Eigen::VectorXd& a, const Eigen::VectorXd* b) const {
   const Impl& m = *impl_;
+  const auto disp = [&](int i) {
+    Eigen::Vector3d d = a.segment<3>(3 * i);
+    if (b) d += b->segment<3>(3 * i);
+    return d;
+  };
   if (contact_nodes.empty()) {
-    const Eigen::Vector3d x =
-        m.sys.X0.row(contact_node).transpose() + m.u.segment<3>(3 * contact_node);
-    return std::max(0.0, (x - contact_point).dot(contact_normal));
+    const Eigen::Vector3d x = m.sys.X0.row(contact_node).transpose() + disp(contact_node);
+    return (x - contact_point).dot(contact_normal);
   }
   if (contact_weights.size() != contact_nodes.size())
     throw std::logic_error("FemModel: one contact weight per patch node");
@@ -246,13 +294,21 @@ double FemModel::penetration() const {
     const int i = contact_nodes[k];
     const Eigen::Vector3d x0 = m.sys.X0.row(i).transpose();
     const double above = std::max(0.0, (x0 - xp).dot(contact_normal));
-    d += contact_weights[k] *
-         ((x0 + m.u.segment<3>(3 * i) - contact_point).dot(contact_normal) - above);
+    d += contact_weights[k] * ((x0 + disp(i) - contact_point).dot(contact_normal) - above);
   }
-  return std::max(0.0, d);
+  return d;
+}
+
+double FemModel::penetration() const {
+  if (contact_node < 0) return 0.0;
+  if (impl_->mr) return contact_k > 0 ? impl_->mr_force / contact_k : 0.0;
+  return std::max(0.0, patch_gap(impl_->u, nullptr));
 }
 
 Eigen::Vector3d FemModel::device_force() const {
+  if (impl_->mr)
+    return contact_node < 0 ? Eigen::Vector3d::Zero()
+                            : Eigen::Vector3d(impl_->mr_force * contact_normal);
   return contact_k * penetration() * contact_normal;
 }
 
@@ -278,8 +334,48 @@ const mesh::Positions& FemModel::positions() {
   return m.X;
 }
 
+void FemModel::step_multirate(double h) {
+  Impl& m = *impl_;
+  CorotMultirate& mr = *m.mr;
+  m.mr_taps.clear();
+  double f = 0;
+  if (contact_node >= 0 && contact_k > 0) {
+    const bool single = contact_nodes.empty();
+    const size_t np = single ? 1 : contact_nodes.size();
+    for (size_t k = 0; k < np; ++k) {
+      const int i = single ? contact_node : contact_nodes[k];
+      if (!fixed_node_[i]) m.mr_taps.push_back({3 * i, single ? 1.0 : contact_weights[k]});
+    }
+    const CorotLinearisation& L = mr.current();
+    // The penetration of the unloaded Newton prediction, then the spring in series with the
+    // patch's compliance about the linearisation (fem_multirate.hpp).
+    const double d0 = patch_gap(L.u, &L.delta0);
+    if (d0 > 0) {
+      const double c = m.mr_taps.empty()
+                           ? 0.0
+                           : contact_normal.dot(mr.patch_compliance(m.mr_taps) * contact_normal);
+      f = contact_k * d0 / (1 + contact_k * c);
+    }
+  }
+  m.mr_force = f;
+  time_ += h;
+  m.since_update += h;
+  if (m.since_update >= opt_.update_interval * (1 - 1e-9)) {
+    // Graphics rate: the deformation moves to the predicted equilibrium under f, and the model
+    // re-linearises about it.
+    m.since_update = 0;
+    const CorotLinearisation& L = mr.current();
+    m.u = L.u + L.delta0;
+    if (f > 0 && !m.mr_taps.empty()) m.u -= f * (mr.compliance_columns(m.mr_taps) * contact_normal);
+    mr.update(m.u, f_ext, m.mr_taps);
+    factor_ms_ = mr.current().factor_ms;
+    m.positions_valid = false;
+  }
+}
+
 void FemModel::step(double h) {
   if (!(h > 0)) throw std::invalid_argument("FemModel::step: h must be > 0");
+  if (impl_->mr) return step_multirate(h);
   Impl& m = *impl_;
   const double alpha = opt_.rayleigh_alpha, beta = opt_.rayleigh_beta;
   const double d = penetration();

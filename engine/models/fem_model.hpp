@@ -27,6 +27,14 @@
 //                 interior positions are recovered only when positions() is called (graphics
 //                 rate), so a step costs a solve of the reduced system. The contact node and
 //                 every patch node must be operational (solves_node()) or fixed.
+//   corotational_multirate
+//                 the multi-rate co-rotational model (fem_multirate.hpp): each step renders the
+//                 contact force from the patch's compliance about the last linearisation of the
+//                 co-rotational FEM (quasi-static, no sparse solve); every update_interval the
+//                 deformation moves to the predicted equilibrium and the model re-linearises
+//                 (in a worker thread with multirate_background). positions() and
+//                 displacement() are the graphics-rate state; penetration() and device_force()
+//                 are those of the last step.
 // Mass is lumped (diagonal) by default; options.lumped_mass = false uses the consistent mass
 // (linear and corotational; the condensed model is always lumped: its Guyan reduction keeps
 // the mass on the solved nodes). Damping is Rayleigh C = alpha M + beta K (K = tangent for
@@ -55,6 +63,13 @@ struct FemModelOptions {
   // hold nodes to their rest position (the surrounding tissue; the scene model gives each
   // surface node support_modulus x its lumped area, as the mass-spring model does). Part of K.
   Eigen::VectorXd support_stiffness;
+  // corotational_multirate: time between deformation updates (s, > 0; the graphics rate) and
+  // whether the re-linearisation runs in a worker thread (fem_multirate.hpp).
+  // multirate_deterministic: the step waits for the worker at the next update (reproducible;
+  // for tests), else it adopts it when finished (real time).
+  double update_interval = 1.0 / 60.0;
+  bool multirate_background = true;
+  bool multirate_deterministic = false;
   // A .psim file's stored precomputation (save_precomputation; engine/haptics/scene_file.hpp):
   // used when it was made from the same inputs (mesh, materials, fixed nodes, options, step),
   // otherwise ignored and everything is computed. Linear formulation only.
@@ -102,6 +117,7 @@ class FemModel {
   long total_dofs() const;                         // 3#V
   std::string solver() const;                      // the linear solver used per step
   double factor_ms() const { return factor_ms_; }  // last factorisation (ms)
+  long relinearisations() const;                   // corotational_multirate: adopted so far
   bool solves_node(int v) const;                   // node v moves in the per-step solve
   const FemSystem& system() const;
   const std::vector<std::uint8_t>& fixed_nodes() const { return fixed_node_; }
@@ -112,6 +128,9 @@ class FemModel {
   bool precomputation_loaded() const;  // options.precomputed was used
 
  private:
+  void step_multirate(double h);
+  // sum_i w_i ((x_i - contact_point) . n - o_i) of the patch (unclamped) at displacement a (+ b).
+  double patch_gap(const Eigen::VectorXd& a, const Eigen::VectorXd* b) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
   FemModelOptions opt_;

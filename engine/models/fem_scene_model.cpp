@@ -54,7 +54,8 @@ class FemSceneModel final : public SceneModel {
         F_(cm.F),
         X0_(cm.model_V),
         patch_radius_(cfg.contact.patch_radius),
-        contact_k_(cfg.contact.stiffness) {
+        contact_k_(cfg.contact.stiffness),
+        update_rate_hz_(cfg.fem.update_rate_hz) {
     const long n = cm.model_V.rows();
     area_.setZero(n);
     for (size_t i = 0; i < cm.surface_to_model.size(); ++i)
@@ -150,7 +151,12 @@ class FemSceneModel final : public SceneModel {
                              {"solver", f.solver()},
                              {"factor_ms", f.factor_ms()},
                              {"patch_nodes", static_cast<long>(f.contact_nodes.size())},
+
                              {"outside_contacts", outside_contacts_}}}};
+    if (f.formulation() == FemFormulation::corotational_multirate) {
+      info["fem"]["update_rate_hz"] = update_rate_hz_;  // deformation updates per second
+      info["fem"]["relinearisations"] = f.relinearisations();
+    }
     st.model_info = info.dump();
   }
 
@@ -264,7 +270,7 @@ class FemSceneModel final : public SceneModel {
   Eigen::VectorXd area_;  // #M lumped surface area (m^2), 0 inside
   std::vector<int> adj_start_, adj_;
   std::vector<std::uint8_t> mark_;
-  double patch_radius_, contact_k_, mass_ = 0;
+  double patch_radius_, contact_k_, update_rate_hz_, mass_ = 0;
   // The probe pad (compute_pad): one entry per (face vertex, pad node).
   struct PadEntry {
     int node, slot;  // pad node; face vertex 0..2
@@ -292,9 +298,10 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
   c.keys(m, P,
          {"kind", "formulation", "material", "rayleigh_alpha", "rayleigh_beta", "lumped_mass",
           "jacobian", "operational_region", "operational_radius", "fixed_region", "fixed_z_below",
-          "support_modulus"});
+          "support_modulus", "update_rate_hz", "deterministic_update"});
   FemConfig& f = cfg.fem;
-  if (auto fo = c.text(m, P, "formulation", false, {"linear", "corotational", "condensed"}))
+  if (auto fo = c.text(m, P, "formulation", false,
+                       {"linear", "corotational", "condensed", "corotational_multirate"}))
     f.formulation = fem_formulation_from_string(*fo);
   read_material(c, m, P, cfg.material);
   f.rayleigh_alpha =
@@ -304,6 +311,16 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
       c.number(m, P, "rayleigh_beta", false, 0, 10, "the stiffness-proportional damping (s)")
           .value_or(f.rayleigh_beta);
   f.lumped_mass = c.boolean(m, P, "lumped_mass", false).value_or(f.lumped_mass);
+  f.update_rate_hz =
+      c.number(m, P, "update_rate_hz", false, 1, 1e4,
+               "the deformation updates per second of the multi-rate co-rotational model (Hz)")
+          .value_or(f.update_rate_hz);
+  f.multirate_deterministic =
+      c.boolean(m, P, "deterministic_update", false).value_or(f.multirate_deterministic);
+  if (m.contains("deterministic_update") && f.formulation != FemFormulation::corotational_multirate)
+    c.err(P + ".deterministic_update", "only the corotational_multirate formulation has updates");
+  if (m.contains("update_rate_hz") && f.formulation != FemFormulation::corotational_multirate)
+    c.err(P + ".update_rate_hz", "only the corotational_multirate formulation has an update rate");
   if (auto j = c.text(m, P, "jacobian", false, {"exact", "warped"}))
     f.exact_jacobian = *j == "exact";
   f.operational_radius =
@@ -405,6 +422,8 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
   opt.rayleigh_beta = fc.rayleigh_beta;
   opt.lumped_mass = fc.lumped_mass;
   opt.jacobian = fc.exact_jacobian ? CorotJacobian::exact : CorotJacobian::warped;
+  opt.update_interval = 1.0 / fc.update_rate_hz;
+  opt.multirate_deterministic = fc.multirate_deterministic;
   if (cm.model_blob_kind == "fem") opt.precomputed = cm.model_blob;  // a .psim file's
   if (cfg.support.modulus > 0) {  // per unit area of the surface it holds, as for C
     opt.support_stiffness.setZero(3 * nm);
@@ -458,8 +477,8 @@ std::string save_fem(const SceneConfig& cfg, const SceneMesh& cm) {
 
 const ModelKind& fem_model_kind() {
   static const ModelKind k{"fem",
-                           "linear, co-rotational or condensed tetrahedral FEM of the tissue "
-                           "(prototype D)",
+                           "linear, co-rotational, condensed or multi-rate co-rotational "
+                           "tetrahedral FEM of the tissue (prototype D)",
                            &read_fem,
                            nullptr,
                            &make_fem,

@@ -1,0 +1,106 @@
+#pragma once
+// Multi-rate co-rotational FEM (issue 12; FemFormulation::corotational_multirate): the
+// co-rotational model split into a haptic part at 1 kHz and a deformation part at graphics rate.
+//
+// A linearisation about a state u_L (x_L = X0 + u_L) is the tangent problem of the static
+// co-rotational FEM there: K_t(x_L) (exact or warped tangent plus the linear foundation, identity
+// rows on fixed dofs), factorised, and the Newton step of the unloaded problem
+//   delta0 = K_t^-1 (f_int(x_L) + f_ext),     f_int including the foundation's -S u_L.
+// Under an additional contact load -f G n on the patch (G = sum_i w_i E_i), one Newton step from
+// x_L gives the static displacement
+//   u(f) = u_L + delta0 - f Y n,   Y = K_t^-1 G  (3#V by 3: the patch's compliance columns),
+// so the patch's normal gap is linear in f with the compliance c = n^T G^T Y n, and the penalty
+// spring k in series with it renders f = k d0 / (1 + k c), d0 the penetration of u_L + delta0.
+// That is the haptic step: a few patch-node reads and a 3x3 product, no sparse solve (Y is
+// solved once per linearisation and patch: 3 back-substitutions).
+//
+// At graphics rate (every update interval) the deformation is advanced to the predicted
+// equilibrium u(f) under the current force and the model re-linearises about it: assembly of the
+// tangent and forces, one numeric factorisation (pattern analysed once), delta0 and Y — the cost
+// of one full co-rotational step. With `background` that work runs in a worker thread on a
+// second buffer while the haptic steps go on with the previous linearisation, and is adopted at
+// the first update at which it is finished (real time: the haptic step never waits; when the
+// re-linearisation takes longer than an interval — ~75 ms on Model-C, ~300 ms under load — the
+// deformation is still moved at every update, from the older linearisation, and the achieved
+// re-linearisation rate is 1 / its cost). `deterministic` instead waits for it at the next
+// update (one interval of lag; the result does not depend on thread timing; the step may
+// block). Without background it runs in the update step itself (a p99 of one factorisation).
+//
+// Quasi-static: the haptic force is the static equilibrium of the linearised problem, the
+// tissue's inertia and damping are not rendered (the full co-rotational model is dynamic; on a
+// slow press the difference is the viscous force). At small strain K_t = K and f_int = -K u, so
+// it equals the linear FEM's static response exactly (tests/fem). Units: m, N, s.
+#include <Eigen/Core>
+#include <cstdint>
+#include <future>
+#include <memory>
+#include <vector>
+
+#include "engine/solvers/fem_corotational.hpp"
+#include "engine/solvers/fem_static.hpp"
+
+namespace palplab::engine {
+
+// A contact patch: (first dof, weight) of every patch node that moves.
+struct PatchTap {
+  int dof;
+  double w;
+  bool operator==(const PatchTap& o) const { return dof == o.dof && w == o.w; }
+};
+
+struct CorotLinearisation {
+  Eigen::VectorXd u;                           // 3#V, the state it is about (m)
+  Eigen::VectorXd delta0;                      // 3#V (m)
+  std::vector<PatchTap> patch;                 // the patch Y was solved for
+  Eigen::Matrix<double, Eigen::Dynamic, 3> Y;  // 3#V by 3, K_t^-1 G (m/N)
+  double factor_ms = 0;                        // assembly + factorisation (ms)
+  // Workspace.
+  SparseMatrixd K;
+  SparseLdlt ldlt;
+  bool analysed = false;
+  std::vector<Matrix12d> Ke_t;
+  Eigen::VectorXd f_int;
+};
+
+class CorotMultirate {
+ public:
+  // fixed_dof: 3#V flags; support: 3#V foundation stiffness (N/m, empty = none).
+  CorotMultirate(const FemSystem& sys, std::vector<std::uint8_t> fixed_dof, Eigen::VectorXd support,
+                 CorotJacobian jac, bool background, bool deterministic);
+  ~CorotMultirate();
+  CorotMultirate(const CorotMultirate&) = delete;
+  CorotMultirate& operator=(const CorotMultirate&) = delete;
+
+  // Re-linearises about u now (construction, reset); drops a pending background job.
+  void relinearise_now(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
+                       const std::vector<PatchTap>& patch);
+  // The graphics-rate update: a finished (deterministic: the) pending linearisation becomes
+  // current, then one about u is started (background; unless one is still running) or made now.
+  void update(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
+              const std::vector<PatchTap>& patch);
+  const CorotLinearisation& current() const { return *cur_; }
+  // Y of the current linearisation for `patch` (3 back-substitutions unless cached).
+  const Eigen::Matrix<double, Eigen::Dynamic, 3>& compliance_columns(
+      const std::vector<PatchTap>& patch);
+  // The patch's 3x3 compliance G^T Y (m/N).
+  Eigen::Matrix3d patch_compliance(const std::vector<PatchTap>& patch);
+  long relinearisations() const { return count_; }  // adopted since construction
+
+ private:
+  void linearise(CorotLinearisation& L, const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
+                 const std::vector<PatchTap>& patch) const;
+  void wait();
+  const FemSystem& sys_;
+  std::vector<std::uint8_t> fixed_dof_;
+  Eigen::VectorXd support_;
+  CorotJacobian jac_;
+  bool background_, deterministic_;
+  long count_ = 0;
+  std::vector<int> diag_slot_, zero_slot_, fixed_diag_slot_;
+  std::unique_ptr<CorotLinearisation> cur_, next_;
+  std::future<void> job_;
+  bool pending_ = false;
+  Eigen::VectorXd job_u_, job_f_;  // the job's inputs (copies: the caller moves on)
+};
+
+}  // namespace palplab::engine
