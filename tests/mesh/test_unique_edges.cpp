@@ -30,8 +30,9 @@ std::set<std::pair<int, int>> rows_of(const Edges& E) {
   std::set<std::pair<int, int>> e;
   for (long k = 0; k < E.rows(); ++k) {
     EXPECT_LT(E(k, 0), E(k, 1)) << k;
-    if (k > 0)
+    if (k > 0) {
       EXPECT_TRUE(std::make_pair(E(k - 1, 0), E(k - 1, 1)) < std::make_pair(E(k, 0), E(k, 1)));
+    }
     e.insert({E(k, 0), E(k, 1)});
   }
   return e;
