@@ -30,6 +30,9 @@
 //           level-0 polyhedron (midpoints stay on the straight coarse edges); the extrapolated
 //           value is the exact solution on that polyhedron, not on the smooth tissue surface,
 //           an O(h0^2) geometric difference that no refinement removes.
+//           Measured on prototype D's body press: D's surface there has 12.9 mm edges against the
+//           10 mm press radius, so level 0 (D itself) sees a point load in effect and the
+//           levels are pre-asymptotic for that press (press_h, reference_untrusted_reason).
 //
 // Quasi-static curve (curve_steps > 0): the same press applied as a slow ramp of dead load
 // F_k = force k / curve_steps, k = 1..curve_steps, each step an equilibrium of the
