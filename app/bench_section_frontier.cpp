@@ -93,6 +93,7 @@ struct Reference {
   bool nested = false;
   std::string untrusted;  // why the reference is not trusted ("" = trusted)
   double press_h0 = 0;    // m, mesh size under the press on the first extrapolation level
+  double press_h_d = 0;   // m, the same on D's own mesh
   long finest_nodes = 0, finest_tets = 0;
 };
 
@@ -194,15 +195,35 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
   o.press_direction = ref.dir;
   o.levels = 3;
   // Full run: nested red refinements of D's own mesh (9264 -> 74k -> 593k tets; measured on
-  // 2 cores: ~2.5 GB peak and about a minute of CPU per region for the finest level's sparse
-  // LDL^T) — the spaces are nested and the extrapolation's ratio is exact
+  // the loaded 2 cores: > 5 GB peak and > 6 min of CPU per region for the finest level's sparse
+  // LDL^T, docs/PERFORMANCE.md) — the spaces are nested and the extrapolation's ratio is exact
   // (fem_reference.hpp). --quick: a finest nested level of 593k tets does not fit 3 minutes, so
   // the quick run keeps three TetGen levels of D's surface (not nested, max volume twice the
   // prototype's mean, halved per level) and says whether they can be trusted.
-  ref.nested = !quick;
-  if (quick) {
+  // The mesh size under the press on D's own mesh (the first nested level): where it exceeds
+  // the pad radius (the body: 12.9 mm edges, one surface vertex within 1 cm) nested levels of D
+  // cannot be trusted whatever they show (reference_untrusted_reason), and the finest one would
+  // cost minutes of CPU and ~5 GB: such a region gets the TetGen levels instead, untrusted with
+  // that reason.
+  double h_d = 0;
+  {
+    const mesh::Positions V = g.V;
+    const mesh::Faces F = g.F;
+    const engine::PressLoad pl = engine::smooth_press_load(V, F, ref.p, ref.dir, 1.0, a);
+    for (long k = 0; k < F.rows(); ++k) {
+      bool loaded = true;
+      for (int j = 0; j < 3; ++j) loaded = loaded && pl.f.segment<3>(3 * F(k, j)).squaredNorm() > 0;
+      if (loaded)
+        for (int j = 0; j < 3; ++j)
+          h_d = std::max(h_d, (V.row(F(k, j)) - V.row(F(k, (j + 1) % 3))).norm());
+    }
+  }
+  const bool unresolved_on_d = h_d > a;
+  ref.press_h_d = h_d;
+  ref.nested = !quick && !unresolved_on_d;
+  if (!ref.nested) {
     o.refinement = engine::FemRefinement::tetgen;
-    o.max_volume *= 2;
+    if (quick) o.max_volume *= 2;
   } else {
     o.refinement = engine::FemRefinement::nested;
   }
@@ -219,6 +240,15 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
   // monotone, the press unresolved on the levels used, or a large correction) is not used for
   // the stiffness: the finest level stands in, ref_extrapolated = 0 and ref_trusted = 0 say so.
   ref.untrusted = engine::reference_untrusted_reason(r);
+  if (unresolved_on_d) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "D's mesh does not resolve the press (edges up to %.3g mm under it > the pad "
+                  "radius %.3g mm: a point load for D), so nested levels of D cannot converge "
+                  "for it either and TetGen levels stand in",
+                  1e3 * h_d, 1e3 * a);
+    ref.untrusted = buf + (ref.untrusted.empty() ? "" : "; " + ref.untrusted);
+  }
   ref.extrapolated = ref.untrusted.empty() && r.stiffness > 0;
   ref.press_h0 = r.levels[r.levels.size() - 3].press_h;
   ref.finest_tets = r.levels.back().tets;
@@ -586,6 +616,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
                    {"nested", ref.nested ? 1.0 : 0.0},
                    {"ref_trusted", ref.untrusted.empty() ? 1.0 : 0.0},
                    {"press_h_level0_m", ref.press_h0},
+                   {"press_h_on_D_m", ref.press_h_d},
                    {"ref_order", std::isfinite(ref.order) ? ref.order : -1.0},
                    {"ref_extrapolated", ref.extrapolated ? 1.0 : 0.0},
                    {"finest_vs_ref_rel", std::abs(ref.k_finest / ref.k - 1)},

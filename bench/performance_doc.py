@@ -97,7 +97,7 @@ def frontier_tables(section):
             g(t[k] / d) if t.get(k) else "" for k in
             ["A", "B", "C", "C_full", "D_condensed", "D_corot"]) + " |")
     ref = ["", "| region | levels | finest tets | k_ref N/m | extrapolated | order | finest vs ref "
-           "| mesh under the press (level 0) mm | 1/k_ref (sᵀGs) m/N | wᵀGs m/N | time s | "
+           "| mesh under the press: D / level 0 mm | 1/k_ref (sᵀGs) m/N | wᵀGs m/N | time s | "
            "trusted (reason) |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in refs:
@@ -108,7 +108,8 @@ def frontier_tables(section):
             r["name"][: -len("_reference")], "nested" if m.get("nested") else "TetGen",
             g(m.get("finest_level_tets")), g(m.get("k_ref_N_per_m")), g(m.get("ref_extrapolated")),
             g(m.get("ref_order")), g(m.get("finest_vs_ref_rel")),
-            g(1e3 * m["press_h_level0_m"]) if "press_h_level0_m" in m else "",
+            (g(1e3 * m.get("press_h_on_D_m", 0)) + " / " + g(1e3 * m["press_h_level0_m"]))
+            if "press_h_level0_m" in m else "",
             g(m.get("c_ss_m_per_N")), g(m.get("c_ws_m_per_N")), g(r["median_s"]), why))
     return "\n".join(out + ratio + ref)
 
