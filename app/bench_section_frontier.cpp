@@ -195,7 +195,7 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
   o.press_direction = ref.dir;
   o.levels = 3;
   // Full run: nested red refinements of D's own mesh (9264 -> 74k -> 593k tets; measured on
-  // the loaded 2 cores: > 5 GB peak and > 6 min of CPU per region for the finest level's sparse
+  // the loaded 2 cores: > 5.9 GB peak and > 9.7 min of CPU per region for the finest level's sparse
   // LDL^T, docs/PERFORMANCE.md) — the spaces are nested and the extrapolation's ratio is exact
   // (fem_reference.hpp). --quick: a finest nested level of 593k tets does not fit 3 minutes, so
   // the quick run keeps three TetGen levels of D's surface (not nested, max volume twice the
