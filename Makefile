@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 GEN := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: deps build demo demo-mesh test bench bench-programs format clean
+.PHONY: deps build demo demo-mesh test bench bench-doc bench-programs format clean
 
 deps:
 	@bash .ci/install-deps
@@ -25,9 +25,23 @@ test: build
 
 # The full `palplab bench` run (docs/PERFORMANCE.md): out/bench/{bench.json,bench.md,*.svg}.
 # The older standalone programs of bench/ stay available: make bench-programs.
+# out/bench/run_info.txt records the commit, the machine load (uptime) before and after, and the
+# run's wall/CPU time and peak memory. `make bench-doc` then regenerates the measured tables of
+# docs/PERFORMANCE.md (bench/performance_doc.py) and copies the frontier figures to docs/figures.
+BENCH_CMD = $(BUILD)/palplab bench --json out/bench/bench.json --md out/bench/bench.md --svg out/bench
 bench: build
 	mkdir -p out/bench
-	$(BUILD)/palplab bench --json out/bench/bench.json --md out/bench/bench.md --svg out/bench
+	{ echo "date: $$(date -u)"; echo "commit: $$(git rev-parse --short HEAD 2>/dev/null)"; \
+	  echo "command: $(BENCH_CMD)"; echo "cores: $$(nproc)"; echo "uptime before: $$(uptime)"; } \
+	  > out/bench/run_info.txt
+	/usr/bin/time -a -o out/bench/run_info.txt -f "time: wall %e s, user %U s, sys %S s, peak RSS %M kB" \
+	  $(BENCH_CMD)
+	echo "uptime after: $$(uptime)" >> out/bench/run_info.txt
+
+bench-doc: bench
+	python3 bench/performance_doc.py out/bench/bench.json --doc docs/PERFORMANCE.md \
+	  --run-info out/bench/run_info.txt
+	cp out/bench/frontier.svg out/bench/frontier_field.svg docs/figures/
 
 bench-programs: build
 	cmake --build $(BUILD) -j $(JOBS) --target benchmarks

@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -50,6 +51,34 @@ bool richardson_sizes(const double q[3], const double h[3], double& order, doubl
   const double C = d2 / (std::pow(h[2], order) - std::pow(h[1], order));
   extrapolated = q[2] - C * std::pow(h[2], order);
   return true;
+}
+
+std::string reference_untrusted_reason(const FemReferenceResult& r, double max_finest_error) {
+  std::string why;
+  const auto add = [&](const std::string& s) { why += (why.empty() ? "" : "; ") + s; };
+  char buf[160];
+  if (!std::isfinite(r.observed_order)) {
+    add("the differences between levels do not shrink monotonically (no observed order)");
+  } else if (!r.order_plausible) {
+    std::snprintf(buf, sizeof buf, "observed order %.3g outside the asymptotic range [%.2g, %.2g]",
+                  r.observed_order, kPlausibleOrder[0], kPlausibleOrder[1]);
+    add(buf);
+  }
+  if (!r.monotone) add("estimated error not decreasing over the levels");
+  const size_t L = r.levels.size();
+  if (L >= 3 && r.press_radius > 0 && r.levels[L - 3].press_h > r.press_radius) {
+    std::snprintf(buf, sizeof buf,
+                  "press not resolved: on level %zu the loaded faces' edges reach %.3g mm > the "
+                  "press radius %.3g mm (pre-asymptotic: a point load in effect)",
+                  L - 3, 1e3 * r.levels[L - 3].press_h, 1e3 * r.press_radius);
+    add(buf);
+  }
+  if (!r.levels.empty() && r.order_plausible && !(r.levels.back().est_error <= max_finest_error)) {
+    std::snprintf(buf, sizeof buf, "finest level's estimated error %.3g above %.3g",
+                  r.levels.back().est_error, max_finest_error);
+    add(buf);
+  }
+  return why;
 }
 
 PressLoad smooth_press_load(const mesh::Positions& V, const mesh::Faces& F,
@@ -345,6 +374,17 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     lv.tets = m.T.rows();
     lv.dofs = static_cast<long>(ss.split.free.size());
     lv.patch_area = load.patch_area;
+    for (long k = 0; k < bf.F.rows(); ++k) {
+      // A face under the patch loads all three of its vertices (interior quadrature points);
+      // a face of the ring around it only touches loaded vertices.
+      bool loaded = true;
+      for (int j = 0; j < 3; ++j) loaded = loaded && f.segment<3>(3 * bf.F(k, j)).squaredNorm() > 0;
+      if (!loaded) continue;
+      for (int j = 0; j < 3; ++j)
+        lv.press_h =
+            std::max(lv.press_h,
+                     (mesh::row3(m.V, bf.F(k, j)) - mesh::row3(m.V, bf.F(k, (j + 1) % 3))).norm());
+    }
     lv.mesh_size = std::cbrt(m.volume.sum() / static_cast<double>(m.T.rows()));
     lv.displacement = delta;
     lv.stiffness = opt.force / delta;
@@ -374,6 +414,7 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     r = h[1] / h[2];  // for the field: the last pair
   }
   res.refinement_ratio = r;
+  res.press_radius = opt.press_radius;
   res.displacement = opt.force / res.stiffness;
   res.order_plausible =
       res.observed_order >= kPlausibleOrder[0] && res.observed_order <= kPlausibleOrder[1];

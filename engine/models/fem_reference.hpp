@@ -30,6 +30,9 @@
 //           level-0 polyhedron (midpoints stay on the straight coarse edges); the extrapolated
 //           value is the exact solution on that polyhedron, not on the smooth tissue surface,
 //           an O(h0^2) geometric difference that no refinement removes.
+//           Measured on prototype D's body press: D's surface there has 12.9 mm edges against the
+//           10 mm press radius, so level 0 (D itself) sees a point load in effect and the
+//           levels are pre-asymptotic for that press (press_h, reference_untrusted_reason).
 //
 // Quasi-static curve (curve_steps > 0): the same press applied as a slow ramp of dead load
 // F_k = force k / curve_steps, k = 1..curve_steps, each step an equilibrium of the
@@ -39,6 +42,7 @@
 // extrapolated with its own observed order (ratio as for the static value) when both it and
 // the static order are plausible, else it is the finest level's value.
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "engine/mesh/materials.hpp"
@@ -95,7 +99,11 @@ struct FemReferenceOptions {
 struct FemReferenceLevel {
   double max_volume = 0;  // m^3
   long nodes = 0, tets = 0, dofs = 0;
-  double patch_area = 0;    // m^2, boundary faces touching the loaded vertices
+  double patch_area = 0;  // m^2, boundary faces touching the loaded vertices
+  // m, the longest edge of the boundary faces that carry load: the mesh size under the press.
+  // Above the press radius the level does not resolve the load (a point load in effect) and is
+  // pre-asymptotic for the press, whatever its mean mesh size.
+  double press_h = 0;
   double displacement = 0;  // m
   double stiffness = 0;     // N/m
   double est_error = 0;     // |stiffness - extrapolated| / extrapolated
@@ -130,8 +138,19 @@ struct FemReferenceResult {
   // be trusted (the field and curve are then the finest level's, unextrapolated).
   bool order_plausible = false;
   double refinement_ratio = 0;       // the ratio used for the extrapolation (nested: 2)
+  double press_radius = 0;           // m, the options' (for reference_untrusted_reason)
   std::vector<FemCurvePoint> curve;  // quasi-static curve (curve_steps points), extrapolated
 };
+
+// Whether a reference can be trusted, by the criteria the extrapolation itself uses: the
+// estimated error strictly decreasing over the levels (`monotone`), the observed order within
+// kPlausibleOrder, the finest level's estimated error at most max_finest_error (the
+// extrapolation's correction is then small against what it corrects), and the press resolved on
+// every level the extrapolation uses (press_h <= press_radius on the three finest: else those
+// levels see a point load, whose compliance does not converge, and are pre-asymptotic). Returns ""
+// when trusted, else the reasons in words (for reports: `palplab fem reference`, the bench
+// frontier).
+std::string reference_untrusted_reason(const FemReferenceResult& r, double max_finest_error = 0.05);
 
 // The consistent nodal load of the smooth press on a triangulated boundary (faces F of the
 // positions V): pressure p(x) = p0 (1 - (|x - point| / radius)^2)^2 within `radius`, along

@@ -133,6 +133,28 @@ TEST(CliBench, QuickRunHasEverySectionFiniteAndFindsPlantedError) {
   const auto* ref = find(f, "ovary_left_reference");
   ASSERT_NE(ref, nullptr);
   EXPECT_GT((*ref)["metrics"]["c_ws_m_per_N"].get<double>(), 0.0);
+  // The reference says whether it can be trusted, and why not: a trusted one was extrapolated
+  // with a plausible order (fem_reference.hpp kPlausibleOrder) on levels that resolve the press;
+  // an untrusted one names its reason in the case's description and stands in unextrapolated.
+  const auto& rm = (*ref)["metrics"];
+  const std::string what = (*ref)["what"].get<std::string>();
+  EXPECT_GT(rm["press_h_level0_m"].get<double>(), 0.0);
+  if (rm["ref_trusted"].get<double>() == 1.0) {
+    EXPECT_NE(what.find("trusted"), std::string::npos) << what;
+    EXPECT_EQ(what.find("NOT TRUSTED"), std::string::npos) << what;
+    EXPECT_EQ(rm["ref_extrapolated"].get<double>(), 1.0);
+    EXPECT_GE(rm["ref_order"].get<double>(), 0.8);
+    EXPECT_LE(rm["ref_order"].get<double>(), 2.5);
+    EXPECT_LE(rm["press_h_level0_m"].get<double>(), 0.01);  // D's pad radius
+  } else {
+    EXPECT_EQ(rm["ref_trusted"].get<double>(), 0.0);
+    EXPECT_NE(what.find("NOT TRUSTED: "), std::string::npos) << what;
+    EXPECT_GT(what.size(), what.find("NOT TRUSTED: ") + 20) << "a reason is given: " << what;
+    EXPECT_EQ(rm["ref_extrapolated"].get<double>(), 0.0);
+    EXPECT_EQ(rm["finest_vs_ref_rel"].get<double>(), 0.0);  // the finest level stands in
+  }
+  EXPECT_EQ(rm["ref_trusted"].get<double>(),
+            (*find(f, "ovary_left_D"))["metrics"]["ref_trusted"].get<double>());
 
   // The integrators' reference agrees with itself at twice its step.
   for (const auto& r : j["integrators"]["results"]) {
