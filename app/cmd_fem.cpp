@@ -152,7 +152,8 @@ int run_reference(const ReferenceArgs& a) {
     field_x.push_back({o.surface.V(i, 0), o.surface.V(i, 1), o.surface.V(i, 2)});
     field_u.push_back({r.field(i, 0), r.field(i, 1), r.field(i, 2)});
   }
-  const bool trusted = r.monotone && r.order_plausible;
+  const std::string untrusted = engine::reference_untrusted_reason(r);
+  const bool trusted = untrusted.empty();
   json out = {
       {"format", "palplab-fem-reference/1"},
       {"prototype", cfg.id},
@@ -180,6 +181,7 @@ int run_reference(const ReferenceArgs& a) {
       {"monotone", r.monotone},
       {"order_plausible", r.order_plausible},
       {"trusted", trusted},
+      {"untrusted_reason", untrusted},
       {"field", {{"positions", field_x}, {"displacement", field_u}}}};
   if (a.steps > 0) {
     json pts = json::array();
@@ -232,9 +234,10 @@ int run_reference(const ReferenceArgs& a) {
   }
   if (!trusted)
     std::printf(
-        "WARNING: the levels are not in the asymptotic range (monotone %s, order %s): the "
-        "extrapolation is not trustworthy; add a level or refine the base mesh\n",
-        r.monotone ? "yes" : "no", r.order_plausible ? "plausible" : "implausible");
+        "WARNING: the extrapolation is not trustworthy: %s (monotone %s, order %s); add a level "
+        "or refine the base mesh\n",
+        untrusted.c_str(), r.monotone ? "yes" : "no",
+        r.order_plausible ? "plausible" : "implausible");
   std::printf("written %s\n", a.out.c_str());
   return 0;
 }

@@ -63,7 +63,9 @@ TEST(Press, ForceControlReachesHoldsAndReleases) {
   EXPECT_NEAR(d.time_to_force(), 0.35, 1.5 * kDt);
   // The hold keeps the force within 1 % of the target after 0.1 s of settling.
   for (const auto& x : s)
-    if (x.phase == PressPhase::hold && x.t > d.time_to_force() + 0.1) EXPECT_NEAR(x.f, 2.5, 0.025);
+    if (x.phase == PressPhase::hold && x.t > d.time_to_force() + 0.1) {
+      EXPECT_NEAR(x.f, 2.5, 0.025);
+    }
   // Withdrawn to the start point and released: the last force is 0 at the start position.
   EXPECT_EQ(s.back().f, 0.0);
   EXPECT_NEAR((s.back().x - (base().point + 0.002 * base().normal)).norm(), 0.0, 1e-12);
@@ -112,7 +114,9 @@ TEST(Press, PositionControlFollowsTheDepthWhateverTheForce) {
   for (const auto& x : s) {
     const double depth = p.normal.dot(p.point - x.x);
     deepest = std::max(deepest, depth);
-    if (x.phase == PressPhase::hold) EXPECT_NEAR(depth, 0.008, 1e-12);
+    if (x.phase == PressPhase::hold) {
+      EXPECT_NEAR(depth, 0.008, 1e-12);
+    }
   }
   EXPECT_NEAR(deepest, 0.008, 1e-12);  // never deeper than asked
   // Hold 0.3 s, then 10 mm out at 3 cm/s, then the release.
@@ -132,7 +136,9 @@ TEST(Press, SlidingHoldMovesAlongTheSurfaceAtTheGivenSpeed) {
   std::vector<std::pair<double, double>> hold;  // (t, along)
   for (const auto& x : s) {
     const double along = tangent.dot(x.x - p.point);
-    if (x.phase == PressPhase::approach) EXPECT_NEAR(along, 0.0, 1e-15);
+    if (x.phase == PressPhase::approach) {
+      EXPECT_NEAR(along, 0.0, 1e-15);
+    }
     if (x.phase == PressPhase::hold) {
       hold.push_back({x.t, along});
       EXPECT_NEAR(x.f, 2.5, 0.05);  // the force is still held

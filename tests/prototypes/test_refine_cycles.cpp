@@ -140,7 +140,10 @@ TEST(RefineCycles, FiveThousandCyclesOnTheStomach) {
   run_cycles(cfg, press, 5000);
 }
 
-TEST(RefineCycles, DISABLED_HundredThousandCyclesOnPrototypeCsOwnMesh) {
+TEST(RefineCycles, HundredThousandCyclesOnPrototypeCsOwnMesh) {
+  // The issue's 10^5 cycles on C's own 2426-node mesh: ~0.5 ms CPU per cycle (each rebuilds the
+  // model), ~50 s on an idle core. Worth it: it is the case the issue names. Left out of the
+  // sanitizer half of CI (.ci/run), where it would take ten times as long.
   const SceneConfig cfg = prototype_c();
   Scene scene = make_scene(cfg);
   run_cycles(cfg, scene.geometry().region_node("body"), 100000);
