@@ -37,6 +37,9 @@ class Device {
   // A scripted device may end before the clock's duration; run_lockstep stops then.
   virtual bool finished() const { return false; }
   // Device events since the last call (moved out). Devices without any return none.
+  // take_events() and samples_received() may be called from another thread than read() and
+  // write() (a real-time session's writer thread polls them while the haptic thread steps):
+  // implementations that have state behind them must make them thread-safe.
   virtual std::vector<DeviceEvent> take_events() { return {}; }
   // Fresh samples received from hardware so far, for the start-up rate self-test
   // (devices/self_test.hpp); -1 for devices whose samples are made by the simulator's own loop.

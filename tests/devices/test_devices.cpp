@@ -146,6 +146,44 @@ TEST(UdpDevice, PositionInForceOutWithSequenceNumbers) {
   EXPECT_EQ(dev.samples_received(), 2);
 }
 
+TEST(UdpDevice, EventsTakenFromAnotherThreadWhileTheHapticThreadReads) {
+  // A real-time session's writer thread takes the device's events while the haptic thread reads
+  // datagrams (protocols/runner.cpp). Every datagram here skips a sequence number, so every read
+  // that drains one adds a device_gap event: no event may be lost or duplicated across the two
+  // threads (the sum of the gaps taken equals lost()), and nothing may crash (ASan in CI).
+  e::UdpDevice dev({0, 1.0});  // no timeout events while the test runs (300 ms)
+  Bridge br(dev.port());
+  std::atomic<bool> stop{false};
+  std::thread haptic([&] {
+    double t = 0;
+    while (!stop.load()) {
+      dev.read(t);
+      t += 0.001;
+    }
+  });
+  double gaps = 0;
+  long taken = 0;
+  const auto end = Clock::now() + std::chrono::milliseconds(300);
+  for (std::uint32_t s = 1; Clock::now() < end; s += 2) {
+    br.send({0.01, 0, 0}, s);
+    for (const auto& ev : dev.take_events()) {
+      EXPECT_EQ(ev.kind, "device_gap");
+      gaps += ev.value;
+      ++taken;
+    }
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the last datagrams drain
+  stop = true;
+  haptic.join();
+  for (const auto& ev : dev.take_events()) {
+    gaps += ev.value;
+    ++taken;
+  }
+  EXPECT_GT(taken, 10);
+  EXPECT_EQ(gaps, static_cast<double>(dev.lost()));
+  EXPECT_EQ(dev.samples_received() - 1, taken);  // every datagram after the first had a gap
+}
+
 TEST(UdpDevice, PortInUseIsAnInputError) {
   e::UdpDevice a({0, 0.002});
   EXPECT_THROW(e::UdpDevice({a.port(), 0.002}), palplab::InputError);

@@ -153,7 +153,7 @@ void UdpDevice::drain(double t) {
     if (have_sample_ && m->seq - last_.seq > 1) {
       const std::uint32_t gap = m->seq - last_.seq - 1;
       lost_ += gap;
-      events_.push_back({t, "device_gap", static_cast<double>(gap)});
+      add_event(t, "device_gap", static_cast<double>(gap));
     }
     last_ = *m;
     have_sample_ = true;
@@ -163,7 +163,7 @@ void UdpDevice::drain(double t) {
     have_peer_ = true;
     if (timed_out_) {
       timed_out_ = false;
-      events_.push_back({t, "device_resumed", 0.0});
+      add_event(t, "device_resumed", 0.0);
     }
   }
 }
@@ -175,7 +175,7 @@ DeviceInput UdpDevice::read(double t) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - last_rx_).count() >
           opt_.timeout) {
     timed_out_ = true;
-    events_.push_back({t, "device_timeout", opt_.timeout});
+    add_event(t, "device_timeout", opt_.timeout);
   }
   DeviceInput in;
   in.position = last_.x;
@@ -192,7 +192,7 @@ void UdpDevice::write(const Rendered& r) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - last_rx_).count() >
           opt_.timeout) {
     timed_out_ = true;
-    events_.push_back({t_, "device_timeout", opt_.timeout});
+    add_event(t_, "device_timeout", opt_.timeout);
   }
   UdpForce f;
   f.seq = ++tx_seq_;
@@ -209,8 +209,14 @@ void UdpDevice::write(const Rendered& r) {
            sizeof(sockaddr_in));
 }
 
+void UdpDevice::add_event(double t, const char* kind, double value) {
+  std::lock_guard lock(events_mu_);
+  events_.push_back({t, kind, value});
+}
+
 std::vector<DeviceEvent> UdpDevice::take_events() {
   std::vector<DeviceEvent> e;
+  std::lock_guard lock(events_mu_);
   e.swap(events_);
   return e;
 }

@@ -19,8 +19,10 @@
 // carries zero force and the "force off" flag until positions arrive again; events
 // device_timeout / device_resumed / device_gap are reported through take_events().
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,9 +87,15 @@ class UdpDevice : public Device {
   UdpPosition last_;
   std::chrono::steady_clock::time_point last_rx_;
   std::uint32_t tx_seq_ = 0;
-  long received_ = 0, dropped_ = 0, lost_ = 0;
+  // received_ and events_ are read by the session's writer thread while the haptic thread
+  // drains datagrams (Device::take_events): an atomic counter and a mutex. Unguarded, a device
+  // gap under load pushed into events_ while the writer swapped it out (a crash seen once).
+  std::atomic<long> received_{0};
+  long dropped_ = 0, lost_ = 0;
   double t_ = 0.0;
+  std::mutex events_mu_;
   std::vector<DeviceEvent> events_;
+  void add_event(double t, const char* kind, double value);
 };
 
 }  // namespace palplab::engine
