@@ -112,7 +112,7 @@ bool get_sparse(In& in, std::int64_t rows, SparseMatrixd& M) {
       const int i = A.innerIndexPtr()[q];
       if (i < 0 || i >= r || (q > outer[j] && i <= A.innerIndexPtr()[q - 1])) return false;
     }
-  M = std::move(A);
+  M.swap(A);  // Eigen 3.4's SparseMatrix has no move assignment: = std::move(A) copies
   return true;
 }
 
@@ -157,8 +157,15 @@ bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long tot
   std::size_t at = in.at;
   LdltFactor f;
   if (!get_ldlt_factor(blob, at, n, f) || at != blob.size()) return false;
-  factor = std::move(f);
-  out = std::move(st);
+  // Member by member: the implicit moves would copy the sparse matrices (no Eigen move).
+  factor.L.swap(f.L);
+  factor.D = std::move(f.D);
+  factor.P.indices().swap(f.P.indices());
+  factor.Pinv.indices().swap(f.Pinv.indices());
+  out.act = std::move(st.act);
+  out.K_c.swap(st.K_c);
+  out.m_lumped = std::move(st.m_lumped);
+  out.h = st.h;
   return true;
 }
 
@@ -186,7 +193,7 @@ bool get_ldlt_factor(const std::string& blob, std::size_t& at, long n, LdltFacto
     if (!(D[j] != 0) || (L.outerIndexPtr()[j] < L.outerIndexPtr()[j + 1] &&
                          L.innerIndexPtr()[L.outerIndexPtr()[j]] <= j))
       return false;
-  factor.L = std::move(L);
+  factor.L.swap(L);
   factor.D = std::move(D);
   factor.P.indices() = std::move(P);
   factor.Pinv.indices() = std::move(Pinv);
