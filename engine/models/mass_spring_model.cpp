@@ -511,7 +511,7 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
       E[t] = mat.youngs_modulus;
       rho[t] = mat.density;
     }
-    sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta);
+    sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta, &cm.model_E);
     sys.mass = tet_lumped_mass(cm.model_V, cm.model_T, rho);
     face_membrane = boundary_membrane(cm.model_V, cm.model_T, cm.model_F, cm.boundary_tet, E);
   } else {

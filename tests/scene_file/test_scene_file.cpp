@@ -16,6 +16,7 @@
 #include "engine/haptics/scene_file.hpp"
 #include "engine/models/fem_block_mesh.hpp"
 #include "engine/models/fem_model.hpp"
+#include "engine/models/mass_spring_material.hpp"
 #include "engine/models/mass_spring_model.hpp"
 #include "engine/models/model.hpp"
 #include "engine/solvers/far_field.hpp"
@@ -261,6 +262,33 @@ TEST(SceneFileMassSpring, StoredFarFieldRestoresExactlyAndOnlyForTheSameSystem) 
   FarField f;
   far_field_build(sys, f, &longer);
   EXPECT_FALSE(f.restored);
+}
+
+// tet_springs takes the scene mesh's stored tet edges (a loaded file need not sort them again)
+// only when they are exactly unique_edges(T): the same springs bit for bit, and any other edge
+// list (reordered, one missing, one extra, out of range) falls back to computing them.
+TEST(SceneFileMassSpring, TetSpringsUseGivenEdgesOnlyWhenTheyAreTheTetsEdges) {
+  using namespace palplab::engine;
+  const SceneConfig cfg = prototypes::load_prototype(proto("C"));
+  const auto cm = scene_mesh(cfg.mesh);
+  ASSERT_TRUE(cm->tet);
+  const Eigen::VectorXd E = Eigen::VectorXd::LinSpaced(cm->model_T.rows(), 5e4, 2e5);
+  const Springs ref = tet_springs(cm->model_V, cm->model_T, E, 0.002);
+  auto same = [&](const Springs& s) {
+    return s.E == ref.E && s.rest == ref.rest && s.ks == ref.ks && s.kd == ref.kd;
+  };
+  EXPECT_TRUE(same(tet_springs(cm->model_V, cm->model_T, E, 0.002, &cm->model_E)));
+  RowMatX2i swapped = cm->model_E;
+  swapped.row(3).swap(swapped.row(4));
+  RowMatX2i missing = cm->model_E.topRows(cm->model_E.rows() - 1);
+  RowMatX2i extra(cm->model_E.rows() + 1, 2);
+  extra << cm->model_E, cm->model_V.rows() - 2, cm->model_V.rows() - 1;
+  RowMatX2i flipped = cm->model_E;
+  std::swap(flipped(0, 0), flipped(0, 1));
+  RowMatX2i range = cm->model_E;
+  range(range.rows() - 1, 1) = static_cast<int>(cm->model_V.rows());
+  for (const RowMatX2i* e : {&swapped, &missing, &extra, &flipped, &range})
+    EXPECT_TRUE(same(tet_springs(cm->model_V, cm->model_T, E, 0.002, e)));
 }
 
 // The FEM hook on its own: a linear model built from the stored precomputation restores it
