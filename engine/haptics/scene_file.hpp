@@ -37,7 +37,8 @@ namespace palplab::engine {
 struct SceneMesh;
 
 // Version 2: the MKEY section (the mesh's cache key) and the needle model's precomputation.
-inline constexpr std::uint32_t kSceneFileVersion = 2;
+// Version 3: the mass-spring model's linear exterior factorisation (engine/solvers/far_field.hpp).
+inline constexpr std::uint32_t kSceneFileVersion = 3;
 inline constexpr std::size_t kSceneFileHeaderBytes = 128;
 
 // One source a scene is built from: the prototype file, a mesh file, the materials table.

@@ -1,5 +1,6 @@
 #include "engine/models/mass_spring_material.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "engine/models/refinement.hpp"
@@ -21,32 +22,54 @@ inline std::uint64_t key(int a, int b) {
 }
 
 // Springs on `edges` (sorted unique, as unique_edges gives) with k_e = sum of contributions.
-Springs from_contributions(const RowMatX3d& X, const RowMatX2i& edges,
-                           const std::vector<std::pair<std::uint64_t, double>>& contrib,
-                           double beta) {
+// `given`: edges the caller had (not computed here from the contributions' elements); they are
+// used only if they are exactly those edges -- rows i < j strictly ascending, every contribution
+// on one of them, every one of them contributed to -- else false (out untouched).
+bool from_contributions(const RowMatX3d& X, const RowMatX2i& edges,
+                        const std::vector<std::pair<std::uint64_t, double>>& contrib, double beta,
+                        bool given, Springs& out) {
   Springs s;
-  s.E = edges;
   s.rest.resize(edges.rows());
   s.ks.setZero(edges.rows());
   // edges are sorted lexicographically (i < j): binary search on the packed key
   std::vector<std::uint64_t> keys(edges.rows());
   for (long e = 0; e < edges.rows(); ++e) {
+    if (given && !(edges(e, 0) >= 0 && edges(e, 0) < edges(e, 1) && edges(e, 1) < X.rows()))
+      return false;
     keys[e] = key(edges(e, 0), edges(e, 1));
-    s.rest[e] = (X.row(edges(e, 0)) - X.row(edges(e, 1))).norm();
+    if (given && e > 0 && keys[e] <= keys[e - 1]) return false;
   }
+  std::vector<std::uint8_t> hit(given ? edges.rows() : 0, 0);
   for (const auto& [k, w] : contrib) {
     const auto it = std::lower_bound(keys.begin(), keys.end(), k);
+    if (given) {
+      if (it == keys.end() || *it != k) return false;
+      hit[it - keys.begin()] = 1;
+    }
     s.ks[it - keys.begin()] += w;
   }
+  if (given && std::find(hit.begin(), hit.end(), 0) != hit.end()) return false;
+  for (long e = 0; e < edges.rows(); ++e)
+    s.rest[e] = (X.row(edges(e, 0)) - X.row(edges(e, 1))).norm();
   for (long e = 0; e < edges.rows(); ++e) s.ks[e] /= s.rest[e] * s.rest[e];
   s.kd = beta * s.ks;
+  s.E = edges;
+  out = std::move(s);
+  return true;
+}
+
+Springs from_contributions(const RowMatX3d& X, const RowMatX2i& edges,
+                           const std::vector<std::pair<std::uint64_t, double>>& contrib,
+                           double beta) {
+  Springs s;
+  from_contributions(X, edges, contrib, beta, false, s);
   return s;
 }
 
 }  // namespace
 
 Springs tet_springs(const RowMatX3d& X, const RowMatX4i& T, const Eigen::VectorXd& E_tet,
-                    double beta) {
+                    double beta, const RowMatX2i* edges) {
   std::vector<std::pair<std::uint64_t, double>> c;
   c.reserve(T.rows() * 6);
   for (long t = 0; t < T.rows(); ++t) {
@@ -54,6 +77,8 @@ Springs tet_springs(const RowMatX3d& X, const RowMatX4i& T, const Eigen::VectorX
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) c.emplace_back(key(T(t, i), T(t, j)), w);
   }
+  Springs s;
+  if (edges && from_contributions(X, *edges, c, beta, true, s)) return s;
   return from_contributions(X, unique_edges(T), c, beta);
 }
 

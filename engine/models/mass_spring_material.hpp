@@ -22,9 +22,11 @@
 
 namespace palplab::engine {
 
-// Springs on the unique edges of T; E_tet #T Young's moduli (Pa).
+// Springs on the unique edges of T; E_tet #T Young's moduli (Pa). `edges`: unique_edges(T) if
+// the caller has them (a scene mesh's model_E; sorting them again was 20 % of loading prototype
+// C from a .psim file); used only when they are exactly those edges (checked), else computed.
 Springs tet_springs(const RowMatX3d& X, const RowMatX4i& T, const Eigen::VectorXd& E_tet,
-                    double beta);
+                    double beta, const RowMatX2i* edges = nullptr);
 // Springs on the unique edges of F; c_face #F membrane moduli (N/m).
 Springs membrane_springs(const RowMatX3d& X, const RowMatX3i& F, const Eigen::VectorXd& c_face,
                          double beta);

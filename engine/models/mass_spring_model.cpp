@@ -372,7 +372,8 @@ class MassSpringModel final : public SceneModel {
         {"cg_iterations_max", ms_.cg_iterations_max},
         {"exterior", ms_.linear_exterior ? "linear" : "held"},
         {"exterior_factor_ms", ms_.far.factor_ms},
-        {"exterior_solve_ms", ms_.far.solve_ms},  // the last solve (one per scope move)
+        {"exterior_factor_restored", ms_.far.restored},  // from a .psim file
+        {"exterior_solve_ms", ms_.far.solve_ms},         // the last solve (one per scope move)
         {"exterior_solves", ms_.far_solves}};
     st.model_info = info.dump();
   }
@@ -510,7 +511,7 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
       E[t] = mat.youngs_modulus;
       rho[t] = mat.density;
     }
-    sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta);
+    sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta, &cm.model_E);
     sys.mass = tet_lumped_mass(cm.model_V, cm.model_T, rho);
     face_membrane = boundary_membrane(cm.model_V, cm.model_T, cm.model_F, cm.boundary_tet, E);
   } else {
@@ -564,7 +565,9 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
   ms.linear_exterior = cfg.scope.radius > 0.0 && cfg.sleeping.enabled &&
                        cfg.scope.linear_exterior && cfg.scope.max_nodes == ScopeConfig{}.max_nodes;
   if (ms.linear_exterior) {
-    far_field_build(ms.model.sys, ms.far);
+    // A .psim file's far field (mass_spring_save), used only if made from this very system.
+    const bool stored = cm.model_blob_kind == "mass_spring" && !cm.model_blob.empty();
+    far_field_build(ms.model.sys, ms.far, stored ? &cm.model_blob : nullptr);
     // A press wakes the whole scope at once: room for every coarse node and spring up front,
     // so that the steps of a press without refinement do not allocate.
     const long n = ms.model.sys.nodes(), ns = ms.model.sys.springs.size();
@@ -590,12 +593,21 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
   return model;
 }
 
+// The .psim hook (ModelKind::save): the linear exterior's factorisation (far_field_save), the
+// one expensive part of building the model; nothing without a linear exterior.
+std::string mass_spring_save(const SceneConfig& cfg, const SceneMesh& cm) {
+  const auto model = make_mass_spring(cfg, cm);
+  const MassSpringScene& ms = static_cast<const MassSpringModel&>(*model).ms_;
+  return ms.linear_exterior ? far_field_save(ms.model.sys, ms.far) : std::string();
+}
+
 }  // namespace
 
 const ModelKind& mass_spring_model_kind() {
-  static const ModelKind k{"mass_spring",
-                           "adaptive mass-spring tissue from the material (prototype C)",
-                           &read_mass_spring, nullptr, &make_mass_spring};
+  static const ModelKind k{
+      "mass_spring",     "adaptive mass-spring tissue from the material (prototype C)",
+      &read_mass_spring, nullptr,
+      &make_mass_spring, &mass_spring_save};
   return k;
 }
 

@@ -112,7 +112,7 @@ bool get_sparse(In& in, std::int64_t rows, SparseMatrixd& M) {
       const int i = A.innerIndexPtr()[q];
       if (i < 0 || i >= r || (q > outer[j] && i <= A.innerIndexPtr()[q - 1])) return false;
     }
-  M = std::move(A);
+  M.swap(A);  // Eigen 3.4's SparseMatrix has no move assignment: = std::move(A) copies
   return true;
 }
 
@@ -131,10 +131,7 @@ std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& ac
   put_vec(s, act.data(), static_cast<std::int64_t>(act.size()));
   put_sparse(s, K);
   put_vec(s, m_lumped.data(), m_lumped.size());
-  put_sparse(s, factor.L);
-  put_vec(s, factor.D.data(), factor.D.size());
-  put_vec(s, factor.P.indices().data(), factor.P.indices().size());
-  put_vec(s, factor.Pinv.indices().data(), factor.Pinv.indices().size());
+  put_ldlt_factor(s, factor);
   return s;
 }
 
@@ -156,25 +153,51 @@ bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long tot
   if (!get_sparse(in, n, st.K_c) || st.K_c.cols() != n) return false;
   st.m_lumped.resize(total_dofs);
   in.vec(st.m_lumped.data(), total_dofs);
+  if (!in.ok) return false;
+  std::size_t at = in.at;
+  LdltFactor f;
+  if (!get_ldlt_factor(blob, at, n, f) || at != blob.size()) return false;
+  // Member by member: the implicit moves would copy the sparse matrices (no Eigen move).
+  factor.L.swap(f.L);
+  factor.D = std::move(f.D);
+  factor.P.indices().swap(f.P.indices());
+  factor.Pinv.indices().swap(f.Pinv.indices());
+  out.act = std::move(st.act);
+  out.K_c.swap(st.K_c);
+  out.m_lumped = std::move(st.m_lumped);
+  out.h = st.h;
+  return true;
+}
+
+void put_ldlt_factor(std::string& s, const LdltFactor& f) {
+  put_sparse(s, f.L);
+  put_vec(s, f.D.data(), f.D.size());
+  put_vec(s, f.P.indices().data(), f.P.indices().size());
+  put_vec(s, f.Pinv.indices().data(), f.Pinv.indices().size());
+}
+
+bool get_ldlt_factor(const std::string& blob, std::size_t& at, long n, LdltFactor& factor) {
+  if (at > blob.size() || n < 0) return false;
+  In in{blob, at};
   SparseMatrixd L;
-  if (!in.ok || !get_sparse(in, n, L) || L.cols() != n) return false;
+  if (!get_sparse(in, n, L) || L.cols() != n) return false;
   Eigen::VectorXd D(n);
   in.vec(D.data(), n);
   Eigen::VectorXi P(n), Pinv(n);
   in.vec(P.data(), n);
   in.vec(Pinv.data(), n);
-  if (!in.ok || in.at != blob.size()) return false;
+  if (!in.ok) return false;
   for (std::int64_t i = 0; i < n; ++i)
     if (P[i] < 0 || P[i] >= n || Pinv[i] < 0 || Pinv[i] >= n || Pinv[P[i]] != i) return false;
   for (std::int64_t j = 0; j < n; ++j)  // L: strictly lower entries only, D nonzero
     if (!(D[j] != 0) || (L.outerIndexPtr()[j] < L.outerIndexPtr()[j + 1] &&
                          L.innerIndexPtr()[L.outerIndexPtr()[j]] <= j))
       return false;
-  factor.L = std::move(L);
+  factor.L.swap(L);
   factor.D = std::move(D);
   factor.P.indices() = std::move(P);
   factor.Pinv.indices() = std::move(Pinv);
-  out = std::move(st);
+  at = in.at;
   return true;
 }
 

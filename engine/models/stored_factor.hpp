@@ -39,6 +39,14 @@ std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& ac
                             const SparseMatrixd& K_c, const Eigen::VectorXd& m_lumped,
                             const LdltFactor& factor, double h);
 
+// An LdltFactor as bytes appended to s (L compressed column, D, P, P^-1), and read back from
+// blob at `at` (advanced past it) for a factor of n rows: false (f untouched) when malformed
+// (sizes, index ranges, a permutation that is not one, L not strictly lower, a zero in D). The
+// one serialisation of a factorisation, shared by the FEM blob and the mass-spring far field
+// (engine/solvers/far_field.hpp).
+void put_ldlt_factor(std::string& s, const LdltFactor& f);
+bool get_ldlt_factor(const std::string& blob, std::size_t& at, long n, LdltFactor& f);
+
 // Restores `out` and factor from `blob` when it was made from inputs `d` for a model of
 // `total_dofs` (3#V); false (factor untouched) otherwise, including for a malformed blob.
 bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long total_dofs,

@@ -1,17 +1,82 @@
 #include "engine/solvers/far_field.hpp"
 
+#include <Eigen/SparseCholesky>
 #include <chrono>
+#include <cstring>
 #include <stdexcept>
+
+#include "engine/models/stored_factor.hpp"
+#include "results/sha256.hpp"
 
 namespace palplab::engine {
 
-void far_field_build(const MassSpringSystem& sys, FarField& ff) {
+namespace {
+
+constexpr char kTag[8] = {'F', 'A', 'R', 'L', 'D', 'L', 'T', '1'};
+using Digest = std::array<std::uint8_t, 32>;
+
+// SHA-256 of everything K is assembled from (lengths keep the fields apart).
+Digest inputs_digest(const MassSpringSystem& sys) {
+  results::Sha256 h;
+  auto add = [&](const void* p, std::size_t n) {
+    const std::uint64_t len = n;
+    h.update(&len, sizeof len);
+    h.update(p, n);
+  };
+  const std::int64_t n = sys.nodes();
+  add(&n, sizeof n);
+  add(sys.X_rest.data(), sizeof(double) * sys.X_rest.size());
+  add(sys.fixed.data(), sys.fixed.size());
+  add(sys.home_ks.data(), sizeof(double) * sys.home_ks.size());
+  add(sys.springs.E.data(), sizeof(int) * sys.springs.E.size());
+  add(sys.springs.ks.data(), sizeof(double) * sys.springs.ks.size());
+  return h.digest();
+}
+
+// The factor of a far_field_save blob made from inputs d for m dofs, or false.
+bool restore(const std::string& blob, const Digest& d, long m, LdltFactor& f) {
+  constexpr std::size_t head = sizeof kTag + 32 + sizeof(std::int64_t);
+  if (blob.size() < head || std::memcmp(blob.data(), kTag, sizeof kTag) != 0 ||
+      std::memcmp(blob.data() + sizeof kTag, d.data(), 32) != 0)
+    return false;
+  std::int64_t dofs;
+  std::memcpy(&dofs, blob.data() + sizeof kTag + 32, sizeof dofs);
+  std::size_t at = head;
+  return dofs == m && get_ldlt_factor(blob, at, m, f) && at == blob.size();
+}
+
+}  // namespace
+
+std::string far_field_save(const MassSpringSystem& sys, const FarField& ff) {
+  if (!ff.ready() || ff.nodes != sys.nodes() || !ff.factor.L.isCompressed()) return {};
+  const Digest d = inputs_digest(sys);
+  const std::int64_t dofs = ff.factor.size();
+  std::string s(kTag, sizeof kTag);
+  s.append(reinterpret_cast<const char*>(d.data()), d.size());
+  s.append(reinterpret_cast<const char*>(&dofs), sizeof dofs);
+  put_ldlt_factor(s, ff.factor);
+  return s;
+}
+
+void far_field_build(const MassSpringSystem& sys, FarField& ff, const std::string* stored) {
   const auto t0 = std::chrono::steady_clock::now();
   const long n = sys.nodes();
   ff.dof.assign(n, -1);
   int m = 0;
   for (long i = 0; i < n; ++i)
     if (sys.fixed.empty() || !sys.fixed[i]) ff.dof[i] = 3 * m++;
+  auto finish = [&] {
+    ff.load.setZero(3 * m);
+    ff.g.setZero(3 * m);
+    ff.tmp.setZero(3 * m);
+    ff.nodes = n;
+    ff.factor_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  };
+  // The stored factor passed the singularity check below when it was made from these inputs.
+  ff.restored =
+      stored && !stored->empty() && restore(*stored, inputs_digest(sys), 3L * m, ff.factor);
+  if (ff.restored) return finish();
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(9 * 4 * sys.springs.size() + 3 * m);
   for (long i = 0; i < n; ++i)
@@ -37,19 +102,15 @@ void far_field_build(const MassSpringSystem& sys, FarField& ff) {
   }
   Eigen::SparseMatrix<double> K(3 * m, 3 * m);
   K.setFromTriplets(t.begin(), t.end());
-  ff.ldlt.compute(K);
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(K);
   // A zero pivot shows up as rounding noise: compare it with the largest one.
-  const Eigen::VectorXd& D = ff.ldlt.vectorD();
-  if (ff.ldlt.info() != Eigen::Success || D.size() == 0 || !(D.minCoeff() > 1e-10 * D.maxCoeff()))
+  const Eigen::VectorXd D = ldlt.vectorD();
+  if (ldlt.info() != Eigen::Success || D.size() == 0 || !(D.minCoeff() > 1e-10 * D.maxCoeff()))
     throw std::runtime_error(
         "far field: the model's stiffness at rest is singular (a part without support)");
-  ff.load.setZero(3 * m);
-  ff.g.setZero(3 * m);
-  ff.tmp.setZero(3 * m);
-  ff.d = ff.ldlt.vectorD();  // vectorD() returns a copy
-  ff.nodes = n;
-  ff.factor_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  // Solved from the plain factors, built here or restored: the same data, the same solve.
+  ff.factor = LdltFactor::from(ldlt);
+  finish();
 }
 
 void far_field_solve(FarField& ff, const std::vector<int>& nodes,
@@ -75,16 +136,16 @@ void far_field_solve(FarField& ff, const std::vector<int>& nodes,
   for (size_t k = 0; k < nodes.size(); ++k)
     if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0)
       ff.load.segment<3>(ff.dof[nodes[k]]) += (weights[k] / sum) * dir;
-  // ldlt.solve() written out (permutation, unit-lower L, D, L^T): Eigen's in-place permutation
-  // and triangular solves allocate a temporary, and this solve runs inside a haptic step.
-  const auto& perm = ff.ldlt.permutationP().indices();
+  // LdltFactor::solve written out (permutation, unit-lower L, D, L^T): Eigen's in-place
+  // permutation and triangular solves allocate a temporary, and this solve runs in a haptic step.
+  const auto& perm = ff.factor.P.indices();
   const bool permuted = perm.size() == ff.load.size();
   for (Eigen::Index i = 0; i < ff.load.size(); ++i) ff.tmp[permuted ? perm[i] : i] = ff.load[i];
-  const auto& L = ff.ldlt.matrixL().nestedExpression();  // strictly lower part, column-major
+  const SparseMatrixd& L = ff.factor.L;  // strictly lower part, column-major
   for (Eigen::Index j = 0; j < L.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
       if (it.row() > j) ff.tmp[it.row()] -= it.value() * ff.tmp[j];
-  ff.tmp.array() /= ff.d.array();
+  ff.tmp.array() /= ff.factor.D.array();
   for (Eigen::Index j = L.outerSize() - 1; j >= 0; --j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
       if (it.row() > j) ff.tmp[j] -= it.value() * ff.tmp[it.row()];

@@ -13,29 +13,39 @@
 // exterior's compliance without integrating it. K is factorised once per model (sparse LDLT),
 // g costs one solve when the scope is re-centred; a step adds |exterior| 3-vectors.
 // Vectors are 3 #coarse, node-major; nodes beyond `nodes` (refinement) are not part of it.
-#include <Eigen/SparseCholesky>
+// A .psim file stores the factorisation (far_field_save; the LdltFactor serialisation of
+// engine/models/stored_factor.hpp) tagged with a SHA-256 of every input of K; a build from the
+// same system restores it instead of factorising, and solves bit-identically.
 #include <Eigen/SparseCore>
+#include <string>
 #include <vector>
 
 #include "engine/models/mass_spring.hpp"
+#include "engine/solvers/ldlt_factor.hpp"
 
 namespace palplab::engine {
 
 struct FarField {
-  long nodes = 0;        // coarse nodes K was assembled for
-  std::vector<int> dof;  // #nodes: first dof of a node, -1 = fixed
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  long nodes = 0;           // coarse nodes K was assembled for
+  std::vector<int> dof;     // #nodes: first dof of a node, -1 = fixed
+  LdltFactor factor;        // P K P^T = L D L^T (#dofs square)
   Eigen::VectorXd load, g;  // #dofs: the unit load and its displacement (m/N)
   Eigen::VectorXd tmp;      // #dofs: solve buffer
-  Eigen::VectorXd d;        // #dofs: D of the LDLT
-  double factor_ms = 0.0;   // time the factorisation took
+  double factor_ms = 0.0;   // time the factorisation (or its restoring) took
+  bool restored = false;    // the factorisation came from a stored blob
   double solve_ms = 0.0;    // time the last far_field_solve took (wall, ms)
   bool ready() const { return nodes > 0; }
 };
 
 // Assembles K at rest over sys's nodes and factorises it. Throws std::runtime_error when K is
-// singular (a part of the model with neither support nor fixed node).
-void far_field_build(const MassSpringSystem& sys, FarField& ff);
+// singular (a part of the model with neither support nor fixed node). `stored` (nullptr = none):
+// a far_field_save blob; used (ff.restored) only when it was made from a system with the same
+// nodes, rest positions, fixed nodes, support and springs, and is well formed; else ignored.
+void far_field_build(const MassSpringSystem& sys, FarField& ff,
+                     const std::string* stored = nullptr);
+
+// ff's factorisation (built for sys) as bytes for a .psim file.
+std::string far_field_save(const MassSpringSystem& sys, const FarField& ff);
 
 // g for a unit force along `dir` (the direction the tissue is pushed) shared by the patch
 // `nodes` with `weights` (nodes >= ff.nodes are left out and the weights renormalised).

@@ -149,7 +149,7 @@ TEST(CliScene, DamagedFilesAreRejectedWithExit2) {
   std::string q = b;
   q[200] ^= 0x80;
   expect_rejected(q, "payload checksum", "flipped early payload byte");
-  // Another format version (the previous one: a file from before the needle precomputation).
+  // Another format version (the previous one: a file from before the far-field factorisation).
   std::string v = b;
   const std::uint32_t old = palplab::engine::kSceneFileVersion - 1;
   std::memcpy(v.data() + 8, &old, 4);

@@ -1,11 +1,14 @@
 // Simulation files (.psim, engine/haptics/scene_file.hpp): the prepared mesh survives the round
 // trip bit for bit, and a scripted press through a scene loaded from the file renders exactly
-// (==) the forces of a scene built from the sources, for prototypes A, B, C and D.
+// (==) the forces of a scene built from the sources, for prototypes A, B, C and D (C slides, so
+// that its scope moves and its linear exterior -- restored from the file -- is solved again).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
@@ -13,7 +16,10 @@
 #include "engine/haptics/scene_file.hpp"
 #include "engine/models/fem_block_mesh.hpp"
 #include "engine/models/fem_model.hpp"
+#include "engine/models/mass_spring_material.hpp"
+#include "engine/models/mass_spring_model.hpp"
 #include "engine/models/model.hpp"
+#include "engine/solvers/far_field.hpp"
 #include "engine/spatial/octree.hpp"
 #include "prototypes/factory.hpp"
 
@@ -38,13 +44,21 @@ struct Track {
   std::vector<Eigen::Vector3d> force;
   std::vector<int> node;
   std::vector<double> deformation;
+  nlohmann::json info;  // the model's statistics at the end (SceneStats::model_info)
 };
 
-Track press(const engine::SceneConfig& cfg) {
+// `slide` (m/s): the press slides along the surface while it holds, for 0.6 s.
+Track press(const engine::SceneConfig& cfg, double slide = 0.0) {
   engine::Scene s = engine::make_scene(cfg);
   const auto& g = s.geometry();
   const int node = g.region_index("body") >= 0 ? g.region_node("body") : 0;
-  engine::PressDevice dev(engine::press_at(g, node, 1.0, 0.05, 0.05));
+  engine::PressSpec spec = engine::press_at(g, node, 1.0, slide > 0 ? 0.6 : 0.05, 0.05);
+  if (slide > 0) {  // along a tangent of the surface at the press point
+    const Eigen::Vector3d a =
+        std::abs(spec.normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    spec.slide = slide * (a - a.dot(spec.normal) * spec.normal).normalized();
+  }
+  engine::PressDevice dev(spec);
   engine::LockstepOptions opt;
   opt.duration = 5.0;
   opt.frame_period = 0.0;
@@ -54,6 +68,8 @@ Track press(const engine::SceneConfig& cfg) {
     t.node.push_back(r.contact_node);
     t.deformation.push_back(r.visible_deformation);
   });
+  const std::string info = s.stats().model_info;
+  if (!info.empty()) t.info = nlohmann::json::parse(info);
   return t;
 }
 
@@ -107,7 +123,11 @@ TEST_P(SceneFileRoundTrip, LoadedSceneIsBitIdentical) {
   engine::install_scene_mesh(cfg.mesh, nullptr);  // built from the sources
   const auto built = engine::scene_mesh(cfg.mesh);
   ASSERT_TRUE(built->model_blob.empty());
-  const Track a = press(cfg);
+  // C's linear exterior is re-solved whenever the scope re-centres (the contact 5 mm from its
+  // centre): slide 3 cm/s for 0.6 s.
+  const bool mass_spring = cfg.model == "mass_spring";
+  const double slide = mass_spring ? 0.03 : 0.0;
+  const Track a = press(cfg, slide);
 
   const fs::path file = scratch() / (std::string(GetParam()) + ".psim");
   const engine::SceneFileInfo info = engine::write_scene_file(file.string(), cfg);
@@ -120,7 +140,16 @@ TEST_P(SceneFileRoundTrip, LoadedSceneIsBitIdentical) {
   EXPECT_EQ(loaded->model_blob_kind, cfg.model);
   EXPECT_EQ(!loaded->model_blob.empty(), info.model_blob);
   expect_same_mesh(*built, *loaded);
-  const Track b = press(loaded_cfg);
+  const Track b = press(loaded_cfg, slide);
+  if (mass_spring) {  // the far field's factorisation was stored, restored and solved again
+    EXPECT_TRUE(info.model_blob);
+    const auto &x = a.info["mass_spring"], &y = b.info["mass_spring"];
+    ASSERT_EQ(x["exterior"], "linear");
+    EXPECT_FALSE(x["exterior_factor_restored"].get<bool>());
+    EXPECT_TRUE(y["exterior_factor_restored"].get<bool>());
+    EXPECT_GE(y["exterior_solves"].get<long>(), 3) << "the scope must move (twice)";
+    EXPECT_EQ(x["exterior_solves"], y["exterior_solves"]);
+  }
 
   ASSERT_EQ(a.force.size(), b.force.size());
   ASSERT_GT(a.force.size(), 50u);
@@ -172,6 +201,95 @@ TEST(SceneFile, EveryTruncationAndSampledByteFlipIsAnInputError) {
 }  // namespace
 
 namespace {
+
+// The mass-spring hook on its own (engine/solvers/far_field.hpp), on prototype C's system: the
+// stored factorisation is restored bit for bit and solves bit-identically; a system with one
+// spring changed, or a damaged blob, ignores it and factorises (the same as a fresh build).
+TEST(SceneFileMassSpring, StoredFarFieldRestoresExactlyAndOnlyForTheSameSystem) {
+  using namespace palplab::engine;
+  const SceneConfig cfg = prototypes::load_prototype(proto("C"));
+  const AdaptiveMassSpring model = mass_spring_adaptive(cfg, *scene_mesh(cfg.mesh));
+  const MassSpringSystem& sys = model.sys;
+  FarField built;
+  far_field_build(sys, built);
+  EXPECT_FALSE(built.restored);
+  const std::string blob = far_field_save(sys, built);
+  ASSERT_FALSE(blob.empty());
+
+  auto same_factor = [](const FarField& x, const FarField& y) {
+    return x.dof == y.dof && x.factor.D == y.factor.D &&
+           x.factor.P.indices() == y.factor.P.indices() &&
+           x.factor.Pinv.indices() == y.factor.Pinv.indices() &&
+           x.factor.L.nonZeros() == y.factor.L.nonZeros() &&
+           std::memcmp(x.factor.L.outerIndexPtr(), y.factor.L.outerIndexPtr(),
+                       sizeof(int) * (x.factor.L.cols() + 1)) == 0 &&
+           std::memcmp(x.factor.L.innerIndexPtr(), y.factor.L.innerIndexPtr(),
+                       sizeof(int) * x.factor.L.nonZeros()) == 0 &&
+           std::memcmp(x.factor.L.valuePtr(), y.factor.L.valuePtr(),
+                       sizeof(double) * x.factor.L.nonZeros()) == 0;
+  };
+  FarField loaded;
+  far_field_build(sys, loaded, &blob);
+  EXPECT_TRUE(loaded.restored);
+  ASSERT_TRUE(same_factor(built, loaded));
+  std::vector<int> patch;  // three nodes that are not fixed
+  for (int i = 0; i < static_cast<int>(sys.nodes()) && patch.size() < 3; ++i)
+    if (!sys.fixed[i]) patch.push_back(i);
+  const std::vector<double> w = {0.5, 0.3, 0.2};
+  far_field_solve(built, patch, w, Eigen::Vector3d(0, 0.6, -0.8));
+  far_field_solve(loaded, patch, w, Eigen::Vector3d(0, 0.6, -0.8));
+  EXPECT_TRUE(built.g == loaded.g);  // bit-identical
+  EXPECT_GT(built.g.norm(), 0.0);
+
+  MassSpringSystem other = sys;  // one spring 1 % stiffer: another K
+  other.springs.ks[other.springs.size() / 2] *= 1.01;
+  FarField fresh, ignored;
+  far_field_build(other, fresh);
+  far_field_build(other, ignored, &blob);
+  EXPECT_FALSE(ignored.restored);
+  EXPECT_TRUE(same_factor(fresh, ignored));
+  EXPECT_FALSE(same_factor(built, ignored));
+
+  for (const std::size_t cut :
+       {std::size_t(0), std::size_t(7), std::size_t(40), blob.size() / 2, blob.size() - 1}) {
+    FarField f;
+    const std::string bad = blob.substr(0, cut);
+    far_field_build(sys, f, &bad);
+    EXPECT_FALSE(f.restored) << "cut at " << cut;
+    EXPECT_TRUE(same_factor(built, f));
+  }
+  std::string longer = blob + '\0';
+  FarField f;
+  far_field_build(sys, f, &longer);
+  EXPECT_FALSE(f.restored);
+}
+
+// tet_springs takes the scene mesh's stored tet edges (a loaded file need not sort them again)
+// only when they are exactly unique_edges(T): the same springs bit for bit, and any other edge
+// list (reordered, one missing, one extra, out of range) falls back to computing them.
+TEST(SceneFileMassSpring, TetSpringsUseGivenEdgesOnlyWhenTheyAreTheTetsEdges) {
+  using namespace palplab::engine;
+  const SceneConfig cfg = prototypes::load_prototype(proto("C"));
+  const auto cm = scene_mesh(cfg.mesh);
+  ASSERT_TRUE(cm->tet);
+  const Eigen::VectorXd E = Eigen::VectorXd::LinSpaced(cm->model_T.rows(), 5e4, 2e5);
+  const Springs ref = tet_springs(cm->model_V, cm->model_T, E, 0.002);
+  auto same = [&](const Springs& s) {
+    return s.E == ref.E && s.rest == ref.rest && s.ks == ref.ks && s.kd == ref.kd;
+  };
+  EXPECT_TRUE(same(tet_springs(cm->model_V, cm->model_T, E, 0.002, &cm->model_E)));
+  RowMatX2i swapped = cm->model_E;
+  swapped.row(3).swap(swapped.row(4));
+  RowMatX2i missing = cm->model_E.topRows(cm->model_E.rows() - 1);
+  RowMatX2i extra(cm->model_E.rows() + 1, 2);
+  extra << cm->model_E, cm->model_V.rows() - 2, cm->model_V.rows() - 1;
+  RowMatX2i flipped = cm->model_E;
+  std::swap(flipped(0, 0), flipped(0, 1));
+  RowMatX2i range = cm->model_E;
+  range(range.rows() - 1, 1) = static_cast<int>(cm->model_V.rows());
+  for (const RowMatX2i* e : {&swapped, &missing, &extra, &flipped, &range})
+    EXPECT_TRUE(same(tet_springs(cm->model_V, cm->model_T, E, 0.002, e)));
+}
 
 // The FEM hook on its own: a linear model built from the stored precomputation restores it
 // (no assembly, no factorisation) and steps bit-identically under a stiff contact; a model with
