@@ -33,11 +33,10 @@ struct BenchResult {
 
 // A result from per-repetition values already measured by the section (seconds per unit of
 // work, e.g. per haptic step): median, min, max over `samples`; cold_s = the first run, which
-// the caller measured separately (NaN-free: pass 0 when there was none).
+// the caller measured separately (NaN-free: pass 0 when there was none). Medians and quantiles
+// of sections: engine::median / engine::quantile (engine/haptics/clock.hpp), the one place.
 BenchResult result_from_samples(const std::string& name, const std::string& what,
                                 std::vector<double> samples_s, double cold_s = 0);
-double bench_median(std::vector<double> v);
-double bench_quantile(std::vector<double> v, double q);  // nearest rank, q in [0, 1]
 
 // Runs `work` once (cold) and then `reps` times; the median, min and max are over the reps.
 BenchResult time_reps(const std::string& name, const std::string& what, int reps,

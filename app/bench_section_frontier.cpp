@@ -65,6 +65,7 @@
 #include "analysis/svg.hpp"
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
+#include "engine/haptics/clock.hpp"
 #include "engine/haptics/scene_config.hpp"
 #include "engine/models/fem_reference.hpp"
 #include "engine/models/model.hpp"
@@ -423,7 +424,7 @@ std::string frontier_svg(const std::vector<Point>& pts, bool field, const std::s
     double em = 0;
     for (double x : e) em += x;
     em /= static_cast<double>(e.size());
-    s.x = {std::log10(app::bench_median(t))};
+    s.x = {std::log10(engine::median(t))};
     s.y = {std::log10(em)};
     s.lo = {std::log10(*std::min_element(e.begin(), e.end()))};
     s.hi = {std::log10(*std::max_element(e.begin(), e.end()))};
@@ -557,10 +558,10 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     for (size_t k = 0; k < used.size(); ++k) meas.push_back(press(*scenes[k], ref, sch, true));
     const int timed = o.quick ? 2 : 5;
     for (size_t k = 0; k < used.size(); ++k)
-      if (app::bench_median(meas[k].contact_step_s) > 2e-3) samples[k] = meas[k].contact_step_s;
+      if (engine::median(meas[k].contact_step_s) > 2e-3) samples[k] = meas[k].contact_step_s;
     for (int rep = 0; rep < timed; ++rep)
       for (size_t k = 0; k < used.size(); ++k) {
-        if (app::bench_median(meas[k].contact_step_s) > 2e-3) continue;
+        if (engine::median(meas[k].contact_step_s) > 2e-3) continue;
         const Measured t = press(*scenes[k], ref, sch, false);
         samples[k].insert(samples[k].end(), t.contact_step_s.begin(), t.contact_step_s.end());
       }
@@ -574,9 +575,9 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       if (v.name == "C") c_meas = &meas[k];
       BenchResult r = app::result_from_samples(
           region + "_" + v.name, region + " press: " + v.what + " (s per contact step)", samples[k],
-          app::bench_median(meas[k].contact_step_s));
+          engine::median(meas[k].contact_step_s));
       const double force_at = meas[k].force.size() > 1 ? meas[k].force[1] : 0.0;
-      r.metrics = {{"p99_step_s", app::bench_quantile(samples[k], 0.99)},
+      r.metrics = {{"p99_step_s", engine::quantile(samples[k], 0.99)},
                    {"force_curve_rel_err", e.curve},
                    {"field_rel_err", e.field},
                    {"felt_curve_rel_err", e.felt},

@@ -7,6 +7,7 @@
 #include "analysis/svg.hpp"
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
+#include "engine/haptics/clock.hpp"
 #include "prototypes/factory.hpp"
 
 namespace {
@@ -38,7 +39,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       for (size_t k = 0; k < scopes.size(); ++k) {
         scenes[k].reset();
         const app::PressTrace t = app::fixed_press(scenes[k], "ovary_left", 0.005, steps);
-        const double m = app::bench_median(t.contact_step_s);
+        const double m = engine::median(t.contact_step_s);
         peak[k] = *std::max_element(t.force.begin(), t.force.end());
         if (rep == 0) {
           cold[k] = m;
@@ -47,7 +48,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
         med[k].push_back(m);
         all[k].insert(all[k].end(), t.contact_step_s.begin(), t.contact_step_s.end());
       }
-    const double whole = app::bench_median(med[2]);
+    const double whole = engine::median(med[2]);
     for (size_t k = 0; k < scopes.size(); ++k) {
       BenchResult r =
           app::result_from_samples("B" + std::to_string(nv) + "_" + scopes[k],
@@ -55,7 +56,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
                                        scopes[k] + " (s per contact step)",
                                    med[k], cold[k]);
       r.metrics = {{"vertices", static_cast<double>(nv)},
-                   {"p99_s", app::bench_quantile(all[k], 0.99)},
+                   {"p99_s", engine::quantile(all[k], 0.99)},
                    {"whole_over_this", whole / r.median_s},
                    {"peak_force_N", peak[k]}};
       series[k].x.push_back(static_cast<double>(nv));

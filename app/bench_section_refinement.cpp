@@ -13,6 +13,7 @@
 
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
+#include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/rings.hpp"
 #include "engine/mesh/surface_mesh.hpp"
@@ -152,8 +153,8 @@ void compare(const std::string& name, const std::string& what, AdaptiveMassSprin
     }
     ha.push_back(x[0]), hw.push_back(x[1]), ga.push_back(x[2]), gw.push_back(x[3]);
   }
-  const double hr = app::bench_median(hw) / app::bench_median(ha);
-  const double gr = app::bench_median(gw) / app::bench_median(ga);
+  const double hr = engine::median(hw) / engine::median(ha);
+  const double gr = engine::median(gw) / engine::median(ga);
   auto add = [&](const std::string& id, const std::string& desc, std::vector<double>& s, double c,
                  const AdaptiveMassSpring& sys, double ratio) {
     BenchResult r = app::result_from_samples(name + "_" + id, what + ": " + desc, s, c);

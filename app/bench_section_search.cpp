@@ -12,6 +12,7 @@
 #include "analysis/svg.hpp"
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
+#include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/spatial/octree.hpp"
 
@@ -101,7 +102,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
         else
           per_query[k].push_back(s);
       }
-    const double lin = app::bench_median(per_query[0]);
+    const double lin = engine::median(per_query[0]);
     for (size_t k = 0; k < variants.size(); ++k) {
       const Variant& v = variants[k];
       BenchResult r =

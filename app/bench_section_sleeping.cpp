@@ -14,6 +14,7 @@
 
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
+#include "engine/haptics/clock.hpp"
 #include "prototypes/factory.hpp"
 
 namespace {
@@ -83,7 +84,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
           steps_all[k].insert(steps_all[k].end(), p.step_s.begin(), p.step_s.end());
         }
       }
-    const double full = app::bench_median(t[0]);
+    const double full = engine::median(t[0]);
     for (size_t k = 0; k < variants.size(); ++k) {
       double cold = 0;
       for (double s : first[k].step_s) cold += s;
@@ -103,8 +104,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
           {"cg_iterations_mean", cg_mean[k]},
           {"cg_iterations_max", cg_max[k]},
           // Per haptic step over the timed repetitions (the cold first press is left out).
-          {"median_step_s", app::bench_median(steps_all[k])},
-          {"p99_step_s", app::bench_quantile(steps_all[k], 0.99)},
+          {"median_step_s", engine::median(steps_all[k])},
+          {"p99_step_s", engine::quantile(steps_all[k], 0.99)},
           {"max_step_s", *std::max_element(steps_all[k].begin(), steps_all[k].end())}};
       out.push_back(r);
     }

@@ -16,6 +16,7 @@
 #include "app/bench.hpp"
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
 
 namespace palplab::app {
 
@@ -48,26 +49,12 @@ BenchResult time_reps(const std::string& name, const std::string& what, int reps
   r.cold_s = once();
   std::vector<double> t;
   for (int i = 0; i < r.reps; ++i) t.push_back(once());
-  std::sort(t.begin(), t.end());
-  r.median_s = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
-  r.min_s = t.front();
-  r.max_s = t.back();
+  r.median_s = engine::median(t);
+  r.min_s = *std::min_element(t.begin(), t.end());
+  r.max_s = *std::max_element(t.begin(), t.end());
   cpu.erase(cpu.begin());  // the cold run
-  std::sort(cpu.begin(), cpu.end());
-  r.median_cpu_s = cpu[cpu.size() / 2];
+  r.median_cpu_s = engine::median(cpu);
   return r;
-}
-
-double bench_median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-double bench_quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1) + 0.5)];
 }
 
 BenchResult result_from_samples(const std::string& name, const std::string& what,
@@ -78,7 +65,7 @@ BenchResult result_from_samples(const std::string& name, const std::string& what
   r.reps = static_cast<int>(samples_s.size());
   r.cold_s = cold_s;
   if (samples_s.empty()) return r;
-  r.median_s = bench_median(samples_s);
+  r.median_s = engine::median(samples_s);
   r.min_s = *std::min_element(samples_s.begin(), samples_s.end());
   r.max_s = *std::max_element(samples_s.begin(), samples_s.end());
   r.median_cpu_s = r.median_s;  // single-threaded work timed by the section

@@ -15,6 +15,7 @@
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
 #include "engine/haptics/scene_file.hpp"
 #include "engine/models/model.hpp"
 #include "prototypes/factory.hpp"
@@ -32,12 +33,6 @@ struct BuildArgs {
 
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 // A scene is ready when it has taken its first haptic step (a FEM model factorises its system
@@ -77,7 +72,7 @@ int run_build(const BuildArgs& a) {
     first_step(engine::load_scene_file(a.out, prototypes::load_prototype));
     load.push_back(ms_since(t0));
   }
-  const double rb = median(rebuild), ld = median(load);
+  const double rb = engine::median(rebuild), ld = engine::median(load);
   nlohmann::json out = {{"file", a.out},
                         {"prototype", info.prototype},
                         {"format_version", info.format_version},

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/rings.hpp"
 #include "engine/mesh/tet_mesh.hpp"
@@ -22,11 +23,6 @@ using namespace palplab::engine;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 AdaptiveMassSpring stomach() {
   const mesh::SurfaceMesh m = mesh::generate_stomach(0);
@@ -110,7 +106,7 @@ double step_cost_us(AdaptiveMassSpring& m) {
     us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
   }
   m.sys.F_ext.setZero();
-  return median(us);
+  return engine::median(us);
 }
 
 void compare(const char* name, AdaptiveMassSpring m, const std::vector<double>& thresholds) {
@@ -156,8 +152,8 @@ void compare(const char* name, AdaptiveMassSpring m, const std::vector<double>& 
   const double whole_refine_us =
       std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
   const double whole = step_cost_us(m);
-  std::printf("refine+simplify event (area-based): median %.0f us, max %.0f us\n", median(ev),
-              *std::max_element(ev.begin(), ev.end()));
+  std::printf("refine+simplify event (area-based): median %.0f us, max %.0f us\n",
+              engine::median(ev), *std::max_element(ev.begin(), ev.end()));
   std::printf(
       "one backward-Euler step of the whole system (CG): coarse %.0f us, adaptive "
       "(%ld nodes, level %d) %.0f us, whole model refined (%ld nodes) %.0f us -> %.1fx; "

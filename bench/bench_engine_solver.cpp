@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 #include "engine/mesh/unique_edges.hpp"
@@ -41,11 +42,6 @@ MassSpringSystem model_c() {
   s.springs = springs_from_edges(tm.V, mesh::unique_edges(tm.T), 150.0, 0.15);
   build_adjacency(s);
   return s;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 struct Result {
@@ -84,7 +80,7 @@ Result run(Integrator method, LinearSolver solver, const std::vector<RowMatX3d>*
     if (ref && k % 10 == 0)
       r.max_err = std::max(r.max_err, ((*ref)[k] - s.X).rowwise().norm().maxCoeff());
   }
-  r.median_us = median(us);
+  r.median_us = engine::median(us);
   r.mean_iters = static_cast<int>(iters / 500);
   return r;
 }

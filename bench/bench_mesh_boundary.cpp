@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 
@@ -13,11 +14,6 @@ using namespace palplab::mesh;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 TetMesh grid(int n) {
   const int m = n + 1;
@@ -54,7 +50,7 @@ double time_ms(F f, int reps) {
     f();
     t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - a).count());
   }
-  return median(t);
+  return palplab::engine::median(t);
 }
 
 }  // namespace

@@ -9,20 +9,14 @@
 #include <random>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/spatial/octree.hpp"
 
 using namespace palplab;
 using Clock = std::chrono::steady_clock;
 
-namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-}  // namespace
+namespace {}  // namespace
 
 int main() {
   // Octree: max depth 10, at most 8 nodes per leaf (and 32 per leaf for comparison).
@@ -65,9 +59,10 @@ int main() {
       sink += a[0] + b[nq - 1];
     }
     std::printf("%8ld %10d %12.3f %12.3f %8.1f %14.3f %8.1f %12.1f %12.1f %6s\n",
-                static_cast<long>(V.rows()), spatial::count_leaves(tree), median(lin), median(oct),
-                median(lin) / median(oct), median(oct32), median(lin) / median(oct32),
-                median(build), median(refit), same ? "same" : "DIFF");
+                static_cast<long>(V.rows()), spatial::count_leaves(tree), engine::median(lin),
+                engine::median(oct), engine::median(lin) / engine::median(oct),
+                engine::median(oct32), engine::median(lin) / engine::median(oct32),
+                engine::median(build), engine::median(refit), same ? "same" : "DIFF");
   }
   std::printf(
       "(published, P4 2.0 GHz: 994 -> 1.05 vs 0.17 ms, ratio 6.2; 14392 -> 14.84 vs "

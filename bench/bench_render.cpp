@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/render/headless.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/render/still.hpp"
@@ -19,10 +20,6 @@ using namespace palplab;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -68,7 +65,8 @@ int main(int argc, char** argv) {
       still.push_back(ms_since(t0));
     }
     std::printf("%-4s %8ld %8ld %12.3f %10.2f %10.1f\n", id, static_cast<long>(V.rows()),
-                static_cast<long>(F.rows()), median(stream), median(frame), median(still));
+                static_cast<long>(F.rows()), engine::median(stream), engine::median(frame),
+                engine::median(still));
   }
   return 0;
 }

@@ -139,6 +139,63 @@ std::vector<results::MeasureRecord> session_measures(const Study& study,
   return compute_measures(mi);
 }
 
+// One haptic step of a session's log (virtual and human sessions alike): the device position
+// given to the step, the force on the hand, the contact node, and the step's events with their
+// region names.
+void log_step(const engine::Rendered& r, const engine::Sample& smp,
+              const std::vector<std::string>& region_names, results::SampleSeries& samples,
+              std::vector<results::EventRecord>& events) {
+  samples.x.insert(samples.x.end(), {smp.x.x(), smp.x.y(), smp.x.z()});
+  samples.F.insert(samples.F.end(), {smp.F.x(), smp.F.y(), smp.F.z()});
+  samples.node.push_back(smp.contact_node);
+  for (const auto& e : r.events)
+    events.push_back({e.t, engine::to_string(e.kind), e.value,
+                      e.region >= 0 && e.region < static_cast<int>(region_names.size())
+                          ? region_names[e.region]
+                          : std::string()});
+}
+
+// A virtual trainee (and, in an instructed session, the instructor watching) as the haptic
+// device of the one lock-step loop: read() is the trainee's command for the end of the step,
+// write() what both perceive of the step. The command time is counted here as step * dt, the
+// scene's own clock (Scene: t = step index * dt), not t + dt of the read time, which rounds
+// differently.
+class VirtualParticipant : public engine::Device {
+ public:
+  VirtualParticipant(pm::Trainee& trainee, pm::Instructor* instructor, pm::Channels instructor_ch,
+                     double dt)
+      : trainee_(trainee), instructor_(instructor), instructor_ch_(instructor_ch), dt_(dt) {}
+  engine::DeviceInput read(double) override {
+    engine::DeviceInput in;
+    in.position = trainee_.command(static_cast<double>(++step_) * dt_);
+    return in;
+  }
+  void write(const engine::Rendered& r) override {
+    pm::Percept p;
+    p.t = r.t;
+    p.force = r.force;
+    p.contact = r.contact;
+    p.contact_region = r.contact_region;
+    p.visible_deformation = r.visible_deformation;
+    p.audio = r.audio;
+    bool call = false;
+    if (instructor_) {
+      call = instructor_->observe(p, instructor_ch_);
+      if (prev_contact_ && !r.contact) instructor_->reset_press();
+    }
+    prev_contact_ = r.contact;
+    trainee_.perceive(p, call);
+  }
+
+ private:
+  pm::Trainee& trainee_;
+  pm::Instructor* instructor_;
+  pm::Channels instructor_ch_;
+  double dt_;
+  long step_ = 0;
+  bool prev_contact_ = false;
+};
+
 struct SessionOutcome {
   results::SessionData data;
   pm::TraineeState state_after;
@@ -158,7 +215,8 @@ struct ModelParams {
 // JSON exactly as a resumed run reads it back.
 SessionOutcome finish_session(const ParticipantPlan& pp, const SessionSpec& spec,
                               results::SessionData out, long steps, double dt, double wall,
-                              std::vector<float> loop, const nlohmann::json& state) {
+                              const engine::TimingSummary& loop, double loop_unit_s,
+                              const nlohmann::json& state) {
   results::SessionRecord& rec = out.session;
   rec.participant = pp.id;
   rec.ordinal = spec.ordinal;
@@ -171,10 +229,9 @@ SessionOutcome finish_session(const ParticipantPlan& pp, const SessionSpec& spec
   rec.duration = steps * dt;
   rec.steps = steps;
   rec.wall_duration = wall;
-  if (!loop.empty()) {
-    const engine::TimingSummary ts = engine::summarize_times({loop.begin(), loop.end()});
-    rec.loop_median = ts.median;
-    rec.loop_p99 = ts.p99;
+  if (loop.count > 0) {
+    rec.loop_median = loop.median * loop_unit_s;
+    rec.loop_p99 = loop.p99 * loop_unit_s;
   }
   rec.seed = spec.seed;
   rec.state_after = state.dump();
@@ -202,7 +259,8 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
         run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene, keep_samples);
     nr.data.session.transparency = scene.config().cues.transparency;
     return finish_session(pp, spec, std::move(nr.data), nr.steps, scene.dt(), nr.wall,
-                          std::move(nr.loop), nr.state_after.to_json());
+                          engine::summarize_times({nr.loop.begin(), nr.loop.end()}), 1.0,
+                          nr.state_after.to_json());
   }
   const engine::SceneGeometry& g = scene.geometry();
   const int feature = g.region_index(study.task.feature);
@@ -254,57 +312,24 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
   samples.node.reserve(steps);
   // Step times for the loop median / p99: every kTimedEvery-th step (reading the clock twice
   // per step cost 12 % of an exp2 run; a systematic 1-in-8 sample estimates both quantiles).
-  constexpr long kTimedEvery = 8;
-  std::vector<float> loop;
-  loop.reserve(steps / kTimedEvery + 1);
+  constexpr int kTimedEvery = 8;
+  std::vector<double> loop_us;
+  loop_us.reserve(steps / kTimedEvery + 1);
+  VirtualParticipant hand(trainee, instructor ? &*instructor : nullptr, instructor_ch, dt);
+  engine::TimedDevice timed(hand, loop_us, kTimedEvery);
   const auto wall0 = Clock::now();
-  bool prev_contact = false;
-  for (long i = 0; i < steps; ++i) {
-    const double t = (i + 1) * dt;
-    const Eigen::Vector3d x = trainee.command(t);
-    const bool timed = i % kTimedEvery == 0;
-    const auto a = timed ? Clock::now() : Clock::time_point{};
-    const engine::Rendered r = scene.step(x);
-    if (timed) loop.push_back(std::chrono::duration<float>(Clock::now() - a).count());
-    samples.x.insert(samples.x.end(), {x.x(), x.y(), x.z()});
-    samples.F.insert(samples.F.end(), {r.force.x(), r.force.y(), r.force.z()});
-    samples.node.push_back(r.contact_node);
-    for (const auto& e : r.events)
-      out.events.push_back({e.t, engine::to_string(e.kind), e.value,
-                            e.region >= 0 && e.region < static_cast<int>(g.region_names.size())
-                                ? g.region_names[e.region]
-                                : std::string()});
-    pm::Percept p;
-    p.t = r.t;
-    p.force = r.force;
-    p.contact = r.contact;
-    p.contact_region = r.contact_region;
-    p.visible_deformation = r.visible_deformation;
-    p.audio = r.audio;
-    bool call = false;
-    if (instructor) {
-      call = instructor->observe(p, instructor_ch);
-      if (prev_contact && !r.contact) instructor->reset_press();
-    }
-    prev_contact = r.contact;
-    trainee.perceive(p, call);
-  }
+  engine::run_lockstep(scene, timed, {.duration = spec.duration, .frame_period = 0.0},
+                       [&](const engine::Rendered& r, const engine::Sample& smp) {
+                         log_step(r, smp, g.region_names, samples, out.events);
+                       });
   const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
   trainee.end_session(spec.offset + spec.duration);
 
-  MeasureInputs mi;
-  mi.samples = &samples;
-  mi.events = &out.events;
-  mi.vertex_region = &g.vertex_region;
-  mi.feature_region = feature;
-  mi.mpf = lim.mpf;
-  mi.accuracy_tolerance = study.task.accuracy_tolerance;
-  mi.identify_dwell = study.task.identify_dwell;
-  mi.palpation_onset = study.task.palpation_onset;
-  out.measures = compute_measures(mi);
+  out.measures = session_measures(study, g, samples, out.events);
   if (keep_samples) out.samples = std::move(samples);
   out.session.transparency = scene.config().cues.transparency;
-  return finish_session(pp, spec, std::move(out), steps, dt, wall, std::move(loop),
+  return finish_session(pp, spec, std::move(out), steps, dt, wall,
+                        engine::summarize_times(std::move(loop_us)), 1e-6,
                         trainee.state().to_json());
 }
 
@@ -664,13 +689,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     const auto names = g.region_names;
     ro.on_step = [&](const engine::Rendered& r, const engine::Sample& smp) {
       std::lock_guard lock(mu);
-      pending.x.insert(pending.x.end(), {smp.x.x(), smp.x.y(), smp.x.z()});
-      pending.F.insert(pending.F.end(), {smp.F.x(), smp.F.y(), smp.F.z()});
-      pending.node.push_back(smp.contact_node);
-      for (const auto& e : r.events)
-        pending_events.push_back(
-            {e.t, engine::to_string(e.kind), e.value,
-             e.region >= 0 && e.region < static_cast<int>(names.size()) ? names[e.region] : ""});
+      log_step(r, smp, names, pending, pending_events);
     };
     if (opt.on_session_start) opt.on_session_start(spec, scene);
     const auto wall0 = Clock::now();

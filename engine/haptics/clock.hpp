@@ -43,8 +43,15 @@ long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
                   const std::function<void(const Rendered&, const Sample&)>& on_step = {},
                   const std::function<void(const Frame&)>& on_frame = {});
 
+// The one place of palplab's timing statistics (probe, bench, the runner's loop times, the
+// real-time clock's jitter). Quantiles are nearest rank on the sorted values: the q-quantile of
+// n values is the value of rank round(q (n - 1)) (0-based), so p99 and max are values that
+// occurred. The median is the usual sample median (the mean of the two middle values when n is
+// even). Both return 0 for an empty set; q is clamped to [0, 1].
+double quantile(std::vector<double> v, double q);
+double median(std::vector<double> v);
+
 // Median, 99th percentile and maximum of a set of durations (any unit); zeros when empty.
-// The one percentile convention of palplab's timings: nearest rank on the sorted values.
 struct TimingSummary {
   double median = 0.0, p99 = 0.0, max = 0.0;
   long count = 0;
@@ -52,17 +59,26 @@ struct TimingSummary {
 TimingSummary summarize_times(std::vector<double> times);
 
 // Wraps a device and records the wall time between its read() and write(), which under
-// run_lockstep is exactly the Scene::step in between (us). For probes and benchmarks.
+// run_lockstep is exactly the Scene::step in between (us). For probes, benchmarks and the
+// runner's loop statistics. every > 1 times only steps 0, every, 2*every, ... (reading the
+// clock twice per step is a measurable part of a cheap step; a systematic sample still
+// estimates the median and p99).
 class TimedDevice : public Device {
  public:
-  TimedDevice(Device& inner, std::vector<double>& step_us) : inner_(inner), out_(step_us) {}
+  TimedDevice(Device& inner, std::vector<double>& step_us, int every = 1)
+      : inner_(inner), out_(step_us), every_(every < 1 ? 1 : every) {}
   DeviceInput read(double t) override;
   void write(const Rendered& r) override;
   bool finished() const override { return inner_.finished(); }
+  std::vector<DeviceEvent> take_events() override { return inner_.take_events(); }
+  long samples_received() const override { return inner_.samples_received(); }
 
  private:
   Device& inner_;
   std::vector<double>& out_;
+  int every_;
+  long step_ = 0;
+  bool timing_ = false;
   std::chrono::steady_clock::time_point t0_;
 };
 

@@ -88,3 +88,39 @@ TEST(Clock, RealtimeHapticAndGraphicsThreads) {
       st.period_median_us, st.period_p99_us, st.period_max_us, st.overruns, st.step_median_us,
       st.frames_drawn, st.frames_published);
 }
+
+// The one place of the timing statistics: nearest-rank quantiles, the usual median.
+TEST(Clock, QuantileIsNearestRankAndMedianTheSampleMedian) {
+  const std::vector<double> odd = {5, 1, 4, 2, 3}, even = {4, 1, 3, 2};
+  EXPECT_EQ(median(odd), 3.0);
+  EXPECT_EQ(median(even), 2.5);         // mean of the two middle values
+  EXPECT_EQ(quantile(even, 0.5), 3.0);  // rank round(0.5 * 3) = 2 (0-based) of 1 2 3 4
+  EXPECT_EQ(quantile(odd, 0.0), 1.0);
+  EXPECT_EQ(quantile(odd, 1.0), 5.0);
+  EXPECT_EQ(quantile(odd, 7.0), 5.0);   // clamped
+  EXPECT_EQ(quantile(odd, 0.24), 2.0);  // rank round(0.96) = 1
+  EXPECT_EQ(median({}), 0.0);
+  EXPECT_EQ(quantile({}, 0.99), 0.0);
+  std::vector<double> v;
+  for (int i = 1; i <= 1000; ++i) v.push_back(1001 - i);  // 1000 .. 1, unsorted order
+  const TimingSummary t = summarize_times(v);
+  EXPECT_EQ(t.count, 1000);
+  EXPECT_EQ(t.median, 500.5);
+  EXPECT_EQ(t.p99, 990.0);  // rank round(0.99 * 999) = 989 -> value 990
+  EXPECT_EQ(t.max, 1000.0);
+  EXPECT_EQ(summarize_times({}).count, 0);
+}
+
+// TimedDevice(every = 8) times steps 0, 8, 16, ... and passes everything else through.
+TEST(Clock, TimedDeviceSamplesEveryNthStep) {
+  Scene s = prototypes::build_scene(proto("A"));
+  ScriptedDevice dev = press_device(s);
+  std::vector<double> all, some;
+  TimedDevice every(dev, all), eighth(every, some, 8);
+  const long n = run_lockstep(s, eighth, {0.1, 0.0});
+  EXPECT_EQ(n, 100);
+  EXPECT_EQ(all.size(), 100u);
+  EXPECT_EQ(some.size(), 13u);  // steps 0, 8, ..., 96
+  EXPECT_EQ(dev.forces().size(), 100u);
+  for (double us : some) EXPECT_GE(us, 0.0);
+}

@@ -1,0 +1,100 @@
+// The runner's virtual sessions run on the one lock-step loop (engine::run_lockstep) with the
+// participant as the device. Checked here: a session's log is exactly what that loop renders
+// for the logged positions (replayed on a fresh scene of the same prototype: every force and
+// contact node bit for bit, so the briefing's demonstration on the session's scene left no
+// trace either), and an instructed session (exp1) logs one sample per planned step.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include "engine/haptics/clock.hpp"
+#include "protocols/plan.hpp"
+#include "protocols/runner.hpp"
+#include "protocols/study.hpp"
+#include "prototypes/factory.hpp"
+
+using namespace palplab;
+using namespace palplab::protocols;
+
+namespace {
+
+Study reference(const std::string& file) {
+  return load_study(
+      (std::filesystem::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / file).string(),
+      engine_prototype_inspector());
+}
+
+// The first participant of `group` with only its first `sessions` sessions, each `seconds` long.
+ParticipantPlan first_of(const Study& study, const std::string& group, int sessions,
+                         double seconds) {
+  for (ParticipantPlan p : make_plan(study).participants)
+    if (p.group == group) {
+      p.sessions.resize(sessions);
+      for (auto& s : p.sessions) s.duration = seconds;
+      return p;
+    }
+  ADD_FAILURE() << "no participant in group " << group;
+  return {};
+}
+
+// Plays logged positions back, one per step.
+class Replay : public engine::Device {
+ public:
+  explicit Replay(const results::SampleSeries& s) : s_(s) {}
+  engine::DeviceInput read(double) override {
+    engine::DeviceInput in;
+    in.position = Eigen::Vector3d(s_.x[3 * k_], s_.x[3 * k_ + 1], s_.x[3 * k_ + 2]);
+    ++k_;
+    return in;
+  }
+  void write(const engine::Rendered&) override {}
+  bool finished() const override { return k_ >= s_.size(); }
+
+ private:
+  const results::SampleSeries& s_;
+  std::size_t k_ = 0;
+};
+
+}  // namespace
+
+TEST(RunnerLoop, VirtualSessionLogIsTheLockstepLoopsOwnRendering) {
+  const Study study = reference("exp2_short_term.json");
+  // Group B: the briefing demonstrates on B's scene before the first session.
+  const ParticipantPlan pp = first_of(study, "B", 2, 15.0);
+  const std::vector<results::SessionData> out = simulate_participant(study, pp, true);
+  ASSERT_EQ(out.size(), 2u);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const results::SampleSeries& s = out[k].samples;
+    engine::Scene scene = prototypes::build_scene(pp.sessions[k].prototype_file);
+    ASSERT_EQ(static_cast<long>(s.size()), std::lround(15.0 / scene.dt())) << k;
+    EXPECT_EQ(out[k].session.steps, static_cast<long>(s.size()));
+    Replay replay(s);
+    std::size_t i = 0, contacts = 0, mismatches = 0;
+    engine::run_lockstep(scene, replay, {.duration = 15.0, .frame_period = 0.0},
+                         [&](const engine::Rendered& r, const engine::Sample&) {
+                           mismatches +=
+                               std::memcmp(r.force.data(), &s.F[3 * i], 3 * sizeof(double)) != 0 ||
+                               r.contact_node != s.node[i];
+                           contacts += r.contact;
+                           ++i;
+                         });
+    EXPECT_EQ(i, s.size());
+    EXPECT_EQ(mismatches, 0u) << "session " << k;
+    EXPECT_GT(contacts, 1000u) << "session " << k << ": the trainee palpated";
+  }
+}
+
+TEST(RunnerLoop, InstructedSessionLogsEveryPlannedStep) {
+  const Study study = reference("exp1_instructor.json");
+  const ParticipantPlan pp = first_of(study, "A", 1, 10.0);
+  ASSERT_FALSE(pp.sessions[0].instructor.empty());
+  const std::vector<results::SessionData> out = simulate_participant(study, pp, true);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].samples.size(), 10000u);  // 10 s at 1 kHz
+  EXPECT_EQ(out[0].session.steps, 10000);
+  EXPECT_DOUBLE_EQ(out[0].session.duration, 10.0);
+  EXPECT_GT(out[0].session.loop_median, 0.0);  // s per step, from the sampled step times
+  EXPECT_GE(out[0].session.loop_p99, out[0].session.loop_median);
+  EXPECT_LT(out[0].session.loop_median, 0.1);
+}
