@@ -26,11 +26,13 @@ struct PressSpec {
   double force = 2.5;                                 // N, target device force
   double hold = 1.0;                                  // s at the target
   double release = 1.0;                               // s after the withdrawal
-  double start_offset = 0.002;                        // m outside the surface
-  double approach_speed = 0.02;                       // m/s
-  double withdraw_speed = 0.05;                       // m/s
-  double max_depth = 0.06;                            // m: give up pressing deeper than this
-  double max_approach_time = 10.0;                    // s: give up pressing after this
+  // m outside the surface; negative: the script starts that far inside (with depth control
+  // and start_offset = -depth, a step input to the held depth)
+  double start_offset = 0.002;
+  double approach_speed = 0.02;     // m/s
+  double withdraw_speed = 0.05;     // m/s
+  double max_depth = 0.06;          // m: give up pressing deeper than this
+  double max_approach_time = 10.0;  // s: give up pressing after this
   // Position control instead of a force target: press to this depth (m below the rest surface,
   // > 0) at approach_speed and hold it; `force` is then ignored. 0 = force control.
   double depth = 0.0;

@@ -37,15 +37,19 @@ nlohmann::json fem_info(const Scene& s) {
   return nlohmann::json::parse(st.model_info).at("fem");
 }
 
-// Holds the device `depth` m inside the rest surface at surface node `node` for `steps` steps and
-// returns the force on the hand.
+// Holds the device `depth` m inside the rest surface at surface node `node` for `steps` steps
+// (the press script started at that depth: a step input) and returns the force on the hand.
 Eigen::Vector3d hold(Scene& s, int node, double depth, int steps) {
-  const SceneGeometry& g = s.geometry();
-  const Eigen::Vector3d x = g.V.row(node).transpose() - depth * g.N.row(node).transpose();
-  Rendered r;
-  for (int k = 0; k < steps; ++k) r = s.step(x);
+  PressSpec spec = press_at(s.geometry(), node, 1.0, 1e9, 0.0);
+  spec.depth = depth;
+  spec.start_offset = -depth;
+  PressDevice press(spec);
+  Rendered last;
+  const long n = run_lockstep(s, press, {.duration = steps * s.dt(), .frame_period = 0.0},
+                              [&](const Rendered& r, const Sample&) { last = r; });
+  EXPECT_EQ(n, steps);
   EXPECT_EQ(s.last_sample().contact_node, node);
-  return r.force;
+  return last.force;
 }
 
 // Large steps: backward Euler with h = 5 s is a damped fixed-point iteration towards the static

@@ -4,8 +4,10 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
+#include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
 
@@ -30,14 +32,31 @@ struct Seen {
   }
 };
 
-void step(Scene& s, const Eigen::Vector3d& x, Seen& seen) {
-  const Rendered r = s.step(x);
+void see(const Rendered& r, Seen& seen) {
   seen.fmax = std::max(seen.fmax, r.force.norm());
   seen.finite = seen.finite && r.force.allFinite() && std::isfinite(r.visible_deformation);
   for (const Event& e : r.events) {
     seen.kinds.push_back(e.kind);
     seen.values.push_back(e.value);
   }
+}
+
+// One step with the device at x (the jumps and invalid inputs, which no press script makes).
+void step(Scene& s, const Eigen::Vector3d& x, Seen& seen) {
+  see(s.step(x), seen);
+}
+
+// The one press script on a region's press node: 2 mm outside, in at 2 cm/s to `depth` (m) and
+// held there; press() runs `steps` lock-step steps of it.
+PressSpec body_press(const Scene& s, double depth, const std::string& region = "body") {
+  PressSpec p = press_at(s.geometry(), s.geometry().region_node(region), 1.0, 1e3, 0.0);
+  p.depth = depth;
+  return p;
+}
+void press(Scene& s, const PressSpec& spec, int steps, Seen& seen) {
+  PressDevice d(spec);
+  run_lockstep(s, d, {.duration = steps * s.dt(), .frame_period = 0.0},
+               [&](const Rendered& r, const Sample&) { see(r, seen); });
 }
 
 }  // namespace
@@ -47,11 +66,8 @@ TEST(Watchdog, PressToTenTimesTheSftIsClampedAndLoggedOnEveryPrototype) {
   // per contact, and a rigid surface is never reset.
   for (const char* id : {"A", "B", "C", "D"}) {
     Scene s = prototypes::build_scene(proto(id));
-    const SceneGeometry& g = s.geometry();
-    const int node = g.region_node("body");
-    const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
     Seen seen;
-    for (int k = 0; k < 3000; ++k) step(s, p - (std::min(k, 2000) * 2e-5 - 0.002) * n, seen);
+    press(s, body_press(s, 0.038), 3000, seen);  // 3.8 cm deep after 2 s, held 1 s
     EXPECT_TRUE(seen.finite) << id;
     EXPECT_LE(seen.fmax, 8.5 + 1e-12) << id;
     EXPECT_NEAR(seen.fmax, 8.5, 1e-9) << id;  // 4 cm deep: the limit is reached
@@ -67,11 +83,9 @@ TEST(Watchdog, DivergenceResetsADeformableModelAndIsLogged) {
   SceneOverrides ov;
   ov.integrator = "symplectic_euler";
   Scene s = prototypes::build_scene(proto("C"), ov);
-  const SceneGeometry& g = s.geometry();
-  const int node = g.region_node("ovary_left");
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
   Seen seen;
-  for (int k = 0; k < 1500; ++k) step(s, p - (std::min(k, 500) * 2e-5 - 0.002) * n, seen);
+  press(s, body_press(s, 0.008, "ovary_left"), 1500,
+        seen);  // 8 mm into the ovary after 0.5 s, held 1 s
   EXPECT_TRUE(seen.finite);
   EXPECT_LE(seen.fmax, 8.5 + 1e-12);
   EXPECT_GE(seen.count(EventKind::divergence), 1);
@@ -88,7 +102,11 @@ TEST(Watchdog, DeviceJumpIntoTheSurfaceIsSeenAsInjectedEnergy) {
   const int node = g.region_node("body");
   const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
   Seen slow;
-  for (int k = 0; k < 1600; ++k) step(s, p - (0.01 - std::abs(k - 800) * 0.01 / 800) * n, slow);
+  PressSpec in_out = body_press(s, 0.01);  // from the surface to 1 cm in 0.8 s, and out again
+  in_out.start_offset = 0.0;
+  in_out.approach_speed = in_out.withdraw_speed = 0.0125;
+  in_out.hold = 0.0;
+  press(s, in_out, 1600, slow);
   EXPECT_EQ(slow.count(EventKind::energy_injected), 0);
   s.reset();
   Seen jump;
@@ -111,7 +129,7 @@ TEST(Watchdog, NonFiniteDeviceInputIsNoContactOnEveryPrototype) {
     const int node = g.region_node("body");
     const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
     Seen seen;
-    for (int k = 0; k < 200; ++k) step(s, p - (k * 2e-5 - 0.002) * n, seen);  // pressing
+    press(s, body_press(s, 0.038), 200, seen);  // pressing (2 mm deep)
     for (const Eigen::Vector3d& bad :
          {Eigen::Vector3d(nan, 0, 0), Eigen::Vector3d(inf, -inf, 0), Eigen::Vector3d(0, 0, -inf)}) {
       const Rendered r = s.step(bad);
