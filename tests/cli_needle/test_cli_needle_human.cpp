@@ -1,0 +1,165 @@
+// `palplab run --human` on a needle study end to end (issue 16): a person's session is scripted
+// as a device trace (replayed by step index, so the session is deterministic whatever the load
+// of the machine): the finger touches the skin, then device button 2 takes the needle, which
+// goes in along the trace's stylus axis through skin, fat, muscle to the joint capsule. The
+// database holds the tool change, the layers in order, the target and the needle measures,
+// exactly the measures of the same track stepped in lock-step in this process.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/haptics/clock.hpp"
+#include "engine/haptics/devices/tool_switch.hpp"
+#include "engine/haptics/devices/trace_device.hpp"
+#include "prototypes/factory.hpp"
+#include "tests/cli_support.hpp"
+
+namespace fs = std::filesystem;
+namespace e = palplab::engine;
+
+namespace {
+
+const std::string kDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_needle/";
+
+std::vector<std::map<std::string, std::string>> query(const fs::path& db, const std::string& sql) {
+  sqlite3* h = nullptr;
+  sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
+  sqlite3_stmt* s = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sql;
+  std::vector<std::map<std::string, std::string>> out;
+  while (s && sqlite3_step(s) == SQLITE_ROW) {
+    std::map<std::string, std::string> row;
+    for (int i = 0; i < sqlite3_column_count(s); ++i) {
+      const auto* t = sqlite3_column_text(s, i);
+      row[sqlite3_column_name(s, i)] = t ? reinterpret_cast<const char*>(t) : "NULL";
+    }
+    out.push_back(row);
+  }
+  sqlite3_finalize(s);
+  sqlite3_close(h);
+  return out;
+}
+
+// 3 s at the 1 ms haptic step: 0.3 s the finger presses the skin near the entry point and comes
+// back out; then the needle (button bit 1) along `axis` from 25 mm outside the skin, 87 mm in at
+// 36 mm/s (past the capsule, short of the humeral head); held to the end.
+e::Trace insertion_trace(const Eigen::Vector3d& axis) {
+  e::Trace tr;
+  tr.meta["script"] = "finger, then needle through the layers";
+  const Eigen::Vector3d entry(-0.002, -0.07, 0.0);
+  for (int k = 0; k <= 3000; ++k) {
+    e::TraceSample s;
+    s.t = k * 0.001;
+    if (k < 300) {
+      const double a = std::sin(M_PI * k / 300.0);  // in 3 mm and back out
+      s.in.position = entry + (-0.02 + 0.023 * a) * Eigen::Vector3d::UnitY();
+    } else {
+      const double d = std::min(0.087, 0.036 * (k - 300) * 0.001);
+      s.in.position = entry - 0.025 * axis + d * axis;
+      s.in.buttons = e::kNeedleToolButton;
+      s.in.stylus_axis = axis;
+    }
+    tr.samples.push_back(s);
+  }
+  return tr;
+}
+
+TEST(CliNeedleHuman, TraceSessionInsertsThroughTheLayersAndStoresTheMeasures) {
+  const fs::path dir = palplab::testing::scratch_dir("needle_human");
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.0, 1.0, 0.02).normalized();
+  const e::Trace tr = insertion_trace(axis);
+  const fs::path trace = dir / "insert.trace", db = dir / "h.db";
+  e::write_trace(trace.string(), tr);
+  fs::remove(db);
+  const auto r = palplab::testing::run_command(
+      "PALPLAB_NOW=2026-11-24T10:00:00Z " + std::string(PALPLAB_BINARY) + " run " + kDir +
+      "needle_human_study.json --db " + db.string() +
+      " --human --participant P01 --device trace:" + trace.string());
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+
+  auto sessions = query(db, "SELECT * FROM sessions");
+  ASSERT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(sessions[0]["status"], "complete") << sessions[0]["abort_reason"];
+  EXPECT_EQ(sessions[0]["trainee"], "human");
+  EXPECT_EQ(sessions[0]["steps"], "3000");
+  const std::string sid = sessions[0]["session"];
+
+  const auto ev = query(db, "SELECT t, kind, value, region FROM events WHERE session = " + sid +
+                                " ORDER BY t, rowid");
+  std::vector<std::string> entered;
+  int tool_changes = 0, targets = 0, starts = 0;
+  double tool_t = -1;
+  for (const auto& row : ev) {
+    if (row.at("kind") == "tool_changed") {
+      ++tool_changes;
+      EXPECT_EQ(row.at("value"), "1.0");  // to the needle
+      tool_t = std::stod(row.at("t"));
+    }
+    if (row.at("kind") == "tissue_entered") entered.push_back(row.at("region"));
+    targets += row.at("kind") == "target_reached";
+    starts += row.at("kind") == "insertion_start";
+  }
+  EXPECT_EQ(tool_changes, 1);
+  EXPECT_NEAR(tool_t, 0.301, 1.5e-3);  // the first step of the needle samples
+  ASSERT_GE(entered.size(), 4u);
+  EXPECT_EQ(entered[0], "skin");
+  EXPECT_EQ(entered[1], "soft tissue");
+  EXPECT_EQ(entered[2], "muscle");
+  EXPECT_EQ(entered[3], "membrane");
+  EXPECT_EQ(starts, 1);
+  EXPECT_EQ(targets, 1);
+
+  std::map<std::string, std::string> m;
+  for (const auto& row : query(db, "SELECT name, value FROM measures WHERE session = " + sid))
+    m[row.at("name")] = row.at("value");
+  EXPECT_EQ(m["insertion_attempts"], "1.0");
+  EXPECT_GE(std::stod(m["layers_passed"]), 4.0);
+  ASSERT_NE(m["tip_to_target_mm"], "NULL");
+  EXPECT_NE(m["procedure_time"], "NULL");
+
+  // The same track in lock-step in this process (the tool switched by the same device layer):
+  // the stored events are this session's, in the same order at the same times.
+  e::Scene scene =
+      palplab::prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/N.json");
+  e::TraceDevice replay(tr);
+  e::ToolSwitchDevice tools(replay, scene);
+  e::LockstepOptions lo;
+  lo.duration = 3.0;
+  lo.frame_period = 0.0;
+  std::vector<std::pair<double, std::string>> expect;
+  e::run_lockstep(scene, tools, lo, [&](const e::Rendered& rr, const e::Sample&) {
+    for (const auto& x : rr.events) expect.push_back({x.t, e::to_string(x.kind)});
+  });
+  ASSERT_EQ(expect.size(), ev.size());
+  for (size_t i = 0; i < ev.size(); ++i) {
+    EXPECT_EQ(ev[i].at("kind"), expect[i].second) << i;
+    EXPECT_NEAR(std::stod(ev[i].at("t")), expect[i].first, 1e-9) << i;
+  }
+  fs::remove_all(dir);
+}
+
+TEST(CliNeedleHuman, APrototypeWithoutToolsIsRefused) {
+  // The needle study's group on prototype A (one tool): a clear error, exit 2.
+  std::string text = palplab::testing::slurp(kDir + "needle_human_study.json");
+  const auto at = text.find("\"prototype\": \"N\"");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 16, "\"prototype\": \"A\"");
+  const std::string study = palplab::testing::write_temp("needle_on_A.json", text);
+  const fs::path dir = palplab::testing::scratch_dir("needle_human_a");
+  e::write_trace((dir / "t.trace").string(), insertion_trace(Eigen::Vector3d::UnitY()));
+  const auto r = palplab::testing::run_command(
+      "PALPLAB_NOW=2026-11-24T10:00:00Z " + std::string(PALPLAB_BINARY) + " run " + study +
+      " --db " + (dir / "a.db").string() +
+      " --human --participant P01 --device trace:" + (dir / "t.trace").string());
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.out.find("needle"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+}  // namespace
