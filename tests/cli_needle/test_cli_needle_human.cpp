@@ -4,19 +4,28 @@
 // goes in along the trace's stylus axis through skin, fat, muscle to the joint capsule. The
 // database holds the tool change, the layers in order, the target and the needle measures,
 // exactly the measures of the same track stepped in lock-step in this process.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <sqlite3.h>
+#include <sys/socket.h>
 #include <unistd.h>
+
+#include <chrono>
+#include <future>
+#include <thread>
 
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/devices/tool_switch.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
+#include "engine/haptics/devices/udp_device.hpp"
 #include "prototypes/factory.hpp"
 #include "tests/cli_support.hpp"
 
@@ -141,6 +150,74 @@ TEST(CliNeedleHuman, TraceSessionInsertsThroughTheLayersAndStoresTheMeasures) {
     EXPECT_EQ(ev[i].at("kind"), expect[i].second) << i;
     EXPECT_NEAR(std::stod(ev[i].at("t")), expect[i].first, 1e-9) << i;
   }
+  fs::remove_all(dir);
+}
+
+// The same insertion from a bridge over UDP in real time (type-3 datagrams: buttons bit 1 and
+// the stylus axis), the script's clock starting at palplab's first force datagram (the
+// session's start), as `device-sim --start-on-force` does. Timing-dependent (a loaded machine
+// delays samples), so only what does not depend on the timing is checked: the session
+// completes, the tool changes once, the layers are entered in order, one insertion.
+TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
+  const fs::path dir = palplab::testing::scratch_dir("needle_human_udp");
+  const e::Trace tr = insertion_trace(Eigen::Vector3d::UnitY());
+  const int port = 30000 + static_cast<int>(getpid() % 9000);
+  const fs::path db = dir / "u.db";
+  auto run = std::async(std::launch::async, [&] {
+    return palplab::testing::run_command(
+        "PALPLAB_NOW=2026-11-24T10:00:00Z " + std::string(PALPLAB_BINARY) + " run " + kDir +
+        "needle_human_study.json --db " + db.string() +
+        " --human --participant P01 --min-device-rate 0 --device udp:" + std::to_string(port));
+  });
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_in self{}, to{};
+  self.sin_family = to.sin_family = AF_INET;
+  self.sin_addr.s_addr = to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&self), sizeof self), 0);
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  std::optional<Clock::time_point> start;
+  std::uint32_t seq = 0;
+  while (true) {
+    std::uint8_t buf[256];
+    if (!start && ::recv(fd, buf, sizeof buf, MSG_DONTWAIT) >= 0) start = Clock::now();
+    const double since = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!start && since > 30.0) break;  // palplab never started the session
+    const double t = start ? std::chrono::duration<double>(Clock::now() - *start).count() : 0.0;
+    if (t > 3.5) break;
+    const std::size_t k =
+        std::min<std::size_t>(static_cast<std::size_t>(t * 1000.0), tr.samples.size() - 1);
+    e::UdpPosition m;
+    m.seq = ++seq;
+    m.t_device = t;
+    m.x = tr.samples[k].in.position;
+    m.buttons = tr.samples[k].in.buttons;
+    m.axis = tr.samples[k].in.stylus_axis;
+    const auto b = e::encode_with_axis(m);
+    ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  ::close(fd);
+  const auto r = run.get();
+  ASSERT_TRUE(start) << "palplab never sent a force: " << r.out;
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto sessions = query(db, "SELECT status, device FROM sessions");
+  ASSERT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(sessions[0].at("status"), "complete");
+  std::vector<std::string> entered;
+  int tool_changes = 0, starts = 0;
+  for (const auto& row : query(db, "SELECT kind, region FROM events ORDER BY t, rowid")) {
+    tool_changes += row.at("kind") == "tool_changed";
+    starts += row.at("kind") == "insertion_start";
+    if (row.at("kind") == "tissue_entered") entered.push_back(row.at("region"));
+  }
+  EXPECT_EQ(tool_changes, 1);
+  EXPECT_EQ(starts, 1);
+  ASSERT_GE(entered.size(), 3u);
+  EXPECT_EQ(entered[0], "skin");
+  EXPECT_EQ(entered[1], "soft tissue");
+  EXPECT_EQ(entered[2], "muscle");
   fs::remove_all(dir);
 }
 
