@@ -87,6 +87,13 @@ void PalpationUi::request_close() {
 
 void PalpationUi::begin_frame() {
   in_ = win_->poll();
+  handle_keys();
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+}
+
+void PalpationUi::handle_keys() {
   for (int k = 0; k < in_.n_keys; ++k) {
     if (in_.keys_pressed[k] == GLFW_KEY_W) wireframe_ = !wireframe_;
     if (in_.keys_pressed[k] == GLFW_KEY_T) transparent_ = !transparent_;
@@ -94,9 +101,6 @@ void PalpationUi::begin_frame() {
     if (in_.keys_pressed[k] == GLFW_KEY_N && scene_ && scene_->tool != "probe") needle_ = !needle_;
     if (in_.keys_pressed[k] == GLFW_KEY_ESCAPE) win_->request_close();
   }
-  ImGui_ImplOpenGL3_NewFrame();
-  ImGui_ImplGlfw_NewFrame();
-  ImGui::NewFrame();
 }
 
 void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::MonitoredDevice* monitor,
@@ -108,6 +112,7 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   // A script drives the mouse only while a scene is shown; its clock starts with the scene.
   if (script_) {
     in_ = script_->input_at(now_s() - stage_t0_, script_close_);
+    handle_keys();  // the script's keys, as the window's
     if (script_close_) win_->request_close();
   }
   const bool ui_mouse = !script_ && ImGui::GetIO().WantCaptureMouse;

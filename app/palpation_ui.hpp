@@ -97,6 +97,7 @@ class PalpationUi {
   render::ToneCue& tone() { return *tone_; }
 
  private:
+  void handle_keys();  // this frame's keys in in_ (W, T, R, N, Esc)
   std::unique_ptr<render::Window> win_;
   std::unique_ptr<render::Renderer> renderer_;
   std::unique_ptr<UiScene> scene_;

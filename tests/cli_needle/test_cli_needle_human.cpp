@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <string>
@@ -26,6 +27,8 @@
 #include "engine/haptics/devices/tool_switch.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
 #include "engine/haptics/devices/udp_device.hpp"
+#include "engine/render/camera.hpp"
+#include "engine/render/pick.hpp"
 #include "prototypes/factory.hpp"
 #include "tests/cli_support.hpp"
 
@@ -218,6 +221,59 @@ TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
   EXPECT_EQ(entered[0], "skin");
   EXPECT_EQ(entered[1], "soft tissue");
   EXPECT_EQ(entered[2], "muscle");
+  fs::remove_all(dir);
+}
+
+// The mouse (palpation window under Xvfb, a scripted mouse): the cursor on the skin where the
+// default camera sees it head-on, N takes the needle, the wheel pushes it 34 mm in along the
+// view ray — the needle's axis for a mouse. The session logs the tool change and the insertion
+// through the skin into the soft tissue.
+TEST(CliNeedleHuman, MouseWithTheNKeyInsertsAlongTheViewRay) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  constexpr int kW = 400, kH = 300;
+  const auto scene =
+      palplab::prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/N.json");
+  const auto& g = scene.geometry();
+  Eigen::Vector3d c;
+  double rad = 0;
+  palplab::render::bounding_sphere(g.V, c, rad);
+  const auto m = palplab::render::camera_matrices(palplab::render::Camera{}, c, rad, kW, kH);
+  const auto px = palplab::render::head_on_pixel(g, m);
+  ASSERT_TRUE(px && px->cosine > 0.9);
+  const fs::path dir = palplab::testing::scratch_dir("needle_human_mouse");
+  const fs::path script = dir / "needle.json", db = dir / "m.db";
+  {
+    std::ofstream o(script);
+    o << "{\"palplab_mouse_script\": 1, \"instructions_seconds\": 0.2, \"events\": ["
+      << "{\"t\": 0.0, \"x\": " << px->x << ", \"y\": " << px->y << ", \"left\": true},"
+      << "{\"t\": 0.05, \"key\": \"N\"}";
+    for (int i = 0; i < 14; ++i) o << ", {\"t\": " << 0.1 + 0.1 * i << ", \"wheel\": 3}";
+    o << "]}";
+  }
+  const auto r = palplab::testing::run_command(
+      "PALPLAB_NOW=2026-11-24T10:00:00Z PALPLAB_AUDIO_DEVICE=null xvfb-run -a -s '-screen 0 "
+      "640x480x24' " +
+      std::string(PALPLAB_BINARY) + " run " + kDir + "needle_human_study.json --db " + db.string() +
+      " --human --participant P01 --device mouse --size " + std::to_string(kW) + "x" +
+      std::to_string(kH) + " --mouse-script " + script.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto sessions = query(db, "SELECT status, device FROM sessions");
+  ASSERT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(sessions[0].at("status"), "complete");
+  EXPECT_EQ(sessions[0].at("device"), "mouse");
+  std::vector<std::string> entered;
+  int to_needle = 0, starts = 0;
+  for (const auto& row : query(db, "SELECT kind, value, region FROM events ORDER BY t, rowid")) {
+    to_needle += row.at("kind") == "tool_changed" && row.at("value") == "1.0";
+    starts += row.at("kind") == "insertion_start";
+    if (row.at("kind") == "tissue_entered") entered.push_back(row.at("region"));
+  }
+  EXPECT_EQ(to_needle, 1) << r.out;
+  EXPECT_EQ(starts, 1);
+  ASSERT_GE(entered.size(), 2u);
+  EXPECT_EQ(entered[0], "skin");
+  EXPECT_EQ(entered[1], "soft tissue");
   fs::remove_all(dir);
 }
 
