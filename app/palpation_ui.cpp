@@ -72,6 +72,7 @@ void PalpationUi::set_scene(UiScene scene) {
   renderer_ = std::make_unique<render::Renderer>(scene_->geometry);
   control_ = std::make_unique<render::MouseControl>(scene_->geometry);
   transparent_ = scene_->cues.transparency;  // the session's cue; T still toggles it
+  needle_ = scene_->tool == "needle";
   stage_t0_ = now_s();
   in_message_ = false;
   if (script_) script_->restart();
@@ -86,15 +87,20 @@ void PalpationUi::request_close() {
 
 void PalpationUi::begin_frame() {
   in_ = win_->poll();
+  handle_keys();
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+}
+
+void PalpationUi::handle_keys() {
   for (int k = 0; k < in_.n_keys; ++k) {
     if (in_.keys_pressed[k] == GLFW_KEY_W) wireframe_ = !wireframe_;
     if (in_.keys_pressed[k] == GLFW_KEY_T) transparent_ = !transparent_;
     if (in_.keys_pressed[k] == GLFW_KEY_R && control_) control_->release();
+    if (in_.keys_pressed[k] == GLFW_KEY_N && scene_ && scene_->tool != "probe") needle_ = !needle_;
     if (in_.keys_pressed[k] == GLFW_KEY_ESCAPE) win_->request_close();
   }
-  ImGui_ImplOpenGL3_NewFrame();
-  ImGui_ImplGlfw_NewFrame();
-  ImGui::NewFrame();
 }
 
 void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::MonitoredDevice* monitor,
@@ -106,11 +112,21 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   // A script drives the mouse only while a scene is shown; its clock starts with the scene.
   if (script_) {
     in_ = script_->input_at(now_s() - stage_t0_, script_close_);
+    handle_keys();  // the script's keys, as the window's
     if (script_close_) win_->request_close();
   }
   const bool ui_mouse = !script_ && ImGui::GetIO().WantCaptureMouse;
+  // The mouse has no stylus: the needle's axis is the view direction from the eye through the
+  // contact point (where the person looks is where the needle goes in), sent with the tool to
+  // the haptic thread (engine/haptics/devices/tool_switch.hpp).
+  Eigen::Vector3d needle_axis = sc.axis;
   if (mouse) {
     control_->update(in_, m, cam_, ui_mouse, *mouse);
+    if (sc.tool != "probe") {
+      const Eigen::Vector3d d = control_->position() - m.eye;
+      needle_axis = d.norm() > 1e-9 ? Eigen::Vector3d(d.normalized()) : m.forward;
+      mouse->set_tool(needle_, needle_axis);
+    }
   } else if (!ui_mouse && in_.middle) {  // another device: the mouse only orbits
     engine::MouseDevice scratch(control_->position());
     control_->update(in_, m, cam_, ui_mouse, scratch);
@@ -124,7 +140,7 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   if (transparent_) opt.region_alpha = sc.see_through;
   opt.device_position = monitor ? monitor->last_position() : control_->position();
   opt.contact = s.contact;
-  if (sc.tool == "needle") opt.needle_axis = sc.axis;
+  if (mouse ? needle_ : sc.tool == "needle") opt.needle_axis = needle_axis;
   renderer_->draw(cam_, fw, fh, opt);
   // The ST cue (the scene's audio cue: force >= ST of the contact region, cue on): always a
   // yellow border flash, and a tone where there is a sound card.
@@ -147,6 +163,8 @@ void PalpationUi::draw_palpation(engine::MouseDevice* mouse, const engine::Monit
   ImGui::Begin("palplab", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   ImGui::Text("prototype %s", sc.prototype.c_str());
+  if (mouse && sc.tool != "probe")
+    ImGui::Text("tool: %s (N switches finger / needle)", needle_ ? "needle" : "finger");
   for (const auto& l : status.lines) ImGui::TextUnformatted(l.c_str());
   if (status.timer >= 0.0) {
     ImGui::ProgressBar(

@@ -97,6 +97,7 @@ class PalpationUi {
   render::ToneCue& tone() { return *tone_; }
 
  private:
+  void handle_keys();  // this frame's keys in in_ (W, T, R, N, Esc)
   std::unique_ptr<render::Window> win_;
   std::unique_ptr<render::Renderer> renderer_;
   std::unique_ptr<UiScene> scene_;
@@ -109,6 +110,9 @@ class PalpationUi {
   double stage_t0_ = 0.0;  // s (steady clock) when the current scene or message started
   bool in_message_ = false;
   bool wireframe_ = false, transparent_ = false;
+  // A multi-tool scene's tool with the mouse as the device: N toggles finger / needle; the
+  // needle goes in along the camera's view direction through the contact point.
+  bool needle_ = false;
   std::deque<double> frame_ms_;
   double t_prev_ = 0.0;
   long frame_no_ = 0;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/clock.hpp"
 #include "protocols/measures.hpp"
 #include "protocols/participants/needle.hpp"
 
@@ -11,11 +12,70 @@ namespace palplab::protocols {
 
 namespace pm = participants;
 
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The virtual trainee as the session's device under engine::run_lockstep: read() is the
+// trainee's command for the step about to run, its tool and axis set on the scene before the
+// step when they change (as engine::ToolSwitchDevice does for a person's device); write() is
+// what the trainee perceives of the step. The command time is the step's end, (k + 1) dt with k
+// counted here (not scene.time() + dt, which can differ in the last bit), so a session is
+// bit-identical to the hand-written loop this replaced.
+class TraineeDevice : public engine::Device {
+ public:
+  static constexpr long kTimedEvery = 8;  // as the palpation sessions (runner.cpp)
+  TraineeDevice(pm::NeedleTrainee& trainee, engine::Scene& scene, std::vector<float>& loop)
+      : trainee_(trainee), scene_(scene), loop_(loop), tool_(scene.tool()), dt_(scene.dt()) {}
+
+  engine::DeviceInput read(double) override {
+    const pm::ToolCommand cmd = trainee_.command(static_cast<double>(k_ + 1) * dt_);
+    timed_ = k_ % kTimedEvery == 0;
+    ++k_;
+    // Timed: the tool change and the step (this read's end to the write).
+    if (timed_) t0_ = Clock::now();
+    if (cmd.tool != tool_ || cmd.axis != axis_) {
+      scene_.set_tool(cmd.tool, cmd.axis);
+      tool_ = cmd.tool;
+      axis_ = cmd.axis;
+    }
+    engine::DeviceInput in;
+    in.position = x_ = cmd.x;
+    return in;
+  }
+  const Eigen::Vector3d& last_position() const { return x_; }  // the command of the last read
+  void write(const engine::Rendered& r) override {
+    if (timed_) loop_.push_back(std::chrono::duration<float>(Clock::now() - t0_).count());
+    pm::Percept p;
+    p.t = r.t;
+    p.force = r.force;
+    p.contact = r.contact;
+    p.contact_region = r.contact_region;
+    p.visible_deformation = r.visible_deformation;
+    p.audio = r.audio;
+    p.visible_tip_to_target = r.visible_tip_to_target;
+    p.visible_tip_tissue = r.visible_tip_tissue;
+    trainee_.perceive(p);
+  }
+
+ private:
+  pm::NeedleTrainee& trainee_;
+  engine::Scene& scene_;
+  std::vector<float>& loop_;
+  std::string tool_;
+  Eigen::Vector3d axis_ = Eigen::Vector3d::Zero(), x_ = Eigen::Vector3d::Zero();
+  double dt_;
+  long k_ = 0;
+  bool timed_ = false;
+  Clock::time_point t0_;
+};
+
+}  // namespace
+
 NeedleSessionRun run_needle_session(const Study& study, const pm::TraineeParams& params,
                                     std::uint64_t participant_seed, const SessionSpec& spec,
                                     const pm::TraineeState& before, engine::Scene& scene,
                                     bool keep_samples) {
-  using Clock = std::chrono::steady_clock;
   const engine::SceneGeometry& g = scene.geometry();
   if (scene.tool() == "probe")
     throw InputError("prototype \"" + spec.prototype + "\" (model \"" + scene.model_kind() +
@@ -44,24 +104,15 @@ NeedleSessionRun run_needle_session(const Study& study, const pm::TraineeParams&
   samples.x.reserve(3 * steps);
   samples.F.reserve(3 * steps);
   samples.node.reserve(steps);
-  constexpr long kTimedEvery = 8;  // as the palpation sessions (runner.cpp)
-  out.loop.reserve(steps / kTimedEvery + 1);
+  out.loop.reserve(steps / TraineeDevice::kTimedEvery + 1);
+  TraineeDevice device(trainee, scene, out.loop);
+  engine::LockstepOptions lo;
+  lo.duration = spec.duration;
+  lo.frame_period = 0.0;
   const auto wall0 = Clock::now();
-  std::string tool = scene.tool();
-  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-  for (long i = 0; i < steps; ++i) {
-    const double t = (i + 1) * dt;
-    const pm::ToolCommand cmd = trainee.command(t);
-    const bool timed = i % kTimedEvery == 0;
-    const auto a = timed ? Clock::now() : Clock::time_point{};
-    if (cmd.tool != tool || cmd.axis != axis) {
-      scene.set_tool(cmd.tool, cmd.axis);
-      tool = cmd.tool;
-      axis = cmd.axis;
-    }
-    const engine::Rendered r = scene.step(cmd.x);
-    if (timed) out.loop.push_back(std::chrono::duration<float>(Clock::now() - a).count());
-    samples.x.insert(samples.x.end(), {cmd.x.x(), cmd.x.y(), cmd.x.z()});
+  engine::run_lockstep(scene, device, lo, [&](const engine::Rendered& r, const engine::Sample&) {
+    const Eigen::Vector3d& x = device.last_position();
+    samples.x.insert(samples.x.end(), {x.x(), x.y(), x.z()});
     samples.F.insert(samples.F.end(), {r.force.x(), r.force.y(), r.force.z()});
     samples.node.push_back(r.contact_node);
     for (const auto& e : r.events)
@@ -69,17 +120,7 @@ NeedleSessionRun run_needle_session(const Study& study, const pm::TraineeParams&
                                  e.region >= 0 && e.region < static_cast<int>(g.region_names.size())
                                      ? g.region_names[e.region]
                                      : std::string()});
-    pm::Percept p;
-    p.t = r.t;
-    p.force = r.force;
-    p.contact = r.contact;
-    p.contact_region = r.contact_region;
-    p.visible_deformation = r.visible_deformation;
-    p.audio = r.audio;
-    p.visible_tip_to_target = r.visible_tip_to_target;
-    p.visible_tip_tissue = r.visible_tip_tissue;
-    trainee.perceive(p);
-  }
+  });
   out.wall = std::chrono::duration<double>(Clock::now() - wall0).count();
   trainee.end_session(spec.offset + spec.duration);
   out.steps = steps;

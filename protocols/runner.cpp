@@ -15,6 +15,7 @@
 #include "common/input_error.hpp"
 #include "common/seed.hpp"
 #include "engine/haptics/clock.hpp"
+#include "engine/haptics/devices/tool_switch.hpp"
 #include "engine/haptics/press.hpp"
 #include "engine/scene.hpp"
 #include "palplab/version.hpp"
@@ -556,18 +557,16 @@ engine::Trace trace_from_samples(const results::SampleSeries& s) {
 std::string session_instructions(const Study& study, const SessionSpec& spec) {
   if (spec.phase >= 0 && spec.phase < static_cast<int>(study.phases.size()))
     if (const std::string* t = study.phases[spec.phase].instructions_for(spec.index)) return *t;
+  if (study.task.kind == "needle_insertion")
+    return "Palpate the skin with the finger to choose the entry point, then take the needle "
+           "(device button 2, or N in the window) and insert it to the " +
+           study.task.feature + ". The session lasts " +
+           std::to_string(std::lround(spec.duration)) + " s.";
   return "Palpate the model and find the " + study.task.feature + ". The session lasts " +
          std::to_string(std::lround(spec.duration)) + " s.";
 }
 
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
-  if (study.task.kind == "needle_insertion")
-    throw InputError(
-        "run --human: human sessions of a needle_insertion task are not supported: the "
-        "real-time session loop cannot switch the tool (finger -> needle) or set the stylus "
-        "axis from the device; virtual sessions run (palplab run without --human); see "
-        "docs/FORMATS.md \"Needle insertion\"",
-        study.file);
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
   };
@@ -641,14 +640,24 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     if (opt.before_session && !opt.before_session(spec)) break;
     engine::Scene scene = session_scene(study, spec);
     const engine::SceneGeometry& g = scene.geometry();
-    if (g.region_index(study.task.feature) < 0)
+    const bool needle = study.task.kind == "needle_insertion";
+    if (needle && scene.tool() == "probe")
+      throw InputError("prototype \"" + spec.prototype + "\" (model \"" + scene.model_kind() +
+                           "\") has no finger and needle tools; a needle_insertion task needs "
+                           "model \"needle\"",
+                       spec.prototype_file);
+    if (!needle && g.region_index(study.task.feature) < 0)
       throw InputError(
           "prototype \"" + spec.prototype + "\" has no region \"" + study.task.feature + "\"",
           spec.prototype_file);
     std::unique_ptr<engine::Device> dev = opt.make_device();
     engine::TraceRecorder recorder(*dev);
-    engine::Device& device = opt.record_trace_dir.empty() ? static_cast<engine::Device&>(*dev)
-                                                          : static_cast<engine::Device&>(recorder);
+    engine::Device& raw = opt.record_trace_dir.empty() ? static_cast<engine::Device&>(*dev)
+                                                       : static_cast<engine::Device&>(recorder);
+    // A needle scene's tool and stylus axis come from the device (buttons bit 1, stylus_axis),
+    // set on the haptic thread before each step (engine/haptics/devices/tool_switch.hpp).
+    engine::ToolSwitchDevice tools(raw, scene);
+    engine::Device& device = needle ? static_cast<engine::Device&>(tools) : raw;
 
     results::SessionData data;
     results::SessionRecord& rec = data.session;

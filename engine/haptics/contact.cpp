@@ -66,74 +66,140 @@ Vec3 closest_on_triangle(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3
 
 }  // namespace
 
-ContactTracker::ContactTracker(const mesh::Positions& V, const mesh::Positions& N,
-                               const mesh::Faces& F)
-    : V_(V), N_(N), F_(F) {
+namespace {
+
+// Top-down median split on the longest axis of the face boxes' centres; leaves of <= 4 faces.
+int build_bvh(FaceIndex& ix, int begin, int end) {
+  const int id = static_cast<int>(ix.bvh.size());
+  ix.bvh.push_back({});
+  Eigen::AlignedBox3d box, centres;
+  box.setEmpty();
+  centres.setEmpty();
+  for (int k = begin; k < end; ++k) {
+    box.extend(ix.face_box[ix.order[k]]);
+    centres.extend(ix.face_box[ix.order[k]].center());
+  }
+  ix.bvh[id].box = box;
+  ix.bvh[id].begin = begin;
+  ix.bvh[id].end = end;
+  if (end - begin > 4) {
+    int axis = 0;
+    centres.sizes().maxCoeff(&axis);
+    const int mid = (begin + end) / 2;
+    std::nth_element(ix.order.begin() + begin, ix.order.begin() + mid, ix.order.begin() + end,
+                     [&](int a, int b) {
+                       return ix.face_box[a].center()[axis] < ix.face_box[b].center()[axis];
+                     });
+    const int l = build_bvh(ix, begin, mid);
+    const int r = build_bvh(ix, mid, end);
+    ix.bvh[id].left = l;
+    ix.bvh[id].right = r;
+  }
+  return id;
+}
+
+}  // namespace
+
+std::vector<Eigen::AlignedBox3d> face_boxes(const mesh::Positions& V, const mesh::Faces& F) {
+  std::vector<Eigen::AlignedBox3d> b(F.rows());
+  for (long f = 0; f < F.rows(); ++f) {
+    b[f].setEmpty();
+    for (int k = 0; k < 3; ++k) b[f].extend(mesh::row3(V, F(f, k)));
+  }
+  return b;
+}
+
+FaceIndex build_face_index(const mesh::Positions& V, const mesh::Faces& F) {
+  FaceIndex ix;
   const long nv = V.rows(), nf = F.rows();
-  vf_offset_.assign(nv + 1, 0);
+  ix.vf_offset.assign(nv + 1, 0);
   for (long f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) ++vf_offset_[F(f, k) + 1];
-  for (long i = 0; i < nv; ++i) vf_offset_[i + 1] += vf_offset_[i];
-  vf_.resize(vf_offset_[nv]);
-  std::vector<int> fill(vf_offset_.begin(), vf_offset_.end() - 1);
+    for (int k = 0; k < 3; ++k) ++ix.vf_offset[F(f, k) + 1];
+  for (long i = 0; i < nv; ++i) ix.vf_offset[i + 1] += ix.vf_offset[i];
+  ix.vf.resize(ix.vf_offset[nv]);
+  std::vector<int> fill(ix.vf_offset.begin(), ix.vf_offset.end() - 1);
   for (long f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) vf_[fill[F(f, k)]++] = static_cast<int>(f);
-  // Face across each edge: edge_face_[3 f + k] is the face sharing the edge opposite corner k.
-  edge_face_.assign(3 * nf, -1);
+    for (int k = 0; k < 3; ++k) ix.vf[fill[F(f, k)]++] = static_cast<int>(f);
+  // Face across each edge: edge_face[3 f + k] is the face sharing the edge opposite corner k.
+  ix.edge_face.assign(3 * nf, -1);
   for (long f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const int u = F(f, (k + 1) % 3), v = F(f, (k + 2) % 3);
-      for (int j = vf_offset_[u]; j < vf_offset_[u + 1] && edge_face_[3 * f + k] < 0; ++j) {
-        const int g = vf_[j];
+      for (int j = ix.vf_offset[u]; j < ix.vf_offset[u + 1] && ix.edge_face[3 * f + k] < 0; ++j) {
+        const int g = ix.vf[j];
         if (g == f) continue;
         for (int m = 0; m < 3; ++m)
-          if (F(g, m) == v) edge_face_[3 * f + k] = g;
+          if (F(g, m) == v) ix.edge_face[3 * f + k] = g;
       }
     }
   double edges = 0.0;
   for (long f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k)
       edges += (mesh::row3(V, F(f, k)) - mesh::row3(V, F(f, (k + 1) % 3))).norm();
-  mean_edge_ = nf > 0 ? edges / (3.0 * nf) : 0.0;
-  face_box_.resize(nf);
-  for (long f = 0; f < nf; ++f) {
-    face_box_[f].setEmpty();
-    for (int k = 0; k < 3; ++k) face_box_[f].extend(mesh::row3(V, F(f, k)));
-  }
-  order_.resize(nf);
-  std::iota(order_.begin(), order_.end(), 0);
-  bvh_.reserve(2 * nf / 4 + 2);
-  if (nf > 0) build(0, static_cast<int>(nf));
-  stack_.reserve(64);
+  ix.mean_edge = nf > 0 ? edges / (3.0 * nf) : 0.0;
+  ix.face_box = face_boxes(V, F);
+  ix.order.resize(nf);
+  std::iota(ix.order.begin(), ix.order.end(), 0);
+  ix.bvh.reserve(2 * nf / 4 + 2);
+  if (nf > 0) build_bvh(ix, 0, static_cast<int>(nf));
+  return ix;
 }
 
-// Top-down median split on the longest axis of the face boxes' centres; leaves of <= 4 faces.
-int ContactTracker::build(int begin, int end) {
-  const int id = static_cast<int>(bvh_.size());
-  bvh_.push_back({});
-  Eigen::AlignedBox3d box, centres;
-  box.setEmpty();
-  centres.setEmpty();
-  for (int k = begin; k < end; ++k) {
-    box.extend(face_box_[order_[k]]);
-    centres.extend(face_box_[order_[k]].center());
+std::string check_face_index(const FaceIndex& ix, long nv, long nf) {
+  if (static_cast<long>(ix.vf_offset.size()) != nv + 1 || ix.vf_offset.front() != 0 ||
+      ix.vf_offset.back() != static_cast<long>(ix.vf.size()) ||
+      static_cast<long>(ix.vf.size()) != 3 * nf)
+    return "vertex-face table does not match the surface";
+  for (long i = 0; i < nv; ++i)
+    if (ix.vf_offset[i + 1] < ix.vf_offset[i]) return "vertex-face table is not monotone";
+  for (int f : ix.vf)
+    if (f < 0 || f >= nf) return "vertex-face table: face out of range";
+  if (static_cast<long>(ix.edge_face.size()) != 3 * nf)
+    return "edge-face table does not match the surface";
+  for (int f : ix.edge_face)
+    if (f < -1 || f >= nf) return "edge-face table: face out of range";
+  if (!std::isfinite(ix.mean_edge) || ix.mean_edge < 0) return "bad mean edge";
+  if (static_cast<long>(ix.face_box.size()) != nf || static_cast<long>(ix.order.size()) != nf)
+    return "face boxes or order do not match the surface";
+  std::vector<char> seen(nf, 0);
+  for (int f : ix.order) {
+    if (f < 0 || f >= nf || seen[f]) return "face order is not a permutation of the faces";
+    seen[f] = 1;
   }
-  bvh_[id].box = box;
-  bvh_[id].begin = begin;
-  bvh_[id].end = end;
-  if (end - begin > 4) {
-    int axis = 0;
-    centres.sizes().maxCoeff(&axis);
-    const int mid = (begin + end) / 2;
-    std::nth_element(
-        order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-        [&](int a, int b) { return face_box_[a].center()[axis] < face_box_[b].center()[axis]; });
-    const int l = build(begin, mid);
-    const int r = build(mid, end);
-    bvh_[id].left = l;
-    bvh_[id].right = r;
+  if ((nf > 0) != !ix.bvh.empty()) return "face hierarchy does not match the surface";
+  // A tree: every child index is later than its parent (the builder's pre-order) and no node is
+  // the child of two, so a walk from the root visits each node at most once; runs lie inside
+  // [0, #F] and children split their parent's run.
+  const long nb = static_cast<long>(ix.bvh.size());
+  std::vector<char> has_parent(nb, 0);
+  for (long i = 0; i < nb; ++i) {
+    const FaceIndex::Node& n = ix.bvh[i];
+    if (n.begin < 0 || n.end < n.begin || n.end > nf) return "face hierarchy: run out of range";
+    if ((n.left < 0) != (n.right < 0)) return "face hierarchy: node with one child";
+    if (n.left >= 0) {
+      if (n.left <= i || n.right <= i || n.left >= nb || n.right >= nb)
+        return "face hierarchy: child out of range";
+      if (has_parent[n.left] || has_parent[n.right] || n.left == n.right)
+        return "face hierarchy: a node has two parents";
+      has_parent[n.left] = has_parent[n.right] = 1;
+      const FaceIndex::Node &l = ix.bvh[n.left], &r = ix.bvh[n.right];
+      if (l.begin != n.begin || l.end != r.begin || r.end != n.end)
+        return "face hierarchy: children do not split their parent";
+    }
   }
-  return id;
+  if (nb > 0 && (ix.bvh[0].begin != 0 || ix.bvh[0].end != nf))
+    return "face hierarchy: the root does not hold every face";
+  return "";
+}
+
+ContactTracker::ContactTracker(const mesh::Positions& V, const mesh::Positions& N,
+                               const mesh::Faces& F)
+    : ContactTracker(V, N, F, std::make_shared<const FaceIndex>(build_face_index(V, F))) {}
+
+ContactTracker::ContactTracker(const mesh::Positions& V, const mesh::Positions& N,
+                               const mesh::Faces& F, std::shared_ptr<const FaceIndex> index)
+    : V_(V), N_(N), F_(F), index_(std::move(index)), ix_(*index_) {
+  stack_.reserve(64);
 }
 
 void ContactTracker::reset() {
@@ -163,7 +229,7 @@ SurfacePoint ContactTracker::closest_point(const Vec3& x) const {
   SurfacePoint best;
   double bd = INFINITY;
   for (long f = 0; f < F_.rows(); ++f) {
-    if (face_box_[f].squaredExteriorDistance(x) >= bd) continue;
+    if (ix_.face_box[f].squaredExteriorDistance(x) >= bd) continue;
     const SurfacePoint s = closest_on_face(static_cast<int>(f), x);
     const double d = (s.p - x).squaredNorm();
     if (d < bd) {
@@ -190,7 +256,7 @@ double ContactTracker::winding_number(const Vec3& x) const {
 }
 
 bool ContactTracker::first_entry(const Vec3& a, const Vec3& b, SurfacePoint& hit) const {
-  if (bvh_.empty()) return false;
+  if (ix_.bvh.empty()) return false;
   const Vec3 d = b - a;
   Eigen::AlignedBox3d seg(a.cwiseMin(b), a.cwiseMax(b));
   const double pad = 1e-12 * (1.0 + a.cwiseAbs().maxCoeff() + b.cwiseAbs().maxCoeff());
@@ -200,7 +266,7 @@ bool ContactTracker::first_entry(const Vec3& a, const Vec3& b, SurfacePoint& hit
   stack_.clear();
   stack_.push_back(0);
   while (!stack_.empty()) {
-    const BvhNode& nd = bvh_[stack_.back()];
+    const FaceIndex::Node& nd = ix_.bvh[stack_.back()];
     stack_.pop_back();
     if (!nd.box.intersects(seg)) continue;
     if (nd.left >= 0) {
@@ -209,8 +275,8 @@ bool ContactTracker::first_entry(const Vec3& a, const Vec3& b, SurfacePoint& hit
       continue;
     }
     for (int k = nd.begin; k < nd.end; ++k) {
-      const int f = order_[k];
-      if (!face_box_[f].intersects(seg)) continue;
+      const int f = ix_.order[k];
+      if (!ix_.face_box[f].intersects(seg)) continue;
       // Moller-Trumbore; only a crossing from the outside (against the face normal) counts. The
       // weights are accepted with a small tolerance so a path through an edge or a vertex is
       // caught by one of the faces there.
@@ -274,7 +340,7 @@ SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x) const
       w = wu.cwiseMax(0.0) / wu.cwiseMax(0.0).sum();
       break;
     }
-    const int g = edge_face_[3 * f + k];
+    const int g = ix_.edge_face[3 * f + k];
     if (g < 0 || g == prev) {  // a boundary, or back and forth over one edge: stay on the edge
       w = wu.cwiseMax(0.0);
       w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
@@ -355,8 +421,9 @@ void ContactTracker::update(const Vec3& from, const Vec3& x) {
     const SurfacePoint q = walk(proxy_, x);
     const double d_new = (q.p - x).dot(shaded_normal(q)), d_old = (proxy_.p - x).dot(n_);
     const double moved = (x - from).norm();
-    const bool run_off = moved > 0.0 && ((d_new <= 0.0 && d_old > 0.0) ||
-                                         (q.p - proxy_.p).norm() > 4.0 * moved + 0.1 * mean_edge_);
+    const bool run_off =
+        moved > 0.0 && ((d_new <= 0.0 && d_old > 0.0) ||
+                        (q.p - proxy_.p).norm() > 4.0 * moved + 0.1 * ix_.mean_edge);
     set_contact(run_off ? proxy_ : q, x);
     return;
   }

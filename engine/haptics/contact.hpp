@@ -21,11 +21,40 @@
 // Shapes: V #V by 3 rest positions (m), N #V by 3 unit outward vertex normals, F #F by 3 faces
 // (ccw seen from outside).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "engine/mesh/types.hpp"
 
 namespace palplab::engine {
+
+// The search structures of a surface for the contact tracker, built once per surface (a scene's
+// prepared mesh holds one, engine/models/model.hpp SceneMesh::face_index; a .psim file stores it,
+// engine/haptics/scene_file.hpp, because building it was ~60 % of loading prototype B).
+struct FaceIndex {
+  struct Node {
+    Eigen::AlignedBox3d box;    // bounds of the node's faces (m)
+    int left = -1, right = -1;  // children (-1: leaf)
+    int begin = 0, end = 0;     // run of `order`
+  };
+  std::vector<int> vf_offset, vf;             // vertex -> incident faces (CSR, #V + 1 / 3 #F)
+  std::vector<int> edge_face;                 // 3 #F: face across the edge opposite each corner, -1
+  double mean_edge = 0.0;                     // m, mean face-edge length
+  std::vector<Eigen::AlignedBox3d> face_box;  // #F face bounds (m)
+  std::vector<Node> bvh;                      // bounding-volume hierarchy over the faces (root 0)
+  std::vector<int> order;                     // #F faces grouped by leaf
+};
+
+// The bounds of each face of (V, F) (FaceIndex::face_box; a .psim file does not store them).
+std::vector<Eigen::AlignedBox3d> face_boxes(const mesh::Positions& V, const mesh::Faces& F);
+// Builds the index of surface (V, F): deterministic (the same bytes for the same surface).
+FaceIndex build_face_index(const mesh::Positions& V, const mesh::Faces& F);
+// An index read from a file is checked against its surface before use: "" when it is
+// consistent (every index in range, the hierarchy a tree over a permutation of the faces),
+// otherwise what is wrong. Never reads out of range, whatever the contents.
+std::string check_face_index(const FaceIndex& ix, long nv, long nf);
 
 // A point on a surface face.
 struct SurfacePoint {
@@ -36,7 +65,11 @@ struct SurfacePoint {
 
 class ContactTracker {
  public:
+  // Builds its own index of (V, F).
   ContactTracker(const mesh::Positions& V, const mesh::Positions& N, const mesh::Faces& F);
+  // Uses `index` (build_face_index(V, F), shared between the scenes of one prepared mesh).
+  ContactTracker(const mesh::Positions& V, const mesh::Positions& N, const mesh::Faces& F,
+                 std::shared_ptr<const FaceIndex> index);
 
   // Disengaged, side of the device unknown.
   void reset();
@@ -69,23 +102,13 @@ class ContactTracker {
   Eigen::Vector3d shaded_normal(const SurfacePoint& s) const;
 
  private:
-  struct BvhNode {
-    Eigen::AlignedBox3d box;
-    int left = -1, right = -1;  // children (-1: leaf)
-    int begin = 0, end = 0;     // run of order_ (leaves)
-  };
-  int build(int begin, int end);
   void set_contact(const SurfacePoint& s, const Eigen::Vector3d& x);
 
   const mesh::Positions& V_;
   const mesh::Positions& N_;
   const mesh::Faces& F_;
-  std::vector<int> vf_offset_, vf_;  // vertex -> incident faces (CSR)
-  double mean_edge_ = 0.0;           // m
-  std::vector<int> edge_face_;       // 3 #F: face across the edge opposite each corner, -1
-  std::vector<BvhNode> bvh_;
-  std::vector<int> order_;  // faces grouped by leaf
-  std::vector<Eigen::AlignedBox3d> face_box_;
+  std::shared_ptr<const FaceIndex> index_;
+  const FaceIndex& ix_;
   mutable std::vector<int> stack_;
 
   bool engaged_ = false, outside_known_ = false, started_inside_ = false;

@@ -16,7 +16,15 @@ struct DeviceInput {
   bool button = false;                                 // = buttons & 1
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s, as the device measures it (0 if not)
   unsigned buttons = 0;                                // bit i = button i pressed
+  // Unit stylus axis, handle -> tip, in the organ's frame; zero = the device reports none.
+  // Read only by multi-tool scenes (the needle's insertion direction, devices/tool_switch.hpp).
+  Eigen::Vector3d stylus_axis = Eigen::Vector3d::Zero();
 };
+
+// Bit of DeviceInput::buttons that selects the needle of a multi-tool scene while set (level, not
+// an edge: a lost sample cannot leave the tool wrong); clear = the finger. A device with a
+// button bar sends it held or latched; the palpation window latches it with the N key.
+inline constexpr unsigned kNeedleToolButton = 1u << 1;
 
 // Something that happened at the device (not in the simulation), for the session's event log:
 // "device_timeout" (no fresh sample for longer than the timeout; the force was switched off),

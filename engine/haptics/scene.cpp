@@ -402,7 +402,10 @@ Scene make_scene(const SceneConfig& cfg) {
   sc.cfg = cfg;
   sc.mesh = scene_mesh(cfg.mesh);
   const SceneMesh& m = *sc.mesh;
-  sc.tracker = std::make_unique<ContactTracker>(m.V, m.N, m.F);
+  // The face index is the mesh's (shared, stored in a .psim file); a mesh made elsewhere without
+  // one (tests) gets its own.
+  sc.tracker = m.face_index ? std::make_unique<ContactTracker>(m.V, m.N, m.F, m.face_index)
+                            : std::make_unique<ContactTracker>(m.V, m.N, m.F);
 
   SceneGeometry& g = sc.geom;
   g.V = m.V;

@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/contact.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/materials.hpp"
 #include "engine/models/model.hpp"
@@ -244,6 +245,8 @@ void put_mesh(Writer& w, const SceneMesh& m) {
   put_csr(w, m.rings->first);
   put_csr(w, m.rings->second);
   w.put<std::uint8_t>(m.tet);
+  // A surface mesh's model mesh is the surface again (scene_mesh.cpp prepare): not stored.
+  if (!m.tet) return;
   w.mat(m.model_V);
   w.mat(m.model_E);
   w.mat(m.model_T);
@@ -319,6 +322,14 @@ std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
   rings->second = get_csr(r, static_cast<int>(nv), "second rings");
   m->rings = rings;
   m->tet = r.get<std::uint8_t>("mesh kind") != 0;
+  if (!m->tet) {  // as scene_mesh.cpp prepares a surface mesh
+    m->model_V = m->V;
+    m->model_E = m->E;
+    m->model_F = m->F;
+    m->surface_to_model.resize(nv);
+    for (long i = 0; i < nv; ++i) m->surface_to_model[i] = static_cast<int>(i);
+    return m;
+  }
   r.mat(m->model_V, "model positions");
   r.mat(m->model_E, "model edges");
   r.mat(m->model_T, "tets");
@@ -337,6 +348,61 @@ std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
   for (int v : m->surface_to_model)
     if (v < 0 || v >= nm) throw InputError("corrupted scene file: bad surface map", r.file());
   return m;
+}
+
+// ---- the contact tracker's face index (FIDX, format 4) -------------------------------------
+
+// The hierarchy as two flat arrays (read in bulk): per node 6 doubles (box min, max) and 4 ints
+// (left, right, begin, end). The face boxes are not stored: recomputed from the surface
+// (face_boxes, the builder's own code, so bit-identical) at less cost than reading them.
+void put_face_index(Writer& w, const FaceIndex& ix) {
+  w.vec(ix.vf_offset);
+  w.vec(ix.vf);
+  w.vec(ix.edge_face);
+  w.put(ix.mean_edge);
+  std::vector<double> boxes;
+  std::vector<std::int32_t> links;
+  boxes.reserve(6 * ix.bvh.size());
+  links.reserve(4 * ix.bvh.size());
+  for (const auto& n : ix.bvh) {
+    boxes.insert(boxes.end(), n.box.min().data(), n.box.min().data() + 3);
+    boxes.insert(boxes.end(), n.box.max().data(), n.box.max().data() + 3);
+    links.insert(links.end(), {n.left, n.right, n.begin, n.end});
+  }
+  w.vec(boxes);
+  w.vec(links);
+  w.vec(ix.order);
+}
+
+// Read and checked against the surface it indexes (check_face_index): a hand-made file that
+// passed the checksum still cannot send the tracker out of range.
+std::shared_ptr<const FaceIndex> get_face_index(Reader& r, const SceneMesh& m) {
+  auto ix = std::make_shared<FaceIndex>();
+  ix->vf_offset = r.vec<int>("vertex-face offsets");
+  ix->vf = r.vec<int>("vertex-face table");
+  ix->edge_face = r.vec<int>("edge-face table");
+  ix->mean_edge = r.get<double>("mean face edge");
+  const auto boxes = r.vec<double>("face hierarchy boxes");
+  const auto links = r.vec<std::int32_t>("face hierarchy links");
+  const std::size_t nb = links.size() / 4;
+  if (links.size() != 4 * nb || boxes.size() != 6 * nb)
+    throw InputError("corrupted scene file: face hierarchy arrays disagree in size", r.file());
+  ix->bvh.resize(nb);
+  for (std::size_t i = 0; i < nb; ++i) {
+    FaceIndex::Node& n = ix->bvh[i];
+    n.box =
+        Eigen::AlignedBox3d(Eigen::Vector3d(boxes[6 * i], boxes[6 * i + 1], boxes[6 * i + 2]),
+                            Eigen::Vector3d(boxes[6 * i + 3], boxes[6 * i + 4], boxes[6 * i + 5]));
+    n.left = links[4 * i];
+    n.right = links[4 * i + 1];
+    n.begin = links[4 * i + 2];
+    n.end = links[4 * i + 3];
+  }
+  ix->order = r.vec<int>("face order");
+  ix->face_box = face_boxes(m.V, m.F);
+  const std::string bad = check_face_index(*ix, m.V.rows(), m.F.rows());
+  if (!bad.empty()) throw InputError("corrupted scene file: face index: " + bad, r.file());
+  return ix;
 }
 
 // ---- sections ---------------------------------------------------------------------------
@@ -438,6 +504,11 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
   }
   {
     Writer s;
+    put_face_index(s, *mesh->face_index);
+    section(payload, tag("FIDX"), s.bytes());
+  }
+  {
+    Writer s;
     s.str(cfg.model);
     s.str(blob);
     section(payload, tag("MODL"), s.bytes());
@@ -530,6 +601,7 @@ SceneFileData read_scene_file(const std::string& path) {
 
   Reader r(path, p, psize);
   bool have_src = false, have_mesh = false, have_model = false, have_key = false;
+  bool have_index = false;
   std::size_t blob_at = 0, blob_size = 0;  // the model blob in `bytes`
   while (r.at() < r.size()) {
     const auto t = r.get<std::uint32_t>("section tag");
@@ -550,6 +622,11 @@ SceneFileData read_scene_file(const std::string& path) {
     } else if (t == tag("MESH")) {
       d.mesh = get_mesh(s);
       have_mesh = true;
+    } else if (t == tag("FIDX")) {
+      if (!have_mesh)
+        throw InputError("corrupted scene file: the face index comes before the mesh", path);
+      std::const_pointer_cast<SceneMesh>(d.mesh)->face_index = get_face_index(s, *d.mesh);
+      have_index = true;
     } else if (t == tag("MODL")) {
       d.info.model_kind = s.str("model kind");
       blob_size = s.count(1, "model data");
@@ -563,9 +640,11 @@ SceneFileData read_scene_file(const std::string& path) {
     if (s.at() != s.size())
       throw InputError("corrupted scene file: section has trailing bytes", path);
   }
-  if (!have_src || !have_key || !have_mesh || !have_model)
+  if (!have_src || !have_key || !have_mesh || !have_index || !have_model)
     throw InputError(
-        "corrupted scene file: a section (sources, mesh key, mesh or model) is missing", path);
+        "corrupted scene file: a section (sources, mesh key, mesh, face index or model) is "
+        "missing",
+        path);
   // A model blob that is most of the file (a FEM factorisation: 93 % of D's) is cut out of the
   // file's buffer in place instead of copied: a copy of 10 MB into fresh pages (page faults,
   // then unmapping them) was a large share of a loaded D's time (perf). A small one is copied,

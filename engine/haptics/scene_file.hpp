@@ -18,7 +18,8 @@
 //     120 u8[8]     first 8 bytes of the SHA-256 of header bytes 0..119
 //   payload: sections {u32 tag, u64 length, bytes}: "SRCS" (the prototype path and each source
 //   file with its SHA-256), "MKEY" (the mesh source's cache key, MeshSource::key), "MESH" (the
-//   prepared mesh), "MODL" (model kind and its blob).
+//   prepared mesh with its ring tables), "FIDX" (the contact tracker's face index: vertex-face
+//   and edge-face tables, face boxes, the face hierarchy), "MODL" (model kind and its blob).
 //
 // Every check fails with a palplab::InputError naming the file and what is wrong (exit 2):
 // not a .psim, wrong format version, built by another palplab build, corrupted header or
@@ -38,7 +39,8 @@ struct SceneMesh;
 
 // Version 2: the MKEY section (the mesh's cache key) and the needle model's precomputation.
 // Version 3: the mass-spring model's linear exterior factorisation (engine/solvers/far_field.hpp).
-inline constexpr std::uint32_t kSceneFileVersion = 3;
+// Version 4: the FIDX section, the contact tracker's face index (engine/haptics/contact.hpp).
+inline constexpr std::uint32_t kSceneFileVersion = 4;
 inline constexpr std::size_t kSceneFileHeaderBytes = 128;
 
 // One source a scene is built from: the prototype file, a mesh file, the materials table.

@@ -1,11 +1,13 @@
 // The prepared meshes of scenes, cached per process and mesh source: generating Model-C or
-// reading a mesh file, normals, regions, lumped areas, the octree and the ring tables are done
-// once; every scene built from the same source shares them (they are immutable).
+// reading a mesh file, normals, regions, lumped areas, the octree, the ring tables and the
+// contact tracker's face index are done once; every scene built from the same source shares them
+// (they are immutable).
 #include <algorithm>
 #include <map>
 #include <mutex>
 
 #include "common/input_error.hpp"
+#include "engine/haptics/contact.hpp"
 #include "engine/haptics/scene_config.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
@@ -127,6 +129,7 @@ std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
   c->octree = std::make_shared<const spatial::Octree>(spatial::build_octree(sm.V, 12, 8));
   c->rings = std::make_shared<const mesh::RingTable>(
       mesh::compute_rings(static_cast<int>(sm.V.rows()), sm.E));
+  c->face_index = std::make_shared<const FaceIndex>(build_face_index(c->V, c->F));
   if (!c->tet) {
     c->model_V = sm.V;
     c->model_E = sm.E;

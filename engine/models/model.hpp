@@ -23,6 +23,8 @@ struct Octree;
 
 namespace palplab::engine {
 
+struct FaceIndex;  // engine/haptics/contact.hpp
+
 // The prepared mesh of a scene (cached per MeshSource): the surface the participant sees, with
 // its search structures, and the model mesh (the tets of a volume mesh, or the surface itself).
 struct SceneMesh {
@@ -36,6 +38,7 @@ struct SceneMesh {
   double mean_edge = 0.0;                         // m
   std::shared_ptr<const spatial::Octree> octree;  // over V
   std::shared_ptr<const mesh::RingTable> rings;   // first/second rings of the surface
+  std::shared_ptr<const FaceIndex> face_index;    // the contact tracker's search tree over F
   // Model mesh: a tet mesh (tet == true) or the surface again.
   bool tet = false;
   mesh::Positions model_V;            // #M nodes (m)

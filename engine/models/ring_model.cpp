@@ -29,11 +29,18 @@ const char* to_string(Scope s) {
 }
 
 RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingParams& p) {
+  return make_ring_model(V, mesh::compute_rings(static_cast<int>(V.rows()), E), p);
+}
+
+RingModel make_ring_model(const RowMatX3d& V, mesh::RingTable rings, const RingParams& p) {
+  if (rings.first.offset.size() != static_cast<std::size_t>(V.rows()) + 1 ||
+      rings.second.offset.size() != static_cast<std::size_t>(V.rows()) + 1)
+    throw std::invalid_argument("make_ring_model: ring tables of another mesh");
   RingModel m;
   m.X_fixed = V;
   m.X = V;
   m.V.setZero(V.rows(), 3);
-  m.rings = mesh::compute_rings(static_cast<int>(V.rows()), E);
+  m.rings = std::move(rings);
   m.params = p;
   m.is_active.assign(V.rows(), 0);
   m.pressed.assign(V.rows(), 0);
@@ -170,7 +177,11 @@ namespace {
 class RingSceneModel final : public SceneModel {
  public:
   RingSceneModel(const SceneConfig& cfg, const SceneMesh& m)
-      : mesh_(m), k_(cfg.contact.stiffness), model_(make_ring_model(m.V, m.E, cfg.ring)) {
+      : mesh_(m),
+        k_(cfg.contact.stiffness),
+        // The prepared mesh's ring tables (computed once per mesh, or loaded from a .psim).
+        model_(m.rings ? make_ring_model(m.V, *m.rings, cfg.ring)
+                       : make_ring_model(m.V, m.E, cfg.ring)) {
     model_.scope = cfg.scope.rings;
     model_.octree = m.octree.get();
   }

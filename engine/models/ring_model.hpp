@@ -48,6 +48,9 @@ struct RingModel {
 };
 
 RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingParams& p);
+// The same with the ring tables given (mesh::compute_rings(#V, E) of the same mesh: a scene's
+// prepared mesh holds them, and a .psim file stores them).
+RingModel make_ring_model(const RowMatX3d& V, mesh::RingTable rings, const RingParams& p);
 
 // One haptic step of h seconds. node = touched node (-1 without contact); push = force of the
 // hand on the organ (N).

@@ -31,7 +31,7 @@ MouseScript MouseScript::parse(const std::string& text, const std::string& file)
         const std::string P = "$.events[" + std::to_string(i) + "]";
         const nlohmann::json& e = (*ev)[i];
         if (!c.expect_object(e, P)) continue;
-        c.keys(e, P, {"t", "x", "y", "left", "right", "middle", "wheel", "close"});
+        c.keys(e, P, {"t", "x", "y", "left", "right", "middle", "wheel", "key", "close"});
         MouseScriptEvent me;
         if (auto t = c.number(e, P, "t", true, 0.0, 86400.0, "the event time (s)")) {
           if (*t < last_t)
@@ -53,6 +53,13 @@ MouseScript MouseScript::parse(const std::string& text, const std::string& file)
         if (auto b = c.boolean(e, P, "middle")) me.middle = *b;
         if (auto w = c.number(e, P, "wheel", false, -1000.0, 1000.0, "the wheel notches"))
           me.wheel = *w;
+        if (auto k = c.text(e, P, "key", false)) {
+          // A letter key (GLFW's key codes of A-Z are their ASCII codes): W, T, N, R.
+          if (k->size() == 1 && (*k)[0] >= 'A' && (*k)[0] <= 'Z')
+            me.key = (*k)[0];
+          else
+            c.err(P + ".key", "expected one capital letter A-Z, got \"" + *k + "\"");
+        }
         if (auto b = c.boolean(e, P, "close")) me.close = *b;
         s.events_.push_back(me);
       }
@@ -81,6 +88,7 @@ WindowInput MouseScript::input_at(double t, bool& close) {
     if (e.right >= 0) state_.right = e.right;
     if (e.middle >= 0) state_.middle = e.middle;
     state_.scroll += e.wheel;
+    if (e.key && state_.n_keys < 16) state_.keys_pressed[state_.n_keys++] = e.key;
     if (e.close) closed_ = true;
   }
   close = closed_;

@@ -14,7 +14,8 @@
 // `t` (s, not decreasing) counts from the start of each session (run --human: the script is
 // replayed from its start in every session) or from the window's first frame (view). A state
 // (cursor x/y in px, origin top-left; left/right/middle buttons) holds until changed; `wheel`
-// notches (+ = press in) are delivered once, in the first frame at or after t; `close` closes
+// notches (+ = press in) and `key` (one capital letter: "N" switches a needle scene's tool, "T"
+// transparency, "W" wireframe) are delivered once, in the first frame at or after t; `close` closes
 // the window as the window manager's close button would.
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct MouseScriptEvent {
   double x = 0.0, y = 0.0;                 // px
   int left = -1, right = -1, middle = -1;  // -1 unchanged, 0 up, 1 down
   double wheel = 0.0;                      // notches
+  int key = 0;                             // a letter key pressed once (GLFW code), 0 = none
   bool close = false;
 };
 

@@ -12,6 +12,7 @@
 
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
+#include "engine/haptics/contact.hpp"
 #include "engine/haptics/press.hpp"
 #include "engine/haptics/scene_file.hpp"
 #include "engine/models/fem_block_mesh.hpp"
@@ -106,6 +107,26 @@ void expect_same_mesh(const engine::SceneMesh& a, const engine::SceneMesh& b) {
   EXPECT_EQ(a.rings->first.index, b.rings->first.index);
   EXPECT_EQ(a.rings->second.offset, b.rings->second.offset);
   EXPECT_EQ(a.rings->second.index, b.rings->second.index);
+  // The contact tracker's face index (format 4): the loaded one is used as stored.
+  ASSERT_TRUE(a.face_index && b.face_index);
+  const engine::FaceIndex &fa = *a.face_index, &fb = *b.face_index;
+  EXPECT_EQ(fa.vf_offset, fb.vf_offset);
+  EXPECT_EQ(fa.vf, fb.vf);
+  EXPECT_EQ(fa.edge_face, fb.edge_face);
+  EXPECT_EQ(fa.mean_edge, fb.mean_edge);
+  EXPECT_EQ(fa.order, fb.order);
+  ASSERT_EQ(fa.face_box.size(), fb.face_box.size());
+  for (size_t i = 0; i < fa.face_box.size(); ++i)
+    EXPECT_TRUE(fa.face_box[i].min() == fb.face_box[i].min() &&
+                fa.face_box[i].max() == fb.face_box[i].max())
+        << "face box " << i;
+  ASSERT_EQ(fa.bvh.size(), fb.bvh.size());
+  for (size_t i = 0; i < fa.bvh.size(); ++i) {
+    const auto &x = fa.bvh[i], &y = fb.bvh[i];
+    EXPECT_TRUE(x.box.min() == y.box.min() && x.box.max() == y.box.max() && x.left == y.left &&
+                x.right == y.right && x.begin == y.begin && x.end == y.end)
+        << "face hierarchy node " << i;
+  }
   EXPECT_EQ(a.tet, b.tet);
   expect_same(a.model_V, b.model_V, "model_V");
   expect_same(a.model_E, b.model_E, "model_E");
@@ -164,7 +185,41 @@ TEST_P(SceneFileRoundTrip, LoadedSceneIsBitIdentical) {
   fs::remove(file);
 }
 
-INSTANTIATE_TEST_SUITE_P(Prototypes, SceneFileRoundTrip, ::testing::Values("A", "B", "C", "D"));
+INSTANTIATE_TEST_SUITE_P(Prototypes, SceneFileRoundTrip,
+                         ::testing::Values("A", "B", "C", "C1", "D", "N"));
+
+// A stored face index is checked against its surface before the tracker uses it: a file that
+// passed its checksums but holds an index out of range, a face order that is not a permutation
+// or a hierarchy that is not a tree (a loop would never end) is refused.
+TEST(SceneFile, DamagedFaceIndexIsRefused) {
+  const engine::SceneConfig cfg = prototypes::load_prototype(proto("B"));
+  const auto mesh = engine::scene_mesh(cfg.mesh);
+  const long nv = mesh->V.rows(), nf = mesh->F.rows();
+  const engine::FaceIndex good = engine::build_face_index(mesh->V, mesh->F);
+  ASSERT_EQ(engine::check_face_index(good, nv, nf), "");
+  ASSERT_GT(good.bvh.size(), 10u);
+  auto bad = [&](auto&& damage, const char* what) {
+    engine::FaceIndex ix = good;
+    damage(ix);
+    EXPECT_NE(engine::check_face_index(ix, nv, nf), "") << what;
+  };
+  bad([](auto& ix) { ix.vf[7] = -1; }, "vertex-face entry");
+  bad([&](auto& ix) { ix.vf[7] = static_cast<int>(nf); }, "vertex-face entry");
+  bad([](auto& ix) { std::swap(ix.vf_offset[3], ix.vf_offset[4]); }, "offsets not monotone");
+  bad([](auto& ix) { ix.vf_offset.pop_back(); }, "offsets size");
+  bad([&](auto& ix) { ix.edge_face[5] = static_cast<int>(nf); }, "edge face");
+  bad([](auto& ix) { ix.edge_face[5] = -2; }, "edge face");
+  bad([](auto& ix) { ix.order[1] = ix.order[0]; }, "order not a permutation");
+  bad([](auto& ix) { ix.face_box.pop_back(); }, "face boxes");
+  bad([](auto& ix) { ix.bvh[0].left = 0; }, "self loop");
+  bad([](auto& ix) { ix.bvh[1].right = ix.bvh[0].right; }, "two parents");
+  bad([&](auto& ix) { ix.bvh[0].right = static_cast<int>(ix.bvh.size()); }, "child range");
+  bad([](auto& ix) { ix.bvh[0].right = -1; }, "one child");
+  bad([&](auto& ix) { ix.bvh.back().end = static_cast<int>(nf) + 1; }, "run range");
+  bad([](auto& ix) { ix.bvh[1].end -= 1; }, "children do not split");
+  bad([](auto& ix) { ix.bvh.clear(); }, "no hierarchy");
+  bad([](auto& ix) { ix.mean_edge = NAN; }, "mean edge");
+}
 
 // The reader never trusts the file: every prefix of a valid file and every single flipped byte
 // is an InputError (never a crash or a silently different scene).

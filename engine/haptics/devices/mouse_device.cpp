@@ -13,12 +13,20 @@ void MouseDevice::set_position(const Eigen::Vector3d& x, bool button) {
   in_.store(v);
 }
 
+void MouseDevice::set_tool(bool needle, const Eigen::Vector3d& axis) {
+  const double v[4] = {needle ? 1.0 : 0.0, axis.x(), axis.y(), axis.z()};
+  tool_.store(v);
+}
+
 DeviceInput MouseDevice::read(double /*t*/) {
-  double v[4];
+  double v[4], w[4];
   in_.load(v);
+  tool_.load(w);
   DeviceInput in;
   in.position = {v[0], v[1], v[2]};
   in.button = v[3] != 0.0;
+  in.buttons = (in.button ? 1u : 0u) | (w[0] != 0.0 ? kNeedleToolButton : 0u);
+  in.stylus_axis = {w[1], w[2], w[3]};
   return in;
 }
 

@@ -43,6 +43,10 @@ class MouseDevice : public Device {
   explicit MouseDevice(const Eigen::Vector3d& start);
   // Window thread.
   void set_position(const Eigen::Vector3d& x, bool button);
+  // The tool of a multi-tool scene (devices/tool_switch.hpp): the needle while `needle` (the
+  // window latches it with the N key), inserted along `axis` (unit; the mouse has no stylus, so
+  // the window sends the camera's view direction through the contact point).
+  void set_tool(bool needle, const Eigen::Vector3d& axis);
   void stop() { stop_.store(true, std::memory_order_release); }
   // Haptic thread.
   DeviceInput read(double t) override;
@@ -50,9 +54,10 @@ class MouseDevice : public Device {
   bool finished() const override { return stop_.load(std::memory_order_acquire); }
 
  private:
-  SeqlockValue<4> in_;   // x, y, z, button
-  SeqlockValue<8> out_;  // t, fx, fy, fz, contact, audio, region, peak
-  double peak_ = 0.0;    // haptic thread only
+  SeqlockValue<4> in_;    // x, y, z, button
+  SeqlockValue<4> tool_;  // needle (0/1), axis x, y, z
+  SeqlockValue<8> out_;   // t, fx, fy, fz, contact, audio, region, peak
+  double peak_ = 0.0;     // haptic thread only
   std::atomic<bool> stop_{false};
 };
 

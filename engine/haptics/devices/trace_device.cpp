@@ -15,6 +15,8 @@ namespace palplab::engine {
 namespace {
 const char* kMagic = "# palplab-trace/1";
 const char* kHeader = "t,x,y,z,vx,vy,vz,buttons";
+// With the stylus axis (a device that reports one; a scripted needle insertion).
+const char* kHeaderAxis = "t,x,y,z,vx,vy,vz,buttons,ax,ay,az";
 }  // namespace
 
 Trace read_trace(const std::string& path) {
@@ -27,6 +29,7 @@ Trace read_trace(const std::string& path) {
     throw InputError(path + ":" + std::to_string(ln) + ": " + what);
   };
   bool magic = false, header = false;
+  int cols = 8;
   while (std::getline(in, line)) {
     ++ln;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -47,24 +50,30 @@ Trace read_trace(const std::string& path) {
     }
     if (!magic) fail("not a palplab trace (expected \"" + std::string(kMagic) + "\")");
     if (!header) {
-      if (line != kHeader) fail("expected the header \"" + std::string(kHeader) + "\"");
+      if (line == kHeaderAxis)
+        cols = 11;
+      else if (line != kHeader)
+        fail("expected the header \"" + std::string(kHeader) + "\" or \"" +
+             std::string(kHeaderAxis) + "\"");
       header = true;
       continue;
     }
-    double v[8];
+    double v[11] = {};
     const char* p = line.c_str();
-    for (int k = 0; k < 8; ++k) {
+    const std::string names = cols == 8 ? kHeader : kHeaderAxis;
+    for (int k = 0; k < cols; ++k) {
       char* end = nullptr;
       errno = 0;
       v[k] = std::strtod(p, &end);
       if (end == p || errno == ERANGE || !std::isfinite(v[k]))
         fail("column " + std::to_string(k + 1) + ": expected a finite number");
       p = end;
-      if (k < 7) {
-        if (*p != ',') fail("expected 8 comma-separated columns (" + std::string(kHeader) + ")");
+      if (k < cols - 1) {
+        if (*p != ',')
+          fail("expected " + std::to_string(cols) + " comma-separated columns (" + names + ")");
         ++p;
       } else if (*p != '\0') {
-        fail("unexpected text after the 8th column");
+        fail("unexpected text after the " + std::to_string(cols) + "th column");
       }
     }
     if (v[7] < 0 || v[7] != std::floor(v[7]) || v[7] > 4294967295.0)
@@ -78,6 +87,10 @@ Trace read_trace(const std::string& path) {
     s.in.velocity = {v[4], v[5], v[6]};
     s.in.buttons = static_cast<unsigned>(v[7]);
     s.in.button = (s.in.buttons & 1u) != 0;
+    s.in.stylus_axis = {v[8], v[9], v[10]};
+    if (cols == 11 && s.in.stylus_axis.norm() > 0 && std::abs(s.in.stylus_axis.norm() - 1.0) > 1e-6)
+      fail("stylus axis (ax, ay, az): expected a unit vector or 0,0,0 (none), length " +
+           std::to_string(s.in.stylus_axis.norm()));
     tr.samples.push_back(s);
   }
   if (!header)
@@ -90,13 +103,19 @@ void write_trace(const std::string& path, const Trace& trace) {
   if (!f) throw InputError(path + ": cannot write the trace: " + std::strerror(errno));
   std::fprintf(f, "%s\n", kMagic);
   for (const auto& [k, v] : trace.meta) std::fprintf(f, "# %s=%s\n", k.c_str(), v.c_str());
-  std::fprintf(f, "%s\n", kHeader);
+  // The axis columns only when the device reported an axis (older readers read the rest).
+  bool axis = false;
+  for (const auto& s : trace.samples) axis = axis || s.in.stylus_axis != Eigen::Vector3d::Zero();
+  std::fprintf(f, "%s\n", axis ? kHeaderAxis : kHeader);
   for (const auto& s : trace.samples) {
     const auto& p = s.in.position;
     const auto& v = s.in.velocity;
     const unsigned b = s.in.buttons | (s.in.button ? 1u : 0u);
-    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u\n", s.t, p.x(), p.y(), p.z(),
-                 v.x(), v.y(), v.z(), b);
+    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u", s.t, p.x(), p.y(), p.z(), v.x(),
+                 v.y(), v.z(), b);
+    const auto& a = s.in.stylus_axis;
+    if (axis) std::fprintf(f, ",%.17g,%.17g,%.17g", a.x(), a.y(), a.z());
+    std::fputc('\n', f);
   }
   const bool ok = std::fflush(f) == 0;
   std::fclose(f);

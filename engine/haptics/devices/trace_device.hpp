@@ -4,8 +4,8 @@
 // A trace is a text file (docs/DEVICES.md):
 //   # palplab-trace/1
 //   # prototype=<id> dt=<s>          (optional key=value comments, kept as metadata)
-//   t,x,y,z,vx,vy,vz,buttons
-//   0.001,0.0123...,...
+//   t,x,y,z,vx,vy,vz,buttons          (or t,x,y,z,vx,vy,vz,buttons,ax,ay,az: with the stylus
+//   0.001,0.0123...,...                axis, a unit vector or 0,0,0 = none)
 // one line per haptic step, numbers printed with 17 significant digits so a replay feeds the
 // scene bit-identical positions. Replay is by step index (not by time lookup): step k of the
 // replay gets line k, so a replay through the lock-step clock reproduces the recorded session

@@ -6,6 +6,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -69,6 +70,15 @@ std::array<std::uint8_t, kUdpPositionSize> encode(const UdpPosition& m) {
   return b;
 }
 
+std::array<std::uint8_t, kUdpPositionAxisSize> encode_with_axis(const UdpPosition& m) {
+  std::array<std::uint8_t, kUdpPositionAxisSize> b{};
+  const auto head = encode(m);
+  std::copy(head.begin(), head.end(), b.begin());
+  put_u16(&b[6], 3);
+  for (int k = 0; k < 3; ++k) put_f64(&b[72 + 8 * k], m.axis[k]);
+  return b;
+}
+
 std::array<std::uint8_t, kUdpForceSize> encode(const UdpForce& m) {
   std::array<std::uint8_t, kUdpForceSize> b{};
   put_header(b.data(), 2);
@@ -81,8 +91,14 @@ std::array<std::uint8_t, kUdpForceSize> encode(const UdpForce& m) {
 }
 
 std::optional<UdpPosition> decode_position(const std::uint8_t* p, size_t n) {
-  if (!header_ok(p, n, kUdpPositionSize, 1)) return std::nullopt;
+  const bool with_axis = header_ok(p, n, kUdpPositionAxisSize, 3);
+  if (!with_axis && !header_ok(p, n, kUdpPositionSize, 1)) return std::nullopt;
   UdpPosition m;
+  if (with_axis) {
+    for (int k = 0; k < 3; ++k) m.axis[k] = get_f64(p + 72 + 8 * k);
+    const double len = m.axis.norm();
+    if (!m.axis.allFinite() || (len != 0.0 && std::abs(len - 1.0) > 1e-6)) return std::nullopt;
+  }
   m.seq = get_u32(p + 8);
   m.buttons = get_u32(p + 12);
   m.t_device = get_f64(p + 16);
@@ -182,6 +198,7 @@ DeviceInput UdpDevice::read(double t) {
   in.velocity = last_.v;
   in.buttons = last_.buttons;
   in.button = (last_.buttons & 1u) != 0;
+  in.stylus_axis = last_.axis;
   return in;
 }
 

@@ -6,6 +6,10 @@
 //     0 u32 magic 0x444C5050 ("PPLD")   4 u16 version 1   6 u16 type 1
 //     8 u32 seq (+1 per datagram)        12 u32 buttons (bit mask)
 //    16 f64 t_device (s, bridge clock)   24 f64 x, y, z (m, organ frame)   48 f64 vx, vy, vz (m/s)
+//   position with the stylus axis (type 3, for a device that measures its orientation), 96 bytes:
+//     bytes 0..71 as type 1 (type field 3), 72 f64 ax, ay, az (unit, handle -> tip, organ frame;
+//     0,0,0 = none). A needle scene takes the insertion direction from it
+//     (devices/tool_switch.hpp; buttons bit 1 = the needle tool).
 //   force (palplab -> bridge, to the sender of the newest position), 64 bytes:
 //     0 u32 magic   4 u16 version 1   6 u16 type 2
 //     8 u32 seq (palplab's, +1 per datagram)   12 u32 ack (seq of the newest position used)
@@ -33,12 +37,13 @@ namespace palplab::engine {
 
 constexpr std::uint32_t kUdpMagic = 0x444C5050u;  // "PPLD" little-endian
 constexpr std::uint16_t kUdpVersion = 1;
-constexpr size_t kUdpPositionSize = 72, kUdpForceSize = 64;
+constexpr size_t kUdpPositionSize = 72, kUdpPositionAxisSize = 96, kUdpForceSize = 64;
 
 struct UdpPosition {
   std::uint32_t seq = 0, buttons = 0;
   double t_device = 0.0;
   Eigen::Vector3d x = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();  // stylus axis (type 3 only; 0 = none)
 };
 struct UdpForce {
   std::uint32_t seq = 0, ack = 0, flags = 0;
@@ -49,6 +54,8 @@ enum UdpFlags : std::uint32_t { kUdpContact = 1u, kUdpAudio = 2u, kUdpForceOff =
 
 std::array<std::uint8_t, kUdpPositionSize> encode(const UdpPosition& p);
 std::array<std::uint8_t, kUdpForceSize> encode(const UdpForce& f);
+// A type-3 position datagram (with m.axis).
+std::array<std::uint8_t, kUdpPositionAxisSize> encode_with_axis(const UdpPosition& p);
 // Empty when the bytes are not a well-formed datagram of that type.
 std::optional<UdpPosition> decode_position(const std::uint8_t* data, size_t n);
 std::optional<UdpForce> decode_force(const std::uint8_t* data, size_t n);
