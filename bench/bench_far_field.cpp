@@ -74,6 +74,7 @@ struct Mode {
 struct Result {
   std::vector<double> us;     // contact steps
   std::vector<double> force;  // every step (N)
+  long node_changes = 0;      // the contact node changed (in contact)
   long moves = 0, adopted = 0, waits = 0, late = 0, max_latency = 0;
 };
 
@@ -91,6 +92,7 @@ Result run(Scene& s, const PressSpec& spec, bool paced) {
   const auto period =
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s.dt()));
   auto next = Clock::now();
+  int last_node = -1;
   for (long k = 0; k < n && !press.finished(); ++k) {
     if (paced) {
       std::this_thread::sleep_until(next);
@@ -103,6 +105,8 @@ Result run(Scene& s, const PressSpec& spec, bool paced) {
     const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
     press.write(out);
     if (out.contact) r.us.push_back(us);
+    if (out.contact && last_node >= 0 && out.contact_node != last_node) ++r.node_changes;
+    if (out.contact) last_node = out.contact_node;
     r.force.push_back(out.force.norm());
   }
   const auto after = info(s);
@@ -152,8 +156,8 @@ int main(int argc, char** argv) {
   for (const bool paced : {false, true}) {
     std::printf("\n%s\n", paced ? "1 kHz loop (each step on a 1 ms tick)"
                                 : "lock-step loop (steps back to back)");
-    std::printf("%-14s %9s %9s %9s %6s %7s %6s %5s %8s %10s\n", "mode", "median", "p99", "max",
-                "moves", "adopted", "waits", "late", "lat max", "|dF| max");
+    std::printf("%-14s %9s %9s %9s %8s %6s %7s %6s %5s %8s %10s\n", "mode", "median", "p99", "max",
+                "node chg", "moves", "adopted", "waits", "late", "lat max", "|dF| max");
     std::vector<Result> all(3);
     std::vector<double> dF(3, 0.0);
     for (int rep = 0; rep <= reps; ++rep) {  // rep 0 warms up
@@ -164,7 +168,8 @@ int main(int argc, char** argv) {
         Result& a = all[m];
         const Result& b = now[m];
         a.us.insert(a.us.end(), b.us.begin(), b.us.end());
-        a.moves += b.moves, a.adopted += b.adopted, a.waits += b.waits, a.late += b.late;
+        a.node_changes += b.node_changes, a.moves += b.moves, a.adopted += b.adopted,
+            a.waits += b.waits, a.late += b.late;
         a.max_latency = std::max(a.max_latency, b.max_latency);
         for (size_t k = 0; k < std::min(b.force.size(), now[0].force.size()); ++k)
           dF[m] = std::max(dF[m], std::abs(b.force[k] - now[0].force[k]));
@@ -172,9 +177,9 @@ int main(int argc, char** argv) {
     }
     for (int m = 0; m < 3; ++m) {
       const TimingSummary t = summarize_times(all[m].us);
-      std::printf("%-14s %9.1f %9.1f %9.0f %6ld %7ld %6ld %5ld %8ld %9.4fN\n", modes[m].name,
-                  t.median, t.p99, t.max, all[m].moves, all[m].adopted, all[m].waits, all[m].late,
-                  all[m].max_latency, dF[m]);
+      std::printf("%-14s %9.1f %9.1f %9.0f %8ld %6ld %7ld %6ld %5ld %8ld %9.4fN\n", modes[m].name,
+                  t.median, t.p99, t.max, all[m].node_changes, all[m].moves, all[m].adopted,
+                  all[m].waits, all[m].late, all[m].max_latency, dF[m]);
     }
   }
   return 0;
