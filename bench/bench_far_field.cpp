@@ -14,7 +14,8 @@
 //              pacing of a human session; the worker has `latency` ms for a solve.
 // Also printed: the scope moves and what became of them (adopted, waits, late, most steps from
 // a move to its exterior) and the largest force difference to the sync run of the same press
-// (the cost of the latency in the rendered force).
+// (the cost of the latency in the rendered force), the contact steps over the 1 ms budget, and
+// the wall time of the steps that moved the scope and of those that adopted its new exterior.
 //
 // Arguments: [PROTOTYPES_DIR] [--reps N] [--speed M_PER_S] [--latency STEPS]
 #include <Eigen/Eigenvalues>
@@ -72,9 +73,11 @@ struct Mode {
 };
 
 struct Result {
-  std::vector<double> us;     // contact steps
-  std::vector<double> force;  // every step (N)
-  long node_changes = 0;      // the contact node changed (in contact)
+  std::vector<double> us;                 // contact steps
+  std::vector<double> force;              // every step (N)
+  std::vector<double> move_us, adopt_us;  // the steps that moved the scope / adopted its exterior
+  long over_1ms = 0;                      // contact steps over the 1 ms haptic budget
+  long node_changes = 0;                  // the contact node changed (in contact)
   long moves = 0, adopted = 0, waits = 0, late = 0, max_latency = 0;
 };
 
@@ -93,6 +96,7 @@ Result run(Scene& s, const PressSpec& spec, bool paced) {
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s.dt()));
   auto next = Clock::now();
   int last_node = -1;
+  long solves = 0, adopted = before.value("exterior_adopted", 0L);
   for (long k = 0; k < n && !press.finished(); ++k) {
     if (paced) {
       std::this_thread::sleep_until(next);
@@ -105,6 +109,13 @@ Result run(Scene& s, const PressSpec& spec, bool paced) {
     const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
     press.write(out);
     if (out.contact) r.us.push_back(us);
+    if (out.contact && us > 1000.0) ++r.over_1ms;
+    const auto now = info(s);  // outside the timed step
+    if (now.value("exterior_solves", 0L) > solves) r.move_us.push_back(us);
+    if (now.value("exterior_adopted", 0L) > adopted && now.value("exterior_update", "") != "sync")
+      r.adopt_us.push_back(us);
+    solves = now.value("exterior_solves", 0L);
+    adopted = now.value("exterior_adopted", 0L);
     if (out.contact && last_node >= 0 && out.contact_node != last_node) ++r.node_changes;
     if (out.contact) last_node = out.contact_node;
     r.force.push_back(out.force.norm());
@@ -168,12 +179,22 @@ int main(int argc, char** argv) {
         Result& a = all[m];
         const Result& b = now[m];
         a.us.insert(a.us.end(), b.us.begin(), b.us.end());
-        a.node_changes += b.node_changes, a.moves += b.moves, a.adopted += b.adopted,
-            a.waits += b.waits, a.late += b.late;
+        a.move_us.insert(a.move_us.end(), b.move_us.begin(), b.move_us.end());
+        a.adopt_us.insert(a.adopt_us.end(), b.adopt_us.begin(), b.adopt_us.end());
+        a.node_changes += b.node_changes, a.over_1ms += b.over_1ms, a.moves += b.moves,
+            a.adopted += b.adopted, a.waits += b.waits, a.late += b.late;
         a.max_latency = std::max(a.max_latency, b.max_latency);
         for (size_t k = 0; k < std::min(b.force.size(), now[0].force.size()); ++k)
           dF[m] = std::max(dF[m], std::abs(b.force[k] - now[0].force[k]));
       }
+    }
+    std::printf("%-14s %9s %9s %9s %9s %9s\n", "", ">1ms steps", "move med", "move max",
+                "adopt med", "adopt max");
+    for (int m = 0; m < 3; ++m) {
+      const TimingSummary mv = summarize_times(all[m].move_us),
+                          ad = summarize_times(all[m].adopt_us);
+      std::printf("%-14s %9ld %9.0f %9.0f %9.0f %9.0f\n", modes[m].name, all[m].over_1ms, mv.median,
+                  mv.max, ad.median, ad.max);
     }
     for (int m = 0; m < 3; ++m) {
       const TimingSummary t = summarize_times(all[m].us);
