@@ -151,20 +151,22 @@ int main(int argc, char** argv) {
   }
   const Mode modes[] = {
       {"sync", false, false}, {"deterministic", true, false}, {"async", true, true}};
-  std::vector<Scene> scenes;
-  for (const Mode& m : modes) {
-    SceneConfig cfg = prototypes::load_prototype(dir + "C.json");
-    cfg.scope.exterior_worker = m.worker;
-    cfg.scope.exterior_latency_steps = latency;
-    scenes.push_back(make_scene(cfg));
-    scenes.back().set_realtime(m.realtime);
-  }
-  const PressSpec slide = sliding_press(scenes[0].geometry(), "ovary_left", 2.5, speed);
+  const PressSpec slide =
+      sliding_press(prototypes::build_scene(dir + "C.json").geometry(), "ovary_left", 2.5, speed);
   std::printf(
       "prototype C, ovary_left: 2.5 N, then sliding at %.0f cm/s for %.2f s; exterior latency %d "
       "steps; %d reps, modes alternating; step times over the contact steps (us)\n",
       100 * speed, slide.hold, latency, reps);
   for (const bool paced : {false, true}) {
+    // Fresh scenes per loop (the updater's counters are since construction).
+    std::vector<Scene> scenes;
+    for (const Mode& m : modes) {
+      SceneConfig cfg = prototypes::load_prototype(dir + "C.json");
+      cfg.scope.exterior_worker = m.worker;
+      cfg.scope.exterior_latency_steps = latency;
+      scenes.push_back(make_scene(cfg));
+      scenes.back().set_realtime(m.realtime);
+    }
     std::printf("\n%s\n", paced ? "1 kHz loop (each step on a 1 ms tick)"
                                 : "lock-step loop (steps back to back)");
     std::printf("%-14s %9s %9s %9s %8s %6s %7s %6s %5s %8s %10s\n", "mode", "median", "p99", "max",
@@ -188,19 +190,19 @@ int main(int argc, char** argv) {
           dF[m] = std::max(dF[m], std::abs(b.force[k] - now[0].force[k]));
       }
     }
-    std::printf("%-14s %9s %9s %9s %9s %9s\n", "", ">1ms steps", "move med", "move max",
+    for (int m = 0; m < 3; ++m) {
+      const TimingSummary t = summarize_times(all[m].us);
+      std::printf("%-14s %9.1f %9.1f %9.0f %8ld %6ld %7ld %6ld %5ld %8ld %9.4fN\n", modes[m].name,
+                  t.median, t.p99, t.max, all[m].node_changes, all[m].moves, all[m].adopted,
+                  all[m].waits, all[m].late, all[m].max_latency, dF[m]);
+    }
+    std::printf("%-14s %9s %9s %9s %9s %9s\n", "mode", ">1ms steps", "move med", "move max",
                 "adopt med", "adopt max");
     for (int m = 0; m < 3; ++m) {
       const TimingSummary mv = summarize_times(all[m].move_us),
                           ad = summarize_times(all[m].adopt_us);
       std::printf("%-14s %9ld %9.0f %9.0f %9.0f %9.0f\n", modes[m].name, all[m].over_1ms, mv.median,
                   mv.max, ad.median, ad.max);
-    }
-    for (int m = 0; m < 3; ++m) {
-      const TimingSummary t = summarize_times(all[m].us);
-      std::printf("%-14s %9.1f %9.1f %9.0f %8ld %6ld %7ld %6ld %5ld %8ld %9.4fN\n", modes[m].name,
-                  t.median, t.p99, t.max, all[m].node_changes, all[m].moves, all[m].adopted,
-                  all[m].waits, all[m].late, all[m].max_latency, dF[m]);
     }
   }
   return 0;
