@@ -123,6 +123,7 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
   long overruns = 0;
   long steps = 0;
 
+  scene.set_realtime(true);  // back to lock-step when the loop ends (below)
   std::thread haptic([&] {
     auto next = Clock::now();
     auto last_start = next;
@@ -180,6 +181,7 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
   });
   haptic.join();
   graphics.join();
+  scene.set_realtime(false);
   st.steps = steps;
   st.stopped = steps < n;
   st.frames_published = frames_published;

@@ -164,6 +164,9 @@ void Scene::set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis
                      s.cfg.source);
   if (tool != before) s.pending_tool_event = tool == "needle" ? 1 : 0;
 }
+void Scene::set_realtime(bool realtime) {
+  impl_->model->set_realtime(realtime);
+}
 Sample Scene::last_sample() const {
   return impl_->last;
 }

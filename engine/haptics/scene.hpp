@@ -205,6 +205,10 @@ class Scene {
   // effect from the next step; an event tool_changed is logged when the tool changes. A real
   // device calls it whenever its stylus turns. InputError for a tool the model does not have.
   void set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis);
+  // Stepped in real time (engine::run_realtime sets it for its run) or in lock-step (default):
+  // work a model does beside the haptic loop (C's exterior solve) is adopted when ready instead
+  // of after a fixed number of steps; faster, but not reproducible run to run.
+  void set_realtime(bool realtime);
   std::string tool() const;           // "probe" for single-tool models
   const SceneConfig& config() const;  // what the scene was built from (copy it for a variant)
   Thresholds thresholds(int region) const;

@@ -62,6 +62,12 @@ struct ScopeConfig {
   // Mass-spring: outside the scope, the whole model's linear static response to the contact
   // force (engine/solvers/far_field.hpp) instead of rest.
   bool linear_exterior = true;
+  // How the linear exterior follows a moved scope (engine/solvers/far_field.hpp, FarFieldMode):
+  // worker (true): solved beside the haptic loop and adopted exterior_latency_steps later —
+  // deterministic in lock-step, asynchronous in a real-time loop (Scene::set_realtime);
+  // false: solved inside the step that moved the scope (a step of 3-25 ms on Model-C).
+  bool exterior_worker = true;
+  int exterior_latency_steps = 20;
 };
 
 struct RefinementConfig {

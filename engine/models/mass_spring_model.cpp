@@ -2,6 +2,7 @@
 // of the tissue, integrated only where the contact needs it (sleeping, integration scope), with
 // the probe face as a contact patch and area-based refinement around the touched node.
 #include <algorithm>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.hpp"
@@ -62,6 +63,9 @@ struct MassSpringScene {
   // to the moving exterior is awake.
   bool linear_exterior = false;
   FarField far;
+  // Its solution in use, solved beside the haptic loop (FarFieldMode; declared after `far`, so
+  // destroyed first: its worker reads far's factor).
+  std::unique_ptr<FarFieldUpdater> far_update;
   std::vector<int> exterior_nodes;  // non-fixed coarse nodes outside the scope
   bool far_solve_pending = false;   // the scope moved: g is for the old centre
   double far_force = 0.0;           // N, contact force of the last step
@@ -116,8 +120,9 @@ void compute_scope(MassSpringScene& ms, int center) {
 void apply_exterior(MassSpringScene& ms, double force) {
   if (force == ms.far_applied) return;
   MassSpringSystem& s = ms.model.sys;
+  const Eigen::VectorXd& g = ms.far_update->g();
   for (int i : ms.exterior_nodes) {
-    s.X.row(i) = s.X_rest.row(i) + force * ms.far.g.segment<3>(ms.far.dof[i]).transpose();
+    s.X.row(i) = s.X_rest.row(i) + force * g.segment<3>(ms.far.dof[i]).transpose();
     s.V.row(i).setZero();
   }
   ms.far_applied = force;
@@ -220,6 +225,7 @@ void reset_mass_spring(MassSpringScene& ms) {
   ms.far_force = 0.0;
   ms.far_applied = -1.0;
   ms.far_solve_pending = false;
+  if (ms.far_update) ms.far_update->clear();
   ms.patch_face = -1;
   ms.pad.clear();
   s.contact_nodes.clear();
@@ -272,6 +278,7 @@ class MassSpringModel final : public SceneModel {
     MassSpringScene& ms = ms_;
     MassSpringSystem& sys = ms.model.sys;
     const int mnode = c.node >= 0 ? ms.surface_to_model[c.node] : -1;
+    if (ms.far_update && ms.far_update->advance()) ms.far_applied = -1.0;  // a new exterior
     if (mnode >= 0) {
       sys.contact_node = mnode;
       sys.contact_point = c.x;
@@ -293,7 +300,7 @@ class MassSpringModel final : public SceneModel {
       set_pad_weights(ms, face, c.w);
       if (ms.linear_exterior) {
         if (ms.far_solve_pending) {
-          far_field_solve(ms.far, sys.contact_nodes, sys.contact_weights, -c.n);
+          ms.far_update->request(sys.contact_nodes, sys.contact_weights, -c.n);
           ms.far_solve_pending = false;
           ++ms.far_solves;
         }
@@ -344,6 +351,11 @@ class MassSpringModel final : public SceneModel {
     return o;
   }
 
+  // Real-time loops: the exterior is adopted when ready, never waited for (FarFieldMode::async).
+  void set_realtime(bool realtime) override {
+    if (ms_.far_update) ms_.far_update->set_realtime(realtime);
+  }
+
   void reset() override {
     reset_mass_spring(ms_);
     ms_.new_nodes_max = ms_.new_springs_max = 0;
@@ -365,6 +377,7 @@ class MassSpringModel final : public SceneModel {
     st.new_nodes_max = ms_.new_nodes_max;
     st.new_springs_max = ms_.new_springs_max;
     nlohmann::json info;
+    const FarFieldUpdater* fu = ms_.far_update.get();
     info["mass_spring"] = {
         {"steps", ms_.steps},
         {"cg_iterations_mean",
@@ -372,9 +385,20 @@ class MassSpringModel final : public SceneModel {
         {"cg_iterations_max", ms_.cg_iterations_max},
         {"exterior", ms_.linear_exterior ? "linear" : "held"},
         {"exterior_factor_ms", ms_.far.factor_ms},
-        {"exterior_factor_restored", ms_.far.restored},  // from a .psim file
-        {"exterior_solve_ms", ms_.far.solve_ms},         // the last solve (one per scope move)
+        {"exterior_factor_restored", ms_.far.restored},          // from a .psim file
+        {"exterior_solve_ms", fu ? fu->stats().solve_ms : 0.0},  // the last (one per scope move)
         {"exterior_solves", ms_.far_solves}};
+    if (fu) {  // since the model was built (engine/solvers/far_field.hpp)
+      const FarFieldUpdateStats& f = fu->stats();
+      const char* mode[] = {"sync", "deterministic", "async"};
+      info["mass_spring"].update({{"exterior_update", mode[static_cast<int>(fu->mode())]},
+                                  {"exterior_latency_steps", fu->latency()},
+                                  {"exterior_adopted", f.adopted},
+                                  {"exterior_superseded", f.superseded},
+                                  {"exterior_waits", f.waits},
+                                  {"exterior_late", f.late},
+                                  {"exterior_max_latency_steps", f.max_latency}});
+    }
     st.model_info = info.dump();
   }
 
@@ -406,7 +430,8 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
   c.keys(m, P,
          {"kind", "material", "thickness", "rayleigh_beta", "support_modulus", "support_damping",
           "jacobian", "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
-          "scope_radius", "scope_max_nodes", "scope_exterior", "cg_tolerance", "fixed_z_below"});
+          "scope_radius", "scope_max_nodes", "scope_exterior", "scope_exterior_update",
+          "scope_exterior_latency_steps", "cg_tolerance", "fixed_z_below"});
   MaterialConfig& mc = cfg.material;
   read_material(c, m, P, mc);
   mc.thickness = c.number(m, P, "thickness", false, 0, 1,
@@ -427,6 +452,12 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
                          .value_or(cfg.scope.radius);
   if (auto ex = c.text(m, P, "scope_exterior", false, {"linear", "held"}))
     cfg.scope.linear_exterior = *ex == "linear";
+  if (auto up = c.text(m, P, "scope_exterior_update", false, {"worker", "sync"}))
+    cfg.scope.exterior_worker = *up == "worker";
+  cfg.scope.exterior_latency_steps =
+      static_cast<int>(c.integer(m, P, "scope_exterior_latency_steps", false, 1, 1000,
+                                 "the haptic steps from a scope move to its new exterior")
+                           .value_or(cfg.scope.exterior_latency_steps));
   cfg.solver.cg_tolerance =
       c.number(m, P, "cg_tolerance", false, 0, 0.1, "the relative residual of the CG solve", true)
           .value_or(cfg.solver.cg_tolerance);
@@ -568,6 +599,9 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     // A .psim file's far field (mass_spring_save), used only if made from this very system.
     const bool stored = cm.model_blob_kind == "mass_spring" && !cm.model_blob.empty();
     far_field_build(ms.model.sys, ms.far, stored ? &cm.model_blob : nullptr);
+    ms.far_update = std::make_unique<FarFieldUpdater>(
+        ms.far, cfg.scope.exterior_worker ? FarFieldMode::deterministic : FarFieldMode::sync,
+        cfg.scope.exterior_latency_steps);
     // A press wakes the whole scope at once: room for every coarse node and spring up front,
     // so that the steps of a press without refinement do not allocate.
     const long n = ms.model.sys.nodes(), ns = ms.model.sys.springs.size();

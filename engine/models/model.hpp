@@ -105,6 +105,9 @@ class SceneModel {
   virtual ModelOutput step(const ContactInput& c, double dt) = 0;
   // Back to rest (cheap: no precomputation).
   virtual void reset() = 0;
+  // The scene is stepped by a real-time loop (true) or in lock-step (false, the default): work
+  // beside the haptic loop must then never be waited for (see Scene::set_realtime).
+  virtual void set_realtime(bool realtime) { (void)realtime; }
   // Fills the model's counters (nodes, springs, mass, rest error, level, awake nodes).
   virtual void stats(SceneStats& s) const = 0;
   // Current surface for a renderer (#V(now) by 3, faces of the current surface).

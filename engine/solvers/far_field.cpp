@@ -1,6 +1,7 @@
 #include "engine/solvers/far_field.hpp"
 
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
@@ -113,43 +114,164 @@ void far_field_build(const MassSpringSystem& sys, FarField& ff, const std::strin
   finish();
 }
 
-void far_field_solve(FarField& ff, const std::vector<int>& nodes,
-                     const std::vector<double>& weights, const Eigen::Vector3d& dir) {
-  // Timed on its own (one solve per scope move; the bench reports it apart from the step).
-  const auto t0 = std::chrono::steady_clock::now();
-  struct Timer {
-    FarField& ff;
-    std::chrono::steady_clock::time_point t0;
-    ~Timer() {
-      ff.solve_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    }
-  } timer{ff, t0};
-  ff.load.setZero();
+namespace {
+
+// g for the patch into `g` (load, tmp: buffers of the same size), from ff's factor only (read):
+// the one solve of every mode, so that all of them give bit-identical solutions.
+void solve_into(const FarField& ff, const std::vector<int>& nodes,
+                const std::vector<double>& weights, const Eigen::Vector3d& dir,
+                Eigen::VectorXd& load, Eigen::VectorXd& tmp, Eigen::VectorXd& g) {
+  load.setZero();
   double sum = 0.0;
   for (size_t k = 0; k < nodes.size(); ++k)
     if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0) sum += weights[k];
   if (!(sum > 0.0)) {
-    ff.g.setZero();
+    g.setZero();
     return;
   }
   for (size_t k = 0; k < nodes.size(); ++k)
     if (nodes[k] < ff.nodes && ff.dof[nodes[k]] >= 0)
-      ff.load.segment<3>(ff.dof[nodes[k]]) += (weights[k] / sum) * dir;
+      load.segment<3>(ff.dof[nodes[k]]) += (weights[k] / sum) * dir;
   // LdltFactor::solve written out (permutation, unit-lower L, D, L^T): Eigen's in-place
-  // permutation and triangular solves allocate a temporary, and this solve runs in a haptic step.
+  // permutation and triangular solves allocate a temporary, and this solve runs beside (or, in
+  // sync mode, in) a haptic step.
   const auto& perm = ff.factor.P.indices();
-  const bool permuted = perm.size() == ff.load.size();
-  for (Eigen::Index i = 0; i < ff.load.size(); ++i) ff.tmp[permuted ? perm[i] : i] = ff.load[i];
+  const bool permuted = perm.size() == load.size();
+  for (Eigen::Index i = 0; i < load.size(); ++i) tmp[permuted ? perm[i] : i] = load[i];
   const SparseMatrixd& L = ff.factor.L;  // strictly lower part, column-major
   for (Eigen::Index j = 0; j < L.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
-      if (it.row() > j) ff.tmp[it.row()] -= it.value() * ff.tmp[j];
-  ff.tmp.array() /= ff.factor.D.array();
+      if (it.row() > j) tmp[it.row()] -= it.value() * tmp[j];
+  tmp.array() /= ff.factor.D.array();
   for (Eigen::Index j = L.outerSize() - 1; j >= 0; --j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
-      if (it.row() > j) ff.tmp[j] -= it.value() * ff.tmp[it.row()];
-  for (Eigen::Index i = 0; i < ff.g.size(); ++i) ff.g[i] = ff.tmp[permuted ? perm[i] : i];
+      if (it.row() > j) tmp[j] -= it.value() * tmp[it.row()];
+  for (Eigen::Index i = 0; i < g.size(); ++i) g[i] = tmp[permuted ? perm[i] : i];
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void far_field_solve(FarField& ff, const std::vector<int>& nodes,
+                     const std::vector<double>& weights, const Eigen::Vector3d& dir) {
+  // Timed on its own (one solve per scope move; the bench reports it apart from the step).
+  const auto t0 = std::chrono::steady_clock::now();
+  solve_into(ff, nodes, weights, dir, ff.load, ff.tmp, ff.g);
+  ff.solve_ms = ms_since(t0);
+}
+
+FarFieldUpdater::FarFieldUpdater(const FarField& ff, FarFieldMode mode, int latency)
+    : ff_(ff), mode_(mode), latency_(std::max(1, latency)) {
+  const long m = ff.g.size();
+  cur_.setZero(m);
+  if (mode_ == FarFieldMode::sync) {
+    load_.setZero(m);
+    tmp_.setZero(m);
+    return;
+  }
+  ready_.setZero(m);
+  work_g_.setZero(m);
+  work_load_.setZero(m);
+  work_tmp_.setZero(m);
+  // Room for a patch of every coarse node: request() copies without allocating.
+  for (Job* j : {&queued_, &run_}) {
+    j->nodes.reserve(ff.nodes);
+    j->weights.reserve(ff.nodes);
+  }
+  worker_ = std::thread([this] { work(); });
+}
+
+FarFieldUpdater::~FarFieldUpdater() {
+  if (!worker_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  worker_.join();  // after the solve in flight, if any (it reads only ff_ and its buffers)
+}
+
+void FarFieldUpdater::work() {
+  std::unique_lock<std::mutex> lock(mu_);
+  for (;;) {
+    cv_.wait(lock, [this] { return stop_ || has_queued_; });
+    if (stop_) return;
+    std::swap(run_, queued_);  // vectors swap their buffers: no allocation
+    has_queued_ = false;
+    lock.unlock();
+    const auto t0 = std::chrono::steady_clock::now();
+    solve_into(ff_, run_.nodes, run_.weights, run_.dir, work_load_, work_tmp_, work_g_);
+    const double ms = ms_since(t0);
+    lock.lock();
+    if (run_.id > floor_id_) {  // not cleared meanwhile
+      std::swap(ready_, work_g_);
+      ready_id_ = run_.id;
+      ready_ms_ = ms;
+    }
+    cv_.notify_all();  // a deterministic step may wait for it
+  }
+}
+
+void FarFieldUpdater::request(const std::vector<int>& nodes, const std::vector<double>& weights,
+                              const Eigen::Vector3d& dir) {
+  ++st_.requests;
+  if (mode_ == FarFieldMode::sync) {
+    const auto t0 = std::chrono::steady_clock::now();
+    solve_into(ff_, nodes, weights, dir, load_, tmp_, cur_);
+    st_.solve_ms = ms_since(t0);
+    ++st_.adopted;
+    return;
+  }
+  if (want_ > 0) ++st_.superseded;
+  want_ = ++next_id_;
+  want_step_ = step_;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    queued_.nodes.assign(nodes.begin(), nodes.end());
+    queued_.weights.assign(weights.begin(), weights.end());
+    queued_.dir = dir;
+    queued_.id = want_;
+    has_queued_ = true;
+  }
+  cv_.notify_all();
+}
+
+bool FarFieldUpdater::advance() {
+  ++step_;
+  if (want_ == 0 || step_ - want_step_ < latency_) return false;
+  std::unique_lock<std::mutex> lock(mu_);
+  if (ready_id_ != want_) {
+    if (mode_ == FarFieldMode::async) return false;  // never waits: adopted later
+    ++st_.waits;
+    cv_.wait(lock, [this] { return ready_id_ == want_; });
+  }
+  std::swap(cur_, ready_);
+  ready_id_ = 0;
+  st_.solve_ms = ready_ms_;
+  lock.unlock();
+  ++st_.adopted;
+  if (step_ - want_step_ > latency_) ++st_.late;
+  st_.max_latency = std::max(st_.max_latency, step_ - want_step_);
+  want_ = 0;
+  return true;
+}
+
+void FarFieldUpdater::clear() {
+  cur_.setZero();
+  if (mode_ == FarFieldMode::sync) return;
+  want_ = 0;
+  std::lock_guard<std::mutex> lock(mu_);
+  has_queued_ = false;
+  floor_id_ = next_id_;
+  ready_id_ = 0;
+}
+
+void FarFieldUpdater::set_realtime(bool realtime) {
+  if (mode_ != FarFieldMode::sync)
+    mode_ = realtime ? FarFieldMode::async : FarFieldMode::deterministic;
 }
 
 }  // namespace palplab::engine

@@ -3,16 +3,19 @@
 // uses), to first order in the load.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
+#include <thread>
+
 #include "engine/solvers/far_field.hpp"
 
 using namespace palplab::engine;
 
 namespace {
 
-// A 4x4x4 lattice (1 cm spacing) with springs to every neighbour within a cube diagonal (a rigid
-// framework), the bottom layer fixed, a support spring on the top layer.
-MassSpringSystem lattice() {
-  const int n = 4;
+// An n x n x n lattice (1 cm spacing) with springs to every neighbour within a cube diagonal (a
+// rigid framework), the bottom layer fixed, a support spring on the top layer.
+MassSpringSystem lattice(const int n = 4) {
   const double a = 0.01;
   MassSpringSystem s;
   s.X_rest.resize(n * n * n, 3);
@@ -25,11 +28,14 @@ MassSpringSystem lattice() {
         0.1 * a * Eigen::RowVector3d(std::sin(3.1 * v), std::cos(1.7 * v), std::sin(0.7 * v + 1.0));
   std::vector<std::pair<int, int>> e;
   for (int p = 0; p < n * n * n; ++p)
-    for (int q = p + 1; q < n * n * n; ++q) {
-      const int di = std::abs(p / (n * n) - q / (n * n)), dj = std::abs((p / n) % n - (q / n) % n),
-                dk = std::abs(p % n - q % n);
-      if (di <= 1 && dj <= 1 && dk <= 1) e.emplace_back(p, q);
-    }
+    for (int di = 0; di <= 1; ++di)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int dk = -1; dk <= 1; ++dk) {
+          const int i = p / (n * n) + di, j = (p / n) % n + dj, k = p % n + dk;
+          const int q = (i * n + j) * n + k;
+          if (i < n && j >= 0 && j < n && k >= 0 && k < n && q > p) e.emplace_back(p, q);
+        }
+  std::sort(e.begin(), e.end());  // (p, q) order, as the all-pairs loop gave them
   RowMatX2i E(e.size(), 2);
   for (size_t k = 0; k < e.size(); ++k) E.row(k) << e[k].first, e[k].second;
   s.springs = springs_from_edges(s.X_rest, E, 300.0, 0.0);
@@ -94,4 +100,156 @@ TEST(FarField, UnsupportedPartIsAnError) {
   s.home_ks.setZero();
   FarField ff;
   EXPECT_THROW(far_field_build(s, ff), std::runtime_error);
+}
+
+// The exterior beside the haptic loop (FarFieldUpdater): every mode adopts the very solution the
+// in-step solve gives (the same solve code on the same factor), deterministic exactly `latency`
+// steps after the request, async never waiting for it.
+namespace {
+
+struct Load {
+  std::vector<int> nodes;
+  std::vector<double> w;
+  Eigen::Vector3d dir;
+};
+
+// The in-step (sync) solution of a load.
+Eigen::VectorXd sync_g(FarField& ff, const Load& l) {
+  far_field_solve(ff, l.nodes, l.w, l.dir);
+  return ff.g;
+}
+
+double max_diff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).cwiseAbs().maxCoeff();
+}
+
+const Load kLoads[3] = {
+    {{3, 7, 19}, {0.5, 0.3, 0.2}, Eigen::Vector3d(0.3, -0.2, -1.0).normalized()},
+    {{23, 27}, {0.6, 0.4}, Eigen::Vector3d(0, 0, -1)},
+    {{63}, {1.0}, Eigen::Vector3d(-1.0, 0.5, -0.5).normalized()}};
+
+}  // namespace
+
+TEST(FarFieldUpdater, DeterministicAdoptsTheSyncSolutionExactlyAfterTheLatency) {
+  MassSpringSystem s = lattice();
+  FarField ff;
+  far_field_build(s, ff);
+  Eigen::VectorXd ref[3];
+  for (int k = 0; k < 3; ++k) ref[k] = sync_g(ff, kLoads[k]);
+  ASSERT_GT(ref[0].cwiseAbs().maxCoeff(), 0.0);
+  const int latency = 5;
+  FarFieldUpdater u(ff, FarFieldMode::deterministic, latency);
+  EXPECT_EQ(u.g().cwiseAbs().maxCoeff(), 0.0);  // held at rest before the first solve
+  u.advance();
+  u.request(kLoads[0].nodes, kLoads[0].w, kLoads[0].dir);
+  for (int k = 1; k < latency; ++k) {
+    EXPECT_FALSE(u.advance()) << k;
+    EXPECT_EQ(u.g().cwiseAbs().maxCoeff(), 0.0) << "the previous exterior until the adoption";
+  }
+  EXPECT_TRUE(u.advance());
+  EXPECT_EQ(max_diff(u.g(), ref[0]), 0.0);  // bit-identical to the in-step solve
+  // A request replaced before its adoption: only the newest is adopted, `latency` steps after it.
+  u.request(kLoads[1].nodes, kLoads[1].w, kLoads[1].dir);
+  EXPECT_FALSE(u.advance());
+  EXPECT_FALSE(u.advance());
+  u.request(kLoads[2].nodes, kLoads[2].w, kLoads[2].dir);
+  for (int k = 1; k < latency; ++k) EXPECT_FALSE(u.advance()) << k;
+  EXPECT_EQ(max_diff(u.g(), ref[0]), 0.0);
+  EXPECT_TRUE(u.advance());
+  EXPECT_EQ(max_diff(u.g(), ref[2]), 0.0);
+  EXPECT_FALSE(u.advance());
+  const FarFieldUpdateStats& st = u.stats();
+  EXPECT_EQ(st.requests, 3);
+  EXPECT_EQ(st.adopted, 2);
+  EXPECT_EQ(st.superseded, 1);
+  EXPECT_EQ(st.max_latency, latency);
+  EXPECT_EQ(st.late, 0);
+}
+
+TEST(FarFieldUpdater, SyncSolvesInTheRequest) {
+  MassSpringSystem s = lattice();
+  FarField ff;
+  far_field_build(s, ff);
+  const Eigen::VectorXd ref = sync_g(ff, kLoads[1]);
+  FarFieldUpdater u(ff, FarFieldMode::sync, 20);
+  u.request(kLoads[1].nodes, kLoads[1].w, kLoads[1].dir);
+  EXPECT_EQ(max_diff(u.g(), ref), 0.0);
+  EXPECT_FALSE(u.pending());
+  u.set_realtime(true);  // no effect on sync
+  EXPECT_EQ(u.mode(), FarFieldMode::sync);
+}
+
+// A larger model (3000 dofs: a solve of a few ms, far longer than a step's bookkeeping), so that
+// the worker is still busy when the haptic thread asks.
+TEST(FarFieldUpdater, AsyncNeverWaitsAndAdoptsTheSyncSolution) {
+  MassSpringSystem s = lattice(10);
+  FarField ff;
+  far_field_build(s, ff);
+  Eigen::VectorXd ref[3];
+  for (int k = 0; k < 3; ++k) ref[k] = sync_g(ff, kLoads[k]);
+  FarFieldUpdater u(ff, FarFieldMode::deterministic, 1);
+  u.set_realtime(true);
+  ASSERT_EQ(u.mode(), FarFieldMode::async);
+  long first_advance_adopted = 0, steps_total = 0;
+  for (int rep = 0; rep < 6; ++rep) {
+    const Load& l = kLoads[rep % 3];
+    u.request(l.nodes, l.w, l.dir);
+    long steps = 0;
+    bool adopted = false;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (!adopted && std::chrono::steady_clock::now() < deadline) {
+      adopted = u.advance();
+      if (++steps == 1 && adopted) ++first_advance_adopted;
+      if (!adopted) std::this_thread::sleep_for(std::chrono::microseconds(50));
+    }
+    ASSERT_TRUE(adopted) << rep;
+    steps_total += steps;
+    EXPECT_EQ(max_diff(u.g(), ref[rep % 3]), 0.0) << rep;
+  }
+  std::printf("async: %ld steps for 6 solves of %.2f ms (%ld adopted at the first step)\n",
+              steps_total, u.stats().solve_ms, first_advance_adopted);
+  // No step waited: the steps went on while the worker solved (a step that had waited would have
+  // adopted the solution in the step right after the request).
+  EXPECT_EQ(u.stats().waits, 0);
+  EXPECT_LT(first_advance_adopted, 6);
+  EXPECT_GT(steps_total, 6);
+  EXPECT_EQ(u.stats().adopted, 6);
+  EXPECT_GT(u.stats().late, 0);  // adopted after the 1-step latency: the solve took longer
+  // Back to lock-step: the deterministic step waits for the worker (counted) and adopts on time.
+  u.set_realtime(false);
+  u.request(kLoads[0].nodes, kLoads[0].w, kLoads[0].dir);
+  EXPECT_TRUE(u.advance());
+  EXPECT_EQ(max_diff(u.g(), ref[0]), 0.0);
+  EXPECT_LE(u.stats().waits, 1);
+}
+
+TEST(FarFieldUpdater, ClearAndDestructionWhileASolveIsInFlight) {
+  MassSpringSystem s = lattice(10);
+  FarField ff;
+  far_field_build(s, ff);
+  const Eigen::VectorXd ref = sync_g(ff, kLoads[1]);
+  {
+    FarFieldUpdater u(ff, FarFieldMode::async, 1);
+    u.request(kLoads[0].nodes, kLoads[0].w, kLoads[0].dir);
+    u.clear();  // the solve in flight (or queued) must never be adopted
+    EXPECT_FALSE(u.pending());
+    for (int k = 0; k < 200; ++k) {
+      EXPECT_FALSE(u.advance());
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    EXPECT_EQ(u.g().cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(u.stats().adopted, 0);
+    // The next request after the clear is adopted normally.
+    u.request(kLoads[1].nodes, kLoads[1].w, kLoads[1].dir);
+    u.set_realtime(false);
+    EXPECT_TRUE(u.advance());
+    EXPECT_EQ(max_diff(u.g(), ref), 0.0);
+    // Destroyed with a solve in flight: joins the worker after it (no use of freed buffers).
+    u.request(kLoads[2].nodes, kLoads[2].w, kLoads[2].dir);
+  }
+  for (int k = 0; k < 20; ++k) {  // created and destroyed at once, again and again
+    FarFieldUpdater u(ff, FarFieldMode::deterministic, 3);
+    u.request(kLoads[k % 3].nodes, kLoads[k % 3].w, kLoads[k % 3].dir);
+  }
+  SUCCEED();
 }
