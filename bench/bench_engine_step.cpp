@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -209,19 +210,73 @@ void sliding_press_on_c(const std::string& dir) {
               tm.median, tm.p99, tm.max);
 }
 
-// Arguments: [PROTOTYPES_PARENT_DIR] [--sliding] (only the sliding-press section).
+// Prototype C's backward-Euler solve, spring blocks as 3x3 matrices (the original path) vs
+// rank_one (engine/solvers/integrators.hpp), with refinement on (as shipped) and off: the same
+// fixed 6 mm press, the variants alternating rep by rep so that both see the same machine load.
+// Per variant: median over reps of the median contact-step time, CG iterations per step, the
+// largest awake set; the rank_one row also gives its largest force difference from the matrix
+// path relative to the peak force (to hold against the 7 % force Weber fraction).
+void solver_blocks_on_c(const std::string& dir, int reps) {
+  std::printf(
+      "\nprototype C, fixed 6 mm press: spring blocks matrix vs rank_one (%d alternating reps)\n",
+      reps);
+  std::printf("%-11s %-7s %-9s %9s %9s %8s %7s %9s %12s\n", "region", "refine", "blocks", "median",
+              "ratio", "CG it.", "awake", "peak F", "max|dF|/F");
+  for (const char* region : {"ovary_left", "horn_right", "body"})
+    for (bool refine : {true, false}) {
+      Scene* scenes[2];
+      std::vector<std::unique_ptr<Scene>> owned;
+      for (SpringBlocks b : {SpringBlocks::matrix, SpringBlocks::rank_one}) {
+        engine::SceneConfig cfg = prototypes::load_prototype(dir + "C.json");
+        cfg.solver.blocks = b;
+        cfg.refinement.enabled = refine;
+        owned.push_back(std::make_unique<Scene>(engine::make_scene(cfg)));
+      }
+      scenes[0] = owned[0].get();
+      scenes[1] = owned[1].get();
+      std::vector<double> med[2];
+      Run last[2];
+      double cg[2] = {0, 0};
+      for (int rep = 0; rep <= reps; ++rep)  // rep 0 warms up
+        for (int v = 0; v < 2; ++v) {
+          scenes[v]->reset();
+          Run r = fixed_press(*scenes[v], region, 0.006);
+          if (rep == 0) continue;
+          med[v].push_back(median_of(r.us));
+          const auto j = nlohmann::json::parse(scenes[v]->stats().model_info)["mass_spring"];
+          cg[v] = j.value("cg_iterations_mean", 0.0);
+          last[v] = std::move(r);
+        }
+      const double peak = *std::max_element(last[0].force.begin(), last[0].force.end());
+      for (int v = 0; v < 2; ++v)
+        std::printf("%-11s %-7s %-9s %7.2fus %8.2fx %8.2f %7ld %8.3fN %11.2e\n", region,
+                    refine ? "on" : "off", v == 0 ? "matrix" : "rank_one", median_of(med[v]),
+                    median_of(med[0]) / median_of(med[v]), cg[v], last[v].awake_max,
+                    *std::max_element(last[v].force.begin(), last[v].force.end()),
+                    max_abs_diff(last[v].force, last[0].force) / peak);
+    }
+}
+
+// Arguments: [PROTOTYPES_PARENT_DIR] [--sliding] (only the sliding-press section) [--solver]
+// (only the spring-blocks section).
 int main(int argc, char** argv) {
-  bool only_sliding = false;
+  bool only_sliding = false, only_solver = false;
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (std::string(argv[i]) == "--sliding")
       only_sliding = true;
+    else if (std::string(argv[i]) == "--solver")
+      only_solver = true;
     else
       args.push_back(argv[i]);
   }
   const std::string dir = prototypes_dir(static_cast<int>(args.size()), args.data());
   if (only_sliding) {
     sliding_press_on_c(dir);
+    return 0;
+  }
+  if (only_solver) {
+    solver_blocks_on_c(dir, 7);
     return 0;
   }
   std::printf("haptic step cost during a 2.5 N press (wall time of Scene::step, contact steps)\n");
@@ -306,6 +361,7 @@ int main(int argc, char** argv) {
     }
   }
 
+  solver_blocks_on_c(dir, 5);
   sliding_press_on_c(dir);
   return 0;
 }
