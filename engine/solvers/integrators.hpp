@@ -80,8 +80,9 @@ struct CompactCg {
 
 // CG's first guess for dv: the last step's dv of each node (`previous`), or its linear
 // extrapolation 2 dv_{n-1} - dv_{n-2} over the last two steps on the same active set
-// (`extrapolated`; a smooth press changes dv slowly, so the first residual is smaller). Both
-// stop at the same tolerance; the results differ within it.
+// (`extrapolated`). Both stop at the same tolerance; the results differ within it. Measured on
+// C's presses (bench_engine_step --solver) extrapolation needs more CG iterations, not fewer
+// (dv is not smooth from step to step at C's tolerance): `previous` is the default.
 enum class WarmStart { previous, extrapolated };
 WarmStart warm_start_from_string(const std::string& s);  // throws std::invalid_argument
 const char* to_string(WarmStart w);
