@@ -102,9 +102,9 @@ struct SpringTangent {
   Eigen::Vector3d f1, d;  // N; unit direction
   double axial = 0.0, lateral = 0.0, kd = 0.0;
 };
-void spring_tangent(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
-                    const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, double ks, double kd,
-                    double rest, SpringJacobian jac, SpringTangent& t);
+void spring_tangent(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
+                    const Eigen::Vector3d& v2, double ks, double kd, double rest,
+                    SpringJacobian jac, SpringTangent& t);
 
 // Rebuilds sys.adj_start / adj_spring from sys.springs.E.
 void build_adjacency(MassSpringSystem& sys);
