@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -209,19 +210,80 @@ void sliding_press_on_c(const std::string& dir) {
               tm.median, tm.p99, tm.max);
 }
 
-// Arguments: [PROTOTYPES_PARENT_DIR] [--sliding] (only the sliding-press section).
+// Prototype C's backward-Euler solve options (engine/solvers/integrators.hpp): the original path
+// (3x3 matrix spring blocks, last dv as CG warm start), rank_one blocks (the default), and
+// rank_one with the extrapolated warm start; with refinement on (as shipped) and off. The same
+// fixed 6 mm press, the variants alternating rep by rep so that all see the same machine load.
+// Per variant: median over reps of the median contact-step time and its ratio to the original,
+// CG iterations per step, the largest awake set, and the largest force difference from the
+// original relative to its peak force (to hold against the 7 % force Weber fraction).
+void solver_options_on_c(const std::string& dir, int reps) {
+  struct Variant {
+    const char* name;
+    SpringBlocks blocks;
+    WarmStart warm;
+  };
+  const Variant variants[] = {
+      {"matrix/previous", SpringBlocks::matrix, WarmStart::previous},
+      {"rank_one/previous", SpringBlocks::rank_one, WarmStart::previous},
+      {"rank_one/extrap.", SpringBlocks::rank_one, WarmStart::extrapolated}};
+  constexpr int nv = 3;
+  std::printf("\nprototype C, fixed 6 mm press: solver options (%d alternating reps)\n", reps);
+  std::printf("%-11s %-7s %-18s %9s %8s %8s %7s %9s %11s\n", "region", "refine", "blocks/warm",
+              "median", "speedup", "CG it.", "awake", "peak F", "max|dF|/F");
+  for (const char* region : {"ovary_left", "horn_right", "body"})
+    for (bool refine : {true, false}) {
+      std::vector<std::unique_ptr<Scene>> scenes;
+      for (const Variant& v : variants) {
+        engine::SceneConfig cfg = prototypes::load_prototype(dir + "C.json");
+        cfg.solver.blocks = v.blocks;
+        cfg.solver.warm_start = v.warm;
+        cfg.refinement.enabled = refine;
+        scenes.push_back(std::make_unique<Scene>(engine::make_scene(cfg)));
+      }
+      std::vector<double> med[nv];
+      Run last[nv];
+      double cg[nv] = {};
+      for (int rep = 0; rep <= reps; ++rep)  // rep 0 warms up
+        for (int v = 0; v < nv; ++v) {
+          scenes[v]->reset();
+          Run r = fixed_press(*scenes[v], region, 0.006);
+          if (rep == 0) continue;
+          med[v].push_back(median_of(r.us));
+          const auto j = nlohmann::json::parse(scenes[v]->stats().model_info)["mass_spring"];
+          cg[v] = j.value("cg_iterations_mean", 0.0);
+          last[v] = std::move(r);
+        }
+      const double peak = *std::max_element(last[0].force.begin(), last[0].force.end());
+      for (int v = 0; v < nv; ++v)
+        std::printf("%-11s %-7s %-18s %7.2fus %7.2fx %8.2f %7ld %8.3fN %11.2e\n", region,
+                    refine ? "on" : "off", variants[v].name, median_of(med[v]),
+                    median_of(med[0]) / median_of(med[v]), cg[v], last[v].awake_max,
+                    *std::max_element(last[v].force.begin(), last[v].force.end()),
+                    max_abs_diff(last[v].force, last[0].force) / peak);
+    }
+}
+
+// Arguments: [PROTOTYPES_PARENT_DIR] [--sliding] (only the sliding-press section) [--solver]
+// (only the solver-options section).
 int main(int argc, char** argv) {
-  bool only_sliding = false;
+  bool only_sliding = false, only_solver = false;
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (std::string(argv[i]) == "--sliding")
       only_sliding = true;
+    else if (std::string(argv[i]) == "--solver")
+      only_solver = true;
     else
       args.push_back(argv[i]);
   }
   const std::string dir = prototypes_dir(static_cast<int>(args.size()), args.data());
   if (only_sliding) {
     sliding_press_on_c(dir);
+    return 0;
+  }
+  if (only_solver) {
+    solver_options_on_c(dir, 7);
     return 0;
   }
   std::printf("haptic step cost during a 2.5 N press (wall time of Scene::step, contact steps)\n");
@@ -306,6 +368,7 @@ int main(int argc, char** argv) {
     }
   }
 
+  solver_options_on_c(dir, 5);
   sliding_press_on_c(dir);
   return 0;
 }

@@ -16,24 +16,40 @@ Eigen::Vector3d spring_force(const Eigen::Vector3d& x1, const Eigen::Vector3d& x
   return -mag * dir;
 }
 
-void spring_eval(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
-                 const Eigen::Vector3d& v2, double ks, double kd, double rest, SpringJacobian jac,
-                 Eigen::Vector3d& f1, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv) {
+void spring_tangent(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
+                    const Eigen::Vector3d& v2, double ks, double kd, double rest,
+                    SpringJacobian jac, SpringTangent& t) {
   const Eigen::Vector3d du = x1 - x2;
   const double len = du.norm();
   if (len <= 0.0) {
-    f1.setZero();
+    t.f1.setZero();
+    t.d.setZero();
+    t.axial = t.lateral = t.kd = 0.0;
+    return;
+  }
+  t.d = du / len;
+  t.f1 = -(ks * (len - rest) + kd * (v1 - v2).dot(t.d)) * t.d;
+  double lateral = ks * (1.0 - rest / len);
+  if (jac == SpringJacobian::definite) lateral = std::max(lateral, 0.0);
+  t.axial = ks;
+  t.lateral = lateral;
+  t.kd = kd;
+}
+
+void spring_eval(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
+                 const Eigen::Vector3d& v2, double ks, double kd, double rest, SpringJacobian jac,
+                 Eigen::Vector3d& f1, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv) {
+  SpringTangent t;
+  spring_tangent(x1, x2, v1, v2, ks, kd, rest, jac, t);
+  f1 = t.f1;
+  if (t.d.isZero()) {  // zero length
     Kx.setZero();
     Kv.setZero();
     return;
   }
-  const Eigen::Vector3d d = du / len;
-  f1 = -(ks * (len - rest) + kd * (v1 - v2).dot(d)) * d;
-  const Eigen::Matrix3d P = d * d.transpose();
-  double lateral = ks * (1.0 - rest / len);
-  if (jac == SpringJacobian::definite) lateral = std::max(lateral, 0.0);
-  Kx = -(ks * P + lateral * (Eigen::Matrix3d::Identity() - P));
-  Kv = -kd * P;
+  const Eigen::Matrix3d P = t.d * t.d.transpose();
+  Kx = -(t.axial * P + t.lateral * (Eigen::Matrix3d::Identity() - P));
+  Kv = -t.kd * P;
 }
 
 void build_adjacency(MassSpringSystem& sys) {

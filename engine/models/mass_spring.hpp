@@ -92,6 +92,20 @@ void spring_eval(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eig
                  const Eigen::Vector3d& v2, double ks, double kd, double rest, SpringJacobian jac,
                  Eigen::Vector3d& f1, Eigen::Matrix3d& Kx, Eigen::Matrix3d& Kv);
 
+// spring_eval in factored form, which spring_eval itself expands: with P = d d^T,
+//   Kx = -(axial P + lateral (I - P)),  Kv = -kd P,
+// d the unit vector along x1 - x2, axial = ks (N/m), lateral = ks (1 - l/|du|) (clamped at 0 for
+// `definite`). Every block of the spring is a rank-one update of a multiple of I, so the
+// backward-Euler solver can keep 5 numbers per spring instead of a 3x3 block. A zero-length
+// spring has f1 = 0 and all coefficients 0 (d = 0).
+struct SpringTangent {
+  Eigen::Vector3d f1, d;  // N; unit direction
+  double axial = 0.0, lateral = 0.0, kd = 0.0;
+};
+void spring_tangent(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const Eigen::Vector3d& v1,
+                    const Eigen::Vector3d& v2, double ks, double kd, double rest,
+                    SpringJacobian jac, SpringTangent& t);
+
 // Rebuilds sys.adj_start / adj_spring from sys.springs.E.
 void build_adjacency(MassSpringSystem& sys);
 

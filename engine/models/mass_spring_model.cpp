@@ -431,7 +431,8 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
          {"kind", "material", "thickness", "rayleigh_beta", "support_modulus", "support_damping",
           "jacobian", "fixed_region", "integrator", "linear_solver", "sleeping", "refinement",
           "scope_radius", "scope_max_nodes", "scope_exterior", "scope_exterior_update",
-          "scope_exterior_latency_steps", "cg_tolerance", "fixed_z_below"});
+          "scope_exterior_latency_steps", "cg_tolerance", "fixed_z_below", "spring_blocks",
+          "warm_start"});
   MaterialConfig& mc = cfg.material;
   read_material(c, m, P, mc);
   mc.thickness = c.number(m, P, "thickness", false, 0, 1,
@@ -468,6 +469,10 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
     cfg.integrator = integrator_from_string(*in);
   if (auto ls = c.text(m, P, "linear_solver", false, {"cg", "ldlt_refactor", "ldlt_frozen"}))
     cfg.solver.solver = linear_solver_from_string(*ls);
+  if (auto sb = c.text(m, P, "spring_blocks", false, {"matrix", "rank_one"}))
+    cfg.solver.blocks = spring_blocks_from_string(*sb);
+  if (auto w = c.text(m, P, "warm_start", false, {"previous", "extrapolated"}))
+    cfg.solver.warm_start = warm_start_from_string(*w);
   if (const nlohmann::json* sl = c.object(m, P, "sleeping", false)) {
     const std::string Q = P + ".sleeping";
     SleepParams& s = cfg.sleeping;
@@ -610,6 +615,7 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     ms.act.nodes.reserve(n);
     ms.act.springs.reserve(ns);
     ms.ws.S.reserve(ns + ns / 2);
+    ms.ws.SR.reserve(ns + ns / 2);
     ms.ws.compact.prev_nodes.reserve(n);
     ms.ws.compact.inner.reserve(ns);
     ms.ws.compact.held.reserve(ns);

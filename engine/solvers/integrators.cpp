@@ -44,6 +44,24 @@ const char* to_string(LinearSolver s) {
   return "?";
 }
 
+SpringBlocks spring_blocks_from_string(const std::string& s) {
+  if (s == "matrix") return SpringBlocks::matrix;
+  if (s == "rank_one") return SpringBlocks::rank_one;
+  throw std::invalid_argument("unknown spring blocks '" + s + "' (expected matrix or rank_one)");
+}
+const char* to_string(SpringBlocks b) {
+  return b == SpringBlocks::matrix ? "matrix" : "rank_one";
+}
+
+WarmStart warm_start_from_string(const std::string& s) {
+  if (s == "previous") return WarmStart::previous;
+  if (s == "extrapolated") return WarmStart::extrapolated;
+  throw std::invalid_argument("unknown warm start '" + s + "' (expected previous or extrapolated)");
+}
+const char* to_string(WarmStart w) {
+  return w == WarmStart::previous ? "previous" : "extrapolated";
+}
+
 void activate_all(const MassSpringSystem& sys, ActiveSet& act) {
   const long n = sys.nodes();
   act.nodes.clear();
@@ -199,8 +217,9 @@ void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactC
   // Vectors only grow (no allocation in steady state); CG works on their heads.
   if (C.x.size() < 3 * m) {
     const long cap = std::max(3 * m, 2 * static_cast<long>(C.x.size()));
-    for (Eigen::VectorXd* v : {&C.x, &C.r, &C.z, &C.p, &C.ap}) v->setZero(cap);
+    for (Eigen::VectorXd* v : {&C.x, &C.r, &C.z, &C.p, &C.ap, &C.x1, &C.x2}) v->setZero(cap);
   }
+  C.history = 0;
   C.version = act.version;
 }
 
@@ -219,6 +238,32 @@ inline void apply_compact(const CompactCg& C, const std::vector<Eigen::Matrix3d>
   }
 }
 
+// The same with the spring blocks in rank_one form: S u = a d (d . u) + b u.
+template <typename In, typename Out>
+inline void apply_compact(const CompactCg& C, const std::vector<RankOneBlock>& S, const In& p,
+                          Out&& y) {
+  const long m = static_cast<long>(C.D.size());
+  for (long k = 0; k < m; ++k)
+    y.template segment<3>(3 * k).noalias() = C.D[k] * p.template segment<3>(3 * k);
+  for (const auto& e : C.inner) {
+    const RankOneBlock& B = S[e.k];
+    const Eigen::Vector3d u = p.template segment<3>(3 * e.a) - p.template segment<3>(3 * e.b);
+    const Eigen::Vector3d t = (B.a * B.d.dot(u)) * B.d + B.b * u;
+    y.template segment<3>(3 * e.a) += t;
+    y.template segment<3>(3 * e.b) -= t;
+  }
+}
+
+inline Eigen::Matrix3d block_matrix(const RankOneBlock& B) {
+  Eigen::Matrix3d M = (B.a * B.d) * B.d.transpose();
+  M.diagonal().array() += B.b;
+  return M;
+}
+
+bool rank_one(const IntegratorWorkspace& ws) {
+  return ws.blocks == SpringBlocks::rank_one && ws.solver == LinearSolver::cg;
+}
+
 void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, IntegratorWorkspace& ws) {
   CompactCg& C = ws.compact;
   if (C.version != act.version || static_cast<long>(C.local.size()) != sys.nodes())
@@ -232,12 +277,23 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
     C.Dinv[k] = ws.Dinv[i].inverse();  // block-Jacobi preconditioner (full diagonal block)
     C.x.segment<3>(3 * k) = ws.DV.row(i).transpose();  // warm start (head of C.x)
   }
+  const bool extrapolate =
+      ws.warm_start == WarmStart::extrapolated && ws.solver == LinearSolver::cg;
+  if (extrapolate && C.history >= 2) C.x.head(3 * m) = 2.0 * C.x1.head(3 * m) - C.x2.head(3 * m);
   for (size_t q = 0; q < ws.contact_blocks.size(); ++q)
     C.D[C.local[ws.contact_block_node[q]]] += ws.contact_blocks[q];
-  for (const auto& e : C.held) C.D[e.a] += ws.S[e.k];
+  const bool r1 = rank_one(ws);
+  if (r1) {
+    for (const auto& e : C.held) C.D[e.a] += block_matrix(ws.SR[e.k]);
+  } else {
+    for (const auto& e : C.held) C.D[e.a] += ws.S[e.k];
+  }
   auto x = C.x.head(3 * m), r = C.r.head(3 * m), z = C.z.head(3 * m), p = C.p.head(3 * m),
        ap = C.ap.head(3 * m);
-  apply_compact(C, ws.S, x, ap);
+  if (r1)
+    apply_compact(C, ws.SR, x, ap);
+  else
+    apply_compact(C, ws.S, x, ap);
   double bnorm = 0.0;
   for (long k = 0; k < m; ++k) {
     const Eigen::Vector3d b = ws.R.row(act.nodes[k]).transpose();
@@ -256,7 +312,10 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
   const double tol = std::max(ws.cg_tolerance * bnorm, h * ws.cg_force_tolerance);
   int it = 0;
   while (rnorm > tol && it < ws.cg_max_iterations) {
-    apply_compact(C, ws.S, p, ap);
+    if (r1)
+      apply_compact(C, ws.SR, p, ap);
+    else
+      apply_compact(C, ws.S, p, ap);
     const double pAp = p.dot(ap);
     if (!(pAp > 0.0)) break;
     const double alpha = rz / pAp;
@@ -274,6 +333,11 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
     ++it;
   }
   for (long k = 0; k < m; ++k) ws.DV.row(act.nodes[k]) = x.segment<3>(3 * k).transpose();
+  if (extrapolate) {
+    C.x2.head(3 * m) = C.x1.head(3 * m);
+    C.x1.head(3 * m) = x;
+    C.history = std::min(C.history + 1, 2);
+  }
   ws.last.cg_iterations = it;
   ws.last.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
 }
@@ -285,7 +349,13 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
   ensure(ws.R, n);
   ensure(ws.DV, n);
   if (ws.Dinv.size() < static_cast<size_t>(n)) ws.Dinv.resize(n);
-  if (ws.S.size() < act.springs.size()) ws.S.resize(act.springs.size() + act.springs.size() / 2);
+  const bool r1 = rank_one(ws);
+  if (r1) {
+    if (ws.SR.size() < act.springs.size())
+      ws.SR.resize(act.springs.size() + act.springs.size() / 2);
+  } else if (ws.S.size() < act.springs.size()) {
+    ws.S.resize(act.springs.size() + act.springs.size() / 2);
+  }
 
   // The rhs b = h (f0 + h K v0) (held nodes count as v = 0 in K v0) and the diagonal blocks,
   // node terms first, then one fused pass over the springs: force, Jacobian, rhs, blocks.
@@ -317,7 +387,37 @@ void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
   }
   ws.contact_on = !ws.contact_blocks.empty();
   const double h2 = h * h;
-  for (size_t k = 0; k < act.springs.size(); ++k) {
+  for (size_t k = 0; r1 && k < act.springs.size(); ++k) {
+    // The rank_one form: S = a P + b I with a = h kd + h^2 (axial - lateral), b = h^2 lateral,
+    // and K v = -((axial - lateral) d (d . v) + lateral v).
+    const int s = act.springs[k];
+    const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
+    const bool aa = act.is_active[a], ba = act.is_active[b];
+    SpringTangent t;
+    spring_tangent(sys.X.row(a).transpose(), sys.X.row(b).transpose(), sys.V.row(a).transpose(),
+                   sys.V.row(b).transpose(), sys.springs.ks[s], sys.springs.kd[s],
+                   sys.springs.rest[s], ws.jacobian, t);
+    RankOneBlock& B = ws.SR[k];
+    const double axial = t.axial - t.lateral;
+    B.d = t.d;
+    B.a = h * t.kd + h2 * axial;
+    B.b = h2 * t.lateral;
+    Eigen::Vector3d dv = Eigen::Vector3d::Zero();
+    if (aa) dv += sys.V.row(a).transpose();
+    if (ba) dv -= sys.V.row(b).transpose();
+    const Eigen::Vector3d r = h * t.f1 - h2 * ((axial * t.d.dot(dv)) * t.d + t.lateral * dv);
+    if (!aa && !ba) continue;
+    const Eigen::Matrix3d Sk = block_matrix(B);
+    if (aa) {
+      ws.R.row(a) += r.transpose();
+      ws.Dinv[a] += Sk;
+    }
+    if (ba) {
+      ws.R.row(b) -= r.transpose();
+      ws.Dinv[b] += Sk;
+    }
+  }
+  for (size_t k = 0; !r1 && k < act.springs.size(); ++k) {
     const int s = act.springs[k];
     const int a = sys.springs.E(s, 0), b = sys.springs.E(s, 1);
     const bool aa = act.is_active[a], ba = act.is_active[b];

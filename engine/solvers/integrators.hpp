@@ -28,10 +28,20 @@ enum class LinearSolver {
                 // (the matrix lags the deformation: cheaper, not exact — see bench_engine_solver)
 };
 
+// How the CG solver stores a spring's block S = -(h Kv + h^2 Kx) of the system matrix.
+//   matrix:   a 3x3 matrix per spring, assembled from spring_eval (the original path).
+//   rank_one: S = a d d^T + b I (spring_tangent's factored form: 5 numbers, no 3x3 products);
+//             the same matrix in exact arithmetic, rounded differently (not bit-identical to
+//             `matrix`: differences are at the CG tolerance, see docs/ARCHITECTURE.md).
+// The LDLT solvers always assemble matrices.
+enum class SpringBlocks { matrix, rank_one };
+
 Integrator integrator_from_string(const std::string& s);  // throws std::invalid_argument
 const char* to_string(Integrator i);
 LinearSolver linear_solver_from_string(const std::string& s);
 const char* to_string(LinearSolver s);
+SpringBlocks spring_blocks_from_string(const std::string& s);  // throws std::invalid_argument
+const char* to_string(SpringBlocks b);
 
 // The nodes to integrate and the springs touching them. `version` changes whenever the set does,
 // so solvers can cache per-set data (sparsity pattern, factorisation).
@@ -62,7 +72,20 @@ struct CompactCg {
   std::vector<Link> inner, held;
   std::vector<Eigen::Matrix3d> D, Dinv;
   Eigen::VectorXd x, r, z, p, ap;
+  // warm_start == extrapolated: the solutions of the last two steps on this set (3m each) and
+  // how many of them are valid (reset when the set changes).
+  Eigen::VectorXd x1, x2;
+  int history = 0;
 };
+
+// CG's first guess for dv: the last step's dv of each node (`previous`), or its linear
+// extrapolation 2 dv_{n-1} - dv_{n-2} over the last two steps on the same active set
+// (`extrapolated`). Both stop at the same tolerance; the results differ within it. Measured on
+// C's presses (bench_engine_step --solver) extrapolation needs more CG iterations, not fewer
+// (dv is not smooth from step to step at C's tolerance): `previous` is the default.
+enum class WarmStart { previous, extrapolated };
+WarmStart warm_start_from_string(const std::string& s);  // throws std::invalid_argument
+const char* to_string(WarmStart w);
 
 // How backward Euler solves its system: the settings a scene configures (engine::SceneConfig
 // holds one of these; its defaults are the scene defaults).
@@ -72,6 +95,14 @@ struct SolverConfig {
   double cg_force_tolerance = 1e-6;  // N: absolute floor of the residual (as a force)
   int cg_max_iterations = 500;
   SpringJacobian jacobian = SpringJacobian::definite;  // spring tangent used by the solve
+  SpringBlocks blocks = SpringBlocks::rank_one;        // CG's storage of the spring blocks
+  WarmStart warm_start = WarmStart::previous;          // CG's first guess
+};
+
+// One spring's block of A in rank_one form: S = a d d^T + b I (d unit, a and b in kg).
+struct RankOneBlock {
+  Eigen::Vector3d d;
+  double a, b;
 };
 
 // The settings plus the buffers of one integrated system.
@@ -80,6 +111,7 @@ struct IntegratorWorkspace : SolverConfig {
   // buffers (sized on first use)
   RowMatX3d F, X1, V1, kx[4], kv[4], R, P, Z, AP, DV;
   std::vector<Eigen::Matrix3d> S;     // per active spring: h Kv + h^2 Kx (negated sign kept)
+  std::vector<RankOneBlock> SR;       // the same in rank_one form (blocks == rank_one)
   std::vector<Eigen::Matrix3d> Dinv;  // per node: inverse diagonal block of A
   std::vector<int> dof_of_node;       // LDLT: node -> row block, -1 inactive
   Eigen::SparseMatrix<double> A;
