@@ -22,6 +22,17 @@
 //     a refined face moves that share from its coarse edges to its leaves' edges by the same
 //     rule, which keeps the strain energy of any uniform in-plane strain exactly for 1->4 splits
 //     (the children are similar to the parent) and to first order for the green closures;
+//   volume (tet models, CoarseTets given): the new surface nodes get the volume stiffness of the
+//     tets under them, by re-dividing those tets and applying van Gelder's rule to the parts —
+//     a refined face's tet becomes the fan of sub-tets over its leaves and its apex (the leaf's
+//     volume share c_f A_leaf = E V_sub on each of the sub-tet's six edges, so the membrane
+//     share above is the in-face part of it), and every other tet at a split surface edge is
+//     bisected at the nodes along that edge (the conforming edge bisection of tet meshes,
+//     Rivara 1991, J. Comput. Appl. Math. 36:79–89), parts (p, q, c, d) with E V |pq| / |ab|;
+//     a tet with several boundary faces or split edges shares its E V between them. The parts'
+//     volumes sum to the tet's exactly; no constant per node. Without this the new nodes held
+//     only membrane springs and their share of the support, and a press whose pad rests on
+//     them was 39 % soft (C at the body, 2.5 N);
 //   damping: kd = beta ks on the new springs (stiffness-proportional Rayleigh damping).
 // Simplify restores the coarse arrays bit for bit.
 #include <array>
