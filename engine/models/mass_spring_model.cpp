@@ -541,8 +541,7 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
     for (long i = 0; i < nm; ++i)
       if (cm.model_V(i, 2) < z0 + cfg.support.fixed_z_below) sys.fixed[i] = 1;
   }
-  return make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt,
-                       tets);
+  return make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt, tets);
 }
 
 namespace {
