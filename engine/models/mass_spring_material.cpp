@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 #include "engine/models/refinement.hpp"
 
@@ -113,9 +114,14 @@ Eigen::VectorXd lumped_area(const RowMatX3d& X, const RowMatX3i& F) {
 Eigen::VectorXd boundary_membrane(const RowMatX3d& X, const RowMatX4i& T, const RowMatX3i& F,
                                   const Eigen::VectorXi& tet_of, const Eigen::VectorXd& E_tet) {
   const Eigen::VectorXd A = mesh_face_areas(X, F);
+  // A tet with several boundary faces is shared between them (each refines its part of it).
+  std::unordered_map<int, int> faces_of_tet;
+  for (long f = 0; f < F.rows(); ++f) ++faces_of_tet[tet_of[f]];
   Eigen::VectorXd c(F.rows());
   for (long f = 0; f < F.rows(); ++f)
-    c[f] = A[f] > 0.0 ? E_tet[tet_of[f]] * tet_volume(X, T, tet_of[f]) / A[f] : 0.0;
+    c[f] = A[f] > 0.0
+               ? E_tet[tet_of[f]] * tet_volume(X, T, tet_of[f]) / (A[f] * faces_of_tet[tet_of[f]])
+               : 0.0;
   return c;
 }
 

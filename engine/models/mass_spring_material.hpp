@@ -35,8 +35,10 @@ Eigen::VectorXd tet_lumped_mass(const RowMatX3d& X, const RowMatX4i& T,
                                 const Eigen::VectorXd& density_tet);
 // #V lumped surface areas (m^2): A_f/3 to each corner.
 Eigen::VectorXd lumped_area(const RowMatX3d& X, const RowMatX3i& F);
-// #F membrane share of boundary face f of a tet model: c_f = E_t V_t / A_f with t = tet_of[f],
-// so that c_f A_f / |e|^2 is exactly tet t's term of van Gelder's sum on each edge of f.
+// #F membrane share of boundary face f of a tet model: c_f = E_t V_t / (n_t A_f) with
+// t = tet_of[f] and n_t its number of boundary faces, so that c_f A_f / |e|^2 summed over the
+// tet's boundary faces is exactly tet t's term of van Gelder's sum on each of its edges (the
+// part of the tet that refining face f re-divides; engine/models/refinement.hpp).
 Eigen::VectorXd boundary_membrane(const RowMatX3d& X, const RowMatX4i& T, const RowMatX3i& F,
                                   const Eigen::VectorXi& tet_of, const Eigen::VectorXd& E_tet);
 

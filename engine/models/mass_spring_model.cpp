@@ -539,6 +539,7 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
   sys.V.setZero(nm, 3);
   sys.F_ext.setZero(nm, 3);
   Eigen::VectorXd face_membrane;
+  CoarseTets tets;  // empty: a membrane refines in its plane only
   if (cm.tet) {
     const long nt = cm.model_T.rows();
     Eigen::VectorXd E(nt), rho(nt);
@@ -550,6 +551,7 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
     sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta, &cm.model_E);
     sys.mass = tet_lumped_mass(cm.model_V, cm.model_T, rho);
     face_membrane = boundary_membrane(cm.model_V, cm.model_T, cm.model_F, cm.boundary_tet, E);
+    tets = {cm.model_T, E, cm.boundary_tet};
   } else {
     const mesh::Material mat = material_of(101);
     face_membrane = Eigen::VectorXd::Constant(cm.model_F.rows(), mat.youngs_modulus * mc.thickness);
@@ -575,7 +577,7 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
     for (long i = 0; i < nm; ++i)
       if (cm.model_V(i, 2) < z0 + cfg.support.fixed_z_below) sys.fixed[i] = 1;
   }
-  return make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt);
+  return make_adaptive(std::move(sys), cm.model_F, face_membrane, mc.rayleigh_beta, cfg.dt, tets);
 }
 
 namespace {

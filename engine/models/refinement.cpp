@@ -217,19 +217,84 @@ void rebuild(AdaptiveMassSpring& m) {
   added.reserve(refined_roots.size() * 12);
   for (int r : refined_roots) {
     const double cf = m.face_membrane[r];
+    const int apex = m.face_apex[r];
     for (int k = 0; k < 3; ++k) {
       const int a = m.F0(r, k), b = m.F0(r, (k + 1) % 3);
       auto it = m.coarse_spring.find(edge_key(a, b));
       if (it != m.coarse_spring.end()) ks[it->second] -= cf * m.face_area[r] / len2(a, b);
+      if (apex < 0) continue;
+      it = m.coarse_spring.find(edge_key(a, apex));
+      if (it != m.coarse_spring.end()) ks[it->second] -= cf * m.face_area[r] / len2(a, apex);
     }
   }
   for (size_t f = 0; f < faces.size(); ++f) {
     const int r = face_root[f];
     if (emitted[r] == 1 && m.tris[r].child < 0) continue;
+    // On a tet model the leaf is the base of a sub-tet of the root's tet (the fan over the
+    // apex): E V_sub = c_r A_leaf on each of its six edges, the three to the apex included.
     const double cf = m.face_membrane[r] * face_leaf_area[f];
+    const int apex = m.face_apex[r];
     for (int k = 0; k < 3; ++k) {
       const int a = faces[f][k], b = faces[f][(k + 1) % 3];
       added[edge_key(a, b)] += cf / len2(a, b);
+      if (apex >= 0) added[edge_key(a, apex)] += cf / len2(a, apex);
+    }
+  }
+  // The other tets at a split surface edge (a tet with no refined boundary face): bisected at
+  // the nodes along the edge, each part (p, q, c, d) with E V |pq| / |ab|; a tet with k split
+  // edges gives each the share 1/k.
+  if (m.tets.rows() > 0) {
+    std::unordered_map<int, int> face_fanned;  // tet -> refined boundary faces of it
+    for (int r : refined_roots) ++face_fanned[m.face_tet[r]];
+    std::vector<int> cand;
+    for (int r : refined_roots)
+      for (int k = 0; k < 3; ++k) {
+        const int a = m.F0(r, k), b = m.F0(r, (k + 1) % 3);
+        if (find_mid(m, a, b) < 0) continue;
+        for (int t : m.edge_tets.at(edge_key(a, b)))
+          if (!face_fanned.count(t)) cand.push_back(t);
+      }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    std::vector<int> chain;
+    for (int t : cand) {
+      int v[4], split_edges = 0;
+      for (int i = 0; i < 4; ++i) v[i] = m.tets(t, i);
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) split_edges += find_mid(m, v[i], v[j]) >= 0;
+      const double ev = m.tet_ev[t] / split_edges;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          const int a = v[i], b = v[j];
+          if (find_mid(m, a, b) < 0) continue;
+          int c = -1, d = -1;
+          for (int q = 0; q < 4; ++q)
+            if (q != i && q != j) (c < 0 ? c : d) = v[q];
+          // The tet's share leaves its six coarse edges ...
+          for (int p = 0; p < 4; ++p)
+            for (int q = p + 1; q < 4; ++q)
+              ks[m.coarse_spring.at(edge_key(v[p], v[q]))] -= ev / len2(v[p], v[q]);
+          // ... for its parts between consecutive nodes along (a, b).
+          chain.assign({a});
+          auto walk = [&](auto&& self, int p, int q) -> void {
+            const int mid = find_mid(m, p, q);
+            if (mid < 0) {
+              chain.push_back(q);
+              return;
+            }
+            self(self, p, mid);
+            self(self, mid, q);
+          };
+          walk(walk, a, b);
+          const double ab = std::sqrt(len2(a, b));
+          for (size_t s2 = 0; s2 + 1 < chain.size(); ++s2) {
+            const int p = chain[s2], q = chain[s2 + 1];
+            const double part = ev * std::sqrt(len2(p, q)) / ab;
+            for (const auto& [x, y] : {std::pair{p, q}, std::pair{p, c}, std::pair{p, d},
+                                       std::pair{q, c}, std::pair{q, d}, std::pair{c, d}})
+              added[edge_key(x, y)] += part / len2(x, y);
+          }
+        }
     }
   }
   std::vector<std::pair<std::uint64_t, double>> fresh;
@@ -317,7 +382,8 @@ void level_and_slod(const AdaptiveMassSpring& m, int root, int* level, int* slod
 }
 
 AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
-                                 Eigen::VectorXd face_membrane, double beta, double h_coarse) {
+                                 Eigen::VectorXd face_membrane, double beta, double h_coarse,
+                                 const CoarseTets& tets) {
   AdaptiveMassSpring m;
   const long n = coarse.nodes();
   if (coarse.V.rows() != n) coarse.V.setZero(n, 3);
@@ -327,10 +393,41 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
   if (static_cast<long>(coarse.fixed.size()) != n) coarse.fixed.assign(n, 0);
   if (face_membrane.size() != F0.rows())
     throw std::invalid_argument("make_adaptive: one membrane modulus per surface face expected");
+  const long nt = tets.T.rows();
+  if (nt > 0 && (tets.E.size() != nt || tets.face_tet.size() != F0.rows() ||
+                 (tets.T.array() < 0).any() || (tets.T.array() >= n).any() ||
+                 (tets.face_tet.array() < 0).any() || (tets.face_tet.array() >= nt).any()))
+    throw std::invalid_argument("make_adaptive: tets, one modulus per tet, one tet per face");
   build_adjacency(coarse);
   m.coarse = std::move(coarse);
   m.F0 = std::move(F0);
   m.face_membrane = std::move(face_membrane);
+  m.face_apex = Eigen::VectorXi::Constant(m.F0.rows(), -1);
+  if (nt > 0) {
+    m.tets = tets.T;
+    m.face_tet = tets.face_tet;
+    m.tet_ev.resize(nt);
+    for (long t = 0; t < nt; ++t) {
+      const Eigen::Vector3d a = m.coarse.X_rest.row(m.tets(t, 0)).transpose(),
+                            b = m.coarse.X_rest.row(m.tets(t, 1)).transpose(),
+                            c = m.coarse.X_rest.row(m.tets(t, 2)).transpose(),
+                            d = m.coarse.X_rest.row(m.tets(t, 3)).transpose();
+      m.tet_ev[t] = tets.E[t] * std::abs((d - a).dot((d - b).cross(d - c))) / 6.0;
+    }
+    for (long f = 0; f < m.F0.rows(); ++f)
+      for (int k = 0; k < 4; ++k) {
+        const int v = m.tets(m.face_tet[f], k);
+        if (v != m.F0(f, 0) && v != m.F0(f, 1) && v != m.F0(f, 2)) m.face_apex[f] = v;
+      }
+    for (long f = 0; f < m.F0.rows(); ++f)
+      for (int k = 0; k < 3; ++k) m.edge_tets[edge_key(m.F0(f, k), m.F0(f, (k + 1) % 3))];
+    for (long t = 0; t < nt; ++t)
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          auto it = m.edge_tets.find(edge_key(m.tets(t, i), m.tets(t, j)));
+          if (it != m.edge_tets.end()) it->second.push_back(static_cast<int>(t));
+        }
+  }
   m.beta = beta;
   m.h_coarse = h_coarse;
   m.h = h_coarse;

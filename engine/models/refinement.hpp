@@ -22,6 +22,17 @@
 //     a refined face moves that share from its coarse edges to its leaves' edges by the same
 //     rule, which keeps the strain energy of any uniform in-plane strain exactly for 1->4 splits
 //     (the children are similar to the parent) and to first order for the green closures;
+//   volume (tet models, CoarseTets given): the new surface nodes get the volume stiffness of the
+//     tets under them, by re-dividing those tets and applying van Gelder's rule to the parts —
+//     a refined face's tet becomes the fan of sub-tets over its leaves and its apex (the leaf's
+//     volume share c_f A_leaf = E V_sub on each of the sub-tet's six edges, so the membrane
+//     share above is the in-face part of it), and every other tet at a split surface edge is
+//     bisected at the nodes along that edge (the conforming edge bisection of tet meshes,
+//     Rivara 1991, J. Comput. Appl. Math. 36:79–89), parts (p, q, c, d) with E V |pq| / |ab|;
+//     a tet with several boundary faces or split edges shares its E V between them. The parts'
+//     volumes sum to the tet's exactly; no constant per node. Without this the new nodes held
+//     only membrane springs and their share of the support, and a press whose pad rests on
+//     them was 39 % soft (C at the body, 2.5 N);
 //   damping: kd = beta ks on the new springs (stiffness-proportional Rayleigh damping).
 // Simplify restores the coarse arrays bit for bit.
 #include <array>
@@ -58,8 +69,14 @@ struct AdaptiveMassSpring {
   MassSpringSystem coarse;        // rest state, coarse masses/springs/home springs
   RowMatX3i F0;                   // #F0 coarse surface faces
   Eigen::VectorXd face_membrane;  // #F0 membrane modulus c_f (N/m) of each coarse face
-  Eigen::VectorXd face_area;      // #F0 rest areas (m^2)
-  Eigen::VectorXd node_area;      // #coarse nodes: rest area of the coarse faces around it (m^2)
+  // Tet models: the coarse tets that a refined surface re-divides (empty for a membrane).
+  RowMatX4i tets;             // #T by 4 coarse tets
+  Eigen::VectorXd tet_ev;     // #T: E_t V_t (N m), the numerator of van Gelder's rule
+  Eigen::VectorXi face_tet;   // #F0 tet owning each coarse face
+  Eigen::VectorXi face_apex;  // #F0 vertex of that tet opposite the face, -1 (membrane)
+  std::unordered_map<std::uint64_t, std::vector<int>> edge_tets;  // surface edge -> its tets
+  Eigen::VectorXd face_area;                                      // #F0 rest areas (m^2)
+  Eigen::VectorXd node_area;  // #coarse nodes: rest area of the coarse faces around it (m^2)
   Eigen::VectorXd coarse_surface_area;  // #coarse nodes: lumped surface area (A_v / 3) (m^2)
   std::unordered_map<std::uint64_t, int> coarse_spring;  // edge (a<b) -> coarse spring
   double beta = 0.0;       // s, Rayleigh stiffness-proportional damping of new springs
@@ -87,8 +104,17 @@ struct AdaptiveMassSpring {
 // Builds the adaptive model from a coarse system (positions at rest, adjacency not needed) and
 // its surface faces F0 (#F0 by 3). face_membrane: #F0 membrane modulus c_f (N/m) — the share of
 // the springs that each face holds (see above); beta: s, kd/ks of new springs; h_coarse: s.
+// On a tet model, `tets` are the coarse tets (T, E_t per tet, the owning tet of each face of
+// F0; face_membrane must then be boundary_membrane's): refinement re-divides the tets under the
+// refined surface (see above). Without them the surface refines as a membrane.
+struct CoarseTets {
+  RowMatX4i T;               // #T by 4
+  Eigen::VectorXd E;         // #T Young's moduli (Pa)
+  Eigen::VectorXi face_tet;  // #F0 owning tet
+};
 AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
-                                 Eigen::VectorXd face_membrane, double beta, double h_coarse);
+                                 Eigen::VectorXd face_membrane, double beta, double h_coarse,
+                                 const CoarseTets& tets = {});
 // #F by 1 triangle areas of F over X (m^2).
 Eigen::VectorXd mesh_face_areas(const RowMatX3d& X, const RowMatX3i& F);
 

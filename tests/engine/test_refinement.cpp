@@ -280,3 +280,62 @@ TEST(Refinement, ModelCSurfaceStaysClosedUnderEveryPolicy) {
     EXPECT_EQ(m.sys.springs.size(), S0);
   }
 }
+
+TEST(Refinement, TetsUnderTheRefinedSurfaceAreReDivided) {
+  // Model-C with its tets given: refining re-divides the tets under the refined surface (fans
+  // over refined faces, bisection at split edges) and applies van Gelder's rule to the parts.
+  // Their volumes sum to the tet's, so sum_e k_e |e|^2 (= 6 sum_t E_t V_t for van Gelder
+  // springs) is conserved exactly, and every new node has springs into the volume (at an angle
+  // out of the surface), not only membrane springs in it.
+  const palplab::mesh::TetMesh tm = palplab::mesh::generate_model_c(0, 2489);
+  const palplab::mesh::BoundaryFaces bf = palplab::mesh::boundary_faces(tm);
+  MassSpringSystem s;
+  s.X_rest = tm.V;
+  s.X = tm.V;
+  s.mass = Eigen::VectorXd::Constant(tm.V.rows(), 0.8 / tm.V.rows());
+  Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
+  for (long t = 0; t < E.size(); t += 3) E[t] = 3e5;  // uneven moduli
+  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
+  auto trace = [](const MassSpringSystem& q) {
+    return (q.springs.ks.array() * q.springs.rest.array().square()).sum();
+  };
+  const double tr0 = trace(s);
+  AdaptiveMassSpring m =
+      make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002, 1e-3,
+                    CoarseTets{tm.T, E, bf.tet});
+  RefineParams p;
+  p.threshold_area = 2e-6;
+  p.max_level = 3;
+  for (int v = 0; v < static_cast<int>(bf.F.rows()); v += 397) refine_around(m, bf.F(v, 0), p);
+  ASSERT_GT(m.new_nodes, 0);
+  EXPECT_NEAR(trace(m.sys), tr0, 1e-12 * tr0);
+  EXPECT_NEAR(m.sys.mass.sum(), 0.8, 1e-12);
+  for (long k = 0; k < m.sys.springs.size(); ++k) EXPECT_GT(m.sys.springs.ks[k], 0.0) << k;
+  // Into the volume: a spring at a large angle (> 11.5 deg) to the surface at the node.
+  const long N = m.coarse_nodes();
+  const MassSpringSystem& q = m.sys;
+  std::vector<std::uint8_t> into_volume(q.nodes(), 0);
+  for (long f = 0; f < m.F.rows(); ++f) {
+    const Eigen::Vector3d x0 = q.X_rest.row(m.F(f, 0)).transpose(),
+                          n = (Eigen::Vector3d(q.X_rest.row(m.F(f, 1)).transpose()) - x0)
+                                  .cross(Eigen::Vector3d(q.X_rest.row(m.F(f, 2)).transpose()) - x0)
+                                  .normalized();
+    for (int c = 0; c < 3; ++c) {
+      const int i = m.F(f, c);
+      if (i < N) continue;
+      for (int k = q.adj_start[i]; k < q.adj_start[i + 1]; ++k) {
+        const int e = q.adj_spring[k];
+        const Eigen::Vector3d d =
+            (q.X_rest.row(q.springs.E(e, 0)) - q.X_rest.row(q.springs.E(e, 1)))
+                .transpose()
+                .normalized();
+        if (std::abs(d.dot(n)) > 0.2) into_volume[i] = 1;
+      }
+    }
+  }
+  long without = 0;
+  for (long i = N; i < q.nodes(); ++i) without += !into_volume[i];
+  EXPECT_EQ(without, 0) << "of " << m.new_nodes << " new nodes";
+  simplify(m);
+  EXPECT_EQ(trace(m.sys), tr0);
+}

@@ -258,9 +258,11 @@ TEST(ContactHard, SlidingAcrossNodesChangesTheForceBoundedly) {
   //   over 50 um. Bound: half the Weber fraction for force (7 %) of the smallest force of the
   //   slide, so no single step is a perceptible jump (the old jumps were 25 % and more). C as
   //   shipped refines around each new contact node while the contact slides: inserting nodes
-  //   into the pressed mesh is itself a step of the model (measured 0.30 N, 0.38 of the force;
-  //   refinement.cpp), bounded at 0.4 of the force here so it cannot grow; C without
-  //   refinement isolates the contact (measured 2.8 %: re-centring the integration scope).
+  //   into the pressed mesh is itself a step of the model. It was 0.30 N (38 % of the force)
+  //   while the new nodes had no volume stiffness; with the tets under the refined surface
+  //   re-divided (refinement.hpp) it is 0.092 N (5.3 %), bounded here by the Weber fraction
+  //   (7 %); C without refinement isolates the contact (measured 2.8 %: re-centring the
+  //   integration scope).
   for (const char* id : {"A", "B", "C", "C without refinement", "D"}) {
     const bool norefine = std::string(id) == "C without refinement";
     Scene s = make(norefine ? "C" : id, [&](SceneConfig& c) {
@@ -328,7 +330,7 @@ TEST(ContactHard, SlidingAcrossNodesChangesTheForceBoundedly) {
     EXPECT_GE(switches, 2) << id << ": the slide must cross node boundaries";
     const bool rigid = std::string(id) == "A" || std::string(id) == "B";
     EXPECT_GT(fmin, 0.5) << id;  // a real press throughout
-    const double bound = rigid ? 4.0 * k * dx : std::string(id) == "C" ? 0.4 * fmin : 0.035 * fmin;
+    const double bound = rigid ? 4.0 * k * dx : std::string(id) == "C" ? 0.07 * fmin : 0.035 * fmin;
     EXPECT_LE(worst, bound) << id;
   }
 }
