@@ -129,9 +129,10 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   // lumped masses and factorisation are restored, the assembly and its checks (which the stored
   // model passed) are skipped; system() then holds X0, T, material and m_lumped only.
   StoredLinearFem stored;
-  m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass &&
-             !opt_.precomputed.empty() &&
-             load_linear_fem(opt_.precomputed, m.inputs, 3 * n, stored, m.lin);
+  m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass && opt_.precomputed &&
+             !opt_.precomputed->empty() &&
+             load_linear_fem(*opt_.precomputed, m.inputs, 3 * n, stored, m.lin);
+  opt_.precomputed = nullptr;  // the caller's: not kept
   if (m.loaded) {
     m.sys.X0 = mesh.V;
     m.sys.T = mesh.T;
@@ -158,7 +159,7 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   const auto t0 = Clock::now();
   if (opt_.formulation == FemFormulation::linear && m.loaded) {
     m.act = std::move(stored.act);
-    m.K_c = std::move(stored.K_c);
+    m.K_c.swap(stored.K_c);  // Eigen 3.4's sparse move-assignment copies
   } else if (opt_.formulation == FemFormulation::linear) {
     StaticSolver check;  // fails early (with a clear message) on a free-floating body
     static_precompute(m.sys.K, m.fixed_dof, check);

@@ -72,8 +72,9 @@ struct FemModelOptions {
   bool multirate_deterministic = false;
   // A .psim file's stored precomputation (save_precomputation; engine/haptics/scene_file.hpp):
   // used when it was made from the same inputs (mesh, materials, fixed nodes, options, step),
-  // otherwise ignored and everything is computed. Linear formulation only.
-  std::string precomputed;
+  // otherwise ignored and everything is computed. Linear formulation only. Not owned (the
+  // blob is megabytes: no copy); read in the constructor only, so it must outlive that.
+  const std::string* precomputed = nullptr;
 };
 
 class FemModel {

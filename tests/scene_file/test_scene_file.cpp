@@ -315,7 +315,7 @@ TEST(SceneFileFem, StoredLinearPrecomputationRestoresExactlyAndOnlyForTheSameInp
   EXPECT_FALSE(built.precomputation_loaded());
 
   FemModelOptions with = opt;
-  with.precomputed = blob;
+  with.precomputed = &blob;
   FemModel loaded(tm, mat, fixed, with);
   EXPECT_TRUE(loaded.precomputation_loaded());
   FemModel fresh(tm, mat, fixed, opt);
