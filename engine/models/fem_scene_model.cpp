@@ -171,6 +171,7 @@ class FemSceneModel final : public SceneModel {
     if (f.formulation() == FemFormulation::corotational_multirate) {
       info["fem"]["update_rate_hz"] = update_rate_hz_;  // deformation updates per second
       info["fem"]["relinearisations"] = f.relinearisations();
+      info["fem"]["pad_solves"] = f.pad_solves();  // pads solved in the haptic step
     }
     st.model_info = info.dump();
   }
@@ -206,6 +207,13 @@ class FemSceneModel final : public SceneModel {
       patch_nodes(face >= 0 ? faces_(face, k) : node, false, tmp_nodes_, tmp_w_);
       for (size_t q = 0; q < tmp_nodes_.size(); ++q) pad_.push_back({tmp_nodes_[q], k, tmp_w_[q]});
     }
+    // The same pads for the multi-rate model's per-pad compliance cache (fem_model.hpp).
+    std::vector<FemModel::ContactPad>& pads = fem_.contact_pads;
+    pads.assign(face >= 0 ? 3 : 1, {});
+    for (const PadEntry& e : pad_) {
+      pads[e.slot].nodes.push_back(e.node);
+      pads[e.slot].weights.push_back(e.w);
+    }
   }
   // This step's patch on the FemModel: the vertex pads weighted by the barycentric weights w
   // (each node once), so the patch moves continuously with the contact point. Each vertex pad
@@ -221,6 +229,8 @@ class FemSceneModel final : public SceneModel {
     const auto offset = [&](int i, int v) {
       return std::max(0.0, (X0_.row(i) - X0_.row(v)).dot(n.transpose()));
     };
+    for (size_t a = 0; a < fem_.contact_pads.size(); ++a)
+      fem_.contact_pads[a].blend = face >= 0 ? w[static_cast<long>(a)] : 1.0;
     double own = 0.0;
     for (const PadEntry& e : pad_) {
       const double we = (face >= 0 ? w[e.slot] : 1.0) * e.w;

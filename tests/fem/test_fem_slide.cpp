@@ -135,6 +135,14 @@ TEST(FemSlide, MultirateSlideIsContinuousAcrossNodes) {
   EXPECT_GT(fine.force.front().norm(), 1.0);
   EXPECT_GT(fine.force.back().norm(), 0.1);
   EXPECT_LT(fine.max_jump(), 0.6 * coarse.max_jump());
-  EXPECT_GE(
-      nlohmann::json::parse(sm.stats().model_info).at("fem").at("relinearisations").get<long>(), 5);
+  const nlohmann::json info = nlohmann::json::parse(sm.stats().model_info).at("fem");
+  EXPECT_GE(info.at("relinearisations").get<long>(), 5);
+  // The compliance columns are solved per vertex pad (3 back-substitutions each), not per step
+  // of the slide (whose blend changes every step): the haptic step solved only the pads it met
+  // between two updates (the worker solves the current ones at each update).
+  // (Solving per blend did it at every one of the 91 sliding steps of both runs.)
+  const size_t steps = coarse.force.size() + fine.force.size() + 2 * (5 + 50);
+  std::printf("pads solved in the haptic step: %ld over %zu steps (both runs)\n",
+              info.at("pad_solves").get<long>(), steps);
+  EXPECT_LE(info.at("pad_solves").get<long>(), 30);
 }
