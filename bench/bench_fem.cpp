@@ -7,7 +7,8 @@
 // force error of the condensed model against the full linear one on that press.
 // Build: cmake --build build --target bench_fem; run: build/bench/bench_fem [PROTOTYPES_DIR]
 // (`--scene-only` skips the component items; `--multirate` runs only the multi-rate D against
-// the full co-rotational D on presses to 1, 2.5 and 4 N and a sliding press).
+// the full co-rotational D on presses to 1, 2.5 and 4 N and a sliding press; `--trace` prints
+// both forces along the slide).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
