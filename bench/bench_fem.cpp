@@ -7,7 +7,8 @@
 // force error of the condensed model against the full linear one on that press.
 // Build: cmake --build build --target bench_fem; run: build/bench/bench_fem [PROTOTYPES_DIR]
 // (`--scene-only` skips the component items; `--multirate` runs only the multi-rate D against
-// the full co-rotational D on presses to 1, 2.5 and 4 N and a sliding press).
+// the full co-rotational D on presses to 1, 2.5 and 4 N and a sliding press; `--trace` prints
+// both forces along the slide).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -149,6 +150,7 @@ struct Recorded {
   std::vector<double> us;
   std::vector<int> snap;
   std::vector<mesh::Positions> surface;
+  int slide_begin = -1, slide_end = -1;  // steps of the slide (corot_press)
 };
 
 using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
@@ -189,10 +191,12 @@ Recorded corot_press(Scene& s, const std::string& region, double target, double 
   for (int k = 0; k < 100; ++k) record_step(s, at(), r);
   snapshot(s, r);
   if (slide > 0) {
+    r.slide_begin = static_cast<int>(r.x.size());
     while (along < slide) {
       along += 0.02 * s.dt();
       record_step(s, at(), r);
     }
+    r.slide_end = static_cast<int>(r.x.size());
     for (int k = 0; k < 100; ++k) record_step(s, at(), r);
     snapshot(s, r);
   }
@@ -226,7 +230,7 @@ Recorded replay(Scene& s, const Recorded& ref, bool paced) {
 // force error at the end of every hold (quasi-static) and over the whole trajectory (includes
 // the full model's viscous and inertial force, which the quasi-static multi-rate model does not
 // render), surface displacement error at the end of every hold, step times of both.
-void multirate_error(const std::string& dir, int only) {
+void multirate_error(const std::string& dir, int only, bool trace) {
   std::printf(
       "\nD_multirate vs D_corot (full co-rotational, dynamic) on the same device trajectory, "
       "press on ovary_left\n");
@@ -244,6 +248,7 @@ void multirate_error(const std::string& dir, int only) {
     const Case& c = cases[ci];
     Scene co = make_scene(prototypes::load_prototype(dir + "D_corot.json"));
     const Recorded a = corot_press(co, "ovary_left", c.target, c.slide);
+    const double s_dt = co.dt();
     for (bool det : {false, true}) {
       SceneConfig mc = prototypes::load_prototype(dir + "D_multirate.json");
       mc.fem.multirate_deterministic = det;
@@ -272,8 +277,29 @@ void multirate_error(const std::string& dir, int only) {
       std::printf(
           "%-22s %-13s %7zu %6ld %9.3f %9.3f %9.3f %9.4f %9.3f %10.0f %10.0f %10.1f %10.1f\n",
           c.name.c_str(), det ? "deterministic" : "real time", a.x.size(), relin, f_hold,
-          100 * hold_err, 100 * disp_err, max_df, 100 * max_df / peak, pct(a.us, 0.5),
-          pct(a.us, 0.99), pct(b.us, 0.5), pct(b.us, 0.99));
+          100 * hold_err, 100 * disp_err, max_df, 100 * max_df / peak, summarize_times(a.us).median,
+          summarize_times(a.us).p99, summarize_times(b.us).median, summarize_times(b.us).p99);
+      if (trace && a.slide_begin >= 0) {
+        // Force along the slide (and 100 steps on): both models, every 20 steps and at the
+        // largest difference.
+        std::printf("    %6s %9s %9s %9s %9s\n", "step", "slide_mm", "F_corot", "F_mr", "dF_N");
+        size_t worst = 0;
+        for (size_t k = 0; k < a.force.size(); ++k)
+          if ((b.force[k] - a.force[k]).norm() > (b.force[worst] - a.force[worst]).norm())
+            worst = k;
+        for (int k = a.slide_begin - 20; k < a.slide_end + 100 && k < static_cast<int>(a.x.size());
+             ++k)
+          if ((k - a.slide_begin) % 20 == 0 || k == static_cast<int>(worst))
+            std::printf("    %6d %9.3f %9.4f %9.4f %9.4f%s\n", k,
+                        1e3 * 0.02 * s_dt *
+                            std::clamp(k - a.slide_begin + 1, 0, a.slide_end - a.slide_begin),
+                        a.force[k].norm(), b.force[k].norm(), (b.force[k] - a.force[k]).norm(),
+                        k == static_cast<int>(worst) ? "  <- largest" : "");
+        if (worst < static_cast<size_t>(a.slide_begin) - 20 ||
+            worst >= static_cast<size_t>(a.slide_end + 100))
+          std::printf("    largest difference at step %zu (outside the slide): %.4f vs %.4f N\n",
+                      worst, a.force[worst].norm(), b.force[worst].norm());
+      }
       std::fflush(stdout);
     }
   }
@@ -295,7 +321,9 @@ int main(int argc, char** argv) {
     int only = -1;  // --case K: only the K-th press (0..3)
     for (int i = 1; i + 1 < argc; ++i)
       if (std::string(argv[i]) == "--case") only = std::stoi(argv[i + 1]);
-    multirate_error(prototypes_dir(argc, argv), only);
+    bool trace = false;  // --trace: the force of both models along the slide
+    for (int i = 1; i < argc; ++i) trace |= std::string(argv[i]) == "--trace";
+    multirate_error(prototypes_dir(argc, argv), only, trace);
     return 0;
   }
   if (scene_only) {

@@ -90,7 +90,9 @@ struct FemModel::Impl {
   // corotational_multirate (declared after sys: it refers to it): the linearisations, the
   // force of the last step (N, along contact_normal), time since the last update (s).
   std::unique_ptr<CorotMultirate> mr;
-  std::vector<PatchTap> mr_taps;
+  PatchPads mr_pads;                       // this step's pads (moving nodes)
+  std::vector<double> mr_blend;            // their blend weights
+  std::vector<const PadColumns*> mr_cols;  // their columns about the current linearisation
   double mr_force = 0, since_update = 0;
 
   // linear / condensed: factorises A = (1 + h alpha) M + (h beta + h^2) K_c for step size h.
@@ -129,9 +131,10 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   // lumped masses and factorisation are restored, the assembly and its checks (which the stored
   // model passed) are skipped; system() then holds X0, T, material and m_lumped only.
   StoredLinearFem stored;
-  m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass &&
-             !opt_.precomputed.empty() &&
-             load_linear_fem(opt_.precomputed, m.inputs, 3 * n, stored, m.lin);
+  m.loaded = opt_.formulation == FemFormulation::linear && opt_.lumped_mass && opt_.precomputed &&
+             !opt_.precomputed->empty() &&
+             load_linear_fem(*opt_.precomputed, m.inputs, 3 * n, stored, m.lin);
+  opt_.precomputed = nullptr;  // the caller's: not kept
   if (m.loaded) {
     m.sys.X0 = mesh.V;
     m.sys.T = mesh.T;
@@ -158,7 +161,7 @@ FemModel::FemModel(const mesh::TetMesh& mesh, const TetMaterials& materials,
   const auto t0 = Clock::now();
   if (opt_.formulation == FemFormulation::linear && m.loaded) {
     m.act = std::move(stored.act);
-    m.K_c = std::move(stored.K_c);
+    m.K_c.swap(stored.K_c);  // Eigen 3.4's sparse move-assignment copies
   } else if (opt_.formulation == FemFormulation::linear) {
     StaticSolver check;  // fails early (with a clear message) on a free-floating body
     static_precompute(m.sys.K, m.fixed_dof, check);
@@ -244,6 +247,10 @@ long FemModel::relinearisations() const {
   return impl_->mr ? impl_->mr->relinearisations() : 0;
 }
 
+long FemModel::pad_solves() const {
+  return impl_->mr ? impl_->mr->pad_solves() : 0;
+}
+
 bool FemModel::solves_node(int v) const {
   return v >= 0 && 3 * v < static_cast<long>(impl_->local.size()) && impl_->local[3 * v] >= 0;
 }
@@ -254,6 +261,7 @@ void FemModel::reset() {
   impl_->v.setZero();
   impl_->positions_valid = false;
   if (impl_->mr) {
+    impl_->mr_cols.clear();  // pointers into the linearisation replaced below
     impl_->mr->relinearise_now(impl_->u, f_ext, {});
     impl_->mr_force = 0;
     impl_->since_update = 0;
@@ -268,8 +276,11 @@ Eigen::Vector3d FemModel::node_position(int v) const {
     const CorotLinearisation& L = m.mr->current();
     Eigen::Vector3d p =
         m.sys.X0.row(v).transpose() + L.u.segment<3>(3 * v) + L.delta0.segment<3>(3 * v);
-    if (m.mr_force > 0 && !L.patch.empty() && L.patch == m.mr_taps)
-      p -= m.mr_force * (L.Y.middleRows<3>(3 * v) * contact_normal);
+    if (m.mr_force > 0)
+      for (size_t b = 0; b < m.mr_cols.size(); ++b)
+        if (m.mr_cols[b])
+          p -= (m.mr_force * m.mr_blend[b]) *
+               (m.mr_cols[b]->Y.middleRows<3>(3 * v) * contact_normal);
     return p;
   }
   return m.sys.X0.row(v).transpose() + m.u.segment<3>(3 * v);
@@ -337,24 +348,55 @@ const mesh::Positions& FemModel::positions() {
 void FemModel::step_multirate(double h) {
   Impl& m = *impl_;
   CorotMultirate& mr = *m.mr;
-  m.mr_taps.clear();
+  m.mr_cols.clear();
+  size_t np = 0;  // pads of this step
+  const auto add_pad = [&](double blend) -> std::vector<PatchTap>& {
+    if (m.mr_pads.size() <= np) m.mr_pads.emplace_back();
+    m.mr_blend.resize(np + 1);
+    m.mr_blend[np] = blend;
+    m.mr_pads[np].clear();
+    return m.mr_pads[np++];
+  };
   double f = 0;
   if (contact_node >= 0 && contact_k > 0) {
-    const bool single = contact_nodes.empty();
-    const size_t np = single ? 1 : contact_nodes.size();
-    for (size_t k = 0; k < np; ++k) {
-      const int i = single ? contact_node : contact_nodes[k];
-      if (!fixed_node_[i]) m.mr_taps.push_back({3 * i, single ? 1.0 : contact_weights[k]});
+    // The pads' moving nodes (a pinned node takes its share into the support).
+    if (!contact_pads.empty()) {
+      for (const ContactPad& P : contact_pads) {
+        if (!(P.blend > 0)) continue;
+        if (P.weights.size() != P.nodes.size())
+          throw std::logic_error("FemModel: one weight per contact pad node");
+        std::vector<PatchTap>& taps = add_pad(P.blend);
+        for (size_t k = 0; k < P.nodes.size(); ++k)
+          if (!fixed_node_[P.nodes[k]]) taps.push_back({3 * P.nodes[k], P.weights[k]});
+      }
+    } else {
+      std::vector<PatchTap>& taps = add_pad(1.0);
+      const bool single = contact_nodes.empty();
+      for (size_t k = 0; k < (single ? 1 : contact_nodes.size()); ++k) {
+        const int i = single ? contact_node : contact_nodes[k];
+        if (!fixed_node_[i]) taps.push_back({3 * i, single ? 1.0 : contact_weights[k]});
+      }
     }
+  }
+  m.mr_pads.resize(np);
+  m.mr_blend.resize(np);
+  if (np) {
     const CorotLinearisation& L = mr.current();
     // The penetration of the unloaded Newton prediction, then the spring in series with the
-    // patch's compliance about the linearisation (fem_multirate.hpp).
+    // patch's compliance about the linearisation (fem_multirate.hpp), blended from its pads':
+    // c = n^T (sum_ab b_a b_b G_a^T Y_b) n.
     const double d0 = patch_gap(L.u, &L.delta0);
     if (d0 > 0) {
-      const double c = m.mr_taps.empty()
-                           ? 0.0
-                           : contact_normal.dot(mr.patch_compliance(m.mr_taps) * contact_normal);
-      f = contact_k * d0 / (1 + contact_k * c);
+      mr.pad_columns(m.mr_pads, m.mr_cols);
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      for (size_t a = 0; a < np; ++a)
+        for (size_t b = 0; b < np; ++b) {
+          if (!m.mr_cols[b]) continue;
+          const auto& Y = m.mr_cols[b]->Y;
+          const double ab = m.mr_blend[a] * m.mr_blend[b];
+          for (const PatchTap& t : m.mr_pads[a]) C += (ab * t.w) * Y.middleRows<3>(t.dof);
+        }
+      f = contact_k * d0 / (1 + contact_k * contact_normal.dot(C * contact_normal));
     }
   }
   m.mr_force = f;
@@ -362,14 +404,28 @@ void FemModel::step_multirate(double h) {
   m.since_update += h;
   if (m.since_update >= opt_.update_interval * (1 - 1e-9)) {
     // Graphics rate: the deformation moves to the predicted equilibrium under f, and the model
-    // re-linearises about it.
+    // re-linearises about it (solving the columns of this step's pads).
     m.since_update = 0;
     const CorotLinearisation& L = mr.current();
     m.u = L.u + L.delta0;
-    if (f > 0 && !m.mr_taps.empty()) m.u -= f * (mr.compliance_columns(m.mr_taps) * contact_normal);
-    mr.update(m.u, f_ext, m.mr_taps);
+    if (f > 0)
+      for (size_t b = 0; b < np; ++b)
+        if (m.mr_cols[b]) m.u -= (f * m.mr_blend[b]) * (m.mr_cols[b]->Y * contact_normal);
+    mr.update(m.u, f_ext, m.mr_pads);
     factor_ms_ = mr.current().factor_ms;
     m.positions_valid = false;
+    // The columns of the (possibly new) current linearisation, where it has them, for
+    // node_position() until the next step; none if any pad is missing.
+    const CorotLinearisation& N = mr.current();
+    m.mr_cols.clear();
+    if (f > 0) {
+      bool all = true;
+      for (size_t q = 0; q < np; ++q) {
+        m.mr_cols.push_back(m.mr_pads[q].empty() ? nullptr : N.find(m.mr_pads[q]));
+        all = all && (m.mr_pads[q].empty() || m.mr_cols.back());
+      }
+      if (!all) m.mr_cols.clear();
+    }
   }
 }
 

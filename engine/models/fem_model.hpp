@@ -72,8 +72,9 @@ struct FemModelOptions {
   bool multirate_deterministic = false;
   // A .psim file's stored precomputation (save_precomputation; engine/haptics/scene_file.hpp):
   // used when it was made from the same inputs (mesh, materials, fixed nodes, options, step),
-  // otherwise ignored and everything is computed. Linear formulation only.
-  std::string precomputed;
+  // otherwise ignored and everything is computed. Linear formulation only. Not owned (the
+  // blob is megabytes: no copy); read in the constructor only, so it must outlive that.
+  const std::string* precomputed = nullptr;
 };
 
 class FemModel {
@@ -104,6 +105,17 @@ class FemModel {
   int contact_node = -1;
   std::vector<int> contact_nodes;       // the patch (contact_node among them); empty = the node
   std::vector<double> contact_weights;  // one per patch node, summing to 1
+  // Optional structure of the patch, used by corotational_multirate (the other formulations
+  // read contact_nodes/contact_weights only): the patch is the blend sum_a blend_a x pad a (each
+  // pad's weights summing to 1; contact_nodes/contact_weights must equal that blend). The
+  // multi-rate model then caches compliance columns per pad, not per blend, so a slide (whose
+  // blend changes every step) solves only when a new pad appears (fem_multirate.hpp).
+  struct ContactPad {
+    std::vector<int> nodes;
+    std::vector<double> weights;
+    double blend = 0;
+  };
+  std::vector<ContactPad> contact_pads;  // empty = the patch is one pad
   Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
   double contact_k = 0.0;                // N/m
@@ -118,7 +130,8 @@ class FemModel {
   std::string solver() const;                      // the linear solver used per step
   double factor_ms() const { return factor_ms_; }  // last factorisation (ms)
   long relinearisations() const;                   // corotational_multirate: adopted so far
-  bool solves_node(int v) const;                   // node v moves in the per-step solve
+  long pad_solves() const;        // corotational_multirate: pads solved in the haptic step
+  bool solves_node(int v) const;  // node v moves in the per-step solve
   const FemSystem& system() const;
   const std::vector<std::uint8_t>& fixed_nodes() const { return fixed_node_; }
   // For a .psim file: the linear model's factorisation for step size h (factorised now if

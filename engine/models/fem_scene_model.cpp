@@ -12,10 +12,12 @@
 // Condensed formulation: the solved (operational) tets are those whose centroid lies within
 // fem.operational_radius of a surface node of fem.operational_region; patch nodes outside the
 // operational tets are dropped from the patch. A touch whose centre node lies outside them is
-// rendered by inverse-stiffness contact with the full linear model (SPEC §4): the patch (all
-// its surface nodes) has the 3x3 compliance C = G^T K^-1 G (G = sum_i w_i E_i, K the full
-// stiffness with foundation and constraints, factorised once at construction; the three
-// columns K^-1 G are solved at the first touch of each centre node and cached), and the force
+// rendered by inverse-stiffness contact with the full linear model (SPEC §4): the probe face
+// (the contact face's vertex pads with all their surface nodes, blended by the barycentric
+// weights as in the main path, so the force is continuous across node changes) has the 3x3
+// compliance C = G^T K^-1 G (G = sum_v w_v G_v, G_v = sum_i s_vi E_i, K the full stiffness with
+// foundation and constraints, factorised once at construction; the columns K^-1 G_v are solved
+// at the first touch of each vertex and cached, C is blended from their 3x3 blocks), and the force
 // is the quasi-static equilibrium of the penalty spring in series with the tissue,
 // F = k d / (1 + k n^T C n) n — the force the full model settles on. No dynamics there and the
 // rendered surface does not deform (the interior of the condensed part is not advanced); such
@@ -26,6 +28,7 @@
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <unordered_map>
 
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
@@ -109,20 +112,32 @@ class FemSceneModel final : public SceneModel {
       o.force = fem_.device_force();
       o.deformation = (fem_.node_position(mnode) - X0_.row(mnode).transpose()).norm();
     } else if (mnode >= 0) {
-      // Outside the operational region of a condensed model: inverse-stiffness contact (top).
-      if (mnode != outside_center_) outside_patch(mnode);
-      const Eigen::Vector3d xp = X0_.row(mnode).transpose();
+      // Outside the operational region of a condensed model: inverse-stiffness contact (top),
+      // on the probe face of the main path (the face's vertex pads blended by the barycentric
+      // weights, every surface node in reach), so the force is continuous across node changes.
+      const int face = c.face >= 0 && c.face < faces_.rows() ? c.face : -1;
+      if ((face >= 0 ? face : -1 - mnode) != outside_key_) outside_face(face, mnode);
       double d = 0;
-      for (size_t q = 0; q < outside_nodes_.size(); ++q) {
-        const Eigen::Vector3d xi = X0_.row(outside_nodes_[q]).transpose();
-        d += outside_w_[q] * ((xi - c.x).dot(c.n) - std::max(0.0, (xi - xp).dot(c.n)));
+      Eigen::Vector3d Yn_node = Eigen::Vector3d::Zero();  // K^-1 G n at the contact node
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();        // G^T K^-1 G of the blend
+      for (int a = 0; a < outside_nv_; ++a) {
+        const double wa = face >= 0 ? c.w[a] : 1.0;
+        const OutsidePad& P = *outside_pad_[a];
+        const Eigen::Vector3d xv = X0_.row(outside_v_[a]).transpose();
+        for (size_t q = 0; q < P.nodes.size(); ++q) {
+          const Eigen::Vector3d xi = X0_.row(P.nodes[q]).transpose();
+          d += wa * P.w[q] * ((xi - c.x).dot(c.n) - std::max(0.0, (xi - xv).dot(c.n)));
+        }
+        for (int b = 0; b < outside_nv_; ++b)
+          C += wa * (face >= 0 ? c.w[b] : 1.0) * outside_B_[a][b];
+        Yn_node += wa * (P.Y.middleRows<3>(3 * mnode) * c.n);
       }
       if (d > 0) {
         ++outside_contacts_;
-        const double compliance = c.n.dot(outside_C_ * c.n);
+        const double compliance = c.n.dot(0.5 * (C + C.transpose()) * c.n);
         const double f = contact_k_ * d / (1 + contact_k_ * compliance);
         o.force = f * c.n;
-        o.deformation = (outside_Y_.middleRows<3>(3 * mnode) * (-f * c.n)).norm();
+        o.deformation = f * Yn_node.norm();
       }
     }
     return o;
@@ -132,7 +147,7 @@ class FemSceneModel final : public SceneModel {
     fem_.reset();
     fem_.contact_node = -1;
     pad_key_ = kNoPad;
-    outside_contacts_ = 0;
+    outside_contacts_ = 0;  // (the outside compliance columns stay valid: K is constant)
   }
 
   void stats(SceneStats& st) const override {
@@ -156,6 +171,7 @@ class FemSceneModel final : public SceneModel {
     if (f.formulation() == FemFormulation::corotational_multirate) {
       info["fem"]["update_rate_hz"] = update_rate_hz_;  // deformation updates per second
       info["fem"]["relinearisations"] = f.relinearisations();
+      info["fem"]["pad_solves"] = f.pad_solves();  // pads solved in the haptic step
     }
     st.model_info = info.dump();
   }
@@ -191,6 +207,13 @@ class FemSceneModel final : public SceneModel {
       patch_nodes(face >= 0 ? faces_(face, k) : node, false, tmp_nodes_, tmp_w_);
       for (size_t q = 0; q < tmp_nodes_.size(); ++q) pad_.push_back({tmp_nodes_[q], k, tmp_w_[q]});
     }
+    // The same pads for the multi-rate model's per-pad compliance cache (fem_model.hpp).
+    std::vector<FemModel::ContactPad>& pads = fem_.contact_pads;
+    pads.assign(face >= 0 ? 3 : 1, {});
+    for (const PadEntry& e : pad_) {
+      pads[e.slot].nodes.push_back(e.node);
+      pads[e.slot].weights.push_back(e.w);
+    }
   }
   // This step's patch on the FemModel: the vertex pads weighted by the barycentric weights w
   // (each node once), so the patch moves continuously with the contact point. Each vertex pad
@@ -206,6 +229,8 @@ class FemSceneModel final : public SceneModel {
     const auto offset = [&](int i, int v) {
       return std::max(0.0, (X0_.row(i) - X0_.row(v)).dot(n.transpose()));
     };
+    for (size_t a = 0; a < fem_.contact_pads.size(); ++a)
+      fem_.contact_pads[a].blend = face >= 0 ? w[static_cast<long>(a)] : 1.0;
     double own = 0.0;
     for (const PadEntry& e : pad_) {
       const double we = (face >= 0 ? w[e.slot] : 1.0) * e.w;
@@ -225,18 +250,41 @@ class FemSceneModel final : public SceneModel {
     }
     return own - fem;
   }
-  // The patch of an outside touch (every surface node in reach) and its compliance columns.
-  void outside_patch(int center) {
-    outside_center_ = center;
-    patch_nodes(center, true, outside_nodes_, outside_w_);
-    const long n3 = 3 * X0_.rows();
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n3, 3);
-    for (size_t q = 0; q < outside_nodes_.size(); ++q)
-      G.middleRows<3>(3 * outside_nodes_[q]) += outside_w_[q] * Eigen::Matrix3d::Identity();
-    outside_Y_.resize(n3, 3);
-    for (int k = 0; k < 3; ++k) outside_Y_.col(k) = static_solve(*full_, G.col(k));
-    outside_C_ = G.transpose() * outside_Y_;
-    outside_C_ = 0.5 * (outside_C_ + outside_C_.transpose()).eval();
+  // The vertex pads of an outside touch's face (or of `node` alone when face < 0): each pad
+  // (every surface node in reach of its vertex) with its compliance columns K^-1 G_v (3
+  // back-substitutions, cached per vertex: a slide onto a neighbouring face solves only its new
+  // vertex), and the 3x3 blocks G_a^T K^-1 G_b of every pair, so that a step blends them by the
+  // barycentric weights: G = sum_a w_a G_a is linear in the weights, C = sum_ab w_a w_b B_ab.
+  void outside_face(int face, int node) {
+    outside_key_ = face >= 0 ? face : -1 - node;
+    outside_nv_ = face >= 0 ? 3 : 1;
+    if (outside_pads_.size() > 64) outside_pads_.clear();  // bounded memory (3#V x 3 each)
+    for (int a = 0; a < outside_nv_; ++a) {
+      const int v = face >= 0 ? faces_(face, a) : node;
+      outside_v_[a] = v;
+      auto [it, fresh] = outside_pads_.try_emplace(v);
+      OutsidePad& P = it->second;
+      if (fresh) {
+        patch_nodes(v, true, P.nodes, P.w);
+        const long n3 = 3 * X0_.rows();
+        Eigen::VectorXd g = Eigen::VectorXd::Zero(n3);
+        P.Y.resize(n3, 3);
+        for (int k = 0; k < 3; ++k) {
+          g.setZero();
+          for (size_t q = 0; q < P.nodes.size(); ++q) g[3 * P.nodes[q] + k] += P.w[q];
+          P.Y.col(k) = static_solve(*full_, g);
+        }
+      }
+      outside_pad_[a] = &P;
+    }
+    for (int a = 0; a < outside_nv_; ++a)
+      for (int b = 0; b < outside_nv_; ++b) {
+        Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+        const OutsidePad& Pa = *outside_pad_[a];
+        for (size_t q = 0; q < Pa.nodes.size(); ++q)
+          B += Pa.w[q] * outside_pad_[b]->Y.middleRows<3>(3 * Pa.nodes[q]);
+        outside_B_[a][b] = B;
+      }
   }
   // Surface nodes within patch_radius of the centre; all = false keeps only the nodes the
   // per-step solve moves (or fixed ones).
@@ -285,11 +333,16 @@ class FemSceneModel final : public SceneModel {
   long outside_contacts_ = 0;
   // Outside touches of a condensed model (inverse-stiffness contact, see top).
   std::unique_ptr<StaticSolver> full_;  // the full linear K, factorised
-  int outside_center_ = -1;
-  std::vector<int> outside_nodes_;
-  std::vector<double> outside_w_;
-  Eigen::MatrixXd outside_Y_;                            // 3#V by 3: K^-1 G (m/N)
-  Eigen::Matrix3d outside_C_ = Eigen::Matrix3d::Zero();  // G^T K^-1 G (m/N)
+  struct OutsidePad {
+    std::vector<int> nodes;                      // surface nodes within patch_radius of the vertex
+    std::vector<double> w;                       // their area weights (sum 1)
+    Eigen::Matrix<double, Eigen::Dynamic, 3> Y;  // 3#V by 3: K^-1 G_v (m/N)
+  };
+  std::unordered_map<int, OutsidePad> outside_pads_;  // per vertex
+  int outside_key_ = kNoPad;                          // face, or -1 - node, of the blocks
+  int outside_nv_ = 0, outside_v_[3] = {-1, -1, -1};
+  const OutsidePad* outside_pad_[3] = {nullptr, nullptr, nullptr};
+  Eigen::Matrix3d outside_B_[3][3];  // G_a^T K^-1 G_b (m/N)
 };
 
 // The "model" object of a FEM prototype (docs/FORMATS.md). Defaults are the config's.
@@ -424,7 +477,7 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
   opt.jacobian = fc.exact_jacobian ? CorotJacobian::exact : CorotJacobian::warped;
   opt.update_interval = 1.0 / fc.update_rate_hz;
   opt.multirate_deterministic = fc.multirate_deterministic;
-  if (cm.model_blob_kind == "fem") opt.precomputed = cm.model_blob;  // a .psim file's
+  if (cm.model_blob_kind == "fem") opt.precomputed = &cm.model_blob;  // a .psim file's (no copy)
   if (cfg.support.modulus > 0) {  // per unit area of the surface it holds, as for C
     opt.support_stiffness.setZero(3 * nm);
     for (size_t i = 0; i < cm.surface_to_model.size(); ++i)

@@ -40,9 +40,21 @@ void CorotMultirate::wait() {
   if (job_.valid()) job_.get();  // rethrows a failed factorisation
 }
 
+const PadColumns* CorotLinearisation::find(const std::vector<PatchTap>& pad) const {
+  for (const PadColumns& c : pads)
+    if (c.pad == pad) return &c;
+  return nullptr;
+}
+
+void CorotMultirate::solve_pad(CorotLinearisation& L, const std::vector<PatchTap>& pad) {
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(L.u.size(), 3);
+  for (const auto& t : pad)
+    for (int c = 0; c < 3; ++c) G(t.dof + c, c) += t.w;
+  L.pads.push_back({pad, L.ldlt.solve(G)});
+}
+
 void CorotMultirate::linearise(CorotLinearisation& L, const Eigen::VectorXd& u,
-                               const Eigen::VectorXd& f_ext,
-                               const std::vector<PatchTap>& patch) const {
+                               const Eigen::VectorXd& f_ext, const PatchPads& pads) const {
   const auto t0 = std::chrono::steady_clock::now();
   const Eigen::VectorXd x = flatten(sys_.X0) + u;
   corotational_stiffness(sys_, x, jac_, L.Ke_t, L.K, &L.f_int);
@@ -67,28 +79,23 @@ void CorotMultirate::linearise(CorotLinearisation& L, const Eigen::VectorXd& u,
     if (fixed_dof_[i]) r[i] = 0.0;
   L.u = u;
   L.delta0 = L.ldlt.solve(r);
-  L.patch.clear();
-  if (!patch.empty()) {
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(u.size(), 3);
-    for (const auto& t : patch)
-      for (int c = 0; c < 3; ++c) G(t.dof + c, c) += t.w;
-    L.Y = L.ldlt.solve(G);
-    L.patch = patch;
-  }
+  L.pads.clear();
+  for (const auto& pad : pads)
+    if (!pad.empty() && !L.find(pad)) solve_pad(L, pad);
 }
 
 void CorotMultirate::relinearise_now(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
-                                     const std::vector<PatchTap>& patch) {
+                                     const PatchPads& pads) {
   wait();
   pending_ = false;
-  linearise(*cur_, u, f_ext, patch);
+  linearise(*cur_, u, f_ext, pads);
   ++count_;
 }
 
 void CorotMultirate::update(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
-                            const std::vector<PatchTap>& patch) {
+                            const PatchPads& pads) {
   if (!background_) {
-    linearise(*cur_, u, f_ext, patch);
+    linearise(*cur_, u, f_ext, pads);
     ++count_;
     return;
   }
@@ -103,30 +110,24 @@ void CorotMultirate::update(const Eigen::VectorXd& u, const Eigen::VectorXd& f_e
   job_u_ = u;
   job_f_ = f_ext;
   CorotLinearisation* L = next_.get();
-  std::vector<PatchTap> p = patch;
+  PatchPads p = pads;
   job_ = std::async(std::launch::async,
                     [this, L, p = std::move(p)] { linearise(*L, job_u_, job_f_, p); });
   pending_ = true;
 }
 
-const Eigen::Matrix<double, Eigen::Dynamic, 3>& CorotMultirate::compliance_columns(
-    const std::vector<PatchTap>& patch) {
+void CorotMultirate::pad_columns(const PatchPads& pads, std::vector<const PadColumns*>& out) {
   CorotLinearisation& L = *cur_;
-  if (L.patch != patch) {
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(L.u.size(), 3);
-    for (const auto& t : patch)
-      for (int c = 0; c < 3; ++c) G(t.dof + c, c) += t.w;
-    L.Y = L.ldlt.solve(G);
-    L.patch = patch;
-  }
-  return L.Y;
-}
-
-Eigen::Matrix3d CorotMultirate::patch_compliance(const std::vector<PatchTap>& patch) {
-  const auto& Y = compliance_columns(patch);
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (const auto& t : patch) C += t.w * Y.middleRows<3>(t.dof);
-  return C;
+  // Bounded cache: cleared before any pointer of this call is taken (a long slide visits many
+  // vertices; one linearisation lives 1/60 s).
+  if (L.pads.size() > 16) L.pads.clear();
+  for (const auto& pad : pads)
+    if (!pad.empty() && !L.find(pad)) {
+      solve_pad(L, pad);
+      ++pad_solves_;
+    }
+  out.clear();
+  for (const auto& pad : pads) out.push_back(pad.empty() ? nullptr : L.find(pad));
 }
 
 }  // namespace palplab::engine

@@ -11,8 +11,13 @@
 //   u(f) = u_L + delta0 - f Y n,   Y = K_t^-1 G  (3#V by 3: the patch's compliance columns),
 // so the patch's normal gap is linear in f with the compliance c = n^T G^T Y n, and the penalty
 // spring k in series with it renders f = k d0 / (1 + k c), d0 the penetration of u_L + delta0.
-// That is the haptic step: a few patch-node reads and a 3x3 product, no sparse solve (Y is
-// solved once per linearisation and patch: 3 back-substitutions).
+// That is the haptic step: a few patch-node reads and a 3x3 product, no sparse solve. Y is
+// linear in G, and the scene's patch is a blend of pads (the contact face's three vertex pads
+// weighted by the contact point's barycentric weights, G = sum_a b_a G_a): the columns
+// Y_a = K_t^-1 G_a are solved once per linearisation and PAD (3 back-substitutions each, cached;
+// the worker solves those of the pads it was started with) and blended each step,
+// Y = sum_a b_a Y_a, c = n^T (sum_ab b_a b_b G_a^T Y_b) n. A slide then solves only when the
+// contact reaches a new vertex, not at every step (the blend's weights change every step).
 //
 // At graphics rate (every update interval) the deformation is advanced to the predicted
 // equilibrium u(f) under the current force and the model re-linearises about it: assembly of the
@@ -48,12 +53,19 @@ struct PatchTap {
   bool operator==(const PatchTap& o) const { return dof == o.dof && w == o.w; }
 };
 
+// A pad's compliance columns about one linearisation.
+struct PadColumns {
+  std::vector<PatchTap> pad;                   // (dof, weight) of the pad's moving nodes
+  Eigen::Matrix<double, Eigen::Dynamic, 3> Y;  // 3#V by 3, K_t^-1 G_pad (m/N)
+};
+using PatchPads = std::vector<std::vector<PatchTap>>;
+
 struct CorotLinearisation {
-  Eigen::VectorXd u;                           // 3#V, the state it is about (m)
-  Eigen::VectorXd delta0;                      // 3#V (m)
-  std::vector<PatchTap> patch;                 // the patch Y was solved for
-  Eigen::Matrix<double, Eigen::Dynamic, 3> Y;  // 3#V by 3, K_t^-1 G (m/N)
-  double factor_ms = 0;                        // assembly + factorisation (ms)
+  Eigen::VectorXd u;             // 3#V, the state it is about (m)
+  Eigen::VectorXd delta0;        // 3#V (m)
+  std::vector<PadColumns> pads;  // cached columns of the pads solved about it
+  double factor_ms = 0;          // assembly + factorisation (ms)
+  const PadColumns* find(const std::vector<PatchTap>& pad) const;
   // Workspace.
   SparseMatrixd K;
   SparseLdlt ldlt;
@@ -72,30 +84,30 @@ class CorotMultirate {
   CorotMultirate& operator=(const CorotMultirate&) = delete;
 
   // Re-linearises about u now (construction, reset); drops a pending background job.
+  // `pads`: the pads whose columns the linearisation solves (those of the current contact).
   void relinearise_now(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
-                       const std::vector<PatchTap>& patch);
+                       const PatchPads& pads);
   // The graphics-rate update: a finished (deterministic: the) pending linearisation becomes
   // current, then one about u is started (background; unless one is still running) or made now.
-  void update(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
-              const std::vector<PatchTap>& patch);
+  void update(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext, const PatchPads& pads);
   const CorotLinearisation& current() const { return *cur_; }
-  // Y of the current linearisation for `patch` (3 back-substitutions unless cached).
-  const Eigen::Matrix<double, Eigen::Dynamic, 3>& compliance_columns(
-      const std::vector<PatchTap>& patch);
-  // The patch's 3x3 compliance G^T Y (m/N).
-  Eigen::Matrix3d patch_compliance(const std::vector<PatchTap>& patch);
+  // The columns Y_a of the current linearisation for every pad (3 back-substitutions for each
+  // pad not cached); out[a] stays valid until the next call or update.
+  void pad_columns(const PatchPads& pads, std::vector<const PadColumns*>& out);
   long relinearisations() const { return count_; }  // adopted since construction
+  long pad_solves() const { return pad_solves_; }   // pads solved in the haptic thread
 
  private:
   void linearise(CorotLinearisation& L, const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
-                 const std::vector<PatchTap>& patch) const;
+                 const PatchPads& pads) const;
+  static void solve_pad(CorotLinearisation& L, const std::vector<PatchTap>& pad);
   void wait();
   const FemSystem& sys_;
   std::vector<std::uint8_t> fixed_dof_;
   Eigen::VectorXd support_;
   CorotJacobian jac_;
   bool background_, deterministic_;
-  long count_ = 0;
+  long count_ = 0, pad_solves_ = 0;
   std::vector<int> diag_slot_, zero_slot_, fixed_diag_slot_;
   std::unique_ptr<CorotLinearisation> cur_, next_;
   std::future<void> job_;

@@ -370,7 +370,7 @@ TEST(SceneFileFem, StoredLinearPrecomputationRestoresExactlyAndOnlyForTheSameInp
   EXPECT_FALSE(built.precomputation_loaded());
 
   FemModelOptions with = opt;
-  with.precomputed = blob;
+  with.precomputed = &blob;
   FemModel loaded(tm, mat, fixed, with);
   EXPECT_TRUE(loaded.precomputation_loaded());
   FemModel fresh(tm, mat, fixed, opt);
@@ -400,7 +400,8 @@ TEST(SceneFileFem, StoredLinearPrecomputationRestoresExactlyAndOnlyForTheSameInp
   EXPECT_FALSE(FemModel(tm, mat, fixed, damped).precomputation_loaded());
   // A damaged blob is ignored, never trusted.
   FemModelOptions bad = opt;
-  bad.precomputed = blob.substr(0, blob.size() - 3);
+  const std::string damaged = blob.substr(0, blob.size() - 3);
+  bad.precomputed = &damaged;
   EXPECT_FALSE(FemModel(tm, mat, fixed, bad).precomputation_loaded());
   // A different step size refactorises on the first step (correct, just not from the file).
   FemModel loaded2(tm, mat, fixed, with);
