@@ -79,6 +79,7 @@ struct ReferenceArgs {
   std::string refinement = "nested";
   std::string solver = "auto";
   std::string grade = "auto";
+  double volume_scale = 1;  // level-0 max tet volume / the prototype's mean tet volume
   double force = 0;
   int levels = 3;
   int steps = 5;
@@ -145,9 +146,12 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
   o.refinement =
       a.refinement == "nested" ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
   o.curve_steps = a.steps;
+  if (!(a.volume_scale > 0) || a.volume_scale > 1e3)
+    throw InputError("--volume-scale: expected a factor in (0, 1000]");
+  o.max_volume *= a.volume_scale;
   if (a.refinement == "nested") {
     // Grading of level 0 around the press (fem_reference.hpp): auto = until the loaded edges
-    // are at most half the pad radius; 0 = the prototype's own mesh as level 0.
+    // are at most the pad radius; 0 = the prototype's own mesh as level 0.
     if (a.grade == "auto") {
       o.grade_rounds = engine::auto_grade_rounds(o);
     } else {
@@ -328,6 +332,7 @@ struct SolverRun {
   double factor_ms = 0, solve_ms = 0, factor_mb = 0, compliance = 0;
   long iterations = 0;
   double peak_rss_mb = 0, rel_diff = 0;
+  double cpu_s = 0;  // the child's user + system CPU time (the machine may be loaded: wall > CPU)
 };
 
 double rss_mb_now() {
@@ -446,7 +451,9 @@ int run_solvers(const SolverArgs& a) {
     const engine::ReferenceLevelSystem& ls = builder.next();
     if (l == a.level - 1) {
       engine::StaticSolver ss;
-      engine::static_precompute(ls.K, ls.fixed_dof, ss, engine::SparseSolverKind::automatic);
+      // LDL^T, not CHOLMOD: CHOLMOD starts an OpenMP thread pool, and a forked child that
+      // uses OpenMP again after that deadlocks (libgomp is not fork-safe).
+      engine::static_precompute(ls.K, ls.fixed_dof, ss, engine::SparseSolverKind::ldlt);
       u_coarse = engine::static_solve(ss, ls.load.f);
     }
   }
@@ -507,6 +514,8 @@ int run_solvers(const SolverArgs& a) {
     rusage ru{};
     ::wait4(pid, &status, 0, &ru);
     run.peak_rss_mb = static_cast<double>(ru.ru_maxrss) / 1024;
+    run.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+                1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
     if (WIFSIGNALED(status))
       run.status = WTERMSIG(status) == SIGXCPU
                        ? "cpu limit"
@@ -542,6 +551,7 @@ int run_solvers(const SolverArgs& a) {
                     {"iterations", r.iterations},
                     {"factor_mb", r.factor_mb},
                     {"peak_rss_mb", r.peak_rss_mb},
+                    {"cpu_s", r.cpu_s},
                     {"compliance", num(r.compliance)},
                     {"rel_diff", num(r.rel_diff)}});
     json out = {{"format", "palplab-fem-solvers/1"},
@@ -600,8 +610,12 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--grade", ra->grade,
                       "Nested levels: rounds of surface refinement around the press before "
-                      "level 0 is meshed (auto: loaded edges <= half the pad radius; 0: the "
+                      "level 0 is meshed (auto: loaded edges <= the pad radius; 0: the "
                       "prototype's mesh is level 0)")
+          ->capture_default_str();
+      ref->add_option("--volume-scale", ra->volume_scale,
+                      "Max tet volume of TetGen levels (tetgen; graded level 0) as a multiple of "
+                      "the prototype's mean tet volume")
           ->capture_default_str();
       ref->add_option("--solver", ra->solver,
                       "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
@@ -619,6 +633,8 @@ palplab::app::CommandRegistration reg{
       sol->add_option("--press", sa->ref.press, "Region name or surface node index to press")
           ->required();
       sol->add_option("--grade", sa->ref.grade, "As for fem reference")->capture_default_str();
+      sol->add_option("--volume-scale", sa->ref.volume_scale, "As for fem reference")
+          ->capture_default_str();
       sol->add_option("--level", sa->level, "Nested level to solve (1-3)")->capture_default_str();
       sol->add_option("--solvers", sa->solvers,
                       "Comma-separated: ldlt, cholmod, pcg-jacobi (from the prolongated coarse "

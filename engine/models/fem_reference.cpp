@@ -45,7 +45,7 @@ int auto_grade_rounds(const FemReferenceOptions& opt) {
   const double h = press_edge(opt.surface.V, opt.surface.F, opt.press_point, opt.press_direction,
                               opt.press_radius);
   int k = 0;
-  while (k < 6 && h / std::pow(2.0, k) > 0.5 * opt.press_radius) ++k;
+  while (k < 6 && h / std::pow(2.0, k) > opt.press_radius) ++k;
   return k;
 }
 

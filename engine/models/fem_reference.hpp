@@ -186,8 +186,8 @@ PressLoad smooth_press_load(const mesh::Positions& V, const mesh::Faces& F,
 // smooth_press_load): the mesh size under the pad (m).
 double press_edge(const mesh::Positions& V, const mesh::Faces& F, const Eigen::Vector3d& point,
                   const Eigen::Vector3d& direction, double radius);
-// The grading rounds that bring the loaded edges of opt.surface to at most half the press
-// radius (at least 4 edges across the pad's diameter): ceil(log2(press_edge / (radius / 2))),
+// The grading rounds that bring the loaded edges of opt.surface to at most the press radius
+// (the resolution reference_untrusted_reason asks of level 0): ceil(log2(press_edge / radius)),
 // >= 0.
 int auto_grade_rounds(const FemReferenceOptions& opt);
 
