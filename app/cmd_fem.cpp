@@ -534,10 +534,10 @@ int run_solvers(const SolverArgs& a) {
       run.rel_diff = (u - u_first).cwiseAbs().maxCoeff() / u_first.cwiseAbs().maxCoeff();
     }
     std::printf(
-        "  %-12s %-22s factor/setup %9.0f ms  solve %9.0f ms  iters %6ld  factor %8.0f MB"
-        "  peak RSS %7.0f MB  f.u %.10g  max|du|/max|u| %.2e\n",
-        n.c_str(), run.status.c_str(), run.factor_ms, run.solve_ms, run.iterations, run.factor_mb,
-        run.peak_rss_mb, run.compliance, run.rel_diff);
+        "  %-12s %-22s factor/setup %9.0f ms  solve %9.0f ms (wall)  CPU %7.1f s  iters %6ld"
+        "  factor %8.0f MB  peak RSS %7.0f MB  f.u %.10g  max|du|/max|u| %.2e\n",
+        n.c_str(), run.status.c_str(), run.factor_ms, run.solve_ms, run.cpu_s, run.iterations,
+        run.factor_mb, run.peak_rss_mb, run.compliance, run.rel_diff);
     std::fflush(stdout);
     runs.push_back(run);
   }
