@@ -539,6 +539,8 @@ TEST(FemReference, SurfaceGradingIsConformingAndLocal) {
 // 10 mm press): two rounds of grading (auto takes one: 7.1 mm <= 10 mm) make level 0 resolve
 // the pad (3.5 mm edges) and the three nested levels are in the asymptotic range; the same problem
 // without grading (level 0 = TetGen of the plain surface) sees a point load on level 0.
+// 4.9 s in Release (measured this session): the third level has 81k tets, the smallest a graded
+// 3-level run of this press reaches.
 TEST(FemReference, GradedNestedLevelsResolveThePress) {
   const Eigen::Vector3d size(0.04, 0.04, 0.02);
   FemReferenceOptions o;
