@@ -92,6 +92,7 @@ struct Reference {
   double field_scale = 1;
   bool extrapolated = false;
   bool nested = false;
+  int grade_rounds = 0;   // rounds of surface grading around the press before level 0 (0: D's mesh)
   std::string untrusted;  // why the reference is not trusted ("" = trusted)
   double press_h0 = 0;    // m, mesh size under the press on the first extrapolation level
   double press_h_d = 0;   // m, the same on D's own mesh
@@ -195,17 +196,16 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
   engine::FemReferenceOptions o = engine::reference_options_for_prototype(cfg, ref.node, 1.0);
   o.press_direction = ref.dir;
   o.levels = 3;
-  // Full run: nested red refinements of D's own mesh (9264 -> 74k -> 593k tets; measured on
-  // the loaded 2 cores: > 5.9 GB peak and > 9.7 min of CPU per region for the finest level's sparse
-  // LDL^T, docs/PERFORMANCE.md) — the spaces are nested and the extrapolation's ratio is exact
-  // (fem_reference.hpp). --quick: a finest nested level of 593k tets does not fit 3 minutes, so
-  // the quick run keeps three TetGen levels of D's surface (not nested, max volume twice the
-  // prototype's mean, halved per level) and says whether they can be trusted.
-  // The mesh size under the press on D's own mesh (the first nested level): where it exceeds
-  // the pad radius (the body: 12.9 mm edges, one surface vertex within 1 cm) nested levels of D
-  // cannot be trusted whatever they show (reference_untrusted_reason), and the finest one would
-  // cost minutes of CPU and ~5 GB: such a region gets the TetGen levels instead, untrusted with
-  // that reason.
+  // Full run: nested red refinements (the spaces are nested and the extrapolation's ratio is
+  // exact, fem_reference.hpp) of D's own mesh where it resolves the press (9264 -> 74k -> 593k
+  // tets), else of a level 0 graded around the press (below); the finest levels are factorised
+  // by CHOLMOD (docs/PERFORMANCE.md "Solvers on the reference levels": the LDL^T needed
+  // > 5.9 GB and > 9.7 CPU min there). --quick: a finest nested level of 593k tets does not fit
+  // 3 minutes, so the quick run keeps three TetGen levels of D's surface (not nested, max
+  // volume twice the prototype's mean, halved per level) and says whether they can be trusted.
+  // The mesh size under the press on D's own mesh: where it exceeds the pad radius (the body:
+  // 12.9 mm edges, one surface vertex within 1 cm) D's own mesh sees a point load and nested
+  // levels of it cannot converge (reference_untrusted_reason).
   double h_d = 0;
   {
     const mesh::Positions V = g.V;
@@ -219,15 +219,21 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
           h_d = std::max(h_d, (V.row(F(k, j)) - V.row(F(k, (j + 1) % 3))).norm());
     }
   }
+  // Full run: where D's mesh does not resolve the press, level 0 is graded around it instead
+  // (engine::auto_grade_rounds: TetGen of D's surface refined under the pad until its edges are
+  // <= the pad radius; docs/ARCHITECTURE.md "Graded level 0"), so the nested levels can
+  // converge; the large levels are factorised by CHOLMOD (SparseSolverKind::automatic).
   const bool unresolved_on_d = h_d > a;
   ref.press_h_d = h_d;
-  ref.nested = !quick && !unresolved_on_d;
+  ref.nested = !quick;
   if (!ref.nested) {
     o.refinement = engine::FemRefinement::tetgen;
-    if (quick) o.max_volume *= 2;
+    o.max_volume *= 2;
   } else {
     o.refinement = engine::FemRefinement::nested;
+    o.grade_rounds = unresolved_on_d ? engine::auto_grade_rounds(o) : 0;
   }
+  ref.grade_rounds = o.grade_rounds;
   const auto t0 = std::chrono::steady_clock::now();
   const engine::FemReferenceResult r = engine::fem_reference(o);
   ref.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -241,12 +247,12 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
   // monotone, the press unresolved on the levels used, or a large correction) is not used for
   // the stiffness: the finest level stands in, ref_extrapolated = 0 and ref_trusted = 0 say so.
   ref.untrusted = engine::reference_untrusted_reason(r);
-  if (unresolved_on_d) {
+  if (unresolved_on_d && !ref.nested) {
     char buf[400];  // the text is ~190 characters with two %.3g numbers
     std::snprintf(buf, sizeof buf,
                   "D's mesh does not resolve the press (edges up to %.3g mm under it > the pad "
-                  "radius %.3g mm: a point load for D), so nested levels of D cannot converge "
-                  "for it either and TetGen levels stand in",
+                  "radius %.3g mm: a point load for D); the --quick run's TetGen levels do not "
+                  "resolve it either (the full run grades level 0 around the press)",
                   1e3 * h_d, 1e3 * a);
     ref.untrusted = buf + (ref.untrusted.empty() ? "" : "; " + ref.untrusted);
   }
@@ -599,10 +605,14 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     {
       BenchResult r;
       r.name = region + "_reference";
-      r.what = region + ": the FEM reference (3 " +
-               (ref.nested ? "nested red refinements of D's mesh" : "TetGen levels, not nested") +
-               "; time = all levels, once): " +
-               (ref.untrusted.empty() ? "trusted" : "NOT TRUSTED: " + ref.untrusted);
+      r.what =
+          region + ": the FEM reference (3 " +
+          (ref.nested ? (ref.grade_rounds > 0 ? "nested red refinements of a level 0 graded around "
+                                                "the press"
+                                              : "nested red refinements of D's mesh")
+                      : "TetGen levels, not nested") +
+          "; time = all levels, once): " +
+          (ref.untrusted.empty() ? "trusted" : "NOT TRUSTED: " + ref.untrusted);
       r.reps = 1;
       r.median_s = r.min_s = r.max_s = r.cold_s = ref.total_s;
       r.metrics = {{"k_ref_N_per_m", ref.k},
@@ -610,6 +620,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
                    {"finest_level_nodes", static_cast<double>(ref.finest_nodes)},
                    {"finest_level_tets", static_cast<double>(ref.finest_tets)},
                    {"nested", ref.nested ? 1.0 : 0.0},
+                   {"grade_rounds", static_cast<double>(ref.grade_rounds)},
                    {"ref_trusted", ref.untrusted.empty() ? 1.0 : 0.0},
                    {"press_h_level0_m", ref.press_h0},
                    {"press_h_on_D_m", ref.press_h_d},

@@ -10,7 +10,15 @@
 // contact stiffness and surface displacement field, the estimated discretisation error of each
 // level, and the quasi-static force-displacement curve of a slow press (`--steps` load steps,
 // co-rotational FEM; 0 = none) (docs/FORMATS.md "FEM reference").
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <Eigen/IterativeLinearSolvers>
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -69,6 +77,9 @@ int run_verify(bool as_json, int levels) {
 struct ReferenceArgs {
   std::string prototype, press, out;
   std::string refinement = "nested";
+  std::string solver = "auto";
+  std::string grade = "auto";
+  double volume_scale = 1;  // level-0 max tet volume / the prototype's mean tet volume
   double force = 0;
   int levels = 3;
   int steps = 5;
@@ -78,14 +89,20 @@ json num(double v) {
   return std::isfinite(v) ? json(v) : json(nullptr);
 }
 
-int run_reference(const ReferenceArgs& a) {
+// The reference problem of `fem reference` / `fem solvers` (checked arguments, the prototype's
+// press and its nested-level size limit).
+struct ReferenceSetup {
+  palplab::engine::FemReferenceOptions o;
+  std::string id, region;  // the prototype's id, the pressed node's region ("" = none)
+  int node = -1;           // the pressed surface node
+};
+ReferenceSetup reference_setup(const ReferenceArgs& a) {
   using namespace palplab;
   if (!(a.force > 0) || !std::isfinite(a.force) || a.force > 1e3)
     throw InputError("--force: expected a force in N in (0, 1000], got " + std::to_string(a.force));
   if (a.levels < 3 || a.levels > 6)
     throw InputError("--levels: expected 3 to 6 levels (3 are needed for an extrapolation), got " +
                      std::to_string(a.levels));
-  if (a.out.empty()) throw InputError("--out: expected an output file name");
   if (a.refinement != "nested" && a.refinement != "tetgen")
     throw InputError("--refinement: expected nested or tetgen, got \"" + a.refinement + "\"");
   if (a.steps < 0 || a.steps > 100)
@@ -126,9 +143,48 @@ int run_reference(const ReferenceArgs& a) {
   }
   engine::FemReferenceOptions o = engine::reference_options_for_prototype(cfg, node, a.force);
   o.levels = a.levels;
-  const bool nested = a.refinement == "nested";
-  o.refinement = nested ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
+  o.refinement =
+      a.refinement == "nested" ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
   o.curve_steps = a.steps;
+  if (!(a.volume_scale > 0) || a.volume_scale > 1e3)
+    throw InputError("--volume-scale: expected a factor in (0, 1000]");
+  o.max_volume *= a.volume_scale;
+  if (a.refinement == "nested") {
+    // Grading of level 0 around the press (fem_reference.hpp): auto = until the loaded edges
+    // are at most the pad radius; 0 = the prototype's own mesh as level 0.
+    if (a.grade == "auto") {
+      o.grade_rounds = engine::auto_grade_rounds(o);
+    } else {
+      size_t used = 0;
+      int k = -1;
+      try {
+        k = std::stoi(a.grade, &used);
+      } catch (const std::exception&) {
+      }
+      if (used != a.grade.size() || k < 0 || k > 6)
+        throw InputError("--grade: expected auto or 0 to 6 rounds, got \"" + a.grade + "\"");
+      o.grade_rounds = k;
+    }
+  }
+  try {
+    o.solver = engine::parse_sparse_solver(a.solver);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("--solver: ") + e.what());
+  }
+  ReferenceSetup su;
+  su.o = std::move(o);
+  su.id = cfg.id;
+  su.node = node;
+  su.region = g.vertex_region[node] >= 0 ? g.region_names[g.vertex_region[node]] : "";
+  return su;
+}
+
+int run_reference(const ReferenceArgs& a) {
+  using namespace palplab;
+  if (a.out.empty()) throw InputError("--out: expected an output file name");
+  const ReferenceSetup su = reference_setup(a);
+  const engine::FemReferenceOptions& o = su.o;
+  const bool nested = a.refinement == "nested";
   const engine::FemReferenceResult r = engine::fem_reference(o);
 
   json levels = json::array();
@@ -145,7 +201,11 @@ int run_reference(const ReferenceArgs& a) {
                       {"stiffness", lv.stiffness},
                       {"est_error", num(lv.est_error)},
                       {"field_error", num(lv.field_error)},
-                      {"solve_ms", lv.solve_ms}});
+                      {"press_h", lv.press_h},
+                      {"solve_ms", lv.solve_ms},
+                      {"solver", lv.solver},
+                      {"factor_ms", lv.factor_ms},
+                      {"factor_mb", lv.factor_mb}});
   }
   json field_x = json::array(), field_u = json::array();
   for (long i = 0; i < r.field.rows(); ++i) {
@@ -156,22 +216,28 @@ int run_reference(const ReferenceArgs& a) {
   const bool trusted = untrusted.empty();
   json out = {
       {"format", "palplab-fem-reference/1"},
-      {"prototype", cfg.id},
+      {"prototype", su.id},
       {"prototype_file", a.prototype},
       {"press", a.press},
-      {"node", node},
-      {"region", g.vertex_region[node] >= 0 ? g.region_names[g.vertex_region[node]] : ""},
+      {"node", su.node},
+      {"region", su.region},
       {"force", a.force},
-      {"press_radius", cfg.contact.patch_radius},
+      {"press_radius", o.press_radius},
       {"press_point", {o.press_point.x(), o.press_point.y(), o.press_point.z()}},
       {"press_direction", {o.press_direction.x(), o.press_direction.y(), o.press_direction.z()}},
       {"load", "smooth pressure (1 - (r/a)^2)^2 over the surface within press_radius"},
       {"analysis", "static, linear elasticity"},
       {"support_modulus", o.support_modulus},
-      {"refinement", nested ? "nested red refinement of the prototype's mesh (1 -> 8 tets, h "
-                              "halved per level; the surface stays the level-0 polyhedron)"
-                            : "TetGen, max tet volume halved per level (meshes not nested)"},
+      {"refinement",
+       nested ? (o.grade_rounds > 0 ? "nested red refinement (1 -> 8 tets, h halved per level) of "
+                                      "a TetGen mesh of the prototype's surface graded around the "
+                                      "press (grade_rounds rounds of surface refinement)"
+                                    : "nested red refinement of the prototype's mesh (1 -> 8 tets, "
+                                      "h halved per level; the surface stays the level-0 "
+                                      "polyhedron)")
+              : "TetGen, max tet volume halved per level (meshes not nested)"},
       {"refinement_kind", a.refinement},
+      {"grade_rounds", nested ? o.grade_rounds : 0},
       {"refinement_ratio", r.refinement_ratio},
       {"plausible_order", {engine::kPlausibleOrder[0], engine::kPlausibleOrder[1]}},
       {"levels", levels},
@@ -213,12 +279,14 @@ int run_reference(const ReferenceArgs& a) {
   if (!f) throw InputError("--out: cannot write \"" + a.out + "\"");
   f << out.dump(1) << "\n";
   if (!f) throw InputError("--out: writing \"" + a.out + "\" failed");
-  std::printf("%5s %8s %8s %12s %12s %12s %10s\n", "level", "tets", "dofs", "h (m)", "k (N/m)",
-              "u (m)", "est_error");
+  std::printf("%5s %8s %8s %12s %10s %12s %12s %10s %8s %10s %10s\n", "level", "tets", "dofs",
+              "h (m)", "h_press", "k (N/m)", "u (m)", "est_error", "solver", "factor_ms",
+              "factor_MB");
   for (size_t l = 0; l < r.levels.size(); ++l) {
     const auto& lv = r.levels[l];
-    std::printf("%5zu %8ld %8ld %12.5g %12.6g %12.6g %10.3g\n", l, lv.tets, lv.dofs, lv.mesh_size,
-                lv.stiffness, lv.displacement, lv.est_error);
+    std::printf("%5zu %8ld %8ld %12.5g %10.4g %12.6g %12.6g %10.3g %8s %10.0f %10.0f\n", l, lv.tets,
+                lv.dofs, lv.mesh_size, lv.press_h, lv.stiffness, lv.displacement, lv.est_error,
+                lv.solver.c_str(), lv.factor_ms, lv.factor_mb);
   }
   std::printf(
       "extrapolated stiffness %.6g N/m, displacement %.6g m, observed order %.3g (ratio %.3g; "
@@ -239,6 +307,270 @@ int run_reference(const ReferenceArgs& a) {
         untrusted.c_str(), r.monotone ? "yes" : "no",
         r.order_plausible ? "plausible" : "implausible");
   std::printf("written %s\n", a.out.c_str());
+  return 0;
+}
+
+// `palplab fem solvers PROTOTYPE.json --press REGION --level L [--solvers LIST]`: the sparse
+// solvers of fem_static.hpp (and preconditioned CG) side by side on nested level L of the
+// reference problem of `fem reference` (docs/ARCHITECTURE.md "Sparse Cholesky"). Each solver
+// runs in a forked child (own peak RSS from wait4, under --mem-limit-gb / --cpu-limit-s);
+// the parent's RSS at the fork (mesh and assembled K) is printed alongside. The solutions are
+// compared with the first solver's: max |u - u_first| / max |u_first| and the compliance f.u.
+// PCG starts from the previous level's solution prolongated to level L (nested spaces).
+struct SolverArgs {
+  ReferenceArgs ref;
+  int level = 2;
+  std::string solvers = "ldlt,cholmod,pcg-jacobi,pcg-ic";
+  double cg_tolerance = 1e-10;
+  double mem_limit_gb = 6;
+  double cpu_limit_s = 900;
+  std::string out;
+};
+
+struct SolverRun {
+  std::string name, status = "ok";
+  double factor_ms = 0, solve_ms = 0, factor_mb = 0, compliance = 0;
+  long iterations = 0;
+  double peak_rss_mb = 0, rel_diff = 0;
+  double cpu_s = 0;  // the child's user + system CPU time (the machine may be loaded: wall > CPU)
+};
+
+double rss_mb_now() {
+  std::ifstream st("/proc/self/status");
+  std::string key;
+  while (st >> key) {
+    if (key == "VmRSS:") {
+      double kb = 0;
+      st >> kb;
+      return kb / 1024;
+    }
+    st.ignore(1 << 12, '\n');
+  }
+  return 0;
+}
+
+// In the child: solve K_ff u = f_f with `name`; writes the numbers and u_f to fd.
+void solve_child(const std::string& name, const palplab::engine::SparseMatrixd& K,
+                 const std::vector<std::uint8_t>& fixed_dof, const Eigen::VectorXd& f,
+                 const Eigen::VectorXd& u0, double tol, int fd) {
+  using namespace palplab::engine;
+  double head[5] = {0, 0, 0, 0, 0};  // factor_ms, solve_ms, factor_mb, iterations, compliance
+  Eigen::VectorXd u;
+  const auto now = [] { return std::chrono::steady_clock::now(); };
+  const auto ms = [](auto a, auto b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+  };
+  if (name == "ldlt" || name == "cholmod") {
+    StaticSolver ss;
+    static_precompute(K, fixed_dof, ss,
+                      name == "ldlt" ? SparseSolverKind::ldlt : SparseSolverKind::cholmod);
+    head[0] = ss.factor_ms;
+    head[2] = 8e-6 * ss.factor_nnz;
+    const auto t0 = now();
+    u = static_solve(ss, f);
+    head[1] = ms(t0, now());
+  } else {
+    const DofSplit split = split_dofs(fixed_dof);
+    const auto t0 = now();
+    const SparseMatrixd Kff = submatrix(K, split.free, split.free);
+    const Eigen::VectorXd b = gather(f, split.free);
+    const Eigen::VectorXd x0 =
+        name == "pcg-jacobi0" ? Eigen::VectorXd::Zero(b.size()) : gather(u0, split.free);
+    Eigen::VectorXd x;
+    const auto run = [&](auto& cg) {
+      cg.setTolerance(tol);
+      cg.setMaxIterations(50000);
+      cg.compute(Kff);
+      head[0] = ms(t0, now());
+      const auto t1 = now();
+      x = cg.solveWithGuess(b, x0);
+      head[1] = ms(t1, now());
+      head[3] = static_cast<double>(cg.iterations());
+      if (cg.info() != Eigen::Success) throw std::runtime_error("CG did not converge");
+    };
+    if (name == "pcg-ic") {
+      Eigen::ConjugateGradient<
+          SparseMatrixd, Eigen::Lower | Eigen::Upper,
+          Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>
+          cg;
+      run(cg);
+    } else if (name == "pcg-jacobi" || name == "pcg-jacobi0") {
+      Eigen::ConjugateGradient<SparseMatrixd, Eigen::Lower | Eigen::Upper,
+                               Eigen::DiagonalPreconditioner<double>>
+          cg;
+      run(cg);
+    } else {
+      throw std::invalid_argument("unknown solver " + name);
+    }
+    u = Eigen::VectorXd::Zero(f.size());
+    scatter(x, split.free, u);
+  }
+  head[4] = f.dot(u);
+  const auto put = [&](const void* p, size_t n) {
+    const char* c = static_cast<const char*>(p);
+    while (n > 0) {
+      const ssize_t w = ::write(fd, c, n);
+      if (w <= 0) _exit(3);
+      c += w;
+      n -= static_cast<size_t>(w);
+    }
+  };
+  put(head, sizeof head);
+  put(u.data(), sizeof(double) * static_cast<size_t>(u.size()));
+}
+
+int run_solvers(const SolverArgs& a) {
+  using namespace palplab;
+  if (a.ref.refinement != "nested")
+    throw InputError("--refinement: fem solvers compares the solvers on nested levels only");
+  if (a.level < 1 || a.level > 3)
+    throw InputError("--level: expected 1 to 3, got " + std::to_string(a.level));
+  if (!(a.cg_tolerance > 0 && a.cg_tolerance < 1))
+    throw InputError("--cg-tolerance: expected a relative residual in (0, 1)");
+  if (!(a.mem_limit_gb > 0) || !(a.cpu_limit_s > 0))
+    throw InputError("--mem-limit-gb / --cpu-limit-s: expected positive limits");
+  std::vector<std::string> names;
+  for (size_t i = 0; i <= a.solvers.size();) {
+    const size_t j = std::min(a.solvers.find(',', i), a.solvers.size());
+    const std::string n = a.solvers.substr(i, j - i);
+    if (n != "ldlt" && n != "cholmod" && n != "pcg-jacobi" && n != "pcg-jacobi0" && n != "pcg-ic")
+      throw InputError(
+          "--solvers: expected a comma-separated list of ldlt, cholmod, pcg-jacobi, "
+          "pcg-jacobi0, pcg-ic; got \"" +
+          n + "\"");
+    names.push_back(n);
+    i = j + 1;
+  }
+  ReferenceArgs ra = a.ref;
+  ra.levels = std::max(3, a.level + 1);
+  const ReferenceSetup su = reference_setup(ra);
+  const engine::FemReferenceOptions& o = su.o;
+  engine::ReferenceLevelBuilder builder(o);
+  Eigen::VectorXd u_coarse;
+  for (int l = 0; l < a.level; ++l) {
+    const engine::ReferenceLevelSystem& ls = builder.next();
+    if (l == a.level - 1) {
+      engine::StaticSolver ss;
+      // LDL^T, not CHOLMOD: CHOLMOD starts an OpenMP thread pool, and a forked child that
+      // uses OpenMP again after that deadlocks (libgomp is not fork-safe).
+      engine::static_precompute(ls.K, ls.fixed_dof, ss, engine::SparseSolverKind::ldlt);
+      u_coarse = engine::static_solve(ss, ls.load.f);
+    }
+  }
+  const engine::ReferenceLevelSystem& ls = builder.next();
+  const Eigen::VectorXd u0 = engine::prolongate(ls.parent, u_coarse);
+  const long free_dofs = std::count(ls.fixed_dof.begin(), ls.fixed_dof.end(), std::uint8_t{0});
+  const double base_rss = rss_mb_now();
+  std::printf(
+      "fem solvers: %s, press %s, nested level %d: %ld tets, %ld nodes, %ld free dofs, "
+      "K %ld nonzeros; parent RSS at fork %.0f MB; limits %.1f GB, %.0f s CPU\n",
+      o.surface.V.rows() ? ra.prototype.c_str() : "", ra.press.c_str(), a.level,
+      static_cast<long>(ls.mesh.T.rows()), static_cast<long>(ls.mesh.V.rows()), free_dofs,
+      static_cast<long>(ls.K.nonZeros()), base_rss, a.mem_limit_gb, a.cpu_limit_s);
+  std::fflush(stdout);
+  std::vector<SolverRun> runs;
+  Eigen::VectorXd u_first;
+  for (const std::string& n : names) {
+    SolverRun run;
+    run.name = n;
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error("fem solvers: pipe failed");
+    const pid_t pid = ::fork();
+    if (pid < 0) throw std::runtime_error("fem solvers: fork failed");
+    if (pid == 0) {
+      ::close(fds[0]);
+      const rlim_t mem = static_cast<rlim_t>(a.mem_limit_gb * 1073741824.0);
+      const rlim_t cpu = static_cast<rlim_t>(a.cpu_limit_s);
+      rlimit rm{mem, mem}, rc{cpu, cpu};
+      ::setrlimit(RLIMIT_AS, &rm);
+      ::setrlimit(RLIMIT_CPU, &rc);
+      try {
+        solve_child(n, ls.K, ls.fixed_dof, ls.load.f, u0, a.cg_tolerance, fds[1]);
+      } catch (const std::bad_alloc&) {
+        _exit(4);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "fem solvers: %s: %s\n", n.c_str(), e.what());
+        _exit(5);
+      }
+      _exit(0);
+    }
+    ::close(fds[1]);
+    double head[5];
+    Eigen::VectorXd u(ls.load.f.size());
+    const auto get = [&](void* p, size_t n_bytes) {
+      char* c = static_cast<char*>(p);
+      while (n_bytes > 0) {
+        const ssize_t r = ::read(fds[0], c, n_bytes);
+        if (r <= 0) return false;
+        c += r;
+        n_bytes -= static_cast<size_t>(r);
+      }
+      return true;
+    };
+    const bool got =
+        get(head, sizeof head) && get(u.data(), sizeof(double) * static_cast<size_t>(u.size()));
+    ::close(fds[0]);
+    int status = 0;
+    rusage ru{};
+    ::wait4(pid, &status, 0, &ru);
+    run.peak_rss_mb = static_cast<double>(ru.ru_maxrss) / 1024;
+    run.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+                1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+    if (WIFSIGNALED(status))
+      run.status = WTERMSIG(status) == SIGXCPU
+                       ? "cpu limit"
+                       : "killed by signal " + std::to_string(WTERMSIG(status));
+    else if (WEXITSTATUS(status) == 4)
+      run.status = "out of memory (limit)";
+    else if (WEXITSTATUS(status) != 0 || !got)
+      run.status = "failed";
+    if (run.status == "ok") {
+      run.factor_ms = head[0];
+      run.solve_ms = head[1];
+      run.factor_mb = head[2];
+      run.iterations = static_cast<long>(head[3]);
+      run.compliance = head[4];
+      if (u_first.size() == 0) u_first = u;
+      run.rel_diff = (u - u_first).cwiseAbs().maxCoeff() / u_first.cwiseAbs().maxCoeff();
+    }
+    std::printf(
+        "  %-12s %-22s factor/setup %9.0f ms  solve %9.0f ms (wall)  CPU %7.1f s  iters %6ld"
+        "  factor %8.0f MB  peak RSS %7.0f MB  f.u %.10g  max|du|/max|u| %.2e\n",
+        n.c_str(), run.status.c_str(), run.factor_ms, run.solve_ms, run.cpu_s, run.iterations,
+        run.factor_mb, run.peak_rss_mb, run.compliance, run.rel_diff);
+    std::fflush(stdout);
+    runs.push_back(run);
+  }
+  if (!a.out.empty()) {
+    json js = json::array();
+    for (const auto& r : runs)
+      js.push_back({{"solver", r.name},
+                    {"status", r.status},
+                    {"factor_ms", r.factor_ms},
+                    {"solve_ms", r.solve_ms},
+                    {"iterations", r.iterations},
+                    {"factor_mb", r.factor_mb},
+                    {"peak_rss_mb", r.peak_rss_mb},
+                    {"cpu_s", r.cpu_s},
+                    {"compliance", num(r.compliance)},
+                    {"rel_diff", num(r.rel_diff)}});
+    json out = {{"format", "palplab-fem-solvers/1"},
+                {"prototype", ra.prototype},
+                {"press", ra.press},
+                {"level", a.level},
+                {"tets", ls.mesh.T.rows()},
+                {"nodes", ls.mesh.V.rows()},
+                {"free_dofs", free_dofs},
+                {"K_nonzeros", ls.K.nonZeros()},
+                {"parent_rss_mb", base_rss},
+                {"cg_tolerance", a.cg_tolerance},
+                {"runs", js}};
+    std::ofstream f(a.out);
+    if (!f) throw InputError("--out: cannot write \"" + a.out + "\"");
+    f << out.dump(2) << "\n";
+  }
+  for (const auto& r : runs)
+    if (r.status != "ok") return 1;
   return 0;
 }
 
@@ -276,7 +608,46 @@ palplab::app::CommandRegistration reg{
       ref->add_option("--steps", ra->steps,
                       "Load steps of the quasi-static (co-rotational) press curve; 0 = none")
           ->capture_default_str();
+      ref->add_option("--grade", ra->grade,
+                      "Nested levels: rounds of surface refinement around the press before "
+                      "level 0 is meshed (auto: loaded edges <= the pad radius; 0: the "
+                      "prototype's mesh is level 0)")
+          ->capture_default_str();
+      ref->add_option("--volume-scale", ra->volume_scale,
+                      "Max tet volume of TetGen levels (tetgen; graded level 0) as a multiple of "
+                      "the prototype's mean tet volume")
+          ->capture_default_str();
+      ref->add_option("--solver", ra->solver,
+                      "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
+                      "auto (cholmod from 20000 free dofs)")
+          ->capture_default_str();
       ref->callback([=] { *code = run_reference(*ra); });
+      auto* sol = fem->add_subcommand(
+          "solvers",
+          "Time and peak memory of the sparse solvers (LDL^T, CHOLMOD, PCG) side by side on one "
+          "nested level of the reference problem");
+      auto sa = std::make_shared<SolverArgs>();
+      sa->ref.force = 1.0;
+      sol->add_option("prototype", sa->ref.prototype, "Prototype JSON file (a tet mesh)")
+          ->required();
+      sol->add_option("--press", sa->ref.press, "Region name or surface node index to press")
+          ->required();
+      sol->add_option("--grade", sa->ref.grade, "As for fem reference")->capture_default_str();
+      sol->add_option("--volume-scale", sa->ref.volume_scale, "As for fem reference")
+          ->capture_default_str();
+      sol->add_option("--level", sa->level, "Nested level to solve (1-3)")->capture_default_str();
+      sol->add_option("--solvers", sa->solvers,
+                      "Comma-separated: ldlt, cholmod, pcg-jacobi (from the prolongated coarse "
+                      "solution), pcg-jacobi0 (from zero), pcg-ic (incomplete Cholesky)")
+          ->capture_default_str();
+      sol->add_option("--cg-tolerance", sa->cg_tolerance, "PCG relative residual")
+          ->capture_default_str();
+      sol->add_option("--mem-limit-gb", sa->mem_limit_gb, "Address-space limit per solver (GB)")
+          ->capture_default_str();
+      sol->add_option("--cpu-limit-s", sa->cpu_limit_s, "CPU-time limit per solver (s)")
+          ->capture_default_str();
+      sol->add_option("--out", sa->out, "Also write the table as JSON");
+      sol->callback([=] { *code = run_solvers(*sa); });
     }};
 
 }  // namespace

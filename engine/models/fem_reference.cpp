@@ -19,6 +19,36 @@
 
 namespace palplab::engine {
 
+namespace {
+// The longest edge of the faces of F whose three vertices carry load in f (3#V).
+double loaded_edge(const mesh::Positions& V, const mesh::Faces& F, const Eigen::VectorXd& f) {
+  double h = 0;
+  for (long k = 0; k < F.rows(); ++k) {
+    // A face under the patch loads all three of its vertices (interior quadrature points);
+    // a face of the ring around it only touches loaded vertices.
+    bool loaded = true;
+    for (int j = 0; j < 3; ++j) loaded = loaded && f.segment<3>(3 * F(k, j)).squaredNorm() > 0;
+    if (!loaded) continue;
+    for (int j = 0; j < 3; ++j)
+      h = std::max(h, (mesh::row3(V, F(k, j)) - mesh::row3(V, F(k, (j + 1) % 3))).norm());
+  }
+  return h;
+}
+}  // namespace
+
+double press_edge(const mesh::Positions& V, const mesh::Faces& F, const Eigen::Vector3d& point,
+                  const Eigen::Vector3d& direction, double radius) {
+  return loaded_edge(V, F, smooth_press_load(V, F, point, direction, 1.0, radius).f);
+}
+
+int auto_grade_rounds(const FemReferenceOptions& opt) {
+  const double h = press_edge(opt.surface.V, opt.surface.F, opt.press_point, opt.press_direction,
+                              opt.press_radius);
+  int k = 0;
+  while (k < 6 && h / std::pow(2.0, k) > opt.press_radius) ++k;
+  return k;
+}
+
 bool richardson(double q0, double q1, double q2, double r, double& order, double& extrapolated) {
   const double d1 = q1 - q0, d2 = q2 - q1;
   if (!(d1 != 0) || d1 * d2 <= 0 || std::abs(d2) >= std::abs(d1)) {
@@ -278,10 +308,92 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
 
 }  // namespace
 
+ReferenceLevelBuilder::ReferenceLevelBuilder(const FemReferenceOptions& opt) : opt_(opt) {
+  nested_ = !opt.mesher && opt.refinement == FemRefinement::nested;
+  have_base_ = nested_ && opt.base.T.rows() > 0 && opt.grade_rounds == 0;
+}
+
+const ReferenceLevelSystem& ReferenceLevelBuilder::next() {
+  const FemReferenceOptions& opt = opt_;
+  const int l = level_++;
+  mesh::TetOptions to;
+  to.max_volume = opt.max_volume / std::pow(2.0, l);
+  to.quality = opt.quality;
+  to.keep_surface = false;  // uniform refinement includes the surface
+  to.seeds = opt.seeds;
+  to.default_attribute = opt.default_attribute;
+  ReferenceLevelSystem& ls = cur_;
+  ls.level = l;
+  ls.parent.clear();
+  if (opt.mesher) {
+    ls.mesh = opt.mesher(l);
+  } else if (!nested_) {
+    ls.mesh = mesh::tetrahedralize(opt.surface, to);
+  } else if (l == 0 && opt.grade_rounds > 0) {
+    const double radius = opt.grade_radius > 0 ? opt.grade_radius : 3 * opt.press_radius;
+    ls.mesh = mesh::tetrahedralize(
+        refine_surface_near(opt.surface, opt.press_point, radius, opt.grade_rounds), to);
+  } else if (l == 0) {
+    ls.mesh = have_base_ ? opt.base : mesh::tetrahedralize(opt.surface, to);
+  } else {
+    RedRefinement rr = refine_red(ls.mesh);
+    ls.mesh = std::move(rr.mesh);
+    ls.parent = std::move(rr.parent);
+  }
+  const mesh::TetMesh& m = ls.mesh;
+  if (!opt.mesher && m.V.rows() < opt.surface.V.rows())
+    throw InputError("fem reference: a level lost surface vertices");
+  const TetMaterials mat = tet_materials(m, opt.materials);
+  ls.sys = fem_precompute(m.V, m.T, mat);
+  std::vector<std::uint8_t> fixed = rigid_nodes(m, mat);
+  long nfixed = 0;
+  for (long i = 0; i < m.V.rows(); ++i) {
+    if (!ls.parent.empty())  // nested: the Dirichlet set of level 0, refined
+      fixed[i] = fixed[i] || (fixed_prev_[ls.parent[i][0]] && fixed_prev_[ls.parent[i][1]]);
+    else
+      fixed[i] = fixed[i] || opt.is_fixed(mesh::row3(m.V, i));
+    nfixed += fixed[i];
+  }
+  if (nfixed == 0) throw InputError("fem reference: the fixed region contains no node");
+  fixed_prev_ = fixed;
+  ls.fixed_dof = node_to_dof_flags(fixed);
+  // Press: the smooth pressure profile as the consistent load (smooth_press_load): the load
+  // functional is (to quadrature accuracy) the same at every level, so on nested levels the
+  // compliance grows monotonically and the differences are discretisation error only.
+  ls.bf = mesh::boundary_faces(m);
+  ls.load = smooth_press_load(m.V, ls.bf.F, opt.press_point, opt.press_direction, opt.force,
+                              opt.press_radius);
+  ls.K = ls.sys.K;
+  ls.support = Eigen::VectorXd::Zero(ls.sys.dofs());
+  if (opt.support_modulus > 0) {
+    const mesh::Faces& F = ls.bf.F;
+    for (long k = 0; k < F.rows(); ++k) {
+      const Eigen::Vector3d a = mesh::row3(m.V, F(k, 0)), b = mesh::row3(m.V, F(k, 1)),
+                            c = mesh::row3(m.V, F(k, 2));
+      const double share = opt.support_modulus * (b - a).cross(c - a).norm() / 6;
+      for (int j = 0; j < 3; ++j) ls.support.segment<3>(3 * F(k, j)).array() += share;
+    }
+    for (long d = 0; d < ls.sys.dofs(); ++d)  // the diagonal is in the pattern: no insertion
+      ls.K.coeffRef(d, d) += ls.support[d];
+  }
+  return ls;
+}
+
+Eigen::VectorXd prolongate(const std::vector<std::array<int, 2>>& parent,
+                           const Eigen::VectorXd& u_coarse) {
+  Eigen::VectorXd u(3 * static_cast<long>(parent.size()));
+  for (size_t i = 0; i < parent.size(); ++i)
+    u.segment<3>(3 * static_cast<long>(i)) =
+        0.5 * (u_coarse.segment<3>(3 * parent[i][0]) + u_coarse.segment<3>(3 * parent[i][1]));
+  return u;
+}
+
 FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   if (opt.levels < 3) throw InputError("fem reference: --levels must be >= 3");
   const bool nested = !opt.mesher && opt.refinement == FemRefinement::nested;
-  const bool have_base = nested && opt.base.T.rows() > 0;
+  const bool have_base = nested && opt.base.T.rows() > 0 && opt.grade_rounds == 0;
+  if (opt.grade_rounds < 0 || opt.grade_rounds > 6 || !(opt.grade_radius >= 0))
+    throw InputError("fem reference: grading rounds must be 0 to 6 and the radius >= 0 m");
   if (!opt.mesher && !have_base && !(opt.max_volume > 0))
     throw InputError("fem reference: max_volume must be > 0");
   if (!(opt.force > 0)) throw InputError("fem reference: --force must be > 0 N");
@@ -307,84 +419,32 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   }
   FemReferenceResult res;
   std::vector<Eigen::VectorXd> surface_u;
-  mesh::TetMesh m;
-  std::vector<std::uint8_t> fixed_prev;  // nested: the fixed flags of the previous level
+  ReferenceLevelBuilder builder(opt);
   for (int l = 0; l < opt.levels; ++l) {
     const auto t0 = std::chrono::steady_clock::now();
-    mesh::TetOptions to;
-    to.max_volume = opt.max_volume / std::pow(2.0, l);
-    to.quality = opt.quality;
-    to.keep_surface = false;  // uniform refinement includes the surface
-    to.seeds = opt.seeds;
-    to.default_attribute = opt.default_attribute;
-    std::vector<std::array<int, 2>> parent;
-    if (opt.mesher) {
-      m = opt.mesher(l);
-    } else if (!nested) {
-      m = mesh::tetrahedralize(opt.surface, to);
-    } else if (l == 0) {
-      m = have_base ? opt.base : mesh::tetrahedralize(opt.surface, to);
-    } else {
-      RedRefinement rr = refine_red(m);
-      m = std::move(rr.mesh);
-      parent = std::move(rr.parent);
-    }
-    if (!opt.mesher && m.V.rows() < ns)
-      throw InputError("fem reference: a level lost surface vertices");
-    const TetMaterials mat = tet_materials(m, opt.materials);
-    const FemSystem sys = fem_precompute(m.V, m.T, mat);
-    std::vector<std::uint8_t> fixed = rigid_nodes(m, mat);
-    long nfixed = 0;
-    for (long i = 0; i < m.V.rows(); ++i) {
-      if (!parent.empty())  // nested: the Dirichlet set of level 0, refined
-        fixed[i] = fixed[i] || (fixed_prev[parent[i][0]] && fixed_prev[parent[i][1]]);
-      else
-        fixed[i] = fixed[i] || opt.is_fixed(mesh::row3(m.V, i));
-      nfixed += fixed[i];
-    }
-    if (nfixed == 0) throw InputError("fem reference: the fixed region contains no node");
-    fixed_prev = fixed;
-    // Press: the smooth pressure profile as the consistent load (smooth_press_load): the load
-    // functional is (to quadrature accuracy) the same at every level, so on nested levels the
-    // compliance grows monotonically and the differences are discretisation error only.
-    const mesh::BoundaryFaces bf = mesh::boundary_faces(m);
-    const PressLoad load = smooth_press_load(m.V, bf.F, opt.press_point, opt.press_direction,
-                                             opt.force, opt.press_radius);
-    const Eigen::VectorXd& f = load.f;
-    SparseMatrixd K = sys.K;
-    Eigen::VectorXd support = Eigen::VectorXd::Zero(sys.dofs());
-    if (opt.support_modulus > 0) {
-      for (long k = 0; k < bf.F.rows(); ++k) {
-        const Eigen::Vector3d a = mesh::row3(m.V, bf.F(k, 0)), b = mesh::row3(m.V, bf.F(k, 1)),
-                              c = mesh::row3(m.V, bf.F(k, 2));
-        const double share = opt.support_modulus * (b - a).cross(c - a).norm() / 6;
-        for (int j = 0; j < 3; ++j) support.segment<3>(3 * bf.F(k, j)).array() += share;
-      }
-      for (long d = 0; d < sys.dofs(); ++d)  // the diagonal is in the pattern: no insertion
-        K.coeffRef(d, d) += support[d];
-    }
+    const ReferenceLevelSystem& ls = builder.next();
+    const mesh::TetMesh& m = ls.mesh;
+    const FemSystem& sys = ls.sys;
+    const SparseMatrixd& K = ls.K;
+    const Eigen::VectorXd& f = ls.load.f;
+    const Eigen::VectorXd& support = ls.support;
+    const mesh::BoundaryFaces& bf = ls.bf;
+    const PressLoad& load = ls.load;
     StaticSolver ss;
-    static_precompute(K, node_to_dof_flags(fixed), ss);
+    static_precompute(K, ls.fixed_dof, ss, opt.solver);
     const Eigen::VectorXd u = static_solve(ss, f);
     const double delta = f.dot(u) / opt.force;  // work-conjugate contact displacement
     FemReferenceLevel lv;
     lv.max_volume = opt.mesher ? 0.0 : m.volume.maxCoeff();
-    if (!opt.mesher && !nested) lv.max_volume = to.max_volume;
+    if (!opt.mesher && !nested) lv.max_volume = opt.max_volume / std::pow(2.0, l);
+    lv.solver = to_string(ss.kind);
+    lv.factor_ms = ss.factor_ms;
+    lv.factor_mb = 8e-6 * ss.factor_nnz;
     lv.nodes = m.V.rows();
     lv.tets = m.T.rows();
     lv.dofs = static_cast<long>(ss.split.free.size());
     lv.patch_area = load.patch_area;
-    for (long k = 0; k < bf.F.rows(); ++k) {
-      // A face under the patch loads all three of its vertices (interior quadrature points);
-      // a face of the ring around it only touches loaded vertices.
-      bool loaded = true;
-      for (int j = 0; j < 3; ++j) loaded = loaded && f.segment<3>(3 * bf.F(k, j)).squaredNorm() > 0;
-      if (!loaded) continue;
-      for (int j = 0; j < 3; ++j)
-        lv.press_h =
-            std::max(lv.press_h,
-                     (mesh::row3(m.V, bf.F(k, j)) - mesh::row3(m.V, bf.F(k, (j + 1) % 3))).norm());
-    }
+    lv.press_h = loaded_edge(m.V, bf.F, f);
     lv.mesh_size = std::cbrt(m.volume.sum() / static_cast<double>(m.T.rows()));
     lv.displacement = delta;
     lv.stiffness = opt.force / delta;

@@ -41,6 +41,7 @@
 // co-rotational tangent when that stalls). On every level; each point is Richardson-
 // extrapolated with its own observed order (ratio as for the static value) when both it and
 // the static order are plausible, else it is the finest level's value.
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -48,6 +49,8 @@
 #include "engine/mesh/materials.hpp"
 #include "engine/mesh/surface_mesh.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
+#include "engine/solvers/fem_assembly.hpp"
+#include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
 
@@ -90,10 +93,20 @@ struct FemReferenceOptions {
   FemRefinement refinement = FemRefinement::tetgen;
   mesh::TetMesh base;
   std::vector<int> base_surface_nodes;
+  // Nested levels graded around the press from level 0 on (grade_rounds > 0): level 0 is then
+  // TetGen (max_volume, quality) of the surface refined `grade_rounds` times around press_point
+  // (refine_surface_near, within grade_radius; 0 = 3 press radii), so that the first level
+  // already resolves the pad and the nested levels are in the asymptotic range; `base` is not
+  // used. Without it a coarse base sees the press as a point load (top of this file).
+  int grade_rounds = 0;
+  double grade_radius = 0;
   // Quasi-static curve: number of load steps (0 = none); a step has converged when its residual
   // is below tolerance x the step's force or its last update below tolerance x max |u|.
   int curve_steps = 0;
   double curve_tolerance = 1e-10;
+  // Factorisation of every level's stiffness (and of the curve's tangents): automatic takes
+  // CHOLMOD's supernodal LL^T on the large levels (fem_static.hpp).
+  SparseSolverKind solver = SparseSolverKind::automatic;
 };
 
 struct FemReferenceLevel {
@@ -109,7 +122,10 @@ struct FemReferenceLevel {
   double est_error = 0;     // |stiffness - extrapolated| / extrapolated
   double field_error = 0;   // max over surface vertices |u - u_extrapolated| / max |u_extrapolated|
   double mesh_size = 0;     // (volume / #tets)^(1/3) (m)
-  double solve_ms = 0;
+  double solve_ms = 0;      // the level: mesh, assembly, factorisation, solve
+  std::string solver;       // the factorisation used: "ldlt" or "cholmod"
+  double factor_ms = 0;     // its analyse + factorise wall time
+  double factor_mb = 0;     // its stored factor (8 bytes per entry), MB
   // Quasi-static curve on this level (curve_steps entries): work-conjugate contact
   // displacement (m) at force F_k, and the Newton iterations of the step.
   std::vector<double> curve_displacement;
@@ -166,6 +182,15 @@ PressLoad smooth_press_load(const mesh::Positions& V, const mesh::Faces& F,
                             const Eigen::Vector3d& point, const Eigen::Vector3d& direction,
                             double force, double radius);
 
+// The longest edge of the faces (V, F) that carry the press (all three vertices loaded by
+// smooth_press_load): the mesh size under the pad (m).
+double press_edge(const mesh::Positions& V, const mesh::Faces& F, const Eigen::Vector3d& point,
+                  const Eigen::Vector3d& direction, double radius);
+// The grading rounds that bring the loaded edges of opt.surface to at most the press radius
+// (the resolution reference_untrusted_reason asks of level 0): ceil(log2(press_edge / radius)),
+// >= 0.
+int auto_grade_rounds(const FemReferenceOptions& opt);
+
 // Richardson extrapolation from three values on meshes refined by ratio r: the observed order
 // p = ln((q0 - q1)/(q1 - q2)) / ln r and q = q2 + (q2 - q1)/(r^p - 1). Returns false (and the
 // finest value) when the differences do not shrink monotonically.
@@ -203,5 +228,38 @@ FemReferenceOptions reference_options_for_prototype(const SceneConfig& cfg, int 
 
 // Throws InputError for bad options (no fixed node, empty patch, levels < 3, ...).
 FemReferenceResult fem_reference(const FemReferenceOptions& opt);
+
+// One level's linear system, as fem_reference builds it: the mesh, its FEM system, K with the
+// foundation on the diagonal (N/m), the Dirichlet flags (3#V), the press load and the lumped
+// foundation stiffness per dof (N/m). Nested levels: parent[i] = the two coarse nodes whose
+// midpoint node i is ({v, v} for a kept node).
+struct ReferenceLevelSystem {
+  int level = 0;
+  mesh::TetMesh mesh;
+  FemSystem sys;
+  SparseMatrixd K;
+  std::vector<std::uint8_t> fixed_dof;
+  mesh::BoundaryFaces bf;
+  PressLoad load;
+  Eigen::VectorXd support;
+  std::vector<std::array<int, 2>> parent;
+};
+// Builds the levels of opt in turn (next() replaces the previous level: one level in memory).
+class ReferenceLevelBuilder {
+ public:
+  explicit ReferenceLevelBuilder(const FemReferenceOptions& opt);
+  const ReferenceLevelSystem& next();
+
+ private:
+  const FemReferenceOptions& opt_;
+  bool nested_ = false, have_base_ = false;
+  int level_ = 0;
+  ReferenceLevelSystem cur_;
+  std::vector<std::uint8_t> fixed_prev_;
+};
+// The coarse nested level's field (3#V_coarse) interpolated on the fine one (3#parent): the
+// value of the coarse FE function at every fine node (exact: nested spaces).
+Eigen::VectorXd prolongate(const std::vector<std::array<int, 2>>& parent,
+                           const Eigen::VectorXd& u_coarse);
 
 }  // namespace palplab::engine

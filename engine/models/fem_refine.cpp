@@ -75,4 +75,91 @@ RedRefinement refine_red(const mesh::TetMesh& m) {
   return out;
 }
 
+mesh::SurfaceMesh refine_surface_near(const mesh::SurfaceMesh& s, const Eigen::Vector3d& point,
+                                      double radius, int rounds) {
+  std::vector<Eigen::Vector3d> V;
+  for (long i = 0; i < s.V.rows(); ++i) V.push_back(mesh::row3(s.V, i));
+  std::vector<std::array<int, 3>> F;
+  for (long k = 0; k < s.F.rows(); ++k) F.push_back({s.F(k, 0), s.F(k, 1), s.F(k, 2)});
+  std::vector<int> region;
+  const bool has_regions = !s.regions.empty() && s.regions.id.size() == s.F.rows();
+  for (long k = 0; has_regions && k < s.F.rows(); ++k) region.push_back(s.regions.id[k]);
+  const auto key = [](int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<long long>(a) << 32) | static_cast<unsigned>(b);
+  };
+  for (int round = 0; round < rounds; ++round) {
+    const double r = radius * (rounds - round) / rounds;
+    std::vector<char> red(F.size(), 0);
+    std::unordered_map<long long, int> split;  // edge -> midpoint index (-1 until created)
+    for (size_t k = 0; k < F.size(); ++k) {
+      const Eigen::Vector3d c = (V[F[k][0]] + V[F[k][1]] + V[F[k][2]]) / 3;
+      double size = 0;
+      for (int j = 0; j < 3; ++j) size = std::max(size, (V[F[k][j]] - c).norm());
+      if ((c - point).norm() > r + size) continue;
+      red[k] = 1;
+      for (int j = 0; j < 3; ++j) split.try_emplace(key(F[k][j], F[k][(j + 1) % 3]), -1);
+    }
+    // Closure: a face with two or more split edges becomes red (its third edge splits too).
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t k = 0; k < F.size(); ++k) {
+        if (red[k]) continue;
+        int n = 0;
+        for (int j = 0; j < 3; ++j) n += split.count(key(F[k][j], F[k][(j + 1) % 3])) > 0;
+        if (n < 2) continue;
+        red[k] = 1;
+        changed = true;
+        for (int j = 0; j < 3; ++j) split.try_emplace(key(F[k][j], F[k][(j + 1) % 3]), -1);
+      }
+    }
+    const auto mid = [&](int a, int b) {
+      int& m = split.at(key(a, b));
+      if (m < 0) {
+        m = static_cast<int>(V.size());
+        V.push_back(0.5 * (V[a] + V[b]));
+      }
+      return m;
+    };
+    std::vector<std::array<int, 3>> F2;
+    std::vector<int> region2;
+    for (size_t k = 0; k < F.size(); ++k) {
+      const auto [a, b, c] = F[k];
+      const size_t before = F2.size();
+      if (red[k]) {
+        const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+        F2.push_back({a, ab, ca});
+        F2.push_back({ab, b, bc});
+        F2.push_back({ca, bc, c});
+        F2.push_back({ab, bc, ca});
+      } else {
+        int j = 0;
+        while (j < 3 && !split.count(key(F[k][j], F[k][(j + 1) % 3]))) ++j;
+        if (j == 3) {
+          F2.push_back(F[k]);
+        } else {  // green: bisect edge (x, y) from the opposite vertex z, same orientation
+          const int x = F[k][j], y = F[k][(j + 1) % 3], z = F[k][(j + 2) % 3];
+          const int m = mid(x, y);
+          F2.push_back({x, m, z});
+          F2.push_back({m, y, z});
+        }
+      }
+      if (has_regions) region2.insert(region2.end(), F2.size() - before, region[k]);
+    }
+    F = std::move(F2);
+    region = std::move(region2);
+  }
+  mesh::Positions P(static_cast<long>(V.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) P.row(static_cast<long>(i)) = V[i].transpose();
+  mesh::Faces G(static_cast<long>(F.size()), 3);
+  for (size_t k = 0; k < F.size(); ++k) G.row(static_cast<long>(k)) << F[k][0], F[k][1], F[k][2];
+  mesh::SurfaceMesh out = mesh::make_surface_mesh(std::move(P), std::move(G));
+  if (has_regions) {
+    out.regions.names = s.regions.names;
+    out.regions.id =
+        Eigen::Map<const Eigen::VectorXi>(region.data(), static_cast<long>(region.size()));
+  }
+  return out;
+}
+
 }  // namespace palplab::engine

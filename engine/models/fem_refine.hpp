@@ -14,6 +14,7 @@
 #include <array>
 #include <vector>
 
+#include "engine/mesh/surface_mesh.hpp"
 #include "engine/mesh/tet_mesh.hpp"
 
 namespace palplab::engine {
@@ -26,5 +27,16 @@ struct RedRefinement {
 };
 
 RedRefinement refine_red(const mesh::TetMesh& m);
+
+// Local grading of a closed triangulated surface around a point (the press of the FEM
+// reference, fem_reference.hpp): `rounds` rounds of 2D red-green refinement; round j splits
+// 1 -> 4 at the edge midpoints every face within radius_j = radius (rounds - j) / rounds
+// + the face's own size of `point`, closes the pattern (a face with two or three split edges is
+// split 1 -> 4 too, one with one split edge is bisected 1 -> 2 from the opposite vertex), so the
+// result is conforming and edges under the point shrink by 2^rounds. The geometry is that of the
+// input polyhedron (midpoints on straight edges); the input vertices keep their indices (new
+// ones are appended); orientation and face regions carry over to the children.
+mesh::SurfaceMesh refine_surface_near(const mesh::SurfaceMesh& s, const Eigen::Vector3d& point,
+                                      double radius, int rounds);
 
 }  // namespace palplab::engine

@@ -28,7 +28,7 @@ void contact_compliance_precompute(const StaticSolver& s, const std::vector<int>
       rhs(l, 3 * k + a) = 1.0;
     }
   }
-  const Eigen::MatrixXd Cf = s.ldlt.solve(rhs);
+  const Eigen::MatrixXd Cf = s.solve_free(rhs);
   c.C = Eigen::MatrixXd::Zero(n, 3 * m);
   for (long i = 0; i < nf; ++i) c.C.row(s.split.free[i]) = Cf.row(i);
   c.u0 = static_solve(s, f_nocontact.size() ? f_nocontact : Eigen::VectorXd::Zero(n));

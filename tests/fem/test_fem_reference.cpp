@@ -338,3 +338,245 @@ TEST(FemReference, NestedLevelsOfDsPressAreTrusted) {
   EXPECT_GT(r.stiffness, 0.8 * r.levels[2].stiffness);
   EXPECT_LT(r.levels[2].field_error, r.levels[1].field_error);
 }
+
+// The CHOLMOD supernodal path of the static solve (the factorisation of the large reference
+// levels) against the analytic solution and the LDL^T on a block in uniaxial stress: rollers on
+// x = 0, y = 0, z = 0, a uniform traction p on the top face. Linear tets represent the exact
+// solution u_z = -p z / E, u_x = nu p x / E, u_y = nu p y / E, so both solvers must give it to
+// round-off, and each other.
+TEST(FemReference, CholmodMatchesLdltAndTheAnalyticBlock) {
+  const Eigen::Vector3d size(0.03, 0.02, 0.04);
+  const mesh::TetMesh b = fem_block_mesh(6, 4, 8, size, 101);
+  const double E = 2e4, nu = 0.35, p = 500;  // Pa, -, Pa
+  const FemSystem s = fem_precompute(b.V, b.T, uniform_materials(b.T.rows(), E, nu, 1000));
+  std::vector<std::uint8_t> fixed(static_cast<size_t>(3 * b.V.rows()), 0);
+  for (long i = 0; i < b.V.rows(); ++i)
+    for (int a = 0; a < 3; ++a) fixed[3 * i + a] = b.V(i, a) < 1e-12;
+  // Consistent load of the uniform traction on the top faces (a third per vertex).
+  const mesh::BoundaryFaces bf = mesh::boundary_faces(b);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * b.V.rows());
+  for (long k = 0; k < bf.F.rows(); ++k) {
+    bool top = true;
+    for (int j = 0; j < 3; ++j) top = top && b.V(bf.F(k, j), 2) > size.z() - 1e-12;
+    if (!top) continue;
+    const Eigen::Vector3d x0 = mesh::row3(b.V, bf.F(k, 0)), x1 = mesh::row3(b.V, bf.F(k, 1)),
+                          x2 = mesh::row3(b.V, bf.F(k, 2));
+    const double area = 0.5 * (x1 - x0).cross(x2 - x0).norm();
+    for (int j = 0; j < 3; ++j) f[3 * bf.F(k, j) + 2] -= p * area / 3;
+  }
+  Eigen::VectorXd exact(3 * b.V.rows());
+  for (long i = 0; i < b.V.rows(); ++i)
+    exact.segment<3>(3 * i) << nu * p * b.V(i, 0) / E, nu * p * b.V(i, 1) / E, -p * b.V(i, 2) / E;
+  StaticSolver ldlt, chol, autom;
+  static_precompute(s.K, fixed, ldlt, SparseSolverKind::ldlt);
+  static_precompute(s.K, fixed, chol, SparseSolverKind::cholmod);
+  static_precompute(s.K, fixed, autom, SparseSolverKind::automatic);
+  EXPECT_EQ(ldlt.kind, SparseSolverKind::ldlt);
+  EXPECT_EQ(chol.kind, SparseSolverKind::cholmod);
+  EXPECT_EQ(autom.kind, SparseSolverKind::ldlt);  // 1.3k free dofs: below kCholmodMinDofs
+  EXPECT_GT(chol.factor_nnz, 0);
+  EXPECT_GT(ldlt.factor_nnz, 0);
+  const Eigen::VectorXd ul = static_solve(ldlt, f), uc = static_solve(chol, f);
+  const double umax = exact.cwiseAbs().maxCoeff();
+  EXPECT_LT((ul - exact).cwiseAbs().maxCoeff(), 1e-9 * umax);
+  EXPECT_LT((uc - exact).cwiseAbs().maxCoeff(), 1e-9 * umax);
+  EXPECT_LT((uc - ul).cwiseAbs().maxCoeff(), 1e-11 * umax);
+  // Several right-hand sides at once (the contact compliance's use).
+  Eigen::MatrixXd B(static_cast<long>(chol.split.free.size()), 2);
+  B.col(0) = gather(f, chol.split.free);
+  B.col(1) = -2 * B.col(0);
+  const Eigen::MatrixXd X = chol.solve_free(B);
+  EXPECT_LT((X.col(0) - gather(ul, ldlt.split.free)).cwiseAbs().maxCoeff(), 1e-11 * umax);
+  EXPECT_LT((X.col(1) + 2 * X.col(0)).cwiseAbs().maxCoeff(), 1e-11 * umax);
+  // A free-floating body (no constraint) is singular for CHOLMOD too.
+  StaticSolver floating;
+  EXPECT_THROW(static_precompute(s.K, std::vector<std::uint8_t>(fixed.size(), 0), floating,
+                                 SparseSolverKind::cholmod),
+               std::runtime_error);
+  // Only rollers on x = 0: rigid translations in y and z remain.
+  std::vector<std::uint8_t> rollers(fixed.size(), 0);
+  for (long i = 0; i < b.V.rows(); ++i) rollers[3 * i] = b.V(i, 0) < 1e-12;
+  EXPECT_THROW(static_precompute(s.K, rollers, floating, SparseSolverKind::cholmod),
+               std::runtime_error);
+  EXPECT_EQ(parse_sparse_solver("cholmod"), SparseSolverKind::cholmod);
+  EXPECT_EQ(parse_sparse_solver("auto"), SparseSolverKind::automatic);
+  EXPECT_THROW(parse_sparse_solver("lu"), std::invalid_argument);
+}
+
+// The whole reference with either solver: the same levels to round-off.
+TEST(FemReference, ReferenceLevelsIndependentOfTheSolver) {
+  FemReferenceOptions o = nested_block_options(0, 0.5);
+  o.solver = SparseSolverKind::ldlt;
+  const FemReferenceResult a = fem_reference(o);
+  o.solver = SparseSolverKind::cholmod;
+  const FemReferenceResult b = fem_reference(o);
+  ASSERT_EQ(a.levels.size(), b.levels.size());
+  for (size_t l = 0; l < a.levels.size(); ++l) {
+    EXPECT_EQ(a.levels[l].solver, "ldlt");
+    EXPECT_EQ(b.levels[l].solver, "cholmod");
+    EXPECT_NEAR(b.levels[l].stiffness / a.levels[l].stiffness, 1.0, 1e-10) << l;
+  }
+  EXPECT_NEAR(b.stiffness / a.stiffness, 1.0, 1e-8);
+  EXPECT_NEAR(b.observed_order, a.observed_order, 1e-6);
+}
+
+// Nested levels prolongate exactly: the coarse FE function read at the fine nodes.
+TEST(FemReference, ProlongationInterpolatesLinearFields) {
+  const mesh::TetMesh b = fem_block_mesh(2, 2, 1, Eigen::Vector3d(0.02, 0.02, 0.01), 101);
+  const RedRefinement rr = refine_red(b);
+  const auto lin = [](const Eigen::Vector3d& x) {
+    return Eigen::Vector3d(1 + 2 * x.x() - x.z(), 3 * x.y(), -x.x() + 0.5 * x.y() + 4 * x.z());
+  };
+  Eigen::VectorXd uc(3 * b.V.rows());
+  for (long i = 0; i < b.V.rows(); ++i) uc.segment<3>(3 * i) = lin(mesh::row3(b.V, i));
+  const Eigen::VectorXd uf = prolongate(rr.parent, uc);
+  ASSERT_EQ(uf.size(), 3 * rr.mesh.V.rows());
+  for (long i = 0; i < rr.mesh.V.rows(); ++i)
+    EXPECT_LT((uf.segment<3>(3 * i) - lin(mesh::row3(rr.mesh.V, i))).norm(), 1e-14) << i;
+}
+
+// The trust rule (reference_untrusted_reason): a converged nested sequence passes; every way of
+// not converging is named.
+TEST(FemReference, TrustRuleAcceptsConvergedAndRejectsUnconverged) {
+  // (The ungraded nested block above is not trusted: 14.1 mm loaded edges on level 0 against
+  // its 12 mm press, and 12 % estimated error on the finest level.)
+  EXPECT_NE(reference_untrusted_reason(fem_reference(nested_block_options(0, 0.5))), "");
+  // Synthetic sequences with ratio 2: q = 100 + 40 h^1.5 (converged) and variants.
+  const auto make = [](double k0, double k1, double k2, double press_h) {
+    FemReferenceResult r;
+    r.press_radius = 0.01;
+    r.refinement_ratio = 2;
+    const double k[3] = {k0, k1, k2};
+    for (int l = 0; l < 3; ++l) {
+      FemReferenceLevel lv;
+      lv.stiffness = k[l];
+      lv.press_h = press_h / (1 << l);
+      r.levels.push_back(lv);
+    }
+    richardson(k0, k1, k2, 2, r.observed_order, r.stiffness);
+    r.order_plausible =
+        r.observed_order >= kPlausibleOrder[0] && r.observed_order <= kPlausibleOrder[1];
+    r.monotone = true;
+    for (int l = 0; l < 3; ++l) {
+      r.levels[l].est_error = std::abs(r.levels[l].stiffness - r.stiffness) / r.stiffness;
+      if (l > 0) r.monotone = r.monotone && r.levels[l].est_error < r.levels[l - 1].est_error;
+    }
+    return r;
+  };
+  const auto q = [](double h) { return 100 + 40 * std::pow(h, 1.5); };
+  EXPECT_EQ(reference_untrusted_reason(make(q(1), q(0.5), q(0.25), 0.005)), "");
+  // The press not resolved on the first level used.
+  EXPECT_NE(reference_untrusted_reason(make(q(1), q(0.5), q(0.25), 0.0129)).find("not resolved"),
+            std::string::npos);
+  // Differences that grow (the 85/44/20 % of an unresolved press go the other way: shrinking
+  // too slowly): order 0.3 is outside the asymptotic range.
+  const auto slow = [](double h) { return 100 + 40 * std::pow(h, 0.3); };
+  EXPECT_NE(reference_untrusted_reason(make(slow(1), slow(0.5), slow(0.25), 0.005))
+                .find("outside the asymptotic range"),
+            std::string::npos);
+  // Oscillating: no order at all.
+  EXPECT_NE(reference_untrusted_reason(make(120, 110, 112, 0.005)).find("do not shrink"),
+            std::string::npos);
+  // Converged in order but the finest level still far from the limit (large correction).
+  const auto big = [](double h) { return 100 + 900 * std::pow(h, 1.0); };
+  EXPECT_NE(reference_untrusted_reason(make(big(1), big(0.5), big(0.25), 0.005))
+                .find("finest level's estimated error"),
+            std::string::npos);
+}
+
+// Local grading of the surface around the press: conforming, the same polyhedron, the input
+// vertices kept, edges under the point shrunk by 2^rounds and untouched far away.
+TEST(FemReference, SurfaceGradingIsConformingAndLocal) {
+  const Eigen::Vector3d size(0.04, 0.04, 0.02);
+  const mesh::SurfaceMesh s = box_surface(size);  // 5 mm edges on the top face
+  const Eigen::Vector3d p(0.02, 0.02, 0.02);
+  const mesh::SurfaceMesh g = refine_surface_near(s, p, 0.012, 2);
+  ASSERT_GT(g.F.rows(), s.F.rows());
+  EXPECT_EQ((g.V.topRows(s.V.rows()) - s.V).cwiseAbs().maxCoeff(), 0.0);
+  // Closed 2-manifold with consistent orientation: every edge in exactly two faces.
+  EXPECT_TRUE(g.non_manifold_edges.empty());
+  EXPECT_TRUE(g.inconsistent_edges.empty());
+  for (long e = 0; e < g.edge_faces.size(); ++e) ASSERT_EQ(g.edge_faces[e], 2) << e;
+  // Same enclosed volume and area (midpoints on straight edges).
+  const auto vol_area = [](const mesh::SurfaceMesh& m) {
+    double v = 0, a = 0;
+    for (long k = 0; k < m.F.rows(); ++k) {
+      const Eigen::Vector3d x0 = mesh::row3(m.V, m.F(k, 0)), x1 = mesh::row3(m.V, m.F(k, 1)),
+                            x2 = mesh::row3(m.V, m.F(k, 2));
+      v += x0.dot(x1.cross(x2)) / 6;
+      a += 0.5 * (x1 - x0).cross(x2 - x0).norm();
+    }
+    return std::pair<double, double>(v, a);
+  };
+  const auto [v0, a0] = vol_area(s);
+  const auto [v1, a1] = vol_area(g);
+  EXPECT_NEAR(v1, v0, 1e-12 * std::abs(v0));
+  EXPECT_NEAR(a1, a0, 1e-12 * a0);
+  const double h_s = press_edge(s.V, s.F, p, -Eigen::Vector3d::UnitZ(), 0.005);
+  const double h_g = press_edge(g.V, g.F, p, -Eigen::Vector3d::UnitZ(), 0.005);
+  EXPECT_NEAR(h_g, h_s / 4, 1e-12);
+  // Far from the point (the bottom face) nothing changed: the same number of bottom faces.
+  const auto bottom = [](const mesh::SurfaceMesh& m) {
+    long n = 0;
+    for (long k = 0; k < m.F.rows(); ++k)
+      n += m.V(m.F(k, 0), 2) < 1e-12 && m.V(m.F(k, 1), 2) < 1e-12 && m.V(m.F(k, 2), 2) < 1e-12;
+    return n;
+  };
+  EXPECT_EQ(bottom(g), bottom(s));
+  // The rounds that auto grading picks: loaded edges down to the press radius.
+  FemReferenceOptions o;
+  o.surface = s;
+  o.press_point = p;
+  o.press_radius = 0.005;  // 5 mm edges (diagonals 7.1 mm) -> 3.5 mm: 1 round
+  EXPECT_EQ(auto_grade_rounds(o), 1);
+  o.press_radius = 0.003;  // -> 1.8 mm: 2 rounds
+  EXPECT_EQ(auto_grade_rounds(o), 2);
+  o.press_radius = 0.02;
+  EXPECT_EQ(auto_grade_rounds(o), 0);
+}
+
+// Nested levels graded around the press from level 0 (10 mm edges on the box's surface, a
+// 10 mm press): two rounds of grading (auto takes one: 7.1 mm <= 10 mm) make level 0 resolve
+// the pad (3.5 mm edges) and the three nested levels are in the asymptotic range; the same problem
+// without grading (level 0 = TetGen of the plain surface) sees a point load on level 0.
+// 4.9 s in Release (measured this session): the third level has 81k tets, the smallest a graded
+// 3-level run of this press reaches.
+TEST(FemReference, GradedNestedLevelsResolveThePress) {
+  const Eigen::Vector3d size(0.04, 0.04, 0.02);
+  FemReferenceOptions o;
+  const mesh::TetMesh b = fem_block_mesh(4, 4, 2, size, 101);
+  o = reference_options_from_mesh(b, 2 + 5 * (2 + 5 * 2), 1.0, 0.01);  // top centre
+  o.is_fixed = [](const Eigen::Vector3d& p) { return p.z() < 1e-9; };
+  o.refinement = FemRefinement::nested;
+  o.base = mesh::TetMesh();
+  o.max_volume = 4e-6;
+  EXPECT_EQ(auto_grade_rounds(o), 1);  // 14.1 mm diagonals -> 7.1 mm <= 10 mm
+  const int rounds = 2;
+  // Without grading (grade_rounds 0, measured): 573, 351, 271 N/m, order 1.48, extrapolated
+  // 226 N/m, 14.1 mm loaded edges on level 0 (unresolved), finest level 20 % above the limit.
+  // Not rerun here (it doubles the test's time); the check that it is untrusted for the press
+  // is TrustRuleAcceptsConvergedAndRejectsUnconverged's.
+  o.grade_rounds = rounds;
+  const FemReferenceResult r = fem_reference(o);
+  for (const auto* x : {&r}) {
+    for (const auto& l : x->levels)
+      std::printf("%ld tets, press h %.3g mm: k %.6g N/m, est. error %.3g\n", l.tets,
+                  1e3 * l.press_h, l.stiffness, l.est_error);
+    std::printf("extrapolated k %.6g N/m, observed order %.3f: %s\n", x->stiffness,
+                x->observed_order, reference_untrusted_reason(*x).c_str());
+  }
+  EXPECT_LE(r.levels[0].press_h, 0.5 * o.press_radius + 1e-12);
+  EXPECT_EQ(r.levels[2].tets, 64 * r.levels[0].tets);
+  EXPECT_TRUE(r.monotone);
+  EXPECT_TRUE(r.order_plausible);
+  // Measured: 374, 272, 239 N/m, order 1.64, extrapolated 223 N/m (the ungraded levels: 226
+  // N/m, order 1.48, unresolved). The finest level is still 7 % above the limit here (level 0
+  // is coarse away from the pad: 4 cm^3 tets): trusted with a 10 % bound on that correction,
+  // not with the default 5 %, which the graded test must therefore still name.
+  EXPECT_EQ(reference_untrusted_reason(r, 0.1), "");
+  EXPECT_NE(reference_untrusted_reason(r).find("finest level's estimated error"),
+            std::string::npos);
+  EXPECT_LT(r.levels[2].est_error, 0.198);        // the ungraded finest level's
+  EXPECT_NEAR(r.stiffness / 226.455, 1.0, 0.03);  // the ungraded extrapolation agrees
+  ASSERT_EQ(r.field.rows(), o.surface.V.rows());
+}
