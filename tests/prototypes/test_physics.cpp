@@ -149,7 +149,7 @@ TEST(Physics, RefinementKeepsTheForceAndConservesTheMass) {
   };
   for (const Case& k : {Case{"tet tract, ovary", c, kOvary}, Case{"tet tract, body", c, kBody},
                         Case{"Model-A surface, ovary", read(membrane_tract), kOvary},
-                                        Case{"Model-B surface, ovary", read(model_b_surface), kOvary},
+                        Case{"Model-B surface, ovary", read(model_b_surface), kOvary},
                         Case{"Model-B surface, body", read(model_b_surface), kBody}}) {
     const std::string on = variant(k.text, "on", {});
     const std::string off = variant(
