@@ -46,16 +46,7 @@ class TraineeDevice : public engine::Device {
   const Eigen::Vector3d& last_position() const { return x_; }  // the command of the last read
   void write(const engine::Rendered& r) override {
     if (timed_) loop_.push_back(std::chrono::duration<float>(Clock::now() - t0_).count());
-    pm::Percept p;
-    p.t = r.t;
-    p.force = r.force;
-    p.contact = r.contact;
-    p.contact_region = r.contact_region;
-    p.visible_deformation = r.visible_deformation;
-    p.audio = r.audio;
-    p.visible_tip_to_target = r.visible_tip_to_target;
-    p.visible_tip_tissue = r.visible_tip_tissue;
-    trainee_.perceive(p);
+    trainee_.perceive(pm::percept_of(r));
   }
 
  private:

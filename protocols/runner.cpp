@@ -172,13 +172,7 @@ class VirtualParticipant : public engine::Device {
     return in;
   }
   void write(const engine::Rendered& r) override {
-    pm::Percept p;
-    p.t = r.t;
-    p.force = r.force;
-    p.contact = r.contact;
-    p.contact_region = r.contact_region;
-    p.visible_deformation = r.visible_deformation;
-    p.audio = r.audio;
+    const pm::Percept p = pm::percept_of(r);
     bool call = false;
     if (instructor_) {
       call = instructor_->observe(p, instructor_ch_);

@@ -5,8 +5,22 @@
 #include <limits>
 
 #include "common/seed.hpp"
+#include "engine/haptics/scene.hpp"
 
 namespace palplab::protocols::participants {
+
+Percept percept_of(const engine::Rendered& r) {
+  Percept p;
+  p.t = r.t;
+  p.force = r.force;
+  p.contact = r.contact;
+  p.contact_region = r.contact_region;
+  p.visible_deformation = r.visible_deformation;
+  p.audio = r.audio;
+  p.visible_tip_to_target = r.visible_tip_to_target;
+  p.visible_tip_tissue = r.visible_tip_tissue;
+  return p;
+}
 
 namespace {
 // The combination over an array (the per-step percept uses a stack array: no allocation).

@@ -24,6 +24,10 @@
 #include "protocols/participants/params.hpp"
 #include "protocols/rng.hpp"
 
+namespace palplab::engine {
+struct Rendered;
+}
+
 namespace palplab::protocols::participants {
 
 // What one haptic step renders, as a participant perceives it (a copy of engine::Rendered's
@@ -40,6 +44,10 @@ struct Percept {
   double visible_tip_to_target = -1.0;
   int visible_tip_tissue = -1;
 };
+
+// The percept of one rendered step (every perceivable field of engine::Rendered); the one copy
+// used by the palpation and the needle sessions.
+Percept percept_of(const engine::Rendered& r);
 
 // The rest surface the trainee explores (what a person sees of the organ before touching it).
 struct SurfaceView {
