@@ -1,5 +1,6 @@
 #include "engine/haptics/contact.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -9,6 +10,11 @@ namespace palplab::engine {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
+
+// The Phong projection is used where every 1 - t kappa_i >= kMinReach (see follow), so it moves
+// the proxy by at most kGain times the device's tangential motion; kAllow mean edges per step
+// more let a walk cut short by that bound finish while the device holds still.
+constexpr double kMinReach = 0.25, kGain = 1.0 / kMinReach, kAllow = 0.01;
 
 // Closest point of triangle abc to x with its barycentric weights (Ericson, Real-Time Collision
 // Detection, 5.1.5): exact on the vertex, edge and face regions.
@@ -307,64 +313,210 @@ bool ContactTracker::first_entry(const Vec3& a, const Vec3& b, SurfacePoint& hit
 }
 
 SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x) const {
+  return walk(from, x, INFINITY, nullptr);
+}
+
+SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x, double max_travel,
+                                  WalkInfo* info) const {
   // Phong projection: the proxy p on the surface whose shaded normal passes through x,
-  // x = p - d n(p). Under a straight push along a node's normal the proxy stays on the node (a
-  // deformable tissue keeps its contact node); sliding moves it continuously, since n is
-  // continuous over edges. Per face a few fixed-point steps (n from the current weights, x
-  // projected onto the face plane along n); a weight below 0 walks to the face across that edge.
-  int f = from.face, prev = -1;
-  Vec3 w = from.w;
-  Vec3 p = from.p;
+  // x = p - t m(p) with m = sum_i w_i N_i (the unnormalised shaded normal; n = m / |m|, depth
+  // t |m|). Under a straight push along a node's normal the proxy stays on the node (a
+  // deformable tissue keeps its contact node); sliding moves it continuously, since m is
+  // continuous over edges.
+  //
+  // Newton's method on the three unknowns (u, v, t) of the face (u = w1, v = w2): the residual
+  // r = p(u, v) - t m(u, v) - x is quadratic in them, so Newton converges quadratically whatever
+  // the depth, up to the focal points of the surface where its Jacobian
+  // J = [e1 - t dN1, e2 - t dN2, -m] is singular. (The former fixed point -- m from the current
+  // weights, x projected onto the face plane along it -- contracts by t |dm/dp| per iteration:
+  // on C's ovary tip, a cap of radius ~9 mm, it did not converge at the 9.3 mm a 2.5 N press
+  // holds there.) Each step is cut at the face's boundary, where the walk crosses to the face
+  // across that edge (the same point, so p moves continuously), and backtracked until |r|
+  // decreases (Armijo): |r| decreases monotonically along the walk. The path of p is at most
+  // `max_travel` long (a trust region: the proxy cannot run off far in one step).
+  int f = from.face;
+  Vec3 w = from.w.cwiseMax(0.0);
+  w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+  const auto at = [&](int face, const Vec3& wt, double t, Vec3& p, Vec3& m) {
+    p = m = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) {
+      p += wt[k] * mesh::row3(V_, F_(face, k));
+      m += wt[k] * mesh::row3(N_, F_(face, k));
+    }
+    return Vec3(p - t * m - x);
+  };
+  Vec3 p, m;
+  at(f, w, 0.0, p, m);
+  double t = m.squaredNorm() > 0 ? (p - x).dot(m) / m.squaredNorm() : 0.0;
+  // Converged at 1e-10 of a mean edge (sub-nanometre on the organs; Newton gets there in a few
+  // iterations and then stops on rounding).
+  const double tol = 1e-10 * std::max(ix_.mean_edge, 1e-300) + 1e-15 * x.norm();
+  double travelled = 0.0;
+  int back_face = -1, still_crossings = 0, it = 0;
+  bool converged = false, capped = false;
+  for (; it < 100; ++it) {
+    const Vec3 r = at(f, w, t, p, m);
+    const double phi = r.squaredNorm();
+    if (!(phi > tol * tol)) {
+      converged = std::isfinite(phi);
+      break;
+    }
+    const Vec3 a = mesh::row3(V_, F_(f, 0)), na = mesh::row3(N_, F_(f, 0));
+    Eigen::Matrix3d J;
+    J.col(0) = (mesh::row3(V_, F_(f, 1)) - a) - t * (mesh::row3(N_, F_(f, 1)) - na);
+    J.col(1) = (mesh::row3(V_, F_(f, 2)) - a) - t * (mesh::row3(N_, F_(f, 2)) - na);
+    J.col(2) = -m;
+    Vec3 d = J.partialPivLu().solve(-r);
+    const double scale = J.col(0).norm() * J.col(1).norm() * J.col(2).norm();
+    if (!d.allFinite() || !(std::abs(J.determinant()) > 1e-12 * scale)) {
+      // At a focal point: a Levenberg-Marquardt step (a descent direction for |r|^2).
+      const Eigen::Matrix3d A = J.transpose() * J;
+      d = (A + 1e-8 * A.trace() * Eigen::Matrix3d::Identity()).ldlt().solve(-J.transpose() * r);
+      if (!d.allFinite()) break;
+    }
+    const Vec3 dw(-d[0] - d[1], d[0], d[1]);
+    // The largest step inside the face, and inside the trust region.
+    double amax = 1.0;
+    int exit_k = -1;
+    for (int k = 0; k < 3; ++k)
+      if (dw[k] < 0.0 && w[k] + dw[k] < 0.0 && w[k] / -dw[k] < amax) {
+        amax = w[k] / -dw[k];
+        exit_k = k;
+      }
+    const Vec3 dp = d[0] * (mesh::row3(V_, F_(f, 1)) - a) + d[1] * (mesh::row3(V_, F_(f, 2)) - a);
+    const double dpn = dp.norm();
+    if (travelled + amax * dpn > max_travel) {
+      amax = dpn > 0 ? std::max(0.0, (max_travel - travelled) / dpn) : 0.0;
+      exit_k = -1;
+      capped = true;
+    }
+    double al = amax;
+    Vec3 wn = w, pn, mn;
+    bool ok = false;
+    for (int ls = 0; ls < 40; ++ls) {
+      wn = (w + al * dw).cwiseMax(0.0);
+      wn /= wn.sum();
+      const double phin = at(f, wn, t + al * d[2], pn, mn).squaredNorm();
+      if (phin <= (1.0 - 1e-4 * al) * phi) {
+        ok = true;
+        break;
+      }
+      al *= 0.5;
+      exit_k = -1;
+      capped = false;
+    }
+    if (!ok) break;  // no decrease along the Newton direction: a fold (rounding, or past a focus)
+    travelled += al * dpn;
+    w = wn;
+    t += al * d[2];
+    if (capped) break;
+    if (exit_k < 0) continue;
+    // On the edge opposite corner exit_k: continue in the face across it, from the same point.
+    const int g = ix_.edge_face[3 * f + exit_k];
+    if (g < 0) break;  // a boundary: stay on the edge
+    still_crossings = al * dpn > 0.0 ? 0 : still_crossings + 1;
+    // Back and forth over one edge without moving (the two faces' solutions lie on each other's
+    // side: a fold), or round a vertex: stay.
+    if ((still_crossings > 1 && g == back_face) || still_crossings > 16) break;
+    const int u = F_(f, (exit_k + 1) % 3), v = F_(f, (exit_k + 2) % 3);
+    const double wu = w[(exit_k + 1) % 3], wv = w[(exit_k + 2) % 3];
+    Vec3 wg = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) wg[k] = F_(g, k) == u ? wu : F_(g, k) == v ? wv : 0.0;
+    if (!(wg.sum() > 0)) break;
+    back_face = f;
+    f = g;
+    w = wg / wg.sum();
+  }
+  // A device exactly on a vertex's normal line is exactly at that vertex (a straight push at a
+  // node renders that node's normal, bit for bit).
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 v = mesh::row3(V_, F_(f, k)), nv = mesh::row3(N_, F_(f, k));
+    if (w[k] > 1.0 - 1e-9 && (x - v).cross(nv).norm() <= 1e-12 * (1.0 + (x - v).norm()) &&
+        (v - x).dot(nv) > 0.0)
+      w = Vec3::Unit(k);
+  }
+  SurfacePoint out;
+  out.face = f;
+  out.w = w;
+  at(f, w, t, out.p, m);
+  if (info) {
+    info->converged = converged;
+    info->capped = capped && !converged;
+    info->iterations = it;
+    info->residual = (out.p - t * m - x).norm();
+    info->travel = travelled;
+    info->t = t;
+    info->reach = reach_margin(out, t);
+  }
+  return out;
+}
+
+double ContactTracker::reach_margin(const SurfacePoint& s, double t) const {
+  // The normal-line map (q, t) -> q - t m(q) at depth t, relative to t = 0, restricted to the
+  // tangent plane: M = I - t S (S the shape operator of the shaded normal field on the face).
+  // Its eigenvalues are 1 - t kappa_i; the smaller real part is returned (1 at the surface, 0
+  // at a focal point, < 0 past it).
+  const int f = s.face;
+  const Vec3 a = mesh::row3(V_, F_(f, 0)), na = mesh::row3(N_, F_(f, 0));
+  Eigen::Matrix<double, 3, 2> A0, At;
+  A0.col(0) = mesh::row3(V_, F_(f, 1)) - a;
+  A0.col(1) = mesh::row3(V_, F_(f, 2)) - a;
+  At.col(0) = A0.col(0) - t * (mesh::row3(N_, F_(f, 1)) - na);
+  At.col(1) = A0.col(1) - t * (mesh::row3(N_, F_(f, 2)) - na);
+  Vec3 m = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) m += s.w[k] * mesh::row3(N_, F_(f, k));
+  if (!(m.squaredNorm() > 0)) return -1.0;
+  const Eigen::Matrix3d Q = Eigen::Matrix3d::Identity() - m * m.transpose() / m.squaredNorm();
+  const Eigen::Matrix<double, 3, 2> B0 = Q * A0, Bt = Q * At;
+  const Eigen::Matrix2d G = B0.transpose() * B0;
+  if (!(std::abs(G.determinant()) > 0)) return -1.0;
+  const Eigen::Matrix2d M = G.inverse() * (B0.transpose() * Bt);
+  const double tr = M.trace(), det = M.determinant(), disc = 0.25 * tr * tr - det;
+  return disc >= 0 ? 0.5 * tr - std::sqrt(disc) : 0.5 * tr;
+}
+
+SurfacePoint ContactTracker::slide(const SurfacePoint& from, const Vec3& delta) const {
+  // The tangential part of delta, walked along the surface: straight within a face, over an
+  // edge rotated into the next face's plane with its length kept (the surface unfolded).
+  int f = from.face;
+  Vec3 w = from.w.cwiseMax(0.0);
+  w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+  Vec3 rest = delta;
+  int back_face = -1;
   for (int it = 0; it < 64; ++it) {
     const Vec3 a = mesh::row3(V_, F_(f, 0)), b = mesh::row3(V_, F_(f, 1)),
                c = mesh::row3(V_, F_(f, 2));
     const Vec3 nf = (b - a).cross(c - a);
     const double area2 = nf.squaredNorm();
-    if (!(area2 > 0.0)) break;  // degenerate face: keep the last point
-    Vec3 wu = w;
-    for (int j = 0; j < 16; ++j) {  // converges linearly, fast for d |dn/dp| < 1
-      SurfacePoint q{f, wu.cwiseMax(0.0) / std::max(wu.cwiseMax(0.0).sum(), 1e-300), p};
-      const Vec3 n = shaded_normal(q);
-      const double den = n.dot(nf);
-      if (!(std::abs(den) > 1e-3 * std::sqrt(area2))) break;  // n nearly in the face plane
-      p = x + ((a - x).dot(nf) / den) * n;
-      const Vec3 w_old = wu;
-      wu = Vec3((b - p).cross(c - p).dot(nf), (c - p).cross(a - p).dot(nf),
-                (a - p).cross(b - p).dot(nf)) /
-           area2;
-      if ((wu - w_old).cwiseAbs().maxCoeff() < 1e-14) break;
-    }
-    int k = 0;
-    const double wmin = wu.minCoeff(&k);
-    if (wmin >= -1e-12) {
-      w = wu.cwiseMax(0.0) / wu.cwiseMax(0.0).sum();
-      break;
-    }
-    const int g = ix_.edge_face[3 * f + k];
-    if (g < 0 || g == prev) {  // a boundary, or back and forth over one edge: stay on the edge
-      w = wu.cwiseMax(0.0);
-      w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
-      break;
-    }
-    // Weights of the same point in the neighbour (a starting guess for its fixed point).
-    prev = f;
+    if (!(area2 > 0.0)) break;
+    const double len = rest.norm();
+    rest -= rest.dot(nf) / area2 * nf;  // into the face plane, length kept
+    if (!(rest.norm() > 0.0)) break;
+    rest *= len / rest.norm();
+    // Barycentric change of the in-plane vector `rest`.
+    const Vec3 dw(nf.dot(rest.cross(b - c)), nf.dot(rest.cross(c - a)), nf.dot(rest.cross(a - b)));
+    const Vec3 dw_unit = dw / area2;
+    double amax = 1.0;
+    int exit_k = -1;
+    for (int k = 0; k < 3; ++k)
+      if (dw_unit[k] < 0.0 && w[k] + dw_unit[k] < 0.0 && w[k] / -dw_unit[k] < amax) {
+        amax = w[k] / -dw_unit[k];
+        exit_k = k;
+      }
+    w = (w + amax * dw_unit).cwiseMax(0.0);
+    w /= w.sum();
+    rest *= 1.0 - amax;
+    if (exit_k < 0) break;
+    const int g = ix_.edge_face[3 * f + exit_k];
+    if (g < 0 || (g == back_face && amax == 0.0)) break;
+    const int u = F_(f, (exit_k + 1) % 3), v = F_(f, (exit_k + 2) % 3);
+    const double wu = w[(exit_k + 1) % 3], wv = w[(exit_k + 2) % 3];
+    Vec3 wg = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) wg[k] = F_(g, k) == u ? wu : F_(g, k) == v ? wv : 0.0;
+    if (!(wg.sum() > 0)) break;
+    back_face = f;
     f = g;
-    const Vec3 a2 = mesh::row3(V_, F_(f, 0)), b2 = mesh::row3(V_, F_(f, 1)),
-               c2 = mesh::row3(V_, F_(f, 2));
-    const Vec3 n2 = (b2 - a2).cross(c2 - a2);
-    const double ar2 = std::max(n2.squaredNorm(), 1e-300);
-    w = Vec3((b2 - p).cross(c2 - p).dot(n2), (c2 - p).cross(a2 - p).dot(n2),
-             (a2 - p).cross(b2 - p).dot(n2)) /
-        ar2;
-    w = w.cwiseMax(0.0);
-    w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
-  }
-  // A device exactly on a vertex's normal line is exactly at that vertex (the fixed point only
-  // approaches it linearly; a straight push at a node must render that node's normal).
-  for (int k = 0; k < 3; ++k) {
-    const Vec3 v = mesh::row3(V_, F_(f, k)), nv = mesh::row3(N_, F_(f, k));
-    if ((x - v).cross(nv).norm() <= 1e-12 * (1.0 + (x - v).norm()) && (v - x).dot(nv) > 0.0)
-      w = Vec3::Unit(k);
+    w = wg / wg.sum();
   }
   SurfacePoint out;
   out.face = f;
@@ -407,30 +559,44 @@ void ContactTracker::set_contact(const SurfacePoint& s, const Vec3& x) {
   node_ = keep >= 0 ? keep : F_(s.face, k);
 }
 
+SurfacePoint ContactTracker::projection_near(const SurfacePoint& c, const Vec3& x) const {
+  // The Phong projection reached from c (the closest surface point to an x found inside) within
+  // the ball of radius |x - c| around it; c itself if there is none within the reach.
+  WalkInfo wi;
+  const SurfacePoint q = walk(c, x, (x - c.p).norm(), &wi);
+  return wi.converged && wi.reach >= kMinReach && (q.p - x).dot(shaded_normal(q)) > 0.0 ? q : c;
+}
+
+SurfacePoint ContactTracker::follow(const SurfacePoint& s, const Vec3& from, const Vec3& x) const {
+  // Within the reach of the surface (every 1 - t kappa_i >= kMinReach at the projection: the
+  // device less deep than 3/4 of the local radius of curvature) the proxy is the Phong
+  // projection, which moves it by at most 1 / kMinReach = kGain times the device's tangential
+  // motion; the walk's path is bounded by that (plus a tenth of an edge, so a device that holds
+  // still lets an unfinished walk converge). Deeper -- near or past the centre of curvature,
+  // where the projection's gain 1 / (1 - t kappa) grows without bound and its solution leaves
+  // the side of entry (on a sphere past its centre the entry-side solution moves against the
+  // device) -- the proxy follows the device's tangential motion along the surface (a god-object
+  // on the local tangent plane, Zilles & Salisbury 1995), and returns to the projection, within
+  // the same bound per step, when the device is back within the reach. Before, the walk was
+  // refused there and the proxy stayed on its node for good (a 2.5 N slide on C's ovary tip).
+  const double moved = (x - from).norm();
+  WalkInfo wi;
+  const SurfacePoint q = walk(s, x, kGain * moved + kAllow * ix_.mean_edge, &wi);
+  if ((wi.converged || wi.capped) && wi.reach >= kMinReach) return q;
+  return slide(s, x - from);
+}
+
 void ContactTracker::update(const Vec3& from, const Vec3& x) {
   started_inside_ = false;
   if (F_.rows() == 0) return;
   if (engaged_) {
-    // Near a focal point of the surface (deeper than its local radius of curvature, e.g. past
-    // the middle of a small ovary whose soft tissue lets the hand that deep) the projection is
-    // no longer unique and the walk may run off. The proxy then stays where it is, on the side
-    // of entry: when the walk ends on the outside while the device is still below the old
-    // proxy, or moves more than 4 times the device's step plus a tenth of a mean edge (sliding
-    // at a few mm depth moves it about 1.2 times the device's step). A device that holds still
-    // lets the walk finish converging (e.g. after a jump onto a node's normal line).
-    const SurfacePoint q = walk(proxy_, x);
-    const double d_new = (q.p - x).dot(shaded_normal(q)), d_old = (proxy_.p - x).dot(n_);
-    const double moved = (x - from).norm();
-    const bool run_off =
-        moved > 0.0 && ((d_new <= 0.0 && d_old > 0.0) ||
-                        (q.p - proxy_.p).norm() > 4.0 * moved + 0.1 * ix_.mean_edge);
-    set_contact(run_off ? proxy_ : q, x);
+    set_contact(follow(proxy_, from, x), x);
     return;
   }
   if (!outside_known_) {
     // Side unknown: the inside test, then the proxy at the closest surface point.
     if (winding_number(x) > 0.5) {
-      set_contact(closest_point(x), x);
+      set_contact(projection_near(closest_point(x), x), x);
       started_inside_ = engaged_;
       outside_known_ = true;
       return;
@@ -440,12 +606,13 @@ void ContactTracker::update(const Vec3& from, const Vec3& x) {
   }
   SurfacePoint hit;
   if (!first_entry(from, x, hit)) return;
-  SurfacePoint q = walk(hit, x);
+  SurfacePoint q = follow(hit, hit.p, x);
   // A long jump in one step (a device that was parked somewhere and reports a point deep in the
   // organ; a bridge's first datagram) can leave the walk from the entry point on a face whose
   // normal line does not reach the device. The device did enter: if it is inside, the proxy
   // goes to the closest surface point, as for a device found inside.
-  if (!((q.p - x).dot(shaded_normal(q)) > 0.0) && winding_number(x) > 0.5) q = closest_point(x);
+  if (!((q.p - x).dot(shaded_normal(q)) > 0.0) && winding_number(x) > 0.5)
+    q = projection_near(closest_point(x), x);
   set_contact(q, x);
 }
 

@@ -9,14 +9,20 @@
 //   * While in contact, the proxy walks face to face over edges to the point p whose shaded
 //     normal passes through the device (Phong projection, x = p - d n(p)): a straight push
 //     along a node's normal keeps the node, sliding moves p continuously, and p never jumps to
-//     the far side of a thin part, however deep the device goes.
+//     the far side of a thin part, however deep the device goes. The projection is solved by
+//     Newton's method with a line search (quadratic convergence at any depth short of a focal
+//     point), the walk's path bounded per step. Where the device is near or past the local
+//     centre of curvature (a 2.5 N press on C's ovary tip, radius ~9 mm, holds 9.3 mm deep) the
+//     projection's gain 1 / (1 - d kappa) has no bound: there the proxy follows the device's
+//     tangential motion along the surface instead (a god-object on the local tangent plane).
 //   * Penetration depth is measured along the shaded normal n(p) = normalize(sum_i w_i N_i) of
 //     the proxy's face (w the barycentric weights of the proxy, N the vertex normals): at a
 //     vertex it is that vertex's normal, on an edge a blend of its two ends. The contact ends
 //     when the depth is <= 0 (the device is back on the outside).
 //   * When the side of the device is unknown (the first step after reset, or after a non-finite
 //     device position), the inside test is the generalized winding number (Jacobson et al.
-//     2013) of the surface at the device; inside, the proxy starts at the closest surface point.
+//     2013) of the surface at the device; inside, the proxy starts at the Phong projection found
+//     from the closest surface point (the closest point itself if there is none near it).
 //
 // Shapes: V #V by 3 rest positions (m), N #V by 3 unit outward vertex normals, F #F by 3 faces
 // (ccw seen from outside).
@@ -97,12 +103,38 @@ class ContactTracker {
   double winding_number(const Eigen::Vector3d& x) const;
   // First face the segment a -> b enters from outside (smallest parameter); false if none.
   bool first_entry(const Eigen::Vector3d& a, const Eigen::Vector3d& b, SurfacePoint& hit) const;
-  // The proxy's walk from `from` to the Phong projection of x (see the top).
+  // The proxy's walk from `from` to the Phong projection of x (see the top), unbounded.
   SurfacePoint walk(const SurfacePoint& from, const Eigen::Vector3d& x) const;
+  struct WalkInfo {
+    bool converged = false;  // x is on the shaded normal line of the result (|r| <= 1e-10 edge)
+    bool capped = false;     // stopped by max_travel before converging
+    int iterations = 0;      // Newton iterations
+    double residual = 0.0;   // m, |p - t m(p) - x|
+    double travel = 0.0;     // m, length of the path of p
+    double t = 0.0;          // depth along the unnormalised shaded normal m (depth = t |m|)
+    double reach = 0.0;      // reach_margin(result, t)
+  };
+  // The same walk, its path at most max_travel long (m); what it did in *info (optional).
+  SurfacePoint walk(const SurfacePoint& from, const Eigen::Vector3d& x, double max_travel,
+                    WalkInfo* info) const;
+  // Smallest real part of the eigenvalues 1 - t kappa_i of the normal-line map at s, depth t
+  // (along the unnormalised shaded normal): 1 on the surface, 0 at a focal point of the shaded
+  // normal field (a centre of curvature), < 0 past it. The Phong projection moves the proxy by
+  // up to 1 / reach times the device's tangential motion.
+  double reach_margin(const SurfacePoint& s, double t) const;
+  // The tangential part of delta (m) walked along the surface from `from` (in each face's
+  // plane, its length kept over edges: the surface unfolded).
+  SurfacePoint slide(const SurfacePoint& from, const Eigen::Vector3d& delta) const;
   Eigen::Vector3d shaded_normal(const SurfacePoint& s) const;
 
  private:
   void set_contact(const SurfacePoint& s, const Eigen::Vector3d& x);
+  // The proxy at s, the device moved from `from` to x: the Phong projection within the reach,
+  // else s slid by the device's tangential motion (see follow's definition).
+  SurfacePoint follow(const SurfacePoint& s, const Eigen::Vector3d& from,
+                      const Eigen::Vector3d& x) const;
+  // The Phong projection of x near c (closest_point(x)), or c.
+  SurfacePoint projection_near(const SurfacePoint& c, const Eigen::Vector3d& x) const;
 
   const mesh::Positions& V_;
   const mesh::Positions& N_;
