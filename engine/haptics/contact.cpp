@@ -476,12 +476,15 @@ double ContactTracker::reach_margin(const SurfacePoint& s, double t) const {
 }
 
 SurfacePoint ContactTracker::slide(const SurfacePoint& from, const Vec3& delta) const {
-  // The tangential part of delta, walked along the surface: straight within a face, over an
-  // edge rotated into the next face's plane with its length kept (the surface unfolded).
+  // The part of delta tangential to the shaded normal at `from` (zero for a push along a
+  // node's normal: the node is kept), walked along the surface: within a face in its plane, over
+  // an edge rotated into the next face's plane, its length kept (the surface unfolded). On a
+  // sphere the proxy's position along a straight slide then moves exactly as the device's does.
   int f = from.face;
   Vec3 w = from.w.cwiseMax(0.0);
   w = w.sum() > 0 ? Vec3(w / w.sum()) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
-  Vec3 rest = delta;
+  const Vec3 n0 = shaded_normal(SurfacePoint{f, w, from.p});
+  Vec3 rest = delta - delta.dot(n0) * n0;
   int back_face = -1;
   for (int it = 0; it < 64; ++it) {
     const Vec3 a = mesh::row3(V_, F_(f, 0)), b = mesh::row3(V_, F_(f, 1)),

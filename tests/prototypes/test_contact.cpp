@@ -148,7 +148,12 @@ TEST(ContactTracker, StartInsideEngagesAtTheClosestPoint) {
   t.update(x, x);
   ASSERT_TRUE(t.engaged());
   EXPECT_TRUE(t.started_inside());
-  EXPECT_NEAR((t.proxy().p - x).norm(), (1.0 - 0.7) / std::sqrt(3.0), 1e-12);
+  // At the Phong projection found from the closest point, so the next steps continue from
+  // where they would have been (from the closest point, at (1 - 0.7) / sqrt(3), the proxy would
+  // then walk to it: a force ramp the device did not cause). With N = V the shaded normal of a
+  // face point is parallel to it: the projection is the central one, x / |x|_1.
+  EXPECT_NEAR((t.proxy().p - x / 0.7).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(t.depth(), x.norm() * (1 / 0.7 - 1), 1e-12);
   t.update(x, x);
   EXPECT_FALSE(t.started_inside());  // only the first step
 }

@@ -112,7 +112,8 @@ TEST(ContactDeep, PhongProjectionOnASphereIsTheCentralProjectionAtAnyDepth) {
     }
   std::printf("largest distance from the central projection %.3g m; reach error %.3g\n", worst,
               worst_reach);
-  EXPECT_LE(worst_reach, 1e-9);
+  // A double eigenvalue of a 2 x 2 matrix has an error of the square root of the rounding.
+  EXPECT_LE(worst_reach, 1e-7);
 }
 
 TEST(ContactDeep, PastTheCentreTheWalkFindsTheEntrySideSolution) {
@@ -169,44 +170,49 @@ TEST(ContactDeep, BeyondTheCentreTheProxyFollowsTheDeviceOnTheEntrySide) {
   // In along the top normal to 10 % of R past the centre, then 1.5 cm (0.3 R) sideways: the
   // projection's entry-side solution would run against the device (at gain R / |x|, up to 10);
   // the proxy instead follows the device's tangential motion along the surface: it moves the
-  // device's way, stays on the top side, never by more than kGain (4) device steps per step,
-  // and the depth changes continuously. Before, the proxy stayed on the top vertex.
+  // device's way and as far along the slide, stays on the top side, never by more than a device
+  // step per step, and the depth changes continuously. Before, the proxy stayed on the top
+  // vertex.
   Sphere s;
   ContactTracker t(s.V, s.N, s.F);
-  const Vec3 top = s.V.row(s.top());
-  Vec3 prev = top + Vec3(0, 0, 0.002);
+  const Vec3 top = s.V.row(s.top()), n = s.N.row(s.top()).normalized();
+  const Vec3 side = (Vec3::UnitX() - Vec3::UnitX().dot(n) * n).normalized();
+  Vec3 prev = top + 0.002 * n;
   t.update(prev, prev);
   const int in = 1100;
   for (int i = 1; i <= in; ++i) {
-    const Vec3 x = top - Vec3(0, 0, (0.002 + 1.1 * s.R) * i / in - 0.002);
+    const Vec3 x = top - ((0.002 + 1.1 * s.R) * i / in - 0.002) * n;
     t.update(prev, x);
     prev = x;
   }
   ASSERT_TRUE(t.engaged());
   EXPECT_EQ(t.node(), s.top());  // a straight push keeps its node
+  const Vec3 p_start = t.proxy().p;
   double d_last = t.depth(), worst_dd = 0, worst_move = 0;
-  Vec3 p_last = t.proxy().p;
+  Vec3 p_last = p_start;
   const double dx = 5e-5;
   for (int i = 1; i <= 300; ++i) {
-    const Vec3 x = prev + Vec3(dx, 0, 0);
+    const Vec3 x = prev + dx * side;
     t.update(prev, x);
     prev = x;
     ASSERT_TRUE(t.engaged()) << i;
     worst_dd = std::max(worst_dd, std::abs(t.depth() - d_last));
     worst_move = std::max(worst_move, (t.proxy().p - p_last).norm());
-    ASSERT_GE(t.proxy().p.x(), p_last.x() - 1e-12) << "the proxy runs against the device";
-    ASSERT_GT(t.proxy().p.z(), 0.8 * s.R) << "the proxy left the entry side";
+    ASSERT_GE((t.proxy().p - p_last).dot(side), -1e-12) << "the proxy runs against the device";
+    ASSERT_GT(t.proxy().p.dot(n), 0.8 * s.R) << "the proxy left the entry side";
     d_last = t.depth();
     p_last = t.proxy().p;
   }
-  const double travelled = 300 * dx;
-  std::printf("beyond the centre: proxy moved %.2f mm for the device's %.2f mm; largest step %.3g"
-              " m, largest depth change %.3g m\n",
-              1e3 * p_last.x(), 1e3 * travelled, worst_move, worst_dd);
-  // Along the surface at the device's speed: x = R sin(s / R) for an arc s = 0.3 R, on the
-  // polyhedron within an edge's sag.
-  EXPECT_NEAR(p_last.x(), s.R * std::sin(travelled / s.R), 0.02 * travelled);
-  EXPECT_LE(worst_move, 4 * dx + 1e-9);
+  const double travelled = 300 * dx, moved = (p_last - p_start).dot(side);
+  std::printf(
+      "beyond the centre: proxy moved %.2f mm for the device's %.2f mm; largest step %.3g"
+      " m, largest depth change %.3g m\n",
+      1e3 * moved, 1e3 * travelled, worst_move, worst_dd);
+  // The proxy moves by the device's motion tangential to its shaded normal: on a sphere its
+  // position along the slide then follows the device's exactly (ds = dx cos(s / R) gives
+  // R sin(s / R) = x); on the polyhedron (flat faces, shaded normals) within 5 % (measured 2.9 %).
+  EXPECT_NEAR(moved, travelled, 0.05 * travelled);
+  EXPECT_LE(worst_move, dx + 1e-12);
   EXPECT_LE(worst_dd, 2 * dx);
 }
 
@@ -286,8 +292,8 @@ TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
       dmax = std::max(dmax, t.depth());
       lead = std::max(lead, std::abs((t.proxy().p - x).dot(sdir)));
       if (was)
-        worst_move =
-            std::max(worst_move, (t.proxy().p - before).norm() / (4 * (x - prev).norm() + 0.01 * edge));
+        worst_move = std::max(
+            worst_move, (t.proxy().p - before).norm() / (4 * (x - prev).norm() + 0.01 * edge));
     }
     prev = x;
   }
