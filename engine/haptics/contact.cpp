@@ -348,9 +348,11 @@ SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x, doubl
   Vec3 p, m;
   at(f, w, 0.0, p, m);
   double t = m.squaredNorm() > 0 ? (p - x).dot(m) / m.squaredNorm() : 0.0;
-  // Converged at 1e-10 of a mean edge (sub-nanometre on the organs; Newton gets there in a few
-  // iterations and then stops on rounding).
-  const double tol = 1e-10 * std::max(ix_.mean_edge, 1e-300) + 1e-15 * x.norm();
+  // Converged at 1e-12 of a mean edge (Newton gets there in a few iterations); a walk that
+  // stops on rounding (no decrease) within 1e-9 of an edge (a few picometres on the organs) is
+  // converged too.
+  const double tol = 1e-12 * std::max(ix_.mean_edge, 1e-300) + 1e-16 * x.norm();
+  const double loose = 1e-9 * std::max(ix_.mean_edge, 1e-300) + 1e-15 * x.norm();
   double travelled = 0.0;
   int back_face = -1, still_crossings = 0, it = 0;
   bool converged = false, capped = false;
@@ -405,7 +407,10 @@ SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x, doubl
       exit_k = -1;
       capped = false;
     }
-    if (!ok) break;  // no decrease along the Newton direction: a fold (rounding, or past a focus)
+    if (!ok) {  // no decrease along the Newton direction: rounding, or a fold
+      converged = phi <= loose * loose;
+      break;
+    }
     travelled += al * dpn;
     w = wn;
     t += al * d[2];

@@ -106,7 +106,7 @@ class ContactTracker {
   // The proxy's walk from `from` to the Phong projection of x (see the top), unbounded.
   SurfacePoint walk(const SurfacePoint& from, const Eigen::Vector3d& x) const;
   struct WalkInfo {
-    bool converged = false;  // x is on the shaded normal line of the result (|r| <= 1e-10 edge)
+    bool converged = false;  // x on the shaded normal line of the result (|r| <= 1e-12 edge)
     bool capped = false;     // stopped by max_travel before converging
     int iterations = 0;      // Newton iterations
     double residual = 0.0;   // m, |p - t m(p) - x|

@@ -89,7 +89,8 @@ std::vector<Vec3> directions(int n, double cone) {
 TEST(ContactDeep, PhongProjectionOnASphereIsTheCentralProjectionAtAnyDepth) {
   // From the top vertex to devices up to 25 degrees away (several faces: the edge subtends
   // ~9 degrees) at depths of 30 to 97 % of the radius: the walk ends exactly on the central
-  // projection. The old fixed point missed it by up to 1.7 mm at 90 % depth (a sphere of 5 cm).
+  // projection. The former fixed point missed it by up to 1.1 mm at 90 % depth and 1.0 cm at
+  // 97 % (a sphere of radius 5 cm; 2e-11 m at 30 %).
   Sphere s;
   ContactTracker t(s.V, s.N, s.F);
   const SurfacePoint top = s.at_vertex(s.top());
