@@ -579,7 +579,7 @@ SurfacePoint ContactTracker::follow(const SurfacePoint& s, const Vec3& from, con
   // Within the reach of the surface (every 1 - t kappa_i >= kMinReach at the projection: the
   // device less deep than 3/4 of the local radius of curvature) the proxy is the Phong
   // projection, which moves it by at most 1 / kMinReach = kGain times the device's tangential
-  // motion; the walk's path is bounded by that (plus a tenth of an edge, so a device that holds
+  // motion; the walk's path is bounded by that (plus 1 % of a mean edge, so a device that holds
   // still lets an unfinished walk converge). Deeper -- near or past the centre of curvature,
   // where the projection's gain 1 / (1 - t kappa) grows without bound and its solution leaves
   // the side of entry (on a sphere past its centre the entry-side solution moves against the
