@@ -57,8 +57,10 @@ AdaptiveMassSpring tet_model() {
   const Eigen::VectorXd area = lumped_area(tm.V, bf.F);
   s.home_ks = 2e5 * area;
   s.home_kd = 200.0 * area;
+  // With the tets, as engine/models/mass_spring_model.cpp builds it: refinement re-divides the
+  // coarse tets under the refined surface (the code path prototype C runs).
   return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
-                       1e-3);
+                       1e-3, CoarseTets{tm.T, E, bf.tet});
 }
 
 // Wall time of `steps` backward-Euler steps of the whole current system, per step (s).
