@@ -13,6 +13,7 @@
 
 #include "app/bench.hpp"
 #include "app/bench_scene.hpp"
+#include "bench/refine_models.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/rings.hpp"
@@ -28,38 +29,7 @@ using namespace palplab::engine;
 using palplab::app::BenchOptions;
 using palplab::app::BenchResult;
 using Clock = std::chrono::steady_clock;
-
-// A surface (membrane) model: 5 mm wall of 10 kPa tissue, 1000 kg/m^3, on a 2e5 N/m^3
-// foundation (the stomach of the original work; the tract surface with the same material).
-AdaptiveMassSpring surface_model(const mesh::SurfaceMesh& m) {
-  MassSpringSystem s;
-  s.X_rest = m.V;
-  s.X = m.V;
-  const Eigen::VectorXd c = Eigen::VectorXd::Constant(m.F.rows(), 1e4 * 0.005);
-  const Eigen::VectorXd area = lumped_area(m.V, m.F);
-  s.mass = area * (1000.0 * 0.005);
-  s.home_ks = 2e5 * area;
-  s.home_kd = 200.0 * area;
-  s.springs = membrane_springs(m.V, m.F, c, 0.002);
-  return make_adaptive(std::move(s), m.F, c, 0.002, 1e-3);
-}
-
-// Model-C: E = 100 kPa, 1000 kg/m^3, foundation 2e5 N/m^3 under the boundary (prototype C).
-AdaptiveMassSpring tet_model() {
-  const mesh::TetMesh tm = mesh::generate_model_c();
-  const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
-  MassSpringSystem s;
-  s.X_rest = tm.V;
-  s.X = tm.V;
-  const Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
-  s.mass = tet_lumped_mass(tm.V, tm.T, Eigen::VectorXd::Constant(tm.T.rows(), 1000.0));
-  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
-  const Eigen::VectorXd area = lumped_area(tm.V, bf.F);
-  s.home_ks = 2e5 * area;
-  s.home_kd = 200.0 * area;
-  return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
-                       1e-3);
-}
+using palplab::bench::surface_model;
 
 // Wall time of `steps` backward-Euler steps of the whole current system, per step (s).
 double haptic_step_s(AdaptiveMassSpring& m, int steps) {
@@ -178,7 +148,8 @@ std::vector<BenchResult> run(const BenchOptions& o) {
           surface_model(mesh::generate_stomach(0)), 5e-5, o, out);
   compare("tract_surface", "tract surface, Model-A", surface_model(mesh::generate_tract({1500, 0})),
           4e-6, o, out);
-  if (!o.quick) compare("tract_tet", "Model-C tet model", tet_model(), 4e-6, o, out);
+  if (!o.quick)
+    compare("tract_tet", "Model-C tet model", palplab::bench::tet_model_c(), 4e-6, o, out);
   return out;
 }
 

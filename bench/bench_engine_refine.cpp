@@ -10,12 +10,8 @@
 #include <cstdio>
 #include <vector>
 
+#include "bench/refine_models.hpp"
 #include "engine/haptics/clock.hpp"
-#include "engine/mesh/generate.hpp"
-#include "engine/mesh/rings.hpp"
-#include "engine/mesh/tet_mesh.hpp"
-#include "engine/models/mass_spring_material.hpp"
-#include "engine/models/refinement.hpp"
 #include "engine/solvers/integrators.hpp"
 
 using namespace palplab;
@@ -23,38 +19,6 @@ using namespace palplab::engine;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-AdaptiveMassSpring stomach() {
-  const mesh::SurfaceMesh m = mesh::generate_stomach(0);
-  MassSpringSystem s;
-  s.X_rest = m.V;
-  s.X = m.V;
-  // A 5 mm wall of 10 kPa tissue, 1000 kg/m^3, on a 2e5 N/m^3 foundation.
-  const Eigen::VectorXd c = Eigen::VectorXd::Constant(m.F.rows(), 1e4 * 0.005);
-  const Eigen::VectorXd area = lumped_area(m.V, m.F);
-  s.mass = area * (1000.0 * 0.005);
-  s.home_ks = 2e5 * area;
-  s.home_kd = 200.0 * area;
-  s.springs = membrane_springs(m.V, m.F, c, 0.002);
-  return make_adaptive(std::move(s), m.F, c, 0.002, 1e-3);
-}
-
-AdaptiveMassSpring model_c() {
-  const mesh::TetMesh tm = mesh::generate_model_c();
-  const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
-  MassSpringSystem s;
-  s.X_rest = tm.V;
-  s.X = tm.V;
-  // Prototype C's material: E = 100 kPa, 1000 kg/m^3, foundation 2e5 N/m^3.
-  const Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
-  s.mass = tet_lumped_mass(tm.V, tm.T, Eigen::VectorXd::Constant(tm.T.rows(), 1000.0));
-  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
-  const Eigen::VectorXd area = lumped_area(tm.V, bf.F);
-  s.home_ks = 2e5 * area;
-  s.home_kd = 200.0 * area;
-  return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
-                       1e-3);
-}
 
 struct Counts {
   double area_nodes = 0, area_springs = 0, conv_nodes = 0, conv_springs = 0;
@@ -166,7 +130,7 @@ void compare(const char* name, AdaptiveMassSpring m, const std::vector<double>& 
 }  // namespace
 
 int main() {
-  compare("stomach", stomach(), {2e-4, 1e-4, 5e-5});
-  compare("Model-C surface (tet model)", model_c(), {8e-6, 4e-6, 2e-6});
+  compare("stomach", palplab::bench::surface_model(mesh::generate_stomach(0)), {2e-4, 1e-4, 5e-5});
+  compare("Model-C (tet model)", palplab::bench::tet_model_c(), {8e-6, 4e-6, 2e-6});
   return 0;
 }

@@ -9,11 +9,10 @@
 // are timed (a participant spends the expensive part of a session there).
 //
 // Sliding press (prototype C): the same press, but while holding 2.5 N the contact point moves
-// across the ovary at 2 cm/s (along the ovary's long axis). It moves C's integration scope; each
-// move costs one solve of the linear exterior (`scope_exterior: linear`, engine/solvers/
-// far_field.*), timed on its own (FarField::solve_ms). Still and sliding presses alternate so
-// that both see the same machine load; quote their ratio.
-#include <Eigen/Eigenvalues>
+// across the ovary at 2 cm/s (along the ovary's long axis: engine::sliding_press). It moves C's
+// integration scope; each move costs one solve of the linear exterior (`scope_exterior: linear`,
+// engine/solvers/ far_field.*), timed on its own (FarField::solve_ms). Still and sliding presses
+// alternate so that both see the same machine load; quote their ratio.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -99,38 +98,6 @@ Run fixed_press(Scene& s, const std::string& region, double depth_max) {
   p.hold = 0.7;
   p.release = 10.0;
   return run(s, p, 1.5);
-}
-
-// A press that crosses `region` along its longest extent (the principal axis of its vertices):
-// it starts at the surface node nearest the point 10 % along that axis and, while holding
-// `force`, slides at `speed` over 80 % of the region's length.
-PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
-                        double speed, double* length) {
-  const int id = g.region_index(region);
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  long count = 0;
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) mean += g.V.row(i).transpose(), ++count;
-  mean /= std::max(count, 1L);
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) {
-      const Eigen::Vector3d d = g.V.row(i).transpose() - mean;
-      C += d * d.transpose();
-    }
-  const Eigen::Vector3d axis =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(2);  // largest
-  double lo = 1e300, hi = -1e300;
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) {
-      const double a = axis.dot(g.V.row(i).transpose() - mean);
-      lo = std::min(lo, a), hi = std::max(hi, a);
-    }
-  *length = hi - lo;
-  const int node = g.nearest_node(mean + (lo + 0.1 * (hi - lo)) * axis);
-  PressSpec p = press_at(g, node, force, 0.8 * (hi - lo) / speed, 0.0);
-  p.slide = speed * (axis - axis.dot(p.normal) * p.normal).normalized();
-  return p;
 }
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {

@@ -10,22 +10,20 @@
 // median, p99 (nearest rank, engine::summarize_times) and the max step. Two loops:
 //   lock-step: steps back to back (as the virtual participants run); a deterministic adoption
 //              then waits for the rest of the solve when the steps outrun it (counted);
-//   1 kHz:     each step starts on a 1 ms tick (sleep_until, as engine::run_realtime): the
-//              pacing of a human session; the worker has `latency` ms for a solve.
+//   1 kHz:     each step starts on a 1 ms tick (run_lockstep's `paced`, the ticks of
+//              engine::run_realtime): the pacing of a human session; the worker has `latency` ms
+//              for a solve.
 // Also printed: the scope moves and what became of them (adopted, waits, late, most steps from
 // a move to its exterior) and the largest force difference to the sync run of the same press
 // (the cost of the latency in the rendered force), the contact steps over the 1 ms budget, and
 // the wall time of the steps that moved the scope and of those that adopted its new exterior.
 //
 // Arguments: [PROTOTYPES_DIR] [--reps N] [--speed M_PER_S] [--latency STEPS]
-#include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "engine/haptics/clock.hpp"
@@ -36,36 +34,6 @@ using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
-
-// The sliding press across `region` (as bench_engine_step --sliding): start at 10 % of its long
-// axis, hold `force` and slide over 80 % of its length.
-PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
-                        double speed) {
-  const int id = g.region_index(region);
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  long count = 0;
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) mean += g.V.row(i).transpose(), ++count;
-  mean /= std::max(count, 1L);
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) {
-      const Eigen::Vector3d d = g.V.row(i).transpose() - mean;
-      C += d * d.transpose();
-    }
-  const Eigen::Vector3d axis =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(2);
-  double lo = 1e300, hi = -1e300;
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) {
-      const double a = axis.dot(g.V.row(i).transpose() - mean);
-      lo = std::min(lo, a), hi = std::max(hi, a);
-    }
-  const int node = g.nearest_node(mean + (lo + 0.1 * (hi - lo)) * axis);
-  PressSpec p = press_at(g, node, force, 0.8 * (hi - lo) / speed, 0.0);
-  p.slide = speed * (axis - axis.dot(p.normal) * p.normal).normalized();
-  return p;
-}
 
 struct Mode {
   const char* name;
@@ -85,41 +53,34 @@ nlohmann::json info(const Scene& s) {
   return nlohmann::json::parse(s.stats().model_info)["mass_spring"];
 }
 
+// The press on s in the one lock-step loop (paced: each step on a 1 ms tick), step times by
+// TimedDevice (the Scene::step between the device's read and write).
 Result run(Scene& s, const PressSpec& spec, bool paced) {
-  using Clock = std::chrono::steady_clock;
   Result r;
   s.reset();
   const auto before = info(s);
   PressDevice press(spec);
-  const long n = std::lround((spec.hold + 2.0) / s.dt());
-  const auto period =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s.dt()));
-  auto next = Clock::now();
+  std::vector<double> step_us;
+  TimedDevice timed(press, step_us);
   int last_node = -1;
   long solves = 0, adopted = before.value("exterior_adopted", 0L);
-  for (long k = 0; k < n && !press.finished(); ++k) {
-    if (paced) {
-      std::this_thread::sleep_until(next);
-      next += period;
-      if (Clock::now() > next) next = Clock::now() + period;
-    }
-    const DeviceInput in = press.read(s.time());
-    const auto t0 = Clock::now();
-    const Rendered out = s.step(in.position);
-    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
-    press.write(out);
-    if (out.contact) r.us.push_back(us);
-    if (out.contact && us > 1000.0) ++r.over_1ms;
-    const auto now = info(s);  // outside the timed step
-    if (now.value("exterior_solves", 0L) > solves) r.move_us.push_back(us);
-    if (now.value("exterior_adopted", 0L) > adopted && now.value("exterior_update", "") != "sync")
-      r.adopt_us.push_back(us);
-    solves = now.value("exterior_solves", 0L);
-    adopted = now.value("exterior_adopted", 0L);
-    if (out.contact && last_node >= 0 && out.contact_node != last_node) ++r.node_changes;
-    if (out.contact) last_node = out.contact_node;
-    r.force.push_back(out.force.norm());
-  }
+  run_lockstep(s, timed, {.duration = spec.hold + 2.0, .frame_period = 0.0, .paced = paced},
+               [&](const Rendered& out, const Sample&) {
+                 const double us = step_us.back();
+                 if (out.contact) r.us.push_back(us);
+                 if (out.contact && us > 1000.0) ++r.over_1ms;
+                 const auto now = info(s);  // outside the timed step
+                 if (now.value("exterior_solves", 0L) > solves) r.move_us.push_back(us);
+                 if (now.value("exterior_adopted", 0L) > adopted &&
+                     now.value("exterior_update", "") != "sync")
+                   r.adopt_us.push_back(us);
+                 solves = now.value("exterior_solves", 0L);
+                 adopted = now.value("exterior_adopted", 0L);
+                 if (out.contact && last_node >= 0 && out.contact_node != last_node)
+                   ++r.node_changes;
+                 if (out.contact) last_node = out.contact_node;
+                 r.force.push_back(out.force.norm());
+               });
   const auto after = info(s);
   auto diff = [&](const char* k) { return after.value(k, 0L) - before.value(k, 0L); };
   r.moves = after.value("exterior_solves", 0L);  // since reset

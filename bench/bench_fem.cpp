@@ -14,7 +14,6 @@
 #include <cstdio>
 #include <functional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "engine/haptics/clock.hpp"
@@ -155,15 +154,6 @@ struct Recorded {
 
 using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
-void record_step(Scene& s, const Eigen::Vector3d& x, Recorded& r) {
-  const auto t0 = Clock::now();
-  const Rendered out = s.step(x);
-  const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
-  r.x.push_back(x);
-  r.force.push_back(out.force);
-  if (out.contact) r.us.push_back(us);
-}
-
 void snapshot(Scene& s, Recorded& r) {
   RowMatX3 V;
   Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> F;
@@ -172,57 +162,65 @@ void snapshot(Scene& s, Recorded& r) {
   r.surface.push_back(V);
 }
 
-// The press of scene_press on the full model (2 cm/s in to `target` N, hold 100 steps, out at
-// 5 cm/s), with `slide` m of tangential travel at 2 cm/s after the first hold (then hold again):
-// the full co-rotational model decides where the holds are; the other model replays it.
+// `device` on s in the one lock-step loop (paced: at the haptic rate in wall time, the
+// multi-rate worker beside it, as in a study); after each step, `after(step index)`.
+void record(Scene& s, Device& device, double duration, bool paced, Recorded& r,
+            const std::function<void(int)>& after) {
+  std::vector<double> all;  // the step time (us) of every step; r.us keeps those in contact
+  TimedDevice timed(device, all);
+  run_lockstep(s, timed, {.duration = duration, .frame_period = 0.0, .paced = paced},
+               [&](const Rendered& out, const Sample& x) {
+                 r.x.push_back(x.x);
+                 r.force.push_back(out.force);
+                 if (out.contact) r.us.push_back(all.back());
+                 after(static_cast<int>(r.x.size()) - 1);
+               });
+}
+
+// The press of scene_press on the full model, as one press script (engine/haptics/press.hpp):
+// 2 cm/s in to `target` N, then the depth held (hold_depth) for 0.1 s; with `slide` > 0, a
+// slide of that many m at 2 cm/s along a tangent and another 0.1 s hold; out at 5 cm/s. The
+// surface is taken at the end of each hold. The full co-rotational model decides where the
+// holds are; the other model replays the positions.
 Recorded corot_press(Scene& s, const std::string& region, double target, double slide) {
-  Recorded r;
   const auto& g = s.geometry();
-  const int node = g.region_node(region);
-  const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
-  const Eigen::Vector3d t = n.unitOrthogonal();
-  double depth = -0.002, along = 0;
-  const auto at = [&] { return Eigen::Vector3d(p - depth * n + along * t); };
-  for (int k = 0; k < 5000; ++k) {
-    record_step(s, at(), r);
-    if (r.force.back().norm() >= target) break;
-    depth += 0.02 * s.dt();
-  }
-  for (int k = 0; k < 100; ++k) record_step(s, at(), r);
-  snapshot(s, r);
-  if (slide > 0) {
-    r.slide_begin = static_cast<int>(r.x.size());
-    while (along < slide) {
-      along += 0.02 * s.dt();
-      record_step(s, at(), r);
-    }
-    r.slide_end = static_cast<int>(r.x.size());
-    for (int k = 0; k < 100; ++k) record_step(s, at(), r);
-    snapshot(s, r);
-  }
-  while (depth > -0.002) {
-    depth -= 0.05 * s.dt();
-    record_step(s, at(), r);
-  }
+  PressSpec spec = press_at(g, g.region_node(region), target, 0.0, 0.0);
+  spec.hold_depth = true;
+  spec.segments = {PressSegment::hold_for(0.1)};
+  if (slide > 0)
+    spec.segments.insert(spec.segments.end(),
+                         {PressSegment::slide_by(slide * spec.normal.unitOrthogonal(), 0.02),
+                          PressSegment::hold_for(0.1)});
+  PressDevice press(spec);
+  Recorded r;
+  int segment = -1;
+  record(s, press, 60.0, false, r, [&](int k) {
+    if (press.segment() == segment) return;
+    const int ended = segment;  // the step just taken was the last of this segment
+    segment = press.segment();
+    if (ended < 0) return;
+    const PressSegment& done = spec.segments[ended];
+    if (done.is_slide()) r.slide_end = k + 1;
+    if (!done.is_slide()) snapshot(s, r);
+    if (segment >= 0 && spec.segments[segment].is_slide()) r.slide_begin = k + 1;
+  });
   return r;
 }
 
-// paced: at the haptic rate in wall time (the multi-rate worker runs beside it, as in a study).
+// The positions of `ref` step by step (a ScriptedDevice at the step times), the surface at
+// ref's snapshot steps.
 Recorded replay(Scene& s, const Recorded& ref, bool paced) {
+  std::vector<std::pair<double, Eigen::Vector3d>> path;
+  for (size_t k = 0; k < ref.x.size(); ++k) path.push_back({k * s.dt(), ref.x[k]});
+  ScriptedDevice scripted(path);
   Recorded r;
   size_t q = 0;
-  auto next = Clock::now();
-  for (size_t k = 0; k < ref.x.size(); ++k) {
-    if (paced) {
-      next += std::chrono::microseconds(static_cast<long>(1e6 * s.dt()));
-      std::this_thread::sleep_until(next);
-    }
-    record_step(s, ref.x[k], r);
-    if (q < ref.snap.size() && static_cast<int>(k) == ref.snap[q]) {
+  record(s, scripted, ref.x.size() * s.dt(), paced, r, [&](int k) {
+    if (q < ref.snap.size() && k == ref.snap[q]) {
       snapshot(s, r);
       ++q;
     }
-  }
+  });
   return r;
 }
 

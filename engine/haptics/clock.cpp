@@ -35,6 +35,16 @@ double median_of_sorted(const std::vector<double>& v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// The next tick of a loop paced at `period`. On schedule: one period later. Late by more than
+// a period (preempted): re-anchored instead of bursting through the missed ticks, so the hand
+// never gets a train of back-to-back steps; simulated time then lags wall time.
+void next_tick(std::chrono::steady_clock::time_point& next,
+               std::chrono::steady_clock::duration period) {
+  next += period;
+  const auto now = std::chrono::steady_clock::now();
+  if (now > next) next = now + period;
+}
+
 }  // namespace
 
 double quantile(std::vector<double> v, double q) {
@@ -85,8 +95,13 @@ long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
   };
   long frame_index = 1, next_frame = frame_step(1);
   Frame frame;
+  using Clock = std::chrono::steady_clock;
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(scene.dt()));
+  auto next = Clock::now();
   long k = 1;
   for (; k <= n && !device.finished(); ++k) {
+    if (opt.paced) std::this_thread::sleep_until(next);
     const DeviceInput in = device.read(scene.time());
     const Rendered r = scene.step(in.position);
     device.write(r);
@@ -96,6 +111,7 @@ long run_lockstep(Scene& scene, Device& device, const LockstepOptions& opt,
       on_frame(frame);
       next_frame = frame_step(++frame_index);
     }
+    if (opt.paced) next_tick(next, period);
   }
   return k - 1;
 }
@@ -151,11 +167,8 @@ RealtimeStats run_realtime(Scene& scene, Device& device, const RealtimeOptions& 
         }
         cv.notify_one();
       }
-      // On schedule: the next tick one period later. Late by more than a period (preempted):
-      // re-anchor instead of bursting through the missed ticks, so the hand never gets a
-      // train of back-to-back steps; simulated time then lags wall time (counted in overruns).
-      next += period;
-      if (Clock::now() > next) next = Clock::now() + period;
+      // (late ticks re-anchored: counted in overruns)
+      next_tick(next, period);
     }
     {
       std::lock_guard<std::mutex> lock(mu);

@@ -34,6 +34,10 @@ struct Frame {
 struct LockstepOptions {
   double duration = 1.0;             // s of simulated time
   double frame_period = 1.0 / 60.0;  // s; <= 0: no frames
+  // Start each step on a 1/dt tick of the steady clock (re-anchored when late, as
+  // run_realtime), on this thread: a benchmark of a scene at the haptic rate in wall time
+  // (e.g. a worker thread beside it) without run_realtime's threads or its real-time mode.
+  bool paced = false;
 };
 
 // Runs duration/dt steps; on_step (optional) sees every step (copy the events you keep),

@@ -1,5 +1,6 @@
 #include "engine/haptics/press.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -36,6 +37,15 @@ PressDevice::PressDevice(const PressSpec& spec) : spec_(spec), depth_(-spec.star
   if (!spec.point.allFinite() || !(std::abs(spec.normal.norm() - 1.0) < 1e-6))
     throw std::invalid_argument("press: point must be finite and the normal a unit vector");
   if (!spec.slide.allFinite()) throw std::invalid_argument("press: slide must be finite (m/s)");
+  for (size_t i = 0; i < spec.segments.size(); ++i) {
+    const PressSegment& g = spec.segments[i];
+    const std::string at = "press: segment " + std::to_string(i) + ": ";
+    if (!g.by.allFinite()) throw std::invalid_argument(at + "the slide must be finite (m)");
+    if (g.is_slide() && !(g.speed > 0.0 && std::isfinite(g.speed)))
+      throw std::invalid_argument(at + "a slide needs a speed > 0 m/s");
+    if (!g.is_slide() && !(g.hold >= 0.0 && std::isfinite(g.hold)))
+      throw std::invalid_argument(at + "a hold must last >= 0 s");
+  }
 }
 
 bool PressDevice::target_reached(double f) const {
@@ -43,7 +53,7 @@ bool PressDevice::target_reached(double f) const {
   return f * (1.0 + spec_.force_error) >= spec_.force;
 }
 
-void PressDevice::reach_target(double t, double f) {
+void PressDevice::reach_target(double t, double f, double dt) {
   time_to_force_ = t;
   // Integral gain: a fifth of the inverse secant stiffness measured on the way in (stable
   // for any stiffness up to 10x that secant), per step.
@@ -51,6 +61,38 @@ void PressDevice::reach_target(double t, double f) {
   gain_ = 0.2 / std::max(k, 1.0);
   phase_ = spec_.stop_at_target ? PressPhase::done : PressPhase::hold;
   phase_start_ = t;
+  if (phase_ == PressPhase::hold && !spec_.segments.empty()) {
+    segment_base_ = offset_;
+    segment_step_ = 0;
+    if (!next_segment_step(dt)) {  // segments of no duration: the next step withdraws
+      phase_ = PressPhase::withdraw;
+      depth_ -= spec_.withdraw_speed * dt;
+    }
+  }
+}
+
+bool PressDevice::next_segment_step(double dt) {
+  const double tau = static_cast<double>(++segment_step_) * dt;
+  // A step whose end is within a millionth of a step of a segment's end belongs to it (tau is
+  // a multiple of dt that rounding may put just past the end).
+  const double eps = 1e-6 * dt;
+  double begin = 0.0;
+  Eigen::Vector3d done = segment_base_;  // offset after the segments before i
+  for (size_t i = 0; i < spec_.segments.size(); ++i) {
+    const PressSegment& g = spec_.segments[i];
+    const double d = g.duration();
+    if (tau <= begin + d + eps) {
+      segment_ = static_cast<int>(i);
+      offset_ =
+          g.is_slide() ? Eigen::Vector3d(done + std::min(1.0, (tau - begin) / d) * g.by) : done;
+      return true;
+    }
+    begin += d;
+    done += g.by;
+  }
+  segment_ = -1;
+  offset_ = done;
+  return false;
 }
 
 DeviceInput PressDevice::read(double t) {
@@ -67,7 +109,7 @@ void PressDevice::write(const Rendered& r) {
     case PressPhase::approach:
       if (f > 0.0 && contact_depth_ < 0.0) contact_depth_ = std::max(depth_, 0.0);
       if (target_reached(f)) {
-        reach_target(r.t, f);
+        reach_target(r.t, f, dt);
         break;
       }
       depth_ += spec_.approach_speed * dt;
@@ -79,14 +121,22 @@ void PressDevice::write(const Rendered& r) {
       }
       break;
     case PressPhase::hold:
-      if (r.t - phase_start_ >= spec_.hold - 1e-12) {
-        phase_ = PressPhase::withdraw;
-        phase_start_ = r.t;
+      if (spec_.segments.empty()) {
+        if (r.t - phase_start_ >= spec_.hold - 1e-12) {
+          phase_ = PressPhase::withdraw;
+          phase_start_ = r.t;
+          break;
+        }
+        if (spec_.depth == 0.0 && !spec_.hold_depth) depth_ += gain_ * (spec_.force - f);
+        offset_ += spec_.slide * dt;
         break;
       }
-      if (spec_.depth == 0.0) depth_ += gain_ * (spec_.force - f);
-      offset_ += spec_.slide * dt;
-      break;
+      if (spec_.depth == 0.0 && !spec_.hold_depth) depth_ += gain_ * (spec_.force - f);
+      if (next_segment_step(dt)) break;
+      // The step after the last segment is the first of the withdrawal.
+      phase_ = PressPhase::withdraw;
+      phase_start_ = r.t;
+      [[fallthrough]];
     case PressPhase::withdraw:
       depth_ -= spec_.withdraw_speed * dt;
       if (depth_ <= -spec_.start_offset) {
@@ -127,6 +177,35 @@ PressSpec press_at(const SceneGeometry& g, int node, double force, double hold, 
   s.hold = hold;
   s.release = release;
   return s;
+}
+
+PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
+                        double speed, double* length) {
+  const int id = g.region_index(region);
+  if (id < 0) throw std::invalid_argument("sliding press: unknown region \"" + region + "\"");
+  std::vector<long> nodes;
+  for (long i = 0; i < g.V.rows(); ++i)
+    if (g.vertex_region[i] == id) nodes.push_back(i);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (long i : nodes) mean += g.V.row(i).transpose();
+  mean /= static_cast<double>(std::max<size_t>(nodes.size(), 1));
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (long i : nodes) {
+    const Eigen::Vector3d d = g.V.row(i).transpose() - mean;
+    C += d * d.transpose();
+  }
+  const Eigen::Vector3d axis =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(2);  // largest
+  double lo = 1e300, hi = -1e300;
+  for (long i : nodes) {
+    const double a = axis.dot(g.V.row(i).transpose() - mean);
+    lo = std::min(lo, a), hi = std::max(hi, a);
+  }
+  if (length) *length = hi - lo;
+  const int node = g.nearest_node(mean + (lo + 0.1 * (hi - lo)) * axis);
+  PressSpec p = press_at(g, node, force, 0.8 * (hi - lo) / speed, 0.0);
+  p.slide = speed * (axis - axis.dot(p.normal) * p.normal).normalized();
+  return p;
 }
 
 }  // namespace palplab::engine

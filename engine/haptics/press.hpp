@@ -13,12 +13,33 @@
 //   stop_at_target     the script ends on the step the target is reached (a demonstration)
 //   slide != 0         the contact point moves tangentially at that velocity while holding
 //                      (a sliding press across an organ)
+//   hold_depth         the hold keeps the depth at which the force target was reached
+//                      (a trajectory fixed by the force, then position control)
+//   segments           a script of holds and slides after the target (below), in place of
+//                      the single hold: e.g. press to 2.5 N, hold 0.1 s, slide 1 cm at
+//                      2 cm/s, hold 0.1 s, withdraw
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "engine/haptics/device.hpp"
 
 namespace palplab::engine {
+
+// One part of a multi-segment press (PressSpec::segments): a hold of `hold` seconds when `by`
+// is zero, else a slide of the contact point by `by` (m) at `speed` (m/s), lasting
+// |by| / speed. The depth is held (force or position control, as in the single hold) while
+// the segment runs.
+struct PressSegment {
+  double hold = 0.0;                             // s
+  Eigen::Vector3d by = Eigen::Vector3d::Zero();  // m, displacement of the contact point
+  double speed = 0.02;                           // m/s along `by`
+
+  static PressSegment hold_for(double seconds) { return {seconds, Eigen::Vector3d::Zero(), 0.02}; }
+  static PressSegment slide_by(const Eigen::Vector3d& by, double speed) { return {0.0, by, speed}; }
+  bool is_slide() const { return !by.isZero(0.0); }
+  double duration() const { return is_slide() ? by.norm() / speed : hold; }  // s
+};
 
 struct PressSpec {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();    // m, rest surface point pressed
@@ -44,6 +65,18 @@ struct PressSpec {
   // m/s, velocity of the contact point along the surface during the hold (the depth stays
   // along `normal`); zero = a still press. Its offset is kept while withdrawing.
   Eigen::Vector3d slide = Eigen::Vector3d::Zero();
+  // Under force control, keep the depth at which the target was reached during the hold (and
+  // the segments) instead of holding the force: the device trajectory then depends on the
+  // model only through that one depth (replayable on another model).
+  bool hold_depth = false;
+  // A script of holds and slides run in order once the target is reached, in place of `hold`
+  // and `slide`; then the withdrawal. Timing: the k-th step after the step that reached the
+  // target ends tau = k dt later and belongs to the segment i whose interval
+  // (T_i, T_i + D_i] holds tau (T_i: the durations before it); a slide's offset there is
+  // by_i (tau - T_i) / D_i, so its first step has moved speed dt and its last step lands
+  // exactly on by_i; a hold of D s lasts D / dt steps. The first step after the last segment
+  // is the first of the withdrawal. Offsets are kept while withdrawing.
+  std::vector<PressSegment> segments;
 };
 
 enum class PressPhase { approach, hold, withdraw, release, done };
@@ -62,11 +95,17 @@ class PressDevice : public Device {
   double time_to_force() const { return time_to_force_; }  // s (scene time), -1 if never
   double depth() const { return depth_; }                  // m below the rest surface now
   const PressSpec& spec() const { return spec_; }
+  // Index of the segment (PressSpec::segments) the next step belongs to; -1 before the target
+  // and after the last segment. A change of it after a write marks the last step of a segment.
+  int segment() const { return segment_; }
+  Eigen::Vector3d offset() const { return offset_; }  // m, slid along the surface so far
 
  private:
   Eigen::Vector3d position() const { return spec_.point + offset_ - depth_ * spec_.normal; }
   bool target_reached(double f) const;
-  void reach_target(double t, double f);
+  void reach_target(double t, double f, double dt);
+  // Moves to the next step of the segments (offset, segment_); false after the last one.
+  bool next_segment_step(double dt);
   PressSpec spec_;
   PressPhase phase_ = PressPhase::approach;
   double depth_ = 0.0;
@@ -76,6 +115,9 @@ class PressDevice : public Device {
   double contact_depth_ = -1.0;  // depth at which force first appeared (m), -1 before
   double gain_ = 0.0;            // m/N per step of the hold controller
   Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();  // m, slid along the surface so far
+  int segment_ = -1;
+  long segment_step_ = 0;                                   // steps since the target
+  Eigen::Vector3d segment_base_ = Eigen::Vector3d::Zero();  // offset at the target
 };
 
 // The press node of a region (the node nearest the region's centroid) or a node index given
@@ -83,5 +125,13 @@ class PressDevice : public Device {
 int press_node(const SceneGeometry& g, const std::string& what);
 // A press spec at surface node `node` of g (its rest position and outward normal).
 PressSpec press_at(const SceneGeometry& g, int node, double force, double hold, double release);
+// A sliding press across `region` along its longest extent (the principal axis of its rest
+// vertices): at the surface node nearest the point 10 % along that axis, to `force` N, then
+// holding the force while the contact point slides at `speed` m/s over 80 % of the region's
+// length (PressSpec::slide, along the axis projected on the tangent plane). `length` (optional)
+// receives the region's extent along the axis (m). Throws std::invalid_argument for an unknown
+// region.
+PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
+                        double speed, double* length = nullptr);
 
 }  // namespace palplab::engine

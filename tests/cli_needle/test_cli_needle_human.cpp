@@ -7,7 +7,6 @@
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
-#include <sqlite3.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -27,36 +26,17 @@
 #include "engine/haptics/devices/tool_switch.hpp"
 #include "engine/haptics/devices/trace_device.hpp"
 #include "engine/haptics/devices/udp_device.hpp"
-#include "engine/render/camera.hpp"
-#include "engine/render/pick.hpp"
 #include "prototypes/factory.hpp"
-#include "tests/cli_support.hpp"
+#include "tests/cli_human_support.hpp"
 
 namespace fs = std::filesystem;
 namespace e = palplab::engine;
+using palplab::testing::db_rows;
+using palplab::testing::human_run;
 
 namespace {
 
 const std::string kDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_needle/";
-
-std::vector<std::map<std::string, std::string>> query(const fs::path& db, const std::string& sql) {
-  sqlite3* h = nullptr;
-  sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sql;
-  std::vector<std::map<std::string, std::string>> out;
-  while (s && sqlite3_step(s) == SQLITE_ROW) {
-    std::map<std::string, std::string> row;
-    for (int i = 0; i < sqlite3_column_count(s); ++i) {
-      const auto* t = sqlite3_column_text(s, i);
-      row[sqlite3_column_name(s, i)] = t ? reinterpret_cast<const char*>(t) : "NULL";
-    }
-    out.push_back(row);
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return out;
-}
 
 // 3 s at the 1 ms haptic step: 0.3 s the finger presses the skin near the entry point and comes
 // back out; then the needle (button bit 1) along `axis` from 25 mm outside the skin, 87 mm in at
@@ -90,20 +70,18 @@ TEST(CliNeedleHuman, TraceSessionInsertsThroughTheLayersAndStoresTheMeasures) {
   e::write_trace(trace.string(), tr);
   fs::remove(db);
   const auto r = palplab::testing::run_command(
-      "PALPLAB_NOW=2026-11-24T10:00:00Z " + std::string(PALPLAB_BINARY) + " run " + kDir +
-      "needle_human_study.json --db " + db.string() +
-      " --human --participant P01 --device trace:" + trace.string());
+      human_run(kDir + "needle_human_study.json", db, "trace:" + trace.string()));
   ASSERT_EQ(r.code, 0) << r.out << r.err;
 
-  auto sessions = query(db, "SELECT * FROM sessions");
+  auto sessions = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(sessions.size(), 1u);
   EXPECT_EQ(sessions[0]["status"], "complete") << sessions[0]["abort_reason"];
   EXPECT_EQ(sessions[0]["trainee"], "human");
   EXPECT_EQ(sessions[0]["steps"], "3000");
   const std::string sid = sessions[0]["session"];
 
-  const auto ev = query(db, "SELECT t, kind, value, region FROM events WHERE session = " + sid +
-                                " ORDER BY t, rowid");
+  const auto ev = db_rows(db, "SELECT t, kind, value, region FROM events WHERE session = " + sid +
+                                  " ORDER BY t, rowid");
   std::vector<std::string> entered;
   int tool_changes = 0, targets = 0, starts = 0;
   double tool_t = -1;
@@ -128,7 +106,7 @@ TEST(CliNeedleHuman, TraceSessionInsertsThroughTheLayersAndStoresTheMeasures) {
   EXPECT_EQ(targets, 1);
 
   std::map<std::string, std::string> m;
-  for (const auto& row : query(db, "SELECT name, value FROM measures WHERE session = " + sid))
+  for (const auto& row : db_rows(db, "SELECT name, value FROM measures WHERE session = " + sid))
     m[row.at("name")] = row.at("value");
   EXPECT_EQ(m["insertion_attempts"], "1.0");
   EXPECT_GE(std::stod(m["layers_passed"]), 4.0);
@@ -167,10 +145,9 @@ TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
   const int port = 30000 + static_cast<int>(getpid() % 9000);
   const fs::path db = dir / "u.db";
   auto run = std::async(std::launch::async, [&] {
-    return palplab::testing::run_command(
-        "PALPLAB_NOW=2026-11-24T10:00:00Z " + std::string(PALPLAB_BINARY) + " run " + kDir +
-        "needle_human_study.json --db " + db.string() +
-        " --human --participant P01 --min-device-rate 0 --device udp:" + std::to_string(port));
+    return palplab::testing::run_command(human_run(kDir + "needle_human_study.json", db,
+                                                   "udp:" + std::to_string(port),
+                                                   "--min-device-rate 0"));
   });
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   sockaddr_in self{}, to{};
@@ -205,12 +182,12 @@ TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
   const auto r = run.get();
   ASSERT_TRUE(start) << "palplab never sent a force: " << r.out;
   ASSERT_EQ(r.code, 0) << r.out;
-  const auto sessions = query(db, "SELECT status, device FROM sessions");
+  const auto sessions = db_rows(db, "SELECT status, device FROM sessions");
   ASSERT_EQ(sessions.size(), 1u);
   EXPECT_EQ(sessions[0].at("status"), "complete");
   std::vector<std::string> entered;
   int tool_changes = 0, starts = 0;
-  for (const auto& row : query(db, "SELECT kind, region FROM events ORDER BY t, rowid")) {
+  for (const auto& row : db_rows(db, "SELECT kind, region FROM events ORDER BY t, rowid")) {
     tool_changes += row.at("kind") == "tool_changed";
     starts += row.at("kind") == "insertion_start";
     if (row.at("kind") == "tissue_entered") entered.push_back(row.at("region"));
@@ -229,17 +206,9 @@ TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
 // view ray — the needle's axis for a mouse. The session logs the tool change and the insertion
 // through the skin into the soft tissue.
 TEST(CliNeedleHuman, MouseWithTheNKeyInsertsAlongTheViewRay) {
-  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  if (!palplab::testing::have_xvfb()) GTEST_SKIP() << palplab::testing::kNoXvfb;
   constexpr int kW = 400, kH = 300;
-  const auto scene =
-      palplab::prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/N.json");
-  const auto& g = scene.geometry();
-  Eigen::Vector3d c;
-  double rad = 0;
-  palplab::render::bounding_sphere(g.V, c, rad);
-  const auto m = palplab::render::camera_matrices(palplab::render::Camera{}, c, rad, kW, kH);
-  const auto px = palplab::render::head_on_pixel(g, m);
+  const auto px = palplab::testing::head_on_pixel_of("N", kW, kH);
   ASSERT_TRUE(px && px->cosine > 0.9);
   const fs::path dir = palplab::testing::scratch_dir("needle_human_mouse");
   const fs::path script = dir / "needle.json", db = dir / "m.db";
@@ -252,19 +221,15 @@ TEST(CliNeedleHuman, MouseWithTheNKeyInsertsAlongTheViewRay) {
     o << "]}";
   }
   const auto r = palplab::testing::run_command(
-      "PALPLAB_NOW=2026-11-24T10:00:00Z PALPLAB_AUDIO_DEVICE=null xvfb-run -a -s '-screen 0 "
-      "640x480x24' " +
-      std::string(PALPLAB_BINARY) + " run " + kDir + "needle_human_study.json --db " + db.string() +
-      " --human --participant P01 --device mouse --size " + std::to_string(kW) + "x" +
-      std::to_string(kH) + " --mouse-script " + script.string());
+      palplab::testing::mouse_run(kDir + "needle_human_study.json", db, script, kW, kH));
   ASSERT_EQ(r.code, 0) << r.out;
-  const auto sessions = query(db, "SELECT status, device FROM sessions");
+  const auto sessions = db_rows(db, "SELECT status, device FROM sessions");
   ASSERT_EQ(sessions.size(), 1u);
   EXPECT_EQ(sessions[0].at("status"), "complete");
   EXPECT_EQ(sessions[0].at("device"), "mouse");
   std::vector<std::string> entered;
   int to_needle = 0, starts = 0;
-  for (const auto& row : query(db, "SELECT kind, value, region FROM events ORDER BY t, rowid")) {
+  for (const auto& row : db_rows(db, "SELECT kind, value, region FROM events ORDER BY t, rowid")) {
     to_needle += row.at("kind") == "tool_changed" && row.at("value") == "1.0";
     starts += row.at("kind") == "insertion_start";
     if (row.at("kind") == "tissue_entered") entered.push_back(row.at("region"));
@@ -287,9 +252,7 @@ TEST(CliNeedleHuman, APrototypeWithoutToolsIsRefused) {
   const fs::path dir = palplab::testing::scratch_dir("needle_human_a");
   e::write_trace((dir / "t.trace").string(), insertion_trace(Eigen::Vector3d::UnitY()));
   const auto r = palplab::testing::run_command(
-      "PALPLAB_NOW=2026-11-24T10:00:00Z " + std::string(PALPLAB_BINARY) + " run " + study +
-      " --db " + (dir / "a.db").string() +
-      " --human --participant P01 --device trace:" + (dir / "t.trace").string());
+      human_run(study, dir / "a.db", "trace:" + (dir / "t.trace").string()));
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_NE(r.out.find("needle"), std::string::npos) << r.out;
   fs::remove_all(dir);

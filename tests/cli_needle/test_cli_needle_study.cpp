@@ -25,12 +25,8 @@ namespace {
 using Result = palplab::testing::CliResult;
 using palplab::testing::slurp;
 
-Result run(const std::string& args) {
-  return palplab::testing::run_palplab(args);
-}
-std::string p(const std::string& name) {
-  return palplab::testing::scratch_file(name);
-}
+using palplab::testing::run_palplab;
+using palplab::testing::scratch_file;
 
 const std::string kSrc = PALPLAB_SOURCE_DIR;
 
@@ -54,8 +50,8 @@ json reduced_study() {
 }
 
 TEST(CliNeedleStudy, ReducedRunStoresEveryNeedleMeasureAndReports) {
-  write(p("study.json"), reduced_study());
-  const Result v = run("validate " + p("study.json"));
+  write(scratch_file("study.json"), reduced_study());
+  const Result v = run_palplab("validate " + scratch_file("study.json"));
   ASSERT_EQ(v.code, 0) << v.err << v.out;
   // The summary describes the needle task, not a palpation one.
   EXPECT_EQ(v.out.find("task: find"), std::string::npos) << v.out;
@@ -70,9 +66,10 @@ TEST(CliNeedleStudy, ReducedRunStoresEveryNeedleMeasureAndReports) {
         "opaque / training: N, model needle, tools finger+needle, opaque (tip not visible) "
         "[prototype]"})
     EXPECT_NE(v.out.find(want), std::string::npos) << want << "\n" << v.out;
-  const Result r = run("run " + p("study.json") + " --db " + p("n.db") + " --quiet");
+  const Result r = run_palplab("run " + scratch_file("study.json") + " --db " +
+                               scratch_file("n.db") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.err << r.out;
-  const auto store = palplab::results::Store::open(p("n.db"));
+  const auto store = palplab::results::Store::open(scratch_file("n.db"));
   // Each session stores the transparency it ran with, each phase its declared switch.
   {
     const auto parts = store.read_participants();
@@ -131,9 +128,10 @@ TEST(CliNeedleStudy, ReducedRunStoresEveryNeedleMeasureAndReports) {
   }
   EXPECT_TRUE(tool);
   EXPECT_TRUE(entered);
-  const Result rep = run("report " + p("n.db") + " --out " + p("report"));
+  const Result rep =
+      run_palplab("report " + scratch_file("n.db") + " --out " + scratch_file("report"));
   ASSERT_EQ(rep.code, 0) << rep.err;
-  const std::string md = slurp(p("report") + "/report.md");
+  const std::string md = slurp(scratch_file("report") + "/report.md");
   for (const auto& m : wanted) EXPECT_NE(md.find(m), std::string::npos) << m;
 }
 
@@ -166,9 +164,9 @@ TEST(CliNeedleStudy, BadPrototypeKeysExitTwoWithThePath) {
   for (const auto& c : cases) {
     json j = n_proto();
     c.edit(j);
-    const std::string f = p("N_" + c.name + ".json");
+    const std::string f = scratch_file("N_" + c.name + ".json");
     write(f, j);
-    const Result r = run("probe " + f + " --press 0 --force 1 --duration 0.01");
+    const Result r = run_palplab("probe " + f + " --press 0 --force 1 --duration 0.01");
     EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.name << ": " << r.err;
   }
@@ -178,8 +176,8 @@ TEST(CliNeedleStudy, BadNeedleTaskKeysExitTwoWithThePath) {
   json s = reduced_study();
   s["task"].erase("entry_hint");
   s["task"]["target_depth_hint"] = -0.01;
-  write(p("bad_study.json"), s);
-  const Result r = run("validate " + p("bad_study.json"));
+  write(scratch_file("bad_study.json"), s);
+  const Result r = run_palplab("validate " + scratch_file("bad_study.json"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("$.task"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("entry_hint"), std::string::npos) << r.err;

@@ -5,10 +5,9 @@
 // the refusal of a session that is not due yet, and a device that goes silent mid-session.
 #include <gtest/gtest.h>
 
-#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
-#include "tests/cli_support.hpp"
+#include "tests/cli_human_support.hpp"
 
 #include <array>
 #include <cmath>
@@ -26,6 +25,7 @@
 
 namespace fs = std::filesystem;
 namespace e = palplab::engine;
+using palplab::testing::db_rows;
 
 namespace {
 using Result = palplab::testing::CliResult;
@@ -34,48 +34,22 @@ Result run(const std::string& cmdline) {
 }
 const std::string kDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_run_human/";
 
-std::vector<std::map<std::string, std::string>> query(const fs::path& db, const std::string& sql) {
-  sqlite3* h = nullptr;
-  sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sql;
-  std::vector<std::map<std::string, std::string>> out;
-  while (sqlite3_step(s) == SQLITE_ROW) {
-    std::map<std::string, std::string> row;
-    for (int i = 0; i < sqlite3_column_count(s); ++i) {
-      const auto* t = sqlite3_column_text(s, i);
-      row[sqlite3_column_name(s, i)] = t ? reinterpret_cast<const char*>(t) : "NULL";
-    }
-    out.push_back(row);
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return out;
-}
-
 std::map<std::string, double> measures(const fs::path& db, int session) {
   std::map<std::string, double> m;
   for (auto& r :
-       query(db, "SELECT name, value FROM measures WHERE session = " + std::to_string(session)))
+       db_rows(db, "SELECT name, value FROM measures WHERE session = " + std::to_string(session)))
     m[r["name"]] = r["value"] == "NULL" ? NAN : std::stod(r["value"]);
   return m;
 }
 
 struct Tmp {
-  fs::path dir;
-  Tmp() {
-    dir = fs::temp_directory_path() / ("palplab_human_" + std::to_string(getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
+  fs::path dir = palplab::testing::scratch_dir("human");
   ~Tmp() { fs::remove_all(dir); }
 };
 
 std::string human(const fs::path& db, const std::string& device, const std::string& now,
                   const std::string& extra = "") {
-  return "PALPLAB_NOW=" + now + " " + std::string(PALPLAB_BINARY) + " run " + kDir +
-         "human_study.json --db " + db.string() + " --human --participant P01 --device " + device +
-         " " + extra;
+  return palplab::testing::human_run(kDir + "human_study.json", db, device, extra, now);
 }
 
 int free_port() {
@@ -137,7 +111,7 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
     ++port;
     // 0, or 3 for a session aborted because the stream ended (a starved loop); never a crash.
     ASSERT_TRUE(r1.code == 0 || r1.code == 3) << r1.code << "\n" << r1.out << s1.out;
-    auto row = query(db, "SELECT wall_duration, steps, loop_median FROM sessions");
+    auto row = db_rows(db, "SELECT wall_duration, steps, loop_median FROM sessions");
     ASSERT_EQ(row.size(), 1u) << r1.out;
     EXPECT_NEAR(std::stod(row[0].at("loop_median")), dt, 0.05 * dt) << r1.out;
     const double drift = std::stod(row[0].at("wall_duration")) - 2000 * dt;
@@ -148,13 +122,13 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
                    << drifts << " > " << kScriptSlack
                    << " s of script slack): no comparison possible here";
   }
-  auto rows = query(db, "SELECT * FROM sessions");
+  auto rows = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["status"], "complete");
   EXPECT_EQ(rows[0]["trainee"], "human");
   EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port - 1));
   EXPECT_EQ(rows[0]["steps"], "2000");
-  EXPECT_GT(std::stoi(query(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
+  EXPECT_GT(std::stoi(db_rows(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
   const auto m_udp = measures(db, 1);
   // What the real-time clock allows, from this session's own loop timing (sessions row). The
   // lock-step reference sees the script at simulated time t exactly; the UDP session differs by
@@ -173,7 +147,7 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   // A fixed window cannot be right for both an idle and a loaded machine; this one is as tight
   // as the run's own timing permits and still fails for any error that is not timing (a wrong
   // identification, a force computed from another track, time measured on the wall clock).
-  const auto row = query(db, "SELECT steps, wall_duration, loop_p99 FROM sessions")[0];
+  const auto row = db_rows(db, "SELECT steps, wall_duration, loop_p99 FROM sessions")[0];
   const double drift = std::max(0.0, std::stod(row.at("wall_duration")) - 2000 * dt);
   const double p99 = std::stod(row.at("loop_p99"));
   const double J = 3.0 * std::max(dt, p99) + 0.002;
@@ -240,16 +214,16 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
       run(human(db, "udp:" + std::to_string(port), "2026-11-24T10:00:00Z", "--device-lost 0.3"));
   sim.get();
   EXPECT_EQ(r.code, 3) << r.out;
-  auto rows = query(db, "SELECT * FROM sessions");
+  auto rows = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["status"], "aborted");
   EXPECT_NE(rows[0]["abort_reason"].find("lost"), std::string::npos) << rows[0]["abort_reason"];
   EXPECT_LT(std::stoi(rows[0]["steps"]), 2000);
   // The data up to the loss is kept: samples and the device_timeout event.
-  EXPECT_GE(std::stoi(query(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
-  EXPECT_GE(std::stoi(query(db,
-                            "SELECT COUNT(*) AS n FROM events WHERE kind = "
-                            "'device_timeout'")[0]["n"]),
+  EXPECT_GE(std::stoi(db_rows(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
+  EXPECT_GE(std::stoi(db_rows(db,
+                              "SELECT COUNT(*) AS n FROM events WHERE kind = "
+                              "'device_timeout'")[0]["n"]),
             1);
   // Not complete: the analysis tables do not see it; the next run repeats it as attempt 1.
   const std::string trace = (tmp.dir / "t.trace").string();
@@ -260,7 +234,7 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
   }
   auto r2 = run(human(db, "trace:" + trace, "2026-11-24T11:00:00Z"));
   EXPECT_EQ(r2.code, 0) << r2.out;
-  rows = query(db, "SELECT attempt, status FROM sessions ORDER BY session");
+  rows = db_rows(db, "SELECT attempt, status FROM sessions ORDER BY session");
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[1]["attempt"], "1");
   EXPECT_EQ(rows[1]["status"], "complete");

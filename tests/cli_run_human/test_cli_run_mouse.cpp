@@ -5,7 +5,6 @@
 // one sample per haptic step); closing the window mid-session aborts the session, kept and
 // flagged. Skipped only without xvfb-run.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -15,50 +14,22 @@
 #include <set>
 #include <string>
 
-#include "engine/render/camera.hpp"
-#include "engine/render/pick.hpp"
-#include "prototypes/factory.hpp"
-#include "tests/cli_support.hpp"
+#include "tests/cli_human_support.hpp"
 
 namespace fs = std::filesystem;
-namespace pr = palplab::render;
 
 namespace {
 using Result = palplab::testing::CliResult;
+using palplab::testing::db_rows;
+using palplab::testing::have_xvfb;
+using palplab::testing::kNoXvfb;
 const std::string kDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_run_human/";
 constexpr int kW = 400, kH = 300;
 
-std::vector<std::map<std::string, std::string>> rows(const fs::path& db, const std::string& sql) {
-  sqlite3* h = nullptr;
-  sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sql;
-  std::vector<std::map<std::string, std::string>> out;
-  while (s && sqlite3_step(s) == SQLITE_ROW) {
-    std::map<std::string, std::string> row;
-    for (int i = 0; i < sqlite3_column_count(s); ++i) {
-      const auto* t = sqlite3_column_text(s, i);
-      row[sqlite3_column_name(s, i)] = t ? reinterpret_cast<const char*>(t) : "NULL";
-    }
-    out.push_back(row);
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return out;
-}
-
-// A pixel where the window's default camera (the renderer centres the rest bounding sphere) sees
-// prototype A's surface head-on: the pick of the cursor ray whose face normal is most nearly
-// along the ray, so a press along the view direction goes straight into the tissue.
+// A pixel where the window's default camera sees prototype A's surface head-on, so a press
+// along the view direction goes straight into the tissue.
 std::pair<int, int> organ_pixel() {
-  const auto scene =
-      palplab::prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/A.json");
-  const auto& g = scene.geometry();
-  Eigen::Vector3d c;
-  double r = 0;
-  pr::bounding_sphere(g.V, c, r);
-  const auto m = pr::camera_matrices(pr::Camera{}, c, r, kW, kH);
-  const auto p = pr::head_on_pixel(g, m);
+  const auto p = palplab::testing::head_on_pixel_of("A", kW, kH);
   EXPECT_TRUE(p && p->cosine > 0.95);
   return p ? std::pair<int, int>{p->x, p->y} : std::pair<int, int>{kW / 2, kH / 2};
 }
@@ -78,25 +49,17 @@ fs::path write_script(const fs::path& dir, double close_at) {
   return p;
 }
 
-Result human(const fs::path& db, const fs::path& script, const fs::path& dir) {
+Result human(const fs::path& db, const fs::path& script) {
   return palplab::testing::run_command(
-      "PALPLAB_NOW=2026-11-24T10:00:00Z PALPLAB_AUDIO_DEVICE=null xvfb-run -a -s '-screen 0 "
-      "640x480x24' " +
-      std::string(PALPLAB_BINARY) + " run " + kDir + "mouse_study.json --db " + db.string() +
-      " --human --participant P01 --device mouse --size " + std::to_string(kW) + "x" +
-      std::to_string(kH) + " --mouse-script " + script.string());
-}
-
-bool have_xvfb() {
-  return std::system("command -v xvfb-run >/dev/null 2>&1") == 0;
+      palplab::testing::mouse_run(kDir + "mouse_study.json", db, script, kW, kH));
 }
 }  // namespace
 
 TEST(CliRunMouse, ScriptedMouseSessionIsStoredLikeAVirtualOne) {
-  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  if (!have_xvfb()) GTEST_SKIP() << kNoXvfb;
   const fs::path dir = palplab::testing::scratch_dir("run_mouse");
   const fs::path db = dir / "human.db", vdb = dir / "virtual.db";
-  const Result r = human(db, write_script(dir, 0), dir);
+  const Result r = human(db, write_script(dir, 0));
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   // The phase's instructions are said (and shown) before the session; the next one is due later.
   EXPECT_NE(r.out.find("instructions: Drag over the model to find the left ovary"),
@@ -105,7 +68,7 @@ TEST(CliRunMouse, ScriptedMouseSessionIsStoredLikeAVirtualOne) {
   EXPECT_NE(r.out.find("1 session(s) completed, 0 aborted, 1 remaining; next due 2026-11-26"),
             std::string::npos)
       << r.out;
-  auto s = rows(db, "SELECT * FROM sessions");
+  auto s = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(s.size(), 1u);
   EXPECT_EQ(s[0]["status"], "complete");
   EXPECT_EQ(s[0]["trainee"], "human");
@@ -113,11 +76,11 @@ TEST(CliRunMouse, ScriptedMouseSessionIsStoredLikeAVirtualOne) {
   EXPECT_EQ(s[0]["steps"], "2000");
   EXPECT_GT(std::stod(s[0]["loop_median"]), 0.0);
   // One sample per haptic step, every second stored.
-  EXPECT_EQ(rows(db, "SELECT SUM(n) AS n FROM samples")[0]["n"], "2000");
+  EXPECT_EQ(db_rows(db, "SELECT SUM(n) AS n FROM samples")[0]["n"], "2000");
   // The scripted press reached the organ: contact, and the ST cue (prototype A, stiffness
   // 500 N/m, 8 mm along the view ray) -- the same events a virtual participant's press makes.
   std::set<std::string> kinds;
-  for (auto& e : rows(db, "SELECT DISTINCT kind FROM events")) kinds.insert(e["kind"]);
+  for (auto& e : db_rows(db, "SELECT DISTINCT kind FROM events")) kinds.insert(e["kind"]);
   EXPECT_TRUE(kinds.count("contact_start")) << r.out;
   EXPECT_TRUE(kinds.count("st_reached")) << r.out;
 
@@ -128,9 +91,9 @@ TEST(CliRunMouse, ScriptedMouseSessionIsStoredLikeAVirtualOne) {
   ASSERT_EQ(v.code, 0) << v.out << v.err;
   auto names = [](const fs::path& d) {
     std::set<std::string> out;
-    for (auto& m : rows(d,
-                        "SELECT name || ' ' || unit AS n FROM measures WHERE session = "
-                        "(SELECT MIN(session) FROM sessions)"))
+    for (auto& m : db_rows(d,
+                           "SELECT name || ' ' || unit AS n FROM measures WHERE session = "
+                           "(SELECT MIN(session) FROM sessions)"))
       out.insert(m["n"]);
     return out;
   };
@@ -140,18 +103,18 @@ TEST(CliRunMouse, ScriptedMouseSessionIsStoredLikeAVirtualOne) {
 }
 
 TEST(CliRunMouse, ClosingTheWindowMidSessionAbortsItKeptAndFlagged) {
-  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
+  if (!have_xvfb()) GTEST_SKIP() << kNoXvfb;
   const fs::path dir = palplab::testing::scratch_dir("run_mouse_close");
   const fs::path db = dir / "human.db";
-  const Result r = human(db, write_script(dir, 0.6), dir);
+  const Result r = human(db, write_script(dir, 0.6));
   ASSERT_EQ(r.code, 3) << r.out << r.err;
-  auto s = rows(db, "SELECT * FROM sessions");
+  auto s = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(s.size(), 1u);
   EXPECT_EQ(s[0]["status"], "aborted");
   EXPECT_EQ(s[0]["abort_reason"], "window closed");
   // The partial log is kept: up to 0.6 s of samples (fewer when a loaded machine makes the
   // real-time loop fall behind), not the planned 2 s.
-  const long n = std::stol(rows(db, "SELECT SUM(n) AS n FROM samples")[0]["n"]);
+  const long n = std::stol(db_rows(db, "SELECT SUM(n) AS n FROM samples")[0]["n"]);
   EXPECT_EQ(s[0]["steps"], std::to_string(n));
   EXPECT_GT(n, 20);
   EXPECT_LT(n, 1900);

@@ -24,22 +24,25 @@ struct Step {
   PressPhase phase;  // after the step
 };
 
-// Runs the press against the half-space below spec.point (normal spec.normal) for at most
-// `steps` steps, the way run_lockstep calls a device (read at the step's start time, write
-// with the end time); t kept as step_index * dt, as Scene does.
-std::vector<Step> drive(PressDevice& d, int steps) {
+// One step k of the press against the half-space below spec.point (normal spec.normal), the
+// way run_lockstep calls a device (read at the step's start time, write with the end time);
+// t kept as step_index * dt, as Scene does.
+Step drive_from(PressDevice& d, int k) {
   const PressSpec& s = d.spec();
+  const Eigen::Vector3d x = d.read(k * kDt).position;
+  const double depth = s.normal.dot(s.point - x);
+  Rendered r;
+  r.t = (k + 1) * kDt;
+  r.force = kK * std::max(depth, 0.0) * s.normal;
+  r.contact = depth > 0.0;
+  d.write(r);
+  return {r.t, x, r.force.norm(), d.phase()};
+}
+
+// The press for at most `steps` steps (until it is finished).
+std::vector<Step> drive(PressDevice& d, int steps) {
   std::vector<Step> out;
-  for (int k = 0; k < steps && !d.finished(); ++k) {
-    const Eigen::Vector3d x = d.read(k * kDt).position;
-    const double depth = s.normal.dot(s.point - x);
-    Rendered r;
-    r.t = (k + 1) * kDt;
-    r.force = kK * std::max(depth, 0.0) * s.normal;
-    r.contact = depth > 0.0;
-    d.write(r);
-    out.push_back({r.t, x, r.force.norm(), d.phase()});
-  }
+  for (int k = 0; k < steps && !d.finished(); ++k) out.push_back(drive_from(d, k));
   return out;
 }
 
@@ -165,4 +168,104 @@ TEST(Press, BadSpecsAreRefused) {
   depth_only.force = 0.0;
   depth_only.depth = 0.005;  // position control does not need one
   EXPECT_NO_THROW(PressDevice{depth_only});
+}
+
+// A multi-segment script (PressSpec::segments) at a held depth: hold 0.1 s, slide 1 cm at 2 cm/s,
+// hold 0.05 s, withdraw. Every position along the path is where the timing rule of press.hpp
+// puts it (k-th step after the target: tau = k dt), and each segment ends on its own step.
+TEST(Press, SegmentsHoldSlideHoldFollowThePathExactly) {
+  PressSpec p = base();
+  const Eigen::Vector3d tangent = Eigen::Vector3d(2, -1, 0).normalized();
+  const Eigen::Vector3d by = 0.01 * tangent;
+  p.hold_depth = true;
+  p.segments = {PressSegment::hold_for(0.1), PressSegment::slide_by(by, 0.02),
+                PressSegment::hold_for(0.05)};
+  PressDevice d(p);
+  std::vector<int> seg;  // d.segment() after each step
+  std::vector<Step> s;
+  for (int k = 0; k < 5000 && !d.finished(); ++k) {
+    const auto one = drive_from(d, k);
+    s.push_back(one);
+    seg.push_back(d.segment());
+  }
+  ASSERT_TRUE(d.finished());
+  ASSERT_TRUE(d.force_reached());
+  // R: the step that reached 2.5 N; x_r its position, the depth held from then on.
+  size_t R = 0;
+  while (s[R].phase == PressPhase::approach) ++R;
+  EXPECT_EQ(s[R].t, d.time_to_force());
+  EXPECT_GE(s[R].f, 2.5);
+  EXPECT_LT(s[R - 1].f, 2.5);
+  const Eigen::Vector3d xr = s[R].x;
+  for (int k = 1; k <= 100; ++k) {  // hold: 0.1 s = 100 steps, not moving
+    EXPECT_NEAR((s[R + k].x - xr).norm(), 0.0, 1e-15) << k;
+    EXPECT_EQ(s[R + k].phase, PressPhase::hold);
+  }
+  for (int k = 101; k <= 600; ++k) {  // slide: 1 cm at 2 cm/s = 500 steps of 20 um
+    const Eigen::Vector3d want = xr + by * ((k - 100) / 500.0);
+    EXPECT_NEAR((s[R + k].x - want).norm(), 0.0, 1e-14) << k;
+  }
+  EXPECT_NEAR((s[R + 101].x - xr).norm(), 0.02 * kDt, 1e-14);  // the first step moves speed dt
+  EXPECT_NEAR((s[R + 600].x - (xr + by)).norm(), 0.0, 1e-14);  // the last lands on `by`
+  for (int k = 601; k <= 650; ++k)                             // hold 0.05 s at the end
+    EXPECT_NEAR((s[R + k].x - (xr + by)).norm(), 0.0, 1e-14) << k;
+  // The segment index changes after the last step of each segment (segment() is the segment of
+  // the next step), and -1 once the withdrawal begins.
+  EXPECT_EQ(seg[R], 0);
+  EXPECT_EQ(seg[R + 99], 0);
+  EXPECT_EQ(seg[R + 100], 1);
+  EXPECT_EQ(seg[R + 599], 1);
+  EXPECT_EQ(seg[R + 600], 2);
+  EXPECT_EQ(seg[R + 649], 2);
+  EXPECT_EQ(seg[R + 650], -1);
+  // Step R + 651 is the first of the withdrawal: 5 cm/s out along the normal, the offset kept.
+  const Eigen::Vector3d w = s[R + 651].x - (xr + by);
+  EXPECT_NEAR(w.dot(p.normal), 0.05 * kDt, 1e-14);
+  EXPECT_NEAR((w - w.dot(p.normal) * p.normal).norm(), 0.0, 1e-14);
+  EXPECT_EQ(s[R + 650].phase, PressPhase::withdraw);
+  // The depth was held: the half-space force is the same on every step of the segments.
+  for (int k = 1; k <= 650; ++k) EXPECT_NEAR(s[R + k].f, s[R].f, 1e-9) << k;
+  // Ends withdrawn to the start offset, `by` along the surface.
+  EXPECT_NEAR((s.back().x - (p.point + 0.002 * p.normal + by)).norm(), 0.0, 1e-12);
+}
+
+// Under force control the segments hold the force while sliding (the sliding press of the
+// benchmarks as a script), and a script of zero-length holds withdraws on the next step.
+TEST(Press, SegmentsUnderForceControlHoldTheForce) {
+  PressSpec p = base();
+  const Eigen::Vector3d tangent = Eigen::Vector3d(2, -1, 0).normalized();
+  p.segments = {PressSegment::slide_by(0.015 * tangent, 0.03)};  // 0.5 s
+  PressDevice d(p);
+  const auto s = drive(d, 5000);
+  ASSERT_TRUE(d.finished());
+  int held = 0;
+  for (const auto& x : s)
+    if (x.phase == PressPhase::hold && x.t > d.time_to_force() + 0.1 + 0.5 * kDt) {
+      EXPECT_NEAR(x.f, 2.5, 0.025);
+      ++held;
+    }
+  EXPECT_EQ(held, 400 - 1);  // 500 steps of slide, the first 0.1 s settling, the last withdraws
+  EXPECT_NEAR(tangent.dot(s.back().x - p.point), 0.015, 1e-12);
+
+  PressSpec z = base();
+  z.segments = {PressSegment::hold_for(0.0)};
+  PressDevice dz(z);
+  const auto sz = drive(dz, 5000);
+  size_t R = 0;
+  while (sz[R].phase == PressPhase::approach) ++R;
+  EXPECT_EQ(sz[R].phase, PressPhase::withdraw);  // no step at the target after the one reaching it
+  EXPECT_NEAR(p.normal.dot(sz[R].x - sz[R + 1].x), -0.05 * kDt, 1e-14);
+}
+
+TEST(Press, BadSegmentsAreRefused) {
+  auto bad = [](PressSegment g) {
+    PressSpec p = base();
+    p.segments = {PressSegment::hold_for(0.1), g};
+    EXPECT_THROW(PressDevice{p}, std::invalid_argument);
+  };
+  bad(PressSegment::hold_for(-0.1));
+  bad(PressSegment::hold_for(NAN));
+  bad(PressSegment::slide_by(Eigen::Vector3d(0.01, 0, 0), 0.0));
+  bad(PressSegment::slide_by(Eigen::Vector3d(0.01, 0, 0), -0.02));
+  bad(PressSegment::slide_by(Eigen::Vector3d(NAN, 0, 0), 0.02));
 }

@@ -2,6 +2,7 @@
 // the scene by hand) and real time (1 kHz haptic thread, graphics thread, double-buffered frames).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
 
 #include "engine/haptics/clock.hpp"
@@ -123,4 +124,33 @@ TEST(Clock, TimedDeviceSamplesEveryNthStep) {
   EXPECT_EQ(some.size(), 13u);  // steps 0, 8, ..., 96
   EXPECT_EQ(dev.forces().size(), 100u);
   for (double us : some) EXPECT_GE(us, 0.0);
+}
+
+// Paced lock-step (LockstepOptions::paced, the benches' loop at the haptic rate): each step
+// starts on a 1/dt tick, so 300 steps of 1 ms take at least 0.299 s of wall time (sleep_until
+// never wakes early), and the results are the unpaced loop's to the bit (same thread, same
+// scene calls).
+TEST(Clock, PacedLockstepKeepsTheHapticRateAndTheResults) {
+  std::vector<Eigen::Vector3d> forces[2];
+  for (int paced = 0; paced < 2; ++paced) {
+    Scene s = prototypes::build_scene(proto("A"));
+    ScriptedDevice dev = press_device(s);
+    ASSERT_EQ(s.dt(), 1e-3);
+    LockstepOptions o;
+    o.duration = 0.3;
+    o.frame_period = 0.0;
+    o.paced = paced;
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(
+        run_lockstep(s, dev, o,
+                     [&](const Rendered& r, const Sample&) { forces[paced].push_back(r.force); }),
+        300);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (paced) EXPECT_GE(wall, 0.299);
+  }
+  ASSERT_EQ(forces[0].size(), forces[1].size());
+  for (size_t k = 0; k < forces[0].size(); ++k)
+    ASSERT_EQ(std::memcmp(forces[0][k].data(), forces[1][k].data(), sizeof(double) * 3), 0) << k;
+  EXPECT_GT(forces[0].back().norm() + forces[0][250].norm(), 0.0);  // the press reached A
 }
