@@ -1,11 +1,12 @@
 // `palplab scene build PROTOTYPE.json --out FILE.psim [--repeat N] [--json]`: writes the
 // scene's precomputation to a simulation file (engine/haptics/scene_file.hpp) and reports how
 // long a scene takes to become ready from it versus rebuilt from the sources (median of N, each
-// timed from nothing cached to the first haptic step done).
+// timed from nothing cached to the first haptic step done; rebuild and load alternate).
 // `palplab scene info FILE.psim [--json]`: verifies a simulation file and prints what it holds.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -56,22 +57,27 @@ nlohmann::json sources_json(const engine::SceneFileInfo& info) {
 int run_build(const BuildArgs& a) {
   if (a.repeat < 1 || a.repeat > 1000) throw InputError("--repeat: expected 1..1000");
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
-  // Rebuild: nothing cached, everything from the sources.
+  // Rebuild (nothing cached, everything from the sources) and load (nothing cached, everything
+  // from the file) alternate, so that a machine whose load changes during the run slows both
+  // alike and their ratio stays meaningful. The file is written from the mesh the first rebuild
+  // left in the cache (write_scene_file takes it from there).
   std::vector<double> rebuild, load;
+  engine::SceneFileInfo info;
+  double load_average[3] = {-1.0, -1.0, -1.0};
   for (int i = 0; i < a.repeat; ++i) {
     engine::install_scene_mesh(cfg.mesh, nullptr);
-    const auto t0 = Clock::now();
+    auto t0 = Clock::now();
     first_step(prototypes::load_prototype(a.prototype));
     rebuild.push_back(ms_since(t0));
-  }
-  // The file is written from the cached, freshly built mesh.
-  const engine::SceneFileInfo info = engine::write_scene_file(a.out, cfg);
-  for (int i = 0; i < a.repeat; ++i) {
+    if (i == 0) info = engine::write_scene_file(a.out, cfg);
     engine::install_scene_mesh(cfg.mesh, nullptr);
-    const auto t0 = Clock::now();
+    t0 = Clock::now();
     first_step(engine::load_scene_file(a.out, prototypes::load_prototype));
     load.push_back(ms_since(t0));
   }
+  // The machine's load when the timings were taken (1, 5, 15 min): the ratio on a busy shared
+  // machine is noisier than on an idle one.
+  if (getloadavg(load_average, 3) != 3) load_average[0] = load_average[1] = load_average[2] = -1;
   const double rb = engine::median(rebuild), ld = engine::median(load);
   nlohmann::json out = {{"file", a.out},
                         {"prototype", info.prototype},
@@ -84,7 +90,8 @@ int run_build(const BuildArgs& a) {
                         {"repeat", a.repeat},
                         {"rebuild_ms", {{"median", rb}, {"all", rebuild}}},
                         {"load_ms", {{"median", ld}, {"all", load}}},
-                        {"speedup", ld > 0 ? rb / ld : 0.0}};
+                        {"speedup", ld > 0 ? rb / ld : 0.0},
+                        {"load_average", {load_average[0], load_average[1], load_average[2]}}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {
@@ -94,7 +101,7 @@ int run_build(const BuildArgs& a) {
               << ")\n"
               << "  ready to step (median of " << a.repeat << "): rebuilt from sources " << rb
               << " ms, loaded from the file " << ld << " ms (" << (ld > 0 ? rb / ld : 0.0)
-              << "x faster)\n";
+              << "x faster; load average " << std::setprecision(2) << load_average[0] << ")\n";
   }
   return 0;
 }

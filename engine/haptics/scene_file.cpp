@@ -4,6 +4,11 @@
 // sources changed).
 #include "engine/haptics/scene_file.hpp"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -46,15 +51,58 @@ Digest sha256(const void* p, std::size_t n) {
   return h.digest();
 }
 
-std::string read_all(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) throw InputError(std::string("cannot read ") + what, path);
-  const std::streamoff n = in.tellg();
-  std::string s(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
-  in.seekg(0);
-  if (n > 0 && !in.read(s.data(), n)) throw InputError(std::string("cannot read ") + what, path);
-  return s;
-}
+// A whole file, read-only, mapped into memory (MAP_POPULATE: the page cache's pages are mapped in
+// one call). Reading into a buffer instead cost a zero-filled allocation (a page fault per 4 KiB
+// on first touch, and glibc unmapping or trimming it again when freed: in a loop this made the
+// load time bimodal, docs/FORMATS.md) plus a copy out of the page cache; a mapping costs neither.
+// A file that cannot be mapped (a pipe, /proc) is read into a buffer. palplab never truncates a
+// .psim in place (scene build writes a new file and renames it), so a mapped file does not
+// shrink under the reader.
+class FileBytes {
+ public:
+  FileBytes(const std::string& path, const char* what) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw InputError(std::string("cannot read ") + what, path);
+    struct stat st {};
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+      n_ = static_cast<std::size_t>(st.st_size);
+      void* m = ::mmap(nullptr, n_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      if (m != MAP_FAILED) {
+        map_ = m;
+        p_ = static_cast<const char*>(m);
+        ::close(fd);
+        return;
+      }
+    }
+    // Not mappable (or empty): read to the end.
+    char chunk[65536];
+    for (;;) {
+      const ssize_t k = ::read(fd, chunk, sizeof chunk);
+      if (k < 0) {
+        ::close(fd);
+        throw InputError(std::string("cannot read ") + what, path);
+      }
+      if (k == 0) break;
+      buf_.append(chunk, static_cast<std::size_t>(k));
+    }
+    ::close(fd);
+    p_ = buf_.data();
+    n_ = buf_.size();
+  }
+  FileBytes(const FileBytes&) = delete;
+  FileBytes& operator=(const FileBytes&) = delete;
+  ~FileBytes() {
+    if (map_) ::munmap(map_, n_);
+  }
+  const char* data() const { return p_; }
+  std::size_t size() const { return n_; }
+
+ private:
+  void* map_ = nullptr;
+  std::string buf_;
+  const char* p_ = nullptr;
+  std::size_t n_ = 0;
+};
 
 // The payload checksum: 256 bits from four independent 64-bit multiply-rotate lanes over 32-byte
 // blocks (the structure of xxHash64, not its exact output). A lane's update is a bijection of
@@ -449,7 +497,7 @@ std::vector<SceneSource> scene_sources(const SceneConfig& cfg) {
     throw InputError("a scene file is built from a prototype file (the config names none)");
   std::vector<SceneSource> out;
   auto add = [&](const char* role, const std::string& path) {
-    const std::string bytes = read_all(path, "a source of the scene");
+    const FileBytes bytes(path, "a source of the scene");
     out.push_back({role, path, sha256(bytes.data(), bytes.size())});
   };
   add("prototype", fs::absolute(cfg.source).lexically_normal().string());
@@ -550,7 +598,7 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
 SceneFileData read_scene_file(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError("no such scene file", path);
-  std::string bytes = read_all(path, "the scene file");
+  const FileBytes bytes(path, "the scene file");
   const std::string rebuild = " (rebuild it with `palplab scene build`)";
   if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
     throw InputError("not a palplab scene file (.psim): bad magic bytes", path);
@@ -645,17 +693,8 @@ SceneFileData read_scene_file(const std::string& path) {
         "corrupted scene file: a section (sources, mesh key, mesh, face index or model) is "
         "missing",
         path);
-  // A model blob that is most of the file (a FEM factorisation: 93 % of D's) is cut out of the
-  // file's buffer in place instead of copied: a copy of 10 MB into fresh pages (page faults,
-  // then unmapping them) was a large share of a loaded D's time (perf). A small one is copied,
-  // so that the cached mesh does not keep the whole file's buffer. p, h are dead here.
-  if (blob_size > bytes.size() / 2) {
-    bytes.resize(blob_at + blob_size);
-    bytes.erase(0, blob_at);
-    d.model_blob = std::move(bytes);
-  } else {
-    d.model_blob.assign(bytes, blob_at, blob_size);
-  }
+  // One copy out of the mapping (no zero fill, no copy of the rest of the file).
+  d.model_blob.assign(bytes.data() + blob_at, blob_size);
   return d;
 }
 
