@@ -117,7 +117,7 @@ TEST(CliDeviceSim, SendsTheScriptsButtonsAndStylusAxis) {
   }
   const Received got = receive_from_sim("--script " + script.string() +
                                         " --start-on-force --duration 0.35 --wait 10");
-  ASSERT_EQ(got.sim.code, 0) << got.sim.out << got.sim.err;
+  ASSERT_EQ(got.sim.code, 0) << got.sim.out;
   const auto j = nlohmann::json::parse(got.sim.out);
   EXPECT_EQ(j["datagram_type"].get<int>(), 3);
   EXPECT_EQ(j["button_changes"].get<long>(), 1);
@@ -128,7 +128,9 @@ TEST(CliDeviceSim, SendsTheScriptsButtonsAndStylusAxis) {
   bool pressed = false;
   for (const auto& s : got.samples) {
     EXPECT_TRUE(s.buttons == 0u || s.buttons == 2u);
-    if (pressed) EXPECT_EQ(s.buttons, 2u);
+    if (pressed) {
+      EXPECT_EQ(s.buttons, 2u);
+    }
     pressed = pressed || s.buttons == 2u;
     EXPECT_FALSE(s.button);  // bit 0 never set
   }
@@ -151,7 +153,7 @@ TEST(CliDeviceSim, SendsTheScriptsButtonsAndStylusAxis) {
 
 TEST(CliDeviceSim, SendsAConstantMaskAndAxisFromTheOptions) {
   const Received got = receive_from_sim("--buttons 3 --axis 1 0 -1 --duration 0.15");
-  ASSERT_EQ(got.sim.code, 0) << got.sim.out << got.sim.err;
+  ASSERT_EQ(got.sim.code, 0) << got.sim.out;
   EXPECT_EQ(nlohmann::json::parse(got.sim.out)["datagram_type"].get<int>(), 3);
   ASSERT_GT(got.samples.size(), 20u);
   const Eigen::Vector3d axis = Eigen::Vector3d(1, 0, -1).normalized();
@@ -162,7 +164,7 @@ TEST(CliDeviceSim, SendsAConstantMaskAndAxisFromTheOptions) {
   }
   // Without an axis: type-1 datagrams, and the device reports no axis.
   const Received plain = receive_from_sim("--buttons 2 --duration 0.1");
-  ASSERT_EQ(plain.sim.code, 0) << plain.sim.out << plain.sim.err;
+  ASSERT_EQ(plain.sim.code, 0) << plain.sim.out;
   EXPECT_EQ(nlohmann::json::parse(plain.sim.out)["datagram_type"].get<int>(), 1);
   ASSERT_FALSE(plain.samples.empty());
   for (const auto& s : plain.samples) {
@@ -196,7 +198,7 @@ TEST(CliDeviceSim, RejectsBadButtonsAndAxes) {
   for (const auto& c : cases) {
     const Result r = with_script(c.script);
     EXPECT_EQ(r.code, 2) << c.script.dump();
-    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.script.dump() << ": " << r.err;
+    EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.script.dump() << ": " << r.out;
   }
   EXPECT_EQ(run(sim + "--axis 0 0 0").code, 2);
   EXPECT_EQ(run(sim + "--axis 1 0").code, 2);
