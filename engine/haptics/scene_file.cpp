@@ -212,8 +212,16 @@ class Reader {
   template <class T>
   std::vector<T> vec(const char* what) {
     const std::size_t n = count(sizeof(T), what);
-    std::vector<T> v(n);
-    if (n) std::memcpy(v.data(), p_ + at_, n * sizeof(T));
+    std::vector<T> v;
+    const char* src = p_ + at_;
+    if (reinterpret_cast<std::uintptr_t>(src) % alignof(T) == 0) {
+      // Aligned in the mapped file: one copy, no zero fill first.
+      const T* t = reinterpret_cast<const T*>(src);
+      v.assign(t, t + n);
+    } else {
+      v.resize(n);
+      if (n) std::memcpy(v.data(), src, n * sizeof(T));
+    }
     at_ += n * sizeof(T);
     return v;
   }
