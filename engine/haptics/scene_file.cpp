@@ -64,7 +64,8 @@ class FileBytes {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) throw InputError(std::string("cannot read ") + what, path);
     struct stat st {};
-    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+    // A small file (a prototype) is cheaper to read than to map and unmap.
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > kMapFrom) {
       n_ = static_cast<std::size_t>(st.st_size);
       void* m = ::mmap(nullptr, n_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
       if (m != MAP_FAILED) {
@@ -74,7 +75,8 @@ class FileBytes {
         return;
       }
     }
-    // Not mappable (or empty): read to the end.
+    // Small, not mappable or empty: read to the end.
+    if (st.st_size > 0) buf_.reserve(static_cast<std::size_t>(st.st_size));
     char chunk[65536];
     for (;;) {
       const ssize_t k = ::read(fd, chunk, sizeof chunk);
@@ -98,6 +100,7 @@ class FileBytes {
   std::size_t size() const { return n_; }
 
  private:
+  static constexpr off_t kMapFrom = 64 * 1024;  // bytes
   void* map_ = nullptr;
   std::string buf_;
   const char* p_ = nullptr;
