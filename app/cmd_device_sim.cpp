@@ -1,12 +1,19 @@
 // `palplab device-sim --port P [--script FILE.json] [--rate HZ] [--duration S] [--stop-after S]
-//  [--json]`: a scripted hand on the UDP device protocol (engine/haptics/devices/udp_device.hpp),
+//  [--buttons MASK] [--axis AX AY AZ] [--json]`: a scripted hand on the UDP device protocol
+// (engine/haptics/devices/udp_device.hpp),
 // for tests and for checking a study setup without hardware. It sends position datagrams to
 // 127.0.0.1:P at HZ (default 1000) along the script's piecewise-linear waypoints, receives the
 // force datagrams, and prints a summary: datagrams sent and received, the largest force, and —
 // with --stop-after — how long after its last position palplab's first "force off" arrived.
 //
 // Script: {"waypoints": [[t, x, y, z], ...]} (s, m; increasing t); the hand holds the last
-// waypoint. Without --script the hand rests at the origin.
+// waypoint. Without --script the hand rests at the origin. Optional, for a stylus with buttons
+// and an orientation sensor (a needle scene: buttons bit 1 = the needle tool):
+//   "buttons": [[t, mask], ...]      the button mask from t on (0 before the first entry);
+//   "axis": [[t, ax, ay, az], ...]   the stylus axis (handle -> tip), linear between entries,
+//                                    normalised, held before the first and after the last.
+// --buttons MASK / --axis AX AY AZ send a constant mask / axis instead (not with the script's).
+// With an axis the datagrams are type 3 (96 bytes, with the axis); else type 1 (72 bytes).
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -38,9 +45,83 @@ struct SimArgs {
   bool json = false;
   bool start_on_force = false;  // hold the first waypoint until palplab's forces arrive
   double wait = 30.0;           // s, the most to wait for them
+  long buttons = -1;            // constant button mask (-1 = none given)
+  std::vector<double> axis;     // constant stylus axis (empty = none given)
 };
 
-std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& path) {
+// The script's (or the options') buttons and stylus axis as functions of the script time.
+struct StylusScript {
+  std::vector<std::pair<double, std::uint32_t>> buttons;  // (t from, mask), increasing t
+  std::vector<std::pair<double, Eigen::Vector3d>> axis;   // (t, unit axis), increasing t
+  std::uint32_t buttons_at(double t) const {
+    std::uint32_t b = 0;
+    for (const auto& [t0, m] : buttons)
+      if (t >= t0) b = m;
+    return b;
+  }
+  Eigen::Vector3d axis_at(double t) const {
+    if (axis.empty()) return Eigen::Vector3d::Zero();
+    if (t <= axis.front().first) return axis.front().second;
+    for (std::size_t i = 1; i < axis.size(); ++i)
+      if (t < axis[i].first) {
+        const double s = (t - axis[i - 1].first) / (axis[i].first - axis[i - 1].first);
+        const Eigen::Vector3d a = (1 - s) * axis[i - 1].second + s * axis[i].second;
+        // Opposite neighbours would pass through 0 half way: hold the earlier one there.
+        return a.norm() > 1e-9 ? Eigen::Vector3d(a.normalized()) : axis[i - 1].second;
+      }
+    return axis.back().second;
+  }
+};
+
+Eigen::Vector3d unit_axis(double x, double y, double z, const std::string& where) {
+  const Eigen::Vector3d a(x, y, z);
+  if (!a.allFinite() || !(a.norm() > 1e-9))
+    throw InputError(where + ": expected a finite, non-zero stylus axis");
+  return a.normalized();
+}
+
+// Reads the optional "buttons" and "axis" arrays of a script (see the top of the file).
+void read_stylus(const nlohmann::json& j, const std::string& path, StylusScript& s) {
+  if (j.contains("buttons")) {
+    const auto& b = j["buttons"];
+    if (!b.is_array() || b.empty())
+      throw InputError(path + ": $.buttons: expected a non-empty array of [t, mask]");
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      const std::string where = path + ": $.buttons[" + std::to_string(i) + "]";
+      const auto& e = b[i];
+      if (!e.is_array() || e.size() != 2 || !e[0].is_number() ||
+          !std::isfinite(e[0].get<double>()) || !e[1].is_number_unsigned() ||
+          e[1].get<std::uint64_t>() > 0xFFFFFFFFull)
+        throw InputError(where + ": expected [t, mask] (s, an integer 0..4294967295)");
+      const double t = e[0].get<double>();
+      if (!s.buttons.empty() && t <= s.buttons.back().first)
+        throw InputError(where + ": times must increase");
+      s.buttons.emplace_back(t, static_cast<std::uint32_t>(e[1].get<std::uint64_t>()));
+    }
+  }
+  if (j.contains("axis")) {
+    const auto& a = j["axis"];
+    if (!a.is_array() || a.empty())
+      throw InputError(path + ": $.axis: expected a non-empty array of [t, ax, ay, az]");
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const std::string where = path + ": $.axis[" + std::to_string(i) + "]";
+      const auto& e = a[i];
+      if (!e.is_array() || e.size() != 4)
+        throw InputError(where + ": expected [t, ax, ay, az] (s, a direction)");
+      for (const auto& v : e)
+        if (!v.is_number() || !std::isfinite(v.get<double>()))
+          throw InputError(where + ": expected four finite numbers");
+      const double t = e[0].get<double>();
+      if (!s.axis.empty() && t <= s.axis.back().first)
+        throw InputError(where + ": times must increase");
+      s.axis.emplace_back(
+          t, unit_axis(e[1].get<double>(), e[2].get<double>(), e[3].get<double>(), where));
+    }
+  }
+}
+
+std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& path,
+                                                            StylusScript& stylus) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open the script");
   nlohmann::json j;
@@ -64,6 +145,10 @@ std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& p
     if (!w.empty() && t <= w.back().first) throw InputError(where + ": times must increase");
     w.emplace_back(t, Eigen::Vector3d(p[1].get<double>(), p[2].get<double>(), p[3].get<double>()));
   }
+  for (const auto& [k, v] : j.items())
+    if (k != "waypoints" && k != "buttons" && k != "axis")
+      throw InputError(path + ": $." + k + ": unknown key (expected waypoints, buttons, axis)");
+  read_stylus(j, path, stylus);
   return w;
 }
 
@@ -72,7 +157,20 @@ int run_device_sim(const SimArgs& a) {
   if (a.port < 1 || a.port > 65535) throw InputError("--port: expected 1..65535");
   if (!(a.rate >= 1.0 && a.rate <= 10000.0)) throw InputError("--rate: expected 1..10000 Hz");
   std::vector<std::pair<double, Eigen::Vector3d>> path = {{0.0, Eigen::Vector3d::Zero()}};
-  if (!a.script.empty()) path = read_script(a.script);
+  StylusScript stylus;
+  if (!a.script.empty()) path = read_script(a.script, stylus);
+  if (a.buttons >= 0) {
+    if (!stylus.buttons.empty())
+      throw InputError("--buttons: the script has its own \"buttons\" (give one of them)");
+    stylus.buttons = {{-1e300, static_cast<std::uint32_t>(a.buttons)}};
+  }
+  if (!a.axis.empty()) {
+    if (a.axis.size() != 3) throw InputError("--axis: expected three numbers AX AY AZ");
+    if (!stylus.axis.empty())
+      throw InputError("--axis: the script has its own \"axis\" (give one of them)");
+    stylus.axis = {{0.0, unit_axis(a.axis[0], a.axis[1], a.axis[2], "--axis")}};
+  }
+  const bool with_axis = !stylus.axis.empty();
   const double duration = a.duration >= 0 ? a.duration : path.back().first + 0.1;
   if (!(duration > 0.0) || duration > 3600.0) throw InputError("--duration: expected (0, 3600] s");
   const double stop = a.stop_after >= 0 ? std::min(a.stop_after, duration) : duration;
@@ -92,7 +190,8 @@ int run_device_sim(const SimArgs& a) {
 
   long sent = 0, received = 0, force_off = 0, bad = 0;
   double max_force = 0.0, first_off_ms = -1.0;
-  std::uint32_t last_ack = 0;
+  std::uint32_t last_ack = 0, last_buttons = 0;
+  long button_changes = 0;
   const auto t0 = Clock::now();
   Clock::time_point last_send = t0;
   const auto period =
@@ -143,8 +242,17 @@ int run_device_sim(const SimArgs& a) {
     m.x = x;
     m.v = (x - prev) * a.rate;
     prev = x;
-    const auto b = engine::encode(m);
-    ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    m.buttons = stylus.buttons_at(t);
+    if (m.buttons != last_buttons) ++button_changes;
+    last_buttons = m.buttons;
+    if (with_axis) {
+      m.axis = stylus.axis_at(t);
+      const auto b = engine::encode_with_axis(m);
+      ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    } else {
+      const auto b = engine::encode(m);
+      ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    }
     last_send = Clock::now();
     ++sent;
     receive();
@@ -168,6 +276,8 @@ int run_device_sim(const SimArgs& a) {
                         {"max_force", max_force},
                         {"last_ack", last_ack},
                         {"stopped_at", stop},
+                        {"datagram_type", with_axis ? 3 : 1},
+                        {"button_changes", button_changes},
                         {"force_off_after_stop_ms", first_off_ms}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";
@@ -197,6 +307,12 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--start-on-force", a->start_on_force,
                     "Hold the first waypoint until forces arrive, then start the script");
       cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)");
+      cmd->add_option("--buttons", a->buttons,
+                      "Constant button mask in every datagram (bit 1 = a needle scene's needle)")
+          ->check(CLI::Range(0L, 4294967295L));
+      cmd->add_option("--axis", a->axis,
+                      "Constant stylus axis AX AY AZ (handle -> tip; sends type-3 datagrams)")
+          ->expected(3);
       cmd->callback([a, code] { *code = run_device_sim(*a); });
     }};
 

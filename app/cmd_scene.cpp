@@ -1,11 +1,15 @@
 // `palplab scene build PROTOTYPE.json --out FILE.psim [--repeat N] [--json]`: writes the
 // scene's precomputation to a simulation file (engine/haptics/scene_file.hpp) and reports how
 // long a scene takes to become ready from it versus rebuilt from the sources (median of N, each
-// timed from nothing cached to the first haptic step done).
+// timed from nothing cached to the first haptic step done; rebuild and load alternate).
 // `palplab scene info FILE.psim [--json]`: verifies a simulation file and prints what it holds.
+#include <sys/resource.h>
+#include <time.h>
 #include <algorithm>
+
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -35,6 +39,21 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// CPU time of the process and of its reaped children (TetGen runs in a forked child,
+// engine/mesh/tetrahedralize.cpp): user + system, every thread (ms). On a shared machine the wall
+// time of a longer phase includes the time it waited for a core (at load average 20 on 2 cores,
+// all of `scene build prototypes/B.json --repeat 7` used 80 ms of CPU in 470 ms of wall time), so
+// the ratio of wall times then says more about the scheduler than about the file; CPU time
+// does not count the waiting.
+double cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  rusage ch{};
+  getrusage(RUSAGE_CHILDREN, &ch);
+  const auto tv = [](const timeval& t) { return t.tv_sec * 1e3 + t.tv_usec * 1e-3; };
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6 + tv(ch.ru_utime) + tv(ch.ru_stime);
+}
+
 // A scene is ready when it has taken its first haptic step (a FEM model factorises its system
 // for the step size there).
 void first_step(const engine::SceneConfig& cfg) {
@@ -56,23 +75,33 @@ nlohmann::json sources_json(const engine::SceneFileInfo& info) {
 int run_build(const BuildArgs& a) {
   if (a.repeat < 1 || a.repeat > 1000) throw InputError("--repeat: expected 1..1000");
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
-  // Rebuild: nothing cached, everything from the sources.
-  std::vector<double> rebuild, load;
+  // Rebuild (nothing cached, everything from the sources) and load (nothing cached, everything
+  // from the file) alternate, so that a machine whose load changes during the run slows both
+  // alike and their ratio stays meaningful. The file is written from the mesh the first rebuild
+  // left in the cache (write_scene_file takes it from there).
+  std::vector<double> rebuild, load, rebuild_cpu, load_cpu;
+  engine::SceneFileInfo info;
+  double load_average[3] = {-1.0, -1.0, -1.0};
   for (int i = 0; i < a.repeat; ++i) {
     engine::install_scene_mesh(cfg.mesh, nullptr);
-    const auto t0 = Clock::now();
+    auto t0 = Clock::now();
+    double c0 = cpu_ms();
     first_step(prototypes::load_prototype(a.prototype));
+    rebuild_cpu.push_back(cpu_ms() - c0);
     rebuild.push_back(ms_since(t0));
-  }
-  // The file is written from the cached, freshly built mesh.
-  const engine::SceneFileInfo info = engine::write_scene_file(a.out, cfg);
-  for (int i = 0; i < a.repeat; ++i) {
+    if (i == 0) info = engine::write_scene_file(a.out, cfg);
     engine::install_scene_mesh(cfg.mesh, nullptr);
-    const auto t0 = Clock::now();
+    t0 = Clock::now();
+    c0 = cpu_ms();
     first_step(engine::load_scene_file(a.out, prototypes::load_prototype));
+    load_cpu.push_back(cpu_ms() - c0);
     load.push_back(ms_since(t0));
   }
+  // The machine's load when the timings were taken (1, 5, 15 min): the ratio on a busy shared
+  // machine is noisier than on an idle one.
+  if (getloadavg(load_average, 3) != 3) load_average[0] = load_average[1] = load_average[2] = -1;
   const double rb = engine::median(rebuild), ld = engine::median(load);
+  const double rbc = engine::median(rebuild_cpu), ldc = engine::median(load_cpu);
   nlohmann::json out = {{"file", a.out},
                         {"prototype", info.prototype},
                         {"format_version", info.format_version},
@@ -84,7 +113,11 @@ int run_build(const BuildArgs& a) {
                         {"repeat", a.repeat},
                         {"rebuild_ms", {{"median", rb}, {"all", rebuild}}},
                         {"load_ms", {{"median", ld}, {"all", load}}},
-                        {"speedup", ld > 0 ? rb / ld : 0.0}};
+                        {"speedup", ld > 0 ? rb / ld : 0.0},
+                        {"rebuild_cpu_ms", {{"median", rbc}, {"all", rebuild_cpu}}},
+                        {"load_cpu_ms", {{"median", ldc}, {"all", load_cpu}}},
+                        {"speedup_cpu", ldc > 0 ? rbc / ldc : 0.0},
+                        {"load_average", {load_average[0], load_average[1], load_average[2]}}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {
@@ -94,7 +127,9 @@ int run_build(const BuildArgs& a) {
               << ")\n"
               << "  ready to step (median of " << a.repeat << "): rebuilt from sources " << rb
               << " ms, loaded from the file " << ld << " ms (" << (ld > 0 ? rb / ld : 0.0)
-              << "x faster)\n";
+              << "x faster; load average " << std::setprecision(2) << load_average[0] << ")\n"
+              << std::setprecision(1) << "  CPU time (median): rebuilt " << rbc << " ms, loaded "
+              << ldc << " ms (" << (ldc > 0 ? rbc / ldc : 0.0) << "x)\n";
   }
   return 0;
 }

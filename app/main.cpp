@@ -1,7 +1,10 @@
 // The `palplab` command line: a thin layer that parses arguments and calls the libraries.
 // Exit codes: 0 success, 1 a command's own "found something" result (e.g. mesh defects),
 // 2 bad input (flags, files, JSON, CSV) with a located message on stderr, 3 internal error.
+#include <malloc.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <iostream>
 
 #include "app/command.hpp"
@@ -21,8 +24,30 @@ CommandRegistration::CommandRegistration(std::string name, CommandSetup setup) {
 
 }  // namespace palplab::app
 
+namespace {
+
+// glibc's allocator serves a block above its mmap threshold (128 KiB at the start, raised on the
+// fly to the largest block freed, up to 32 MiB) with a fresh mapping and unmaps it on free, and
+// returns the top of the heap to the kernel once 2x that threshold is free. palplab builds and
+// drops scenes of MB-sized arrays one after another (a study's sessions, a scene file's load, a
+// benchmark's repetitions): every drop gave the pages back and the next scene took them again, a
+// page fault and a zeroed page per 4 KiB, at a time that depended on the dynamic threshold's
+// history. `scene build` showed it as a load time that jumped between two values from run to run
+// (B: 1.1-1.5 ms or 4-5 ms). A fixed threshold of 32 MiB and a 128 MiB trim threshold keep
+// freed memory in the heap for the next scene: measured on `scene build --repeat 5` (load
+// average 17) B's load 32 -> 1.3 ms, D's 109 -> 24 ms, page faults of the whole run -73 % (B) and
+// -26 % (D), peak RSS +2.4 MB (B) and +1.3 MB (D) (docs/FORMATS.md, "Simulation files").
+// MALLOC_MMAP_THRESHOLD_ / MALLOC_TRIM_THRESHOLD_ in the environment still take precedence.
+void tune_allocator() {
+  if (!std::getenv("MALLOC_MMAP_THRESHOLD_")) mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  if (!std::getenv("MALLOC_TRIM_THRESHOLD_")) mallopt(M_TRIM_THRESHOLD, 128 << 20);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace palplab::app;
+  tune_allocator();
   CLI::App cli{"palplab — experiment runner and evaluation for haptic palpation-training studies"};
   cli.set_version_flag(
       "--version", std::string("palplab ") + palplab::kVersion + " (" + palplab::kGitCommit + ")");

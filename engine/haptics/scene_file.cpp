@@ -4,6 +4,11 @@
 // sources changed).
 #include "engine/haptics/scene_file.hpp"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -46,15 +51,61 @@ Digest sha256(const void* p, std::size_t n) {
   return h.digest();
 }
 
-std::string read_all(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) throw InputError(std::string("cannot read ") + what, path);
-  const std::streamoff n = in.tellg();
-  std::string s(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
-  in.seekg(0);
-  if (n > 0 && !in.read(s.data(), n)) throw InputError(std::string("cannot read ") + what, path);
-  return s;
-}
+// A whole file, read-only, mapped into memory (MAP_POPULATE: the page cache's pages are mapped in
+// one call). Reading into a buffer instead cost a zero-filled allocation (a page fault per 4 KiB
+// on first touch, and glibc unmapping or trimming it again when freed: in a loop this made the
+// load time bimodal, docs/FORMATS.md) plus a copy out of the page cache; a mapping costs neither.
+// A file that cannot be mapped (a pipe, /proc) is read into a buffer. palplab never truncates a
+// .psim in place (scene build writes a new file and renames it), so a mapped file does not
+// shrink under the reader.
+class FileBytes {
+ public:
+  FileBytes(const std::string& path, const char* what) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw InputError(std::string("cannot read ") + what, path);
+    struct stat st {};
+    // A small file (a prototype) is cheaper to read than to map and unmap.
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > kMapFrom) {
+      n_ = static_cast<std::size_t>(st.st_size);
+      void* m = ::mmap(nullptr, n_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      if (m != MAP_FAILED) {
+        map_ = m;
+        p_ = static_cast<const char*>(m);
+        ::close(fd);
+        return;
+      }
+    }
+    // Small, not mappable or empty: read to the end.
+    if (st.st_size > 0) buf_.reserve(static_cast<std::size_t>(st.st_size));
+    char chunk[65536];
+    for (;;) {
+      const ssize_t k = ::read(fd, chunk, sizeof chunk);
+      if (k < 0) {
+        ::close(fd);
+        throw InputError(std::string("cannot read ") + what, path);
+      }
+      if (k == 0) break;
+      buf_.append(chunk, static_cast<std::size_t>(k));
+    }
+    ::close(fd);
+    p_ = buf_.data();
+    n_ = buf_.size();
+  }
+  FileBytes(const FileBytes&) = delete;
+  FileBytes& operator=(const FileBytes&) = delete;
+  ~FileBytes() {
+    if (map_) ::munmap(map_, n_);
+  }
+  const char* data() const { return p_; }
+  std::size_t size() const { return n_; }
+
+ private:
+  static constexpr off_t kMapFrom = 64 * 1024;  // bytes
+  void* map_ = nullptr;
+  std::string buf_;
+  const char* p_ = nullptr;
+  std::size_t n_ = 0;
+};
 
 // The payload checksum: 256 bits from four independent 64-bit multiply-rotate lanes over 32-byte
 // blocks (the structure of xxHash64, not its exact output). A lane's update is a bijection of
@@ -164,8 +215,16 @@ class Reader {
   template <class T>
   std::vector<T> vec(const char* what) {
     const std::size_t n = count(sizeof(T), what);
-    std::vector<T> v(n);
-    if (n) std::memcpy(v.data(), p_ + at_, n * sizeof(T));
+    std::vector<T> v;
+    const char* src = p_ + at_;
+    if (reinterpret_cast<std::uintptr_t>(src) % alignof(T) == 0) {
+      // Aligned in the mapped file: one copy, no zero fill first.
+      const T* t = reinterpret_cast<const T*>(src);
+      v.assign(t, t + n);
+    } else {
+      v.resize(n);
+      if (n) std::memcpy(v.data(), src, n * sizeof(T));
+    }
     at_ += n * sizeof(T);
     return v;
   }
@@ -199,6 +258,25 @@ class Reader {
 
 // ---- the prepared mesh ------------------------------------------------------------------
 
+// Whole-array checks without an early exit, so that the compiler vectorises them (the
+// short-circuiting loops they replace were a third of B's mesh parsing, perf): a damaged file is
+// rare, a loaded one is not.
+bool any_outside(const std::vector<int>& v, long lo, long hi) {  // some v[i] not in [lo, hi)
+  const auto width = static_cast<std::uint32_t>(hi - lo);
+  const auto base = static_cast<std::uint32_t>(lo);
+  std::uint32_t bad = 0;
+  for (int x : v) bad |= static_cast<std::uint32_t>(x) - base >= width;
+  return bad != 0;
+}
+bool any_outside(const std::vector<int>& v, long n) {
+  return any_outside(v, 0, n);
+}
+bool any_decrease(const std::vector<int>& v) {
+  std::uint32_t bad = 0;
+  for (std::size_t i = 1; i < v.size(); ++i) bad |= v[i] < v[i - 1];
+  return bad != 0;
+}
+
 void put_csr(Writer& w, const mesh::Csr& c) {
   w.vec(c.offset);
   w.vec(c.index);
@@ -207,10 +285,9 @@ mesh::Csr get_csr(Reader& r, int rows, const char* what) {
   mesh::Csr c;
   c.offset = r.vec<int>(what);
   c.index = r.vec<int>(what);
-  bool ok = static_cast<int>(c.offset.size()) == rows + 1 && c.offset.front() == 0 &&
-            c.offset.back() == static_cast<int>(c.index.size());
-  for (std::size_t i = 1; ok && i < c.offset.size(); ++i) ok = c.offset[i] >= c.offset[i - 1];
-  for (int v : c.index) ok = ok && v >= 0 && v < rows;
+  const bool ok = static_cast<int>(c.offset.size()) == rows + 1 && c.offset.front() == 0 &&
+                  c.offset.back() == static_cast<int>(c.index.size()) && !any_decrease(c.offset) &&
+                  !any_outside(c.index, rows);
   if (!ok) throw InputError(std::string("corrupted scene file: inconsistent ") + what, r.file());
   return c;
 }
@@ -280,9 +357,8 @@ std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
   if (m->N.rows() != nv || m->vertex_area.size() != nv ||
       static_cast<long>(m->vertex_region.size()) != nv)
     throw InputError("corrupted scene file: per-vertex arrays disagree in size", r.file());
-  for (int v : m->vertex_region)
-    if (v < -1 || v >= static_cast<int>(nr))
-      throw InputError("corrupted scene file: vertex region out of range", r.file());
+  if (any_outside(m->vertex_region, -1, static_cast<long>(nr)))
+    throw InputError("corrupted scene file: vertex region out of range", r.file());
 
   auto o = std::make_shared<spatial::Octree>();
   o->max_depth = r.get<std::int32_t>("octree depth");
@@ -312,10 +388,8 @@ std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
   for (const auto& n : o->nodes)
     if (n.begin < 0 || n.end < n.begin || n.end > nv)
       throw InputError("corrupted scene file: octree run out of range", r.file());
-  for (std::size_t i = 0; i < o->order.size(); ++i)
-    if (o->order[i] < 0 || o->order[i] >= nv || o->leaf_of[i] < 0 ||
-        o->leaf_of[i] >= static_cast<long>(nn))
-      throw InputError("corrupted scene file: octree index out of range", r.file());
+  if (any_outside(o->order, nv) || any_outside(o->leaf_of, static_cast<long>(nn)))
+    throw InputError("corrupted scene file: octree index out of range", r.file());
   m->octree = o;
   auto rings = std::make_shared<mesh::RingTable>();
   rings->first = get_csr(r, static_cast<int>(nv), "first rings");
@@ -345,8 +419,8 @@ std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
   if (static_cast<long>(m->surface_to_model.size()) != nv ||
       m->tet_attribute.size() != m->model_T.rows())
     throw InputError("corrupted scene file: model arrays disagree in size", r.file());
-  for (int v : m->surface_to_model)
-    if (v < 0 || v >= nm) throw InputError("corrupted scene file: bad surface map", r.file());
+  if (any_outside(m->surface_to_model, nm))
+    throw InputError("corrupted scene file: bad surface map", r.file());
   return m;
 }
 
@@ -449,7 +523,7 @@ std::vector<SceneSource> scene_sources(const SceneConfig& cfg) {
     throw InputError("a scene file is built from a prototype file (the config names none)");
   std::vector<SceneSource> out;
   auto add = [&](const char* role, const std::string& path) {
-    const std::string bytes = read_all(path, "a source of the scene");
+    const FileBytes bytes(path, "a source of the scene");
     out.push_back({role, path, sha256(bytes.data(), bytes.size())});
   };
   add("prototype", fs::absolute(cfg.source).lexically_normal().string());
@@ -550,7 +624,7 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
 SceneFileData read_scene_file(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError("no such scene file", path);
-  std::string bytes = read_all(path, "the scene file");
+  const FileBytes bytes(path, "the scene file");
   const std::string rebuild = " (rebuild it with `palplab scene build`)";
   if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
     throw InputError("not a palplab scene file (.psim): bad magic bytes", path);
@@ -645,17 +719,8 @@ SceneFileData read_scene_file(const std::string& path) {
         "corrupted scene file: a section (sources, mesh key, mesh, face index or model) is "
         "missing",
         path);
-  // A model blob that is most of the file (a FEM factorisation: 93 % of D's) is cut out of the
-  // file's buffer in place instead of copied: a copy of 10 MB into fresh pages (page faults,
-  // then unmapping them) was a large share of a loaded D's time (perf). A small one is copied,
-  // so that the cached mesh does not keep the whole file's buffer. p, h are dead here.
-  if (blob_size > bytes.size() / 2) {
-    bytes.resize(blob_at + blob_size);
-    bytes.erase(0, blob_at);
-    d.model_blob = std::move(bytes);
-  } else {
-    d.model_blob.assign(bytes, blob_at, blob_size);
-  }
+  // One copy out of the mapping (no zero fill, no copy of the rest of the file).
+  d.model_blob.assign(bytes.data() + blob_at, blob_size);
   return d;
 }
 

@@ -75,3 +75,138 @@ TEST(CliDeviceSim, ScriptedHandPressesAndGetsForceOffWhenSilent) {
       run(std::string(PALPLAB_BINARY) + " device-sim --port 5000 --script /nonexistent.json").code,
       2);
 }
+
+namespace {
+
+// What a UdpDevice here received from one device-sim run: every read() until the simulator
+// exits, answered with a zero force (so that --start-on-force starts its script).
+struct Received {
+  Result sim;
+  std::vector<e::DeviceInput> samples;
+};
+Received receive_from_sim(const std::string& args) {
+  e::UdpDevice dev({0, 0.05});
+  const std::string cmd = std::string(PALPLAB_BINARY) + " device-sim --port " +
+                          std::to_string(dev.port()) + " --json " + args;
+  auto sim = std::async(std::launch::async, [&] { return run(cmd); });
+  Received out;
+  double t = 0.0;
+  while (sim.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready) {
+    const e::DeviceInput in = dev.read(t);
+    if (dev.samples_received() > 0) out.samples.push_back(in);
+    e::Rendered r;
+    r.t = t += 0.001;
+    dev.write(r);
+  }
+  out.sim = sim.get();
+  return out;
+}
+
+}  // namespace
+
+// The stylus of a needle scene: a button mask and an orientation, from the script (buttons held
+// from their time on, the axis interpolated and normalised) in type-3 datagrams.
+TEST(CliDeviceSim, SendsTheScriptsButtonsAndStylusAxis) {
+  const auto script = std::filesystem::temp_directory_path() /
+                      ("palplab_sim_stylus_" + std::to_string(getpid()) + ".json");
+  {
+    nlohmann::json j = {{"waypoints", {{0.0, 0.0, 0.0, 0.01}, {0.3, 0.0, 0.0, 0.01}}},
+                        {"buttons", {{0.1, 2}}},
+                        {"axis", {{0.0, 0.0, 0.0, 2.0}, {0.2, 0.0, 3.0, 0.0}}}};
+    std::ofstream(script) << j.dump();
+  }
+  const Received got = receive_from_sim("--script " + script.string() +
+                                        " --start-on-force --duration 0.35 --wait 10");
+  ASSERT_EQ(got.sim.code, 0) << got.sim.out;
+  const auto j = nlohmann::json::parse(got.sim.out);
+  EXPECT_EQ(j["datagram_type"].get<int>(), 3);
+  EXPECT_EQ(j["button_changes"].get<long>(), 1);
+  ASSERT_GT(got.samples.size(), 50u);
+  // Buttons: 0 first, then 2 (the needle bit) until the end, never back.
+  EXPECT_EQ(got.samples.front().buttons, 0u);
+  EXPECT_EQ(got.samples.back().buttons, 2u);
+  bool pressed = false;
+  for (const auto& s : got.samples) {
+    EXPECT_TRUE(s.buttons == 0u || s.buttons == 2u);
+    if (pressed) {
+      EXPECT_EQ(s.buttons, 2u);
+    }
+    pressed = pressed || s.buttons == 2u;
+    EXPECT_FALSE(s.button);  // bit 0 never set
+  }
+  // Axis: +z (normalised from 2) at the start, +y (from 3) at the end, unit and in the y-z plane
+  // with y, z >= 0 in between.
+  EXPECT_LT((got.samples.front().stylus_axis - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  EXPECT_LT((got.samples.back().stylus_axis - Eigen::Vector3d::UnitY()).norm(), 1e-12);
+  int between = 0;
+  for (const auto& s : got.samples) {
+    const Eigen::Vector3d& a = s.stylus_axis;
+    EXPECT_NEAR(a.norm(), 1.0, 1e-12);
+    EXPECT_EQ(a.x(), 0.0);
+    EXPECT_GE(a.y(), 0.0);
+    EXPECT_GE(a.z(), 0.0);
+    between += a.y() > 0.05 && a.z() > 0.05;
+  }
+  EXPECT_GT(between, 10);  // ~200 samples on the way from +z to +y
+  std::filesystem::remove(script);
+}
+
+TEST(CliDeviceSim, SendsAConstantMaskAndAxisFromTheOptions) {
+  const Received got = receive_from_sim("--buttons 3 --axis 1 0 -1 --duration 0.15");
+  ASSERT_EQ(got.sim.code, 0) << got.sim.out;
+  EXPECT_EQ(nlohmann::json::parse(got.sim.out)["datagram_type"].get<int>(), 3);
+  ASSERT_GT(got.samples.size(), 20u);
+  const Eigen::Vector3d axis = Eigen::Vector3d(1, 0, -1).normalized();
+  for (const auto& s : got.samples) {
+    EXPECT_EQ(s.buttons, 3u);
+    EXPECT_TRUE(s.button);
+    EXPECT_LT((s.stylus_axis - axis).norm(), 1e-12);
+  }
+  // Without an axis: type-1 datagrams, and the device reports no axis.
+  const Received plain = receive_from_sim("--buttons 2 --duration 0.1");
+  ASSERT_EQ(plain.sim.code, 0) << plain.sim.out;
+  EXPECT_EQ(nlohmann::json::parse(plain.sim.out)["datagram_type"].get<int>(), 1);
+  ASSERT_FALSE(plain.samples.empty());
+  for (const auto& s : plain.samples) {
+    EXPECT_EQ(s.buttons, 2u);
+    EXPECT_EQ(s.stylus_axis, Eigen::Vector3d::Zero());
+  }
+}
+
+TEST(CliDeviceSim, RejectsBadButtonsAndAxes) {
+  const std::string sim = std::string(PALPLAB_BINARY) + " device-sim --port 5000 --duration 0.01 ";
+  const auto script = std::filesystem::temp_directory_path() /
+                      ("palplab_sim_bad_" + std::to_string(getpid()) + ".json");
+  auto with_script = [&](const nlohmann::json& j) {
+    std::ofstream(script) << j.dump();
+    return run(sim + "--script " + script.string());
+  };
+  const nlohmann::json w = {{0.0, 0.0, 0.0, 0.0}};
+  struct Case {
+    nlohmann::json script;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {{{"waypoints", w}, {"axis", {{0.0, 0.0, 0.0, 0.0}}}}, "$.axis[0]"},
+      {{{"waypoints", w}, {"axis", {{0.0, 1.0, 0.0}}}}, "$.axis[0]"},
+      {{{"waypoints", w}, {"axis", {{0.2, 1.0, 0.0, 0.0}, {0.1, 0.0, 1.0, 0.0}}}}, "$.axis[1]"},
+      {{{"waypoints", w}, {"buttons", {{0.0, -1}}}}, "$.buttons[0]"},
+      {{{"waypoints", w}, {"buttons", {{0.0, 1.5}}}}, "$.buttons[0]"},
+      {{{"waypoints", w}, {"buttons", nlohmann::json::array()}}, "$.buttons"},
+      {{{"waypoints", w}, {"button", {{0.0, 2}}}}, "$.button"},
+  };
+  for (const auto& c : cases) {
+    const Result r = with_script(c.script);
+    EXPECT_EQ(r.code, 2) << c.script.dump();
+    EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.script.dump() << ": " << r.out;
+  }
+  EXPECT_EQ(run(sim + "--axis 0 0 0").code, 2);
+  EXPECT_EQ(run(sim + "--axis 1 0").code, 2);
+  EXPECT_EQ(run(sim + "--buttons -1").code, 2);
+  EXPECT_EQ(run(sim + "--buttons 4294967296").code, 2);
+  {
+    std::ofstream(script) << nlohmann::json({{"waypoints", w}, {"buttons", {{0.0, 2}}}}).dump();
+    EXPECT_EQ(run(sim + "--script " + script.string() + " --buttons 2").code, 2);
+  }
+  std::filesystem::remove(script);
+}
