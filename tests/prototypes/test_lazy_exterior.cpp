@@ -14,18 +14,18 @@ using namespace palplab;
 
 namespace {
 
-struct Run {
+struct PressRun {
   std::vector<double> force;           // |F| per step (N)
   std::vector<mesh::Positions> shape;  // the surface every 50th step
 };
 
 // read_every = 1: the surface is read at every step (eager exterior); 50: only when recorded.
-Run two_presses(bool worker, int read_every) {
+PressRun two_presses(bool worker, int read_every) {
   engine::SceneConfig cfg =
       prototypes::load_prototype(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/C.json");
   cfg.scope.exterior_worker = worker;
   engine::Scene s = engine::make_scene(cfg);
-  Run out;
+  PressRun out;
   long step = 0;
   mesh::Positions V;
   mesh::Faces F;
@@ -46,7 +46,7 @@ Run two_presses(bool worker, int read_every) {
 
 TEST(LazyExterior, BitIdenticalToWritingTheWholeExteriorEveryStep) {
   for (bool worker : {true, false}) {
-    const Run eager = two_presses(worker, 1), lazy = two_presses(worker, 50);
+    const PressRun eager = two_presses(worker, 1), lazy = two_presses(worker, 50);
     ASSERT_EQ(eager.force.size(), lazy.force.size());
     ASSERT_EQ(eager.shape.size(), lazy.shape.size());
     double peak = 0.0;
