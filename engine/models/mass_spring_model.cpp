@@ -2,6 +2,7 @@
 // of the tissue, integrated only where the contact needs it (sleeping, integration scope), with
 // the probe face as a contact patch and area-based refinement around the touched node.
 #include <algorithm>
+#include <atomic>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -79,6 +80,7 @@ struct MassSpringScene {
   long front_act_version = -1;            // act.version exterior_front was built for (-1: none)
   double ext_force = 0.0;                 // N, the force of the last apply_exterior
   bool ext_behind = false;                // exterior nodes off the frontier lag ext_force
+  bool lazy_exterior = true;              // false: every apply writes the whole exterior
   long far_solves = 0;
   long steps = 0, cg_iterations = 0;  // integrator steps and CG iterations since reset
   int cg_iterations_max = 0;          // most CG iterations of one step since reset
@@ -181,7 +183,7 @@ void write_frontier(MassSpringScene& ms, double force) {
 void apply_exterior(MassSpringScene& ms, double force, bool all = false) {
   if (force == ms.far_applied && !(all && ms.ext_behind)) return;
   const Eigen::VectorXd& g = ms.far_update->g();
-  if (all || ms.far_applied == -1.0) {
+  if (all || ms.far_applied == -1.0 || !ms.lazy_exterior) {
     for (int i : ms.exterior_nodes) set_exterior_node(ms, g, i, force);
     ms.ext_behind = false;
   } else {
@@ -674,6 +676,8 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
 
 namespace {
 
+std::atomic<bool> g_lazy_exterior{true};
+
 std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {
   auto model = std::make_unique<MassSpringModel>();
   MassSpringScene& ms = model->ms_;
@@ -690,6 +694,7 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
   ms.substep = cfg.refinement.substep;
   ms.scope_radius = cfg.scope.radius;
   ms.scope_max_nodes = cfg.scope.max_nodes;
+  ms.lazy_exterior = g_lazy_exterior.load();
   // Not with a node cap: a capped scope is no ball around the contact, and the linear exterior
   // then pulls on a few nodes next to the probe (measured: 49 % and 409 % force error).
   ms.linear_exterior = cfg.scope.radius > 0.0 && cfg.sleeping.enabled &&
@@ -716,6 +721,10 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     ms.ws.compact.held.reserve(ns);
     ms.ws.compact.D.reserve(n);
     ms.ws.compact.Dinv.reserve(n);
+    ms.ws.compact.Ds.reserve(n);
+    ms.ws.compact.Pinv.reserve(n);
+    ms.ws.compact.ends.reserve(ns);
+    ms.is_exterior.reserve(n);
   }
   ms.surface_to_model = cm.surface_to_model;
   ms.surface_row.assign(nm, -1);
@@ -737,6 +746,10 @@ std::string mass_spring_save(const SceneConfig& cfg, const SceneMesh& cm) {
 }
 
 }  // namespace
+
+void set_lazy_exterior(bool lazy) {
+  g_lazy_exterior = lazy;
+}
 
 const ModelKind& mass_spring_model_kind() {
   static const ModelKind k{

@@ -1,12 +1,14 @@
 // Prototype C's linear exterior is written lazily (engine/models/mass_spring_model.cpp: each
 // contact step writes only the exterior's frontier, the rest catches up before anything reads
-// it). Reading the surface materialises the whole exterior, so a run that reads the surface
-// every step is the eager path; the forces must be bit-identical to a run that never reads it,
-// and the surfaces bit-identical wherever both read them. Two presses on different regions (the
-// scope moves, a new exterior is solved and adopted, the contact is released in between), with
-// the exterior solved beside the loop (worker, as shipped) and inside the step (sync).
+// it). Against the eager path (engine::set_lazy_exterior(false): the whole exterior written every
+// step) the forces must be bit-identical at every step and the surfaces wherever both are read
+// (the lazy run reads its surface only every 50th step, so the exterior catches up only there). Two
+// presses on different regions (the scope moves, a new exterior is solved and adopted, the contact
+// is released in between), with the exterior solved beside the loop (worker, as shipped) and inside
+// the step (sync).
 #include <gtest/gtest.h>
 
+#include "engine/models/mass_spring_model.hpp"
 #include "prototypes/factory.hpp"
 #include "tests/prototypes/press_run.hpp"
 
@@ -19,8 +21,10 @@ struct PressRun {
   std::vector<mesh::Positions> shape;  // the surface every 50th step
 };
 
-// read_every = 1: the surface is read at every step (eager exterior); 50: only when recorded.
-PressRun two_presses(bool worker, int read_every) {
+// lazy = false: the eager exterior, and the surface read at every step.
+PressRun two_presses(bool worker, bool lazy) {
+  engine::set_lazy_exterior(lazy);
+  const int read_every = lazy ? 50 : 1;
   engine::SceneConfig cfg =
       prototypes::load_prototype(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/C.json");
   cfg.scope.exterior_worker = worker;
@@ -39,6 +43,7 @@ PressRun two_presses(bool worker, int read_every) {
                            ++step;
                          });
   }
+  engine::set_lazy_exterior(true);
   return out;
 }
 
@@ -46,7 +51,7 @@ PressRun two_presses(bool worker, int read_every) {
 
 TEST(LazyExterior, BitIdenticalToWritingTheWholeExteriorEveryStep) {
   for (bool worker : {true, false}) {
-    const PressRun eager = two_presses(worker, 1), lazy = two_presses(worker, 50);
+    const PressRun eager = two_presses(worker, false), lazy = two_presses(worker, true);
     ASSERT_EQ(eager.force.size(), lazy.force.size());
     ASSERT_EQ(eager.shape.size(), lazy.shape.size());
     double peak = 0.0;
