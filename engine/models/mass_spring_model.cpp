@@ -2,6 +2,7 @@
 // of the tissue, integrated only where the contact needs it (sleeping, integration scope), with
 // the probe face as a contact patch and area-based refinement around the touched node.
 #include <algorithm>
+#include <atomic>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -70,6 +71,16 @@ struct MassSpringScene {
   bool far_solve_pending = false;   // the scope moved: g is for the old centre
   double far_force = 0.0;           // N, contact force of the last step
   double far_applied = -1.0;        // N, the force the exterior now shows (-1: stale)
+  // The exterior is written lazily (issue 14: writing every exterior node each contact step was
+  // 11 % of exp2): each step only its frontier (exterior endpoints of active springs, exterior
+  // pad nodes) gets X_rest + f g; the rest catches up in flush_exterior before anything else
+  // reads it (the scope or g changes, refinement, surface, stats). Bit-identical to writing all.
+  std::vector<std::uint8_t> is_exterior;  // #V, 1 = in exterior_nodes
+  std::vector<int> exterior_front;        // exterior endpoints of the active springs
+  long front_act_version = -1;            // act.version exterior_front was built for (-1: none)
+  double ext_force = 0.0;                 // N, the force of the last apply_exterior
+  bool ext_behind = false;                // exterior nodes off the frontier lag ext_force
+  bool lazy_exterior = true;              // false: every apply writes the whole exterior
   long far_solves = 0;
   long steps = 0, cg_iterations = 0;  // integrator steps and CG iterations since reset
   int cg_iterations_max = 0;          // most CG iterations of one step since reset
@@ -78,7 +89,11 @@ struct MassSpringScene {
 // Marks the nodes within scope_radius of `center` (rest positions, breadth-first through springs
 // so that the scope never jumps across a gap to another part of the organ), nearest rings first,
 // at most scope_max_nodes of them (a fine region such as an ovary would otherwise hold hundreds).
+void flush_exterior(MassSpringScene& ms);
+
 void compute_scope(MassSpringScene& ms, int center) {
+  flush_exterior(ms);  // the exterior changes: it must hold what the eager writes gave it
+  ms.front_act_version = -1;
   const MassSpringSystem& s = ms.model.sys;
   const long n = s.nodes();
   if (static_cast<long>(ms.in_scope.size()) != n) {
@@ -111,20 +126,71 @@ void compute_scope(MassSpringScene& ms, int center) {
     }
   }
   if (!ms.linear_exterior) return;
+  for (int i : ms.exterior_nodes) ms.is_exterior[i] = 0;
+  ms.is_exterior.resize(n, 0);
   ms.exterior_nodes.clear();
   for (long i = 0; i < ms.far.nodes; ++i)
-    if (!ms.in_scope[i] && ms.far.dof[i] >= 0) ms.exterior_nodes.push_back(static_cast<int>(i));
+    if (!ms.in_scope[i] && ms.far.dof[i] >= 0) {
+      ms.exterior_nodes.push_back(static_cast<int>(i));
+      ms.is_exterior[i] = 1;
+    }
 }
 
-// Puts the exterior of the scope where the whole model's linear response to `force` (N) has it.
-void apply_exterior(MassSpringScene& ms, double force) {
-  if (force == ms.far_applied) return;
+// Puts exterior node i where the whole model's linear response to `force` (N) has it.
+inline void set_exterior_node(MassSpringScene& ms, const Eigen::VectorXd& g, int i, double force) {
   MassSpringSystem& s = ms.model.sys;
+  s.X.row(i) = s.X_rest.row(i) + force * g.segment<3>(ms.far.dof[i]).transpose();
+  s.V.row(i).setZero();
+}
+
+// Brings the exterior nodes off the frontier to the last applied force (see ext_behind). Must
+// run before g, the exterior or the node count changes, and before X is read outside the step.
+void flush_exterior(MassSpringScene& ms) {
+  if (!ms.ext_behind) return;
   const Eigen::VectorXd& g = ms.far_update->g();
-  for (int i : ms.exterior_nodes) {
-    s.X.row(i) = s.X_rest.row(i) + force * g.segment<3>(ms.far.dof[i]).transpose();
-    s.V.row(i).setZero();
+  for (int i : ms.exterior_nodes) set_exterior_node(ms, g, i, ms.ext_force);
+  ms.ext_behind = false;
+}
+
+// Writes the frontier of the exterior at `force` (N): its nodes at the ends of active springs
+// (the list is rebuilt when the active set changed) and the exterior pad nodes.
+void write_frontier(MassSpringScene& ms, double force) {
+  const MassSpringSystem& s = ms.model.sys;
+  const Eigen::VectorXd& g = ms.far_update->g();
+  if (ms.front_act_version != ms.act.version) {
+    ms.exterior_front.clear();
+    for (int k : ms.act.springs)
+      for (int e = 0; e < 2; ++e) {
+        const int j = s.springs.E(k, e);
+        if (j < static_cast<int>(ms.is_exterior.size()) && ms.is_exterior[j])
+          ms.exterior_front.push_back(j);
+      }
+    std::sort(ms.exterior_front.begin(), ms.exterior_front.end());
+    ms.exterior_front.erase(std::unique(ms.exterior_front.begin(), ms.exterior_front.end()),
+                            ms.exterior_front.end());
+    ms.front_act_version = ms.act.version;
   }
+  for (int i : ms.exterior_front) set_exterior_node(ms, g, i, force);
+  if (s.contact_node >= 0)
+    for (int i : s.contact_nodes)
+      if (i < static_cast<int>(ms.is_exterior.size()) && ms.is_exterior[i])
+        set_exterior_node(ms, g, i, force);
+}
+
+// Puts the exterior of the scope where the whole model's linear response to `force` (N) has it:
+// every node after a change of g or of the scope (far_applied = -1) or with `all`, else only
+// the frontier, which is all that the step reads (the active springs' held ends and the pad).
+void apply_exterior(MassSpringScene& ms, double force, bool all = false) {
+  if (force == ms.far_applied && !(all && ms.ext_behind)) return;
+  const Eigen::VectorXd& g = ms.far_update->g();
+  if (all || ms.far_applied == -1.0 || !ms.lazy_exterior) {
+    for (int i : ms.exterior_nodes) set_exterior_node(ms, g, i, force);
+    ms.ext_behind = false;
+  } else {
+    write_frontier(ms, force);
+    ms.ext_behind = true;
+  }
+  ms.ext_force = force;
   ms.far_applied = force;
 }
 
@@ -221,7 +287,10 @@ void reset_mass_spring(MassSpringScene& ms) {
   ms.in_scope.assign(s.nodes(), 0);
   ms.scope_nodes.clear();
   ms.scope_center = -1;
+  for (int i : ms.exterior_nodes) ms.is_exterior[i] = 0;
   ms.exterior_nodes.clear();
+  ms.ext_behind = false;
+  ms.front_act_version = -1;
   ms.far_force = 0.0;
   ms.far_applied = -1.0;
   ms.far_solve_pending = false;
@@ -278,6 +347,7 @@ class MassSpringModel final : public SceneModel {
     MassSpringScene& ms = ms_;
     MassSpringSystem& sys = ms.model.sys;
     const int mnode = c.node >= 0 ? ms.surface_to_model[c.node] : -1;
+    if (ms.far_update && ms.far_update->pending()) flush_exterior(ms);     // g may change now
     if (ms.far_update && ms.far_update->advance()) ms.far_applied = -1.0;  // a new exterior
     if (mnode >= 0) {
       sys.contact_node = mnode;
@@ -300,6 +370,7 @@ class MassSpringModel final : public SceneModel {
       set_pad_weights(ms, face, c.w);
       if (ms.linear_exterior) {
         if (ms.far_solve_pending) {
+          flush_exterior(ms);  // a sync request changes g at once
           ms.far_update->request(sys.contact_nodes, sys.contact_weights, -c.n);
           ms.far_solve_pending = false;
           ++ms.far_solves;
@@ -313,11 +384,14 @@ class MassSpringModel final : public SceneModel {
           if (!ms.act.is_active[i] && (i == mnode || contact_node_penetration(sys, sys.X, q) > 0))
             wake_around(sys, ms.act, i, scope_mask(ms));
         }
+      // Woken nodes may hold exterior nodes the frontier did not have.
+      if (ms.linear_exterior && ms.ext_behind && ms.front_act_version != ms.act.version)
+        write_frontier(ms, ms.ext_force);
     } else {
       sys.contact_node = -1;
       if (ms.linear_exterior) {
         ms.far_force = 0.0;
-        apply_exterior(ms, 0.0);
+        apply_exterior(ms, 0.0, true);  // no contact: the whole exterior back at rest
       }
       if (ms.model.refined() && ms.refine) {
         simplify(ms.model);
@@ -342,6 +416,7 @@ class MassSpringModel final : public SceneModel {
       ms.far_force = o.force.norm();
       o.deformation = (sys.X.row(mnode) - sys.X_rest.row(mnode)).norm();
       if (ms.refine && mnode != ms.refined_node && o.force.norm() >= ms.refine_force) {
+        if (ms.linear_exterior) flush_exterior(ms);
         if (refine_around(ms.model, mnode, ms.refine_params)) resync_active(ms);
         ms.refined_node = mnode;
         ms.new_nodes_max = std::max(ms.new_nodes_max, ms.model.new_nodes);
@@ -364,6 +439,8 @@ class MassSpringModel final : public SceneModel {
   }
 
   void stats(SceneStats& st) const override {
+    // Materialising the lazily written exterior changes no state (see ext_behind).
+    if (ms_.linear_exterior) flush_exterior(const_cast<MassSpringScene&>(ms_));
     const MassSpringSystem& sys = ms_.model.sys;
     st.nodes = sys.nodes();
     st.springs = sys.springs.size();
@@ -406,6 +483,7 @@ class MassSpringModel final : public SceneModel {
   // geometry's order, then the refinement nodes (all on the surface) in model order; a tet
   // mesh's interior nodes are left out.
   void surface(mesh::Positions& V, mesh::Faces& F) const override {
+    if (ms_.linear_exterior) flush_exterior(const_cast<MassSpringScene&>(ms_));
     const MassSpringSystem& s = ms_.model.sys;
     const long ns = static_cast<long>(ms_.surface_to_model.size());
     const long nc = ms_.model.coarse_nodes(), nn = s.nodes() - nc;
@@ -598,6 +676,8 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
 
 namespace {
 
+std::atomic<bool> g_lazy_exterior{true};
+
 std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {
   auto model = std::make_unique<MassSpringModel>();
   MassSpringScene& ms = model->ms_;
@@ -614,6 +694,7 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
   ms.substep = cfg.refinement.substep;
   ms.scope_radius = cfg.scope.radius;
   ms.scope_max_nodes = cfg.scope.max_nodes;
+  ms.lazy_exterior = g_lazy_exterior.load();
   // Not with a node cap: a capped scope is no ball around the contact, and the linear exterior
   // then pulls on a few nodes next to the probe (measured: 49 % and 409 % force error).
   ms.linear_exterior = cfg.scope.radius > 0.0 && cfg.sleeping.enabled &&
@@ -629,6 +710,7 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     // so that the steps of a press without refinement do not allocate.
     const long n = ms.model.sys.nodes(), ns = ms.model.sys.springs.size();
     ms.exterior_nodes.reserve(n);
+    ms.exterior_front.reserve(n);
     ms.scope_nodes.reserve(n);
     ms.act.nodes.reserve(n);
     ms.act.springs.reserve(ns);
@@ -639,6 +721,10 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     ms.ws.compact.held.reserve(ns);
     ms.ws.compact.D.reserve(n);
     ms.ws.compact.Dinv.reserve(n);
+    ms.ws.compact.Ds.reserve(n);
+    ms.ws.compact.Pinv.reserve(n);
+    ms.ws.compact.ends.reserve(ns);
+    ms.is_exterior.reserve(n);
   }
   ms.surface_to_model = cm.surface_to_model;
   ms.surface_row.assign(nm, -1);
@@ -660,6 +746,10 @@ std::string mass_spring_save(const SceneConfig& cfg, const SceneMesh& cm) {
 }
 
 }  // namespace
+
+void set_lazy_exterior(bool lazy) {
+  g_lazy_exterior = lazy;
+}
 
 const ModelKind& mass_spring_model_kind() {
   static const ModelKind k{

@@ -11,4 +11,8 @@ namespace palplab::engine {
 // InputError for an unknown tissue or fixed region.
 AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh& cm);
 
+// Test seam: models made while this is false write their whole linear exterior every contact
+// step (the eager path the lazy exterior must reproduce bit for bit). Default true.
+void set_lazy_exterior(bool lazy);
+
 }  // namespace palplab::engine

@@ -203,9 +203,11 @@ void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactC
   C.prev_nodes = act.nodes;
   C.inner.clear();
   C.held.clear();
+  C.ends.resize(act.springs.size());
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
     const int a = C.local[sys.springs.E(s, 0)], b = C.local[sys.springs.E(s, 1)];
+    C.ends[k] = {a, b};
     if (a >= 0 && b >= 0)
       C.inner.push_back({a, b, static_cast<int>(k)});
     else
@@ -214,10 +216,13 @@ void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactC
   const long m = static_cast<long>(act.nodes.size());
   C.D.resize(m);
   C.Dinv.resize(m);
+  C.Ds.resize(m);
+  C.Pinv.resize(m);
   // Vectors only grow (no allocation in steady state); CG works on their heads.
   if (C.x.size() < 3 * m) {
     const long cap = std::max(3 * m, 2 * static_cast<long>(C.x.size()));
-    for (Eigen::VectorXd* v : {&C.x, &C.r, &C.z, &C.p, &C.ap, &C.x1, &C.x2}) v->setZero(cap);
+    for (Eigen::VectorXd* v : {&C.x, &C.r, &C.z, &C.p, &C.ap, &C.x1, &C.x2, &C.rhs})
+      v->setZero(cap);
   }
   C.history = 0;
   C.version = act.version;
@@ -342,12 +347,257 @@ void solve_cg_compact(const MassSpringSystem& sys, const ActiveSet& act, Integra
   ws.last.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
 }
 
+// ---- The rank_one path (SpringBlocks::rank_one with CG; issue 14) --------------------------
+// The same linearised backward-Euler step as the matrix path, with the data kept compact per
+// active set: one pass over the active springs computes force, rhs and blocks (one sqrt and one
+// division per spring: d = du / |du| and l / |du| from the same reciprocal), diagonal blocks
+// are symmetric (6 numbers; the preconditioner is their closed-form inverse), the rhs and the
+// CG vectors are in local node order. Differs from the matrix path at round-off only.
+
+inline void sym_add_rank_one(Sym3& S, const RankOneBlock& B) {
+  const double ax = B.a * B.d.x(), ay = B.a * B.d.y(), az = B.a * B.d.z();
+  S.xx += ax * B.d.x() + B.b;
+  S.yy += ay * B.d.y() + B.b;
+  S.zz += az * B.d.z() + B.b;
+  S.xy += ax * B.d.y();
+  S.xz += ax * B.d.z();
+  S.yz += ay * B.d.z();
+}
+
+inline void sym_add(Sym3& S, const Eigen::Matrix3d& M) {
+  S.xx += M(0, 0);
+  S.yy += M(1, 1);
+  S.zz += M(2, 2);
+  S.xy += M(0, 1);
+  S.xz += M(0, 2);
+  S.yz += M(1, 2);
+}
+
+inline Sym3 sym_inverse(const Sym3& A) {
+  const double c00 = A.yy * A.zz - A.yz * A.yz, c01 = A.xz * A.yz - A.xy * A.zz,
+               c02 = A.xy * A.yz - A.yy * A.xz;
+  const double det = A.xx * c00 + A.xy * c01 + A.xz * c02;
+  const double inv = 1.0 / det;
+  return {
+      c00 * inv, (A.xx * A.zz - A.xz * A.xz) * inv, (A.xx * A.yy - A.xy * A.xy) * inv, c01 * inv,
+      c02 * inv, (A.xy * A.xz - A.xx * A.yz) * inv};
+}
+
+template <typename In, typename Out>
+inline void sym_mul(const Sym3& S, const In& p, Out&& y) {
+  const double p0 = p[0], p1 = p[1], p2 = p[2];
+  y[0] = S.xx * p0 + S.xy * p1 + S.xz * p2;
+  y[1] = S.xy * p0 + S.yy * p1 + S.yz * p2;
+  y[2] = S.xz * p0 + S.yz * p1 + S.zz * p2;
+}
+
+// y = A p, A = blockdiag(Ds) + the inner springs' blocks (rank-one form).
+inline void apply_rank_one(const CompactCg& C, const std::vector<RankOneBlock>& SR, const double* p,
+                           double* y) {
+  const long m = static_cast<long>(C.Ds.size());
+  for (long k = 0; k < m; ++k) sym_mul(C.Ds[k], p + 3 * k, y + 3 * k);
+  for (const auto& e : C.inner) {
+    const RankOneBlock& B = SR[e.k];
+    const double* pa = p + 3 * e.a;
+    const double* pb = p + 3 * e.b;
+    const double u0 = pa[0] - pb[0], u1 = pa[1] - pb[1], u2 = pa[2] - pb[2];
+    const double s = B.a * (B.d.x() * u0 + B.d.y() * u1 + B.d.z() * u2);
+    const double t0 = s * B.d.x() + B.b * u0, t1 = s * B.d.y() + B.b * u1,
+                 t2 = s * B.d.z() + B.b * u2;
+    double* ya = y + 3 * e.a;
+    double* yb = y + 3 * e.b;
+    ya[0] += t0;
+    ya[1] += t1;
+    ya[2] += t2;
+    yb[0] -= t0;
+    yb[1] -= t1;
+    yb[2] -= t2;
+  }
+}
+
+void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double h,
+                             IntegratorWorkspace& ws) {
+  CompactCg& C = ws.compact;
+  if (C.version != act.version || static_cast<long>(C.local.size()) != sys.nodes())
+    rebuild_compact(sys, act, C);
+  const long m = static_cast<long>(act.nodes.size());
+  const double h2 = h * h;
+  if (ws.SR.size() < act.springs.size()) ws.SR.resize(act.springs.size() + act.springs.size() / 2);
+  double* b = C.rhs.data();
+  // Node terms: rhs h (f - h kh v), diagonal m + h dh + h^2 kh.
+  for (long k = 0; k < m; ++k) {
+    const int i = act.nodes[k];
+    Eigen::RowVector3d f = sys.F_ext.row(i);
+    const double kh = sys.home_ks[i], dh = sys.home_kd[i];
+    if (kh != 0.0 || dh != 0.0) f += kh * (sys.X_rest.row(i) - sys.X.row(i)) - dh * sys.V.row(i);
+    const Eigen::RowVector3d r = h * (f - h * kh * sys.V.row(i));
+    b[3 * k] = r[0];
+    b[3 * k + 1] = r[1];
+    b[3 * k + 2] = r[2];
+    const double d = sys.mass[i] + h * dh + h2 * kh;
+    C.Ds[k] = {d, d, d, 0.0, 0.0, 0.0};
+  }
+  // The probe's penalty on every penetrating, integrated patch node (as in backward_euler).
+  ws.contact_blocks.clear();
+  ws.contact_block_node.clear();
+  if (sys.contact_node >= 0) {
+    const Eigen::Vector3d& n = sys.contact_normal;
+    for (size_t q = 0; q < sys.contact_nodes.size(); ++q) {
+      const int p = sys.contact_nodes[q];
+      const double d = contact_node_penetration(sys, sys.X, q);
+      if (!(d > 0.0) || !act.is_active[p]) continue;
+      const double kw = sys.contact_k * sys.contact_weights[q];
+      const Eigen::Matrix3d Kc = -kw * (n * n.transpose());
+      const Eigen::Vector3d r = -(h * kw * d) * n + (h * h) * (Kc * sys.V.row(p).transpose());
+      const int k = C.local[p];
+      for (int c = 0; c < 3; ++c) b[3 * k + c] += r[c];
+      ws.contact_blocks.push_back(-(h * h) * Kc);
+      ws.contact_block_node.push_back(p);
+      sym_add(C.Ds[k], ws.contact_blocks.back());
+    }
+  }
+  ws.contact_on = !ws.contact_blocks.empty();
+  // The preconditioner's blocks start as the product's (held springs are added to both below).
+  std::vector<Sym3>& P = C.Pinv;
+  std::copy(C.Ds.begin(), C.Ds.begin() + m, P.begin());
+  // One pass over the springs: force, tangent (spring_tangent's formulas with one reciprocal),
+  // rhs h f1 + h^2 K dv (dv over the active ends) and the blocks a d d^T + b I.
+  const double* X = sys.X.data();
+  const double* V = sys.V.data();
+  const auto& E = sys.springs.E;
+  const bool definite = ws.jacobian == SpringJacobian::definite;
+  for (size_t k = 0; k < act.springs.size(); ++k) {
+    const int s = act.springs[k];
+    const int ga = E(s, 0), gb = E(s, 1);
+    const CompactCg::Ends en = C.ends[k];
+    RankOneBlock& B = ws.SR[k];
+    const double* xa = X + 3 * ga;
+    const double* xb = X + 3 * gb;
+    const double du0 = xa[0] - xb[0], du1 = xa[1] - xb[1], du2 = xa[2] - xb[2];
+    const double len = std::sqrt(du0 * du0 + du1 * du1 + du2 * du2);
+    if (!(len > 0.0)) {  // zero length: no force, no stiffness (spring_tangent)
+      B.d.setZero();
+      B.a = B.b = 0.0;
+      continue;
+    }
+    const double ks = sys.springs.ks[s], kd = sys.springs.kd[s], rest = sys.springs.rest[s];
+    const double il = 1.0 / len;
+    const double d0 = du0 * il, d1 = du1 * il, d2 = du2 * il;
+    const double* va = V + 3 * ga;
+    const double* vb = V + 3 * gb;
+    const double mag = ks * (len - rest) +
+                       kd * ((va[0] - vb[0]) * d0 + (va[1] - vb[1]) * d1 + (va[2] - vb[2]) * d2);
+    double lateral = ks * (1.0 - rest * il);
+    if (definite) lateral = std::max(lateral, 0.0);
+    const double axial = ks - lateral;
+    B.d = Eigen::Vector3d(d0, d1, d2);
+    B.a = h * kd + h2 * axial;
+    B.b = h2 * lateral;
+    double w0 = 0.0, w1 = 0.0, w2 = 0.0;  // dv over the active ends
+    if (en.a >= 0) w0 += va[0], w1 += va[1], w2 += va[2];
+    if (en.b >= 0) w0 -= vb[0], w1 -= vb[1], w2 -= vb[2];
+    const double sa = h2 * axial * (d0 * w0 + d1 * w1 + d2 * w2), sl = h2 * lateral;
+    const double hm = -h * mag;
+    const double r0 = hm * d0 - (sa * d0 + sl * w0), r1 = hm * d1 - (sa * d1 + sl * w1),
+                 r2 = hm * d2 - (sa * d2 + sl * w2);
+    if (en.a >= 0) {
+      double* ba = b + 3 * en.a;
+      ba[0] += r0, ba[1] += r1, ba[2] += r2;
+      sym_add_rank_one(P[en.a], B);
+      if (en.b < 0) sym_add_rank_one(C.Ds[en.a], B);
+    }
+    if (en.b >= 0) {
+      double* bb = b + 3 * en.b;
+      bb[0] -= r0, bb[1] -= r1, bb[2] -= r2;
+      sym_add_rank_one(P[en.b], B);
+      if (en.a < 0) sym_add_rank_one(C.Ds[en.b], B);
+    }
+  }
+  for (long k = 0; k < m; ++k) P[k] = sym_inverse(P[k]);
+
+  // Block-Jacobi preconditioned CG from the warm start (as solve_cg_compact).
+  double* x = C.x.data();
+  for (long k = 0; k < m; ++k) {
+    const int i = act.nodes[k];
+    for (int c = 0; c < 3; ++c) x[3 * k + c] = ws.DV(i, c);
+  }
+  const bool extrapolate = ws.warm_start == WarmStart::extrapolated;
+  if (extrapolate && C.history >= 2) C.x.head(3 * m) = 2.0 * C.x1.head(3 * m) - C.x2.head(3 * m);
+  double* r = C.r.data();
+  double* z = C.z.data();
+  double* p = C.p.data();
+  double* ap = C.ap.data();
+  apply_rank_one(C, ws.SR, x, ap);
+  double bnorm = 0.0, rz = 0.0, rr = 0.0;
+  for (long k = 0; k < m; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      const long j = 3 * k + c;
+      bnorm += b[j] * b[j];
+      r[j] = b[j] - ap[j];
+    }
+    sym_mul(P[k], r + 3 * k, z + 3 * k);
+  }
+  const long n3 = 3 * m;
+  for (long j = 0; j < n3; ++j) {
+    p[j] = z[j];
+    rz += r[j] * z[j];
+    rr += r[j] * r[j];
+  }
+  bnorm = std::sqrt(bnorm);
+  double rnorm = std::sqrt(rr);
+  const double tol = std::max(ws.cg_tolerance * bnorm, h * ws.cg_force_tolerance);
+  int it = 0;
+  while (rnorm > tol && it < ws.cg_max_iterations) {
+    apply_rank_one(C, ws.SR, p, ap);
+    double pAp = 0.0;
+    for (long j = 0; j < n3; ++j) pAp += p[j] * ap[j];
+    if (!(pAp > 0.0)) break;
+    const double alpha = rz / pAp;
+    double rz_new = 0.0;
+    rr = 0.0;
+    for (long k = 0; k < m; ++k) {
+      for (int c = 0; c < 3; ++c) {
+        const long j = 3 * k + c;
+        x[j] += alpha * p[j];
+        r[j] -= alpha * ap[j];
+        rr += r[j] * r[j];
+      }
+      sym_mul(P[k], r + 3 * k, z + 3 * k);
+      for (int c = 0; c < 3; ++c) rz_new += r[3 * k + c] * z[3 * k + c];
+    }
+    rnorm = std::sqrt(rr);
+    const double beta = rz_new / rz;
+    for (long j = 0; j < n3; ++j) p[j] = z[j] + beta * p[j];
+    rz = rz_new;
+    ++it;
+  }
+  if (extrapolate) {
+    C.x2.head(3 * m) = C.x1.head(3 * m);
+    C.x1.head(3 * m) = C.x.head(3 * m);
+    C.history = std::min(C.history + 1, 2);
+  }
+  ws.last.cg_iterations = it;
+  ws.last.residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  for (long k = 0; k < m; ++k) {
+    const int i = act.nodes[k];
+    for (int c = 0; c < 3; ++c) {
+      ws.DV(i, c) = x[3 * k + c];
+      sys.V(i, c) += x[3 * k + c];
+      sys.X(i, c) += h * sys.V(i, c);
+    }
+  }
+}
+
 void backward_euler(MassSpringSystem& sys, const ActiveSet& act, double h,
                     IntegratorWorkspace& ws) {
   const long n = sys.nodes();
   ws.h = h;
   ensure(ws.R, n);
   ensure(ws.DV, n);
+  if (rank_one(ws)) {
+    backward_euler_rank_one(sys, act, h, ws);
+    return;
+  }
   if (ws.Dinv.size() < static_cast<size_t>(n)) ws.Dinv.resize(n);
   const bool r1 = rank_one(ws);
   if (r1) {

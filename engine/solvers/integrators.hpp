@@ -62,6 +62,11 @@ struct SolverStats {
   double residual = 0.0;  // relative residual of the last solve
 };
 
+// A symmetric 3x3 block (kg): xx, yy, zz, xy, xz, yz.
+struct Sym3 {
+  double xx, yy, zz, xy, xz, yz;
+};
+
 // Compact per-active-set data of the CG solver (see integrators.cpp).
 struct CompactCg {
   struct Link {
@@ -72,6 +77,15 @@ struct CompactCg {
   std::vector<Link> inner, held;
   std::vector<Eigen::Matrix3d> D, Dinv;
   Eigen::VectorXd x, r, z, p, ap;
+  // The rank_one path (SpringBlocks::rank_one): per active spring its local ends (-1 = held),
+  // per node the symmetric diagonal block of the product (mass, support, contact, held springs)
+  // and the inverse of A's full diagonal block (the preconditioner), and the rhs b (3m).
+  struct Ends {
+    int a, b;
+  };
+  std::vector<Ends> ends;
+  std::vector<Sym3> Ds, Pinv;
+  Eigen::VectorXd rhs;
   // warm_start == extrapolated: the solutions of the last two steps on this set (3m each) and
   // how many of them are valid (reset when the set changes).
   Eigen::VectorXd x1, x2;
