@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
@@ -244,4 +245,22 @@ TEST(Physics, DiscPadMovesContinuouslyWhenSliding) {
   EXPECT_GE(switches, 1);
   EXPECT_GT(fmin, 1.0);
   EXPECT_LE(worst, 0.035 * fmin);
+}
+
+TEST(Physics, ContactPadKeyIsChecked) {
+  // "contact_pad" takes "vertices" or "disc"; anything else is an input error naming the file,
+  // the JSON path and the choices.
+  const std::string p =
+      variant(read(proto("C")), "bad_pad",
+              {{"\"rayleigh_beta\"", "\"contact_pad\": \"discs\", \"rayleigh_beta\""}});
+  try {
+    prototypes::load_prototype(p);
+    FAIL() << "contact_pad: discs accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(p), std::string::npos) << what;
+    EXPECT_NE(what.find("$.model.contact_pad"), std::string::npos) << what;
+    EXPECT_NE(what.find("disc"), std::string::npos) << what;
+    EXPECT_NE(what.find("vertices"), std::string::npos) << what;
+  }
 }
