@@ -52,6 +52,9 @@ struct ContactConfig {
   double stiffness = 500.0;    // N/m: penalty (A, B) or the device coupling (deformable models)
   double patch_radius = 0.01;  // m, radius of the probe face (deformable models)
   double force_limit = 8.5;    // N, the device's peak force (a common desktop device)
+  // mass_spring: the probe face as a disc of quadrature points (engine/models/contact_pad.hpp)
+  // instead of the vertex pads (model key "contact_pad": "disc").
+  bool disc_pad = false;
 };
 
 // Which nodes a deformable model integrates.

@@ -134,6 +134,7 @@ double contact_node_penetration(const MassSpringSystem& sys, const RowMatX3d& X,
   const int i = sys.contact_nodes[k];
   const Eigen::Vector3d& n = sys.contact_normal;
   const double flat = (X.row(i).transpose() - sys.contact_point).dot(n);
+  if (!sys.contact_offsets.empty()) return std::max(0.0, flat - sys.contact_offsets[k]);
   // Rest height of the node above its pad centre's tangent plane: the pad yields to it.
   const int c = sys.contact_refs.empty() ? sys.contact_node : sys.contact_refs[k];
   const double above = (sys.X_rest.row(i) - sys.X_rest.row(c)).dot(n.transpose());

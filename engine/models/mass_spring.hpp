@@ -59,6 +59,9 @@ struct MassSpringSystem {
   std::vector<int> contact_nodes;  // the patch (contains contact_node); a node may repeat
   std::vector<double> contact_weights;
   std::vector<int> contact_refs;  // per entry its pad's centre; empty = contact_node for all
+  // Per entry its rest offset o_k (m) in place of max(0, above): d_k = flat_k - o_k (the disc
+  // pad of engine/models/contact_pad.hpp); empty = the centre-plane rule above.
+  std::vector<double> contact_offsets;
   Eigen::Vector3d contact_point = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_normal = Eigen::Vector3d::UnitZ();
   double contact_k = 0.0;  // N/m, total coupling stiffness of the probe face

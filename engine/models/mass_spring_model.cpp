@@ -9,6 +9,7 @@
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
 #include "engine/mesh/materials.hpp"
+#include "engine/models/contact_pad.hpp"
 #include "engine/models/mass_spring_material.hpp"
 #include "engine/models/mass_spring_model.hpp"
 #include "engine/models/model.hpp"
@@ -54,6 +55,13 @@ struct MassSpringScene {
   std::vector<PadEntry> pad;
   std::vector<int> vertex_pad;  // scratch: one vertex's pad
   std::vector<std::uint8_t> patch_mark;
+  // Or the probe disc as quadrature points on the current surface (contact.disc_pad; set_disc_pad,
+  // engine/models/contact_pad.hpp), made anew each step from the contact point.
+  bool disc_pad = false;
+  PadSurface pad_coarse, pad_refined;  // the coarse surface; the refined one (while refined)
+  const PadSurface* pad_on = nullptr;  // the surface pad_face is a face of
+  int pad_face = -1;                   // face of pad_on under the last contact point
+  std::vector<PadPoint> disc;
   int scope_center = -1;
   std::vector<std::uint8_t> in_scope;
   std::vector<int> scope_nodes;
@@ -271,6 +279,57 @@ void set_pad_weights(MassSpringScene& ms, int face, const Eigen::Vector3d& w) {
   }
 }
 
+// The surface the pad lies on now: the coarse one, or the refined one (rebuilt when the
+// refinement changed; allocates, as the refinement itself does).
+const PadSurface& pad_surface(MassSpringScene& ms) {
+  const AdaptiveMassSpring& m = ms.model;
+  if (!m.refined()) return ms.pad_coarse;
+  if (ms.pad_refined.nodes != m.sys.nodes() || ms.pad_refined.F.rows() != m.F.rows() ||
+      ms.pad_on != &ms.pad_refined) {
+    build_pad_surface(m.F, m.sys.nodes(), ms.pad_refined);
+    ms.pad_on = nullptr;
+  }
+  return ms.pad_refined;
+}
+
+// This step's pad on the system: the probe disc centred on the contact point of the rest
+// surface (c.proxy on face c.face; the rest position of `node` when the face is unknown),
+// projected along c.n onto the current surface, its quadrature points weighted onto their
+// faces' nodes (contact_pad.hpp). The disc moves continuously with the contact point, so the
+// force does not jump when the nearest node changes (issue 10); it is the same disc on the
+// coarse and the refined mesh (issue 9). A contact whose disc finds no surface (cannot happen
+// on a closed surface) falls back to the node alone.
+void set_disc_pad(MassSpringScene& ms, const ContactInput& c, int node) {
+  MassSpringSystem& s = ms.model.sys;
+  const PadSurface& ps = pad_surface(ms);
+  const Eigen::Vector3d centre =
+      c.face >= 0 ? c.proxy : Eigen::Vector3d(s.X_rest.row(node).transpose());
+  const int node_face = node < ps.nodes && ps.node_start[node] < ps.node_start[node + 1]
+                            ? ps.node_faces[ps.node_start[node]]
+                            : -1;
+  int f = -1;
+  if (ms.pad_on == &ps && ms.pad_face >= 0)
+    f = disc_pad(ps, s.X_rest, centre, c.n, ms.patch_radius, ms.pad_face, ms.disc);
+  if (f < 0) f = disc_pad(ps, s.X_rest, centre, c.n, ms.patch_radius, node_face, ms.disc);
+  ms.pad_on = &ps;
+  ms.pad_face = f;
+  s.contact_nodes.clear();
+  s.contact_weights.clear();
+  s.contact_refs.clear();
+  s.contact_offsets.clear();
+  if (ms.disc.empty()) {
+    s.contact_nodes.push_back(node);
+    s.contact_weights.push_back(1.0);
+    s.contact_offsets.push_back(0.0);
+    return;
+  }
+  for (const PadPoint& p : ms.disc) {
+    s.contact_nodes.push_back(p.node);
+    s.contact_weights.push_back(p.w);
+    s.contact_offsets.push_back(p.offset);
+  }
+}
+
 const std::vector<std::uint8_t>* scope_mask(const MassSpringScene& ms) {
   return ms.scope_radius > 0.0 ? &ms.in_scope : nullptr;
 }
@@ -297,9 +356,13 @@ void reset_mass_spring(MassSpringScene& ms) {
   if (ms.far_update) ms.far_update->clear();
   ms.patch_face = -1;
   ms.pad.clear();
+  ms.pad_on = nullptr;
+  ms.pad_face = -1;
+  ms.disc.clear();
   s.contact_nodes.clear();
   s.contact_weights.clear();
   s.contact_refs.clear();
+  s.contact_offsets.clear();
   if (ms.sleep.enabled)
     sleep_all(s, ms.act);
   else
@@ -365,9 +428,14 @@ class MassSpringModel final : public SceneModel {
         if (!keep) compute_scope(ms, mnode);
       }
       const int face = c.face >= 0 && c.face < ms.faces.rows() ? c.face : -1;
-      if ((face >= 0 ? face : -1 - mnode) != ms.patch_face || ms.patch_nodes_version != sys.nodes())
-        compute_pad(ms, face, mnode);
-      set_pad_weights(ms, face, c.w);
+      if (ms.disc_pad) {
+        set_disc_pad(ms, c, mnode);
+      } else {
+        if ((face >= 0 ? face : -1 - mnode) != ms.patch_face ||
+            ms.patch_nodes_version != sys.nodes())
+          compute_pad(ms, face, mnode);
+        set_pad_weights(ms, face, c.w);
+      }
       if (ms.linear_exterior) {
         if (ms.far_solve_pending) {
           flush_exterior(ms);  // a sync request changes g at once
@@ -526,7 +594,8 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
           "cg_tolerance",
           "fixed_z_below",
           "spring_blocks",
-          "warm_start"});
+          "warm_start",
+          "contact_pad"});
   MaterialConfig& mc = cfg.material;
   read_material(c, m, P, mc);
   mc.thickness = c.number(m, P, "thickness", false, 0, 1,
@@ -540,6 +609,8 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
   sp.damping =
       c.number(m, P, "support_damping", false, 0, 1e9, "the damping of the foundation (N s/m^3)")
           .value_or(sp.damping);
+  if (auto pad = c.text(m, P, "contact_pad", false, {"vertices", "disc"}))
+    cfg.contact.disc_pad = *pad == "disc";
   if (auto jc = c.text(m, P, "jacobian", false, {"definite", "exact"}))
     cfg.solver.jacobian = *jc == "exact" ? SpringJacobian::exact : SpringJacobian::definite;
   cfg.scope.radius = c.number(m, P, "scope_radius", false, 0, 10,
@@ -734,6 +805,16 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
   for (long f = 0; f < cm.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) ms.faces(f, k) = cm.surface_to_model[cm.F(f, k)];
   ms.pad.reserve(256);
+  ms.disc_pad = cfg.contact.disc_pad;
+  if (ms.disc_pad) {
+    build_pad_surface(ms.model.F0, ms.model.coarse_nodes(), ms.pad_coarse);
+    // Room for the largest disc (three nodes per quadrature point): steps do not allocate.
+    const size_t disc_max = 3 * 3 * kPadRings * (kPadRings + 1) + 1;
+    ms.disc.reserve(disc_max);
+    ms.model.sys.contact_nodes.reserve(disc_max);
+    ms.model.sys.contact_weights.reserve(disc_max);
+    ms.model.sys.contact_offsets.reserve(disc_max);
+  }
   return model;
 }
 

@@ -129,8 +129,9 @@ TEST(Physics, RefinementKeepsTheForceAndConservesTheMass) {
   // soft there (331 vs 540 N/m), which the ovary-only test missed.
   // (The 192-node stomach is not among them: its edges are longer than the 1 cm probe face, so
   // refining it changes the force by 23 % — a coarse mesh that cannot resolve the probe. Nor is
-  // the Model-A membrane at the body: 78.5 N/m refined vs 187.7 unrefined, measured; a membrane
-  // refines in its plane only, which this change did not touch — open.)
+  // the Model-A membrane at the body: 257 N/m refined vs 188 unrefined at 2.5 N (+37 %; with the
+  // disc pad -40 %, -9 %, 0 % at 1, 2.5, 4 N, test_refine_pad.cpp); a membrane refines in its
+  // plane only — open.)
   const std::string c = read(proto("C"));
   const std::string membrane_tract =
       variant(c, "tract_surface_base",
