@@ -107,6 +107,20 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
     throw InputError("--refinement: expected nested or tetgen, got \"" + a.refinement + "\"");
   if (a.steps < 0 || a.steps > 100)
     throw InputError("--steps: expected 0 to 100 load steps, got " + std::to_string(a.steps));
+  // Grading of level 0 around the press (fem_reference.hpp): auto (-1 here) = until the loaded
+  // edges are at most the pad radius; 0 = the prototype's own mesh as level 0. Checked before
+  // the prototype is loaded (which can take seconds).
+  int grade_rounds = -1;
+  if (a.grade != "auto") {
+    size_t used = 0;
+    try {
+      grade_rounds = std::stoi(a.grade, &used);
+    } catch (const std::exception&) {
+      grade_rounds = -1;
+    }
+    if (used != a.grade.size() || grade_rounds < 0 || grade_rounds > 6)
+      throw InputError("--grade: expected auto or 0 to 6 rounds, got \"" + a.grade + "\"");
+  }
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
   const auto cm = engine::scene_mesh(cfg.mesh);
   if (!cm->tet)
@@ -149,23 +163,8 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
   if (!(a.volume_scale > 0) || a.volume_scale > 1e3)
     throw InputError("--volume-scale: expected a factor in (0, 1000]");
   o.max_volume *= a.volume_scale;
-  if (a.refinement == "nested") {
-    // Grading of level 0 around the press (fem_reference.hpp): auto = until the loaded edges
-    // are at most the pad radius; 0 = the prototype's own mesh as level 0.
-    if (a.grade == "auto") {
-      o.grade_rounds = engine::auto_grade_rounds(o);
-    } else {
-      size_t used = 0;
-      int k = -1;
-      try {
-        k = std::stoi(a.grade, &used);
-      } catch (const std::exception&) {
-      }
-      if (used != a.grade.size() || k < 0 || k > 6)
-        throw InputError("--grade: expected auto or 0 to 6 rounds, got \"" + a.grade + "\"");
-      o.grade_rounds = k;
-    }
-  }
+  if (a.refinement == "nested")
+    o.grade_rounds = grade_rounds >= 0 ? grade_rounds : engine::auto_grade_rounds(o);
   try {
     o.solver = engine::parse_sparse_solver(a.solver);
   } catch (const std::invalid_argument& e) {
