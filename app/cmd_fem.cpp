@@ -165,10 +165,20 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
   o.max_volume *= a.volume_scale;
   if (a.refinement == "nested")
     o.grade_rounds = grade_rounds >= 0 ? grade_rounds : engine::auto_grade_rounds(o);
-  try {
-    o.solver = engine::parse_sparse_solver(a.solver);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(std::string("--solver: ") + e.what());
+  if (a.solver == "pcg") {
+    // Static references only: Jacobi-PCG from kCholmodMinDofs free dofs (fem_reference.hpp).
+    if (a.steps > 0)
+      throw InputError(
+          "--solver pcg: the quasi-static curve (--steps) reuses a factorisation; use --steps 0 "
+          "with pcg, or ldlt / cholmod / auto");
+    o.solver = engine::SparseSolverKind::automatic;
+    o.pcg_min_dofs = engine::kCholmodMinDofs;
+  } else {
+    try {
+      o.solver = engine::parse_sparse_solver(a.solver);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("--solver: ") + e.what() + " (or pcg)");
+    }
   }
   ReferenceSetup su;
   su.o = std::move(o);
@@ -204,7 +214,8 @@ int run_reference(const ReferenceArgs& a) {
                       {"solve_ms", lv.solve_ms},
                       {"solver", lv.solver},
                       {"factor_ms", lv.factor_ms},
-                      {"factor_mb", lv.factor_mb}});
+                      {"factor_mb", lv.factor_mb},
+                      {"pcg_iterations", lv.pcg_iterations}});
   }
   json field_x = json::array(), field_u = json::array();
   for (long i = 0; i < r.field.rows(); ++i) {
@@ -618,7 +629,8 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--solver", ra->solver,
                       "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
-                      "auto (cholmod from 20000 free dofs)")
+                      "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: "
+                      "Jacobi-PCG from 20000 free dofs, no factor)")
           ->capture_default_str();
       ref->callback([=] { *code = run_reference(*ra); });
       auto* sol = fem->add_subcommand(

@@ -9,9 +9,11 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "common/input_error.hpp"
 #include "engine/mesh/check.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
 #include "engine/models/fem_block_mesh.hpp"
+#include "engine/models/fem_reference.hpp"
 #include "engine/models/fem_refine.hpp"
 
 using namespace palplab;
@@ -21,20 +23,22 @@ namespace {
 
 // The closed boundary of a structured block, rotated by an angle whose coordinates are not
 // dyadic (so midpoints of its faces' edges round off the faces' planes) and shifted.
-mesh::SurfaceMesh rotated_box_surface(int n) {
+mesh::SurfaceMesh rotated_box_surface(int n, bool rotate = true) {
   const mesh::TetMesh b = fem_block_mesh(n, n, n, Eigen::Vector3d(0.03, 0.03, 0.03), 101);
   const mesh::BoundaryFaces bf = mesh::boundary_faces(b);
   std::vector<int> map(static_cast<size_t>(b.V.rows()), -1);
   std::vector<Eigen::Vector3d> pts;
   mesh::Faces F(bf.F.rows(), 3);
   const Eigen::Matrix3d R =
-      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+      rotate ? Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix()
+             : Eigen::Matrix3d::Identity();
   for (long f = 0; f < bf.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       int& v = map[static_cast<size_t>(bf.F(f, k))];
       if (v < 0) {
         v = static_cast<int>(pts.size());
-        pts.push_back(R * mesh::row3(b.V, bf.F(f, k)) + Eigen::Vector3d(0.013, -0.021, 0.117));
+        pts.push_back(R * mesh::row3(b.V, bf.F(f, k)) +
+                      (rotate ? Eigen::Vector3d(0.013, -0.021, 0.117) : Eigen::Vector3d::Zero()));
       }
       F(f, k) = v;
     }
@@ -88,4 +92,40 @@ TEST(FemGrading, CheckStillFindsACrossingNearCoplanarFaces) {
   const std::vector<std::pair<int, int>> x = mesh::self_intersections(V, F);
   EXPECT_FALSE(x.empty());
   for (auto [f, h] : x) EXPECT_TRUE(f == g.F.rows() || h == g.F.rows()) << f << " " << h;
+}
+
+// The PCG solve of static reference levels (pcg_min_dofs) gives the direct solve's stiffness on
+// every level, and starts the nested levels from the prolongated coarser solution.
+TEST(FemGrading, PcgLevelsMatchTheFactorisation) {
+  FemReferenceOptions o;
+  o.surface = rotated_box_surface(2, false);  // 3 cm cube, base pinned, pressed on top
+  o.is_fixed = [](const Eigen::Vector3d& p) { return p.z() < 1e-9; };
+  o.press_point = Eigen::Vector3d(0.015, 0.015, 0.03);
+  o.press_direction = -Eigen::Vector3d::UnitZ();
+  o.force = 0.5;
+  o.press_radius = 0.01;
+  o.max_volume = 8e-7;
+  o.levels = 3;
+  o.refinement = FemRefinement::nested;
+  o.solver = SparseSolverKind::ldlt;
+  const FemReferenceResult direct = fem_reference(o);
+  o.pcg_min_dofs = 1;
+  o.pcg_tolerance = 1e-12;
+  const FemReferenceResult pcg = fem_reference(o);
+  ASSERT_EQ(pcg.levels.size(), 3u);
+  for (size_t l = 0; l < 3; ++l) {
+    EXPECT_EQ(direct.levels[l].solver, "ldlt");
+    EXPECT_EQ(pcg.levels[l].solver, "pcg-jacobi");
+    EXPECT_GT(pcg.levels[l].pcg_iterations, 0);
+    EXPECT_EQ(pcg.levels[l].tets, direct.levels[l].tets);
+    EXPECT_EQ(pcg.levels[l].dofs, direct.levels[l].dofs);
+    EXPECT_NEAR(pcg.levels[l].stiffness, direct.levels[l].stiffness,
+                1e-8 * direct.levels[l].stiffness)
+        << l;
+  }
+  EXPECT_GT(direct.levels[2].tets, 4000);
+  EXPECT_NEAR(pcg.stiffness, direct.stiffness, 1e-6 * direct.stiffness);
+  // A static-only option: with the quasi-static curve it is an input error.
+  o.curve_steps = 2;
+  EXPECT_THROW(fem_reference(o), InputError);
 }
