@@ -171,6 +171,16 @@ TEST(CliFemD, ReferenceBadInputsExitTwo) {
   EXPECT_EQ(
       run("fem reference " + proto("D") + " --press ovary_left --force 1 --steps -1" + o, d).code,
       2);
+  // PCG solves the static levels only: the quasi-static curve needs a factorisation.
+  const Result pcg = run(
+      "fem reference " + proto("D") + " --press ovary_left --force 1 --solver pcg --steps 2" + o,
+      d);
+  EXPECT_EQ(pcg.code, 2);
+  EXPECT_NE(pcg.err.find("--solver pcg"), std::string::npos) << pcg.err;
+  const Result sol = run(
+      "fem reference " + proto("D") + " --press ovary_left --force 1 --solver qr --steps 0" + o, d);
+  EXPECT_EQ(sol.code, 2);
+  EXPECT_NE(sol.err.find("--solver"), std::string::npos) << sol.err;
   // Nested levels of D's 9k tets: 4 levels would be 4.7M tets on the finest.
   const Result big =
       run("fem reference " + proto("D") + " --press ovary_left --force 1 --levels 4" + o, d);
