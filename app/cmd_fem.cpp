@@ -150,7 +150,8 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
                        "copy of the prototype (mesh \"vertices\")");
     if (finest > 2e5)
       std::fprintf(stderr,
-                   "note: the finest nested level has %.0f tets (8x per level): this takes "
+                   "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
+                   "per level; a graded level 0, --grade, is larger): this takes "
                    "minutes and GBs of memory; a coarser copy of the prototype (mesh "
                    "\"vertices\": 400) runs in about a minute\n",
                    finest);
@@ -313,9 +314,14 @@ int run_reference(const ReferenceArgs& a) {
   if (!trusted)
     std::printf(
         "WARNING: the extrapolation is not trustworthy: %s (monotone %s, order %s); add a level "
-        "or refine the base mesh\n",
+        "or refine the base mesh%s\n",
         untrusted.c_str(), r.monotone ? "yes" : "no",
-        r.order_plausible ? "plausible" : "implausible");
+        r.order_plausible ? "plausible" : "implausible",
+        nested ? (" (nested: e.g. --grade " + std::to_string(o.grade_rounds + 2) +
+                  ", two more rounds of grading around the press; the 400-vertex D's body press "
+                  "is trusted with 4, docs/PERFORMANCE.md)")
+                     .c_str()
+               : "");
   std::printf("written %s\n", a.out.c_str());
   return 0;
 }
