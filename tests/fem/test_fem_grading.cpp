@@ -49,11 +49,12 @@ mesh::SurfaceMesh rotated_box_surface(int n, bool rotate = true) {
 
 }  // namespace
 
-// Three rounds over the whole box: every face of the rotated box becomes up to 64 children,
+// Three rounds over the whole box: every face of the rotated box becomes up to 64 children
 // coplanar up to round-off. The result is the same polyhedron, so it has no self-intersection,
-// and TetGen meshes it.
+// and TetGen meshes it. (With the former floating-point orientations the check reported 4
+// crossings on this surface, 7 after two rounds, 8 on the 3x3x3 block after three.)
 TEST(FemGrading, GradedSurfaceHasNoSpuriousSelfIntersections) {
-  const mesh::SurfaceMesh s = rotated_box_surface(3);
+  const mesh::SurfaceMesh s = rotated_box_surface(2);
   const Eigen::Vector3d centre = s.V.colwise().mean().transpose();
   const mesh::SurfaceMesh g = refine_surface_near(s, centre, 0.05, 3);
   ASSERT_GT(g.F.rows(), 30 * s.F.rows());  // most faces split three times
