@@ -232,6 +232,19 @@ Reference reference_for(const engine::Scene& d_scene, const std::string& region,
   } else {
     o.refinement = engine::FemRefinement::nested;
     o.grade_rounds = unresolved_on_d ? engine::auto_grade_rounds(o) : 0;
+    if (unresolved_on_d) {
+      // Measured on D's body press (docs/PERFORMANCE.md, "More grading"): the auto rounds (1)
+      // give a resolved but untrusted reference (finest level > 5 % from the limit; order
+      // ~1.15 whatever the grading); 4 rounds with a coarse far field (TetGen max volume 128x
+      // D's mean: the tet count is then set by the surface) give 16.6k / 133k / 1.07M tets,
+      // finest level 4.4 % from the limit: trusted (186 s CPU, 7.3 GB peak RSS with PCG).
+      o.grade_rounds = std::max(o.grade_rounds, 4);
+      o.max_volume *= 128;
+    }
+    // The frontier needs the static response only (no curve): the large levels are solved by
+    // Jacobi-PCG from the prolongated coarser level, ~1/4 of CHOLMOD's CPU and no factor on
+    // D's 593k-tet level (docs/PERFORMANCE.md "Solvers on the reference levels").
+    o.pcg_min_dofs = engine::kCholmodMinDofs;
   }
   ref.grade_rounds = o.grade_rounds;
   const auto t0 = std::chrono::steady_clock::now();

@@ -107,6 +107,20 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
     throw InputError("--refinement: expected nested or tetgen, got \"" + a.refinement + "\"");
   if (a.steps < 0 || a.steps > 100)
     throw InputError("--steps: expected 0 to 100 load steps, got " + std::to_string(a.steps));
+  // Grading of level 0 around the press (fem_reference.hpp): auto (-1 here) = until the loaded
+  // edges are at most the pad radius; 0 = the prototype's own mesh as level 0. Checked before
+  // the prototype is loaded (which can take seconds).
+  int grade_rounds = -1;
+  if (a.grade != "auto") {
+    size_t used = 0;
+    try {
+      grade_rounds = std::stoi(a.grade, &used);
+    } catch (const std::exception&) {
+      grade_rounds = -1;
+    }
+    if (used != a.grade.size() || grade_rounds < 0 || grade_rounds > 6)
+      throw InputError("--grade: expected auto or 0 to 6 rounds, got \"" + a.grade + "\"");
+  }
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
   const auto cm = engine::scene_mesh(cfg.mesh);
   if (!cm->tet)
@@ -136,7 +150,8 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
                        "copy of the prototype (mesh \"vertices\")");
     if (finest > 2e5)
       std::fprintf(stderr,
-                   "note: the finest nested level has %.0f tets (8x per level): this takes "
+                   "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
+                   "per level; a graded level 0, --grade, is larger): this takes "
                    "minutes and GBs of memory; a coarser copy of the prototype (mesh "
                    "\"vertices\": 400) runs in about a minute\n",
                    finest);
@@ -149,27 +164,22 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
   if (!(a.volume_scale > 0) || a.volume_scale > 1e3)
     throw InputError("--volume-scale: expected a factor in (0, 1000]");
   o.max_volume *= a.volume_scale;
-  if (a.refinement == "nested") {
-    // Grading of level 0 around the press (fem_reference.hpp): auto = until the loaded edges
-    // are at most the pad radius; 0 = the prototype's own mesh as level 0.
-    if (a.grade == "auto") {
-      o.grade_rounds = engine::auto_grade_rounds(o);
-    } else {
-      size_t used = 0;
-      int k = -1;
-      try {
-        k = std::stoi(a.grade, &used);
-      } catch (const std::exception&) {
-      }
-      if (used != a.grade.size() || k < 0 || k > 6)
-        throw InputError("--grade: expected auto or 0 to 6 rounds, got \"" + a.grade + "\"");
-      o.grade_rounds = k;
+  if (a.refinement == "nested")
+    o.grade_rounds = grade_rounds >= 0 ? grade_rounds : engine::auto_grade_rounds(o);
+  if (a.solver == "pcg") {
+    // Static references only: Jacobi-PCG from kCholmodMinDofs free dofs (fem_reference.hpp).
+    if (a.steps > 0)
+      throw InputError(
+          "--solver pcg: the quasi-static curve (--steps) reuses a factorisation; use --steps 0 "
+          "with pcg, or ldlt / cholmod / auto");
+    o.solver = engine::SparseSolverKind::automatic;
+    o.pcg_min_dofs = engine::kCholmodMinDofs;
+  } else {
+    try {
+      o.solver = engine::parse_sparse_solver(a.solver);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("--solver: ") + e.what() + " (or pcg)");
     }
-  }
-  try {
-    o.solver = engine::parse_sparse_solver(a.solver);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(std::string("--solver: ") + e.what());
   }
   ReferenceSetup su;
   su.o = std::move(o);
@@ -205,7 +215,8 @@ int run_reference(const ReferenceArgs& a) {
                       {"solve_ms", lv.solve_ms},
                       {"solver", lv.solver},
                       {"factor_ms", lv.factor_ms},
-                      {"factor_mb", lv.factor_mb}});
+                      {"factor_mb", lv.factor_mb},
+                      {"pcg_iterations", lv.pcg_iterations}});
   }
   json field_x = json::array(), field_u = json::array();
   for (long i = 0; i < r.field.rows(); ++i) {
@@ -303,9 +314,14 @@ int run_reference(const ReferenceArgs& a) {
   if (!trusted)
     std::printf(
         "WARNING: the extrapolation is not trustworthy: %s (monotone %s, order %s); add a level "
-        "or refine the base mesh\n",
+        "or refine the base mesh%s\n",
         untrusted.c_str(), r.monotone ? "yes" : "no",
-        r.order_plausible ? "plausible" : "implausible");
+        r.order_plausible ? "plausible" : "implausible",
+        nested ? (" (nested: e.g. --grade " + std::to_string(o.grade_rounds + 2) +
+                  ", two more rounds of grading around the press; the 400-vertex D's body press "
+                  "is trusted with 4, docs/PERFORMANCE.md)")
+                     .c_str()
+               : "");
   std::printf("written %s\n", a.out.c_str());
   return 0;
 }
@@ -619,7 +635,8 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--solver", ra->solver,
                       "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
-                      "auto (cholmod from 20000 free dofs)")
+                      "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: "
+                      "Jacobi-PCG from 20000 free dofs, no factor)")
           ->capture_default_str();
       ref->callback([=] { *code = run_reference(*ra); });
       auto* sol = fem->add_subcommand(

@@ -6,6 +6,11 @@
 
 #include "engine/spatial/bvh.hpp"
 
+// Shewchuk's robust predicates, compiled into TetGen's library (libtet): tetgen.h declares
+// exactinit and orient3d; orient2d is exported alongside them without a declaration.
+#include <tetgen.h>
+REAL orient2d(REAL* pa, REAL* pb, REAL* pc);
+
 namespace palplab::mesh {
 
 const std::vector<std::string>& defect_kinds() {
@@ -27,8 +32,26 @@ void add(CheckReport& r, const CheckOptions& o, Defect d) {
     r.truncated = true;
 }
 
+// The orientation predicates are Shewchuk's adaptive exact ones (as exported by TetGen's
+// library, which meshes what passes this check): a plain floating-point determinant has a random
+// sign when the four points are coplanar up to round-off, and reports spurious crossings
+// between neighbouring triangles of a subdivided planar face (midpoints a few ulp off the
+// plane: e.g. the surface grading of the FEM reference, engine/models/fem_refine.hpp).
+void init_exact_predicates() {
+  // noexact = 0, nofilter = 1: the adaptive predicates without TetGen's static filter (whose
+  // bound depends on the coordinates' range), so the bounds passed are not used.
+  static const bool done = [] {
+    exactinit(0, 0, 1, 1.0, 1.0, 1.0);
+    return true;
+  }();
+  (void)done;
+}
+
+// (b - a) . ((c - a) x (d - a)), exactly signed.
 double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  return (b - a).dot((c - a).cross(d - a));
+  init_exact_predicates();
+  Vec3 pa = a, pb = b, pc = c, pd = d;
+  return -::orient3d(pa.data(), pb.data(), pc.data(), pd.data());
 }
 
 // Segment pq crosses the interior of triangle abc (strictly; touching and coplanar cases are not
@@ -44,7 +67,9 @@ bool segment_crosses(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
 }
 
 double orient2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  init_exact_predicates();
+  Eigen::Vector2d pa = a, pb = b, pc = c;
+  return ::orient2d(pa.data(), pb.data(), pc.data());
 }
 
 bool strictly_inside(const Eigen::Vector2d& p, const Eigen::Vector2d* t) {

@@ -1,5 +1,6 @@
 #include "engine/models/fem_reference.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -403,6 +404,12 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     throw InputError("fem reference: support modulus must be >= 0 N/m^3");
   if (opt.curve_steps < 0 || !(opt.curve_tolerance > 0))
     throw InputError("fem reference: curve steps must be >= 0 and the tolerance > 0");
+  if (opt.pcg_min_dofs < 0 || !(opt.pcg_tolerance > 0 && opt.pcg_tolerance < 1))
+    throw InputError("fem reference: PCG threshold must be >= 0 and its tolerance in (0, 1)");
+  if (opt.pcg_min_dofs > 0 && opt.curve_steps > 0)
+    throw InputError(
+        "fem reference: the PCG solver is for static references only (the quasi-static curve "
+        "reuses a factorisation): use --steps 0 or a direct solver");
   const long ns = opt.surface.V.rows();
   // Node of each surface vertex in every level's mesh (TetGen and nested keep them).
   std::vector<int> surface_node(static_cast<size_t>(ns));
@@ -420,6 +427,8 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   FemReferenceResult res;
   std::vector<Eigen::VectorXd> surface_u;
   ReferenceLevelBuilder builder(opt);
+  Eigen::VectorXd u_prev;    // the previous level's solution (PCG's start on nested levels)
+  long fixed_prev_size = 0;  // its node count
   for (int l = 0; l < opt.levels; ++l) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReferenceLevelSystem& ls = builder.next();
@@ -430,19 +439,54 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     const Eigen::VectorXd& support = ls.support;
     const mesh::BoundaryFaces& bf = ls.bf;
     const PressLoad& load = ls.load;
-    StaticSolver ss;
-    static_precompute(K, ls.fixed_dof, ss, opt.solver);
-    const Eigen::VectorXd u = static_solve(ss, f);
-    const double delta = f.dot(u) / opt.force;  // work-conjugate contact displacement
     FemReferenceLevel lv;
+    StaticSolver ss;
+    Eigen::VectorXd u;
+    const long free_dofs =
+        static_cast<long>(std::count(ls.fixed_dof.begin(), ls.fixed_dof.end(), std::uint8_t{0}));
+    if (opt.pcg_min_dofs > 0 && free_dofs >= opt.pcg_min_dofs) {
+      // One solve, no factor: Jacobi-PCG from the coarser level's solution (nested spaces:
+      // prolongation is exact interpolation, so the start is the coarse FE function).
+      const auto ts = std::chrono::steady_clock::now();
+      ss.split = split_dofs(ls.fixed_dof);
+      const SparseMatrixd Kff = submatrix(K, ss.split.free, ss.split.free);
+      const Eigen::VectorXd b = gather(f, ss.split.free);
+      Eigen::VectorXd x0 = Eigen::VectorXd::Zero(b.size());
+      if (!ls.parent.empty() && u_prev.size() == 3 * static_cast<long>(fixed_prev_size))
+        x0 = gather(prolongate(ls.parent, u_prev), ss.split.free);
+      Eigen::ConjugateGradient<SparseMatrixd, Eigen::Lower | Eigen::Upper,
+                               Eigen::DiagonalPreconditioner<double>>
+          cg;
+      cg.setTolerance(opt.pcg_tolerance);
+      cg.setMaxIterations(std::max<long>(100000, 10 * b.size() / 100));
+      cg.compute(Kff);
+      lv.factor_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ts).count();
+      const Eigen::VectorXd x = cg.solveWithGuess(b, x0);
+      if (cg.info() != Eigen::Success)
+        throw std::runtime_error("fem reference: PCG on level " + std::to_string(l) +
+                                 " did not reach the relative residual " +
+                                 std::to_string(opt.pcg_tolerance) + " in " +
+                                 std::to_string(cg.iterations()) + " iterations");
+      u = Eigen::VectorXd::Zero(f.size());
+      scatter(x, ss.split.free, u);
+      lv.solver = "pcg-jacobi";
+      lv.pcg_iterations = static_cast<long>(cg.iterations());
+    } else {
+      static_precompute(K, ls.fixed_dof, ss, opt.solver);
+      u = static_solve(ss, f);
+      lv.solver = to_string(ss.kind);
+      lv.factor_ms = ss.factor_ms;
+      lv.factor_mb = 8e-6 * ss.factor_nnz;
+    }
+    u_prev = u;
+    fixed_prev_size = m.V.rows();
+    const double delta = f.dot(u) / opt.force;  // work-conjugate contact displacement
     lv.max_volume = opt.mesher ? 0.0 : m.volume.maxCoeff();
     if (!opt.mesher && !nested) lv.max_volume = opt.max_volume / std::pow(2.0, l);
-    lv.solver = to_string(ss.kind);
-    lv.factor_ms = ss.factor_ms;
-    lv.factor_mb = 8e-6 * ss.factor_nnz;
     lv.nodes = m.V.rows();
     lv.tets = m.T.rows();
-    lv.dofs = static_cast<long>(ss.split.free.size());
+    lv.dofs = free_dofs;
     lv.patch_area = load.patch_area;
     lv.press_h = loaded_edge(m.V, bf.F, f);
     lv.mesh_size = std::cbrt(m.volume.sum() / static_cast<double>(m.T.rows()));

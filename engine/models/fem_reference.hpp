@@ -107,6 +107,15 @@ struct FemReferenceOptions {
   // Factorisation of every level's stiffness (and of the curve's tangents): automatic takes
   // CHOLMOD's supernodal LL^T on the large levels (fem_static.hpp).
   SparseSolverKind solver = SparseSolverKind::automatic;
+  // Static-only references (curve_steps == 0): levels with at least pcg_min_dofs free dofs are
+  // solved by Jacobi-preconditioned CG to relative residual pcg_tolerance instead of a
+  // factorisation, started from the previous nested level's solution prolongated (zero
+  // otherwise). For one solve of a large level it needs ~1/4 of CHOLMOD's CPU and no factor
+  // (measured: `palplab fem solvers`, docs/PERFORMANCE.md), so it reaches levels whose factor
+  // does not fit in memory. 0 = never. Throws InputError with curve_steps > 0 (the curve's
+  // Newton steps reuse a factorisation).
+  long pcg_min_dofs = 0;
+  double pcg_tolerance = 1e-10;
 };
 
 struct FemReferenceLevel {
@@ -123,9 +132,10 @@ struct FemReferenceLevel {
   double field_error = 0;   // max over surface vertices |u - u_extrapolated| / max |u_extrapolated|
   double mesh_size = 0;     // (volume / #tets)^(1/3) (m)
   double solve_ms = 0;      // the level: mesh, assembly, factorisation, solve
-  std::string solver;       // the factorisation used: "ldlt" or "cholmod"
-  double factor_ms = 0;     // its analyse + factorise wall time
-  double factor_mb = 0;     // its stored factor (8 bytes per entry), MB
+  std::string solver;       // the solver used: "ldlt", "cholmod" or "pcg-jacobi"
+  double factor_ms = 0;     // its analyse + factorise wall time (pcg: the preconditioner's)
+  double factor_mb = 0;     // its stored factor (8 bytes per entry), MB (pcg: 0)
+  long pcg_iterations = 0;  // pcg: CG iterations to pcg_tolerance
   // Quasi-static curve on this level (curve_steps entries): work-conjugate contact
   // displacement (m) at force F_k, and the Newton iterations of the step.
   std::vector<double> curve_displacement;

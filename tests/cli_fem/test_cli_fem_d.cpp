@@ -171,6 +171,16 @@ TEST(CliFemD, ReferenceBadInputsExitTwo) {
   EXPECT_EQ(
       run("fem reference " + proto("D") + " --press ovary_left --force 1 --steps -1" + o, d).code,
       2);
+  // PCG solves the static levels only: the quasi-static curve needs a factorisation.
+  const Result pcg = run(
+      "fem reference " + proto("D") + " --press ovary_left --force 1 --solver pcg --steps 2" + o,
+      d);
+  EXPECT_EQ(pcg.code, 2);
+  EXPECT_NE(pcg.err.find("--solver pcg"), std::string::npos) << pcg.err;
+  const Result sol = run(
+      "fem reference " + proto("D") + " --press ovary_left --force 1 --solver qr --steps 0" + o, d);
+  EXPECT_EQ(sol.code, 2);
+  EXPECT_NE(sol.err.find("--solver"), std::string::npos) << sol.err;
   // Nested levels of D's 9k tets: 4 levels would be 4.7M tets on the finest.
   const Result big =
       run("fem reference " + proto("D") + " --press ovary_left --force 1 --levels 4" + o, d);
@@ -180,5 +190,83 @@ TEST(CliFemD, ReferenceBadInputsExitTwo) {
   const Result a = run("fem reference " + proto("A") + " --press ovary_left --force 1" + o, d);
   EXPECT_EQ(a.code, 2);
   EXPECT_NE(a.err.find("tetrahedral"), std::string::npos) << a.err;
+  fs::remove_all(d);
+}
+
+// `palplab fem solvers` on a small nested level: every solver finishes with finite numbers, and
+// all of them solve the same system (the same compliance and displacement as the first).
+TEST(CliFemD, SolversAgreeOnASmallLevel) {
+  const fs::path d = tmp("solvers");
+  const fs::path p = d_variant(d, "Dsolvers", 400);
+  const fs::path out = d / "solvers.json";
+  const Result r = run("fem solvers " + p.string() +
+                           " --press ovary_left --grade 0 --level 1 "
+                           "--solvers cholmod,ldlt,pcg-jacobi,pcg-jacobi0,pcg-ic "
+                           "--cg-tolerance 1e-12 --out " +
+                           out.string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j.at("format"), "palplab-fem-solvers/1");
+  EXPECT_EQ(j.at("level"), 1);
+  EXPECT_EQ(j.at("press"), "ovary_left");
+  const long tets = j.at("tets").get<long>(), free_dofs = j.at("free_dofs").get<long>();
+  EXPECT_GT(tets, 8000);  // level 1: 8x the ~1.5k tets of the 400-vertex tract
+  EXPECT_GT(free_dofs, 1000);
+  EXPECT_LT(free_dofs, 3 * j.at("nodes").get<long>());
+  EXPECT_GT(j.at("K_nonzeros").get<long>(), 9 * free_dofs);
+  const json& runs = j.at("runs");
+  ASSERT_EQ(runs.size(), 5u);
+  const double c0 = runs[0].at("compliance").get<double>();
+  EXPECT_TRUE(std::isfinite(c0) && c0 > 0);
+  // The 400-vertex tract's ovary: ~600 N/m, i.e. f.u ~ 1/600 m/N for 1 N (ovary level values
+  // 560-640 N/m, docs/PERFORMANCE.md).
+  EXPECT_GT(1 / c0, 300.0);
+  EXPECT_LT(1 / c0, 1500.0);
+  for (const json& s : runs) {
+    const std::string n = s.at("solver");
+    EXPECT_EQ(s.at("status"), "ok") << n;
+    EXPECT_NEAR(s.at("compliance").get<double>(), c0, 1e-8 * c0) << n;
+    EXPECT_LT(s.at("rel_diff").get<double>(), 1e-6) << n;
+    EXPECT_GT(s.at("peak_rss_mb").get<double>(), 0.0) << n;
+    EXPECT_TRUE(std::isfinite(s.at("factor_ms").get<double>())) << n;
+    EXPECT_TRUE(std::isfinite(s.at("solve_ms").get<double>())) << n;
+    if (n.rfind("pcg", 0) == 0) {
+      EXPECT_GT(s.at("iterations").get<long>(), 0) << n;
+    } else {
+      EXPECT_GT(s.at("factor_mb").get<double>(), 0.0) << n;
+    }
+  }
+  EXPECT_DOUBLE_EQ(runs[0].at("rel_diff").get<double>(), 0.0);
+  // The prolongated coarse solution is a better start than zero.
+  EXPECT_LE(runs[2].at("iterations").get<long>(), runs[3].at("iterations").get<long>());
+  // The table on stdout names every solver.
+  for (const char* n : {"cholmod", "ldlt", "pcg-jacobi0", "pcg-ic"})
+    EXPECT_NE(r.out.find(n), std::string::npos) << n;
+  fs::remove_all(d);
+}
+
+TEST(CliFemD, SolversBadInputsExitTwo) {
+  const fs::path d = tmp("solvers_bad");
+  const std::string base = "fem solvers " + proto("D") + " --press ovary_left ";
+  const Result s = run(base + "--solvers ldlt,gmres", d);
+  EXPECT_EQ(s.code, 2);
+  EXPECT_NE(s.err.find("--solvers"), std::string::npos) << s.err;
+  EXPECT_NE(s.err.find("gmres"), std::string::npos) << s.err;
+  const Result e = run(base + "--solvers ldlt,", d);  // an empty name
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.err.find("--solvers"), std::string::npos) << e.err;
+  const Result g = run(base + "--grade x", d);
+  EXPECT_EQ(g.code, 2);
+  EXPECT_NE(g.err.find("--grade"), std::string::npos) << g.err;
+  const Result g7 = run(base + "--grade 7", d);
+  EXPECT_EQ(g7.code, 2);
+  EXPECT_NE(g7.err.find("--grade"), std::string::npos) << g7.err;
+  const Result l = run(base + "--level 4", d);
+  EXPECT_EQ(l.code, 2);
+  EXPECT_NE(l.err.find("--level"), std::string::npos) << l.err;
+  const Result t = run(base + "--cg-tolerance 2", d);
+  EXPECT_EQ(t.code, 2);
+  EXPECT_NE(t.err.find("--cg-tolerance"), std::string::npos) << t.err;
   fs::remove_all(d);
 }
