@@ -147,7 +147,9 @@ TEST(Clock, PacedLockstepKeepsTheHapticRateAndTheResults) {
         300);
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (paced) EXPECT_GE(wall, 0.299);
+    if (paced) {
+      EXPECT_GE(wall, 0.299);
+    }
   }
   ASSERT_EQ(forces[0].size(), forces[1].size());
   for (size_t k = 0; k < forces[0].size(); ++k)

@@ -217,39 +217,6 @@ TEST(ContactDeep, BeyondTheCentreTheProxyFollowsTheDeviceOnTheEntrySide) {
   EXPECT_LE(worst_dd, 2 * dx);
 }
 
-namespace {
-
-// The benchmark's sliding press (bench/bench_engine_step.cpp, sliding_press): on the node 10 %
-// along the region's principal axis, `force` held while sliding at `speed` over 80 % of the
-// region's length, along the axis projected into the tangent plane.
-PressSpec sliding_press(const SceneGeometry& g, const std::string& region, double force,
-                        double speed) {
-  const int id = g.region_index(region);
-  Vec3 mean = Vec3::Zero();
-  long count = 0;
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) mean += g.V.row(i).transpose(), ++count;
-  mean /= std::max(count, 1L);
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) {
-      const Vec3 d = g.V.row(i).transpose() - mean;
-      C += d * d.transpose();
-    }
-  const Vec3 axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(2);
-  double lo = 1e300, hi = -1e300;
-  for (long i = 0; i < g.V.rows(); ++i)
-    if (g.vertex_region[i] == id) {
-      const double a = axis.dot(g.V.row(i).transpose() - mean);
-      lo = std::min(lo, a), hi = std::max(hi, a);
-    }
-  const int node = g.nearest_node(mean + (lo + 0.1 * (hi - lo)) * axis);
-  PressSpec p = press_at(g, node, force, 0.8 * (hi - lo) / speed, 0.0);
-  p.slide = speed * (axis - axis.dot(p.normal) * p.normal).normalized();
-  return p;
-}
-
-}  // namespace
 
 TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
   // The benchmark's sliding press: 2.5 N on C's left ovary, 10 % along its axis (its tip, a cap
