@@ -75,13 +75,11 @@ results::StudyStructure study_structure(const Study& s) {
   return out;
 }
 
-// A demonstration press on the feature of this simulator: a slow deliberate press until the
-// force, judged with relative error `eps`, reaches the MPF; what it rendered on the way (the
-// visible deformation at the target, 0 when none is drawn; whether the sound came). The scene
-// is reset afterwards. Used for the instructor's own calibration (eps from the instructor's
-// Weber fraction) and for the briefing's demonstration to the trainee (eps 0: the trainee
-// watches an exact demonstration).
-pm::Demonstration demonstrate(engine::Scene& scene, int node, double mpf, double eps) {
+// One demonstration press on `node` of this simulator: a slow deliberate press until the force,
+// judged with relative error `eps`, reaches the MPF; what it rendered on the way (the visible
+// deformation at the target, 0 when none is drawn; whether the sound came). The scene is reset
+// afterwards.
+pm::Demonstration demonstrate_at(engine::Scene& scene, int node, double mpf, double eps) {
   engine::PressSpec spec = engine::press_at(scene.geometry(), node, mpf, 0.0, 0.0);
   spec.approach_speed = 0.004;  // m/s, a slow deliberate press
   // 1 cm outside; its first step is already one step in (as the studies' reference results were
@@ -101,6 +99,49 @@ pm::Demonstration demonstrate(engine::Scene& scene, int node, double mpf, double
                        });
   if (press.force_reached()) d.deformation = deformation;
   scene.reset();
+  return d;
+}
+
+// The surface nodes of the feature a demonstration presses: the kDemonstrationPresses nodes of
+// its region nearest the region's centroid (the same neighbourhood the trainees' search, drawn
+// around the believed centroid, ends up pressing). Geometry only: nothing depends on which
+// prototype this is.
+constexpr int kDemonstrationPresses = 5;
+std::vector<int> demonstration_nodes(const engine::SceneGeometry& g, const std::string& feature) {
+  const int r = g.region_index(feature);
+  const Eigen::Vector3d c = g.region_centroid(feature);
+  std::vector<std::pair<double, int>> by_distance;
+  for (int i = 0; i < static_cast<int>(g.vertex_region.size()); ++i)
+    if (g.vertex_region[i] == r)
+      by_distance.push_back({(g.V.row(i).transpose() - c).squaredNorm(), i});
+  const std::size_t k = std::min<std::size_t>(kDemonstrationPresses, by_distance.size());
+  std::partial_sort(by_distance.begin(), by_distance.begin() + k, by_distance.end());
+  std::vector<int> nodes;
+  for (std::size_t i = 0; i < k; ++i) nodes.push_back(by_distance[i].second);
+  return nodes;
+}
+
+// The demonstration of the target press on the feature of this simulator: the target press
+// shown at each demonstration node (a few presses around the feature, not one: a simulated
+// organ's stiffness varies from place to place — on prototype C the node nearest the ovary's
+// centroid, formerly the only one shown, takes 600 N/m, the places the trainees press 220–440
+// N/m — so one press at one arbitrary point shows a deformation at the target that the
+// trainee's own presses elsewhere do not reproduce). What is remembered is the mean picture at
+// the target (ensemble averaging: observers keep the mean of a set of seen sizes, Ariely 2001)
+// and whether a sound came in any press. Used for the instructor's own calibration (eps from
+// the instructor's Weber fraction, one hand bias for all presses) and for the briefing's
+// demonstration to the trainee (eps 0: the trainee watches an exact demonstration).
+pm::Demonstration demonstrate(engine::Scene& scene, const std::string& feature, double mpf,
+                              double eps) {
+  pm::Demonstration d;
+  double sum = 0.0;
+  int reached = 0;
+  for (int node : demonstration_nodes(scene.geometry(), feature)) {
+    const pm::Demonstration one = demonstrate_at(scene, node, mpf, eps);
+    d.sound = d.sound || one.sound;
+    if (one.deformation > 0) sum += one.deformation, ++reached;
+  }
+  if (reached > 0) d.deformation = sum / reached;
   return d;
 }
 
@@ -289,11 +330,11 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
     Rng rng(derive_seed(iseed, "instructor-calibration"));
     const double eps = mp.instructor.weber_fraction * rng.normal();
     instructor->set_target_deformation(
-        demonstrate(scene, g.region_node(study.task.feature), lim.mpf, eps).deformation);
+        demonstrate(scene, study.task.feature, lim.mpf, eps).deformation);
   }
   // The briefing (before the first session) demonstrates the target press on this simulator.
   if (!state_before.initialised)
-    trainee.set_demonstration(demonstrate(scene, g.region_node(study.task.feature), lim.mpf, 0.0));
+    trainee.set_demonstration(demonstrate(scene, study.task.feature, lim.mpf, 0.0));
   trainee.begin_session(view, lim.mpf, spec.offset, spec.duration, pp.seed, spec.seed, trainee_ch);
 
   const double dt = scene.dt();

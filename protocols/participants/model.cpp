@@ -457,6 +457,7 @@ void Trainee::start_press() {
   call_heard_ = false;
   peak_felt_ = 0.0;
   peak_seen_d_ = 0.0;
+  press_d0_ = -1.0;
   ++presses_;
 }
 
@@ -500,9 +501,19 @@ void Trainee::perceive(const Percept& p, bool call) {
   if (mode_ == Mode::dwell && ch_.visual && p.contact && p.visible_deformation > 0)
     dwell_saw_d_ = true;
   if (mode_ == Mode::press || mode_ == Mode::hold) {
-    const double f = perceived_force(p);
+    // What this press does to the picture: the indentation since the press first touched. The
+    // demonstration's d* is an indentation from rest; deformation the tissue has not yet
+    // recovered from the previous press is not this press's doing (after a deep press on a soft
+    // spot of C it was still beyond d* when the next press touched, so the visual marker fired
+    // at 0.1 N and the learned target collapsed to 0). Marker, visual force estimate and the
+    // felt/seen ratio all use this one quantity.
+    if (p.contact && press_d0_ < 0) press_d0_ = p.visible_deformation;
+    Percept q = p;
+    q.visible_deformation =
+        p.contact && press_d0_ >= 0 ? std::max(0.0, p.visible_deformation - press_d0_) : 0.0;
+    const double f = perceived_force(q);
     if (ch_.haptic) peak_felt_ = std::max(peak_felt_, p.force.norm() * (1.0 + eps_h_));
-    if (ch_.visual) peak_seen_d_ = std::max(peak_seen_d_, p.visible_deformation * (1.0 + eps_v_));
+    if (ch_.visual) peak_seen_d_ = std::max(peak_seen_d_, q.visible_deformation * (1.0 + eps_v_));
     // Reaction times vary from trial to trial: one draw per press (rt_scale_).
     const double rt_audio = p_.reaction_time_audio * rt_scale_;
     // The sound means "target reached": learn the force felt at its onset, release after a
@@ -513,13 +524,13 @@ void Trainee::perceive(const Percept& p, bool call) {
     if (ch_.audio && p.audio && !audio_seen_) {
       audio_seen_ = true;
       marker_this_press_ = true;
-      learn_target(f, perceived_variance(p), guided);
+      learn_target(f, perceived_variance(q), guided);
       if (release_at_ < 0) release_at_ = p.t + rt_audio;
     }
     if (call && !call_heard_) {
       call_heard_ = true;
       marker_this_press_ = true;
-      learn_target(f, perceived_variance(p), guided);
+      learn_target(f, perceived_variance(q), guided);
       if (release_at_ < 0 || p.t + rt_audio < release_at_) release_at_ = p.t + rt_audio;
     }
     if (audio_seen_ || call_heard_) marker_in_session_ = true;
@@ -528,9 +539,9 @@ void Trainee::perceive(const Percept& p, bool call) {
     // inconsistently felt force and seen deformation went together so far (a simulator whose
     // picture does not follow the force teaches less).
     if (ch_.visual && ch_.haptic && s_.demo_d > 0 && !visual_marker_ &&
-        p.visible_deformation * (1.0 + eps_v_) >= s_.demo_d) {
+        q.visible_deformation * (1.0 + eps_v_) >= s_.demo_d) {
       visual_marker_ = true;
-      double var = perceived_variance(p) + std::pow(p_.visual_weber * f, 2);
+      double var = perceived_variance(q) + std::pow(p_.visual_weber * f, 2);
       if (s_.k_count >= 2) {
         const double m = s_.k_log_sum / s_.k_count;
         var += std::max(0.0, s_.k_log_sq / s_.k_count - m * m) * f * f;
@@ -546,7 +557,7 @@ void Trainee::perceive(const Percept& p, bool call) {
                                        : 1.0;
     // While the trainee sees the part deform and knows what the target looks like, the press
     // aims at that picture (it ends at the visual marker above), bounded like a marker wait.
-    const bool aiming_visually = ch_.visual && s_.demo_d > 0 && p.visible_deformation > 0;
+    const bool aiming_visually = ch_.visual && s_.demo_d > 0 && q.visible_deformation > 0;
     const double limit =
         aiming_visually ? std::max(wait, 1.0 + p_.marker_wait_overshoot) * 1.5 : wait;
     if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * limit) {
@@ -574,7 +585,11 @@ bool Instructor::observe(const Percept& p, Channels ch) {
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
   prev_audio_ = p.audio;
-  if (ch.visual && target_d_ > 0 && p.visible_deformation >= target_d_ * (1.0 + eps_)) {
+  // The indentation since this press touched (as the trainee's own visual marker).
+  if (!p.contact) d0_ = -1.0;
+  if (p.contact && d0_ < 0) d0_ = p.visible_deformation;
+  const double seen = p.contact && d0_ >= 0 ? std::max(0.0, p.visible_deformation - d0_) : 0.0;
+  if (ch.visual && target_d_ > 0 && seen >= target_d_ * (1.0 + eps_)) {
     double at = p.t + p_.reaction_time_visual * rt_scale_;
     if (call_at_ < 0 || at < call_at_) call_at_ = at;
   }
@@ -588,6 +603,7 @@ bool Instructor::observe(const Percept& p, Channels ch) {
 void Instructor::reset_press() {
   called_ = false;
   call_at_ = -1.0;
+  d0_ = -1.0;
   prev_audio_ = false;
   eps_ = p_.visual_weber * rng_.normal();
   rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());

@@ -188,6 +188,7 @@ class Trainee {
   bool marker_this_press_ = false, visual_marker_ = false, dwell_saw_d_ = false;
   double rec_time_ = 0.0;
   double peak_seen_d_ = 0.0, peak_felt_ = 0.0;
+  double press_d0_ = -1.0;  // m, seen deformation when this press first touched (-1: not yet)
   double t_prev_ = 0.0;
   // Release: where the contact ended, and whether something resisted the lift.
   static constexpr double kReleaseClearance = 0.002;  // m lifted after the contact ends
@@ -213,6 +214,7 @@ class Instructor {
   Rng rng_;
   double target_d_ = 0.0, eps_ = 0.0, rt_scale_ = 1.0;
   double call_at_ = -1.0;
+  double d0_ = -1.0;  // m, seen deformation when the current press first touched (-1: not yet)
   bool called_ = false, prev_audio_ = false;
 };
 
