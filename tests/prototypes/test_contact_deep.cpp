@@ -217,7 +217,6 @@ TEST(ContactDeep, BeyondTheCentreTheProxyFollowsTheDeviceOnTheEntrySide) {
   EXPECT_LE(worst_dd, 2 * dx);
 }
 
-
 TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
   // The benchmark's sliding press: 2.5 N on C's left ovary, 10 % along its axis (its tip, a cap
   // of radius ~9 mm), held while sliding 3.2 cm at 2 cm/s. 2.5 N holds the device ~9.3 mm
