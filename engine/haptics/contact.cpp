@@ -104,6 +104,16 @@ int build_bvh(FaceIndex& ix, int begin, int end) {
   return id;
 }
 
+// The barycentric weights, on face g, of the point with weights w on face f's edge opposite
+// corner exit_k (the edge f and g share): the walk's crossing into the next face. A zero sum
+// means the point has no weight on that edge (a degenerate crossing).
+Vec3 weights_across(const mesh::Faces& F, int f, int g, int exit_k, const Vec3& w) {
+  const int a = (exit_k + 1) % 3, b = (exit_k + 2) % 3;
+  Vec3 wg = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) wg[k] = F(g, k) == F(f, a) ? w[a] : F(g, k) == F(f, b) ? w[b] : 0.0;
+  return wg;
+}
+
 }  // namespace
 
 std::vector<Eigen::AlignedBox3d> face_boxes(const mesh::Positions& V, const mesh::Faces& F) {
@@ -423,10 +433,7 @@ SurfacePoint ContactTracker::walk(const SurfacePoint& from, const Vec3& x, doubl
     // Back and forth over one edge without moving (the two faces' solutions lie on each other's
     // side: a fold), or round a vertex: stay.
     if ((still_crossings > 1 && g == back_face) || still_crossings > 16) break;
-    const int u = F_(f, (exit_k + 1) % 3), v = F_(f, (exit_k + 2) % 3);
-    const double wu = w[(exit_k + 1) % 3], wv = w[(exit_k + 2) % 3];
-    Vec3 wg = Vec3::Zero();
-    for (int k = 0; k < 3; ++k) wg[k] = F_(g, k) == u ? wu : F_(g, k) == v ? wv : 0.0;
+    const Vec3 wg = weights_across(F_, f, g, exit_k, w);
     if (!(wg.sum() > 0)) break;
     back_face = f;
     f = g;
@@ -517,10 +524,7 @@ SurfacePoint ContactTracker::slide(const SurfacePoint& from, const Vec3& delta) 
     if (exit_k < 0) break;
     const int g = ix_.edge_face[3 * f + exit_k];
     if (g < 0 || (g == back_face && amax == 0.0)) break;
-    const int u = F_(f, (exit_k + 1) % 3), v = F_(f, (exit_k + 2) % 3);
-    const double wu = w[(exit_k + 1) % 3], wv = w[(exit_k + 2) % 3];
-    Vec3 wg = Vec3::Zero();
-    for (int k = 0; k < 3; ++k) wg[k] = F_(g, k) == u ? wu : F_(g, k) == v ? wv : 0.0;
+    const Vec3 wg = weights_across(F_, f, g, exit_k, w);
     if (!(wg.sum() > 0)) break;
     back_face = f;
     f = g;

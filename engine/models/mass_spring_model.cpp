@@ -88,7 +88,7 @@ struct MassSpringScene {
   long front_act_version = -1;            // act.version exterior_front was built for (-1: none)
   double ext_force = 0.0;                 // N, the force of the last apply_exterior
   bool ext_behind = false;                // exterior nodes off the frontier lag ext_force
-  bool lazy_exterior = true;              // false: every apply writes the whole exterior
+  bool lazy_exterior = false;             // false: every apply writes the whole exterior
   long far_solves = 0;
   long steps = 0, cg_iterations = 0;  // integrator steps and CG iterations since reset
   int cg_iterations_max = 0;          // most CG iterations of one step since reset
@@ -160,6 +160,16 @@ void flush_exterior(MassSpringScene& ms) {
   ms.ext_behind = false;
 }
 
+// Writes the exterior nodes of this step's pad at `force` (N).
+void write_pad_exterior(MassSpringScene& ms, double force) {
+  const MassSpringSystem& s = ms.model.sys;
+  if (s.contact_node < 0) return;
+  const Eigen::VectorXd& g = ms.far_update->g();
+  for (int i : s.contact_nodes)
+    if (i < static_cast<int>(ms.is_exterior.size()) && ms.is_exterior[i])
+      set_exterior_node(ms, g, i, force);
+}
+
 // Writes the frontier of the exterior at `force` (N): its nodes at the ends of active springs
 // (the list is rebuilt when the active set changed) and the exterior pad nodes.
 void write_frontier(MassSpringScene& ms, double force) {
@@ -179,17 +189,19 @@ void write_frontier(MassSpringScene& ms, double force) {
     ms.front_act_version = ms.act.version;
   }
   for (int i : ms.exterior_front) set_exterior_node(ms, g, i, force);
-  if (s.contact_node >= 0)
-    for (int i : s.contact_nodes)
-      if (i < static_cast<int>(ms.is_exterior.size()) && ms.is_exterior[i])
-        set_exterior_node(ms, g, i, force);
+  write_pad_exterior(ms, force);
 }
 
 // Puts the exterior of the scope where the whole model's linear response to `force` (N) has it:
 // every node after a change of g or of the scope (far_applied = -1) or with `all`, else only
 // the frontier, which is all that the step reads (the active springs' held ends and the pad).
 void apply_exterior(MassSpringScene& ms, double force, bool all = false) {
-  if (force == ms.far_applied && !(all && ms.ext_behind)) return;
+  if (force == ms.far_applied && !(all && ms.ext_behind)) {
+    // The force did not change (e.g. held at the device's force limit) but the pad may have
+    // moved onto exterior nodes off the frontier: those must show the force too.
+    if (ms.ext_behind) write_pad_exterior(ms, force);
+    return;
+  }
   const Eigen::VectorXd& g = ms.far_update->g();
   if (all || ms.far_applied == -1.0 || !ms.lazy_exterior) {
     for (int i : ms.exterior_nodes) set_exterior_node(ms, g, i, force);
@@ -747,7 +759,10 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
 
 namespace {
 
-std::atomic<bool> g_lazy_exterior{true};
+// Off by default: after the deep-press tracker (a contact that slides at the force limit) the
+// lazy path differs from the eager one (LazyExterior test, step 683 of its body press); the cause
+// is not found yet, so the exact eager path ships.
+std::atomic<bool> g_lazy_exterior{false};
 
 std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {
   auto model = std::make_unique<MassSpringModel>();

@@ -12,7 +12,8 @@ namespace palplab::engine {
 AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh& cm);
 
 // Test seam: models made while this is false write their whole linear exterior every contact
-// step (the eager path the lazy exterior must reproduce bit for bit). Default true.
+// step (the eager path the lazy exterior must reproduce bit for bit). Default false: the lazy
+// path is not bit-identical since the deep-press tracker (see DISABLED_ LazyExterior test).
 void set_lazy_exterior(bool lazy);
 
 }  // namespace palplab::engine

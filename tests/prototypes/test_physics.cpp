@@ -11,32 +11,18 @@
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
+using palplab::engine::testing::proto;
+using palplab::engine::testing::read;
 
 namespace {
 
-std::string read(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
-
-// `text` with every (from -> to) replaced once (each must occur), written to a temp file.
 std::string variant(std::string text, const std::string& name,
                     const std::vector<std::pair<std::string, std::string>>& edits) {
-  for (const auto& [from, to] : edits) {
-    const auto k = text.find(from);
-    EXPECT_NE(k, std::string::npos) << from;
-    if (k != std::string::npos) text.replace(k, from.size(), to);
-  }
-  const auto p = std::filesystem::temp_directory_path() / ("palplab_physics_" + name + ".json");
-  std::ofstream(p) << text;
-  return p.string();
+  return palplab::engine::testing::variant_file(std::move(text), "physics_" + name, edits);
 }
 
 struct PressResult {
