@@ -760,8 +760,8 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
 namespace {
 
 // Off by default: after the deep-press tracker (a contact that slides at the force limit) the
-// lazy path differs from the eager one (LazyExterior test, step 683 of its body press); the cause
-// is not found yet, so the exact eager path ships.
+// lazy path differs from the eager one on a body press (in the last bits, from its step 233); the
+// cause is not found yet, so the exact eager path ships.
 std::atomic<bool> g_lazy_exterior{false};
 
 std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const SceneMesh& cm) {

@@ -13,7 +13,8 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
 
 // Test seam: models made while this is false write their whole linear exterior every contact
 // step (the eager path the lazy exterior must reproduce bit for bit). Default false: the lazy
-// path is not bit-identical since the deep-press tracker (see DISABLED_ LazyExterior test).
+// path is not bit-identical on a body press since the deep-press tracker (see the LazyExterior
+// test).
 void set_lazy_exterior(bool lazy);
 
 }  // namespace palplab::engine
