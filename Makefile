@@ -27,7 +27,7 @@ test: build
 # The older standalone programs of bench/ stay available: make bench-programs.
 # out/bench/run_info.txt records the commit, the machine load (uptime) before and after, and the
 # run's wall/CPU time and peak memory. `make bench-doc` then regenerates the measured tables of
-# docs/PERFORMANCE.md (bench/performance_doc.py) and copies the frontier figures to docs/figures.
+# docs/PERFORMANCE.md (bench/performance_doc.py) and copies the figures (out/bench/*.svg) to docs/figures.
 BENCH_CMD = $(BUILD)/palplab bench --json out/bench/bench.json --md out/bench/bench.md --svg out/bench
 bench: build
 	mkdir -p out/bench
@@ -41,7 +41,7 @@ bench: build
 bench-doc: bench
 	python3 bench/performance_doc.py out/bench/bench.json --doc docs/PERFORMANCE.md \
 	  --run-info out/bench/run_info.txt
-	cp out/bench/frontier.svg out/bench/frontier_field.svg docs/figures/
+	cp out/bench/*.svg docs/figures/
 
 bench-programs: build
 	cmake --build $(BUILD) -j $(JOBS) --target benchmarks
