@@ -152,8 +152,8 @@ TEST(RefinementDepth, AtTheBodyTheSofteningIsNotTheAdaptiveClosureNorThePadsQuad
   //    each on its fan of needles: 716.5 vs 884.1 N/m (-19 %), the one case where the pad adds
   //    to the softening.
   // Finer base meshes of the organ (docs/ARCHITECTURE.md) show the rest: the unrefined body
-  // stiffness falls with the resolution and the refined one rises; the coarse body is the stiff
-  // outlier (its 12.9 mm faces lock a 1 cm dent).
+  // stiffness falls with the resolution (its 12.9 mm faces lock a 1 cm dent) and the refined
+  // one rises faster; they meet between, the refined side from further away.
   AdaptiveMassSpring m = bench::tet_model_c();
   int node = -1;  // the pressed node: the surface node nearest the body point
   double best = INFINITY;
