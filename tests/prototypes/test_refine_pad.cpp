@@ -131,8 +131,10 @@ TEST(Physics, DiscPadKeepsTheShapeOfTheCurveAtTheBody) {
   // refined mesh alike, and the ratio on/off is the same along the curve (measured -23.9, -24.7,
   // -25.0 %; asserted: within 3 % of each other). What remains is refinement's own softening
   // of the tet patch, which grows with the level (measured at 2.5 N: -9 % with max_level 1,
-  // -19 % with 2, -25 % with 3): the refined surface nodes stand on fans of sub-tets to the
-  // coarse apex, a bed of springs without shear between neighbours (open, docs/ARCHITECTURE.md).
+  // -19 % with 2, -25 % with 3). Not the fans of sub-tets under the refined surface (a red
+  // refinement of the tets in depth softened more: -10.5, -22.8, -31.1 %), nor the adaptive
+  // closure (test_refine_depth.cpp): the coarse body's faces are larger than the probe face
+  // (open, docs/ARCHITECTURE.md).
   const OnOff r = on_off(models(true).c, kBody);
   print("C body, disc pad", r);
   double lo = INFINITY, hi = -INFINITY;
