@@ -116,8 +116,9 @@ TEST(Physics, RefinementKeepsTheForceAndConservesTheMass) {
   // (The 192-node stomach is not among them: its edges are longer than the 1 cm probe face, so
   // refining it changes the force by 23 % — a coarse mesh that cannot resolve the probe. Nor is
   // the Model-A membrane at the body: 257 N/m refined vs 188 unrefined at 2.5 N (+37 %; with the
-  // disc pad -40 %, -9 %, 0 % at 1, 2.5, 4 N, test_refine_pad.cpp); a membrane refines in its
-  // plane only — open.)
+  // disc pad -40 %, -9 %, 0 % at 1, 2.5, 4 N): its unrefined 1500-vertex surface is the
+  // outlier there, the refined one is near a 6000-vertex surface's press
+  // (MembraneAtTheBodyTheUnrefinedCoarseMeshIsTheOutlier, test_refine_pad.cpp).)
   const std::string c = read(proto("C"));
   const std::string membrane_tract =
       variant(c, "tract_surface_base",
