@@ -94,7 +94,10 @@ void PressDevice::hold_force(double f, double dt) {
     // creeping) cancels, so what is left is the response to the change of the depth steps.
     const double dd = (hist_d_[0] - hist_d_[1]) - (hist_d_[1] - hist_d_[2]);
     const double df = (hist_f_[0] - hist_f_[1]) - (hist_f_[1] - hist_f_[2]);
-    if (std::abs(dd) > kMinExcitation) {  // no update without excitation (a settled hold)
+    // No update without excitation (a settled hold), nor from a force that moved against the
+    // depth (a disturbance: a contact change, the tissue's own motion; it tells nothing of
+    // the stiffness).
+    if (std::abs(dd) > kMinExcitation && df / dd > 0.0) {
       const double k = std::clamp(df / dd, stiffness_ / kMaxRatio, stiffness_ * kMaxRatio);
       stiffness_ = std::clamp(stiffness_ * std::pow(k / stiffness_, kFilter),
                               stiffness_in_ / kRange, stiffness_in_ * kRange);
