@@ -105,7 +105,8 @@ void PressDevice::hold_force(double f, double dt) {
   }
   const double step = kLoopGain / stiffness_ * (spec_.force - f);
   depth_ += std::clamp(step, -spec_.hold_speed_out * dt, spec_.hold_speed_in * dt);
-  depth_ = std::clamp(depth_, -spec_.start_offset, spec_.max_depth);
+  // Never back out past the start point nor in past max_depth.
+  depth_ = std::min(std::max(depth_, -spec_.start_offset), spec_.max_depth);
 }
 
 bool PressDevice::next_segment_step(double dt) {
