@@ -36,6 +36,9 @@ PressDevice::PressDevice(const PressSpec& spec) : spec_(spec), depth_(-spec.star
     throw std::invalid_argument("press: speeds must be > 0 m/s");
   if (!spec.point.allFinite() || !(std::abs(spec.normal.norm() - 1.0) < 1e-6))
     throw std::invalid_argument("press: point must be finite and the normal a unit vector");
+  if (!(spec.hold_speed_in > 0.0) || !(spec.hold_speed_out > 0.0) ||
+      !std::isfinite(spec.hold_speed_in + spec.hold_speed_out))
+    throw std::invalid_argument("press: the hold's depth rate limits must be > 0 m/s");
   if (!spec.slide.allFinite()) throw std::invalid_argument("press: slide must be finite (m/s)");
   for (size_t i = 0; i < spec.segments.size(); ++i) {
     const PressSegment& g = spec.segments[i];
@@ -55,10 +58,10 @@ bool PressDevice::target_reached(double f) const {
 
 void PressDevice::reach_target(double t, double f, double dt) {
   time_to_force_ = t;
-  // Integral gain: a fifth of the inverse secant stiffness measured on the way in (stable
-  // for any stiffness up to 10x that secant), per step.
+  // The hold controller's first stiffness estimate: the secant measured on the way in.
   const double k = f / std::max(depth_ - std::max(contact_depth_, 0.0), 1e-5);
-  gain_ = 0.2 / std::max(k, 1.0);
+  stiffness_ = stiffness_in_ = std::max(k, 1.0);
+  hist_n_ = 0;
   phase_ = spec_.stop_at_target ? PressPhase::done : PressPhase::hold;
   phase_start_ = t;
   if (phase_ == PressPhase::hold && !spec_.segments.empty()) {
@@ -69,6 +72,41 @@ void PressDevice::reach_target(double t, double f, double dt) {
       depth_ -= spec_.withdraw_speed * dt;
     }
   }
+}
+
+namespace {
+// The hold's force controller (see PressDevice::hold_force). Measured on the benches' presses
+// (docs/ARCHITECTURE.md, "Press force control").
+constexpr double kLoopGain = 0.3;        // fraction of the force error corrected per step
+constexpr double kMinExcitation = 1e-6;  // m, smallest second difference of depth used
+constexpr double kMaxRatio = 2.0;        // one measurement moves the estimate at most 2x...
+constexpr double kFilter = 0.3;          // ...and counts with this weight (geometric mean)
+constexpr double kRange = 10.0;          // estimate within [1/10, 10] x the approach's
+}  // namespace
+
+void PressDevice::hold_force(double f, double dt) {
+  // The depth that produced f is depth_ (read() gave it for this step).
+  hist_d_[2] = hist_d_[1], hist_f_[2] = hist_f_[1];
+  hist_d_[1] = hist_d_[0], hist_f_[1] = hist_f_[0];
+  hist_d_[0] = depth_, hist_f_[0] = f;
+  if (++hist_n_ >= 3) {
+    // Second differences: a force drift of constant rate (a slide over a slope, the tissue
+    // creeping) cancels, so what is left is the response to the change of the depth steps.
+    const double dd = (hist_d_[0] - hist_d_[1]) - (hist_d_[1] - hist_d_[2]);
+    const double df = (hist_f_[0] - hist_f_[1]) - (hist_f_[1] - hist_f_[2]);
+    // No update without excitation (a settled hold), nor from a force that moved against the
+    // depth (a disturbance: a contact change, the tissue's own motion; it tells nothing of
+    // the stiffness).
+    if (std::abs(dd) > kMinExcitation && df / dd > 0.0) {
+      const double k = std::clamp(df / dd, stiffness_ / kMaxRatio, stiffness_ * kMaxRatio);
+      stiffness_ = std::clamp(stiffness_ * std::pow(k / stiffness_, kFilter),
+                              stiffness_in_ / kRange, stiffness_in_ * kRange);
+    }
+  }
+  const double step = kLoopGain / stiffness_ * (spec_.force - f);
+  depth_ += std::clamp(step, -spec_.hold_speed_out * dt, spec_.hold_speed_in * dt);
+  // Never back out past the start point nor in past max_depth.
+  depth_ = std::min(std::max(depth_, -spec_.start_offset), spec_.max_depth);
 }
 
 bool PressDevice::next_segment_step(double dt) {
@@ -127,11 +165,11 @@ void PressDevice::write(const Rendered& r) {
           phase_start_ = r.t;
           break;
         }
-        if (spec_.depth == 0.0 && !spec_.hold_depth) depth_ += gain_ * (spec_.force - f);
+        if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(f, dt);
         offset_ += spec_.slide * dt;
         break;
       }
-      if (spec_.depth == 0.0 && !spec_.hold_depth) depth_ += gain_ * (spec_.force - f);
+      if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(f, dt);
       if (next_segment_step(dt)) break;
       // The step after the last segment is the first of the withdrawal.
       phase_ = PressPhase::withdraw;

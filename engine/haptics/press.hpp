@@ -2,8 +2,12 @@
 // The one scripted press (used by `palplab probe`, `render --press`, the benchmarks and tests):
 // a device that starts `start_offset` outside a surface point, moves in along the inward normal
 // at `approach_speed` until the rendered force reaches `force`, holds that force for `hold`
-// seconds (integral control of the depth, gain from the stiffness it measured on the way in),
-// withdraws at `withdraw_speed` to the start point and stays there for `release` seconds.
+// seconds, withdraws at `withdraw_speed` to the start point and stays there for `release` seconds.
+// Force control during the hold: integral control of the depth, d += 0.3 (F* - F) / k, with k
+// an online estimate of the local stiffness (second differences of force and depth, each
+// measurement bounded to a factor 2, geometric filter, within 1/10..10x the approach's secant)
+// and the depth's rate bounded (hold_speed_in/out); the depth is the integrator's state, so
+// bounding it (and its rate) is the anti-windup.
 // It is a Device, so the lock-step and the real-time clocks drive it the same way; it reports
 // finished() when the script is over.
 //
@@ -54,6 +58,11 @@ struct PressSpec {
   double withdraw_speed = 0.05;     // m/s
   double max_depth = 0.06;          // m: give up pressing deeper than this
   double max_approach_time = 10.0;  // s: give up pressing after this
+  // m/s, rate limits of the depth while the force is held (force control): in at most
+  // hold_speed_in, back out at most hold_speed_out (backing off a force overshoot is the safe
+  // direction, so it may be faster)
+  double hold_speed_in = 0.1;
+  double hold_speed_out = 0.5;
   // Position control instead of a force target: press to this depth (m below the rest surface,
   // > 0) at approach_speed and hold it; `force` is then ignored. 0 = force control.
   double depth = 0.0;
@@ -95,6 +104,9 @@ class PressDevice : public Device {
   double time_to_force() const { return time_to_force_; }  // s (scene time), -1 if never
   double depth() const { return depth_; }                  // m below the rest surface now
   const PressSpec& spec() const { return spec_; }
+  // N/m, the hold controller's current estimate of the local stiffness dF/d(depth) (0 before
+  // the target is reached under force control).
+  double stiffness_estimate() const { return stiffness_; }
   // Index of the segment (PressSpec::segments) the next step belongs to; -1 before the target
   // and after the last segment. A change of it after a write marks the last step of a segment.
   int segment() const { return segment_; }
@@ -113,8 +125,13 @@ class PressDevice : public Device {
   double phase_start_ = 0.0;  // s, when the current phase began
   double time_to_force_ = -1.0;
   double contact_depth_ = -1.0;  // depth at which force first appeared (m), -1 before
-  double gain_ = 0.0;            // m/N per step of the hold controller
-  Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();  // m, slid along the surface so far
+  // One step of the hold's force control after a step rendered f (N) at depth_.
+  void hold_force(double f, double dt);
+  double stiffness_ = 0.0;     // N/m, the hold controller's local stiffness estimate
+  double stiffness_in_ = 0.0;  // N/m, its first value (the approach's secant)
+  double hist_d_[3] = {0, 0, 0}, hist_f_[3] = {0, 0, 0};  // m, N: the last three hold steps
+  int hist_n_ = 0;                                        // hold steps seen
+  Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();      // m, slid along the surface so far
   int segment_ = -1;
   long segment_step_ = 0;                                   // steps since the target
   Eigen::Vector3d segment_base_ = Eigen::Vector3d::Zero();  // offset at the target
