@@ -47,8 +47,10 @@ struct TraineeParams {
   // guidance: reliance on a binary "target reached" marker (sound, call).
   // extinction_rate and marker_wait_overshoot: output of `palplab calibrate` on exp2 (2026-11-25,
   // after the censored-miss update; protocols/participants/exp2_calibration.json, command in
-  // docs/PARTICIPANTS.md "The shipped calibration (2026-11-25)"). They act only on trainees who
-  // expect a marker, so exp2's B and C cells do not depend on them.
+  // docs/PARTICIPANTS.md "The shipped calibration (2026-11-25)"). Both act on trainees who
+  // expect a marker (exp2: group A); marker_wait_overshoot also bounds a visually aimed press
+  // (1.5 * (1 + overshoot)), which rarely binds (exp2 A/B run: 2 of B's 60 sessions changed,
+  // by 0.01 N).
   // landmark_time, visual_recognition_gain: the A/B calibration of 2026-11-24 (same section).
   double guidance_dependence = 0.6;   // 1, share of marker learning withheld at full reliance
   double guidance_rate = 0.2;         // 1, reliance gained per press with a marker
