@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "common/seed.hpp"
 #include "engine/haptics/scene.hpp"
@@ -322,6 +323,34 @@ void Trainee::learn_target(double observed, double variance, double gain_scale) 
   ++s_.feedback_count;
 }
 
+void Trainee::learn_lower_bound(double felt) {
+  // Moments of N(m, v) conditioned on  T + e > felt,  e ~ N(0, r) the perceptual error of the
+  // felt force (Weber): with s = sqrt(v + r), a = (felt - m)/s and the inverse Mills ratio
+  // lambda = phi(a)/(1 - Phi(a)): m' = m + v/s lambda, v' = v (1 - v/s^2 lambda (lambda - a))
+  // (the probit update of expectation propagation; Minka 2001, Opper 1998).
+  const double r = std::pow(p_.weber_fraction * std::max(felt, 0.05), 2);
+  const double v = s_.target_var, s = std::sqrt(v + r);
+  if (!(s > 0)) return;
+  const double a = (felt - s_.target_mean) / s;
+  const double tail = 0.5 * std::erfc(a / std::sqrt(2.0));  // 1 - Phi(a)
+  const double phi = std::exp(-0.5 * a * a) / std::sqrt(2.0 * std::numbers::pi);
+  // Far in the tail the ratio tends to a (lambda ~ a + 1/a): the asymptote avoids 0/0.
+  const double lambda = tail > 1e-12 ? phi / tail : a + 1.0 / a;
+  // The missing marker has a second explanation: the cue no longer works (it was withdrawn).
+  // With the trust in the cue (the reliance) as prior, the posterior that the cue still works is
+  //   w = pi (1 - Phi(a)) / (pi (1 - Phi(a)) + 1 - pi)
+  // (no marker is certain when the cue is gone, has probability 1 - Phi(a) when it works), and
+  // the belief becomes the moment-matched mixture of "truncated" (w) and "unchanged" (1 - w):
+  // a miss well above the believed target says "the cue is gone" and teaches little, a miss
+  // below it says "not there yet".
+  const double pi = std::clamp(s_.reliance, 0.0, 1.0);
+  const double w = pi * tail / (pi * tail + (1.0 - pi) + 1e-300);
+  const double shift = v / s * lambda;
+  const double v_trunc = std::max(v * (1.0 - v / (s * s) * lambda * (lambda - a)), 1e-6 * v);
+  s_.target_mean += w * shift;
+  s_.target_var = w * v_trunc + (1.0 - w) * v + w * (1.0 - w) * shift * shift;
+}
+
 Eigen::Vector3d Trainee::command(double t) {
   const double dt = std::max(0.0, t - t_prev_);
   t_prev_ = t;
@@ -478,9 +507,17 @@ void Trainee::begin_release(double t) {
     s_.reliance += p_.guidance_rate * (1.0 - s_.reliance);
     misses_ = 0;
   } else if (expect_marker_) {
+    // The marker that means "target reached" did not come: the target lies above the force this
+    // press reached. A censored observation (target > F): the belief is updated by assumed
+    // density filtering, i.e. replaced by the Gaussian with the moments of the belief truncated
+    // below F, with the perceptual noise of F added to the truncation's scale. Without it a
+    // trainee who heard the marker once but whose belief stayed below the threshold kept
+    // pressing short of it, the expectation extinguished and the belief stayed at the low
+    // briefing (group A's bimodal low tail, docs/PARTICIPANTS.md "Not reaching the marker").
+    if (ch_.haptic && peak_felt_ > 0) learn_lower_bound(peak_felt_);
     // An expectation built on markers received fades when they stop; one that rests only on
     // the demonstration (no marker received yet) keeps the trainee searching, pressing harder
-    // after each miss (this is what ends the "never hears the sound" mode of group A).
+    // after each miss.
     if (s_.feedback_count > 0) s_.reliance *= 1.0 - p_.extinction_rate;
     ++misses_;
   }

@@ -151,6 +151,9 @@ class Trainee {
   double perceived_force(const Percept& p) const;
   double perceived_variance(const Percept& p) const;
   void learn_target(double observed, double variance, double gain_scale = 1.0);
+  // An expected "target reached" marker did not come at felt force `felt` (N): the target is
+  // above it (a censored observation; moment-matched truncation of the belief).
+  void learn_lower_bound(double felt);
   double draw_recognition_time();
   double draw_landmark_time();
   void start_press();
