@@ -12,9 +12,8 @@ namespace palplab::engine {
 AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh& cm);
 
 // Test seam: models made while this is false write their whole linear exterior every contact
-// step (the eager path the lazy exterior must reproduce bit for bit). Default false: the lazy
-// path is not bit-identical on a body press since the deep-press tracker (see the LazyExterior
-// test).
+// step (the eager path the lazy exterior must reproduce bit for bit; see the LazyExterior test).
+// Default true.
 void set_lazy_exterior(bool lazy);
 
 }  // namespace palplab::engine
