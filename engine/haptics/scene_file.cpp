@@ -187,11 +187,14 @@ class Reader {
  public:
   Reader(const std::string& file, const char* p, std::size_t n) : file_(file), p_(p), n_(n) {}
   void need(std::size_t k, const char* what) {
-    if (k > n_ - at_)
-      throw InputError(std::string("corrupted scene file: ") + what + " at payload offset " +
-                           std::to_string(at_) + " runs past the end (" + std::to_string(n_) +
-                           " bytes)",
-                       file_);
+    if (k > n_ - at_) past_end(what);
+  }
+  // k bytes at the current offset (bounds-checked once), advanced past.
+  const char* bytes(std::size_t k, const char* what) {
+    need(k, what);
+    const char* b = p_ + at_;
+    at_ += k;
+    return b;
   }
   template <class T>
   T get(const char* what) {
@@ -251,6 +254,13 @@ class Reader {
   const std::string& file() const { return file_; }
 
  private:
+  // Out of line and cold, so that need() inlines into every read.
+  [[noreturn, gnu::cold, gnu::noinline]] void past_end(const char* what) const {
+    throw InputError(std::string("corrupted scene file: ") + what + " at payload offset " +
+                         std::to_string(at_) + " runs past the end (" + std::to_string(n_) +
+                         " bytes)",
+                     file_);
+  }
   std::string file_;
   const char* p_;
   std::size_t n_, at_ = 0;
@@ -363,23 +373,34 @@ std::shared_ptr<const SceneMesh> get_mesh(Reader& r) {
   auto o = std::make_shared<spatial::Octree>();
   o->max_depth = r.get<std::int32_t>("octree depth");
   o->max_points_per_leaf = r.get<std::int32_t>("octree leaf size");
-  const std::size_t nn = r.count(4 * 3 * 8 + 8 * 4 + 3 * 4 + 1, "octree nodes");
+  // The nodes as put_mesh writes them, field by field from one bounds-checked run (reading each
+  // field through get() was most of parsing the octree, perf).
+  constexpr std::size_t kNodeBytes = 4 * 3 * 8 + 8 * 4 + 3 * 4 + 1;
+  const std::size_t nn = r.count(kNodeBytes, "octree nodes");
+  const char* at = r.bytes(nn * kNodeBytes, "octree nodes");
   o->nodes.resize(nn);
+  std::uint32_t bad_child = 0;
   for (auto& n : o->nodes) {
-    Eigen::Vector3d a, b, c, d;
-    for (Eigen::Vector3d* v : {&a, &b, &c, &d})
-      for (int k = 0; k < 3; ++k) (*v)[k] = r.get<double>("octree box");
-    n.cell = Eigen::AlignedBox3d(a, b);
-    n.box = Eigen::AlignedBox3d(c, d);
-    for (int& ch : n.child) ch = r.get<std::int32_t>("octree child");
-    n.begin = r.get<std::int32_t>("octree run");
-    n.end = r.get<std::int32_t>("octree run");
-    n.depth = r.get<std::int32_t>("octree depth");
-    n.leaf = r.get<std::uint8_t>("octree leaf") != 0;
+    double box[12];
+    std::memcpy(box, at, sizeof box);
+    n.cell = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[1], box[2]),
+                                 Eigen::Vector3d(box[3], box[4], box[5]));
+    n.box = Eigen::AlignedBox3d(Eigen::Vector3d(box[6], box[7], box[8]),
+                                Eigen::Vector3d(box[9], box[10], box[11]));
+    static_assert(sizeof n.child == 8 * sizeof(std::int32_t));
+    std::memcpy(n.child, at + 96, sizeof n.child);
+    std::int32_t run[3];
+    std::memcpy(run, at + 128, sizeof run);
+    n.begin = run[0];
+    n.end = run[1];
+    n.depth = run[2];
+    n.leaf = at[140] != 0;
+    at += kNodeBytes;
+    // -1 (none) or a node: ch + 1 in [0, nn] (unsigned, so no early exit).
     for (int ch : n.child)
-      if (ch < -1 || ch >= static_cast<long>(nn))
-        throw InputError("corrupted scene file: octree child out of range", r.file());
+      bad_child |= static_cast<std::uint32_t>(ch) + 1u > static_cast<std::uint32_t>(nn);
   }
+  if (bad_child) throw InputError("corrupted scene file: octree child out of range", r.file());
   o->order = r.vec<int>("octree order");
   o->leaf_of = r.vec<int>("octree leaves");
   if (nn == 0 || static_cast<long>(o->order.size()) != nv ||
@@ -539,8 +560,13 @@ std::vector<SceneSource> scene_sources(const SceneConfig& cfg) {
       add("mesh", cfg.mesh.file);
     }
   }
-  const std::string& mat = mesh::default_materials_json();
-  out.push_back({"materials", "<built-in materials table>", sha256(mat.data(), mat.size())});
+  // The built-in table is part of this binary, so its digest is a constant of the build: taken
+  // once per process (hashing its 4 KB was 4 % of loading prototype A from a .psim file).
+  static const Digest materials = [] {
+    const std::string& mat = mesh::default_materials_json();
+    return sha256(mat.data(), mat.size());
+  }();
+  out.push_back({"materials", "<built-in materials table>", materials});
   return out;
 }
 
