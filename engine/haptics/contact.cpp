@@ -274,19 +274,24 @@ double ContactTracker::winding_number(const Vec3& x) const {
     auto closed = [&] {
       const std::vector<int>& ef = ix_.edge_face;
       if (static_cast<long>(ef.size()) != 3 * nf) return false;
-      for (long f = 0; f < nf; ++f) {
-        if (F_(f, 0) == F_(f, 1) || F_(f, 1) == F_(f, 2) || F_(f, 2) == F_(f, 0)) return false;
+      const int* Fp = F_.data();  // row-major #F by 3
+      static constexpr int next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+      bool ok = true;  // no early exit inside a face: the loop stays branch-light
+      for (long f = 0; f < nf && ok; ++f) {
+        const int* a = Fp + 3 * f;
+        ok = a[0] != a[1] && a[1] != a[2] && a[2] != a[0];
         for (int k = 0; k < 3; ++k) {
           // The face g across f's edge u -> v must run it v -> u and name f across it.
           const int g = ef[3 * f + k];
-          if (g < 0 || g >= nf) return false;
-          const int u = F_(f, (k + 1) % 3), v = F_(f, (k + 2) % 3);
-          int j = 0;
-          while (j < 3 && F_(g, j) != v) ++j;
-          if (j == 3 || F_(g, (j + 1) % 3) != u || ef[3 * g + (j + 2) % 3] != f) return false;
+          if (static_cast<unsigned>(g) >= static_cast<unsigned long>(nf)) return false;
+          const int u = a[next[k]], v = a[prev[k]];
+          const int* b = Fp + 3 * static_cast<long>(g);
+          const int j = b[0] == v ? 0 : b[1] == v ? 1 : b[2] == v ? 2 : -1;
+          if (j < 0) return false;
+          ok = ok && b[next[j]] == u && ef[3 * static_cast<long>(g) + prev[j]] == f;
         }
       }
-      return true;
+      return ok;
     };
     if (outside_box && closed()) return 0.0;
   }
