@@ -40,7 +40,8 @@ struct SceneMesh;
 // Version 2: the MKEY section (the mesh's cache key) and the needle model's precomputation.
 // Version 3: the mass-spring model's linear exterior factorisation (engine/solvers/far_field.hpp).
 // Version 4: the FIDX section, the contact tracker's face index (engine/haptics/contact.hpp).
-inline constexpr std::uint32_t kSceneFileVersion = 4;
+// Version 5: the payload checksum's eight-lane accumulation (scene_file.cpp payload_checksum).
+inline constexpr std::uint32_t kSceneFileVersion = 5;
 inline constexpr std::size_t kSceneFileHeaderBytes = 128;
 
 // One source a scene is built from: the prototype file, a mesh file, the materials table.

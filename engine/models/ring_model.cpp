@@ -29,12 +29,16 @@ const char* to_string(Scope s) {
 }
 
 RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingParams& p) {
-  return make_ring_model(V, mesh::compute_rings(static_cast<int>(V.rows()), E), p);
+  return make_ring_model(
+      V,
+      std::make_shared<const mesh::RingTable>(mesh::compute_rings(static_cast<int>(V.rows()), E)),
+      p);
 }
 
-RingModel make_ring_model(const RowMatX3d& V, mesh::RingTable rings, const RingParams& p) {
-  if (rings.first.offset.size() != static_cast<std::size_t>(V.rows()) + 1 ||
-      rings.second.offset.size() != static_cast<std::size_t>(V.rows()) + 1)
+RingModel make_ring_model(const RowMatX3d& V, std::shared_ptr<const mesh::RingTable> rings,
+                          const RingParams& p) {
+  if (!rings || rings->first.offset.size() != static_cast<std::size_t>(V.rows()) + 1 ||
+      rings->second.offset.size() != static_cast<std::size_t>(V.rows()) + 1)
     throw std::invalid_argument("make_ring_model: ring tables of another mesh");
   RingModel m;
   m.X_fixed = V;
@@ -110,8 +114,8 @@ void ring_step(RingModel& m, const int nodes[3], const double w[3], const Eigen:
       if (nodes[k] < 0 || !(w[k] > 0.0)) continue;
       const int p = nodes[k];
       add(p, w[k] * m.params.m1);
-      for (int q : m.rings.first.row(p)) add(q, w[k] * m.params.m2);
-      for (int r : m.rings.second.row(p)) add(r, w[k] * m.params.m3);
+      for (int q : m.rings->first.row(p)) add(q, w[k] * m.params.m2);
+      for (int r : m.rings->second.row(p)) add(r, w[k] * m.params.m3);
     }
     // The weighted sum of the rings dents the contact point by less than m1 between nodes (the
     // face's vertices are in each other's first ring, m2 < m1): scale it so the point itself is
@@ -180,7 +184,7 @@ class RingSceneModel final : public SceneModel {
       : mesh_(m),
         k_(cfg.contact.stiffness),
         // The prepared mesh's ring tables (computed once per mesh, or loaded from a .psim).
-        model_(m.rings ? make_ring_model(m.V, *m.rings, cfg.ring)
+        model_(m.rings ? make_ring_model(m.V, m.rings, cfg.ring)
                        : make_ring_model(m.V, m.E, cfg.ring)) {
     model_.scope = cfg.scope.rings;
     model_.octree = m.octree.get();

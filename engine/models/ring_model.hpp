@@ -13,6 +13,7 @@
 // Scope (which nodes the haptic loop updates): rings = only displaced/moving nodes
 // (tracked in an active list), octant = also every node of the touched node's octree leaf,
 // whole = every node every step (the original's "whole model" mode).
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -36,7 +37,9 @@ struct RingParams {
 
 struct RingModel {
   RowMatX3d X_fixed, X, V;  // #V by 3 (m, m/s)
-  mesh::RingTable rings;
+  // The ring tables, shared with the scene's prepared mesh (or a .psim file's): read-only, and
+  // copying them was a third of building B's model (perf). Never null after make_ring_model.
+  std::shared_ptr<const mesh::RingTable> rings;
   RingParams params;
   Scope scope = Scope::rings;
   const spatial::Octree* octree = nullptr;  // for Scope::octant (owned by the scene)
@@ -49,8 +52,10 @@ struct RingModel {
 
 RingModel make_ring_model(const RowMatX3d& V, const mesh::Edges& E, const RingParams& p);
 // The same with the ring tables given (mesh::compute_rings(#V, E) of the same mesh: a scene's
-// prepared mesh holds them, and a .psim file stores them).
-RingModel make_ring_model(const RowMatX3d& V, mesh::RingTable rings, const RingParams& p);
+// prepared mesh holds them, and a .psim file stores them), shared, not copied. Throws
+// std::invalid_argument for null tables or tables of another mesh.
+RingModel make_ring_model(const RowMatX3d& V, std::shared_ptr<const mesh::RingTable> rings,
+                          const RingParams& p);
 
 // One haptic step of h seconds. node = touched node (-1 without contact); push = force of the
 // hand on the organ (N).

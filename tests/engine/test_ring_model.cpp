@@ -19,9 +19,9 @@ TEST(RingModel, PressDisplacesRingsDeepestAtTouchedNode) {
   const int node = 17;
   ring_step(m, node, push, 1e-3);
   EXPECT_NEAR((m.X.row(node) - m.X_fixed.row(node)).norm(), p.m1 * 2.0, 1e-15);
-  for (int q : m.rings.first.row(node))
+  for (int q : m.rings->first.row(node))
     EXPECT_NEAR((m.X.row(q) - m.X_fixed.row(q)).norm(), p.m2 * 2.0, 1e-15);
-  for (int r : m.rings.second.row(node))
+  for (int r : m.rings->second.row(node))
     EXPECT_NEAR((m.X.row(r) - m.X_fixed.row(r)).norm(), p.m3 * 2.0, 1e-15);
   // Displacement is along the push.
   const Eigen::Vector3d d = (m.X.row(node) - m.X_fixed.row(node)).transpose();
@@ -29,8 +29,8 @@ TEST(RingModel, PressDisplacesRingsDeepestAtTouchedNode) {
   // Nothing else moved.
   long moved = 0;
   for (long i = 0; i < m.X.rows(); ++i) moved += (m.X.row(i) - m.X_fixed.row(i)).norm() > 0;
-  EXPECT_EQ(moved, 1 + static_cast<long>(m.rings.first.row(node).size() +
-                                         m.rings.second.row(node).size()));
+  EXPECT_EQ(moved, 1 + static_cast<long>(m.rings->first.row(node).size() +
+                                         m.rings->second.row(node).size()));
 }
 
 TEST(RingModel, EveryNodeReturnsToRestAfterReleaseInEveryScope) {
