@@ -241,7 +241,9 @@ namespace {
 // co-rotational FEM (plus the linear foundation `support`, 3#V diagonal), from rest. ss is the
 // factorised linear K (with the foundation) of the same constraints: modified Newton on it (or
 // on the last exact tangent once one was needed), a full Newton step with the exact
-// co-rotational tangent when that stalls. Fills the level's curve.
+// co-rotational tangent when that stalls. Fills the level's curve. The tangents are factorised
+// with ss's kind (CHOLMOD on the large levels): with the default LDL^T a 107k-dof level spent
+// 85 % of a 4 N curve's CPU in SimplicialLDLT factorisations (perf, docs/ARCHITECTURE.md).
 void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
                         const Eigen::VectorXd& support, const Eigen::VectorXd& f, double force,
                         int steps, double tol, FemReferenceLevel& lv) {
@@ -290,7 +292,7 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
       corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
       for (long d = 0; d < support.size(); ++d)
         if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
-      static_precompute(K_t, fixed_dof, st);
+      static_precompute(K_t, fixed_dof, st, ss.kind);
       mn = &st;  // the latest tangent drives the modified Newton of the next steps
       const Eigen::VectorXd du = static_solve(st, r);
       u += du;
