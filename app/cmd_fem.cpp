@@ -677,8 +677,9 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--solver", ra->solver,
                       "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
-                      "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: "
-                      "Jacobi-PCG from 20000 free dofs, no factor)")
+                      "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: the "
+                      "finest level by PCG from 20000 free dofs, preconditioned by the coarser "
+                      "level's factor, no factor of its own)")
           ->capture_default_str();
       ref->callback([=] { *code = run_reference(*ra); });
       auto* sol = fem->add_subcommand(
