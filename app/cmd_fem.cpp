@@ -94,6 +94,7 @@ struct ReferenceArgs {
   std::string refinement = "nested";
   std::string solver = "auto";
   std::string grade = "auto";
+  int grade_max = 6;        // --grade auto: the most rounds tried
   double volume_scale = 1;  // level-0 max tet volume / the prototype's mean tet volume
   double force = 0;
   int levels = 3;
@@ -207,10 +208,22 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
 int run_reference(const ReferenceArgs& a) {
   using namespace palplab;
   if (a.out.empty()) throw InputError("--out: expected an output file name");
+  if (a.grade_max < 0 || a.grade_max > 6)
+    throw InputError("--grade-max: expected 0 to 6 rounds, got " + std::to_string(a.grade_max));
   const ReferenceSetup su = reference_setup(a);
-  const engine::FemReferenceOptions& o = su.o;
+  engine::FemReferenceOptions o = su.o;
   const bool nested = a.refinement == "nested";
-  const engine::FemReferenceResult r = engine::fem_reference(o);
+  // --grade auto on nested levels: the grading rounds chosen by the reference's own trust
+  // verdict (engine::fem_reference_auto_grade), from the resolution rule's rounds up.
+  const bool auto_grade = nested && a.grade == "auto";
+  engine::FemAutoGradeResult ag;
+  if (auto_grade) {
+    ag = engine::fem_reference_auto_grade(o, a.grade_max);
+    o.grade_rounds = ag.rounds;
+  } else {
+    ag.result = engine::fem_reference(o);
+  }
+  const engine::FemReferenceResult& r = ag.result;
 
   json levels = json::array();
   for (size_t l = 0; l < r.levels.size(); ++l) {
@@ -275,6 +288,23 @@ int run_reference(const ReferenceArgs& a) {
       {"trusted", trusted},
       {"untrusted_reason", untrusted},
       {"field", {{"positions", field_x}, {"displacement", field_u}}}};
+  if (auto_grade) {
+    json att = json::array();
+    for (const auto& t : ag.attempts)
+      att.push_back({{"grade_rounds", t.rounds},
+                     {"finest_tets", t.finest_tets},
+                     {"finest_est_error", num(t.finest_error)},
+                     {"trusted", t.trusted},
+                     {"reason", t.reason},
+                     {"seconds", t.seconds}});
+    out["grade_auto"] = {
+        {"rule",
+         "from the rounds that bring the loaded edges to the pad radius, one more round while "
+         "the reference is untrusted (finest level's estimated error <= 5 %), at most "
+         "grade_max (each attempt a whole reference; the last one is reported)"},
+        {"grade_max", a.grade_max},
+        {"attempts", att}};
+  }
   if (a.steps > 0) {
     json pts = json::array();
     for (size_t k = 0; k < r.curve.size(); ++k) {
@@ -332,11 +362,19 @@ int run_reference(const ReferenceArgs& a) {
         "or refine the base mesh%s\n",
         untrusted.c_str(), r.monotone ? "yes" : "no",
         r.order_plausible ? "plausible" : "implausible",
-        nested ? (" (nested: e.g. --grade " + std::to_string(o.grade_rounds + 2) +
-                  ", two more rounds of grading around the press; the 400-vertex D's body press "
-                  "is trusted with 4, docs/PERFORMANCE.md)")
+        nested ? (auto_grade
+                      ? (" (nested, --grade auto stopped at --grade-max " +
+                         std::to_string(a.grade_max) + ")")
+                      : (" (nested: e.g. --grade " + std::to_string(o.grade_rounds + 2) +
+                         " or auto, more rounds of grading around the press; the 400-vertex D's "
+                         "body press is trusted with 4, docs/PERFORMANCE.md)"))
                      .c_str()
                : "");
+  if (auto_grade)
+    for (const auto& t : ag.attempts)
+      std::printf("grade %d: finest level %ld tets, estimated error %.3g, %.1f s: %s\n", t.rounds,
+                  t.finest_tets, t.finest_error, t.seconds,
+                  t.trusted ? "trusted" : t.reason.c_str());
   std::printf("written %s\n", a.out.c_str());
   return 0;
 }
@@ -645,8 +683,12 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--grade", ra->grade,
                       "Nested levels: rounds of surface refinement around the press before "
-                      "level 0 is meshed (auto: loaded edges <= the pad radius; 0: the "
+                      "level 0 is meshed (auto: from loaded edges <= the pad radius, one more "
+                      "round while the reference is untrusted, up to --grade-max; 0: the "
                       "prototype's mesh is level 0)")
+          ->capture_default_str();
+      ref->add_option("--grade-max", ra->grade_max,
+                      "--grade auto: the most grading rounds tried (0-6)")
           ->capture_default_str();
       ref->add_option("--volume-scale", ra->volume_scale,
                       "Max tet volume of TetGen levels (tetgen; graded level 0) as a multiple of "
@@ -654,8 +696,9 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--solver", ra->solver,
                       "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
-                      "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: "
-                      "Jacobi-PCG from 20000 free dofs, no factor)")
+                      "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: the "
+                      "finest level by PCG from 20000 free dofs, preconditioned by the coarser "
+                      "level's factor, no factor of its own)")
           ->capture_default_str();
       ref->callback([=] { *code = run_reference(*ra); });
       auto* sol = fem->add_subcommand(

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -240,7 +241,9 @@ namespace {
 // co-rotational FEM (plus the linear foundation `support`, 3#V diagonal), from rest. ss is the
 // factorised linear K (with the foundation) of the same constraints: modified Newton on it (or
 // on the last exact tangent once one was needed), a full Newton step with the exact
-// co-rotational tangent when that stalls. Fills the level's curve.
+// co-rotational tangent when that stalls. Fills the level's curve. The tangents are factorised
+// with ss's kind (CHOLMOD on the large levels): with the default LDL^T a 107k-dof level spent
+// 85 % of a 4 N curve's CPU in SimplicialLDLT factorisations (perf, docs/ARCHITECTURE.md).
 void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
                         const Eigen::VectorXd& support, const Eigen::VectorXd& f, double force,
                         int steps, double tol, FemReferenceLevel& lv) {
@@ -289,7 +292,7 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
       corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
       for (long d = 0; d < support.size(); ++d)
         if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
-      static_precompute(K_t, fixed_dof, st);
+      static_precompute(K_t, fixed_dof, st, ss.kind);
       mn = &st;  // the latest tangent drives the modified Newton of the next steps
       const Eigen::VectorXd du = static_solve(st, r);
       u += du;
@@ -305,6 +308,62 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
   }
   lv.curve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+namespace {
+
+// Preconditioned CG on a nested level with the two-level additive preconditioner
+//   M^-1 r = P K_c^-1 P^T r + D^-1 r
+// (P: the exact prolongation of the coarser nested level's free dofs, K_c: that level's
+// factorised K_ff, D: the diagonal of K_ff). Nested spaces make P^T K P = K_c, so the coarse
+// part removes the smooth error that Jacobi-PCG needs thousands of iterations for; the
+// iteration count then stays bounded under refinement (h ratio 2). Returns the iterations;
+// x holds the start on entry.
+long pcg_two_level(const SparseMatrixd& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tol,
+                   long max_it, const StaticSolver& coarse, long coarse_nodes,
+                   const std::vector<std::array<int, 2>>& parent, const DofSplit& fine) {
+  const Eigen::VectorXd inv_diag = A.diagonal().cwiseInverse();
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(3 * static_cast<long>(parent.size()));
+  Eigen::VectorXd rc = Eigen::VectorXd::Zero(3 * coarse_nodes);
+  const auto precondition = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+    full.setZero();
+    scatter(r, fine.free, full);
+    rc.setZero();
+    for (size_t i = 0; i < parent.size(); ++i) {
+      const Eigen::Vector3d ri = 0.5 * full.segment<3>(3 * static_cast<long>(i));
+      rc.segment<3>(3 * parent[i][0]) += ri;
+      rc.segment<3>(3 * parent[i][1]) += ri;
+    }
+    const Eigen::VectorXd zc_free = coarse.solve_free(gather(rc, coarse.split.free));
+    rc.setZero();
+    scatter(zc_free, coarse.split.free, rc);
+    z = gather(prolongate(parent, rc), fine.free) + inv_diag.cwiseProduct(r);
+  };
+  Eigen::VectorXd r = b - A * x, z, p, Ap;
+  const double bnorm = b.norm();
+  if (!(bnorm > 0)) {
+    x.setZero();
+    return 0;
+  }
+  precondition(r, z);
+  p = z;
+  double rz = r.dot(z);
+  long it = 0;
+  while (r.norm() > tol * bnorm) {
+    if (it >= max_it) return -1;
+    Ap = A * p;
+    const double alpha = rz / p.dot(Ap);
+    x += alpha * p;
+    r -= alpha * Ap;
+    ++it;
+    precondition(r, z);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  return it;
 }
 
 }  // namespace
@@ -389,6 +448,34 @@ Eigen::VectorXd prolongate(const std::vector<std::array<int, 2>>& parent,
   return u;
 }
 
+FemAutoGradeResult fem_reference_auto_grade(FemReferenceOptions opt, int max_rounds,
+                                            double max_finest_error) {
+  if (opt.mesher || opt.refinement != FemRefinement::nested)
+    throw InputError("fem reference: automatic grading needs nested levels");
+  if (max_rounds < 0 || max_rounds > 6 || !(max_finest_error > 0))
+    throw InputError(
+        "fem reference: automatic grading needs 0 to 6 rounds at most and an error bound > 0");
+  FemAutoGradeResult out;
+  const int start = std::min(std::max(opt.grade_rounds, auto_grade_rounds(opt)), max_rounds);
+  for (int g = start; g <= max_rounds; ++g) {
+    const auto t0 = std::chrono::steady_clock::now();
+    opt.grade_rounds = g;
+    FemReferenceResult r = fem_reference(opt);
+    FemGradeAttempt at;
+    at.rounds = g;
+    at.finest_tets = r.levels.back().tets;
+    at.finest_error = r.levels.back().est_error;
+    at.reason = reference_untrusted_reason(r, max_finest_error);
+    at.trusted = at.reason.empty();
+    at.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.attempts.push_back(at);
+    out.result = std::move(r);
+    out.rounds = g;
+    if (at.trusted) break;
+  }
+  return out;
+}
+
 FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   if (opt.levels < 3) throw InputError("fem reference: --levels must be >= 3");
   const bool nested = !opt.mesher && opt.refinement == FemRefinement::nested;
@@ -429,6 +516,9 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   ReferenceLevelBuilder builder(opt);
   Eigen::VectorXd u_prev;    // the previous level's solution (PCG's start on nested levels)
   long fixed_prev_size = 0;  // its node count
+  // The previous level's factor (the PCG's coarse correction), if any (StaticSolver is not
+  // movable: held by pointer).
+  std::unique_ptr<StaticSolver> ss_prev;
   for (int l = 0; l < opt.levels; ++l) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReferenceLevelSystem& ls = builder.next();
@@ -440,11 +530,35 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     const mesh::BoundaryFaces& bf = ls.bf;
     const PressLoad& load = ls.load;
     FemReferenceLevel lv;
-    StaticSolver ss;
+    auto ss_ptr = std::make_unique<StaticSolver>();
+    StaticSolver& ss = *ss_ptr;
     Eigen::VectorXd u;
     const long free_dofs =
         static_cast<long>(std::count(ls.fixed_dof.begin(), ls.fixed_dof.end(), std::uint8_t{0}));
-    if (opt.pcg_min_dofs > 0 && free_dofs >= opt.pcg_min_dofs) {
+    const bool nested_prev =
+        !ls.parent.empty() && u_prev.size() == 3 * static_cast<long>(fixed_prev_size);
+    if (opt.pcg_min_dofs > 0 && free_dofs >= opt.pcg_min_dofs && l == opt.levels - 1 &&
+        nested_prev && ss_prev) {
+      // The finest nested level: PCG with the coarser level's factor as coarse correction
+      // (pcg_two_level), from the coarser level's solution prolongated.
+      const auto ts = std::chrono::steady_clock::now();
+      ss.split = split_dofs(ls.fixed_dof);
+      const SparseMatrixd Kff = submatrix(K, ss.split.free, ss.split.free);
+      const Eigen::VectorXd b = gather(f, ss.split.free);
+      Eigen::VectorXd x = gather(prolongate(ls.parent, u_prev), ss.split.free);
+      lv.factor_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ts).count();
+      const long it = pcg_two_level(Kff, b, x, opt.pcg_tolerance, 100000, *ss_prev, fixed_prev_size,
+                                    ls.parent, ss.split);
+      if (it < 0)
+        throw std::runtime_error("fem reference: PCG on level " + std::to_string(l) +
+                                 " did not reach the relative residual " +
+                                 std::to_string(opt.pcg_tolerance));
+      u = Eigen::VectorXd::Zero(f.size());
+      scatter(x, ss.split.free, u);
+      lv.solver = "pcg-two-level";
+      lv.pcg_iterations = it;
+    } else if (opt.pcg_min_dofs > 0 && free_dofs >= opt.pcg_min_dofs && l == opt.levels - 1) {
       // One solve, no factor: Jacobi-PCG from the coarser level's solution (nested spaces:
       // prolongation is exact interpolation, so the start is the coarse FE function).
       const auto ts = std::chrono::steady_clock::now();
@@ -452,8 +566,7 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
       const SparseMatrixd Kff = submatrix(K, ss.split.free, ss.split.free);
       const Eigen::VectorXd b = gather(f, ss.split.free);
       Eigen::VectorXd x0 = Eigen::VectorXd::Zero(b.size());
-      if (!ls.parent.empty() && u_prev.size() == 3 * static_cast<long>(fixed_prev_size))
-        x0 = gather(prolongate(ls.parent, u_prev), ss.split.free);
+      if (nested_prev) x0 = gather(prolongate(ls.parent, u_prev), ss.split.free);
       Eigen::ConjugateGradient<SparseMatrixd, Eigen::Lower | Eigen::Upper,
                                Eigen::DiagonalPreconditioner<double>>
           cg;
@@ -496,6 +609,9 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (opt.curve_steps > 0)
       quasi_static_curve(sys, ss, support, f, opt.force, opt.curve_steps, opt.curve_tolerance, lv);
+    // Kept for the next level's PCG coarse correction (none after a PCG level: no factor).
+    ss_prev.reset();
+    if (opt.pcg_min_dofs > 0 && lv.solver.rfind("pcg", 0) != 0) ss_prev = std::move(ss_ptr);
     res.levels.push_back(std::move(lv));
     if (!opt.mesher) {
       Eigen::VectorXd us(3 * ns);

@@ -270,3 +270,51 @@ TEST(CliFemD, SolversBadInputsExitTwo) {
   EXPECT_NE(t.err.find("--cg-tolerance"), std::string::npos) << t.err;
   fs::remove_all(d);
 }
+
+// --grade auto chooses the grading by the reference's own verdict (issue 12): on the 400-vertex
+// D's body press the rounds that resolve the pad (2: loaded edges <= the 10 mm pad radius) leave
+// the finest level 8.9 % above the limit (untrusted; measured at --volume-scale 128), so auto
+// must add rounds until the reference is trusted (3 rounds: 5.3 %, 4 rounds: 4.1 %). The old
+// rule (resolution only) reported 2 rounds, untrusted.
+TEST(CliFemD, AutoGradingEndsWithATrustedBodyReference) {
+  const fs::path d = tmp("autograde");
+  const fs::path p = d_variant(d, "Dauto", 400);
+  const fs::path out = d / "ref.json";
+  const Result r = run("fem reference " + p.string() +
+                           " --press body --force 1 --steps 0 --volume-scale 128 --solver pcg "
+                           "--out " +
+                           out.string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j.at("region"), "body");
+  EXPECT_TRUE(j.at("trusted").get<bool>()) << j.at("untrusted_reason");
+  const json& lv = j.at("levels");
+  ASSERT_EQ(lv.size(), 3u);
+  EXPECT_LE(lv[2].at("est_error").get<double>(), 0.05);
+  const int rounds = j.at("grade_rounds").get<int>();
+  EXPECT_GT(rounds, 2);  // more than the resolution rule's
+  const json& ga = j.at("grade_auto");
+  EXPECT_EQ(ga.at("grade_max"), 6);
+  const json& at = ga.at("attempts");
+  ASSERT_GE(at.size(), 2u);
+  EXPECT_EQ(at[0].at("grade_rounds"), 2);  // the resolution rule's rounds come first
+  EXPECT_FALSE(at[0].at("trusted").get<bool>());
+  EXPECT_GT(at[0].at("finest_est_error").get<double>(), 0.05);
+  EXPECT_NE(at[0].at("reason").get<std::string>().find("finest level"), std::string::npos);
+  for (size_t k = 1; k < at.size(); ++k)
+    EXPECT_EQ(at[k].at("grade_rounds").get<int>(), at[k - 1].at("grade_rounds").get<int>() + 1);
+  EXPECT_TRUE(at.back().at("trusted").get<bool>());
+  EXPECT_EQ(at.back().at("grade_rounds").get<int>(), rounds);
+  EXPECT_NEAR(at.back().at("finest_est_error").get<double>(), lv[2].at("est_error").get<double>(),
+              1e-12);
+  // Every grading shares the level-0 polyhedron: the limits agree (measured 1120-1135 N/m).
+  EXPECT_NEAR(j.at("stiffness").get<double>(), 1130.0, 0.02 * 1130.0);
+  // --grade-max is checked (0-6) before the prototype is loaded.
+  EXPECT_EQ(run("fem reference " + p.string() + " --press body --force 1 --grade-max 7 --out " +
+                    (d / "x.json").string(),
+                d)
+                .code,
+            2);
+  fs::remove_all(d);
+}
