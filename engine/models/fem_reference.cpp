@@ -292,7 +292,14 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
       corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
       for (long d = 0; d < support.size(); ++d)
         if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
-      static_precompute(K_t, fixed_dof, st, ss.kind);
+      // CHOLMOD's LL^T needs a positive definite matrix; the exact co-rotational tangent can be
+      // indefinite under a large load (the 4 N body press), where LDL^T still factorises it.
+      try {
+        static_precompute(K_t, fixed_dof, st, ss.kind);
+      } catch (const std::runtime_error&) {
+        if (ss.kind != SparseSolverKind::cholmod) throw;
+        static_precompute(K_t, fixed_dof, st, SparseSolverKind::ldlt);
+      }
       mn = &st;  // the latest tangent drives the modified Newton of the next steps
       const Eigen::VectorXd du = static_solve(st, r);
       u += du;

@@ -17,6 +17,7 @@
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/octahedron.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
@@ -77,27 +78,7 @@ const char* kAll[] = {"A", "B", "C", "D"};
 
 // --- the tracker on a closed octahedron (|x|+|y|+|z| = 1) ---
 
-struct Octa {
-  mesh::Positions V, N;
-  mesh::Faces F;
-  Octa() {
-    V.resize(6, 3);
-    V << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
-    N = V;
-    F.resize(8, 3);
-    int k = 0;
-    for (int sx : {0, 1})
-      for (int sy : {2, 3})
-        for (int sz : {4, 5}) {
-          // ccw seen from outside: the sign of the triple product of the three axes
-          const double s = (sx == 0 ? 1 : -1) * (sy == 2 ? 1 : -1) * (sz == 4 ? 1 : -1);
-          if (s > 0)
-            F.row(k++) << sx, sy, sz;
-          else
-            F.row(k++) << sx, sz, sy;
-        }
-  }
-};
+using Octa = palplab::test::Octahedron;
 
 }  // namespace
 

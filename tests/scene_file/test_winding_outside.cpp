@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "engine/haptics/contact.hpp"
+#include "tests/octahedron.hpp"
 
 namespace {
 
@@ -15,25 +16,7 @@ using namespace palplab;
 using Vec3 = Eigen::Vector3d;
 
 // The octahedron |x| + |y| + |z| = 1, faces ccw seen from outside.
-struct Octa {
-  mesh::Positions V;
-  mesh::Faces F;
-  Octa() {
-    V.resize(6, 3);
-    V << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
-    F.resize(8, 3);
-    int k = 0;
-    for (int sx : {0, 1})
-      for (int sy : {2, 3})
-        for (int sz : {4, 5}) {
-          const double s = (sx == 0 ? 1 : -1) * (sy == 2 ? 1 : -1) * (sz == 4 ? 1 : -1);
-          if (s > 0)
-            F.row(k++) << sx, sy, sz;
-          else
-            F.row(k++) << sx, sz, sy;
-        }
-  }
-};
+using Octa = palplab::test::Octahedron;
 
 // Reference: the signed solid angles of the faces (Van Oosterom & Strackee) over 4 pi.
 double solid_angle_sum(const mesh::Positions& V, const mesh::Faces& F, const Vec3& x) {
