@@ -26,13 +26,13 @@ inline PressSpec depth_press(const Scene& s, const std::string& region, double d
   return p;
 }
 
-// `steps` lock-step haptic steps of `spec` on s (fewer only if the script ends first); on_step
-// (optional) sees each step as run_lockstep gives it.
-inline std::vector<Rec> run_press(Scene& s, const PressSpec& spec, int steps) {
+// `steps` lock-step haptic steps of `spec` on s (fewer only if the script ends first); `paced`:
+// each step on a 1/dt tick of the steady clock (LockstepOptions::paced), as in real time.
+inline std::vector<Rec> run_press(Scene& s, const PressSpec& spec, int steps, bool paced = false) {
   PressDevice d(spec);
   std::vector<Rec> out;
   out.reserve(steps);
-  run_lockstep(s, d, {.duration = steps * s.dt(), .frame_period = 0.0},
+  run_lockstep(s, d, {.duration = steps * s.dt(), .frame_period = 0.0, .paced = paced},
                [&](const Rendered& r, const Sample&) {
                  Rec x;
                  static_cast<Rendered&>(x) = r;
