@@ -12,6 +12,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cstdio>
+#include <string>
 
 #include "bench/refine_models.hpp"
 #include "engine/models/contact_pad.hpp"
@@ -196,4 +197,94 @@ TEST(RefinementDepth, AtTheBodyTheSofteningIsNotTheAdaptiveClosureNorThePadsQuad
   std::printf("  whole model level 1: pressure %.1f (%+.1f %%), %ld new nodes\n", whole.k,
               100 * (whole.k - off_p.k) / off_p.k, whole.nodes);
   EXPECT_NEAR(whole.k, adaptive_1, 0.07 * adaptive_1);
+}
+
+namespace {
+
+// Model-C with C's material (bench::tet_model_c) on `vertices` surface vertices.
+AdaptiveMassSpring model_c_at(int vertices) {
+  const mesh::TetMesh tm = mesh::generate_model_c(0, vertices);
+  const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
+  MassSpringSystem s;
+  s.X_rest = tm.V;
+  s.X = tm.V;
+  const Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
+  s.mass = tet_lumped_mass(tm.V, tm.T, Eigen::VectorXd::Constant(tm.T.rows(), 1000.0));
+  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
+  const Eigen::VectorXd area = lumped_area(tm.V, bf.F);
+  s.home_ks = 2e5 * area;
+  s.home_kd = 200.0 * area;
+  return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
+                       1e-3, CoarseTets{tm.T, E, bf.tet});
+}
+
+int nearest_surface_node(const AdaptiveMassSpring& m, const Eigen::Vector3d& x) {
+  int node = -1;
+  double best = INFINITY;
+  for (long f = 0; f < m.F0.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const double d = (m.coarse.X_rest.row(m.F0(f, k)).transpose() - x).norm();
+      if (d < best) {
+        best = d;
+        node = m.F0(f, k);
+      }
+    }
+  return node;
+}
+
+}  // namespace
+
+TEST(RefinementDepth, OnOffOverResolutions) {
+  // Issue 9's measures on Model-C (C's material and springs) at three base resolutions: the
+  // static stiffness under a uniform 1 cm disc pressure, refinement off and on (max_level 2),
+  // at the body and at the ovary. Measured (van Gelder springs):
+  //   nodes   body off / on (N/m)       ovary off / on (N/m)
+  //   2426    1604.3 / 1024.6 (-36.1 %)  851.1 / 847.4 (-0.4 %)
+  //   4565    1533.9 / 1018.2 (-33.6 %)  839.3 / 826.1 (-1.6 %)
+  //   9160    1478.8 / 1250.6 (-15.4 %)  654.3 / 654.3 (no face above the area threshold)
+  // The FEM reference at this body (D = Model-C's mesh, E 100 kPa, nu 0.45, the same foundation;
+  // docs/ARCHITECTURE.md "D against the trusted references") is 1162 N/m: unrefined +38 %,
+  // refined -12 %. Linear FEM on the same coarse mesh is +28.5 % (1493.6) and one / two red
+  // refinements of the whole mesh take it to +14.3 / +6.0 %: the coarse body does not resolve the
+  // probe, so no discretisation keeps its unrefined stiffness under refinement. The springs add
+  // to it: refined, they fall below the reference, which a conforming linear element of the
+  // material cannot (its compliance converges from below). Spring rules tried (numbers in
+  // docs/ARCHITECTURE.md, refinement section) either soften more (least squares) or keep on/off
+  // within 4 % but are 2.8 x the reference (a diagonal upper bound of the tet's stiffness).
+  // What holds, asserted: on/off within the Weber fraction (7 %) at the ovary; the unrefined body
+  // within 7 % of its mean over the three resolutions; the patch's mass conserved. The body's
+  // on/off gap (the open part of issue 9) is pinned to the measured values (2 points).
+  const Eigen::Vector3d kOvary(-0.0522, 0.0430, 0.3179);
+  const int res[3] = {1600, 2440, 4000};
+  const double body_gap[3] = {-36.1, -33.6, -15.4};  // % (measured, see above)
+  double body_off[3];
+  for (int r = 0; r < 3; ++r) {
+    AdaptiveMassSpring m = model_c_at(res[r]);
+    const double mass = m.sys.mass.sum();
+    for (const auto& [where, point] : {std::pair{"body", kBody}, std::pair{"ovary", kOvary}}) {
+      const int node = nearest_surface_node(m, point);
+      const double off = disc_stiffness(m, node, 0).k;
+      RefineParams p;  // prototype C's refinement, two levels
+      p.threshold_area = 4e-6;
+      p.max_level = 2;
+      const bool refined = refine_around(m, node, p);
+      const Static on = disc_stiffness(m, node, 0);
+      EXPECT_NEAR(m.sys.mass.sum(), mass, 1e-12 * mass);
+      simplify(m);
+      const double gap = 100 * (on.k - off) / off;
+      std::printf(
+          "%d surface vertices (%ld nodes), %s: off %.1f, on (max_level 2) %.1f N/m (%+.1f %%), "
+          "%ld new nodes\n",
+          res[r], m.coarse_nodes(), where, off, on.k, gap, on.nodes);
+      if (std::string(where) == "body") {
+        EXPECT_TRUE(refined);
+        body_off[r] = off;
+        EXPECT_NEAR(gap, body_gap[r], 2.0) << res[r];
+      } else {
+        EXPECT_NEAR(on.k, off, 0.07 * off) << res[r];
+      }
+    }
+  }
+  const double mean = (body_off[0] + body_off[1] + body_off[2]) / 3;
+  for (int r = 0; r < 3; ++r) EXPECT_NEAR(body_off[r], mean, 0.07 * mean) << res[r];
 }
