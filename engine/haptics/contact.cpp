@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace palplab::engine {
@@ -117,19 +118,25 @@ Vec3 weights_across(const mesh::Faces& F, int f, int g, int exit_k, const Vec3& 
 }  // namespace
 
 std::vector<Eigen::AlignedBox3d> face_boxes(const mesh::Positions& V, const mesh::Faces& F) {
-  // Each box as AlignedBox::extend makes it from an empty one (the same operations in the same
-  // order, so the same bits), constructed once (a sized vector would set every box empty first).
+  // Each box as AlignedBox::extend makes it from an empty one: per coordinate std::min/std::max
+  // (Eigen's cwiseMin/cwiseMax on scalars) from lowest/highest over the three corners in order,
+  // so the same bits; on the raw row-major arrays, each box constructed once.
   std::vector<Eigen::AlignedBox3d> b;
   b.reserve(static_cast<std::size_t>(F.rows()));
-  const Eigen::AlignedBox3d empty;  // min() highest, max() lowest (Eigen's setEmpty)
-  for (long f = 0; f < F.rows(); ++f) {
-    Eigen::Vector3d lo = empty.min(), hi = empty.max();
+  const double* v = V.data();
+  const int* f = F.data();
+  const double top = std::numeric_limits<double>::max(),
+               bottom = std::numeric_limits<double>::lowest();
+  for (long i = 0; i < F.rows(); ++i, f += 3) {
+    double lo[3] = {top, top, top}, hi[3] = {bottom, bottom, bottom};
     for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d p = mesh::row3(V, F(f, k));
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
+      const double* p = v + 3 * static_cast<long>(f[k]);
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], p[c]);
+        hi[c] = std::max(hi[c], p[c]);
+      }
     }
-    b.emplace_back(lo, hi);
+    b.emplace_back(Eigen::Vector3d(lo[0], lo[1], lo[2]), Eigen::Vector3d(hi[0], hi[1], hi[2]));
   }
   return b;
 }
