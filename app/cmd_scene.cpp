@@ -1,7 +1,8 @@
 // `palplab scene build PROTOTYPE.json --out FILE.psim [--repeat N] [--json]`: writes the
 // scene's precomputation to a simulation file (engine/haptics/scene_file.hpp) and reports how
-// long a scene takes to become ready from it versus rebuilt from the sources (median of N, each
-// timed from nothing cached to the first haptic step done; rebuild and load alternate).
+// long a scene takes to become ready from it versus rebuilt from the sources (medians over
+// pairs of one rebuild and one load in alternating order, each timed from nothing cached to the
+// first haptic step done).
 // `palplab scene info FILE.psim [--json]`: verifies a simulation file and prints what it holds.
 #include <sys/resource.h>
 #include <time.h>
@@ -31,8 +32,9 @@ using Clock = std::chrono::steady_clock;
 
 struct BuildArgs {
   std::string prototype, out;
-  int repeat = 5;
+  int repeat = 0;  // timed pairs (--repeat); 0 without it: until enough CPU time (run_build)
   bool json = false;
+  bool repeat_given = false;
 };
 
 double ms_since(Clock::time_point t0) {
@@ -72,31 +74,70 @@ nlohmann::json sources_json(const engine::SceneFileInfo& info) {
   return a;
 }
 
+// The median of the ratios a[i] / b[i] of the pairs timed together.
+double median_ratio(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> r;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
+    if (b[i] > 0) r.push_back(a[i] / b[i]);
+  return r.empty() ? 0.0 : engine::median(r);
+}
+
 int run_build(const BuildArgs& a) {
-  if (a.repeat < 1 || a.repeat > 1000) throw InputError("--repeat: expected 1..1000");
+  if (a.repeat < 0 || a.repeat > 1000 || (a.repeat == 0 && a.repeat_given))
+    throw InputError("--repeat: expected 1..1000");
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
   // Rebuild (nothing cached, everything from the sources) and load (nothing cached, everything
-  // from the file) alternate, so that a machine whose load changes during the run slows both
-  // alike and their ratio stays meaningful. The file is written from the mesh the first rebuild
-  // left in the cache (write_scene_file takes it from there).
+  // from the file) are timed in pairs, the order alternating from pair to pair (rebuild first,
+  // then load first), so that a machine whose load changes during the run slows both alike and
+  // neither always runs in the other's wake (warm caches, a freshly trimmed heap). Without
+  // --repeat the pairs go on until both sides have used kAutoCpuMs of CPU time, at least
+  // kAutoMin and at most kAutoMax pairs: a prototype that loads in 0.3 ms gets a hundred pairs
+  // (a median a preempted or migrated repetition cannot move), one that rebuilds in a second
+  // gets seven. The file is written from the mesh the first rebuild left in the cache
+  // (write_scene_file takes it from there).
+  constexpr int kAutoMin = 7, kAutoMax = 201;
+  constexpr double kAutoCpuMs = 300.0;
   std::vector<double> rebuild, load, rebuild_cpu, load_cpu;
   engine::SceneFileInfo info;
+  bool written = false;
   double load_average[3] = {-1.0, -1.0, -1.0};
-  for (int i = 0; i < a.repeat; ++i) {
+  auto time_rebuild = [&] {
     engine::install_scene_mesh(cfg.mesh, nullptr);
-    auto t0 = Clock::now();
-    double c0 = cpu_ms();
+    const auto t0 = Clock::now();
+    const double c0 = cpu_ms();
     first_step(prototypes::load_prototype(a.prototype));
     rebuild_cpu.push_back(cpu_ms() - c0);
     rebuild.push_back(ms_since(t0));
-    if (i == 0) info = engine::write_scene_file(a.out, cfg);
+    if (!written) {
+      info = engine::write_scene_file(a.out, cfg);
+      written = true;
+    }
+  };
+  auto time_load = [&] {
     engine::install_scene_mesh(cfg.mesh, nullptr);
-    t0 = Clock::now();
-    c0 = cpu_ms();
+    const auto t0 = Clock::now();
+    const double c0 = cpu_ms();
     first_step(engine::load_scene_file(a.out, prototypes::load_prototype));
     load_cpu.push_back(cpu_ms() - c0);
     load.push_back(ms_since(t0));
+  };
+  double rebuild_total = 0, load_total = 0;
+  for (int i = 0;; ++i) {
+    if (a.repeat > 0 ? i >= a.repeat
+                     : i >= kAutoMax || (i >= kAutoMin && rebuild_total >= kAutoCpuMs &&
+                                         load_total >= kAutoCpuMs))
+      break;
+    if (i % 2 == 0 || !written) {
+      time_rebuild();
+      time_load();
+    } else {
+      time_load();
+      time_rebuild();
+    }
+    rebuild_total += rebuild_cpu.back();
+    load_total += load_cpu.back();
   }
+  const int pairs = static_cast<int>(rebuild.size());
   // The machine's load when the timings were taken (1, 5, 15 min): the ratio on a busy shared
   // machine is noisier than on an idle one.
   if (getloadavg(load_average, 3) != 3) load_average[0] = load_average[1] = load_average[2] = -1;
@@ -110,13 +151,15 @@ int run_build(const BuildArgs& a) {
                         {"model", info.model_kind},
                         {"model_precomputation_stored", info.model_blob},
                         {"sources", sources_json(info)},
-                        {"repeat", a.repeat},
+                        {"repeat", pairs},
                         {"rebuild_ms", {{"median", rb}, {"all", rebuild}}},
                         {"load_ms", {{"median", ld}, {"all", load}}},
                         {"speedup", ld > 0 ? rb / ld : 0.0},
                         {"rebuild_cpu_ms", {{"median", rbc}, {"all", rebuild_cpu}}},
                         {"load_cpu_ms", {{"median", ldc}, {"all", load_cpu}}},
                         {"speedup_cpu", ldc > 0 ? rbc / ldc : 0.0},
+                        {"speedup_pairs", median_ratio(rebuild, load)},
+                        {"speedup_cpu_pairs", median_ratio(rebuild_cpu, load_cpu)},
                         {"load_average", {load_average[0], load_average[1], load_average[2]}}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";
@@ -125,11 +168,13 @@ int run_build(const BuildArgs& a) {
               << " bytes, format " << info.format_version << ", model " << info.model_kind
               << (info.model_blob ? " with its precomputation" : ", mesh precomputation only")
               << ")\n"
-              << "  ready to step (median of " << a.repeat << "): rebuilt from sources " << rb
-              << " ms, loaded from the file " << ld << " ms (" << (ld > 0 ? rb / ld : 0.0)
+              << std::setprecision(2) << "  ready to step (median of " << pairs
+              << " alternating pairs): rebuilt from sources " << rb << " ms, loaded from the file "
+              << ld << " ms (" << std::setprecision(1) << (ld > 0 ? rb / ld : 0.0)
               << "x faster; load average " << std::setprecision(2) << load_average[0] << ")\n"
-              << std::setprecision(1) << "  CPU time (median): rebuilt " << rbc << " ms, loaded "
-              << ldc << " ms (" << (ldc > 0 ? rbc / ldc : 0.0) << "x)\n";
+              << "  CPU time (median): rebuilt " << rbc << " ms, loaded " << ldc << " ms ("
+              << std::setprecision(1) << (ldc > 0 ? rbc / ldc : 0.0)
+              << "x; median of the pairs' ratios " << median_ratio(rebuild_cpu, load_cpu) << "x)\n";
   }
   return 0;
 }
@@ -177,9 +222,15 @@ palplab::app::CommandRegistration reg{
       auto a = std::make_shared<BuildArgs>();
       b->add_option("prototype", a->prototype, "Prototype JSON file")->required();
       b->add_option("--out", a->out, "Simulation file to write (.psim)")->required();
-      b->add_option("--repeat", a->repeat, "Timed repetitions of rebuild and load (median; 5)");
+      auto* repeat = b->add_option(
+          "--repeat", a->repeat,
+          "Timed pairs of rebuild and load (median; default: 7 to 201 pairs, until each "
+          "side has used 0.3 s of CPU)");
       b->add_flag("--json", a->json, "Print JSON");
-      b->callback([a, code] { *code = run_build(*a); });
+      b->callback([a, repeat, code] {
+        a->repeat_given = repeat->count() > 0;
+        *code = run_build(*a);
+      });
       auto* i = cmd->add_subcommand("info", "Verify a .psim file and print what it holds");
       auto file = std::make_shared<std::string>();
       auto json = std::make_shared<bool>(false);

@@ -65,10 +65,10 @@ std::string shown(const json& v) {
 
 }  // namespace
 
-Checker::Checker(std::string file, std::string_view text) : file_(std::move(file)), loc_(text) {}
+Checker::Checker(std::string file, std::string_view text) : file_(std::move(file)), text_(text) {}
 
 void Checker::err(const std::string& path, const std::string& what, bool at_key) {
-  problems_.push_back({loc_.locate(file_, path, at_key), what});
+  problems_.push_back({locator().locate(file_, path, at_key), what});
 }
 
 void Checker::throw_if_any() {

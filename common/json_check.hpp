@@ -41,7 +41,12 @@ class Checker {
   Checker(std::string file, std::string_view text);
 
   const std::string& file() const { return file_; }
-  const JsonLocator& locator() const { return loc_; }
+  // Located on first use (an error): locating every value of a valid file costs more than
+  // checking it.
+  const JsonLocator& locator() const {
+    if (!loc_) loc_.emplace(text_);
+    return *loc_;
+  }
 
   // Records a problem at `path` (at the member key when at_key, for unknown/misplaced keys).
   void err(const std::string& path, const std::string& what, bool at_key = false);
@@ -117,7 +122,8 @@ class Checker {
   bool in_range(const nlohmann::json& v, const std::string& p, double lo, double hi,
                 const char* what, bool lo_open);
   std::string file_;
-  JsonLocator loc_;
+  std::string text_;
+  mutable std::optional<JsonLocator> loc_;
   std::vector<Problem> problems_;
 };
 

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace palplab::engine {
@@ -117,12 +118,50 @@ Vec3 weights_across(const mesh::Faces& F, int f, int g, int exit_k, const Vec3& 
 }  // namespace
 
 std::vector<Eigen::AlignedBox3d> face_boxes(const mesh::Positions& V, const mesh::Faces& F) {
-  std::vector<Eigen::AlignedBox3d> b(F.rows());
-  for (long f = 0; f < F.rows(); ++f) {
-    b[f].setEmpty();
-    for (int k = 0; k < 3; ++k) b[f].extend(mesh::row3(V, F(f, k)));
+  // Each box as AlignedBox::extend makes it from an empty one: per coordinate std::min/std::max
+  // (Eigen's cwiseMin/cwiseMax on scalars) from lowest/highest over the three corners in order,
+  // so the same bits; on the raw row-major arrays, each box constructed once.
+  std::vector<Eigen::AlignedBox3d> b;
+  b.reserve(static_cast<std::size_t>(F.rows()));
+  const double* v = V.data();
+  const int* f = F.data();
+  const double top = std::numeric_limits<double>::max(),
+               bottom = std::numeric_limits<double>::lowest();
+  for (long i = 0; i < F.rows(); ++i, f += 3) {
+    double lo[3] = {top, top, top}, hi[3] = {bottom, bottom, bottom};
+    for (int k = 0; k < 3; ++k) {
+      const double* p = v + 3 * static_cast<long>(f[k]);
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], p[c]);
+        hi[c] = std::max(hi[c], p[c]);
+      }
+    }
+    b.emplace_back(Eigen::Vector3d(lo[0], lo[1], lo[2]), Eigen::Vector3d(hi[0], hi[1], hi[2]));
   }
   return b;
+}
+
+bool surface_closed(const mesh::Faces& F, const std::vector<int>& ef) {
+  const long nf = F.rows();
+  if (nf == 0 || static_cast<long>(ef.size()) != 3 * nf) return false;
+  const int* Fp = F.data();  // row-major #F by 3
+  static constexpr int next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+  bool ok = true;  // no early exit inside a face: the loop stays branch-light
+  for (long f = 0; f < nf && ok; ++f) {
+    const int* a = Fp + 3 * f;
+    ok = a[0] != a[1] && a[1] != a[2] && a[2] != a[0];
+    for (int k = 0; k < 3; ++k) {
+      // The face g across f's edge u -> v must run it v -> u and name f across it.
+      const int g = ef[3 * f + k];
+      if (static_cast<unsigned>(g) >= static_cast<unsigned long>(nf)) return false;
+      const int u = a[next[k]], v = a[prev[k]];
+      const int* b = Fp + 3 * static_cast<long>(g);
+      const int j = b[0] == v ? 0 : b[1] == v ? 1 : b[2] == v ? 2 : -1;
+      if (j < 0) return false;
+      ok = ok && b[next[j]] == u && ef[3 * static_cast<long>(g) + prev[j]] == f;
+    }
+  }
+  return ok;
 }
 
 FaceIndex build_face_index(const mesh::Positions& V, const mesh::Faces& F) {
@@ -158,30 +197,45 @@ FaceIndex build_face_index(const mesh::Positions& V, const mesh::Faces& F) {
   std::iota(ix.order.begin(), ix.order.end(), 0);
   ix.bvh.reserve(2 * nf / 4 + 2);
   if (nf > 0) build_bvh(ix, 0, static_cast<int>(nf));
+  ix.closed = surface_closed(F, ix.edge_face);
   return ix;
 }
+
+namespace {
+// Whole-array scans without an early exit, so that the compiler vectorises them (a stored index
+// is checked on every .psim load; a damaged one is rare): some v[i] outside [lo, hi).
+bool any_outside(const std::vector<int>& v, long lo, long hi) {
+  const auto width = static_cast<std::uint32_t>(hi - lo);
+  const auto base = static_cast<std::uint32_t>(lo);
+  std::uint32_t bad = 0;
+  for (int x : v) bad |= static_cast<std::uint32_t>(x) - base >= width;
+  return bad != 0;
+}
+}  // namespace
 
 std::string check_face_index(const FaceIndex& ix, long nv, long nf) {
   if (static_cast<long>(ix.vf_offset.size()) != nv + 1 || ix.vf_offset.front() != 0 ||
       ix.vf_offset.back() != static_cast<long>(ix.vf.size()) ||
       static_cast<long>(ix.vf.size()) != 3 * nf)
     return "vertex-face table does not match the surface";
-  for (long i = 0; i < nv; ++i)
-    if (ix.vf_offset[i + 1] < ix.vf_offset[i]) return "vertex-face table is not monotone";
-  for (int f : ix.vf)
-    if (f < 0 || f >= nf) return "vertex-face table: face out of range";
+  std::uint32_t decrease = 0;
+  for (long i = 0; i < nv; ++i) decrease |= ix.vf_offset[i + 1] < ix.vf_offset[i];
+  if (decrease) return "vertex-face table is not monotone";
+  if (any_outside(ix.vf, 0, nf)) return "vertex-face table: face out of range";
   if (static_cast<long>(ix.edge_face.size()) != 3 * nf)
     return "edge-face table does not match the surface";
-  for (int f : ix.edge_face)
-    if (f < -1 || f >= nf) return "edge-face table: face out of range";
+  if (any_outside(ix.edge_face, -1, nf)) return "edge-face table: face out of range";
   if (!std::isfinite(ix.mean_edge) || ix.mean_edge < 0) return "bad mean edge";
   if (static_cast<long>(ix.face_box.size()) != nf || static_cast<long>(ix.order.size()) != nf)
     return "face boxes or order do not match the surface";
-  std::vector<char> seen(nf, 0);
+  if (any_outside(ix.order, 0, nf)) return "face order is not a permutation of the faces";
+  std::vector<unsigned char> seen(static_cast<std::size_t>(nf), 0);
+  unsigned char twice = 0;
   for (int f : ix.order) {
-    if (f < 0 || f >= nf || seen[f]) return "face order is not a permutation of the faces";
+    twice |= seen[f];
     seen[f] = 1;
   }
+  if (twice) return "face order is not a permutation of the faces";
   if ((nf > 0) != !ix.bvh.empty()) return "face hierarchy does not match the surface";
   // A tree: every child index is later than its parent (the builder's pre-order) and no node is
   // the child of two, so a walk from the root visits each node at most once; runs lie inside
@@ -263,37 +317,16 @@ double ContactTracker::winding_number(const Vec3& x) const {
   // complement, and the box's outside is one connected region reaching infinity, where it is 0.
   // A scene's first step starts the device below the organ (scene.cpp start_position), outside
   // that box: the sum over every face below was a seventh of loading prototype A from a .psim
-  // file (perf). The check reads each face's three neighbours (a few loads per face, no
-  // transcendental); a surface with a hole, a duplicated, degenerate or flipped face, or a
-  // non-manifold edge takes the sum, which is robust to those.
+  // file (perf). Whether the surface is closed is a property of the index (FaceIndex::closed,
+  // surface_closed: decided once when the index is built, stored in a .psim file); a surface
+  // with a hole, a duplicated, degenerate or flipped face, or a non-manifold edge takes the sum,
+  // which is robust to those.
   const long nf = F_.rows();
   if (nf > 0 && V_.rows() > 0) {
     const Eigen::RowVector3d lo = V_.colwise().minCoeff(), hi = V_.colwise().maxCoeff();
     const bool outside_box = x.x() < lo.x() || x.y() < lo.y() || x.z() < lo.z() || x.x() > hi.x() ||
                              x.y() > hi.y() || x.z() > hi.z();
-    auto closed = [&] {
-      const std::vector<int>& ef = ix_.edge_face;
-      if (static_cast<long>(ef.size()) != 3 * nf) return false;
-      const int* Fp = F_.data();  // row-major #F by 3
-      static constexpr int next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
-      bool ok = true;  // no early exit inside a face: the loop stays branch-light
-      for (long f = 0; f < nf && ok; ++f) {
-        const int* a = Fp + 3 * f;
-        ok = a[0] != a[1] && a[1] != a[2] && a[2] != a[0];
-        for (int k = 0; k < 3; ++k) {
-          // The face g across f's edge u -> v must run it v -> u and name f across it.
-          const int g = ef[3 * f + k];
-          if (static_cast<unsigned>(g) >= static_cast<unsigned long>(nf)) return false;
-          const int u = a[next[k]], v = a[prev[k]];
-          const int* b = Fp + 3 * static_cast<long>(g);
-          const int j = b[0] == v ? 0 : b[1] == v ? 1 : b[2] == v ? 2 : -1;
-          if (j < 0) return false;
-          ok = ok && b[next[j]] == u && ef[3 * static_cast<long>(g) + prev[j]] == f;
-        }
-      }
-      return ok;
-    };
-    if (outside_box && closed()) return 0.0;
+    if (outside_box && ix_.closed) return 0.0;
   }
   // Sum of the signed solid angles of the faces seen from x (Van Oosterom & Strackee 1983),
   // over 4 pi. Robust for a surface with small holes or duplicated faces (fractional values).

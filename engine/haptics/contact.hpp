@@ -51,10 +51,17 @@ struct FaceIndex {
   std::vector<Eigen::AlignedBox3d> face_box;  // #F face bounds (m)
   std::vector<Node> bvh;                      // bounding-volume hierarchy over the faces (root 0)
   std::vector<int> order;                     // #F faces grouped by leaf
+  // The surface is closed and consistently oriented (surface_closed): winding_number is then 0
+  // outside its bounding box without the sum over the faces.
+  bool closed = false;
 };
 
 // The bounds of each face of (V, F) (FaceIndex::face_box; a .psim file does not store them).
 std::vector<Eigen::AlignedBox3d> face_boxes(const mesh::Positions& V, const mesh::Faces& F);
+// Whether every edge of F is shared by exactly two faces that run it in opposite directions
+// (edge_face as FaceIndex::edge_face of F; no degenerate face): a closed, consistently oriented
+// surface. Never reads out of range, whatever edge_face holds.
+bool surface_closed(const mesh::Faces& F, const std::vector<int>& edge_face);
 // Builds the index of surface (V, F): deterministic (the same bytes for the same surface).
 FaceIndex build_face_index(const mesh::Positions& V, const mesh::Faces& F);
 // An index read from a file is checked against its surface before use: "" when it is

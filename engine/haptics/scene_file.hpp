@@ -41,7 +41,8 @@ struct SceneMesh;
 // Version 3: the mass-spring model's linear exterior factorisation (engine/solvers/far_field.hpp).
 // Version 4: the FIDX section, the contact tracker's face index (engine/haptics/contact.hpp).
 // Version 5: the payload checksum's eight-lane accumulation (scene_file.cpp payload_checksum).
-inline constexpr std::uint32_t kSceneFileVersion = 5;
+// Version 6: FIDX ends with the surface's closedness (FaceIndex::closed).
+inline constexpr std::uint32_t kSceneFileVersion = 6;
 inline constexpr std::size_t kSceneFileHeaderBytes = 128;
 
 // One source a scene is built from: the prototype file, a mesh file, the materials table.
@@ -89,5 +90,13 @@ SceneFileData read_scene_file(const std::string& path);
 // viewer) starts from it. Returns the configuration.
 SceneConfig load_scene_file(const std::string& path,
                             const std::function<SceneConfig(const std::string&)>& load_config);
+
+// The payload checksum (header offset 24): `best` is what the reader uses, the fastest path this
+// CPU runs; the others (exposed for tests) must give the same bytes. Throws std::logic_error for
+// a path this build or CPU does not have.
+enum class ChecksumPath { best, avx2, sse2, portable };
+std::array<std::uint8_t, 32> psim_payload_checksum(const void* p, std::size_t n,
+                                                   ChecksumPath path = ChecksumPath::best);
+bool psim_checksum_has_avx2();
 
 }  // namespace palplab::engine

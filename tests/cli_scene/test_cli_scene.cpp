@@ -69,12 +69,19 @@ TEST(CliScene, BuildReportsLoadAndRebuildTimes) {
   ASSERT_EQ(j.code, 0) << j.err;
   const auto o = nlohmann::json::parse(j.out);
   EXPECT_EQ(o["rebuild_ms"]["all"].size(), 3u);
+  EXPECT_EQ(o["load_cpu_ms"]["all"].size(), 3u);
+  EXPECT_EQ(o["repeat"], 3);
+  EXPECT_GT(o["speedup_cpu_pairs"].get<double>(), 0.0);
   EXPECT_GT(o["rebuild_ms"]["median"].get<double>(), 0.0);
   EXPECT_GT(o["load_ms"]["median"].get<double>(), 0.0);
   EXPECT_EQ(o["format_version"], palplab::engine::kSceneFileVersion);
   const auto info = run_palplab("scene info " + out.string() + " --json", f.dir);
   ASSERT_EQ(info.code, 0) << info.err;
   EXPECT_EQ(nlohmann::json::parse(info.out)["prototype"], fs::absolute(f.proto).string());
+  const auto zero = run_palplab(
+      "scene build " + f.proto.string() + " --out " + out.string() + " --repeat 0", f.dir);
+  EXPECT_EQ(zero.code, 2) << zero.err;
+  EXPECT_NE(zero.err.find("--repeat: expected 1..1000"), std::string::npos) << zero.err;
 }
 
 TEST(CliScene, ProbeThroughTheFileEqualsProbeThroughThePrototype) {

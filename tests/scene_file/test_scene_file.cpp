@@ -115,6 +115,7 @@ void expect_same_mesh(const engine::SceneMesh& a, const engine::SceneMesh& b) {
   EXPECT_EQ(fa.edge_face, fb.edge_face);
   EXPECT_EQ(fa.mean_edge, fb.mean_edge);
   EXPECT_EQ(fa.order, fb.order);
+  EXPECT_EQ(fa.closed, fb.closed);
   ASSERT_EQ(fa.face_box.size(), fb.face_box.size());
   for (size_t i = 0; i < fa.face_box.size(); ++i)
     EXPECT_TRUE(fa.face_box[i].min() == fb.face_box[i].min() &&
@@ -219,6 +220,45 @@ TEST(SceneFile, DamagedFaceIndexIsRefused) {
   bad([](auto& ix) { ix.bvh[1].end -= 1; }, "children do not split");
   bad([](auto& ix) { ix.bvh.clear(); }, "no hierarchy");
   bad([](auto& ix) { ix.mean_edge = NAN; }, "mean edge");
+}
+
+// The payload checksum's paths (AVX2 where the CPU has it, SSE2, portable) give the same bytes for
+// every length (every tail length, whole 1 KiB blocks and one stripe past them, where the
+// scramble runs) and every alignment of the data; one flipped bit anywhere changes the result.
+TEST(SceneFile, PayloadChecksumPathsAgree) {
+  std::string buf(4096 + 200, '\0');
+  std::uint64_t x = 0x0123456789ABCDEFULL;
+  for (char& c : buf) {  // xorshift bytes
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    c = static_cast<char>(x >> 56);
+  }
+  using engine::ChecksumPath;
+  std::vector<ChecksumPath> paths = {ChecksumPath::portable};
+#if defined(__SSE2__)
+  paths.push_back(ChecksumPath::sse2);
+#endif
+  if (engine::psim_checksum_has_avx2()) paths.push_back(ChecksumPath::avx2);
+  std::vector<std::size_t> lengths;
+  for (std::size_t n = 0; n <= 200; ++n) lengths.push_back(n);
+  for (std::size_t n : {1023, 1024, 1025, 1087, 1088, 2048, 2111, 3000, 4096}) lengths.push_back(n);
+  for (std::size_t off : {0, 1, 8, 13})
+    for (std::size_t n : lengths) {
+      const char* p = buf.data() + off;
+      const auto ref = engine::psim_payload_checksum(p, n, ChecksumPath::portable);
+      for (ChecksumPath path : paths)
+        ASSERT_EQ(engine::psim_payload_checksum(p, n, path), ref)
+            << "path " << static_cast<int>(path) << " length " << n << " offset " << off;
+      ASSERT_EQ(engine::psim_payload_checksum(p, n), ref) << "length " << n;
+    }
+  const auto whole = engine::psim_payload_checksum(buf.data(), 4096);
+  for (std::size_t at = 0; at < 4096; at += 97) {
+    std::string b = buf;
+    b[at] ^= 0x10;
+    for (ChecksumPath path : paths)
+      EXPECT_NE(engine::psim_payload_checksum(b.data(), 4096, path), whole) << "byte " << at;
+  }
 }
 
 // The reader never trusts the file: every prefix of a valid file and every single flipped byte
