@@ -16,7 +16,7 @@ using namespace palplab::engine;
 
 namespace {
 constexpr int kSteps = 4;
-constexpr int kNewton = 2;
+constexpr int kNewton = 3;
 // The loads tried (N; the block's linear stiffness is ~300 N/m, so 0.3 N is ~1 mm on its 2 cm
 // height, 9.6 N far beyond it): each test takes the smallest at which the restricted solver
 // fails, so that the case is a real non-convergence whatever the block's exact response.
@@ -86,7 +86,6 @@ TEST(FemCurve, ANonConvergedStepEndsTheCurveWithTheReason) {
     EXPECT_DOUBLE_EQ(f.force, force * f.step / kSteps);
     EXPECT_DOUBLE_EQ(f.substep_force, force / kSteps);
     EXPECT_FALSE(f.residual <= o.curve_tolerance * f.force);
-    EXPECT_GT(f.iterations, 0);
     ASSERT_GE(part.curve_failure_level, 0);
     // The failing level and the finer ones stop at the same load; the static part is unchanged.
     for (size_t l = 0; l < part.levels.size(); ++l) {
