@@ -9,7 +9,9 @@
 // surface with max tet volume halved per level (not nested) — the Richardson-extrapolated
 // contact stiffness and surface displacement field, the estimated discretisation error of each
 // level, and the quasi-static force-displacement curve of a slow press (`--steps` load steps,
-// co-rotational FEM; 0 = none) (docs/FORMATS.md "FEM reference").
+// co-rotational FEM; 0 = none) (docs/FORMATS.md "FEM reference"). Exit 0; 1 when the curve is
+// incomplete (a load step did not converge: the file holds the curve up to the last load every
+// level reached and the reason, `curve.failure`); 2 bad input.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -99,6 +101,8 @@ struct ReferenceArgs {
   double force = 0;
   int levels = 3;
   int steps = 5;
+  int newton_max = 30;  // full Newton iterations per load increment of the curve
+  int bisections = 4;   // halvings of a curve load step that does not converge
 };
 
 json num(double v) {
@@ -177,6 +181,14 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
   o.refinement =
       a.refinement == "nested" ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
   o.curve_steps = a.steps;
+  if (a.newton_max < 0 || a.newton_max > 1000)
+    throw InputError("--newton-max: expected 0 to 1000 iterations, got " +
+                     std::to_string(a.newton_max));
+  if (a.bisections < 0 || a.bisections > 20)
+    throw InputError("--bisections: expected 0 to 20 halvings, got " +
+                     std::to_string(a.bisections));
+  o.curve_max_newton = a.newton_max;
+  o.curve_bisections = a.bisections;
   if (!(a.volume_scale > 0) || a.volume_scale > 1e3)
     throw InputError("--volume-scale: expected a factor in (0, 1000]");
   o.max_volume *= a.volume_scale;
@@ -305,6 +317,20 @@ int run_reference(const ReferenceArgs& a) {
         {"grade_max", a.grade_max},
         {"attempts", att}};
   }
+  const auto failure_json = [](const engine::FemCurveFailure& fl) {
+    return json{{"step", fl.step},
+                {"force", fl.force},
+                {"last_converged_force", fl.last_converged_force},
+                {"substep_force", fl.substep_force},
+                {"residual", num(fl.residual)},
+                {"iterations", fl.iterations},
+                {"tangent_indefinite", fl.tangent_indefinite},
+                {"negative_pivots", fl.negative_pivots},
+                {"converged_negative_pivots", fl.converged_negative_pivots},
+                {"min_det_f", num(fl.min_det_f)},
+                {"inverted_tets", fl.inverted_tets},
+                {"converged_min_det_f", num(fl.converged_min_det_f)}};
+  };
   if (a.steps > 0) {
     json pts = json::array();
     for (size_t k = 0; k < r.curve.size(); ++k) {
@@ -318,17 +344,39 @@ int run_reference(const ReferenceArgs& a) {
                      {"extrapolated", r.curve[k].extrapolated},
                      {"level_displacement", per_level}});
     }
-    json iters = json::array(), ms = json::array();
+    json iters = json::array(), ms = json::array(), subs = json::array(), bis = json::array(),
+         lsearch = json::array(), fails = json::array(), paths = json::array();
     for (const auto& lv : r.levels) {
       iters.push_back(lv.curve_iterations);
       ms.push_back(lv.curve_ms);
+      subs.push_back(lv.curve_substeps);
+      bis.push_back(lv.curve_bisections);
+      lsearch.push_back(lv.curve_line_searches);
+      json path = json::array();
+      for (const auto& q : lv.curve_path) path.push_back({q[0], q[1]});
+      paths.push_back(path);
+      fails.push_back(lv.curve_failure.failed ? failure_json(lv.curve_failure) : json(nullptr));
+    }
+    json failure = nullptr;
+    if (!r.curve_complete) {
+      failure = failure_json(r.curve_failure);
+      failure["level"] = r.curve_failure_level;
     }
     out["curve"] = {{"analysis",
                      "quasi-static: dead load ramped in equal steps, each an equilibrium of the "
                      "co-rotational FEM (large rotations, linear material)"},
                     {"steps", a.steps},
+                    {"complete", r.curve_complete},
+                    {"failure", failure},
+                    {"newton_max", a.newton_max},
+                    {"bisections_max", a.bisections},
                     {"points", pts},
                     {"newton_iterations", iters},
+                    {"substeps", subs},
+                    {"bisections", bis},
+                    {"line_searches", lsearch},
+                    {"level_failure", fails},
+                    {"level_path", paths},
                     {"solve_ms", ms}};
   }
   std::ofstream f(a.out);
@@ -349,7 +397,7 @@ int run_reference(const ReferenceArgs& a) {
       "asymptotic range [%.2g, %.2g])\n",
       r.stiffness, r.displacement, r.observed_order, r.refinement_ratio, engine::kPlausibleOrder[0],
       engine::kPlausibleOrder[1]);
-  if (!r.curve.empty()) {
+  if (a.steps > 0 && !r.curve.empty()) {
     std::printf("quasi-static press (co-rotational):\n%10s %14s %14s %14s\n", "F (N)", "u (m)",
                 "u_linear (m)", "k_secant (N/m)");
     for (const auto& c : r.curve)
@@ -376,6 +424,24 @@ int run_reference(const ReferenceArgs& a) {
                   t.finest_tets, t.finest_error, t.seconds,
                   t.trusted ? "trusted" : t.reason.c_str());
   std::printf("written %s\n", a.out.c_str());
+  if (a.steps > 0 && !r.curve_complete) {
+    const auto& fl = r.curve_failure;
+    std::printf(
+        "CURVE INCOMPLETE: on level %d the load %.6g N (step %d of %d, increment %.4g N after "
+        "at most %d bisections) did not converge: residual %.4g N after %d iterations; last "
+        "equilibrium at %.6g N; the tangent %s (%ld negative pivots on the last iterate, %ld at "
+        "the last equilibrium); smallest det F %.3g at the last iterate (%ld tets inverted), %.3g "
+        "at "
+        "the last equilibrium; the curve above ends at %.6g N (exit 1)\n",
+        r.curve_failure_level, fl.force, fl.step, a.steps, fl.substep_force, a.bisections,
+        fl.residual, fl.iterations, fl.last_converged_force,
+        fl.negative_pivots < 0  ? "was singular"
+        : fl.tangent_indefinite ? "was indefinite"
+                                : "stayed positive definite",
+        fl.negative_pivots, fl.converged_negative_pivots, fl.min_det_f, fl.inverted_tets,
+        fl.converged_min_det_f, r.curve.empty() ? 0.0 : r.curve.back().force);
+    return 1;
+  }
   return 0;
 }
 
@@ -680,6 +746,14 @@ palplab::app::CommandRegistration reg{
           ->capture_default_str();
       ref->add_option("--steps", ra->steps,
                       "Load steps of the quasi-static (co-rotational) press curve; 0 = none")
+          ->capture_default_str();
+      ref->add_option("--newton-max", ra->newton_max,
+                      "Curve: full Newton iterations per load increment (each with a line "
+                      "search) before the increment is halved")
+          ->capture_default_str();
+      ref->add_option("--bisections", ra->bisections,
+                      "Curve: halvings of a load step that does not converge (0-20); below "
+                      "that the curve stops at its last converged load and the command exits 1")
           ->capture_default_str();
       ref->add_option("--grade", ra->grade,
                       "Nested levels: rounds of surface refinement around the press before "

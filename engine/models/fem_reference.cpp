@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -237,17 +238,40 @@ FemReferenceOptions reference_options_from_mesh(const mesh::TetMesh& m, int pres
 
 namespace {
 
-// Quasi-static ramp of the dead load f (total force `force`) in `steps` steps on the
-// co-rotational FEM (plus the linear foundation `support`, 3#V diagonal), from rest. ss is the
-// factorised linear K (with the foundation) of the same constraints: modified Newton on it (or
-// on the last exact tangent once one was needed), a full Newton step with the exact
-// co-rotational tangent when that stalls. Fills the level's curve. The tangents are factorised
-// with ss's kind (CHOLMOD on the large levels): with the default LDL^T a 107k-dof level spent
-// 85 % of a 4 N curve's CPU in SimplicialLDLT factorisations (perf, docs/ARCHITECTURE.md).
+// Quasi-static ramp of the dead load f (total force `force`) to the loads force k / steps,
+// k = 1..max_points, on the co-rotational FEM (plus the linear foundation `support`, 3#V
+// diagonal), from rest. ss is the factorised linear K (with the foundation) of the same
+// constraints: modified Newton on it (or on the last exact tangent once one was needed), then
+// full Newton with the exact co-rotational tangent and a backtracking line search when that
+// stalls. A load step that does not converge is retried as two half steps, recursively, down to
+// 1 / 2^opt.curve_bisections of a step; below that the ramp stops and the level's curve ends at
+// the last converged load (lv.curve_failure says why). The tangents are factorised with ss's
+// kind (CHOLMOD on the large levels): with the default LDL^T a 107k-dof level spent 85 % of a
+// 4 N curve's CPU in SimplicialLDLT factorisations (perf, docs/ARCHITECTURE.md).
+// The smallest volume ratio det F = det[x1-x0, x2-x0, x3-x0] / det[X1-X0, ...] over the tets
+// at positions x (3#V), and the number of tets with det F <= 0 (inverted) in `inverted`.
+double min_det_f(const FemSystem& sys, const Eigen::VectorXd& x, long& inverted) {
+  double m = std::numeric_limits<double>::infinity();
+  inverted = 0;
+  for (long t = 0; t < sys.T.rows(); ++t) {
+    Eigen::Matrix3d Ds, Dm;
+    for (int j = 0; j < 3; ++j) {
+      Ds.col(j) = x.segment<3>(3 * sys.T(t, j + 1)) - x.segment<3>(3 * sys.T(t, 0));
+      Dm.col(j) = (sys.X0.row(sys.T(t, j + 1)) - sys.X0.row(sys.T(t, 0))).transpose();
+    }
+    const double j = Ds.determinant() / Dm.determinant();
+    m = std::min(m, j);
+    if (!(j > 0)) ++inverted;
+  }
+  return m;
+}
+
 void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
-                        const Eigen::VectorXd& support, const Eigen::VectorXd& f, double force,
-                        int steps, double tol, FemReferenceLevel& lv) {
+                        const Eigen::VectorXd& support, const Eigen::VectorXd& f,
+                        const FemReferenceOptions& opt, int max_points, FemReferenceLevel& lv) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double force = opt.force, tol = opt.curve_tolerance;
+  const int steps = opt.curve_steps;
   const Eigen::VectorXd X0 = flatten(sys.X0);
   const std::vector<int>& fixed = ss.split.fixed;
   std::vector<std::uint8_t> fixed_dof(static_cast<size_t>(sys.dofs()), 0);
@@ -255,15 +279,41 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
   Eigen::VectorXd u = Eigen::VectorXd::Zero(sys.dofs()), fint, r;
   std::vector<Matrix12d> Ke_t;
   SparseMatrixd K_t;
-  const auto residual = [&](const Eigen::VectorXd& fk) {
-    corotational_forces(sys, X0 + u, fint);
-    r = fk + fint - support.cwiseProduct(u);
-    for (int d : fixed) r[d] = 0;
-    return r.norm();
+  const auto residual_at = [&](const Eigen::VectorXd& uu, const Eigen::VectorXd& fk,
+                               Eigen::VectorXd& rr) {
+    corotational_forces(sys, X0 + uu, fint);
+    rr = fk + fint - support.cwiseProduct(uu);
+    for (int d : fixed) rr[d] = 0;
+    const double n = rr.norm();
+    return std::isfinite(n) ? n : std::numeric_limits<double>::infinity();
   };
-  // Converged: residual below tol x the step's force, or the update below tol x max |u|, or
+  // The exact tangent at u, factorised into st (with ss's kind; LDL^T when CHOLMOD refuses an
+  // indefinite tangent). Returns its negative pivots (the inertia of K_ff by Sylvester's law:
+  // 0 for a CHOLMOD factor, which exists only for a positive definite matrix), or -1 when the
+  // tangent is singular (no factor).
+  const auto tangent = [&](StaticSolver& st) -> long {
+    corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
+    for (long d = 0; d < support.size(); ++d)
+      if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
+    // CHOLMOD's LL^T needs a positive definite matrix; the exact co-rotational tangent can be
+    // indefinite under a large load (the 4 N body press), where LDL^T still factorises it.
+    try {
+      static_precompute(K_t, fixed_dof, st, ss.kind);
+    } catch (const std::runtime_error&) {
+      if (ss.kind == SparseSolverKind::ldlt) return -1;  // a (near) zero pivot: singular
+      try {
+        static_precompute(K_t, fixed_dof, st, SparseSolverKind::ldlt);
+      } catch (const std::runtime_error&) {
+        return -1;  // a (near) zero pivot: singular tangent
+      }
+    }
+    if (st.kind != SparseSolverKind::ldlt) return 0;
+    const Eigen::VectorXd dd = st.ldlt.vectorD();
+    return static_cast<long>((dd.array() < 0).count());
+  };
+  // Converged: residual below tol x the load's force, or the update below tol x max |u|, or
   // the residual at its round-off floor (eps |K| |x| from forces computed on positions; it no
-  // longer decreases and is below 1e-6 of the step's force).
+  // longer decreases and is below 1e-6 of the load's force).
   const auto converged = [&](const Eigen::VectorXd& du, double res, double prev, double scale) {
     return res <= tol * scale * force ||
            du.cwiseAbs().maxCoeff() <= tol * u.cwiseAbs().maxCoeff() ||
@@ -271,47 +321,126 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
   };
   StaticSolver st;               // the last exact tangent, factorised
   const StaticSolver* mn = &ss;  // the matrix of the modified Newton iterations
-  for (int k = 1; k <= steps; ++k) {
-    const double scale = static_cast<double>(k) / steps;
+  long last_negative = 0;        // negative pivots of the last tangent factorised
+  bool any_indefinite = false;   // of the current attempt's tangents
+  // Equilibrium at load fraction `scale` from the current u. Returns whether it converged; the
+  // iterations are added to `it`, the final residual left in `res`.
+  const auto equilibrate = [&](double scale, int& it, double& res) {
     const Eigen::VectorXd fk = scale * f;
-    const double target = tol * scale * force;
-    double res = residual(fk);
-    int it = 0;
-    bool done = res <= target;
+    res = residual_at(u, fk, r);
+    bool done = res <= tol * scale * force;
     // Modified Newton: linear convergence at the rate of |1 - K^-1 K_t|, cheap (one
     // back-substitution per iteration); left for the full Newton when it contracts too slowly.
     for (double prev = res; !done && it < 200; ++it) {
       const Eigen::VectorXd du = static_solve(*mn, r);
       u += du;
       prev = res;
-      res = residual(fk);
+      res = residual_at(u, fk, r);
       done = converged(du, res, prev, scale);
-      if (!done && res > 0.9 * prev) break;
+      if (!done && !(res <= 0.9 * prev)) break;
     }
-    for (int newton = 0; !done && newton < 30; ++newton, ++it) {
-      corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
-      for (long d = 0; d < support.size(); ++d)
-        if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
-      // CHOLMOD's LL^T needs a positive definite matrix; the exact co-rotational tangent can be
-      // indefinite under a large load (the 4 N body press), where LDL^T still factorises it.
-      try {
-        static_precompute(K_t, fixed_dof, st, ss.kind);
-      } catch (const std::runtime_error&) {
-        if (ss.kind != SparseSolverKind::cholmod) throw;
-        static_precompute(K_t, fixed_dof, st, SparseSolverKind::ldlt);
-      }
-      mn = &st;  // the latest tangent drives the modified Newton of the next steps
+    Eigen::VectorXd r_try;
+    for (int newton = 0; !done && newton < opt.curve_max_newton; ++newton, ++it) {
+      if (!std::isfinite(res)) return false;
+      last_negative = tangent(st);
+      if (last_negative < 0) return false;
+      any_indefinite = any_indefinite || last_negative > 0;
+      mn = &st;  // the latest tangent drives the modified Newton of the next loads
       const Eigen::VectorXd du = static_solve(st, r);
-      u += du;
+      // Backtracking line search on |r|: the full step unless it does not decrease the
+      // residual, else the best of the halved steps (down to 1/32); the full step when none
+      // does better (Newton may need to climb out of a region where |r| is not convex).
+      double alpha = 1, best_alpha = 1;
+      double res_try = residual_at(u + du, fk, r_try), best = res_try;
+      for (int h = 0; h < opt.curve_line_search && !(res_try < res); ++h) {
+        alpha *= 0.5;
+        res_try = residual_at(u + alpha * du, fk, r_try);
+        if (res_try < best) {
+          best = res_try;
+          best_alpha = alpha;
+        }
+      }
+      const Eigen::VectorXd step = best_alpha * du;
+      u += step;
       const double prev = res;
-      res = residual(fk);
-      done = converged(du, res, prev, scale);
+      res = residual_at(u, fk, r);
+      done = converged(step, res, prev, scale);
+      if (best_alpha < 1) ++lv.curve_line_searches;
     }
-    if (!done)
-      throw std::runtime_error("fem reference: the quasi-static step " + std::to_string(k) +
-                               " did not converge (residual " + std::to_string(res) + " N)");
+    return done;
+  };
+  Eigen::VectorXd u_try_end;  // the last iterate of the last failed attempt
+  double lambda = 0;          // the last converged load fraction
+  const double dl0 = 1.0 / steps, dl_min = dl0 / std::pow(2.0, opt.curve_bisections);
+  for (int k = 1; k <= max_points; ++k) {
+    const double target = static_cast<double>(k) / steps;
+    double dl = target - lambda;
+    int it = 0, sub = 0;
+    while (lambda < target) {
+      // The step's own load exactly when it is reached (as without bisection: F_k = F k/steps).
+      const double scale = lambda + dl >= target * (1 - 1e-12) ? target : lambda + dl;
+      const Eigen::VectorXd u_prev = u;
+      double res = 0;
+      any_indefinite = false;
+      int it_try = 0;
+      if (equilibrate(scale, it_try, res)) {
+        it += it_try;
+        ++sub;
+        lambda = scale;
+        lv.curve_path.push_back({force * lambda, f.dot(u) / force});
+        dl = std::min(2 * dl, dl0);  // grow back after a bisected sub-step
+        continue;
+      }
+      it += it_try;
+      // Not converged: restore the last equilibrium and halve the increment (modified Newton
+      // on the linear K again: st holds a tangent of the failed attempt's last iterate).
+      u_try_end = u;
+      u = u_prev;
+      mn = &ss;
+      if (dl * 0.5 >= dl_min * (1 - 1e-12)) {
+        dl *= 0.5;
+        ++lv.curve_bisections;
+        continue;
+      }
+      FemCurveFailure& fl = lv.curve_failure;
+      fl.failed = true;
+      fl.step = k;
+      fl.force = force * scale;
+      fl.last_converged_force = force * lambda;
+      fl.substep_force = force * dl;
+      fl.residual = res;
+      fl.iterations = it_try;
+      fl.tangent_indefinite = any_indefinite || last_negative > 0;
+      fl.negative_pivots = last_negative;
+      {
+        long inv = 0;
+        fl.min_det_f = min_det_f(sys, X0 + u_try_end, inv);
+        fl.inverted_tets = inv;
+        fl.converged_min_det_f = min_det_f(sys, X0 + u, inv);
+      }
+      // The inertia of the tangent at the last converged equilibrium: negative pivots there
+      // mean the path already passed a limit or bifurcation point (unstable equilibrium); none
+      // means the load cannot be raised by dl from a stable state (a limit point within dl, or
+      // a Newton failure).
+      if (lambda > 0) {
+        StaticSolver sc;
+        corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
+        for (long d = 0; d < support.size(); ++d)
+          if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
+        try {
+          static_precompute(K_t, fixed_dof, sc, SparseSolverKind::ldlt);
+          const Eigen::VectorXd dd = sc.ldlt.vectorD();
+          fl.converged_negative_pivots = static_cast<long>((dd.array() < 0).count());
+        } catch (const std::runtime_error&) {
+          fl.converged_negative_pivots = -1;
+        }
+      }
+      break;
+    }
+    if (lv.curve_failure.failed) break;
     lv.curve_displacement.push_back(f.dot(u) / force);
     lv.curve_iterations.push_back(it);
+    lv.curve_substeps.push_back(sub);
   }
   lv.curve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -498,6 +627,11 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     throw InputError("fem reference: support modulus must be >= 0 N/m^3");
   if (opt.curve_steps < 0 || !(opt.curve_tolerance > 0))
     throw InputError("fem reference: curve steps must be >= 0 and the tolerance > 0");
+  if (opt.curve_max_newton < 0 || opt.curve_bisections < 0 || opt.curve_bisections > 20 ||
+      opt.curve_line_search < 0 || opt.curve_line_search > 20)
+    throw InputError(
+        "fem reference: curve Newton iterations must be >= 0, bisections and line-search halvings "
+        "0 to 20");
   if (opt.pcg_min_dofs < 0 || !(opt.pcg_tolerance > 0 && opt.pcg_tolerance < 1))
     throw InputError("fem reference: PCG threshold must be >= 0 and its tolerance in (0, 1)");
   if (opt.pcg_min_dofs > 0 && opt.curve_steps > 0)
@@ -526,6 +660,7 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
   // The previous level's factor (the PCG's coarse correction), if any (StaticSolver is not
   // movable: held by pointer).
   std::unique_ptr<StaticSolver> ss_prev;
+  int curve_points = opt.curve_steps;  // the loads every level so far reached
   for (int l = 0; l < opt.levels; ++l) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReferenceLevelSystem& ls = builder.next();
@@ -614,8 +749,16 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     lv.stiffness = opt.force / delta;
     lv.solve_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (opt.curve_steps > 0)
-      quasi_static_curve(sys, ss, support, f, opt.force, opt.curve_steps, opt.curve_tolerance, lv);
+    // The curve of a level goes at most as far as those of the coarser levels (a partial curve
+    // is extrapolated over the loads every level reached).
+    if (opt.curve_steps > 0 && curve_points > 0) {
+      quasi_static_curve(sys, ss, support, f, opt, curve_points, lv);
+      if (lv.curve_failure.failed && !res.curve_failure.failed) {
+        res.curve_failure = lv.curve_failure;
+        res.curve_failure_level = l;
+      }
+      curve_points = static_cast<int>(lv.curve_displacement.size());
+    }
     // Kept for the next level's PCG coarse correction (none after a PCG level: no factor).
     ss_prev.reset();
     if (opt.pcg_min_dofs > 0 && lv.solver.rfind("pcg", 0) != 0) ss_prev = std::move(ss_ptr);
@@ -656,7 +799,8 @@ FemReferenceResult fem_reference(const FemReferenceOptions& opt) {
     res.field = unflatten(uf);
     umax = uf.cwiseAbs().maxCoeff();
   }
-  for (int k = 0; k < opt.curve_steps; ++k) {
+  res.curve_complete = curve_points == opt.curve_steps;
+  for (int k = 0; k < curve_points; ++k) {
     FemCurvePoint c;
     c.force = opt.force * (k + 1) / opt.curve_steps;
     const double d2 = res.levels[L - 1].curve_displacement[k],

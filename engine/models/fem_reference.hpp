@@ -41,6 +41,16 @@
 // co-rotational tangent when that stalls). On every level; each point is Richardson-
 // extrapolated with its own observed order (ratio as for the static value) when both it and
 // the static order are plausible, else it is the finest level's value.
+//
+// Non-convergence: a load step whose Newton iterations do not converge (curve_max_newton full
+// Newton iterations, each with a backtracking line search on |r|) is retried as two half
+// steps, recursively, down to 1/2^curve_bisections of a step. When even that increment does
+// not converge the level's curve stops at its last converged load, with the reason
+// (FemCurveFailure: residual, iterations, the load, the inertia of the tangents); the finer
+// levels then compute the curve only up to that load, and the extrapolated curve has the points
+// every level reached (curve_complete = false). Under a dead load (load control) no method can
+// pass a limit point of the load-displacement path: there the tangent at the last equilibrium
+// has a negative pivot or the load cannot be raised by the smallest increment.
 #include <array>
 #include <functional>
 #include <string>
@@ -104,6 +114,13 @@ struct FemReferenceOptions {
   // is below tolerance x the step's force or its last update below tolerance x max |u|.
   int curve_steps = 0;
   double curve_tolerance = 1e-10;
+  // Robustness of the curve's Newton solves (top of this file, "Non-convergence"): full Newton
+  // iterations per load increment (after the modified Newton ones), halvings of the line
+  // search per iteration (0 = none), halvings of a load step that does not converge (0 = none:
+  // the smallest increment is the step / 2^curve_bisections).
+  int curve_max_newton = 30;
+  int curve_line_search = 5;
+  int curve_bisections = 4;
   // Factorisation of every level's stiffness (and of the curve's tangents): automatic takes
   // CHOLMOD's supernodal LL^T on the large levels (fem_static.hpp).
   SparseSolverKind solver = SparseSolverKind::automatic;
@@ -117,6 +134,28 @@ struct FemReferenceOptions {
   // (the curve's Newton steps reuse a factorisation).
   long pcg_min_dofs = 0;
   double pcg_tolerance = 1e-10;
+};
+
+// Why a level's quasi-static curve stopped (failed = false: it reached every load asked of it).
+struct FemCurveFailure {
+  bool failed = false;
+  int step = 0;                     // the load step (1-based) whose load was not reached
+  double force = 0;                 // N, the load of the last increment tried
+  double last_converged_force = 0;  // N, the last equilibrium (0 = none)
+  double substep_force = 0;         // N, that increment (the smallest allowed)
+  double residual = 0;              // N, |r| after its last iteration (inf: not finite)
+  int iterations = 0;               // of that attempt (modified + full Newton)
+  // A tangent of that attempt had negative pivots (LDL^T inertia: CHOLMOD refused it).
+  bool tangent_indefinite = false;
+  long negative_pivots = 0;  // of its last tangent (-1: singular, no factor)
+  // Negative pivots of the tangent at the last equilibrium (LDL^T; -1 singular; 0 when there is
+  // no equilibrium but rest, whose tangent is the positive definite K).
+  long converged_negative_pivots = 0;
+  // The smallest det F over the tets at the attempt's last iterate / at the last equilibrium,
+  // and the inverted tets (det F <= 0) at that iterate: the linear material of the
+  // co-rotational model does not resist inversion (its energy stays finite as det F -> 0).
+  double min_det_f = 1, converged_min_det_f = 1;
+  long inverted_tets = 0;
 };
 
 struct FemReferenceLevel {
@@ -139,8 +178,17 @@ struct FemReferenceLevel {
   long pcg_iterations = 0;  // pcg: CG iterations to pcg_tolerance
   // Quasi-static curve on this level (curve_steps entries): work-conjugate contact
   // displacement (m) at force F_k, and the Newton iterations of the step.
+  // Fewer entries than curve_steps when the curve stopped (curve_failure) or a coarser level's
+  // did.
   std::vector<double> curve_displacement;
   std::vector<int> curve_iterations;
+  std::vector<int> curve_substeps;  // converged increments per step (1 = not bisected)
+  long curve_bisections = 0;        // halvings of load increments
+  long curve_line_searches = 0;     // Newton iterations that took a shortened step
+  // Every converged increment's (load N, work-conjugate displacement m), bisected ones
+  // included: the path near a failure (its slope dF/du tends to 0 at a limit point).
+  std::vector<std::array<double, 2>> curve_path;
+  FemCurveFailure curve_failure;
   double curve_ms = 0;
 };
 
@@ -164,9 +212,14 @@ struct FemReferenceResult {
   // asymptotic range or their sizes are not what was assumed, and the extrapolation should not
   // be trusted (the field and curve are then the finest level's, unextrapolated).
   bool order_plausible = false;
-  double refinement_ratio = 0;       // the ratio used for the extrapolation (nested: 2)
-  double press_radius = 0;           // m, the options' (for reference_untrusted_reason)
-  std::vector<FemCurvePoint> curve;  // quasi-static curve (curve_steps points), extrapolated
+  double refinement_ratio = 0;  // the ratio used for the extrapolation (nested: 2)
+  double press_radius = 0;      // m, the options' (for reference_untrusted_reason)
+  // Quasi-static curve, extrapolated: one point per load step that every level reached
+  // (curve_steps points when curve_complete).
+  std::vector<FemCurvePoint> curve;
+  bool curve_complete = true;
+  FemCurveFailure curve_failure;  // of the first level whose curve stopped
+  int curve_failure_level = -1;
 };
 
 // Whether a reference can be trusted, by the criteria the extrapolation itself uses: the

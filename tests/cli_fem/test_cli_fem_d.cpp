@@ -156,6 +156,60 @@ TEST(CliFemD, ReferenceOnASmallCase) {
   fs::remove_all(d);
 }
 
+// A curve whose load step does not converge is a result, not an internal error: exit 1, the
+// file written with the points every level reached and the reason (`curve.failure`). 1000 N on
+// the coarse D (~600 N/m) in one step, 3 Newton iterations, no bisection: the first load step
+// cannot converge, so the curve is empty.
+TEST(CliFemD, ReferenceWithAnIncompleteCurveExitsOne) {
+  const fs::path d = tmp("incomplete");
+  const fs::path p = d_variant(d, "Dcoarse", 400);
+  const fs::path out = d / "ref.json";
+  const Result r = run("fem reference " + p.string() +
+                           " --press ovary_left --force 1000 --levels 3 --refinement tetgen "
+                           "--steps 1 --newton-max 3 --bisections 0 --out " +
+                           out.string(),
+                       d);
+  ASSERT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_NE(r.out.find("CURVE INCOMPLETE"), std::string::npos) << r.out;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  const json j = json::parse(slurp(out));
+  const json& c = j.at("curve");
+  EXPECT_FALSE(c.at("complete").get<bool>());
+  EXPECT_EQ(c.at("newton_max").get<int>(), 3);
+  EXPECT_EQ(c.at("bisections_max").get<int>(), 0);
+  EXPECT_TRUE(c.at("points").empty());
+  const json& f = c.at("failure");
+  EXPECT_EQ(f.at("level").get<int>(), 0);
+  EXPECT_EQ(f.at("step").get<int>(), 1);
+  EXPECT_DOUBLE_EQ(f.at("force").get<double>(), 1000.0);
+  EXPECT_DOUBLE_EQ(f.at("last_converged_force").get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(f.at("substep_force").get<double>(), 1000.0);
+  EXPECT_TRUE(f.at("residual").is_null() || f.at("residual").get<double>() > 1e-8);
+  EXPECT_GT(f.at("iterations").get<int>(), 0);
+  for (const char* k : {"tangent_indefinite", "negative_pivots", "converged_negative_pivots",
+                        "min_det_f", "inverted_tets", "converged_min_det_f"})
+    EXPECT_TRUE(f.contains(k)) << k;
+  ASSERT_EQ(c.at("level_failure").size(), 3u);
+  EXPECT_FALSE(c.at("level_failure")[0].is_null());
+  // The finer levels do not try loads the coarsest did not reach; the static part is complete.
+  EXPECT_TRUE(c.at("level_failure")[1].is_null());
+  EXPECT_TRUE(c.at("newton_iterations")[2].empty());
+  EXPECT_EQ(j.at("levels").size(), 3u);
+  EXPECT_GT(j.at("stiffness").get<double>(), 0.0);
+  // The bounds of the new options are input errors.
+  EXPECT_EQ(run("fem reference " + p.string() + " --press ovary_left --force 1 --bisections 21 " +
+                    "--out " + out.string(),
+                d)
+                .code,
+            2);
+  EXPECT_EQ(run("fem reference " + p.string() + " --press ovary_left --force 1 --newton-max -1 " +
+                    "--out " + out.string(),
+                d)
+                .code,
+            2);
+  fs::remove_all(d);
+}
+
 TEST(CliFemD, ReferenceBadInputsExitTwo) {
   const fs::path d = tmp("bad");
   const std::string o = " --out " + (d / "x.json").string();
