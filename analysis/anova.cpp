@@ -121,16 +121,19 @@ Anova levene(const Groups& groups, LeveneCentre centre) {
 
 std::vector<double> midranks(const std::vector<double>& x, double* tie_sum) {
   const size_t n = x.size();
-  std::vector<size_t> idx(n);
-  std::iota(idx.begin(), idx.end(), 0);
-  std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return x[a] < x[b]; });
+  // (value, index) pairs sorted by value, contiguous (no indirection through x): ranks depend
+  // only on the values (equal values share their mean rank), not on the order within ties.
+  std::vector<std::pair<double, size_t>> v(n);
+  for (size_t i = 0; i < n; ++i) v[i] = {x[i], i};
+  std::stable_sort(v.begin(), v.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<double> r(n);
   double ts = 0;
   for (size_t i = 0; i < n;) {
     size_t j = i;
-    while (j + 1 < n && x[idx[j + 1]] == x[idx[i]]) ++j;
+    while (j + 1 < n && v[j + 1].first == v[i].first) ++j;
     double rank = 0.5 * (static_cast<double>(i + 1) + static_cast<double>(j + 1));
-    for (size_t t = i; t <= j; ++t) r[idx[t]] = rank;
+    for (size_t t = i; t <= j; ++t) r[v[t].second] = rank;
     double t = static_cast<double>(j - i + 1);
     ts += t * t * t - t;
     i = j + 1;

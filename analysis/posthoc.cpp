@@ -7,6 +7,7 @@
 
 #include "analysis/descriptives.hpp"
 #include "analysis/distributions.hpp"
+#include "analysis/parallel.hpp"
 
 namespace palplab::analysis {
 
@@ -44,12 +45,15 @@ std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch, DfMode mode)
       PairwiseT r;
       r.a = static_cast<int>(a);
       r.b = static_cast<int>(b);
-      r.test = welch ? welch_t(groups[a], groups[b], mode) : student_t(groups[a], groups[b]);
-      // The effect-size interval inverts the same t as the test beside it.
-      r.effect =
-          welch ? cohens_d_welch(groups[a], groups[b], r.test) : cohens_d(groups[a], groups[b]);
       out.push_back(r);
     }
+  parallel_for(out.size(), [&](size_t i) {
+    PairwiseT& r = out[i];
+    const auto &ga = groups[r.a], &gb = groups[r.b];
+    r.test = welch ? welch_t(ga, gb, mode) : student_t(ga, gb);
+    // The effect-size interval inverts the same t as the test beside it.
+    r.effect = welch ? cohens_d_welch(ga, gb, r.test) : cohens_d(ga, gb);
+  });
   std::vector<double> p;
   for (auto& r : out) p.push_back(r.test.p);
   auto h = holm(p), bf = bonferroni(p);
@@ -80,15 +84,16 @@ RangeQuantiles::RangeQuantiles(double level, int k, const std::vector<double>& d
     x_hi_ = 1 / big.front();
     const double checks[] = {big[big.size() / 3], big[big.size() / 2], big[2 * big.size() / 3]};
     double exact[3];
-    for (int c = 0; c < 3; ++c) exact[c] = studentized_range_quantile(level, k, checks[c]);
+    parallel_for(
+        3, [&](size_t c) { exact[c] = studentized_range_quantile(level, k, checks[c]); }, 2);
     // A narrow df range (e.g. Welch df that differ only by rounding) needs 2 or 3 nodes.
     const int first = x_hi_ - x_lo_ < 1e-3 * x_hi_ ? 2 : 9;
     for (int n = first; n <= kMaxNodes && nodes_.empty(); n = 2 * n - 1) {
       std::vector<double> x(n), q(n);
-      for (int i = 0; i < n; ++i) {
+      for (int i = 0; i < n; ++i)
         x[i] = 0.5 * (x_lo_ + x_hi_) + 0.5 * (x_hi_ - x_lo_) * std::cos(M_PI * i / (n - 1));
-        q[i] = studentized_range_quantile(level, k, 1 / x[i]);
-      }
+      parallel_for(
+          n, [&](size_t i) { q[i] = studentized_range_quantile(level, k, 1 / x[i]); }, 2);
       nodes_ = x;
       values_ = q;
       double worst = 0;
@@ -98,7 +103,10 @@ RangeQuantiles::RangeQuantiles(double level, int k, const std::vector<double>& d
     }
     if (nodes_.empty()) direct_df_.insert(direct_df_.end(), big.begin(), big.end());
   }
-  for (double v : direct_df_) direct_q_.push_back(studentized_range_quantile(level, k, v));
+  direct_q_.resize(direct_df_.size());
+  parallel_for(
+      direct_df_.size(),
+      [&](size_t i) { direct_q_[i] = studentized_range_quantile(level, k, direct_df_[i]); }, 2);
 }
 
 double RangeQuantiles::interpolate(double x) const {
@@ -148,20 +156,24 @@ std::vector<RangeComparison> tukey_kramer(const Groups& groups, double level) {
       RangeComparison r;
       r.a = a;
       r.b = b;
-      r.mean_diff = static_cast<double>(mean_ld(groups[a]) - mean_ld(groups[b]));
-      r.df = an.df_within;
-      r.se = std::sqrt(an.ms_within / 2 * (1.0 / groups[a].size() + 1.0 / groups[b].size()));
-      if (r.se > 0) {
-        r.q = std::fabs(r.mean_diff) / r.se;
-        r.p = clamp_p(studentized_range_sf(r.q, k, r.df));
-        r.ci_low = r.mean_diff - qc * r.se;
-        r.ci_high = r.mean_diff + qc * r.se;
-      } else {
-        r.defined = false;
-        r.q = r.p = r.ci_low = r.ci_high = kNaN;
-      }
       out.push_back(r);
     }
+  parallel_for(out.size(), [&](size_t i) {
+    RangeComparison& r = out[i];
+    const auto &ga = groups[r.a], &gb = groups[r.b];
+    r.mean_diff = static_cast<double>(mean_ld(ga) - mean_ld(gb));
+    r.df = an.df_within;
+    r.se = std::sqrt(an.ms_within / 2 * (1.0 / ga.size() + 1.0 / gb.size()));
+    if (r.se > 0) {
+      r.q = std::fabs(r.mean_diff) / r.se;
+      r.p = clamp_p(studentized_range_sf(r.q, k, r.df));
+      r.ci_low = r.mean_diff - qc * r.se;
+      r.ci_high = r.mean_diff + qc * r.se;
+    } else {
+      r.defined = false;
+      r.q = r.p = r.ci_low = r.ci_high = kNaN;
+    }
+  });
   return out;
 }
 
@@ -174,16 +186,20 @@ std::vector<RangeComparison> games_howell(const Groups& groups, double level) {
       RangeComparison r;
       r.a = a;
       r.b = b;
-      TTest w = welch_t(groups[a], groups[b]);
-      r.mean_diff = w.mean_diff;
-      r.se = w.se / std::sqrt(2.0);
-      r.df = w.df_exact;
-      if (r.se > 0 && r.df > 0) dfs.push_back(r.df);
       out.push_back(r);
     }
+  parallel_for(out.size(), [&](size_t i) {
+    RangeComparison& r = out[i];
+    const TTest w = welch_t_moments(groups[r.a], groups[r.b]);
+    r.mean_diff = w.mean_diff;
+    r.se = w.se / std::sqrt(2.0);
+    r.df = w.df_exact;
+  });
+  for (const auto& r : out)
+    if (r.se > 0 && r.df > 0) dfs.push_back(r.df);
   // One critical value per pair's df, but not one slow root search per pair.
   RangeQuantiles qc(level, k, dfs);
-  for (auto& r : out) finish_range(r, k, qc);
+  parallel_for(out.size(), [&](size_t i) { finish_range(out[i], k, qc); });
   return out;
 }
 

@@ -45,7 +45,7 @@ TTest student_t(const std::vector<double>& a, const std::vector<double>& b) {
   return r;
 }
 
-TTest welch_t(const std::vector<double>& a, const std::vector<double>& b, DfMode mode) {
+TTest welch_t_moments(const std::vector<double>& a, const std::vector<double>& b, DfMode mode) {
   need_two(a, b);
   TTest r;
   r.welch = true;
@@ -56,6 +56,11 @@ TTest welch_t(const std::vector<double>& a, const std::vector<double>& b, DfMode
   long double den = va * va / (na - 1) + vb * vb / (nb - 1);
   r.df_exact = den > 0 ? static_cast<double>((va + vb) * (va + vb) / den) : kNaN;
   r.df = mode == DfMode::Floor ? std::max(1.0, std::floor(r.df_exact)) : r.df_exact;
+  return r;
+}
+
+TTest welch_t(const std::vector<double>& a, const std::vector<double>& b, DfMode mode) {
+  TTest r = welch_t_moments(a, b, mode);
   finish(r);
   return r;
 }
@@ -83,14 +88,36 @@ std::vector<long double> mann_whitney_counts(int m, int n) {
 }  // namespace
 
 MannWhitney mann_whitney(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> sa = a, sb = b;
+  std::stable_sort(sa.begin(), sa.end());  // stable_sort: no out-of-range reads on a NaN
+  std::stable_sort(sb.begin(), sb.end());
+  return mann_whitney_sorted(sa, sb);
+}
+
+MannWhitney mann_whitney_sorted(const std::vector<double>& a, const std::vector<double>& b) {
   if (a.empty() || b.empty()) throw std::invalid_argument("Mann-Whitney: empty sample");
-  std::vector<double> all = a;
-  all.insert(all.end(), b.begin(), b.end());
+  // Mid-ranks of the pooled sample by merging the two sorted samples: each run of equal values
+  // (from either sample) gets the average of its ranks. Ranks are multiples of 1/2 and their
+  // sum is exact in long double, so the order of summation does not matter; the tie sum is
+  // accumulated in increasing order of value, as midranks() does.
   double ties = 0;
-  auto r = midranks(all, &ties);
-  const double na = a.size(), nb = b.size(), n = na + nb;
   long double rs = 0;
-  for (size_t i = 0; i < a.size(); ++i) rs += r[i];
+  for (size_t i = 0, j = 0; i < a.size() || j < b.size();) {
+    const bool from_a = j == b.size() || (i < a.size() && a[i] < b[j]);
+    const double v = from_a ? a[i] : b[j];
+    size_t ia = i, jb = j;
+    while (ia < a.size() && a[ia] == v) ++ia;
+    while (jb < b.size() && b[jb] == v) ++jb;
+    if (ia == i && jb == j) (from_a ? ia : jb) += 1;            // a NaN: a run of its own, no loop
+    const size_t run = (ia - i) + (jb - j), first = i + j + 1;  // 1-based rank of the run start
+    const double rank = 0.5 * (static_cast<double>(first) + static_cast<double>(first + run - 1));
+    for (size_t t = i; t < ia; ++t) rs += rank;
+    const double t = static_cast<double>(run);
+    ties += t * t * t - t;
+    i = ia;
+    j = jb;
+  }
+  const double na = a.size(), nb = b.size(), n = na + nb;
   MannWhitney mw;
   mw.W = static_cast<double>(rs - na * (na + 1) / 2);
   mw.exact = na < 50 && nb < 50 && ties == 0;
@@ -122,7 +149,10 @@ MannWhitney mann_whitney(const std::vector<double>& a, const std::vector<double>
   return mw;
 }
 
-EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b, double level) {
+namespace {
+// d and g of cohens_d, without an interval (cohens_d_welch replaces the pooled one).
+EffectSize cohens_d_point(const std::vector<double>& a, const std::vector<double>& b,
+                          double level) {
   need_two(a, b);
   EffectSize e;
   e.level = level;
@@ -136,6 +166,15 @@ EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b, 
   e.d = static_cast<double>((mean_ld(a) - mean_ld(b)) / sp);
   const double j = std::exp(std::lgamma(nu / 2) - std::lgamma((nu - 1) / 2)) / std::sqrt(nu / 2);
   e.g = j * e.d;
+  return e;
+}
+}  // namespace
+
+EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b, double level) {
+  EffectSize e = cohens_d_point(a, b, level);
+  if (!e.defined) return e;
+  const double na = a.size(), nb = b.size(), nu = na + nb - 2;
+  const double j = std::exp(std::lgamma(nu / 2) - std::lgamma((nu - 1) / 2)) / std::sqrt(nu / 2);
   // d·/sqrt(1/na + 1/nb) is Student's t, noncentral t(ν, δ) with δ = true d/sqrt(1/na+1/nb):
   // the interval for δ inverts its CDF at the observed t.
   const double scale = std::sqrt(1 / na + 1 / nb);
@@ -150,7 +189,9 @@ EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b, 
 
 EffectSize cohens_d_welch(const std::vector<double>& a, const std::vector<double>& b,
                           const TTest& w, double level) {
-  EffectSize e = cohens_d(a, b, level);
+  // The pooled interval of cohens_d is not computed: it would be replaced below (two root
+  // searches on the noncentral t per pair saved).
+  EffectSize e = cohens_d_point(a, b, level);
   e.ci_method = "welch";
   if (!e.defined || !w.defined) {
     e.d_ci_low = e.d_ci_high = e.g_ci_low = e.g_ci_high = kNaN;

@@ -23,6 +23,10 @@ struct TTest {
 TTest student_t(const std::vector<double>& a, const std::vector<double>& b);
 TTest welch_t(const std::vector<double>& a, const std::vector<double>& b,
               DfMode mode = DfMode::Exact);
+// Only mean_diff, se, df_exact, df and welch of welch_t (same values; t, p and the interval
+// are left at their defaults): for Games–Howell, which needs the SE and df, not the t test.
+TTest welch_t_moments(const std::vector<double>& a, const std::vector<double>& b,
+                      DfMode mode = DfMode::Exact);
 
 struct MannWhitney {
   double W = 0;         // Σ ranks of a - #a(#a+1)/2 (R's W; the Mann–Whitney U of a)
@@ -35,6 +39,9 @@ struct MannWhitney {
 // when both samples have < 50 values and there are no ties, else the normal approximation
 // with tie-corrected variance and continuity correction.
 MannWhitney mann_whitney(const std::vector<double>& a, const std::vector<double>& b);
+// The same test on samples already sorted ascending (no NaN): a linear merge instead of a sort
+// of the pooled sample, for callers that compare every pair of many groups.
+MannWhitney mann_whitney_sorted(const std::vector<double>& a, const std::vector<double>& b);
 
 struct EffectSize {
   double d = 0;  // Cohen's d = (mean a - mean b) / pooled SD

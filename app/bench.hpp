@@ -24,8 +24,11 @@ struct BenchResult {
   std::string name, what;  // short id, human description
   int reps = 0;
   double median_s = 0, min_s = 0, max_s = 0, cold_s = 0;  // wall time
-  double median_cpu_s = 0;  // process CPU time: on a shared machine wall time includes waiting
-  double goal_s = 0;        // 0 = no stated goal
+  // Process CPU time (every thread's, so it can exceed the wall time of parallel work): on a
+  // shared machine wall time includes waiting for a core, CPU time does not.
+  double median_cpu_s = 0;
+  double cold_cpu_s = 0;  // CPU time of the cold run (0 where the section has none)
+  double goal_s = 0;      // 0 = no stated goal
   // Further measured quantities of this case (errors, counts, ratios measured in the same run),
   // name -> value; the name carries the unit (e.g. "force_rel_err", "new_nodes", "ratio").
   std::vector<std::pair<std::string, double>> metrics;

@@ -243,12 +243,13 @@ def throughput_summary(section):
 
 
 def stats_summary(section):
-    out = ["| case | median s | median CPU s | cold s | goal s | cold run meets goal |",
-           "|---|---|---|---|---|---|"]
+    out = ["| case | median s | median CPU s | cold s | cold CPU s | goal s | cold run meets goal |",
+           "|---|---|---|---|---|---|---|"]
     for r in section["results"]:
-        out.append("| {} | {} | {} | {} | {} | {} |".format(
+        out.append("| {} | {} | {} | {} | {} | {} | {} |".format(
             r["what"] or r["name"], noisy_cell(r, g(r["median_s"])), g(r.get("median_cpu_s")),
-            g(r.get("cold_s")), g(r.get("goal_s")) if r.get("goal_s") else "",
+            g(r.get("cold_s")), g(r.get("cold_cpu_s")) if "cold_cpu_s" in r else "",
+            g(r.get("goal_s")) if r.get("goal_s") else "",
             ("yes" if r.get("meets_goal") else "**no**") if r.get("goal_s") else ""))
     return "\n".join(out + ["", NOISE_NOTE])
 
