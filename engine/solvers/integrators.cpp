@@ -213,6 +213,9 @@ void rebuild_compact(const MassSpringSystem& sys, const ActiveSet& act, CompactC
     else
       C.held.push_back({a >= 0 ? a : b, -1, static_cast<int>(k)});
   }
+  C.iblocks.resize(C.inner.size());
+  for (size_t j = 0; j < C.inner.size(); ++j)
+    C.iblocks[j] = {0.0, 0.0, 0.0, 0.0, 0.0, C.inner[j].a, C.inner[j].b};
   const long m = static_cast<long>(act.nodes.size());
   C.D.resize(m);
   C.Dinv.resize(m);
@@ -391,27 +394,39 @@ inline void sym_mul(const Sym3& S, const In& p, Out&& y) {
   y[2] = S.xz * p0 + S.yz * p1 + S.zz * p2;
 }
 
-// y = A p, A = blockdiag(Ds) + the inner springs' blocks (rank-one form).
-inline void apply_rank_one(const CompactCg& C, const std::vector<RankOneBlock>& SR, const double* p,
-                           double* y) {
+// y = A p, A = blockdiag(Ds) + the inner springs' blocks (rank-one form, C.iblocks). Springs
+// come in runs with the same first end (the edge order); a run's sum on that end is kept in
+// registers and stored once (every y entry still receives its terms in spring order, so the
+// result is bit-identical to storing after each spring; the stores and reloads were the
+// product's critical path).
+inline void apply_rank_one(const CompactCg& C, const double* p, double* y) {
   const long m = static_cast<long>(C.Ds.size());
   for (long k = 0; k < m; ++k) sym_mul(C.Ds[k], p + 3 * k, y + 3 * k);
-  for (const auto& e : C.inner) {
-    const RankOneBlock& B = SR[e.k];
-    const double* pa = p + 3 * e.a;
-    const double* pb = p + 3 * e.b;
-    const double u0 = pa[0] - pb[0], u1 = pa[1] - pb[1], u2 = pa[2] - pb[2];
-    const double s = B.a * (B.d.x() * u0 + B.d.y() * u1 + B.d.z() * u2);
-    const double t0 = s * B.d.x() + B.b * u0, t1 = s * B.d.y() + B.b * u1,
-                 t2 = s * B.d.z() + B.b * u2;
-    double* ya = y + 3 * e.a;
-    double* yb = y + 3 * e.b;
-    ya[0] += t0;
-    ya[1] += t1;
-    ya[2] += t2;
-    yb[0] -= t0;
-    yb[1] -= t1;
-    yb[2] -= t2;
+  const CompactCg::InnerBlock* B = C.iblocks.data();
+  const CompactCg::InnerBlock* const end = B + C.iblocks.size();
+  while (B != end) {
+    const int a = B->ia;
+    const double* pa = p + 3 * a;
+    const double pa0 = pa[0], pa1 = pa[1], pa2 = pa[2];
+    double* ya = y + 3 * a;
+    double ya0 = ya[0], ya1 = ya[1], ya2 = ya[2];
+    for (; B != end && B->ia == a; ++B) {  // b != a: y at b never aliases the run's sum
+      const double* pb = p + 3 * B->ib;
+      const double u0 = pa0 - pb[0], u1 = pa1 - pb[1], u2 = pa2 - pb[2];
+      const double s = B->a * (B->d0 * u0 + B->d1 * u1 + B->d2 * u2);
+      const double t0 = s * B->d0 + B->b * u0, t1 = s * B->d1 + B->b * u1,
+                   t2 = s * B->d2 + B->b * u2;
+      ya0 += t0;
+      ya1 += t1;
+      ya2 += t2;
+      double* yb = y + 3 * B->ib;
+      yb[0] -= t0;
+      yb[1] -= t1;
+      yb[2] -= t2;
+    }
+    ya[0] = ya0;
+    ya[1] = ya1;
+    ya[2] = ya2;
   }
 }
 
@@ -422,7 +437,6 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
     rebuild_compact(sys, act, C);
   const long m = static_cast<long>(act.nodes.size());
   const double h2 = h * h;
-  if (ws.SR.size() < act.springs.size()) ws.SR.resize(act.springs.size() + act.springs.size() / 2);
   double* b = C.rhs.data();
   // Node terms: rhs h (f - h kh v), diagonal m + h dh + h^2 kh.
   for (long k = 0; k < m; ++k) {
@@ -466,18 +480,21 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
   const double* V = sys.V.data();
   const auto& E = sys.springs.E;
   const bool definite = ws.jacobian == SpringJacobian::definite;
+  CompactCg::InnerBlock* ib = C.iblocks.data();
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
     const int ga = E(s, 0), gb = E(s, 1);
     const CompactCg::Ends en = C.ends[k];
-    RankOneBlock& B = ws.SR[k];
+    RankOneBlock B;
     const double* xa = X + 3 * ga;
     const double* xb = X + 3 * gb;
     const double du0 = xa[0] - xb[0], du1 = xa[1] - xb[1], du2 = xa[2] - xb[2];
     const double len = std::sqrt(du0 * du0 + du1 * du1 + du2 * du2);
     if (!(len > 0.0)) {  // zero length: no force, no stiffness (spring_tangent)
-      B.d.setZero();
-      B.a = B.b = 0.0;
+      if (en.a >= 0 && en.b >= 0) {
+        ib->d0 = ib->d1 = ib->d2 = ib->a = ib->b = 0.0;
+        ++ib;
+      }
       continue;
     }
     const double ks = sys.springs.ks[s], kd = sys.springs.kd[s], rest = sys.springs.rest[s];
@@ -493,6 +510,10 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
     B.d = Eigen::Vector3d(d0, d1, d2);
     B.a = h * kd + h2 * axial;
     B.b = h2 * lateral;
+    if (en.a >= 0 && en.b >= 0) {
+      ib->d0 = d0, ib->d1 = d1, ib->d2 = d2, ib->a = B.a, ib->b = B.b;
+      ++ib;
+    }
     double w0 = 0.0, w1 = 0.0, w2 = 0.0;  // dv over the active ends
     if (en.a >= 0) w0 += va[0], w1 += va[1], w2 += va[2];
     if (en.b >= 0) w0 -= vb[0], w1 -= vb[1], w2 -= vb[2];
@@ -527,7 +548,7 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
   double* z = C.z.data();
   double* p = C.p.data();
   double* ap = C.ap.data();
-  apply_rank_one(C, ws.SR, x, ap);
+  apply_rank_one(C, x, ap);
   double bnorm = 0.0, rz = 0.0, rr = 0.0;
   for (long k = 0; k < m; ++k) {
     for (int c = 0; c < 3; ++c) {
@@ -548,7 +569,7 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
   const double tol = std::max(ws.cg_tolerance * bnorm, h * ws.cg_force_tolerance);
   int it = 0;
   while (rnorm > tol && it < ws.cg_max_iterations) {
-    apply_rank_one(C, ws.SR, p, ap);
+    apply_rank_one(C, p, ap);
     double pAp = 0.0;
     for (long j = 0; j < n3; ++j) pAp += p[j] * ap[j];
     if (!(pAp > 0.0)) break;

@@ -84,6 +84,13 @@ struct CompactCg {
     int a, b;
   };
   std::vector<Ends> ends;
+  // Per inner spring (in the order of `inner`) its block a d d^T + b I beside its local ends,
+  // contiguous for the CG product (written by the step's spring pass).
+  struct InnerBlock {
+    double d0, d1, d2, a, b;
+    int ia, ib;
+  };
+  std::vector<InnerBlock> iblocks;
   std::vector<Sym3> Ds, Pinv;
   Eigen::VectorXd rhs;
   // warm_start == extrapolated: the solutions of the last two steps on this set (3m each) and
