@@ -21,6 +21,9 @@ struct TraineeParams {
   double visual_weber = 0.10;    // 1, relative SD of a perceived visible deformation
   // motor
   double motor_noise_cv = 0.05;  // 1, SD of produced / intended force
+  // lag-1 correlation of the per-press motor and haptic errors within a session (AR(1); 0 =
+  // every press draws afresh, the behaviour before 2026-11-25)
+  double press_error_correlation = 0.0;  // 1
   // memory of the target force
   double prior_target_cv = 0.30;        // 1, relative SD of the briefed target belief
   double memory_noise_cv = 0.03;        // 1, relative SD added when a force is stored
