@@ -473,8 +473,16 @@ void Trainee::start_press() {
   mode_start_ = t_prev_;
   // Signal-dependent motor noise (Harris & Wolpert 1998): the produced force scatters with an SD
   // proportional to the intended force; per-press perceptual errors (Weber).
-  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.motor_noise_cv * rng_.normal()));
-  eps_h_ = p_.weber_fraction * rng_.normal();
+  // Successive presses of a session are not independent draws: their errors follow a stationary
+  // AR(1) (lag-1 correlation press_error_correlation; each error keeps its SD). Repeated
+  // productions without feedback drift rather than scatter afresh (Gilden, Thornton & Mallon
+  // 1995; van Beers 2009). The first press of a session draws afresh.
+  const double rho = p_.press_error_correlation;
+  const double innovation = std::sqrt(1.0 - rho * rho);
+  z_motor_ = presses_ > 0 ? rho * z_motor_ + innovation * rng_.normal() : rng_.normal();
+  intended_ = std::max(0.0, s_.target_mean * (1.0 + p_.motor_noise_cv * z_motor_));
+  z_haptic_ = presses_ > 0 ? rho * z_haptic_ + innovation * rng_.normal() : rng_.normal();
+  eps_h_ = p_.weber_fraction * z_haptic_;
   eps_v_ = p_.visual_weber * rng_.normal();
   rt_scale_ = std::max(0.3, 1.0 + p_.reaction_time_cv * rng_.normal());
   release_at_ = -1.0;

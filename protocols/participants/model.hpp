@@ -180,6 +180,8 @@ class Trainee {
   bool identified_ = false;
   double dwell_start_ = -1.0, mode_start_ = 0.0, release_at_ = -1.0;
   double intended_ = 0.0, eps_h_ = 0.0, eps_v_ = 0.0, rt_scale_ = 1.0;
+  // Standardised motor and haptic errors of the last press (AR(1) across a session's presses).
+  double z_motor_ = 0.0, z_haptic_ = 0.0;
   bool audio_seen_ = false, call_heard_ = false;
   // A trainee who knows a cue marks the target presses until it comes (up to a limit); the
   // first press of a session tries, and the expectation stays while the cue keeps coming.

@@ -66,6 +66,11 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       tspec("motor_noise_cv", &T::motor_noise_cv, 0.0, 0.5, "1",
             "signal-dependent motor noise: SD of the produced force / intended force",
             "Harris & Wolpert 1998 (SD proportional to force)"),
+      tspec("press_error_correlation", &T::press_error_correlation, 0.0, 0.99, "1",
+            "lag-1 correlation of the motor and haptic errors of successive presses of a "
+            "session (AR(1), stationary: each error keeps its SD)",
+            "Gilden, Thornton & Mallon 1995; van Beers 2009 (serially correlated errors of "
+            "repeated productions without feedback)"),
       tspec("prior_target_cv", &T::prior_target_cv, 0.0, 2.0, "1",
             "relative SD of the target force believed after the briefing (MPF told in words)",
             "model assumption; fitted to exp2 (docs/PARTICIPANTS.md)"),

@@ -21,6 +21,11 @@ struct TraineeParams {
   double visual_weber = 0.10;    // 1, relative SD of a perceived visible deformation
   // motor
   double motor_noise_cv = 0.05;  // 1, SD of produced / intended force
+  // lag-1 correlation of the per-press motor and haptic errors within a session (AR(1); 0 =
+  // every press draws afresh, the behaviour before 2026-11-25). Fitted with
+  // marker_wait_overshoot on exp2 A/B (2026-11-25 evening; docs/PARTICIPANTS.md "The test
+  // maximum").
+  double press_error_correlation = 0.9;  // 1
   // memory of the target force
   double prior_target_cv = 0.30;        // 1, relative SD of the briefed target belief
   double memory_noise_cv = 0.03;        // 1, relative SD added when a force is stored
@@ -45,17 +50,17 @@ struct TraineeParams {
   double lift_height = 0.01;           // m
   double max_force = 10.0;             // N
   // guidance: reliance on a binary "target reached" marker (sound, call).
-  // extinction_rate and marker_wait_overshoot: output of `palplab calibrate` on exp2 (2026-11-25,
-  // after the censored-miss update; protocols/participants/exp2_calibration.json, command in
-  // docs/PARTICIPANTS.md "The shipped calibration (2026-11-25)"). Both act on trainees who
-  // expect a marker (exp2: group A); marker_wait_overshoot also bounds a visually aimed press
-  // (1.5 * (1 + overshoot)), which rarely binds (exp2 A/B run: 2 of B's 60 sessions changed,
-  // by 0.01 N).
-  // landmark_time, visual_recognition_gain: the A/B calibration of 2026-11-24 (same section).
+  // extinction_rate: output of `palplab calibrate` on exp2 (2026-11-25, marker_wait_overshoot
+  // refitted with press_error_correlation the same evening;
+  // protocols/participants/exp2_calibration.json; commands in docs/PARTICIPANTS.md "The shipped
+  // calibration (2026-11-25)"). Both act on trainees who expect a marker (exp2: group A);
+  // marker_wait_overshoot also bounds a visually aimed press (1.5 * (1 + overshoot)), which rarely
+  // binds (exp2 A/B run: 2 of B's 60 sessions changed, by 0.01 N). landmark_time,
+  // visual_recognition_gain: the A/B calibration of 2026-11-24 (same section).
   double guidance_dependence = 0.6;   // 1, share of marker learning withheld at full reliance
   double guidance_rate = 0.2;         // 1, reliance gained per press with a marker
   double extinction_rate = 0.472119;  // 1, reliance lost per press whose expected marker failed
-  double marker_wait_overshoot = 0.128613;  // 1, press beyond the intended force awaiting a marker
+  double marker_wait_overshoot = 0.104498;  // 1, press beyond the intended force awaiting a marker
   // visual learning and search
   double visual_spatial_sd = 0.004;         // m, SD of locating the touched point by eye
   double visual_recognition_gain = 1.7257;  // 1, recognition speed-up when the part deforms
