@@ -109,6 +109,17 @@ void PressDevice::hold_force(double f, double dt) {
   depth_ = std::min(std::max(depth_, -spec_.start_offset), spec_.max_depth);
 }
 
+void PressDevice::begin_withdraw(double t, const Eigen::Vector3d& f) {
+  phase_ = PressPhase::withdraw;
+  phase_start_ = t;
+  // A press that slid lifts off along the force it feels (the outward contact normal where the
+  // probe is now). Backing out along the start normal instead pushed C's body slide deeper
+  // into the body's curved flank: the depth along the contact normal grew from 3.5 to 12 mm
+  // and the force to the device's 8.5 N limit while the script "withdrew".
+  const double fn = f.norm();
+  if (!offset_.isZero(0.0) && fn > 0.0 && std::isfinite(fn)) out_dir_ = f / fn;
+}
+
 bool PressDevice::next_segment_step(double dt) {
   const double tau = static_cast<double>(++segment_step_) * dt;
   // A step whose end is within a millionth of a step of a segment's end belongs to it (tau is
@@ -154,15 +165,18 @@ void PressDevice::write(const Rendered& r) {
       if (spec_.depth > 0.0) depth_ = std::min(depth_, spec_.depth);
       if (depth_ > spec_.max_depth || r.t > spec_.max_approach_time) {
         // target not reachable: give up, withdraw (or end a script that stops at the target)
-        phase_ = spec_.stop_at_target ? PressPhase::done : PressPhase::withdraw;
-        phase_start_ = r.t;
+        if (spec_.stop_at_target) {
+          phase_ = PressPhase::done;
+          phase_start_ = r.t;
+        } else {
+          begin_withdraw(r.t, r.force);
+        }
       }
       break;
     case PressPhase::hold:
       if (spec_.segments.empty()) {
         if (r.t - phase_start_ >= spec_.hold - 1e-12) {
-          phase_ = PressPhase::withdraw;
-          phase_start_ = r.t;
+          begin_withdraw(r.t, r.force);
           break;
         }
         if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(f, dt);
@@ -172,10 +186,13 @@ void PressDevice::write(const Rendered& r) {
       if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(f, dt);
       if (next_segment_step(dt)) break;
       // The step after the last segment is the first of the withdrawal.
-      phase_ = PressPhase::withdraw;
-      phase_start_ = r.t;
+      begin_withdraw(r.t, r.force);
       [[fallthrough]];
     case PressPhase::withdraw:
+      // Along out_dir_ instead of `normal` (a slid press): the same distance per step.
+      if (!out_dir_.isZero(0.0))
+        lift_ += std::clamp(depth_ + spec_.start_offset, 0.0, spec_.withdraw_speed * dt) *
+                 (out_dir_ - spec_.normal);
       depth_ -= spec_.withdraw_speed * dt;
       if (depth_ <= -spec_.start_offset) {
         depth_ = -spec_.start_offset;

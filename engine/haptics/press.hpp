@@ -72,7 +72,11 @@ struct PressSpec {
   // End the script on the step the target is reached (or given up): no hold, no withdrawal.
   bool stop_at_target = false;
   // m/s, velocity of the contact point along the surface during the hold (the depth stays
-  // along `normal`); zero = a still press. Its offset is kept while withdrawing.
+  // along `normal`); zero = a still press. Its offset is kept while withdrawing. A press that
+  // slid withdraws along the direction of the force rendered on its last hold step (the
+  // surface's normal where the probe is, not `normal` where it started: on a curved organ the
+  // start normal may point into the surface there), over the same distance and at the same
+  // speed; a still press withdraws along `normal`.
   Eigen::Vector3d slide = Eigen::Vector3d::Zero();
   // Under force control, keep the depth at which the target was reached during the hold (and
   // the segments) instead of holding the force: the device trajectory then depends on the
@@ -113,7 +117,9 @@ class PressDevice : public Device {
   Eigen::Vector3d offset() const { return offset_; }  // m, slid along the surface so far
 
  private:
-  Eigen::Vector3d position() const { return spec_.point + offset_ - depth_ * spec_.normal; }
+  Eigen::Vector3d position() const { return spec_.point + offset_ - depth_ * spec_.normal + lift_; }
+  // Enters the withdrawal after a step that rendered force f (N, on the hand).
+  void begin_withdraw(double t, const Eigen::Vector3d& f);
   bool target_reached(double f) const;
   void reach_target(double t, double f, double dt);
   // Moves to the next step of the segments (offset, segment_); false after the last one.
@@ -132,6 +138,10 @@ class PressDevice : public Device {
   double hist_d_[3] = {0, 0, 0}, hist_f_[3] = {0, 0, 0};  // m, N: the last three hold steps
   int hist_n_ = 0;                                        // hold steps seen
   Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();      // m, slid along the surface so far
+  // m, what a slid press's withdrawal moved the device off the line along `normal`, and the
+  // unit direction it withdraws along (see PressSpec::slide)
+  Eigen::Vector3d lift_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d out_dir_ = Eigen::Vector3d::Zero();
   int segment_ = -1;
   long segment_step_ = 0;                                   // steps since the target
   Eigen::Vector3d segment_base_ = Eigen::Vector3d::Zero();  // offset at the target

@@ -235,11 +235,14 @@ TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
   const Vec3 sdir = spec.slide.normalized();
   std::vector<Vec3> xs;
   std::vector<int> nodes;
+  std::vector<bool> sliding;  // the step's device position was one of the approach or the slide
   PressDevice press(spec);
   run_lockstep(s, press, {.duration = spec.hold + 2.0, .frame_period = 0.0},
                [&](const Rendered& o, const Sample& x) {
                  xs.push_back(x.x);
                  nodes.push_back(o.contact_node);
+                 sliding.push_back(press.phase() == PressPhase::approach ||
+                                   press.phase() == PressPhase::hold);
                });
   int changes = 0;
   for (size_t k = 1; k < nodes.size(); ++k)
@@ -250,13 +253,15 @@ TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
   Vec3 prev = xs[0];
   double dmax = 0, lead = 0, worst_move = 0, p0 = 0, x0 = 0, p1 = 0, x1 = 0;
   bool first = true;
-  for (const Vec3& x : xs) {
+  for (size_t k = 0; k < xs.size(); ++k) {
+    const Vec3& x = xs[k];
     const bool was = t.engaged();
     const Vec3 before = t.proxy().p;
     t.update(prev, x);
     if (t.engaged()) {
       if (first) p0 = t.proxy().p.dot(sdir), x0 = x.dot(sdir), first = false;
-      p1 = t.proxy().p.dot(sdir), x1 = x.dot(sdir);
+      // Where the slide ends (the withdrawal lifts off along the contact normal there).
+      if (sliding[k]) p1 = t.proxy().p.dot(sdir), x1 = x.dot(sdir);
       dmax = std::max(dmax, t.depth());
       lead = std::max(lead, std::abs((t.proxy().p - x).dot(sdir)));
       if (was)
