@@ -2,6 +2,7 @@
 // Prototype files as text for the physics tests: a shipped prototype's path, a file's text, and
 // a variant of a prototype's text (string edits) written to a temp file that build_scene reads.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -22,8 +23,9 @@ inline std::string read(const std::string& path) {
 }
 
 // `text` with every (from -> to) replaced once (each must occur: a failed expectation names the
-// missing one), written to <temp>/palplab_<file_tag>.json; returns that path. Test files pass
-// their own tag prefix so tests run in parallel never share a file.
+// missing one), written to <temp>/palplab_<file_tag>_<pid>.json; returns that path. ctest runs
+// each test in its own process, in parallel: the pid keeps two tests of one file (same tag) from
+// writing and reading one file at the same time.
 inline std::string variant_file(std::string text, const std::string& file_tag,
                                 const std::vector<std::pair<std::string, std::string>>& edits) {
   for (const auto& [from, to] : edits) {
@@ -31,7 +33,8 @@ inline std::string variant_file(std::string text, const std::string& file_tag,
     EXPECT_NE(k, std::string::npos) << from;
     if (k != std::string::npos) text.replace(k, from.size(), to);
   }
-  const auto p = std::filesystem::temp_directory_path() / ("palplab_" + file_tag + ".json");
+  const auto p = std::filesystem::temp_directory_path() /
+                 ("palplab_" + file_tag + "_" + std::to_string(::getpid()) + ".json");
   std::ofstream(p) << text;
   return p.string();
 }

@@ -105,7 +105,9 @@ void run_cycles(const SceneConfig& cfg, int press, int cycles) {
   // smooth field; the membrane shares move to the leaves, refinement.hpp) — never growing.
   EXPECT_GT(e_lo, 0.9);
   EXPECT_LT(e_hi, 1.1);
-  EXPECT_LE(heap_end, heap_early + 4096) << "heap grew";
+  // A leak per cycle shows as >= 8 bytes x 4500 cycles = 36 KB; a few KB of one-time allocations
+  // (measured 0.3-5 KB, varying between runs: glibc's bookkeeping) are not a leak.
+  EXPECT_LE(heap_end, heap_early + 16384) << "heap grew";
 }
 
 SceneConfig prototype_c() {
