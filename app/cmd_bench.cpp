@@ -132,6 +132,16 @@ palplab::app::CommandRegistration reg{
             throw palplab::InputError(palplab::SourceLocation{"--svg"},
                                       "cannot create the directory '" + a->svg + "'");
         }
+        // The output files are checked before the first section (an unwritable path is an input
+        // error, not a lost run) and rewritten after every section, so a run that is stopped
+        // keeps the sections it finished.
+        const auto write = [](const std::string& path, const std::string& text, const char* what) {
+          std::ofstream out(path, std::ios::trunc);
+          if (!out || !(out << text) || !out.flush())
+            throw palplab::InputError(std::string("cannot write the ") + what + " file", path);
+        };
+        if (!a->json.empty()) write(a->json, "{}\n", "JSON");
+        if (!a->md.empty()) write(a->md, "", "Markdown");
         BenchOptions opt{a->quick, a->data, a->svg};
         nlohmann::json j = nlohmann::json::object();
         std::string md =
@@ -179,16 +189,8 @@ palplab::app::CommandRegistration reg{
                   (r.goal_s > 0 ? fmt_s(r.goal_s) : "") + " | " + mtext + " |\n";
           }
           j[s->name] = {{"description", s->description}, {"quick", a->quick}, {"results", arr}};
-        }
-        if (!a->json.empty()) {
-          std::ofstream out(a->json);
-          if (!out) throw palplab::InputError("cannot write the JSON file", a->json);
-          out << j.dump(2) << "\n";
-        }
-        if (!a->md.empty()) {
-          std::ofstream out(a->md);
-          if (!out) throw palplab::InputError("cannot write the Markdown file", a->md);
-          out << md;
+          if (!a->json.empty()) write(a->json, j.dump(2) + "\n", "JSON");
+          if (!a->md.empty()) write(a->md, md, "Markdown");
         }
         *code = 0;
       });

@@ -170,4 +170,16 @@ TEST(CliBench, UnknownSectionIsAnInputError) {
   EXPECT_NE(r.out.find("frontier"), std::string::npos) << r.out;  // lists the known sections
 }
 
+// An unwritable --json or --md is an input error before the first section runs (the section
+// named would take seconds; the output says nothing of it), not after the whole run.
+TEST(CliBench, UnwritableOutputIsAnInputErrorBeforeAnySection) {
+  for (const char* flag : {"--json", "--md"}) {
+    const Result r = run(std::string("bench stats --quick --data ") + data_dir() + " " + flag +
+                         " /nonexistent_dir_palplab/out.x");
+    EXPECT_EQ(r.code, 2) << flag << ": " << r.out;
+    EXPECT_NE(r.out.find("/nonexistent_dir_palplab/out.x"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("rows1e5"), std::string::npos) << "a section ran first: " << r.out;
+  }
+}
+
 }  // namespace
