@@ -30,10 +30,11 @@ inline engine::AdaptiveMassSpring surface_model(const mesh::SurfaceMesh& m) {
 // Model-C as a tet model with prototype C's material: E = 100 kPa, 1000 kg/m^3, foundation
 // 2e5 N/m^3 under the boundary. Built with its tets, as engine/models/mass_spring_model.cpp
 // builds it: refinement re-divides the coarse tets under the refined surface (the code path
-// prototype C runs), not the surface alone.
-inline engine::AdaptiveMassSpring tet_model_c() {
+// prototype C runs), not the surface alone. `surface_vertices`: the base resolution (the
+// refinement tests compare several).
+inline engine::AdaptiveMassSpring tet_model_c(int surface_vertices = mesh::kModelCSurfaceVertices) {
   using namespace engine;
-  const mesh::TetMesh tm = mesh::generate_model_c();
+  const mesh::TetMesh tm = mesh::generate_model_c(0, surface_vertices);
   const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
   MassSpringSystem s;
   s.X_rest = tm.V;

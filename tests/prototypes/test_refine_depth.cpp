@@ -201,21 +201,9 @@ TEST(RefinementDepth, AtTheBodyTheSofteningIsNotTheAdaptiveClosureNorThePadsQuad
 
 namespace {
 
-// Model-C with C's material (bench::tet_model_c) on `vertices` surface vertices.
+// Model-C with C's material on `vertices` surface vertices (bench::tet_model_c).
 AdaptiveMassSpring model_c_at(int vertices) {
-  const mesh::TetMesh tm = mesh::generate_model_c(0, vertices);
-  const mesh::BoundaryFaces bf = mesh::boundary_faces(tm);
-  MassSpringSystem s;
-  s.X_rest = tm.V;
-  s.X = tm.V;
-  const Eigen::VectorXd E = Eigen::VectorXd::Constant(tm.T.rows(), 1e5);
-  s.mass = tet_lumped_mass(tm.V, tm.T, Eigen::VectorXd::Constant(tm.T.rows(), 1000.0));
-  s.springs = tet_springs(tm.V, tm.T, E, 0.002);
-  const Eigen::VectorXd area = lumped_area(tm.V, bf.F);
-  s.home_ks = 2e5 * area;
-  s.home_kd = 200.0 * area;
-  return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
-                       1e-3, CoarseTets{tm.T, E, bf.tet});
+  return bench::tet_model_c(vertices);
 }
 
 int nearest_surface_node(const AdaptiveMassSpring& m, const Eigen::Vector3d& x) {
