@@ -27,9 +27,10 @@ palplab::app::CommandRegistration reg{
           ->required()
           ->expected(1, -1);
       cmd->add_option("--out", a->out, "Output directory for power.json/md/svg")->required();
-      cmd->add_option("--alpha", a->alpha, "Significance level")->check(CLI::Range(1e-9, 0.5));
+      cmd->add_option("--alpha", a->alpha, "Significance level")
+          ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->target, "Power the smallest n must reach")
-          ->check(CLI::Range(0.01, 0.999999));
+          ->check(palplab::app::finite_range(0.01, 0.999999));
       cmd->callback([a, code] {
         std::vector<std::string> files;
         for (const auto& in : a->inputs) {

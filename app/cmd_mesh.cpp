@@ -224,10 +224,10 @@ palplab::app::CommandRegistration reg{
                     "The surface may have boundaries (no open_edge defects)");
         c->add_option("--duplicate-tolerance", opt->duplicate_tolerance,
                       "Distance (m) below which vertices are duplicates")
-            ->check(CLI::NonNegativeNumber);
+            ->check(palplab::app::finite_range(0.0, 1.0));
         c->add_option("--sliver-ratio", opt->sliver_ratio,
                       "Radius ratio below which a tet is a sliver")
-            ->check(CLI::Range(0.0, 1.0));
+            ->check(palplab::app::finite_range(0.0, 1.0));
         c->add_option("--max-defects", opt->max_per_kind,
                       "Defects listed per kind (all are counted)")
             ->check(CLI::PositiveNumber);
@@ -268,7 +268,7 @@ palplab::app::CommandRegistration reg{
         c->add_option("--out", *out, "Output surface")->required();
         c->add_option("--merge-tolerance", opt->merge_tolerance,
                       "Distance (m) below which vertices merge")
-            ->check(CLI::NonNegativeNumber);
+            ->check(palplab::app::finite_range(0.0, 1.0));
         c->add_option("--max-hole-edges", opt->max_hole_edges,
                       "Fill boundary loops up to this many edges (0 = none)")
             ->check(CLI::NonNegativeNumber);

@@ -40,9 +40,10 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--jobs", a->opt.jobs, "Replicates simulated in parallel (threads)")
           ->check(CLI::Range(1, 1024));
       cmd->add_option("--out", a->out, "Output directory (replicates.jsonl, power.json/md/svg)");
-      cmd->add_option("--alpha", a->opt.alpha, "Significance level")->check(CLI::Range(1e-9, 0.5));
+      cmd->add_option("--alpha", a->opt.alpha, "Significance level")
+          ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->opt.target_power, "Power the smallest n must reach")
-          ->check(CLI::Range(0.01, 0.999999));
+          ->check(palplab::app::finite_range(0.01, 0.999999));
       cmd->add_option("--shard", a->shard, "Run only shard I of K (I/K, 1-based), for job arrays");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, code] {

@@ -4,6 +4,7 @@
 // A command's run function returns the process exit code; it throws palplab::InputError for
 // bad input (exit 2, message on stderr).
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -23,5 +24,20 @@ struct RegisteredCommand {
 };
 
 std::vector<RegisteredCommand>& command_registry();
+
+// A real-valued flag in [lo, hi]: CLI::Range lets NaN through (every comparison with it is
+// false), so "--alpha nan" would be accepted; this refuses NaN and +-inf too, echoing the value.
+inline CLI::Validator finite_range(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v)) return "expected a number, got '" + text + "'";
+        if (!std::isfinite(v) || v < lo || v > hi)
+          return "expected a finite number in [" + CLI::detail::to_string(lo) + ", " +
+                 CLI::detail::to_string(hi) + "], got '" + text + "'";
+        return std::string();
+      },
+      "FINITE in [" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]");
+}
 
 }  // namespace palplab::app

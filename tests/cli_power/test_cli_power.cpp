@@ -92,6 +92,13 @@ TEST(Power, BadArgumentsAreInputErrors) {
           .code,
       2);
   EXPECT_EQ(run_palplab("merge " + (d / "nothing").string() + " --out " + d.string(), d).code, 2);
+  // NaN and inf pass CLI11's Range (every comparison with NaN is false): refused, exit 2.
+  for (const char* bad : {"--alpha nan", "--alpha inf", "--target-power nan", "--alpha 0.7"}) {
+    const auto r = run_palplab(
+        "power " + null_study() + " --replicates 2 " + bad + " --out " + (d / "never").string(), d);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out << r.err;
+    EXPECT_FALSE(fs::exists(d / "never" / "replicates.jsonl")) << bad;
+  }
   fs::remove_all(d);
 }
 
