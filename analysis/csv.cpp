@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -16,15 +17,89 @@ InputError error_at(const std::string& file, int line, int column, std::string w
   return InputError(SourceLocation{file, line, column}, std::move(what));
 }
 
+// Length of the well-formed UTF-8 sequence at s[i] (Unicode 15, table 3-7), 0 if ill-formed.
+size_t utf8_sequence(std::string_view s, size_t i) {
+  const auto b = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char c = b(i);
+  if (c < 0x80) return 1;
+  size_t len = 0;
+  unsigned char lo = 0x80, hi = 0xBF;  // the second byte's range
+  if (c >= 0xC2 && c <= 0xDF) {
+    len = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    len = 3;
+    if (c == 0xE0) lo = 0xA0;  // no overlong forms
+    if (c == 0xED) hi = 0x9F;  // no surrogates
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    len = 4;
+    if (c == 0xF0) lo = 0x90;
+    if (c == 0xF4) hi = 0x8F;  // <= U+10FFFF
+  } else {
+    return 0;
+  }
+  if (i + len > s.size() || b(i + 1) < lo || b(i + 1) > hi) return 0;
+  for (size_t k = 2; k < len; ++k)
+    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
+  return len;
+}
+
+// The whole text must be UTF-8: the first ill-formed byte is an error at its line:column.
+void require_utf8(std::string_view text, const std::string& file) {
+  int line = 1, column = 1;
+  for (size_t i = 0; i < text.size();) {
+    const size_t len = utf8_sequence(text, i);
+    if (len == 0) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned char>(text[i]));
+      throw error_at(file, line, column,
+                     std::string("byte ") + hex +
+                         " is not UTF-8: CSV files are read as UTF-8, and this one looks like "
+                         "Latin-1 / Windows-1252 (e.g. an accented label); save it as UTF-8 "
+                         "(Excel: \"CSV UTF-8\"; or iconv -f WINDOWS-1252 -t UTF-8 IN.csv > "
+                         "OUT.csv)");
+    }
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+    i += len;
+  }
+}
+
+// [+-]digits[.digits][(e|E)[+-]digits], at least one mantissa digit (".5" and "5." are allowed).
+bool decimal_form(std::string_view v) {
+  size_t i = 0, digits = 0;
+  if (i < v.size() && (v[i] == '+' || v[i] == '-')) ++i;
+  for (; i < v.size() && v[i] >= '0' && v[i] <= '9'; ++i) ++digits;
+  if (i < v.size() && v[i] == '.')
+    for (++i; i < v.size() && v[i] >= '0' && v[i] <= '9'; ++i) ++digits;
+  if (digits == 0) return false;
+  if (i < v.size() && (v[i] == 'e' || v[i] == 'E')) {
+    ++i;
+    if (i < v.size() && (v[i] == '+' || v[i] == '-')) ++i;
+    size_t e = 0;
+    for (; i < v.size() && v[i] >= '0' && v[i] <= '9'; ++i) ++e;
+    if (e == 0) return false;
+  }
+  return i == v.size();
+}
+
 }  // namespace
 
 CsvTable parse_csv(std::string_view text, const std::string& file) {
   CsvTable t;
   t.file = file;
+  require_utf8(text, file);
   size_t i = 0;
   // A UTF-8 byte-order mark (Excel writes one) is not part of the first column name.
   if (text.substr(0, 3) == "\xEF\xBB\xBF") i = 3;
   int line = 1;
+  // Field columns: code points from the start of the current line, counted incrementally.
+  size_t line_start = i, counted_to = i;
+  int counted = 0;
+  std::vector<int> f_line, f_col;  // the current record's fields
   bool have_header = false;
   const size_t n = text.size();
   while (i < n) {
@@ -32,8 +107,15 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
     std::vector<std::string> fields;
     std::string field;
     bool record_done = false;
+    f_line.clear();
+    f_col.clear();
     while (!record_done) {
       field.clear();
+      if (counted_to < line_start) counted_to = line_start, counted = 0;
+      for (; counted_to < i; ++counted_to)
+        if ((static_cast<unsigned char>(text[counted_to]) & 0xC0) != 0x80) ++counted;
+      f_line.push_back(line);
+      f_col.push_back(counted + 1);
       if (i < n && text[i] == '"') {
         const int quote_line = line;
         ++i;
@@ -50,7 +132,10 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
             closed = true;
             break;
           }
-          if (c == '\n') ++line;
+          if (c == '\n') {
+            ++line;
+            line_start = i + 1;
+          }
           field += c;
           ++i;
         }
@@ -80,6 +165,7 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
         if (text[i] == '\r') ++i;
         if (i < n && text[i] == '\n') ++i;
         ++line;
+        line_start = i;
         record_done = true;
       }
     }
@@ -104,6 +190,8 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
                          " fields (as in the header), got " + std::to_string(fields.size()));
     t.rows.push_back(std::move(fields));
     t.line.push_back(record_line);
+    t.field_line.insert(t.field_line.end(), f_line.begin(), f_line.end());
+    t.field_column.insert(t.field_column.end(), f_col.begin(), f_col.end());
   }
   if (!have_header) throw InputError("empty CSV file: expected a header row", file);
   return t;
@@ -131,17 +219,28 @@ double parse_number(const CsvTable& t, int row, int col) {
   size_t b = s.find_first_not_of(" \t");
   size_t e = s.find_last_not_of(" \t");
   std::string v = b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+  const size_t k = static_cast<size_t>(row) * t.header.size() + static_cast<size_t>(col);
+  const bool located = k < t.field_line.size();  // tables built by hand have no positions
   auto fail = [&](const std::string& why) {
     return InputError(
-        SourceLocation{t.file, t.line[row]},
+        SourceLocation{t.file, located ? t.field_line[k] : t.line[row],
+                       located ? t.field_column[k] : 0},
         "column '" + t.header[col] + "' (field " + std::to_string(col + 1) + "): " + why);
   };
   if (v.empty()) throw fail("empty value; expected a number (missing data are not allowed)");
+  if (!decimal_form(v))
+    throw fail("expected a decimal number ([+-]digits[.digits][e[+-]digits]), got '" + s + "'");
   errno = 0;
   char* end = nullptr;
   double x = std::strtod(v.c_str(), &end);
   if (end != v.c_str() + v.size() || !std::isfinite(x) || errno == ERANGE)
-    throw fail("expected a finite number, got '" + s + "'");
+    throw fail("expected a number within the range of a double (|x| < 1.8e308), got '" + s + "'");
+  // Squares of larger values (and sums of them) overflow a double: SDs and sums of squares would
+  // be inf next to finite, scale-free statistics (F, t) and some tests would go wrong (Tukey q 0).
+  if (std::fabs(x) > kMaxCsvMagnitude)
+    throw fail("the magnitude of '" + s +
+               "' is above 1e150: the statistics square values and sum the squares, which "
+               "overflows a double beyond that; rescale the column (e.g. other units)");
   return x;
 }
 

@@ -3,6 +3,8 @@
 // literal quote inside), CRLF or LF line ends, quoted fields may span lines. The first record is
 // the header. Every problem throws palplab::InputError with the file and the 1-based line number
 // of the record (the physical line on which the record starts), so a researcher can find it.
+// The text must be UTF-8 (a Latin-1 / Windows-1252 file is an error at its first non-UTF-8 byte,
+// saying how to convert it): labels go into JSON output, which is UTF-8 only.
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,6 +16,9 @@ struct CsvTable {
   std::vector<std::string> header;             // #columns column names
   std::vector<std::vector<std::string>> rows;  // #rows by #columns fields (unquoted)
   std::vector<int> line;                       // #rows 1-based line where each row starts
+  // #rows x #columns, row-major: 1-based line and column (Unicode code points, as editors count)
+  // where each field starts.
+  std::vector<int> field_line, field_column;
 };
 
 // Parses CSV text. `file` only labels error messages.
@@ -24,8 +29,14 @@ CsvTable read_csv(const std::string& path);
 // Index of column `name`; throws InputError listing the available columns when it is absent.
 int column_index(const CsvTable& t, std::string_view name);
 
-// Strict number parsing of one field (surrounding blanks allowed, nothing else): throws
-// InputError "file:line: column 'c': expected a number, got '...'".
+// The largest magnitude a CSV number may have: squares and sums of squares of larger values
+// overflow a double (1.8e308).
+inline constexpr double kMaxCsvMagnitude = 1e150;
+
+// Strict number parsing of one field: a decimal number [+-]digits[.digits][(e|E)[+-]digits]
+// (surrounding blanks allowed; no hexadecimal, inf or nan) of magnitude <= kMaxCsvMagnitude;
+// otherwise
+// InputError "file:line:column: column 'c' (field k): expected ..., got '...'".
 double parse_number(const CsvTable& t, int row, int col);
 
 }  // namespace palplab::analysis

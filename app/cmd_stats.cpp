@@ -54,9 +54,12 @@ palplab::app::CommandRegistration reg{
                       "Asymmetric equivalence margins LOW,HIGH (LOW < HIGH, data units)")
           ->delimiter(',')
           ->expected(2);
-      cmd->add_option("--alpha", a->alpha, "Level of the equivalence tests (default 0.05)");
+      auto* alpha_opt =
+          cmd->add_option("--alpha", a->alpha, "Level of the equivalence tests (default 0.05)");
       cmd->add_flag("--json", a->json, "Print JSON instead of tables");
-      cmd->callback([a, code] {
+      cmd->callback([a, alpha_opt, code] {
+        palplab::app::flag_only_with(alpha_opt, a->margin || !a->margins.empty(),
+                                     "--margin or --margins (it is the equivalence tests' level)");
         using namespace palplab::analysis;
         std::vector<WhereFilter> where;
         for (const auto& w : a->where) where.push_back(parse_where(w));
@@ -133,11 +136,14 @@ palplab::app::CommandRegistration reg_report{
       cmd->add_flag("--no-stills", a->no_stills,
                     "Leave out the stills of the prototypes under the same press (they need "
                     "headless OpenGL and take about a second per prototype)");
-      cmd->add_option("--still-size", a->still_size,
-                      "Size of each still, WIDTHxHEIGHT in pixels (default 480x360)");
-      cmd->callback([a, code] {
+      auto* size_opt =
+          cmd->add_option("--still-size", a->still_size,
+                          "Size of each still, WIDTHxHEIGHT in pixels (default 480x360)");
+      cmd->callback([a, size_opt, code] {
         palplab::analysis::ReportOptions opt;
         const auto [w, h] = palplab::app::parse_image_size("--still-size", a->still_size);
+        palplab::app::flag_only_with(size_opt, !a->no_stills, "stills (not with --no-stills)");
+        palplab::app::require_writable_dir("--out", a->out);
         opt.still_width = w;
         opt.still_height = h;
         if (a->no_stills)

@@ -219,6 +219,14 @@ TEST(CliReport, WritesReportAndRejectsBadDatabases) {
   EXPECT_NE(r.err.find("missing.db"), std::string::npos);
   r = run_palplab("report " + db);
   EXPECT_EQ(r.code, 2);  // --out is required
+  // --out that cannot be a directory (below a regular file): refused before any analysis.
+  r = run_palplab("report " + db + " --no-stills --out " + (dir / "junk.db" / "out").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--out: cannot create the directory"), std::string::npos) << r.err;
+  // --still-size with --no-stills was silently ignored.
+  r = run_palplab("report " + db + " --no-stills --still-size 100x100 --out " + out);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--still-size: applies only with stills"), std::string::npos) << r.err;
   fs::remove_all(dir);
 }
 
@@ -249,4 +257,42 @@ TEST(CliStats, EquivalenceMarginsAndVerdicts) {
     r = run_palplab("stats --csv " + csv + " --value value --group group " + bad);
     EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
   }
+}
+
+// A Latin-1 label (0xE9 = é) made `stats --json` crash (exit 3: JSON output is UTF-8 only); it is
+// an input error at the byte's line:column that says how to convert the file. Numbers are
+// decimal only ("0x10" is not 16, "inf" is not a number), located at line:column, and values
+// whose squares overflow a double (|x| > 1e150: inf sums of squares next to a finite F) are
+// refused. --alpha is the equivalence tests' level: alone it would be ignored.
+TEST(CliStats, NonUtf8HexAndHugeValuesAreInputErrors) {
+  struct Case {
+    std::string csv, extra, expect1, expect2;
+  };
+  const std::vector<Case> cases = {
+      {"group,value\nA,1\nA,2\nCaf\xE9,3\nCaf\xE9,4\n", " --json", ":4:4:", "UTF-8"},
+      {"group,value\nA,1\nA,2\nB,0x10\nB,4\n", "", ":4:3:", "decimal number"},
+      {"group,value\nA,1\nA,2\nB,3\n\"B\",  inf\n", "", ":5:5:", "decimal number"},
+      {"group,value\nA,1\nA,nan\nB,3\nB,4\n", "", ":3:3:", "decimal number"},
+      {"group,value\nA,1e160\nA,2e160\nA,3e160\nB,1\nB,2\n", " --json", ":2:3:", "1e150"},
+      {"group,value\nA,1\nA,2\nB,3\nB,4\n", " --alpha 0.1", "--alpha", "--margin"},
+  };
+  int i = 0;
+  for (const auto& c : cases) {
+    const std::string path = write_temp("enc" + std::to_string(i++) + ".csv", c.csv);
+    const Result r = run_palplab("stats --csv " + path + " --value value --group group" + c.extra);
+    EXPECT_EQ(r.code, 2) << c.csv << "\n" << r.out << r.err;
+    EXPECT_NE(r.err.find(c.expect1), std::string::npos) << c.expect1 << " in: " << r.err;
+    EXPECT_NE(r.err.find(c.expect2), std::string::npos) << c.expect2 << " in: " << r.err;
+    std::filesystem::remove(path);
+  }
+  // The limit is inclusive: 1e150 itself is a value; UTF-8 labels and "1e2", ".5", "+3." are fine.
+  const std::string ok = write_temp(
+      "enc_ok.csv", "group,value\nCaf\xC3\xA9,1e150\nCaf\xC3\xA9,-1e150\nB,1e2\nB,.5\nB,+3.\n");
+  const Result r = run_palplab("stats --csv " + ok + " --value value --group group --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["groups"][0]["name"], "Caf\xC3\xA9");
+  EXPECT_DOUBLE_EQ(j["groups"][1]["mean"].get<double>(), (100 + 0.5 + 3) / 3);
+  EXPECT_TRUE(j["anova"]["ss_within"].is_number());  // finite, not null
+  std::filesystem::remove(ok);
 }
