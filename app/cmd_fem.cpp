@@ -116,8 +116,12 @@ struct ReferenceSetup {
   std::string id, region;  // the prototype's id, the pressed node's region ("" = none)
   int node = -1;           // the pressed surface node
 };
-ReferenceSetup reference_setup(const ReferenceArgs& a) {
+// `built_levels`: the levels the command builds (fem solvers builds fewer than a.levels; 0 = all).
+// `auto_grading`: --grade auto may add grading rounds up to --grade-max (fem reference).
+ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
+                               bool auto_grading = true) {
   using namespace palplab;
+  if (built_levels <= 0) built_levels = a.levels;
   if (!(a.force > 0) || !std::isfinite(a.force) || a.force > 1e3)
     throw InputError("--force: expected a force in N in (0, 1000], got " + std::to_string(a.force));
   if (a.levels < 3 || a.levels > 6)
@@ -161,9 +165,9 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
   if (a.refinement == "nested") {
     // The finest nested level has 8^(levels-1) times the prototype's tets; a sparse Cholesky
     // of millions of tets needs tens of GB.
-    const double finest = static_cast<double>(tets) * std::pow(8.0, a.levels - 1);
+    const double finest = static_cast<double>(tets) * std::pow(8.0, built_levels - 1);
     if (finest > 2e6)
-      throw InputError("--levels: " + std::to_string(a.levels) + " nested levels of " + cfg.id +
+      throw InputError("--levels: " + std::to_string(built_levels) + " nested levels of " + cfg.id +
                        "'s " + std::to_string(tets) + " tets give " +
                        std::to_string(static_cast<long>(finest)) +
                        " tets on the finest level (limit 2e6): use fewer levels or a coarser "
@@ -189,11 +193,33 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
                      std::to_string(a.bisections));
   o.curve_max_newton = a.newton_max;
   o.curve_bisections = a.bisections;
-  if (!(a.volume_scale > 0) || a.volume_scale > 1e3)
+  if (!(a.volume_scale > 0) || !std::isfinite(a.volume_scale) || a.volume_scale > 1e3)
     throw InputError("--volume-scale: expected a factor in (0, 1000]");
   o.max_volume *= a.volume_scale;
   if (a.refinement == "nested")
     o.grade_rounds = grade_rounds >= 0 ? grade_rounds : engine::auto_grade_rounds(o);
+  // Levels meshed by TetGen at o.max_volume (every tetgen level; a graded nested level 0, also
+  // when --grade auto may grade later) have at least volume / max_volume tets each (no tet is
+  // larger than max_volume): refused here when the finest level cannot fit, not after minutes of
+  // meshing and an exhausted memory. The prototype's mean tet volume is volume / tets, so level 0
+  // has at least tets / volume_scale tets.
+  const bool tetgen_levels = a.refinement == "tetgen" || o.grade_rounds > 0 ||
+                             (auto_grading && a.grade == "auto" && a.grade_max > 0);
+  if (tetgen_levels) {
+    const double level0 = static_cast<double>(tets) / a.volume_scale;
+    const double finest = level0 * std::pow(a.refinement == "tetgen" ? 2.0 : 8.0, built_levels - 1);
+    if (finest > 2e6) {
+      char msg[512];
+      std::snprintf(msg, sizeof msg,
+                    "--volume-scale %g: level 0 is meshed with tets of at most %.3g m^3 (%g x "
+                    "the mean tet volume of %s's %ld tets), so it has at least %.3g tets and the "
+                    "finest of %d %s levels at least %.3g (estimated before meshing; limit 2e6): "
+                    "use a larger --volume-scale or fewer --levels",
+                    a.volume_scale, o.max_volume, a.volume_scale, cfg.id.c_str(), tets, level0,
+                    built_levels, a.refinement == "tetgen" ? "tetgen" : "nested", finest);
+      throw InputError(msg);
+    }
+  }
   if (a.solver == "pcg") {
     // Static references only: Jacobi-PCG from kCholmodMinDofs free dofs (fem_reference.hpp).
     if (a.steps > 0)
@@ -220,6 +246,7 @@ ReferenceSetup reference_setup(const ReferenceArgs& a) {
 int run_reference(const ReferenceArgs& a) {
   using namespace palplab;
   if (a.out.empty()) throw InputError("--out: expected an output file name");
+  app::require_writable_file("--out", a.out);
   if (a.grade_max < 0 || a.grade_max > 6)
     throw InputError("--grade-max: expected 0 to 6 rounds, got " + std::to_string(a.grade_max));
   const ReferenceSetup su = reference_setup(a);
@@ -562,8 +589,7 @@ int run_solvers(const SolverArgs& a) {
     throw InputError("--level: expected 1 to 3, got " + std::to_string(a.level));
   if (!(a.cg_tolerance > 0 && a.cg_tolerance < 1))
     throw InputError("--cg-tolerance: expected a relative residual in (0, 1)");
-  if (!(a.mem_limit_gb > 0) || !(a.cpu_limit_s > 0))
-    throw InputError("--mem-limit-gb / --cpu-limit-s: expected positive limits");
+  if (!a.out.empty()) app::require_writable_file("--out", a.out);
   std::vector<std::string> names;
   for (size_t i = 0; i <= a.solvers.size();) {
     const size_t j = std::min(a.solvers.find(',', i), a.solvers.size());
@@ -578,7 +604,7 @@ int run_solvers(const SolverArgs& a) {
   }
   ReferenceArgs ra = a.ref;
   ra.levels = std::max(3, a.level + 1);
-  const ReferenceSetup su = reference_setup(ra);
+  const ReferenceSetup su = reference_setup(ra, a.level + 1, false);
   const engine::FemReferenceOptions& o = su.o;
   engine::ReferenceLevelBuilder builder(o);
   Eigen::VectorXd u_coarse;
@@ -747,34 +773,52 @@ palplab::app::CommandRegistration reg{
       ref->add_option("--steps", ra->steps,
                       "Load steps of the quasi-static (co-rotational) press curve; 0 = none")
           ->capture_default_str();
-      ref->add_option("--newton-max", ra->newton_max,
-                      "Curve: full Newton iterations per load increment (each with a line "
-                      "search) before the increment is halved")
-          ->capture_default_str();
-      ref->add_option("--bisections", ra->bisections,
-                      "Curve: halvings of a load step that does not converge (0-20); below "
-                      "that the curve stops at its last converged load and the command exits 1")
-          ->capture_default_str();
-      ref->add_option("--grade", ra->grade,
-                      "Nested levels: rounds of surface refinement around the press before "
-                      "level 0 is meshed (auto: from loaded edges <= the pad radius, one more "
-                      "round while the reference is untrusted, up to --grade-max; 0: the "
-                      "prototype's mesh is level 0)")
-          ->capture_default_str();
-      ref->add_option("--grade-max", ra->grade_max,
-                      "--grade auto: the most grading rounds tried (0-6)")
-          ->capture_default_str();
-      ref->add_option("--volume-scale", ra->volume_scale,
-                      "Max tet volume of TetGen levels (tetgen; graded level 0) as a multiple of "
-                      "the prototype's mean tet volume")
-          ->capture_default_str();
+      auto* newton_opt =
+          ref->add_option("--newton-max", ra->newton_max,
+                          "Curve: full Newton iterations per load increment (each with a line "
+                          "search) before the increment is halved")
+              ->capture_default_str();
+      auto* bisect_opt =
+          ref->add_option("--bisections", ra->bisections,
+                          "Curve: halvings of a load step that does not converge (0-20); below "
+                          "that the curve stops at its last converged load and the command exits 1")
+              ->capture_default_str();
+      auto* grade_opt =
+          ref->add_option("--grade", ra->grade,
+                          "Nested levels: rounds of surface refinement around the press before "
+                          "level 0 is meshed (auto: from loaded edges <= the pad radius, one more "
+                          "round while the reference is untrusted, up to --grade-max; 0: the "
+                          "prototype's mesh is level 0)")
+              ->capture_default_str();
+      auto* grade_max_opt = ref->add_option("--grade-max", ra->grade_max,
+                                            "--grade auto: the most grading rounds tried (0-6)")
+                                ->capture_default_str();
+      auto* vscale_opt =
+          ref->add_option(
+                 "--volume-scale", ra->volume_scale,
+                 "Max tet volume of TetGen levels (tetgen; graded level 0) as a multiple of "
+                 "the prototype's mean tet volume")
+              ->capture_default_str();
       ref->add_option("--solver", ra->solver,
                       "Sparse factorisation: ldlt (Eigen SimplicialLDLT), cholmod (supernodal), "
                       "auto (cholmod from 20000 free dofs), pcg (static only, --steps 0: the "
                       "finest level by PCG from 20000 free dofs, preconditioned by the coarser "
                       "level's factor, no factor of its own)")
           ->capture_default_str();
-      ref->callback([=] { *code = run_reference(*ra); });
+      ref->callback([=] {
+        // Flags that another flag makes meaningless are errors, not silently ignored.
+        using palplab::app::flag_only_with;
+        const bool nested = ra->refinement == "nested";
+        flag_only_with(grade_opt, nested, "--refinement nested");
+        flag_only_with(grade_max_opt, nested && ra->grade == "auto",
+                       "--refinement nested and --grade auto");
+        flag_only_with(vscale_opt, !nested || ra->grade != "0",
+                       "--refinement tetgen or a graded nested level 0 (--grade auto or 1-6; "
+                       "--grade 0 uses the prototype's own mesh)");
+        flag_only_with(newton_opt, ra->steps > 0, "--steps > 0 (the press curve)");
+        flag_only_with(bisect_opt, ra->steps > 0, "--steps > 0 (the press curve)");
+        *code = run_reference(*ra);
+      });
       auto* sol = fem->add_subcommand(
           "solvers",
           "Time and peak memory of the sparse solvers (LDL^T, CHOLMOD, PCG) side by side on one "
@@ -786,21 +830,35 @@ palplab::app::CommandRegistration reg{
       sol->add_option("--press", sa->ref.press, "Region name or surface node index to press")
           ->required();
       sol->add_option("--grade", sa->ref.grade, "As for fem reference")->capture_default_str();
-      sol->add_option("--volume-scale", sa->ref.volume_scale, "As for fem reference")
-          ->capture_default_str();
+      auto* sol_vscale_opt =
+          sol->add_option("--volume-scale", sa->ref.volume_scale, "As for fem reference")
+              ->capture_default_str();
       sol->add_option("--level", sa->level, "Nested level to solve (1-3)")->capture_default_str();
       sol->add_option("--solvers", sa->solvers,
                       "Comma-separated: ldlt, cholmod, pcg-jacobi (from the prolongated coarse "
                       "solution), pcg-jacobi0 (from zero), pcg-ic (incomplete Cholesky)")
           ->capture_default_str();
-      sol->add_option("--cg-tolerance", sa->cg_tolerance, "PCG relative residual")
-          ->capture_default_str();
+      auto* cg_tol_opt =
+          sol->add_option("--cg-tolerance", sa->cg_tolerance, "PCG relative residual")
+              ->capture_default_str();
+      // Converted to rlim_t (bytes, whole seconds): bounded so the conversion cannot overflow.
       sol->add_option("--mem-limit-gb", sa->mem_limit_gb, "Address-space limit per solver (GB)")
-          ->capture_default_str();
-      sol->add_option("--cpu-limit-s", sa->cpu_limit_s, "CPU-time limit per solver (s)")
-          ->capture_default_str();
+          ->capture_default_str()
+          ->check(palplab::app::finite_range(0.01, 1e6));
+      sol->add_option("--cpu-limit-s", sa->cpu_limit_s,
+                      "CPU-time limit per solver (s, whole seconds)")
+          ->capture_default_str()
+          ->check(palplab::app::finite_range(1, 1e8));
       sol->add_option("--out", sa->out, "Also write the table as JSON");
-      sol->callback([=] { *code = run_solvers(*sa); });
+      sol->callback([=] {
+        using palplab::app::flag_only_with;
+        flag_only_with(sol_vscale_opt, sa->ref.grade != "0",
+                       "a graded level 0 (--grade auto or 1-6; --grade 0 uses the prototype's "
+                       "own mesh)");
+        flag_only_with(cg_tol_opt, sa->solvers.find("pcg") != std::string::npos,
+                       "a PCG solver in --solvers (pcg-jacobi, pcg-jacobi0, pcg-ic)");
+        *code = run_solvers(*sa);
+      });
     }};
 
 }  // namespace

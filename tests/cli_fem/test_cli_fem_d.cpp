@@ -372,3 +372,65 @@ TEST(CliFemD, AutoGradingEndsWithATrustedBodyReference) {
             2);
   fs::remove_all(d);
 }
+
+// Inputs found wrong only after the work (or never) before: a --volume-scale whose TetGen levels
+// cannot fit (0.001: bad_alloc after 66 s) is refused from the tet-count estimate up front; an
+// unwritable --out before any level is built; flags another flag makes meaningless name both.
+TEST(CliFemD, ReferenceRefusesBeforeTheWork) {
+  const fs::path d = tmp("before");
+  const std::string base = "fem reference " + proto("D") + " --press ovary_left --force 1 ";
+  const std::string o = " --out " + (d / "x.json").string();
+  for (const char* refinement : {"nested", "tetgen"}) {
+    const Result r = run(base + "--volume-scale 0.001 --refinement " + refinement + o, d);
+    EXPECT_EQ(r.code, 2) << refinement << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find("--volume-scale"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("at least"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("limit 2e6"), std::string::npos) << r.err;
+  }
+  const Result w = run(base + "--out /nonexistent_dir_palplab/ref.json", d);
+  EXPECT_EQ(w.code, 2) << w.out << w.err;
+  EXPECT_NE(w.err.find("--out"), std::string::npos) << w.err;
+  EXPECT_NE(w.err.find("/nonexistent_dir_palplab/ref.json"), std::string::npos) << w.err;
+  struct Combo {
+    std::string args, flag, needed;
+  };
+  for (const Combo& c : std::vector<Combo>{
+           {"--refinement tetgen --grade-max 3", "--grade-max", "--refinement nested"},
+           {"--grade 2 --grade-max 3", "--grade-max", "--grade auto"},
+           {"--refinement tetgen --grade 2", "--grade", "--refinement nested"},
+           {"--grade 0 --volume-scale 4", "--volume-scale", "--refinement tetgen"},
+           {"--steps 0 --newton-max 5", "--newton-max", "--steps"},
+           {"--steps 0 --bisections 2", "--bisections", "--steps"}}) {
+    const Result r = run(base + c.args + o, d);
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(c.flag + ": applies only with"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.needed), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "x.json"));
+  fs::remove_all(d);
+}
+
+// --mem-limit-gb 1e308 overflowed the conversion to rlim_t and --cpu-limit-s inf was accepted;
+// an unwritable --out was found after every solver had run.
+TEST(CliFemD, SolversLimitsAndOutputCheckedFirst) {
+  const fs::path d = tmp("solvers_first");
+  const std::string base = "fem solvers " + proto("D") + " --press ovary_left ";
+  for (const char* bad : {"--mem-limit-gb 1e308", "--mem-limit-gb nan", "--mem-limit-gb 0",
+                          "--cpu-limit-s inf", "--cpu-limit-s 0.5", "--cpu-limit-s 1e300"}) {
+    const Result r = run(base + bad, d);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out << r.err;
+    const std::string flag = std::string(bad).substr(0, std::string(bad).find(' '));
+    EXPECT_NE(r.err.find(flag), std::string::npos) << r.err;
+  }
+  const Result w = run(base + "--out /nonexistent_dir_palplab/solvers.json", d);
+  EXPECT_EQ(w.code, 2) << w.out << w.err;
+  EXPECT_NE(w.err.find("/nonexistent_dir_palplab/solvers.json"), std::string::npos) << w.err;
+  EXPECT_EQ(w.out.find("fem solvers:"), std::string::npos) << "a solver ran first: " << w.out;
+  const Result t = run(base + "--solvers ldlt,cholmod --cg-tolerance 1e-8", d);
+  EXPECT_EQ(t.code, 2) << t.out << t.err;
+  EXPECT_NE(t.err.find("--cg-tolerance: applies only with"), std::string::npos) << t.err;
+  const Result v = run(base + "--grade 0 --volume-scale 8", d);
+  EXPECT_EQ(v.code, 2) << v.out << v.err;
+  EXPECT_NE(v.err.find("--volume-scale: applies only with"), std::string::npos) << v.err;
+  fs::remove_all(d);
+}
