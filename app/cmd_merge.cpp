@@ -32,6 +32,7 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--target-power", a->target, "Power the smallest n must reach")
           ->check(palplab::app::finite_range(0.01, 0.999999));
       cmd->callback([a, code] {
+        palplab::app::require_writable_dir("--out", a->out);
         std::vector<std::string> files;
         for (const auto& in : a->inputs) {
           if (fs::is_directory(in)) {

@@ -6,6 +6,8 @@
 // With --shard I/K only every K-th replicate is run (job arrays); `palplab merge` combines.
 #include <unistd.h>
 
+#include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -18,9 +20,39 @@
 #include "protocols/study.hpp"
 
 namespace {
+
+// --n: comma-separated group sizes (the option may also be repeated). An empty entry ("6,,8"),
+// a non-integer, a size outside [2, 100000] or a size given twice is an input error.
+std::vector<int> parse_sizes(const std::vector<std::string>& args) {
+  std::vector<int> out;
+  for (const std::string& arg : args) {
+    const auto fail = [&](const std::string& what) {
+      return palplab::InputError(palplab::SourceLocation{"--n"},
+                                 what + " in \"" + arg +
+                                     "\" (expected group sizes 2 to 100000, separated by commas, "
+                                     "each once)");
+    };
+    for (std::size_t i = 0;;) {
+      const std::size_t j = std::min(arg.find(',', i), arg.size());
+      const std::string item = arg.substr(i, j - i);
+      if (item.empty()) throw fail("an empty entry");
+      int v = 0;
+      const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+      if (ec != std::errc() || end != item.data() + item.size() || v < 2 || v > 100000)
+        throw fail("\"" + item + "\" is not a group size");
+      if (std::find(out.begin(), out.end(), v) != out.end())
+        throw fail("the size " + item + " is given twice");
+      out.push_back(v);
+      if (j == arg.size()) break;
+      i = j + 1;
+    }
+  }
+  return out;
+}
+
 struct PowerArgs {
   std::string study, out = "power", shard;
-  std::vector<int> n;
+  std::vector<std::string> n;  // "6,8,10" (or several arguments), parsed by parse_sizes
   palplab::protocols::PowerOptions opt;
   bool quiet = false;
 };
@@ -34,9 +66,10 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--replicates", a->opt.replicates, "Simulated studies per group size")
           ->required()
           ->check(CLI::Range(1, 10000000));
-      cmd->add_option("--n", a->n, "Participants per group, comma separated (default: the study's)")
-          ->delimiter(',')
-          ->check(CLI::Range(2, 100000));
+      // Split here, not by CLI11: its delimiter drops empty entries ("6,,8" would be 6,8).
+      cmd->add_option("--n", a->n,
+                      "Participants per group, comma separated (default: the study's); each "
+                      "size once, 2 to 100000");
       cmd->add_option("--jobs", a->opt.jobs, "Replicates simulated in parallel (threads)")
           ->check(CLI::Range(1, 1024));
       cmd->add_option("--out", a->out, "Output directory (replicates.jsonl, power.json/md/svg)");
@@ -58,9 +91,18 @@ palplab::app::CommandRegistration reg{
           a->opt.shard = i - 1;
           a->opt.shards = k;
         }
-        a->opt.n = a->n;
+        a->opt.n = parse_sizes(a->n);
         a->opt.out_dir = a->out;
         Study s = load_study(a->study, engine_prototype_inspector());
+        // The tests whose power is simulated (protocols/power.cpp run_declared_analyses).
+        if (std::none_of(s.analyses.begin(), s.analyses.end(), [](const Analysis& x) {
+              return x.kind == "anova_oneway" || x.kind == "pairwise_t";
+            }))
+          throw palplab::InputError(
+              palplab::SourceLocation{a->study, 0, 0, -1, "$.analyses"},
+              "the study declares no test to compute the power of: expected at least one "
+              "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
+        palplab::app::require_writable_dir("--out", a->out);
         const bool tty = isatty(2);
         if (!a->quiet)
           a->opt.progress = [tty](long done, long total, double elapsed) {

@@ -102,6 +102,51 @@ TEST(Power, BadArgumentsAreInputErrors) {
   fs::remove_all(d);
 }
 
+// --n "6,,8" was 6,8 (CLI11 drops empty entries) and "3,3" simulated n = 3 twice; a study
+// without a test has no power to compute; an unwritable --out is refused before any replicate.
+TEST(Power, SizesStudyAndOutputAreCheckedFirst) {
+  auto d = scratch_dir("first");
+  for (const char* bad : {"6,,8", "3,3", "3,", ",3", "3,x", "1", "3.5"}) {
+    const auto r = run_palplab("power " + null_study() + " --replicates 1 --quiet --n " + bad +
+                                   " --out " + (d / "never").string(),
+                               d);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find("--n:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::string("\"") + bad + "\""), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(d / "never")) << bad;
+  }
+  // Only descriptives: nothing to compute the power of.
+  std::string text = slurp(null_study());
+  const auto a = text.find("\"analyses\"");
+  ASSERT_NE(a, std::string::npos);
+  text = text.substr(0, a) +
+         "\"analyses\": [{\"kind\": \"descriptives\", \"measure\": \"palpation_force\", "
+         "\"phase\": \"test\"}]\n}\n";
+  const std::string dirs = "\"prototype_dirs\": [\"../../../prototypes\"]";
+  const auto p = text.find(dirs);
+  ASSERT_NE(p, std::string::npos);
+  text.replace(p, dirs.size(),
+               "\"prototype_dirs\": [\"" + std::string(PALPLAB_SOURCE_DIR) + "/prototypes\"]");
+  std::ofstream(d / "no_tests.json") << text;
+  const auto nt = run_palplab("power " + (d / "no_tests.json").string() +
+                                  " --replicates 1 --quiet --out " + (d / "never").string(),
+                              d);
+  EXPECT_EQ(nt.code, 2) << nt.out << nt.err;
+  EXPECT_NE(nt.err.find("no_tests.json: $.analyses:"), std::string::npos) << nt.err;
+  EXPECT_FALSE(fs::exists(d / "never"));
+  // --out under a regular file cannot be created.
+  std::ofstream(d / "file") << "x";
+  const auto w = run_palplab(
+      "power " + null_study() + " --replicates 1 --quiet --out " + (d / "file" / "out").string(),
+      d);
+  EXPECT_EQ(w.code, 2) << w.out << w.err;
+  EXPECT_NE(w.err.find("--out"), std::string::npos) << w.err;
+  const auto m = run_palplab("merge " + d.string() + " --out " + (d / "file" / "m").string(), d);
+  EXPECT_EQ(m.code, 2) << m.out << m.err;
+  EXPECT_NE(m.err.find("--out"), std::string::npos) << m.err;
+  fs::remove_all(d);
+}
+
 TEST(Power, MpiEqualsSingleProcess) {
 #ifndef PALPLAB_MPIEXEC
   GTEST_SKIP() << "built without PALPLAB_MPI";
