@@ -71,6 +71,64 @@ void read_mesh(Checker& c, const json& m, const std::string& path, MeshSource& o
   }
 }
 
+// What holds a deformable body ("$.model": "support_modulus", "fixed_z_below", "fixed_region",
+// read by engine::read_support for the kinds "mass_spring" and "fem", which pin the model nodes
+// below fixed_z_below and the nodes of fixed_region as their makers do). Nonsense that the
+// models would accept: nothing holds the body (no pinned node, no foundation: a press pushes it
+// away), or every surface node is pinned (nothing can be pressed: an infinite stiffness). The
+// mesh is needed when pins are declared; it is built once per process (engine::scene_mesh's
+// cache), so the scene made from this prototype reuses it.
+void check_support(Checker& c, const json& model, const SceneConfig& s) {
+  const SupportConfig& sp = s.support;
+  const std::string P = "$.model";
+  const bool foundation = sp.modulus > 0;
+  if (sp.fixed_region.empty() && !(sp.fixed_z_below > 0)) {
+    if (!foundation)
+      c.err(model.contains("support_modulus") ? P + ".support_modulus" : P,
+            "nothing holds the body: no node is pinned (\"fixed_z_below\", \"fixed_region\") "
+            "and \"support_modulus\" is 0, so a press would push the whole body away; pin its "
+            "base (e.g. \"fixed_z_below\": 0.02) or give an elastic foundation "
+            "(\"support_modulus\" > 0)");
+    return;
+  }
+  const auto mesh = scene_mesh(s.mesh);
+  const SceneMesh& m = *mesh;
+  const long nm = m.model_V.rows(), nv = m.V.rows();
+  if (nm == 0 || nv == 0) return;
+  std::vector<std::uint8_t> pinned(static_cast<size_t>(nm), 0);
+  int region = -1;
+  if (!sp.fixed_region.empty())
+    for (size_t r = 0; r < m.region_names.size(); ++r)
+      if (m.region_names[r] == sp.fixed_region) region = static_cast<int>(r);
+  if (region >= 0)
+    for (size_t i = 0; i < m.vertex_region.size(); ++i)
+      if (m.vertex_region[i] == region) pinned[static_cast<size_t>(m.surface_to_model[i])] = 1;
+  const double z0 = m.model_V.col(2).minCoeff(), height = m.model_V.col(2).maxCoeff() - z0;
+  if (sp.fixed_z_below > 0)
+    for (long i = 0; i < nm; ++i)
+      if (m.model_V(i, 2) < z0 + sp.fixed_z_below) pinned[static_cast<size_t>(i)] = 1;
+  long surface_pinned = 0, model_pinned = 0;
+  for (long i = 0; i < nm; ++i) model_pinned += pinned[static_cast<size_t>(i)];
+  for (long i = 0; i < nv; ++i)
+    surface_pinned += pinned[static_cast<size_t>(m.surface_to_model[static_cast<size_t>(i)])];
+  // Located at the member that pins (fixed_z_below when both are given and it alone pins all).
+  const std::string where = sp.fixed_z_below > 0 ? P + ".fixed_z_below" : P + ".fixed_region";
+  if (surface_pinned == nv)
+    c.err(where,
+          "pins every surface node (" + std::to_string(nv) + " of " + std::to_string(nv) +
+              "): nothing is left to press (the body would be infinitely stiff); the "
+              "mesh is " +
+              Checker::fmt(height) + " m tall above its lowest point, \"fixed_z_below\" is " +
+              Checker::fmt(sp.fixed_z_below) + " m" +
+              (sp.fixed_region.empty() ? std::string()
+                                       : ", \"fixed_region\" is \"" + sp.fixed_region + "\""));
+  else if (model_pinned < 3 && !foundation)
+    c.err(where, "pins only " + std::to_string(model_pinned) +
+                     " node(s) and \"support_modulus\" is 0: the body can turn about them (at "
+                     "least 3 pinned nodes are needed to hold it); raise \"fixed_z_below\" or "
+                     "give an elastic foundation (\"support_modulus\" > 0)");
+}
+
 }  // namespace
 
 SceneConfig load_prototype(const std::string& path) {
@@ -130,7 +188,7 @@ SceneConfig load_prototype(const std::string& path) {
         c.number(*ct, P, "force_limit", false, 0, 1000, "the device's peak force (N)", true)
             .value_or(k.force_limit);
     k.patch_radius =
-        c.number(*ct, P, "patch_radius", false, 0, 0.1, "the radius of the probe face (m)")
+        c.number(*ct, P, "patch_radius", false, 0, 0.1, "the radius of the probe face (m)", true)
             .value_or(k.patch_radius);
     k.stiffness = c.number(*ct, P, "stiffness", false, 0, 1e6, "the contact stiffness (N/m)", true)
                       .value_or(k.stiffness);
@@ -145,6 +203,9 @@ SceneConfig load_prototype(const std::string& path) {
             true);
   }
   if (kind && kind->check && c.ok()) kind->check(c, s);
+  // The kinds whose body is held by the support (the ones that read it, engine::read_support).
+  if (kind && c.ok() && (s.model == "mass_spring" || s.model == "fem"))
+    check_support(c, root["model"], s);
   if (const json* cu = c.object(root, R, "cues", false)) {
     const std::string P = "$.cues";
     c.keys(*cu, P, {"haptic", "visual_deformation", "audio", "transparency"});

@@ -2,10 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace {
 struct Result {
@@ -87,4 +90,57 @@ TEST(CliProbe, ExplicitIntegratorsDivergeOnModelCAndAreCaught) {
       run("probe " + proto("A") + " --press ovary_left --force 2 --duration 1 --integrator rk4")
           .code,
       2);
+}
+
+namespace {
+// Prototype C1 with `from` replaced by `to`, written to a per-process temporary file.
+std::string c1_variant(const std::string& name, const std::string& from, const std::string& to) {
+  FILE* f = std::fopen(proto("C1").c_str(), "rb");
+  std::string t;
+  std::array<char, 4096> buf;
+  while (size_t n = std::fread(buf.data(), 1, buf.size(), f)) t.append(buf.data(), n);
+  std::fclose(f);
+  const auto k = t.find(from);
+  EXPECT_NE(k, std::string::npos) << from;
+  if (k != std::string::npos) t.replace(k, from.size(), to);
+  const std::string path =
+      "/tmp/palplab_probe_" + name + "_" + std::to_string(::getpid()) + ".json";
+  FILE* o = std::fopen(path.c_str(), "wb");
+  std::fwrite(t.data(), 1, t.size(), o);
+  std::fclose(o);
+  return path;
+}
+}  // namespace
+
+// Nonsense the prototype check let through (the probe then reported an infinitely stiff body,
+// exit 0, or a body with nothing holding it): every surface node pinned, nothing pinned and no
+// foundation, too few pinned nodes without a foundation, and a probe face of radius 0. Each is
+// exit 2 at its JSON path.
+TEST(CliProbe, PrototypeSupportAndPatchRadiusAreChecked) {
+  struct Case {
+    std::string name, from, to, path, what;
+  };
+  const std::vector<Case> cases = {
+      {"allpinned", "\"fixed_z_below\": 0.02", "\"fixed_z_below\": 10", "$.model.fixed_z_below",
+       "pins every surface node"},
+      {"unheld",
+       "\"support_modulus\": 200000.0,\n    \"support_damping\": 200.0,\n    "
+       "\"fixed_z_below\": 0.02,",
+       "\"support_damping\": 200.0,", "$.model:", "nothing holds the body"},
+      {"onepin",
+       "\"support_modulus\": 200000.0,\n    \"support_damping\": 200.0,\n    "
+       "\"fixed_z_below\": 0.02,",
+       "\"fixed_z_below\": 1e-12,", "$.model.fixed_z_below", "pins only"},
+      {"patch0", "\"patch_radius\": 0.01", "\"patch_radius\": 0", "$.contact.patch_radius",
+       "the radius of the probe face"},
+  };
+  for (const auto& c : cases) {
+    const std::string p = c1_variant(c.name, c.from, c.to);
+    const Result r = run("probe " + p + " --press ovary_left --force 2 --duration 0.1");
+    EXPECT_EQ(r.code, 2) << c.name << ": " << r.out;
+    EXPECT_NE(r.out.find(p), std::string::npos) << c.name << ": " << r.out;
+    EXPECT_NE(r.out.find(c.path), std::string::npos) << c.name << ": " << r.out;
+    EXPECT_NE(r.out.find(c.what), std::string::npos) << c.name << ": " << r.out;
+    std::remove(p.c_str());
+  }
 }
