@@ -5,6 +5,7 @@
 // before and after, and the fit per group and measure; writes them all to PARAMS.json (its
 // "participant_model" object can be pasted into a study).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -56,6 +57,16 @@ palplab::app::CommandRegistration reg{
         using namespace palplab::protocols;
         Study s = load_study(a->study, engine_prototype_inspector());
         auto cells = read_human_cells(a->human);
+        // The outputs are checked before the fit (which takes minutes to hours).
+        palplab::app::require_writable_file("--out", a->out);
+        if (!a->write_defaults.empty()) {
+          if (!std::filesystem::is_regular_file(a->write_defaults))
+            throw palplab::InputError(palplab::SourceLocation{"--write-defaults"},
+                                      "no file \"" + a->write_defaults +
+                                          "\" (expected the participant model's params.hpp, "
+                                          "protocols/participants/params.hpp)");
+          palplab::app::require_writable_file("--write-defaults", a->write_defaults);
+        }
         a->opt.standard_errors = !a->no_se;
         if (!a->quiet)
           a->opt.progress = [keys = a->opt.keys](int e, double l, double best,

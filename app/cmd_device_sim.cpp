@@ -302,18 +302,24 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--duration", a->duration, "Seconds to run (default: script end + 0.1)");
       cmd->add_option("--stop-after", a->stop_after,
                       "Stop sending after S seconds and measure the force-off latency");
-      cmd->add_option("--linger", a->linger, "Seconds to listen after --stop-after (default 0.1)");
+      auto* linger_opt = cmd->add_option("--linger", a->linger,
+                                         "Seconds to listen after --stop-after (default 0.1)");
       cmd->add_flag("--json", a->json, "Print the summary as JSON");
       cmd->add_flag("--start-on-force", a->start_on_force,
                     "Hold the first waypoint until forces arrive, then start the script");
-      cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)");
+      auto* wait_opt =
+          cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)");
       cmd->add_option("--buttons", a->buttons,
                       "Constant button mask in every datagram (bit 1 = a needle scene's needle)")
           ->check(CLI::Range(0L, 4294967295L));
       cmd->add_option("--axis", a->axis,
                       "Constant stylus axis AX AY AZ (handle -> tip; sends type-3 datagrams)")
           ->expected(3);
-      cmd->callback([a, code] { *code = run_device_sim(*a); });
+      cmd->callback([a, linger_opt, wait_opt, code] {
+        palplab::app::flag_only_with(linger_opt, a->stop_after >= 0, "--stop-after");
+        palplab::app::flag_only_with(wait_opt, a->start_on_force, "--start-on-force");
+        *code = run_device_sim(*a);
+      });
     }};
 
 }  // namespace

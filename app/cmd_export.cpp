@@ -19,6 +19,7 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--samples", *samples, "Also write samples.csv (every 1 kHz sample; large)");
       cmd->callback([db, dir, samples, code] {
         palplab::results::Store store = palplab::results::Store::open(*db);
+        palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";
         palplab::results::export_csv(store, *dir, *samples);

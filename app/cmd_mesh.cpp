@@ -22,18 +22,27 @@ namespace {
 using namespace palplab::mesh;
 using json = nlohmann::ordered_json;
 
-// Where a tet mesh goes: BASE.vtu -> VTU only; otherwise TetGen files at BASE (+ VTU if asked).
-void write_tet_output(const std::string& out, const TetMesh& m, bool vtu,
-                      const MaterialTable& mat) {
-  if (extension(out) == ".vtu") {
-    write_vtu(out, m, &mat);
-    return;
-  }
-  // Any other name is a TetGen base ("out/model-c", "mesh.1"); surface formats are a mistake.
+// The first file a tet mesh output `out` writes, checked (name and writability) before the mesh
+// is made: BASE.vtu -> that file; a surface format is a mistake; otherwise BASE.node.
+std::string check_tet_output(const std::string& out) {
   const std::string e = extension(out);
   if (e == ".obj" || e == ".stl" || e == ".off" || e == ".ply")
     throw palplab::InputError(
         "a tet mesh is written as TetGen files (BASE, BASE.node) or .vtu, not '" + e + "'", out);
+  const std::string first = e == ".vtu" ? out : tetgen_base(out) + ".node";
+  palplab::app::require_writable_file("--out", first);
+  return first;
+}
+
+// Where a tet mesh goes: BASE.vtu -> VTU only; otherwise TetGen files at BASE (+ VTU if asked).
+void write_tet_output(const std::string& out, const TetMesh& m, bool vtu,
+                      const MaterialTable& mat) {
+  check_tet_output(out);
+  if (extension(out) == ".vtu") {
+    write_vtu(out, m, &mat);
+    return;
+  }
+  // Any other name is a TetGen base ("out/model-c", "mesh.1").
   const std::string base = tetgen_base(out);
   write_tetgen(base, m);
   if (vtu) write_vtu(base + ".vtu", m, &mat);
@@ -124,12 +133,22 @@ palplab::app::CommandRegistration reg{
         c->add_option("--vertices", *vertices,
                       "Target vertex count (tract models: surface vertices; sphere: 642 ... 23522; "
                       "shoulder: per skin layer, default 2562)");
-        c->add_option("--seed", *seed,
-                      "0 = reference shape; other seeds perturb the tract/stomach by up to 5 %");
-        c->add_flag("--binary", *binary, "Binary STL/PLY");
-        c->add_flag("--vtu", *vtu, "model-c: also write BASE.vtu");
+        auto* seed_opt = c->add_option(
+            "--seed", *seed,
+            "0 = reference shape; other seeds perturb the tract/stomach by up to 5 %");
+        auto* binary_opt = c->add_flag("--binary", *binary, "Binary STL/PLY");
+        auto* vtu_opt = c->add_flag("--vtu", *vtu, "model-c: also write BASE.vtu");
         c->callback([=] {
           const std::string& n = *name;
+          using palplab::app::flag_only_with;
+          flag_only_with(vtu_opt, n == "model-c", "model-c (a tet mesh written as TetGen files)");
+          flag_only_with(seed_opt,
+                         n == "model-a" || n == "model-b" || n == "model-c" || n == "stomach",
+                         "model-a, model-b, model-c or stomach (sphere and shoulder have no seed)");
+          const std::string oe = extension(*out);
+          flag_only_with(binary_opt, n != "model-c" && (oe == ".stl" || oe == ".ply"),
+                         "a surface mesh written as .stl or .ply");
+          if (n == "model-c") check_tet_output(*out);
           if (*vertices < 0) throw palplab::InputError("--vertices must be positive");
           if (n == "shoulder") {
             // Nested tissue surfaces + BASE.regions for `mesh tetrahedralize` (issue 16).
@@ -339,6 +358,7 @@ palplab::app::CommandRegistration reg{
           }
           if (!rf.empty()) o.seeds = read_region_seeds(rf);
           const MaterialTable materials = load_materials(*mat);
+          check_tet_output(*out);  // before TetGen runs (minutes on a fine mesh)
           const TetMesh m = tetrahedralize(s, o);
           write_tet_output(*out, m, *vtu, materials);
           std::cout << "TetGen -" << tetgen_switches(o)

@@ -167,13 +167,17 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--transparent", a->transparent,
                       "TISSUE[,TISSUE..]: draw these regions see-through (needle scenes: 'soft' "
                       "= the soft tissues), so the bone and target inside show");
-      cmd->add_option("--transparent-alpha", a->transparent_alpha,
-                      "Opacity of the --transparent regions (default 0.15)");
+      auto* talpha_opt = cmd->add_option("--transparent-alpha", a->transparent_alpha,
+                                         "Opacity of the --transparent regions (default 0.15)");
       cmd->add_option("--press", a->press, "Region name or surface node index to press");
       cmd->add_option("--force", a->force, "Target device force of the press (N)");
-      cmd->add_option("--hold", a->hold,
-                      "Time the press holds the force before the still (s, default 0.5)");
-      cmd->callback([a, code] { *code = run_render(*a); });
+      auto* hold_opt = cmd->add_option(
+          "--hold", a->hold, "Time the press holds the force before the still (s, default 0.5)");
+      cmd->callback([a, talpha_opt, hold_opt, code] {
+        palplab::app::flag_only_with(talpha_opt, !a->transparent.empty(), "--transparent");
+        palplab::app::flag_only_with(hold_opt, !a->press.empty(), "--press and --force");
+        *code = run_render(*a);
+      });
     }};
 
 }  // namespace

@@ -315,20 +315,26 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--human", human->human,
                     "Run one participant's due sessions with a person at the device (real time)");
       cmd->add_option("--participant", human->participant, "Participant id (with --human)");
-      cmd->add_option(
+      std::vector<const CLI::Option*> human_only;
+      human_only.push_back(cmd->add_option(
           "--device", human->device,
-          "mouse (the palpation window; default), udp:PORT or trace:FILE (with --human)");
-      cmd->add_option("--mouse-script", human->mouse_script,
-                      "Scripted mouse input for --device mouse (JSON, docs/DEVICES.md; tests)");
-      cmd->add_option("--size", human->size, "Window size WIDTHxHEIGHT for --device mouse");
-      cmd->add_option("--min-device-rate", human->min_rate,
-                      "Refuse a device below this rate (Hz; default 900)");
-      cmd->add_option("--device-lost", human->device_lost,
-                      "Abort the session after this long without device samples (s; default 2)");
+          "mouse (the palpation window; default), udp:PORT or trace:FILE (with --human)"));
+      human_only.push_back(cmd->add_option(
+          "--mouse-script", human->mouse_script,
+          "Scripted mouse input for --device mouse (JSON, docs/DEVICES.md; tests)"));
+      human_only.push_back(
+          cmd->add_option("--size", human->size, "Window size WIDTHxHEIGHT for --device mouse"));
+      human_only.push_back(cmd->add_option("--min-device-rate", human->min_rate,
+                                           "Refuse a device below this rate (Hz; default 900)"));
+      human_only.push_back(cmd->add_option(
+          "--device-lost", human->device_lost,
+          "Abort the session after this long without device samples (s; default 2)"));
       cmd->add_option("--record-trace", human->record_trace,
                       "Write each session's device track to DIR (trace files)");
-      cmd->callback([study, opt, quiet, samples, code, human, scenes] {
+      cmd->callback([study, opt, quiet, samples, code, human, scenes, human_only] {
         using namespace palplab::protocols;
+        for (const CLI::Option* o : human_only)
+          palplab::app::flag_only_with(o, human->human, "--human (a person at the device)");
         palplab::app::preload_scenes(*scenes);
         if (opt->resume && opt->force)
           throw palplab::InputError("--resume and --force exclude each other");

@@ -86,6 +86,7 @@ int run_build(const BuildArgs& a) {
   if (a.repeat < 0 || a.repeat > 1000 || (a.repeat == 0 && a.repeat_given))
     throw InputError("--repeat: expected 1..1000");
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
+  app::require_writable_file("--out", a.out);
   // Rebuild (nothing cached, everything from the sources) and load (nothing cached, everything
   // from the file) are timed in pairs, the order alternating from pair to pair (rebuild first,
   // then load first), so that a machine whose load changes during the run slows both alike and

@@ -69,6 +69,8 @@ int run_view(const ViewArgs& a) {
   if (!a.screenshot.empty() && a.frames == 0)
     throw InputError("--screenshot needs --frames N (the frame to save)");
   const engine::DeviceSpec spec = engine::parse_device_spec(a.device);
+  if (!a.mouse_script.empty() && spec.kind != "mouse")
+    throw InputError("--mouse-script needs --device mouse (it scripts the window's mouse)");
   if (!(a.min_rate >= 0.0) || a.min_rate > 100000.0)
     throw InputError("--min-device-rate: expected a rate in [0, 100000] Hz");
   engine::Scene scene = prototypes::build_scene(app::scene_prototype(a.file, a.scene));

@@ -111,6 +111,27 @@ TEST(Calibrate, BadInputIsExit2) {
   fs::remove_all(d);
 }
 
+// The outputs are checked before the fit (minutes to hours): an unwritable --out and a missing
+// --write-defaults file were found only when the fit was done.
+TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
+  auto d = scratch_dir("calibrate_out");
+  const std::string base = "calibrate " + data("recovery_study.json").string() + " --human " +
+                           data("exp2_human.csv").string() + " --params weber_fraction --budget 2 ";
+  const Result r = run_palplab(base + "--out /nonexistent_dir_palplab/params.json", d);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("/nonexistent_dir_palplab/params.json"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("evaluation"), std::string::npos) << "the fit ran first: " << r.err;
+  const Result w = run_palplab(base + "--out " + (d / "p.json").string() + " --write-defaults " +
+                                   (d / "no_params.hpp").string(),
+                               d);
+  EXPECT_EQ(w.code, 2) << w.out << w.err;
+  EXPECT_NE(w.err.find("--write-defaults"), std::string::npos) << w.err;
+  EXPECT_EQ(w.err.find("evaluation"), std::string::npos) << "the fit ran first: " << w.err;
+  EXPECT_FALSE(fs::exists(d / "p.json"));  // the check leaves no empty file behind
+  fs::remove_all(d);
+}
+
 // Common random numbers make a simulation a deterministic function of the parameters, so
 // calibrate simulates each point once: the start (which Nelder–Mead evaluates again) and the
 // optimum (whose fit is reported) are looked up. With --no-se the curvature stencil is skipped,

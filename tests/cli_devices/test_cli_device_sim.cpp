@@ -173,6 +173,17 @@ TEST(CliDeviceSim, SendsAConstantMaskAndAxisFromTheOptions) {
   }
 }
 
+// --wait without --start-on-force and --linger without --stop-after were silently ignored.
+TEST(CliDeviceSim, FlagsWithoutTheirPartnerAreInputErrors) {
+  const std::string sim = std::string(PALPLAB_BINARY) + " device-sim --port 5000 --duration 0.01 ";
+  const Result w = run(sim + "--wait 5");
+  EXPECT_EQ(w.code, 2) << w.out;
+  EXPECT_NE(w.out.find("--wait: applies only with --start-on-force"), std::string::npos) << w.out;
+  const Result l = run(sim + "--linger 0.5");
+  EXPECT_EQ(l.code, 2) << l.out;
+  EXPECT_NE(l.out.find("--linger: applies only with --stop-after"), std::string::npos) << l.out;
+}
+
 TEST(CliDeviceSim, RejectsBadButtonsAndAxes) {
   const std::string sim = std::string(PALPLAB_BINARY) + " device-sim --port 5000 --duration 0.01 ";
   const auto script = std::filesystem::temp_directory_path() /

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -184,4 +185,38 @@ TEST(CliMesh, MaterialsTable) {
   r = run("mesh materials --check " + p("badm.json"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("$.materials[0]"), std::string::npos) << r.err;
+}
+
+// Flags that the mesh ignores (--vtu of a surface, --seed of the sphere, --binary of .obj) were
+// accepted silently; a tet-mesh output that cannot be written (or is a surface format) was found
+// after TetGen or the generator had run.
+TEST(CliMesh, IgnoredFlagsAndUnwritableOutputsAreInputErrors) {
+  struct Case {
+    std::string args, flag, needed;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"mesh generate sphere --vtu --out " + p("f1.obj"), "--vtu", "model-c"},
+           {"mesh generate sphere --seed 3 --out " + p("f2.obj"), "--seed", "stomach"},
+           {"mesh generate model-a --binary --out " + p("f3.obj"), "--binary", ".stl or .ply"},
+           {"mesh generate model-c --binary --out " + p("f4"), "--binary", ".stl or .ply"}}) {
+    const Result r = run(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(c.flag + ": applies only with"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.needed), std::string::npos) << r.err;
+  }
+  for (const char* f : {"f1.obj", "f2.obj", "f3.obj", "f4.node"}) EXPECT_FALSE(fs::exists(p(f)));
+  const Result m = run("mesh generate model-c --out /nonexistent_dir_palplab/c");
+  EXPECT_EQ(m.code, 2) << m.out << m.err;
+  EXPECT_NE(m.err.find("/nonexistent_dir_palplab/c.node"), std::string::npos) << m.err;
+  EXPECT_EQ(m.out.find("model-c:"), std::string::npos) << m.out;
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("s162.obj")).code, 0);
+  const Result t =
+      run("mesh tetrahedralize " + p("s162.obj") + " --out /nonexistent_dir_palplab/t");
+  EXPECT_EQ(t.code, 2) << t.out << t.err;
+  EXPECT_NE(t.err.find("--out"), std::string::npos) << t.err;
+  EXPECT_NE(t.err.find("/nonexistent_dir_palplab/t.node"), std::string::npos) << t.err;
+  const Result s = run("mesh tetrahedralize " + p("s162.obj") + " --out " + p("t.obj"));
+  EXPECT_EQ(s.code, 2) << s.out << s.err;
+  EXPECT_NE(s.err.find("TetGen files"), std::string::npos) << s.err;
+  EXPECT_EQ(s.out.find("TetGen -"), std::string::npos) << s.out;
 }

@@ -277,6 +277,23 @@ TEST(CliExport, TidyCsv) {
   Result bad =
       run_palplab("export " + (d / "missing.db").string() + " --csv " + (d / "o2").string(), d);
   EXPECT_EQ(bad.code, 2);
+  // A --csv directory that cannot be made (below a regular file) is refused before any table.
+  Result unw = run_palplab(
+      "export " + (d / "e.db").string() + " --csv " + (d / "out" / "measures.csv" / "x").string(),
+      d);
+  EXPECT_EQ(unw.code, 2) << unw.err;
+  EXPECT_NE(unw.err.find("--csv: cannot create the directory"), std::string::npos) << unw.err;
+  // The device flags of a person's run (--human) were ignored without it.
+  for (const char* flag : {"--device udp:5000", "--size 800x600", "--min-device-rate 500",
+                           "--device-lost 5", "--mouse-script x.json"}) {
+    Result h = run_palplab(
+        "run " + (d / "s.json").string() + " --db " + (d / "h.db").string() + " --quiet " + flag,
+        d);
+    EXPECT_EQ(h.code, 2) << flag << ": " << h.err;
+    const std::string name = std::string(flag).substr(0, std::string(flag).find(' '));
+    EXPECT_NE(h.err.find(name + ": applies only with --human"), std::string::npos) << h.err;
+    EXPECT_FALSE(fs::exists(d / "h.db")) << flag;
+  }
 }
 
 TEST(CliRun, ResumeRefusesAChangedPrototype) {

@@ -106,6 +106,14 @@ TEST(CliRender, BadInputExitsTwo) {
   EXPECT_EQ(cli("render " + proto("A") + " --alpha body" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --alpha spleen=0.5" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --out /nonexistent/dir/x.png").code, 2);
+  // Flags another flag makes meaningless were silently ignored: exit 2 naming both.
+  const Result hold = cli("render " + proto("A") + " --hold 1" + out);
+  EXPECT_EQ(hold.code, 2) << hold.out;
+  EXPECT_NE(hold.out.find("--hold: applies only with --press"), std::string::npos) << hold.out;
+  const Result ta = cli("render " + proto("A") + " --transparent-alpha 0.3" + out);
+  EXPECT_EQ(ta.code, 2) << ta.out;
+  EXPECT_NE(ta.out.find("--transparent-alpha: applies only with --transparent"), std::string::npos)
+      << ta.out;
 }
 
 TEST(CliView, FramesAndScreenshotUnderXvfb) {
