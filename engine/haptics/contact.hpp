@@ -137,9 +137,10 @@ class ContactTracker {
  private:
   void set_contact(const SurfacePoint& s, const Eigen::Vector3d& x);
   // The proxy at s, the device moved from `from` to x: the Phong projection within the reach,
-  // else s slid by the device's tangential motion (see follow's definition).
-  SurfacePoint follow(const SurfacePoint& s, const Eigen::Vector3d& from,
-                      const Eigen::Vector3d& x) const;
+  // else s slid by the device's tangential motion (see follow's definition). `entry`: the first
+  // step of a contact (s the entry point).
+  SurfacePoint follow(const SurfacePoint& s, const Eigen::Vector3d& from, const Eigen::Vector3d& x,
+                      bool entry = false) const;
   // The Phong projection of x near c (closest_point(x)), or c.
   SurfacePoint projection_near(const SurfacePoint& c, const Eigen::Vector3d& x) const;
 
