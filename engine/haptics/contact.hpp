@@ -15,6 +15,9 @@
 //     centre of curvature (a 2.5 N press on C's ovary tip, radius ~9 mm, holds 9.3 mm deep) the
 //     projection's gain 1 / (1 - d kappa) has no bound: there the proxy follows the device's
 //     tangential motion along the surface instead (a god-object on the local tangent plane).
+//     Per step the proxy moves at most 1.25 x the projection's gain at the proxy (<= 4) x the
+//     device's motion tangential to the contact normal, plus 0.2 % of a mean edge: a proxy that
+//     lags the projection catches up slowly instead of jumping (the force's steps, issue 9).
 //   * Penetration depth is measured along the shaded normal n(p) = normalize(sum_i w_i N_i) of
 //     the proxy's face (w the barycentric weights of the proxy, N the vertex normals): at a
 //     vertex it is that vertex's normal, on an edge a blend of its two ends. The contact ends
@@ -137,9 +140,10 @@ class ContactTracker {
  private:
   void set_contact(const SurfacePoint& s, const Eigen::Vector3d& x);
   // The proxy at s, the device moved from `from` to x: the Phong projection within the reach,
-  // else s slid by the device's tangential motion (see follow's definition).
-  SurfacePoint follow(const SurfacePoint& s, const Eigen::Vector3d& from,
-                      const Eigen::Vector3d& x) const;
+  // else s slid by the device's tangential motion (see follow's definition). `entry`: the first
+  // step of a contact (s the entry point).
+  SurfacePoint follow(const SurfacePoint& s, const Eigen::Vector3d& from, const Eigen::Vector3d& x,
+                      bool entry = false) const;
   // The Phong projection of x near c (closest_point(x)), or c.
   SurfacePoint projection_near(const SurfacePoint& c, const Eigen::Vector3d& x) const;
 

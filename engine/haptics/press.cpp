@@ -48,7 +48,9 @@ PressDevice::PressDevice(const PressSpec& spec) : spec_(spec), depth_(-spec.star
       throw std::invalid_argument(at + "a slide needs a speed > 0 m/s");
     if (!g.is_slide() && !(g.hold >= 0.0 && std::isfinite(g.hold)))
       throw std::invalid_argument(at + "a hold must last >= 0 s");
+    slides_ = slides_ || g.is_slide();
   }
+  slides_ = slides_ || !spec.slide.isZero(0.0);
 }
 
 bool PressDevice::target_reached(double f) const {
@@ -84,7 +86,9 @@ constexpr double kFilter = 0.3;          // ...and counts with this weight (geom
 constexpr double kRange = 10.0;          // estimate within [1/10, 10] x the approach's
 }  // namespace
 
-void PressDevice::hold_force(double f, double dt) {
+void PressDevice::hold_force(const Eigen::Vector3d& force, double dt) {
+  const double f = force.norm();
+  const double depth_before = depth_;
   // The depth that produced f is depth_ (read() gave it for this step).
   hist_d_[2] = hist_d_[1], hist_f_[2] = hist_f_[1];
   hist_d_[1] = hist_d_[0], hist_f_[1] = hist_f_[0];
@@ -107,6 +111,10 @@ void PressDevice::hold_force(double f, double dt) {
   depth_ += std::clamp(step, -spec_.hold_speed_out * dt, spec_.hold_speed_in * dt);
   // Never back out past the start point nor in past max_depth.
   depth_ = std::min(std::max(depth_, -spec_.start_offset), spec_.max_depth);
+  // A sliding press moves its depth along the force it feels (the contact normal where the probe
+  // is), not along the start normal: see PressSpec::slide.
+  if (slides_ && f > 0.0 && std::isfinite(f))
+    lift_ += (depth_ - depth_before) * (spec_.normal - force / f);
 }
 
 void PressDevice::begin_withdraw(double t, const Eigen::Vector3d& f) {
@@ -179,11 +187,11 @@ void PressDevice::write(const Rendered& r) {
           begin_withdraw(r.t, r.force);
           break;
         }
-        if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(f, dt);
+        if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(r.force, dt);
         offset_ += spec_.slide * dt;
         break;
       }
-      if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(f, dt);
+      if (spec_.depth == 0.0 && !spec_.hold_depth) hold_force(r.force, dt);
       if (next_segment_step(dt)) break;
       // The step after the last segment is the first of the withdrawal.
       begin_withdraw(r.t, r.force);

@@ -16,7 +16,8 @@
 //   force_error != 0   the force is judged with that relative error (a person's Weber noise)
 //   stop_at_target     the script ends on the step the target is reached (a demonstration)
 //   slide != 0         the contact point moves tangentially at that velocity while holding
-//                      (a sliding press across an organ)
+//                      (a sliding press across an organ; the hold's depth then follows the
+//                      rendered force's direction)
 //   hold_depth         the hold keeps the depth at which the force target was reached
 //                      (a trajectory fixed by the force, then position control)
 //   segments           a script of holds and slides after the target (below), in place of
@@ -71,8 +72,13 @@ struct PressSpec {
   double force_error = 0.0;
   // End the script on the step the target is reached (or given up): no hold, no withdrawal.
   bool stop_at_target = false;
-  // m/s, velocity of the contact point along the surface during the hold (the depth stays
-  // along `normal`); zero = a still press. Its offset is kept while withdrawing. A press that
+  // m/s, velocity of the contact point along the surface during the hold; zero = a still press.
+  // The offset moves along this fixed vector; the hold's depth changes of a sliding press (this,
+  // or a slide segment) are made along the force rendered on the step before (the contact
+  // normal where the probe is), not along `normal` (issue 9: on the ovary tips pushing in along
+  // the start normal slid the device down the flank at the 10 cm/s rate limit, 5x the slide,
+  // 3 cm deep along `normal`, and the force jumped by up to 0.67 N a step). A still press keeps
+  // its depth along `normal`. Its offset is kept while withdrawing. A press that
   // slid withdraws along the direction of the force rendered on its last hold step (the
   // surface's normal where the probe is, not `normal` where it started: on a curved organ the
   // start normal may point into the surface there), over the same distance and at the same
@@ -131,8 +137,9 @@ class PressDevice : public Device {
   double phase_start_ = 0.0;  // s, when the current phase began
   double time_to_force_ = -1.0;
   double contact_depth_ = -1.0;  // depth at which force first appeared (m), -1 before
-  // One step of the hold's force control after a step rendered f (N) at depth_.
-  void hold_force(double f, double dt);
+  // One step of the hold's force control after a step rendered `force` (N, on the hand) at depth_.
+  void hold_force(const Eigen::Vector3d& force, double dt);
+  bool slides_ = false;        // the script slides (PressSpec::slide or a slide segment)
   double stiffness_ = 0.0;     // N/m, the hold controller's local stiffness estimate
   double stiffness_in_ = 0.0;  // N/m, its first value (the approach's secant)
   double hist_d_[3] = {0, 0, 0}, hist_f_[3] = {0, 0, 0};  // m, N: the last three hold steps

@@ -430,6 +430,11 @@ void resync_active(MassSpringScene& ms) {
   ms.scratch.assign(n, 0);
 }
 
+// Haptic steps over which a new exterior solution is blended in (FarFieldUpdater, blend): a
+// re-centred scope's exterior adopted in one step made the force under C's sliding press jump by
+// up to 0.82 N (issue 9).
+constexpr int kExteriorBlendSteps = 16;
+
 class MassSpringModel final : public SceneModel {
  public:
   const char* kind() const override { return "mass_spring"; }
@@ -806,7 +811,7 @@ std::unique_ptr<SceneModel> make_mass_spring(const SceneConfig& cfg, const Scene
     far_field_build(ms.model.sys, ms.far, stored ? &cm.model_blob : nullptr);
     ms.far_update = std::make_unique<FarFieldUpdater>(
         ms.far, cfg.scope.exterior_worker ? FarFieldMode::deterministic : FarFieldMode::sync,
-        cfg.scope.exterior_latency_steps);
+        cfg.scope.exterior_latency_steps, kExteriorBlendSteps);
     // A press wakes the whole scope at once: room for every coarse node and spring up front,
     // so that the steps of a press without refinement do not allocate.
     const long n = ms.model.sys.nodes(), ns = ms.model.sys.springs.size();

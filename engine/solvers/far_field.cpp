@@ -163,10 +163,14 @@ void far_field_solve(FarField& ff, const std::vector<int>& nodes,
   ff.solve_ms = ms_since(t0);
 }
 
-FarFieldUpdater::FarFieldUpdater(const FarField& ff, FarFieldMode mode, int latency)
-    : ff_(ff), mode_(mode), latency_(std::max(1, latency)) {
+FarFieldUpdater::FarFieldUpdater(const FarField& ff, FarFieldMode mode, int latency, int blend)
+    : ff_(ff), mode_(mode), latency_(std::max(1, latency)), blend_(std::max(1, blend)) {
   const long m = ff.g.size();
   cur_.setZero(m);
+  if (blend_ > 1) {
+    from_.setZero(m);
+    to_.setZero(m);
+  }
   if (mode_ == FarFieldMode::sync) {
     load_.setZero(m);
     tmp_.setZero(m);
@@ -220,7 +224,12 @@ void FarFieldUpdater::request(const std::vector<int>& nodes, const std::vector<d
   ++st_.requests;
   if (mode_ == FarFieldMode::sync) {
     const auto t0 = std::chrono::steady_clock::now();
-    solve_into(ff_, nodes, weights, dir, load_, tmp_, cur_);
+    if (blend_ > 1) {
+      solve_into(ff_, nodes, weights, dir, load_, tmp_, to_);  // a running blend's target: replaced
+      adopt(to_);
+    } else {
+      solve_into(ff_, nodes, weights, dir, load_, tmp_, cur_);
+    }
     st_.solve_ms = ms_since(t0);
     ++st_.adopted;
     return;
@@ -239,16 +248,47 @@ void FarFieldUpdater::request(const std::vector<int>& nodes, const std::vector<d
   cv_.notify_all();
 }
 
+void FarFieldUpdater::adopt(Eigen::VectorXd& g) {
+  if (blend_ <= 1) {
+    std::swap(cur_, g);
+    return;
+  }
+  // g_old is the g in use now (a running blend's too); g_new moves into to_ (g may be to_ itself).
+  if (&g != &to_) std::swap(to_, g);
+  from_ = cur_;  // same size: no allocation
+  blend_k_ = 0;
+  blend_step();
+}
+
+void FarFieldUpdater::blend_step() {
+  if (++blend_k_ >= blend_) {
+    cur_ = to_;  // the adopted solution itself, bit for bit
+    blend_k_ = 0;
+    return;
+  }
+  const double s = static_cast<double>(blend_k_) / static_cast<double>(blend_);
+  cur_ = from_ + s * (to_ - from_);  // one expression: no temporary
+}
+
 bool FarFieldUpdater::advance() {
   ++step_;
-  if (want_ == 0 || step_ - want_step_ < latency_) return false;
+  // Not adopting this step: the next step of a running blend, if any.
+  const auto blend_on = [this] {
+    if (blend_k_ == 0) return false;
+    blend_step();
+    return true;
+  };
+  if (want_ == 0 || step_ - want_step_ < latency_) return blend_on();
   std::unique_lock<std::mutex> lock(mu_);
   if (ready_id_ != want_) {
-    if (mode_ == FarFieldMode::async) return false;  // never waits: adopted later
+    if (mode_ == FarFieldMode::async) {  // never waits: adopted later
+      lock.unlock();
+      return blend_on();
+    }
     ++st_.waits;
     cv_.wait(lock, [this] { return ready_id_ == want_; });
   }
-  std::swap(cur_, ready_);
+  adopt(ready_);  // ready_ gets a buffer not in use
   ready_id_ = 0;
   st_.solve_ms = ready_ms_;
   lock.unlock();
@@ -261,6 +301,7 @@ bool FarFieldUpdater::advance() {
 
 void FarFieldUpdater::clear() {
   cur_.setZero();
+  blend_k_ = 0;
   if (mode_ == FarFieldMode::sync) return;
   want_ = 0;
   std::lock_guard<std::mutex> lock(mu_);

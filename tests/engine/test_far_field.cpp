@@ -253,3 +253,52 @@ TEST(FarFieldUpdater, ClearAndDestructionWhileASolveIsInFlight) {
   }
   SUCCEED();
 }
+
+TEST(FarFieldUpdater, BlendStepsLinearlyAndEndsOnTheSolutionBitForBit) {
+  // blend = 4: from the adoption step on, g = g_old + (k / 4)(g_new - g_old), k = 1, 2, 3, then
+  // g_new itself (the converged exterior of an unblended update, bit for bit); a newer adoption
+  // during a blend blends on from the g in use; clear() stops a blend.
+  MassSpringSystem s = lattice();
+  FarField ff;
+  far_field_build(s, ff);
+  Eigen::VectorXd ref[3];
+  for (int k = 0; k < 3; ++k) ref[k] = sync_g(ff, kLoads[k]);
+  const double scale = ref[0].cwiseAbs().maxCoeff();
+  ASSERT_GT(scale, 0.0);
+  const int latency = 5, blend = 4;
+  FarFieldUpdater u(ff, FarFieldMode::deterministic, latency, blend);
+  EXPECT_EQ(u.blend(), blend);
+  u.request(kLoads[0].nodes, kLoads[0].w, kLoads[0].dir);
+  for (int k = 1; k < latency; ++k) EXPECT_FALSE(u.advance()) << k;
+  for (int k = 1; k < blend; ++k) {
+    EXPECT_TRUE(u.advance()) << k;  // the adoption step is the first of the blend
+    EXPECT_TRUE(u.pending()) << k;  // g changes at the next advance
+    EXPECT_LE(max_diff(u.g(), (k / 4.0) * ref[0]), 1e-15 * scale) << k;
+  }
+  EXPECT_TRUE(u.advance());
+  EXPECT_EQ(max_diff(u.g(), ref[0]), 0.0);
+  EXPECT_FALSE(u.pending());
+  EXPECT_FALSE(u.advance());
+  EXPECT_EQ(u.stats().adopted, 1);
+  // Sync mode: the request's step is the first of the blend; a request in the middle of a blend
+  // blends on from the g in use.
+  FarFieldUpdater v(ff, FarFieldMode::sync, 1, blend);
+  v.request(kLoads[1].nodes, kLoads[1].w, kLoads[1].dir);
+  EXPECT_LE(max_diff(v.g(), 0.25 * ref[1]), 1e-15 * scale);
+  EXPECT_TRUE(v.advance());
+  const Eigen::VectorXd mid = v.g();
+  EXPECT_LE(max_diff(mid, 0.5 * ref[1]), 1e-15 * scale);
+  v.request(kLoads[2].nodes, kLoads[2].w, kLoads[2].dir);
+  EXPECT_LE(max_diff(v.g(), mid + 0.25 * (ref[2] - mid)), 1e-15 * scale);
+  for (int k = 2; k < blend; ++k) EXPECT_TRUE(v.advance()) << k;
+  EXPECT_TRUE(v.advance());
+  EXPECT_EQ(max_diff(v.g(), ref[2]), 0.0);
+  EXPECT_FALSE(v.advance());
+  // clear() in the middle of a blend: at rest, nothing more changes.
+  v.request(kLoads[0].nodes, kLoads[0].w, kLoads[0].dir);
+  EXPECT_TRUE(v.pending());
+  v.clear();
+  EXPECT_FALSE(v.pending());
+  EXPECT_FALSE(v.advance());
+  EXPECT_EQ(v.g().cwiseAbs().maxCoeff(), 0.0);
+}

@@ -223,12 +223,18 @@ TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
   // deep, at the tip's centre of curvature. Before, the proxy stayed on the start node for the
   // whole slide (0 node changes; the proxy 3.2 cm behind the device along the slide, the force
   // pushing straight back along the tip's normal). Now the contact moves with the device:
-  //   * the contact node changes (measured 20 times with the adaptive hold of press.cpp, 25 before;
-  //   bound >= 10),
+  //   * the contact node changes (measured 16 times; 20 while the hold pushed along the start
+  //     normal, 25 before the adaptive hold of press.cpp; bound >= 10),
   //   * along the slide the proxy is never further from the device than the depth (the Phong
   //     projection puts the device at depth d along n, |(p - x) . s| = d |n . s| <= d; measured
-  //     7.8 mm at 9.8 mm of depth), and it ends where the device ends (within 10 %),
-  //   * the proxy never moves more than 4 device steps plus 1 % of an edge per step.
+  //     10.7 mm at 12.6 mm of depth), and it moves the slide's way at least as far as the device
+  //     (the hold pushes along the contact normal, press.hpp: the device runs closer to the
+  //     tip's centre than the proxy on its surface; measured 13.5 mm against the device's 8.4 mm,
+  //     bound >= 8 mm; when the hold pushed along the start normal the device went 3.2 cm, 3 cm
+  //     deep, and the proxy 3.0 cm),
+  //   * per step the proxy moves at most kTrack (1.25) times the projection's gain (<= 4) times
+  //     the device's step plus 0.2 % of an edge (contact.cpp; 4 device steps plus 1 % of an
+  //     edge before, which made the force jump by up to 0.67 N on D's ovary).
   Scene s = prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/C.json");
   const SceneGeometry& g = s.geometry();
   const PressSpec spec = sliding_press(g, "ovary_left", 2.5, 0.02);
@@ -266,7 +272,7 @@ TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
       lead = std::max(lead, std::abs((t.proxy().p - x).dot(sdir)));
       if (was)
         worst_move = std::max(
-            worst_move, (t.proxy().p - before).norm() / (4 * (x - prev).norm() + 0.01 * edge));
+            worst_move, (t.proxy().p - before).norm() / (5 * (x - prev).norm() + 0.002 * edge));
     }
     prev = x;
   }
@@ -278,7 +284,8 @@ TEST(ContactDeep, TheProxyFollowsA2_5NSlideOnTheOvaryOfC) {
   EXPECT_GT(dmax, 0.0085);  // the deep case (3/4 of the tip's radius of curvature and more)
   EXPECT_GE(changes, 10);
   EXPECT_LE(lead, dmax + 1e-4);
-  EXPECT_GT(x1 - x0, 0.03);
-  EXPECT_NEAR(p1 - p0, x1 - x0, 0.1 * (x1 - x0));
+  EXPECT_GT(x1 - x0, 0.0);
+  EXPECT_GE(p1 - p0, x1 - x0);
+  EXPECT_GT(p1 - p0, 0.008);
   EXPECT_LE(worst_move, 1.0 + 1e-9);
 }

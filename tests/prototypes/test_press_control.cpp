@@ -13,6 +13,13 @@
 //   (no rate limit) C 3.09 N (+23 %), D 3.47 N (+39 %, and it lost the contact for a step);
 //   both together bound it. Most of what is left are force jumps
 //   at contact-node changes, which no controller sees coming.
+// Then (issue 9, the force's steps while sliding): a sliding hold moves its depth along the force
+// it feels instead of the start normal (press.hpp), the contact tracker bounds the proxy's step
+// by the projection's gain times the device's tangential step (contact.cpp) and C's exterior is
+// blended in over 16 steps (far_field.hpp). Peak and share within 10 % of the ovary slides:
+//   C 2.78 N, 89 % -> 2.503 N, 99.4 %; B 2.80 N, 91 % -> 2.500 N, 100 %; D 2.96 N, 93 % ->
+//   2.500 N, 97 %; A 2.53 N, 90 % -> 2.500 N, 100 %. Largest step of the force (vector): see
+//   SlideForceStepsBelowWeberHalf.
 
 #include <gtest/gtest.h>
 
@@ -24,37 +31,19 @@
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/press_run.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
+using palplab::engine::testing::Hold;
+using palplab::engine::testing::measure_hold;
 
 namespace {
-
-struct Hold {
-  double peak = 0.0;     // N, largest force during the hold
-  double in_band = 0.0;  // fraction of hold steps within 10 % of the target
-  double settled = 0.0;  // largest |F / F* - 1| from 0.1 s after the target (still presses)
-  double time_to_force = -1.0;
-};
 
 Hold run(const std::string& id, const PressSpec& spec) {
   Scene s =
       prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json");
-  PressDevice d(spec);
-  Hold h;
-  long steps = 0, in = 0;
-  run_lockstep(s, d, {.duration = spec.hold + 2.0, .frame_period = 0.0},
-               [&](const Rendered& r, const Sample&) {
-                 if (!d.force_reached() || d.phase() != PressPhase::hold) return;
-                 const double f = r.force.norm(), rel = f / spec.force - 1.0;
-                 h.peak = std::max(h.peak, f);
-                 ++steps;
-                 in += std::abs(rel) <= 0.1;
-                 if (r.t > d.time_to_force() + 0.1) h.settled = std::max(h.settled, std::abs(rel));
-               });
-  h.in_band = steps ? static_cast<double>(in) / static_cast<double>(steps) : 0.0;
-  h.time_to_force = d.time_to_force();
-  return h;
+  return measure_hold(s, spec);
 }
 
 PressSpec slide_on(const std::string& id, const std::string& region) {
@@ -66,12 +55,13 @@ PressSpec slide_on(const std::string& id, const std::string& region) {
 }  // namespace
 
 TEST(PressControl, SlidingPressOffTheOvaryTipOfCStaysBounded) {
-  // The slide moves off the tip's cap onto the ovary's flank: the force along the press axis
-  // falls away (the device follows the flank 3 cm deep) and the contact node changes ~25 times,
-  // each change a step in the force. Bound: peak <= +20 % (measured +11 %, before +58 %); the
-  // force within 10 % on >= 85 % of the hold's steps (measured 89 %; the rest are dips where
-  // the surface falls away along the axis faster than the 10 cm/s rate limit lets the device
-  // follow, and force drops of the model at a constant depth).
+  // The slide moves off the tip's cap onto the ovary's flank. While the hold pushed along the
+  // start normal, the force along that axis fell away (the device followed the flank 3 cm deep)
+  // and the contact node changed ~25 times, each change a step in the force: peak +11 % (+58 %
+  // before the adaptive hold), 89 % of the steps within 10 %, the rest dips where the surface
+  // fell away along the axis faster than the 10 cm/s rate limit let the device follow. Pushing
+  // along the force it feels: peak +0.1 %, 99.4 % within 10 %. Bounds kept: peak <= +20 %,
+  // >= 85 % within 10 %.
   const Hold h = run("C", slide_on("C", "ovary_left"));
   std::printf("C ovary slide: peak %.3f N, %.1f %% of the hold within 10 %%\n", h.peak,
               100 * h.in_band);
@@ -83,8 +73,8 @@ TEST(PressControl, SlidingPressOnTheOvaryOfBStaysBounded) {
   const Hold h = run("B", slide_on("B", "ovary_left"));
   std::printf("B ovary slide: peak %.3f N, %.1f %% of the hold within 10 %%\n", h.peak,
               100 * h.in_band);
-  EXPECT_LE(h.peak, 1.15 * 2.5);  // measured +12 %, before +19 %
-  EXPECT_GE(h.in_band, 0.85);     // measured 91 %
+  EXPECT_LE(h.peak, 1.15 * 2.5);  // measured +0.0 % (+12 % pushing along the start normal)
+  EXPECT_GE(h.in_band, 0.85);     // measured 100 % (91 %)
 }
 
 TEST(PressControl, StillPressesReachAndHoldTheTargetAsBefore) {
@@ -139,4 +129,26 @@ TEST(PressControl, SlidBodyPressWithdrawsOffTheSurfaceBelowTheDeviceLimit) {
   EXPECT_EQ(limited, 0);
   EXPECT_LT(f_max, s.config().contact.force_limit);
   EXPECT_FALSE(contact_at_end);
+}
+
+TEST(PressControl, SlideForceStepsBelowWeberHalf) {
+  // The benches' sliding press (2.5 N, 2 cm/s over 80 % of the left ovary's long axis) on every
+  // prototype: the largest step-to-step change of the rendered force (the vector) during the
+  // hold. At 1 kHz a step of force is felt as a tap; the force Weber fraction is ~7 %, so a
+  // step must stay below half of it, 3.5 % of the target (0.0875 N).
+  // Measured (issue 9), before -> now: A 0.132 -> 0.020 N, B 0.421 -> 0.017 N,
+  // C 0.821 -> 0.058 N, D 0.674 -> 0.043 N. Before, the hold pushed in along the start normal,
+  // which on the ovaries' flanks moved the device sideways at the 10 cm/s rate limit (5x the
+  // slide), the tracker moved the contact point up to 4x that per step (catching up with a
+  // projection millimetres away at 1 % of an edge a step) and C adopted a re-centred scope's
+  // exterior in one step (0.82 N). Leaving one change out (measured): depth along the start
+  // normal: A 0.13, B 0.32, C 0.30, D 0.36 N; the former tracker bound: C 0.33, D 0.52 N.
+  for (const char* id : {"A", "B", "C", "D"}) {
+    const Hold h = run(id, slide_on(id, "ovary_left"));
+    std::printf(
+        "%s ovary slide: largest step %.4f N at %.3f s, peak %.3f N, %.1f %% within 10 %%\n", id,
+        h.max_step, h.max_step_t, h.peak, 100 * h.in_band);
+    SCOPED_TRACE(id);
+    EXPECT_LE(h.max_step, 0.035 * 2.5);
+  }
 }

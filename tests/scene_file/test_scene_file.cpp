@@ -53,7 +53,7 @@ Track press(const engine::SceneConfig& cfg, double slide = 0.0) {
   engine::Scene s = engine::make_scene(cfg);
   const auto& g = s.geometry();
   const int node = g.region_index("body") >= 0 ? g.region_node("body") : 0;
-  engine::PressSpec spec = engine::press_at(g, node, 1.0, slide > 0 ? 0.6 : 0.05, 0.05);
+  engine::PressSpec spec = engine::press_at(g, node, 1.0, slide > 0 ? 1.0 : 0.05, 0.05);
   if (slide > 0) {  // along a tangent of the surface at the press point
     const Eigen::Vector3d a =
         std::abs(spec.normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
@@ -146,7 +146,8 @@ TEST_P(SceneFileRoundTrip, LoadedSceneIsBitIdentical) {
   const auto built = engine::scene_mesh(cfg.mesh);
   ASSERT_TRUE(built->model_blob.empty());
   // C's linear exterior is re-solved whenever the scope re-centres (the contact 5 mm from its
-  // centre): slide 3 cm/s for 0.6 s.
+  // centre): slide 3 cm/s for 1 s. (0.6 s moved it twice while the sliding hold pushed along the
+  // start normal; along the force, issue 9, the contact crosses one node in 0.6 s: one move.)
   const bool mass_spring = cfg.model == "mass_spring";
   const double slide = mass_spring ? 0.03 : 0.0;
   const Track a = press(cfg, slide);
