@@ -469,6 +469,11 @@ int run_reference(const ReferenceArgs& a) {
           fl.eigenvalues[0], fl.mode_linear_stiffness, fl.mode_load_cosine,
           100 * fl.mode_near_press, 100 * fl.mode_non_elliptic, fl.non_elliptic_tets,
           fl.min_ellipticity_margin);
+    if (fl.non_elliptic_tets > 0 && a.material == "corotated-linear")
+      std::printf(
+          "the co-rotated linear material lost strong ellipticity under the pad: a fine level's "
+          "curve has no converged continuation there; --material fixed-corotated stays "
+          "elliptic (docs/ARCHITECTURE.md)\n");
     return 1;
   }
   return 0;
