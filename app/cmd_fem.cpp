@@ -103,6 +103,7 @@ struct ReferenceArgs {
   int steps = 5;
   int newton_max = 30;  // full Newton iterations per load increment of the curve
   int bisections = 4;   // halvings of a curve load step that does not converge
+  std::string material = "corotated-linear";  // the curve's co-rotational material
 };
 
 json num(double v) {
@@ -131,6 +132,9 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
     throw InputError("--refinement: expected nested or tetgen, got \"" + a.refinement + "\"");
   if (a.steps < 0 || a.steps > 100)
     throw InputError("--steps: expected 0 to 100 load steps, got " + std::to_string(a.steps));
+  if (a.material != "corotated-linear" && a.material != "fixed-corotated")
+    throw InputError("--material: expected corotated-linear or fixed-corotated, got \"" +
+                     a.material + "\"");
   // Grading of level 0 around the press (fem_reference.hpp): auto (-1 here) = until the loaded
   // edges are at most the pad radius; 0 = the prototype's own mesh as level 0. Checked before
   // the prototype is loaded (which can take seconds).
@@ -193,6 +197,7 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
                      std::to_string(a.bisections));
   o.curve_max_newton = a.newton_max;
   o.curve_bisections = a.bisections;
+  o.curve_material = engine::parse_corot_material(a.material);
   if (!(a.volume_scale > 0) || !std::isfinite(a.volume_scale) || a.volume_scale > 1e3)
     throw InputError("--volume-scale: expected a factor in (0, 1000]");
   o.max_volume *= a.volume_scale;
@@ -356,7 +361,18 @@ int run_reference(const ReferenceArgs& a) {
                 {"converged_negative_pivots", fl.converged_negative_pivots},
                 {"min_det_f", num(fl.min_det_f)},
                 {"inverted_tets", fl.inverted_tets},
-                {"converged_min_det_f", num(fl.converged_min_det_f)}};
+                {"converged_min_det_f", num(fl.converged_min_det_f)},
+                {"stability",
+                 {{"eigenvalues", fl.eigenvalues},
+                  {"eigen_residual", num(fl.eigen_residual)},
+                  {"mode_linear_stiffness", num(fl.mode_linear_stiffness)},
+                  {"mode_load_cosine", num(fl.mode_load_cosine)},
+                  {"mode_max_distance", num(fl.mode_max_distance)},
+                  {"mode_near_press", num(fl.mode_near_press)},
+                  {"mode_participation", num(fl.mode_participation)},
+                  {"mode_non_elliptic", num(fl.mode_non_elliptic)},
+                  {"non_elliptic_tets", fl.non_elliptic_tets},
+                  {"min_ellipticity_margin", num(fl.min_ellipticity_margin)}}}};
   };
   if (a.steps > 0) {
     json pts = json::array();
@@ -372,8 +388,10 @@ int run_reference(const ReferenceArgs& a) {
                      {"level_displacement", per_level}});
     }
     json iters = json::array(), ms = json::array(), subs = json::array(), bis = json::array(),
-         lsearch = json::array(), fails = json::array(), paths = json::array();
+         lsearch = json::array(), fails = json::array(), paths = json::array(),
+         non_elliptic = json::array();
     for (const auto& lv : r.levels) {
+      non_elliptic.push_back(lv.curve_non_elliptic);
       iters.push_back(lv.curve_iterations);
       ms.push_back(lv.curve_ms);
       subs.push_back(lv.curve_substeps);
@@ -391,8 +409,9 @@ int run_reference(const ReferenceArgs& a) {
     }
     out["curve"] = {{"analysis",
                      "quasi-static: dead load ramped in equal steps, each an equilibrium of the "
-                     "co-rotational FEM (large rotations, linear material)"},
+                     "co-rotational FEM (large rotations; material: see material)"},
                     {"steps", a.steps},
+                    {"material", a.material},
                     {"complete", r.curve_complete},
                     {"failure", failure},
                     {"newton_max", a.newton_max},
@@ -404,6 +423,7 @@ int run_reference(const ReferenceArgs& a) {
                     {"line_searches", lsearch},
                     {"level_failure", fails},
                     {"level_path", paths},
+                    {"non_elliptic_tets", non_elliptic},
                     {"solve_ms", ms}};
   }
   std::ofstream f(a.out);
@@ -467,6 +487,20 @@ int run_reference(const ReferenceArgs& a) {
                                 : "stayed positive definite",
         fl.negative_pivots, fl.converged_negative_pivots, fl.min_det_f, fl.inverted_tets,
         fl.converged_min_det_f, r.curve.empty() ? 0.0 : r.curve.back().force);
+    if (!fl.eigenvalues.empty())
+      std::printf(
+          "at the last equilibrium: tangent eigenvalue nearest zero %.4g N/m (the same mode in "
+          "the linear K: %.4g N/m), load work cosine %.3g, %.0f%% of the mode within 2 pad radii, "
+          "%.0f%% on the %ld tets whose material lost strong ellipticity (smallest margin %.3g "
+          "mu)\n",
+          fl.eigenvalues[0], fl.mode_linear_stiffness, fl.mode_load_cosine,
+          100 * fl.mode_near_press, 100 * fl.mode_non_elliptic, fl.non_elliptic_tets,
+          fl.min_ellipticity_margin);
+    if (fl.non_elliptic_tets > 0 && a.material == "corotated-linear")
+      std::printf(
+          "the co-rotated linear material lost strong ellipticity under the pad: a fine level's "
+          "curve has no converged continuation there; --material fixed-corotated stays "
+          "elliptic (docs/ARCHITECTURE.md)\n");
     return 1;
   }
   return 0;
@@ -778,6 +812,13 @@ palplab::app::CommandRegistration reg{
                           "Curve: full Newton iterations per load increment (each with a line "
                           "search) before the increment is halved")
               ->capture_default_str();
+      auto* material_opt =
+          ref->add_option("--material", ra->material,
+                          "Curve: the co-rotational material, corotated-linear (the linear element "
+                          "rotated, as D_corot; loses strong ellipticity under large compression, "
+                          "where a fine level's curve stops) or fixed-corotated (volume term in "
+                          "det F, stays elliptic; equal to first order)")
+              ->capture_default_str();
       auto* bisect_opt =
           ref->add_option("--bisections", ra->bisections,
                           "Curve: halvings of a load step that does not converge (0-20); below "
@@ -817,6 +858,7 @@ palplab::app::CommandRegistration reg{
                        "--grade 0 uses the prototype's own mesh)");
         flag_only_with(newton_opt, ra->steps > 0, "--steps > 0 (the press curve)");
         flag_only_with(bisect_opt, ra->steps > 0, "--steps > 0 (the press curve)");
+        flag_only_with(material_opt, ra->steps > 0, "--steps > 0 (the press curve)");
         *code = run_reference(*ra);
       });
       auto* sol = fem->add_subcommand(

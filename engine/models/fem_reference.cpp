@@ -18,6 +18,7 @@
 #include "engine/models/model.hpp"
 #include "engine/solvers/fem_assembly.hpp"
 #include "engine/solvers/fem_corotational.hpp"
+#include "engine/solvers/fem_stability.hpp"
 #include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
@@ -281,7 +282,7 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
   SparseMatrixd K_t;
   const auto residual_at = [&](const Eigen::VectorXd& uu, const Eigen::VectorXd& fk,
                                Eigen::VectorXd& rr) {
-    corotational_forces(sys, X0 + uu, fint);
+    corotational_forces(sys, X0 + uu, fint, nullptr, opt.curve_material);
     rr = fk + fint - support.cwiseProduct(uu);
     for (int d : fixed) rr[d] = 0;
     const double n = rr.norm();
@@ -292,7 +293,8 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
   // 0 for a CHOLMOD factor, which exists only for a positive definite matrix), or -1 when the
   // tangent is singular (no factor).
   const auto tangent = [&](StaticSolver& st) -> long {
-    corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
+    corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t, nullptr,
+                           opt.curve_material);
     for (long d = 0; d < support.size(); ++d)
       if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
     // CHOLMOD's LL^T needs a positive definite matrix; the exact co-rotational tangent can be
@@ -424,13 +426,34 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
       // a Newton failure).
       if (lambda > 0) {
         StaticSolver sc;
-        corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t);
+        corotational_stiffness(sys, X0 + u, CorotJacobian::exact, Ke_t, K_t, nullptr,
+                               opt.curve_material);
         for (long d = 0; d < support.size(); ++d)
           if (support[d] != 0) K_t.coeffRef(d, d) += support[d];
+        const std::vector<double> margin = ellipticity_margin(sys, X0 + u, opt.curve_material);
+        fl.non_elliptic_tets = static_cast<long>(
+            std::count_if(margin.begin(), margin.end(), [](double v) { return v <= 0; }));
+        fl.min_ellipticity_margin = *std::min_element(margin.begin(), margin.end());
         try {
           static_precompute(K_t, fixed_dof, sc, SparseSolverKind::ldlt);
           const Eigen::VectorXd dd = sc.ldlt.vectorD();
           fl.converged_negative_pivots = static_cast<long>((dd.array() < 0).count());
+          // The tangent's eigenvalues nearest zero and the first mode (fem_stability.hpp).
+          const LowestModes lm = lowest_modes(sc, 3);
+          fl.eigenvalues.assign(lm.values.data(), lm.values.data() + lm.values.size());
+          fl.eigen_residual = lm.residual;
+          if (lm.vectors.cols() > 0) {
+            Eigen::VectorXd phi = Eigen::VectorXd::Zero(sys.dofs());
+            scatter(lm.vectors.col(0), sc.split.free, phi);
+            const Eigen::VectorXd phif = lm.vectors.col(0);
+            fl.mode_linear_stiffness = phif.dot(ss.K_ff * phif);
+            const ModeShape ms = mode_shape(sys, phi, f, opt.press_point, opt.press_radius, margin);
+            fl.mode_load_cosine = ms.load_cosine;
+            fl.mode_max_distance = ms.max_node_distance;
+            fl.mode_near_press = ms.near_press_fraction;
+            fl.mode_participation = ms.participation;
+            fl.mode_non_elliptic = ms.non_elliptic_fraction;
+          }
         } catch (const std::runtime_error&) {
           fl.converged_negative_pivots = -1;
         }
@@ -439,6 +462,11 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
     }
     if (lv.curve_failure.failed) break;
     lv.curve_displacement.push_back(f.dot(u) / force);
+    {
+      const std::vector<double> margin = ellipticity_margin(sys, X0 + u, opt.curve_material);
+      lv.curve_non_elliptic.push_back(static_cast<long>(
+          std::count_if(margin.begin(), margin.end(), [](double v) { return v <= 0; })));
+    }
     lv.curve_iterations.push_back(it);
     lv.curve_substeps.push_back(sub);
   }

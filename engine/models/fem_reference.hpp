@@ -60,6 +60,7 @@
 #include "engine/mesh/surface_mesh.hpp"
 #include "engine/mesh/tetrahedralize.hpp"
 #include "engine/solvers/fem_assembly.hpp"
+#include "engine/solvers/fem_corotational.hpp"
 #include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
@@ -118,6 +119,11 @@ struct FemReferenceOptions {
   // iterations per load increment (after the modified Newton ones), halvings of the line
   // search per iteration (0 = none), halvings of a load step that does not converge (0 = none:
   // the smallest increment is the step / 2^curve_bisections).
+  // The co-rotational element's material (fem_corotational.hpp): corotated_linear (the linear
+  // element rotated, as D_corot) loses strong ellipticity under the compression of a large
+  // press, and its curve then stops on a fine enough level (the 4 N body press: level 1 at
+  // 3.73 N); fixed_corotated (volume term in det F) stays elliptic. Equal to first order.
+  CorotMaterial curve_material = CorotMaterial::corotated_linear;
   int curve_max_newton = 30;
   int curve_line_search = 5;
   int curve_bisections = 4;
@@ -156,6 +162,22 @@ struct FemCurveFailure {
   // co-rotational model does not resist inversion (its energy stays finite as det F -> 0).
   double min_det_f = 1, converged_min_det_f = 1;
   long inverted_tets = 0;
+  // Stability at the last equilibrium (fem_stability.hpp; computed when lambda > 0): the
+  // eigenvalues of its tangent (free dofs, N/m) closest to zero, ascending by magnitude, and
+  // the Rayleigh quotient of the first mode in the linear K (N/m: how far that mode's stiffness
+  // fell); the first mode's shape (load work, localisation, share on non-elliptic tets); the
+  // tets whose co-rotated linear material has lost strong ellipticity there (acoustic tensor
+  // not positive, ellipticity_margin <= 0) and the smallest margin.
+  std::vector<double> eigenvalues;
+  double eigen_residual = 0;
+  double mode_linear_stiffness = 0;
+  double mode_load_cosine = 0;
+  double mode_max_distance = 0;   // m, press point to the mode's largest node
+  double mode_near_press = 0;     // share of |phi|^2 within 2 press radii
+  double mode_participation = 0;  // nodes
+  double mode_non_elliptic = 0;   // share of |phi|^2 on nodes of non-elliptic tets
+  long non_elliptic_tets = 0;
+  double min_ellipticity_margin = 1;  // over the tets, / mu
 };
 
 struct FemReferenceLevel {
@@ -188,6 +210,9 @@ struct FemReferenceLevel {
   // Every converged increment's (load N, work-conjugate displacement m), bisected ones
   // included: the path near a failure (its slope dF/du tends to 0 at a limit point).
   std::vector<std::array<double, 2>> curve_path;
+  // Per curve point: the tets whose material has lost strong ellipticity at that equilibrium
+  // (ellipticity_margin <= 0; the tangent of a fine enough mesh goes singular there).
+  std::vector<long> curve_non_elliptic;
   FemCurveFailure curve_failure;
   double curve_ms = 0;
 };

@@ -187,8 +187,10 @@ TEST(CliFemD, ReferenceWithAnIncompleteCurveExitsOne) {
   EXPECT_TRUE(f.at("residual").is_null() || f.at("residual").get<double>() > 1e-8);
   EXPECT_GT(f.at("iterations").get<int>(), 0);
   for (const char* k : {"tangent_indefinite", "negative_pivots", "converged_negative_pivots",
-                        "min_det_f", "inverted_tets", "converged_min_det_f"})
+                        "min_det_f", "inverted_tets", "converged_min_det_f", "stability"})
     EXPECT_TRUE(f.contains(k)) << k;
+  EXPECT_EQ(c.at("material"), "corotated-linear");
+  EXPECT_EQ(c.at("non_elliptic_tets").size(), 3u);
   ASSERT_EQ(c.at("level_failure").size(), 3u);
   EXPECT_FALSE(c.at("level_failure")[0].is_null());
   // The finer levels do not try loads the coarsest did not reach; the static part is complete.
@@ -207,6 +209,12 @@ TEST(CliFemD, ReferenceWithAnIncompleteCurveExitsOne) {
                 d)
                 .code,
             2);
+  const Result bad_material =
+      run("fem reference " + p.string() +
+              " --press ovary_left --force 1 --material neo-hookean --out " + out.string(),
+          d);
+  EXPECT_EQ(bad_material.code, 2);
+  EXPECT_NE(bad_material.err.find("--material"), std::string::npos) << bad_material.err;
   fs::remove_all(d);
 }
 
