@@ -394,8 +394,12 @@ Eigen::Vector3d Trainee::command(double t) {
         break;
       }
       if (move_towards(goal_, travel_speed_ * s_.speed_factor)) {
-        mode_ = after_travel_;
-        mode_start_ = t;
+        if (after_travel_ == Mode::press) {
+          start_press();  // arrived above the demonstrated place: press at once
+        } else {
+          mode_ = after_travel_;
+          mode_start_ = t;
+        }
       }
       break;
     case Mode::descend:
@@ -426,8 +430,8 @@ Eigen::Vector3d Trainee::command(double t) {
           if (p_.press_at_demonstrated_place > 0) {
             // Press where the target press was shown, not where the search happened to touch
             // the feature: reach the hover point above the aimed node, then press from there.
-            aim_press(p_.lift_height);
-            start_travel(hover_, Mode::rest);
+            aim_press(kReleaseClearance);
+            start_travel(hover_, Mode::press);
             travel_speed_ = p_.explore_speed;
           } else {
             mode_ = Mode::press;

@@ -81,9 +81,7 @@ TEST(TraineeRelease, PressesDoNotCreepAwayOrRunIntoTheOrganAbove) {
       const Percept p = tissue.render(t, x);
       tr.perceive(p, false);
       fmax = std::max(fmax, p.force.norm());
-      // From the first press on (the reach from where the feature was found to the place where
-      // the target press was shown goes lift_height = 1 cm above it, like a search probe).
-      if (tr.identified() && !starts.empty()) max_height = std::max(max_height, x.z());
+      if (tr.identified()) max_height = std::max(max_height, x.z());
       if (p.contact && !in && p.contact_region == 0 && tr.identified()) starts.push_back(t);
       in = p.contact;
     }
