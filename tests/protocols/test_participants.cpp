@@ -265,7 +265,7 @@ TEST(Trainee, PressesWhereTheTargetWasShownSoThePictureMeansTheTargetForce) {
   // (each press a reach to the demonstrated place, visual_spatial_sd scatter), the visual marker
   // means the demonstrated force. Aims sharper than the default (2 mm instead of 4 mm) keep them
   // off this small test feature's rim. Measured (10 trainees, two 120 s sessions, same seeds):
-  // switch 1 2.56 +- 0.28 N (the spread is that of the remembered picture, 10 % visual Weber
+  // switch 1 2.56 +- 0.29 N (the spread is that of the remembered picture, 10 % visual Weber
   // noise), switch 0 1.69 +- 0.72 N (five of ten pressed the rim: 0.88-1.61 N).
   FlatTissue tissue;
   tissue.audio = false;
