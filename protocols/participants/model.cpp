@@ -116,6 +116,8 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
   ch_ = channels;
   briefed_ = briefed_target;
   rng_ = Rng(derive_seed(seed, "trainee"));
+  aim_rng_ = Rng(derive_seed(seed, "press_aim"));
+  press_node_ = -1;
   if (!s_.initialised) {
     // The briefing: the target is told in newtons, but how much force that is to this person
     // is uncertain; the anatomy lesson leaves a rough idea of where the feature lies.
@@ -381,12 +383,23 @@ Eigen::Vector3d Trainee::command(double t) {
       // A goal the organ keeps the hand from (behind another part of it) is given up after
       // three times the straight-line travel time plus 2 s: the next landmark or probe.
       if (t - mode_start_ > 3.0 * travel_len_ / (travel_speed_ * s_.speed_factor) + 2.0) {
-        next_probe();
+        if (identified_) {
+          // On the way to the demonstrated place: press from where the hand got to.
+          press_node_ = -1;
+          mode_ = Mode::rest;
+          mode_start_ = t;
+        } else {
+          next_probe();
+        }
         break;
       }
       if (move_towards(goal_, travel_speed_ * s_.speed_factor)) {
-        mode_ = after_travel_;
-        mode_start_ = t;
+        if (after_travel_ == Mode::press) {
+          start_press();  // arrived above the demonstrated place: press at once
+        } else {
+          mode_ = after_travel_;
+          mode_start_ = t;
+        }
       }
       break;
     case Mode::descend:
@@ -414,9 +427,17 @@ Eigen::Vector3d Trainee::command(double t) {
               s_.place_sd * s_.place_sd / (s_.place_sd * s_.place_sd + obs_sd * obs_sd + 1e-18);
           s_.place += k * (obs - s_.place);
           s_.place_sd = std::sqrt((1.0 - k) * s_.place_sd * s_.place_sd);
-          mode_ = Mode::press;
-          mode_start_ = t;
-          start_press();
+          if (p_.press_at_demonstrated_place > 0) {
+            // Press where the target press was shown, not where the search happened to touch
+            // the feature: reach the hover point above the aimed node, then press from there.
+            aim_press(kReleaseClearance);
+            start_travel(hover_, Mode::press);
+            travel_speed_ = p_.explore_speed;
+          } else {
+            mode_ = Mode::press;
+            mode_start_ = t;
+            start_press();
+          }
         } else {
           if (orienting_)
             s_.landmark_practice += dwell_saw_d_ ? 1.0 + p_.visual_recognition_gain : 1.0;
@@ -457,15 +478,59 @@ Eigen::Vector3d Trainee::command(double t) {
         if (release_blocked_ || (pos_ - lift_off_).dot(up) >= kReleaseClearance) {
           mode_ = Mode::rest;
           mode_start_ = t;
+          // The next press aims at the demonstrated place anew (each press is a new reach).
+          if (identified_ && p_.press_at_demonstrated_place > 0) aim_press(kReleaseClearance);
         }
       }
       break;
     }
-    case Mode::rest:
-      if (t - mode_start_ >= p_.rest_time) start_press();
+    case Mode::rest: {
+      // Between presses the hand moves to above the next aimed node (moving with the felt force
+      // if it touches the organ on the way, as in travel); the press starts after the rest.
+      bool there = true;
+      if (press_node_ >= 0) {
+        if (last_.contact && ch_.haptic && last_.force.norm() > 1e-9)
+          pos_ += last_.force.normalized() * p_.explore_speed * s_.speed_factor * dt;
+        there = move_towards(hover_, p_.explore_speed * s_.speed_factor);
+        // A hover point the organ keeps the hand from: press from where the hand is.
+        if (!there && t - mode_start_ > p_.rest_time + 2.0) there = true;
+      }
+      if (there && t - mode_start_ >= p_.rest_time) start_press();
       break;
+    }
   }
   return pos_;
+}
+
+void Trainee::aim_press(double clearance) {
+  // Observational learning: what a learner takes from a demonstration is first of all its goal,
+  // the end point of the demonstrated action (Hodges, Williams, Hayes & Breslin 2007). The
+  // briefing showed the target press at the feature's centre (the surface nodes of the feature
+  // nearest its centroid, docs/PARTICIPANTS.md "The demonstration"), so every press aims there,
+  // with the scatter of a reach to a seen place (visual_spatial_sd per axis; van Beers, Sittig &
+  // Denier van der Gon 1999), projected to the nearest surface node of the feature. On a tissue
+  // whose stiffness varies from place to place the picture at the target is then the one the
+  // demonstration showed; pressing wherever the search happened to touch the feature (the
+  // model before) compared the demonstration's picture with softer places' (prototype C's
+  // ovary: 600 N/m at its centre, 167-450 N/m where the searches ended).
+  const auto& V = *view_.V;
+  const auto& region = *view_.vertex_region;
+  const Eigen::Vector3d q =
+      view_.feature_centroid +
+      Eigen::Vector3d(aim_rng_.normal(), aim_rng_.normal(), aim_rng_.normal()) *
+          p_.visual_spatial_sd;
+  int node = -1;
+  double bd = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < V.rows(); ++i) {
+    if (region[i] != view_.feature_region) continue;
+    const double d = (V.row(i).transpose() - q).squaredNorm();
+    if (d < bd) bd = d, node = i;
+  }
+  if (node < 0) return;  // no surface node of the feature: press where the hand is
+  press_node_ = node;
+  const Eigen::Vector3d n = view_.N->row(node).transpose().normalized();
+  press_dir_ = -n;
+  hover_ = V.row(node).transpose() + n * clearance;
 }
 
 void Trainee::start_press() {

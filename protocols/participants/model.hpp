@@ -158,10 +158,15 @@ class Trainee {
   double draw_landmark_time();
   void start_press();
   void begin_release(double t);
+  // Where the next press goes: the feature's surface node nearest a point aimed at the place
+  // where the target press was demonstrated (the feature's centre), with a reach's scatter;
+  // the hand waits `clearance` above it along its outward normal (hover_).
+  void aim_press(double clearance);
 
   TraineeParams p_;
   TraineeState s_;
   Rng rng_{0};
+  Rng aim_rng_{0};  // the press aims (its own stream: the other draws are as before)
   SurfaceView view_;
   Channels ch_;
   double briefed_ = 0.0;
@@ -170,6 +175,8 @@ class Trainee {
   Eigen::Vector3d press_dir_ = Eigen::Vector3d::Zero();  // unit, into the surface
   Mode after_travel_ = Mode::descend;
   int target_node_ = -1;
+  int press_node_ = -1;  // node the current/next press aims at (-1: press where the hand is)
+  Eigen::Vector3d hover_ = Eigen::Vector3d::Zero();  // where the hand waits before a press
   int search_k_ = 0;
   std::vector<int> probed_;    // surface nodes probed this session
   std::vector<int> route_;     // landmark nodes of this session's orienting route

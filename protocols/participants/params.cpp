@@ -171,6 +171,12 @@ const std::vector<ParamSpec>& trainee_param_specs() {
             "hand speed from one landmark to the next while orienting (slower than a seen reach)",
             "Lederman & Klatzky 1987 (deliberate exploratory movements of a few cm/s); value "
             "an assumption"),
+      tspec("press_at_demonstrated_place", &T::press_at_demonstrated_place, 0, 1, "1",
+            "1: once the feature is found every press aims at the place where the target press "
+            "was demonstrated (the feature's centre; scatter visual_spatial_sd per axis); 0: the "
+            "presses stay where the search touched the feature (values above 0 count as 1)",
+            "observational learning takes over a demonstration's goal, its end point (Hodges, "
+            "Williams, Hayes & Breslin 2007); switch, not fitted"),
       // ---- needle insertion
       tspec("palpation_grid", &T::palpation_grid, 1, 15, "1",
             "needle task: points per side of the square grid palpated around the believed entry "

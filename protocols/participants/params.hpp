@@ -72,6 +72,10 @@ struct TraineeParams {
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
   double landmark_time = 12.9513;  // s, median novice judgement time at one landmark
   double trace_speed = 0.02;       // m/s, hand speed from one landmark to the next
+  // where the presses go once the feature is found: 1 = at the place where the target press was
+  // demonstrated (the feature's centre, each press a reach with visual_spatial_sd scatter),
+  // 0 = where the search touched the feature (the model up to 2026-11-27)
+  double press_at_demonstrated_place = 1;  // 1 (0 or 1)
   // needle insertion (task kind needle_insertion; docs/PARTICIPANTS.md "Needle insertion")
   double palpation_grid = 5;         // 1, palpated points per side of the square grid
   double palpation_spacing = 0.005;  // m, between palpated points

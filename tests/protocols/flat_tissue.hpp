@@ -17,7 +17,11 @@ struct FlatTissue {
   std::vector<int> region;
   Eigen::Vector3d feature{0.05, 0.05, 0.0};
   double k = 800.0;  // N/m
-  double st = 2.3;   // N
+  // Optional stiffness that varies from place to place: within the feature disc but farther than
+  // core_radius from its centre the tissue is softer, k_edge (0 = uniform k).
+  double k_edge = 0.0;       // N/m
+  double core_radius = 0.0;  // m
+  double st = 2.3;           // N
   bool visual = true, audio = true;
 
   FlatTissue() {
@@ -43,6 +47,10 @@ struct FlatTissue {
     s.start_position = {0.0, 0.0, start_height};
     return s;
   }
+  double stiffness(const Eigen::Vector3d& x) const {
+    const double r = (Eigen::Vector3d(x.x(), x.y(), 0) - feature).norm();
+    return k_edge > 0 && r >= core_radius && r < 0.015 ? k_edge : k;
+  }
   Percept render(double t, const Eigen::Vector3d& x) const {
     Percept p;
     p.t = t;
@@ -50,7 +58,7 @@ struct FlatTissue {
     const bool inside = std::abs(x.x()) <= 0.1 && std::abs(x.y()) <= 0.1;
     if (depth > 0 && inside) {
       p.contact = true;
-      p.force = Eigen::Vector3d(0, 0, k * depth);
+      p.force = Eigen::Vector3d(0, 0, stiffness(x) * depth);
       p.contact_region = (Eigen::Vector3d(x.x(), x.y(), 0) - feature).norm() < 0.015 ? 0 : 1;
       p.visible_deformation = visual ? depth : 0.0;
       p.audio = audio && p.force.norm() >= st;

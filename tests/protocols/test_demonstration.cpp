@@ -6,7 +6,8 @@
 // of the target (exp2 check: C learned ≈ 1.4 N for 2.5 N). Checked here on the first C trainee
 // of exp2 (its pre-training session, shortened): the force its own presses take to show the
 // demonstrated picture, k̂·d*, is within 15 % of the MPF. Measured: one press at the node nearest
-// the centroid (before) 0.728 (fails); the mean of the 5 nearest nodes (now) 0.932. CPU ≈ 3 s
+// the centroid (before) 0.728 (fails); the mean of the 5 nearest nodes 0.932; with the trainee's
+// presses aimed at the demonstrated place (2026-11-28, docs/PARTICIPANTS.md) 1.008. CPU ≈ 3 s
 // (75 s of C simulated; the wall time depends on the machine's load).
 #include <gtest/gtest.h>
 
