@@ -1,6 +1,6 @@
 // `palplab device-sim` end to end: the scripted hand presses into prototype A over the UDP
 // protocol while the real-time clock runs the scene here; then it goes silent and must get the
-// force switched off. Bounded: the simulator runs 0.45 s.
+// force switched off. Bounded: the simulator runs 0.45 s; the scene runs until it has exited (<= 20 s).
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -8,6 +8,7 @@
 #include "tests/cli_support.hpp"
 
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -51,10 +52,19 @@ TEST(CliDeviceSim, ScriptedHandPressesAndGetsForceOffWhenSilent) {
   const std::string cmd = std::string(PALPLAB_BINARY) + " device-sim --port " +
                           std::to_string(dev.port()) + " --script " + script.string() +
                           " --stop-after 0.3 --linger 0.1 --json";
-  auto sim = std::async(std::launch::async, [&] { return run(cmd); });
+  // The scene runs until the simulator process has exited (bounded at 20 s): a loaded machine can
+  // take longer than the simulator's own 0.4 s to start the process, and a scene that had already
+  // stopped would leave every datagram unanswered (received 0).
+  std::atomic<bool> sim_done{false};
+  auto sim = std::async(std::launch::async, [&] {
+    Result res = run(cmd);
+    sim_done = true;
+    return res;
+  });
   e::RealtimeOptions ro;
-  ro.duration = 0.5;
+  ro.duration = 20.0;
   ro.frame_period = 0.0;
+  ro.stop = &sim_done;
   const e::RealtimeStats st = e::run_realtime(scene, dev, ro);
   const Result r = sim.get();
   std::filesystem::remove(script);
