@@ -1,6 +1,7 @@
 // `palplab device-sim` end to end: the scripted hand presses into prototype A over the UDP
 // protocol while the real-time clock runs the scene here; then it goes silent and must get the
-// force switched off. Bounded: the simulator runs 0.45 s; the scene runs until it has exited (<= 20 s).
+// force switched off. Bounded: the simulator runs 0.45 s; the scene runs until it has exited
+// (at most 20 s).
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
