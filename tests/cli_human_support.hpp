@@ -42,10 +42,12 @@ inline const char* const kNoXvfb = "xvfb-run not installed (.ci/install-deps ins
 // The palpation window (w x h pixels) under Xvfb, no sound, driven by the mouse script.
 inline std::string mouse_run(const std::string& study, const std::filesystem::path& db,
                              const std::filesystem::path& script, int w, int h) {
-  return human_run(study, db, "mouse",
-                   "--size " + std::to_string(w) + "x" + std::to_string(h) + " --mouse-script " +
-                       script.string(),
-                   kHumanNow, "PALPLAB_AUDIO_DEVICE=null xvfb-run -a -s '-screen 0 640x480x24' ");
+  return human_run(
+      study, db, "mouse",
+      "--size " + std::to_string(w) + "x" + std::to_string(h) + " --mouse-script " +
+          script.string(),
+      kHumanNow,
+      "PALPLAB_AUDIO_DEVICE=null timeout -k 10 300 xvfb-run -a -s '-screen 0 640x480x24' ");
 }
 
 // The pixel where the window's default camera (the renderer centres the rest bounding sphere)

@@ -1,6 +1,9 @@
 #pragma once
 // What the end-to-end tests (tests/cli_*) share: run the palplab binary with arguments and
 // capture its exit code, stdout and stderr; read a file; a fresh per-process scratch directory.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -81,6 +84,23 @@ inline CliResult run_command(const std::string& cmdline) {
   const int st = pclose(p);
   r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
   return r;
+}
+
+// A UDP port on 127.0.0.1 that the kernel has just handed out as free (bound as port 0, then
+// released), for a `palplab` process and a `device-sim` to meet on. Ports derived from the pid
+// collided: the test processes ctest starts side by side have nearby pids.
+inline int free_udp_port() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t n = sizeof a;
+  int port = -1;
+  if (fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n) == 0)
+    port = ntohs(a.sin_port);
+  if (fd >= 0) ::close(fd);
+  return port;
 }
 
 }  // namespace palplab::testing

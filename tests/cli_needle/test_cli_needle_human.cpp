@@ -142,7 +142,7 @@ TEST(CliNeedleHuman, TraceSessionInsertsThroughTheLayersAndStoresTheMeasures) {
 TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
   const fs::path dir = palplab::testing::scratch_dir("needle_human_udp");
   const e::Trace tr = insertion_trace(Eigen::Vector3d::UnitY());
-  const int port = 30000 + static_cast<int>(getpid() % 9000);
+  const int port = palplab::testing::free_udp_port();
   const fs::path db = dir / "u.db";
   auto run = std::async(std::launch::async, [&] {
     return palplab::testing::run_command(human_run(kDir + "needle_human_study.json", db,

@@ -156,8 +156,8 @@ TEST(Power, MpiEqualsSingleProcess) {
   ASSERT_EQ(run_palplab(base + (d / "single").string(), d).code, 0);
   // Root in containers: OpenMPI refuses unless told; --oversubscribe for 2 ranks on 1 core.
   const std::string mpirun =
-      std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") + PALPLAB_MPIEXEC +
-      " -np 2 --oversubscribe ";
+      std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout -k 10 300 ") +
+      PALPLAB_MPIEXEC + " -np 2 --oversubscribe ";
   auto r = run_shell(mpirun + PALPLAB_BINARY + " " + base + (d / "mpi").string(), d);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_EQ(power_json(d / "mpi"), power_json(d / "single"));

@@ -120,9 +120,9 @@ TEST(CliView, FramesAndScreenshotUnderXvfb) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
   const fs::path shot = tmp("view.png");
-  const Result r =
-      run("xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(PALPLAB_BINARY) + " view " +
-          proto("A") + " --frames 30 --size 640x480 --screenshot " + shot.string());
+  const Result r = run("timeout -k 10 300 xvfb-run -a -s '-screen 0 1024x768x24' " +
+                       std::string(PALPLAB_BINARY) + " view " + proto("A") +
+                       " --frames 30 --size 640x480 --screenshot " + shot.string());
   ASSERT_EQ(r.code, 0) << r.out;
   const pr::Image img = pr::read_png(shot.string());
   ASSERT_EQ(img.width, 640);
@@ -143,8 +143,8 @@ TEST(CliView, FramesAndScreenshotUnderXvfb) {
 
 TEST(CliView, SlowUdpDeviceIsRefusedBeforeAnyWindowOpens) {
   // No bridge on this port: 0 Hz < 900 Hz. Needs no display.
-  const Result r = cli("view " + proto("A") +
-                       " --device udp:" + std::to_string(20000 + getpid() % 20000) + " --frames 1");
+  const Result r = cli("view " + proto("A") + " --device udp:" +
+                       std::to_string(palplab::testing::free_udp_port()) + " --frames 1");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("below the required 900 Hz"), std::string::npos) << r.out;
   EXPECT_EQ(cli("view " + proto("A") + " --device serial:1 --frames 1").code, 2);
@@ -155,7 +155,8 @@ TEST(CliView, RecordTraceThenReplayItUnderXvfb) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
   const fs::path trace = tmp("view.trace"), shot = tmp("replay.png");
-  const std::string xvfb = "xvfb-run -a -s '-screen 0 800x600x24' " + std::string(PALPLAB_BINARY);
+  const std::string xvfb =
+      "timeout -k 10 300 xvfb-run -a -s '-screen 0 800x600x24' " + std::string(PALPLAB_BINARY);
   Result r = run(xvfb + " view " + proto("B") + " --frames 20 --size 320x240 --record-trace " +
                  trace.string());
   ASSERT_EQ(r.code, 0) << r.out;
@@ -196,10 +197,11 @@ TEST(CliView, StCueFlashesTheBorderWhenTheForceCrossesSt) {
         << ", \"y\": " << px->y << ", \"left\": true}, {\"t\": 0.05, \"wheel\": " << notches
         << "}]}";
     }
-    const Result r = run("PALPLAB_AUDIO_DEVICE=null xvfb-run -a -s '-screen 0 640x480x24' " +
-                         std::string(PALPLAB_BINARY) + " view " + proto("A") + " --size " +
-                         std::to_string(W) + "x" + std::to_string(H) + " --mouse-script " +
-                         script.string() + " --frames 20 --screenshot " + shot.string());
+    const Result r =
+        run("PALPLAB_AUDIO_DEVICE=null timeout -k 10 300 xvfb-run -a -s '-screen 0 640x480x24' " +
+            std::string(PALPLAB_BINARY) + " view " + proto("A") + " --size " + std::to_string(W) +
+            "x" + std::to_string(H) + " --mouse-script " + script.string() +
+            " --frames 20 --screenshot " + shot.string());
     EXPECT_EQ(r.code, 0) << r.out << r.err;
     // How long the tone sounded (the haptic thread switches it; ALSA's null device plays it).
     const auto at = r.out.find("ST tone: ");

@@ -69,7 +69,7 @@ nlohmann::json render_metrics(const std::string& chromium, const fs::path& html,
   std::string page = slurp(html);
   page.insert(page.rfind("</body>"), kProbe);
   std::ofstream(probe) << page;
-  Result r = run_shell(chromium +
+  Result r = run_shell("timeout -k 10 120 " + chromium +
                            " --headless --no-sandbox --disable-gpu --hide-scrollbars "
                            "--window-size=700,900 --virtual-time-budget=3000 --dump-dom 'file://" +
                            probe.string() + "'",

@@ -52,10 +52,6 @@ std::string human(const fs::path& db, const std::string& device, const std::stri
   return palplab::testing::human_run(kDir + "human_study.json", db, device, extra, now);
 }
 
-int free_port() {
-  // A port in the dynamic range derived from the pid (tests run in parallel processes).
-  return 40000 + static_cast<int>(getpid() % 20000);
-}
 }  // namespace
 
 TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
@@ -95,20 +91,20 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   const double kScriptSlack = 0.3;
   fs::path db;
   std::string trace_dir, drifts;
-  int port = free_port();
+  int port = 0;
   for (int attempt = 1;; ++attempt) {
+    port = palplab::testing::free_udp_port();
     db = tmp.dir / ("h" + std::to_string(attempt) + ".db");
     trace_dir = (tmp.dir / ("tr" + std::to_string(attempt))).string();
     auto sim = std::async(std::launch::async, [&] {
       return run(std::string(PALPLAB_BINARY) + " device-sim --port " + std::to_string(port) +
                  " --script " + kDir +
-                 "press_script.json --start-on-force --duration 2.3 --wait 10");
+                 "press_script.json --start-on-force --duration 2.3 --wait 60");
     });
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     auto r1 = run(human(db, "udp:" + std::to_string(port), "2026-11-24T10:00:00Z",
                         "--record-trace " + trace_dir));
     auto s1 = sim.get();
-    ++port;
     // 0, or 3 for a session aborted because the stream ended (a starved loop); never a crash.
     ASSERT_TRUE(r1.code == 0 || r1.code == 3) << r1.code << "\n" << r1.out << s1.out;
     auto row = db_rows(db, "SELECT wall_duration, steps, loop_median FROM sessions");
@@ -126,7 +122,7 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["status"], "complete");
   EXPECT_EQ(rows[0]["trainee"], "human");
-  EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port - 1));
+  EXPECT_EQ(rows[0]["device"], "udp:" + std::to_string(port));
   EXPECT_EQ(rows[0]["steps"], "2000");
   EXPECT_GT(std::stoi(db_rows(db, "SELECT COUNT(*) AS n FROM samples")[0]["n"]), 1);
   const auto m_udp = measures(db, 1);
@@ -203,11 +199,11 @@ TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
 TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
   Tmp tmp;
   const fs::path db = tmp.dir / "h.db";
-  const int port = free_port() + 1;
+  const int port = palplab::testing::free_udp_port();
   auto sim = std::async(std::launch::async, [&] {
     return run(std::string(PALPLAB_BINARY) + " device-sim --port " + std::to_string(port) +
                " --script " + kDir +
-               "press_script.json --start-on-force --stop-after 0.5 --wait 10");
+               "press_script.json --start-on-force --stop-after 0.5 --wait 60");
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   auto r =
