@@ -132,9 +132,11 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
     throw InputError("--refinement: expected nested or tetgen, got \"" + a.refinement + "\"");
   if (a.steps < 0 || a.steps > 100)
     throw InputError("--steps: expected 0 to 100 load steps, got " + std::to_string(a.steps));
-  if (a.material != "corotated-linear" && a.material != "fixed-corotated")
-    throw InputError("--material: expected corotated-linear or fixed-corotated, got \"" +
-                     a.material + "\"");
+  try {
+    engine::parse_corot_material(a.material);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("--material: ") + e.what());
+  }
   // Grading of level 0 around the press (fem_reference.hpp): auto (-1 here) = until the loaded
   // edges are at most the pad radius; 0 = the prototype's own mesh as level 0. Checked before
   // the prototype is loaded (which can take seconds).
@@ -499,8 +501,8 @@ int run_reference(const ReferenceArgs& a) {
     if (fl.non_elliptic_tets > 0 && a.material == "corotated-linear")
       std::printf(
           "the co-rotated linear material lost strong ellipticity under the pad: a fine level's "
-          "curve has no converged continuation there; --material fixed-corotated stays "
-          "elliptic (docs/ARCHITECTURE.md)\n");
+          "curve has no converged continuation there; --material neo-hookean (or "
+          "fixed-corotated) stays elliptic (docs/ARCHITECTURE.md)\n");
     return 1;
   }
   return 0;
@@ -816,8 +818,9 @@ palplab::app::CommandRegistration reg{
           ref->add_option("--material", ra->material,
                           "Curve: the co-rotational material, corotated-linear (the linear element "
                           "rotated, as D_corot; loses strong ellipticity under large compression, "
-                          "where a fine level's curve stops) or fixed-corotated (volume term in "
-                          "det F, stays elliptic; equal to first order)")
+                          "where a fine level's curve stops), fixed-corotated (volume term in "
+                          "det F, stays elliptic) or neo-hookean (compressible neo-Hookean: "
+                          "elliptic, with a barrier against inversion); all equal to first order")
               ->capture_default_str();
       auto* bisect_opt =
           ref->add_option("--bisections", ra->bisections,

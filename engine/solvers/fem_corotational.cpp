@@ -107,11 +107,13 @@ Vector12d element_vector(const mesh::Tets& T, long t, const Eigen::VectorXd& x) 
 // One tet of sys in the given material.
 void element_of(const FemSystem& sys, long t, const Eigen::VectorXd& X0, const Eigen::VectorXd& x,
                 CorotJacobian jac, CorotMaterial material, Vector12d& fe, Matrix12d* Kt) {
-  if (material == CorotMaterial::fixed_corotated) {
+  if (material != CorotMaterial::corotated_linear) {
     double mu = 0, lambda = 0;
     lame(sys.material.youngs_modulus[t], sys.material.poisson_ratio[t], mu, lambda);
-    fixed_corotated_element(sys.shape[t].grad, std::abs(sys.shape[t].volume), mu, lambda,
-                            element_vector(sys.T, t, x), fe, Kt);
+    const auto element =
+        material == CorotMaterial::fixed_corotated ? fixed_corotated_element : neo_hookean_element;
+    element(sys.shape[t].grad, std::abs(sys.shape[t].volume), mu, lambda,
+            element_vector(sys.T, t, x), fe, Kt);
     return;
   }
   corotational_element(sys.shape[t].grad, sys.Ke[t], element_vector(sys.T, t, X0),
@@ -120,13 +122,23 @@ void element_of(const FemSystem& sys, long t, const Eigen::VectorXd& X0, const E
 }  // namespace
 
 const char* to_string(CorotMaterial m) {
-  return m == CorotMaterial::fixed_corotated ? "fixed-corotated" : "corotated-linear";
+  switch (m) {
+    case CorotMaterial::fixed_corotated:
+      return "fixed-corotated";
+    case CorotMaterial::neo_hookean:
+      return "neo-hookean";
+    case CorotMaterial::corotated_linear:
+      break;
+  }
+  return "corotated-linear";
 }
 
 CorotMaterial parse_corot_material(const std::string& name) {
-  if (name == "corotated-linear") return CorotMaterial::corotated_linear;
-  if (name == "fixed-corotated") return CorotMaterial::fixed_corotated;
-  throw std::invalid_argument("expected corotated-linear or fixed-corotated, got \"" + name + "\"");
+  for (CorotMaterial m : {CorotMaterial::corotated_linear, CorotMaterial::fixed_corotated,
+                          CorotMaterial::neo_hookean})
+    if (name == to_string(m)) return m;
+  throw std::invalid_argument("expected corotated-linear, fixed-corotated or neo-hookean, got \"" +
+                              name + "\"");
 }
 
 void corotational_forces(const FemSystem& sys, const Eigen::VectorXd& x, Eigen::VectorXd& f,
@@ -149,9 +161,9 @@ void corotational_forces(const FemSystem& sys, const Eigen::VectorXd& x, Eigen::
 void corotational_stiffness(const FemSystem& sys, const Eigen::VectorXd& x, CorotJacobian jac,
                             std::vector<Matrix12d>& Ke_t, SparseMatrixd& K_t, Eigen::VectorXd* f,
                             CorotMaterial material) {
-  if (material == CorotMaterial::fixed_corotated && jac != CorotJacobian::exact)
-    throw std::invalid_argument(
-        "corotational_stiffness: fixed_corotated has the exact tangent only");
+  if (material != CorotMaterial::corotated_linear && jac != CorotJacobian::exact)
+    throw std::invalid_argument(std::string("corotational_stiffness: ") + to_string(material) +
+                                " has the exact tangent only");
   const Eigen::VectorXd X0 = flatten(sys.X0);
   Ke_t.resize(sys.T.rows());
   if (f) f->setZero(x.size());
@@ -232,10 +244,15 @@ Matrix9d fixed_corotated_tangent(const Eigen::Matrix3d& F, double mu, double lam
   return C;
 }
 
-void fixed_corotated_element(const Matrix43d& grad, double volume, double mu, double lambda,
-                             const Vector12d& x, Vector12d& f_e, Matrix12d* K_e_t) {
+namespace {
+// One tet of a hyperelastic material given by its stress P(F) and tangent C(F): the force
+// f_r = -V P grad N_r and the tangent V G^T C G.
+void hyperelastic_element(Eigen::Matrix3d (*stress)(const Eigen::Matrix3d&, double, double),
+                          Matrix9d (*tangent)(const Eigen::Matrix3d&, double, double),
+                          const Matrix43d& grad, double volume, double mu, double lambda,
+                          const Vector12d& x, Vector12d& f_e, Matrix12d* K_e_t) {
   const Eigen::Matrix3d F = deformation_gradient(grad, x);
-  const Eigen::Matrix3d P = fixed_corotated_stress(F, mu, lambda);
+  const Eigen::Matrix3d P = stress(F, mu, lambda);
   for (int r = 0; r < 4; ++r) f_e.segment<3>(3 * r) = -volume * P * grad.row(r).transpose();
   if (!K_e_t) return;
   // G = d vec(F) / d x_e: vec(F)[i + 3 j] = sum_r x_r[i] grad(r, j).
@@ -243,8 +260,56 @@ void fixed_corotated_element(const Matrix43d& grad, double volume, double mu, do
   for (int r = 0; r < 4; ++r)
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) Gm(i + 3 * j, 3 * r + i) = grad(r, j);
-  Matrix12d K = volume * Gm.transpose() * fixed_corotated_tangent(F, mu, lambda) * Gm;
+  Matrix12d K = volume * Gm.transpose() * tangent(F, mu, lambda) * Gm;
   *K_e_t = 0.5 * (K + K.transpose());
+}
+}  // namespace
+
+void fixed_corotated_element(const Matrix43d& grad, double volume, double mu, double lambda,
+                             const Vector12d& x, Vector12d& f_e, Matrix12d* K_e_t) {
+  hyperelastic_element(fixed_corotated_stress, fixed_corotated_tangent, grad, volume, mu, lambda, x,
+                       f_e, K_e_t);
+}
+
+Eigen::Matrix3d neo_hookean_stress(const Eigen::Matrix3d& F, double mu, double lambda) {
+  const double J = F.determinant();
+  if (!(J > 0)) return Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  const Eigen::Matrix3d FinvT = F.inverse().transpose();
+  return mu * (F - FinvT) + lambda * std::log(J) * FinvT;
+}
+
+Matrix9d neo_hookean_tangent(const Eigen::Matrix3d& F, double mu, double lambda) {
+  const double J = F.determinant();
+  if (!(J > 0)) return Matrix9d::Constant(std::numeric_limits<double>::quiet_NaN());
+  const Eigen::Matrix3d Finv = F.inverse();
+  const double a = mu - lambda * std::log(J);
+  Matrix9d C;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l)
+          C(i + 3 * j, k + 3 * l) = (i == k && j == l ? mu : 0.0) + a * Finv(j, k) * Finv(l, i) +
+                                    lambda * Finv(j, i) * Finv(l, k);
+  return C;
+}
+
+void neo_hookean_element(const Matrix43d& grad, double volume, double mu, double lambda,
+                         const Vector12d& x, Vector12d& f_e, Matrix12d* K_e_t) {
+  hyperelastic_element(neo_hookean_stress, neo_hookean_tangent, grad, volume, mu, lambda, x, f_e,
+                       K_e_t);
+}
+
+Matrix9d material_tangent(CorotMaterial material, const Eigen::Matrix3d& F, double mu,
+                          double lambda) {
+  switch (material) {
+    case CorotMaterial::fixed_corotated:
+      return fixed_corotated_tangent(F, mu, lambda);
+    case CorotMaterial::neo_hookean:
+      return neo_hookean_tangent(F, mu, lambda);
+    case CorotMaterial::corotated_linear:
+      break;
+  }
+  return corotational_material_tangent(F, mu, lambda);
 }
 
 namespace {

@@ -46,9 +46,18 @@ enum class CorotJacobian { exact, warped };
 //                     volume term in J, whose pressure does no initial-stress work on a rank-one
 //                     perturbation (cof F is a null Lagrangian), so it stays strongly elliptic
 //                     while the singular values pairwise sum above 1 (hydrostatic: s > 1/2).
-enum class CorotMaterial { corotated_linear, fixed_corotated };
+//                     No barrier against inversion: under a large press tets collapse (det F
+//                     0.05 on the test block's level 2 at 4 N).
+//   neo_hookean       psi = mu/2 (tr F^T F - 3) - mu ln J + lambda/2 (ln J)^2, J = det F (the
+//                     compressible neo-Hookean solid, as FEBio's "neo-Hookean"; Bonet & Wood
+//                     2008, eq. 6.28): polyconvex, so strongly elliptic for every J > 0, and its
+//                     energy grows without bound as J -> 0, a barrier against inversion. Not
+//                     defined for J <= 0: the stress there is NaN, which the curve's line search
+//                     rejects (a step that inverts a tet is shortened).
+// (Not all co-rotational: the name is that of the curve's geometrically nonlinear element.)
+enum class CorotMaterial { corotated_linear, fixed_corotated, neo_hookean };
 const char* to_string(CorotMaterial m);
-// "corotated-linear" or "fixed-corotated"; throws std::invalid_argument otherwise.
+// "corotated-linear", "fixed-corotated" or "neo-hookean"; throws std::invalid_argument otherwise.
 CorotMaterial parse_corot_material(const std::string& name);
 
 // Internal elastic forces f (3#V, N) at current positions x (3#V, m); R_out (optional) gets the
@@ -89,6 +98,18 @@ Eigen::Matrix3d fixed_corotated_stress(const Eigen::Matrix3d& F, double mu, doub
 Matrix9d fixed_corotated_tangent(const Eigen::Matrix3d& F, double mu, double lambda);
 void fixed_corotated_element(const Matrix43d& grad, double volume, double mu, double lambda,
                              const Vector12d& x, Vector12d& f_e, Matrix12d* K_e_t);
+
+// The neo-Hookean material: P = mu (F - F^-T) + lambda ln J F^-T, its tangent
+//   dP_ij/dF_kl = mu d_ik d_jl + (mu - lambda ln J) Finv_jk Finv_li + lambda Finv_ji Finv_lk,
+// and one tet's force and tangent as above. NaN where J <= 0.
+Eigen::Matrix3d neo_hookean_stress(const Eigen::Matrix3d& F, double mu, double lambda);
+Matrix9d neo_hookean_tangent(const Eigen::Matrix3d& F, double mu, double lambda);
+void neo_hookean_element(const Matrix43d& grad, double volume, double mu, double lambda,
+                         const Vector12d& x, Vector12d& f_e, Matrix12d* K_e_t);
+
+// The tangent dP/dF of `material` at F (the co-rotated linear one with its rotation gradient).
+Matrix9d material_tangent(CorotMaterial material, const Eigen::Matrix3d& F, double mu,
+                          double lambda);
 
 // Strong ellipticity of a material tangent C: the smallest eigenvalue of the acoustic tensor
 // Q(n)_ik = sum_jl C(i + 3 j, k + 3 l) n_j n_l (Pa) over unit directions n (sampled on 600

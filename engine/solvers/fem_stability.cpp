@@ -69,10 +69,7 @@ std::vector<double> ellipticity_margin(const FemSystem& sys, const Eigen::Vector
     const Eigen::Matrix3d F = deformation_gradient(sys.shape[static_cast<size_t>(t)].grad, xe);
     double mu = 0, lambda = 0;
     lame(sys.material.youngs_modulus[t], sys.material.poisson_ratio[t], mu, lambda);
-    const Matrix9d C = material == CorotMaterial::fixed_corotated
-                           ? fixed_corotated_tangent(F, mu, lambda)
-                           : corotational_material_tangent(F, mu, lambda);
-    m[static_cast<size_t>(t)] = acoustic_tensor_min(C) / mu;
+    m[static_cast<size_t>(t)] = acoustic_tensor_min(material_tangent(material, F, mu, lambda)) / mu;
   }
   return m;
 }

@@ -223,6 +223,93 @@ TEST(FemStability, FixedCorotatedStaysEllipticUnderCompression) {
   }
 }
 
+// The neo-Hookean element (--material neo-hookean): its stress is the derivative of the energy
+// density psi = mu/2 (tr F^T F - 3) - mu ln J + lambda/2 (ln J)^2, its tangent that of its
+// forces (central differences; strained and strongly compressed tets), it equals the linear
+// element to first order, has no force under a rigid motion, and is NaN for an inverted tet.
+TEST(FemStability, NeoHookeanElementMatchesItsEnergyAndFiniteDifferences) {
+  double mu = 0, lambda = 0;
+  lame(kE, kNu, mu, lambda);
+  const auto psi = [&](const Eigen::Matrix3d& F) {
+    const double lnJ = std::log(F.determinant());
+    return mu / 2 * ((F.transpose() * F).trace() - 3) - mu * lnJ + lambda / 2 * lnJ * lnJ;
+  };
+  for (const auto& [seed, amp, scale] :
+       {std::tuple{1u, 0.25, 1.0}, std::tuple{2u, 0.1, 0.7}, std::tuple{3u, 0.05, 0.45}}) {
+    const Tet t = deformed_tet(seed, amp, scale);
+    const Eigen::Matrix3d F = deformation_gradient(t.s.grad, t.x);
+    ASSERT_GT(F.determinant(), 0.0) << seed;
+    const Eigen::Matrix3d P = neo_hookean_stress(F, mu, lambda);
+    Eigen::Matrix3d Pfd;
+    const double hF = 1e-7;
+    for (int k = 0; k < 9; ++k) {
+      Eigen::Matrix3d Fp = F, Fm = F;
+      Fp(k % 3, k / 3) += hF;
+      Fm(k % 3, k / 3) -= hF;
+      Pfd(k % 3, k / 3) = (psi(Fp) - psi(Fm)) / (2 * hF);
+    }
+    EXPECT_LT((P - Pfd).cwiseAbs().maxCoeff(), 1e-6 * P.cwiseAbs().maxCoeff()) << seed;
+    const double V = std::abs(t.s.volume);
+    Vector12d f;
+    Matrix12d Kt;
+    neo_hookean_element(t.s.grad, V, mu, lambda, t.x, f, &Kt);
+    Matrix12d Kfd;
+    const double h = 1e-9;
+    for (int j = 0; j < 12; ++j) {
+      Vector12d xp = t.x, xm = t.x, fp, fm;
+      xp[j] += h;
+      xm[j] -= h;
+      neo_hookean_element(t.s.grad, V, mu, lambda, xp, fp, nullptr);
+      neo_hookean_element(t.s.grad, V, mu, lambda, xm, fm, nullptr);
+      Kfd.col(j) = -(fp - fm) / (2 * h);
+    }
+    EXPECT_LT((Kt - Kfd).cwiseAbs().maxCoeff(), 1e-6 * Kfd.cwiseAbs().maxCoeff()) << seed;
+    EXPECT_EQ(material_tangent(CorotMaterial::neo_hookean, F, mu, lambda),
+              neo_hookean_tangent(F, mu, lambda));
+  }
+  const Tet small = deformed_tet(4, 1e-6);
+  const Matrix12d Ke = element_stiffness(small.s, kE, kNu);
+  Vector12d f_lin, f_nh;
+  corotational_element(small.s.grad, Ke, small.X0, small.x, CorotJacobian::exact, f_lin, nullptr);
+  neo_hookean_element(small.s.grad, std::abs(small.s.volume), mu, lambda, small.x, f_nh, nullptr);
+  EXPECT_LT((f_nh - f_lin).norm(), 1e-5 * f_lin.norm());
+  const Tet rigid = deformed_tet(5, 0.0);
+  neo_hookean_element(rigid.s.grad, std::abs(rigid.s.volume), mu, lambda, rigid.x, f_nh, nullptr);
+  EXPECT_LT(f_nh.norm(), 1e-12 * kE * 0.01);
+  Tet inv = deformed_tet(6, 0.0);
+  inv.x.segment<3>(9) = 2 * inv.x.segment<3>(0) - inv.x.segment<3>(9);  // node 3 mirrored
+  neo_hookean_element(inv.s.grad, std::abs(inv.s.volume), mu, lambda, inv.x, f_nh, nullptr);
+  EXPECT_TRUE(f_nh.hasNaN());
+}
+
+// Hydrostatic compression F = s R of the neo-Hookean material: the acoustic tensor is
+// mu I + (mu + lambda (1 - 3 ln s)) / s^2 m m^T (m = R n), so its smallest eigenvalue is the
+// shear modulus at every s <= 1 (polyconvex: strongly elliptic for every J > 0), where the
+// co-rotated linear one lost ellipticity at s = 0.9355 and the fixed co-rotated one at 1/2.
+TEST(FemStability, NeoHookeanStaysEllipticUnderAnyCompression) {
+  double mu = 0, lambda = 0;
+  lame(kE, kNu, mu, lambda);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  for (double s : {1.0, 0.93, 0.7, 0.5, 0.3, 0.1}) {
+    const Matrix9d C = neo_hookean_tangent(s * R, mu, lambda);
+    // The longitudinal wave along n = R^T e_z: m = e_z.
+    const Eigen::Vector3d n = R.transpose() * Eigen::Vector3d::UnitZ();
+    Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j)
+          for (int l = 0; l < 3; ++l) Q(i, k) += C(i + 3 * j, k + 3 * l) * n[j] * n[l];
+    const double longitudinal = mu + (mu + lambda * (1 - 3 * std::log(s))) / (s * s);
+    EXPECT_NEAR(Q(2, 2), longitudinal, 1e-9 * longitudinal) << s;
+    // The closed-form 3 x 3 eigensolver resolves the double shear eigenvalue to ~1e-6 of the
+    // largest (the longitudinal one: 7000 mu at s = 0.1).
+    const double got = acoustic_tensor_min(C);
+    EXPECT_NEAR(got, mu, 1e-6 * longitudinal) << s;
+    EXPECT_GT(got, 0.99 * mu) << s;
+  }
+}
+
 namespace {
 // The verification block of tests/fem/test_fem_curve.cpp (2 x 2 x 1 hexes of 0.04 x 0.04 x
 // 0.02 m, E 10 kPa, nu 0.45, base pinned; nested levels of 12, 96, 768, 6144 tets), pressed at
@@ -275,7 +362,7 @@ void report(const char* what, const FemReferenceResult& r) {
 // on it (|cos| < 0.2: close to a bifurcation). With the fixed co-rotated material no tet loses
 // ellipticity along the path and level 1 completes the curve (its level 2 still stops near
 // 4 N, where tets under the pad collapse: det F 0.05 — that material has no barrier against
-// inversion either).
+// inversion either). The neo-Hookean material completes it on all three levels.
 TEST(FemStability, CorotatedLinearCurveStopsWhereEllipticityIsLost) {
   const FemReferenceResult lin = fem_reference(block(3, 8, 4.8, CorotMaterial::corotated_linear));
   report("corotated-linear", lin);
@@ -313,4 +400,16 @@ TEST(FemStability, CorotatedLinearCurveStopsWhereEllipticityIsLost) {
     for (long n : fix.levels[l].curve_non_elliptic) EXPECT_EQ(n, 0) << l;
   // Equal to first order: the first point (0.6 N, ~2 mm on 20 mm) within a few %.
   EXPECT_NEAR(fix.levels[0].curve_displacement[0] / lin.levels[0].curve_displacement[0], 1.0, 0.05);
+
+  // The neo-Hookean material (elliptic for every J > 0, its energy unbounded as J -> 0)
+  // completes the curve on every level, where the fixed co-rotated one's level 2 collapsed.
+  const FemReferenceResult nh = fem_reference(block(3, 8, 4.8, CorotMaterial::neo_hookean));
+  report("neo-hookean", nh);
+  EXPECT_TRUE(nh.curve_complete);
+  for (int l = 0; l < 3; ++l) {
+    EXPECT_FALSE(nh.levels[l].curve_failure.failed) << l;
+    EXPECT_EQ(nh.levels[l].curve_displacement.size(), 8u) << l;
+    for (long n : nh.levels[l].curve_non_elliptic) EXPECT_EQ(n, 0) << l;
+  }
+  EXPECT_NEAR(nh.levels[0].curve_displacement[0] / lin.levels[0].curve_displacement[0], 1.0, 0.05);
 }
