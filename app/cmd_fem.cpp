@@ -103,7 +103,8 @@ struct ReferenceArgs {
   int steps = 5;
   int newton_max = 30;  // full Newton iterations per load increment of the curve
   int bisections = 4;   // halvings of a curve load step that does not converge
-  std::string material = "corotated-linear";  // the curve's co-rotational material
+  // The curve's material: the engine's default.
+  std::string material = palplab::engine::to_string(palplab::engine::kDefaultCurveMaterial);
 };
 
 json num(double v) {
@@ -815,12 +816,13 @@ palplab::app::CommandRegistration reg{
                           "search) before the increment is halved")
               ->capture_default_str();
       auto* material_opt =
-          ref->add_option("--material", ra->material,
-                          "Curve: the co-rotational material, corotated-linear (the linear element "
-                          "rotated, as D_corot; loses strong ellipticity under large compression, "
-                          "where a fine level's curve stops), fixed-corotated (volume term in "
-                          "det F, stays elliptic) or neo-hookean (compressible neo-Hookean: "
-                          "elliptic, with a barrier against inversion); all equal to first order")
+          ref->add_option(
+                 "--material", ra->material,
+                 "Curve: the material, neo-hookean (compressible neo-Hookean: elliptic, with "
+                 "a barrier against inversion), corotated-linear (the linear element "
+                 "rotated, as D_corot; loses strong ellipticity under large compression, "
+                 "where a fine level's curve stops) or fixed-corotated (volume term in "
+                 "det F, stays elliptic); all equal to first order")
               ->capture_default_str();
       auto* bisect_opt =
           ref->add_option("--bisections", ra->bisections,

@@ -333,13 +333,22 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
     bool done = res <= tol * scale * force;
     // Modified Newton: linear convergence at the rate of |1 - K^-1 K_t|, cheap (one
     // back-substitution per iteration); left for the full Newton when it contracts too slowly.
-    for (double prev = res; !done && it < 200; ++it) {
+    // A step that leaves the material's domain (an inverted tet of the neo-Hookean solid: its
+    // residual is inf) is undone first, so the full Newton starts from the last finite iterate.
+    for (double prev = res; !done && it < 200;) {
       const Eigen::VectorXd du = static_solve(*mn, r);
       u += du;
+      ++it;
       prev = res;
       res = residual_at(u, fk, r);
       done = converged(du, res, prev, scale);
-      if (!done && !(res <= 0.9 * prev)) break;
+      if (!done && !(res <= 0.9 * prev)) {
+        if (!std::isfinite(res)) {
+          u -= du;
+          res = residual_at(u, fk, r);
+        }
+        break;
+      }
     }
     Eigen::VectorXd r_try;
     for (int newton = 0; !done && newton < opt.curve_max_newton; ++newton, ++it) {
@@ -361,6 +370,10 @@ void quasi_static_curve(const FemSystem& sys, const StaticSolver& ss,
           best = res_try;
           best_alpha = alpha;
         }
+      }
+      if (!std::isfinite(best)) {  // every trial step leaves the material's domain
+        ++it;
+        return false;
       }
       const Eigen::VectorXd step = best_alpha * du;
       u += step;

@@ -75,6 +75,10 @@ enum class FemRefinement { tetgen, nested };
 // the range leaves a margin for the pre-asymptotic approach.
 inline constexpr double kPlausibleOrder[2] = {0.8, 2.5};
 
+// The quasi-static curve's default material (FemReferenceOptions::curve_material, `fem reference
+// --material`).
+inline constexpr CorotMaterial kDefaultCurveMaterial = CorotMaterial::neo_hookean;
+
 struct FemReferenceOptions {
   mesh::SurfaceMesh surface;            // closed surface of the body (m)
   std::vector<mesh::RegionSeed> seeds;  // tissue regions (attributes); empty = default_attribute
@@ -119,11 +123,15 @@ struct FemReferenceOptions {
   // iterations per load increment (after the modified Newton ones), halvings of the line
   // search per iteration (0 = none), halvings of a load step that does not converge (0 = none:
   // the smallest increment is the step / 2^curve_bisections).
-  // The co-rotational element's material (fem_corotational.hpp): corotated_linear (the linear
-  // element rotated, as D_corot) loses strong ellipticity under the compression of a large
-  // press, and its curve then stops on a fine enough level (the 4 N body press: level 1 at
-  // 3.73 N); fixed_corotated (volume term in det F) stays elliptic. Equal to first order.
-  CorotMaterial curve_material = CorotMaterial::corotated_linear;
+  // The curve element's material (fem_corotational.hpp; kDefaultCurveMaterial), equal to first
+  // order, so the static reference and the small-load curve do not depend on it. Default
+  // neo_hookean: polyconvex (strongly elliptic for every det F > 0) with a barrier against
+  // inversion; it is the one of the three whose 4 N body curve of D completes on every level
+  // (docs/ARCHITECTURE.md). corotated_linear (the linear element rotated, as D_corot) loses strong
+  // ellipticity under the compression of a large press, and its curve then stops on a fine enough
+  // level (the 4 N body press: level 1 at 3.73 N); fixed_corotated (volume term in det F) stays
+  // elliptic but lets tets collapse.
+  CorotMaterial curve_material = kDefaultCurveMaterial;
   int curve_max_newton = 30;
   int curve_line_search = 5;
   int curve_bisections = 4;

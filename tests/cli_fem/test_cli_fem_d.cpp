@@ -189,7 +189,7 @@ TEST(CliFemD, ReferenceWithAnIncompleteCurveExitsOne) {
   for (const char* k : {"tangent_indefinite", "negative_pivots", "converged_negative_pivots",
                         "min_det_f", "inverted_tets", "converged_min_det_f", "stability"})
     EXPECT_TRUE(f.contains(k)) << k;
-  EXPECT_EQ(c.at("material"), "corotated-linear");
+  EXPECT_EQ(c.at("material"), "neo-hookean");  // the default
   EXPECT_EQ(c.at("non_elliptic_tets").size(), 3u);
   ASSERT_EQ(c.at("level_failure").size(), 3u);
   EXPECT_FALSE(c.at("level_failure")[0].is_null());
