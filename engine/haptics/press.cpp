@@ -126,6 +126,7 @@ void PressDevice::begin_withdraw(double t, const Eigen::Vector3d& f) {
   // and the force to the device's 8.5 N limit while the script "withdrew".
   const double fn = f.norm();
   if (!offset_.isZero(0.0) && fn > 0.0 && std::isfinite(fn)) out_dir_ = f / fn;
+  clear_ = 0.0;
 }
 
 bool PressDevice::next_segment_step(double dt) {
@@ -196,18 +197,29 @@ void PressDevice::write(const Rendered& r) {
       // The step after the last segment is the first of the withdrawal.
       begin_withdraw(r.t, r.force);
       [[fallthrough]];
-    case PressPhase::withdraw:
+    case PressPhase::withdraw: {
       // Along out_dir_ instead of `normal` (a slid press): the same distance per step.
-      if (!out_dir_.isZero(0.0))
+      const bool slid = !out_dir_.isZero(0.0);
+      if (slid) {
         lift_ += std::clamp(depth_ + spec_.start_offset, 0.0, spec_.withdraw_speed * dt) *
                  (out_dir_ - spec_.normal);
+        clear_ = f > 0.0 ? 0.0 : clear_ + spec_.withdraw_speed * dt;
+      }
       depth_ -= spec_.withdraw_speed * dt;
       if (depth_ <= -spec_.start_offset) {
         depth_ = -spec_.start_offset;
         phase_ = PressPhase::release;
         phase_start_ = r.t;
+      } else if (slid && f == 0.0 && clear_ >= spec_.start_offset * (1 - 1e-9)) {
+        // A slid press ends its withdrawal start_offset beyond where it left the surface, as a
+        // still press does: its depth includes the slide's path, and backing all of it out
+        // carried the probe past the surface it left into the next one (C's left ovary: off
+        // the ovary, then 4 cm on into the horn, 5.8 N during the "withdrawal").
+        phase_ = PressPhase::release;
+        phase_start_ = r.t;
       }
       break;
+    }
     case PressPhase::release:
       if (r.t - phase_start_ >= spec_.release - 1e-12) phase_ = PressPhase::done;
       break;

@@ -149,6 +149,7 @@ class PressDevice : public Device {
   // unit direction it withdraws along (see PressSpec::slide)
   Eigen::Vector3d lift_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d out_dir_ = Eigen::Vector3d::Zero();
+  double clear_ = 0.0;  // m, a slid press's withdrawal: moved since its last step in contact
   int segment_ = -1;
   long segment_step_ = 0;                                   // steps since the target
   Eigen::Vector3d segment_base_ = Eigen::Vector3d::Zero();  // offset at the target

@@ -94,41 +94,54 @@ TEST(PressControl, StillPressesReachAndHoldTheTargetAsBefore) {
 }
 
 TEST(PressControl, SlidBodyPressWithdrawsOffTheSurfaceBelowTheDeviceLimit) {
-  // The benches' sliding press on C's body (2.5 N, 2 cm/s over 80 % of its long axis). The
-  // slide ends where the body's surface faces another way than at the start: there the depth
-  // along the start normal is 2.6 cm (the controller followed the flank), and backing out along
-  // the start normal drove the probe into the flank (the contact depth grew 3.5 -> 12 mm, the
-  // force 2.4 -> 8.5 N, the device's limit, for 30 ms of the "withdrawal"). A slid press now
-  // lifts off along the force it feels: the force may only fall during the withdrawal (bound:
-  // the force at its start + 2 %, for the tissue's own relaxation), it ends out of contact and
-  // the device limit is never reached.
+  // The benches' sliding press on C's body and left ovary (2.5 N, 2 cm/s over 80 % of the
+  // region's long axis).
+  // - Body: the slide ends where the body's surface faces another way than at the start: there
+  //   the depth along the start normal is 2.6 cm (the controller followed the flank), and
+  //   backing out along the start normal drove the probe into the flank (the contact depth grew
+  //   3.5 -> 12 mm, the force 2.4 -> 8.5 N, the device's limit, for 30 ms of the "withdrawal").
+  //   A slid press now lifts off along the force it feels.
+  // - Left ovary: lifting off along the force for the whole depth (which includes the slide's
+  //   path) carried the probe off the ovary and 4 cm on into the horn (5.8 N during the
+  //   "withdrawal"; bench_engine_step --sliding). A slid press now ends its withdrawal
+  //   start_offset out of contact.
+  // The force may only fall during the withdrawal (bound: the force at its start + 2 %, for
+  // the tissue's own relaxation); it ends out of contact and the device limit is never reached.
   Scene s = prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/C.json");
-  const PressSpec spec = sliding_press(s.geometry(), "body", 2.5, 0.02);
-  PressDevice d(spec);
-  double f_start = -1.0, f_withdraw = 0.0, f_max = 0.0;
-  long limited = 0;
-  bool contact_at_end = true;
-  run_lockstep(s, d, {.duration = spec.hold + 3.0, .frame_period = 0.0},
-               [&](const Rendered& r, const Sample&) {
-                 const double f = r.force.norm();
-                 f_max = std::max(f_max, f);
-                 for (const Event& e : r.events) limited += e.kind == EventKind::force_limited;
-                 if (d.phase() == PressPhase::withdraw || d.phase() == PressPhase::release) {
-                   if (f_start < 0.0)
-                     f_start = f;  // the step that began the withdrawal
-                   else
-                     f_withdraw = std::max(f_withdraw, f);
-                 }
-                 contact_at_end = r.contact;
-               });
-  std::printf("C body slide: max force %.3f N, withdrawal starts at %.3f N, then at most %.3f N\n",
-              f_max, f_start, f_withdraw);
-  EXPECT_TRUE(d.finished());
-  EXPECT_GT(f_start, 0.0);
-  EXPECT_LE(f_withdraw, 1.02 * f_start);
-  EXPECT_EQ(limited, 0);
-  EXPECT_LT(f_max, s.config().contact.force_limit);
-  EXPECT_FALSE(contact_at_end);
+  for (const char* region : {"body", "ovary_left"}) {
+    s.reset();
+    const PressSpec spec = sliding_press(s.geometry(), region, 2.5, 0.02);
+    PressDevice d(spec);
+    double f_start = -1.0, f_withdraw = 0.0, f_max = 0.0;
+    long limited = 0, contact_steps_after = 0;
+    bool contact_at_end = true, left = false;
+    run_lockstep(s, d, {.duration = spec.hold + 3.0, .frame_period = 0.0},
+                 [&](const Rendered& r, const Sample&) {
+                   const double f = r.force.norm();
+                   f_max = std::max(f_max, f);
+                   for (const Event& e : r.events) limited += e.kind == EventKind::force_limited;
+                   if (d.phase() == PressPhase::withdraw || d.phase() == PressPhase::release) {
+                     if (f_start < 0.0)
+                       f_start = f;  // the step that began the withdrawal
+                     else
+                       f_withdraw = std::max(f_withdraw, f);
+                     left = left || !r.contact;
+                     contact_steps_after += left && r.contact;  // touching again
+                   }
+                   contact_at_end = r.contact;
+                 });
+    std::printf(
+        "C %s slide: max force %.3f N, withdrawal starts at %.3f N, then at most %.3f N; %ld "
+        "steps in contact again after leaving\n",
+        region, f_max, f_start, f_withdraw, contact_steps_after);
+    EXPECT_TRUE(d.finished()) << region;
+    EXPECT_GT(f_start, 0.0) << region;
+    EXPECT_LE(f_withdraw, 1.02 * f_start) << region;
+    EXPECT_EQ(contact_steps_after, 0) << region;
+    EXPECT_EQ(limited, 0) << region;
+    EXPECT_LT(f_max, s.config().contact.force_limit) << region;
+    EXPECT_FALSE(contact_at_end) << region;
+  }
 }
 
 TEST(PressControl, SlideForceStepsBelowWeberHalf) {
