@@ -448,8 +448,8 @@ int run_reference(const ReferenceArgs& a) {
       r.stiffness, r.displacement, r.observed_order, r.refinement_ratio, engine::kPlausibleOrder[0],
       engine::kPlausibleOrder[1]);
   if (a.steps > 0 && !r.curve.empty()) {
-    std::printf("quasi-static press (co-rotational):\n%10s %14s %14s %14s\n", "F (N)", "u (m)",
-                "u_linear (m)", "k_secant (N/m)");
+    std::printf("quasi-static press (material %s):\n%10s %14s %14s %14s\n", a.material.c_str(),
+                "F (N)", "u (m)", "u_linear (m)", "k_secant (N/m)");
     for (const auto& c : r.curve)
       std::printf("%10.4g %14.6g %14.6g %14.6g\n", c.force, c.displacement, c.linear_displacement,
                   c.secant_stiffness);
