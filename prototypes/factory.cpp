@@ -63,8 +63,23 @@ void read_mesh(Checker& c, const json& m, const std::string& path, MeshSource& o
     out.generator =
         c.text(m, P, "generator", true, {"tract", "model_c", "stomach", "sphere", "shoulder"})
             .value_or(out.generator);
-    out.vertices = static_cast<int>(
-        c.integer(m, P, "vertices", false, 12, 200000, "the vertex count").value_or(out.vertices));
+    // Each generator's own vertex range (engine/mesh/generate*.cpp), so that a count the
+    // generator would refuse is an error here, at its JSON path; the stomach is one fixed mesh.
+    if (out.generator == "stomach") {
+      if (m.contains("vertices"))
+        c.err(pj::path_key(P, "vertices"),
+              "\"vertices\" does not apply to the stomach generator (one fixed mesh)", true);
+    } else {
+      const long long lo = out.generator == "sphere" ? 12 : out.generator == "shoulder" ? 162 : 200;
+      const long long hi = out.generator == "shoulder" ? 40962 : 200000;
+      const std::string what = out.generator == "shoulder"
+                                   ? "the vertex count per skin layer"
+                                   : "the " +
+                                         std::string(out.generator == "sphere" ? "" : "surface ") +
+                                         "vertex count of the " + out.generator + " generator";
+      out.vertices = static_cast<int>(
+          c.integer(m, P, "vertices", false, lo, hi, what.c_str()).value_or(out.vertices));
+    }
     out.seed = static_cast<std::uint64_t>(
         c.integer(m, P, "seed", false, 0, 1L << 40, "the shape seed (0 = reference)")
             .value_or(static_cast<long long>(out.seed)));

@@ -320,6 +320,17 @@ TEST(Prototypes, MeshFilesInsteadOfGenerators) {
   EXPECT_NE(e.find("not both"), std::string::npos) << e;
   e = error_of(with_mesh("A", "{\"file\": \"tract.obj\", \"vertices\": 10}"));
   EXPECT_NE(e.find("$.mesh.vertices"), std::string::npos) << e;
+  // Each generator's own vertex range, at the JSON path (model_c refused 12 only when building,
+  // as "tract: --vertices ..."); the stomach is one fixed mesh (its "vertices" was ignored).
+  e = error_of(with_mesh("C", "{\"generator\": \"model_c\", \"vertices\": 12}"));
+  EXPECT_NE(e.find("$.mesh.vertices"), std::string::npos) << e;
+  EXPECT_NE(e.find("model_c"), std::string::npos) << e;
+  EXPECT_EQ(e.find("--vertices"), std::string::npos) << e;
+  e = error_of(with_mesh("A", "{\"generator\": \"stomach\", \"vertices\": 500}"));
+  EXPECT_NE(e.find("$.mesh.vertices"), std::string::npos) << e;
+  EXPECT_NE(e.find("stomach"), std::string::npos) << e;
+  e = error_of(with_mesh("A", "{\"generator\": \"shoulder\", \"vertices\": 100}"));
+  EXPECT_NE(e.find("$.mesh.vertices"), std::string::npos) << e;
   std::ofstream(dir / "broken.obj") << "v 0 0 0\nv 1 0 0\nf 1 2 7\n";
   e = error_of(with_mesh("A", "{\"file\": \"broken.obj\"}"));
   EXPECT_NE(e.find("broken.obj"), std::string::npos) << e;
