@@ -9,9 +9,9 @@
 // surface with max tet volume halved per level (not nested) — the Richardson-extrapolated
 // contact stiffness and surface displacement field, the estimated discretisation error of each
 // level, and the quasi-static force-displacement curve of a slow press (`--steps` load steps,
-// co-rotational FEM; 0 = none) (docs/FORMATS.md "FEM reference"). Exit 0; 1 when the curve is
-// incomplete (a load step did not converge: the file holds the curve up to the last load every
-// level reached and the reason, `curve.failure`); 2 bad input.
+// geometrically nonlinear FEM, --material; 0 = none) (docs/FORMATS.md "FEM reference"). Exit 0; 1
+// when the curve is incomplete (a load step did not converge: the file holds the curve up to the
+// last load every level reached and the reason, `curve.failure`); 2 bad input.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -29,6 +29,7 @@
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "engine/haptics/press.hpp"
 #include "engine/models/fem_reference.hpp"
 #include "engine/models/fem_verify.hpp"
@@ -125,7 +126,8 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
   using namespace palplab;
   if (built_levels <= 0) built_levels = a.levels;
   if (!(a.force > 0) || !std::isfinite(a.force) || a.force > 1e3)
-    throw InputError("--force: expected a force in N in (0, 1000], got " + std::to_string(a.force));
+    throw InputError("--force: expected a force in N in (0, 1000], got " +
+                     palplab::json::Checker::fmt(a.force));
   if (a.levels < 3 || a.levels > 6)
     throw InputError("--levels: expected 3 to 6 levels (3 are needed for an extrapolation), got " +
                      std::to_string(a.levels));
@@ -411,8 +413,9 @@ int run_reference(const ReferenceArgs& a) {
       failure["level"] = r.curve_failure_level;
     }
     out["curve"] = {{"analysis",
-                     "quasi-static: dead load ramped in equal steps, each an equilibrium of the "
-                     "co-rotational FEM (large rotations; material: see material)"},
+                     "quasi-static: dead load ramped in equal steps, each a static equilibrium of "
+                     "the geometrically nonlinear FEM (large deformations) with the material named "
+                     "in material"},
                     {"steps", a.steps},
                     {"material", a.material},
                     {"complete", r.curve_complete},
@@ -636,6 +639,8 @@ int run_solvers(const SolverArgs& a) {
           "--solvers: expected a comma-separated list of ldlt, cholmod, pcg-jacobi, "
           "pcg-jacobi0, pcg-ic; got \"" +
           n + "\"");
+    if (std::find(names.begin(), names.end(), n) != names.end())
+      throw InputError("--solvers: \"" + n + "\" is listed twice");
     names.push_back(n);
     i = j + 1;
   }
@@ -800,7 +805,7 @@ palplab::app::CommandRegistration reg{
       ref->add_option("prototype", ra->prototype, "Prototype JSON file (a tet mesh)")->required();
       ref->add_option("--press", ra->press, "Region name or surface node index to press")
           ->required();
-      ref->add_option("--force", ra->force, "Press force (N)")->required();
+      ref->add_option("--force", ra->force, "Press force (N), in (0, 1000]")->required();
       ref->add_option("--levels", ra->levels, "Refinement levels (3-6)")->capture_default_str();
       ref->add_option("--out", ra->out, "Output JSON file")->required();
       ref->add_option("--refinement", ra->refinement,
@@ -813,7 +818,7 @@ palplab::app::CommandRegistration reg{
       auto* newton_opt =
           ref->add_option("--newton-max", ra->newton_max,
                           "Curve: full Newton iterations per load increment (each with a line "
-                          "search) before the increment is halved")
+                          "search) before the increment is halved; 0: modified Newton only")
               ->capture_default_str();
       auto* material_opt =
           ref->add_option(

@@ -17,6 +17,7 @@
 #include "app/command.hpp"
 #include "app/scene_option.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
@@ -32,8 +33,9 @@ struct ProbeArgs {
 
 int run_probe(const ProbeArgs& a) {
   using namespace palplab;
-  if (!(a.force > 0.0) || !std::isfinite(a.force))
-    throw InputError("--force: expected a positive force in N, got " + std::to_string(a.force));
+  if (!(a.force > 0.0) || !(a.force <= 100.0))
+    throw InputError("--force: expected a force in N in (0, 100], got " +
+                     json::Checker::fmt(a.force));
   if (!(a.duration >= 0.0) || a.duration > 3600)
     throw InputError("--duration: expected a hold time in s in [0, 3600]");
   if (!(a.release >= 0.0) || a.release > 3600)
@@ -153,7 +155,7 @@ palplab::app::CommandRegistration reg{
       palplab::app::add_scene_option(cmd, a->scene, false);
       cmd->add_option("--press", a->press, "Region name or surface node index to press")
           ->required();
-      cmd->add_option("--force", a->force, "Target device force (N)")->required();
+      cmd->add_option("--force", a->force, "Target device force (N), in (0, 100]")->required();
       cmd->add_option("--duration", a->duration, "Hold time at the target force (s)")->required();
       cmd->add_option("--release", a->release,
                       "Time to keep simulating after withdrawal (s), default 1");

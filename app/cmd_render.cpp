@@ -12,6 +12,7 @@
 #include "app/command.hpp"
 #include "app/stills.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "engine/render/headless.hpp"
 #include "engine/render/still.hpp"
 #include "prototypes/factory.hpp"
@@ -57,7 +58,7 @@ int run_render(const RenderArgs& a) {
     const auto c = parse_numbers("--camera", a.camera, ',', 2, 3,
                                  "AZIMUTH,ELEVATION[,DISTANCE] (degrees, degrees, m)");
     if (c[1] < -90 || c[1] > 90)
-      throw InputError("--camera: elevation " + std::to_string(c[1]) +
+      throw InputError("--camera: elevation " + json::Checker::fmt(c[1]) +
                        " outside [-90, 90] degrees");
     cam.azimuth_deg = c[0];
     cam.elevation_deg = c[1];
@@ -70,9 +71,9 @@ int run_render(const RenderArgs& a) {
   if (a.press.empty() != (a.force == 0.0))
     throw InputError("--press and --force go together (REGION_OR_NODE and a force in N)");
   if (!a.press.empty() && (!(a.force > 0.0) || a.force > 100.0))
-    throw InputError("--force: expected a force in (0, 100] N, got " + std::to_string(a.force));
+    throw InputError("--force: expected a force in (0, 100] N, got " + json::Checker::fmt(a.force));
   if (!(a.hold >= 0.0) || a.hold > 60.0)
-    throw InputError("--hold: expected a time in [0, 60] s, got " + std::to_string(a.hold));
+    throw InputError("--hold: expected a time in [0, 60] s, got " + json::Checker::fmt(a.hold));
   engine::Scene scene = prototypes::build_scene(a.file);
   render::StillOptions opt;
   if (!a.press.empty()) {
@@ -112,7 +113,7 @@ int run_render(const RenderArgs& a) {
   if (!a.transparent.empty()) {
     if (!(a.transparent_alpha >= 0.0 && a.transparent_alpha < 1.0))
       throw InputError("--transparent-alpha: expected an opacity in [0, 1), got " +
-                       std::to_string(a.transparent_alpha));
+                       json::Checker::fmt(a.transparent_alpha));
     const auto& g = scene.geometry();
     std::stringstream ss(a.transparent);
     std::string name;

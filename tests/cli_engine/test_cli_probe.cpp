@@ -68,6 +68,13 @@ TEST(CliProbe, BadInputExitsTwo) {
   EXPECT_EQ(run("probe " + proto("A") + " --press 999999 --force 2 --duration 1").code, 2);
   const Result r = run("probe " + proto("A") + " --press liver --force 2 --duration 1");
   EXPECT_NE(r.out.find("ovary_left"), std::string::npos) << r.out;  // lists the regions
+  // A force of 1e308 N was accepted; the bound is render's, and the message shows the value in
+  // the JSON checker's format (std::to_string printed 309 digits).
+  const Result huge = run("probe " + proto("A") + " --press ovary_left --force 1e308 --duration 1");
+  EXPECT_EQ(huge.code, 2);
+  EXPECT_NE(huge.out.find("--force: expected a force in N in (0, 100], got 1e+308"),
+            std::string::npos)
+      << huge.out;
 }
 
 TEST(CliProbe, ExplicitIntegratorsDivergeOnModelCAndAreCaught) {

@@ -318,6 +318,9 @@ TEST(CliFemD, SolversBadInputsExitTwo) {
   EXPECT_EQ(s.code, 2);
   EXPECT_NE(s.err.find("--solvers"), std::string::npos) << s.err;
   EXPECT_NE(s.err.find("gmres"), std::string::npos) << s.err;
+  const Result twice = run(base + "--solvers ldlt,pcg-ic,ldlt", d);  // ran twice, shown twice
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.err.find("\"ldlt\" is listed twice"), std::string::npos) << twice.err;
   const Result e = run(base + "--solvers ldlt,", d);  // an empty name
   EXPECT_EQ(e.code, 2);
   EXPECT_NE(e.err.find("--solvers"), std::string::npos) << e.err;
