@@ -46,7 +46,8 @@ inline engine::AdaptiveMassSpring tet_model_c(int surface_vertices = mesh::kMode
   s.home_ks = 2e5 * area;
   s.home_kd = 200.0 * area;
   return make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002,
-                       1e-3, CoarseTets{tm.T, E, bf.tet});
+                       1e-3,
+                       CoarseTets{tm.T, E, bf.tet, Eigen::VectorXd::Constant(tm.T.rows(), 0.45)});
 }
 
 }  // namespace palplab::bench

@@ -740,16 +740,17 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
   CoarseTets tets;  // empty: a membrane refines in its plane only
   if (cm.tet) {
     const long nt = cm.model_T.rows();
-    Eigen::VectorXd E(nt), rho(nt);
+    Eigen::VectorXd E(nt), rho(nt), nu(nt);
     for (long t = 0; t < nt; ++t) {
       const mesh::Material mat = material_of(cm.tet_attribute[t]);
       E[t] = mat.youngs_modulus;
       rho[t] = mat.density;
+      nu[t] = mat.poisson_ratio;
     }
     sys.springs = tet_springs(cm.model_V, cm.model_T, E, mc.rayleigh_beta, &cm.model_E);
     sys.mass = tet_lumped_mass(cm.model_V, cm.model_T, rho);
     face_membrane = boundary_membrane(cm.model_V, cm.model_T, cm.model_F, cm.boundary_tet, E);
-    tets = {cm.model_T, E, cm.boundary_tet};
+    tets = {cm.model_T, E, cm.boundary_tet, nu};
   } else {
     const mesh::Material mat = material_of(101);
     face_membrane = Eigen::VectorXd::Constant(cm.model_F.rows(), mat.youngs_modulus * mc.thickness);

@@ -34,7 +34,7 @@ double rest_area(const AdaptiveMassSpring& m, const RefineTri& t) {
 
 // Creates (or finds) the midpoint node of edge (a, b); appends a row to the current system
 // (state = mean of the parents), so rest positions of new nodes are available immediately.
-int get_mid(AdaptiveMassSpring& m, int a, int b, int level) {
+int get_mid(AdaptiveMassSpring& m, int a, int b, int level, int root) {
   const std::uint64_t k = edge_key(a, b);
   auto it = m.midpoint.find(k);
   if (it != m.midpoint.end()) return it->second;
@@ -57,6 +57,7 @@ int get_mid(AdaptiveMassSpring& m, int a, int b, int level) {
       m.flagged.push_back(e);
     }
   m.midpoint_parents.push_back({std::min(a, b), std::max(a, b)});
+  m.midpoint_root.push_back(root);
   m.node_level.push_back(level);
   return id;
 }
@@ -65,8 +66,9 @@ void split(AdaptiveMassSpring& m, int t) {
   if (m.tris[t].child >= 0) return;
   const RefineTri T = m.tris[t];
   const int d = T.depth + 1;
-  const int m01 = get_mid(m, T.v[0], T.v[1], d), m12 = get_mid(m, T.v[1], T.v[2], d),
-            m20 = get_mid(m, T.v[2], T.v[0], d);
+  const int m01 = get_mid(m, T.v[0], T.v[1], d, T.root),
+            m12 = get_mid(m, T.v[1], T.v[2], d, T.root),
+            m20 = get_mid(m, T.v[2], T.v[0], d, T.root);
   const int c = static_cast<int>(m.tris.size());
   m.tris[t].child = c;
   m.tris.push_back({{T.v[0], m01, m20}, -1, d, T.root});
@@ -312,6 +314,7 @@ void rebuild(AdaptiveMassSpring& m) {
   for (long k = 0; k < c.springs.size(); ++k)
     if (ks[k] > eps * c.springs.ks[k]) ++kept;
   const long S = kept + static_cast<long>(fresh.size());
+  const long ties = m.tets.rows() > 0 ? 3 * (n - N) : 0;
   Springs sp;
   sp.E.resize(S, 2);
   sp.rest.resize(S);
@@ -334,9 +337,30 @@ void rebuild(AdaptiveMassSpring& m) {
     sp.kd[w] = m.beta * val;
     ++w;
   }
+  // The dent ties (tet models): (m, a), (m, b) with k/2 and (a, b) with -k/4, rest length 0.
+  if (ties > 0) {
+    sp.E.conservativeResize(S + ties, 2);
+    sp.rest.conservativeResize(S + ties);
+    sp.ks.conservativeResize(S + ties);
+    sp.kd.conservativeResize(S + ties);
+    for (long i = N; i < n; ++i) {
+      const int mi = static_cast<int>(i);
+      const auto& pr = m.midpoint_parents[i - N];
+      const double k = kConeDentStiffness * m.tet_estar[m.face_tet[m.midpoint_root[i - N]]] *
+                       std::sqrt(len2(mi, pr[0]));
+      const std::array<int, 2> ends[3] = {{mi, pr[0]}, {mi, pr[1]}, {pr[0], pr[1]}};
+      const double share[3] = {0.5, 0.5, -0.25};
+      for (int t = 0; t < 3; ++t, ++w) {
+        sp.E.row(w) << ends[t][0], ends[t][1];
+        sp.rest[w] = 0.0;
+        sp.ks[w] = share[t] * k;
+        sp.kd[w] = 0.0;
+      }
+    }
+  }
   s.springs = std::move(sp);
   m.new_nodes = n - N;
-  m.new_springs = static_cast<long>(fresh.size());
+  m.new_springs = static_cast<long>(fresh.size()) + ties;
   build_adjacency(s);
 
   // --- lumped surface area of the current surface (the contact patch weights) ---
@@ -394,10 +418,14 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
   if (face_membrane.size() != F0.rows())
     throw std::invalid_argument("make_adaptive: one membrane modulus per surface face expected");
   const long nt = tets.T.rows();
-  if (nt > 0 && (tets.E.size() != nt || tets.face_tet.size() != F0.rows() ||
-                 (tets.T.array() < 0).any() || (tets.T.array() >= n).any() ||
-                 (tets.face_tet.array() < 0).any() || (tets.face_tet.array() >= nt).any()))
-    throw std::invalid_argument("make_adaptive: tets, one modulus per tet, one tet per face");
+  if (nt > 0 && (tets.E.size() != nt || tets.nu.size() != nt ||
+                 !((tets.nu.array() > -1.0) && (tets.nu.array() < 0.5)).all() ||
+                 tets.face_tet.size() != F0.rows() || (tets.T.array() < 0).any() ||
+                 (tets.T.array() >= n).any() || (tets.face_tet.array() < 0).any() ||
+                 (tets.face_tet.array() >= nt).any()))
+    throw std::invalid_argument(
+        "make_adaptive: tets, one modulus and one Poisson's ratio in (-1, 0.5) per tet, one tet "
+        "per face");
   build_adjacency(coarse);
   m.coarse = std::move(coarse);
   m.F0 = std::move(F0);
@@ -407,6 +435,8 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
     m.tets = tets.T;
     m.face_tet = tets.face_tet;
     m.tet_ev.resize(nt);
+    m.tet_estar.resize(nt);
+    m.tet_estar = tets.E.array() / (1.0 - tets.nu.array().square());
     for (long t = 0; t < nt; ++t) {
       const Eigen::Vector3d a = m.coarse.X_rest.row(m.tets(t, 0)).transpose(),
                             b = m.coarse.X_rest.row(m.tets(t, 1)).transpose(),
@@ -517,6 +547,7 @@ bool simplify(AdaptiveMassSpring& m) {
   for (auto& t : m.tris) t.child = -1;
   m.midpoint.clear();
   m.midpoint_parents.clear();
+  m.midpoint_root.clear();
   for (int e : m.flagged) m.mid_flag[e] = 0;
   m.flagged.clear();
   m.mid_flag.resize(N);

@@ -505,7 +505,7 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
     const double mag = ks * (len - rest) +
                        kd * ((va[0] - vb[0]) * d0 + (va[1] - vb[1]) * d1 + (va[2] - vb[2]) * d2);
     double lateral = ks * (1.0 - rest * il);
-    if (definite) lateral = std::max(lateral, 0.0);
+    if (definite && rest > 0.0) lateral = std::max(lateral, 0.0);  // (a tie's k I is exact)
     const double axial = ks - lateral;
     B.d = Eigen::Vector3d(d0, d1, d2);
     B.a = h * kd + h2 * axial;

@@ -302,7 +302,7 @@ TEST(Refinement, TetsUnderTheRefinedSurfaceAreReDivided) {
   const double tr0 = trace(s);
   AdaptiveMassSpring m =
       make_adaptive(std::move(s), bf.F, boundary_membrane(tm.V, tm.T, bf.F, bf.tet, E), 0.002, 1e-3,
-                    CoarseTets{tm.T, E, bf.tet});
+                    CoarseTets{tm.T, E, bf.tet, Eigen::VectorXd::Constant(tm.T.rows(), 0.45)});
   RefineParams p;
   p.threshold_area = 2e-6;
   p.max_level = 3;
@@ -310,7 +310,49 @@ TEST(Refinement, TetsUnderTheRefinedSurfaceAreReDivided) {
   ASSERT_GT(m.new_nodes, 0);
   EXPECT_NEAR(trace(m.sys), tr0, 1e-12 * tr0);
   EXPECT_NEAR(m.sys.mass.sum(), 0.8, 1e-12);
-  for (long k = 0; k < m.sys.springs.size(); ++k) EXPECT_GT(m.sys.springs.ks[k], 0.0) << k;
+  // Springs with a rest length are positive; the rest are the dent ties, three per new node
+  // m = mid(a, b): (m, a) and (m, b) with k/2, (a, b) with -k/4, k = 0.5546 E l / (1 - nu^2),
+  // l = |m a| (refinement.hpp), so that their energy is (k/2) |x_m - (x_a + x_b)/2|^2.
+  long ties = 0;
+  for (long k = 0; k < m.sys.springs.size(); ++k) {
+    if (m.sys.springs.rest[k] > 0.0) {
+      EXPECT_GT(m.sys.springs.ks[k], 0.0) << k;
+      continue;
+    }
+    ASSERT_LE(k + 2, m.sys.springs.size() - 1);
+    const int mi = m.sys.springs.E(k, 0), a = m.sys.springs.E(k, 1);
+    ASSERT_GE(mi, m.coarse_nodes());
+    const auto& pr = m.midpoint_parents[mi - m.coarse_nodes()];
+    const double l = (m.sys.X_rest.row(mi) - m.sys.X_rest.row(a)).norm();
+    const double E_root = E[m.face_tet[m.midpoint_root[mi - m.coarse_nodes()]]];
+    const double kt = kConeDentStiffness * E_root * l / (1 - 0.45 * 0.45);
+    EXPECT_EQ(a, pr[0]);
+    EXPECT_EQ(m.sys.springs.E(k + 1, 1), pr[1]);
+    EXPECT_EQ(m.sys.springs.E(k + 2, 0), pr[0]);
+    EXPECT_EQ(m.sys.springs.E(k + 2, 1), pr[1]);
+    EXPECT_NEAR(m.sys.springs.ks[k], kt / 2, 1e-12 * kt);
+    EXPECT_NEAR(m.sys.springs.ks[k + 1], kt / 2, 1e-12 * kt);
+    EXPECT_NEAR(m.sys.springs.ks[k + 2], -kt / 4, 1e-12 * kt);
+    // Zero energy for a displacement linear in space (uniform strain plus rigid motion), the
+    // quadratic form otherwise: m moved off its parents' mean by 1 mm.
+    const Eigen::Matrix3d G = Eigen::Matrix3d::Random();
+    auto energy = [&](const Eigen::Vector3d& dm) {
+      double e = 0;
+      for (int t = 0; t < 3; ++t) {
+        const int p = m.sys.springs.E(k + t, 0), q = m.sys.springs.E(k + t, 1);
+        const Eigen::Vector3d xp = G * m.sys.X_rest.row(p).transpose() +
+                                   (p == mi ? dm : Eigen::Vector3d::Zero()),
+                              xq = G * m.sys.X_rest.row(q).transpose();
+        e += 0.5 * m.sys.springs.ks[k + t] * (xp - xq).squaredNorm();
+      }
+      return e;
+    };
+    EXPECT_NEAR(energy(Eigen::Vector3d::Zero()), 0.0, 1e-9 * kt * l * l);
+    EXPECT_NEAR(energy(Eigen::Vector3d(0, 0, 1e-3)), 0.5 * kt * 1e-6, 1e-9 * kt * 1e-6);
+    ++ties;
+    k += 2;
+  }
+  EXPECT_EQ(ties, m.new_nodes);
   // Into the volume: a spring at a large angle (> 11.5 deg) to the surface at the node.
   const long N = m.coarse_nodes();
   const MassSpringSystem& q = m.sys;

@@ -5,7 +5,9 @@
 // path and with the exact LDLT solve.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
+#include <tuple>
 
 #include "engine/solvers/integrators.hpp"
 
@@ -50,6 +52,32 @@ MassSpringSystem lattice(unsigned seed, bool moving) {
   return s;
 }
 
+// The refinement's dent ties (engine/models/refinement.hpp) added to a lattice: each middle node
+// m of an x row is tied to the mean of its row neighbours a, b by three zero-rest-length springs,
+// (m, a) and (m, b) with k/2 and (a, b) with -k/4.
+MassSpringSystem with_ties(MassSpringSystem s, double k) {
+  const long S = s.springs.size();
+  std::vector<std::array<int, 3>> t;
+  for (int i = 0; i < s.nodes(); ++i)
+    if (i % 3 == 1) t.push_back({i, i - 1, i + 1});
+  const long add = 3 * static_cast<long>(t.size());
+  s.springs.E.conservativeResize(S + add, 2);
+  s.springs.rest.conservativeResize(S + add);
+  s.springs.ks.conservativeResize(S + add);
+  s.springs.kd.conservativeResize(S + add);
+  long w = S;
+  for (const auto& [m, a, b] : t)
+    for (const auto& [p, q, share] :
+         {std::tuple{m, a, 0.5}, std::tuple{m, b, 0.5}, std::tuple{a, b, -0.25}}) {
+      s.springs.E.row(w) << p, q;
+      s.springs.rest[w] = 0.0;
+      s.springs.ks[w] = share * k;
+      s.springs.kd[w] = 0.0;
+      ++w;
+    }
+  build_adjacency(s);
+  return s;
+}
 // dv of one backward-Euler step of `blocks` / `solver` from s (s is not changed).
 RowMatX3d step_dv(const MassSpringSystem& s0, LinearSolver solver, SpringBlocks blocks,
                   SpringJacobian jac, double h, ActiveSet* act_in = nullptr) {
@@ -94,6 +122,16 @@ TEST(SpringBlocks, TangentExpandsToSpringEval) {
         EXPECT_GE(tg.lateral, 0.0);
       }
     }
+  // A zero-rest-length spring (a dent tie, k of either sign): its tangent k I is exact, also
+  // with the `definite` Jacobian (which clamps only compressed springs with a rest length).
+  for (double k : {80.0, -40.0}) {
+    const Eigen::Vector3d x1(0.01, 0.002, -0.003), x2(-0.004, 0.001, 0.002), v(0, 0, 0);
+    SpringTangent tg;
+    spring_tangent(x1, x2, v, v, k, 0.0, 0.0, SpringJacobian::definite, tg);
+    EXPECT_EQ(tg.lateral, k);
+    EXPECT_EQ(tg.axial, k);
+    EXPECT_LT((tg.f1 + k * (x1 - x2)).norm(), 1e-15);
+  }
   SpringTangent z;
   spring_tangent(Eigen::Vector3d::Ones(), Eigen::Vector3d::Ones(), Eigen::Vector3d::Zero(),
                  Eigen::Vector3d::UnitX(), 10.0, 1.0, 0.1, SpringJacobian::exact, z);
@@ -106,8 +144,11 @@ TEST(SpringBlocks, TangentExpandsToSpringEval) {
 // with K u and D u taken here by central differences of compute_forces.
 TEST(SpringBlocks, RankOneStepSolvesTheFiniteDifferenceSystem) {
   const double h = 1e-3;
-  for (unsigned seed : {1u, 2u, 3u}) {
-    const MassSpringSystem s = lattice(seed, false);
+  // Seed 3 with dent ties (k = 60 N/m, of the order of the springs' 300 N/m), whose negative
+  // (a, b) springs must enter the step exactly.
+  for (unsigned seed : {1u, 2u, 3u, 103u}) {
+    const MassSpringSystem s =
+        seed > 100 ? with_ties(lattice(seed - 100, false), 60.0) : lattice(seed, false);
     const RowMatX3d dv =
         step_dv(s, LinearSolver::cg, SpringBlocks::rank_one, SpringJacobian::exact, h);
     RowMatX3d f0, fp, fm, gp, gm;
@@ -139,8 +180,9 @@ TEST(SpringBlocks, RankOneStepSolvesTheFiniteDifferenceSystem) {
 // node: rank_one CG = matrix CG = exact LDLT, to the CG tolerance.
 TEST(SpringBlocks, RankOneMatchesMatrixAndLdlt) {
   const double h = 1e-3;
-  for (unsigned seed : {4u, 5u}) {
-    const MassSpringSystem s = lattice(seed, true);
+  for (unsigned seed : {4u, 5u, 105u}) {
+    const MassSpringSystem s =
+        seed > 100 ? with_ties(lattice(seed - 100, true), 60.0) : lattice(seed, true);
     ActiveSet act;
     activate_all(s, act);
     // Hold node 13 (the centre): its springs are "held" links of CG.

@@ -112,7 +112,10 @@ TEST(Physics, RefinementKeepsTheForceAndConservesTheMass) {
   // stiffness within 7 %, mass exact. At C's body the coarse edges (12.9 mm) are longer than the
   // probe face's radius and refinement adds ~260 nodes under it: before the refined tets were
   // re-divided (refinement.hpp) the new nodes had no volume stiffness and the press was 39 %
-  // soft there (331 vs 540 N/m), which the ovary-only test missed.
+  // soft there (331 vs 540 N/m), which the ovary-only test missed. With the dent ties
+  // (refinement.hpp) C's body is 603 vs 540 N/m: +11.7 % over the unrefined press, within 7 % of
+  // the two's mean (expect_within's measure) — the vertex pads' coarse single-node press, see
+  // test_refine_pad.cpp.
   // (The 192-node stomach is not among them: its edges are longer than the 1 cm probe face, so
   // refining it changes the force by 23 % — a coarse mesh that cannot resolve the probe. Nor is
   // the Model-A membrane at the body: 257 N/m refined vs 188 unrefined at 2.5 N (+37 %; with the

@@ -127,14 +127,12 @@ TEST(Physics, RefinementOnOffAgreesFrom1To4NAtTheOvary) {
 TEST(Physics, DiscPadKeepsTheShapeOfTheCurveAtTheBody) {
   // C's body (coarse edges 12.9 mm, longer than the probe face's radius). With the vertex pads
   // the refined pad rests on the whole face and the coarse one on one node, so the two curves
-  // cross: on/off -29 %, -5 %, +12 % at 1, 2.5, 4 N. The disc pad loads the coarse and the
-  // refined mesh alike, and the ratio on/off is the same along the curve (measured -23.9, -24.7,
-  // -25.0 %; asserted: within 3 % of each other). What remains is refinement's own softening
-  // of the tet patch, which grows with the level (measured at 2.5 N: -9 % with max_level 1,
-  // -19 % with 2, -25 % with 3). Not the fans of sub-tets under the refined surface (a red
-  // refinement of the tets in depth softened more: -10.5, -22.8, -31.1 %), nor the adaptive
-  // closure (test_refine_depth.cpp): the coarse body's faces are larger than the probe face
-  // (open, docs/ARCHITECTURE.md).
+  // cross: on/off -19 %, +12 %, +32 % at 1, 2.5, 4 N (the coarse single-node press softens
+  // with the force). The disc pad loads the coarse and the refined mesh alike, and the ratio
+  // on/off is the same along the curve (measured -9.6, -10.1, -11.3 %; asserted: within 3 % of
+  // each other): the coarse body's own discretisation error, its faces being larger than the
+  // probe face (test_refine_depth.cpp; before the dent ties of refinement.hpp -23.9, -24.7,
+  // -25.0 %, growing with the level).
   const OnOff r = on_off(models(true).c, kBody);
   print("C body, disc pad", r);
   double lo = INFINITY, hi = -INFINITY;
