@@ -39,11 +39,12 @@
 //     c = 0.5546 the stiffness of a cone-shaped dent of unit radius on the surface of a unit
 //     half-space (E* = E / (1 - nu^2); from the Boussinesq kernel p^(q) = E* |q| w^(q) / 2,
 //     integrated numerically: k = (E* / 4 pi) int q^2 W(q)^2 dq, W the Hankel transform of the
-//     cone). The energy (k_m / 2) |x_m - (x_a + x_b) / 2|^2 is zero for every displacement
-//     that is linear over the coarse face (uniform strain, rigid motion: the handed-on springs'
-//     energy stays exact) and gives the new nodes' dent modes the stiffness that van Gelder's
-//     sub-tets lack: without it the refined press was softer the finer the refinement (C's body,
-//     static disc pressure: -18.5 / -36.1 / -44.9 % at max_level 1 / 2 / 3). It is three
+//     cone; tests/engine/test_refinement.cpp recomputes it and checks the quadrature on a
+//     Gaussian's closed form). The energy (k_m / 2) |x_m - (x_a + x_b) / 2|^2 is zero for every
+//     displacement that is linear over the coarse face (uniform strain, rigid motion: the handed-on
+//     springs' energy stays exact) and gives the new nodes' dent modes the stiffness that van
+//     Gelder's sub-tets lack: without it the refined press was softer the finer the refinement (C's
+//     body, static disc pressure: -18.5 / -36.1 / -44.9 % at max_level 1 / 2 / 3). It is three
 //     zero-rest-length springs, (m, a) and (m, b) with k_m / 2 and (a, b) with -k_m / 4 (the
 //     identity |m - (a + b) / 2|^2 = |m - a|^2 / 2 + |m - b|^2 / 2 - |a - b|^2 / 4), whose
 //     tangent k I is exact and positive semi-definite in sum; no damping;

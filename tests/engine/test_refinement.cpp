@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <malloc.h>
 
+#include <cmath>
+#include <functional>
 #include <map>
 
 #include "engine/mesh/generate.hpp"
@@ -380,4 +382,37 @@ TEST(Refinement, TetsUnderTheRefinedSurfaceAreReDivided) {
   EXPECT_EQ(without, 0) << "of " << m.new_nodes << " new nodes";
   simplify(m);
   EXPECT_EQ(trace(m.sys), tr0);
+}
+
+// The dent ties' constant (refinement.hpp): the stiffness k = c E* l of a cone-shaped surface
+// displacement w(r) = 1 - r/l (r < l) of a half-space, from the Boussinesq kernel in Fourier
+// space, p^(q) = E* |q| w^(q) / 2: k = 2 energy = (E* / 4 pi) int_0^inf q^2 W(q)^2 dq with W the
+// Hankel transform 2 pi int_0^l w(r) J0(q r) r dr. The same quadrature gives the closed form
+// k = pi sqrt(2 pi) / 8 E* s of a Gaussian w = exp(-r^2 / s^2), W = pi s^2 exp(-q^2 s^2 / 4).
+namespace {
+double simpson(const std::function<double(double)>& f, double a, double b, int n) {
+  const double h = (b - a) / n;
+  double s = f(a) + f(b);
+  for (int i = 1; i < n; ++i) s += (i % 2 ? 4.0 : 2.0) * f(a + i * h);
+  return s * h / 3.0;
+}
+double dent_stiffness(const std::function<double(double)>& w, double rmax, double qmax) {
+  auto W = [&](double q) {
+    const int n = 2 * std::max(50, static_cast<int>(2 * q * rmax));
+    return 2 * M_PI *
+           simpson([&](double r) { return w(r) * std::cyl_bessel_j(0.0, q * r) * r; }, 0.0, rmax,
+                   n);
+  };
+  const int nq = 2 * static_cast<int>(8 * qmax);
+  return simpson([&](double q) { return q * q * W(q) * W(q); }, 0.0, qmax, nq) / (4 * M_PI);
+}
+}  // namespace
+
+TEST(Refinement, DentTieConstantIsTheConesHalfSpaceStiffness) {
+  const double gauss = dent_stiffness([](double r) { return std::exp(-r * r); }, 7.0, 14.0);
+  EXPECT_NEAR(gauss, M_PI * std::sqrt(2 * M_PI) / 8, 1e-4);  // the quadrature: 2e-5
+  // The cone's transform decays as q^-3: the tail beyond q = 150 adds < 1e-5.
+  const double cone = dent_stiffness([](double r) { return 1.0 - r; }, 1.0, 150.0);
+  std::printf("cone %.6f, Gaussian %.8f\n", cone, gauss);
+  EXPECT_NEAR(cone, kConeDentStiffness, 2e-4);
 }
