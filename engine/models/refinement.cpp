@@ -435,7 +435,6 @@ AdaptiveMassSpring make_adaptive(MassSpringSystem coarse, RowMatX3i F0,
     m.tets = tets.T;
     m.face_tet = tets.face_tet;
     m.tet_ev.resize(nt);
-    m.tet_estar.resize(nt);
     m.tet_estar = tets.E.array() / (1.0 - tets.nu.array().square());
     for (long t = 0; t < nt; ++t) {
       const Eigen::Vector3d a = m.coarse.X_rest.row(m.tets(t, 0)).transpose(),
