@@ -79,7 +79,9 @@ TEST(PressControl, SlidingPressOnTheOvaryOfBStaysBounded) {
 
 TEST(PressControl, StillPressesReachAndHoldTheTargetAsBefore) {
   // The approach is unchanged (the same time to force to the step); the hold settles within 1 %
-  // of the target 0.1 s after it (measured <= 0.4 %, as before: 0.4 % on C's body).
+  // of the target 0.1 s after it (measured <= 0.4 %, as before: 0.4 % on C's body). C's time
+  // is that of its disc pad (0.448 s; 0.410 s with the vertex pads, whose press at the ovary
+  // node is 11 % stiffer: test_refine_pad.cpp).
   for (const char* id : {"A", "B", "C"}) {
     Scene s =
         prototypes::build_scene(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json");
@@ -87,7 +89,7 @@ TEST(PressControl, StillPressesReachAndHoldTheTargetAsBefore) {
         press_at(s.geometry(), s.geometry().region_node("ovary_left"), 2.5, 0.5, 0.0);
     const Hold h = run(id, p);
     SCOPED_TRACE(id);
-    EXPECT_NEAR(h.time_to_force, std::string(id) == "C" ? 0.410 : 0.351, 1.5e-3);
+    EXPECT_NEAR(h.time_to_force, std::string(id) == "C" ? 0.448 : 0.351, 1.5e-3);
     EXPECT_LE(h.settled, 0.01);
     EXPECT_LE(h.peak, 1.01 * 2.5);
   }

@@ -28,6 +28,10 @@ std::string variant(std::string text, const std::string& name,
   return palplab::engine::testing::variant_file(std::move(text), "refpad_" + name, edits);
 }
 
+// C, C1 and C2 ship with the disc pad; the vertex pads are the variant.
+constexpr const char* kDiscPad = "\"contact_pad\": \"disc\"";
+constexpr const char* kVertexPads = "\"contact_pad\": \"vertices\"";
+
 constexpr double kForces[3] = {1.0, 2.5, 4.0};  // N
 
 struct Curve {
@@ -91,15 +95,13 @@ void expect_agree(const std::string& name, const OnOff& r) {
         << name << " at " << kForces[i] << " N: on " << r.on.k[i] << ", off " << r.off.k[i];
 }
 
-// The tract models, with the vertex pads (as shipped) or the disc pad.
+// The tract models, with the disc pad (as shipped) or the vertex pads.
 struct Models {
   std::string c, membrane;
 };
 Models models(bool disc) {
-  std::string c = read(proto("C"));
-  if (disc)
-    c = read(variant(c, "disc",
-                     {{"\"rayleigh_beta\"", "\"contact_pad\": \"disc\", \"rayleigh_beta\""}}));
+  std::string c = read(proto("C"));  // C ships with the disc pad
+  if (!disc) c = read(variant(c, "vertices", {{kDiscPad, kVertexPads}}));
   const std::string m = variant(c, disc ? "tract_surface_disc" : "tract_surface",
                                 {{"\"generator\": \"model_c\", \"vertices\": 1600",
                                   "\"generator\": \"tract\", \"vertices\": 1500"},
@@ -202,17 +204,16 @@ TEST(Physics, RefinementOnOffAgreesAtExpTwosPressNodes) {
   // 405.8 / 402.7 N/m with the vertex pads, 359.6 / 356.6 with the disc, -11 %; a vertex pad's
   // nodes carry their whole lumped area, which reaches about half an edge beyond the radius —
   // a likely cause, not measured).
-  const std::string disc =
-      variant(read(proto("C")), "exp2_disc",
-              {{"\"rayleigh_beta\"", "\"contact_pad\": \"disc\", \"rayleigh_beta\""}});
-  for (const std::string& text : {read(proto("C")), read(disc)})
+  const std::string vertices =
+      variant(read(proto("C")), "exp2_vertices", {{kDiscPad, kVertexPads}});
+  for (const std::string& text : {read(vertices), read(proto("C"))})
     for (const char* region : {"ovary_left", "ovary_right"}) {
       const std::string on = variant(text, "exp2_on", {});
       const std::string off = variant(
           text, "exp2_off", {{"\"enabled\": true, \"policy\"", "\"enabled\": false, \"policy\""}});
       const OnOff r{press_curve(on, kOvary, region), press_curve(off, kOvary, region)};
       EXPECT_GT(r.on.new_nodes, 0);
-      const bool is_disc = text.find("\"contact_pad\": \"disc\"") != std::string::npos;
+      const bool is_disc = text.find(kDiscPad) != std::string::npos;
       const std::string name =
           std::string("C ") + region + (is_disc ? ", disc pad" : ", vertex pads");
       print(name, r);
@@ -227,8 +228,7 @@ TEST(Physics, DiscPadMovesContinuouslyWhenSliding) {
   // per 1 ms step (half the Weber fraction; D's bound in ContactHard.SlidingAcrossNodes...).
   const std::string path =
       variant(read(proto("C")), "slide_disc",
-              {{"\"rayleigh_beta\"", "\"contact_pad\": \"disc\", \"rayleigh_beta\""},
-               {"\"enabled\": true, \"policy\"", "\"enabled\": false, \"policy\""}});
+              {{"\"enabled\": true, \"policy\"", "\"enabled\": false, \"policy\""}});
   Scene s = prototypes::build_scene(path);
   const SceneGeometry& g = s.geometry();
   PressSpec p = press_at(g, g.nearest_node(kBody), 2.5, 1.0, 0.05);
@@ -268,7 +268,7 @@ TEST(Physics, ContactPadKeyIsChecked) {
   // the JSON path and the choices.
   const std::string p =
       variant(read(proto("C")), "bad_pad",
-              {{"\"rayleigh_beta\"", "\"contact_pad\": \"discs\", \"rayleigh_beta\""}});
+              {{kDiscPad, "\"contact_pad\": \"discs\""}});
   try {
     prototypes::load_prototype(p);
     FAIL() << "contact_pad: discs accepted";
