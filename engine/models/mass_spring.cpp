@@ -29,12 +29,8 @@ void spring_tangent(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const 
   }
   t.d = du / len;
   t.f1 = -(ks * (len - rest) + kd * (v1 - v2).dot(t.d)) * t.d;
-  double lateral = ks * (1.0 - rest / len);
-  // A compressed spring's negative lateral stiffness is clamped; a zero-rest-length spring (the
-  // refinement's dent ties, refinement.hpp; k may be negative there) has the exact tangent k I.
-  if (jac == SpringJacobian::definite && rest > 0.0) lateral = std::max(lateral, 0.0);
   t.axial = ks;
-  t.lateral = lateral;
+  t.lateral = spring_lateral(ks, rest, rest / len, jac);
   t.kd = kd;
 }
 

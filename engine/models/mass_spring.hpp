@@ -109,6 +109,16 @@ void spring_tangent(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, const 
                     const Eigen::Vector3d& v2, double ks, double kd, double rest,
                     SpringJacobian jac, SpringTangent& t);
 
+// The lateral coefficient ks (1 - rest/|du|), given rest/|du| (callers keep their own rounding
+// of it). Under `definite` a compressed spring's negative value is clamped at 0, except for a
+// zero-rest-length spring (the refinement's dent ties, refinement.hpp; ks may be negative
+// there), whose tangent ks I is exact. spring_tangent and the integrators' fused spring pass
+// both use it.
+inline double spring_lateral(double ks, double rest, double rest_over_length, SpringJacobian jac) {
+  const double lateral = ks * (1.0 - rest_over_length);
+  return jac == SpringJacobian::definite && rest > 0.0 && lateral < 0.0 ? 0.0 : lateral;
+}
+
 // Rebuilds sys.adj_start / adj_spring from sys.springs.E.
 void build_adjacency(MassSpringSystem& sys);
 

@@ -479,7 +479,6 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
   const double* X = sys.X.data();
   const double* V = sys.V.data();
   const auto& E = sys.springs.E;
-  const bool definite = ws.jacobian == SpringJacobian::definite;
   CompactCg::InnerBlock* ib = C.iblocks.data();
   for (size_t k = 0; k < act.springs.size(); ++k) {
     const int s = act.springs[k];
@@ -504,8 +503,7 @@ void backward_euler_rank_one(MassSpringSystem& sys, const ActiveSet& act, double
     const double* vb = V + 3 * gb;
     const double mag = ks * (len - rest) +
                        kd * ((va[0] - vb[0]) * d0 + (va[1] - vb[1]) * d1 + (va[2] - vb[2]) * d2);
-    double lateral = ks * (1.0 - rest * il);
-    if (definite && rest > 0.0) lateral = std::max(lateral, 0.0);  // (a tie's k I is exact)
+    const double lateral = spring_lateral(ks, rest, rest * il, ws.jacobian);
     const double axial = ks - lateral;
     B.d = Eigen::Vector3d(d0, d1, d2);
     B.a = h * kd + h2 * axial;
