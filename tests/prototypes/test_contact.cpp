@@ -239,16 +239,18 @@ TEST(ContactHard, SlidingAcrossNodesChangesTheForceBoundedly) {
   //   A, B: f = k d n(p) with the proxy p moving with the device and the shaded normal n
   //   continuous: a step changes f by about k |dx| (1 + d |dn/dp|) — bound 4 k |dx| = 0.1 N
   //   (500 N/m).
-  //   C, D: the pad is the face's three vertex pads blended by the barycentric weights, so it
-  //   moves continuously with the contact point and a step changes f by what the tissue changes
+  //   C, D: D's pad is the face's three vertex pads blended by the barycentric weights, C's
+  //   (since 2026-12-02) the disc of contact_pad.hpp made anew from the contact point; both move
+  //   continuously with the contact point and a step changes f by what the tissue changes
   //   over 50 um. Bound: half the Weber fraction for force (7 %) of the smallest force of the
   //   slide, so no single step is a perceptible jump (the old jumps were 25 % and more). C as
   //   shipped refines around each new contact node while the contact slides: inserting nodes
   //   into the pressed mesh is itself a step of the model. It was 0.30 N (38 % of the force)
   //   while the new nodes had no volume stiffness; with the tets under the refined surface
-  //   re-divided (refinement.hpp) it is 0.092 N (5.3 %), bounded here by the Weber fraction
-  //   (7 %); C without refinement isolates the contact (measured 2.8 %: re-centring the
-  //   integration scope).
+  //   re-divided (refinement.hpp) it was 0.092 N (5.3 %) with the vertex pads and is 0.106 N
+  //   (4.5 %) with the disc, bounded here by the Weber fraction (7 %); C without refinement
+  //   isolates the contact (measured 1.5 % with the disc, 2.8 % with the vertex pads:
+  //   re-centring the integration scope).
   for (const char* id : {"A", "B", "C", "C without refinement", "D"}) {
     const bool norefine = std::string(id) == "C without refinement";
     Scene s = make(norefine ? "C" : id, [&](SceneConfig& c) {
