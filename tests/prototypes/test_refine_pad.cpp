@@ -267,8 +267,7 @@ TEST(Physics, ContactPadKeyIsChecked) {
   // "contact_pad" takes "vertices" or "disc"; anything else is an input error naming the file,
   // the JSON path and the choices.
   const std::string p =
-      variant(read(proto("C")), "bad_pad",
-              {{kDiscPad, "\"contact_pad\": \"discs\""}});
+      variant(read(proto("C")), "bad_pad", {{kDiscPad, "\"contact_pad\": \"discs\""}});
   try {
     prototypes::load_prototype(p);
     FAIL() << "contact_pad: discs accepted";
