@@ -18,7 +18,7 @@ namespace palplab::protocols::participants {
 struct TraineeParams {
   // perception
   double weber_fraction = 0.08;  // 1, haptic force JND / force
-  double visual_weber = 0.10;    // 1, relative SD of a perceived visible deformation
+  double visual_weber = 0.05;    // 1, relative SD of a perceived visible deformation
   // motor
   double motor_noise_cv = 0.05;  // 1, SD of produced / intended force
   // lag-1 correlation of the per-press motor and haptic errors within a session (AR(1); 0 =
