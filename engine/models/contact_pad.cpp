@@ -70,6 +70,28 @@ int locate(const PadSurface& s, const RowMatX3d& X, const Eigen::Vector3d& e1,
   return -1;
 }
 
+// cos t and sin t of every quadrature point's angle, ring by ring (point q of ring j, m = 6 (j + 1)
+// points: t = (j odd) pi / m + 2 pi q / m, alternate rings staggered), computed once per ring
+// count: disc_pad runs every haptic step.
+struct UnitDir {
+  double c, s;
+};
+const std::vector<UnitDir>& disc_directions(int rings) {
+  thread_local std::vector<std::vector<UnitDir>> cache;
+  if (static_cast<int>(cache.size()) <= rings) cache.resize(rings + 1);
+  std::vector<UnitDir>& dirs = cache[rings];
+  if (dirs.empty())
+    for (int j = 0; j < rings; ++j) {
+      const int m = 6 * (j + 1);
+      const double phase = (j % 2) * std::numbers::pi / m;
+      for (int q = 0; q < m; ++q) {
+        const double t = phase + 2 * std::numbers::pi * q / m;
+        dirs.push_back({std::cos(t), std::sin(t)});
+      }
+    }
+  return dirs;
+}
+
 }  // namespace
 
 int disc_pad(const PadSurface& s, const RowMatX3d& X, const Eigen::Vector3d& centre,
@@ -86,15 +108,20 @@ int disc_pad(const PadSurface& s, const RowMatX3d& X, const Eigen::Vector3d& cen
   Eigen::Vector3d b;
   const int fc = locate(s, X, e1, e2, cu, cv, start, b);
   if (fc < 0) return -1;
-  for (int j = 0; j < rings; ++j) {
+  const std::vector<UnitDir>& dirs = disc_directions(rings);
+  int prev = fc;  // the face of the last point found: the next point is a few mm away
+  for (int j = 0, d = 0; j < rings; ++j) {
     const double r = radius * std::sqrt((j + 0.5) / rings);
     const int m = 6 * (j + 1);
     const double w = 1.0 / (rings * m);
-    const double phase = (j % 2) * std::numbers::pi / m;  // alternate rings staggered
-    for (int q = 0; q < m; ++q) {
-      const double t = phase + 2 * std::numbers::pi * q / m;
-      const int f = locate(s, X, e1, e2, cu + r * std::cos(t), cv + r * std::sin(t), fc, b);
+    for (int q = 0; q < m; ++q, ++d) {
+      const double u = cu + r * dirs[d].c, v = cv + r * dirs[d].s;
+      // From the last point's face (few hops); from the centre's face if that walk fails (it
+      // may meet a face seen from behind that the straight walk from the centre does not).
+      int f = locate(s, X, e1, e2, u, v, prev, b);
+      if (f < 0 && prev != fc) f = locate(s, X, e1, e2, u, v, fc, b);
       if (f < 0) continue;  // off the surface: no load
+      prev = f;
       Eigen::Vector3d y = Eigen::Vector3d::Zero();
       for (int k = 0; k < 3; ++k) y += b[k] * X.row(s.F(f, k)).transpose();
       const double yield = std::max(0.0, (y - centre).dot(n));

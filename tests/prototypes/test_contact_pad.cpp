@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <set>
 
@@ -103,4 +104,88 @@ TEST(ContactPad, OffsetsMakeEachPointsPenetrationOnACurvedSurface) {
   EXPECT_NEAR(mean, delta - 0.2 * e_abs_x, 1e-14);
   // The disc's exact mean |x| is 4R / (3 pi); the quadrature's is within 3 % of it.
   EXPECT_NEAR(e_abs_x, 0.04 / (3 * std::numbers::pi), 0.03 * 0.04 / (3 * std::numbers::pi));
+}
+
+TEST(ContactPad, EveryPointLandsOnTheFaceUnderIt) {
+  // A jittered, bumpy height field z = h(x, y) (16 x 16 cells over 8 cm, nodes moved by up to
+  // 40 % of a cell, so faces of all shapes): above a height field each quadrature point has
+  // exactly one face under it. disc_pad walks there (from the last point's face); the reference
+  // here tests every face. For 100 centres the pads must load the same nodes with the same
+  // weights and offsets (to rounding).
+  const int cells = 16;
+  const double a = 0.04, h = 2 * a / cells;
+  RowMatX3d X;
+  RowMatX3i F;
+  flat_grid(a, cells, X, F);
+  unsigned state = 12345;
+  auto uniform = [&] {  // [-1, 1), a small LCG: the test's own, reproducible everywhere
+    state = state * 1664525u + 1013904223u;
+    return static_cast<double>(state >> 8) / (1u << 23) - 1.0;
+  };
+  for (long i = 0; i < X.rows(); ++i) {
+    const bool border =
+        std::abs(std::abs(X(i, 0)) - a) < 1e-12 || std::abs(std::abs(X(i, 1)) - a) < 1e-12;
+    if (!border) X(i, 0) += 0.4 * h * uniform(), X(i, 1) += 0.4 * h * uniform();
+    X(i, 2) = 0.004 * std::sin(60 * X(i, 0)) * std::cos(45 * X(i, 1));
+  }
+  PadSurface s;
+  build_pad_surface(F, X.rows(), s);
+  const Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  std::vector<PadPoint> pad;
+  for (int trial = 0; trial < 100; ++trial) {
+    const double cx = 0.025 * uniform(), cy = 0.025 * uniform();
+    // The centre on the surface: its face by the reference search below.
+    auto face_under = [&](double u, double v, Eigen::Vector3d& b) {
+      for (long f = 0; f < F.rows(); ++f) {
+        double l[3];
+        for (int k = 0; k < 3; ++k) {
+          const auto p = X.row(F(f, (k + 1) % 3)), q = X.row(F(f, (k + 2) % 3));
+          l[k] = (p(0) - u) * (q(1) - v) - (q(0) - u) * (p(1) - v);
+        }
+        if (l[0] >= 0 && l[1] >= 0 && l[2] >= 0) {
+          b = Eigen::Vector3d(l[0], l[1], l[2]) / (l[0] + l[1] + l[2]);
+          return static_cast<int>(f);
+        }
+      }
+      return -1;
+    };
+    Eigen::Vector3d b;
+    const int fc = face_under(cx, cy, b);
+    ASSERT_GE(fc, 0);
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) c += b[k] * X.row(F(fc, k)).transpose();
+    ASSERT_EQ(disc_pad(s, X, c, n, 0.01, 0, pad), fc) << trial;
+    // The reference pad, node by node: weight and weight-summed offset.
+    std::map<int, std::pair<double, double>> want, got;
+    for (int j = 0; j < kPadRings; ++j) {
+      const int m = 6 * (j + 1);
+      const double r = 0.01 * std::sqrt((j + 0.5) / kPadRings);
+      for (int q = 0; q < m; ++q) {
+        const double t = (j % 2) * std::numbers::pi / m + 2 * std::numbers::pi * q / m;
+        const int f = face_under(c.x() + r * std::cos(t), c.y() + r * std::sin(t), b);
+        ASSERT_GE(f, 0);
+        Eigen::Vector3d y = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k) y += b[k] * X.row(F(f, k)).transpose();
+        const double yield = std::max(0.0, (y - c).dot(n));
+        for (int k = 0; k < 3; ++k) {
+          const int i = F(f, k);
+          const double w = b[k] / (kPadRings * m);
+          want[i].first += w;
+          want[i].second += w * ((X.row(i).transpose() - y).dot(n) + yield);
+        }
+      }
+    }
+    for (const PadPoint& p : pad) {
+      got[p.node].first += p.w;
+      got[p.node].second += p.w * p.offset;
+    }
+    for (const auto& [i, ws] : want) {
+      if (ws.first < 1e-14) continue;  // a point on an edge: its third node carries nothing
+      ASSERT_TRUE(got.count(i)) << "trial " << trial << ": node " << i << " not loaded";
+      EXPECT_NEAR(got[i].first, ws.first, 1e-12) << "trial " << trial << ", node " << i;
+      EXPECT_NEAR(got[i].second, ws.second, 1e-14) << "trial " << trial << ", node " << i;
+    }
+    for (const auto& [i, ws] : got)
+      EXPECT_TRUE(want.count(i)) << "trial " << trial << ", node " << i;
+  }
 }
