@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <random>
 #include <set>
 
 #include "engine/models/contact_pad.hpp"
@@ -108,47 +109,46 @@ TEST(ContactPad, OffsetsMakeEachPointsPenetrationOnACurvedSurface) {
 
 TEST(ContactPad, EveryPointLandsOnTheFaceUnderIt) {
   // A jittered, bumpy height field z = h(x, y) (16 x 16 cells over 8 cm, nodes moved by up to
-  // 40 % of a cell, so faces of all shapes): above a height field each quadrature point has
-  // exactly one face under it. disc_pad walks there (from the last point's face); the reference
-  // here tests every face. For 100 centres the pads must load the same nodes with the same
-  // weights and offsets (to rounding).
+  // 20 % of a cell per axis, so faces of many shapes, none flipped: a node moves at most
+  // 0.28 of a cell, its face's opposite edge at most as much, and they lie 0.71 of a cell apart):
+  // above a height field each quadrature point has exactly one face under it. disc_pad walks there
+  // (from the last point's face); the reference here tests every face. For 100 centres the pads
+  // must load the same nodes with the same weights and offsets (to rounding).
   const int cells = 16;
   const double a = 0.04, h = 2 * a / cells;
   RowMatX3d X;
   RowMatX3i F;
   flat_grid(a, cells, X, F);
-  unsigned state = 12345;
-  auto uniform = [&] {  // [-1, 1), a small LCG: the test's own, reproducible everywhere
-    state = state * 1664525u + 1013904223u;
-    return static_cast<double>(state >> 8) / (1u << 23) - 1.0;
-  };
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  auto uniform = [&] { return unit(rng); };
   for (long i = 0; i < X.rows(); ++i) {
     const bool border =
         std::abs(std::abs(X(i, 0)) - a) < 1e-12 || std::abs(std::abs(X(i, 1)) - a) < 1e-12;
-    if (!border) X(i, 0) += 0.4 * h * uniform(), X(i, 1) += 0.4 * h * uniform();
+    if (!border) X(i, 0) += 0.2 * h * uniform(), X(i, 1) += 0.2 * h * uniform();
     X(i, 2) = 0.004 * std::sin(60 * X(i, 0)) * std::cos(45 * X(i, 1));
   }
   PadSurface s;
   build_pad_surface(F, X.rows(), s);
   const Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
   std::vector<PadPoint> pad;
+  // The reference: the face whose projection holds (u, v), by testing every face.
+  auto face_under = [&](double u, double v, Eigen::Vector3d& b) {
+    for (long f = 0; f < F.rows(); ++f) {
+      double l[3];
+      for (int k = 0; k < 3; ++k) {
+        const auto p = X.row(F(f, (k + 1) % 3)), q = X.row(F(f, (k + 2) % 3));
+        l[k] = (p(0) - u) * (q(1) - v) - (q(0) - u) * (p(1) - v);
+      }
+      if (l[0] >= 0 && l[1] >= 0 && l[2] >= 0) {
+        b = Eigen::Vector3d(l[0], l[1], l[2]) / (l[0] + l[1] + l[2]);
+        return static_cast<int>(f);
+      }
+    }
+    return -1;
+  };
   for (int trial = 0; trial < 100; ++trial) {
     const double cx = 0.025 * uniform(), cy = 0.025 * uniform();
-    // The centre on the surface: its face by the reference search below.
-    auto face_under = [&](double u, double v, Eigen::Vector3d& b) {
-      for (long f = 0; f < F.rows(); ++f) {
-        double l[3];
-        for (int k = 0; k < 3; ++k) {
-          const auto p = X.row(F(f, (k + 1) % 3)), q = X.row(F(f, (k + 2) % 3));
-          l[k] = (p(0) - u) * (q(1) - v) - (q(0) - u) * (p(1) - v);
-        }
-        if (l[0] >= 0 && l[1] >= 0 && l[2] >= 0) {
-          b = Eigen::Vector3d(l[0], l[1], l[2]) / (l[0] + l[1] + l[2]);
-          return static_cast<int>(f);
-        }
-      }
-      return -1;
-    };
     Eigen::Vector3d b;
     const int fc = face_under(cx, cy, b);
     ASSERT_GE(fc, 0);
