@@ -71,24 +71,20 @@ int locate(const PadSurface& s, const RowMatX3d& X, const Eigen::Vector3d& e1,
 }
 
 // cos t and sin t of every quadrature point's angle, ring by ring (point q of ring j, m = 6 (j + 1)
-// points: t = (j odd) pi / m + 2 pi q / m, alternate rings staggered), computed once per ring
-// count: disc_pad runs every haptic step.
+// points: t = (j odd) pi / m + 2 pi q / m, alternate rings staggered).
 struct UnitDir {
   double c, s;
 };
-const std::vector<UnitDir>& disc_directions(int rings) {
-  thread_local std::vector<std::vector<UnitDir>> cache;
-  if (static_cast<int>(cache.size()) <= rings) cache.resize(rings + 1);
-  std::vector<UnitDir>& dirs = cache[rings];
-  if (dirs.empty())
-    for (int j = 0; j < rings; ++j) {
-      const int m = 6 * (j + 1);
-      const double phase = (j % 2) * std::numbers::pi / m;
-      for (int q = 0; q < m; ++q) {
-        const double t = phase + 2 * std::numbers::pi * q / m;
-        dirs.push_back({std::cos(t), std::sin(t)});
-      }
+std::vector<UnitDir> disc_directions(int rings) {
+  std::vector<UnitDir> dirs;
+  for (int j = 0; j < rings; ++j) {
+    const int m = 6 * (j + 1);
+    const double phase = (j % 2) * std::numbers::pi / m;
+    for (int q = 0; q < m; ++q) {
+      const double t = phase + 2 * std::numbers::pi * q / m;
+      dirs.push_back({std::cos(t), std::sin(t)});
     }
+  }
   return dirs;
 }
 
@@ -108,7 +104,11 @@ int disc_pad(const PadSurface& s, const RowMatX3d& X, const Eigen::Vector3d& cen
   Eigen::Vector3d b;
   const int fc = locate(s, X, e1, e2, cu, cv, start, b);
   if (fc < 0) return -1;
-  const std::vector<UnitDir>& dirs = disc_directions(rings);
+  // The shipped ring count's directions once (disc_pad runs every haptic step); others per call.
+  static const std::vector<UnitDir> kDirs = disc_directions(kPadRings);
+  const std::vector<UnitDir> other =
+      rings == kPadRings ? std::vector<UnitDir>{} : disc_directions(rings);
+  const std::vector<UnitDir>& dirs = rings == kPadRings ? kDirs : other;
   int prev = fc;  // the face of the last point found: the next point is a few mm away
   for (int j = 0, d = 0; j < rings; ++j) {
     const double r = radius * std::sqrt((j + 0.5) / rings);
