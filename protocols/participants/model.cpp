@@ -152,6 +152,13 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     s_.place_sd = std::sqrt(s_.place_sd * s_.place_sd +
                             (1.0 - r * r) * std::pow(p_.spatial_forgetting_sd, 2));
   }
+  // An instructed session starts with the instruction "I will tell you when to release": the
+  // trainee waits for the call as for a marker it trusts (reliance 1), whether or not the
+  // demonstration had a sound. Before 2026-12-02 only a demonstration's sound set this, so in
+  // experiment 1 the trainees of A (whose demonstration sounded) waited for the call and those
+  // of B and C stopped at their own belief: a trainee briefed low (exp1 C's P13, 1.29 N) never
+  // reached the instructor's target and learned nothing in four sessions.
+  if (ch_.call) s_.reliance = 1.0;
   pos_ = view.start_position;
   identified_ = false;
   search_k_ = 0;
@@ -325,7 +332,7 @@ void Trainee::learn_target(double observed, double variance, double gain_scale) 
   ++s_.feedback_count;
 }
 
-void Trainee::learn_lower_bound(double felt) {
+void Trainee::learn_lower_bound(double felt, double trust) {
   // Moments of N(m, v) conditioned on  T + e > felt,  e ~ N(0, r) the perceptual error of the
   // felt force (Weber): with s = sqrt(v + r), a = (felt - m)/s and the inverse Mills ratio
   // lambda = phi(a)/(1 - Phi(a)): m' = m + v/s lambda, v' = v (1 - v/s^2 lambda (lambda - a))
@@ -339,13 +346,14 @@ void Trainee::learn_lower_bound(double felt) {
   // Far in the tail the ratio tends to a (lambda ~ a + 1/a): the asymptote avoids 0/0.
   const double lambda = tail > 1e-12 ? phi / tail : a + 1.0 / a;
   // The missing marker has a second explanation: the cue no longer works (it was withdrawn).
-  // With the trust in the cue (the reliance) as prior, the posterior that the cue still works is
+  // With the trust in the cue (for a sound or call the reliance) as prior, the posterior that the
+  // cue still works is
   //   w = pi (1 - Phi(a)) / (pi (1 - Phi(a)) + 1 - pi)
   // (no marker is certain when the cue is gone, has probability 1 - Phi(a) when it works), and
   // the belief becomes the moment-matched mixture of "truncated" (w) and "unchanged" (1 - w):
   // a miss well above the believed target says "the cue is gone" and teaches little, a miss
   // below it says "not there yet".
-  const double pi = std::clamp(s_.reliance, 0.0, 1.0);
+  const double pi = std::clamp(trust, 0.0, 1.0);
   const double w = pi * tail / (pi * tail + (1.0 - pi) + 1e-300);
   const double shift = v / s * lambda;
   const double v_trunc = std::max(v * (1.0 - v / (s * s) * lambda * (lambda - a)), 1e-6 * v);
@@ -555,6 +563,7 @@ void Trainee::start_press() {
   expect_marker_ = (ch_.audio || ch_.call) && s_.reliance > 0.05;
   marker_this_press_ = false;
   visual_marker_ = false;
+  visual_bound_stop_ = false;
   audio_seen_ = false;
   call_heard_ = false;
   peak_felt_ = 0.0;
@@ -587,13 +596,21 @@ void Trainee::begin_release(double t) {
     // trainee who heard the marker once but whose belief stayed below the threshold kept
     // pressing short of it, the expectation extinguished and the belief stayed at the low
     // briefing (group A's bimodal low tail, docs/PARTICIPANTS.md "Not reaching the marker").
-    if (ch_.haptic && peak_felt_ > 0) learn_lower_bound(peak_felt_);
+    if (ch_.haptic && peak_felt_ > 0) learn_lower_bound(peak_felt_, s_.reliance);
     // An expectation built on markers received fades when they stop; one that rests only on
     // the demonstration (no marker received yet) keeps the trainee searching, pressing harder
     // after each miss.
     if (s_.feedback_count > 0) s_.reliance *= 1.0 - p_.extinction_rate;
     ++misses_;
   }
+  // A press aimed at the remembered picture that reached its bound while the indentation stayed
+  // short of it says the same about the target: it lies above the force reached. The picture is
+  // in view the whole time, so its absence is not ambiguous (trust 1). Without this a trainee
+  // whose briefed belief was low (exp4's P15 in the predictions of 2026-12-02: 0.92 N) stopped
+  // every press at 1.66 x that belief, short of the picture, and never learned: 1.04 N in the
+  // haptic-only test after training presses of 1.8-2.2 N.
+  if (visual_bound_stop_ && !visual_marker_ && ch_.haptic && peak_felt_ > 0)
+    learn_lower_bound(peak_felt_, 1.0);
   mode_ = Mode::release;
   mode_start_ = t;
   release_at_ = -1.0;
@@ -673,6 +690,7 @@ void Trainee::perceive(const Percept& p, bool call) {
     if (mode_ == Mode::press && release_at_ < 0 && f >= intended_ * limit) {
       mode_ = Mode::hold;
       mode_start_ = p.t;
+      visual_bound_stop_ = aiming_visually;
     }
   }
   last_ = p;

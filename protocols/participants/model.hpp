@@ -153,7 +153,9 @@ class Trainee {
   void learn_target(double observed, double variance, double gain_scale = 1.0);
   // An expected "target reached" marker did not come at felt force `felt` (N): the target is
   // above it (a censored observation; moment-matched truncation of the belief).
-  void learn_lower_bound(double felt);
+  // trust: prior probability that the awaited cue works (the reliance for a sound or call; 1 for
+  // the picture, which is always in view).
+  void learn_lower_bound(double felt, double trust);
   double draw_recognition_time();
   double draw_landmark_time();
   void start_press();
@@ -198,6 +200,8 @@ class Trainee {
   std::optional<Demonstration> demo_;
   int misses_ = 0;  // consecutive presses of this session whose expected marker did not come
   bool marker_this_press_ = false, visual_marker_ = false, dwell_saw_d_ = false;
+  // This press stopped at its bound while aiming at the remembered picture (not reached).
+  bool visual_bound_stop_ = false;
   double rec_time_ = 0.0;
   double peak_seen_d_ = 0.0, peak_felt_ = 0.0;
   double press_d0_ = -1.0;  // m, seen deformation when this press first touched (-1: not yet)
