@@ -12,6 +12,23 @@
 
 namespace palplab::app {
 
+const std::filesystem::path& bench_scratch_dir() {
+  struct Scratch {
+    std::filesystem::path dir;
+    Scratch()
+        : dir(std::filesystem::temp_directory_path() /
+              ("palplab_bench_" + std::to_string(static_cast<long>(::getpid())))) {
+      std::filesystem::create_directories(dir);
+    }
+    ~Scratch() {
+      std::error_code ec;  // nothing to report at exit
+      std::filesystem::remove_all(dir, ec);
+    }
+  };
+  static const Scratch scratch;
+  return scratch.dir;
+}
+
 std::string prototype_variant(const BenchOptions& o, const std::string& id, const std::string& tag,
                               const std::function<void(nlohmann::json&)>& edit) {
   const std::string src = o.prototypes_dir() + "/" + id + ".json";
@@ -19,10 +36,7 @@ std::string prototype_variant(const BenchOptions& o, const std::string& id, cons
   if (!in) throw InputError("cannot read the prototype (pass --data pointing at tests/data)", src);
   nlohmann::json j = nlohmann::json::parse(in);
   edit(j);
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("palplab_bench_" + std::to_string(static_cast<long>(::getpid())));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / (id + "_" + tag + ".json")).string();
+  const std::string file = (bench_scratch_dir() / (id + "_" + tag + ".json")).string();
   std::ofstream(file) << j.dump(2) << "\n";
   return file;
 }

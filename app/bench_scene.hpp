@@ -2,6 +2,7 @@
 // Shared pieces of the scene-level bench sections (app/bench_section_*.cpp): prototype variants
 // written as JSON files (the shipped prototypes/*.json with keys changed, docs/FORMATS.md), a
 // fixed-trajectory press timed step by step, and figure output.
+#include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -12,8 +13,12 @@
 
 namespace palplab::app {
 
-// prototypes/<id>.json with `edit` applied, written to a per-process temp directory as
-// <id>_<tag>.json; returns its path (build it with prototypes::build_scene).
+// The bench's scratch directory, <tmp>/palplab_bench_<pid>: made on first use, removed with
+// what it holds when the process exits.
+const std::filesystem::path& bench_scratch_dir();
+
+// prototypes/<id>.json with `edit` applied, written to bench_scratch_dir() as <id>_<tag>.json;
+// returns its path (build it with prototypes::build_scene).
 std::string prototype_variant(const BenchOptions& o, const std::string& id, const std::string& tag,
                               const std::function<void(nlohmann::json&)>& edit);
 

@@ -53,9 +53,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   for (auto& ph : study.phases) ph.sessions = 1, ph.session_duration = o.quick ? 5.0 : 30.0;
   for (auto& g : study.groups) g.size = o.quick ? 1 : 2;
   const protocols::Plan plan = protocols::make_plan(study);
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("palplab_bench_" + std::to_string(static_cast<long>(::getpid())));
-  std::filesystem::create_directories(dir);
+  const auto& dir = palplab::app::bench_scratch_dir();
   const int reps = 5;
   std::vector<BenchResult> out;
   std::vector<double> med;

@@ -296,6 +296,7 @@ int main(int argc, char** argv) {
     }
     std::printf("%-9ld %8.2fus %8.2fus %8.2fus %11.1fx\n", nv, med[0], med[1], med[2],
                 med[2] / med[0]);
+    std::filesystem::remove(file);
   }
 
   // Accuracy of local integration: the same fixed device trajectory (ramp 6 mm at 2 cm/s, hold

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -110,8 +111,9 @@ std::string c1_variant(const std::string& name, const std::string& from, const s
   const auto k = t.find(from);
   EXPECT_NE(k, std::string::npos) << from;
   if (k != std::string::npos) t.replace(k, from.size(), to);
-  const std::string path =
-      "/tmp/palplab_probe_" + name + "_" + std::to_string(::getpid()) + ".json";
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("palplab_probe_" + name + "_" + std::to_string(::getpid()) + ".json"))
+                               .string();
   FILE* o = std::fopen(path.c_str(), "wb");
   std::fwrite(t.data(), 1, t.size(), o);
   std::fclose(o);
