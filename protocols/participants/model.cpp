@@ -585,6 +585,7 @@ void Trainee::begin_release(double t) {
     s_.k_log_sq += lr * lr;
   }
   // Guidance: reliance grows with every marker received, and fades when an expected one fails.
+  double lower_bound_trust = -1.0;  // < 0: this press is no censored observation
   if (marker_this_press_) {
     s_.reliance += p_.guidance_rate * (1.0 - s_.reliance);
     misses_ = 0;
@@ -596,7 +597,7 @@ void Trainee::begin_release(double t) {
     // trainee who heard the marker once but whose belief stayed below the threshold kept
     // pressing short of it, the expectation extinguished and the belief stayed at the low
     // briefing (group A's bimodal low tail, docs/PARTICIPANTS.md "Not reaching the marker").
-    if (ch_.haptic && peak_felt_ > 0) learn_lower_bound(peak_felt_, s_.reliance);
+    lower_bound_trust = s_.reliance;
     // An expectation built on markers received fades when they stop; one that rests only on
     // the demonstration (no marker received yet) keeps the trainee searching, pressing harder
     // after each miss.
@@ -608,9 +609,11 @@ void Trainee::begin_release(double t) {
   // in view the whole time, so its absence is not ambiguous (trust 1). Without this a trainee
   // whose briefed belief was low (exp4's P15 in the predictions of 2026-12-02: 0.92 N) stopped
   // every press at 1.66 x that belief, short of the picture, and never learned: 1.04 N in the
-  // haptic-only test after training presses of 1.8-2.2 N.
-  if (visual_bound_stop_ && !visual_marker_ && ch_.haptic && peak_felt_ > 0)
-    learn_lower_bound(peak_felt_, 1.0);
+  // haptic-only test after training presses of 1.8-2.2 N. One observation per press: this
+  // one replaces that of a missed sound or call (the same evidence, more trusted).
+  if (visual_bound_stop_ && !visual_marker_ && !marker_this_press_) lower_bound_trust = 1.0;
+  if (lower_bound_trust >= 0.0 && ch_.haptic && peak_felt_ > 0)
+    learn_lower_bound(peak_felt_, lower_bound_trust);
   mode_ = Mode::release;
   mode_start_ = t;
   release_at_ = -1.0;
