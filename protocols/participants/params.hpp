@@ -55,19 +55,21 @@ struct TraineeParams {
   // protocols/participants/exp2_calibration.json; commands in docs/PARTICIPANTS.md "The shipped
   // calibration (2026-11-25)"). Both act on trainees who expect a marker (exp2: group A);
   // marker_wait_overshoot also bounds a visually aimed press (1.5 * (1 + overshoot)), which rarely
-  // binds (exp2 A/B run: 2 of B's 60 sessions changed, by 0.01 N). landmark_time,
-  // visual_recognition_gain: the A/B calibration of 2026-11-24 (same section).
+  // binds (exp2 A/B run: 2 of B's 60 sessions changed, by 0.01 N). landmark_time: the A/B
+  // calibration of 2026-11-24 (same section); visual_recognition_gain: refitted with it on the
+  // whole exp2 on 2026-12-02 (protocols/participants/exp2_calibration_explore.json; "The shipped
+  // calibration (2026-12-02, afternoon)"; landmark_time kept its value).
   double guidance_dependence = 0.6;   // 1, share of marker learning withheld at full reliance
   double guidance_rate = 0.2;         // 1, reliance gained per press with a marker
   double extinction_rate = 0.472119;  // 1, reliance lost per press whose expected marker failed
   double marker_wait_overshoot = 0.104498;  // 1, press beyond the intended force awaiting a marker
   // visual learning and search
-  double visual_spatial_sd = 0.004;         // m, SD of locating the touched point by eye
-  double visual_recognition_gain = 1.7257;  // 1, recognition speed-up when the part deforms
-  double recognition_cv = 0.3;              // 1, trial-to-trial SD / mean of a recognition time
-  double miss_probability = 0.2;            // 1, chance the feature is not recognised on a touch
-  double practice_exponent = 0.3;           // 1, power law of practice for recognition
-  double individual_cv = 0.15;              // 1, between-person SD of speed (log scale)
+  double visual_spatial_sd = 0.004;          // m, SD of locating the touched point by eye
+  double visual_recognition_gain = 2.58855;  // 1, recognition speed-up when the part deforms
+  double recognition_cv = 0.3;               // 1, trial-to-trial SD / mean of a recognition time
+  double miss_probability = 0.2;             // 1, chance the feature is not recognised on a touch
+  double practice_exponent = 0.3;            // 1, power law of practice for recognition
+  double individual_cv = 0.15;               // 1, between-person SD of speed (log scale)
   // orienting on landmarks before the search (blind haptic navigation along the organ)
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
   double landmark_time = 12.9513;  // s, median novice judgement time at one landmark
