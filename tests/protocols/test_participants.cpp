@@ -74,6 +74,18 @@ double mean_learned_error(FlatTissue tissue, const nlohmann::json& overrides, in
   return err / std::max(counted, 1);
 }
 
+// A briefed trainee who believes the target is `target` N (the variance of a 30 % briefing of
+// 2.5 N) and knows where the feature is (3 mm).
+TraineeState briefed_state(const FlatTissue& tissue, double target) {
+  TraineeState st;
+  st.initialised = true;
+  st.prior_mean = st.target_mean = target;
+  st.prior_var = st.target_var = std::pow(0.3 * 2.5, 2);
+  st.place = tissue.feature;
+  st.place_sd = 0.003;
+  return st;
+}
+
 }  // namespace
 
 TEST(Perception, MleWeightsAreInverseVariances) {
@@ -181,13 +193,8 @@ TEST(Trainee, AMissedMarkerBelowTheBeliefRaisesIt) {
   int climbed = 0;
   const int n = 10;
   for (int k = 0; k < n; ++k) {
-    TraineeState st;
-    st.initialised = true;
-    st.prior_mean = st.target_mean = 1.3;  // N, well below ST 2.3 N
-    st.prior_var = st.target_var = std::pow(0.3 * 2.5, 2);
-    st.place = tissue.feature;
-    st.place_sd = 0.003;
-    st.feedback_count = 1;  // heard the sound once
+    TraineeState st = briefed_state(tissue, 1.3);  // N, well below ST 2.3 N
+    st.feedback_count = 1;                         // heard the sound once
     st.demo_sound = true;
     st.reliance = 1.0;
     Trainee tr(params, st);
@@ -301,19 +308,14 @@ TEST(Trainee, APressStoppedShortOfTheRememberedPictureRaisesTheBelief) {
   const int n = 10;
   int learned = 0;
   for (int k = 0; k < n; ++k) {
-    TraineeState st;
-    st.initialised = true;
-    st.prior_mean = st.target_mean = 0.9;  // N
-    st.prior_var = st.target_var = std::pow(0.3 * 2.5, 2);
-    st.place = tissue.feature;
-    st.place_sd = 0.003;
-    st.demo_d = 2.5 / tissue.k;  // m, the picture at the target
+    TraineeState st = briefed_state(tissue, 0.9);  // N
+    st.demo_d = 2.5 / tissue.k;                    // m, the picture at the target
     Trainee tr(params, st);
     const std::uint64_t ps = derive_seed(15, static_cast<std::uint64_t>(k));
     run_session(tr, tissue, 0.0, 120.0, ps, derive_seed(ps, 1));
     ASSERT_TRUE(tr.identified());
-    // Reached the picture and learned from it, near the force it marks (Weber 8 %, the
-    // remembered picture's visual noise 5 %: 0.25 N is about 1.3 SD of one observation).
+    // Reached the picture and learned from it, near the force it marks (one observation's SD
+    // is 0.25 N: Weber 8 %, the remembered picture 5 %, memory 3 % of 2.5 N).
     if (tr.state().feedback_count > 3 && std::abs(tr.state().target_mean - 2.5) < 0.35) ++learned;
   }
   EXPECT_EQ(learned, n);
@@ -335,12 +337,7 @@ TEST(Trainee, AnInstructedTraineeWaitsForTheCallWithoutADemonstratedSound) {
   const int n = 10;
   int learned = 0;
   for (int k = 0; k < n; ++k) {
-    TraineeState st;
-    st.initialised = true;
-    st.prior_mean = st.target_mean = 1.3;  // N
-    st.prior_var = st.target_var = std::pow(0.3 * 2.5, 2);
-    st.place = tissue.feature;
-    st.place_sd = 0.003;
+    TraineeState st = briefed_state(tissue, 1.3);  // N
     st.demo_d = 2.5 / tissue.k;  // what the demonstration showed; no sound (st.demo_sound false)
     Trainee tr(params, st);
     Instructor in(iparams, derive_seed(13, static_cast<std::uint64_t>(k)));
