@@ -247,6 +247,10 @@ long FemModel::relinearisations() const {
   return impl_->mr ? impl_->mr->relinearisations() : 0;
 }
 
+long FemModel::linearisation_max_lag() const {
+  return impl_->mr ? impl_->mr->max_lag() : 0;
+}
+
 long FemModel::pad_solves() const {
   return impl_->mr ? impl_->mr->pad_solves() : 0;
 }

@@ -130,6 +130,9 @@ class FemModel {
   std::string solver() const;                      // the linear solver used per step
   double factor_ms() const { return factor_ms_; }  // last factorisation (ms)
   long relinearisations() const;                   // corotational_multirate: adopted so far
+  // corotational_multirate: the largest age, in update intervals, of the linearisation in use
+  // (1 deterministic; more when the real-time worker was late)
+  long linearisation_max_lag() const;
   long pad_solves() const;        // corotational_multirate: pads solved in the haptic step
   bool solves_node(int v) const;  // node v moves in the per-step solve
   const FemSystem& system() const;

@@ -1,5 +1,6 @@
 #include "engine/solvers/fem_multirate.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -89,27 +90,34 @@ void CorotMultirate::relinearise_now(const Eigen::VectorXd& u, const Eigen::Vect
   wait();
   pending_ = false;
   linearise(*cur_, u, f_ext, pads);
+  cur_->started = updates_;
   ++count_;
 }
 
 void CorotMultirate::update(const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
                             const PatchPads& pads) {
+  ++updates_;
   if (!background_) {
     linearise(*cur_, u, f_ext, pads);
+    cur_->started = updates_;
     ++count_;
     return;
   }
   if (pending_) {
-    if (!deterministic_ && job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+    if (!deterministic_ && job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+      max_lag_ = std::max(max_lag_, updates_ - cur_->started);
       return;  // still running: the haptic step does not wait
+    }
     wait();
     std::swap(cur_, next_);
     pending_ = false;
     ++count_;
   }
+  max_lag_ = std::max(max_lag_, updates_ - cur_->started);
   job_u_ = u;
   job_f_ = f_ext;
   CorotLinearisation* L = next_.get();
+  L->started = updates_;
   PatchPads p = pads;
   job_ = std::async(std::launch::async,
                     [this, L, p = std::move(p)] { linearise(*L, job_u_, job_f_, p); });

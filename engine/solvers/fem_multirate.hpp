@@ -65,6 +65,7 @@ struct CorotLinearisation {
   Eigen::VectorXd delta0;        // 3#V (m)
   std::vector<PadColumns> pads;  // cached columns of the pads solved about it
   double factor_ms = 0;          // assembly + factorisation (ms)
+  long started = 0;              // the update (CorotMultirate::updates()) that captured u
   const PadColumns* find(const std::vector<PatchTap>& pad) const;
   // Workspace.
   SparseMatrixd K;
@@ -95,7 +96,11 @@ class CorotMultirate {
   // pad not cached); out[a] stays valid until the next call or update.
   void pad_columns(const PatchPads& pads, std::vector<const PadColumns*>& out);
   long relinearisations() const { return count_; }  // adopted since construction
-  long pad_solves() const { return pad_solves_; }   // pads solved in the haptic thread
+  long updates() const { return updates_; }         // update() calls since construction
+  // The largest age (in update intervals) of the linearisation in use, sampled at every update
+  // after the adoption: 0 without background, 1 deterministic, more when the worker was late.
+  long max_lag() const { return max_lag_; }
+  long pad_solves() const { return pad_solves_; }  // pads solved in the haptic thread
 
  private:
   void linearise(CorotLinearisation& L, const Eigen::VectorXd& u, const Eigen::VectorXd& f_ext,
@@ -107,7 +112,7 @@ class CorotMultirate {
   Eigen::VectorXd support_;
   CorotJacobian jac_;
   bool background_, deterministic_;
-  long count_ = 0, pad_solves_ = 0;
+  long count_ = 0, pad_solves_ = 0, updates_ = 0, max_lag_ = 0;
   std::vector<int> diag_slot_, zero_slot_, fixed_diag_slot_;
   std::unique_ptr<CorotLinearisation> cur_, next_;
   std::future<void> job_;

@@ -207,9 +207,16 @@ TEST(FemMultirate, RampStaysWithinTheClaimedBoundOfTheEquilibrium) {
       max_err_lin = std::max(max_err_lin, std::abs(lin[q] - ref[q]));
       peak = std::max(peak, ref[q]);
     }
-    std::printf("ramp: max |F - F_eq| %.4g N (%.3g %% of the peak %.4g N); linear: %.4g N\n",
-                max_err, 100 * max_err / peak, peak, max_err_lin);
-    EXPECT_LT(max_err, 0.01 * peak) << realtime;
+    const long lag = f.linearisation_max_lag();
+    std::printf(
+        "ramp: max |F - F_eq| %.4g N (%.3g %% of the peak %.4g N); linear: %.4g N; "
+        "%ld re-linearisations, largest lag %ld intervals\n",
+        max_err, 100 * max_err / peak, peak, max_err_lin, f.relinearisations(), lag);
+    // The claim holds for a linearisation one interval old when adopted (deterministic, or a
+    // worker that kept up). A worker made late by the machine (a loaded CI, a sanitizer build)
+    // leaves an older one in use: then only the comparison with the linear model is claimed.
+    if (!realtime) EXPECT_EQ(lag, 1);
+    if (lag <= 1) EXPECT_LT(max_err, 0.01 * peak) << realtime;
     EXPECT_GT(max_err_lin, 3 * max_err);  // the linear model is not within it
     // Deterministic: one per update after the first; real time: the same unless the worker
     // (~1 ms here) was late.
@@ -229,7 +236,8 @@ TEST(FemMultirate, BackgroundUpdateIsDeterministicAndLagsOneInterval) {
     }
     Eigen::VectorXd u = f.displacement();
     EXPECT_TRUE(u.allFinite());
-    EXPECT_GT(u.cwiseAbs().maxCoeff(), 1e-3);  // the graphics state moved
+    EXPECT_GT(u.cwiseAbs().maxCoeff(), 1e-3);          // the graphics state moved
+    EXPECT_EQ(f.linearisation_max_lag(), bg ? 1 : 0);  // adopted one interval late, or at once
     return F;
   };
   const auto a = run(true, 0.01), b = run(true, 0.01), c = run(false, 0.01);
