@@ -167,11 +167,50 @@ struct Context {
     return nullptr;
   }
   void save_figure(const std::string& name, const std::string& svg, const std::string& caption) {
-    std::ofstream(fs::path(out_dir) / "figures" / name) << svg;
+    const fs::path file = fs::path(out_dir) / "figures" / name;
+    std::ofstream out(file);
+    out << svg;
+    if (!out) throw InputError("cannot write the figure (expected a writable file)", file.string());
     files.figures.push_back((fs::path(out_dir) / "figures" / name).string());
     doc.figure(svg, name, caption);
   }
 };
+
+// A directory the report writes into (`what`), created if needed: a file in its place is said
+// as such (exit 2), never a filesystem_error.
+void make_out_dir(const fs::path& dir, const std::string& what) {
+  std::error_code ec;
+  if (fs::exists(fs::status(dir, ec)) && !fs::is_directory(fs::status(dir, ec)))
+    throw InputError("exists and is not a directory (the report writes " + what + " there)",
+                     dir.string());
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw InputError("cannot create the directory for " + what + " (" +
+                         (ec ? ec.message() : std::string("not a directory")) + ")",
+                     dir.string());
+}
+
+// Everything the report will write under DIR, checked before the work starts: a file where the
+// report puts a directory (figures/, stills/) or a directory where it puts a file (report.md,
+// report.html) is refused naming it; nothing is deleted or replaced to make room.
+void check_out_dir(const std::string& out_dir, bool stills) {
+  make_out_dir(out_dir, "report.md, report.html, figures/ and stills/");
+  std::error_code ec;
+  const fs::path out(out_dir);
+  auto no_file_at = [&](const fs::path& p, const std::string& what) {
+    const auto st = fs::status(p, ec);
+    if (fs::exists(st) && !fs::is_directory(st))
+      throw InputError("exists and is not a directory (the report writes " + what + " there)",
+                       p.string());
+  };
+  no_file_at(out / "figures", "its SVG figures");
+  if (stills) no_file_at(out / "stills", "the stills");
+  for (const char* name : {"report.md", "report.html"})
+    if (fs::is_directory(out / name, ec))
+      throw InputError(std::string("is a directory (expected the report's file ") + name +
+                           "; move it out of the way)",
+                       (out / name).string());
+}
 
 Context load(const std::string& db_path, const std::string& out_dir, const ReportOptions& o) {
   if (!fs::exists(db_path)) throw InputError("no such results database", db_path);
@@ -390,7 +429,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
                    [&](const auto* a, const auto* b) { return first_user(a) < first_user(b); });
 
   const fs::path dir = fs::path(c.out_dir) / "stills";
-  fs::create_directories(dir);
+  make_out_dir(dir, "the stills");
   const int W = c.options.still_width, H = c.options.still_height;
   const std::string force_text = fmt(th->mpf, "%.3g") + " N";
   struct Done {
@@ -469,7 +508,12 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
       "the press and cameras in stills/stills.json.");
   for (const auto& m : missing) c.doc.para("No still of prototype " + m + ".");
   c.files.stills_missing = missing;
-  std::ofstream(dir / "stills.json") << side.dump(2) << "\n";
+  {
+    std::ofstream json(dir / "stills.json");
+    json << side.dump(2) << "\n";
+    if (!json)
+      throw InputError("cannot write the stills' description", (dir / "stills.json").string());
+  }
   if (done.empty()) {
     c.files.stills_skipped = "no prototype could be drawn";
   } else {
@@ -1292,7 +1336,11 @@ void section_force_traces(Context& c, const std::vector<Unit>& units) {
 void write_documents(Context& c) {
   c.files.markdown = (fs::path(c.out_dir) / "report.md").string();
   c.files.html = (fs::path(c.out_dir) / "report.html").string();
-  std::ofstream(c.files.markdown) << c.doc.md.str();
+  {
+    std::ofstream md(c.files.markdown);
+    md << c.doc.md.str();
+    if (!md) throw InputError("cannot write the report", c.files.markdown);
+  }
   std::ofstream html(c.files.html);
   html << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
        << xml_escape(c.study.title) << "</title>\n<style>\n"
@@ -1319,9 +1367,10 @@ void write_documents(Context& c) {
 ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
                          const ReportOptions& options) {
   Context c = load(db_path, out_dir, options);
+  check_out_dir(out_dir, options.stills != nullptr);
   const std::vector<Unit> units = analysis_units(c);
   const std::vector<Hypothesis> hypotheses = declared_hypotheses(c);
-  fs::create_directories(fs::path(out_dir) / "figures");
+  make_out_dir(fs::path(out_dir) / "figures", "its SVG figures");
   section_provenance(c);
   {
     // The stills' press comes from the analysed phases first, then the others from the last.

@@ -1,9 +1,11 @@
 // `palplab export DB --csv DIR [--samples]`: tidy CSV files from a results database.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "app/command.hpp"
 #include "common/escape.hpp"
+#include "common/input_error.hpp"
 #include "results/store.hpp"
 
 namespace {
@@ -19,6 +21,14 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--samples", *samples, "Also write samples.csv (every 1 kHz sample; large)");
       cmd->callback([db, dir, samples, code] {
         palplab::results::Store store = palplab::results::Store::open(*db);
+        // A file where the CSV directory goes is said as such (and left alone).
+        std::error_code ec;
+        if (const auto st = std::filesystem::status(*dir, ec);
+            std::filesystem::exists(st) && !std::filesystem::is_directory(st))
+          throw palplab::InputError(palplab::SourceLocation{"--csv"},
+                                    "\"" + *dir +
+                                        "\" exists and is not a directory (expected the "
+                                        "directory for measures.csv, sessions.csv, events.csv)");
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";

@@ -309,8 +309,9 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--samples", *samples, "Store device samples: full (1 kHz) or none")
           ->check(CLI::IsMember({"full", "none"}));
       cmd->add_option("--max-sessions", opt->max_sessions,
-                      "Stop after this many sessions (continue later with --resume)")
-          ->check(CLI::Range(0L, 1000000000L));
+                      "Stop after this many sessions, at least 1 (continue later with --resume; "
+                      "without the flag: no limit)")
+          ->check(CLI::Range(1L, 1000000000L));
       auto human = std::make_shared<HumanArgs>();
       cmd->add_flag("--human", human->human,
                     "Run one participant's due sessions with a person at the device (real time)");
@@ -338,6 +339,10 @@ palplab::app::CommandRegistration reg{
         palplab::app::preload_scenes(*scenes);
         if (opt->resume && opt->force)
           throw palplab::InputError("--resume and --force exclude each other");
+        if (opt->db.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--db"},
+                                    "no database file name given (an empty string): expected "
+                                    "FILE.db");
         Study s = load_study(*study, engine_prototype_inspector());
         Plan plan = make_plan(s);
         opt->samples = *samples == "full";

@@ -413,6 +413,14 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   const auto t0 = Clock::now();
   const std::string sha = results::sha256_hex(study.json_text);
   const bool exists = fs::exists(opt.db);
+  // A mistyped path with --resume would otherwise start a new run in a new file.
+  if (!exists && opt.resume)
+    throw InputError(
+        "nothing to resume: the database does not exist (check the path; without --resume, "
+        "`run` creates a new database)",
+        opt.db);
+  if (exists && fs::is_directory(opt.db) && !opt.force)
+    throw InputError("is a directory (expected a results database file)", opt.db);
   if (exists && !opt.resume && !opt.force)
     throw InputError(
         "the database already exists; use --resume to continue it or --force to "

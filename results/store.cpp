@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -26,13 +27,24 @@ namespace palplab::results {
 
 namespace {
 
+// A failed SQLite call. On the writer's own statements it is an internal error; reading a
+// user's database (Store's read_* functions, via `reading`) turns it into an InputError that
+// names the file. `code` is the primary result code (SQLITE_CORRUPT, SQLITE_ERROR, ...),
+// `detail` SQLite's message without the statement.
+struct SqliteError : std::runtime_error {
+  SqliteError(int code_, std::string detail_, const std::string& what)
+      : std::runtime_error(what), code(code_), detail(std::move(detail_)) {}
+  int code;
+  std::string detail;
+};
+
 // RAII prepared statement. Every value goes through bind_*; no SQL is built from data.
 class Stmt {
  public:
   Stmt(sqlite3* db, const char* sql) : db_(db) {
     if (sqlite3_prepare_v2(db, sql, -1, &st_, nullptr) != SQLITE_OK)
-      throw std::runtime_error(std::string("sqlite prepare: ") + sqlite3_errmsg(db) +
-                               " in: " + sql);
+      throw SqliteError(sqlite3_errcode(db) & 0xff, sqlite3_errmsg(db),
+                        std::string("sqlite prepare: ") + sqlite3_errmsg(db) + " in: " + sql);
   }
   ~Stmt() { sqlite3_finalize(st_); }
   Stmt(const Stmt&) = delete;
@@ -65,7 +77,8 @@ class Stmt {
     int rc = sqlite3_step(st_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw std::runtime_error(std::string("sqlite step: ") + sqlite3_errmsg(db_));
+    throw SqliteError(rc & 0xff, sqlite3_errmsg(db_),
+                      std::string("sqlite step: ") + sqlite3_errmsg(db_));
   }
   void run() {
     step();
@@ -83,11 +96,13 @@ class Stmt {
   double real(int c) const { return sqlite3_column_double(st_, c); }
   long long integer(int c) const { return sqlite3_column_int64(st_, c); }
   bool null(int c) const { return sqlite3_column_type(st_, c) == SQLITE_NULL; }
+  int type(int c) const { return sqlite3_column_type(st_, c); }
 
  private:
   void check(int rc) {
     if (rc != SQLITE_OK)
-      throw std::runtime_error(std::string("sqlite bind: ") + sqlite3_errmsg(db_));
+      throw SqliteError(rc & 0xff, sqlite3_errmsg(db_),
+                        std::string("sqlite bind: ") + sqlite3_errmsg(db_));
   }
   sqlite3* db_;
   sqlite3_stmt* st_ = nullptr;
@@ -95,11 +110,33 @@ class Stmt {
 
 void exec(sqlite3* db, const std::string& sql) {
   char* err = nullptr;
-  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+  if (const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err); rc != SQLITE_OK) {
     std::string m = err ? err : "?";
     sqlite3_free(err);
-    throw std::runtime_error("sqlite: " + m);
+    throw SqliteError(rc & 0xff, m, "sqlite: " + m);
   }
+}
+
+// Shortest text that reads back as the same double (no "15.633000000000001" artefacts).
+std::string num(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// "session 12 (participant P03, phase post_training #1)": where a bad stored value is.
+std::string session_label(long long session, const std::string& participant,
+                          const std::string& phase, int phase_index) {
+  return "session " + std::to_string(session) + " (participant " + participant + ", phase " +
+         phase + " #" + std::to_string(phase_index + 1) + ")";
+}
+std::string session_label(const MeasureRow& r) {
+  return session_label(r.session, r.participant, r.phase, r.phase_index);
+}
+
+// A stored text shown in a message: at most 40 characters.
+std::string shown(const std::string& s) {
+  return s.size() <= 40 ? s : s.substr(0, 40) + "...";
 }
 
 std::uint64_t parse_u64(const std::string& s) {
@@ -115,6 +152,34 @@ sqlite3* open_db(const std::string& path, int flags) {
   }
   sqlite3_busy_timeout(db, 10000);
   return db;
+}
+
+// What reading a user's database failed on, said about the file: exit 2 with the reason, never
+// an "internal error" (a damaged file, tables dropped or edited by hand, a foreign schema).
+InputError read_error(const std::string& path, const SqliteError& e) {
+  switch (e.code) {
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB:
+      return InputError("damaged or truncated database (sqlite: " + e.detail + ")", path);
+    case SQLITE_ERROR:  // no such table/column: not the schema palplab wrote
+      return InputError("not a complete palplab results database (sqlite: " + e.detail + ")", path);
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+      return InputError("the database is locked by another process (sqlite: " + e.detail + ")",
+                        path);
+    default:
+      return InputError("cannot read the database (sqlite: " + e.detail + ")", path);
+  }
+}
+
+// Runs `f` (a read of the user's database at `path`), turning SQLite failures into InputError.
+template <class F>
+auto reading(const std::string& path, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const SqliteError& e) {
+    throw read_error(path, e);
+  }
 }
 
 void put_varint(std::string& out, std::uint64_t v) {
@@ -219,6 +284,13 @@ fs::path dir_of(const std::string& path) {
 // Writing needs the file and its directory (SQLite's WAL creates PATH-wal and PATH-shm there).
 void require_writable(const std::string& path, bool file_exists) {
   const fs::path d = dir_of(path);
+  std::error_code ec;
+  const auto st = fs::status(d, ec);
+  if (!fs::exists(st))
+    throw InputError("cannot create the database: its directory " + d.string() + " does not exist",
+                     path);
+  if (!fs::is_directory(st))
+    throw InputError("cannot create the database: " + d.string() + " is not a directory", path);
   if (::access(d.c_str(), W_OK) != 0)
     throw InputError("cannot write the database: its directory " + d.string() +
                          " is read-only (palplab writes PATH, PATH-wal and PATH-shm there)",
@@ -242,28 +314,66 @@ int lock_exclusive(const std::string& path) {
   return fd;
 }
 
-// True when `path` is an SQLite file holding palplab's meta table (read-only look).
-bool looks_like_palplab_db(const std::string& path) {
+// What a read-only look at `path` finds: not SQLite at all, an SQLite file SQLite reports as
+// damaged (a truncated copy: SQLITE_CORRUPT / SQLITE_NOTADB, or a failing quick_check), an
+// SQLite file without palplab's meta table, or a palplab results database.
+struct Probe {
+  enum Kind { kNotSqlite, kDamaged, kNotPalplab, kPalplab } kind = kNotSqlite;
+  std::string detail;  // kDamaged: SQLite's words
+};
+
+Probe probe_db(const std::string& path) {
+  static const std::string kMagic("SQLite format 3\0", 16);
   {
     std::ifstream in(path, std::ios::binary);
-    char magic[16] = {};
-    if (!in.read(magic, 16) || std::string(magic, 15) != "SQLite format 3") return false;
+    char head[100] = {};
+    in.read(head, sizeof head);
+    const auto got = static_cast<std::size_t>(in.gcount());
+    if (got == 0 || kMagic.compare(0, std::min<std::size_t>(got, 16), head,
+                                   std::min<std::size_t>(got, 16)) != 0)
+      return {Probe::kNotSqlite, ""};
+    if (got < 100)  // the start of an SQLite file, cut inside its 100-byte header
+      return {Probe::kDamaged,
+              "the file ends inside the 100-byte SQLite header, at byte " + std::to_string(got)};
   }
   sqlite3* db = nullptr;
   const std::string uri = "file:" + path + "?mode=ro";
   if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) !=
       SQLITE_OK) {
     sqlite3_close(db);
-    return false;
+    return {Probe::kNotPalplab, ""};
   }
-  bool ok = false;
+  Probe out{Probe::kNotPalplab, ""};
   sqlite3_stmt* st = nullptr;
-  if (sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'schema_version'", -1, &st,
-                         nullptr) == SQLITE_OK)
-    ok = sqlite3_step(st) == SQLITE_ROW;
+  int rc = sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'schema_version'", -1, &st,
+                              nullptr);
+  if (rc == SQLITE_OK) rc = sqlite3_step(st);
+  if (rc == SQLITE_ROW) {
+    out.kind = Probe::kPalplab;
+  } else if ((rc & 0xff) == SQLITE_CORRUPT || (rc & 0xff) == SQLITE_NOTADB) {
+    out = {Probe::kDamaged, sqlite3_errmsg(db)};
+  } else {
+    // No meta table: another SQLite file, or one damaged where the meta table was. Only
+    // here (a refusal anyway) does the whole file get checked.
+    sqlite3_finalize(st);
+    st = nullptr;
+    rc = sqlite3_prepare_v2(db, "PRAGMA quick_check(1)", -1, &st, nullptr);
+    if (rc == SQLITE_OK) rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+      const auto* t = sqlite3_column_text(st, 0);
+      const std::string r = t ? reinterpret_cast<const char*>(t) : "";
+      if (r != "ok") out = {Probe::kDamaged, "quick_check: " + r};
+    } else if ((rc & 0xff) == SQLITE_CORRUPT || (rc & 0xff) == SQLITE_NOTADB) {
+      out = {Probe::kDamaged, sqlite3_errmsg(db)};
+    }
+  }
   sqlite3_finalize(st);
   sqlite3_close(db);
-  return ok;
+  return out;
+}
+
+std::string damaged(const std::string& detail) {
+  return "damaged or truncated database (sqlite: " + detail + ")";
 }
 
 }  // namespace
@@ -277,7 +387,12 @@ void Store::remove_existing(const std::string& path) {
         "refusing to replace it: not a regular file (--force only replaces a palplab "
         "results database)",
         path);
-  if (!looks_like_palplab_db(path))
+  if (const Probe p = probe_db(path); p.kind == Probe::kDamaged)
+    throw InputError("refusing to replace it: " + damaged(p.detail) +
+                         "; palplab cannot tell whether it is a results database (if it is, "
+                         "move or delete it yourself)",
+                     path);
+  else if (p.kind != Probe::kPalplab)
     throw InputError(
         "refusing to replace it: not a palplab results database (--force only "
         "replaces a database written by palplab run)",
@@ -358,7 +473,91 @@ void migrate_to_v4(sqlite3* db) {
 
 }  // namespace
 
+namespace {
+
+using TableColumns = std::vector<std::pair<std::string, std::vector<std::string>>>;
+
+// The tables and columns a database of schema `version` has: those of results/schema.sql less
+// what later versions added (version 2: study_groups, phases, thresholds; 3: the sessions
+// columns of human sessions; 4: the transparency columns).
+TableColumns expected_tables(int version) {
+  static const TableColumns current = [] {
+    sqlite3* mem = nullptr;
+    sqlite3_open(":memory:", &mem);
+    std::unique_ptr<sqlite3, int (*)(sqlite3*)> hold(mem, sqlite3_close);
+    exec(mem, schema_sql());
+    TableColumns out;
+    Stmt t(mem, "SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY rowid");
+    while (t.step()) {
+      out.push_back({t.text(0), {}});
+      Stmt c(mem, "SELECT name FROM pragma_table_info(?1) ORDER BY cid");
+      c.bind(1, t.text(0));
+      while (c.step()) out.back().second.push_back(c.text(0));
+    }
+    return out;
+  }();
+  auto added_after = [version](const std::string& table, const std::string& column) {
+    if (version < 2 && (table == "study_groups" || table == "phases" || table == "thresholds"))
+      return true;
+    if (version < 3 && table == "sessions" &&
+        (column == "attempt" || column == "status" || column == "trainee" || column == "device" ||
+         column == "started_at" || column == "abort_reason"))
+      return true;
+    return version < 4 && (table == "sessions" || table == "phases") && column == "transparency";
+  };
+  TableColumns out;
+  for (const auto& [table, columns] : current) {
+    if (added_after(table, "")) continue;
+    std::vector<std::string> keep;
+    for (const auto& c : columns)
+      if (!added_after(table, c)) keep.push_back(c);
+    out.push_back({table, keep});
+  }
+  return out;
+}
+
+// Every table (and column) that schema `version` has is there: a table dropped or a column
+// lost (a hand edit, a foreign tool) is said when the database is opened, naming it, instead
+// of as an SQL error in the middle of a report.
+void check_tables(sqlite3* db, int version, const std::string& path) {
+  for (const auto& [table, columns] : expected_tables(version)) {
+    Stmt q(db, "SELECT name FROM pragma_table_info(?1)");
+    q.bind(1, table);
+    std::vector<std::string> have;
+    while (q.step()) have.push_back(q.text(0));
+    if (have.empty())
+      throw InputError("not a complete palplab results database: table \"" + table +
+                           "\" is missing (schema version " + std::to_string(version) + ")",
+                       path);
+    std::string missing;
+    for (const auto& c : columns)
+      if (std::find(have.begin(), have.end(), c) == have.end())
+        missing += (missing.empty() ? "" : ", ") + c;
+    if (!missing.empty())
+      throw InputError("not a complete palplab results database: table \"" + table +
+                           "\" lacks the column(s) " + missing + " (schema version " +
+                           std::to_string(version) + ")",
+                       path);
+  }
+}
+
+std::string not_palplab() {
+  return "not a palplab results database (expected schema version " +
+         std::to_string(kSchemaVersion) + ")";
+}
+
+void require_name(const std::string& path) {
+  if (path.empty())
+    throw InputError("no database file name given (an empty path): expected FILE.db");
+}
+
+}  // namespace
+
 Store Store::create(const std::string& path) {
+  require_name(path);
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw InputError("is a directory (expected a results database file)", path);
   if (fs::exists(path)) throw InputError("database already exists", path);
   require_writable(path, false);
   sqlite3* db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX);
@@ -374,18 +573,21 @@ Store Store::create(const std::string& path) {
 }
 
 Store Store::open(const std::string& path, bool exclusive) {
+  require_name(path);
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("no such database", path);
   if (fs::is_directory(path, ec))
     throw InputError("is a directory (expected a results database file)", path);
   if (::access(path.c_str(), R_OK) != 0)
     throw InputError(std::string("cannot read the database: ") + std::strerror(errno), path);
-  if (!looks_like_palplab_db(path) && ::access(dir_of(path).c_str(), W_OK) == 0) {
+  if (::access(dir_of(path).c_str(), W_OK) == 0) {
     // (In a read-only directory a WAL database may be unreadable without its -shm file: the
     // immutable open below decides then.)
-    throw InputError("not a palplab results database (expected schema version " +
-                         std::to_string(kSchemaVersion) + ")",
-                     path);
+    const Probe p = probe_db(path);
+    if (p.kind == Probe::kDamaged) throw InputError(damaged(p.detail), path);
+    if (p.kind != Probe::kPalplab)
+      throw InputError(
+          fs::file_size(path, ec) == 0 ? "is empty (" + not_palplab() + ")" : not_palplab(), path);
   }
   sqlite3* db = nullptr;
   const bool can_write =
@@ -408,11 +610,11 @@ Store Store::open(const std::string& path, bool exclusive) {
     Stmt q(db, "PRAGMA user_version");
     if (q.step()) version = q.integer(0);
     Stmt m(db, "SELECT value FROM meta WHERE key = 'schema_version'");
-    if (!m.step()) version = -1;
-  } catch (const std::runtime_error&) {
-    throw InputError("not a palplab results database (expected schema version " +
-                         std::to_string(kSchemaVersion) + ")",
-                     path);
+    if (!m.step()) throw InputError(not_palplab() + ": its meta table has no schema_version", path);
+  } catch (const SqliteError& e) {
+    if (e.code == SQLITE_CORRUPT || e.code == SQLITE_NOTADB)
+      throw InputError(damaged(e.detail), path);
+    throw InputError(not_palplab(), path);
   }
   if (version < kOldestReadableSchemaVersion || version > kSchemaVersion)
     throw InputError("results schema version " + std::to_string(version) +
@@ -421,34 +623,39 @@ Store Store::open(const std::string& path, bool exclusive) {
                          std::to_string(kSchemaVersion) + ")",
                      path);
   s.version_ = static_cast<int>(version);
-  if (exclusive && s.version_ < 3) {
-    migrate_sessions_to_v3(db);
-    s.version_ = 3;
-  }
-  if (exclusive && s.version_ == 3) {
-    migrate_to_v4(db);
-    s.version_ = 4;
-  }
-  if (exclusive || can_write)
-    exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+  reading(path, [&] {
+    check_tables(db, s.version_, path);
+    if (exclusive && s.version_ < 3) {
+      migrate_sessions_to_v3(db);
+      s.version_ = 3;
+    }
+    if (exclusive && s.version_ == 3) {
+      migrate_to_v4(db);
+      s.version_ = 4;
+    }
+    if (exclusive || can_write)
+      exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+  });
   return s;
 }
 
 std::string Store::incomplete_warning() const {
-  StudyRecord st = read_study();
-  if (!st.finished_at.empty()) return "";
-  std::size_t n = 0;
-  {
-    std::lock_guard lock(*mu_);
-    Stmt q(db_, version_ >= 3 ? "SELECT COUNT(*) FROM sessions WHERE status = 'complete'"
-                              : "SELECT COUNT(*) FROM sessions");
-    if (q.step()) n = static_cast<std::size_t>(q.integer(0));
-  }
-  return "warning: " + path_ + " is INCOMPLETE: the run started " + st.started_at +
-         " has not finished (" + std::to_string(n) +
-         " sessions stored); results cover only those sessions. Continue it with "
-         "`palplab run STUDY --db " +
-         path_ + " --resume`.";
+  return reading(path_, [&]() -> std::string {
+    StudyRecord st = read_study();
+    if (!st.finished_at.empty()) return "";
+    std::size_t n = 0;
+    {
+      std::lock_guard lock(*mu_);
+      Stmt q(db_, version_ >= 3 ? "SELECT COUNT(*) FROM sessions WHERE status = 'complete'"
+                                : "SELECT COUNT(*) FROM sessions");
+      if (q.step()) n = static_cast<std::size_t>(q.integer(0));
+    }
+    return "warning: " + path_ + " is INCOMPLETE: the run started " + st.started_at +
+           " has not finished (" + std::to_string(n) +
+           " sessions stored); results cover only those sessions. Continue it with "
+           "`palplab run STUDY --db " +
+           path_ + " --resume`.";
+  });
 }
 
 void Store::write_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
@@ -552,30 +759,34 @@ void Store::set_finished(const std::string& finished_at) {
 }
 
 StudyRecord Store::read_study() const {
-  std::lock_guard lock(*mu_);
-  Stmt q(db_,
-         "SELECT study_id, title, json, sha256, palplab_version, git_commit, seed, started_at, "
-         "finished_at FROM study WHERE id = 1");
-  if (!q.step()) throw InputError("the database has no study record (an aborted start?)", path_);
-  StudyRecord s;
-  s.study_id = q.text(0);
-  s.title = q.text(1);
-  s.json = q.text(2);
-  s.sha256 = q.text(3);
-  s.palplab_version = q.text(4);
-  s.git_commit = q.text(5);
-  s.seed = parse_u64(q.text(6));
-  s.started_at = q.text(7);
-  s.finished_at = q.null(8) ? "" : q.text(8);
-  return s;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_,
+           "SELECT study_id, title, json, sha256, palplab_version, git_commit, seed, started_at, "
+           "finished_at FROM study WHERE id = 1");
+    if (!q.step()) throw InputError("the database has no study record (an aborted start?)", path_);
+    StudyRecord s;
+    s.study_id = q.text(0);
+    s.title = q.text(1);
+    s.json = q.text(2);
+    s.sha256 = q.text(3);
+    s.palplab_version = q.text(4);
+    s.git_commit = q.text(5);
+    s.seed = parse_u64(q.text(6));
+    s.started_at = q.text(7);
+    s.finished_at = q.null(8) ? "" : q.text(8);
+    return s;
+  });
 }
 
 std::vector<PrototypeRecord> Store::read_prototypes() const {
-  std::lock_guard lock(*mu_);
-  Stmt q(db_, "SELECT prototype, path, sha256, json FROM prototypes ORDER BY prototype");
-  std::vector<PrototypeRecord> out;
-  while (q.step()) out.push_back({q.text(0), q.text(1), q.text(2), q.text(3)});
-  return out;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT prototype, path, sha256, json FROM prototypes ORDER BY prototype");
+    std::vector<PrototypeRecord> out;
+    while (q.step()) out.push_back({q.text(0), q.text(1), q.text(2), q.text(3)});
+    return out;
+  });
 }
 
 void Store::write_structure(const StudyStructure& st) {
@@ -624,47 +835,51 @@ void Store::write_structure(const StudyStructure& st) {
 }
 
 StudyStructure Store::read_structure() const {
-  std::lock_guard lock(*mu_);
-  StudyStructure out;
-  if (version_ < 2) return out;
-  out.has_structure = true;
-  Stmt g(db_, "SELECT grp, prototype FROM study_groups ORDER BY position");
-  while (g.step()) out.groups.push_back({g.text(0), g.text(1)});
-  Stmt p(db_, version_ >= 4
-                  ? "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
-                    "audio, instructed, feature, transparency FROM phases ORDER BY position"
-                  : "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
-                    "audio, instructed, feature FROM phases ORDER BY position");
-  auto cue = [&](int c) { return p.null(c) ? std::optional<bool>() : p.integer(c) != 0; };
-  while (p.step()) {
-    PhaseRecord r;
-    r.phase = p.text(0);
-    r.kind = p.text(1);
-    r.sessions = static_cast<int>(p.integer(2));
-    r.session_duration = p.real(3);
-    r.haptic = cue(4);
-    r.visual_deformation = cue(5);
-    r.audio = cue(6);
-    r.instructed = p.integer(7) != 0;
-    r.feature = p.text(8);
-    if (version_ >= 4) r.transparency = cue(9);
-    out.phases.push_back(r);
-  }
-  Stmt t(db_, "SELECT phase, region, st, mpf, sft FROM thresholds ORDER BY phase, region");
-  while (t.step())
-    for (auto& r : out.phases)
-      if (r.phase == t.text(0))
-        r.thresholds.push_back({t.text(1), t.real(2), t.real(3), t.real(4)});
-  return out;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    StudyStructure out;
+    if (version_ < 2) return out;
+    out.has_structure = true;
+    Stmt g(db_, "SELECT grp, prototype FROM study_groups ORDER BY position");
+    while (g.step()) out.groups.push_back({g.text(0), g.text(1)});
+    Stmt p(db_, version_ >= 4
+                    ? "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
+                      "audio, instructed, feature, transparency FROM phases ORDER BY position"
+                    : "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
+                      "audio, instructed, feature FROM phases ORDER BY position");
+    auto cue = [&](int c) { return p.null(c) ? std::optional<bool>() : p.integer(c) != 0; };
+    while (p.step()) {
+      PhaseRecord r;
+      r.phase = p.text(0);
+      r.kind = p.text(1);
+      r.sessions = static_cast<int>(p.integer(2));
+      r.session_duration = p.real(3);
+      r.haptic = cue(4);
+      r.visual_deformation = cue(5);
+      r.audio = cue(6);
+      r.instructed = p.integer(7) != 0;
+      r.feature = p.text(8);
+      if (version_ >= 4) r.transparency = cue(9);
+      out.phases.push_back(r);
+    }
+    Stmt t(db_, "SELECT phase, region, st, mpf, sft FROM thresholds ORDER BY phase, region");
+    while (t.step())
+      for (auto& r : out.phases)
+        if (r.phase == t.text(0))
+          r.thresholds.push_back({t.text(1), t.real(2), t.real(3), t.real(4)});
+    return out;
+  });
 }
 
 std::vector<ParticipantRecord> Store::read_participants() const {
-  std::lock_guard lock(*mu_);
-  Stmt q(db_, "SELECT participant, grp, number, seed FROM participants ORDER BY number");
-  std::vector<ParticipantRecord> out;
-  while (q.step())
-    out.push_back({q.text(0), q.text(1), static_cast<int>(q.integer(2)), parse_u64(q.text(3))});
-  return out;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT participant, grp, number, seed FROM participants ORDER BY number");
+    std::vector<ParticipantRecord> out;
+    while (q.step())
+      out.push_back({q.text(0), q.text(1), static_cast<int>(q.integer(2)), parse_u64(q.text(3))});
+    return out;
+  });
 }
 
 namespace {
@@ -722,13 +937,17 @@ std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool comp
 }  // namespace
 
 std::vector<SessionRecord> Store::read_sessions() const {
-  std::lock_guard lock(*mu_);
-  return read_session_rows(db_, version_, true, "");
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    return read_session_rows(db_, version_, true, "");
+  });
 }
 
 std::vector<SessionRecord> Store::read_attempts(const std::string& participant) const {
-  std::lock_guard lock(*mu_);
-  return read_session_rows(db_, version_, false, participant);
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    return read_session_rows(db_, version_, false, participant);
+  });
 }
 
 void Store::begin_session(SessionRecord& r) {
@@ -821,57 +1040,103 @@ int Store::abort_stale_sessions(const std::string& participant) {
 }
 
 std::vector<MeasureRow> Store::read_measures() const {
-  std::lock_guard lock(*mu_);
-  const std::string sql =
-      "SELECT s.participant, p.grp, s.phase, s.ordinal, s.phase_index, s.session, m.name, "
-      "m.value, m.unit FROM measures m JOIN sessions s ON s.session = m.session JOIN "
-      "participants p ON p.participant = s.participant" +
-      std::string(version_ >= 3 ? " WHERE s.status = 'complete'" : "") +
-      " ORDER BY p.number, s.ordinal, m.name";
-  Stmt q(db_, sql.c_str());
-  std::vector<MeasureRow> out;
-  while (q.step()) {
-    MeasureRow r;
-    r.participant = q.text(0);
-    r.group = q.text(1);
-    r.phase = q.text(2);
-    r.ordinal = static_cast<int>(q.integer(3));
-    r.phase_index = static_cast<int>(q.integer(4));
-    r.session = q.integer(5);
-    r.name = q.text(6);
-    if (!q.null(7)) r.value = q.real(7);
-    r.unit = q.text(8);
-    out.push_back(std::move(r));
-  }
-  return out;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    const std::string sql =
+        "SELECT s.participant, p.grp, s.phase, s.ordinal, s.phase_index, s.session, m.name, "
+        "m.value, m.unit FROM measures m JOIN sessions s ON s.session = m.session JOIN "
+        "participants p ON p.participant = s.participant" +
+        std::string(version_ >= 3 ? " WHERE s.status = 'complete'" : "") +
+        " ORDER BY p.number, s.ordinal, m.name";
+    Stmt q(db_, sql.c_str());
+    std::vector<MeasureRow> out;
+    while (q.step()) {
+      MeasureRow r;
+      r.participant = q.text(0);
+      r.group = q.text(1);
+      r.phase = q.text(2);
+      r.ordinal = static_cast<int>(q.integer(3));
+      r.phase_index = static_cast<int>(q.integer(4));
+      r.session = q.integer(5);
+      r.name = q.text(6);
+      // REAL affinity stores a number as INTEGER or REAL; text left as text (or a blob) is not a
+      // number, and is refused rather than read as 0. NULL = undefined.
+      const int type = q.type(7);
+      if (type == SQLITE_INTEGER || type == SQLITE_FLOAT) {
+        r.value = q.real(7);
+        if (!std::isfinite(*r.value))  // palplab stores a non-finite value as NULL
+          throw InputError(session_label(r) + ": measure \"" + r.name + "\": value " +
+                               num(*r.value) + " is not finite (a value must be a number or NULL)",
+                           path_);
+      } else if (type != SQLITE_NULL) {
+        throw InputError(
+            session_label(r) + ": measure \"" + r.name + "\": value " +
+                (type == SQLITE_TEXT ? "'" + shown(q.text(7)) + "'" : std::string("(a blob)")) +
+                " is not a number (a value must be a number or NULL)",
+            path_);
+      }
+      r.unit = q.text(8);
+      out.push_back(std::move(r));
+    }
+    return out;
+  });
 }
 
 std::vector<EventRecord> Store::read_events(long long session) const {
-  std::lock_guard lock(*mu_);
-  Stmt q(db_, "SELECT t, kind, value, region FROM events WHERE session = ?1 ORDER BY rowid");
-  q.bind(1, session);
-  std::vector<EventRecord> out;
-  while (q.step()) out.push_back({q.real(0), q.text(1), q.real(2), q.null(3) ? "" : q.text(3)});
-  return out;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT t, kind, value, region FROM events WHERE session = ?1 ORDER BY rowid");
+    q.bind(1, session);
+    std::vector<EventRecord> out;
+    while (q.step()) out.push_back({q.real(0), q.text(1), q.real(2), q.null(3) ? "" : q.text(3)});
+    return out;
+  });
 }
 
 SampleSeries Store::read_samples(long long session) const {
-  std::lock_guard lock(*mu_);
-  Stmt q(db_, "SELECT t0, dt, n, encoding, data FROM samples WHERE session = ?1 ORDER BY second");
-  q.bind(1, session);
-  SampleSeries out;
-  bool first = true;
-  while (q.step()) {
-    if (q.text(3) != "qdv1")
-      throw InputError("unknown sample encoding \"" + q.text(3) + "\"", path_);
-    if (first) {
-      out.t0 = q.real(0);
-      out.dt = q.real(1);
-      first = false;
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    // Which session a bad row belongs to, said with its participant and phase.
+    auto where = [&](long long second) {
+      Stmt w(db_, "SELECT participant, phase, phase_index FROM sessions WHERE session = ?1");
+      w.bind(1, session);
+      const std::string s =
+          w.step() ? session_label(session, w.text(0), w.text(1), static_cast<int>(w.integer(2)))
+                   : "session " + std::to_string(session);
+      return "samples of " + s + ", second " + std::to_string(second);
+    };
+    Stmt q(db_,
+           "SELECT t0, dt, n, encoding, data, second FROM samples WHERE session = ?1 ORDER BY "
+           "second");
+    q.bind(1, session);
+    SampleSeries out;
+    bool first = true;
+    while (q.step()) {
+      if (q.text(3) != "qdv1")
+        throw InputError(where(q.integer(5)) + ": unknown sample encoding \"" + shown(q.text(3)) +
+                             "\" (expected qdv1)",
+                         path_);
+      const long long n = q.integer(2);
+      const double dt = q.real(1);
+      if (n < 0 || !(dt > 0.0 && std::isfinite(dt)) || !std::isfinite(q.real(0)))
+        throw InputError(
+            where(q.integer(5)) + ": damaged sample row (expected n >= 0, dt > 0 and a finite t0)",
+            path_);
+      if (first) {
+        out.t0 = q.real(0);
+        out.dt = dt;
+        first = false;
+      }
+      try {
+        decode_samples(q.blob(4), static_cast<std::size_t>(n), q.real(0), dt, out);
+      } catch (const std::runtime_error& e) {
+        throw InputError(where(q.integer(5)) + ": " + e.what() + ", " + std::to_string(n) +
+                             " samples expected; the database is damaged",
+                         path_);
+      }
     }
-    decode_samples(q.blob(4), static_cast<std::size_t>(q.integer(2)), q.real(0), q.real(1), out);
-  }
-  return out;
+    return out;
+  });
 }
 
 namespace {
@@ -884,37 +1149,74 @@ std::string csv(const std::string& s) {
   }
   return o + "\"";
 }
-// Shortest text that reads back as the same double (no "15.633000000000001" artefacts).
-std::string num(double v) {
-  char buf[64];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-std::ofstream open_out(const fs::path& p) {
-  std::ofstream o(p, std::ios::binary);
-  if (!o) throw InputError("cannot write (expected a writable directory)", p.string());
-  return o;
-}
+// The export's files: each is written as NAME.partial and renamed over NAME only when every
+// file is complete, so an export that fails half-way (a damaged database) leaves the files of an
+// earlier export as they were; the partial files are removed.
+class Outputs {
+ public:
+  std::ofstream open(const fs::path& p) {
+    std::error_code ec;
+    if (fs::is_directory(p, ec))
+      throw InputError("is a directory (expected the export's file " + p.filename().string() +
+                           "; move it out of the way)",
+                       p.string());
+    fs::path part = p;
+    part += ".partial";
+    std::ofstream o(part, std::ios::binary);
+    if (!o) throw InputError("cannot write (expected a writable directory)", part.string());
+    files_.push_back({part, p});
+    return o;
+  }
+  void check(const std::ofstream& o) const {
+    if (!o) throw InputError("cannot write (disk full?)", files_.back().first.string());
+  }
+  void commit() {
+    for (const auto& [part, final] : files_) {
+      std::error_code ec;
+      fs::rename(part, final, ec);
+      if (ec)
+        throw InputError("cannot rename " + part.filename().string() + " to " +
+                             final.filename().string() + ": " + ec.message(),
+                         final.string());
+    }
+    files_.clear();
+  }
+  ~Outputs() {
+    std::error_code ec;
+    for (const auto& f : files_) fs::remove(f.first, ec);
+  }
+
+ private:
+  std::vector<std::pair<fs::path, fs::path>> files_;
+};
 }  // namespace
 
 void export_csv(const Store& store, const std::string& dir, bool samples) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
-    throw InputError("cannot create the export directory: " + ec.message(), dir);
+    throw InputError(fs::exists(fs::status(dir, ec)) && !fs::is_directory(fs::status(dir, ec))
+                         ? std::string("exists and is not a directory (expected the export "
+                                       "directory)")
+                         : "cannot create the export directory: " + ec.message(),
+                     dir);
   std::map<std::string, std::string> group_of;
   for (const auto& p : store.read_participants()) group_of[p.participant] = p.group;
+  Outputs files;
   {
-    auto o = open_out(fs::path(dir) / "measures.csv");
+    const auto measures = store.read_measures();
+    auto o = files.open(fs::path(dir) / "measures.csv");
     o << "participant,group,phase,session,measure,value,unit\n";
-    for (const auto& r : store.read_measures())
+    for (const auto& r : measures)
       o << csv(r.participant) << ',' << csv(r.group) << ',' << csv(r.phase) << ','
         << (r.phase_index + 1) << ',' << csv(r.name) << ',' << (r.value ? num(*r.value) : "") << ','
         << csv(r.unit) << '\n';
+    o.flush();
+    files.check(o);
   }
   auto sessions = store.read_sessions();
   {
-    auto o = open_out(fs::path(dir) / "sessions.csv");
+    auto o = files.open(fs::path(dir) / "sessions.csv");
     o << "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
          "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at\n";
     for (const auto& s : sessions)
@@ -923,18 +1225,22 @@ void export_csv(const Store& store, const std::string& dir, bool samples) {
         << csv(s.instructor) << ',' << num(s.study_offset) << ',' << s.day << ',' << num(s.duration)
         << ',' << s.steps << ',' << num(s.wall_duration) << ',' << num(s.loop_median) << ','
         << num(s.loop_p99) << ',' << s.seed << ',' << csv(s.completed_at) << '\n';
+    o.flush();
+    files.check(o);
   }
   {
-    auto o = open_out(fs::path(dir) / "events.csv");
+    auto o = files.open(fs::path(dir) / "events.csv");
     o << "participant,group,phase,session,t,kind,value,region\n";
     for (const auto& s : sessions)
       for (const auto& e : store.read_events(s.session))
         o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
           << (s.phase_index + 1) << ',' << num(e.t) << ',' << csv(e.kind) << ',' << num(e.value)
           << ',' << csv(e.region) << '\n';
+    o.flush();
+    files.check(o);
   }
   if (samples) {
-    auto o = open_out(fs::path(dir) / "samples.csv");
+    auto o = files.open(fs::path(dir) / "samples.csv");
     o << "participant,group,phase,session,t,x,y,z,fx,fy,fz,contact_node\n";
     for (const auto& s : sessions) {
       SampleSeries ss = store.read_samples(s.session);
@@ -948,7 +1254,10 @@ void export_csv(const Store& store, const std::string& dir, bool samples) {
         o << prefix << buf;
       }
     }
+    o.flush();
+    files.check(o);
   }
+  files.commit();
 }
 
 }  // namespace palplab::results

@@ -12,6 +12,7 @@
 #include "common/input_error.hpp"
 #include "results/sha256.hpp"
 #include "results/store.hpp"
+#include "tests/results/results_test_support.hpp"
 
 using namespace palplab;
 using namespace palplab::results;
@@ -19,15 +20,9 @@ namespace fs = std::filesystem;
 
 namespace {
 fs::path tmp(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("palplab_results_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return test_support::tmp("results", name);
 }
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test_support::slurp;
 
 SessionData make_session(const std::string& participant, int ordinal, std::size_t n_samples) {
   SessionData d;

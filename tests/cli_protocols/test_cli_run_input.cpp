@@ -1,0 +1,93 @@
+// `palplab run`: flags and paths that are wrong are said as what they are (exit 2) — a mistyped
+// --resume path, --max-sessions 0, a --db in a missing directory, a directory given as --db or as
+// the study, an empty --db — and nothing is created or deleted because of them.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "../cli_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+using Result = palplab::testing::CliResult;
+using palplab::testing::run_palplab;
+using palplab::testing::scratch_dir;
+
+const char* kStudy = R"({"palplab_study": 1, "id": "inp", "title": "input", "seed": 3,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "G1", "prototype": "A", "size": 1}, {"id": "G2", "prototype": "B", "size": 1}],
+  "phases": [
+    {"id": "pre", "kind": "pre_training", "session_duration": 2, "start": {"day": 0}},
+    {"id": "test", "kind": "post_training", "session_duration": 2,
+     "start": {"after_previous": {"minutes": 10}}}]})";
+
+bool has(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+void expect_exit2(const Result& r, std::initializer_list<std::string> parts) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  for (const auto& p : parts) EXPECT_TRUE(has(r.err, p)) << r.err << "\nmissing: " << p;
+}
+
+}  // namespace
+
+TEST(CliRunInput, ResumeOfAMissingDatabaseIsRefused) {
+  auto d = scratch_dir("run_resume_missing");
+  std::ofstream(d / "s.json") << kStudy;
+  const fs::path db = d / "typo.db";
+  Result r = run_palplab(
+      "run " + (d / "s.json").string() + " --db " + db.string() + " --resume --quiet", d);
+  expect_exit2(r, {db.string(), "nothing to resume", "does not exist"});
+  EXPECT_FALSE(fs::exists(db));
+}
+
+TEST(CliRunInput, MaxSessionsZeroIsRefusedAndOneStopsAfterOne) {
+  auto d = scratch_dir("run_max0");
+  std::ofstream(d / "s.json") << kStudy;
+  const std::string base = "run " + (d / "s.json").string() + " --db " + (d / "r.db").string();
+  Result r = run_palplab(base + " --max-sessions 0 --quiet", d);
+  expect_exit2(r, {"--max-sessions", "1"});
+  EXPECT_FALSE(fs::exists(d / "r.db"));
+  Result help = run_palplab("run --help", d);
+  EXPECT_TRUE(has(help.out, "at least 1")) << help.out;
+  r = run_palplab(base + " --max-sessions 1 --jobs 1", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "1 sessions run")) << r.out;
+  EXPECT_TRUE(has(r.out, "INCOMPLETE")) << r.out;
+}
+
+TEST(CliRunInput, DatabasePathsSayWhatIsWrong) {
+  auto d = scratch_dir("run_dbpath");
+  std::ofstream(d / "s.json") << kStudy;
+  const std::string run = "run " + (d / "s.json").string() + " --quiet --db ";
+  // A directory that does not exist: not "read-only".
+  Result r = run_palplab(run + (d / "nodir" / "x.db").string(), d);
+  expect_exit2(r, {"its directory", "does not exist"});
+  EXPECT_FALSE(has(r.err, "read-only")) << r.err;
+  EXPECT_FALSE(fs::exists(d / "nodir"));
+  // A directory as the database: not "already exists; use --resume".
+  fs::create_directories(d / "adir");
+  r = run_palplab(run + (d / "adir").string(), d);
+  expect_exit2(r, {"is a directory"});
+  EXPECT_FALSE(has(r.err, "--resume")) << r.err;
+  r = run_palplab(run + (d / "adir").string() + " --resume", d);
+  expect_exit2(r, {"is a directory"});
+  EXPECT_TRUE(fs::is_directory(d / "adir"));
+  // An empty name.
+  r = run_palplab(run + "''", d);
+  expect_exit2(r, {"--db", "no database file name given"});
+}
+
+TEST(CliRunInput, StudyThatIsADirectoryIsSaidAsSuch) {
+  auto d = scratch_dir("run_studydir");
+  fs::create_directories(d / "studies");
+  Result r = run_palplab(
+      "run " + (d / "studies").string() + " --db " + (d / "r.db").string() + " --quiet", d);
+  expect_exit2(r, {(d / "studies").string(), "is a directory", "study file"});
+  EXPECT_FALSE(has(r.err, "invalid JSON")) << r.err;
+  EXPECT_FALSE(fs::exists(d / "r.db"));
+}
