@@ -1,9 +1,9 @@
 #include "analysis/csv.hpp"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -198,6 +198,10 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
 }
 
 CsvTable read_csv(const std::string& path) {
+  // A directory opens as an empty stream on Linux: say what it is, not "empty CSV file".
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError("is a directory, expected a CSV file", path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot open CSV file (does it exist and is it readable?)", path);
   std::ostringstream ss;
@@ -230,10 +234,12 @@ double parse_number(const CsvTable& t, int row, int col) {
   if (v.empty()) throw fail("empty value; expected a number (missing data are not allowed)");
   if (!decimal_form(v))
     throw fail("expected a decimal number ([+-]digits[.digits][e[+-]digits]), got '" + s + "'");
-  errno = 0;
   char* end = nullptr;
   double x = std::strtod(v.c_str(), &end);
-  if (end != v.c_str() + v.size() || !std::isfinite(x) || errno == ERANGE)
+  // Only overflow is an error (strtod returns inf). strtod reports underflow with ERANGE too,
+  // but a value below the normal range (1e-320, a subnormal) or below the smallest double
+  // (1e-400, read as 0) is a valid, correctly rounded number.
+  if (end != v.c_str() + v.size() || !std::isfinite(x))
     throw fail("expected a number within the range of a double (|x| < 1.8e308), got '" + s + "'");
   // Squares of larger values (and sums of them) overflow a double: SDs and sums of squares would
   // be inf next to finite, scale-free statistics (F, t) and some tests would go wrong (Tukey q 0).

@@ -85,6 +85,8 @@ LmmFormula parse_lmm_formula(const std::string& text) {
     if (std::find(var_order.begin(), var_order.end(), v) == var_order.end()) var_order.push_back(v);
   };
   std::vector<std::vector<std::string>> raw_terms;
+  std::map<std::string, int> fixed_pos;  // fixed-effect variable -> position in the text
+  int group_pos = 0, slope_pos = 0;
   bool have_random = false, expect_operand = true;
   while (i < tok.size()) {
     if (!expect_operand) {
@@ -101,6 +103,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       ++i;
       // (1 | g), (1 + x | g) or lme4's shorthand (x | g), which includes the intercept
       if (i < tok.size() && tok[i].kind == 'n') {
+        slope_pos = tok[i].pos;
         f.slope = tok[i++].text;
       } else {
         if (i >= tok.size() || tok[i].kind != '1')
@@ -110,6 +113,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
           ++i;
           if (i >= tok.size() || tok[i].kind != 'n')
             formula_error(at(i), "expected the random slope variable after '1 +'");
+          slope_pos = tok[i].pos;
           f.slope = tok[i++].text;
         }
       }
@@ -118,6 +122,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       ++i;
       if (i >= tok.size() || tok[i].kind != 'n')
         formula_error(at(i), "expected the grouping factor after '|'");
+      group_pos = tok[i].pos;
       f.group = tok[i++].text;
       if (i >= tok.size() || tok[i].kind != ')')
         formula_error(at(i),
@@ -138,6 +143,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
     while (true) {
       if (i >= tok.size() || tok[i].kind != 'n') formula_error(at(i), "expected a variable name");
       note_var(tok[i].text);
+      fixed_pos.emplace(tok[i].text, tok[i].pos);  // the first mention
       segments.back().push_back(tok[i++].text);
       if (i < tok.size() && tok[i].kind == ':') {
         ++i;
@@ -194,6 +200,26 @@ LmmFormula parse_lmm_formula(const std::string& text) {
   for (const auto& t : terms)
     for (const auto& v : t)
       if (v == f.response) formula_error(0, "the response '" + v + "' is also a predictor");
+  // Models that cannot be estimated (they used to print df 0 and p 1e-8, or crash):
+  if (f.group == f.response)
+    formula_error(group_pos, "the response '" + f.response + "' is also the grouping factor");
+  if (f.slope == f.response)
+    formula_error(slope_pos, "the response '" + f.response + "' is also the random slope");
+  if (f.slope == f.group)
+    formula_error(slope_pos, "the random slope '" + f.slope +
+                                 "' is also the grouping factor (a slope needs a numeric "
+                                 "column that varies within the levels of '" +
+                                 f.group + "')");
+  // A fixed effect of the grouping factor gives every level its own fixed mean, which the
+  // random intercepts of the same levels also are: the variance of the random intercepts and
+  // the fixed effects are not identifiable (both explain the same level means).
+  if (auto it = fixed_pos.find(f.group); it != fixed_pos.end())
+    formula_error(it->second,
+                  "the fixed-effect term '" + f.group +
+                      "' is also the random-effects grouping factor ('| " + f.group +
+                      "'): its fixed effects and the random intercepts both model one mean "
+                      "per level, so the model is not identifiable; remove '" +
+                      f.group + "' from the fixed effects or group by another column");
   f.terms = terms;
   return f;
 }
@@ -588,15 +614,32 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   md.XtX = md.X.transpose() * md.X;
   md.Xty = md.X.transpose() * md.y;
   {
-    // A response the fixed effects reproduce exactly (e.g. constant) leaves no variance to
-    // split between participants and residual: the model is not estimable.
-    const VectorXd resid = md.y - md.X * qr.solve(md.y);
-    const double scale = std::max(md.y.cwiseAbs().maxCoeff(), 1e-300);
-    if (!(resid.cwiseAbs().maxCoeff() > 1e-12 * scale))
-      throw InputError("the response '" + f.response +
-                           "' is fitted exactly by the fixed effects (e.g. it is constant): no "
-                           "variance is left to estimate",
-                       t.file);
+    // Random effects the fixed effects already contain: when every level's column of Z (its
+    // indicator, or the slope within it) lies in the span of X, e.g. a fixed factor that
+    // recodes the grouping factor or has one level of it per value, the random-effect
+    // variance and the fixed effects are not identifiable (the fit used to print df 0 and a
+    // p of 1e-8). Residual of each column after projection on X, with an orthonormal basis of
+    // X (stable: no normal equations).
+    const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(n, md.p);
+    for (int c = 0; c < md.k; ++c) {
+      std::vector<VectorXd> proj(md.m, VectorXd::Zero(md.p));
+      std::vector<double> norm2(md.m, 0.0);
+      for (int r = 0; r < n; ++r) {
+        proj[md.g[r]] += md.Z(r, c) * Q.row(r).transpose();
+        norm2[md.g[r]] += md.Z(r, c) * md.Z(r, c);
+      }
+      bool all_in_span = true;
+      for (int i = 0; i < md.m && all_in_span; ++i)
+        all_in_span = !(norm2[i] - proj[i].squaredNorm() > 1e-8 * norm2[i]);
+      if (all_in_span)
+        throw InputError(
+            (c == 0 ? "the random intercepts of '" + f.group + "'"
+                    : "the random slopes of '" + f.slope + "' within '" + f.group + "'") +
+                " are fully determined by the fixed effects (a fixed term recodes '" + f.group +
+                "' or has a separate level for each of its levels): the model is not "
+                "identifiable; remove that term from the fixed effects",
+            t.file);
+    }
   }
   {
     // A response the fixed effects reproduce exactly (e.g. constant) leaves no variance to

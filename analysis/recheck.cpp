@@ -1,6 +1,8 @@
 #include "analysis/recheck.hpp"
 
 #include <cmath>
+#include <cstdlib>
+#include <map>
 #include <regex>
 
 #include "analysis/anova.hpp"
@@ -8,6 +10,7 @@
 #include "analysis/summary.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "common/json_locate.hpp"
 
 namespace palplab::analysis {
 
@@ -18,10 +21,14 @@ int decimals_of(const std::string& number) {
   return dot == std::string::npos ? 0 : static_cast<int>(number.size() - dot - 1);
 }
 
-// ".001" and "0.001" both mean 0.001 (APA omits the leading zero of p).
-double to_number(const std::string& s) {
-  return std::stod(s.size() && s[0] == '.' ? "0" + s
-                                           : (s.rfind("-.", 0) == 0 ? "-0" + s.substr(1) : s));
+// ".001" and "0.001" both mean 0.001 (APA omits the leading zero of p). The text matched the
+// APA pattern (digits and a point): only a number of more than 308 digits overflows.
+double to_number(const std::string& s, const std::string& text, const SourceLocation& where) {
+  const double x = std::strtod(s.c_str(), nullptr);
+  if (!std::isfinite(x))
+    throw InputError(where, "the number " + s.substr(0, 20) +
+                                "... is beyond the range of a double, in \"" + text + "\"");
+  return x;
 }
 
 int rank(const std::string& v) {
@@ -30,35 +37,43 @@ int rank(const std::string& v) {
 
 }  // namespace
 
-ApaStatistic parse_apa(const std::string& text, const std::string& where) {
+ApaStatistic parse_apa(const std::string& text, const SourceLocation& where) {
   // F(2, 27) = 18.65, p < .001    t(17.92) = -3.02, p = .056   (spaces optional, "−" allowed)
   std::string t = std::regex_replace(text, std::regex("\xE2\x88\x92"), "-");
   static const std::regex re(
       R"(^\s*([Ft])\s*\(\s*([0-9]+(?:\.[0-9]+)?)\s*(?:,\s*([0-9]+(?:\.[0-9]+)?)\s*)?\)\s*=\s*(-?[0-9]*\.?[0-9]+)\s*,\s*p\s*([<>=])\s*([0-9]*\.[0-9]+|[01])\s*$)");
   std::smatch m;
   if (!std::regex_match(t, m, re))
-    throw InputError(SourceLocation{where},
+    throw InputError(where,
                      "expected APA text such as \"F(2, 27) = 18.65, p < .001\" or "
                      "\"t(17.9) = -3.02, p = .056\", got \"" +
                          text + "\"");
   ApaStatistic a;
   a.kind = m[1].str()[0];
-  a.df1 = to_number(m[2]);
+  a.df1 = to_number(m[2], text, where);
   a.df1_decimals = decimals_of(m[2]);
   if (a.kind == 'F') {
     if (!m[3].matched)
-      throw InputError(SourceLocation{where},
-                       "an F needs two df: F(df1, df2), got \"" + text + "\"");
-    a.df2 = to_number(m[3]);
+      throw InputError(where, "an F needs two df: F(df1, df2), got \"" + text + "\"");
+    a.df2 = to_number(m[3], text, where);
     a.df2_decimals = decimals_of(m[3]);
   } else if (m[3].matched) {
-    throw InputError(SourceLocation{where}, "a t has one df: t(df), got \"" + text + "\"");
+    throw InputError(where, "a t has one df: t(df), got \"" + text + "\"");
   }
-  a.value = to_number(m[4]);
+  a.value = to_number(m[4], text, where);
   a.value_decimals = decimals_of(m[4]);
   a.p_relation = m[5];
-  a.p = to_number(m[6]);
+  a.p = to_number(m[6], text, where);
   a.p_decimals = decimals_of(m[6]);
+  // Values no test can print are malformed input, not an inconsistency of the data.
+  const std::string got = ", got \"" + text + "\"";
+  if (!(a.df1 > 0) || (a.kind == 'F' && !(a.df2 > 0)))
+    throw InputError(where, "degrees of freedom must be > 0" + got);
+  if (a.kind == 'F' && a.value < 0)
+    throw InputError(where, "an F statistic is never negative" + got);
+  if (a.p > 1) throw InputError(where, "a p-value is at most 1" + got);
+  if (a.p_relation == "<" && a.p == 0) throw InputError(where, "no p-value is below 0" + got);
+  if (a.p_relation == ">" && a.p == 1) throw InputError(where, "no p-value is above 1" + got);
   return a;
 }
 
@@ -87,37 +102,54 @@ std::string classify_p(const std::string& relation, double reported, int decimal
 }
 
 std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& table,
-                                 const std::string& file) {
+                                 const std::string& file, std::string_view text) {
+  // Errors at a JSON path, with the line:column when the text is at hand (located on the first
+  // error only).
+  auto at = [&](const std::string& path, bool at_key = false) {
+    if (text.empty()) return SourceLocation{file, 0, 0, -1, path};
+    return json::JsonLocator(text).locate(file, path, at_key);
+  };
   if (!rep.is_object() || !rep.contains("statistics") || !rep["statistics"].is_array())
-    throw InputError(SourceLocation{file, 0, 0, -1, "$.statistics"},
-                     "expected an object with an array \"statistics\"");
+    throw InputError(at("$.statistics"), "expected an object with an array \"statistics\"");
+  if (rep["statistics"].empty())
+    throw InputError(at("$.statistics"),
+                     "no statistics: nothing to check (expected at least one {\"text\": ...})");
   auto str = [&](const nlohmann::json& j, const char* key, const std::string& path,
                  const std::string& def) -> std::string {
+    const std::string kp = json::path_key(path, key);
     if (!j.contains(key)) {
       if (!def.empty()) return def;
-      throw InputError(SourceLocation{file, 0, 0, -1, path + "." + key}, "missing key");
+      throw InputError(at(kp), "missing key");
     }
-    if (!j[key].is_string())
-      throw InputError(SourceLocation{file, 0, 0, -1, path + "." + key}, "expected a string");
+    if (!j[key].is_string()) throw InputError(at(kp), "expected a string");
     return j[key];
   };
-  const std::string def_value = rep.contains("value") ? str(rep, "value", "", "") : "";
-  const std::string def_group = rep.contains("group") ? str(rep, "group", "", "") : "";
+  const std::string def_value = rep.contains("value") ? str(rep, "value", "$", "") : "";
+  const std::string def_group = rep.contains("group") ? str(rep, "group", "$", "") : "";
   std::vector<RecheckItem> out;
+  std::map<std::string, size_t> ids;  // id -> index of the statistic that has it
   for (size_t i = 0; i < rep["statistics"].size(); ++i) {
     const auto& s = rep["statistics"][i];
-    const std::string path = "$.statistics[" + std::to_string(i) + "]";
-    if (!s.is_object())
-      throw InputError(SourceLocation{file, 0, 0, -1, path}, "expected an object");
+    const std::string path = json::path_index("$.statistics", i);
+    if (!s.is_object()) throw InputError(at(path), "expected an object");
     for (auto it = s.begin(); it != s.end(); ++it)
       if (it.key() != "id" && it.key() != "text" && it.key() != "test" && it.key() != "value" &&
           it.key() != "group" && it.key() != "where" && it.key() != "pair")
-        throw InputError(SourceLocation{file, 0, 0, -1, path + "." + it.key()},
+        throw InputError(at(json::path_key(path, it.key()), true),
                          "unknown key (expected id, text, test, value, group, where, pair)");
     RecheckItem item;
     item.id = s.contains("id") ? str(s, "id", path, "") : std::to_string(i + 1);
+    if (auto [first, fresh] = ids.emplace(item.id, i); !fresh)
+      throw InputError(at(path + ".id"), "duplicate id \"" + item.id + "\" (also $.statistics[" +
+                                             std::to_string(first->second) +
+                                             "]); each statistic needs its own id");
     item.text = str(s, "text", path, "");
-    ApaStatistic a = parse_apa(item.text, file + ": " + path + ".text");
+    ApaStatistic a;
+    try {
+      a = parse_apa(item.text, SourceLocation{file, 0, 0, -1, path + ".text"});
+    } catch (const InputError& e) {
+      throw InputError(at(path + ".text"), e.problems().front().what);
+    }
     item.test =
         s.contains("test") ? str(s, "test", path, "") : (a.kind == 'F' ? "anova" : "welch_t");
     const std::string value = str(s, "value", path, def_value);
@@ -125,26 +157,32 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
     std::vector<WhereFilter> where;
     if (s.contains("where")) {
       if (!s["where"].is_array())
-        throw InputError(SourceLocation{file, 0, 0, -1, path + ".where"},
-                         "expected an array of \"COL=VALUE\" strings");
-      for (const auto& w : s["where"]) {
-        if (!w.is_string())
-          throw InputError(SourceLocation{file, 0, 0, -1, path + ".where"},
-                           "expected \"COL=VALUE\" strings");
+        throw InputError(at(path + ".where"), "expected an array of \"COL=VALUE\" strings");
+      for (size_t k = 0; k < s["where"].size(); ++k) {
+        const auto& w = s["where"][k];
+        const std::string wp = json::path_index(path + ".where", k);
+        if (!w.is_string() || w.get<std::string>().find('=') == std::string::npos ||
+            w.get<std::string>().find('=') == 0)
+          throw InputError(at(wp), "expected a \"COL=VALUE\" string, got " + w.dump());
         where.push_back(parse_where(w));
       }
     }
-    GroupedData d = group_table(table, value, group, where);
-    double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
     const bool f_test = item.test == "anova" || item.test == "welch_anova";
     const bool t_test = item.test == "welch_t" || item.test == "student_t";
     if (!f_test && !t_test)
       throw InputError(
-          SourceLocation{file, 0, 0, -1, path + ".test"},
+          at(path + ".test"),
           "expected anova, welch_anova, welch_t or student_t, got \"" + item.test + "\"");
     if ((a.kind == 'F') != f_test)
-      throw InputError(SourceLocation{file, 0, 0, -1, path + ".test"},
+      throw InputError(at(path + ".test"),
                        "test \"" + item.test + "\" does not print as " + std::string(1, a.kind));
+    if (f_test && s.contains("pair"))
+      throw InputError(at(path + ".pair", true), "\"pair\" applies to t-tests only; an F test (" +
+                                                     item.test +
+                                                     ") compares all groups of column '" + group +
+                                                     "' (select groups with \"where\")");
+    GroupedData d = group_table(table, value, group, where);
+    double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
     if (item.test == "anova") {
       Anova r = oneway_anova(d.values);
       df1 = r.df_between, df2 = r.df_within, stat = r.F, p = r.p;
@@ -154,7 +192,7 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
     } else {
       if (!s.contains("pair") || !s["pair"].is_array() || s["pair"].size() != 2 ||
           !s["pair"][0].is_string() || !s["pair"][1].is_string())
-        throw InputError(SourceLocation{file, 0, 0, -1, path + ".pair"},
+        throw InputError(at(path + ".pair"),
                          "a t-test needs \"pair\": [\"GROUP_A\", \"GROUP_B\"] (t = A − B)");
       int ia = -1, ib = -1;
       for (size_t g = 0; g < d.names.size(); ++g) {
@@ -162,7 +200,7 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
         if (d.names[g] == s["pair"][1].get<std::string>()) ib = static_cast<int>(g);
       }
       if (ia < 0 || ib < 0 || ia == ib)
-        throw InputError(SourceLocation{file, 0, 0, -1, path + ".pair"},
+        throw InputError(at(path + ".pair"),
                          "both groups must be distinct groups of column '" + group + "'");
       TTest r = item.test == "welch_t" ? welch_t(d.values[ia], d.values[ib])
                                        : student_t(d.values[ia], d.values[ib]);

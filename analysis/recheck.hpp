@@ -13,9 +13,11 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "analysis/csv.hpp"
+#include "common/input_error.hpp"
 
 namespace palplab::analysis {
 
@@ -30,8 +32,9 @@ struct ApaStatistic {
   double p = 0;
   int p_decimals = 0;
 };
-// Throws InputError (naming `where`) when the text is not of the forms above.
-ApaStatistic parse_apa(const std::string& text, const std::string& where);
+// Throws InputError (at `where`) when the text is not of the forms above or prints an
+// impossible value: a df <= 0, a negative F, p outside [0, 1], "p < 0" or "p > 1".
+ApaStatistic parse_apa(const std::string& text, const SourceLocation& where);
 
 struct RecheckPart {
   std::string name;      // "df", "df1", "df2", "statistic", "p"
@@ -46,9 +49,12 @@ struct RecheckItem {
   std::string recomputed_apa;
 };
 
-// Recomputes every statistic of a REPORTED.json document on `table`. `file` labels errors.
+// Recomputes every statistic of a REPORTED.json document on `table`. `file` labels errors;
+// with the document's `text` (json::parse_json_file), errors also give its line:column. Bad
+// input (no statistics, unknown or inapplicable keys, impossible printed values, duplicate ids)
+// is an InputError at its JSON path.
 std::vector<RecheckItem> recheck(const nlohmann::json& reported, const CsvTable& table,
-                                 const std::string& file);
+                                 const std::string& file, std::string_view text = {});
 
 // Classifies a printed number against a recomputed one (decimals as printed).
 std::string classify_number(double reported, int decimals, double recomputed);

@@ -3,7 +3,6 @@
 // consistent, a rounding difference or inconsistent (analysis/recheck.hpp; the REPORTED.json
 // format is in docs/FORMATS.md). Exit 0 when every statistic is consistent or a rounding
 // difference, 1 when any is inconsistent, 2 on bad input.
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -11,6 +10,7 @@
 #include "analysis/recheck.hpp"
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 
 namespace {
 struct RecheckArgs {
@@ -31,16 +31,12 @@ palplab::app::CommandRegistration reg{
       cmd->add_flag("--json", a->json, "Print JSON");
       cmd->callback([a, code] {
         using namespace palplab::analysis;
-        std::ifstream in(a->reported);
-        if (!in) throw palplab::InputError("cannot open the REPORTED file", a->reported);
-        nlohmann::json rep;
-        try {
-          rep = nlohmann::json::parse(in);
-        } catch (const nlohmann::json::parse_error& e) {
-          throw palplab::InputError(std::string("not valid JSON: ") + e.what(), a->reported);
-        }
+        // The JSON reader of study files: located syntax errors, duplicate keys (nlohmann
+        // would keep the last one silently), too deep nesting, numbers beyond a double.
+        std::string text;
+        const nlohmann::json rep = palplab::json::parse_json_file(a->reported, &text);
         CsvTable t = read_csv(a->csv);
-        auto items = recheck(rep, t, a->reported);
+        auto items = recheck(rep, t, a->reported, text);
         int inconsistent = 0;
         nlohmann::json out = nlohmann::json::array();
         for (const auto& it : items) {

@@ -3,7 +3,8 @@
 //                descriptives per group, classical and
 // Welch ANOVA, every pairwise Welch t-test (Holm/Bonferroni), post-hoc tests, assumption
 // checks; APA lines. Bad input (missing column, non-numeric value, a group with < 2 values,
-// bad --where) → InputError → exit 2 with the CSV line.
+// more than 100 groups (the pairwise tests grow with their square; analysis/grouped.cpp), bad
+// --where) → InputError → exit 2 with the CSV line.
 #include <cmath>
 #include <iostream>
 #include <memory>

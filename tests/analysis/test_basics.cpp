@@ -196,3 +196,54 @@ TEST(NoncentralF, CentralLimitTruncationAndInversion) {
   EXPECT_FALSE(f_effect_ci(1e18, 2, 27).defined);
   EXPECT_THROW(noncentral_f_cdf(1, 0, 3, 1), std::invalid_argument);
 }
+
+// Review findings: strtod's ERANGE on underflow rejected valid subnormals such as 1e-320; a
+// directory was "empty CSV file"; 50 000 groups allocated 1.25e9 pairs (bad_alloc, exit 3).
+TEST(Csv, SubnormalAndUnderflowingValuesAreNumbers) {
+  auto t = parse_csv("g,v\nA,1e-320\nA,-4.9e-324\nA,1e-400\nA,1e309\n", "f.csv");
+  EXPECT_EQ(parse_number(t, 0, 1), 1e-320);
+  EXPECT_EQ(parse_number(t, 1, 1), -4.9e-324);
+  EXPECT_EQ(parse_number(t, 2, 1), 0.0);  // below the smallest double: rounds to 0
+  const std::string e = error_of([&] { parse_number(t, 3, 1); });  // overflow stays an error
+  EXPECT_NE(e.find("f.csv:5:3:"), std::string::npos) << e;
+  EXPECT_NE(e.find("range of a double"), std::string::npos) << e;
+}
+
+// ... but data whose spread is below 1e-150 cannot be squared: they gave SD 0 beside F = 5.
+TEST(Grouping, ASpreadBelowTheSquarableRangeIsRefused) {
+  auto t = parse_csv("g,v\nA,1e-200\nA,2e-200\nB,3e-200\nB,5e-200\n", "f.csv");
+  const std::string e = error_of([&] { group_table(t, "v", "g", {}); });
+  EXPECT_NE(e.find("f.csv: column 'v': the values used differ from 0 by at most 5e-200: below "
+                   "1e-150"),
+            std::string::npos)
+      << e;
+  // Tiny values beside ordinary ones, and constant data (no spread), are analysed.
+  EXPECT_EQ(
+      group_table(parse_csv("g,v\nA,1e-320\nA,1\nB,2\nB,3\n", "f.csv"), "v", "g", {}).rows_used, 4);
+  EXPECT_EQ(
+      group_table(parse_csv("g,v\nA,1e-200\nA,1e-200\nB,1e-200\nB,1e-200\n", "f.csv"), "v", "g", {})
+          .rows_used,
+      4);
+}
+
+TEST(Csv, ADirectoryIsNamedAsOne) {
+  const std::string e = error_of([] { read_csv(PALPLAB_SOURCE_DIR); });
+  EXPECT_NE(e.find("is a directory, expected a CSV file"), std::string::npos) << e;
+}
+
+TEST(Grouping, TooManyGroupsAreRefusedBeforeTheAnalysis) {
+  auto many = [](int k) {
+    std::string csv = "g,v\n";
+    for (int i = 0; i < k; ++i)
+      csv += "G" + std::to_string(i) + ",1\nG" + std::to_string(i) + ",2\n";
+    return parse_csv(csv, "f.csv");
+  };
+  EXPECT_EQ(group_table(many(100), "v", "g", {}).names.size(), 100u);  // the limit itself
+  const std::string e = error_of([&] { group_table(many(101), "v", "g", {}); });
+  EXPECT_NE(e.find("f.csv: column 'g' has 101 groups"), std::string::npos) << e;
+  EXPECT_NE(e.find("at most 100"), std::string::npos) << e;
+  EXPECT_NE(e.find("5050 pairs"), std::string::npos) << e;
+  // The review's file: 50 000 groups of 2 (1.25e9 pairs) ended in bad_alloc after 22 GB.
+  EXPECT_NE(error_of([&] { group_table(many(50000), "v", "g", {}); }).find("has 50000 groups"),
+            std::string::npos);
+}

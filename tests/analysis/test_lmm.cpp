@@ -302,3 +302,56 @@ TEST(LmmSingular, UnchangedAndAsGoodAsLme4) {
     for (int j = 0; j < 4; ++j) EXPECT_NEAR(fit.fixed[j].estimate, beta[j], 1e-10) << j;
   }
 }
+
+// A fixed effect that is also the grouping factor printed df 0.000, p 1.3e-08 and partial
+// eta^2 1.000 [0, 0] with exit 0 (review finding); the grouping factor as the response or the
+// slope crashed (segmentation fault). All are located formula errors now.
+TEST(LmmFormula, UnidentifiableModelsAreFormulaErrors) {
+  auto err = [](const std::string& f) {
+    try {
+      parse_lmm_formula(f);
+    } catch (const palplab::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string e = err("value ~ group + (1 | group)");
+  EXPECT_NE(e.find("(at character 9)"), std::string::npos) << e;
+  EXPECT_NE(e.find("fixed-effect term 'group' is also the random-effects grouping factor"),
+            std::string::npos)
+      << e;
+  e = err("value ~ session * participant + (1 + session | participant)");
+  EXPECT_NE(e.find("'participant' is also the random-effects grouping factor"), std::string::npos)
+      << e;
+  EXPECT_NE(err("participant ~ x + (1 | participant)").find("is also the grouping factor"),
+            std::string::npos);
+  EXPECT_NE(err("y ~ x + (g | g)").find("random slope 'g' is also the grouping factor"),
+            std::string::npos);
+  EXPECT_NE(err("y ~ x + (1 + y | g)").find("is also the random slope"), std::string::npos);
+  EXPECT_EQ(err("y ~ x + (1 + x | g)"), "no error");
+}
+
+// The same confounding under another name: a fixed factor that recodes the grouping factor.
+TEST(LmmFit, RandomEffectsDeterminedByTheFixedEffectsAreRefused) {
+  CsvTable t = read_csv(kDir + "study.csv");
+  t.header.push_back("alias");
+  for (auto& row : t.rows) row.push_back("Q" + row[0]);
+  t.field_line.clear();  // positions no longer match the widened rows
+  t.field_column.clear();
+  auto err = [&](const std::string& f) {
+    try {
+      fit_lmm(t, parse_lmm_formula(f), {}, true);
+    } catch (const palplab::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string e = err("value ~ alias + (1 | participant)");
+  EXPECT_NE(e.find("the random intercepts of 'participant' are fully determined by the fixed "
+                   "effects"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(err("value ~ session + alias + (1 + session | participant)").find("not identifiable"),
+            std::string::npos);
+  EXPECT_EQ(err("value ~ group * session + (1 + session | participant)"), "no error");
+}

@@ -149,3 +149,27 @@ TEST(CliLmm, BadInputExitsTwoWithLocation) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("fitted exactly by the fixed effects"), std::string::npos) << r.err;
 }
+
+// Review findings: a fixed effect that is also the grouping factor printed df 0.000, p 1.3e-08
+// and partial eta^2 1.000 [0, 0] with exit 0; the grouping factor as the slope or the response
+// crashed (segmentation fault); a directory was "empty CSV file".
+TEST(CliLmm, UnidentifiableModelsExitTwo) {
+  const std::string csv = " --csv " + fixture("study.csv");
+  Result r = run_palplab("lmm" + csv + " --formula \"value ~ group + (1 | group)\"");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("fixed-effect term 'group' is also the random-effects grouping factor"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  r = run_palplab("lmm" + csv + " --formula \"value ~ group + (session | session)\"");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("random slope 'session' is also the grouping factor"), std::string::npos)
+      << r.err;
+  r = run_palplab("lmm" + csv + " --formula \"session ~ group + (1 | session)\"");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("is also the grouping factor"), std::string::npos) << r.err;
+  const std::string dir = palplab::testing::process_scratch().string();
+  r = run_palplab("lmm --csv " + dir + " " + kStudy);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("is a directory, expected a CSV file"), std::string::npos) << r.err;
+}

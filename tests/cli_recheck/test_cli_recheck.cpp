@@ -89,3 +89,48 @@ TEST(CliRecheck, BadInputIsExitTwo) {
     std::filesystem::remove(f);
   }
 }
+
+// Review findings: a duplicate key was not detected (the last one won); impossible printed
+// values were graded "inconsistent" (exit 1) instead of being malformed input; "pair" on an F
+// test was ignored; an empty "statistics" exited 0; the top-level path was ".value".
+TEST(CliRecheck, MalformedReportsAreExitTwoWithTheLocation) {
+  const std::string csv = " --csv " + src("tests/data/r/unequal.csv");
+  struct Case {
+    const char *json, *where, *what;
+  };
+  const std::vector<Case> cases = {
+      {R"({"value":"force","value":"x","group":"group","statistics":[{"text":"F(2, 13) = 1.2, p = .3"}]})",
+       ":1:18: $.value:", "duplicate key (first defined at line 1, column 10)"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = -7.14, p = .026"}]})",
+       ":1:56: $.statistics[0].text:", "an F statistic is never negative"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p = 1.5"}]})",
+       ":1:56: $.statistics[0].text:", "a p-value is at most 1"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p > 1"}]})",
+       ":1:56: $.statistics[0].text:", "no p-value is above 1"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p < 0"}]})",
+       ":1:56: $.statistics[0].text:", "no p-value is below 0"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(0, 0) = 7.14, p = .026"}]})",
+       ":1:56: $.statistics[0].text:", "degrees of freedom must be > 0"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"t(0) = 1.2, p = .3","pair":["A","B"]}]})",
+       ":1:56: $.statistics[0].text:", "degrees of freedom must be > 0"},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p = .026","pair":["A","B"]}]})",
+       ":1:83: $.statistics[0].pair:", "applies to t-tests only"},
+      {R"({"value":"force","group":"group","statistics":[]})",
+       ":1:47: $.statistics:", "nothing to check"},
+      {R"({"value":5,"group":"group","statistics":[{"text":"F(2, 6) = 7.14, p = .026"}]})",
+       ":1:10: $.value:", "expected a string"},
+      {R"({"value":"force","group":"group","statistics":[{"id":"x","text":"F(2, 6) = 7.14, p = .026"},{"id":"x","text":"F(2, 6) = 7.14, p = .026"}]})",
+       ":1:99: $.statistics[1].id:", "duplicate id \"x\""},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p = .026","where":["phase"]}]})",
+       ":1:92: $.statistics[0].where[0]:", "expected a \"COL=VALUE\" string"},
+  };
+  for (const auto& c : cases) {
+    const std::string f = write_temp("malformed.json", c.json);
+    const Result r = run_palplab("recheck " + f + csv);
+    EXPECT_EQ(r.code, 2) << c.json << "\n" << r.out << r.err;
+    EXPECT_NE(r.err.find("error: " + f + c.where), std::string::npos)
+        << c.json << "\nexpected '" << f + c.where << "' in: " << r.err;
+    EXPECT_NE(r.err.find(c.what), std::string::npos) << c.what << " in: " << r.err;
+    std::filesystem::remove(f);
+  }
+}

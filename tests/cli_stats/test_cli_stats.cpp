@@ -296,3 +296,50 @@ TEST(CliStats, NonUtf8HexAndHugeValuesAreInputErrors) {
   EXPECT_TRUE(j["anova"]["ss_within"].is_number());  // finite, not null
   std::filesystem::remove(ok);
 }
+
+// Review findings. 1e-320 (a subnormal double) was refused as out of range (strtod's ERANGE on
+// underflow), while data that all lie below 1e-150 gave SD 0; a directory was "empty CSV file"; 50
+// 000 groups of 2 grew to 22 GB and ended in exit 3 (bad_alloc): the pairwise tables grow with the
+// square of the number of groups (150 groups took ~10 s before the limit; tests/analysis checks 50
+// 000 on group_table alone).
+TEST(CliStats, SubnormalValuesDirectoriesAndTooManyGroups) {
+  // A subnormal value beside ordinary ones is a number (min 1e-320 as strtod rounds it).
+  const std::string sub =
+      write_temp("subnormal.csv", "group,value\nA,1e-320\nA,2\nB,3\nB,-4.9e-324\nB,5\n");
+  Result r = run_palplab("stats --csv " + sub + " --value value --group group --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["groups"][0]["min"].get<double>(), 1e-320);
+  EXPECT_EQ(j["groups"][1]["min"].get<double>(), -4.9e-324);
+  EXPECT_DOUBLE_EQ(j["groups"][0]["sd"].get<double>(), std::sqrt(2.0));
+  std::filesystem::remove(sub);
+  // Values that all differ by less than 1e-150 (1e-200 was accepted before and printed SD 0
+  // beside F = 5): the squares underflow, so this is an input error that says so.
+  for (const char* csv : {"group,value\nA,1e-320\nA,2e-320\nB,3e-320\nB,5e-320\n",
+                          "group,value\nA,1e-200\nA,2e-200\nB,3e-200\nB,5e-200\n"}) {
+    const std::string path = write_temp("tiny.csv", csv);
+    r = run_palplab("stats --csv " + path + " --value value --group group");
+    EXPECT_EQ(r.code, 2) << csv << r.out << r.err;
+    EXPECT_NE(r.err.find("below 1e-150 the statistics, which square and sum the differences, "
+                         "underflow a double"),
+              std::string::npos)
+        << r.err;
+    std::filesystem::remove(path);
+  }
+
+  const std::string dir = palplab::testing::process_scratch().string();
+  r = run_palplab("stats --csv " + dir + " --value value --group group");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(dir + ": is a directory, expected a CSV file"), std::string::npos) << r.err;
+
+  std::string csv = "g,v\n";
+  for (int i = 0; i < 150; ++i)
+    csv += "G" + std::to_string(i) + ",1\nG" + std::to_string(i) + ",2\n";
+  const std::string many = write_temp("manygroups.csv", csv);
+  r = run_palplab("stats --csv " + many + " --value v --group g --json");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("column 'g' has 150 groups in the rows used; at most 100"),
+            std::string::npos)
+      << r.err;
+  std::filesystem::remove(many);
+}
