@@ -447,7 +447,11 @@ nlohmann::json parse_file_located(const std::string& path, std::string* text_out
   if (fd < 0) throw InputError("cannot open file (expected a readable JSON file)", path);
   std::string text;
   struct stat st {};
-  if (::fstat(fd, &st) == 0 && st.st_size > 0) text.reserve(static_cast<std::size_t>(st.st_size));
+  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw InputError("is a directory (expected a JSON file)", path);
+  }
+  if (st.st_size > 0) text.reserve(static_cast<std::size_t>(st.st_size));
   char chunk[16384];
   for (;;) {
     const ssize_t k = ::read(fd, chunk, sizeof chunk);

@@ -2,6 +2,7 @@
 // FILE:LINE:COL and JSON path, then thrown together as one palplab::InputError.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -62,6 +63,14 @@ std::string join(const std::vector<std::string>& v) {
 constexpr long long kMaxDays = 3650;          // 10 years
 constexpr long long kMaxSessions = 10000;     // per phase
 constexpr double kMaxSessionSeconds = 86400;  // 24 h of 1 kHz samples per session
+// The longest haptic step a prototype may have (prototypes/factory.cpp, "haptic_step" <= 0.01 s):
+// a session at least this long runs at least one step of any prototype (a shorter one would
+// store a session of 0 steps).
+constexpr double kMinSessionSeconds = 0.01;
+// Task fields: forces are bounded as the thresholds are (prototypes::read_thresholds, 1e6 N); a
+// dwell longer than a minute on the feature is no longer "touching it to identify it".
+constexpr double kMaxTaskForce = 1e6;     // N
+constexpr double kMaxIdentifyDwell = 60;  // s
 constexpr long long kMaxGroupSize = 100000;
 constexpr long long kMaxPlannedSessions = 1000000;  // participants x sessions each
 
@@ -122,6 +131,41 @@ void parse_limits(Ctx& c, const json& j, const std::string& path, engine::Thresh
   out = prototypes::read_thresholds(c, j, path);
 }
 
+// Ids end up in file names, database text and CSV cells: no control characters (C0, DEL, C1),
+// whichever id it is (study, phase, group, participant, instructor, hypothesis). The problem is
+// recorded; the caller keeps the id so that references to it do not report a second time.
+void check_id_chars(Ctx& c, const std::string& id, const std::string& path) {
+  for (std::size_t i = 0; i < id.size(); ++i) {
+    const auto b = static_cast<unsigned char>(id[i]);
+    unsigned cp = 0;
+    if (b < 0x20 || b == 0x7f)
+      cp = b;
+    else if (b == 0xC2 && i + 1 < id.size() && static_cast<unsigned char>(id[i + 1]) >= 0x80 &&
+             static_cast<unsigned char>(id[i + 1]) <= 0x9F)
+      cp = static_cast<unsigned char>(id[i + 1]);
+    else
+      continue;
+    char u[8];
+    std::snprintf(u, sizeof u, "U+%04X", cp);
+    c.err(path, std::string("expected an id without control characters, got one with ") + u +
+                    " at byte " + std::to_string(i + 1));
+    return;
+  }
+}
+
+// A non-empty id (see check_id_chars).
+std::optional<std::string> id_text(Ctx& c, const json& o, const std::string& path, const char* key,
+                                   bool required) {
+  auto v = c.nonempty_text(o, path, key, required);
+  if (v) check_id_chars(c, *v, path_key(path, key));
+  return v;
+}
+
+// " N", " s", ...: nothing for a dimensionless ("1") parameter.
+std::string unit_suffix(const std::string& unit) {
+  return unit.empty() || unit == "1" ? std::string() : " " + unit;
+}
+
 void parse_params(Ctx& c, const json& j, const std::string& path,
                   const std::vector<participants::ParamSpec>& specs, json& out) {
   if (!c.expect_object(j, path)) return;
@@ -133,8 +177,8 @@ void parse_params(Ctx& c, const json& j, const std::string& path,
     if (!v) continue;
     if (*v < s.min || *v > s.max) {
       c.err(path_key(path, s.name), std::string("expected a value in [") + json(s.min).dump() +
-                                        ", " + json(s.max).dump() + "] " + s.unit + ", got " +
-                                        json(*v).dump());
+                                        ", " + json(s.max).dump() + "]" + unit_suffix(s.unit) +
+                                        ", got " + json(*v).dump());
       continue;
     }
     out[s.name] = *v;
@@ -198,7 +242,7 @@ Study parse_study(const std::string& text, const std::string& file,
     if (*v != kStudyFormatVersion)
       c.err("$.palplab_study", "unsupported study format version " + std::to_string(*v) +
                                    " (this palplab reads version 1)");
-  if (auto v = c.nonempty_text(root, R, "id", true)) s.id = *v;
+  if (auto v = id_text(c, root, R, "id", true)) s.id = *v;
   if (auto v = c.nonempty_text(root, R, "title", true)) s.title = *v;
   if (auto v = c.nonempty_text(root, R, "description", false)) s.description = *v;
   if (auto v = c.uint64(root, R, "seed", true, "an integer >= 0")) s.seed = *v;
@@ -207,10 +251,26 @@ Study parse_study(const std::string& text, const std::string& file,
       c.err("$.prototype_dirs", std::string("expected an array of strings, got ") + kind_name(*v));
     else
       for (std::size_t i = 0; i < v->size(); ++i) {
-        if ((*v)[i].is_string())
-          s.prototype_dirs.push_back((*v)[i].get<std::string>());
-        else
-          c.err(path_index("$.prototype_dirs", i), "expected a directory path (string)");
+        const std::string DP = path_index("$.prototype_dirs", i);
+        if (!(*v)[i].is_string()) {
+          c.err(DP, "expected a directory path (string)");
+          continue;
+        }
+        const std::string d = (*v)[i].get<std::string>();
+        s.prototype_dirs.push_back(d);
+        // Resolved as prototype_search_dirs does: relative to the study file's directory.
+        namespace fs = std::filesystem;
+        fs::path sdir = fs::path(file).parent_path();
+        if (sdir.empty()) sdir = ".";
+        const fs::path dp = fs::path(d).is_absolute() ? fs::path(d) : sdir / d;
+        std::error_code ec;
+        const auto st = fs::status(dp, ec);
+        if (d.empty() || !fs::exists(st) || !fs::is_directory(st))
+          c.err(DP, "expected an existing directory of prototype files, got \"" + d + "\" (" +
+                        dp.lexically_normal().string() +
+                        (d.empty()         ? ": an empty path)"
+                         : !fs::exists(st) ? ": no such directory)"
+                                           : ": not a directory)"));
       }
   }
 
@@ -229,7 +289,7 @@ Study parse_study(const std::string& text, const std::string& file,
         c.keys(pj, P,
                {"id", "kind", "sessions", "session_duration", "start", "gap", "prototype", "cues",
                 "instructed", "instructions"});
-        if (auto v = c.nonempty_text(pj, P, "id", true)) {
+        if (auto v = id_text(c, pj, P, "id", true)) {
           p.id = *v;
           if (!phase_ids.insert(*v).second)
             c.err(path_key(P, "id"), "duplicate phase id \"" + *v + "\"");
@@ -245,9 +305,11 @@ Study parse_study(const std::string& text, const std::string& file,
             p.sessions = static_cast<int>(*v);
         }
         if (auto v = c.num(pj, P, "session_duration", true, "a duration in s > 0")) {
-          if (*v <= 0 || *v > kMaxSessionSeconds)
+          if (*v < kMinSessionSeconds || *v > kMaxSessionSeconds)
             c.err(path_key(P, "session_duration"),
-                  "expected a duration in s > 0 and at most " +
+                  "expected a duration in s of at least " + Ctx::fmt(kMinSessionSeconds) +
+                      " (the longest haptic step a prototype may have: every session runs at least "
+                      "one step) and at most " +
                       std::to_string(static_cast<int>(kMaxSessionSeconds)) + " s (24 h), got " +
                       json(*v).dump());
           else
@@ -323,7 +385,7 @@ Study parse_study(const std::string& text, const std::string& file,
         if (!c.expect_object(gj, G)) continue;
         c.keys(gj, G, {"id", "prototype", "phase_prototypes", "size", "participants"});
         Group g;
-        if (auto v = c.nonempty_text(gj, G, "id", true)) {
+        if (auto v = id_text(c, gj, G, "id", true)) {
           g.id = *v;
           if (!group_ids.insert(*v).second)
             c.err(path_key(G, "id"), "duplicate group id \"" + *v + "\"");
@@ -369,6 +431,7 @@ Study parse_study(const std::string& text, const std::string& file,
                 c.err(path_index(PL, k), "expected a participant id (string)");
                 continue;
               }
+              check_id_chars(c, e.get<std::string>(), path_index(PL, k));
               if (!participant_ids.insert(e.get<std::string>()).second)
                 c.err(path_index(PL, k),
                       "participant \"" + e.get<std::string>() + "\" is listed more than once");
@@ -406,15 +469,16 @@ Study parse_study(const std::string& text, const std::string& file,
             c.err(path_key(T, k), std::string("\"") + k + "\" applies to needle_insertion tasks");
       if (auto v = c.nonempty_text(*t, T, "scene", false)) s.task.scene = *v;
       if (auto v = c.nonempty_text(*t, T, "feature", true)) s.task.feature = *v;
-      for (auto [key, field] : {std::pair{"accuracy_tolerance", &s.task.accuracy_tolerance},
-                                {"identify_dwell", &s.task.identify_dwell},
-                                {"palpation_onset", &s.task.palpation_onset}})
-        if (auto v = c.num(*t, T, key, false, "a number > 0")) {
-          if (*v <= 0)
-            c.err(path_key(T, key), "expected a number > 0, got " + json(*v).dump());
-          else
-            *field = *v;
-        }
+      // (0, max]: a huge value is a typo (1e308 N of onset: no contact is ever a palpation).
+      if (auto v = c.number(*t, T, "accuracy_tolerance", false, 0, kMaxTaskForce,
+                            "the accuracy tolerance (N)", true))
+        s.task.accuracy_tolerance = *v;
+      if (auto v = c.number(*t, T, "identify_dwell", false, 0, kMaxIdentifyDwell,
+                            "the contact time on the feature that identifies it (s)", true))
+        s.task.identify_dwell = *v;
+      if (auto v = c.number(*t, T, "palpation_onset", false, 0, kMaxTaskForce,
+                            "the force at which a contact counts as a palpation (N)", true))
+        s.task.palpation_onset = *v;
       if (const json* th = c.member(*t, T, "thresholds", true, "region name -> {ST, MPF, SFT}")) {
         std::string TH = path_key(T, "thresholds");
         if (c.expect_object(*th, TH)) {
@@ -460,6 +524,7 @@ Study parse_study(const std::string& text, const std::string& file,
                   c.err(path_index(path_key(IN, "ids"), k), "expected an instructor id (string)");
                   continue;
                 }
+                check_id_chars(c, (*v)[k].get<std::string>(), path_index(path_key(IN, "ids"), k));
                 if (!ids.insert((*v)[k].get<std::string>()).second)
                   c.err(path_index(path_key(IN, "ids"), k), "duplicate instructor id");
                 role.ids.push_back((*v)[k].get<std::string>());
@@ -517,10 +582,20 @@ Study parse_study(const std::string& text, const std::string& file,
       for (std::size_t i = 0; i < m->size(); ++i) {
         const json& e = (*m)[i];
         auto& km = known_measures();
-        if (!e.is_string() || std::find(km.begin(), km.end(), e.get<std::string>()) == km.end())
+        if (!e.is_string() || std::find(km.begin(), km.end(), e.get<std::string>()) == km.end()) {
           c.err(path_index("$.measures", i), "expected a measure name, one of: " + join(km));
-        else
-          s.measures.push_back(e.get<std::string>());
+          continue;
+        }
+        const std::string name = e.get<std::string>();
+        if (auto it = std::find(s.measures.begin(), s.measures.end(), name);
+            it != s.measures.end()) {
+          std::size_t first = 0;  // its index in the JSON array (bad entries are not stored)
+          while ((*m)[first] != e) ++first;
+          c.err(path_index("$.measures", i), "duplicate measure \"" + name + "\" (already " +
+                                                 path_index("$.measures", first) + ")");
+          continue;
+        }
+        s.measures.push_back(name);
       }
     }
   } else {
@@ -614,7 +689,7 @@ Study parse_study(const std::string& text, const std::string& file,
                {"id", "statement", "measure", "phase", "test", "pairs", "margins", "alpha",
                 "correction", "pooled"});
         Hypothesis h;
-        if (auto v = c.nonempty_text(hj, H, "id", true)) {
+        if (auto v = id_text(c, hj, H, "id", true)) {
           h.id = *v;
           if (!ids.insert(*v).second)
             c.err(path_key(H, "id"), "duplicate hypothesis id \"" + *v + "\"");
@@ -769,7 +844,9 @@ Study parse_study(const std::string& text, const std::string& file,
 }
 
 Study load_study(const std::string& path, const PrototypeInspector& inspect) {
-  std::string text;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError("is a directory (expected a study file, JSON)", path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot open study file (expected a readable JSON file)", path);
   std::ostringstream ss;

@@ -46,7 +46,8 @@ P apply(const std::vector<ParamSpec>& specs, const nlohmann::json& overrides,
     if (!(v >= s->min && v <= s->max))
       throw InputError("participant parameter \"" + it.key() + "\": expected a value in [" +
                            nlohmann::json(s->min).dump() + ", " + nlohmann::json(s->max).dump() +
-                           "] " + s->unit + ", got " + nlohmann::json(v).dump(),
+                           "]" + (std::string(s->unit) == "1" ? "" : " " + std::string(s->unit)) +
+                           ", got " + nlohmann::json(v).dump(),
                        where);
     set(p, *s, v);
   }

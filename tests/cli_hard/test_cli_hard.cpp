@@ -152,7 +152,16 @@ TEST(HardJson, HugeNumberIsExitTwoNotThree) {
   s = study(kGroups, "", 1e300);
   spit(d / "study.json", s);
   r = cli("validate " + (d / "study.json").string(), d);
-  EXPECT_EXIT2_WITH(r, "$.phases[0].session_duration: expected a duration in s > 0 and at most");
+  EXPECT_EXIT2_WITH(r, "$.phases[0].session_duration: expected a duration in s of at least 0.01");
+  EXPECT_TRUE(has(r.err, "and at most 86400 s (24 h), got 1e+300")) << r.err;
+  // So is one shorter than a haptic step (it stored sessions of 0 steps).
+  s = study(kGroups, "", 1e-300);
+  spit(d / "study.json", s);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "study.json:5:");
+  EXPECT_TRUE(has(r.err, "$.phases[0].session_duration: expected a duration in s of at least 0.01"))
+      << r.err;
+  EXPECT_TRUE(has(r.err, "every session runs at least one step")) << r.err;
 }
 
 TEST(HardJson, AbsurdStartPositionFailsValidateWithItsRange) {
@@ -486,15 +495,29 @@ TEST(HardDb, MeshFileChangedBetweenRunAndResumeIsRefused) {
 TEST(HardDb, EscapeSequencesInNamesAreNeverEchoedRaw) {
   auto d = tmp("esc");
   const std::string esc = "\\u001b]0;pwned\\u0007\\u001b[31m";
-  // In a valid study: the plan summary shows the group id escaped.
-  std::string s = study(R"([{"id": "G)" + esc + R"(", "prototype": "A", "size": 1},
-                           {"id": "G2", "prototype": "B", "size": 1}])");
+  // In a valid study: the plan summary shows the title escaped.
+  std::string s = study();
+  s.replace(s.find("\"title\": \"hard cases\""), 21, "\"title\": \"hard" + esc + "\"");
   spit(d / "study.json", s);
   Result r = cli("validate " + (d / "study.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.out, "\x1b")) << r.out;
   EXPECT_TRUE(has(r.out, "\\x1b[31m")) << r.out;
+  // Ids (file names, database text) may not hold control characters at all: a located error,
+  // itself escaped.
+  s = study(R"([{"id": "G)" + esc + R"(", "prototype": "A", "size": 1},
+                           {"id": "G2", "prototype": "B", "size": 1}])");
+  spit(d / "study.json", s);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.groups[0].id: expected an id without control characters");
+  EXPECT_FALSE(has(r.err, "\x1b")) << r.err;
+  s = study();
+  s.replace(s.find("\"id\": \"hard\""), 12, "\"id\": \"ha\\u0000rd\"");
+  spit(d / "study.json", s);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.id: expected an id without control characters, got one with U+0000");
   // In an error message: an unknown key with escapes.
+  s = study();
   s.replace(s.find("\"seed\": 1,"), 10, "\"seed\": 1, \"k" + esc + "\": 1,");
   spit(d / "study.json", s);
   r = cli("validate " + (d / "study.json").string(), d);

@@ -220,3 +220,72 @@ TEST(CliMesh, IgnoredFlagsAndUnwritableOutputsAreInputErrors) {
   EXPECT_NE(s.err.find("TetGen files"), std::string::npos) << s.err;
   EXPECT_EQ(s.out.find("TetGen -"), std::string::npos) << s.out;
 }
+
+// Option values: each flag's range in one readable message (--max-defects printed its range as
+// "0.000000 to 179769313486231570814527..." and refused 0, which is in it), 0 / negative /
+// non-finite values refused alike instead of silently meaning "default" or "none".
+TEST(CliMesh, OptionValuesAreCheckedWithTheirRange) {
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("o162.obj")).code, 0);
+  // --max-defects 0: counts only (the defects are still counted: exit 1 on a defect).
+  Result r = run("mesh check " + p("o162.obj") + " --max-defects 0");
+  EXPECT_EQ(r.code, 0) << r.err;
+  {
+    std::ofstream f(p("open.obj"));
+    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  }
+  r = run("mesh check " + p("open.obj") + " --max-defects 0 --json");
+  EXPECT_EQ(r.code, 1) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_FALSE(j["clean"].get<bool>());
+  EXPECT_TRUE(j["defects"].empty());
+  EXPECT_TRUE(j["truncated"].get<bool>());
+  struct Case {
+    std::string args, says;
+  };
+  const std::string tet = "mesh tetrahedralize " + p("o162.obj") + " --out " + p("ot");
+  for (const Case& c : std::vector<Case>{
+           {"mesh check " + p("o162.obj") + " --max-defects -1",
+            "expected an integer in [0, 2147483647], got '-1'"},
+           {"mesh check " + p("o162.obj") + " --max-defects 1e99", "got '1e99'"},
+           {"mesh repair " + p("o162.obj") + " --out " + p("or.obj") + " --max-hole-edges -3",
+            "expected an integer in [0, 2147483647], got '-3'"},
+           {"mesh generate sphere --vertices 0 --out " + p("v0.obj"),
+            "--vertices: expected an integer in [1, 2147483647], got '0'"},
+           {"mesh generate sphere --vertices -5 --out " + p("v5.obj"), "got '-5'"},
+           {"mesh generate model-a --vertices 0 --out " + p("v0a.obj"), "got '0'"},
+           {tet + " --timeout -1", "--timeout: expected a finite number in [0, 1e+09], got '-1'"},
+           {tet + " --timeout nan", "got 'nan'"},
+           {tet + " --timeout inf", "got 'inf'"},
+           {tet + " --max-volume 0",
+            "--max-volume: expected a finite number in (0, 1e+18], got '0'"},
+           {tet + " --max-volume -1", "got '-1'"},
+           {tet + " --max-volume nan", "got 'nan'"}}) {
+    r = run(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_EQ(r.err.find("17976931348623157"), std::string::npos) << r.err;
+  }
+  for (const char* f : {"v0.obj", "v5.obj", "v0a.obj", "ot.node", "or.obj"})
+    EXPECT_FALSE(fs::exists(p(f))) << f;
+  // In range: accepted.
+  EXPECT_EQ(run(tet + " --timeout 0 --max-volume 1e-5").code, 0);
+}
+
+// A --materials file that does not exist (or is invalid) is an error whatever the mesh (a
+// surface's info does not use the table, but a typo must not pass silently).
+TEST(CliMesh, NamedMaterialsFileMustExist) {
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("m162.obj")).code, 0);
+  Result r = run("mesh info " + p("m162.obj") + " --materials /nonexistent_palplab/m.json");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("/nonexistent_palplab/m.json"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  {
+    std::ofstream f(p("badm2.json"));
+    f << R"({"materials": [{"first": 1}]})";
+  }
+  r = run("mesh info " + p("m162.obj") + " --materials " + p("badm2.json"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("$.materials[0]"), std::string::npos) << r.err;
+  ASSERT_EQ(run("mesh materials --out " + p("m2.json")).code, 0);
+  EXPECT_EQ(run("mesh info " + p("m162.obj") + " --materials " + p("m2.json")).code, 0);
+}

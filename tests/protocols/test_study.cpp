@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include "common/input_error.hpp"
+#include "protocols/participants/params.hpp"
 #include "protocols/study.hpp"
 #include "study_fixture.hpp"
 
@@ -125,9 +126,9 @@ TEST(Study, MpfAboveSft) {
 
 TEST(Study, NonPositiveDurations) {
   auto ps = problems_of("dur0", edit("\"session_duration\": 60", "\"session_duration\": 0"));
-  expect_one(ps, "$.phases[0].session_duration", 15, "expected a duration in s > 0");
+  expect_one(ps, "$.phases[0].session_duration", 15, "expected a duration in s of at least 0.01");
   auto ps2 = problems_of("durneg", edit("\"session_duration\": 30", "\"session_duration\": -30"));
-  expect_one(ps2, "$.phases[1].session_duration", 17, "expected a duration in s > 0");
+  expect_one(ps2, "$.phases[1].session_duration", 17, "expected a duration in s of at least 0.01");
   auto ps3 = problems_of("gapneg", edit("{\"minutes\": 10}", "{\"minutes\": -10}"));
   expect_one(ps3, "$.phases[0].gap.minutes", 16, "expected a number >= 0");
 }
@@ -275,4 +276,141 @@ TEST(Study, HypothesesChecked) {
       "$.hypotheses[0].pairs", 22, "about all groups");
   expect_one(problems_of("hycorr", with(base + R"("test": "welch_t", "correction": "fdr"})")),
              "$.hypotheses[0].correction", 22, "not one of");
+}
+
+// A session shorter than one haptic step ran 0 steps and stored an empty session: the minimum
+// is the longest haptic step a prototype may have (0.01 s), so every session runs >= 1 step.
+TEST(Study, SessionLastsAtLeastOneHapticStep) {
+  for (const char* tiny : {"1e-300", "0.005", "5e-324"}) {
+    auto ps =
+        problems_of(std::string("durtiny") + tiny,
+                    edit("\"session_duration\": 60", std::string("\"session_duration\": ") + tiny));
+    expect_one(ps, "$.phases[0].session_duration", 15, "expected a duration in s of at least 0.01");
+    EXPECT_NE(ps.at(0).what.find(std::string("got ")), std::string::npos);
+  }
+  std::string f = fixture::study_in_dir(
+      "durmin", edit("\"session_duration\": 60", "\"session_duration\": 0.01"));
+  EXPECT_DOUBLE_EQ(load_study(f, fixture::tract_inspector()).phases[0].session_duration, 0.01);
+}
+
+// Task fields have an upper bound like every other number: forces as the thresholds (1e6 N),
+// the identification dwell at most 60 s.
+TEST(Study, TaskDwellOnsetAndToleranceAreBounded) {
+  auto with = [](const std::string& kv) {
+    return edit("\"feature\": \"ovary_left\",", "\"feature\": \"ovary_left\", " + kv + ",");
+  };
+  expect_one(problems_of("dwellbig", with("\"identify_dwell\": 1e308")), "$.task.identify_dwell", 7,
+             "expected the contact time on the feature that identifies it (s) in (0.0, 60.0]");
+  expect_one(problems_of("dwell61", with("\"identify_dwell\": 61")), "$.task.identify_dwell", 7,
+             "value 61");
+  expect_one(problems_of("dwell0", with("\"identify_dwell\": 0")), "$.task.identify_dwell", 7,
+             "out of range");
+  expect_one(problems_of("onsetbig", with("\"palpation_onset\": 1e308")), "$.task.palpation_onset",
+             7,
+             "expected the force at which a contact counts as a palpation (N) in (0.0, 1000000.0]");
+  expect_one(problems_of("onsetneg", with("\"palpation_onset\": -1")), "$.task.palpation_onset", 7,
+             "out of range");
+  expect_one(problems_of("tolbig", with("\"accuracy_tolerance\": 1e308")),
+             "$.task.accuracy_tolerance", 7,
+             "expected the accuracy tolerance (N) in (0.0, 1000000.0]");
+  Study s = load_study(fixture::study_in_dir("taskok", with("\"identify_dwell\": 60, "
+                                                            "\"palpation_onset\": 1e6, "
+                                                            "\"accuracy_tolerance\": 0.5")),
+                       fixture::tract_inspector());
+  EXPECT_DOUBLE_EQ(s.task.identify_dwell, 60);
+  EXPECT_DOUBLE_EQ(s.task.palpation_onset, 1e6);
+  EXPECT_DOUBLE_EQ(s.task.accuracy_tolerance, 0.5);
+}
+
+TEST(Study, DuplicateMeasureNamesItsIndex) {
+  auto ps = problems_of("measdup", edit("\"phases\": [",
+                                        "\"measures\": [\"palpation_force\", \"accuracy\", "
+                                        "\"palpation_force\"], \"phases\": ["));
+  expect_one(ps, "$.measures[2]", 14,
+             "duplicate measure \"palpation_force\" (already $.measures[0])");
+}
+
+// Ids end up in file names, database text and CSV cells: control characters (C0, DEL, C1) are
+// rejected in every kind of id alike; other UTF-8 is fine.
+TEST(Study, ControlCharactersInIdsAreRejected) {
+  expect_one(problems_of("idnul", edit("\"id\": \"t\"", "\"id\": \"x\\u0000y\"")), "$.id", 3,
+             "expected an id without control characters, got one with U+0000 at byte 2");
+  expect_one(problems_of("idesc", edit("\"id\": \"t\"", "\"id\": \"t\\u001b[31m\"")), "$.id", 3,
+             "U+001B");
+  expect_one(problems_of("iddel", edit("\"id\": \"t\"", "\"id\": \"t\\u007f\"")), "$.id", 3,
+             "U+007F");
+  expect_one(problems_of("idc1", edit("\"id\": \"t\"", "\"id\": \"t\\u009b2J\"")), "$.id", 3,
+             "U+009B");
+  expect_one(problems_of("idtab", edit("\"id\": \"t\"", "\"id\": \"a\\tb\"")), "$.id", 3, "U+0009");
+  // Group and phase ids: one problem each (references to the id do not report again).
+  expect_one(problems_of("grpnul", edit("{\"id\": \"B\"", "{\"id\": \"B\\u0000\"")),
+             "$.groups[1].id", 12, "U+0000");
+  expect_one(problems_of("phnul", edit("\"id\": \"training\"", "\"id\": \"tr\\nain\"")),
+             "$.phases[0].id", 15, "U+000A");
+  std::string ex = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
+  ex = ex.replace(ex.find("\"size\": 3"), 9, "\"participants\": [\"p1\", \"p\\u0007\", \"p3\"]");
+  ex = ex.replace(ex.find("\"size\": 2"), 9, "\"participants\": [\"p4\"]");
+  expect_one(problems_of("partnul", ex), "$.groups[0].participants[1]", 11, "U+0007");
+  std::string in = fixture::reference_study("exp1_instructor.json");
+  in.replace(in.find("\"I10\"]"), 6, "\"I10\", \"I\\u001b\"]");
+  auto ps = problems_of("instrid", in);
+  ASSERT_EQ(ps.size(), 1u) << InputError(ps).what();
+  EXPECT_EQ(ps[0].where.json_path, "$.roles.instructor.ids[10]");
+  EXPECT_NE(ps[0].what.find("U+001B"), std::string::npos) << ps[0].what;
+  expect_one(problems_of("hypid", edit("  ]\n}",
+                                       "  ],\n  \"hypotheses\": [{\"id\": \"H\\u0001\", "
+                                       "\"measure\": \"accuracy\", \"phase\": \"test\", "
+                                       "\"test\": \"welch_t\"}]\n}")),
+             "$.hypotheses[0].id", 21, "U+0001");
+  std::string f = fixture::study_in_dir(
+      "idutf8", edit("\"id\": \"t\"", "\"id\": \"\\u00e9tude \\u03b1-\\u2603\""));
+  EXPECT_EQ(load_study(f, fixture::tract_inspector()).id, "\xc3\xa9tude \xce\xb1-\xe2\x98\x83");
+}
+
+TEST(Study, PrototypeDirsMustBeExistingDirectories) {
+  auto with = [](const std::string& dirs) {
+    return edit("\"seed\": 7,", "\"seed\": 7, \"prototype_dirs\": " + dirs + ",");
+  };
+  expect_one(problems_of("pdnone", with("[\"no_such_dir\"]")), "$.prototype_dirs[0]", 5,
+             "expected an existing directory of prototype files, got \"no_such_dir\"");
+  auto ps = problems_of("pdnone2", with("[\"no_such_dir\"]"));
+  EXPECT_NE(ps.at(0).what.find("no_such_dir: no such directory)"), std::string::npos) << ps[0].what;
+  expect_one(problems_of("pdfile", with("[\".\", \"/etc/passwd\"]")), "$.prototype_dirs[1]", 5,
+             "/etc/passwd: not a directory)");
+  expect_one(problems_of("pdrelfile", with("[\"A.json\"]")), "$.prototype_dirs[0]", 5,
+             "not a directory");
+  expect_one(problems_of("pdempty", with("[\"\"]")), "$.prototype_dirs[0]", 5, "an empty path");
+  // Existing directories, relative (to the study file) or absolute, are fine.
+  std::string f = fixture::study_in_dir(
+      "pdok", with("[\".\", \"" + std::filesystem::temp_directory_path().string() + "\"]"));
+  EXPECT_EQ(load_study(f, fixture::tract_inspector()).prototype_dirs.size(), 2u);
+}
+
+// A dimensionless parameter's range has no unit after it (it read "[0.01, 0.5] 1, got -1.0");
+// a parameter with a unit keeps it. The same wording from the study validator and from
+// trainee_params().
+TEST(Study, ParameterRangeMessageHasNoStrayUnit) {
+  auto ps = problems_of("pmneg", edit("\"phases\": [",
+                                      "\"participant_model\": {\"parameters\": "
+                                      "{\"weber_fraction\": -1}}, \"phases\": ["));
+  expect_one(ps, "$.participant_model.parameters.weber_fraction", 14,
+             "expected a value in [0.01, 0.5], got -1");
+  ps = problems_of("pmtau", edit("\"phases\": [",
+                                 "\"participant_model\": {\"parameters\": "
+                                 "{\"forgetting_tau\": -1}}, \"phases\": ["));
+  expect_one(ps, "$.participant_model.parameters.forgetting_tau", 14, "] s, got -1");
+  try {
+    participants::trainee_params(nlohmann::json{{"weber_fraction", -1.0}});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("expected a value in [0.01, 0.5], got -1"), std::string::npos) << w;
+  }
+  try {
+    participants::trainee_params(nlohmann::json{{"forgetting_tau", -1.0}});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("] s, got -1"), std::string::npos) << w;
+  }
 }
