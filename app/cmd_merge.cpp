@@ -52,6 +52,9 @@ palplab::app::CommandRegistration reg{
           }
         }
         auto summary = palplab::protocols::power_summary(files, a->alpha, a->target);
+        // As `palplab power` does: never overwrite (or mix in) another study's results.
+        palplab::protocols::check_out_dir_study(a->out,
+                                                summary.at("study_sha256").get<std::string>());
         std::cout << palplab::protocols::write_power_report(summary, a->out) << "\nmerged "
                   << files.size() << " replicate files into " << a->out << "\n";
         *code = 0;

@@ -32,28 +32,62 @@ void mean_sd(const std::vector<double>& x, double& m, double& sd) {
 
 }  // namespace
 
+namespace {
+
+// The values a measure can take (protocols/measures.hpp); "" when any number will do.
+std::string out_of_range(const std::string& measure, double v) {
+  if (measure == "feature_identified") return v == 0 || v == 1 ? "" : "0 or 1";
+  if (measure == "accuracy") return v >= 0 && v <= 100 ? "" : "a percentage from 0 to 100";
+  if (measure == "palpations" || measure == "sft_reached" || measure == "insertion_attempts" ||
+      measure == "layers_passed" || measure == "bone_contacts")
+    return v >= 0 && v == std::floor(v) ? "" : "a count, a whole number >= 0";
+  if (measure == "palpation_force" || measure == "exploration_time" ||
+      measure == "procedure_time" || measure == "tip_to_target_mm")
+    return v >= 0 ? "" : "a number >= 0 (" + measure_unit(measure) + ")";
+  return "";
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+  return s;
+}
+
+}  // namespace
+
 std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   const analysis::CsvTable t = analysis::read_csv(csv_path);
-  int col[5];
-  const char* names[5] = {"group", "phase", "session", "measure", "value"};
-  for (int i = 0; i < 5; ++i) {
+  int col[6];
+  const char* names[6] = {"group", "phase", "session", "measure", "value", "participant"};
+  for (int i = 0; i < 6; ++i) {
     col[i] = analysis::column_index(t, names[i]);
     if (col[i] < 0)
       throw InputError(SourceLocation{csv_path, 1, 1},
                        std::string("missing column \"") + names[i] +
                            "\" (expected participant,group,phase,session,measure,value)");
   }
-  std::map<std::tuple<std::string, std::string, int, std::string>, std::vector<double>> values;
-  std::map<std::tuple<std::string, std::string, int, std::string>, int> first_line;
-  std::vector<std::tuple<std::string, std::string, int, std::string>> order;
-  std::map<std::tuple<std::string, std::string, int, std::string>, int> undefined;
+  using Key = std::tuple<std::string, std::string, int, std::string>;
+  std::map<Key, std::vector<double>> values;
+  std::map<Key, int> first_line;
+  std::vector<Key> order;
+  std::map<Key, int> undefined;
+  // (participant, cell) -> the line it was first given on: one value per participant and cell.
+  std::map<std::pair<std::string, Key>, int> seen;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const double s = analysis::parse_number(t, static_cast<int>(r), col[2]);
-    if (s < 1 || s != std::floor(s))
+    if (s < 1 || s != std::floor(s) || s > 1e6)
       throw InputError(SourceLocation{csv_path, t.line[r], 1},
                        "column 'session': expected a session number >= 1 within the phase");
     auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], static_cast<int>(s),
                                t.rows[r][col[3]]);
+    const std::string& participant = t.rows[r][col[5]];
+    if (auto [it, fresh] = seen.emplace(std::make_pair(participant, key), t.line[r]); !fresh)
+      throw InputError(SourceLocation{csv_path, t.line[r], 1},
+                       "participant " + participant + ", group " + std::get<0>(key) + ", phase " +
+                           std::get<1>(key) + ", session " + std::to_string(std::get<2>(key)) +
+                           ", measure " + std::get<3>(key) + " is given twice (lines " +
+                           std::to_string(it->second) + " and " + std::to_string(t.line[r]) +
+                           "); expected one value per participant, session and measure");
     // An undefined measure (empty or NA, as `palplab export` and R write it) is no value.
     const std::string& field = t.rows[r][col[4]];
     if (!values.count(key)) order.push_back(key), first_line[key] = t.line[r];
@@ -62,7 +96,14 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
       values[key];
       continue;
     }
-    values[key].push_back(analysis::parse_number(t, static_cast<int>(r), col[4]));
+    const double v = analysis::parse_number(t, static_cast<int>(r), col[4]);
+    if (const std::string expected = out_of_range(std::get<3>(key), v); !expected.empty()) {
+      const std::size_t f = r * t.header.size() + col[4];
+      throw InputError(
+          SourceLocation{csv_path, t.field_line[f], t.field_column[f]},
+          "column 'value': " + std::get<3>(key) + " must be " + expected + ", got " + field);
+    }
+    values[key].push_back(v);
   }
   if (order.empty()) throw InputError("no data rows", csv_path);
   std::vector<HumanCell> cells;
@@ -70,6 +111,8 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     const auto& v = values[key];
     HumanCell c{std::get<0>(key), std::get<1>(key),           std::get<2>(key),
                 std::get<3>(key), static_cast<int>(v.size()), undefined[key]};
+    c.file = csv_path;
+    c.line = first_line[key];
     if (c.n < 2)
       throw InputError(SourceLocation{csv_path, first_line[key], 1},
                        "group " + c.group + ", " + c.measure + ": fewer than 2 values");
@@ -98,9 +141,10 @@ double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int 
       }
     const int total = static_cast<int>(x.size()) + f.undefined;
     if (total == 0)
-      throw InputError("the human data have a cell the study does not simulate: group " + c.group +
-                       ", phase " + c.phase + ", session " + std::to_string(c.session) +
-                       ", measure " + c.measure);
+      throw InputError(SourceLocation{c.file, c.line},
+                       "the human data have a cell the study does not simulate: group " + c.group +
+                           ", phase " + c.phase + ", session " + std::to_string(c.session) +
+                           ", measure " + c.measure);
     f.n_sim = static_cast<int>(x.size());
     if (x.size() < 2) {
       f.mean = f.sd = f.z_mean = f.z_sd = kNaN;
@@ -257,15 +301,62 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
                             const CalibrateOptions& opt) {
   namespace pm = participants;
   if (opt.keys.empty()) throw InputError("--params: name at least one parameter to fit");
+  for (std::size_t i = 0; i < opt.keys.size(); ++i)
+    if (std::find(opt.keys.begin(), opt.keys.begin() + i, opt.keys[i]) != opt.keys.begin() + i)
+      throw InputError(SourceLocation{"--params"},
+                       "\"" + opt.keys[i] + "\" is named twice (expected each parameter once)");
+  // --measures: the study's measures and those its task computes (all are simulated).
+  std::vector<std::string> simulated = study.measures;
+  for (const auto& m : default_measures(study.task.kind))
+    if (std::find(simulated.begin(), simulated.end(), m) == simulated.end()) simulated.push_back(m);
+  for (std::size_t i = 0; i < opt.measures.size(); ++i) {
+    const std::string& m = opt.measures[i];
+    if (std::find(simulated.begin(), simulated.end(), m) == simulated.end())
+      throw InputError(
+          SourceLocation{"--measures"},
+          "\"" + m + "\" is not a measure of the study (expected one of: " + join(simulated) + ")");
+    if (std::find(opt.measures.begin(), opt.measures.begin() + i, m) != opt.measures.begin() + i)
+      throw InputError(SourceLocation{"--measures"},
+                       "\"" + m + "\" is named twice (expected each measure once)");
+  }
   CalibrationResult r;
   r.keys = opt.keys;
   const std::vector<std::string>& measures = opt.measures.empty() ? study.measures : opt.measures;
   std::vector<HumanCell> used;
   for (const auto& c : cells)
     if (std::find(measures.begin(), measures.end(), c.measure) != measures.end()) used.push_back(c);
-  if (used.empty())
-    throw InputError("the human data have no cell of the measures to fit (" +
-                     std::to_string(measures.size()) + " measures named)");
+  if (used.empty()) {
+    std::vector<std::string> in_data;
+    for (const auto& c : cells)
+      if (std::find(in_data.begin(), in_data.end(), c.measure) == in_data.end())
+        in_data.push_back(c.measure);
+    throw InputError("the human data have no cell of the measures to fit (" + join(measures) +
+                         "); their measures: " + join(in_data) +
+                         " (choose the measures with --measures)",
+                     cells.empty() ? std::string() : cells.front().file);
+  }
+  // Every cell fitted must be one the study simulates: checked now, not after a simulation.
+  for (const auto& c : used) {
+    auto fail = [&](const std::string& what) {
+      return InputError(SourceLocation{c.file, c.line},
+                        "the human data have a cell the study does not simulate: " + what);
+    };
+    std::vector<std::string> ids;
+    for (const auto& g : study.groups) ids.push_back(g.id);
+    if (std::find(ids.begin(), ids.end(), c.group) == ids.end())
+      throw fail("group \"" + c.group + "\" (the study's groups: " + join(ids) + ")");
+    ids.clear();
+    const Phase* phase = nullptr;
+    for (const auto& p : study.phases) {
+      ids.push_back(p.id);
+      if (p.id == c.phase) phase = &p;
+    }
+    if (!phase) throw fail("phase \"" + c.phase + "\" (the study's phases: " + join(ids) + ")");
+    if (c.session > phase->sessions)
+      throw fail("session " + std::to_string(c.session) + " of phase " + c.phase + " (it has " +
+                 std::to_string(phase->sessions) + " session" + (phase->sessions == 1 ? "" : "s") +
+                 ")");
+  }
   std::vector<double> lo, hi, step;
   const pm::TraineeParams current = pm::trainee_params(study.participant_parameters, study.file);
   for (const auto& k : opt.keys) {

@@ -34,11 +34,16 @@ struct HumanCell {
   int n = 0;          // defined values
   int undefined = 0;  // empty / NA values (e.g. the feature was never found)
   double mean = 0.0, sd = 0.0;
+  std::string file;  // the CSV and the line of the cell's first row, for messages
+  int line = 0;
 };
 
 // Reads a tidy CSV (columns participant, group, phase, session, measure, value) into cells
 // (empty or NA values, i.e. undefined measures, are left out);
-// InputError with the line for missing columns, non-numbers, or cells with fewer than 2 values.
+// InputError with the line for missing columns, non-numbers, a value outside its measure's range
+// (feature_identified 0 or 1, accuracy 0–100 %, counts whole numbers >= 0, forces, times and
+// distances >= 0), a (participant, group, phase, session, measure) given twice, or cells with
+// fewer than 2 values.
 std::vector<HumanCell> read_human_cells(const std::string& csv_path);
 
 struct CellFit {

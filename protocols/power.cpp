@@ -137,22 +137,122 @@ void repair_tail(const std::string& path) {
   fs::resize_file(path, keep);
 }
 
-std::vector<nlohmann::json> read_replicates(const std::string& path) {
-  std::vector<nlohmann::json> out;
-  std::ifstream in(path);
+// The limits `palplab power` writes within (--n 2..100000, --replicates 1..10000000).
+constexpr long long kMaxN = 100000, kMaxReplicates = 10000000;
+
+// A JSON value as shown in a message (cut when long).
+std::string shown(const nlohmann::json& v) {
+  std::string s = v.dump();
+  return s.size() > 40 ? s.substr(0, 37) + "..." : s;
+}
+
+bool integer_in(const nlohmann::json& v, long long lo, long long hi) {
+  if (v.is_number_unsigned()) {
+    const std::uint64_t u = v.get<std::uint64_t>();
+    return u <= static_cast<std::uint64_t>(hi) && static_cast<long long>(u) >= lo;
+  }
+  if (v.is_number_integer()) return v.get<long long>() >= lo && v.get<long long>() <= hi;
+  return false;
+}
+
+// Checks one replicate record (docs/FORMATS.md "Power-analysis and calibration files") so that
+// the summary can read it without surprises: InputError at FILE:LINE: $.field.
+void check_replicate(const nlohmann::json& r, const std::string& path, int line) {
+  auto fail = [&](const std::string& json_path, const std::string& what) {
+    return InputError(SourceLocation{path, line, 0, -1, json_path}, what);
+  };
+  if (!r.is_object())
+    throw fail("$",
+               "expected a replicate record (a JSON object with study_sha256, study, n, "
+               "replicate, seed and tests), got " +
+                   shown(r));
+  auto member = [&](const char* key, const std::string& expected) -> const nlohmann::json& {
+    auto it = r.find(key);
+    if (it == r.end()) throw fail("$", "missing \"" + std::string(key) + "\" (" + expected + ")");
+    return *it;
+  };
+  for (const char* key : {"study_sha256", "study"})
+    if (!member(key, "a string").is_string())
+      throw fail(std::string("$.") + key, "expected a string, got " + shown(r.at(key)));
+  const std::string n_what = "the group size, an integer from 2 to " + std::to_string(kMaxN);
+  if (!integer_in(member("n", n_what), 2, kMaxN))
+    throw fail("$.n", "expected " + n_what + ", got " + shown(r.at("n")));
+  const std::string rep_what =
+      "the 0-based replicate index, an integer from 0 to " + std::to_string(kMaxReplicates - 1);
+  if (!integer_in(member("replicate", rep_what), 0, kMaxReplicates - 1))
+    throw fail("$.replicate", "expected " + rep_what + ", got " + shown(r.at("replicate")));
+  if (!member("seed", "the replicate's seed").is_number_unsigned() &&
+      !(r.at("seed").is_number_integer() && r.at("seed").get<long long>() >= 0))
+    throw fail("$.seed",
+               "expected the replicate's seed, an integer >= 0, got " + shown(r.at("seed")));
+  const nlohmann::json& tests = member("tests", "an array of test outcomes");
+  if (!tests.is_array())
+    throw fail(
+        "$.tests",
+        "expected an array of {\"id\", \"p\", \"effect\", \"effect_name\"}, got " + shown(tests));
+  for (std::size_t i = 0; i < tests.size(); ++i) {
+    const nlohmann::json& t = tests[i];
+    const std::string tp = "$.tests[" + std::to_string(i) + "]";
+    if (!t.is_object())
+      throw fail(tp, "expected a test outcome {\"id\", \"p\", \"effect\", \"effect_name\"}, got " +
+                         shown(t));
+    for (const char* key : {"id", "effect_name"}) {
+      auto it = t.find(key);
+      if (it == t.end() || !it->is_string() ||
+          (std::string(key) == "id" && it->get<std::string>().empty()))
+        throw fail(tp + "." + key, it == t.end()
+                                       ? "missing (expected a string)"
+                                       : "expected a non-empty string, got " + shown(*it));
+    }
+    auto p = t.find("p");
+    if (p == t.end() ||
+        !(p->is_null() || (p->is_number() && p->get<double>() >= 0 && p->get<double>() <= 1)))
+      throw fail(tp + ".p", std::string("expected a p-value in [0, 1] or null (undefined), ") +
+                                (p == t.end() ? "missing" : "got " + shown(*p)));
+    const bool eta = t.at("effect_name") == "eta_squared";
+    auto e = t.find("effect");
+    if (e == t.end() ||
+        !(e->is_null() ||
+          (e->is_number() && (!eta || (e->get<double>() >= 0 && e->get<double>() <= 1)))))
+      throw fail(tp + ".effect",
+                 std::string("expected the effect size, ") + (eta ? "η² in [0, 1]" : "a number") +
+                     ", or null (undefined), " + (e == t.end() ? "missing" : "got " + shown(*e)));
+  }
+}
+
+struct ReplicateLine {
+  nlohmann::json record;
+  int line = 0;
+};
+
+// Reads and checks every record. A last line without its newline that is not a whole record was
+// being written when the run was interrupted: `palplab power` cuts it on resume (repair_tail)
+// and simulates that replicate again, so it is an error here rather than silently dropped.
+std::vector<ReplicateLine> read_replicates(const std::string& path) {
+  std::vector<ReplicateLine> out;
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read replicate file", path);
   std::string line;
   int no = 0;
   while (std::getline(in, line)) {
     ++no;
-    if (line.empty()) continue;
+    const bool unterminated = in.eof();
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos) continue;
+    nlohmann::json r;
     try {
-      out.push_back(nlohmann::json::parse(line));
+      r = nlohmann::json::parse(line);
     } catch (const std::exception&) {
-      // Only an interrupted last line may be incomplete.
-      if (in.peek() == EOF) break;
+      if (unterminated)
+        throw InputError(SourceLocation{path, no, 1},
+                         "the last line is incomplete (the run writing this file was interrupted "
+                         "mid-line); rerun that `palplab power` command with the same --out (and "
+                         "--shard): it resumes, cuts the incomplete line and simulates the "
+                         "replicate again. Or delete the line to merge without it");
       throw InputError(SourceLocation{path, no, 1}, "not a replicate record (JSON line)");
     }
+    check_replicate(r, path, no);
+    out.push_back({std::move(r), no});
   }
   return out;
 }
@@ -279,12 +379,13 @@ long run_power(const Study& study, const PowerOptions& opt) {
       throw InputError("cannot create the output directory", opt.out_dir);
     repair_tail(file);
     if (fs::exists(file))
-      for (const auto& r : read_replicates(file)) {
-        if (r.value("study_sha256", "") != sha)
+      for (const auto& [r, line] : read_replicates(file)) {
+        if (r.at("study_sha256") != sha)
           throw InputError(
               "the replicate file holds another study (SHA-256 differs); use another --out", file);
         done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
       }
+    check_out_dir_study(opt.out_dir, sha);  // its power.json and other shards' files
   }
   // Every rank needs to know what is done: rank 0 read it; share as text.
   std::string done_text;
@@ -379,24 +480,31 @@ long run_power(const Study& study, const PowerOptions& opt) {
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
                              double target_power) {
   std::map<std::pair<int, int>, nlohmann::json> reps;
+  std::map<std::pair<int, int>, std::string> where;  // FILE:LINE each replicate came from
   std::string sha, study_id;
+  std::string first;  // FILE:LINE of the first replicate read
   for (const auto& f : files)
-    for (auto& r : read_replicates(f)) {
-      const std::string s = r.value("study_sha256", "");
-      if (sha.empty()) sha = s, study_id = r.value("study", "");
+    for (auto& [r, line] : read_replicates(f)) {
+      const SourceLocation here{f, line};
+      const std::string at = f + ":" + std::to_string(line);
+      const std::string s = r.at("study_sha256").get<std::string>();
+      if (first.empty()) sha = s, study_id = r.at("study").get<std::string>(), first = at;
       if (s != sha)
-        throw InputError("replicates of different studies (SHA-256 " + s.substr(0, 12) + " vs " +
-                             sha.substr(0, 12) + ")",
-                         f);
+        throw InputError(SourceLocation{f, line, 0, -1, "$.study_sha256"},
+                         "replicate of another study (SHA-256 " + s.substr(0, 12) +
+                             ") than the one at " + first + " (SHA-256 " + sha.substr(0, 12) +
+                             "); merge the shards of one study");
       const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
       if (auto it = reps.find(key); it != reps.end()) {
         if (it->second != r)
-          throw InputError("replicate n=" + std::to_string(key.first) + " #" +
-                               std::to_string(key.second) + " differs between files",
-                           f);
+          throw InputError(here, "replicate n=" + std::to_string(key.first) + " #" +
+                                     std::to_string(key.second) + " differs from the one at " +
+                                     where[key] +
+                                     " (the same replicate must give the same record)");
         continue;
       }
       reps.emplace(key, std::move(r));
+      where.emplace(key, at);
     }
   if (reps.empty()) throw InputError("no replicates found", files.empty() ? "" : files.front());
 
@@ -437,8 +545,11 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
     nlohmann::json smallest = nullptr;
     for (auto& [n, c] : cells[id]) {
       std::sort(c.effects.begin(), c.effects.end());
+      // An undefined test counts as not significant; with no defined test at all there is no
+      // estimate (0 would read as "the test never detects the effect").
+      const bool estimable = c.undefined < c.reps;
       const auto [lo, hi] = wilson_interval(c.significant, c.reps);
-      const double power = static_cast<double>(c.significant) / c.reps;
+      const double power = estimable ? static_cast<double>(c.significant) / c.reps : kNaN;
       double mean = kNaN;
       if (!c.effects.empty()) {
         mean = 0;
@@ -449,19 +560,56 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
                            {"replicates", c.reps},
                            {"significant", c.significant},
                            {"undefined", c.undefined},
-                           {"power", power},
-                           {"ci_low", lo},
-                           {"ci_high", hi},
+                           {"power", num_or_null(power)},
+                           {"ci_low", estimable ? nlohmann::json(lo) : nlohmann::json()},
+                           {"ci_high", estimable ? nlohmann::json(hi) : nlohmann::json()},
                            {"effect_mean", num_or_null(mean)},
                            {"effect_q025", num_or_null(quantile(c.effects, 0.025))},
                            {"effect_median", num_or_null(quantile(c.effects, 0.5))},
                            {"effect_q975", num_or_null(quantile(c.effects, 0.975))}});
-      if (smallest.is_null() && power >= target_power) smallest = n;
+      if (smallest.is_null() && estimable && power >= target_power) smallest = n;
     }
     t["smallest_n"] = smallest;
     out["tests"].push_back(t);
   }
   return out;
+}
+
+void check_out_dir_study(const std::string& out_dir, const std::string& sha) {
+  std::error_code ec;
+  if (!fs::is_directory(out_dir, ec)) return;
+  auto refuse = [&](const fs::path& file, const std::string& what) {
+    return InputError(what + "; use another --out (or remove it)", file.string());
+  };
+  const fs::path summary = fs::path(out_dir) / "power.json";
+  if (fs::exists(summary, ec)) {
+    std::ifstream in(summary, std::ios::binary);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (!j.is_object() || !j.contains("study_sha256") || !j.at("study_sha256").is_string())
+      throw refuse(summary,
+                   "the output directory holds a power.json that is not a palplab power "
+                   "summary");
+    if (j.at("study_sha256") != sha)
+      throw refuse(summary,
+                   "the output directory holds the power summary of another study "
+                   "(SHA-256 " +
+                       j.at("study_sha256").get<std::string>().substr(0, 12) + " vs " +
+                       sha.substr(0, 12) + ")");
+  }
+  // The first record of each replicate file tells its study.
+  for (const auto& e : fs::directory_iterator(out_dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("replicates", 0) != 0 || e.path().extension() != ".jsonl") continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    std::string line;
+    while (std::getline(in, line) && line.find_first_not_of(" \t\r") == std::string::npos) {
+    }
+    const nlohmann::json r = nlohmann::json::parse(line, nullptr, false);
+    if (r.is_object() && r.contains("study_sha256") && r.at("study_sha256") != sha)
+      throw refuse(e.path(),
+                   "the output directory holds replicates of another study (SHA-256 "
+                   "differs)");
+  }
 }
 
 std::string write_power_report(const nlohmann::json& s, const std::string& out_dir) {
@@ -478,9 +626,12 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
      << "alpha = " << s.at("alpha").get<double>() << ", target power "
      << s.at("target_power").get<double>()
      << "; power = share of replicates with p < alpha, 95 % Monte Carlo interval (Wilson); "
-        "effect: η² (ANOVA) or Hedges' g (pairs), median [2.5 %, 97.5 %].\n\n"
-     << "| test | n per group | replicates | power | 95 % CI | effect median [2.5 %, 97.5 %] |\n"
-     << "|---|---:|---:|---:|---|---|\n";
+        "undefined = replicates in which the test had no p-value (counted as not significant; "
+        "— when it was undefined in all); effect: η² (ANOVA) or Hedges' g (pairs), median "
+        "[2.5 %, 97.5 %].\n\n"
+     << "| test | n per group | replicates | undefined | power | 95 % CI | effect median [2.5 %, "
+        "97.5 %] |\n"
+     << "|---|---:|---:|---:|---:|---|---|\n";
   std::vector<analysis::Series> series;
   int colour = 0;
   for (const auto& t : s.at("tests")) {
@@ -489,22 +640,41 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     line.colour = colour++;
     for (const auto& c : t.at("by_n")) {
       md << "| " << line.name << " | " << c.at("n").get<int>() << " | "
-         << c.at("replicates").get<long>() << " | " << fmt(c.at("power"), 3) << " | ["
-         << fmt(c.at("ci_low"), 3) << ", " << fmt(c.at("ci_high"), 3) << "] | "
-         << fmt(c.at("effect_median"), 2) << " [" << fmt(c.at("effect_q025"), 2) << ", "
+         << c.at("replicates").get<long>() << " | " << c.value("undefined", 0L) << " | "
+         << fmt(c.at("power"), 3) << " | "
+         << (c.at("ci_low").is_number()
+                 ? "[" + fmt(c.at("ci_low"), 3) + ", " + fmt(c.at("ci_high"), 3) + "]"
+                 : std::string("—"))
+         << " | " << fmt(c.at("effect_median"), 2) << " [" << fmt(c.at("effect_q025"), 2) << ", "
          << fmt(c.at("effect_q975"), 2) << "] |\n";
       line.x.push_back(c.at("n").get<double>());
+      if (!c.at("power").is_number()) {  // undefined in every replicate: no point drawn
+        line.y.push_back(kNaN);
+        line.err.push_back(kNaN);
+        continue;
+      }
       line.y.push_back(c.at("power").get<double>());
       line.err.push_back((c.at("ci_high").get<double>() - c.at("ci_low").get<double>()) / 2);
     }
     series.push_back(line);
   }
   md << "\nSmallest n per group reaching the target power:\n\n";
-  for (const auto& t : s.at("tests"))
-    md << "- " << t.at("id").get<std::string>() << ": "
-       << (t.at("smallest_n").is_null() ? std::string("not reached in the simulated sizes")
-                                        : std::to_string(t.at("smallest_n").get<int>()))
+  for (const auto& t : s.at("tests")) {
+    md << "- " << t.at("id").get<std::string>() << ": ";
+    if (!t.at("smallest_n").is_null()) {
+      md << t.at("smallest_n").get<int>() << "\n";
+      continue;
+    }
+    std::string undefined_at;  // the sizes at which the test was never defined
+    for (const auto& c : t.at("by_n"))
+      if (!c.at("power").is_number())
+        undefined_at += (undefined_at.empty() ? "" : ", ") + std::to_string(c.at("n").get<int>());
+    md << "not reached in the simulated sizes"
+       << (undefined_at.empty()
+               ? ""
+               : " (the test was undefined in every replicate at n = " + undefined_at + ")")
        << "\n";
+  }
   const std::string table = md.str();
   auto write = [&](const std::string& name, const std::string& text) {
     std::ofstream o(fs::path(out_dir) / name, std::ios::binary);

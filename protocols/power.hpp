@@ -72,6 +72,9 @@ long run_power(const Study& study, const PowerOptions& opt);
 // duplicates must agree). InputError when files hold different studies or settings.
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
                              double target_power);
+// InputError when `out_dir` holds results of a study other than the one with SHA-256 `sha`
+// (a power.json or replicates*.jsonl of another study), so they are not overwritten or mixed.
+void check_out_dir_study(const std::string& out_dir, const std::string& sha);
 // Writes DIR/power.json, DIR/power.md (the table, also returned) and DIR/power.svg.
 std::string write_power_report(const nlohmann::json& summary, const std::string& out_dir);
 

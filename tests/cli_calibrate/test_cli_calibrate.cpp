@@ -166,3 +166,74 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   EXPECT_LE(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
   fs::remove_all(d);
 }
+
+// Input checks made before any simulation. Each was accepted (a row given twice counted the
+// participant twice, --params X X fitted two parameters, feature_identified = 5 was averaged)
+// or reported without the file and line.
+TEST(Calibrate, HumanDataAndNamesAreChecked) {
+  auto d = scratch_dir("calibrate_checks");
+  const std::string header = "participant,group,phase,session,measure,value\n";
+  const std::string rows =
+      "H1,G1,test,1,palpation_force,2.4\n"
+      "H2,G1,test,1,palpation_force,2.9\n"
+      "H3,G2,test,1,palpation_force,2.2\n"
+      "H4,G2,test,1,palpation_force,2.8\n";
+  auto run = [&](const std::string& csv_text, const std::string& args) {
+    std::ofstream(d / "h.csv", std::ios::trunc) << csv_text;
+    return run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                           (d / "h.csv").string() + " --budget 1 --no-se --out " +
+                           (d / "fit.json").string() + " " + args,
+                       d);
+  };
+  const std::string h = (d / "h.csv").string();
+  struct Case {
+    std::string csv, args, expected;
+  };
+  const std::vector<Case> cases = {
+      // Every row twice: line 6 repeats line 2.
+      {header + rows + rows, "--params weber_fraction",
+       h + ":6:1: participant H1, group G1, phase test, session 1, measure palpation_force is "
+           "given twice (lines 2 and 6)"},
+      {header + rows, "--params weber_fraction weber_fraction",
+       "--params: \"weber_fraction\" is named twice"},
+      {header + rows, "--params weber_fraction --measures bogus",
+       "--measures: \"bogus\" is not a measure of the study (expected one of: palpation_force, "
+       "exploration_time"},
+      {header + rows + "H5,Z,test,1,palpation_force,2.4\nH6,Z,test,1,palpation_force,2.5\n",
+       "--params weber_fraction",
+       h + ":6: the human data have a cell the study does not simulate: group \"Z\" (the study's "
+           "groups: G1, G2)"},
+      {header + rows +
+           "H1,G1,retention,1,palpation_force,2.4\nH2,G1,retention,1,"
+           "palpation_force,2.5\n",
+       "--params weber_fraction",
+       h + ":6: the human data have a cell the study does not "
+           "simulate: phase \"retention\""},
+      {header + rows + "H1,G1,test,7,palpation_force,2.4\nH2,G1,test,7,palpation_force,2.5\n",
+       "--params weber_fraction",
+       h + ":6: the human data have a cell the study does not "
+           "simulate: session 7 of phase test (it has 1 session)"},
+      {header + rows + "H1,G1,test,1,feature_identified,5\n", "--params weber_fraction",
+       h + ":6:33: column 'value': feature_identified must be 0 or 1, got 5"},
+      {header + rows + "H1,G1,test,1,accuracy,150\n", "--params weber_fraction",
+       h + ":6:23: column 'value': accuracy must be a percentage from 0 to 100, got 150"},
+      {header + "H1,G1,test,1,palpation_force,-2.4\n" + rows, "--params weber_fraction",
+       h + ":2:30: column 'value': palpation_force must be a number >= 0 (N), got -2.4"},
+      {header + rows + "H1,G1,test,1,exploration_time,-1\n", "--params weber_fraction",
+       "exploration_time must be a number >= 0 (s)"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run(c.csv, c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << c.csv << r.out << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.expected << "\n" << r.err;
+    EXPECT_EQ(r.err.find("evaluation"), std::string::npos) << "the fit ran first: " << r.err;
+  }
+  // No cell of the measures to fit: the message names them and the data's measures.
+  const Result r = run(header + rows, "--params weber_fraction --measures exploration_time");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(h + ": the human data have no cell of the measures to fit "
+                           "(exploration_time); their measures: palpation_force"),
+            std::string::npos)
+      << r.err;
+  fs::remove_all(d);
+}

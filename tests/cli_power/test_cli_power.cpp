@@ -178,3 +178,181 @@ TEST(Power, MpiEqualsSingleProcess) {
   fs::remove_all(d);
 #endif
 }
+
+namespace {
+
+// A replicate record as `palplab power` writes it (one ANOVA), with p and effect given.
+nlohmann::json record(int n, int replicate, const nlohmann::json& p, const nlohmann::json& effect,
+                      const std::string& sha = "5ca1ab1e") {
+  return {{"study_sha256", sha},
+          {"study", "power_null"},
+          {"n", n},
+          {"replicate", replicate},
+          {"seed", 12345678901234567890ull},
+          {"tests", nlohmann::json::array({{{"id", "anova_oneway palpation_force test"},
+                                            {"p", p},
+                                            {"effect", effect},
+                                            {"effect_name", "eta_squared"}}})}};
+}
+
+}  // namespace
+
+// Replicate records of the wrong shape were nlohmann exceptions ("internal error", exit 3) and
+// impossible values (n = -5, p = 7) were summarised: each is exit 2 with FILE:LINE: $.field.
+TEST(Power, MergeChecksEveryReplicateRecord) {
+  auto d = scratch_dir("merge_records");
+  const std::string good = record(2, 0, 0.01, 0.3).dump();
+  auto with = [](nlohmann::json r, const std::string& key, const nlohmann::json& v) {
+    r[key] = v;
+    return r.dump();
+  };
+  auto with_test = [](nlohmann::json r, const std::string& key, const nlohmann::json& v) {
+    r["tests"][0][key] = v;
+    return r.dump();
+  };
+  const nlohmann::json base = record(2, 1, 0.01, 0.3);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"n":2})", "$: missing \"study_sha256\""},
+      {with(base, "n", "2"),
+       "$.n: expected the group size, an integer from 2 to 100000, got \"2\""},
+      {with(base, "n", -5), "$.n: expected the group size"},
+      {with(base, "n", 2.5), "$.n: expected the group size"},
+      {with(base, "replicate", -1), "$.replicate: expected the 0-based replicate index"},
+      {with(base, "tests", 5), "$.tests: expected an array"},
+      {"[]", "$: expected a replicate record"},
+      {with_test(base, "p", 7), "$.tests[0].p: expected a p-value in [0, 1] or null"},
+      {with_test(base, "p", "0.01"), "$.tests[0].p: expected a p-value"},
+      {with_test(base, "effect", -0.5), "$.tests[0].effect: expected the effect size, η²"},
+      {with_test(base, "id", 3), "$.tests[0].id: expected a non-empty string"},
+  };
+  for (const auto& [line, expected] : cases) {
+    std::ofstream(d / "r.jsonl", std::ios::trunc) << good << "\n" << line << "\n";
+    const auto r =
+        run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "out").string(), d);
+    EXPECT_EQ(r.code, 2) << line << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find((d / "r.jsonl").string() + ":2: " + expected), std::string::npos)
+        << line << ": " << r.err;
+    EXPECT_FALSE(fs::exists(d / "out" / "power.json")) << line;
+  }
+  fs::remove_all(d);
+}
+
+// A shard killed mid-write leaves a half-written last line: merge silently dropped that
+// replicate. It is an error naming the line and the way out; `palplab power` resuming the shard
+// cuts the line and simulates the replicate again, after which the merge succeeds.
+TEST(Power, MergeRefusesAnIncompleteLastLine) {
+  auto d = scratch_dir("merge_trunc");
+  const auto s = run_palplab(
+      "power " + null_study() + " --n 2 --replicates 2 --quiet " + "--out " + (d / "p").string(),
+      d);
+  ASSERT_EQ(s.code, 0) << s.err;
+  const fs::path file = d / "p" / "replicates.jsonl";
+  ASSERT_TRUE(fs::exists(file));
+  const std::string whole = slurp(file);
+  // Cut into the second record.
+  fs::resize_file(file, whole.size() - 50);
+  auto m = run_palplab("merge " + (d / "p").string() + " --out " + (d / "m").string(), d);
+  EXPECT_EQ(m.code, 2) << m.out << m.err;
+  EXPECT_NE(m.err.find(file.string() + ":2:1: the last line is incomplete"), std::string::npos)
+      << m.err;
+  EXPECT_NE(m.err.find("rerun that `palplab power` command"), std::string::npos) << m.err;
+  // Resume: the incomplete line is cut and that replicate simulated again.
+  const auto again = run_palplab(
+      "power " + null_study() + " --n 2 --replicates 2 --quiet " + "--out " + (d / "p").string(),
+      d);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.out.find("1 replicates run"), std::string::npos) << again.out;
+  EXPECT_EQ(slurp(file), whole);
+  m = run_palplab("merge " + (d / "p").string() + " --out " + (d / "m").string(), d);
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(power_json(d / "m")["replicates"]["2"], 2);
+  // A whole last record that only lacks its newline is complete: merged.
+  std::ofstream(d / "nonl.jsonl", std::ios::binary) << record(2, 0, 0.01, 0.3).dump() << "\n"
+                                                    << record(2, 1, 0.5, 0.1).dump();
+  m = run_palplab("merge " + (d / "nonl.jsonl").string() + " --out " + (d / "m2").string(), d);
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(power_json(d / "m2")["replicates"]["2"], 2);
+  fs::remove_all(d);
+}
+
+// `palplab power` refuses an --out holding another study; merge overwrote its power.json.
+TEST(Power, MergeRefusesAnOutputDirectoryOfAnotherStudy) {
+  auto d = scratch_dir("merge_other");
+  std::ofstream(d / "r.jsonl") << record(2, 0, 0.01, 0.3).dump() << "\n";
+  fs::create_directories(d / "other");
+  const std::string other = record(2, 0, 0.2, 0.1, "0fff").dump() + "\n";
+  std::ofstream(d / "other" / "replicates.jsonl") << other;
+  auto r = run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "other").string(), d);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("replicates.jsonl: the output directory holds replicates of another study"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("use another --out"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "other" / "power.json"));
+  // Its power.json (another study's summary) is not overwritten either.
+  fs::remove(d / "other" / "replicates.jsonl");
+  const std::string summary = R"({"study": "x", "study_sha256": "0fff"})";
+  std::ofstream(d / "other" / "power.json") << summary;
+  r = run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "other").string(), d);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("power.json: the output directory holds the power summary of another "
+                       "study"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(slurp(d / "other" / "power.json"), summary);
+  // The same study's directory (`merge DIR --out DIR`) is fine.
+  std::ofstream(d / "other" / "power.json", std::ios::trunc)
+      << R"({"study": "x", "study_sha256": "5ca1ab1e"})";
+  r = run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "other").string(), d);
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  fs::remove_all(d);
+}
+
+// A test undefined in every replicate (no p-value) had power 0 [0, .79] and "not reached"; the
+// table did not show the undefined count. Now: the count is a column and such a power is
+// undefined (null, "—").
+TEST(Power, UndefinedTestsAreShownAndNotPowerZero) {
+  auto d = scratch_dir("merge_undefined");
+  std::ofstream f(d / "r.jsonl");
+  f << record(2, 0, nullptr, nullptr).dump() << "\n"
+    << record(3, 0, 0.01, 0.4).dump() << "\n"
+    << record(3, 1, nullptr, nullptr).dump() << "\n";
+  f.close();
+  const auto r =
+      run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "out").string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = power_json(d / "out");
+  const auto& by_n = j["tests"][0]["by_n"];
+  ASSERT_EQ(by_n.size(), 2u);
+  EXPECT_EQ(by_n[0]["undefined"], 1);
+  EXPECT_TRUE(by_n[0]["power"].is_null()) << by_n[0];
+  EXPECT_TRUE(by_n[0]["ci_low"].is_null()) << by_n[0];
+  EXPECT_EQ(by_n[1]["undefined"], 1);
+  EXPECT_EQ(by_n[1]["power"], 0.5);  // an undefined test counts as not significant
+  const std::string md = slurp(d / "out" / "power.md");
+  EXPECT_NE(md.find("| replicates | undefined | power |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| anova_oneway palpation_force test | 2 | 1 | 1 | — | — |"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| anova_oneway palpation_force test | 3 | 2 | 1 | 0.500 |"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("undefined in every replicate at n = 2"), std::string::npos) << md;
+  fs::remove_all(d);
+}
+
+// A one-way ANOVA (or a pair) of a one-group study is never defined: power reported 0.
+TEST(Power, OneGroupStudyIsRefused) {
+  auto d = scratch_dir("one_group");
+  auto study = nlohmann::json::parse(slurp(null_study()));
+  study["groups"].erase(1);
+  study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
+  std::ofstream(d / "one.json") << study.dump(1);
+  const auto r = run_palplab("power " + (d / "one.json").string() +
+                                 " --replicates 1 --quiet --out " + (d / "never").string(),
+                             d);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("one.json:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("$.analyses[0]: analysis \"anova_oneway\""), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("needs at least 2 groups"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "never"));
+  fs::remove_all(d);
+}
