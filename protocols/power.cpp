@@ -190,6 +190,7 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
     throw fail(
         "$.tests",
         "expected an array of {\"id\", \"p\", \"effect\", \"effect_name\"}, got " + shown(tests));
+  if (tests.empty()) throw fail("$.tests", "expected at least one test outcome, got []");
   for (std::size_t i = 0; i < tests.size(); ++i) {
     const nlohmann::json& t = tests[i];
     const std::string tp = "$.tests[" + std::to_string(i) + "]";
@@ -204,6 +205,10 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
                                        ? "missing (expected a string)"
                                        : "expected a non-empty string, got " + shown(*it));
     }
+    for (std::size_t j = 0; j < i; ++j)
+      if (tests[j].is_object() && tests[j].value("id", "") == t.at("id"))
+        throw fail(tp + ".id", "duplicate test id " + shown(t.at("id")) + " (already $.tests[" +
+                                   std::to_string(j) + "])");
     auto p = t.find("p");
     if (p == t.end() ||
         !(p->is_null() || (p->is_number() && p->get<double>() >= 0 && p->get<double>() <= 1)))
@@ -482,7 +487,8 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   std::map<std::pair<int, int>, nlohmann::json> reps;
   std::map<std::pair<int, int>, std::string> where;  // FILE:LINE each replicate came from
   std::string sha, study_id;
-  std::string first;  // FILE:LINE of the first replicate read
+  std::string first;                   // FILE:LINE of the first replicate read
+  std::vector<std::string> first_ids;  // its test ids, sorted
   for (const auto& f : files)
     for (auto& [r, line] : read_replicates(f)) {
       const SourceLocation here{f, line};
@@ -502,6 +508,17 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
                                      where[key] +
                                      " (the same replicate must give the same record)");
         continue;
+      }
+      // Every replicate of one study runs the same declared analyses: the same test ids.
+      std::vector<std::string> ids;
+      for (const auto& t : r.at("tests")) ids.push_back(t.at("id").get<std::string>());
+      std::sort(ids.begin(), ids.end());
+      if (first_ids.empty()) {
+        first_ids = ids;
+      } else if (ids != first_ids) {
+        throw InputError(SourceLocation{f, line, 0, -1, "$.tests"},
+                         "the replicate's tests differ from those of the replicate at " + first +
+                             " (every replicate of a study has the same tests)");
       }
       reps.emplace(key, std::move(r));
       where.emplace(key, at);

@@ -448,6 +448,33 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
              parts[i].group == plan.participants[i].group;
     if (!same) throw InputError("the database's participants differ from the plan", opt.db);
     for (const auto& s : store.read_sessions()) done[s.participant][s.ordinal] = s.state_after;
+    // Sessions are written in order per participant: what is stored must be the first k of the
+    // plan's sessions of a planned participant (a row deleted or edited by hand would otherwise
+    // make the resumed run write an ordinal that exists: an SQL error after simulating).
+    for (const auto& [participant, ordinals] : done) {
+      const auto pp = std::find_if(plan.participants.begin(), plan.participants.end(),
+                                   [&](const ParticipantPlan& q) { return q.id == participant; });
+      if (pp == plan.participants.end())
+        throw InputError("inconsistent database: it holds sessions of participant \"" +
+                             participant +
+                             "\", who is not in the plan; resume needs the database "
+                             "palplab run wrote",
+                         opt.db);
+      int expect = 0;
+      for (const auto& [ordinal, state] : ordinals) {
+        if (ordinal != expect || ordinal >= static_cast<int>(pp->sessions.size()))
+          throw InputError(
+              "inconsistent database: participant " + participant + " has session ordinal " +
+                  std::to_string(ordinal) + " but " +
+                  (ordinal >= static_cast<int>(pp->sessions.size())
+                       ? "the plan has " + std::to_string(pp->sessions.size()) + " sessions"
+                       : "not ordinal " + std::to_string(expect)) +
+                  " (sessions are written in order); resume needs the database "
+                  "palplab run wrote",
+              opt.db);
+        ++expect;
+      }
+    }
     for (const auto& s : store.read_attempts())
       if (s.trainee == "human") human.insert(s.participant);
     for (const auto& p : store.read_prototypes()) {

@@ -1,5 +1,6 @@
 #include "engine/mesh/materials.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -136,6 +137,9 @@ MaterialTable parse_materials(const std::string& text, const std::string& source
 }
 
 MaterialTable read_materials(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError("is a directory (expected a material table, JSON)", path);
   std::ifstream in(path);
   if (!in) throw InputError("cannot open material table", path);
   std::stringstream ss;

@@ -286,6 +286,11 @@ TEST(CliMesh, NamedMaterialsFileMustExist) {
   r = run("mesh info " + p("m162.obj") + " --materials " + p("badm2.json"));
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("$.materials[0]"), std::string::npos) << r.err;
+  // A directory is said as such (it read as an empty JSON text: "unexpected end of input").
+  std::filesystem::create_directories(p("mdir"));
+  r = run("mesh materials --check " + p("mdir"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
   ASSERT_EQ(run("mesh materials --out " + p("m2.json")).code, 0);
   EXPECT_EQ(run("mesh info " + p("m162.obj") + " --materials " + p("m2.json")).code, 0);
 }

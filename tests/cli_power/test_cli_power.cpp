@@ -224,6 +224,11 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
       {with_test(base, "p", "0.01"), "$.tests[0].p: expected a p-value"},
       {with_test(base, "effect", -0.5), "$.tests[0].effect: expected the effect size, η²"},
       {with_test(base, "id", 3), "$.tests[0].id: expected a non-empty string"},
+      {with(base, "tests", nlohmann::json::array()), "$.tests: expected at least one test"},
+      {with(base, "tests", nlohmann::json::array({base["tests"][0], base["tests"][0]})),
+       "$.tests[1].id: duplicate test id"},
+      {with_test(base, "id", "another test"),
+       "$.tests: the replicate's tests differ from those of the replicate at"},
   };
   for (const auto& [line, expected] : cases) {
     std::ofstream(d / "r.jsonl", std::ios::trunc) << good << "\n" << line << "\n";

@@ -2,6 +2,7 @@
 // --resume path, --max-sessions 0, a --db in a missing directory, a directory given as --db or as
 // the study, an empty --db — and nothing is created or deleted because of them.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
@@ -90,4 +91,37 @@ TEST(CliRunInput, StudyThatIsADirectoryIsSaidAsSuch) {
   expect_exit2(r, {(d / "studies").string(), "is a directory", "study file"});
   EXPECT_FALSE(has(r.err, "invalid JSON")) << r.err;
   EXPECT_FALSE(fs::exists(d / "r.db"));
+}
+
+TEST(CliRunInput, ResumeOfADatabaseWithAMissingSessionIsRefused) {
+  // Sessions 0 and 1 of G1's participant are written; deleting ordinal 0 leaves ordinal 1
+  // without its predecessor. Resuming used to simulate ordinal 0 again and then fail writing
+  // ordinal 1 (exit 3, an SQL UNIQUE error) with a session already added to the file.
+  auto d = scratch_dir("run_resume_gap");
+  std::ofstream(d / "s.json") << kStudy;
+  const fs::path db = d / "r.db";
+  const std::string run = "run " + (d / "s.json").string() + " --db " + db.string();
+  Result r = run_palplab(run + " --max-sessions 2 --jobs 1 --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  sqlite3* h = nullptr;
+  ASSERT_EQ(sqlite3_open(db.string().c_str(), &h), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(h,
+                         "DELETE FROM measures WHERE session IN (SELECT session FROM sessions "
+                         "WHERE ordinal = 0); DELETE FROM events WHERE session IN (SELECT session "
+                         "FROM sessions WHERE ordinal = 0); DELETE FROM samples WHERE session IN "
+                         "(SELECT session FROM sessions WHERE ordinal = 0); DELETE FROM sessions "
+                         "WHERE ordinal = 0",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(h);
+  r = run_palplab(run + " --resume --jobs 1 --quiet", d);
+  expect_exit2(r, {db.string(), "inconsistent database", "ordinal 1", "not ordinal 0"});
+  // Nothing was simulated or written: the one remaining session is all there is.
+  ASSERT_EQ(sqlite3_open(db.string().c_str(), &h), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(h, "SELECT count(*) FROM sessions", -1, &st, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(st, 0), 1);
+  sqlite3_finalize(st);
+  sqlite3_close(h);
 }
