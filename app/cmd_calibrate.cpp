@@ -37,12 +37,12 @@ palplab::app::CommandRegistration reg{
           ->required()
           ->expected(1, -1);
       cmd->add_option("--budget", a->opt.budget, "Loss evaluations for the optimiser")
-          ->check(CLI::Range(1, 1000000));
+          ->check(palplab::app::count_range(1, 1000000));
       cmd->add_option("--jobs", a->opt.jobs, "Participants simulated in parallel (threads)")
-          ->check(CLI::Range(1, 1024));
+          ->check(palplab::app::count_range(1, 1024));
       cmd->add_option("--sim-n", a->opt.sim_n,
                       "Simulated participants per group (default: the study's group sizes)")
-          ->check(CLI::Range(2, 100000));
+          ->check(palplab::app::count_range(2, 100000));
       cmd->add_option("--measures", a->opt.measures,
                       "Measures to fit (default: the study's declared measures)")
           ->expected(1, -1);

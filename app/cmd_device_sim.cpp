@@ -311,7 +311,7 @@ palplab::app::CommandRegistration reg{
           cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)");
       cmd->add_option("--buttons", a->buttons,
                       "Constant button mask in every datagram (bit 1 = a needle scene's needle)")
-          ->check(CLI::Range(0L, 4294967295L));
+          ->check(palplab::app::count_range(0, 4294967295));
       cmd->add_option("--axis", a->axis,
                       "Constant stylus axis AX AY AZ (handle -> tip; sends type-3 datagrams)")
           ->expected(3);

@@ -59,41 +59,6 @@ std::string written_files(const std::string& out, bool vtu, bool regions) {
   return s;
 }
 
-// Option validators with readable messages (CLI::PositiveNumber printed its range as
-// "0.000000 to 1797693134862315708...", and CLI::Range lets NaN through).
-std::string shown(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", x);
-  return b;
-}
-
-// An integer count in [lo, hi].
-CLI::Validator count_in(long long lo, long long hi) {
-  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-  return CLI::Validator(
-      [lo, hi, range](std::string& text) -> std::string {
-        long long v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || v < lo || v > hi)
-          return "expected an integer in " + range + ", got '" + text + "'";
-        return std::string();
-      },
-      "INT in " + range);
-}
-
-// A finite number in [lo, hi] ((lo, hi] when lo_open).
-CLI::Validator finite_in(double lo, double hi, bool lo_open) {
-  const std::string range = (lo_open ? "(" : "[") + shown(lo) + ", " + shown(hi) + "]";
-  return CLI::Validator(
-      [lo, hi, lo_open, range](std::string& text) -> std::string {
-        double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < lo || v > hi ||
-            (lo_open && v == lo))
-          return "expected a finite number in " + range + ", got '" + text + "'";
-        return std::string();
-      },
-      "FINITE in " + range);
-}
-
 MaterialTable load_materials(const std::string& path) {
   return path.empty() ? default_materials() : read_materials(path);
 }
@@ -170,7 +135,7 @@ palplab::app::CommandRegistration reg{
         c->add_option("--vertices", *vertices,
                       "Target vertex count (tract models: surface vertices; sphere: 642 ... 23522; "
                       "shoulder: per skin layer, default 2562)")
-            ->check(count_in(1, std::numeric_limits<int>::max()));
+            ->check(palplab::app::count_range(1, std::numeric_limits<int>::max()));
         auto* seed_opt = c->add_option(
             "--seed", *seed,
             "0 = reference shape; other seeds perturb the tract/stomach by up to 5 %");
@@ -290,7 +255,7 @@ palplab::app::CommandRegistration reg{
             ->check(palplab::app::finite_range(0.0, 1.0));
         c->add_option("--max-defects", opt->max_per_kind,
                       "Defects listed per kind (all are counted; 0 = counts only)")
-            ->check(count_in(0, std::numeric_limits<int>::max()));
+            ->check(palplab::app::count_range(0, std::numeric_limits<int>::max()));
         c->callback([=] {
           const AnyMesh a = read_mesh(*file);
           CheckOptions o = *opt;
@@ -331,7 +296,7 @@ palplab::app::CommandRegistration reg{
             ->check(palplab::app::finite_range(0.0, 1.0));
         c->add_option("--max-hole-edges", opt->max_hole_edges,
                       "Fill boundary loops up to this many edges (0 = none)")
-            ->check(count_in(0, std::numeric_limits<int>::max()));
+            ->check(palplab::app::count_range(0, std::numeric_limits<int>::max()));
         c->add_flag("--json", *js, "Print the changes as JSON");
         c->callback([=] {
           const SurfaceMesh m = read_surface(*in);
@@ -380,7 +345,7 @@ palplab::app::CommandRegistration reg{
         c->add_option("--quality", opt->quality,
                       "Radius-edge ratio bound (TetGen -q), >= 1.0; 0 = off");
         c->add_option("--max-volume", opt->max_volume, "Maximum tet volume (m^3, TetGen -a), > 0")
-            ->check(finite_in(0, 1e18, true));
+            ->check(palplab::app::finite_range(0, 1e18, true));
         c->add_option("--attribute", opt->default_attribute,
                       "Attribute (tissue type) of tets outside seeded regions");
         c->add_option("--materials", *mat,
@@ -389,7 +354,7 @@ palplab::app::CommandRegistration reg{
         c->add_option("--timeout", opt->timeout_seconds,
                       "Stop TetGen after this many seconds (it runs in a child process); 0 = none")
             ->capture_default_str()
-            ->check(finite_in(0, 1e9, false));
+            ->check(palplab::app::finite_range(0, 1e9, false));
         c->callback([=] {
           const SurfaceMesh s = read_surface(*in);
           TetOptions o = *opt;

@@ -66,13 +66,13 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("STUDY", a->study, "Study file (JSON)")->required();
       cmd->add_option("--replicates", a->opt.replicates, "Simulated studies per group size")
           ->required()
-          ->check(CLI::Range(1, 10000000));
+          ->check(palplab::app::count_range(1, 10000000));
       // Split here, not by CLI11: its delimiter drops empty entries ("6,,8" would be 6,8).
       cmd->add_option("--n", a->n,
                       "Participants per group, comma separated (default: the study's); each "
                       "size once, 2 to 100000");
       cmd->add_option("--jobs", a->opt.jobs, "Replicates simulated in parallel (threads)")
-          ->check(CLI::Range(1, 1024));
+          ->check(palplab::app::count_range(1, 1024));
       cmd->add_option("--out", a->out, "Output directory (replicates.jsonl, power.json/md/svg)");
       cmd->add_option("--alpha", a->opt.alpha, "Significance level")
           ->check(palplab::app::finite_range(1e-9, 0.5));

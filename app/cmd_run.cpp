@@ -302,7 +302,7 @@ palplab::app::CommandRegistration reg{
       auto scenes = std::make_shared<std::vector<std::string>>();
       palplab::app::add_scene_option(cmd, *scenes, true);
       cmd->add_option("--jobs", opt->jobs, "Participants simulated in parallel (threads)")
-          ->check(CLI::Range(1, 1024));
+          ->check(palplab::app::count_range(1, 1024));
       cmd->add_flag("--resume", opt->resume, "Continue an interrupted run in the same database");
       cmd->add_flag("--force", opt->force, "Replace an existing database");
       cmd->add_flag("--quiet", *quiet, "No progress output");
@@ -311,7 +311,7 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--max-sessions", opt->max_sessions,
                       "Stop after this many sessions, at least 1 (continue later with --resume; "
                       "without the flag: no limit)")
-          ->check(CLI::Range(1L, 1000000000L));
+          ->check(palplab::app::count_range(1, 1000000000));
       auto human = std::make_shared<HumanArgs>();
       cmd->add_flag("--human", human->human,
                     "Run one participant's due sessions with a person at the device (real time)");

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -32,19 +33,41 @@ struct RegisteredCommand {
 
 std::vector<RegisteredCommand>& command_registry();
 
-// A real-valued flag in [lo, hi]: CLI::Range lets NaN through (every comparison with it is
-// false), so "--alpha nan" would be accepted; this refuses NaN and +-inf too, echoing the value.
-inline CLI::Validator finite_range(double lo, double hi) {
+// Option validators with readable messages: CLI::Range lets NaN through (every comparison with
+// it is false), so "--alpha nan" was accepted, and CLI::PositiveNumber printed its range as
+// "0.000000 to 1797693134862315708...". These refuse NaN and +-inf and echo the value given.
+inline std::string shown_number(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", x);
+  return b;
+}
+
+// A finite number in [lo, hi] ((lo, hi] when lo_open).
+inline CLI::Validator finite_range(double lo, double hi, bool lo_open = false) {
+  const std::string range =
+      (lo_open ? "(" : "[") + shown_number(lo) + ", " + shown_number(hi) + "]";
   return CLI::Validator(
-      [lo, hi](std::string& text) -> std::string {
+      [lo, hi, lo_open, range](std::string& text) -> std::string {
         double v = 0;
-        if (!CLI::detail::lexical_cast(text, v)) return "expected a number, got '" + text + "'";
-        if (!std::isfinite(v) || v < lo || v > hi)
-          return "expected a finite number in [" + CLI::detail::to_string(lo) + ", " +
-                 CLI::detail::to_string(hi) + "], got '" + text + "'";
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < lo || v > hi ||
+            (lo_open && v == lo))
+          return "expected a finite number in " + range + ", got '" + text + "'";
         return std::string();
       },
-      "FINITE in [" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]");
+      "FINITE in " + range);
+}
+
+// An integer count in [lo, hi].
+inline CLI::Validator count_range(long long lo, long long hi) {
+  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        long long v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || v < lo || v > hi)
+          return "expected an integer in " + range + ", got '" + text + "'";
+        return std::string();
+      },
+      "INT in " + range);
 }
 
 // An output file named by `flag`, checked before a command starts its work (an unwritable path is

@@ -7,11 +7,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 
@@ -101,6 +104,30 @@ inline int free_udp_port() {
     port = ntohs(a.sin_port);
   if (fd >= 0) ::close(fd);
   return port;
+}
+
+inline bool has(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+// Exit 2 (bad input), not an internal error, and stderr holds every one of `parts`.
+inline void expect_exit2(const CliResult& r, std::initializer_list<std::string> parts) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_FALSE(has(r.err, "internal error")) << r.err;
+  for (const auto& p : parts) EXPECT_TRUE(has(r.err, p)) << r.err << "\nmissing: " << p;
+}
+
+// A tiny study: one participant in each of two groups (prototypes A and B), a 2 s pre-training
+// and a 2 s post-training session: a results database in well under a second.
+inline std::string tiny_study_json(const std::string& id, int seed) {
+  return R"({"palplab_study": 1, "id": ")" + id + R"(", "title": "tiny", "seed": )" +
+         std::to_string(seed) + R"(,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "G1", "prototype": "A", "size": 1}, {"id": "G2", "prototype": "B", "size": 1}],
+  "phases": [
+    {"id": "pre", "kind": "pre_training", "session_duration": 2, "start": {"day": 0}},
+    {"id": "test", "kind": "post_training", "session_duration": 2,
+     "start": {"after_previous": {"minutes": 10}}}]})";
 }
 
 }  // namespace palplab::testing

@@ -2,13 +2,13 @@
 // --resume path, --max-sessions 0, a --db in a missing directory, a directory given as --db or as
 // the study, an empty --db — and nothing is created or deleted because of them.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "../cli_support.hpp"
+#include "../sqlite_support.hpp"
 
 namespace fs = std::filesystem;
 
@@ -17,22 +17,11 @@ using Result = palplab::testing::CliResult;
 using palplab::testing::run_palplab;
 using palplab::testing::scratch_dir;
 
-const char* kStudy = R"({"palplab_study": 1, "id": "inp", "title": "input", "seed": 3,
-  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
-  "groups": [{"id": "G1", "prototype": "A", "size": 1}, {"id": "G2", "prototype": "B", "size": 1}],
-  "phases": [
-    {"id": "pre", "kind": "pre_training", "session_duration": 2, "start": {"day": 0}},
-    {"id": "test", "kind": "post_training", "session_duration": 2,
-     "start": {"after_previous": {"minutes": 10}}}]})";
-
-bool has(const std::string& s, const std::string& part) {
-  return s.find(part) != std::string::npos;
-}
-
-void expect_exit2(const Result& r, std::initializer_list<std::string> parts) {
-  EXPECT_EQ(r.code, 2) << r.err;
-  for (const auto& p : parts) EXPECT_TRUE(has(r.err, p)) << r.err << "\nmissing: " << p;
-}
+const std::string kStudy = palplab::testing::tiny_study_json("inp", 3);
+using palplab::testing::expect_exit2;
+using palplab::testing::has;
+using palplab::testing::sql_exec;
+using palplab::testing::sql_int;
 
 }  // namespace
 
@@ -103,25 +92,14 @@ TEST(CliRunInput, ResumeOfADatabaseWithAMissingSessionIsRefused) {
   const std::string run = "run " + (d / "s.json").string() + " --db " + db.string();
   Result r = run_palplab(run + " --max-sessions 2 --jobs 1 --quiet", d);
   ASSERT_EQ(r.code, 0) << r.err;
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open(db.string().c_str(), &h), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(h,
-                         "DELETE FROM measures WHERE session IN (SELECT session FROM sessions "
-                         "WHERE ordinal = 0); DELETE FROM events WHERE session IN (SELECT session "
-                         "FROM sessions WHERE ordinal = 0); DELETE FROM samples WHERE session IN "
-                         "(SELECT session FROM sessions WHERE ordinal = 0); DELETE FROM sessions "
-                         "WHERE ordinal = 0",
-                         nullptr, nullptr, nullptr),
-            SQLITE_OK);
-  sqlite3_close(h);
+  sql_exec(db,
+           "DELETE FROM measures WHERE session IN (SELECT session FROM sessions "
+           "WHERE ordinal = 0); DELETE FROM events WHERE session IN (SELECT session "
+           "FROM sessions WHERE ordinal = 0); DELETE FROM samples WHERE session IN "
+           "(SELECT session FROM sessions WHERE ordinal = 0); DELETE FROM sessions "
+           "WHERE ordinal = 0");
   r = run_palplab(run + " --resume --jobs 1 --quiet", d);
   expect_exit2(r, {db.string(), "inconsistent database", "ordinal 1", "not ordinal 0"});
   // Nothing was simulated or written: the one remaining session is all there is.
-  ASSERT_EQ(sqlite3_open(db.string().c_str(), &h), SQLITE_OK);
-  sqlite3_stmt* st = nullptr;
-  ASSERT_EQ(sqlite3_prepare_v2(h, "SELECT count(*) FROM sessions", -1, &st, nullptr), SQLITE_OK);
-  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(st, 0), 1);
-  sqlite3_finalize(st);
-  sqlite3_close(h);
+  EXPECT_EQ(sql_int(db, "SELECT count(*) FROM sessions"), 1);
 }

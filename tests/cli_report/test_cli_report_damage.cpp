@@ -2,13 +2,13 @@
 // directory with a file where a directory goes (or the reverse): exit 2 with a message naming
 // the file and what is wrong, never "internal error" (exit 3); nothing of the user's is deleted.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "../cli_support.hpp"
+#include "../sqlite_support.hpp"
 
 namespace fs = std::filesystem;
 
@@ -18,14 +18,7 @@ using palplab::testing::run_palplab;
 using palplab::testing::scratch_dir;
 using palplab::testing::slurp;
 
-// One participant per group, three short sessions each: a database in well under a second.
-const char* kStudy = R"({"palplab_study": 1, "id": "dmg", "title": "damage", "seed": 7,
-  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
-  "groups": [{"id": "G1", "prototype": "A", "size": 1}, {"id": "G2", "prototype": "B", "size": 1}],
-  "phases": [
-    {"id": "pre", "kind": "pre_training", "session_duration": 2, "start": {"day": 0}},
-    {"id": "test", "kind": "post_training", "session_duration": 2,
-     "start": {"after_previous": {"minutes": 10}}}]})";
+const std::string kStudy = palplab::testing::tiny_study_json("dmg", 7);
 
 // A fresh, valid database (made once per test process, copied for each test).
 fs::path good_db() {
@@ -46,27 +39,10 @@ fs::path copy_db(const fs::path& dir) {
   return dir / "r.db";
 }
 
-void sql(const fs::path& db, const std::string& text) {
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
-  char* err = nullptr;
-  const int rc = sqlite3_exec(h, text.c_str(), nullptr, nullptr, &err);
-  const std::string m = err ? err : "";
-  sqlite3_free(err);
-  sqlite3_close(h);
-  ASSERT_EQ(rc, SQLITE_OK) << m;
-}
+using palplab::testing::sql_exec;
 
-bool has(const std::string& s, const std::string& part) {
-  return s.find(part) != std::string::npos;
-}
-
-// Exit 2, not an internal error, and stderr holds every one of `parts`.
-void expect_exit2(const Result& r, std::initializer_list<std::string> parts) {
-  EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_FALSE(has(r.err, "internal error")) << r.err;
-  for (const auto& p : parts) EXPECT_TRUE(has(r.err, p)) << r.err << "\nmissing: " << p;
-}
+using palplab::testing::expect_exit2;
+using palplab::testing::has;
 
 // `report --no-stills` and `export --samples` of `db` both refuse it, saying `parts`.
 void expect_both_refuse(const fs::path& d, const fs::path& db,
@@ -85,7 +61,7 @@ void expect_both_refuse(const fs::path& d, const fs::path& db,
 TEST(CliReportDamage, MissingTableIsNamed) {
   auto d = scratch_dir("dmg_table");
   const fs::path db = copy_db(d);
-  sql(db, "DROP TABLE sessions;");
+  sql_exec(db, "DROP TABLE sessions;");
   expect_both_refuse(d, db,
                      {db.string(), "not a complete palplab results database", "\"sessions\""});
 }
@@ -102,9 +78,9 @@ TEST(CliReportDamage, TruncatedDatabaseIsSaidDamaged) {
 TEST(CliReportDamage, TextInAMeasureValueNamesSessionAndMeasure) {
   auto d = scratch_dir("dmg_text");
   const fs::path db = copy_db(d);
-  sql(db,
-      "UPDATE measures SET value = 'abc' WHERE name = 'palpation_force' AND session = "
-      "(SELECT MIN(session) FROM sessions);");
+  sql_exec(db,
+           "UPDATE measures SET value = 'abc' WHERE name = 'palpation_force' AND session = "
+           "(SELECT MIN(session) FROM sessions);");
   expect_both_refuse(
       d, db, {db.string(), "measure \"palpation_force\"", "'abc' is not a number", "participant"});
 }
@@ -112,7 +88,7 @@ TEST(CliReportDamage, TextInAMeasureValueNamesSessionAndMeasure) {
 TEST(CliReportDamage, CorruptSampleBlobNamesItsSession) {
   auto d = scratch_dir("dmg_blob");
   const fs::path db = copy_db(d);
-  sql(db, "UPDATE samples SET data = substr(data, 1, 5);");
+  sql_exec(db, "UPDATE samples SET data = substr(data, 1, 5);");
   expect_both_refuse(d, db, {db.string(), "corrupt sample blob", "participant"});
 }
 

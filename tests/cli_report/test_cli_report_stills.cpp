@@ -4,7 +4,6 @@
 // differs from the same view at rest near the contact and nowhere far from it. Without EGL (or
 // with --no-stills) the report is still written and says in one line why it has no stills.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
@@ -14,6 +13,7 @@
 
 #include "../cli_support.hpp"
 #include "../render_support.hpp"
+#include "../sqlite_support.hpp"
 #include "engine/haptics/press.hpp"
 #include "engine/render/camera.hpp"
 #include "engine/render/image.hpp"
@@ -199,14 +199,7 @@ TEST_F(ReportStills, SwitchedOffOrWithoutEglTheReportSaysWhy) {
 TEST_F(ReportStills, PrototypeFileGoneIsDrawnFromTheStoredCopyOrSkippedWithWhy) {
   const fs::path db = dir_ / "moved.db";
   fs::copy_file(dir_ / "s.db", db, fs::copy_options::overwrite_existing);
-  auto sql = [&](const std::string& q) {
-    sqlite3* h = nullptr;
-    ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
-    char* err = nullptr;
-    EXPECT_EQ(sqlite3_exec(h, q.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
-    sqlite3_free(err);
-    sqlite3_close(h);
-  };
+  auto sql = [&](const std::string& q) { palplab::testing::sql_exec(db, q); };
   sql("UPDATE prototypes SET path = '/nonexistent/A.json' WHERE prototype = 'A'");
   CliResult r = run_shell(std::string(PALPLAB_BINARY) + " report " + db.string() + " --out " +
                               (dir_ / "moved").string() + " --still-size 160x120",

@@ -11,39 +11,35 @@
 #include "engine/haptics/devices/trace_device.hpp"
 #include "results/sha256.hpp"
 #include "tests/cli_support.hpp"
+#include "tests/sqlite_support.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-void exec(const fs::path& db, const std::string& sql) {
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
-  char* err = nullptr;
-  EXPECT_EQ(sqlite3_exec(h, sql.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "");
-  sqlite3_free(err);
-  sqlite3_close(h);
-}
+using palplab::testing::sql_exec;
 }  // namespace
 
 TEST(CliSchema, V2IsExportedAsItIsAndAnUnknownVersionExits2) {
   const fs::path dir = palplab::testing::scratch_dir("cli_schema");
   const fs::path db = dir / "v2.db";
-  exec(db,
-       palplab::testing::slurp(std::string(PALPLAB_SOURCE_DIR) + "/tests/results/schema_v2.sql"));
-  exec(db,
-       "INSERT INTO meta VALUES ('schema_version', '2'), ('created_at', '2026-01-05T09:00:00Z');"
-       "INSERT INTO study VALUES (1, 'old', 'an old study', '{}', 'abc', '0.2.0', 'deadbeef', "
-       "'42', '2026-01-05T09:00:00Z', '2026-01-05T09:01:00Z');"
-       "INSERT INTO participants VALUES ('P01', 'A', 0, '1234');"
-       "INSERT INTO sessions VALUES (7, 'P01', 0, 'training', 0, 'A', NULL, 0.0, 0, 2.0, 2000, "
-       "0.5, 1e-6, 2e-6, '99', '{}', '2026-01-05T09:00:30Z');"
-       "INSERT INTO measures VALUES (7, 'palpation_force', 2.4375, 'N');");
+  sql_exec(db, palplab::testing::slurp(std::string(PALPLAB_SOURCE_DIR) +
+                                       "/tests/results/schema_v2.sql"));
+  sql_exec(
+      db,
+      "INSERT INTO meta VALUES ('schema_version', '2'), ('created_at', '2026-01-05T09:00:00Z');"
+      "INSERT INTO study VALUES (1, 'old', 'an old study', '{}', 'abc', '0.2.0', 'deadbeef', "
+      "'42', '2026-01-05T09:00:00Z', '2026-01-05T09:01:00Z');"
+      "INSERT INTO participants VALUES ('P01', 'A', 0, '1234');"
+      "INSERT INTO sessions VALUES (7, 'P01', 0, 'training', 0, 'A', NULL, 0.0, 0, 2.0, 2000, "
+      "0.5, 1e-6, 2e-6, '99', '{}', '2026-01-05T09:00:30Z');"
+      "INSERT INTO measures VALUES (7, 'palpation_force', 2.4375, 'N');");
   auto r = palplab::testing::run_palplab(
       "export " + db.string() + " --csv " + (dir / "csv").string(), dir);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   const std::string measures = palplab::testing::slurp(dir / "csv" / "measures.csv");
   EXPECT_NE(measures.find("2.4375"), std::string::npos) << measures;
-  exec(db, "UPDATE meta SET value = '99' WHERE key = 'schema_version'; PRAGMA user_version = 99;");
+  sql_exec(db,
+           "UPDATE meta SET value = '99' WHERE key = 'schema_version'; PRAGMA user_version = 99;");
   r = palplab::testing::run_palplab("export " + db.string() + " --csv " + (dir / "csv4").string(),
                                     dir);
   EXPECT_EQ(r.code, 2) << r.out << r.err;
@@ -59,8 +55,8 @@ TEST(CliSchema, RunHumanContinuesAV2DatabaseMigratingIt) {
   const std::string study_file =
       std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_run_human/human_study.json";
   const std::string study = palplab::testing::slurp(study_file);
-  exec(db,
-       palplab::testing::slurp(std::string(PALPLAB_SOURCE_DIR) + "/tests/results/schema_v2.sql"));
+  sql_exec(db, palplab::testing::slurp(std::string(PALPLAB_SOURCE_DIR) +
+                                       "/tests/results/schema_v2.sql"));
   // The study as palplab 2 stored it (its exact text and SHA-256) and its two participants.
   sqlite3* h = nullptr;
   ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
@@ -76,9 +72,10 @@ TEST(CliSchema, RunHumanContinuesAV2DatabaseMigratingIt) {
   EXPECT_EQ(sqlite3_step(st), SQLITE_DONE);
   sqlite3_finalize(st);
   sqlite3_close(h);
-  exec(db,
-       "INSERT INTO meta VALUES ('schema_version', '2'), ('created_at', '2026-01-05T09:00:00Z');"
-       "INSERT INTO participants VALUES ('P01', 'A', 0, '1'), ('P02', 'A', 1, '2');");
+  sql_exec(
+      db,
+      "INSERT INTO meta VALUES ('schema_version', '2'), ('created_at', '2026-01-05T09:00:00Z');"
+      "INSERT INTO participants VALUES ('P01', 'A', 0, '1'), ('P02', 'A', 1, '2');");
   // A device track held 2 mm above the model: 2 s at 1 kHz.
   palplab::engine::Trace tr;
   for (int k = 0; k < 2000; ++k) {

@@ -3,7 +3,6 @@
 // value, a corrupt sample blob, an empty or impossible path. A failing export leaves an earlier
 // export's files as they were.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include <cstdint>
@@ -16,6 +15,7 @@
 #include "results/sha256.hpp"
 #include "results/store.hpp"
 #include "tests/results/results_test_support.hpp"
+#include "tests/sqlite_support.hpp"
 
 using namespace palplab;
 using namespace palplab::results;
@@ -58,16 +58,7 @@ std::string make_db(const fs::path& dir, std::size_t n_samples = 1500) {
   return db;
 }
 
-void sql(const std::string& db, const std::string& text) {
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
-  char* err = nullptr;
-  const int rc = sqlite3_exec(h, text.c_str(), nullptr, nullptr, &err);
-  const std::string m = err ? err : "";
-  sqlite3_free(err);
-  sqlite3_close(h);
-  ASSERT_EQ(rc, SQLITE_OK) << m;
-}
+using palplab::testing::sql_exec;
 
 // `f` throws an InputError whose message holds every one of `parts`.
 void expect_input_error(const std::function<void()>& f, std::initializer_list<std::string> parts) {
@@ -87,7 +78,7 @@ void expect_input_error(const std::function<void()>& f, std::initializer_list<st
 TEST(StoreDamage, MissingTableIsNamedWhenOpening) {
   auto d = tmp("notable");
   const std::string db = make_db(d);
-  sql(db, "DROP TABLE samples; DROP TABLE sessions;");
+  sql_exec(db, "DROP TABLE samples; DROP TABLE sessions;");
   expect_input_error([&] { Store::open(db); },
                      {db, "not a complete palplab results database", "table \"sessions\""});
   expect_input_error([&] { Store::open(db, true); }, {db, "table \"sessions\" is missing"});
@@ -96,7 +87,7 @@ TEST(StoreDamage, MissingTableIsNamedWhenOpening) {
 TEST(StoreDamage, MissingColumnIsNamedWhenOpening) {
   auto d = tmp("nocolumn");
   const std::string db = make_db(d);
-  sql(db, "ALTER TABLE measures DROP COLUMN unit;");
+  sql_exec(db, "ALTER TABLE measures DROP COLUMN unit;");
   expect_input_error([&] { Store::open(db); }, {db, "table \"measures\" lacks the column(s) unit"});
 }
 
@@ -122,15 +113,15 @@ TEST(StoreDamage, TruncatedFileIsSaidDamagedNotForeign) {
 TEST(StoreDamage, TextInAMeasureValueIsRefusedNotReadAsZero) {
   auto d = tmp("textvalue");
   const std::string db = make_db(d);
-  sql(db,
-      "UPDATE measures SET value = 'abc' WHERE name = 'palpation_force' AND session = "
-      "(SELECT session FROM sessions WHERE participant = 'P02');");
+  sql_exec(db,
+           "UPDATE measures SET value = 'abc' WHERE name = 'palpation_force' AND session = "
+           "(SELECT session FROM sessions WHERE participant = 'P02');");
   Store s = Store::open(db);
   expect_input_error(
       [&] { s.read_measures(); },
       {db, "participant P02", "measure \"palpation_force\"", "'abc' is not a number"});
   // A numeric text is stored as a number by the column's REAL affinity and reads as one.
-  sql(db, "UPDATE measures SET value = '2.75' WHERE name = 'palpation_force';");
+  sql_exec(db, "UPDATE measures SET value = '2.75' WHERE name = 'palpation_force';");
   const auto rows = Store::open(db).read_measures();
   for (const auto& r : rows) {
     if (r.name == "palpation_force") {
@@ -142,9 +133,9 @@ TEST(StoreDamage, TextInAMeasureValueIsRefusedNotReadAsZero) {
 TEST(StoreDamage, CorruptSampleBlobNamesItsSession) {
   auto d = tmp("blob");
   const std::string db = make_db(d);
-  sql(db,
-      "UPDATE samples SET data = substr(data, 1, 10) WHERE session = (SELECT session FROM "
-      "sessions WHERE participant = 'P02');");
+  sql_exec(db,
+           "UPDATE samples SET data = substr(data, 1, 10) WHERE session = (SELECT session FROM "
+           "sessions WHERE participant = 'P02');");
   Store s = Store::open(db);
   const auto sessions = s.read_sessions();
   ASSERT_EQ(sessions.size(), 2u);
@@ -161,7 +152,7 @@ TEST(StoreDamage, FailingExportKeepsTheEarlierExport) {
   const std::string measures = slurp(d / "csv" / "measures.csv");
   const std::string samples = slurp(d / "csv" / "samples.csv");
   ASSERT_NE(measures.find("palpation_force"), std::string::npos);
-  sql(db, "UPDATE samples SET data = x'01';");
+  sql_exec(db, "UPDATE samples SET data = x'01';");
   expect_input_error([&] { export_csv(Store::open(db), (d / "csv").string(), true); },
                      {"corrupt sample blob"});
   EXPECT_EQ(slurp(d / "csv" / "measures.csv"), measures);
