@@ -1,6 +1,9 @@
-// `palplab merge DIR_OR_FILE... --out DIR [--alpha A] [--target-power P]`: combines the
-// replicate files of `palplab power --shard I/K` runs (every replicates*.jsonl in the given
-// directories, or the files given) and writes the power summary, identical to a single run.
+// `palplab merge DIR_OR_FILE... --out DIR [--alpha A] [--target-power P] [--allow-partial]`:
+// combines the replicate files of `palplab power --shard I/K` runs (every replicates*.jsonl in
+// the given directories, or the files given) and writes the power summary, identical to a single
+// run. A merge known to lack replicates (a shard's file not among the inputs, or indices missing
+// below the largest of an n: protocols::merge_gaps) is refused (exit 2) unless --allow-partial,
+// which writes it with a warning and marks power.json/md partial.
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -16,6 +19,7 @@ struct MergeArgs {
   std::vector<std::string> inputs;
   std::string out;
   double alpha = 0.05, target = 0.80;
+  bool allow_partial = false;
 };
 
 palplab::app::CommandRegistration reg{
@@ -31,8 +35,11 @@ palplab::app::CommandRegistration reg{
           ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->target, "Power the smallest n must reach")
           ->check(palplab::app::finite_range(0.01, 0.999999));
+      cmd->add_flag("--allow-partial", a->allow_partial,
+                    "Merge even when shards or replicates are missing (a preliminary summary, "
+                    "marked partial in power.json/md; a warning names what is missing)");
       cmd->callback([a, code] {
-        palplab::app::require_writable_dir("--out", a->out);
+        // The inputs before the outputs: a missing input creates no --out directory.
         std::vector<std::string> files;
         for (const auto& in : a->inputs) {
           if (fs::is_directory(in)) {
@@ -52,11 +59,26 @@ palplab::app::CommandRegistration reg{
           }
         }
         auto summary = palplab::protocols::power_summary(files, a->alpha, a->target);
+        // Shards of a sharded run merged without the others gave a summary of part of the
+        // replicates that read as the whole result.
+        const palplab::protocols::MergeGaps gaps = palplab::protocols::merge_gaps(files);
+        if (!gaps.complete() && !a->allow_partial)
+          throw palplab::InputError(
+              "incomplete merge: " + gaps.message() +
+              ". Merge the directories or files of every shard (a shard that stopped early: "
+              "rerun its `palplab power` command, it resumes), or give --allow-partial for a "
+              "preliminary summary marked partial");
+        palplab::app::require_writable_dir("--out", a->out);
         // As `palplab power` does: never overwrite (or mix in) another study's results.
         palplab::protocols::check_out_dir_study(a->out,
                                                 summary.at("study_sha256").get<std::string>());
+        if (!gaps.complete()) {
+          std::cerr << "warning: partial merge (--allow-partial): " << gaps.message() << "\n";
+          summary["partial"] = gaps.to_json();
+        }
         std::cout << palplab::protocols::write_power_report(summary, a->out) << "\nmerged "
-                  << files.size() << " replicate files into " << a->out << "\n";
+                  << files.size() << " replicate files into " << a->out
+                  << (gaps.complete() ? "" : " (PARTIAL: see the warning above)") << "\n";
         *code = 0;
       });
     }};

@@ -63,6 +63,20 @@ MaterialTable load_materials(const std::string& path) {
   return path.empty() ? default_materials() : read_materials(path);
 }
 
+// A tissue attribute the material table does not define is bad input: the VTU cell data had
+// NaN material values (exit 0) and every later user of the mesh (scene, fem, needle) would stop
+// on it. `what` says where the attribute comes from ("--attribute 999", "region seed 1").
+void require_tissue(const MaterialTable& t, int attribute, const std::string& what,
+                    const std::string& file = {}) {
+  if (t.find(attribute)) return;
+  const std::string a = std::to_string(attribute);
+  throw palplab::InputError(
+      what + ": tissue attribute " + a + " is not defined by the material table " + t.source +
+          ", which defines " + t.describe() + "; use a defined attribute or a --materials table " +
+          "with an entry covering " + a,
+      file);
+}
+
 json vec(const Vec3& p) {
   return {p.x(), p.y(), p.z()};
 }
@@ -346,10 +360,13 @@ palplab::app::CommandRegistration reg{
                       "Radius-edge ratio bound (TetGen -q), >= 1.0; 0 = off");
         c->add_option("--max-volume", opt->max_volume, "Maximum tet volume (m^3, TetGen -a), > 0")
             ->check(palplab::app::finite_range(0, 1e18, true));
-        c->add_option("--attribute", opt->default_attribute,
-                      "Attribute (tissue type) of tets outside seeded regions");
+        auto* attribute_opt =
+            c->add_option("--attribute", opt->default_attribute,
+                          "Attribute (tissue type) of tets outside seeded regions (default 0 = "
+                          "undefined tissue); must be defined by the material table");
         c->add_option("--materials", *mat,
-                      "Material table JSON for the VTU cell data (default: built-in)");
+                      "Material table JSON defining every tissue attribute of the mesh; its "
+                      "values go into the VTU cell data (default: built-in)");
         c->add_flag("--vtu", *vtu, "Also write BASE.vtu");
         c->add_option("--timeout", opt->timeout_seconds,
                       "Stop TetGen after this many seconds (it runs in a child process); 0 = none")
@@ -366,8 +383,22 @@ palplab::app::CommandRegistration reg{
           }
           if (!rf.empty()) o.seeds = read_region_seeds(rf);
           const MaterialTable materials = load_materials(*mat);
+          // Every tissue attribute of the result must be in the table, checked before TetGen
+          // runs when it can be: the seeds' region ids, and --attribute when it is given or
+          // there are no seeds (with seeds it applies only to tets outside them: checked after).
+          for (const RegionSeed& g : o.seeds)
+            require_tissue(materials, g.region_id,
+                           "region seed " + std::to_string(g.index) + " (region_id)", rf);
+          const std::string attribute_what = "--attribute " + std::to_string(o.default_attribute) +
+                                             (attribute_opt->count() ? "" : " (the default)");
+          if (o.seeds.empty() || attribute_opt->count())
+            require_tissue(materials, o.default_attribute, attribute_what);
           check_tet_output(*out);  // before TetGen runs (minutes on a fine mesh)
           const TetMesh m = tetrahedralize(s, o);
+          for (long t = 0; t < m.T.rows(); ++t)
+            require_tissue(
+                materials, m.attribute[t],
+                attribute_what + ", the tissue of the tets outside every region of " + rf);
           write_tet_output(*out, m, *vtu, materials);
           std::cout << "TetGen -" << tetgen_switches(o)
                     << (rf.empty() ? "" : " with regions from " + rf) << ": " << m.V.rows()

@@ -144,6 +144,10 @@ palplab::app::CommandRegistration reg_report{
         palplab::analysis::ReportOptions opt;
         const auto [w, h] = palplab::app::parse_image_size("--still-size", a->still_size);
         palplab::app::flag_only_with(size_opt, !a->no_stills, "stills (not with --no-stills)");
+        // The input before the outputs: a missing or foreign database is refused before --out
+        // is created (it made an empty directory and then exit 2). An INCOMPLETE run still
+        // reports, on the sessions stored, but says so (issue 10).
+        const std::string warning = palplab::results::Store::open(a->db).incomplete_warning();
         palplab::app::require_writable_dir("--out", a->out);
         opt.still_width = w;
         opt.still_height = h;
@@ -151,8 +155,6 @@ palplab::app::CommandRegistration reg_report{
           opt.no_stills_reason = "switched off (--no-stills)";
         else
           opt.stills = palplab::app::make_still_maker();
-        // An INCOMPLETE run still reports, on the sessions stored, but says so (issue 10).
-        const std::string warning = palplab::results::Store::open(a->db).incomplete_warning();
         if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
         auto files = palplab::analysis::write_report(a->db, a->out, opt);
         if (!files.stills_skipped.empty())

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -383,6 +385,9 @@ long run_power(const Study& study, const PowerOptions& opt) {
     if (!fs::is_directory(opt.out_dir))
       throw InputError("cannot create the output directory", opt.out_dir);
     repair_tail(file);
+    // The file exists even when this shard has nothing to run (K above the replicate count):
+    // `palplab merge` takes a shard without its file for a missing one.
+    if (!fs::exists(file)) std::ofstream(file, std::ios::app | std::ios::binary);
     if (fs::exists(file))
       for (const auto& [r, line] : read_replicates(file)) {
         if (r.at("study_sha256") != sha)
@@ -592,6 +597,87 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   return out;
 }
 
+namespace {
+
+// (I, K) of a file named replicates.shard-I-of-K.jsonl (as replicate_file writes), else nullopt.
+std::optional<std::pair<int, int>> shard_of(const std::string& path) {
+  const std::string name = fs::path(path).filename().string();
+  int i = 0, k = 0, used = 0;
+  if (std::sscanf(name.c_str(), "replicates.shard-%d-of-%d.jsonl%n", &i, &k, &used) != 2 ||
+      used != static_cast<int>(name.size()) || k < 1 || i < 1 || i > k)
+    return std::nullopt;
+  return std::make_pair(i, k);
+}
+
+// "0, 2, 4" (the first `most`, then "… (N in all)").
+std::string index_list(const std::vector<int>& v, std::size_t most = 8) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size() && i < most; ++i)
+    s += (i ? ", " : "") + std::to_string(v[i]);
+  if (v.size() > most) s += ", … (" + std::to_string(v.size()) + " in all)";
+  return s;
+}
+
+}  // namespace
+
+MergeGaps merge_gaps(const std::vector<std::string>& files) {
+  MergeGaps g;
+  std::map<int, std::set<int>> shards_seen;  // K -> I present
+  std::map<int, std::set<int>> reps;         // n -> replicate indices present
+  for (const auto& f : files) {
+    if (const auto s = shard_of(f)) shards_seen[s->second].insert(s->first);
+    for (const auto& [r, line] : read_replicates(f))
+      reps[r.at("n").get<int>()].insert(r.at("replicate").get<int>());
+  }
+  for (const auto& [k, present] : shards_seen)
+    for (int i = 1; i <= k; ++i)
+      if (!present.count(i)) g.missing_shards.push_back({i, k});
+  for (const auto& [n, set] : reps) {
+    g.present[n] = static_cast<long>(set.size());
+    g.largest[n] = *set.rbegin();
+    std::vector<int> gaps;
+    for (int r = 0; r < *set.rbegin(); ++r)
+      if (!set.count(r)) gaps.push_back(r);
+    if (!gaps.empty()) g.missing_replicates[n] = std::move(gaps);
+  }
+  return g;
+}
+
+std::string MergeGaps::message() const {
+  if (complete()) return {};
+  std::string s;
+  for (const auto& [i, k] : missing_shards)
+    s += (s.empty() ? "" : "; ") + std::string("shard ") + std::to_string(i) + " of " +
+         std::to_string(k) + " missing (no replicates.shard-" + std::to_string(i) + "-of-" +
+         std::to_string(k) + ".jsonl among the merged files)";
+  for (const auto& [n, gaps] : missing_replicates)
+    s += (s.empty() ? "" : "; ") + std::string("n = ") + std::to_string(n) + ": replicate" +
+         (gaps.size() == 1 ? " " : "s ") + index_list(gaps) + " of 0-" +
+         std::to_string(largest.at(n)) + " missing";
+  long total = 0;
+  std::string per_n;
+  for (const auto& [n, k] : present) {
+    total += k;
+    per_n += (per_n.empty() ? "" : ", ") + std::string("n = ") + std::to_string(n) + ": " +
+             std::to_string(k);
+  }
+  return s + ": the summary covers only " + std::to_string(total) + " replicate" +
+         (total == 1 ? "" : "s") + " (" + per_n + ")";
+}
+
+nlohmann::json MergeGaps::to_json() const {
+  nlohmann::json j = {{"missing_shards", nlohmann::json::array()},
+                      {"missing_replicates", nlohmann::json::object()},
+                      {"replicates", nlohmann::json::object()},
+                      {"message", message()}};
+  for (const auto& [i, k] : missing_shards)
+    j["missing_shards"].push_back(std::to_string(i) + "/" + std::to_string(k));
+  for (const auto& [n, gaps] : missing_replicates)
+    j["missing_replicates"][std::to_string(n)] = gaps;
+  for (const auto& [n, k] : present) j["replicates"][std::to_string(n)] = k;
+  return j;
+}
+
 void check_out_dir_study(const std::string& out_dir, const std::string& sha) {
   std::error_code ec;
   if (!fs::is_directory(out_dir, ec)) return;
@@ -639,8 +725,14 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     return std::string(buf);
   };
   std::ostringstream md;
-  md << "# Power analysis: " << s.at("study").get<std::string>() << "\n\n"
-     << "alpha = " << s.at("alpha").get<double>() << ", target power "
+  md << "# Power analysis: " << s.at("study").get<std::string>() << "\n\n";
+  const bool partial = s.contains("partial");
+  if (partial)
+    md << "**Partial result** (`palplab merge --allow-partial`): "
+       << s.at("partial").at("message").get<std::string>()
+       << ". The table covers only the replicates merged; power and the smallest n may change "
+          "once every shard is merged.\n\n";
+  md << "alpha = " << s.at("alpha").get<double>() << ", target power "
      << s.at("target_power").get<double>()
      << "; power = share of replicates with p < alpha, 95 % Monte Carlo interval (Wilson); "
         "undefined = replicates in which the test had no p-value (counted as not significant; "
@@ -700,10 +792,12 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
   };
   write("power.json", s.dump(2) + "\n");
   write("power.md", table);
-  write("power.svg", analysis::svg_line_plot(series,
-                                             "Power by group size (bars: half-width of the 95 % "
-                                             "Monte Carlo interval)",
-                                             "participants per group", "power"));
+  write("power.svg",
+        analysis::svg_line_plot(series,
+                                std::string(partial ? "PARTIAL (shards missing): " : "") +
+                                    "Power by group size (bars: half-width of the "
+                                    "95 % Monte Carlo interval)",
+                                "participants per group", "power"));
   return table;
 }
 

@@ -13,6 +13,7 @@
 // that file alone, so shards merged afterwards give the single-run result exactly.
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -72,10 +73,33 @@ long run_power(const Study& study, const PowerOptions& opt);
 // duplicates must agree). InputError when files hold different studies or settings.
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
                              double target_power);
+// What a merge of `files` is known to lack (`palplab merge`; docs/PARTICIPANTS.md "Power
+// analysis"): shards I of a `--shard I/K` run whose file replicates.shard-I-of-K.jsonl is not
+// among `files` (K read from the names of those that are), and, per n, replicate indices below
+// the largest one present (a shard missing or stopped early). The total a run meant to simulate
+// is in no record, so missing replicates above the largest of an n cannot be seen.
+struct MergeGaps {
+  std::vector<std::pair<int, int>> missing_shards;     // (I, K), 1-based I
+  std::map<int, std::vector<int>> missing_replicates;  // n -> indices below the largest present
+  std::map<int, long> present;                         // n -> replicates present (deduplicated)
+  std::map<int, int> largest;                          // n -> largest replicate index present
+  bool complete() const { return missing_shards.empty() && missing_replicates.empty(); }
+  // "shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl among the merged files); n = 3:
+  // replicates 0, 2 of 0-3 missing: the summary covers only 3 replicates (n = 2: 2, n = 3: 1)";
+  // empty when complete().
+  std::string message() const;
+  // The power.json "partial" object: {"missing_shards": ["2/2"], "missing_replicates": {"3": [0,
+  // 2]}, "replicates": {"2": 2, "3": 1}, "message": message()}.
+  nlohmann::json to_json() const;
+};
+MergeGaps merge_gaps(const std::vector<std::string>& files);
+
 // InputError when `out_dir` holds results of a study other than the one with SHA-256 `sha`
 // (a power.json or replicates*.jsonl of another study), so they are not overwritten or mixed.
 void check_out_dir_study(const std::string& out_dir, const std::string& sha);
-// Writes DIR/power.json, DIR/power.md (the table, also returned) and DIR/power.svg.
+// Writes DIR/power.json, DIR/power.md (the table, also returned) and DIR/power.svg. A summary
+// with a "partial" object (MergeGaps::to_json, `merge --allow-partial`) gets a partial-result
+// line under power.md's title and in the figure's title.
 std::string write_power_report(const nlohmann::json& summary, const std::string& out_dir);
 
 // Wilson score 95 % interval of a proportion k/n.

@@ -57,7 +57,9 @@ Tets read_tetgen_neigh(const std::string& path);
 std::string tetgen_base(const std::string& path);  // strips .node/.ele/.face/.neigh
 
 // VTK XML unstructured grid (ASCII), for ParaView. Tet cells carry `attribute`, `region`,
-// `volume` and, with a material table, `youngs_modulus`, `poisson_ratio`, `density`.
+// `volume` and, with a material table, `youngs_modulus`, `poisson_ratio`, `density`: then every
+// tet's attribute must be defined by the table (InputError before the file is opened, never a
+// NaN cell value).
 void write_vtu(const std::string& path, const SurfaceMesh& m);
 void write_vtu(const std::string& path, const TetMesh& m, const MaterialTable* materials = nullptr);
 

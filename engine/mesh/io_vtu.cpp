@@ -75,6 +75,14 @@ void write_vtu(const std::string& path, const SurfaceMesh& m) {
 }
 
 void write_vtu(const std::string& path, const TetMesh& m, const MaterialTable* mat) {
+  if (mat)
+    for (long i = 0; i < m.T.rows(); ++i)
+      if (!mat->find(m.attribute[i]))
+        throw InputError("tet " + std::to_string(i) + " has tissue attribute " +
+                             std::to_string(m.attribute[i]) + ", which the material table " +
+                             mat->source + " does not define (it defines " + mat->describe() +
+                             "): no material cell data for it",
+                         path);
   std::ofstream out(path);
   if (!out) throw InputError("cannot write file", path);
   header(out, m.V, m.T.rows(), m.regions);
@@ -87,8 +95,7 @@ void write_vtu(const std::string& path, const TetMesh& m, const MaterialTable* m
              [&](long i) { return format_exact(m.volume[i]); });
   if (mat) {
     auto prop = [&](long i, auto get) {
-      const Material* x = mat->find(m.attribute[i]);
-      return x ? format_exact(get(*x)) : std::string("nan");
+      return format_exact(get(*mat->find(m.attribute[i])));  // checked above
     };
     cell_array(out, "Float64", "youngs_modulus", m.T.rows(),
                [&](long i) { return prop(i, [](const Material& x) { return x.youngs_modulus; }); });

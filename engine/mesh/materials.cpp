@@ -1,5 +1,6 @@
 #include "engine/mesh/materials.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -13,6 +14,22 @@ const Material* MaterialTable::find(int a) const {
   for (const Material& m : materials)
     if (a >= m.first && a <= m.last) return &m;
   return nullptr;
+}
+
+std::string MaterialTable::describe() const {
+  if (materials.empty()) return "no tissue at all (the \"materials\" array is empty)";
+  std::vector<const Material*> sorted;
+  for (const Material& m : materials) sorted.push_back(&m);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const Material* a, const Material* b) { return a->first < b->first; });
+  std::string s;
+  for (const Material* m : sorted) {
+    if (!s.empty()) s += ", ";
+    s += std::to_string(m->first);
+    if (m->last != m->first) s += "-" + std::to_string(m->last);
+    s += " " + m->name;
+  }
+  return s;
 }
 
 const std::string& default_materials_json() {
@@ -78,6 +95,7 @@ MaterialTable parse_materials(const std::string& text, const std::string& source
   if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array())
     bad(source, "$", "expected an object with a \"materials\" array");
   MaterialTable t;
+  t.source = source;
   const auto& arr = j["materials"];
   for (size_t i = 0; i < arr.size(); ++i) {
     const std::string p = "$.materials[" + std::to_string(i) + "]";

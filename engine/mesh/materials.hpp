@@ -39,8 +39,12 @@ struct Material {
 
 struct MaterialTable {
   std::vector<Material> materials;  // non-overlapping ranges
+  std::string source;               // where it was read from (file, "<built-in materials>")
   // The entry covering attribute a, or nullptr.
   const Material* find(int attribute) const;
+  // The attributes defined, for messages: "0-99 undefined, 100 skin, ..." ("no tissue at all
+  // (the \"materials\" array is empty)" for an empty table).
+  std::string describe() const;
 };
 
 // The compiled-in default table (same content as engine/mesh/materials.json).

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "common/input_error.hpp"
@@ -356,12 +357,17 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
     V.row(i) << out.points[3 * i], out.points[3 * i + 1], out.points[3 * i + 2];
   Tets T(nt, 4);
   Eigen::VectorXi A = Eigen::VectorXi::Constant(nt, opt.default_attribute);
+  // TetGen -A numbers the tets of a closed region without a seed itself (0, or max seed
+  // attribute + 1, + 2, ...: a bone region left unseeded next to seed 300 came out as 301,
+  // muscle): only a seed's region_id is kept, every other tet gets the default attribute.
+  std::set<int> seeded;
+  for (const RegionSeed& g : opt.seeds)
+    if (g.region_id != 0) seeded.insert(g.region_id);
   for (int t = 0; t < nt; ++t) {
     for (int k = 0; k < 4; ++k) T(t, k) = out.tets[4 * t + k];
     if (!out.attr.empty()) {
-      const double a = out.attr[t];
-      // Tets in no seeded region get attribute 0 from TetGen: keep the default for them.
-      if (a != 0) A[t] = static_cast<int>(std::lround(a));
+      const long a = std::lround(out.attr[t]);
+      if (a == static_cast<int>(a) && seeded.count(static_cast<int>(a))) A[t] = static_cast<int>(a);
     }
   }
   Regions regions;

@@ -35,7 +35,8 @@ struct TetOptions {
   double max_volume = 0;          // global maximum tet volume (m^3, TetGen -a); 0 = none
   bool keep_surface = true;       // TetGen -Y: no Steiner points on the input surface
   std::vector<RegionSeed> seeds;  // TetGen -A regions; without seeds every tet gets
-  int default_attribute = 0;      //   this attribute (0-99 = undefined tissue)
+  int default_attribute = 0;      //   this attribute; with seeds, the tets of closed regions
+                                  //   without a seed get it (0-99 = undefined tissue)
   double timeout_seconds = 300;   // wall-clock limit of the TetGen run; <= 0 = none
 };
 

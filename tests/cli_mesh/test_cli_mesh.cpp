@@ -294,3 +294,71 @@ TEST(CliMesh, NamedMaterialsFileMustExist) {
   ASSERT_EQ(run("mesh materials --out " + p("m2.json")).code, 0);
   EXPECT_EQ(run("mesh info " + p("m162.obj") + " --materials " + p("m2.json")).code, 0);
 }
+
+// A tissue attribute the material table does not define (--attribute 999, a seed's region_id
+// 150, anything with an empty table) was written as NaN material cell data with exit 0. SPEC §4's
+// 0-99 "undefined" tissue is a table entry of its own: --attribute 50 is fine.
+TEST(CliMesh, TetrahedralizeRefusesTissueAttributesTheMaterialTableLacks) {
+  using palplab::testing::expect_exit2;
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("u162.obj")).code, 0);
+  const std::string tet = "mesh tetrahedralize " + p("u162.obj");
+  Result r = run(tet + " --out " + p("u999.vtu") + " --attribute 999");
+  expect_exit2(r, {"--attribute 999: tissue attribute 999 is not defined by the material table "
+                   "<built-in materials>, which defines 0-99 undefined, 100 skin",
+                   "300-399 muscle", "entry covering 999"});
+  EXPECT_FALSE(fs::exists(p("u999.vtu")));
+  EXPECT_EQ(r.out.find("TetGen -"), std::string::npos) << r.out;  // refused before TetGen
+  const std::string empty = palplab::testing::write_temp("u_empty.json", R"({"materials": []})");
+  r = run(tet + " --out " + p("uempty") + " --vtu --materials " + empty);
+  expect_exit2(r, {"--attribute 0 (the default): tissue attribute 0 is not defined",
+                   "material table " + empty, "no tissue at all"});
+  for (const char* f : {"uempty.node", "uempty.ele", "uempty.vtu"}) EXPECT_FALSE(fs::exists(p(f)));
+  const std::string seeds = palplab::testing::write_temp("u150.regions", "1\n1 0 0 0 150 0\n");
+  r = run(tet + " --out " + p("u150") + " --regions " + seeds);
+  expect_exit2(r, {seeds + ": region seed 1 (region_id): tissue attribute 150 is not defined"});
+  EXPECT_FALSE(fs::exists(p("u150.node")));
+  // Undefined tissue (0-99) is defined: its values, never NaN.
+  r = run(tet + " --out " + p("u50") + " --vtu --attribute 50");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string vtu = slurp(p("u50.vtu"));
+  EXPECT_NE(vtu.find("Name=\"youngs_modulus\""), std::string::npos);
+  EXPECT_EQ(vtu.find("nan"), std::string::npos);
+
+  // Nested closed surfaces, the humerus's seed (200) left out: its tets get --attribute (TetGen
+  // numbered them 301 = muscle), and an undefined default is found after TetGen.
+  ASSERT_EQ(run("mesh generate shoulder --vertices 162 --out " + p("ush")).code, 0);
+  std::ifstream in(p("ush.regions"));
+  std::string line, kept;
+  int n = 0;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    double i, x, y, z;
+    int id;
+    ASSERT_TRUE(ls >> i >> x >> y >> z >> id) << line;
+    if (id == 200) continue;
+    kept += line + "\n";
+    ++n;
+  }
+  ASSERT_GT(n, 0);
+  const std::string part =
+      palplab::testing::write_temp("ush_part.regions", std::to_string(n) + "\n" + kept);
+  const std::string sh = "mesh tetrahedralize " + p("ush.obj") + " --regions " + part;
+  r = run(sh + " --out " + p("ush5") + " --attribute 5");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(run("mesh info " + p("ush5.node") + " --json").out);
+  EXPECT_TRUE(j["tissues"].contains("5")) << j["tissues"].dump();
+  EXPECT_FALSE(j["tissues"].contains("301")) << j["tissues"].dump();
+  EXPECT_FALSE(j["tissues"].contains("200")) << j["tissues"].dump();
+  json table = json::parse(run("mesh materials").out);
+  json no_undefined = json::array();
+  for (auto& m : table["materials"])
+    if (m["first"] != 0) no_undefined.push_back(m);
+  table["materials"] = no_undefined;
+  const std::string t = palplab::testing::write_temp("u_no0.json", table.dump());
+  r = run(sh + " --out " + p("ush0") + " --materials " + t);
+  expect_exit2(r, {"--attribute 0 (the default), the tissue of the tets outside every region of " +
+                       part + ": tissue attribute 0 is not defined by the material table " + t,
+                   "which defines 100 skin"});
+  EXPECT_FALSE(fs::exists(p("ush0.node")));
+}

@@ -141,7 +141,14 @@ TEST(Power, SizesStudyAndOutputAreCheckedFirst) {
       d);
   EXPECT_EQ(w.code, 2) << w.out << w.err;
   EXPECT_NE(w.err.find("--out"), std::string::npos) << w.err;
-  const auto m = run_palplab("merge " + d.string() + " --out " + (d / "file" / "m").string(), d);
+  // (merge reads its inputs first: give it one.)
+  std::ofstream(d / "r.jsonl")
+      << R"({"study_sha256": "5ca1ab1e", "study": "power_null", "n": 2, "replicate": 0, )"
+      << R"("seed": 1, "tests": [{"id": "anova_oneway palpation_force test", "p": 0.01, )"
+      << R"("effect": 0.3, "effect_name": "eta_squared"}]})"
+      << "\n";
+  const auto m =
+      run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "file" / "m").string(), d);
   EXPECT_EQ(m.code, 2) << m.out << m.err;
   EXPECT_NE(m.err.find("--out"), std::string::npos) << m.err;
   fs::remove_all(d);
@@ -358,6 +365,69 @@ TEST(Power, OneGroupStudyIsRefused) {
   EXPECT_NE(r.err.find("one.json:"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("$.analyses[0]: analysis \"anova_oneway\""), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("needs at least 2 groups"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "never"));
+  fs::remove_all(d);
+}
+
+// Merging the file of shard 1 of 2 alone gave a summary of half the replicates that read as the
+// whole result (exit 0, nothing said). Now it is exit 2 naming the missing shard and what the
+// summary would cover, unless --allow-partial: then a warning, and power.json/md say "partial".
+TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
+  using palplab::testing::expect_exit2;
+  using palplab::testing::has;
+  auto d = scratch_dir("merge_partial");
+  const std::string base = "power " + null_study() + " --n 2,3 --replicates 3 --quiet";
+  for (int i = 1; i <= 2; ++i)
+    ASSERT_EQ(run_palplab(base + " --shard " + std::to_string(i) + "/2 --out " +
+                              (d / ("s" + std::to_string(i))).string(),
+                          d)
+                  .code,
+              0);
+  const std::string s1 = (d / "s1").string(), s2 = (d / "s2").string();
+  auto r = run_palplab("merge " + s1 + " --out " + (d / "m").string(), d);
+  expect_exit2(r, {"incomplete merge: shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl "
+                   "among the merged files)",
+                   "the summary covers only 3 replicates (n = 2: 2, n = 3: 1)", "--allow-partial"});
+  EXPECT_FALSE(fs::exists(d / "m"));
+  r = run_palplab("merge " + s1 + " --allow-partial --out " + (d / "m").string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "warning: partial merge (--allow-partial): shard 2 of 2 missing"))
+      << r.err;
+  EXPECT_TRUE(has(r.out, "PARTIAL")) << r.out;
+  const auto j = power_json(d / "m");
+  ASSERT_TRUE(j.contains("partial")) << j.dump();
+  EXPECT_EQ(j["partial"]["missing_shards"], nlohmann::json::array({"2/2"}));
+  EXPECT_EQ(j["partial"]["replicates"]["2"], 2);
+  EXPECT_TRUE(has(j["partial"]["message"].get<std::string>(), "shard 2 of 2 missing"));
+  EXPECT_EQ(j["replicates"]["2"], 2);  // the contract keys as before
+  EXPECT_TRUE(has(slurp(d / "m" / "power.md"),
+                  "**Partial result** (`palplab merge "
+                  "--allow-partial`): shard 2 of 2 missing"));
+  // Every shard: complete, no mark, no warning (also after a partial merge into the same --out).
+  r = run_palplab("merge " + s1 + " " + s2 + " --out " + (d / "m").string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_FALSE(power_json(d / "m").contains("partial"));
+  EXPECT_FALSE(has(slurp(d / "m" / "power.md"), "Partial"));
+  // Replicates missing inside a file (a shard stopped early, or a file cut by hand): named.
+  std::ofstream f(d / "gap.jsonl");
+  for (int rep : {0, 2, 4}) f << record(2, rep, 0.01, 0.3).dump() << "\n";
+  f.close();
+  r = run_palplab("merge " + (d / "gap.jsonl").string() + " --out " + (d / "g").string(), d);
+  expect_exit2(r, {"n = 2: replicates 1, 3 of 0-4 missing", "covers only 3 replicates"});
+  EXPECT_FALSE(fs::exists(d / "g"));
+  // A shard with nothing to run (K above the replicates) still writes its (empty) file.
+  const std::string one = "power " + null_study() + " --n 2 --replicates 1 --quiet --out " +
+                          (d / "few").string() + " --shard ";
+  ASSERT_EQ(run_palplab(one + "1/2", d).code, 0);
+  ASSERT_EQ(run_palplab(one + "2/2", d).code, 0);
+  EXPECT_TRUE(fs::exists(d / "few" / "replicates.shard-2-of-2.jsonl"));
+  r = run_palplab("merge " + (d / "few").string() + " --out " + (d / "few").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  // A missing input creates no --out.
+  r = run_palplab("merge " + (d / "nothing").string() + " --out " + (d / "never").string(), d);
+  expect_exit2(r, {(d / "nothing").string() + ": no such file or directory"});
   EXPECT_FALSE(fs::exists(d / "never"));
   fs::remove_all(d);
 }

@@ -129,3 +129,26 @@ TEST(CliReportDamage, FileWhereTheExportPutsADirectory) {
   r = run_palplab("export " + db.string() + " --csv " + (d / "csv").string(), d);
   expect_exit2(r, {"sessions.csv", "is a directory"});
 }
+
+// A database that does not exist (or is no palplab database) is refused before any output is
+// made: `report` created its --out directory first and then said "no such database".
+TEST(CliReportDamage, MissingDatabaseCreatesNoOutput) {
+  auto d = scratch_dir("dmg_missing");
+  const fs::path missing = d / "MISSING.db";
+  Result r =
+      run_palplab("report " + missing.string() + " --out " + (d / "rep" / "sub").string(), d);
+  expect_exit2(r, {missing.string() + ": no such database"});
+  EXPECT_FALSE(fs::exists(d / "rep"));
+  r = run_palplab("export " + missing.string() + " --csv " + (d / "csv" / "sub").string(), d);
+  expect_exit2(r, {missing.string() + ": no such database"});
+  EXPECT_FALSE(fs::exists(d / "csv"));
+  EXPECT_FALSE(fs::exists(missing));  // not created by opening it either
+  std::ofstream(d / "notes.db") << "my notes\n";
+  r = run_palplab("report " + (d / "notes.db").string() + " --out " + (d / "rep").string(), d);
+  expect_exit2(r, {(d / "notes.db").string(), "not a palplab results database"});
+  EXPECT_FALSE(fs::exists(d / "rep"));
+  r = run_palplab("export " + (d / "notes.db").string() + " --csv " + (d / "csv").string(), d);
+  expect_exit2(r, {(d / "notes.db").string(), "not a palplab results database"});
+  EXPECT_FALSE(fs::exists(d / "csv"));
+  EXPECT_EQ(slurp(d / "notes.db"), "my notes\n");
+}
