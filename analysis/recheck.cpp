@@ -1,5 +1,6 @@
 #include "analysis/recheck.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -31,8 +32,23 @@ double to_number(const std::string& s, const std::string& text, const SourceLoca
   return x;
 }
 
+constexpr const char* kNotRecomputable = "not recomputable";
+
 int rank(const std::string& v) {
-  return v == "consistent" ? 0 : (v == "rounding" ? 1 : 2);
+  return v == "consistent" ? 0 : v == "rounding" ? 1 : v == kNotRecomputable ? 2 : 3;
+}
+
+// "line 8" / "lines 3, 5"
+std::string lines_text(const std::vector<int>& lines) {
+  std::string s = lines.size() == 1 ? "line " : "lines ";
+  for (size_t i = 0; i < lines.size(); ++i) s += (i ? ", " : "") + std::to_string(lines[i]);
+  return s;
+}
+
+// "group 'D' has 1 value (line 8)"
+std::string too_few(const GroupedData& d, size_t g) {
+  return "group '" + d.names[g] + "' has " + std::to_string(d.values[g].size()) + " value" +
+         (d.values[g].size() == 1 ? "" : "s") + " (" + lines_text(d.lines[g]) + ")";
 }
 
 }  // namespace
@@ -78,7 +94,7 @@ ApaStatistic parse_apa(const std::string& text, const SourceLocation& where) {
 }
 
 std::string classify_number(double reported, int decimals, double recomputed) {
-  if (!std::isfinite(recomputed)) return "inconsistent";
+  if (!std::isfinite(recomputed)) return kNotRecomputable;
   const double unit = std::pow(10.0, -decimals);
   // Rounded half away from zero, as printed; a small relative slack absorbs the binary
   // representation of values exactly on a half.
@@ -91,7 +107,7 @@ std::string classify_number(double reported, int decimals, double recomputed) {
 
 std::string classify_p(const std::string& relation, double reported, int decimals,
                        double recomputed) {
-  if (!std::isfinite(recomputed)) return "inconsistent";
+  if (!std::isfinite(recomputed)) return kNotRecomputable;
   const double unit = decimals > 0 ? std::pow(10.0, -decimals) : 1;
   // A bound is a claim ("p < .05" with p = .051 claims significance that is not there): it
   // holds or it is inconsistent; no rounding slack.
@@ -181,14 +197,48 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
                                                      item.test +
                                                      ") compares all groups of column '" + group +
                                                      "' (select groups with \"where\")");
-    GroupedData d = group_table(table, value, group, where);
+    // Every group of the rows used with at least 1 value: which groups a test needs (and how
+    // many values) is the test's own matter, and too few is "not recomputable", not bad input.
+    GroupedData d = group_table(table, value, group, where, 1, 1);
     double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
-    if (item.test == "anova") {
-      Anova r = oneway_anova(d.values);
-      df1 = r.df_between, df2 = r.df_within, stat = r.F, p = r.p;
+    std::string why;  // why the test is undefined on these rows
+    const std::string col = "column '" + group + "'";
+    if (f_test && d.names.size() < 2) {
+      why = "the rows used hold one group of " + col + " ('" + d.names[0] +
+            "'); an F test compares at least 2";
+    } else if (item.test == "anova") {
+      size_t n = 0;
+      for (const auto& g : d.values) n += g.size();
+      df1 = static_cast<double>(d.names.size() - 1);
+      if (n <= d.names.size()) {
+        why = "every group of " + col +
+              " has a single value: no variation within groups to "
+              "compare with (df2 = 0)";
+      } else {
+        Anova r = oneway_anova(d.values);
+        df2 = r.df_within;
+        if (r.defined)
+          stat = r.F, p = r.p;
+        else
+          why = "no variation within any group of " + col +
+                " (the values of each group are all equal): F and p are undefined";
+      }
     } else if (item.test == "welch_anova") {
-      WelchAnova r = welch_anova(d.values);
-      df1 = r.df_between, df2 = r.df_within, stat = r.F, p = r.p;
+      df1 = static_cast<double>(d.names.size() - 1);
+      for (size_t g = 0; g < d.names.size() && why.empty(); ++g)
+        if (d.values[g].size() < 2) why = too_few(d, g) + "; Welch's F needs at least 2 per group";
+      if (why.empty()) {
+        WelchAnova r = welch_anova(d.values);
+        if (r.defined)
+          df2 = r.df_within, stat = r.F, p = r.p;
+        else
+          for (size_t g = 0; g < d.names.size() && why.empty(); ++g)
+            if (std::all_of(d.values[g].begin(), d.values[g].end(),
+                            [&](double x) { return x == d.values[g].front(); }))
+              why = "group '" + d.names[g] +
+                    "' has no variation (its values are all equal): Welch's F weights each "
+                    "group by 1/variance and is undefined";
+      }
     } else {
       if (!s.contains("pair") || !s["pair"].is_array() || s["pair"].size() != 2 ||
           !s["pair"][0].is_string() || !s["pair"][1].is_string())
@@ -201,12 +251,23 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
       }
       if (ia < 0 || ib < 0 || ia == ib)
         throw InputError(at(path + ".pair"),
-                         "both groups must be distinct groups of column '" + group + "'");
-      TTest r = item.test == "welch_t" ? welch_t(d.values[ia], d.values[ib])
-                                       : student_t(d.values[ia], d.values[ib]);
-      df1 = r.df, stat = r.t, p = r.p;
-      // A printed t may be the |t| of a pair written the other way round.
-      if (a.value >= 0 && stat < 0 && s["pair"].is_array()) stat = -stat;
+                         "both groups must be distinct groups of " + col + " in the rows used");
+      for (int g : {ia, ib})
+        if (why.empty() && d.values[g].size() < 2)
+          why = too_few(d, g) + "; a t-test needs at least 2 per group";
+      if (why.empty()) {
+        TTest r = item.test == "welch_t" ? welch_t(d.values[ia], d.values[ib])
+                                         : student_t(d.values[ia], d.values[ib]);
+        df1 = r.df;
+        if (r.defined) {
+          stat = r.t, p = r.p;
+          // A printed t may be the |t| of a pair written the other way round.
+          if (a.value >= 0 && stat < 0) stat = -stat;
+        } else {
+          why = "no variation within groups '" + d.names[ia] + "' and '" + d.names[ib] +
+                "' (the values of each are all equal): t and p are undefined";
+        }
+      }
     }
     auto part = [&](const std::string& name, const std::string& shown, std::string verdict,
                     double v) {
@@ -226,9 +287,15 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
     part("p", a.p_relation + " " + show(a.p, a.p_decimals),
          classify_p(a.p_relation, a.p, a.p_decimals, p), p);
     item.verdict = "consistent";
-    for (const auto& pt : item.parts)
+    bool undefined = false;
+    for (const auto& pt : item.parts) {
       if (rank(pt.verdict) > rank(item.verdict)) item.verdict = pt.verdict;
-    item.recomputed_apa = a.kind == 'F' ? apa_f(stat, df1, df2, p) : apa_t(stat, df1, p);
+      undefined = undefined || pt.verdict == kNotRecomputable;
+    }
+    if (undefined)
+      item.reason = why.empty() ? "the test is undefined on the rows used" : why;
+    else
+      item.recomputed_apa = a.kind == 'F' ? apa_f(stat, df1, df2, p) : apa_t(stat, df1, p);
     out.push_back(std::move(item));
   }
   return out;

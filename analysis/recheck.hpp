@@ -8,8 +8,13 @@
 //                      bound that does not hold is inconsistent, never a rounding);
 //   rounding           off by at most one unit in the last printed digit (a rounding or
 //                      truncation slip, e.g. 18.64 for 18.645...);
+//   not recomputable   the raw data do not define the value (no variation within the groups,
+//                      a group of the test with fewer than 2 values, one group for an F): the
+//                      item says why; never graded from a NaN;
 //   inconsistent       anything else (with the recomputed value).
-// The verdict of a statistic is its worst part. REPORTED.json: docs/FORMATS.md.
+// The verdict of a statistic is its worst part, in the order consistent < rounding < not
+// recomputable < inconsistent (a part that can be recomputed and disagrees is inconsistent even
+// when another part cannot be recomputed). REPORTED.json: docs/FORMATS.md.
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -37,16 +42,17 @@ struct ApaStatistic {
 ApaStatistic parse_apa(const std::string& text, const SourceLocation& where);
 
 struct RecheckPart {
-  std::string name;      // "df", "df1", "df2", "statistic", "p"
-  std::string reported;  // as printed
-  double recomputed = 0;
-  std::string verdict;  // "consistent", "rounding", "inconsistent"
+  std::string name;       // "df", "df1", "df2", "statistic", "p"
+  std::string reported;   // as printed
+  double recomputed = 0;  // NaN when not recomputable
+  std::string verdict;    // "consistent", "rounding", "not recomputable", "inconsistent"
 };
 struct RecheckItem {
   std::string id, text, test;
   std::vector<RecheckPart> parts;
-  std::string verdict;  // worst of the parts
-  std::string recomputed_apa;
+  std::string verdict;         // worst of the parts
+  std::string recomputed_apa;  // empty when a part is not recomputable
+  std::string reason;          // why parts are not recomputable; empty when every part is
 };
 
 // Recomputes every statistic of a REPORTED.json document on `table`. `file` labels errors;
@@ -56,7 +62,8 @@ struct RecheckItem {
 std::vector<RecheckItem> recheck(const nlohmann::json& reported, const CsvTable& table,
                                  const std::string& file, std::string_view text = {});
 
-// Classifies a printed number against a recomputed one (decimals as printed).
+// Classifies a printed number against a recomputed one (decimals as printed); a recomputed
+// value that is not finite is "not recomputable".
 std::string classify_number(double reported, int decimals, double recomputed);
 // Classifies a printed p ("=", "<", ">") against a recomputed p.
 std::string classify_p(const std::string& relation, double reported, int decimals,

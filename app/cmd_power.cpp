@@ -103,20 +103,7 @@ palplab::app::CommandRegistration reg{
               palplab::SourceLocation{a->study, 0, 0, -1, "$.analyses"},
               "the study declares no test to compute the power of: expected at least one "
               "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
-        // A one-way ANOVA compares groups and a pair needs two: with one group the test is
-        // never defined and its power would read 0. (Checked here, not by the study validator:
-        // `palplab run` may describe a one-group study.)
-        if (s.groups.size() < 2)
-          for (std::size_t i = 0; i < s.analyses.size(); ++i) {
-            const Analysis& x = s.analyses[i];
-            if (x.kind != "anova_oneway" && x.kind != "pairwise_t") continue;
-            const std::string path = "$.analyses[" + std::to_string(i) + "]";
-            throw palplab::InputError(
-                palplab::json::JsonLocator(s.json_text).locate(a->study, path),
-                "analysis \"" + x.kind + "\" of " + x.measure + " in phase " + x.phase +
-                    " needs at least 2 groups to compare; the study has " +
-                    std::to_string(s.groups.size()) + " (add a group or remove the analysis)");
-          }
+        // A one-group study with such a test is refused by the study validator (load_study).
         palplab::app::require_writable_dir("--out", a->out);
         const bool tty = isatty(2);
         if (!a->quiet)

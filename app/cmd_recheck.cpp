@@ -1,8 +1,10 @@
 // `palplab recheck REPORTED.json --csv FILE [--json]`: recomputes statistics as a paper printed
 // them (APA text with the columns they refer to) from the raw data and flags each as
-// consistent, a rounding difference or inconsistent (analysis/recheck.hpp; the REPORTED.json
-// format is in docs/FORMATS.md). Exit 0 when every statistic is consistent or a rounding
-// difference, 1 when any is inconsistent, 2 on bad input.
+// consistent, a rounding difference, not recomputable (the data do not define it, with the
+// reason) or inconsistent (analysis/recheck.hpp; the REPORTED.json format is in
+// docs/FORMATS.md). Exit 0 when every statistic is consistent or a rounding difference, 1 when
+// any is inconsistent or not recomputable, 2 on bad input.
+#include <cmath>
 #include <iostream>
 #include <memory>
 
@@ -23,7 +25,7 @@ palplab::app::CommandRegistration reg{
       auto* cmd = root.add_subcommand(
           "recheck",
           "Recompute printed statistics (e.g. \"F(2, 27) = 18.65, p < .001\") from "
-          "the raw data: consistent, rounding difference or inconsistent");
+          "the raw data: consistent, rounding difference, not recomputable or inconsistent");
       auto a = std::make_shared<RecheckArgs>();
       cmd->add_option("reported", a->reported, "REPORTED.json (docs/FORMATS.md)")->required();
       cmd->add_option("--csv", a->csv, "Raw data CSV the statistics were computed from")
@@ -37,38 +39,58 @@ palplab::app::CommandRegistration reg{
         const nlohmann::json rep = palplab::json::parse_json_file(a->reported, &text);
         CsvTable t = read_csv(a->csv);
         auto items = recheck(rep, t, a->reported, text);
-        int inconsistent = 0;
+        int inconsistent = 0, undefined = 0;
         nlohmann::json out = nlohmann::json::array();
         for (const auto& it : items) {
           inconsistent += it.verdict == "inconsistent";
+          undefined += it.verdict == "not recomputable";
           nlohmann::json parts = nlohmann::json::array();
           for (const auto& p : it.parts)
-            parts.push_back({{"part", p.name},
-                             {"reported", p.reported},
-                             {"recomputed", p.recomputed},
-                             {"verdict", p.verdict}});
-          out.push_back({{"id", it.id},
-                         {"text", it.text},
-                         {"test", it.test},
-                         {"verdict", it.verdict},
-                         {"recomputed", it.recomputed_apa},
-                         {"parts", parts}});
+            parts.push_back(
+                {{"part", p.name},
+                 {"reported", p.reported},
+                 {"recomputed", std::isfinite(p.recomputed) ? nlohmann::json(p.recomputed)
+                                                            : nlohmann::json(nullptr)},
+                 {"verdict", p.verdict}});
+          nlohmann::json item = {
+              {"id", it.id},
+              {"text", it.text},
+              {"test", it.test},
+              {"verdict", it.verdict},
+              {"recomputed", it.recomputed_apa.empty() ? nlohmann::json(nullptr)
+                                                       : nlohmann::json(it.recomputed_apa)},
+              {"parts", parts}};
+          if (!it.reason.empty()) item["not_recomputable"] = it.reason;
+          out.push_back(item);
         }
         if (a->json) {
-          std::cout << nlohmann::json{{"statistics", out}, {"inconsistent", inconsistent}}.dump(2)
+          std::cout << nlohmann::json{{"statistics", out},
+                                      {"inconsistent", inconsistent},
+                                      {"not_recomputable", undefined}}
+                           .dump(2)
                     << "\n";
         } else {
           for (const auto& it : items) {
-            std::cout << it.id << ": \"" << it.text << "\" -> " << it.verdict
-                      << " (recomputed: " << it.recomputed_apa << ")\n";
+            std::cout << it.id << ": \"" << it.text << "\" -> ";
+            if (it.verdict == "not recomputable")
+              std::cout << "not recomputable: " << it.reason << "\n";
+            else if (!it.reason.empty())  // a part disagrees, another cannot be recomputed
+              std::cout << it.verdict << " (in part not recomputable: " << it.reason << ")\n";
+            else
+              std::cout << it.verdict << " (recomputed: " << it.recomputed_apa << ")\n";
             for (const auto& p : it.parts)
-              if (p.verdict != "consistent")
+              if (p.verdict == "not recomputable")
+                std::cout << "    " << p.name << ": printed " << p.reported
+                          << ", not recomputable\n";
+              else if (p.verdict != "consistent")
                 std::cout << "    " << p.name << ": printed " << p.reported << ", recomputed "
                           << p.recomputed << " (" << p.verdict << ")\n";
           }
-          std::cout << items.size() << " statistics, " << inconsistent << " inconsistent\n";
+          std::cout << items.size() << (items.size() == 1 ? " statistic, " : " statistics, ")
+                    << inconsistent << " inconsistent, " << undefined << " not recomputable\n";
         }
-        *code = inconsistent > 0 ? 1 : 0;
+        // Exit 0 only when every statistic is confirmed by the data (consistent or a rounding).
+        *code = inconsistent + undefined > 0 ? 1 : 0;
       });
     }};
 }  // namespace

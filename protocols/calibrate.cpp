@@ -53,6 +53,34 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
+// "line 4" / "lines 4, 9"
+std::string lines_text(const std::vector<int>& lines) {
+  std::string s = lines.size() == 1 ? "line " : "lines ";
+  for (std::size_t i = 0; i < lines.size(); ++i) s += (i ? ", " : "") + std::to_string(lines[i]);
+  return s;
+}
+
+// Column 'session' of row r: the 1-based session number within the phase, a positive integer
+// written as digits (as `palplab export` writes it); 1.5, 0, -1, 2e0 or text are errors at the
+// field.
+int session_number(const analysis::CsvTable& t, std::size_t r, int col) {
+  const std::string& field = t.rows[r][col];
+  const std::size_t b = field.find_first_not_of(" \t"), e = field.find_last_not_of(" \t");
+  const std::string v = b == std::string::npos ? std::string() : field.substr(b, e - b + 1);
+  const bool digits =
+      !v.empty() && v.size() <= 7 && v.find_first_not_of("0123456789") == std::string::npos;
+  const long n = digits ? std::stol(v) : 0;
+  if (n >= 1 && n <= 1000000) return static_cast<int>(n);
+  const std::size_t f = r * t.header.size() + col;
+  const bool located = f < t.field_line.size();
+  throw InputError(
+      SourceLocation{t.file, located ? t.field_line[f] : t.line[r],
+                     located ? t.field_column[f] : 0},
+      "column 'session': expected a positive integer (the session number within its phase: 1, "
+      "2, ...), got " +
+          (v.empty() ? std::string("an empty field") : "'" + field + "'"));
+}
+
 }  // namespace
 
 std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
@@ -71,15 +99,12 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   std::map<Key, int> first_line;
   std::vector<Key> order;
   std::map<Key, int> undefined;
+  std::map<Key, std::vector<int>> value_lines, undefined_lines;
   // (participant, cell) -> the line it was first given on: one value per participant and cell.
   std::map<std::pair<std::string, Key>, int> seen;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
-    const double s = analysis::parse_number(t, static_cast<int>(r), col[2]);
-    if (s < 1 || s != std::floor(s) || s > 1e6)
-      throw InputError(SourceLocation{csv_path, t.line[r], 1},
-                       "column 'session': expected a session number >= 1 within the phase");
-    auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], static_cast<int>(s),
-                               t.rows[r][col[3]]);
+    const int s = session_number(t, r, col[2]);
+    auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], s, t.rows[r][col[3]]);
     const std::string& participant = t.rows[r][col[5]];
     if (auto [it, fresh] = seen.emplace(std::make_pair(participant, key), t.line[r]); !fresh)
       throw InputError(SourceLocation{csv_path, t.line[r], 1},
@@ -94,6 +119,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     if (field.find_first_not_of(" \t") == std::string::npos || field == "NA") {
       ++undefined[key];
       values[key];
+      undefined_lines[key].push_back(t.line[r]);
       continue;
     }
     const double v = analysis::parse_number(t, static_cast<int>(r), col[4]);
@@ -104,6 +130,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
           "column 'value': " + std::get<3>(key) + " must be " + expected + ", got " + field);
     }
     values[key].push_back(v);
+    value_lines[key].push_back(t.line[r]);
   }
   if (order.empty()) throw InputError("no data rows", csv_path);
   std::vector<HumanCell> cells;
@@ -113,10 +140,9 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
                 std::get<3>(key), static_cast<int>(v.size()), undefined[key]};
     c.file = csv_path;
     c.line = first_line[key];
-    if (c.n < 2)
-      throw InputError(SourceLocation{csv_path, first_line[key], 1},
-                       "group " + c.group + ", " + c.measure + ": fewer than 2 values");
-    mean_sd(v, c.mean, c.sd);
+    c.value_lines = value_lines[key];
+    c.undefined_lines = undefined_lines[key];
+    mean_sd(v, c.mean, c.sd);  // only cells with n >= 2 are fitted (checked by calibrate)
     cells.push_back(c);
   }
   return cells;
@@ -356,6 +382,20 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
       throw fail("session " + std::to_string(c.session) + " of phase " + c.phase + " (it has " +
                  std::to_string(phase->sessions) + " session" + (phase->sessions == 1 ? "" : "s") +
                  ")");
+    // The loss compares SDs (and divides by n - 1): a fitted cell needs 2 values.
+    if (c.n < 2)
+      throw InputError(
+          SourceLocation{c.file, c.line},
+          "group " + c.group + ", phase " + c.phase + ", session " + std::to_string(c.session) +
+              ", measure " + c.measure + ": " + std::to_string(c.n) + " participant" +
+              (c.n == 1 ? "" : "s") + " with a value" +
+              (c.value_lines.empty() ? "" : " (" + lines_text(c.value_lines) + ")") +
+              (c.undefined_lines.empty()
+                   ? std::string()
+                   : ", " + std::to_string(c.undefined) + " without (empty or NA, " +
+                         lines_text(c.undefined_lines) + ")") +
+              "; expected at least 2 participants with a value in every fitted cell (an SD "
+              "needs 2): add participants, or leave the measure out with --measures");
   }
   std::vector<double> lo, hi, step;
   const pm::TraineeParams current = pm::trainee_params(study.participant_parameters, study.file);

@@ -36,14 +36,16 @@ struct HumanCell {
   double mean = 0.0, sd = 0.0;
   std::string file;  // the CSV and the line of the cell's first row, for messages
   int line = 0;
+  std::vector<int> value_lines, undefined_lines;  // the lines of its values / undefined rows
 };
 
 // Reads a tidy CSV (columns participant, group, phase, session, measure, value) into cells
 // (empty or NA values, i.e. undefined measures, are left out);
-// InputError with the line for missing columns, non-numbers, a value outside its measure's range
-// (feature_identified 0 or 1, accuracy 0–100 %, counts whole numbers >= 0, forces, times and
-// distances >= 0), a (participant, group, phase, session, measure) given twice, or cells with
-// fewer than 2 values.
+// InputError with the line for missing columns, a session that is not a positive integer,
+// non-numbers, a value outside its measure's range (feature_identified 0 or 1, accuracy 0–100 %,
+// counts whole numbers >= 0, forces, times and distances >= 0) or a (participant, group, phase,
+// session, measure) given twice. Cells with fewer than 2 values are kept: calibrate() refuses
+// them among the cells it fits.
 std::vector<HumanCell> read_human_cells(const std::string& csv_path);
 
 struct CellFit {
@@ -95,6 +97,8 @@ struct CalibrationResult {
   nlohmann::json parameters;  // the study's parameters with the fitted values applied
 };
 
+// Before any simulation, InputError (with the CSV line) for a fitted cell (one of the measures
+// to fit) whose group, phase or session the study lacks or that has fewer than 2 values.
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
                             const CalibrateOptions& opt);
 

@@ -131,33 +131,65 @@ void parse_limits(Ctx& c, const json& j, const std::string& path, engine::Thresh
   out = prototypes::read_thresholds(c, j, path);
 }
 
-// Ids end up in file names, database text and CSV cells: no control characters (C0, DEL, C1),
-// whichever id it is (study, phase, group, participant, instructor, hypothesis). The problem is
-// recorded; the caller keeps the id so that references to it do not report a second time.
-void check_id_chars(Ctx& c, const std::string& id, const std::string& path) {
-  for (std::size_t i = 0; i < id.size(); ++i) {
-    const auto b = static_cast<unsigned char>(id[i]);
-    unsigned cp = 0;
-    if (b < 0x20 || b == 0x7f)
-      cp = b;
-    else if (b == 0xC2 && i + 1 < id.size() && static_cast<unsigned char>(id[i + 1]) >= 0x80 &&
-             static_cast<unsigned char>(id[i + 1]) <= 0x9F)
-      cp = static_cast<unsigned char>(id[i + 1]);
-    else
-      continue;
-    char u[8];
-    std::snprintf(u, sizeof u, "U+%04X", cp);
-    c.err(path, std::string("expected an id without control characters, got one with ") + u +
-                    " at byte " + std::to_string(i + 1));
-    return;
-  }
+// Ids end up in file names (figures, traces), database text and CSV cells, so every id (study,
+// phase, group, participant, instructor, hypothesis) follows one grammar (docs/FORMATS.md "Ids"):
+// 1 to kMaxIdLength ASCII letters, digits, '_', '-' and '.', the first a letter or digit — no
+// '/', ',', quotes, spaces, control characters or other Unicode. The problem is recorded; the
+// caller keeps the id so that references to it do not report a second time.
+constexpr std::size_t kMaxIdLength = 64;
+constexpr const char* kIdRule =
+    "expected an id of 1 to 64 ASCII letters, digits, '_', '-' or '.', starting with a letter or "
+    "digit (ids become file names and CSV cells)";
+
+bool id_char(unsigned char b) {
+  return (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || (b >= '0' && b <= '9') || b == '_' ||
+         b == '-' || b == '.';
 }
 
-// A non-empty id (see check_id_chars).
+void check_id(Ctx& c, const std::string& id, const std::string& path) {
+  // The id as shown in the message (control characters are escaped when it is printed).
+  auto shown = [&] {
+    if (id.size() <= 40) return "\"" + id + "\"";
+    std::size_t cut = 40;  // at a character boundary
+    while (cut > 0 && (static_cast<unsigned char>(id[cut]) & 0xC0) == 0x80) --cut;
+    return "\"" + id.substr(0, cut) + "...\"";
+  };
+  std::size_t chars = 0;  // characters (UTF-8 code points) before i
+  for (std::size_t i = 0; i < id.size(); ++chars) {
+    const auto b = static_cast<unsigned char>(id[i]);
+    // One UTF-8 character (the JSON parser has checked the encoding).
+    std::size_t len = b < 0x80 ? 1 : b >> 5 == 0x6 ? 2 : b >> 4 == 0xE ? 3 : 4;
+    len = std::min(len, id.size() - i);
+    const bool first = i == 0;
+    if (len == 1 && id_char(b) && !(first && (b == '_' || b == '-' || b == '.'))) {
+      ++i;
+      continue;
+    }
+    unsigned cp = len == 1 ? b : b & (0x7F >> len);
+    for (std::size_t k = 1; k < len; ++k)
+      cp = cp << 6 | (static_cast<unsigned char>(id[i + k]) & 0x3F);
+    char u[16];
+    std::snprintf(u, sizeof u, "U+%04X", cp);
+    const bool printable = cp >= 0x20 && cp != 0x7f && !(cp >= 0x80 && cp <= 0x9f);
+    const std::string what = printable ? "'" + id.substr(i, len) + "' (" + u + ")" : std::string(u);
+    c.err(path, std::string(kIdRule) + ", got " + shown() + ": " +
+                    (first && len == 1 && id_char(b)
+                         ? "it starts with " + what
+                         : what + " at character " + std::to_string(chars + 1)));
+    return;
+  }
+  if (chars == 0)
+    c.err(path, std::string(kIdRule) + ", got an empty id");
+  else if (chars > kMaxIdLength)
+    c.err(path, std::string(kIdRule) + ", got " + shown() + " (" + std::to_string(chars) +
+                    " characters)");
+}
+
+// A non-empty id (see check_id).
 std::optional<std::string> id_text(Ctx& c, const json& o, const std::string& path, const char* key,
                                    bool required) {
   auto v = c.nonempty_text(o, path, key, required);
-  if (v) check_id_chars(c, *v, path_key(path, key));
+  if (v) check_id(c, *v, path_key(path, key));
   return v;
 }
 
@@ -374,7 +406,10 @@ Study parse_study(const std::string& text, const std::string& file,
   if (auto v = c.one_of(root, R, "assignment", false, {"balanced_random", "explicit"}))
     s.assignment = *v;
   std::set<std::string> group_ids, participant_ids;
+  // Groups as declared (entries with problems included): a test that compares groups needs two.
+  std::size_t declared_groups = 0;
   if (const json* gs = c.member(root, R, "groups", true, "an array of groups")) {
+    if (gs->is_array()) declared_groups = gs->size();
     if (!gs->is_array() || gs->empty()) {
       c.err("$.groups", std::string("expected a non-empty array of groups, got ") +
                             (gs->is_array() ? "an empty array" : kind_name(*gs)));
@@ -431,7 +466,7 @@ Study parse_study(const std::string& text, const std::string& file,
                 c.err(path_index(PL, k), "expected a participant id (string)");
                 continue;
               }
-              check_id_chars(c, e.get<std::string>(), path_index(PL, k));
+              check_id(c, e.get<std::string>(), path_index(PL, k));
               if (!participant_ids.insert(e.get<std::string>()).second)
                 c.err(path_index(PL, k),
                       "participant \"" + e.get<std::string>() + "\" is listed more than once");
@@ -524,7 +559,7 @@ Study parse_study(const std::string& text, const std::string& file,
                   c.err(path_index(path_key(IN, "ids"), k), "expected an instructor id (string)");
                   continue;
                 }
-                check_id_chars(c, (*v)[k].get<std::string>(), path_index(path_key(IN, "ids"), k));
+                check_id(c, (*v)[k].get<std::string>(), path_index(path_key(IN, "ids"), k));
                 if (!ids.insert((*v)[k].get<std::string>()).second)
                   c.err(path_index(path_key(IN, "ids"), k), "duplicate instructor id");
                 role.ids.push_back((*v)[k].get<std::string>());
@@ -627,6 +662,7 @@ Study parse_study(const std::string& text, const std::string& file,
         Analysis a;
         if (auto v = c.one_of(aj, A, "kind", true, {"anova_oneway", "pairwise_t", "descriptives"}))
           a.kind = *v;
+        const bool compares = a.kind == "anova_oneway" || a.kind == "pairwise_t";
         if (auto v = c.one_of(aj, A, "measure", true, known_measures())) {
           a.measure = *v;
           if (std::find(s.measures.begin(), s.measures.end(), *v) == s.measures.end())
@@ -656,6 +692,13 @@ Study parse_study(const std::string& text, const std::string& file,
           else
             a.margin = *v;
         }
+        // An ANOVA compares groups and a pair needs two: with one group the test is never
+        // defined (report, power and run would carry an analysis that cannot be computed).
+        if (compares && declared_groups == 1)
+          c.err(A, "analysis \"" + a.kind + "\"" + (a.measure.empty() ? "" : " of " + a.measure) +
+                       (a.phase.empty() ? "" : " in phase " + a.phase) +
+                       " needs at least 2 groups to compare; the study has 1 (add a group, make "
+                       "it \"descriptives\" or remove the analysis)");
         s.analyses.push_back(a);
       }
     }
@@ -768,6 +811,11 @@ Study parse_study(const std::string& text, const std::string& file,
         if (auto v = c.one_of(hj, H, "correction", false, {"holm", "bonferroni", "none"}))
           h.correction = *v;
         if (auto v = c.boolean(hj, H, "pooled")) h.pooled = *v;
+        // Every hypothesis test compares groups (declared pairs are checked above).
+        if (declared_groups == 1 && !h.test.empty() && !hj.contains("pairs"))
+          c.err(H, "hypothesis \"" + h.id + "\" (" + h.test +
+                       ") compares groups; the study has 1 group (add a group or remove the "
+                       "hypothesis)");
         s.hypotheses.push_back(h);
       }
     }

@@ -503,19 +503,21 @@ TEST(HardDb, EscapeSequencesInNamesAreNeverEchoedRaw) {
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.out, "\x1b")) << r.out;
   EXPECT_TRUE(has(r.out, "\\x1b[31m")) << r.out;
-  // Ids (file names, database text) may not hold control characters at all: a located error,
-  // itself escaped.
+  // Ids (file names, database text) may not hold control characters (nor anything outside the id
+  // grammar, docs/FORMATS.md "Ids"): a located error, itself escaped.
   s = study(R"([{"id": "G)" + esc + R"(", "prototype": "A", "size": 1},
                            {"id": "G2", "prototype": "B", "size": 1}])");
   spit(d / "study.json", s);
   r = cli("validate " + (d / "study.json").string(), d);
-  EXPECT_EXIT2_WITH(r, "$.groups[0].id: expected an id without control characters");
+  EXPECT_EXIT2_WITH(r, "$.groups[0].id: expected an id of 1 to 64 ASCII letters");
+  EXPECT_EXIT2_WITH(r, "U+001B at character 2");
   EXPECT_FALSE(has(r.err, "\x1b")) << r.err;
   s = study();
   s.replace(s.find("\"id\": \"hard\""), 12, "\"id\": \"ha\\u0000rd\"");
   spit(d / "study.json", s);
   r = cli("validate " + (d / "study.json").string(), d);
-  EXPECT_EXIT2_WITH(r, "$.id: expected an id without control characters, got one with U+0000");
+  EXPECT_EXIT2_WITH(r, "$.id: expected an id of 1 to 64 ASCII letters");
+  EXPECT_EXIT2_WITH(r, "U+0000 at character 3");
   // In an error message: an unknown key with escapes.
   s = study();
   s.replace(s.find("\"seed\": 1,"), 10, "\"seed\": 1, \"k" + esc + "\": 1,");

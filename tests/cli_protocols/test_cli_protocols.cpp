@@ -12,6 +12,8 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "results/store.hpp"
 
 #include "../cli_support.hpp"
@@ -21,6 +23,8 @@ using palplab::results::Store;
 
 namespace {
 using Result = palplab::testing::CliResult;
+using palplab::testing::expect_exit2;
+using palplab::testing::has;
 using palplab::testing::run_palplab;
 using palplab::testing::scratch_dir;
 using palplab::testing::slurp;
@@ -119,6 +123,47 @@ TEST(CliValidate, AllProblemsLocatedExitTwo) {
   Result r2 = run_palplab("validate " + (d2 / "s.json").string(), d2);
   EXPECT_EQ(r2.code, 2);
   EXPECT_NE(r2.err.find((d2 / "Broken.json").string() + ":1:"), std::string::npos) << r2.err;
+}
+
+// Review finding: validate (and so run) accepted a one-group study declaring an ANOVA or a
+// pairwise t-test, which can never be computed; only `power` refused it, with its own copy of
+// the check. Now the study validator refuses it at the analysis, for every command.
+TEST(CliValidate, OneGroupStudyWithAGroupComparisonIsRefused) {
+  auto d = scratch_dir("one_group_validate");
+  auto study = nlohmann::json::parse(palplab::testing::tiny_study_json("one", 1));
+  study["groups"].erase(1);
+  study["analyses"] = {{{"kind", "descriptives"}, {"measure", "accuracy"}, {"phase", "test"}},
+                       {{"kind", "anova_oneway"}, {"measure", "accuracy"}, {"phase", "test"}}};
+  std::ofstream(d / "one.json") << study.dump(1);
+  const std::string f = (d / "one.json").string();
+  Result r = run_palplab("validate " + f, d);
+  expect_exit2(r, {f + ":",
+                   ": $.analyses[1]: analysis \"anova_oneway\" of accuracy in phase "
+                   "test needs at least 2 groups to compare; the study has 1"});
+  EXPECT_FALSE(has(r.err, "$.analyses[0]")) << r.err;  // descriptives are fine
+  r = run_palplab("run " + f + " --db " + (d / "one.db").string() + " --quiet", d);
+  expect_exit2(r, {": $.analyses[1]: analysis \"anova_oneway\""});
+  EXPECT_FALSE(fs::exists(d / "one.db"));
+  // Without the comparison the one-group study is valid.
+  study["analyses"].erase(1);
+  std::ofstream(d / "one.json", std::ios::trunc) << study.dump(1);
+  r = run_palplab("validate " + f, d);
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// Review finding: ids with '/' or ',' were accepted; they become file names and CSV cells.
+TEST(CliValidate, IdsOutsideTheGrammarAreRefused) {
+  auto d = scratch_dir("id_grammar");
+  std::string study = palplab::testing::tiny_study_json("a/b", 1);
+  study.replace(study.find("\"G2\""), 4, "\"G,2\"");
+  std::ofstream(d / "ids.json") << study;
+  const std::string f = (d / "ids.json").string();
+  Result r = run_palplab("validate " + f, d);
+  const std::string rule =
+      "expected an id of 1 to 64 ASCII letters, digits, '_', '-' or '.', starting with a letter "
+      "or digit (ids become file names and CSV cells), got ";
+  expect_exit2(r, {f + ":1:", ": $.id: " + rule + "\"a/b\": '/' (U+002F) at character 2", f + ":3:",
+                   ": $.groups[1].id: " + rule + "\"G,2\": ',' (U+002C) at character 2"});
 }
 
 TEST(CliRun, SameSeedIdenticalMeasuresAnyJobs) {

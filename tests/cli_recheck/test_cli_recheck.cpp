@@ -134,3 +134,98 @@ TEST(CliRecheck, MalformedReportsAreExitTwoWithTheLocation) {
     std::filesystem::remove(f);
   }
 }
+
+// Review finding: a statistic the raw data do not define (no variation within the groups, a
+// group of the test with one value, one group for an F) was graded "inconsistent" with nan as
+// the recomputed value. It is now "not recomputable" with the reason; a part that can be
+// recomputed and differs still makes the statistic inconsistent; groups the test does not use
+// no longer matter (a single-value group D made every t-test of the rows exit 2).
+TEST(CliRecheck, UndefinedStatisticsAreNotRecomputableNeverNan) {
+  using palplab::testing::has;
+  const std::string csv = write_temp("undefined.csv",
+                                     "group,force,phase\n"
+                                     "A,1,flat\n"
+                                     "A,1,flat\n"
+                                     "B,2,flat\n"
+                                     "B,2,flat\n"
+                                     "C,3,var\n"
+                                     "C,4.5,var\n"
+                                     "C,5,var\n"
+                                     "E,2,var\n"
+                                     "E,2.5,var\n"
+                                     "E,4,var\n"
+                                     "D,7,var\n");
+  const std::string rep = write_temp("undefined.json", R"({"value": "force", "group": "group",
+  "statistics": [
+    {"id": "flat-welch", "text": "t(2.0) = -3.02, p = .056", "pair": ["A", "B"], "where": ["phase=flat"]},
+    {"id": "flat-student", "text": "t(2) = -3.02, p = .056", "pair": ["A", "B"], "test": "student_t", "where": ["phase=flat"]},
+    {"id": "flat-student-df", "text": "t(5) = -3.02, p = .056", "pair": ["A", "B"], "test": "student_t", "where": ["phase=flat"]},
+    {"id": "flat-anova", "text": "F(1, 2) = 18.65, p < .001", "where": ["phase=flat"]},
+    {"id": "one-group", "text": "F(1, 2) = 3.02, p = .056", "where": ["group=C"]},
+    {"id": "single", "text": "t(2.0) = -3.02, p = .056", "pair": ["C", "D"], "where": ["phase=var"]},
+    {"id": "C-E", "text": "t(4) = 1.57, p = .192", "pair": ["C", "E"], "where": ["phase=var"]},
+    {"id": "flat-welch-anova", "text": "F(1, 2.5) = 18.65, p < .001", "test": "welch_anova", "where": ["phase=flat"]}
+  ]})");
+  Result r = run_palplab("recheck " + rep + " --csv " + csv);
+  EXPECT_EQ(r.code, 1) << r.out << r.err;  // not everything is confirmed by the data
+  EXPECT_FALSE(has(r.out, "nan")) << r.out;
+  EXPECT_FALSE(has(r.out, "inf")) << r.out;
+  for (const char* line :
+       {"flat-welch: \"t(2.0) = -3.02, p = .056\" -> not recomputable: no variation within "
+        "groups 'A' and 'B' (the values of each are all equal): t and p are undefined\n"
+        "    df: printed 2.0, not recomputable\n"
+        "    statistic: printed -3.02, not recomputable\n"
+        "    p: printed = 0.056, not recomputable\n",
+        // Student's df is defined (n - 2): graded, and consistent here.
+        "flat-student: \"t(2) = -3.02, p = .056\" -> not recomputable: no variation within "
+        "groups 'A' and 'B'",
+        "flat-student-df: \"t(5) = -3.02, p = .056\" -> inconsistent (in part not recomputable: "
+        "no variation within groups 'A' and 'B'",
+        "    df: printed 5, recomputed 2 (inconsistent)\n",
+        "flat-anova: \"F(1, 2) = 18.65, p < .001\" -> not recomputable: no variation within any "
+        "group of column 'group' (the values of each group are all equal): F and p are undefined",
+        "one-group: \"F(1, 2) = 3.02, p = .056\" -> not recomputable: the rows used hold one "
+        "group of column 'group' ('C'); an F test compares at least 2",
+        "single: \"t(2.0) = -3.02, p = .056\" -> not recomputable: group 'D' has 1 value (line "
+        "12); a t-test needs at least 2 per group",
+        "C-E: \"t(4) = 1.57, p = .192\" -> consistent (recomputed: t(4) = 1.57, p = .192)",
+        "flat-welch-anova: \"F(1, 2.5) = 18.65, p < .001\" -> not recomputable: group 'A' has "
+        "no variation (its values are all equal): Welch's F weights each group by 1/variance "
+        "and is undefined",
+        "8 statistics, 1 inconsistent, 6 not recomputable\n"})
+    EXPECT_TRUE(has(r.out, line)) << "missing:\n" << line << "\nin:\n" << r.out;
+  EXPECT_FALSE(has(r.out,
+                   "flat-student: \"t(2) = -3.02, p = .056\" -> not recomputable: no "
+                   "variation within groups 'A' and 'B' (the values of each are all "
+                   "equal): t and p are undefined\n    df:"))
+      << "a consistent df is not listed: " << r.out;
+
+  r = run_palplab("recheck " + rep + " --csv " + csv + " --json");
+  EXPECT_EQ(r.code, 1) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["inconsistent"], 1);
+  EXPECT_EQ(j["not_recomputable"], 6);
+  const auto& s = j["statistics"];
+  ASSERT_EQ(s.size(), 8u);
+  const char* verdicts[] = {"not recomputable", "not recomputable", "inconsistent",
+                            "not recomputable", "not recomputable", "not recomputable",
+                            "consistent",       "not recomputable"};
+  for (size_t i = 0; i < 8; ++i) {
+    EXPECT_EQ(s[i]["verdict"], verdicts[i]) << s[i].dump();
+    EXPECT_EQ(s[i].contains("not_recomputable"), i != 6) << s[i].dump();
+    EXPECT_EQ(s[i]["recomputed"].is_null(), i != 6) << s[i].dump();
+  }
+  // Parts: the flat ANOVA's df are graded; F and p are null, never NaN or a number.
+  const auto& parts = s[3]["parts"];
+  ASSERT_EQ(parts.size(), 4u);
+  EXPECT_EQ(parts[0]["verdict"], "consistent");
+  EXPECT_EQ(parts[1]["verdict"], "consistent");
+  for (int k : {2, 3}) {
+    EXPECT_EQ(parts[k]["verdict"], "not recomputable") << parts[k].dump();
+    EXPECT_TRUE(parts[k]["recomputed"].is_null()) << parts[k].dump();
+  }
+  EXPECT_EQ(s[2]["parts"][0]["verdict"], "inconsistent");
+  EXPECT_EQ(s[2]["parts"][0]["recomputed"], 2);
+  std::filesystem::remove(csv);
+  std::filesystem::remove(rep);
+}

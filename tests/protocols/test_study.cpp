@@ -330,11 +330,12 @@ TEST(Study, DuplicateMeasureNamesItsIndex) {
              "duplicate measure \"palpation_force\" (already $.measures[0])");
 }
 
-// Ids end up in file names, database text and CSV cells: control characters (C0, DEL, C1) are
-// rejected in every kind of id alike; other UTF-8 is fine.
+// Ids end up in file names, database text and CSV cells: one grammar for every kind of id
+// (docs/FORMATS.md "Ids"). Control characters (C0, DEL, C1) were the first thing refused; '/'
+// and ',' were accepted (a figure path with a directory in it, a CSV cell that splits).
 TEST(Study, ControlCharactersInIdsAreRejected) {
   expect_one(problems_of("idnul", edit("\"id\": \"t\"", "\"id\": \"x\\u0000y\"")), "$.id", 3,
-             "expected an id without control characters, got one with U+0000 at byte 2");
+             "got \"x\0y\": U+0000 at character 2");
   expect_one(problems_of("idesc", edit("\"id\": \"t\"", "\"id\": \"t\\u001b[31m\"")), "$.id", 3,
              "U+001B");
   expect_one(problems_of("iddel", edit("\"id\": \"t\"", "\"id\": \"t\\u007f\"")), "$.id", 3,
@@ -362,9 +363,92 @@ TEST(Study, ControlCharactersInIdsAreRejected) {
                                        "\"measure\": \"accuracy\", \"phase\": \"test\", "
                                        "\"test\": \"welch_t\"}]\n}")),
              "$.hypotheses[0].id", 21, "U+0001");
+}
+
+TEST(Study, IdsFollowOneGrammar) {
+  const std::string rule =
+      "expected an id of 1 to 64 ASCII letters, digits, '_', '-' or '.', starting with a letter "
+      "or digit (ids become file names and CSV cells), got ";
+  // Every kind of id, each with what is wrong with it.
+  expect_one(problems_of("idslash", edit("\"id\": \"t\"", "\"id\": \"a/b\"")), "$.id", 3,
+             rule + "\"a/b\": '/' (U+002F) at character 2");
+  expect_one(problems_of("idcomma", edit("{\"id\": \"B\"", "{\"id\": \"B,C\"")), "$.groups[1].id",
+             12, rule + "\"B,C\": ',' (U+002C) at character 2");
+  expect_one(problems_of("idspace", edit("\"id\": \"training\"", "\"id\": \"day 1\"")),
+             "$.phases[0].id", 15, rule + "\"day 1\": ' ' (U+0020) at character 4");
+  expect_one(problems_of("iddot", edit("\"id\": \"training\"", "\"id\": \"..\"")), "$.phases[0].id",
+             15, rule + "\"..\": it starts with '.' (U+002E)");
+  expect_one(problems_of("iddash", edit("\"id\": \"t\"", "\"id\": \"-rf\"")), "$.id", 3,
+             "it starts with '-'");
+  expect_one(problems_of("idutf8", edit("\"id\": \"t\"", "\"id\": \"\\u00e9tude\"")), "$.id", 3,
+             rule + "\"\xc3\xa9tude\": '\xc3\xa9' (U+00E9) at character 1");
+  expect_one(problems_of("idquote", edit("\"id\": \"t\"", "\"id\": \"a\\\"b\"")), "$.id", 3,
+             "'\"' (U+0022) at character 2");
+  expect_one(
+      problems_of("idlong", edit("\"id\": \"t\"", "\"id\": \"" + std::string(65, 'x') + "\"")),
+      "$.id", 3, "...\" (65 characters)");
+  std::string ex = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
+  ex = ex.replace(ex.find("\"size\": 3"), 9, "\"participants\": [\"p1\", \"p/2\", \"p3\"]");
+  ex = ex.replace(ex.find("\"size\": 2"), 9, "\"participants\": [\"p4\"]");
+  expect_one(problems_of("partslash", ex), "$.groups[0].participants[1]", 11, "'/' (U+002F)");
+  std::string in = fixture::reference_study("exp1_instructor.json");
+  in.replace(in.find("\"I10\"]"), 6, "\"I10\", \"\"]");
+  auto ps = problems_of("instrempty", in);
+  ASSERT_EQ(ps.size(), 1u) << InputError(ps).what();
+  EXPECT_EQ(ps[0].where.json_path, "$.roles.instructor.ids[10]");
+  EXPECT_NE(ps[0].what.find(rule + "an empty id"), std::string::npos) << ps[0].what;
+  expect_one(problems_of("hypcomma", edit("  ]\n}",
+                                          "  ],\n  \"hypotheses\": [{\"id\": \"H1,H2\", "
+                                          "\"measure\": \"accuracy\", \"phase\": \"test\", "
+                                          "\"test\": \"welch_t\"}]\n}")),
+             "$.hypotheses[0].id", 21, "',' (U+002C) at character 3");
+  // The whole grammar is accepted: 64 characters, letters, digits, '_', '-', '.'.
+  const std::string longest = "A" + std::string(59, 'x') + "_-.9";
+  ASSERT_EQ(longest.size(), 64u);
+  std::string f =
+      fixture::study_in_dir("idok", edit("\"id\": \"t\"", "\"id\": \"" + longest + "\""));
+  EXPECT_EQ(load_study(f, fixture::tract_inspector()).id, longest);
+  f = fixture::study_in_dir("idok2", edit("\"id\": \"training\"", "\"id\": \"0.day-1_b\""));
+  EXPECT_EQ(load_study(f, fixture::tract_inspector()).phases[0].id, "0.day-1_b");
+}
+
+// An ANOVA or a pair of a one-group study can never be computed: the validator refuses it at the
+// analysis (validate, run and power alike); descriptives are fine. A hypothesis compares groups.
+TEST(Study, GroupComparisonsNeedTwoGroups) {
+  std::string one = edit(",\n    {\"id\": \"B\", \"prototype\": \"B\", \"size\": 2}", "");
+  auto with = [&](const std::string& key, const std::string& list) {
+    std::string s = one;
+    return s.replace(s.rfind("  ]\n}"), 5, "  ],\n  \"" + key + "\": [\n    " + list + "\n  ]\n}");
+  };
+  auto ps = problems_of(
+      "onegroup",
+      with("analyses",
+           R"({"kind": "descriptives", "measure": "accuracy", "phase": "test"},)"
+           "\n    "
+           R"({"kind": "anova_oneway", "measure": "accuracy", "phase": "test"},)"
+           "\n    "
+           R"({"kind": "pairwise_t", "measure": "palpation_force", "phase": "training"})"));
+  ASSERT_EQ(ps.size(), 2u) << InputError(ps).what();
+  EXPECT_EQ(ps[0].where.json_path, "$.analyses[1]");
+  EXPECT_EQ(ps[0].where.line, 22);
+  EXPECT_EQ(ps[0].what,
+            "analysis \"anova_oneway\" of accuracy in phase test needs at least 2 groups to "
+            "compare; the study has 1 (add a group, make it \"descriptives\" or remove the "
+            "analysis)");
+  EXPECT_EQ(ps[1].where.json_path, "$.analyses[2]");
+  EXPECT_NE(ps[1].what.find("analysis \"pairwise_t\" of palpation_force in phase training needs "
+                            "at least 2 groups"),
+            std::string::npos)
+      << ps[1].what;
+  // Descriptives alone: a valid one-group study.
   std::string f = fixture::study_in_dir(
-      "idutf8", edit("\"id\": \"t\"", "\"id\": \"\\u00e9tude \\u03b1-\\u2603\""));
-  EXPECT_EQ(load_study(f, fixture::tract_inspector()).id, "\xc3\xa9tude \xce\xb1-\xe2\x98\x83");
+      "onegroupok",
+      with("analyses", R"({"kind": "descriptives", "measure": "accuracy", "phase": "test"})"));
+  EXPECT_EQ(load_study(f, fixture::tract_inspector()).groups.size(), 1u);
+  expect_one(
+      problems_of("onegrouphy", with("hypotheses", R"({"id": "H1", "measure": "accuracy", )"
+                                                   R"("phase": "test", "test": "welch_t"})")),
+      "$.hypotheses[0]", 21, "hypothesis \"H1\" (welch_t) compares groups; the study has 1 group");
 }
 
 TEST(Study, PrototypeDirsMustBeExistingDirectories) {
