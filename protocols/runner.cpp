@@ -139,7 +139,7 @@ pm::Demonstration demonstrate(engine::Scene& scene, const std::string& feature, 
   for (int node : demonstration_nodes(scene.geometry(), feature)) {
     const pm::Demonstration one = demonstrate_at(scene, node, mpf, eps);
     d.sound = d.sound || one.sound;
-    if (one.deformation > 0) sum += one.deformation, ++reached;
+    if (one.deformation > 0) sum += one.deformation, ++reached, d.seen.push_back(one.deformation);
   }
   if (reached > 0) d.deformation = sum / reached;
   return d;

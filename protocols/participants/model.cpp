@@ -139,8 +139,17 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     if (demo_) {
       s_.demo_sound = demo_->sound;
       s_.reliance = demo_->sound ? 1.0 : 0.0;
-      if (demo_->deformation > 0)
+      // Each press of the demonstration is seen with its own visual Weber noise and the mean of
+      // what was seen is kept (ensemble averaging over a sequence, Albrecht & Scholl 2010): the
+      // remembered picture's error shrinks with the number of presses shown.
+      if (!demo_->seen.empty()) {
+        double sum = 0.0;
+        for (double d : demo_->seen)
+          sum += d * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
+        s_.demo_d = sum / static_cast<double>(demo_->seen.size());
+      } else if (demo_->deformation > 0) {
         s_.demo_d = demo_->deformation * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
+      }
     }
     s_.initialised = true;
   } else {

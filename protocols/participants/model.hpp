@@ -81,8 +81,9 @@ double retention(double dt, const TraineeParams& p);
 // What a demonstration press up to the target force on a simulator renders (the briefing shows
 // one on the simulator the trainee first trains on; the instructor makes one before coaching).
 struct Demonstration {
-  double deformation = 0.0;  // m, visible deformation when the target force is reached
+  double deformation = 0.0;  // m, visible deformation when the target force is reached (mean)
   bool sound = false;        // the audio cue came on the way to the target force
+  std::vector<double> seen;  // m, that deformation in each press that reached the target
 };
 
 // ---- the trainee

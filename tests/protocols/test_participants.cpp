@@ -294,6 +294,44 @@ TEST(Trainee, PressesWhereTheTargetWasShownSoThePictureMeansTheTargetForce) {
   EXPECT_LT(before, now - 0.3);
 }
 
+TEST(Trainee, TheRememberedPictureAveragesTheDemonstrationsPresses) {
+  // The briefing shows the target press at 5 places; each press is seen with its own visual
+  // Weber noise and their mean is kept (ensemble averaging), so the remembered picture's relative
+  // error is about visual_weber / sqrt(5) - not visual_weber, as when one draw was put on the
+  // mean. 1000 trainees: the sample SD's relative SE is 1/sqrt(2 * 999) = 2.2 %, 10 % is 4.5 SE.
+  FlatTissue tissue;
+  const auto params = trainee_params({});
+  const std::vector<double> seen = {0.0040, 0.0050, 0.0055, 0.0045, 0.0060};
+  double mean_seen = 0.0, mean_sq = 0.0;
+  for (double d : seen) mean_seen += d / seen.size(), mean_sq += d * d / seen.size();
+  // SD of mean(d_i (1 + w z_i)) over its mean: w sqrt(mean d^2) / (mean d sqrt(5)).
+  const double expected5 = params.visual_weber * std::sqrt(mean_sq) / mean_seen / std::sqrt(5.0);
+  auto relative_spread = [&](const Demonstration& demo, double* mean) {
+    double s1 = 0.0, s2 = 0.0;
+    const int n = 1000;
+    for (int k = 0; k < n; ++k) {
+      Trainee tr(params, TraineeState{});
+      tr.set_demonstration(demo);
+      const std::uint64_t ps = derive_seed(2712, static_cast<std::uint64_t>(k));
+      tr.begin_session(tissue.view(), 2.5, 0.0, 1.0, ps, 1, {});
+      s1 += tr.state().demo_d;
+      s2 += tr.state().demo_d * tr.state().demo_d;
+    }
+    *mean = s1 / n;
+    return std::sqrt((s2 - n * *mean * *mean) / (n - 1)) / *mean;
+  };
+  double m5 = 0.0, m1 = 0.0;
+  const double cv5 = relative_spread(Demonstration{mean_seen, false, seen}, &m5);
+  const double cv1 = relative_spread(Demonstration{mean_seen, false, {}}, &m1);
+  std::printf("remembered picture: 5 presses %.4f (expected %.4f), one picture %.4f (%.4f)\n", cv5,
+              params.visual_weber / std::sqrt(5.0), cv1, params.visual_weber);
+  EXPECT_NEAR(cv5, params.visual_weber / std::sqrt(5.0),
+              0.15 * params.visual_weber / std::sqrt(5.0));
+  EXPECT_NEAR(cv1, params.visual_weber, 0.1 * params.visual_weber);
+  // Unbiased: the mean picture is the mean deformation shown (within 4 SE of the mean).
+  EXPECT_NEAR(m5, mean_seen, 4 * expected5 / std::sqrt(1000.0) * mean_seen);
+}
+
 TEST(Trainee, APressStoppedShortOfTheRememberedPictureRaisesTheBelief) {
   // A trainee briefed far too low (0.9 N for a 2.5 N target; exp4's P15 in the predictions of
   // 2026-12-02) aims each press at the picture the demonstration showed, bounded at
