@@ -167,17 +167,20 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   fs::remove_all(d);
 }
 
+// A small valid human CSV (two groups of two, one measure) the input checks below edit.
+const std::string kHumanHeader = "participant,group,phase,session,measure,value\n";
+const std::string kHumanRows =
+    "H1,G1,test,1,palpation_force,2.4\n"
+    "H2,G1,test,1,palpation_force,2.9\n"
+    "H3,G2,test,1,palpation_force,2.2\n"
+    "H4,G2,test,1,palpation_force,2.8\n";
+
 // Input checks made before any simulation. Each was accepted (a row given twice counted the
 // participant twice, --params X X fitted two parameters, feature_identified = 5 was averaged)
 // or reported without the file and line.
 TEST(Calibrate, HumanDataAndNamesAreChecked) {
   auto d = scratch_dir("calibrate_checks");
-  const std::string header = "participant,group,phase,session,measure,value\n";
-  const std::string rows =
-      "H1,G1,test,1,palpation_force,2.4\n"
-      "H2,G1,test,1,palpation_force,2.9\n"
-      "H3,G2,test,1,palpation_force,2.2\n"
-      "H4,G2,test,1,palpation_force,2.8\n";
+  const std::string header = kHumanHeader, rows = kHumanRows;
   auto run = [&](const std::string& csv_text, const std::string& args) {
     std::ofstream(d / "h.csv", std::ios::trunc) << csv_text;
     return run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
@@ -245,12 +248,7 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
 TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
   using palplab::testing::expect_exit2;
   auto d = scratch_dir("calibrate_cells");
-  const std::string header = "participant,group,phase,session,measure,value\n";
-  const std::string rows =
-      "H1,G1,test,1,palpation_force,2.4\n"
-      "H2,G1,test,1,palpation_force,2.9\n"
-      "H3,G2,test,1,palpation_force,2.2\n"
-      "H4,G2,test,1,palpation_force,2.8\n";
+  const std::string header = kHumanHeader, rows = kHumanRows;
   const std::string h = (d / "h.csv").string();
   auto run = [&](const std::string& csv_text, const std::string& args) {
     std::ofstream(h, std::ios::trunc) << csv_text;
