@@ -1,6 +1,8 @@
 // `palplab mesh ...`: generate, info, check, repair, tetrahedralize, materials (issue 2).
 // Exit codes: 0 success (check: clean), 1 check found defects, 2 bad input / unreadable file.
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -57,6 +59,18 @@ std::string written_files(const std::string& out, bool vtu, bool regions) {
   if (regions) s += ", " + b + ".names";
   if (vtu) s += ", " + b + ".vtu";
   return s;
+}
+
+// --seed: an unsigned 64-bit decimal integer, parsed strictly (CLI11 saturated -1 and
+// 99999999999999999999 to 2^64-1 with exit 0).
+std::uint64_t parse_seed(const std::string& t) {
+  std::uint64_t v = 0;
+  const auto r = std::from_chars(t.data(), t.data() + t.size(), v, 10);
+  if (t.empty() || r.ec != std::errc() || r.ptr != t.data() + t.size())
+    throw palplab::InputError("--seed " + t +
+                              ": expected an unsigned 64-bit decimal integer (0 ... "
+                              "18446744073709551615)");
+  return v;
 }
 
 MaterialTable load_materials(const std::string& path) {
@@ -137,7 +151,7 @@ palplab::app::CommandRegistration reg{
         auto name = std::make_shared<std::string>();
         auto out = std::make_shared<std::string>();
         auto vertices = std::make_shared<int>(0);
-        auto seed = std::make_shared<std::uint64_t>(0);
+        auto seed_text = std::make_shared<std::string>("0");
         auto binary = std::make_shared<bool>(false);
         auto vtu = std::make_shared<bool>(false);
         c->add_option("NAME", *name, "model-a | model-b | model-c | stomach | sphere | shoulder")
@@ -151,8 +165,9 @@ palplab::app::CommandRegistration reg{
                       "shoulder: per skin layer, default 2562)")
             ->check(palplab::app::count_range(1, std::numeric_limits<int>::max()));
         auto* seed_opt = c->add_option(
-            "--seed", *seed,
-            "0 = reference shape; other seeds perturb the tract/stomach by up to 5 %");
+            "--seed", *seed_text,
+            "0 = reference shape; other seeds perturb the tract/stomach by up to 5 % (an unsigned "
+            "64-bit decimal integer)");
         auto* binary_opt = c->add_flag("--binary", *binary, "Binary STL/PLY");
         auto* vtu_opt = c->add_flag("--vtu", *vtu, "model-c: also write BASE.vtu");
         c->callback([=] {
@@ -165,6 +180,8 @@ palplab::app::CommandRegistration reg{
           const std::string oe = extension(*out);
           flag_only_with(binary_opt, n != "model-c" && (oe == ".stl" || oe == ".ply"),
                          "a surface mesh written as .stl or .ply");
+          const std::uint64_t seed_value = parse_seed(*seed_text);
+          const std::uint64_t* seed = &seed_value;
           if (n == "model-c") check_tet_output(*out);
           if (n == "shoulder") {
             // Nested tissue surfaces + BASE.regions for `mesh tetrahedralize` (issue 16).
@@ -382,6 +399,7 @@ palplab::app::CommandRegistration reg{
             if (std::filesystem::exists(side)) rf = side;
           }
           if (!rf.empty()) o.seeds = read_region_seeds(rf);
+          o.regions_file = rf;
           const MaterialTable materials = load_materials(*mat);
           // Every tissue attribute of the result must be in the table, checked before TetGen
           // runs when it can be: the seeds' region ids, and --attribute when it is given or

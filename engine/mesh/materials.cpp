@@ -1,12 +1,18 @@
 #include "engine/mesh/materials.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "common/json_locate.hpp"
 
 namespace palplab::mesh {
 
@@ -64,91 +70,149 @@ const MaterialTable& default_materials() {
 
 namespace {
 
-[[noreturn]] void bad(const std::string& source, const std::string& path, const std::string& what) {
-  throw InputError(SourceLocation{source, 0, 0, -1, path}, what);
+// Where a JSON path of the table lies in its text (line:column when the locator knows it).
+struct Ctx {
+  const std::string& source;
+  const json::JsonLocator& loc;
+  [[noreturn]] void bad(const std::string& path, const std::string& what,
+                        bool at_key = false) const {
+    throw InputError(loc.locate(source, path, at_key), what);
+  }
+};
+
+std::string fmt_g(double x) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%g", x);
+  return b;
 }
 
-double number(const nlohmann::json& j, const std::string& source, const std::string& path,
-              const char* key, double lo, double hi, bool open_lo, bool open_hi) {
-  if (!j.contains(key)) bad(source, path, std::string("missing \"") + key + "\"");
+// Refuses members of `j` (an object at `path`) that are not in `allowed`.
+void check_keys(const Ctx& c, const nlohmann::json& j, const std::string& path,
+                std::initializer_list<const char*> allowed) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& k = it.key();
+    if (std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return k == a; }))
+      continue;
+    std::string list;
+    for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+    c.bad(json::path_key(path, k), "unknown key \"" + k + "\" (allowed: " + list + ")", true);
+  }
+}
+
+double number(const Ctx& c, const nlohmann::json& j, const std::string& path, const char* key,
+              double lo, double hi, bool open_lo, bool open_hi) {
+  const std::string p = json::path_key(path, key);
+  if (!j.contains(key)) c.bad(path, std::string("missing \"") + key + "\"");
   const auto& v = j.at(key);
-  const std::string p = path + "." + key;
-  if (!v.is_number()) bad(source, p, "expected a number");
+  const std::string range =
+      std::string(open_lo ? "(" : "[") + fmt_g(lo) + ", " + fmt_g(hi) + (open_hi ? ")" : "]");
+  if (!v.is_number()) c.bad(p, "expected a number in " + range);
   const double x = v.get<double>();
-  if ((open_lo ? x <= lo : x < lo) || (open_hi ? x >= hi : x > hi))
-    bad(source, p,
-        "expected a value in " + std::string(open_lo ? "(" : "[") + std::to_string(lo) + ", " +
-            std::to_string(hi) + (open_hi ? ")" : "]") + ", got " + std::to_string(x));
+  if (!std::isfinite(x) || (open_lo ? x <= lo : x < lo) || (open_hi ? x >= hi : x > hi))
+    c.bad(p, "expected a value in " + range + ", got " + fmt_g(x));
   return x;
+}
+
+// A tissue attribute: an integer that fits an int (no wrap-around of 4294967296 to 0).
+int attribute(const Ctx& c, const nlohmann::json& e, const std::string& path, const char* key) {
+  const std::string p = json::path_key(path, key);
+  const std::string expected = "expected an integer tissue attribute in [" +
+                               std::to_string(std::numeric_limits<int>::min()) + ", " +
+                               std::to_string(std::numeric_limits<int>::max()) + "]";
+  if (!e.contains(key)) c.bad(path, std::string("missing \"") + key + "\" (" + expected + ")");
+  const auto& v = e.at(key);
+  if (v.is_number_unsigned()) {
+    const auto u = v.get<std::uint64_t>();
+    if (u > static_cast<std::uint64_t>(std::numeric_limits<int>::max()))
+      c.bad(p, expected + ", got " + std::to_string(u));
+    return static_cast<int>(u);
+  }
+  if (v.is_number_integer()) {
+    const auto i = v.get<std::int64_t>();
+    if (i < std::numeric_limits<int>::min() || i > std::numeric_limits<int>::max())
+      c.bad(p, expected + ", got " + std::to_string(i));
+    return static_cast<int>(i);
+  }
+  c.bad(p, expected + ", got " + v.dump());
 }
 
 }  // namespace
 
 MaterialTable parse_materials(const std::string& text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(SourceLocation{source, 0, 0, static_cast<long>(e.byte)},
-                     std::string("invalid JSON: ") + e.what());
-  }
+  // Syntax errors and duplicate keys: located InputErrors (FILE:LINE:COL) from the shared reader.
+  const nlohmann::json j = json::parse_located(text, source);
+  const json::JsonLocator loc(text);
+  const Ctx c{source, loc};
   if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array())
-    bad(source, "$", "expected an object with a \"materials\" array");
+    c.bad("$", "expected an object with a \"materials\" array");
+  check_keys(c, j, "$", {"format", "version", "note", "needle_note", "materials"});
+  // "format" and "version" are optional (tables written before they existed), checked if given.
+  if (j.contains("format") &&
+      (!j["format"].is_string() || j["format"].get<std::string>() != "palplab-materials"))
+    c.bad("$.format", "expected \"palplab-materials\", got " + j["format"].dump());
+  if (j.contains("version") && !(j["version"].is_number_integer() && j["version"] == 1))
+    c.bad("$.version",
+          "expected 1 (the only version of the material table), got " + j["version"].dump());
+  for (const char* k : {"note", "needle_note"})
+    if (j.contains(k) && !j[k].is_string())
+      c.bad(json::path_key("$", k), "expected a string (a free-form note)");
   MaterialTable t;
   t.source = source;
   const auto& arr = j["materials"];
   for (size_t i = 0; i < arr.size(); ++i) {
     const std::string p = "$.materials[" + std::to_string(i) + "]";
     const auto& e = arr[i];
-    if (!e.is_object()) bad(source, p, "expected an object");
+    if (!e.is_object()) c.bad(p, "expected an object");
+    check_keys(c, e, p,
+               {"first", "last", "name", "youngs_modulus", "poisson_ratio", "density", "colour",
+                "rigid", "needle"});
     Material m;
-    for (const char* k : {"first", "last"}) {
-      if (!e.contains(k) || !e[k].is_number_integer())
-        bad(source, p + "." + k, "expected an integer tissue attribute");
-    }
-    m.first = e["first"].get<int>();
-    m.last = e["last"].get<int>();
-    if (m.last < m.first) bad(source, p + ".last", "must be >= \"first\"");
+    m.first = attribute(c, e, p, "first");
+    m.last = attribute(c, e, p, "last");
+    if (m.last < m.first) c.bad(p + ".last", "must be >= \"first\"");
     if (!e.contains("name") || !e["name"].is_string() || e["name"].get<std::string>().empty())
-      bad(source, p + ".name", "expected a non-empty string");
+      c.bad(e.contains("name") ? p + ".name" : p, "expected a non-empty string \"name\"");
     m.name = e["name"].get<std::string>();
-    m.youngs_modulus = number(e, source, p, "youngs_modulus", 0, 1e13, true, false);
-    m.poisson_ratio = number(e, source, p, "poisson_ratio", -1, 0.5, true, true);
-    m.density = number(e, source, p, "density", 0, 1e5, true, false);
+    m.youngs_modulus = number(c, e, p, "youngs_modulus", 0, 1e13, true, false);
+    m.poisson_ratio = number(c, e, p, "poisson_ratio", -1, 0.5, true, true);
+    m.density = number(c, e, p, "density", 0, 1e5, true, false);
     if (!e.contains("colour") || !e["colour"].is_array() || e["colour"].size() != 3)
-      bad(source, p + ".colour", "expected [r, g, b] with values in [0, 1]");
-    for (int c = 0; c < 3; ++c) {
-      const auto& v = e["colour"][c];
+      c.bad(e.contains("colour") ? p + ".colour" : p,
+            "expected \"colour\": [r, g, b] with values in [0, 1]");
+    for (int k = 0; k < 3; ++k) {
+      const auto& v = e["colour"][k];
       if (!v.is_number() || v.get<double>() < 0 || v.get<double>() > 1)
-        bad(source, p + ".colour[" + std::to_string(c) + "]", "expected a number in [0, 1]");
-      m.colour[c] = v.get<double>();
+        c.bad(p + ".colour[" + std::to_string(k) + "]", "expected a number in [0, 1]");
+      m.colour[k] = v.get<double>();
     }
     if (e.contains("rigid")) {
-      if (!e["rigid"].is_boolean()) bad(source, p + ".rigid", "expected true or false");
+      if (!e["rigid"].is_boolean()) c.bad(p + ".rigid", "expected true or false");
       m.rigid = e["rigid"].get<bool>();
     }
     if (e.contains("needle")) {
       const auto& n = e["needle"];
       const std::string q = p + ".needle";
-      if (!n.is_object()) bad(source, q, "expected an object");
+      if (!n.is_object()) c.bad(q, "expected an object");
+      check_keys(c, n, q,
+                 {"puncture_force", "puncture_stiffness", "cutting_force", "friction", "source"});
       NeedleParams& np = m.needle;
       np.defined = true;
-      np.puncture_stiffness = number(n, source, q, "puncture_stiffness", 0, 1e9, true, false);
+      np.puncture_stiffness = number(c, n, q, "puncture_stiffness", 0, 1e9, true, false);
       // A rigid tissue is never punctured: the other values are optional there.
       if (!m.rigid || n.contains("puncture_force"))
-        np.puncture_force = number(n, source, q, "puncture_force", 0, 1e4, true, false);
+        np.puncture_force = number(c, n, q, "puncture_force", 0, 1e4, true, false);
       if (!m.rigid || n.contains("cutting_force"))
-        np.cutting_force = number(n, source, q, "cutting_force", 0, 1e4, false, false);
+        np.cutting_force = number(c, n, q, "cutting_force", 0, 1e4, false, false);
       if (!m.rigid || n.contains("friction"))
-        np.friction = number(n, source, q, "friction", 0, 1e6, false, false);
+        np.friction = number(c, n, q, "friction", 0, 1e6, false, false);
       if (n.contains("source")) {
-        if (!n["source"].is_string()) bad(source, q + ".source", "expected a string");
+        if (!n["source"].is_string()) c.bad(q + ".source", "expected a string");
         np.source = n["source"].get<std::string>();
       }
     }
     for (size_t k = 0; k < t.materials.size(); ++k)
       if (m.first <= t.materials[k].last && t.materials[k].first <= m.last)
-        bad(source, p, "attribute range overlaps $.materials[" + std::to_string(k) + "]");
+        c.bad(p, "attribute range overlaps $.materials[" + std::to_string(k) + "]");
     t.materials.push_back(std::move(m));
   }
   return t;

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -22,6 +23,7 @@
 #include "common/input_error.hpp"
 #include "engine/mesh/check.hpp"
 #include "engine/mesh/io.hpp"
+#include "engine/mesh/text_reader.hpp"
 #include "engine/spatial/octree.hpp"
 
 namespace palplab::mesh {
@@ -50,40 +52,50 @@ std::string tetgen_error(int code) {
 }  // namespace
 
 std::vector<RegionSeed> read_region_seeds(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open region file", path);
-  std::string line;
-  int lineno = 0, expected = -1;
+  // SPEC §4: first line the count, then one line per region `index x y z region_id attribute`.
+  // Every token is parsed whole (no "12abc" read as 12, no NaN), each error names FILE:LINE and
+  // the field.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError("is a directory (expected a .regions file)", path);
+  detail::TextReader r(path);
+  std::vector<std::string> tok;
+  if (!r.tokens(tok))
+    throw InputError("empty region file (expected the number of regions on the first line)", path);
+  if (tok.size() != 1)
+    r.fail("expected only the number of regions on the first line, got " +
+           std::to_string(tok.size()) + " fields");
+  const long n = r.integer(tok[0], "the number of regions");
+  if (n < 0 || n > 1000000)
+    r.fail("expected the number of regions (an integer in 0 ... 1000000), got " + tok[0]);
+  const int count_line = r.line;
+  static const char* kFields[] = {"index", "x", "y", "z", "region_id", "attribute"};
   std::vector<RegionSeed> seeds;
-  auto where = [&](int col = 0) { return SourceLocation{path, lineno, col}; };
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (auto h = line.find('#'); h != std::string::npos) line.erase(h);
-    std::istringstream ls(line);
-    std::string first;
-    if (!(ls >> first)) continue;
-    ls.seekg(0);
-    if (expected < 0) {
-      long n;
-      if (!(ls >> n) || n < 0 || n > 1000000)
-        throw InputError(where(1), "expected the number of regions (a non-negative integer)");
-      expected = static_cast<int>(n);
-      continue;
+  while (r.tokens(tok)) {
+    if (tok.size() != 6) {
+      std::string got = tok.size() < 6 ? "the " + std::string(kFields[tok.size()]) + " is missing"
+                                       : "unexpected text '" + tok[6] + "' after the attribute";
+      r.fail("expected `index x y z region_id attribute` (6 fields), got " +
+             std::to_string(tok.size()) + ": " + got);
     }
+    if (static_cast<long>(seeds.size()) == n)
+      r.fail("more regions than the " + std::to_string(n) + " announced on line " +
+             std::to_string(count_line));
     RegionSeed s;
-    if (!(ls >> s.index >> s.point.x() >> s.point.y() >> s.point.z() >> s.region_id))
-      throw InputError(where(1), "expected `index x y z region_id attribute`");
-    if (!(ls >> s.max_volume)) s.max_volume = 0;
-    std::string extra;
-    if (ls >> extra)
-      throw InputError(where(), "unexpected text '" + extra + "' after the attribute");
-    if (!s.point.allFinite()) throw InputError(where(), "region point is not finite");
+    s.line = r.line;
+    s.index = r.int32(tok[0], "the index (field 1)");
+    s.point.x() = r.number(tok[1], "x (field 2)");
+    s.point.y() = r.number(tok[2], "y (field 3)");
+    s.point.z() = r.number(tok[3], "z (field 4)");
+    s.region_id = r.int32(tok[4], "the region_id (field 5, an integer tissue attribute)");
+    // The attribute is the region's maximum tet volume (m^3; <= 0 = no constraint).
+    s.max_volume =
+        r.number(tok[5], "the attribute (field 6, the maximum tet volume in m^3; <= 0 = none)");
     seeds.push_back(s);
   }
-  if (expected < 0) throw InputError("empty region file (expected the number of regions)", path);
-  if (static_cast<int>(seeds.size()) != expected)
-    throw InputError(SourceLocation{path, lineno}, "the first line announces " +
-                                                       std::to_string(expected) + " regions but " +
+  if (static_cast<long>(seeds.size()) != n)
+    throw InputError(SourceLocation{path, r.line}, "the first line announces " + std::to_string(n) +
+                                                       " regions but " +
                                                        std::to_string(seeds.size()) + " follow");
   return seeds;
 }
@@ -263,7 +275,10 @@ RawTets run_tetgen_isolated(const SurfaceMesh& s, const TetOptions& opt) {
   if (WIFSIGNALED(st))
     throw InputError(std::string("TetGen crashed on this surface (signal ") +
                      std::to_string(WTERMSIG(st)) + ", " + strsignal(WTERMSIG(st)) +
-                     "); run `palplab mesh check` and `palplab mesh repair` on it");
+                     "); run `palplab mesh check` and `palplab mesh repair` on it" +
+                     (opt.seeds.empty() ? std::string()
+                                        : std::string(", and check that every region seed lies "
+                                                      "inside the region it seeds")));
   std::size_t pos = 0;
   auto get = [&](void* dst, std::size_t n) {
     if (buf.size() - pos < n)
@@ -338,6 +353,57 @@ void check_tetgen_input(const SurfaceMesh& s) {
                      "fix what can be fixed");
 }
 
+void check_region_seeds_inside(const SurfaceMesh& s, const std::vector<RegionSeed>& seeds,
+                               const std::string& source) {
+  if (seeds.empty() || s.F.rows() == 0) return;
+  // Connected components of faces (through shared vertices): the generalized winding number of
+  // each closed component is +-1 inside it and 0 outside, whatever its orientation, so a seed
+  // between nested surfaces (fat between skin and muscle) is inside too.
+  const long nv = s.V.rows(), nf = s.F.rows();
+  std::vector<long> parent(nv);
+  for (long i = 0; i < nv; ++i) parent[i] = i;
+  auto root = [&](long a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (long f = 0; f < nf; ++f)
+    for (int k = 1; k < 3; ++k) {
+      const long a = root(s.F(f, 0)), b = root(s.F(f, k));
+      if (a != b) parent[a] = b;
+    }
+  std::map<long, int> comp_of_root;
+  std::vector<int> face_comp(nf);
+  for (long f = 0; f < nf; ++f) {
+    const long r0 = root(s.F(f, 0));
+    auto it = comp_of_root.emplace(r0, static_cast<int>(comp_of_root.size())).first;
+    face_comp[f] = it->second;
+  }
+  std::vector<double> w(comp_of_root.size());
+  for (const RegionSeed& g : seeds) {
+    std::fill(w.begin(), w.end(), 0.0);
+    for (long f = 0; f < nf; ++f) {
+      // Solid angle of the triangle seen from the seed (van Oosterom & Strackee 1983).
+      const Vec3 a = s.V.row(s.F(f, 0)).transpose() - g.point;
+      const Vec3 b = s.V.row(s.F(f, 1)).transpose() - g.point;
+      const Vec3 c = s.V.row(s.F(f, 2)).transpose() - g.point;
+      const double la = a.norm(), lb = b.norm(), lc = c.norm();
+      const double num = a.dot(b.cross(c));
+      const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+      w[face_comp[f]] += 2 * std::atan2(num, den);
+    }
+    bool inside = false;
+    for (double x : w) inside = inside || std::abs(x) / (4 * M_PI) > 0.5;
+    if (!inside) {
+      const std::string what =
+          "region seed " + std::to_string(g.index) + " at (" + format_exact(g.point.x()) + ", " +
+          format_exact(g.point.y()) + ", " + format_exact(g.point.z()) +
+          ") is not inside the closed surface (expected a point inside the region it seeds)";
+      if (!source.empty()) throw InputError(SourceLocation{source, g.line}, what);
+      throw InputError(what);
+    }
+  }
+}
+
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
   if (opt.quality < 0 || (opt.quality > 0 && opt.quality < 1.0) || !std::isfinite(opt.quality))
     throw InputError("--quality must be 0 (off) or a radius-edge ratio >= 1.0, got " +
@@ -348,6 +414,7 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
     if (!g.point.allFinite() || !std::isfinite(g.max_volume))
       throw InputError("region seed " + std::to_string(g.index) + " is not finite");
   check_tetgen_input(s);
+  check_region_seeds_inside(s, opt.seeds, opt.regions_file);
   const RawTets out = run_tetgen_isolated(s, opt);
   const int np = static_cast<int>(out.points.size() / 3),
             nt = static_cast<int>(out.tets.size() / 4);

@@ -17,6 +17,7 @@ struct RegionSeed {
   Vec3 point = Vec3::Zero();
   int region_id = 0;
   double max_volume = 0;
+  int line = 0;  // line in the .regions file it was read from (0 = not read from a file)
 };
 
 // Reads a `.regions` file: first line the count, then one seed per line ('#' starts a comment).
@@ -37,6 +38,7 @@ struct TetOptions {
   std::vector<RegionSeed> seeds;  // TetGen -A regions; without seeds every tet gets
   int default_attribute = 0;      //   this attribute; with seeds, the tets of closed regions
                                   //   without a seed get it (0-99 = undefined tissue)
+  std::string regions_file;       // where `seeds` were read from (for messages); may be empty
   double timeout_seconds = 300;   // wall-clock limit of the TetGen run; <= 0 = none
 };
 
@@ -45,6 +47,12 @@ struct TetOptions {
 // (open/non-manifold edges and vertices, duplicate vertices, degenerate faces, self-intersections
 // including duplicated and coincident triangles). Throws InputError naming the first defect.
 void check_tetgen_input(const SurfaceMesh& s);
+
+// Checks that every seed point lies inside the closed surface `s` (generalized winding number of
+// each connected component); otherwise an InputError names the seed (and `source`:line when
+// given). tetrahedralize() runs it after check_tetgen_input (TetGen crashes on such seeds).
+void check_region_seeds_inside(const SurfaceMesh& s, const std::vector<RegionSeed>& seeds,
+                               const std::string& source = "");
 
 // Tetrahedralizes the closed surface `s`. The input vertices keep their indices (Steiner points
 // are appended). The surface's named face regions carry over to the tets: a tet takes the region

@@ -362,3 +362,118 @@ TEST(CliMesh, TetrahedralizeRefusesTissueAttributesTheMaterialTableLacks) {
                    "which defines 100 skin"});
   EXPECT_FALSE(fs::exists(p("ush0.node")));
 }
+
+// Review: the .regions parser took `12abc` as 12, a missing attribute, NaN and `1abc` as the
+// count with exit 0, and blamed the wrong field for `101.5`. Now every token is parsed whole.
+TEST(CliMesh, RegionsFileIsParsedStrictly) {
+  ASSERT_EQ(run("mesh generate sphere --out " + p("rs.obj")).code, 0);
+  struct Case {
+    std::string text, where, expected;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"1\n1 0 0 0 12abc 0\n", "rs.regions:2:", "region_id (field 5"},
+           {"1\n1 0 0 0 101\n", "rs.regions:2:", "the attribute is missing"},
+           {"1\n1 0 0 0 101 nan\n", "rs.regions:2:", "attribute (field 6"},
+           {"1abc\n1 0 0 0 101 0\n", "rs.regions:1:", "the number of regions"},
+           {"1\n1 0 0 0 101.5 0\n", "rs.regions:2:", "region_id (field 5"},
+           {"1\n1 0 0x 0 101 0\n", "rs.regions:2:", "y (field 3)"},
+           {"1\n1 0 0 0 101 0 7\n", "rs.regions:2:", "unexpected text '7' after the attribute"},
+           {"-1\n", "rs.regions:1:", "the number of regions"},
+           {"2\n1 0 0 0 101 0\n", "rs.regions:2:", "announces 2 regions but 1 follow"},
+       }) {
+    {
+      std::ofstream f(p("rs.regions"));
+      f << c.text;
+    }
+    Result r = run("mesh tetrahedralize " + p("rs.obj") + " --out " + p("rs_t"));
+    EXPECT_EQ(r.code, 2) << c.text << r.err;
+    EXPECT_NE(r.err.find(c.where), std::string::npos) << c.text << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.text << r.err;
+  }
+  {
+    std::ofstream f(p("rs.regions"));
+    f << "# seeds\n1\n1 0 0 0 101 0  # soft tissue\n";
+  }
+  Result r = run("mesh tetrahedralize " + p("rs.obj") + " --out " + p("rs_t"));
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// Review: a seed outside the surface crashed TetGen and the message blamed the surface.
+TEST(CliMesh, RegionSeedOutsideTheSurfaceIsNamed) {
+  ASSERT_EQ(run("mesh generate sphere --out " + p("ro.obj")).code, 0);
+  {
+    std::ofstream f(p("ro.regions"));
+    f << "2\n1 0 0 0 101 0\n2 0 0 5 100 0\n";
+  }
+  Result r = run("mesh tetrahedralize " + p("ro.obj") + " --out " + p("ro_t"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("ro.regions:3:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("region seed 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not inside the closed surface"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(p("ro_t.ele")));
+  // Nested surfaces: the generated shoulder's seeds (between skin layers etc.) are all inside.
+  ASSERT_EQ(run("mesh generate shoulder --vertices 642 --out " + p("ro_sh")).code, 0);
+  r = run("mesh tetrahedralize " + p("ro_sh.obj") + " --out " + p("ro_sh_t"));
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// Review: --seed -1 / 99999999999999999999 saturated to 2^64-1 with exit 0.
+TEST(CliMesh, GenerateSeedIsAStrictUnsigned64BitInteger) {
+  for (const char* s :
+       {"-1", "99999999999999999999", "18446744073709551617", "1.5", "12abc", "+3", "0x10", ""}) {
+    Result r = run(std::string("mesh generate model-a --seed '") + s + "' --out " + p("sd.obj"));
+    EXPECT_EQ(r.code, 2) << s << r.err;
+    EXPECT_NE(r.err.find("expected an unsigned 64-bit decimal integer"), std::string::npos)
+        << s << r.err;
+  }
+  EXPECT_EQ(run("mesh generate model-a --seed 18446744073709551615 --out " + p("sd.obj")).code, 0);
+}
+
+// Review: the material table took "last": 4294967296 (wrapped to 0), unknown and duplicate keys,
+// a wrong "format" and "version": 2 with exit 0.
+TEST(CliMesh, MaterialTableIsCheckedStrictly) {
+  const std::string entry =
+      R"("name": "a", "youngs_modulus": 1, "poisson_ratio": 0.3, "density": 1, "colour": [0, 0, 0])";
+  struct Case {
+    std::string text, where, expected;
+  };
+  for (const Case& c : std::vector<Case>{
+           {R"({"materials": [{"first": 1, "last": 4294967296, )" + entry + "}]}",
+            "mt.json:1:", "$.materials[0].last: expected an integer tissue attribute"},
+           {R"({"materials": [{"first": 1, "last": 1, "youngs_modlus": 2, )" + entry + "}]}",
+            "mt.json:1:", "unknown key \"youngs_modlus\" (allowed: first, last, name"},
+           {"{\"materials\": [{\"first\": 1,\n \"first\": 2, \"last\": 3, " + entry + "}]}",
+            "mt.json:2:", "duplicate key"},
+           {R"({"format": "palplab-material", "materials": []})",
+            "mt.json:1:", "$.format: expected \"palplab-materials\""},
+           {R"({"format": "palplab-materials", "version": 2, "materials": []})",
+            "mt.json:1:", "$.version: expected 1"},
+           {R"({"colours": 1, "materials": []})", "mt.json:1:", "unknown key \"colours\""},
+           {R"({"materials": [{"first": 1, "last": 1, "needle": {"frction": 1}, )" + entry + "}]}",
+            "mt.json:1:", "$.materials[0].needle.frction: unknown key"},
+           {"{\"materials\": [{\"first\": 1, \"last\": 1, " + entry + ", \"density\": -1}]}",
+            "mt.json:1:", "duplicate key"},
+       }) {
+    const std::string f = palplab::testing::write_temp("mt.json", c.text);
+    Result r = run("mesh materials --check " + f);
+    EXPECT_EQ(r.code, 2) << c.text << r.err;
+    EXPECT_NE(r.err.find(c.where), std::string::npos) << c.text << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.text << r.err;
+  }
+  // Bounds are printed with %g, not %f.
+  const std::string f = palplab::testing::write_temp(
+      "mt.json", R"({"materials": [{"first": 1, "last": 1, "name": "a", "youngs_modulus": 1,
+      "poisson_ratio": 0.3, "density": -1, "colour": [0, 0, 0]}]})");
+  Result r = run("mesh materials --check " + f);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("mt.json:2:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("expected a value in (0, 100000], got -1"), std::string::npos) << r.err;
+  // Optional "format"/"version" with the right values, and the notes, are fine.
+  EXPECT_EQ(run("mesh materials --check " +
+                palplab::testing::write_temp(
+                    "mt_ok.json", R"({"format": "palplab-materials", "version": 1, "note": "x",
+                    "materials": [{"first": 1, "last": 1, )" +
+                                      entry + "}]}"))
+                .code,
+            0);
+}
