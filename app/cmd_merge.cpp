@@ -3,7 +3,8 @@
 // the given directories, or the files given) and writes the power summary, identical to a single
 // run. A merge known to lack replicates (a shard's file not among the inputs, or indices missing
 // below the largest of an n: protocols::merge_gaps) is refused (exit 2) unless --allow-partial,
-// which writes it with a warning and marks power.json/md partial.
+// which writes it with a warning and marks power.json/md partial. Shard files of different K
+// (replicates.shard-I-of-K.jsonl) among the inputs are refused (exit 2) even then.
 #include <filesystem>
 #include <iostream>
 #include <memory>

@@ -78,17 +78,18 @@ palplab::app::CommandRegistration reg{
           ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->opt.target_power, "Power the smallest n must reach")
           ->check(palplab::app::finite_range(0.01, 0.999999));
-      cmd->add_option("--shard", a->shard, "Run only shard I of K (I/K, 1-based), for job arrays");
+      cmd->add_option("--shard", a->shard,
+                      "Run only shard I of K (I/K, 1 <= I <= K <= 100000), for job arrays");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, code] {
         using namespace palplab::protocols;
         if (!a->shard.empty()) {
-          int i = 0, k = 0;
-          char extra = 0;
-          if (std::sscanf(a->shard.c_str(), "%d/%d%c", &i, &k, &extra) != 2 || k < 1 || i < 1 ||
-              i > k)
-            throw palplab::InputError("--shard: expected I/K with 1 <= I <= K, got \"" + a->shard +
-                                      "\"");
+          // Strictly: digits only, no wrap-around (sscanf's %d took 1/4294967297 for 1/1).
+          const auto ik = parse_shard(a->shard, "/");
+          if (!ik)
+            throw palplab::InputError("--shard: expected I/K, whole numbers with 1 <= I <= K <= " +
+                                      std::to_string(kMaxShards) + ", got \"" + a->shard + "\"");
+          const auto [i, k] = *ik;
           a->opt.shard = i - 1;
           a->opt.shards = k;
         }

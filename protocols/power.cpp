@@ -362,6 +362,25 @@ std::pair<double, double> wilson_interval(long k, long n, double z) {
   return {std::max(0.0, c - h), std::min(1.0, c + h)};
 }
 
+std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep) {
+  const std::size_t at = text.find(sep);
+  if (at == std::string::npos) return std::nullopt;
+  // Digits only, stopping once above kMaxShards (no overflow, no wrap-around).
+  auto number = [](const std::string& d) -> std::optional<long> {
+    if (d.empty() || d.size() > 20) return std::nullopt;
+    long v = 0;
+    for (const char c : d) {
+      if (c < '0' || c > '9') return std::nullopt;
+      v = v * 10 + (c - '0');
+      if (v > kMaxShards) return std::nullopt;
+    }
+    return v;
+  };
+  const auto i = number(text.substr(0, at)), k = number(text.substr(at + sep.size()));
+  if (!i || !k || *i < 1 || *i > *k) return std::nullopt;
+  return std::make_pair(static_cast<int>(*i), static_cast<int>(*k));
+}
+
 long run_power(const Study& study, const PowerOptions& opt) {
   const Ranks ranks = init_ranks();
   std::vector<int> ns = opt.n;
@@ -372,8 +391,8 @@ long run_power(const Study& study, const PowerOptions& opt) {
     ns.push_back(study.groups.front().size);
   }
   if (opt.replicates < 1) throw InputError("--replicates must be >= 1");
-  if (opt.shards < 1 || opt.shard < 0 || opt.shard >= opt.shards)
-    throw InputError("--shard I/K needs 1 <= I <= K");
+  if (opt.shards < 1 || opt.shards > kMaxShards || opt.shard < 0 || opt.shard >= opt.shards)
+    throw InputError("--shard I/K needs 1 <= I <= K <= " + std::to_string(kMaxShards));
   const std::string sha = results::sha256_hex(study.json_text);
   const std::string file = replicate_file(opt);
 
@@ -599,22 +618,24 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
 
 namespace {
 
-// (I, K) of a file named replicates.shard-I-of-K.jsonl (as replicate_file writes), else nullopt.
+// (I, K) of a file named replicates.shard-I-of-K.jsonl (as replicate_file writes), else nullopt:
+// a name that does not parse strictly (parse_shard) is not a shard file.
 std::optional<std::pair<int, int>> shard_of(const std::string& path) {
   const std::string name = fs::path(path).filename().string();
-  int i = 0, k = 0, used = 0;
-  if (std::sscanf(name.c_str(), "replicates.shard-%d-of-%d.jsonl%n", &i, &k, &used) != 2 ||
-      used != static_cast<int>(name.size()) || k < 1 || i < 1 || i > k)
+  const std::string head = "replicates.shard-", tail = ".jsonl";
+  if (name.size() <= head.size() + tail.size() || name.rfind(head, 0) != 0 ||
+      name.compare(name.size() - tail.size(), tail.size(), tail) != 0)
     return std::nullopt;
-  return std::make_pair(i, k);
+  return parse_shard(name.substr(head.size(), name.size() - head.size() - tail.size()), "-of-");
 }
 
-// "0, 2, 4" (the first `most`, then "… (N in all)").
-std::string index_list(const std::vector<int>& v, std::size_t most = 8) {
+// "0, 2, 4" (the listed ones; when `total` is larger, then ", … and N more").
+template <class T>
+std::string index_list(const std::vector<T>& v, long total) {
   std::string s;
-  for (std::size_t i = 0; i < v.size() && i < most; ++i)
-    s += (i ? ", " : "") + std::to_string(v[i]);
-  if (v.size() > most) s += ", … (" + std::to_string(v.size()) + " in all)";
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+  if (total > static_cast<long>(v.size()))
+    s += ", … and " + std::to_string(total - static_cast<long>(v.size())) + " more";
   return s;
 }
 
@@ -622,23 +643,48 @@ std::string index_list(const std::vector<int>& v, std::size_t most = 8) {
 
 MergeGaps merge_gaps(const std::vector<std::string>& files) {
   MergeGaps g;
-  std::map<int, std::set<int>> shards_seen;  // K -> I present
-  std::map<int, std::set<int>> reps;         // n -> replicate indices present
+  std::map<long, std::set<long>> shards_seen;  // K -> I present
+  std::map<int, std::set<int>> reps;           // n -> replicate indices present
   for (const auto& f : files) {
     if (const auto s = shard_of(f)) shards_seen[s->second].insert(s->first);
     for (const auto& [r, line] : read_replicates(f))
       reps[r.at("n").get<int>()].insert(r.at("replicate").get<int>());
   }
-  for (const auto& [k, present] : shards_seen)
-    for (int i = 1; i <= k; ++i)
-      if (!present.count(i)) g.missing_shards.push_back({i, k});
+  if (shards_seen.size() > 1) {
+    std::string ks;
+    for (const auto& [k, present] : shards_seen)
+      ks += (ks.empty() ? "" : ", ") + std::string("K = ") + std::to_string(k) + " (" +
+            std::to_string(present.size()) + " file" + (present.size() == 1 ? "" : "s") + ")";
+    throw InputError("shard files of different --shard I/K runs among the merged files (" + ks +
+                     "): which replicates are missing cannot be told. Merge the files of one run "
+                     "(give them by name, or move the others out of the directory)");
+  }
+  for (const auto& [k, present] : shards_seen) {
+    g.shards = k;
+    g.missing_shard_count = k - static_cast<long>(present.size());
+    auto it = present.begin();  // sorted: at most |present| + kListed steps
+    for (long i = 1; i <= k && g.missing_shards.size() < MergeGaps::kListed; ++i) {
+      if (it != present.end() && *it == i)
+        ++it;
+      else
+        g.missing_shards.push_back(i);
+    }
+  }
   for (const auto& [n, set] : reps) {
+    const int top = *set.rbegin();
     g.present[n] = static_cast<long>(set.size());
-    g.largest[n] = *set.rbegin();
-    std::vector<int> gaps;
-    for (int r = 0; r < *set.rbegin(); ++r)
-      if (!set.count(r)) gaps.push_back(r);
-    if (!gaps.empty()) g.missing_replicates[n] = std::move(gaps);
+    g.largest[n] = top;
+    const long below = static_cast<long>(std::distance(set.lower_bound(0), set.find(top)));
+    if (top <= 0 || below == top) continue;
+    g.missing_replicate_count[n] = static_cast<long>(top) - below;
+    std::vector<int>& list = g.missing_replicates[n];
+    auto it = set.lower_bound(0);
+    for (int r = 0; r < top && list.size() < MergeGaps::kListed; ++r) {
+      if (it != set.end() && *it == r)
+        ++it;
+      else
+        list.push_back(r);
+    }
   }
   return g;
 }
@@ -646,14 +692,22 @@ MergeGaps merge_gaps(const std::vector<std::string>& files) {
 std::string MergeGaps::message() const {
   if (complete()) return {};
   std::string s;
-  for (const auto& [i, k] : missing_shards)
-    s += (s.empty() ? "" : "; ") + std::string("shard ") + std::to_string(i) + " of " +
-         std::to_string(k) + " missing (no replicates.shard-" + std::to_string(i) + "-of-" +
-         std::to_string(k) + ".jsonl among the merged files)";
-  for (const auto& [n, gaps] : missing_replicates)
+  if (missing_shard_count > 0) {
+    const std::string k = std::to_string(shards);
+    s = missing_shard_count == 1
+            ? "shard " + std::to_string(missing_shards.front()) + " of " + k +
+                  " missing (no replicates.shard-" + std::to_string(missing_shards.front()) +
+                  "-of-" + k + ".jsonl among the merged files)"
+            : std::to_string(missing_shard_count) + " of " + k +
+                  " shards missing: " + index_list(missing_shards, missing_shard_count) +
+                  " (no replicates.shard-I-of-" + k + ".jsonl among the merged files)";
+  }
+  for (const auto& [n, gaps] : missing_replicates) {
+    const long count = missing_replicate_count.at(n);
     s += (s.empty() ? "" : "; ") + std::string("n = ") + std::to_string(n) + ": replicate" +
-         (gaps.size() == 1 ? " " : "s ") + index_list(gaps) + " of 0-" +
+         (count == 1 ? " " : "s ") + index_list(gaps, count) + " of 0-" +
          std::to_string(largest.at(n)) + " missing";
+  }
   long total = 0;
   std::string per_n;
   for (const auto& [n, k] : present) {
@@ -667,13 +721,17 @@ std::string MergeGaps::message() const {
 
 nlohmann::json MergeGaps::to_json() const {
   nlohmann::json j = {{"missing_shards", nlohmann::json::array()},
+                      {"missing_shard_count", missing_shard_count},
                       {"missing_replicates", nlohmann::json::object()},
+                      {"missing_replicate_count", nlohmann::json::object()},
                       {"replicates", nlohmann::json::object()},
                       {"message", message()}};
-  for (const auto& [i, k] : missing_shards)
-    j["missing_shards"].push_back(std::to_string(i) + "/" + std::to_string(k));
+  for (const long i : missing_shards)
+    j["missing_shards"].push_back(std::to_string(i) + "/" + std::to_string(shards));
   for (const auto& [n, gaps] : missing_replicates)
     j["missing_replicates"][std::to_string(n)] = gaps;
+  for (const auto& [n, c] : missing_replicate_count)
+    j["missing_replicate_count"][std::to_string(n)] = c;
   for (const auto& [n, k] : present) j["replicates"][std::to_string(n)] = k;
   return j;
 }

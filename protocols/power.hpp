@@ -62,6 +62,11 @@ struct PowerOptions {
   int shard = 0, shards = 1;  // this process runs replicates with index % shards == shard
   std::function<void(long done, long total, double elapsed_s)> progress;
 };
+// --shard I/K: K is at most this (docs/PARTICIPANTS.md "Power analysis").
+constexpr long kMaxShards = 100000;
+// "I/K" (sep '/') or "I-of-K" (sep "-of-"): digits only, 1 <= I <= K <= kMaxShards, else
+// nullopt (no sign, space, overflow or wrap-around). Returns (I, K), I 1-based.
+std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep);
 
 // Runs the replicates this process is responsible for (skipping those already in
 // DIR/replicates.jsonl) and appends each as it finishes. Under MPI (PALPLAB_MPI, launched by
@@ -79,19 +84,27 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
 // the largest one present (a shard missing or stopped early). The total a run meant to simulate
 // is in no record, so missing replicates above the largest of an n cannot be seen.
 struct MergeGaps {
-  std::vector<std::pair<int, int>> missing_shards;     // (I, K), 1-based I
-  std::map<int, std::vector<int>> missing_replicates;  // n -> indices below the largest present
+  // Missing shards and replicate indices listed (message, power.json); the rest are counted.
+  static constexpr std::size_t kListed = 10;
+  long shards = 0;                   // K of the shard files merged (one K only), 0 when none
+  std::vector<long> missing_shards;  // the first kListed missing I (1-based) of K
+  long missing_shard_count = 0;      // all of them
+  std::map<int, std::vector<int>> missing_replicates;  // n -> first kListed indices missing
+  std::map<int, long> missing_replicate_count;         // n -> all indices missing below the largest
   std::map<int, long> present;                         // n -> replicates present (deduplicated)
   std::map<int, int> largest;                          // n -> largest replicate index present
-  bool complete() const { return missing_shards.empty() && missing_replicates.empty(); }
+  bool complete() const { return missing_shard_count == 0 && missing_replicate_count.empty(); }
   // "shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl among the merged files); n = 3:
   // replicates 0, 2 of 0-3 missing: the summary covers only 3 replicates (n = 2: 2, n = 3: 1)";
-  // empty when complete().
+  // longer lists end "…, and N more"; empty when complete().
   std::string message() const;
-  // The power.json "partial" object: {"missing_shards": ["2/2"], "missing_replicates": {"3": [0,
-  // 2]}, "replicates": {"2": 2, "3": 1}, "message": message()}.
+  // The power.json "partial" object: {"missing_shards": ["2/2"], "missing_shard_count": 1,
+  // "missing_replicates": {"3": [0, 2]}, "missing_replicate_count": {"3": 2}, "replicates":
+  // {"2": 2, "3": 1}, "message": message()}; the lists hold at most kListed entries each.
   nlohmann::json to_json() const;
 };
+// Shard files of different K among `files` are an InputError (which replicates a run of
+// another K should hold cannot be told from the records): merge the files of one run.
 MergeGaps merge_gaps(const std::vector<std::string>& files);
 
 // InputError when `out_dir` holds results of a study other than the one with SHA-256 `sha`

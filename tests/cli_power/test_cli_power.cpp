@@ -431,3 +431,94 @@ TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
   EXPECT_FALSE(fs::exists(d / "never"));
   fs::remove_all(d);
 }
+
+// --shard was read with sscanf %d: 1/4294967297 wrapped to 1/1 (an unsharded run, exit 0), and
+// any K was accepted, so a merge of one shard of K = 1000000000 listed every missing shard
+// (minutes, then bad_alloc). Now --shard is digits only with 1 <= I <= K <= 100000 (else exit 2
+// naming the flag and the range), and merge counts missing shards and lists the first few.
+TEST(Power, ShardIsParsedStrictlyAndMissingShardsAreCounted) {
+  using palplab::testing::expect_exit2;
+  using palplab::testing::has;
+  auto d = scratch_dir("shard_strict");
+  const std::string base = "power " + null_study() + " --n 2 --replicates 1 --quiet --out ";
+  for (const char* bad : {"1/4294967297", "1/1000000000", "1/100001", "0/3", "4/3", "+1/2", "1/-2",
+                          "1/2x", "1 /2", "1", "/2", "99999999999999999999999/1"}) {
+    const auto r = run_palplab(base + (d / "never").string() + " --shard '" + bad + "'", d);
+    expect_exit2(r, {"--shard: expected I/K, whole numbers with 1 <= I <= K <= 100000",
+                     std::string("got \"") + bad + "\""});
+    EXPECT_FALSE(fs::exists(d / "never" / "replicates.jsonl")) << bad;
+  }
+  // The largest K: the merge of shard 1 alone is refused quickly, with a bounded message.
+  ASSERT_EQ(run_palplab(base + (d / "big").string() + " --shard 1/100000", d).code, 0);
+  auto r = run_palplab("merge " + (d / "big").string() + " --out " + (d / "m").string(), d);
+  expect_exit2(r, {"incomplete merge: 99999 of 100000 shards missing: 2, 3, 4, 5, 6, 7, 8, 9, "
+                   "10, 11, … and 99989 more (no replicates.shard-I-of-100000.jsonl among the "
+                   "merged files)"});
+  EXPECT_LT(r.err.size(), 2000u);
+  r = run_palplab("merge " + (d / "big").string() + " --allow-partial --out " + (d / "m").string(),
+                  d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = power_json(d / "m")["partial"];
+  EXPECT_EQ(j["missing_shard_count"], 99999);
+  ASSERT_EQ(j["missing_shards"].size(), 10u);
+  EXPECT_EQ(j["missing_shards"][0], "2/100000");
+  EXPECT_EQ(j["missing_replicate_count"], nlohmann::json::object());
+  // Missing replicates: counted, the first few listed (power.json too).
+  std::ofstream f(d / "gap.jsonl");
+  for (int rep : {0, 30}) f << record(2, rep, 0.01, 0.3).dump() << "\n";
+  f.close();
+  r = run_palplab("merge " + (d / "gap.jsonl").string() + " --out " + (d / "g").string(), d);
+  expect_exit2(r, {"n = 2: replicates 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, … and 19 more of 0-30 "
+                   "missing"});
+  r = run_palplab(
+      "merge " + (d / "gap.jsonl").string() + " --allow-partial --out " + (d / "g").string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto g = power_json(d / "g")["partial"];
+  EXPECT_EQ(g["missing_replicate_count"]["2"], 29);
+  EXPECT_EQ(g["missing_replicates"]["2"].size(), 10u);
+  fs::remove_all(d);
+}
+
+// merge read shard file names with sscanf %d too: replicates.shard-2-of-4294967298.jsonl was
+// taken for shard 2 of 2. A name that does not parse strictly is not a shard file (its
+// replicates are merged, but it completes no shard set).
+TEST(Power, MergeParsesShardFileNamesStrictly) {
+  using palplab::testing::expect_exit2;
+  auto d = scratch_dir("shard_names");
+  const std::string base = "power " + null_study() + " --n 2 --replicates 2 --quiet --out " +
+                           (d / "s").string() + " --shard ";
+  ASSERT_EQ(run_palplab(base + "1/2", d).code, 0);
+  ASSERT_EQ(run_palplab(base + "2/2", d).code, 0);
+  fs::rename(d / "s" / "replicates.shard-2-of-2.jsonl",
+             d / "s" / "replicates.shard-2-of-4294967298.jsonl");
+  const auto r = run_palplab("merge " + (d / "s").string() + " --out " + (d / "m").string(), d);
+  expect_exit2(r, {"shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl"});
+  fs::remove_all(d);
+}
+
+// A complete K = 3 shard set plus a stray shard 1 of K = 2 was reported as "shard 2 of 2
+// missing" although every replicate was there. Shard files of different K are refused (exit 2,
+// also with --allow-partial) with a message naming the K and the way out.
+TEST(Power, MergeOfShardsOfDifferentKIsRefused) {
+  using palplab::testing::expect_exit2;
+  auto d = scratch_dir("shard_mix");
+  const std::string base = "power " + null_study() + " --n 2,3 --replicates 2 --quiet --out " +
+                           (d / "s").string() + " --shard ";
+  for (const char* s : {"1/3", "2/3", "3/3", "1/2"}) ASSERT_EQ(run_palplab(base + s, d).code, 0);
+  for (const char* extra : {"", " --allow-partial"}) {
+    const auto r =
+        run_palplab("merge " + (d / "s").string() + extra + " --out " + (d / "m").string(), d);
+    expect_exit2(r, {"shard files of different --shard I/K runs among the merged files (K = 2 "
+                     "(1 file), K = 3 (3 files))",
+                     "Merge the files of one run"});
+    EXPECT_FALSE(fs::exists(d / "m")) << extra;
+  }
+  // The K = 3 set alone is complete.
+  std::string files;
+  for (int i = 1; i <= 3; ++i)
+    files += (d / "s" / ("replicates.shard-" + std::to_string(i) + "-of-3.jsonl")).string() + " ";
+  const auto r = run_palplab("merge " + files + "--out " + (d / "m").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  fs::remove_all(d);
+}
