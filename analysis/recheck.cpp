@@ -51,6 +51,54 @@ std::string too_few(const GroupedData& d, size_t g) {
          (d.values[g].size() == 1 ? "" : "s") + " (" + lines_text(d.lines[g]) + ")";
 }
 
+bool has_column(const CsvTable& t, const std::string& name) {
+  return std::find(t.header.begin(), t.header.end(), name) != t.header.end();
+}
+
+std::string no_column(const CsvTable& t, const std::string& name) {
+  std::string columns;
+  for (const auto& h : t.header) columns += (columns.empty() ? "'" : ", '") + h + "'";
+  return "no column '" + name + "' in " + t.file + "; its columns are: " + columns;
+}
+
+std::string trimmed(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t");
+  return b == std::string::npos ? std::string() : s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+// Why the statistic's "where" entries (`shown` as written) keep no row of `t`: how they combine
+// and the values their columns hold (the first 10 of each), so a misspelt value is seen.
+std::string no_row_matches(const CsvTable& t, const std::vector<WhereFilter>& where,
+                           const std::string& shown) {
+  std::vector<std::string> columns;
+  for (const auto& w : where)
+    if (std::find(columns.begin(), columns.end(), w.column) == columns.end())
+      columns.push_back(w.column);
+  std::string held;
+  for (const auto& c : columns) {
+    const int col = column_index(t, c);
+    std::vector<std::string> values;
+    bool more = false;
+    for (const auto& row : t.rows) {
+      const std::string v = trimmed(row[col]);  // as the filters compare
+      if (std::find(values.begin(), values.end(), v) != values.end()) continue;
+      if (values.size() == 10) {
+        more = true;
+        break;
+      }
+      values.push_back(v);
+    }
+    held += "; column '" + c + "' holds ";
+    for (size_t k = 0; k < values.size(); ++k) held += (k ? ", '" : "'") + values[k] + "'";
+    if (more) held += " and more";
+  }
+  return "no row of " + t.file + " matches " + shown + " (" + std::to_string(t.rows.size()) +
+         " data row" + (t.rows.size() == 1 ? "" : "s") +
+         "; entries on the same column are alternatives, entries on different columns must all "
+         "hold)" +
+         held;
+}
+
 }  // namespace
 
 ApaStatistic parse_apa(const std::string& text, const SourceLocation& where) {
@@ -170,18 +218,31 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
         s.contains("test") ? str(s, "test", path, "") : (a.kind == 'F' ? "anova" : "welch_t");
     const std::string value = str(s, "value", path, def_value);
     const std::string group = str(s, "group", path, def_group);
+    // The columns are checked here, at the key that names them (the CSV reader's own message
+    // has no JSON path).
+    for (const auto& [key, name] : {std::pair{"value", value}, std::pair{"group", group}})
+      if (!has_column(table, name))
+        throw InputError(at(json::path_key(s.contains(key) ? path : "$", key)),
+                         no_column(table, name));
     std::vector<WhereFilter> where;
+    const std::string where_path = json::path_key(path, "where");
     if (s.contains("where")) {
       if (!s["where"].is_array())
-        throw InputError(at(path + ".where"), "expected an array of \"COL=VALUE\" strings");
+        throw InputError(at(where_path), "expected an array of \"COL=VALUE\" strings");
       for (size_t k = 0; k < s["where"].size(); ++k) {
         const auto& w = s["where"][k];
-        const std::string wp = json::path_index(path + ".where", k);
-        if (!w.is_string() || w.get<std::string>().find('=') == std::string::npos ||
-            w.get<std::string>().find('=') == 0)
+        const std::string wp = json::path_index(where_path, k);
+        const bool text = w.is_string() && w.get<std::string>().find('=') != std::string::npos;
+        const WhereFilter f = text ? parse_where(w) : WhereFilter{};
+        if (f.column.empty())  // not a string, no '=', or nothing before it
           throw InputError(at(wp), "expected a \"COL=VALUE\" string, got " + w.dump());
-        where.push_back(parse_where(w));
+        if (!has_column(table, f.column)) throw InputError(at(wp), no_column(table, f.column));
+        where.push_back(f);
       }
+      // group_table would say "no data rows match the --where filters": a flag recheck does
+      // not have.
+      if (!where.empty() && filter_rows(table, where).empty())
+        throw InputError(at(where_path), no_row_matches(table, where, s["where"].dump()));
     }
     const bool f_test = item.test == "anova" || item.test == "welch_anova";
     const bool t_test = item.test == "welch_t" || item.test == "student_t";

@@ -14,6 +14,7 @@
 
 #include "analysis/csv.hpp"
 #include "common/input_error.hpp"
+#include "protocols/measures.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/power.hpp"
 
@@ -100,12 +101,32 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   std::vector<Key> order;
   std::map<Key, int> undefined;
   std::map<Key, std::vector<int>> value_lines, undefined_lines;
+  std::map<Key, int> measure_column;
   // (participant, cell) -> the line it was first given on: one value per participant and cell.
   std::map<std::pair<std::string, Key>, int> seen;
+  // participant -> (group, line of its first row): groups are between-participant, so a
+  // participant in two groups (a typo in either column, or ids reused across groups) would be
+  // counted in both.
+  std::map<std::string, std::pair<std::string, int>> group_of;
+  // Where field `c` of row `r` starts (the row's start for tables without field positions).
+  auto at = [&](std::size_t r, int c) {
+    const std::size_t f = r * t.header.size() + c;
+    return f < t.field_line.size() ? SourceLocation{csv_path, t.field_line[f], t.field_column[f]}
+                                   : SourceLocation{csv_path, t.line[r], 0};
+  };
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const int s = session_number(t, r, col[2]);
     auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], s, t.rows[r][col[3]]);
     const std::string& participant = t.rows[r][col[5]];
+    if (auto [it, fresh] =
+            group_of.emplace(participant, std::make_pair(std::get<0>(key), t.line[r]));
+        !fresh && it->second.first != std::get<0>(key))
+      throw InputError(at(r, col[0]), "participant \"" + participant + "\" is in group \"" +
+                                          std::get<0>(key) + "\" here but in group \"" +
+                                          it->second.first + "\" on line " +
+                                          std::to_string(it->second.second) +
+                                          "; expected each participant in one group (groups are "
+                                          "between-participant: ids must be unique across groups)");
     if (auto [it, fresh] = seen.emplace(std::make_pair(participant, key), t.line[r]); !fresh)
       throw InputError(SourceLocation{csv_path, t.line[r], 1},
                        "participant " + participant + ", group " + std::get<0>(key) + ", phase " +
@@ -115,7 +136,8 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
                            "); expected one value per participant, session and measure");
     // An undefined measure (empty or NA, as `palplab export` and R write it) is no value.
     const std::string& field = t.rows[r][col[4]];
-    if (!values.count(key)) order.push_back(key), first_line[key] = t.line[r];
+    if (!values.count(key))
+      order.push_back(key), first_line[key] = t.line[r], measure_column[key] = at(r, col[3]).column;
     if (field.find_first_not_of(" \t") == std::string::npos || field == "NA") {
       ++undefined[key];
       values[key];
@@ -123,12 +145,9 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
       continue;
     }
     const double v = analysis::parse_number(t, static_cast<int>(r), col[4]);
-    if (const std::string expected = out_of_range(std::get<3>(key), v); !expected.empty()) {
-      const std::size_t f = r * t.header.size() + col[4];
-      throw InputError(
-          SourceLocation{csv_path, t.field_line[f], t.field_column[f]},
-          "column 'value': " + std::get<3>(key) + " must be " + expected + ", got " + field);
-    }
+    if (const std::string expected = out_of_range(std::get<3>(key), v); !expected.empty())
+      throw InputError(at(r, col[4]), "column 'value': " + std::get<3>(key) + " must be " +
+                                          expected + ", got " + field);
     values[key].push_back(v);
     value_lines[key].push_back(t.line[r]);
   }
@@ -140,12 +159,43 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
                 std::get<3>(key), static_cast<int>(v.size()), undefined[key]};
     c.file = csv_path;
     c.line = first_line[key];
+    c.measure_column = measure_column[key];
     c.value_lines = value_lines[key];
     c.undefined_lines = undefined_lines[key];
     mean_sd(v, c.mean, c.sd);  // only cells with n >= 2 are fitted (checked by calibrate)
     cells.push_back(c);
   }
   return cells;
+}
+
+std::string not_compared_reason(const CellFit& f) {
+  if (f.n_sim >= 2) return "";
+  const std::string total = std::to_string(f.n_sim + f.undefined);
+  return f.n_sim == 0
+             ? "no simulated participant produced this measure: all " + total + " undefined"
+             : "only 1 of " + total +
+                   " simulated participants produced this measure: an SD needs 2";
+}
+
+std::vector<std::string> produced_measures(const Study& study) {
+  std::vector<std::string> out = study.measures;
+  auto add = [&](const std::string& m) {
+    if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
+  };
+  for (const auto& m : default_measures(study.task.kind)) add(m);
+  // The names every session of the task writes, from the functions that compute them (a
+  // session without samples or events: all undefined or 0, but every name is there).
+  const results::SampleSeries no_samples;
+  const std::vector<results::EventRecord> no_events;
+  const std::vector<int> no_regions;
+  MeasureInputs in;
+  in.samples = &no_samples;
+  in.events = &no_events;
+  in.vertex_region = &no_regions;
+  for (const auto& m : study.task.kind == "needle_insertion" ? compute_needle_measures(no_events)
+                                                             : compute_measures(in))
+    add(m.name);
+  return out;
 }
 
 double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int jobs,
@@ -348,9 +398,28 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   CalibrationResult r;
   r.keys = opt.keys;
   const std::vector<std::string>& measures = opt.measures.empty() ? study.measures : opt.measures;
+  // Cells of measures not fitted are ignored (docs/PARTICIPANTS.md: --measures selects), but
+  // only measures the study produces: any other (a typo, another task's measure) would be
+  // ignored silently, so it is an error at its first row.
+  const std::vector<std::string> produced = produced_measures(study);
   std::vector<HumanCell> used;
-  for (const auto& c : cells)
-    if (std::find(measures.begin(), measures.end(), c.measure) != measures.end()) used.push_back(c);
+  for (const auto& c : cells) {
+    if (std::find(produced.begin(), produced.end(), c.measure) == produced.end()) {
+      int rows = 0;
+      for (const auto& o : cells)
+        if (o.measure == c.measure) rows += o.n + o.undefined;
+      throw InputError(
+          SourceLocation{c.file, c.line, c.measure_column},
+          "column 'measure': \"" + c.measure + "\" is not a measure the study " + study.file +
+              " produces (" +
+              (rows == 1 ? std::string("1 row") : std::to_string(rows) + " rows, the first here") +
+              "); expected one of: " + join(produced));
+    }
+    if (std::find(measures.begin(), measures.end(), c.measure) != measures.end())
+      used.push_back(c);
+    else if (std::find(r.not_fitted.begin(), r.not_fitted.end(), c.measure) == r.not_fitted.end())
+      r.not_fitted.push_back(c.measure);
+  }
   if (used.empty()) {
     std::vector<std::string> in_data;
     for (const auto& c : cells)
@@ -488,20 +557,29 @@ void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
 }
 
 nlohmann::json to_json(const CalibrationResult& r) {
+  // A number that is not finite is written as null (never NaN, which is no JSON); a cell whose
+  // simulated moments are undefined says why in "not_compared".
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
   auto fits = [&](const std::vector<CellFit>& v) {
     nlohmann::json a = nlohmann::json::array();
-    for (const auto& f : v)
-      a.push_back(
-          {{"group", f.human.group},
-           {"phase", f.human.phase},
-           {"session", f.human.session},
-           {"measure", f.human.measure},
-           {"human", {{"n", f.human.n}, {"mean", f.human.mean}, {"sd", f.human.sd}}},
-           {"simulated",
-            {{"n", f.n_sim}, {"undefined", f.undefined}, {"mean", num(f.mean)}, {"sd", num(f.sd)}}},
-           {"z_mean", num(f.z_mean)},
-           {"z_sd", num(f.z_sd)}});
+    for (const auto& f : v) {
+      nlohmann::json cell = {
+          {"group", f.human.group},
+          {"phase", f.human.phase},
+          {"session", f.human.session},
+          {"measure", f.human.measure},
+          {"human",
+           {{"n", f.human.n},
+            {"undefined", f.human.undefined},
+            {"mean", num(f.human.mean)},
+            {"sd", num(f.human.sd)}}},
+          {"simulated",
+           {{"n", f.n_sim}, {"undefined", f.undefined}, {"mean", num(f.mean)}, {"sd", num(f.sd)}}},
+          {"z_mean", num(f.z_mean)},
+          {"z_sd", num(f.z_sd)}};
+      if (const std::string why = not_compared_reason(f); !why.empty()) cell["not_compared"] = why;
+      a.push_back(std::move(cell));
+    }
     return a;
   };
   nlohmann::json fitted = nlohmann::json::object(), se = nlohmann::json::object(),
@@ -515,8 +593,9 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"fitted", fitted},
           {"standard_errors", se},
           {"start", start},
-          {"loss_before", r.loss_before},
-          {"loss_after", r.loss_after},
+          {"loss_before", num(r.loss_before)},
+          {"loss_after", num(r.loss_after)},
+          {"measures_not_fitted", r.not_fitted},
           {"standard_errors_computed", r.se_computed},
           {"evaluations", r.evaluations},
           {"restarts", r.restarts},
@@ -542,17 +621,44 @@ std::string to_text(const CalibrationResult& r) {
                 r.loss_before, r.loss_after, r.evaluations, r.restarts);
   o << buf;
   o << "fit per group and measure (human mean ± SD vs simulated; z in SE units):\n";
+  // "mean ± SD" in a fixed width, or "undefined" (explained on a line below the cell's).
+  auto moments = [](const CellFit& f) {
+    char m[64];
+    if (std::isfinite(f.mean) && std::isfinite(f.sd))
+      std::snprintf(m, sizeof m, "%8.3f ± %-7.3f", f.mean, f.sd);
+    else
+      std::snprintf(m, sizeof m, "%-18s", "undefined");
+    return std::string(m);
+  };
   for (std::size_t i = 0; i < r.fit_after.size(); ++i) {
     const CellFit& b = r.fit_before[i];
     const CellFit& f = r.fit_after[i];
-    std::snprintf(buf, sizeof buf,
-                  "  %-4s %-18s %-18s human %8.3f ± %-7.3f before %8.3f ± %-7.3f after %8.3f ± "
-                  "%-7.3f z_mean %6.2f z_sd %6.2f%s\n",
-                  f.human.group.c_str(), f.human.phase.c_str(), f.human.measure.c_str(),
-                  f.human.mean, f.human.sd, b.mean, b.sd, f.mean, f.sd, f.z_mean, f.z_sd,
-                  f.undefined ? (" (" + std::to_string(f.undefined) + " undefined)").c_str() : "");
-    o << buf;
+    char z[64];
+    if (std::isfinite(f.z_mean) && std::isfinite(f.z_sd))
+      std::snprintf(z, sizeof z, "z_mean %6.2f z_sd %6.2f", f.z_mean, f.z_sd);
+    else
+      std::snprintf(z, sizeof z, "z not computed");
+    // Names from the CSV may be of any length: padded, never cut.
+    auto pad = [](const std::string& x, std::size_t w) {
+      return x.size() < w ? x + std::string(w - x.size(), ' ') : x;
+    };
+    std::snprintf(buf, sizeof buf, "%8.3f ± %-7.3f", f.human.mean, f.human.sd);
+    o << "  " << pad(f.human.group, 4) << " " << pad(f.human.phase, 18) << " "
+      << pad(f.human.measure, 18) << " human " << buf << " before " << moments(b) << " after "
+      << moments(f) << " " << z;
+    if (f.undefined) o << " (" << f.undefined << " undefined)";
+    o << "\n";
+    const std::string why_before = not_compared_reason(b), why_after = not_compared_reason(f);
+    if (!why_before.empty() && why_before == why_after)
+      o << "       before and after: undefined (" << why_after << ")\n";
+    else {
+      if (!why_before.empty()) o << "       before: undefined (" << why_before << ")\n";
+      if (!why_after.empty()) o << "       after: undefined (" << why_after << ")\n";
+    }
   }
+  if (!r.not_fitted.empty())
+    o << "not fitted (in the human data, ignored; choose with --measures): " << join(r.not_fitted)
+      << "\n";
   return o.str();
 }
 

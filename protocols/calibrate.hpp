@@ -36,6 +36,7 @@ struct HumanCell {
   double mean = 0.0, sd = 0.0;
   std::string file;  // the CSV and the line of the cell's first row, for messages
   int line = 0;
+  int measure_column = 0;  // the column of that row's measure field (0: unknown)
   std::vector<int> value_lines, undefined_lines;  // the lines of its values / undefined rows
 };
 
@@ -43,9 +44,10 @@ struct HumanCell {
 // (empty or NA values, i.e. undefined measures, are left out);
 // InputError with the line for missing columns, a session that is not a positive integer,
 // non-numbers, a value outside its measure's range (feature_identified 0 or 1, accuracy 0–100 %,
-// counts whole numbers >= 0, forces, times and distances >= 0) or a (participant, group, phase,
-// session, measure) given twice. Cells with fewer than 2 values are kept: calibrate() refuses
-// them among the cells it fits.
+// counts whole numbers >= 0, forces, times and distances >= 0), a (participant, group, phase,
+// session, measure) given twice or a participant given in two groups (groups are
+// between-participant). Cells with fewer than 2 values are kept: calibrate() refuses them among
+// the cells it fits. Measures are checked against the study by calibrate().
 std::vector<HumanCell> read_human_cells(const std::string& csv_path);
 
 struct CellFit {
@@ -54,6 +56,15 @@ struct CellFit {
   double mean = 0.0, sd = 0.0;  // simulated
   double z_mean = 0.0, z_sd = 0.0;
 };
+
+// Why a cell's simulated moments (and so its z) are undefined: "" when n_sim >= 2, else e.g.
+// "no simulated participant produced this measure: all 3 undefined".
+std::string not_compared_reason(const CellFit& f);
+
+// The measures a session of `study` writes (its declared measures and every measure its task's
+// sessions compute, e.g. palpations and sft_reached beside the palpation measures): the
+// measures a tidy CSV of this study (`palplab export`) can hold.
+std::vector<std::string> produced_measures(const Study& study);
 
 // Simulates `study` and compares it with `cells`; returns the loss (see above).
 double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int jobs,
@@ -95,10 +106,15 @@ struct CalibrationResult {
   int evaluations = 0, restarts = 0;
   std::vector<CellFit> fit_before, fit_after;
   nlohmann::json parameters;  // the study's parameters with the fitted values applied
+  // Measures of the study found in the human data but not fitted (their cells are ignored;
+  // --measures selects), in order of first appearance.
+  std::vector<std::string> not_fitted;
 };
 
-// Before any simulation, InputError (with the CSV line) for a fitted cell (one of the measures
-// to fit) whose group, phase or session the study lacks or that has fewer than 2 values.
+// Before any simulation, InputError (with the CSV line) for a cell of a measure the study does
+// not produce (produced_measures(); a typo would otherwise be ignored silently) and for a fitted
+// cell (one of the measures to fit) whose group, phase or session the study lacks or that has
+// fewer than 2 values.
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
                             const CalibrateOptions& opt);
 

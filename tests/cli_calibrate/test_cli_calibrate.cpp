@@ -288,3 +288,108 @@ TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
   EXPECT_TRUE(fs::exists(d / "fit.json"));
   fs::remove_all(d);
 }
+
+// Review findings: rows of a measure the study does not produce (a typo such as
+// "palpation_forc", another task's measure) were ignored silently, like the cells of measures
+// not fitted; a participant given in two groups was counted in both.
+TEST(Calibrate, UnknownMeasuresAndParticipantsInTwoGroupsAreRefused) {
+  using palplab::testing::expect_exit2;
+  using palplab::testing::has;
+  auto d = scratch_dir("calibrate_rows");
+  const std::string h = (d / "h.csv").string(), study = data("recovery_study.json").string();
+  auto run = [&](const std::string& csv_text, const std::string& args) {
+    std::ofstream(h, std::ios::trunc) << csv_text;
+    return run_palplab("calibrate " + study + " --human " + h +
+                           " --params weber_fraction --budget 1 --no-se --quiet --out " +
+                           (d / "fit.json").string() + " " + args,
+                       d);
+  };
+  const std::string known =
+      "expected one of: palpation_force, exploration_time, feature_identified, accuracy, "
+      "palpations, sft_reached";
+  // A misspelt measure: its first row and field, the count, the measures the study produces.
+  Result r = run(kHumanHeader + kHumanRows +
+                     "H1,G1,test,1,palpation_forc,2.4\nH3,G2,test,1,palpation_forc,2.5\n",
+                 "");
+  expect_exit2(r, {h + ":6:14: column 'measure': \"palpation_forc\" is not a measure the study " +
+                   study + " produces (2 rows, the first here); " + known});
+  EXPECT_FALSE(has(r.err, "evaluation")) << "the fit ran first: " << r.err;
+  EXPECT_FALSE(fs::exists(d / "fit.json"));
+  // Also when it is not among the measures to fit (it was ignored as "not fitted"), and for a
+  // measure of another task (needle insertion) in a palpation study.
+  r = run(kHumanHeader + kHumanRows + "H2,G1,test,1,insertion_attempts,3\n",
+          "--measures palpation_force");
+  expect_exit2(r, {h +
+                   ":6:14: column 'measure': \"insertion_attempts\" is not a measure the "
+                   "study " +
+                   study + " produces (1 row); " + known});
+  EXPECT_FALSE(fs::exists(d / "fit.json"));
+  // A participant in two groups: the conflicting row's group field and the first group's line.
+  r = run(kHumanHeader + kHumanRows + "H1,G2,test,1,exploration_time,30\n", "");
+  expect_exit2(r, {h + ":6:4: participant \"H1\" is in group \"G2\" here but in group \"G1\" on "
+                       "line 2; expected each participant in one group"});
+  EXPECT_FALSE(fs::exists(d / "fit.json"));
+  // Measures the study produces but does not fit are still ignored (documented: --measures
+  // selects), and the output names them instead of dropping them silently.
+  r = run(kHumanHeader + kHumanRows + "H1,G1,test,1,palpations,4\nH2,G1,test,1,sft_reached,0\n",
+          "");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_TRUE(has(r.out,
+                  "not fitted (in the human data, ignored; choose with --measures): "
+                  "palpations, sft_reached\n"))
+      << r.out;
+  const auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_EQ(fit["measures_not_fitted"], nlohmann::json({"palpations", "sft_reached"}))
+      << fit.dump(1);
+  fs::remove_all(d);
+}
+
+// Review finding: a cell no virtual participant produced a value for (here exploration_time and
+// palpation_force in a 1 s session, too short to find the feature) printed "before nan ± nan
+// after nan ± nan z_mean nan z_sd nan"; it now says why, and the JSON has null with the reason.
+TEST(Calibrate, UndefinedSimulatedCellsSayWhyNeverNan) {
+  using palplab::testing::has;
+  auto d = scratch_dir("calibrate_undefined");
+  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
+  study["phases"][0]["session_duration"] = 1;
+  study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
+  std::ofstream(d / "short.json") << study.dump(1);
+  std::ofstream(d / "h.csv") << kHumanHeader + kHumanRows +
+                                    "H1,G1,test,1,exploration_time,12\n"
+                                    "H2,G1,test,1,exploration_time,14\n"
+                                    "H3,G2,test,1,exploration_time,10\n"
+                                    "H4,G2,test,1,exploration_time,11\n";
+  const Result r = run_palplab(
+      "calibrate " + (d / "short.json").string() + " --human " + (d / "h.csv").string() +
+          " --params weber_fraction --budget 1 --no-se --quiet --sim-n 3 --out " +
+          (d / "fit.json").string(),
+      d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_FALSE(has(r.out, "nan")) << r.out;
+  EXPECT_FALSE(has(r.out, "inf")) << r.out;
+  EXPECT_TRUE(has(r.out,
+                  "  G1   test               exploration_time   human   13.000 ± 1.414   before "
+                  "undefined          after undefined          z not computed (3 undefined)\n"
+                  "       before and after: undefined (no simulated participant produced this "
+                  "measure: all 3 undefined)\n"))
+      << r.out;
+  const std::string text = slurp(d / "fit.json");
+  EXPECT_FALSE(has(text, "NaN")) << text;
+  EXPECT_FALSE(has(text, "nan")) << text;
+  const auto fit = nlohmann::json::parse(text);
+  ASSERT_EQ(fit["fit_after"].size(), 4u) << text;
+  for (const auto& cells : {fit["fit_before"], fit["fit_after"]})
+    for (const auto& c : cells) {
+      EXPECT_TRUE(c["simulated"]["mean"].is_null()) << c.dump();
+      EXPECT_TRUE(c["simulated"]["sd"].is_null()) << c.dump();
+      EXPECT_TRUE(c["z_mean"].is_null()) << c.dump();
+      EXPECT_TRUE(c["z_sd"].is_null()) << c.dump();
+      EXPECT_EQ(c["simulated"]["n"], 0) << c.dump();
+      EXPECT_EQ(c["simulated"]["undefined"], 3) << c.dump();
+      EXPECT_EQ(c["not_compared"],
+                "no simulated participant produced this measure: all 3 undefined")
+          << c.dump();
+      EXPECT_EQ(c["human"]["n"], 2) << c.dump();
+    }
+  fs::remove_all(d);
+}

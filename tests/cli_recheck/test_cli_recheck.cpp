@@ -229,3 +229,48 @@ TEST(CliRecheck, UndefinedStatisticsAreNotRecomputableNeverNan) {
   std::filesystem::remove(csv);
   std::filesystem::remove(rep);
 }
+
+// Review finding: "where" entries that keep no row were "unequal.csv: no data rows match the
+// --where filters": recheck has no --where flag (the filters are the statistic's "where" key),
+// and the message named neither the statistic nor what the column holds. A filter (or "value",
+// "group") on a column the CSV lacks was located at the CSV's header, not at the JSON key.
+TEST(CliRecheck, WhereMatchingNoRowNamesTheKeyNotAFlag) {
+  using palplab::testing::expect_exit2;
+  using palplab::testing::has;
+  const std::string csv_path = src("tests/data/r/unequal.csv");
+  struct Case {
+    const char* json;
+    std::vector<std::string> parts;
+  };
+  const std::vector<Case> cases = {
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002","where":["phase=nosuch"]}]})",
+       {":1:93: $.statistics[0].where: no row of " + csv_path +
+        " matches [\"phase=nosuch\"] (32 data rows; entries on the same column are "
+        "alternatives, entries on different columns must all hold); column 'phase' holds "
+        "'post', 'pre'"}},
+      // Each filter matches rows, both together none.
+      {R"({"value":"force","group":"group","statistics":[{"id":"a","text":"F(2, 13) = 11.05, p = .002"},{"text":"F(2, 13) = 11.05, p = .002","where":["phase=post","group=Z"]}]})",
+       {": $.statistics[1].where: no row of " + csv_path + " matches [\"phase=post\",\"group=Z\"]",
+        "column 'phase' holds 'post', 'pre'; column 'group' holds 'A', 'B', 'C'"}},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002","where":["phase=post","nocol=x"]}]})",
+       {": $.statistics[0].where[1]: no column 'nocol' in " + csv_path +
+        "; its columns are: 'group', 'force', 'phase'"}},
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002","where":[" =x"]}]})",
+       {": $.statistics[0].where[0]: expected a \"COL=VALUE\" string, got \" =x\""}},
+      {R"({"value":"forc","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002"}]})",
+       {":1:10: $.value: no column 'forc' in " + csv_path}},
+      {R"({"value":"force","statistics":[{"text":"F(2, 13) = 11.05, p = .002","group":"grp"}]})",
+       {": $.statistics[0].group: no column 'grp' in " + csv_path}},
+  };
+  for (const auto& c : cases) {
+    const std::string f = write_temp("where.json", c.json);
+    for (const char* json_flag : {"", " --json"}) {
+      const Result r = run_palplab("recheck " + f + " --csv " + csv_path + json_flag);
+      expect_exit2(r, {"error: " + f});
+      for (const auto& p : c.parts) EXPECT_TRUE(has(r.err, p)) << c.json << "\n" << r.err;
+      EXPECT_FALSE(has(r.err, "--where")) << r.err;
+      EXPECT_TRUE(r.out.empty()) << r.out;
+    }
+    std::filesystem::remove(f);
+  }
+}
