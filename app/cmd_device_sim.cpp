@@ -152,10 +152,10 @@ std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& p
   return w;
 }
 
+// The numeric flags are range-checked by their validators (app/command.hpp: NaN, inf and values
+// out of range are exit 2 naming the flag); run_device_sim checks what depends on the script.
 int run_device_sim(const SimArgs& a) {
   using Clock = std::chrono::steady_clock;
-  if (a.port < 1 || a.port > 65535) throw InputError("--port: expected 1..65535");
-  if (!(a.rate >= 1.0 && a.rate <= 10000.0)) throw InputError("--rate: expected 1..10000 Hz");
   std::vector<std::pair<double, Eigen::Vector3d>> path = {{0.0, Eigen::Vector3d::Zero()}};
   StylusScript stylus;
   if (!a.script.empty()) path = read_script(a.script, stylus);
@@ -171,10 +171,23 @@ int run_device_sim(const SimArgs& a) {
     stylus.axis = {{0.0, unit_axis(a.axis[0], a.axis[1], a.axis[2], "--axis")}};
   }
   const bool with_axis = !stylus.axis.empty();
+  // Without --duration the run lasts to the script's end + 0.1 s, which must be in (0, 3600] s.
   const double duration = a.duration >= 0 ? a.duration : path.back().first + 0.1;
-  if (!(duration > 0.0) || duration > 3600.0) throw InputError("--duration: expected (0, 3600] s");
-  const double stop = a.stop_after >= 0 ? std::min(a.stop_after, duration) : duration;
-  if (!(a.linger >= 0.0) || a.linger > 10.0) throw InputError("--linger: expected [0, 10] s");
+  if (!(duration > 0.0) || duration > 3600.0)
+    throw InputError(
+        SourceLocation{a.script},
+        "the script ends at " + app::shown_number(path.back().first) +
+            " s: the run to its end + 0.1 s must last (0, 3600] s (or give --duration)");
+  // --stop-after past the end of the run would never stop the sending: refused, not clamped.
+  if (a.stop_after > duration)
+    throw InputError(SourceLocation{"--stop-after"},
+                     app::shown_number(a.stop_after) + " s is after the end of the run at " +
+                         app::shown_number(duration) + " s (" +
+                         (a.duration >= 0 ? "--duration)"
+                                          : "the script's end + 0.1 s; give --duration to run "
+                                            "longer)") +
+                         ": expected at most that");
+  const double stop = a.stop_after >= 0 ? a.stop_after : duration;
   engine::ScriptedDevice hand(path);
 
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
@@ -296,27 +309,37 @@ palplab::app::CommandRegistration reg{
       auto* cmd = root.add_subcommand(
           "device-sim", "Play a scripted hand over the UDP device protocol (for tests)");
       auto a = std::make_shared<SimArgs>();
-      cmd->add_option("--port", a->port, "palplab's UDP port on 127.0.0.1")->required();
+      using palplab::app::finite_range;
+      // -1 (duration, stop_after) means "not given": the validators refuse every negative value.
+      cmd->add_option("--port", a->port, "palplab's UDP port on 127.0.0.1")
+          ->required()
+          ->check(palplab::app::count_range(1, 65535));
       cmd->add_option("--script", a->script, "JSON {\"waypoints\": [[t, x, y, z], ...]} (s, m)");
-      cmd->add_option("--rate", a->rate, "Position datagrams per second (default 1000)");
-      cmd->add_option("--duration", a->duration, "Seconds to run (default: script end + 0.1)");
-      cmd->add_option("--stop-after", a->stop_after,
-                      "Stop sending after S seconds and measure the force-off latency");
+      cmd->add_option("--rate", a->rate, "Position datagrams per second (default 1000)")
+          ->check(finite_range(1, 10000));
+      cmd->add_option("--duration", a->duration, "Seconds to run (default: script end + 0.1)")
+          ->check(finite_range(0, 3600, true));
+      auto* stop_opt =
+          cmd->add_option("--stop-after", a->stop_after,
+                          "Stop sending after S seconds and measure the force-off latency")
+              ->check(finite_range(0, 3600, true));
       auto* linger_opt = cmd->add_option("--linger", a->linger,
-                                         "Seconds to listen after --stop-after (default 0.1)");
+                                         "Seconds to listen after --stop-after (default 0.1)")
+                             ->check(finite_range(0, 10));
       cmd->add_flag("--json", a->json, "Print the summary as JSON");
       cmd->add_flag("--start-on-force", a->start_on_force,
                     "Hold the first waypoint until forces arrive, then start the script");
       auto* wait_opt =
-          cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)");
+          cmd->add_option("--wait", a->wait, "With --start-on-force: seconds to wait (default 30)")
+              ->check(finite_range(0, 3600, true));
       cmd->add_option("--buttons", a->buttons,
                       "Constant button mask in every datagram (bit 1 = a needle scene's needle)")
           ->check(palplab::app::count_range(0, 4294967295));
       cmd->add_option("--axis", a->axis,
                       "Constant stylus axis AX AY AZ (handle -> tip; sends type-3 datagrams)")
           ->expected(3);
-      cmd->callback([a, linger_opt, wait_opt, code] {
-        palplab::app::flag_only_with(linger_opt, a->stop_after >= 0, "--stop-after");
+      cmd->callback([a, stop_opt, linger_opt, wait_opt, code] {
+        palplab::app::flag_only_with(linger_opt, stop_opt->count() > 0, "--stop-after");
         palplab::app::flag_only_with(wait_opt, a->start_on_force, "--start-on-force");
         *code = run_device_sim(*a);
       });

@@ -17,7 +17,6 @@
 #include "app/command.hpp"
 #include "app/scene_option.hpp"
 #include "common/input_error.hpp"
-#include "common/json_check.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
@@ -33,13 +32,7 @@ struct ProbeArgs {
 
 int run_probe(const ProbeArgs& a) {
   using namespace palplab;
-  if (!(a.force > 0.0) || !(a.force <= 100.0))
-    throw InputError("--force: expected a force in N in (0, 100], got " +
-                     json::Checker::fmt(a.force));
-  if (!(a.duration >= 0.0) || a.duration > 3600)
-    throw InputError("--duration: expected a hold time in s in [0, 3600]");
-  if (!(a.release >= 0.0) || a.release > 3600)
-    throw InputError("--release: expected a time in s in [0, 3600]");
+  // --force, --duration and --release are range-checked by their validators (app/command.hpp).
   engine::SceneOverrides ov;
   if (!a.integrator.empty()) {
     if (a.integrator != "symplectic_euler" && a.integrator != "backward_euler" &&
@@ -155,10 +148,18 @@ palplab::app::CommandRegistration reg{
       palplab::app::add_scene_option(cmd, a->scene, false);
       cmd->add_option("--press", a->press, "Region name or surface node index to press")
           ->required();
-      cmd->add_option("--force", a->force, "Target device force (N), in (0, 100]")->required();
-      cmd->add_option("--duration", a->duration, "Hold time at the target force (s)")->required();
+      // Validators that refuse NaN and inf and echo the value given ("--force nan" printed
+      // "got null", the JSON spelling of NaN).
+      using palplab::app::finite_range;
+      cmd->add_option("--force", a->force, "Target device force (N), in (0, 100]")
+          ->required()
+          ->check(finite_range(0, 100, true));
+      cmd->add_option("--duration", a->duration, "Hold time at the target force (s)")
+          ->required()
+          ->check(finite_range(0, 3600));
       cmd->add_option("--release", a->release,
-                      "Time to keep simulating after withdrawal (s), default 1");
+                      "Time to keep simulating after withdrawal (s), default 1")
+          ->check(finite_range(0, 3600));
       cmd->add_option("--integrator", a->integrator,
                       "symplectic_euler | backward_euler | rk4 (mass-spring models)");
       cmd->add_flag("--json", a->json, "Print JSON");

@@ -68,13 +68,16 @@ int run_render(const RenderArgs& a) {
       cam.distance = c[2];
     }
   }
+  // --force (0 = not given) and --hold are range-checked by their validators (app/command.hpp).
   if (a.press.empty() != (a.force == 0.0))
     throw InputError("--press and --force go together (REGION_OR_NODE and a force in N)");
-  if (!a.press.empty() && (!(a.force > 0.0) || a.force > 100.0))
-    throw InputError("--force: expected a force in (0, 100] N, got " + json::Checker::fmt(a.force));
-  if (!(a.hold >= 0.0) || a.hold > 60.0)
-    throw InputError("--hold: expected a time in [0, 60] s, got " + json::Checker::fmt(a.hold));
+  if (!a.transparent.empty() && !(a.transparent_alpha >= 0.0 && a.transparent_alpha < 1.0))
+    throw InputError("--transparent-alpha: expected an opacity in [0, 1), got " +
+                     app::shown_number(a.transparent_alpha));
   engine::Scene scene = prototypes::build_scene(a.file);
+  const auto& g = scene.geometry();
+  std::string region_list;  // for the messages on unknown regions
+  for (const auto& n : g.region_names) region_list += (region_list.empty() ? "" : ", ") + n;
   render::StillOptions opt;
   if (!a.press.empty()) {
     render::PressedStill p;
@@ -92,12 +95,9 @@ int run_render(const RenderArgs& a) {
               << " s; visible deformation " << p.visible_deformation * 1e3 << " mm\n";
   }
   if (!a.look_at.empty()) {
-    const auto& g = scene.geometry();
-    if (g.region_index(a.look_at) < 0) {
-      std::string names;
-      for (const auto& n : g.region_names) names += (names.empty() ? "" : ", ") + n;
-      throw InputError("--look-at: unknown region \"" + a.look_at + "\" (regions: " + names + ")");
-    }
+    if (g.region_index(a.look_at) < 0)
+      throw InputError("--look-at: unknown region \"" + a.look_at + "\" (regions: " + region_list +
+                       ")");
     cam.target = g.region_centroid(a.look_at);
   }
   opt.wireframe = a.wireframe;
@@ -105,16 +105,23 @@ int run_render(const RenderArgs& a) {
     const auto eq = s.find('=');
     if (eq == std::string::npos || eq == 0)
       throw InputError("--alpha: \"" + s + "\": expected REGION=OPACITY, e.g. body=0.4");
+    // The region and the opacity are checked here, so that the message names the flag (the
+    // renderer's own check, render::region_alpha_vector, does not know where they came from).
+    const std::string region = s.substr(0, eq);
     const auto v = parse_numbers("--alpha", s.substr(eq + 1), ',', 1, 1, "an opacity in [0, 1]");
-    opt.region_alpha[s.substr(0, eq)] = static_cast<float>(v[0]);
+    if (v[0] < 0.0 || v[0] > 1.0)
+      throw InputError("--alpha: \"" + s + "\": expected an opacity in [0, 1], got " +
+                       app::shown_number(v[0]));
+    if (region != "*" && g.region_index(region) < 0)
+      throw InputError("--alpha: \"" + s + "\": unknown region \"" + region +
+                       "\" (regions: " + region_list + ", or * for every region)");
+    if (opt.region_alpha.count(region))
+      throw InputError("--alpha: region \"" + region + "\" given twice (give each region once)");
+    opt.region_alpha[region] = static_cast<float>(v[0]);
   }
   // --transparent TISSUE[,..]: those regions see-through ("soft" = a needle scene's soft
   // tissues, what the transparency cue shows), so bone and target show through (--alpha wins).
   if (!a.transparent.empty()) {
-    if (!(a.transparent_alpha >= 0.0 && a.transparent_alpha < 1.0))
-      throw InputError("--transparent-alpha: expected an opacity in [0, 1), got " +
-                       json::Checker::fmt(a.transparent_alpha));
-    const auto& g = scene.geometry();
     std::stringstream ss(a.transparent);
     std::string name;
     while (std::getline(ss, name, ',')) {
@@ -127,12 +134,9 @@ int run_render(const RenderArgs& a) {
           opt.region_alpha.emplace(g.region_names[r], static_cast<float>(a.transparent_alpha));
         continue;
       }
-      if (g.region_index(name) < 0) {
-        std::string names;
-        for (const auto& n : g.region_names) names += (names.empty() ? "" : ", ") + n;
+      if (g.region_index(name) < 0)
         throw InputError("--transparent: unknown tissue/region \"" + name +
-                         "\" (regions: " + names + (g.tissues ? ", or soft" : "") + ")");
-      }
+                         "\" (regions: " + region_list + (g.tissues ? ", or soft" : "") + ")");
       opt.region_alpha.emplace(name, static_cast<float>(a.transparent_alpha));
     }
   }
@@ -171,9 +175,12 @@ palplab::app::CommandRegistration reg{
       auto* talpha_opt = cmd->add_option("--transparent-alpha", a->transparent_alpha,
                                          "Opacity of the --transparent regions (default 0.15)");
       cmd->add_option("--press", a->press, "Region name or surface node index to press");
-      cmd->add_option("--force", a->force, "Target device force of the press (N)");
-      auto* hold_opt = cmd->add_option(
-          "--hold", a->hold, "Time the press holds the force before the still (s, default 0.5)");
+      cmd->add_option("--force", a->force, "Target device force of the press (N), in (0, 100]")
+          ->check(palplab::app::finite_range(0, 100, true));
+      auto* hold_opt =
+          cmd->add_option("--hold", a->hold,
+                          "Time the press holds the force before the still (s, default 0.5)")
+              ->check(palplab::app::finite_range(0, 60));
       cmd->callback([a, talpha_opt, hold_opt, code] {
         palplab::app::flag_only_with(talpha_opt, !a->transparent.empty(), "--transparent");
         palplab::app::flag_only_with(hold_opt, !a->press.empty(), "--press and --force");

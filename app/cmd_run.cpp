@@ -222,13 +222,28 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   if (h.participant.empty()) throw InputError("--human needs --participant ID");
   if (ro.resume || ro.force)
     throw InputError("--human continues or creates the database by itself; drop --resume/--force");
+  // Everything the arguments name is checked here, before run_human creates (or opens) the
+  // database: a bad --device left a fresh database behind its exit 2. (--min-device-rate and
+  // --device-lost are range-checked by their validators.)
   const engine::DeviceSpec spec = engine::parse_device_spec(h.device);
   if (!h.mouse_script.empty() && spec.kind != "mouse")
     throw InputError("--mouse-script needs --device mouse");
-  if (!(h.min_rate >= 0.0 && h.min_rate <= 100000.0))
-    throw InputError("--min-device-rate: expected 0..100000 Hz");
-  if (!(h.device_lost > 0.0 && h.device_lost <= 3600.0))
-    throw InputError("--device-lost: expected (0, 3600] s");
+  // A trace is read once, here (a missing or malformed file is exit 2 before any output); each
+  // session replays a copy from its start.
+  auto trace = std::make_shared<engine::Trace>();
+  if (spec.kind == "trace") {
+    *trace = engine::read_trace(spec.file);
+    if (trace->samples.empty())
+      throw InputError(SourceLocation{"--device"},
+                       "\"" + h.device + "\": the trace has no samples (expected a device track)");
+  }
+  // A UDP device is bound and measured once before the database is touched: a port in use or a
+  // bridge that does not send is exit 2 with no output file. (Each session binds it again.)
+  if (spec.kind == "udp") {
+    engine::UdpDevice probe(engine::UdpDeviceOptions{spec.port, 0.002});
+    engine::require_device_rate(probe, spec.text, h.min_rate);
+  }
+  if (!h.record_trace.empty()) app::require_writable_dir("--record-trace", h.record_trace);
   protocols::HumanOptions o;
   o.db = ro.db;
   o.participant = h.participant;
@@ -246,13 +261,13 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
       throw InputError(std::string("PALPLAB_NOW: expected YYYY-MM-DDTHH:MM:SSZ, got \"") + now +
                        "\"");
   }
-  o.make_device = [spec, h]() -> std::unique_ptr<engine::Device> {
+  o.make_device = [spec, h, trace]() -> std::unique_ptr<engine::Device> {
     if (spec.kind == "udp") {
       auto d = std::make_unique<engine::UdpDevice>(engine::UdpDeviceOptions{spec.port, 0.002});
       engine::require_device_rate(*d, spec.text, h.min_rate);
       return d;
     }
-    return std::make_unique<engine::TraceDevice>(engine::read_trace(spec.file));
+    return std::make_unique<engine::TraceDevice>(*trace);
   };
   o.say = [quiet](const std::string& m) {
     if (!quiet) std::printf("%s\n", palplab::escape_controls(m, false).c_str());
@@ -301,17 +316,19 @@ palplab::app::CommandRegistration reg{
       cmd->add_option("--db", opt->db, "Results database to create (SQLite)")->required();
       auto scenes = std::make_shared<std::vector<std::string>>();
       palplab::app::add_scene_option(cmd, *scenes, true);
-      cmd->add_option("--jobs", opt->jobs, "Participants simulated in parallel (threads)")
-          ->check(palplab::app::count_range(1, 1024));
+      auto* jobs_opt =
+          cmd->add_option("--jobs", opt->jobs, "Participants simulated in parallel (threads)")
+              ->check(palplab::app::count_range(1, 1024));
       cmd->add_flag("--resume", opt->resume, "Continue an interrupted run in the same database");
       cmd->add_flag("--force", opt->force, "Replace an existing database");
       cmd->add_flag("--quiet", *quiet, "No progress output");
       cmd->add_option("--samples", *samples, "Store device samples: full (1 kHz) or none")
           ->check(CLI::IsMember({"full", "none"}));
-      cmd->add_option("--max-sessions", opt->max_sessions,
-                      "Stop after this many sessions, at least 1 (continue later with --resume; "
-                      "without the flag: no limit)")
-          ->check(palplab::app::count_range(1, 1000000000));
+      auto* max_sessions_opt =
+          cmd->add_option("--max-sessions", opt->max_sessions,
+                          "Stop after this many sessions, at least 1 (continue later with "
+                          "--resume; without the flag: no limit)")
+              ->check(palplab::app::count_range(1, 1000000000));
       auto human = std::make_shared<HumanArgs>();
       cmd->add_flag("--human", human->human,
                     "Run one participant's due sessions with a person at the device (real time)");
@@ -326,16 +343,23 @@ palplab::app::CommandRegistration reg{
       human_only.push_back(
           cmd->add_option("--size", human->size, "Window size WIDTHxHEIGHT for --device mouse"));
       human_only.push_back(cmd->add_option("--min-device-rate", human->min_rate,
-                                           "Refuse a device below this rate (Hz; default 900)"));
-      human_only.push_back(cmd->add_option(
-          "--device-lost", human->device_lost,
-          "Abort the session after this long without device samples (s; default 2)"));
+                                           "Refuse a device below this rate (Hz; default 900)")
+                               ->check(palplab::app::finite_range(0, 100000)));
+      human_only.push_back(
+          cmd->add_option("--device-lost", human->device_lost,
+                          "Abort the session after this long without device samples (s; "
+                          "default 2)")
+              ->check(palplab::app::finite_range(0, 3600, true)));
       cmd->add_option("--record-trace", human->record_trace,
                       "Write each session's device track to DIR (trace files)");
-      cmd->callback([study, opt, quiet, samples, code, human, scenes, human_only] {
+      // Virtual runs only: with --human they would be silently ignored.
+      const std::vector<const CLI::Option*> virtual_only = {jobs_opt, max_sessions_opt};
+      cmd->callback([study, opt, quiet, samples, code, human, scenes, human_only, virtual_only] {
         using namespace palplab::protocols;
         for (const CLI::Option* o : human_only)
           palplab::app::flag_only_with(o, human->human, "--human (a person at the device)");
+        for (const CLI::Option* o : virtual_only)
+          palplab::app::flag_only_with(o, !human->human, "virtual participants (without --human)");
         palplab::app::preload_scenes(*scenes);
         if (opt->resume && opt->force)
           throw palplab::InputError("--resume and --force exclude each other");
@@ -351,6 +375,8 @@ palplab::app::CommandRegistration reg{
           return;
         }
         if (!human->participant.empty()) throw palplab::InputError("--participant needs --human");
+        if (!human->record_trace.empty())
+          palplab::app::require_writable_dir("--record-trace", human->record_trace);
         opt->record_trace_dir = human->record_trace;
         const bool tty = isatty(2);
         if (!*quiet) {

@@ -2,7 +2,9 @@
 // (its 1 kHz samples) as a trace file for `--device trace:FILE` (docs/DEVICES.md). Positions in
 // the database are quantised to 1 um, so a replay reproduces the session within that, not bit
 // for bit (a `--record-trace` file is exact).
+#include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -25,21 +27,35 @@ palplab::app::CommandRegistration reg{
           "trace-export", "Write a stored session's device track (samples) as a trace file");
       auto a = std::make_shared<Args>();
       cmd->add_option("DB", a->db, "Results database")->required();
-      cmd->add_option("--session", a->session, "Session id (sessions.session)")->required();
+      // count_range refuses a number beyond the 64-bit range, which the integer parse silently
+      // clamped (99999999999999999999 was read as session 9223372036854775807).
+      cmd->add_option("--session", a->session, "Session id (sessions.session)")
+          ->required()
+          ->check(palplab::app::count_range(1, std::numeric_limits<long long>::max()));
       cmd->add_option("--out", a->out, "Trace file to write")->required();
       cmd->callback([a, code] {
         using namespace palplab;
         results::Store store = results::Store::open(a->db);
         bool found = false;
         std::string who;
-        for (const auto& s : store.read_attempts())
+        long long lo = 0, hi = 0, n = 0;  // the session ids of the database, for the message
+        for (const auto& s : store.read_attempts()) {
+          lo = n == 0 ? s.session : std::min(lo, s.session);
+          hi = n == 0 ? s.session : std::max(hi, s.session);
+          ++n;
           if (s.session == a->session) {
             found = true;
             who = s.participant + " " + s.phase + " #" + std::to_string(s.phase_index + 1);
           }
+        }
         if (!found)
           throw InputError(
-              "--session: no session " + std::to_string(a->session) + " in the database", a->db);
+              SourceLocation{a->db},
+              "--session: no session " + std::to_string(a->session) + " in the database (" +
+                  (n == 0 ? std::string("it holds no sessions")
+                          : "its sessions are " + std::to_string(lo) + ".." + std::to_string(hi) +
+                                ", " + std::to_string(n) + " in all") +
+                  ")");
         const results::SampleSeries ss = store.read_samples(a->session);
         if (ss.size() == 0)
           throw InputError("session " + std::to_string(a->session) +

@@ -57,13 +57,15 @@ inline CLI::Validator finite_range(double lo, double hi, bool lo_open = false) {
       "FINITE in " + range);
 }
 
-// An integer count in [lo, hi].
+// An integer count in [lo, hi]. A number beyond the 64-bit range is refused too (the parse,
+// strtoll, clamps it to the largest one and says so only in errno).
 inline CLI::Validator count_range(long long lo, long long hi) {
   const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   return CLI::Validator(
       [lo, hi, range](std::string& text) -> std::string {
         long long v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || v < lo || v > hi)
+        errno = 0;
+        if (!CLI::detail::lexical_cast(text, v) || errno == ERANGE || v < lo || v > hi)
           return "expected an integer in " + range + ", got '" + text + "'";
         return std::string();
       },

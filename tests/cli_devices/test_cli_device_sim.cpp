@@ -232,3 +232,62 @@ TEST(CliDeviceSim, RejectsBadButtonsAndAxes) {
   }
   std::filesystem::remove(script);
 }
+
+// NaN and negative --duration/--stop-after fell back to the defaults without a word (-1 was the
+// "not given" marker, and every comparison with NaN is false), and "--start-on-force --wait nan"
+// waited for ever when no forces came. Every numeric flag is exit 2 naming it and the value; the
+// runs are bounded by `timeout`, so a hang shows as exit 124, not as a stuck test.
+TEST(CliDeviceSim, NumericFlagsRefuseNanNegativeAndOutOfRange) {
+  namespace t = palplab::testing;
+  const auto dir = t::scratch_dir("device_sim_flags");
+  auto sim = [&](const std::string& args) {
+    return t::run_shell(
+        "timeout -k 5 20 " + std::string(PALPLAB_BINARY) + " device-sim --port 5000 " + args, dir);
+  };
+  struct Case {
+    std::string args, flag, shown;  // the flag and what the message must show
+  };
+  const std::vector<Case> cases = {
+      {"--duration nan", "--duration", "'nan'"},
+      {"--duration -1", "--duration", "'-1'"},
+      {"--duration 0", "--duration", "(0, 3600]"},
+      {"--duration inf", "--duration", "'inf'"},
+      {"--stop-after nan", "--stop-after", "'nan'"},
+      {"--stop-after -3", "--stop-after", "'-3'"},
+      {"--duration 0.05 --rate nan", "--rate", "'nan'"},
+      {"--duration 0.05 --rate 0", "--rate", "[1, 10000]"},
+      {"--stop-after 0.05 --linger nan", "--linger", "'nan'"},
+      {"--stop-after 0.05 --linger -1", "--linger", "[0, 10]"},
+      {"--start-on-force --wait nan", "--wait", "'nan'"},
+      {"--start-on-force --wait inf", "--wait", "'inf'"},
+      {"--start-on-force --wait -1", "--wait", "'-1'"},
+      {"--start-on-force --wait 0", "--wait", "(0, 3600]"},
+      // The stop was silently clamped to the end of the run.
+      {"--duration 1 --stop-after 5", "--stop-after", "5 s is after the end of the run at 1 s"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.args);
+    const t::CliResult r = sim(c.args);
+    t::expect_exit2(r, {c.flag + ":", c.shown});
+    EXPECT_TRUE(r.out.empty()) << r.out;  // refused before sending anything
+  }
+  // The port: a number beyond 64 bits was clamped by the integer parse.
+  t::expect_exit2(t::run_palplab("device-sim --port 99999999999999999999", dir),
+                  {"--port", "[1, 65535]", "'99999999999999999999'"});
+  // Without --duration the run lasts to the script's end + 0.1 s: a --stop-after beyond it, or
+  // a script that ends before 0 - 0.1 s, names the script's end.
+  const std::string script = (dir / "s.json").string();
+  std::ofstream(script) << R"({"waypoints": [[0, 0, 0, 0], [0.2, 0, 0, 0]]})";
+  t::expect_exit2(sim("--script " + script + " --stop-after 0.5"),
+                  {"--stop-after", "after the end of the run at 0.3 s", "give --duration"});
+  std::ofstream(script) << R"({"waypoints": [[-5, 0, 0, 0]]})";
+  t::expect_exit2(sim("--script " + script),
+                  {script, "the script ends at -5 s", "or give --duration"});
+  // A valid bounded run still runs (nobody answers on port 5000: exit 1, nothing received).
+  const t::CliResult ok = sim("--duration 0.05 --stop-after 0.02 --linger 0 --json");
+  EXPECT_EQ(ok.code, 1) << ok.err;
+  const auto j = nlohmann::json::parse(ok.out);
+  EXPECT_GT(j["sent"].get<long>(), 0);
+  EXPECT_EQ(j["stopped_at"].get<double>(), 0.02);
+  std::filesystem::remove_all(dir);
+}

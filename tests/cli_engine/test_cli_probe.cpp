@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/cli_support.hpp"
+
 namespace {
 struct Result {
   int code;
@@ -69,13 +71,39 @@ TEST(CliProbe, BadInputExitsTwo) {
   EXPECT_EQ(run("probe " + proto("A") + " --press 999999 --force 2 --duration 1").code, 2);
   const Result r = run("probe " + proto("A") + " --press liver --force 2 --duration 1");
   EXPECT_NE(r.out.find("ovary_left"), std::string::npos) << r.out;  // lists the regions
-  // A force of 1e308 N was accepted; the bound is render's, and the message shows the value in
-  // the JSON checker's format (std::to_string printed 309 digits).
+  // A force of 1e308 N was accepted; the bound is render's, and the message shows the value as
+  // given (std::to_string printed 309 digits).
   const Result huge = run("probe " + proto("A") + " --press ovary_left --force 1e308 --duration 1");
   EXPECT_EQ(huge.code, 2);
-  EXPECT_NE(huge.out.find("--force: expected a force in N in (0, 100], got 1e+308"),
+  EXPECT_NE(huge.out.find("--force: expected a finite number in (0, 100], got '1e308'"),
             std::string::npos)
       << huge.out;
+}
+
+// "--force nan" said "got null" (the JSON checker's spelling of NaN) and named no value given:
+// NaN and inf are refused by the flags' validators, which name the flag and echo the text.
+TEST(CliProbe, NanAndInfAreRefusedNamingTheFlagAndTheValue) {
+  namespace t = palplab::testing;
+  const std::string base = "probe " + proto("A") + " --press ovary_left ";
+  struct Case {
+    std::string args, flag, shown;
+  };
+  const std::vector<Case> cases = {
+      {"--force nan --duration 1", "--force:", "got 'nan'"},
+      {"--force inf --duration 1", "--force:", "got 'inf'"},
+      {"--force -inf --duration 1", "--force:", "got '-inf'"},
+      {"--force 0 --duration 1", "--force:", "(0, 100]"},
+      {"--force 2 --duration nan", "--duration:", "got 'nan'"},
+      {"--force 2 --duration -1", "--duration:", "[0, 3600]"},
+      {"--force 2 --duration 1 --release nan", "--release:", "got 'nan'"},
+      {"--force 2 --duration 1 --release 1e9", "--release:", "[0, 3600]"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.args);
+    const t::CliResult r = t::run_palplab(base + c.args);
+    t::expect_exit2(r, {c.flag, c.shown});
+    EXPECT_FALSE(t::has(r.err, "null")) << r.err;
+  }
 }
 
 TEST(CliProbe, ExplicitIntegratorsDivergeOnModelCAndAreCaught) {

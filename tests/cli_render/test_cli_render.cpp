@@ -116,6 +116,39 @@ TEST(CliRender, BadInputExitsTwo) {
       << ta.out;
 }
 
+// An --alpha opacity out of [0, 1] or an unknown region was refused by the renderer with
+// "opacity of region ..." / "unknown region ..." (no flag named), and a region given twice took
+// the last value silently. Checked before the still, so no EGL is needed. --force and
+// --transparent-alpha said "got null" for NaN.
+TEST(CliRender, AlphaAndNumericErrorsNameTheFlag) {
+  namespace t = palplab::testing;
+  const fs::path png = tmp("alpha.png");
+  const std::string base = "render " + proto("A") + " --out " + png.string() + " ";
+  struct Case {
+    std::string args;
+    std::vector<std::string> shown;
+  };
+  const std::vector<Case> cases = {
+      {"--alpha body=2", {"--alpha: \"body=2\"", "[0, 1]", "got 2"}},
+      {"--alpha body=-0.5", {"--alpha: \"body=-0.5\"", "got -0.5"}},
+      {"--alpha body=nan", {"--alpha:", "nan"}},
+      {"--alpha spleen=0.5",
+       {"--alpha: \"spleen=0.5\"", "unknown region \"spleen\"", "ovary_left"}},
+      {"--alpha body=0.5 --alpha body=0.4", {"--alpha:", "\"body\" given twice"}},
+      {"--press ovary_left --force nan", {"--force:", "got 'nan'"}},
+      {"--press ovary_left --force 2 --hold inf", {"--hold:", "got 'inf'"}},
+      {"--transparent body --transparent-alpha nan", {"--transparent-alpha:", "got nan"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.args);
+    const t::CliResult r = t::run_palplab(base + c.args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    for (const auto& s : c.shown) EXPECT_TRUE(t::has(r.err, s)) << r.err << "\nmissing: " << s;
+    EXPECT_FALSE(t::has(r.err, "null")) << r.err;
+    EXPECT_FALSE(fs::exists(png));
+  }
+}
+
 TEST(CliView, FramesAndScreenshotUnderXvfb) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";

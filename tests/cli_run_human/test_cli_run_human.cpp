@@ -235,3 +235,91 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
   EXPECT_EQ(rows[1]["attempt"], "1");
   EXPECT_EQ(rows[1]["status"], "complete");
 }
+
+// `run --human` created (or opened) the results database before it read the trace of
+// `--device trace:FILE` (and before it bound a UDP device or checked --record-trace), so a bad
+// device left a fresh database behind its exit 2. Every argument is checked first now: no
+// database file (nor its -wal/-shm) after any of these.
+TEST(CliRunHuman, BadDeviceOrArgumentsExit2BeforeTheDatabaseExists) {
+  namespace t = palplab::testing;
+  Tmp tmp;
+  const fs::path db = tmp.dir / "h.db";
+  const std::string good = (tmp.dir / "good.trace").string();
+  {
+    e::Trace tr;
+    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+    e::write_trace(good, tr);
+  }
+  const std::string no_samples = (tmp.dir / "empty.trace").string();
+  e::write_trace(no_samples, e::Trace{});
+  const std::string a_file = (tmp.dir / "file").string();
+  std::ofstream(a_file) << "x";
+  const int silent_port = t::free_udp_port();  // nobody sends there
+  struct Case {
+    std::string device, extra, flag, shown;
+  };
+  const std::vector<Case> cases = {
+      {"BAD", "", "--device", "\"BAD\""},
+      {"udp:0", "", "--device", "udp:PORT (1..65535)"},
+      {"trace:" + (tmp.dir / "missing.trace").string(), "", "missing.trace",
+       "cannot open the trace"},
+      {"trace:" + kDir + "human_study.json", "", "human_study.json", "not a palplab trace"},
+      {"trace:" + no_samples, "", "--device", "the trace has no samples"},
+      {"udp:" + std::to_string(silent_port), "", "udp:" + std::to_string(silent_port),
+       "below the required 900 Hz"},
+      {"trace:" + good, "--record-trace " + a_file + "/sub", "--record-trace", "/sub"},
+      {"trace:" + good, "--min-device-rate nan", "--min-device-rate", "'nan'"},
+      {"trace:" + good, "--device-lost nan", "--device-lost", "'nan'"},
+      {"trace:" + good, "--device-lost 0", "--device-lost", "(0, 3600]"},
+      // Options of virtual runs were silently ignored with --human.
+      {"trace:" + good, "--jobs 2", "--jobs", "without --human"},
+      {"trace:" + good, "--max-sessions 1", "--max-sessions", "without --human"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.device + " " + c.extra);
+    const t::CliResult r = t::run_shell(human(db, c.device, t::kHumanNow, c.extra), tmp.dir);
+    t::expect_exit2(r, {c.flag, c.shown});
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"})
+      EXPECT_FALSE(fs::exists(db.string() + suffix)) << db.string() + suffix;
+  }
+  // The same good trace and arguments without the bad one: the session runs and is stored (the
+  // trace read once before the database replays in the session).
+  const t::CliResult ok = t::run_shell(
+      human(db, "trace:" + good, t::kHumanNow, "--record-trace " + (tmp.dir / "tr").string()),
+      tmp.dir);
+  ASSERT_EQ(ok.code, 0) << ok.out << ok.err;
+  const auto rows = db_rows(db, "SELECT status, steps FROM sessions");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].at("status"), "complete");
+  EXPECT_EQ(fs::exists(tmp.dir / "tr" / "P01_0_0.trace"), true);
+}
+
+// `trace-export --session N`: a session id not in the database is exit 2 naming the ids it holds,
+// and one beyond the 64-bit range (clamped by the integer parse to 9223372036854775807, so the
+// message named another number than the one given) or below 1 is exit 2 naming the valid range.
+// Nothing is written then.
+TEST(CliTraceExport, SessionOutOfRangeIsExit2NamingTheRange) {
+  namespace t = palplab::testing;
+  Tmp tmp;
+  const std::string study = (tmp.dir / "tiny.json").string();
+  std::ofstream(study) << t::tiny_study_json("tiny", 3);
+  const fs::path db = tmp.dir / "t.db";
+  const t::CliResult made =
+      t::run_palplab("run " + study + " --db " + db.string() + " --quiet", tmp.dir);
+  ASSERT_EQ(made.code, 0) << made.err;
+  const fs::path out = tmp.dir / "o.trace";
+  auto export_session = [&](const std::string& session) {
+    return t::run_palplab(
+        "trace-export " + db.string() + " --session " + session + " --out " + out.string(),
+        tmp.dir);
+  };
+  t::expect_exit2(export_session("5"), {"--session", "no session 5", "its sessions are 1..4"});
+  for (const std::string bad : {"0", "-1", "99999999999999999999", "-99999999999999999999"})
+    t::expect_exit2(export_session(bad),
+                    {"--session:", "[1, 9223372036854775807]", "'" + bad + "'"});
+  EXPECT_FALSE(fs::exists(out));
+  const t::CliResult ok = export_session("4");
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_TRUE(t::has(ok.out, "2000 samples of session 4")) << ok.out;
+  EXPECT_EQ(e::read_trace(out.string()).samples.size(), 2000u);
+}
