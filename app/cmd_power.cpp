@@ -1,7 +1,9 @@
 // `palplab power STUDY.json --replicates R [--n 6,8,10,...] [--jobs N] [--out DIR]
 //                [--shard I/K] [--alpha A]`: simulates the whole study R times per group size
 // and reports the power of every declared test (protocols/power.hpp). Replicates are appended
-// to DIR/replicates.jsonl as they finish; running the same command again resumes. Under MPI
+// to DIR/replicates.jsonl as they finish; running the same command again resumes, and the
+// summary covers exactly the sizes and replicates asked for (a directory holding more, from an
+// earlier larger run, keeps them; the output says so). Under MPI
 // (a PALPLAB_MPI build launched by mpirun) the ranks share the replicates and rank 0 writes.
 // With --shard I/K only every K-th replicate is run (job arrays); `palplab merge` combines.
 #include <unistd.h>
@@ -49,6 +51,35 @@ std::vector<int> parse_sizes(const std::vector<std::string>& args) {
     }
   }
   return out;
+}
+
+// What a summary of exactly the requested replicates leaves out of `file`: "note: FILE holds 2
+// replicates this command did not ask for (n = 3: 2 beyond --replicates 3). They are kept in
+// the file but not used in this summary; to use them, rerun with --replicates 5, or ...".
+std::string left_out_note(const palplab::protocols::LeftOut& l, const std::string& file,
+                          int replicates) {
+  const long total = l.total();
+  std::string parts, sizes;
+  int largest = -1;
+  for (const auto& [n, k] : l.beyond) {
+    parts += (parts.empty() ? "" : "; ") + std::string("n = ") + std::to_string(n) + ": " +
+             std::to_string(k) + " beyond --replicates " + std::to_string(replicates);
+    largest = std::max(largest, l.largest.at(n));
+  }
+  for (const auto& [n, k] : l.other_n) {
+    parts += (parts.empty() ? "" : "; ") + std::string("n = ") + std::to_string(n) + ": " +
+             std::to_string(k) + ", a size this command did not simulate";
+    sizes += (sizes.empty() ? "" : ",") + std::to_string(n);
+  }
+  std::string rerun;
+  if (largest >= 0) rerun = "--replicates " + std::to_string(largest + 1);
+  if (!sizes.empty())
+    rerun += (rerun.empty() ? "" : " and ") + std::string("--n including ") + sizes;
+  return "note: " + file + " holds " + std::to_string(total) + " replicate" +
+         (total == 1 ? "" : "s") + " this command did not ask for (" + parts +
+         "). They are kept in the file but not used in this summary; to use them, rerun with " +
+         rerun + ", or summarise every replicate of the file with `palplab merge " + file +
+         " --out DIR`";
 }
 
 struct PowerArgs {
@@ -129,11 +160,18 @@ palplab::app::CommandRegistration reg{
           *code = 0;
           return;
         }
+        // Exactly the sizes and replicates asked for: a resume with a smaller --replicates (or
+        // other --n) than the directory holds leaves the others in the file, unused.
+        const std::string file = (std::filesystem::path(a->out) / "replicates.jsonl").string();
+        LeftOut left_out;
         auto summary =
-            power_summary({(std::filesystem::path(a->out) / "replicates.jsonl").string()},
-                          a->opt.alpha, a->opt.target_power);
-        std::cout << write_power_report(summary, a->out) << "\nwrote " << a->out
-                  << "/power.json, power.md, power.svg (" << ran << " replicates run now)\n";
+            power_summary({file}, a->opt.alpha, a->opt.target_power,
+                          SummaryScope{power_sizes(s, a->opt), a->opt.replicates}, &left_out);
+        std::cout << write_power_report(summary, a->out);
+        if (left_out.total() > 0)
+          std::cout << "\n" << left_out_note(left_out, file, a->opt.replicates) << "\n";
+        std::cout << "\nwrote " << a->out << "/power.json, power.md, power.svg (" << ran
+                  << " replicates run now)\n";
         *code = 0;
       });
     }};

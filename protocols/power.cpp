@@ -381,15 +381,17 @@ std::optional<std::pair<int, int>> parse_shard(const std::string& text, const st
   return std::make_pair(static_cast<int>(*i), static_cast<int>(*k));
 }
 
+std::vector<int> power_sizes(const Study& study, const PowerOptions& opt) {
+  if (!opt.n.empty()) return opt.n;
+  for (const auto& g : study.groups)
+    if (g.size != study.groups.front().size)
+      throw InputError("groups differ in size; give the sizes to simulate with --n", study.file);
+  return {study.groups.front().size};
+}
+
 long run_power(const Study& study, const PowerOptions& opt) {
   const Ranks ranks = init_ranks();
-  std::vector<int> ns = opt.n;
-  if (ns.empty()) {
-    for (const auto& g : study.groups)
-      if (g.size != study.groups.front().size)
-        throw InputError("groups differ in size; give the sizes to simulate with --n", study.file);
-    ns.push_back(study.groups.front().size);
-  }
+  const std::vector<int> ns = power_sizes(study, opt);
   if (opt.replicates < 1) throw InputError("--replicates must be >= 1");
   if (opt.shards < 1 || opt.shards > kMaxShards || opt.shard < 0 || opt.shard >= opt.shards)
     throw InputError("--shard I/K needs 1 <= I <= K <= " + std::to_string(kMaxShards));
@@ -506,8 +508,20 @@ long run_power(const Study& study, const PowerOptions& opt) {
   return run_here;
 }
 
+bool SummaryScope::covers(int n, int replicate) const {
+  return (sizes.empty() || std::find(sizes.begin(), sizes.end(), n) != sizes.end()) &&
+         (replicates <= 0 || replicate < replicates);
+}
+
+long LeftOut::total() const {
+  long t = 0;
+  for (const auto& m : {beyond, other_n})
+    for (const auto& [n, k] : m) t += k;
+  return t;
+}
+
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
-                             double target_power) {
+                             double target_power, const SummaryScope& scope, LeftOut* left_out) {
   std::map<std::pair<int, int>, nlohmann::json> reps;
   std::map<std::pair<int, int>, std::string> where;  // FILE:LINE each replicate came from
   std::string sha, study_id;
@@ -548,6 +562,26 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
       where.emplace(key, at);
     }
   if (reps.empty()) throw InputError("no replicates found", files.empty() ? "" : files.front());
+  // Only the replicates in scope are summarised; the others were checked like them above.
+  LeftOut outside;
+  for (auto it = reps.begin(); it != reps.end();) {
+    const auto [n, replicate] = it->first;
+    if (scope.covers(n, replicate)) {
+      ++it;
+      continue;
+    }
+    if (scope.covers(n, 0)) {
+      ++outside.beyond[n];
+      outside.largest[n] = std::max(outside.largest[n], replicate);
+    } else {
+      ++outside.other_n[n];
+    }
+    it = reps.erase(it);
+  }
+  if (left_out) *left_out = outside;
+  if (reps.empty())
+    throw InputError("none of the replicates found is among those asked for",
+                     files.empty() ? "" : files.front());
 
   struct Cell {
     long reps = 0, significant = 0, undefined = 0;

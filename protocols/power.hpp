@@ -10,7 +10,8 @@
 // (η² for an ANOVA, Hedges' g for a pair). Replicates are appended to DIR/replicates.jsonl as
 // they finish (resume skips those already there); the summary (power with a Wilson 95 % Monte
 // Carlo interval, effect-size quantiles, smallest n reaching the target power) is computed from
-// that file alone, so shards merged afterwards give the single-run result exactly.
+// that file alone — of `palplab power`, only the sizes and replicates it was asked for, the rest
+// of the file kept — so shards merged afterwards give the single-run result exactly.
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -68,16 +69,40 @@ constexpr long kMaxShards = 100000;
 // nullopt (no sign, space, overflow or wrap-around). Returns (I, K), I 1-based.
 std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep);
 
+// The group sizes a run simulates: opt.n, or the study's own size when empty (all groups equal,
+// else an InputError asking for --n).
+std::vector<int> power_sizes(const Study& study, const PowerOptions& opt);
+
 // Runs the replicates this process is responsible for (skipping those already in
 // DIR/replicates.jsonl) and appends each as it finishes. Under MPI (PALPLAB_MPI, launched by
 // mpirun) ranks share the replicates and rank 0 writes them. Returns the number run here, or
 // -1 on an MPI rank other than 0 (which must not write the summary).
 long run_power(const Study& study, const PowerOptions& opt);
 
-// The summary of every replicate found in `files` (replicates.jsonl from one or more shards;
-// duplicates must agree). InputError when files hold different studies or settings.
+// Which replicates a summary covers: the group sizes `sizes` (empty = every size found) and the
+// replicate indices 0..replicates-1 (0 = every index found). `palplab power` summarises exactly
+// what it was asked for, also when its --out holds more (an earlier, larger run); `palplab merge`
+// summarises everything.
+struct SummaryScope {
+  std::vector<int> sizes;
+  int replicates = 0;
+  bool covers(int n, int replicate) const;
+};
+// The replicates found but left out of a summary by its SummaryScope (deduplicated).
+struct LeftOut {
+  std::map<int, long> beyond;   // n in scope -> replicates with an index >= scope.replicates
+  std::map<int, int> largest;   // n in scope -> largest index found among those
+  std::map<int, long> other_n;  // n not in scope -> replicates
+  long total() const;
+};
+
+// The summary of the replicates found in `files` (replicates.jsonl from one or more shards;
+// duplicates must agree) that `scope` covers; those it does not are counted in `*left_out`
+// (when given). Every record is checked, in scope or not. InputError when files hold different
+// studies or settings, or no replicate in scope.
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
-                             double target_power);
+                             double target_power, const SummaryScope& scope = {},
+                             LeftOut* left_out = nullptr);
 // What a merge of `files` is known to lack (`palplab merge`; docs/PARTICIPANTS.md "Power
 // analysis"): shards I of a `--shard I/K` run whose file replicates.shard-I-of-K.jsonl is not
 // among `files` (K read from the names of those that are), and, per n, replicate indices below

@@ -147,12 +147,24 @@ bool id_char(unsigned char b) {
 }
 
 void check_id(Ctx& c, const std::string& id, const std::string& path) {
-  // The id as shown in the message (control characters are escaped when it is printed).
+  // The id as shown in the message: a JSON string (quotes, backslashes and control characters
+  // escaped, so that an id holding '"' or a newline cannot garble the message), cut after
+  // kShownChars characters, with its length: "xxxx"… (65 characters).
   auto shown = [&] {
-    if (id.size() <= 40) return "\"" + id + "\"";
-    std::size_t cut = 40;  // at a character boundary
-    while (cut > 0 && (static_cast<unsigned char>(id[cut]) & 0xC0) == 0x80) --cut;
-    return "\"" + id.substr(0, cut) + "...\"";
+    constexpr std::size_t kShownChars = 40;
+    std::size_t cut = 0, n = 0;  // byte offset and count of the first kShownChars characters
+    for (; cut < id.size() && n < kShownChars; ++n) {
+      ++cut;  // the lead byte, then its continuation bytes
+      while (cut < id.size() && (static_cast<unsigned char>(id[cut]) & 0xC0) == 0x80) ++cut;
+    }
+    std::size_t total = n;
+    for (std::size_t i = cut; i < id.size(); ++i)
+      total += (static_cast<unsigned char>(id[i]) & 0xC0) != 0x80;
+    const auto quoted = [](const std::string& t) {
+      return json(t).dump(-1, ' ', false, json::error_handler_t::replace);
+    };
+    if (cut == id.size()) return quoted(id);
+    return quoted(id.substr(0, cut)) + "… (" + std::to_string(total) + " characters)";
   };
   std::size_t chars = 0;  // characters (UTF-8 code points) before i
   for (std::size_t i = 0; i < id.size(); ++chars) {
@@ -180,9 +192,8 @@ void check_id(Ctx& c, const std::string& id, const std::string& path) {
   }
   if (chars == 0)
     c.err(path, std::string(kIdRule) + ", got an empty id");
-  else if (chars > kMaxIdLength)
-    c.err(path, std::string(kIdRule) + ", got " + shown() + " (" + std::to_string(chars) +
-                    " characters)");
+  else if (chars > kMaxIdLength)  // shown() gives the length
+    c.err(path, std::string(kIdRule) + ", got " + shown());
 }
 
 // A non-empty id (see check_id).

@@ -1,7 +1,8 @@
 // End-to-end tests of `palplab power` and `palplab merge`: a study without any effect has power
 // alpha (its Monte Carlo interval covers .05), resuming adds only the missing replicates and
-// gives the uninterrupted result, shards merged equal a single run, and (in a PALPLAB_MPI
-// build) `mpirun -np 2` equals a single process. The null test needs many replicates to say
+// gives the uninterrupted result (a resume asking for fewer summarises just those), shards
+// merged equal a single run, and (in a PALPLAB_MPI build) `mpirun -np 2` equals a single
+// process. The null test needs many replicates to say
 // anything about alpha, so it is the slow one (~10 s on one core): replicates are tiny
 // (2 x 3 participants, one 12 s session).
 #include <gtest/gtest.h>
@@ -18,6 +19,8 @@ namespace fs = std::filesystem;
 
 namespace {
 using Result = palplab::testing::CliResult;
+using palplab::testing::expect_exit2;
+using palplab::testing::has;
 using palplab::testing::run_palplab;
 using palplab::testing::run_shell;
 using palplab::testing::scratch_dir;
@@ -29,6 +32,36 @@ std::string null_study() {
 
 nlohmann::json power_json(const fs::path& dir) {
   return nlohmann::json::parse(slurp(dir / "power.json"));
+}
+
+// `palplab power` of the null study: sizes `n` ("2,3"), `replicates` per size, no progress.
+std::string power_cmd(const std::string& n, int replicates) {
+  return "power " + null_study() + " --n " + n + " --replicates " + std::to_string(replicates) +
+         " --quiet";
+}
+
+// `cmd --shard SHARD --out OUT` (stdout and stderr kept in `d`).
+Result run_shard(const std::string& cmd, const std::string& shard, const fs::path& out,
+                 const fs::path& d) {
+  return run_palplab(cmd + " --shard '" + shard + "' --out " + out.string(), d);
+}
+
+// Shards 1..k of `cmd`, shard I into its own directory d/sI (as separate array jobs would write
+// them); each must succeed.
+void run_shards_apart(const std::string& cmd, int k, const fs::path& d) {
+  for (int i = 1; i <= k; ++i) {
+    const auto s = run_shard(cmd, std::to_string(i) + "/" + std::to_string(k),
+                             d / ("s" + std::to_string(i)), d);
+    ASSERT_EQ(s.code, 0) << s.err;
+  }
+}
+
+// `palplab merge INPUT... [extra] --out OUT`.
+Result merge(const std::vector<fs::path>& inputs, const fs::path& out, const fs::path& d,
+             const std::string& extra = "") {
+  std::string args;
+  for (const auto& in : inputs) args += " " + in.string();
+  return run_palplab("merge" + args + extra + " --out " + out.string(), d);
 }
 
 }  // namespace
@@ -69,19 +102,58 @@ TEST(Power, ResumeAndShardsGiveTheSingleRunResult) {
   EXPECT_NE(resumed.out.find("(2 replicates run now)"), std::string::npos) << resumed.out;
   EXPECT_EQ(power_json(d / "resumed"), power_json(d / "single"));
   // Shards 1/2 and 2/2 into separate directories, then merged.
-  for (int i = 1; i <= 2; ++i) {
-    auto s = run_palplab(base + " --replicates 3 --shard " + std::to_string(i) + "/2 --out " +
-                             (d / ("s" + std::to_string(i))).string(),
-                         d);
-    ASSERT_EQ(s.code, 0) << s.err;
-  }
-  auto m = run_palplab("merge " + (d / "s1").string() + " " + (d / "s2").string() + " --out " +
-                           (d / "merged").string(),
-                       d);
+  ASSERT_NO_FATAL_FAILURE(run_shards_apart(power_cmd("2,3", 3), 2, d));
+  auto m = merge({d / "s1", d / "s2"}, d / "merged", d);
   ASSERT_EQ(m.code, 0) << m.err;
   EXPECT_EQ(power_json(d / "merged"), power_json(d / "single"));
   // A shard alone is not the whole result.
   EXPECT_FALSE(fs::exists(d / "s1" / "power.json"));
+  fs::remove_all(d);
+}
+
+// A resume with a smaller --replicates (or fewer sizes) than --out holds summarised every
+// replicate in the file: `--replicates 2` after a run of 3 reported 3 per size. The summary is
+// of exactly the replicates asked for; the others stay in the file and the output says so.
+TEST(Power, ResumeWithFewerReplicatesSummarisesThoseAskedFor) {
+  auto d = scratch_dir("fewer");
+  const fs::path dir = d / "dir", file = dir / "replicates.jsonl";
+  ASSERT_EQ(run_palplab(power_cmd("2,3", 3) + " --out " + dir.string(), d).code, 0);
+  const auto three = power_json(dir);
+  const std::string records = slurp(file);
+  const auto two = run_palplab(power_cmd("2,3", 2) + " --out " + (d / "two").string(), d);
+  ASSERT_EQ(two.code, 0) << two.err;
+  // Fewer replicates: nothing run, the summary of replicates 0 and 1 only.
+  auto r = run_palplab(power_cmd("2,3", 2) + " --out " + dir.string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "(0 replicates run now)")) << r.out;
+  EXPECT_EQ(power_json(dir), power_json(d / "two"));
+  EXPECT_EQ(power_json(dir)["replicates"], nlohmann::json({{"2", 2}, {"3", 2}}));
+  EXPECT_TRUE(has(r.out, "note: " + file.string() +
+                             " holds 2 replicates this command did not ask for (n = 2: 1 beyond "
+                             "--replicates 2; n = 3: 1 beyond --replicates 2). They are kept in "
+                             "the file but not used in this summary; to use them, rerun with "
+                             "--replicates 3, or summarise every replicate of the file with "
+                             "`palplab merge " +
+                             file.string() + " --out DIR`"))
+      << r.out;
+  EXPECT_TRUE(has(slurp(dir / "power.md"), "| anova_oneway palpation_force test | 3 | 2 | "))
+      << slurp(dir / "power.md");
+  EXPECT_EQ(slurp(file), records);  // kept, not cut
+  // Fewer sizes: the other size is left out and named.
+  r = run_palplab(power_cmd("2", 3) + " --out " + dir.string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(power_json(dir)["replicates"], nlohmann::json({{"2", 3}}));
+  EXPECT_TRUE(has(r.out,
+                  "holds 3 replicates this command did not ask for (n = 3: 3, a size this "
+                  "command did not simulate)"))
+      << r.out;
+  EXPECT_TRUE(has(r.out, "rerun with --n including 3")) << r.out;
+  // Asking for all of them again: the uninterrupted result, and no note.
+  r = run_palplab(power_cmd("2,3", 3) + " --out " + dir.string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.out, "note:")) << r.out;
+  EXPECT_EQ(power_json(dir), three);
+  EXPECT_EQ(slurp(file), records);
   fs::remove_all(d);
 }
 
@@ -91,7 +163,7 @@ TEST(Power, BadArgumentsAreInputErrors) {
       run_palplab("power " + null_study() + " --replicates 2 --shard 3/2 --out " + d.string(), d)
           .code,
       2);
-  EXPECT_EQ(run_palplab("merge " + (d / "nothing").string() + " --out " + d.string(), d).code, 2);
+  EXPECT_EQ(merge({d / "nothing"}, d, d).code, 2);
   // NaN and inf pass CLI11's Range (every comparison with NaN is false): refused, exit 2.
   for (const char* bad : {"--alpha nan", "--alpha inf", "--target-power nan", "--alpha 0.7"}) {
     const auto r = run_palplab(
@@ -147,8 +219,7 @@ TEST(Power, SizesStudyAndOutputAreCheckedFirst) {
       << R"("seed": 1, "tests": [{"id": "anova_oneway palpation_force test", "p": 0.01, )"
       << R"("effect": 0.3, "effect_name": "eta_squared"}]})"
       << "\n";
-  const auto m =
-      run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "file" / "m").string(), d);
+  const auto m = merge({d / "r.jsonl"}, d / "file" / "m", d);
   EXPECT_EQ(m.code, 2) << m.out << m.err;
   EXPECT_NE(m.err.find("--out"), std::string::npos) << m.err;
   fs::remove_all(d);
@@ -176,11 +247,7 @@ TEST(Power, MpiEqualsSingleProcess) {
                   d);
     ASSERT_EQ(s.code, 0) << s.out << s.err;
   }
-  ASSERT_EQ(run_palplab("merge " + (d / "m1").string() + " " + (d / "m2").string() + " --out " +
-                            (d / "mmerged").string(),
-                        d)
-                .code,
-            0);
+  ASSERT_EQ(merge({d / "m1", d / "m2"}, d / "mmerged", d).code, 0);
   EXPECT_EQ(power_json(d / "mmerged"), power_json(d / "single"));
   fs::remove_all(d);
 #endif
@@ -239,8 +306,7 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
   };
   for (const auto& [line, expected] : cases) {
     std::ofstream(d / "r.jsonl", std::ios::trunc) << good << "\n" << line << "\n";
-    const auto r =
-        run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "out").string(), d);
+    const auto r = merge({d / "r.jsonl"}, d / "out", d);
     EXPECT_EQ(r.code, 2) << line << ": " << r.out << r.err;
     EXPECT_NE(r.err.find((d / "r.jsonl").string() + ":2: " + expected), std::string::npos)
         << line << ": " << r.err;
@@ -263,7 +329,7 @@ TEST(Power, MergeRefusesAnIncompleteLastLine) {
   const std::string whole = slurp(file);
   // Cut into the second record.
   fs::resize_file(file, whole.size() - 50);
-  auto m = run_palplab("merge " + (d / "p").string() + " --out " + (d / "m").string(), d);
+  auto m = merge({d / "p"}, d / "m", d);
   EXPECT_EQ(m.code, 2) << m.out << m.err;
   EXPECT_NE(m.err.find(file.string() + ":2:1: the last line is incomplete"), std::string::npos)
       << m.err;
@@ -275,13 +341,13 @@ TEST(Power, MergeRefusesAnIncompleteLastLine) {
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.out.find("1 replicates run"), std::string::npos) << again.out;
   EXPECT_EQ(slurp(file), whole);
-  m = run_palplab("merge " + (d / "p").string() + " --out " + (d / "m").string(), d);
+  m = merge({d / "p"}, d / "m", d);
   ASSERT_EQ(m.code, 0) << m.err;
   EXPECT_EQ(power_json(d / "m")["replicates"]["2"], 2);
   // A whole last record that only lacks its newline is complete: merged.
   std::ofstream(d / "nonl.jsonl", std::ios::binary) << record(2, 0, 0.01, 0.3).dump() << "\n"
                                                     << record(2, 1, 0.5, 0.1).dump();
-  m = run_palplab("merge " + (d / "nonl.jsonl").string() + " --out " + (d / "m2").string(), d);
+  m = merge({d / "nonl.jsonl"}, d / "m2", d);
   ASSERT_EQ(m.code, 0) << m.err;
   EXPECT_EQ(power_json(d / "m2")["replicates"]["2"], 2);
   fs::remove_all(d);
@@ -294,7 +360,7 @@ TEST(Power, MergeRefusesAnOutputDirectoryOfAnotherStudy) {
   fs::create_directories(d / "other");
   const std::string other = record(2, 0, 0.2, 0.1, "0fff").dump() + "\n";
   std::ofstream(d / "other" / "replicates.jsonl") << other;
-  auto r = run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "other").string(), d);
+  auto r = merge({d / "r.jsonl"}, d / "other", d);
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("replicates.jsonl: the output directory holds replicates of another study"),
             std::string::npos)
@@ -305,7 +371,7 @@ TEST(Power, MergeRefusesAnOutputDirectoryOfAnotherStudy) {
   fs::remove(d / "other" / "replicates.jsonl");
   const std::string summary = R"({"study": "x", "study_sha256": "0fff"})";
   std::ofstream(d / "other" / "power.json") << summary;
-  r = run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "other").string(), d);
+  r = merge({d / "r.jsonl"}, d / "other", d);
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("power.json: the output directory holds the power summary of another "
                        "study"),
@@ -315,7 +381,7 @@ TEST(Power, MergeRefusesAnOutputDirectoryOfAnotherStudy) {
   // The same study's directory (`merge DIR --out DIR`) is fine.
   std::ofstream(d / "other" / "power.json", std::ios::trunc)
       << R"({"study": "x", "study_sha256": "5ca1ab1e"})";
-  r = run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "other").string(), d);
+  r = merge({d / "r.jsonl"}, d / "other", d);
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   fs::remove_all(d);
 }
@@ -330,8 +396,7 @@ TEST(Power, UndefinedTestsAreShownAndNotPowerZero) {
     << record(3, 0, 0.01, 0.4).dump() << "\n"
     << record(3, 1, nullptr, nullptr).dump() << "\n";
   f.close();
-  const auto r =
-      run_palplab("merge " + (d / "r.jsonl").string() + " --out " + (d / "out").string(), d);
+  const auto r = merge({d / "r.jsonl"}, d / "out", d);
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = power_json(d / "out");
   const auto& by_n = j["tests"][0]["by_n"];
@@ -373,23 +438,15 @@ TEST(Power, OneGroupStudyIsRefused) {
 // whole result (exit 0, nothing said). Now it is exit 2 naming the missing shard and what the
 // summary would cover, unless --allow-partial: then a warning, and power.json/md say "partial".
 TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
-  using palplab::testing::expect_exit2;
-  using palplab::testing::has;
   auto d = scratch_dir("merge_partial");
-  const std::string base = "power " + null_study() + " --n 2,3 --replicates 3 --quiet";
-  for (int i = 1; i <= 2; ++i)
-    ASSERT_EQ(run_palplab(base + " --shard " + std::to_string(i) + "/2 --out " +
-                              (d / ("s" + std::to_string(i))).string(),
-                          d)
-                  .code,
-              0);
-  const std::string s1 = (d / "s1").string(), s2 = (d / "s2").string();
-  auto r = run_palplab("merge " + s1 + " --out " + (d / "m").string(), d);
+  ASSERT_NO_FATAL_FAILURE(run_shards_apart(power_cmd("2,3", 3), 2, d));
+  const fs::path s1 = d / "s1", s2 = d / "s2";
+  auto r = merge({s1}, d / "m", d);
   expect_exit2(r, {"incomplete merge: shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl "
                    "among the merged files)",
                    "the summary covers only 3 replicates (n = 2: 2, n = 3: 1)", "--allow-partial"});
   EXPECT_FALSE(fs::exists(d / "m"));
-  r = run_palplab("merge " + s1 + " --allow-partial --out " + (d / "m").string(), d);
+  r = merge({s1}, d / "m", d, " --allow-partial");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(has(r.err, "warning: partial merge (--allow-partial): shard 2 of 2 missing"))
       << r.err;
@@ -404,7 +461,7 @@ TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
                   "**Partial result** (`palplab merge "
                   "--allow-partial`): shard 2 of 2 missing"));
   // Every shard: complete, no mark, no warning (also after a partial merge into the same --out).
-  r = run_palplab("merge " + s1 + " " + s2 + " --out " + (d / "m").string(), d);
+  r = merge({s1, s2}, d / "m", d);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");
   EXPECT_FALSE(power_json(d / "m").contains("partial"));
@@ -413,20 +470,18 @@ TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
   std::ofstream f(d / "gap.jsonl");
   for (int rep : {0, 2, 4}) f << record(2, rep, 0.01, 0.3).dump() << "\n";
   f.close();
-  r = run_palplab("merge " + (d / "gap.jsonl").string() + " --out " + (d / "g").string(), d);
+  r = merge({d / "gap.jsonl"}, d / "g", d);
   expect_exit2(r, {"n = 2: replicates 1, 3 of 0-4 missing", "covers only 3 replicates"});
   EXPECT_FALSE(fs::exists(d / "g"));
   // A shard with nothing to run (K above the replicates) still writes its (empty) file.
-  const std::string one = "power " + null_study() + " --n 2 --replicates 1 --quiet --out " +
-                          (d / "few").string() + " --shard ";
-  ASSERT_EQ(run_palplab(one + "1/2", d).code, 0);
-  ASSERT_EQ(run_palplab(one + "2/2", d).code, 0);
+  for (const char* shard : {"1/2", "2/2"})
+    ASSERT_EQ(run_shard(power_cmd("2", 1), shard, d / "few", d).code, 0);
   EXPECT_TRUE(fs::exists(d / "few" / "replicates.shard-2-of-2.jsonl"));
-  r = run_palplab("merge " + (d / "few").string() + " --out " + (d / "few").string(), d);
+  r = merge({d / "few"}, d / "few", d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");
   // A missing input creates no --out.
-  r = run_palplab("merge " + (d / "nothing").string() + " --out " + (d / "never").string(), d);
+  r = merge({d / "nothing"}, d / "never", d);
   expect_exit2(r, {(d / "nothing").string() + ": no such file or directory"});
   EXPECT_FALSE(fs::exists(d / "never"));
   fs::remove_all(d);
@@ -437,26 +492,23 @@ TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
 // (minutes, then bad_alloc). Now --shard is digits only with 1 <= I <= K <= 100000 (else exit 2
 // naming the flag and the range), and merge counts missing shards and lists the first few.
 TEST(Power, ShardIsParsedStrictlyAndMissingShardsAreCounted) {
-  using palplab::testing::expect_exit2;
-  using palplab::testing::has;
   auto d = scratch_dir("shard_strict");
-  const std::string base = "power " + null_study() + " --n 2 --replicates 1 --quiet --out ";
+  const std::string base = power_cmd("2", 1);
   for (const char* bad : {"1/4294967297", "1/1000000000", "1/100001", "0/3", "4/3", "+1/2", "1/-2",
                           "1/2x", "1 /2", "1", "/2", "99999999999999999999999/1"}) {
-    const auto r = run_palplab(base + (d / "never").string() + " --shard '" + bad + "'", d);
+    const auto r = run_shard(base, bad, d / "never", d);
     expect_exit2(r, {"--shard: expected I/K, whole numbers with 1 <= I <= K <= 100000",
                      std::string("got \"") + bad + "\""});
     EXPECT_FALSE(fs::exists(d / "never" / "replicates.jsonl")) << bad;
   }
   // The largest K: the merge of shard 1 alone is refused quickly, with a bounded message.
-  ASSERT_EQ(run_palplab(base + (d / "big").string() + " --shard 1/100000", d).code, 0);
-  auto r = run_palplab("merge " + (d / "big").string() + " --out " + (d / "m").string(), d);
+  ASSERT_EQ(run_shard(base, "1/100000", d / "big", d).code, 0);
+  auto r = merge({d / "big"}, d / "m", d);
   expect_exit2(r, {"incomplete merge: 99999 of 100000 shards missing: 2, 3, 4, 5, 6, 7, 8, 9, "
                    "10, 11, … and 99989 more (no replicates.shard-I-of-100000.jsonl among the "
                    "merged files)"});
   EXPECT_LT(r.err.size(), 2000u);
-  r = run_palplab("merge " + (d / "big").string() + " --allow-partial --out " + (d / "m").string(),
-                  d);
+  r = merge({d / "big"}, d / "m", d, " --allow-partial");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = power_json(d / "m")["partial"];
   EXPECT_EQ(j["missing_shard_count"], 99999);
@@ -467,11 +519,10 @@ TEST(Power, ShardIsParsedStrictlyAndMissingShardsAreCounted) {
   std::ofstream f(d / "gap.jsonl");
   for (int rep : {0, 30}) f << record(2, rep, 0.01, 0.3).dump() << "\n";
   f.close();
-  r = run_palplab("merge " + (d / "gap.jsonl").string() + " --out " + (d / "g").string(), d);
+  r = merge({d / "gap.jsonl"}, d / "g", d);
   expect_exit2(r, {"n = 2: replicates 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, … and 19 more of 0-30 "
                    "missing"});
-  r = run_palplab(
-      "merge " + (d / "gap.jsonl").string() + " --allow-partial --out " + (d / "g").string(), d);
+  r = merge({d / "gap.jsonl"}, d / "g", d, " --allow-partial");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto g = power_json(d / "g")["partial"];
   EXPECT_EQ(g["missing_replicate_count"]["2"], 29);
@@ -483,15 +534,12 @@ TEST(Power, ShardIsParsedStrictlyAndMissingShardsAreCounted) {
 // taken for shard 2 of 2. A name that does not parse strictly is not a shard file (its
 // replicates are merged, but it completes no shard set).
 TEST(Power, MergeParsesShardFileNamesStrictly) {
-  using palplab::testing::expect_exit2;
   auto d = scratch_dir("shard_names");
-  const std::string base = "power " + null_study() + " --n 2 --replicates 2 --quiet --out " +
-                           (d / "s").string() + " --shard ";
-  ASSERT_EQ(run_palplab(base + "1/2", d).code, 0);
-  ASSERT_EQ(run_palplab(base + "2/2", d).code, 0);
+  for (const char* shard : {"1/2", "2/2"})
+    ASSERT_EQ(run_shard(power_cmd("2", 2), shard, d / "s", d).code, 0);
   fs::rename(d / "s" / "replicates.shard-2-of-2.jsonl",
              d / "s" / "replicates.shard-2-of-4294967298.jsonl");
-  const auto r = run_palplab("merge " + (d / "s").string() + " --out " + (d / "m").string(), d);
+  const auto r = merge({d / "s"}, d / "m", d);
   expect_exit2(r, {"shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl"});
   fs::remove_all(d);
 }
@@ -500,24 +548,21 @@ TEST(Power, MergeParsesShardFileNamesStrictly) {
 // missing" although every replicate was there. Shard files of different K are refused (exit 2,
 // also with --allow-partial) with a message naming the K and the way out.
 TEST(Power, MergeOfShardsOfDifferentKIsRefused) {
-  using palplab::testing::expect_exit2;
   auto d = scratch_dir("shard_mix");
-  const std::string base = "power " + null_study() + " --n 2,3 --replicates 2 --quiet --out " +
-                           (d / "s").string() + " --shard ";
-  for (const char* s : {"1/3", "2/3", "3/3", "1/2"}) ASSERT_EQ(run_palplab(base + s, d).code, 0);
+  for (const char* s : {"1/3", "2/3", "3/3", "1/2"})
+    ASSERT_EQ(run_shard(power_cmd("2,3", 2), s, d / "s", d).code, 0);
   for (const char* extra : {"", " --allow-partial"}) {
-    const auto r =
-        run_palplab("merge " + (d / "s").string() + extra + " --out " + (d / "m").string(), d);
+    const auto r = merge({d / "s"}, d / "m", d, extra);
     expect_exit2(r, {"shard files of different --shard I/K runs among the merged files (K = 2 "
                      "(1 file), K = 3 (3 files))",
                      "Merge the files of one run"});
     EXPECT_FALSE(fs::exists(d / "m")) << extra;
   }
   // The K = 3 set alone is complete.
-  std::string files;
+  std::vector<fs::path> files;
   for (int i = 1; i <= 3; ++i)
-    files += (d / "s" / ("replicates.shard-" + std::to_string(i) + "-of-3.jsonl")).string() + " ";
-  const auto r = run_palplab("merge " + files + "--out " + (d / "m").string(), d);
+    files.push_back(d / "s" / ("replicates.shard-" + std::to_string(i) + "-of-3.jsonl"));
+  const auto r = merge(files, d / "m", d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");
   fs::remove_all(d);

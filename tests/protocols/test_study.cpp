@@ -53,6 +53,38 @@ std::string edit(const std::string& from, const std::string& to) {
   return s.replace(i, from.size(), to);
 }
 
+// kValid with the first "id": "from" (the study "t", group "B", phase "training") made
+// "id": "to" (`to` as written in JSON: escapes allowed).
+std::string renamed(const std::string& from, const std::string& to) {
+  return edit("\"id\": \"" + from + "\"", "\"id\": \"" + to + "\"");
+}
+
+// `base` (default kValid) with a top-level list "key": [\n    items\n  ] at the end: its first
+// item on line 22 of kValid.
+std::string with_list(const std::string& key, const std::string& items, std::string base = kValid) {
+  return base.replace(base.rfind("  ]\n}"), 5,
+                      "  ],\n  \"" + key + "\": [\n    " + items + "\n  ]\n}");
+}
+
+// kValid with explicit assignment: group A's participants `a`, group B's `b` (JSON arrays).
+std::string with_participants(const std::string& a, const std::string& b) {
+  std::string s = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
+  s = s.replace(s.find("\"size\": 3"), 9, "\"participants\": " + a);
+  return s.replace(s.find("\"size\": 2"), 9, "\"participants\": " + b);
+}
+
+// The reference study exp1_instructor.json with `extra` (JSON) added to its instructor ids:
+// exactly one problem, at $.roles.instructor.ids[10], containing `what`.
+void expect_instructor_id_problem(const std::string& name, const std::string& extra,
+                                  const std::string& what) {
+  std::string in = fixture::reference_study("exp1_instructor.json");
+  in.replace(in.find("\"I10\"]"), 6, "\"I10\", " + extra + "]");
+  auto ps = problems_of(name, in);
+  ASSERT_EQ(ps.size(), 1u) << InputError(ps).what();
+  EXPECT_EQ(ps[0].where.json_path, "$.roles.instructor.ids[10]");
+  EXPECT_NE(ps[0].what.find(what), std::string::npos) << ps[0].what;
+}
+
 // Exactly one problem, at `path`, on line `line`, containing `what`.
 void expect_one(const std::vector<Problem>& ps, const std::string& path, int line,
                 const std::string& what) {
@@ -140,10 +172,7 @@ TEST(Study, EmptyGroups) {
       problems_of("empty2", edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": ["));
   // explicit assignment needs participant lists: both groups lack them
   EXPECT_EQ(ps2.size(), 2u) << InputError(ps2).what();
-  std::string s = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
-  s = s.replace(s.find("\"size\": 3"), 9, "\"participants\": []");
-  s = s.replace(s.find("\"size\": 2"), 9, "\"participants\": [\"x\"]");
-  auto ps3 = problems_of("empty3", s);
+  auto ps3 = problems_of("empty3", with_participants("[]", "[\"x\"]"));
   expect_one(ps3, "$.groups[0].participants", 11, "empty group");
   auto ps4 = problems_of("nogroups", edit("\"groups\": [", "\"groups\": [], \"x_groups\": ["));
   ASSERT_GE(ps4.size(), 1u);
@@ -221,9 +250,7 @@ TEST(Study, ReferenceStudiesAreValid) {
 
 // Analysis keys the report reads (margin, pool_sessions) are accepted and checked.
 TEST(Study, AnalysisMarginAndPoolSessions) {
-  auto with = [](const std::string& analysis) {
-    return edit("  ]\n}", "  ],\n  \"analyses\": [\n    " + analysis + "\n  ]\n}");
-  };
+  auto with = [](const std::string& analysis) { return with_list("analyses", analysis); };
   std::string f = fixture::study_in_dir(
       "anaok",
       with(R"({"kind": "anova_oneway", "measure": "palpation_force", "phase": "training", )"
@@ -247,9 +274,7 @@ TEST(Study, AnalysisMarginAndPoolSessions) {
 
 // Declared hypotheses: checked keys, tests, pairs of known groups, margins for tost, α range.
 TEST(Study, HypothesesChecked) {
-  auto with = [](const std::string& h) {
-    return edit("  ]\n}", "  ],\n  \"hypotheses\": [\n    " + h + "\n  ]\n}");
-  };
+  auto with = [](const std::string& h) { return with_list("hypotheses", h); };
   std::string f = fixture::study_in_dir(
       "hyok",
       with(R"({"id": "H1", "measure": "palpation_force", "phase": "test", )"
@@ -334,30 +359,19 @@ TEST(Study, DuplicateMeasureNamesItsIndex) {
 // (docs/FORMATS.md "Ids"). Control characters (C0, DEL, C1) were the first thing refused; '/'
 // and ',' were accepted (a figure path with a directory in it, a CSV cell that splits).
 TEST(Study, ControlCharactersInIdsAreRejected) {
-  expect_one(problems_of("idnul", edit("\"id\": \"t\"", "\"id\": \"x\\u0000y\"")), "$.id", 3,
-             "got \"x\0y\": U+0000 at character 2");
-  expect_one(problems_of("idesc", edit("\"id\": \"t\"", "\"id\": \"t\\u001b[31m\"")), "$.id", 3,
-             "U+001B");
-  expect_one(problems_of("iddel", edit("\"id\": \"t\"", "\"id\": \"t\\u007f\"")), "$.id", 3,
-             "U+007F");
-  expect_one(problems_of("idc1", edit("\"id\": \"t\"", "\"id\": \"t\\u009b2J\"")), "$.id", 3,
-             "U+009B");
-  expect_one(problems_of("idtab", edit("\"id\": \"t\"", "\"id\": \"a\\tb\"")), "$.id", 3, "U+0009");
+  expect_one(problems_of("idnul", renamed("t", "x\\u0000y")), "$.id", 3,
+             "got \"x\\u0000y\": U+0000 at character 2");
+  expect_one(problems_of("idesc", renamed("t", "t\\u001b[31m")), "$.id", 3, "U+001B");
+  expect_one(problems_of("iddel", renamed("t", "t\\u007f")), "$.id", 3, "U+007F");
+  expect_one(problems_of("idc1", renamed("t", "t\\u009b2J")), "$.id", 3, "U+009B");
+  expect_one(problems_of("idtab", renamed("t", "a\\tb")), "$.id", 3, "U+0009");
   // Group and phase ids: one problem each (references to the id do not report again).
-  expect_one(problems_of("grpnul", edit("{\"id\": \"B\"", "{\"id\": \"B\\u0000\"")),
-             "$.groups[1].id", 12, "U+0000");
-  expect_one(problems_of("phnul", edit("\"id\": \"training\"", "\"id\": \"tr\\nain\"")),
-             "$.phases[0].id", 15, "U+000A");
-  std::string ex = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
-  ex = ex.replace(ex.find("\"size\": 3"), 9, "\"participants\": [\"p1\", \"p\\u0007\", \"p3\"]");
-  ex = ex.replace(ex.find("\"size\": 2"), 9, "\"participants\": [\"p4\"]");
-  expect_one(problems_of("partnul", ex), "$.groups[0].participants[1]", 11, "U+0007");
-  std::string in = fixture::reference_study("exp1_instructor.json");
-  in.replace(in.find("\"I10\"]"), 6, "\"I10\", \"I\\u001b\"]");
-  auto ps = problems_of("instrid", in);
-  ASSERT_EQ(ps.size(), 1u) << InputError(ps).what();
-  EXPECT_EQ(ps[0].where.json_path, "$.roles.instructor.ids[10]");
-  EXPECT_NE(ps[0].what.find("U+001B"), std::string::npos) << ps[0].what;
+  expect_one(problems_of("grpnul", renamed("B", "B\\u0000")), "$.groups[1].id", 12, "U+0000");
+  expect_one(problems_of("phnul", renamed("training", "tr\\nain")), "$.phases[0].id", 15, "U+000A");
+  expect_one(
+      problems_of("partnul", with_participants("[\"p1\", \"p\\u0007\", \"p3\"]", "[\"p4\"]")),
+      "$.groups[0].participants[1]", 11, "U+0007");
+  expect_instructor_id_problem("instrid", "\"I\\u001b\"", "U+001B");
   expect_one(problems_of("hypid", edit("  ]\n}",
                                        "  ],\n  \"hypotheses\": [{\"id\": \"H\\u0001\", "
                                        "\"measure\": \"accuracy\", \"phase\": \"test\", "
@@ -370,33 +384,24 @@ TEST(Study, IdsFollowOneGrammar) {
       "expected an id of 1 to 64 ASCII letters, digits, '_', '-' or '.', starting with a letter "
       "or digit (ids become file names and CSV cells), got ";
   // Every kind of id, each with what is wrong with it.
-  expect_one(problems_of("idslash", edit("\"id\": \"t\"", "\"id\": \"a/b\"")), "$.id", 3,
+  expect_one(problems_of("idslash", renamed("t", "a/b")), "$.id", 3,
              rule + "\"a/b\": '/' (U+002F) at character 2");
-  expect_one(problems_of("idcomma", edit("{\"id\": \"B\"", "{\"id\": \"B,C\"")), "$.groups[1].id",
-             12, rule + "\"B,C\": ',' (U+002C) at character 2");
-  expect_one(problems_of("idspace", edit("\"id\": \"training\"", "\"id\": \"day 1\"")),
-             "$.phases[0].id", 15, rule + "\"day 1\": ' ' (U+0020) at character 4");
-  expect_one(problems_of("iddot", edit("\"id\": \"training\"", "\"id\": \"..\"")), "$.phases[0].id",
-             15, rule + "\"..\": it starts with '.' (U+002E)");
-  expect_one(problems_of("iddash", edit("\"id\": \"t\"", "\"id\": \"-rf\"")), "$.id", 3,
-             "it starts with '-'");
-  expect_one(problems_of("idutf8", edit("\"id\": \"t\"", "\"id\": \"\\u00e9tude\"")), "$.id", 3,
+  expect_one(problems_of("idcomma", renamed("B", "B,C")), "$.groups[1].id", 12,
+             rule + "\"B,C\": ',' (U+002C) at character 2");
+  expect_one(problems_of("idspace", renamed("training", "day 1")), "$.phases[0].id", 15,
+             rule + "\"day 1\": ' ' (U+0020) at character 4");
+  expect_one(problems_of("iddot", renamed("training", "..")), "$.phases[0].id", 15,
+             rule + "\"..\": it starts with '.' (U+002E)");
+  expect_one(problems_of("iddash", renamed("t", "-rf")), "$.id", 3, "it starts with '-'");
+  expect_one(problems_of("idutf8", renamed("t", "\\u00e9tude")), "$.id", 3,
              rule + "\"\xc3\xa9tude\": '\xc3\xa9' (U+00E9) at character 1");
-  expect_one(problems_of("idquote", edit("\"id\": \"t\"", "\"id\": \"a\\\"b\"")), "$.id", 3,
+  expect_one(problems_of("idquote", renamed("t", "a\\\"b")), "$.id", 3,
              "'\"' (U+0022) at character 2");
-  expect_one(
-      problems_of("idlong", edit("\"id\": \"t\"", "\"id\": \"" + std::string(65, 'x') + "\"")),
-      "$.id", 3, "...\" (65 characters)");
-  std::string ex = edit("\"groups\": [", "\"assignment\": \"explicit\", \"groups\": [");
-  ex = ex.replace(ex.find("\"size\": 3"), 9, "\"participants\": [\"p1\", \"p/2\", \"p3\"]");
-  ex = ex.replace(ex.find("\"size\": 2"), 9, "\"participants\": [\"p4\"]");
-  expect_one(problems_of("partslash", ex), "$.groups[0].participants[1]", 11, "'/' (U+002F)");
-  std::string in = fixture::reference_study("exp1_instructor.json");
-  in.replace(in.find("\"I10\"]"), 6, "\"I10\", \"\"]");
-  auto ps = problems_of("instrempty", in);
-  ASSERT_EQ(ps.size(), 1u) << InputError(ps).what();
-  EXPECT_EQ(ps[0].where.json_path, "$.roles.instructor.ids[10]");
-  EXPECT_NE(ps[0].what.find(rule + "an empty id"), std::string::npos) << ps[0].what;
+  expect_one(problems_of("idlong", renamed("t", std::string(65, 'x'))), "$.id", 3,
+             rule + "\"" + std::string(40, 'x') + "\"… (65 characters)");
+  expect_one(problems_of("partslash", with_participants("[\"p1\", \"p/2\", \"p3\"]", "[\"p4\"]")),
+             "$.groups[0].participants[1]", 11, "'/' (U+002F)");
+  expect_instructor_id_problem("instrempty", "\"\"", rule + "an empty id");
   expect_one(problems_of("hypcomma", edit("  ]\n}",
                                           "  ],\n  \"hypotheses\": [{\"id\": \"H1,H2\", "
                                           "\"measure\": \"accuracy\", \"phase\": \"test\", "
@@ -412,13 +417,55 @@ TEST(Study, IdsFollowOneGrammar) {
   EXPECT_EQ(load_study(f, fixture::tract_inspector()).phases[0].id, "0.day-1_b");
 }
 
+// The offending id was printed raw between quotes: an id holding '"' read as two strings, one
+// holding a newline split the message, and a long id was cut at a byte (possibly inside a
+// character) with no length. It is shown as a JSON string, cut after 40 characters with '…'
+// and its length in characters.
+TEST(Study, OffendingIdIsShownAsAJsonStringCutWhenLong) {
+  const std::string got =
+      "starting with a letter or digit (ids become file names and CSV cells), got ";
+  // Quotes and backslashes escaped: one readable string.
+  expect_one(problems_of("idq", renamed("t", "a\\\"b")), "$.id", 3,
+             got + R"("a\"b": '"' (U+0022) at character 2)");
+  expect_one(problems_of("idbs", renamed("t", "a\\\\b")), "$.id", 3,
+             got + R"("a\\b": '\' (U+005C) at character 2)");
+  // Control characters as JSON escapes: the message stays on one line.
+  auto ps = problems_of("idnl", renamed("training", "tr\\nain"));
+  expect_one(ps, "$.phases[0].id", 15, got + R"("tr\nain": U+000A at character 3)");
+  EXPECT_EQ(ps.at(0).format().find('\n'), std::string::npos) << ps[0].format();
+  expect_one(problems_of("idesc2", renamed("t", "t\\u001b[31m")), "$.id", 3,
+             got + R"("t\u001b[31m": U+001B at character 2)");
+  // Long ids: the first 40 characters (escapes count as one), '…' and the length.
+  const std::string x40(40, 'x');
+  expect_one(problems_of("idlong2", renamed("t", std::string(100, 'x') + "/")), "$.id", 3,
+             got + "\"" + x40 + "\"… (101 characters): '/' (U+002F) at character 101");
+  expect_one(
+      problems_of("idlongq", renamed("t", std::string(30, 'x') + "\\\"" + std::string(50, 'x'))),
+      "$.id", 3,
+      got + "\"" + std::string(30, 'x') + "\\\"" + std::string(9, 'x') +
+          "\"… (81 characters): '\"' (U+0022) at character 31");
+  // Cut at a character, not a byte: 45 × 'é' (2 bytes each) shows 40 of them.
+  std::string e45_json, e40;
+  for (int i = 0; i < 45; ++i) {
+    e45_json += "\\u00e9";
+    if (i < 40) e40 += "\xc3\xa9";
+  }
+  expect_one(problems_of("idlongu", renamed("t", e45_json)), "$.id", 3,
+             got + "\"" + e40 + "\"… (45 characters): '\xc3\xa9' (U+00E9) at character 1");
+  // 41 to 64 characters: too long to show whole, yet within the length limit.
+  expect_one(problems_of("idmid", renamed("t", std::string(50, 'x') + ",")), "$.id", 3,
+             got + "\"" + x40 + "\"… (51 characters): ',' (U+002C) at character 51");
+  // Up to 40 characters: whole, no length.
+  expect_one(problems_of("idshort", renamed("t", std::string(39, 'x') + ",")), "$.id", 3,
+             got + "\"" + std::string(39, 'x') + ",\": ',' (U+002C) at character 40");
+}
+
 // An ANOVA or a pair of a one-group study can never be computed: the validator refuses it at the
 // analysis (validate, run and power alike); descriptives are fine. A hypothesis compares groups.
 TEST(Study, GroupComparisonsNeedTwoGroups) {
   std::string one = edit(",\n    {\"id\": \"B\", \"prototype\": \"B\", \"size\": 2}", "");
   auto with = [&](const std::string& key, const std::string& list) {
-    std::string s = one;
-    return s.replace(s.rfind("  ]\n}"), 5, "  ],\n  \"" + key + "\": [\n    " + list + "\n  ]\n}");
+    return with_list(key, list, one);
   };
   auto ps = problems_of(
       "onegroup",
