@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "common/read_file.hpp"
 
 namespace palplab::analysis {
 
@@ -202,11 +203,8 @@ CsvTable read_csv(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError("is a directory, expected a CSV file", path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open CSV file (does it exist and is it readable?)", path);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_csv(ss.str(), path);
+  // Bounded: a CSV of measures is megabytes; /dev/zero or a pipe that never ends stops here.
+  return parse_csv(read_file_bounded(path, kMaxCsvFileBytes, "CSV file"), path);
 }
 
 int column_index(const CsvTable& t, std::string_view name) {

@@ -5,6 +5,7 @@
 // of the record (the physical line on which the record starts), so a researcher can find it.
 // The text must be UTF-8 (a Latin-1 / Windows-1252 file is an error at its first non-UTF-8 byte,
 // saying how to convert it): labels go into JSON output, which is UTF-8 only.
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -23,7 +24,11 @@ struct CsvTable {
 
 // Parses CSV text. `file` only labels error messages.
 CsvTable parse_csv(std::string_view text, const std::string& file = {});
-// Reads and parses a file; a missing or unreadable file is an InputError.
+// Largest CSV read (1 GiB: a measures table of thousands of studies; a samples.csv of a long
+// study may be larger: select its rows first). Checked while reading.
+inline constexpr std::size_t kMaxCsvFileBytes = 1024u * 1024 * 1024;
+// Reads and parses a file; a missing or unreadable file, a directory or one above
+// kMaxCsvFileBytes is an InputError.
 CsvTable read_csv(const std::string& path);
 
 // Index of column `name`; throws InputError listing the available columns when it is absent.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <tuple>
 
 namespace palplab::json {
@@ -61,6 +62,30 @@ std::string join(const std::vector<std::string>& v) {
 std::string shown(const json& v) {
   std::string s = v.dump(-1, ' ', false, json::error_handler_t::replace);
   return s.size() > 60 ? s.substr(0, 60) + "..." : s;
+}
+
+// Why a value is not an integer, for "expected ..., got <this>": a whole number written beyond
+// the 64-bit range (the parser keeps it as a double) is out of range, not "a number".
+// `literal` is the number as written in the file (the double's digits would differ).
+std::string not_an_integer(const json& v, const std::string& literal, const char* range) {
+  if (v.is_number_float()) {
+    const double x = v.get<double>();
+    const std::string as_written = literal.empty() ? shown(v) : literal;
+    if (std::isfinite(x) && x == std::floor(x))
+      return std::fabs(x) >= 9.2e18 ? as_written + ", out of range " + range
+                                    : as_written + " (write an integer as digits only)";
+    return "a number with a fraction, " + as_written;
+  }
+  return kind_name(v);
+}
+
+// The number token starting at `offset` of `text` ("" when there is none).
+std::string number_literal(std::string_view text, long offset) {
+  if (offset < 0 || static_cast<std::size_t>(offset) >= text.size()) return "";
+  std::size_t e = static_cast<std::size_t>(offset);
+  while (e < text.size() && e - offset < 60 && std::strchr("+-0123456789.eE", text[e]) && text[e])
+    ++e;
+  return std::string(text.substr(offset, e - offset));
 }
 
 }  // namespace
@@ -194,7 +219,9 @@ std::optional<long long> Checker::integer(const json& o, const std::string& path
   if (!v) return std::nullopt;
   const std::string p = path_key(path, key);
   if (!v->is_number_integer()) {
-    err(p, std::string("expected ") + expected + ", got " + kind_name(*v));
+    err(p, std::string("expected ") + expected + ", got " +
+               not_an_integer(*v, number_literal(text_, locator().value(p).offset),
+                              "[-9223372036854775808, 9223372036854775807]"));
     return std::nullopt;
   }
   if (v->is_number_unsigned() &&
@@ -213,8 +240,13 @@ std::optional<unsigned long long> Checker::uint64(const json& o, const std::stri
   if (!v) return std::nullopt;
   if (v->is_number_unsigned() || (v->is_number_integer() && v->get<long long>() >= 0))
     return v->get<unsigned long long>();
-  err(path_key(path, key), std::string("expected ") + expected + ", got " +
-                               (v->is_number_integer() ? "a negative integer" : kind_name(*v)));
+  err(path_key(path, key),
+      std::string("expected ") + expected + ", got " +
+          (v->is_number_integer()
+               ? "a negative integer"
+               : not_an_integer(*v,
+                                number_literal(text_, locator().value(path_key(path, key)).offset),
+                                "[0, 18446744073709551615]")));
   return std::nullopt;
 }
 

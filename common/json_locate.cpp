@@ -1,15 +1,13 @@
 #include "common/json_locate.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+
+#include "common/read_file.hpp"
 
 namespace palplab::json {
 
@@ -442,27 +440,8 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
 }
 
 nlohmann::json parse_file_located(const std::string& path, std::string* text_out) {
-  // POSIX reads: an ifstream's locale and buffer set-up cost more than reading a prototype.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw InputError("cannot open file (expected a readable JSON file)", path);
-  std::string text;
-  struct stat st {};
-  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
-    ::close(fd);
-    throw InputError("is a directory (expected a JSON file)", path);
-  }
-  if (st.st_size > 0) text.reserve(static_cast<std::size_t>(st.st_size));
-  char chunk[16384];
-  for (;;) {
-    const ssize_t k = ::read(fd, chunk, sizeof chunk);
-    if (k < 0) {
-      ::close(fd);
-      throw InputError("cannot read file (expected a readable JSON file)", path);
-    }
-    if (k == 0) break;
-    text.append(chunk, static_cast<std::size_t>(k));
-  }
-  ::close(fd);
+  // A palplab JSON file (study, prototype, material table, reported statistics) is kilobytes.
+  std::string text = read_file_bounded(path, kMaxJsonFileBytes, "JSON file");
   nlohmann::json j = parse_located(text, path);
   if (text_out) *text_out = std::move(text);
   return j;

@@ -36,7 +36,11 @@ inline constexpr int kMaxDepth = 64;
 // so are nesting deeper than kMaxDepth and numbers that overflow a double (1e400).
 nlohmann::json parse_located(std::string_view text, const std::string& file);
 
-// Reads and parses a file; a missing/unreadable file is an InputError naming it.
+// Largest JSON file read (parse_file_located): 256 MiB, far above any study or prototype.
+inline constexpr std::size_t kMaxJsonFileBytes = 256u * 1024 * 1024;
+
+// Reads and parses a file; a missing/unreadable file, a directory or one above
+// kMaxJsonFileBytes (checked while reading: /dev/zero stops there) is an InputError naming it.
 nlohmann::json parse_file_located(const std::string& path, std::string* text_out = nullptr);
 
 // Child paths in the message syntax: path_key("$", "groups") == "$.groups",

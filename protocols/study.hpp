@@ -147,6 +147,7 @@ std::string measure_unit(const std::string& measure);
 struct PrototypeInfo {
   std::vector<std::string> region_names;
   std::string scene;  // may be empty
+  std::string id;     // the file's "id" (may be empty: not checked)
 };
 using PrototypeInspector = std::function<PrototypeInfo(const std::string& prototype_path)>;
 PrototypeInspector engine_prototype_inspector();

@@ -12,6 +12,7 @@
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
 #include "common/json_locate.hpp"
+#include "common/read_file.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/resolve.hpp"
@@ -856,8 +857,21 @@ Study parse_study(const std::string& text, const std::string& file,
       continue;
     }
     try {
-      palplab::json::parse_file_located(f);  // exists and parses, located errors otherwise
-      infos[id] = inspect ? inspect(f) : PrototypeInfo{};
+      std::string text;  // exists and parses, located errors otherwise
+      palplab::json::parse_file_located(f, &text);
+      const PrototypeInfo info = inspect ? inspect(f) : PrototypeInfo{};
+      // A study names a prototype by its file (ID.json); the file's own "id" must agree, or
+      // the database would store one name while `probe`, `scene` and the report show another.
+      if (!info.id.empty() && info.id != id) {
+        c.problems().push_back({palplab::json::JsonLocator(text).locate(f, "$.id"),
+                                "expected \"" + id + "\" (the prototype's file name, " + id +
+                                    ".json, is its id), got \"" + info.id +
+                                    "\": rename the file or the id"});
+        c.err(path, "prototype \"" + id + "\" (" + f + ") has the id \"" + info.id + "\"");
+        failed.insert(id);
+        continue;
+      }
+      infos[id] = info;
       s.prototype_files[id] = f;
     } catch (const InputError& e) {
       for (const auto& p : e.problems()) c.problems().push_back(p);
@@ -906,11 +920,9 @@ Study load_study(const std::string& path, const PrototypeInspector& inspect) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError("is a directory (expected a study file, JSON)", path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open study file (expected a readable JSON file)", path);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_study(ss.str(), path, inspect);
+  // Bounded like every JSON input: /dev/zero or a pipe that never ends stops at the limit.
+  return parse_study(read_file_bounded(path, palplab::json::kMaxJsonFileBytes, "study file (JSON)"),
+                     path, inspect);
 }
 
 }  // namespace palplab::protocols

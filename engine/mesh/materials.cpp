@@ -13,6 +13,7 @@
 
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
+#include "common/read_file.hpp"
 
 namespace palplab::mesh {
 
@@ -222,11 +223,8 @@ MaterialTable read_materials(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError("is a directory (expected a material table, JSON)", path);
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open material table", path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_materials(ss.str(), path);
+  return parse_materials(
+      read_file_bounded(path, palplab::json::kMaxJsonFileBytes, "material table (JSON)"), path);
 }
 
 std::string materials_to_json(const MaterialTable& t) {

@@ -125,6 +125,32 @@ TEST(CliValidate, AllProblemsLocatedExitTwo) {
   EXPECT_NE(r2.err.find((d2 / "Broken.json").string() + ":1:"), std::string::npos) << r2.err;
 }
 
+// Review finding: a prototype file X.json whose "id" is "Y" was accepted as prototype X; the
+// database stored X while probe and the scene showed Y. The id must be the file name.
+TEST(CliValidate, PrototypeWhoseIdIsNotItsFileNameIsRefused) {
+  auto d = scratch_dir("protoid");
+  copy_prototype("A", d, "A");
+  copy_prototype("B", d, "Y");
+  fs::rename(d / "Y.json", d / "X.json");
+  std::ofstream(d / "s.json") << small_study("A", "X", 1, 10);
+  for (const char* cmd : {"validate ", "run "}) {
+    const std::string extra = std::string(cmd) == "run " ? " --db " + (d / "x.db").string() : "";
+    Result r = run_palplab(cmd + (d / "s.json").string() + extra, d);
+    EXPECT_EQ(r.code, 2) << cmd << r.err;
+    // Located in the prototype file, at its id, and named in the study.
+    EXPECT_NE(r.err.find((d / "X.json").string() + ":3:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("$.id: expected \"X\" (the prototype's file name, X.json, is its id), "
+                         "got \"Y\""),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("prototype \"X\""), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "x.db"));
+  // Renamed consistently (file and id), it is valid.
+  copy_prototype("B", d, "X");
+  EXPECT_EQ(run_palplab("validate " + (d / "s.json").string(), d).code, 0);
+}
+
 // Review finding: validate (and so run) accepted a one-group study declaring an ANOVA or a
 // pairwise t-test, which can never be computed; only `power` refused it, with its own copy of
 // the check. Now the study validator refuses it at the analysis, for every command.

@@ -82,6 +82,16 @@ TEST(CliRunInput, StudyThatIsADirectoryIsSaidAsSuch) {
   EXPECT_FALSE(fs::exists(d / "r.db"));
 }
 
+// Review finding: `validate /dev/zero` read until memory ran out (exit 3, std::bad_alloc).
+TEST(CliRunInput, EndlessStudyInputStopsAtTheSizeLimit) {
+  auto d = scratch_dir("run_devzero");
+  Result r = run_palplab("validate /dev/zero", d);
+  expect_exit2(r, {"/dev/zero", "more than the 256 MiB accepted for study file (JSON)"});
+  r = run_palplab("run /dev/zero --db " + (d / "r.db").string() + " --quiet", d);
+  expect_exit2(r, {"/dev/zero", "more than the 256 MiB"});
+  EXPECT_FALSE(fs::exists(d / "r.db"));
+}
+
 TEST(CliRunInput, ResumeOfADatabaseWithAMissingSessionIsRefused) {
   // Sessions 0 and 1 of G1's participant are written; deleting ordinal 0 leaves ordinal 1
   // without its predecessor. Resuming used to simulate ordinal 0 again and then fail writing

@@ -1,10 +1,14 @@
 // The one JSON validator (common/json_check.hpp) and the hardened parser (json_locate).
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <fstream>
 #include <string>
+#include <utility>
 
 #include "common/escape.hpp"
 #include "common/json_check.hpp"
+#include "common/read_file.hpp"
 
 using namespace palplab;
 using Json = nlohmann::json;
@@ -49,6 +53,64 @@ TEST(JsonCheck, IntegersOutsideTheirRangeNeverWrap) {
     EXPECT_EQ(c.integer(j, "$", "n", true, 1, 100000, "a group size"), 100000);
   });
   EXPECT_TRUE(ok.empty());
+}
+
+// Review finding: a seed of 2^64 (the parser keeps it as a double) said "got a number".
+TEST(JsonCheck, AWholeNumberBeyondSixtyFourBitsIsOutOfRangeAsWritten) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"18446744073709551616", "got 18446744073709551616, out of range [0, 18446744073709551615]"},
+      {"1e30", "got 1e30, out of range [0, 18446744073709551615]"},
+      {"1.5e3", "got 1.5e3 (write an integer as digits only)"},
+      {"2.5", "got a number with a fraction, 2.5"},
+      {"-1", "got a negative integer"},
+      {"\"7\"", "got a string"}};
+  for (const auto& [v, expected] : cases) {
+    auto ps = problems(std::string("{\"seed\": ") + v + "}", [](Checker& c, const Json& j) {
+      EXPECT_FALSE(c.uint64(j, "$", "seed", true, "an integer >= 0").has_value());
+    });
+    ASSERT_EQ(ps.size(), 1u) << v;
+    EXPECT_EQ(ps[0].where.column, 10);
+    EXPECT_NE(ps[0].what.find(expected), std::string::npos) << ps[0].what;
+  }
+  auto ps = problems("{\"t\": -9223372036854775809}", [](Checker& c, const Json& j) {
+    EXPECT_FALSE(c.integer(j, "$", "t", true, "an integer").has_value());
+  });
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_NE(ps[0].what.find("got -9223372036854775809, out of range "
+                            "[-9223372036854775808, 9223372036854775807]"),
+            std::string::npos)
+      << ps[0].what;
+  auto ok = problems("{\"seed\": 18446744073709551615}", [](Checker& c, const Json& j) {
+    EXPECT_EQ(c.uint64(j, "$", "seed", true, "an integer >= 0"), 18446744073709551615ull);
+  });
+  EXPECT_TRUE(ok.empty());
+}
+
+// Review finding: `validate /dev/zero` read until memory ran out (std::bad_alloc, exit 3).
+// Every whole-file read of an input is bounded, and checked while reading.
+TEST(ReadFile, EndlessAndOversizedInputsStopAtTheLimit) {
+  auto message = [](const std::string& path, std::size_t limit) {
+    try {
+      read_file_bounded(path, limit, "JSON file");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("/dev/zero", 1u << 20)
+                .find("/dev/zero: more than the 1 MiB accepted for "
+                      "JSON file"),
+            std::string::npos);
+  const std::string dir = ::testing::TempDir();
+  const std::string big = dir + "/palplab_read_file_big.json";
+  { std::ofstream(big) << std::string(5000, ' ') << "{}"; }
+  EXPECT_NE(message(big, 4096).find("is 5002 bytes, more than the 4096 bytes accepted"),
+            std::string::npos)
+      << message(big, 4096);
+  EXPECT_EQ(read_file_bounded(big, 5002, "JSON file").size(), 5002u);  // at the limit: read
+  EXPECT_NE(message(dir, 4096).find("is a directory, expected a JSON file"), std::string::npos);
+  EXPECT_NE(message(dir + "/no_such_file.json", 4096).find("cannot open file"), std::string::npos);
+  std::remove(big.c_str());
 }
 
 TEST(JsonCheck, NumbersAreFiniteAndInRange) {

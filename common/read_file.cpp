@@ -1,0 +1,60 @@
+#include "common/read_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "common/input_error.hpp"
+
+namespace palplab {
+
+namespace {
+
+std::string size_text(std::size_t bytes) {
+  if (bytes % (1024 * 1024) == 0) return std::to_string(bytes / (1024 * 1024)) + " MiB";
+  return std::to_string(bytes) + " bytes";
+}
+
+}  // namespace
+
+std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
+                              const std::string& what) {
+  // POSIX reads: an ifstream's locale and buffer set-up cost more than reading a prototype.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError("cannot open file (expected a readable " + what + ")", path);
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw InputError("is a directory, expected a " + what, path);
+  }
+  std::string text;
+  if (S_ISREG(st.st_mode) && st.st_size > 0) {
+    if (static_cast<unsigned long long>(st.st_size) > max_bytes) {
+      ::close(fd);
+      throw InputError("is " + std::to_string(st.st_size) + " bytes, more than the " +
+                           size_text(max_bytes) + " accepted for " + what,
+                       path);
+    }
+    text.reserve(static_cast<std::size_t>(st.st_size));
+  }
+  char chunk[65536];
+  for (;;) {
+    const ssize_t k = ::read(fd, chunk, sizeof chunk);
+    if (k < 0) {
+      ::close(fd);
+      throw InputError("cannot read file (expected a readable " + what + ")", path);
+    }
+    if (k == 0) break;
+    if (text.size() + static_cast<std::size_t>(k) > max_bytes) {
+      ::close(fd);
+      throw InputError("more than the " + size_text(max_bytes) + " accepted for " + what +
+                           " (an endless input such as a device or a pipe that does not end?)",
+                       path);
+    }
+    text.append(chunk, static_cast<std::size_t>(k));
+  }
+  ::close(fd);
+  return text;
+}
+
+}  // namespace palplab
