@@ -2,7 +2,7 @@
 // case the computed value, the analytic value, the relative error, its tolerance and the
 // observed convergence order. Exit 0 when every case is within tolerance, 1 otherwise.
 // `palplab fem reference PROTOTYPE.json --press REGION --force N [--levels 3] --out FILE.json
-//  [--refinement nested|tetgen] [--steps 5]`:
+//  [--refinement nested|tetgen] [--steps 5] [--overwrite]`:
 // the accuracy reference (engine/models/fem_reference.hpp) of one press on the prototype's tet
 // mesh: the static response on `levels` meshes — by default the prototype's mesh and its
 // nested red refinements (1 -> 8 tets, h halved); --refinement tetgen: TetGen meshes of its
@@ -11,7 +11,9 @@
 // level, and the quasi-static force-displacement curve of a slow press (`--steps` load steps,
 // geometrically nonlinear FEM, --material; 0 = none) (docs/FORMATS.md "FEM reference"). Exit 0; 1
 // when the curve is incomplete (a load step did not converge: the file holds the curve up to the
-// last load every level reached and the reason, `curve.failure`); 2 bad input.
+// last load every level reached and the reason, `curve.failure`); 2 bad input (every argument,
+// --out included, is checked before the work starts: --out is never the prototype or its mesh,
+// and an existing file that is not a fem reference JSON is replaced only with --overwrite).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -31,6 +33,7 @@
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
 #include "engine/haptics/press.hpp"
+#include "engine/haptics/scene_file.hpp"
 #include "engine/models/fem_reference.hpp"
 #include "engine/models/fem_verify.hpp"
 #include "engine/models/model.hpp"
@@ -102,8 +105,9 @@ struct ReferenceArgs {
   double force = 0;
   int levels = 3;
   int steps = 5;
-  int newton_max = 30;  // full Newton iterations per load increment of the curve
-  int bisections = 4;   // halvings of a curve load step that does not converge
+  int newton_max = 30;     // full Newton iterations per load increment of the curve
+  int bisections = 4;      // halvings of a curve load step that does not converge
+  bool overwrite = false;  // --overwrite: replace an existing --out of another kind
   // The curve's material: the engine's default.
   std::string material = palplab::engine::to_string(palplab::engine::kDefaultCurveMaterial);
 };
@@ -118,6 +122,11 @@ struct ReferenceSetup {
   palplab::engine::FemReferenceOptions o;
   std::string id, region;  // the prototype's id, the pressed node's region ("" = none)
   int node = -1;           // the pressed surface node
+  // The files the reference is computed from (the prototype, its mesh files): never an --out.
+  std::vector<palplab::app::CommandInput> inputs;
+  // A note for stderr on the cost ("this takes minutes and GBs"), printed by the command once
+  // every argument has been checked (an error is never preceded by it).
+  std::string note;
 };
 // `built_levels`: the levels the command builds (fem solvers builds fewer than a.levels; 0 = all).
 // `auto_grading`: --grade auto may add grading rounds up to --grade-max (fem reference).
@@ -140,6 +149,23 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("--material: ") + e.what());
   }
+  if (a.newton_max < 0 || a.newton_max > 1000)
+    throw InputError("--newton-max: expected 0 to 1000 iterations, got " +
+                     std::to_string(a.newton_max));
+  if (a.bisections < 0 || a.bisections > 20)
+    throw InputError("--bisections: expected 0 to 20 halvings, got " +
+                     std::to_string(a.bisections));
+  if (!(a.volume_scale > 0) || !std::isfinite(a.volume_scale) || a.volume_scale > 1e3)
+    throw InputError("--volume-scale: expected a factor in (0, 1000]");
+  // The values of --solver: the engine's sparse factorisations (engine::parse_sparse_solver:
+  // ldlt, cholmod, auto) and pcg, which this command adds.
+  if (a.solver != "ldlt" && a.solver != "cholmod" && a.solver != "pcg" && a.solver != "auto")
+    throw InputError("--solver: expected one of ldlt, cholmod, pcg, auto, got \"" + a.solver +
+                     "\"");
+  if (a.solver == "pcg" && a.steps > 0)
+    throw InputError(
+        "--solver pcg: the quasi-static curve (--steps) reuses a factorisation; use --steps 0 "
+        "with pcg, or ldlt / cholmod / auto");
   // Grading of level 0 around the press (fem_reference.hpp): auto (-1 here) = until the loaded
   // edges are at most the pad radius; 0 = the prototype's own mesh as level 0. Checked before
   // the prototype is loaded (which can take seconds).
@@ -154,7 +180,11 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
     if (used != a.grade.size() || grade_rounds < 0 || grade_rounds > 6)
       throw InputError("--grade: expected auto or 0 to 6 rounds, got \"" + a.grade + "\"");
   }
+  ReferenceSetup su;
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
+  su.inputs.push_back({"the prototype file", a.prototype});
+  for (const auto& s : engine::scene_sources(cfg))
+    su.inputs.push_back({"the " + s.role + " file of the prototype", s.path});
   const auto cm = engine::scene_mesh(cfg.mesh);
   if (!cm->tet)
     throw InputError("prototype " + cfg.id +
@@ -181,30 +211,25 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
                        std::to_string(static_cast<long>(finest)) +
                        " tets on the finest level (limit 2e6): use fewer levels or a coarser "
                        "copy of the prototype (mesh \"vertices\")");
-    if (finest > 2e5)
-      std::fprintf(stderr,
-                   "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
-                   "per level; a graded level 0, --grade, is larger): this takes "
-                   "minutes and GBs of memory; a coarser copy of the prototype (mesh "
-                   "\"vertices\": 400) runs in about a minute\n",
-                   finest);
+    if (finest > 2e5) {
+      char note[400];
+      std::snprintf(note, sizeof note,
+                    "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
+                    "per level; a graded level 0, --grade, is larger): this takes "
+                    "minutes and GBs of memory; a coarser copy of the prototype (mesh "
+                    "\"vertices\": 400) runs in about a minute\n",
+                    finest);
+      su.note = note;
+    }
   }
   engine::FemReferenceOptions o = engine::reference_options_for_prototype(cfg, node, a.force);
   o.levels = a.levels;
   o.refinement =
       a.refinement == "nested" ? engine::FemRefinement::nested : engine::FemRefinement::tetgen;
   o.curve_steps = a.steps;
-  if (a.newton_max < 0 || a.newton_max > 1000)
-    throw InputError("--newton-max: expected 0 to 1000 iterations, got " +
-                     std::to_string(a.newton_max));
-  if (a.bisections < 0 || a.bisections > 20)
-    throw InputError("--bisections: expected 0 to 20 halvings, got " +
-                     std::to_string(a.bisections));
   o.curve_max_newton = a.newton_max;
   o.curve_bisections = a.bisections;
   o.curve_material = engine::parse_corot_material(a.material);
-  if (!(a.volume_scale > 0) || !std::isfinite(a.volume_scale) || a.volume_scale > 1e3)
-    throw InputError("--volume-scale: expected a factor in (0, 1000]");
   o.max_volume *= a.volume_scale;
   if (a.refinement == "nested")
     o.grade_rounds = grade_rounds >= 0 ? grade_rounds : engine::auto_grade_rounds(o);
@@ -232,20 +257,11 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
   }
   if (a.solver == "pcg") {
     // Static references only: Jacobi-PCG from kCholmodMinDofs free dofs (fem_reference.hpp).
-    if (a.steps > 0)
-      throw InputError(
-          "--solver pcg: the quasi-static curve (--steps) reuses a factorisation; use --steps 0 "
-          "with pcg, or ldlt / cholmod / auto");
     o.solver = engine::SparseSolverKind::automatic;
     o.pcg_min_dofs = engine::kCholmodMinDofs;
   } else {
-    try {
-      o.solver = engine::parse_sparse_solver(a.solver);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("--solver: ") + e.what() + " (or pcg)");
-    }
+    o.solver = engine::parse_sparse_solver(a.solver);
   }
-  ReferenceSetup su;
   su.o = std::move(o);
   su.id = cfg.id;
   su.node = node;
@@ -253,13 +269,29 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
   return su;
 }
 
+// True when the file `path` is a JSON object whose "format" starts with `format` (e.g.
+// "palplab-fem-reference/"): an output of that kind, which its command may replace.
+bool json_file_of_format(const std::string& path, const std::string& format) {
+  std::ifstream in(path, std::ios::binary);
+  const json j = json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return false;
+  const auto f = j.find("format");
+  return f != j.end() && f->is_string() && f->get<std::string>().rfind(format, 0) == 0;
+}
+
 int run_reference(const ReferenceArgs& a) {
   using namespace palplab;
   if (a.out.empty()) throw InputError("--out: expected an output file name");
-  app::require_writable_file("--out", a.out);
   if (a.grade_max < 0 || a.grade_max > 6)
     throw InputError("--grade-max: expected 0 to 6 rounds, got " + std::to_string(a.grade_max));
   const ReferenceSetup su = reference_setup(a);
+  // --out is none of the inputs and replaces no file of another kind (a prototype, a database)
+  // unless --overwrite: checked before the work, as every argument (app/command.hpp).
+  app::require_replaceable_output(
+      "--out", a.out, su.inputs,
+      [](const std::string& p) { return json_file_of_format(p, "palplab-fem-reference/"); },
+      "palplab fem reference JSON (\"format\": \"palplab-fem-reference/1\")", a.overwrite);
+  std::fputs(su.note.c_str(), stderr);
   engine::FemReferenceOptions o = su.o;
   const bool nested = a.refinement == "nested";
   // --grade auto on nested levels: the grading rounds chosen by the reference's own trust
@@ -527,6 +559,7 @@ struct SolverArgs {
   double mem_limit_gb = 6;
   double cpu_limit_s = 900;
   std::string out;
+  bool overwrite = false;  // --overwrite: replace an existing --out of another kind
 };
 
 struct SolverRun {
@@ -629,7 +662,6 @@ int run_solvers(const SolverArgs& a) {
     throw InputError("--level: expected 1 to 3, got " + std::to_string(a.level));
   if (!(a.cg_tolerance > 0 && a.cg_tolerance < 1))
     throw InputError("--cg-tolerance: expected a relative residual in (0, 1)");
-  if (!a.out.empty()) app::require_writable_file("--out", a.out);
   std::vector<std::string> names;
   for (size_t i = 0; i <= a.solvers.size();) {
     const size_t j = std::min(a.solvers.find(',', i), a.solvers.size());
@@ -647,6 +679,12 @@ int run_solvers(const SolverArgs& a) {
   ReferenceArgs ra = a.ref;
   ra.levels = std::max(3, a.level + 1);
   const ReferenceSetup su = reference_setup(ra, a.level + 1, false);
+  if (!a.out.empty())
+    app::require_replaceable_output(
+        "--out", a.out, su.inputs,
+        [](const std::string& p) { return json_file_of_format(p, "palplab-fem-solvers/"); },
+        "palplab fem solvers JSON (\"format\": \"palplab-fem-solvers/1\")", a.overwrite);
+  std::fputs(su.note.c_str(), stderr);
   const engine::FemReferenceOptions& o = su.o;
   engine::ReferenceLevelBuilder builder(o);
   Eigen::VectorXd u_coarse;
@@ -807,7 +845,12 @@ palplab::app::CommandRegistration reg{
           ->required();
       ref->add_option("--force", ra->force, "Press force (N), in (0, 1000]")->required();
       ref->add_option("--levels", ra->levels, "Refinement levels (3-6)")->capture_default_str();
-      ref->add_option("--out", ra->out, "Output JSON file")->required();
+      ref->add_option("--out", ra->out,
+                      "Output JSON file (never the prototype or its mesh; an existing file that "
+                      "is not a fem reference JSON only with --overwrite)")
+          ->required();
+      ref->add_flag("--overwrite", ra->overwrite,
+                    "Replace an existing --out file that is not a fem reference JSON");
       ref->add_option("--refinement", ra->refinement,
                       "nested: red 1->8 refinements of the prototype's mesh (nested, h halved); "
                       "tetgen: TetGen meshes with max tet volume halved (not nested)")
@@ -901,12 +944,18 @@ palplab::app::CommandRegistration reg{
                       "CPU-time limit per solver (s, whole seconds)")
           ->capture_default_str()
           ->check(palplab::app::finite_range(1, 1e8));
-      sol->add_option("--out", sa->out, "Also write the table as JSON");
+      sol->add_option("--out", sa->out,
+                      "Also write the table as JSON (never the prototype or its mesh; an existing "
+                      "file that is not a fem solvers JSON only with --overwrite)");
+      auto* sol_overwrite_opt =
+          sol->add_flag("--overwrite", sa->overwrite,
+                        "Replace an existing --out file that is not a fem solvers JSON");
       sol->callback([=] {
         using palplab::app::flag_only_with;
         flag_only_with(sol_vscale_opt, sa->ref.grade != "0",
                        "a graded level 0 (--grade auto or 1-6; --grade 0 uses the prototype's "
                        "own mesh)");
+        flag_only_with(sol_overwrite_opt, !sa->out.empty(), "--out");
         flag_only_with(cg_tol_opt, sa->solvers.find("pcg") != std::string::npos,
                        "a PCG solver in --solvers (pcg-jacobi, pcg-jacobi0, pcg-ic)");
         *code = run_solvers(*sa);

@@ -1,8 +1,11 @@
-// `palplab scene build PROTOTYPE.json --out FILE.psim [--repeat N] [--json]`: writes the
-// scene's precomputation to a simulation file (engine/haptics/scene_file.hpp) and reports how
-// long a scene takes to become ready from it versus rebuilt from the sources (medians over
-// pairs of one rebuild and one load in alternating order, each timed from nothing cached to the
-// first haptic step done).
+// `palplab scene build PROTOTYPE.json --out FILE.psim [--repeat N] [--json] [--overwrite]`:
+// writes the scene's precomputation to a simulation file (engine/haptics/scene_file.hpp) and
+// reports how long a scene takes to become ready from it versus rebuilt from the sources (medians
+// over pairs of one rebuild and one load in alternating order, each timed from nothing cached to
+// the first haptic step done).
+// --out is never one of the scene's sources, and an existing file that is not a .psim file (a
+// results database, a prototype) is replaced only with --overwrite (app/command.hpp
+// require_replaceable_output).
 // `palplab scene info FILE.psim [--json]`: verifies a simulation file and prints what it holds.
 #include <sys/resource.h>
 #include <time.h>
@@ -19,6 +22,7 @@
 #include <vector>
 
 #include "app/command.hpp"
+#include "app/scene_option.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/scene_file.hpp"
@@ -35,6 +39,7 @@ struct BuildArgs {
   int repeat = 0;  // timed pairs (--repeat); 0 without it: until enough CPU time (run_build)
   bool json = false;
   bool repeat_given = false;
+  bool overwrite = false;  // --overwrite: replace an existing --out that is not a .psim file
 };
 
 double ms_since(Clock::time_point t0) {
@@ -86,7 +91,13 @@ int run_build(const BuildArgs& a) {
   if (a.repeat < 0 || a.repeat > 1000 || (a.repeat == 0 && a.repeat_given))
     throw InputError("--repeat: expected 1..1000");
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
-  app::require_writable_file("--out", a.out);
+  // Checked before anything is written: --out is none of the sources (the prototype, its mesh
+  // files) and replaces no file of another kind (the first 8 bytes: the .psim magic).
+  std::vector<app::CommandInput> inputs = {{"the prototype file", a.prototype}};
+  for (const auto& s : engine::scene_sources(cfg))
+    inputs.push_back({"the " + s.role + " file of the prototype", s.path});
+  app::require_replaceable_output("--out", a.out, inputs, app::has_scene_magic,
+                                  "palplab scene file (.psim)", a.overwrite);
   // Rebuild (nothing cached, everything from the sources) and load (nothing cached, everything
   // from the file) are timed in pairs, the order alternating from pair to pair (rebuild first,
   // then load first), so that a machine whose load changes during the run slows both alike and
@@ -181,6 +192,7 @@ int run_build(const BuildArgs& a) {
 }
 
 int run_info(const std::string& file, bool json) {
+  app::refuse_directory_as_scene(file, file);
   const engine::SceneFileData d = engine::read_scene_file(file);
   const engine::SceneMesh& m = *d.mesh;
   nlohmann::json out = {{"file", file},
@@ -228,6 +240,9 @@ palplab::app::CommandRegistration reg{
           "Timed pairs of rebuild and load (median; default: 7 to 201 pairs, until each "
           "side has used 0.3 s of CPU)");
       b->add_flag("--json", a->json, "Print JSON");
+      b->add_flag("--overwrite", a->overwrite,
+                  "Replace an existing --out file that is not a .psim file (never one of the "
+                  "prototype's sources)");
       b->callback([a, repeat, code] {
         a->repeat_given = repeat->count() > 0;
         *code = run_build(*a);

@@ -90,6 +90,62 @@ inline void require_writable_file(const std::string& flag, const std::string& pa
   if (!existed) fs::remove(path, ec);
 }
 
+// An input file of a command, for require_replaceable_output: what it is ("the prototype file")
+// and its path.
+struct CommandInput {
+  std::string what, path;
+};
+
+// What an existing file looks like, for a message ("an SQLite database", "a JSON file").
+inline std::string describe_existing_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[16] = {};
+  in.read(head, sizeof head);
+  const std::string h(head, static_cast<size_t>(in.gcount()));
+  if (h.size() == 16 && h == std::string("SQLite format 3\0", 16)) return "an SQLite database";
+  if (h.size() >= 8 && h.compare(0, 8, std::string("PALPSIM\0", 8)) == 0)
+    return "a palplab scene file (.psim)";
+  const auto first = h.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && (h[first] == '{' || h[first] == '[')) return "a JSON file";
+  return "a file";
+}
+
+// The output file of `flag` (scene build --out, fem reference --out), checked before the command
+// reads or computes anything costly, so that no result and no input is lost:
+// - the same file as one of `inputs` (std::filesystem::equivalent: also through a link or
+//   another spelling) is an input error, --overwrite or not: writing it would destroy the input
+//   the command reads;
+// - an existing regular, non-empty file that `is_own_output` does not recognise as this
+//   command's own output (`own_kind`, e.g. "palplab scene file (.psim)") is refused unless
+//   `overwrite` (the --overwrite flag) is given: `--out results.db` must not replace a database;
+// - then require_writable_file.
+// A file the command wrote before (own output), an empty file and a non-regular file (/dev/null)
+// are replaced without --overwrite.
+inline void require_replaceable_output(const std::string& flag, const std::string& path,
+                                       const std::vector<CommandInput>& inputs,
+                                       const std::function<bool(const std::string&)>& is_own_output,
+                                       const std::string& own_kind, bool overwrite) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(path, ec)) {
+    for (const auto& in : inputs) {
+      std::error_code e2;
+      if (!in.path.empty() && fs::exists(in.path, e2) && fs::equivalent(path, in.path, e2))
+        throw InputError(SourceLocation{flag},
+                         "\"" + path + "\" is " + in.what + " this command reads" +
+                             (in.path == path ? "" : " (\"" + in.path + "\")") +
+                             "; writing the output there would destroy it: choose another " + flag);
+    }
+    if (!overwrite && fs::is_regular_file(path, ec) && fs::file_size(path, ec) > 0 && !ec &&
+        !is_own_output(path))
+      throw InputError(SourceLocation{flag},
+                       "\"" + path + "\" exists and is " + describe_existing_file(path) +
+                           ", not a " + own_kind + "; refusing to replace it: choose another " +
+                           flag + ", or give --overwrite to replace it");
+  }
+  require_writable_file(flag, path);
+}
+
 // An output directory named by `flag`, created if needed and checked for writing before a
 // command starts its work (a probe file is created in it and removed).
 inline void require_writable_dir(const std::string& flag, const std::string& dir) {

@@ -19,15 +19,27 @@ CLI::Option* add_scene_option(CLI::App* cmd, std::vector<std::string>& scenes, b
                                    "precomputation the study's scenes start from (repeatable)"
                                  : "Simulation file (.psim, `palplab scene build`) or prototype "
                                    "key (A, B, C, D, ...) instead of the prototype file");
+  // A vector option takes every following argument by default; one value per --scene.
+  o->allow_extra_args(false);
   if (!many) o->expected(1);
   return o;
 }
 
-bool is_scene_file(const std::string& value) {
-  if (fs::path(value).extension() == ".psim") return true;
-  std::ifstream in(value, std::ios::binary);
+bool has_scene_magic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
   char magic[8] = {};
   return in.read(magic, 8) && std::memcmp(magic, "PALPSIM\0", 8) == 0;
+}
+
+bool is_scene_file(const std::string& value) {
+  if (fs::path(value).extension() == ".psim") return true;
+  return has_scene_magic(value);
+}
+
+void refuse_directory_as_scene(const std::string& label, const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw InputError(label + ": is a directory, expected a .psim scene file");
 }
 
 namespace {
@@ -51,7 +63,17 @@ std::string scene_prototype(const std::string& positional, const std::vector<std
   }
   const std::string& v = scenes.front();
   std::string proto;
-  if (is_scene_file(v)) {
+  std::error_code ec;
+  if (fs::is_directory(v, ec)) {
+    // A prototype key is a name, never a path; a directory of that name in the working
+    // directory does not hide the shipped prototype.
+    if (fs::path(v).extension() != ".psim")
+      proto = protocols::resolve_prototype(v, protocols::prototype_search_dirs("", {}));
+    if (proto.empty())
+      throw InputError("--scene \"" + v +
+                       "\": is a directory, expected a .psim scene file (or a prototype key: A, B, "
+                       "C, D, ...)");
+  } else if (is_scene_file(v)) {
     proto = load_psim(v);
   } else {
     proto = protocols::resolve_prototype(v, protocols::prototype_search_dirs("", {}));
@@ -67,6 +89,7 @@ std::string scene_prototype(const std::string& positional, const std::vector<std
 
 void preload_scenes(const std::vector<std::string>& scenes) {
   for (const auto& v : scenes) {
+    refuse_directory_as_scene("--scene \"" + v + "\"", v);
     if (!is_scene_file(v))
       throw InputError("--scene \"" + v +
                        "\": run takes simulation files (.psim); the study names its prototypes");

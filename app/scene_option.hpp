@@ -13,7 +13,9 @@
 
 namespace palplab::app {
 
-// Registers --scene on cmd (repeatable when `many`: run may use several prototypes).
+// Registers --scene on cmd (repeatable when `many`: run may use several prototypes). Each
+// --scene takes exactly one value, so a positional after it stays positional
+// (`probe --scene A.psim B.json` compares the two; it said "At Most 1 required but received 2").
 CLI::Option* add_scene_option(CLI::App* cmd, std::vector<std::string>& scenes, bool many);
 
 // The prototype file of a command that builds one scene: the positional file, or what --scene
@@ -26,5 +28,12 @@ void preload_scenes(const std::vector<std::string>& scenes);
 
 // True when `value` names a .psim file (by extension or by its magic bytes).
 bool is_scene_file(const std::string& value);
+
+// True when the file `path` starts with the .psim magic ("PALPSIM\0").
+bool has_scene_magic(const std::string& path);
+
+// A directory given where a .psim file is expected (`scene info DIR`): an InputError
+// "LABEL: is a directory, expected a .psim scene file" (the reader said "no such scene file").
+void refuse_directory_as_scene(const std::string& label, const std::string& path);
 
 }  // namespace palplab::app

@@ -181,3 +181,19 @@ TEST(CliProbe, PrototypeSupportAndPatchRadiusAreChecked) {
     std::remove(p.c_str());
   }
 }
+
+// `probe --scene A.psim prototypes/B.json` said "--scene: At Most 1 required but received 2":
+// --scene took the positional prototype as a second value. It takes exactly one, so the two are
+// compared (the same prototype: fine; another: named both).
+TEST(CliProbe, APositionalAfterSceneStaysThePrototype) {
+  namespace t = palplab::testing;
+  const std::string tail = " --press ovary_left --force 1 --duration 0.05 --release 0.05";
+  t::CliResult r = t::run_palplab("probe --scene A " + proto("B") + tail);
+  t::expect_exit2(r, {"--scene A is prototype ", "A.json, not " + proto("B")});
+  EXPECT_FALSE(t::has(r.err, "At Most")) << r.err;
+  r = t::run_palplab("probe --scene A " + proto("A") + tail);
+  EXPECT_EQ(r.code, 0) << r.err;
+  // Two --scene values are still one too many for probe.
+  r = t::run_palplab("probe --scene A --scene B" + tail);
+  t::expect_exit2(r, {"--scene"});
+}

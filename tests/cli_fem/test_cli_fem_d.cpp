@@ -245,7 +245,9 @@ TEST(CliFemD, ReferenceBadInputsExitTwo) {
   const Result sol = run(
       "fem reference " + proto("D") + " --press ovary_left --force 1 --solver qr --steps 0" + o, d);
   EXPECT_EQ(sol.code, 2);
-  EXPECT_NE(sol.err.find("--solver"), std::string::npos) << sol.err;
+  EXPECT_NE(sol.err.find("--solver: expected one of ldlt, cholmod, pcg, auto, got \"qr\""),
+            std::string::npos)
+      << sol.err;
   // Nested levels of D's 9k tets: 4 levels would be 4.7M tets on the finest.
   const Result big =
       run("fem reference " + proto("D") + " --press ovary_left --force 1 --levels 4" + o, d);
@@ -420,6 +422,86 @@ TEST(CliFemD, ReferenceRefusesBeforeTheWork) {
     EXPECT_NE(r.err.find(c.flag + ": applies only with"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(c.needed), std::string::npos) << r.err;
   }
+  EXPECT_FALSE(fs::exists(d / "x.json"));
+  fs::remove_all(d);
+}
+
+// `fem reference D.json ... --out D.json` replaced the prototype with the reference JSON: --out
+// is never the prototype or its mesh (exit 2, --overwrite or not), and an existing file that is
+// not a fem reference JSON ("format") is replaced only with --overwrite. A previous reference
+// is replaced without it.
+TEST(CliFemD, ReferenceNeverReplacesAnInputOrAForeignFile) {
+  namespace t = palplab::testing;
+  const fs::path d = tmp("out_guard");
+  const fs::path p = d_variant(d, "Dguard", 400);
+  const std::string text = slurp(p);
+  const std::string base =
+      "fem reference " + p.string() + " --press ovary_left --force 1 --steps 0 --refinement tetgen";
+  fs::create_symlink(p, d / "link.json");
+  for (const std::string& out :
+       {p.string(), (d / "." / "Dguard.json").string(), (d / "link.json").string()}) {
+    for (const char* overwrite : {"", " --overwrite"}) {
+      SCOPED_TRACE(out + overwrite);
+      const Result r = run(base + " --out " + out + overwrite, d);
+      t::expect_exit2(r, {"--out", "is the prototype file this command reads"});
+      EXPECT_EQ(slurp(p), text) << "the prototype was changed";
+    }
+  }
+  // fem solvers --out: the same guard.
+  Result r =
+      run("fem solvers " + p.string() + " --press ovary_left --level 1 --out " + p.string(), d);
+  t::expect_exit2(r, {"--out", "is the prototype file this command reads"});
+  EXPECT_EQ(slurp(p), text);
+  // Files of another kind: a results database, a JSON file without the reference's format.
+  std::ofstream(d / "results.db", std::ios::binary)
+      << std::string("SQLite format 3\0", 16) << std::string(4080, '\x01');
+  const std::string db = slurp(d / "results.db");
+  r = run(base + " --out " + (d / "results.db").string(), d);
+  t::expect_exit2(
+      r, {"exists and is an SQLite database", "not a palplab fem reference JSON", "--overwrite"});
+  EXPECT_EQ(slurp(d / "results.db"), db);
+  std::ofstream(d / "notes.json") << "{\"format\": \"palplab-fem-solvers/1\", \"kept\": true}\n";
+  r = run(base + " --out " + (d / "notes.json").string(), d);
+  t::expect_exit2(r, {"exists and is a JSON file", "not a palplab fem reference JSON"});
+  EXPECT_TRUE(t::has(slurp(d / "notes.json"), "kept"));
+  // --overwrite replaces it with the reference; the reference is then replaced without it.
+  r = run(base + " --out " + (d / "notes.json").string() + " --overwrite", d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(json::parse(slurp(d / "notes.json")).at("format"), "palplab-fem-reference/1");
+  r = run(base + " --out " + (d / "notes.json").string(), d);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(json::parse(slurp(d / "notes.json")).at("format"), "palplab-fem-reference/1");
+  fs::remove_all(d);
+}
+
+// Argument errors came after the note "this takes minutes and GBs of memory" (D's own mesh,
+// nested: 593k tets on the finest level), and --solver foo was "expected ldlt, cholmod or auto,
+// got "foo" (or pcg)": every argument is checked first, the note comes only before the work.
+TEST(CliFemD, ArgumentErrorsComeBeforeTheCostNote) {
+  namespace t = palplab::testing;
+  const fs::path d = tmp("note");
+  const std::string base = "fem reference " + proto("D") + " --press ovary_left --force 1 --out " +
+                           (d / "x.json").string() + " ";
+  struct Case {
+    std::string args, message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"--solver foo", "--solver: expected one of ldlt, cholmod, pcg, auto, got \"foo\""},
+           {"--bisections -1", "--bisections: expected 0 to 20 halvings, got -1"},
+           {"--newton-max 1001", "--newton-max: expected 0 to 1000 iterations, got 1001"},
+           {"--volume-scale 2000", "--volume-scale: expected a factor in (0, 1000]"},
+           {"--solver pcg", "--solver pcg: the quasi-static curve"}}) {
+    SCOPED_TRACE(c.args);
+    const Result r = run(base + c.args, d);
+    t::expect_exit2(r, {c.message});
+    EXPECT_FALSE(t::has(r.err, "note:")) << r.err;
+    EXPECT_FALSE(t::has(r.err, "(or pcg)")) << r.err;
+  }
+  // An --out it must not replace, too.
+  const Result r =
+      run("fem reference " + proto("D") + " --press ovary_left --force 1 --out " + proto("D"), d);
+  t::expect_exit2(r, {"is the prototype file this command reads"});
+  EXPECT_FALSE(t::has(r.err, "note:")) << r.err;
   EXPECT_FALSE(fs::exists(d / "x.json"));
   fs::remove_all(d);
 }

@@ -10,10 +10,13 @@
 
 #include "engine/haptics/scene_file.hpp"
 #include "tests/cli_support.hpp"
+#include "tests/sqlite_support.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using palplab::testing::expect_exit2;
+using palplab::testing::has;
 using palplab::testing::run_palplab;
 using palplab::testing::scratch_dir;
 using palplab::testing::slurp;
@@ -190,6 +193,116 @@ TEST(CliScene, StaleSourceIsRejectedWithExit2) {
   r = run_palplab("probe --scene " + psim.string() + kProbe, dir);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("is gone"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+// `scene build P.json --out P.json` overwrote the prototype with the scene file (then failed to
+// read it back), `--out results.db` replaced a results database: --out is never one of the
+// scene's sources (exit 2, --overwrite or not), and an existing file that is not a .psim file is
+// replaced only with --overwrite. Nothing is written before the refusal.
+TEST(CliScene, BuildNeverReplacesAnInputOrAForeignFile) {
+  const fs::path dir = scratch_dir("cli_scene_out");
+  const fs::path proto = dir / "A.json";
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "A.json", proto);
+  const std::string text = slurp(proto);
+  const std::string build = "scene build " + proto.string() + " --repeat 1 --out ";
+  // The prototype itself, under three spellings: its path, a relative one, a symlink.
+  fs::create_symlink(proto, dir / "link.json");
+  for (const std::string& out :
+       {proto.string(), (dir / "." / "A.json").string(), (dir / "link.json").string()}) {
+    SCOPED_TRACE(out);
+    for (const char* overwrite : {"", " --overwrite"}) {
+      const auto r = run_palplab(build + out + overwrite, dir);
+      expect_exit2(r, {"--out", "is the prototype file this command reads", "choose another"});
+      EXPECT_EQ(slurp(proto), text) << "the prototype was changed";
+    }
+  }
+  // A mesh file the prototype is built from (mesh.file): a source too.
+  auto r = run_palplab(
+      "mesh generate model-a --vertices 1500 --out " + (dir / "tract.obj").string(), dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string with_file = text;
+  const auto a = with_file.find("\"mesh\":"), b = with_file.find('}', a);
+  ASSERT_NE(a, std::string::npos);
+  with_file.replace(a, b - a + 1, "\"mesh\": {\"file\": \"tract.obj\"}");
+  write_bytes(dir / "Af.json", with_file);
+  const std::string mesh = slurp(dir / "tract.obj");
+  r = run_palplab("scene build " + (dir / "Af.json").string() + " --repeat 1 --overwrite --out " +
+                      (dir / "tract.obj").string(),
+                  dir);
+  expect_exit2(r, {"--out", "is the mesh file of the prototype this command reads"});
+  EXPECT_EQ(slurp(dir / "tract.obj"), mesh);
+  // A results database (SQLite) and another prototype: refused without --overwrite.
+  const fs::path db = dir / "results.db";
+  palplab::testing::sql_exec(db, "CREATE TABLE kept(x); INSERT INTO kept VALUES (42);");
+  const std::string db_bytes = slurp(db);
+  r = run_palplab(build + db.string(), dir);
+  expect_exit2(r, {"--out", "\"" + db.string() + "\" exists and is an SQLite database",
+                   "not a palplab scene file (.psim)", "--overwrite"});
+  EXPECT_EQ(slurp(db), db_bytes) << "the database was changed";
+  EXPECT_EQ(palplab::testing::sql_int(db, "SELECT x FROM kept"), 42);
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "B.json", dir / "B.json");
+  r = run_palplab(build + (dir / "B.json").string(), dir);
+  expect_exit2(r, {"exists and is a JSON file", "not a palplab scene file (.psim)"});
+  EXPECT_EQ(slurp(dir / "B.json"), slurp(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "B.json"));
+  // With --overwrite the foreign file is replaced by a valid scene file.
+  r = run_palplab(build + db.string() + " --overwrite", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(db).substr(0, 8), std::string("PALPSIM\0", 8));
+  // A .psim file (the command's own output) and an empty file are replaced without it.
+  r = run_palplab(build + db.string(), dir);
+  EXPECT_EQ(r.code, 0) << r.err;
+  write_bytes(dir / "empty.psim", "");
+  r = run_palplab(build + (dir / "empty.psim").string(), dir);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(
+      has(run_palplab("scene info " + (dir / "empty.psim").string(), dir).out, "checksums ok"));
+  fs::remove_all(dir);
+}
+
+// `probe --scene A.psim prototypes/B.json` said "--scene: At Most 1 required but received 2" (the
+// option took the positional too): --scene takes one value, and the two are compared.
+TEST(CliScene, PositionalAfterSceneStaysPositional) {
+  const Fixture& f = fixture();
+  const std::string b = (fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "B.json").string();
+  auto r = run_palplab("probe --scene " + f.psim.string() + " " + b + kProbe, f.dir);
+  expect_exit2(r, {"--scene " + f.psim.string() + " is prototype " +
+                   fs::absolute(f.proto).string() + ", not " + b});
+  EXPECT_FALSE(has(r.err, "At Most")) << r.err;
+  r = run_palplab("probe --scene " + f.psim.string() + " " + f.proto.string() + kProbe, f.dir);
+  EXPECT_EQ(r.code, 0) << r.err;
+  // run (--scene repeatable, one file each): a study file after --scene is the study.
+  const std::string study = (f.dir / "no_such_study.json").string();
+  r = run_palplab(
+      "run --scene " + f.psim.string() + " " + study + " --db " + (f.dir / "pos.db").string(),
+      f.dir);
+  expect_exit2(r, {study});  // the study named as such, not swallowed by --scene
+  EXPECT_FALSE(has(r.err, "At Most")) << r.err;
+}
+
+// A directory where a .psim file is expected was "no such scene file" (scene info) or "neither a
+// .psim file nor a known prototype key" (--scene).
+TEST(CliScene, ADirectoryIsNamedAsSuch) {
+  const fs::path dir = scratch_dir("cli_scene_dir");
+  fs::create_directories(dir / "scenes.psim");
+  for (const fs::path& d : {dir, dir / "scenes.psim"}) {
+    SCOPED_TRACE(d.string());
+    auto r = run_palplab("scene info " + d.string(), dir);
+    expect_exit2(r, {d.string() + ": is a directory, expected a .psim scene file"});
+    r = run_palplab("probe --scene " + d.string() + kProbe, dir);
+    expect_exit2(r,
+                 {"--scene \"" + d.string() + "\": is a directory, expected a .psim scene file"});
+    r = run_palplab("run " + (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies").string() +
+                        "/example_minimal.json --db " + (dir / "x.db").string() + " --scene " +
+                        d.string(),
+                    dir);
+    expect_exit2(r,
+                 {"--scene \"" + d.string() + "\": is a directory, expected a .psim scene file"});
+  }
+  // A directory named like a prototype key in the working directory does not hide the key.
+  fs::create_directories(dir / "A");
+  const auto k = run_palplab(std::string("probe --scene A") + kProbe, dir);
+  EXPECT_EQ(k.code, 0) << k.err;
   fs::remove_all(dir);
 }
 
