@@ -32,9 +32,14 @@ palplab::app::CommandRegistration reg{
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";
-        palplab::results::export_csv(store, *dir, *samples);
+        const auto summary = palplab::results::export_csv(store, *dir, *samples);
         std::cout << "wrote " << *dir << "/measures.csv, sessions.csv, events.csv"
                   << (*samples ? ", samples.csv" : "") << "\n";
+        // Without --samples, an earlier export's samples.csv is not left beside these files.
+        for (const auto& f : summary.removed)
+          std::cout << "removed " << palplab::escape_controls(f, false)
+                    << " (left by an earlier export; this one wrote no samples: add --samples "
+                       "to export them)\n";
         *code = 0;
       });
     }};

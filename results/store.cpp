@@ -15,7 +15,9 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -139,9 +141,84 @@ std::string shown(const std::string& s) {
   return s.size() <= 40 ? s : s.substr(0, 40) + "...";
 }
 
-std::uint64_t parse_u64(const std::string& s) {
-  return s.empty() ? 0 : std::stoull(s);
+// A stored value as a message shows it: 2.5, inf, 'abc', (a blob), NULL.
+std::string stored_value(const Stmt& q, int c) {
+  switch (q.type(c)) {
+    case SQLITE_INTEGER:
+      return std::to_string(q.integer(c));
+    case SQLITE_FLOAT:
+      return num(q.real(c));
+    case SQLITE_TEXT:
+      return "'" + shown(q.text(c)) + "'";
+    case SQLITE_BLOB:
+      return "(a blob)";
+    default:
+      return "NULL";
+  }
 }
+
+// The typed columns of one row of a user's database, read as the schema types them: a value a
+// hand edit (or damage) left there that is not (text in a REAL column, ±inf, a fraction in an
+// INTEGER column, NULL in a NOT NULL one) is refused with an InputError naming the table, the
+// row, the column and what was expected, instead of being read as 0 or exported as inf. One
+// sqlite3_column_type call per value; `row` (a callable giving the row's description) is only
+// called on an error.
+template <class Row>
+class Typed {
+ public:
+  Typed(const Stmt& q, const std::string& path, const char* table, Row row)
+      : q_(q), path_(path), table_(table), row_(std::move(row)) {}
+
+  // REAL column: a finite number (REAL affinity stores numbers as REAL; INTEGER accepted too).
+  double real(int c, const char* column) const {
+    const int t = q_.type(c);
+    if (t == SQLITE_FLOAT || t == SQLITE_INTEGER) {
+      const double v = q_.real(c);
+      if (std::isfinite(v)) return v;
+    }
+    fail(c, column, "a finite number");
+  }
+  // INTEGER column: an integer in [lo, hi].
+  long long integer(int c, const char* column, long long lo, long long hi) const {
+    if (q_.type(c) == SQLITE_INTEGER) {
+      const long long v = q_.integer(c);
+      if (v >= lo && v <= hi) return v;
+    }
+    fail(c, column,
+         hi == std::numeric_limits<long long>::max()
+             ? "an integer >= " + std::to_string(lo)
+             : "an integer from " + std::to_string(lo) + " to " + std::to_string(hi));
+  }
+  int int32(int c, const char* column) const {
+    return static_cast<int>(integer(c, column, 0, std::numeric_limits<int>::max()));
+  }
+  // Nullable 0/1 switch (NULL = not recorded).
+  std::optional<bool> flag(int c, const char* column) const {
+    if (q_.null(c)) return std::nullopt;
+    return integer(c, column, 0, 1) != 0;
+  }
+  // TEXT column holding an unsigned 64-bit integer in decimal (seeds).
+  std::uint64_t u64(int c, const char* column) const {
+    if (q_.type(c) == SQLITE_TEXT) {
+      const std::string s = q_.text(c);
+      std::uint64_t v = 0;
+      const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+      if (r.ec == std::errc() && r.ptr == s.data() + s.size()) return v;
+    }
+    fail(c, column, "an unsigned 64-bit integer in decimal");
+  }
+
+ private:
+  [[noreturn]] void fail(int c, const char* column, const std::string& expected) const {
+    throw InputError("table " + std::string(table_) + ", row (" + row_() + ") column " + column +
+                         ": expected " + expected + ", got " + stored_value(q_, c),
+                     path_);
+  }
+  const Stmt& q_;
+  const std::string& path_;
+  const char* table_;
+  Row row_;
+};
 
 sqlite3* open_db(const std::string& path, int flags) {
   sqlite3* db = nullptr;
@@ -772,7 +849,7 @@ StudyRecord Store::read_study() const {
     s.sha256 = q.text(3);
     s.palplab_version = q.text(4);
     s.git_commit = q.text(5);
-    s.seed = parse_u64(q.text(6));
+    s.seed = Typed(q, path_, "study", [] { return std::string("id 1"); }).u64(6, "seed");
     s.started_at = q.text(7);
     s.finished_at = q.null(8) ? "" : q.text(8);
     return s;
@@ -876,16 +953,17 @@ std::vector<ParticipantRecord> Store::read_participants() const {
     std::lock_guard lock(*mu_);
     Stmt q(db_, "SELECT participant, grp, number, seed FROM participants ORDER BY number");
     std::vector<ParticipantRecord> out;
+    const Typed col(q, path_, "participants", [&] { return "participant " + q.text(0); });
     while (q.step())
-      out.push_back({q.text(0), q.text(1), static_cast<int>(q.integer(2)), parse_u64(q.text(3))});
+      out.push_back({q.text(0), q.text(1), col.int32(2, "number"), col.u64(3, "seed")});
     return out;
   });
 }
 
 namespace {
 
-std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool complete_only,
-                                             const std::string& participant) {
+std::vector<SessionRecord> read_session_rows(sqlite3* db, const std::string& path, int version,
+                                             bool complete_only, const std::string& participant) {
   std::string sql =
       "SELECT s.session, s.participant, s.ordinal, s.phase, s.phase_index, s.prototype, "
       "s.instructor, s.study_offset, s.day, s.duration, s.steps, s.wall_duration, "
@@ -901,34 +979,39 @@ std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool comp
   Stmt q(db, sql.c_str());
   if (!participant.empty()) q.bind(1, participant);
   std::vector<SessionRecord> out;
+  // session is the INTEGER PRIMARY KEY (always an integer); participant and phase are text.
+  const Typed col(q, path, "sessions", [&] {
+    return "session " + std::to_string(q.integer(0)) + ", participant " + q.text(1) + ", phase " +
+           q.text(3);
+  });
   while (q.step()) {
     SessionRecord r;
     r.session = q.integer(0);
     r.participant = q.text(1);
-    r.ordinal = static_cast<int>(q.integer(2));
+    r.ordinal = col.int32(2, "ordinal");
     r.phase = q.text(3);
-    r.phase_index = static_cast<int>(q.integer(4));
+    r.phase_index = col.int32(4, "phase_index");
     r.prototype = q.text(5);
     r.instructor = q.null(6) ? "" : q.text(6);
-    r.study_offset = q.real(7);
-    r.day = static_cast<int>(q.integer(8));
-    r.duration = q.real(9);
-    r.steps = q.integer(10);
-    r.wall_duration = q.real(11);
-    r.loop_median = q.real(12);
-    r.loop_p99 = q.real(13);
-    r.seed = parse_u64(q.text(14));
+    r.study_offset = col.real(7, "study_offset");
+    r.day = col.int32(8, "day");
+    r.duration = col.real(9, "duration");
+    r.steps = col.integer(10, "steps", 0, std::numeric_limits<long long>::max());
+    r.wall_duration = col.real(11, "wall_duration");
+    r.loop_median = col.real(12, "loop_median");
+    r.loop_p99 = col.real(13, "loop_p99");
+    r.seed = col.u64(14, "seed");
     r.state_after = q.text(15);
     r.completed_at = q.text(16);
     if (version >= 3) {
-      r.attempt = static_cast<int>(q.integer(17));
+      r.attempt = col.int32(17, "attempt");
       r.status = q.text(18);
       r.trainee = q.text(19);
       r.device = q.null(20) ? "" : q.text(20);
       r.started_at = q.null(21) ? "" : q.text(21);
       r.abort_reason = q.null(22) ? "" : q.text(22);
     }
-    if (version >= 4 && !q.null(23)) r.transparency = q.integer(23) != 0;
+    if (version >= 4) r.transparency = col.flag(23, "transparency");
     out.push_back(std::move(r));
   }
   return out;
@@ -939,14 +1022,14 @@ std::vector<SessionRecord> read_session_rows(sqlite3* db, int version, bool comp
 std::vector<SessionRecord> Store::read_sessions() const {
   return reading(path_, [&] {
     std::lock_guard lock(*mu_);
-    return read_session_rows(db_, version_, true, "");
+    return read_session_rows(db_, path_, version_, true, "");
   });
 }
 
 std::vector<SessionRecord> Store::read_attempts(const std::string& participant) const {
   return reading(path_, [&] {
     std::lock_guard lock(*mu_);
-    return read_session_rows(db_, version_, false, participant);
+    return read_session_rows(db_, path_, version_, false, participant);
   });
 }
 
@@ -1050,13 +1133,18 @@ std::vector<MeasureRow> Store::read_measures() const {
         " ORDER BY p.number, s.ordinal, m.name";
     Stmt q(db_, sql.c_str());
     std::vector<MeasureRow> out;
+    // ordinal and phase_index are the session's (table sessions), checked as read_sessions does.
+    const Typed session_col(q, path_, "sessions", [&] {
+      return "session " + std::to_string(q.integer(5)) + ", participant " + q.text(0) + ", phase " +
+             q.text(2);
+    });
     while (q.step()) {
       MeasureRow r;
       r.participant = q.text(0);
       r.group = q.text(1);
       r.phase = q.text(2);
-      r.ordinal = static_cast<int>(q.integer(3));
-      r.phase_index = static_cast<int>(q.integer(4));
+      r.ordinal = session_col.int32(3, "ordinal");
+      r.phase_index = session_col.int32(4, "phase_index");
       r.session = q.integer(5);
       r.name = q.text(6);
       // REAL affinity stores a number as INTEGER or REAL; text left as text (or a blob) is not a
@@ -1069,11 +1157,10 @@ std::vector<MeasureRow> Store::read_measures() const {
                                num(*r.value) + " is not finite (a value must be a number or NULL)",
                            path_);
       } else if (type != SQLITE_NULL) {
-        throw InputError(
-            session_label(r) + ": measure \"" + r.name + "\": value " +
-                (type == SQLITE_TEXT ? "'" + shown(q.text(7)) + "'" : std::string("(a blob)")) +
-                " is not a number (a value must be a number or NULL)",
-            path_);
+        throw InputError(session_label(r) + ": measure \"" + r.name + "\": value " +
+                             stored_value(q, 7) +
+                             " is not a number (a value must be a number or NULL)",
+                         path_);
       }
       r.unit = q.text(8);
       out.push_back(std::move(r));
@@ -1082,13 +1169,40 @@ std::vector<MeasureRow> Store::read_measures() const {
   });
 }
 
+namespace {
+// "session 12 (participant P03, phase post_training #1)" for a session id, looked up when a
+// message needs it (its phase_index only when that is an integer).
+std::string describe_session(sqlite3* db, long long session) {
+  Stmt w(db, "SELECT participant, phase, phase_index FROM sessions WHERE session = ?1");
+  w.bind(1, session);
+  if (!w.step()) return "session " + std::to_string(session);
+  if (w.type(2) != SQLITE_INTEGER)
+    return "session " + std::to_string(session) + " (participant " + w.text(0) + ", phase " +
+           w.text(1) + ")";
+  return session_label(session, w.text(0), w.text(1), static_cast<int>(w.integer(2)));
+}
+}  // namespace
+
 std::vector<EventRecord> Store::read_events(long long session) const {
   return reading(path_, [&] {
     std::lock_guard lock(*mu_);
-    Stmt q(db_, "SELECT t, kind, value, region FROM events WHERE session = ?1 ORDER BY rowid");
+    Stmt q(db_,
+           "SELECT t, kind, value, region, rowid FROM events WHERE session = ?1 ORDER BY rowid");
     q.bind(1, session);
+    // Where a bad value is: its session, the event's kind, its t when that is a number, and the
+    // rowid (to find the row with SQL).
+    const Typed col(q, path_, "events", [&] {
+      const int tt = q.type(0);
+      const bool t_ok = (tt == SQLITE_FLOAT || tt == SQLITE_INTEGER) && std::isfinite(q.real(0));
+      return describe_session(db_, session) + ", kind " + shown(q.text(1)) +
+             (t_ok ? ", t " + num(q.real(0)) : std::string()) + ", rowid " +
+             std::to_string(q.integer(4));
+    });
     std::vector<EventRecord> out;
-    while (q.step()) out.push_back({q.real(0), q.text(1), q.real(2), q.null(3) ? "" : q.text(3)});
+    while (q.step()) {
+      const double t = col.real(0, "t");
+      out.push_back({t, q.text(1), col.real(2, "value"), q.null(3) ? "" : q.text(3)});
+    }
     return out;
   });
 }
@@ -1098,39 +1212,37 @@ SampleSeries Store::read_samples(long long session) const {
     std::lock_guard lock(*mu_);
     // Which session a bad row belongs to, said with its participant and phase.
     auto where = [&](long long second) {
-      Stmt w(db_, "SELECT participant, phase, phase_index FROM sessions WHERE session = ?1");
-      w.bind(1, session);
-      const std::string s =
-          w.step() ? session_label(session, w.text(0), w.text(1), static_cast<int>(w.integer(2)))
-                   : "session " + std::to_string(session);
-      return "samples of " + s + ", second " + std::to_string(second);
+      return "samples of " + describe_session(db_, session) + ", second " + std::to_string(second);
     };
     Stmt q(db_,
            "SELECT t0, dt, n, encoding, data, second FROM samples WHERE session = ?1 ORDER BY "
            "second");
     q.bind(1, session);
+    const Typed col(q, path_, "samples", [&] {
+      return describe_session(db_, session) + ", second " + stored_value(q, 5);
+    });
     SampleSeries out;
     bool first = true;
     while (q.step()) {
+      const long long second = col.integer(5, "second", 0, std::numeric_limits<long long>::max());
       if (q.text(3) != "qdv1")
-        throw InputError(where(q.integer(5)) + ": unknown sample encoding \"" + shown(q.text(3)) +
+        throw InputError(where(second) + ": unknown sample encoding \"" + shown(q.text(3)) +
                              "\" (expected qdv1)",
                          path_);
-      const long long n = q.integer(2);
-      const double dt = q.real(1);
-      if (n < 0 || !(dt > 0.0 && std::isfinite(dt)) || !std::isfinite(q.real(0)))
-        throw InputError(
-            where(q.integer(5)) + ": damaged sample row (expected n >= 0, dt > 0 and a finite t0)",
-            path_);
+      const double t0 = col.real(0, "t0");
+      const double dt = col.real(1, "dt");
+      const long long n = col.integer(2, "n", 0, std::numeric_limits<long long>::max());
+      if (!(dt > 0.0))
+        throw InputError(where(second) + ": damaged sample row (expected dt > 0)", path_);
       if (first) {
-        out.t0 = q.real(0);
+        out.t0 = t0;
         out.dt = dt;
         first = false;
       }
       try {
-        decode_samples(q.blob(4), static_cast<std::size_t>(n), q.real(0), dt, out);
+        decode_samples(q.blob(4), static_cast<std::size_t>(n), t0, dt, out);
       } catch (const std::runtime_error& e) {
-        throw InputError(where(q.integer(5)) + ": " + e.what() + ", " + std::to_string(n) +
+        throw InputError(where(second) + ": " + e.what() + ", " + std::to_string(n) +
                              " samples expected; the database is damaged",
                          path_);
       }
@@ -1170,7 +1282,24 @@ class Outputs {
   void check(const std::ofstream& o) const {
     if (!o) throw InputError("cannot write (disk full?)", files_.back().first.string());
   }
-  void commit() {
+  // A file of an earlier export that this one does not write: removed when this export commits
+  // (before its files are renamed into place; if it cannot be removed, nothing is replaced).
+  void remove_on_commit(const fs::path& p) { stale_.push_back(p); }
+  // The stale files removed by commit().
+  std::vector<std::string> commit() {
+    std::vector<std::string> removed;
+    for (const auto& p : stale_) {
+      std::error_code ec;
+      fs::remove(p, ec);
+      if (ec)
+        throw InputError("cannot remove " + p.filename().string() +
+                             " of an earlier export (this export does not write it, and the "
+                             "directory must not mix two exports): " +
+                             ec.message(),
+                         p.string());
+      removed.push_back(p.string());
+    }
+    stale_.clear();
     for (const auto& [part, final] : files_) {
       std::error_code ec;
       fs::rename(part, final, ec);
@@ -1180,6 +1309,7 @@ class Outputs {
                          final.string());
     }
     files_.clear();
+    return removed;
   }
   ~Outputs() {
     std::error_code ec;
@@ -1188,10 +1318,11 @@ class Outputs {
 
  private:
   std::vector<std::pair<fs::path, fs::path>> files_;
+  std::vector<fs::path> stale_;
 };
 }  // namespace
 
-void export_csv(const Store& store, const std::string& dir, bool samples) {
+ExportSummary export_csv(const Store& store, const std::string& dir, bool samples) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
@@ -1219,6 +1350,8 @@ void export_csv(const Store& store, const std::string& dir, bool samples) {
     auto o = files.open(fs::path(dir) / "sessions.csv");
     o << "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
          "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at\n";
+    // `ordinal` is written 1-based (the database's is 0-based), like `session`: a contract of
+    // sessions.csv (docs/FORMATS.md), kept for the scripts that read it.
     for (const auto& s : sessions)
       o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
         << (s.phase_index + 1) << ',' << (s.ordinal + 1) << ',' << csv(s.prototype) << ','
@@ -1256,8 +1389,15 @@ void export_csv(const Store& store, const std::string& dir, bool samples) {
     }
     o.flush();
     files.check(o);
+  } else {
+    // A samples.csv left by an earlier `--samples` export (perhaps of another database) would
+    // sit beside this export's files as if it belonged to them: removed, and said.
+    const fs::path old = fs::path(dir) / "samples.csv";
+    std::error_code ec;
+    const auto st = fs::symlink_status(old, ec);
+    if (fs::exists(st) && !fs::is_directory(st)) files.remove_on_commit(old);
   }
-  files.commit();
+  return {files.commit()};
 }
 
 }  // namespace palplab::results

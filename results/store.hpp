@@ -175,6 +175,10 @@ class Store {
 
   StudyRecord read_study() const;
   std::vector<ParticipantRecord> read_participants() const;
+  // The read_* functions refuse (InputError naming the table, row and column) a numeric value a
+  // hand edit or damage left that is not what the schema types it as (text or a blob in a REAL or
+  // INTEGER column, ±inf, a fraction in an INTEGER column, a seed that is no decimal integer)
+  // rather than reading it as 0 or passing inf on.
   // Complete sessions only (what analyses use), ordered by participant number, ordinal.
   std::vector<SessionRecord> read_sessions() const;
   // Every attempt of every session, aborted and running ones included (same order, then
@@ -201,9 +205,19 @@ class Store {
   int version_ = kSchemaVersion;
 };
 
+// What export_csv did besides writing its files.
+struct ExportSummary {
+  // Files of an earlier export in `dir` that this export does not write (samples.csv when
+  // `samples` is false), removed so that the directory never mixes two exports.
+  std::vector<std::string> removed;
+};
+
 // Tidy CSV export: measures.csv (participant,group,phase,session,measure,value,unit),
-// sessions.csv, events.csv and, when `samples`, samples.csv. Creates `dir` if needed.
-void export_csv(const Store& store, const std::string& dir, bool samples);
+// sessions.csv, events.csv and, when `samples`, samples.csv. Creates `dir` if needed. The files
+// replace an earlier export's only when all are written; without `samples`, an earlier export's
+// samples.csv is then removed (ExportSummary::removed). Every numeric value read is checked
+// (InputError naming the table, row and column), so nothing is exported as 0 or inf.
+ExportSummary export_csv(const Store& store, const std::string& dir, bool samples);
 
 // Current UTC time as ISO 8601 ("2026-11-21T13:30:00Z").
 std::string utc_now();

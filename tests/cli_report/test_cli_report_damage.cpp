@@ -85,6 +85,62 @@ TEST(CliReportDamage, TextInAMeasureValueNamesSessionAndMeasure) {
       d, db, {db.string(), "measure \"palpation_force\"", "'abc' is not a number", "participant"});
 }
 
+// Numbers a hand edit left in events and sessions rows (±inf, text): refused naming the table,
+// row and column, where the export wrote `contact_end,inf` and read text as 0.
+TEST(CliReportDamage, HandEditedEventNumbersAreRefusedByExport) {
+  auto d = scratch_dir("dmg_events");
+  const fs::path db = copy_db(d);
+  ASSERT_GT(palplab::testing::sql_int(db, "SELECT COUNT(*) FROM events"), 0);
+  sql_exec(db, "UPDATE events SET value = 9e999;");
+  Result r = run_palplab("export " + db.string() + " --csv " + (d / "csv").string(), d);
+  expect_exit2(r, {db.string(), "table events, row (session ", "participant",
+                   "column value: expected a finite number, got inf"});
+  EXPECT_FALSE(fs::exists(d / "csv" / "events.csv"));
+  sql_exec(db, "UPDATE events SET value = 1, t = 'abc';");
+  r = run_palplab("export " + db.string() + " --csv " + (d / "csv").string(), d);
+  expect_exit2(r, {db.string(), "table events", "column t: expected a finite number, got 'abc'"});
+  sql_exec(db, "UPDATE events SET t = 0.5;");
+  r = run_palplab("export " + db.string() + " --csv " + (d / "csv").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(slurp(d / "csv" / "events.csv"), "inf"));
+}
+
+TEST(CliReportDamage, HandEditedSessionNumbersAreRefused) {
+  auto d = scratch_dir("dmg_sessions");
+  const fs::path db = copy_db(d);
+  sql_exec(db,
+           "UPDATE sessions SET loop_median = 9e999 WHERE session = (SELECT MIN(session) "
+           "FROM sessions);");
+  expect_both_refuse(d, db,
+                     {db.string(), "table sessions, row (session ", "participant",
+                      "column loop_median: expected a finite number, got inf"});
+  sql_exec(db, "UPDATE sessions SET loop_median = 1e-6, wall_duration = 'x';");
+  expect_both_refuse(
+      d, db,
+      {db.string(), "table sessions", "column wall_duration: expected a finite number, got 'x'"});
+}
+
+// `export DB1 --samples` then `export DB2` (no --samples) into the same directory: DB1's
+// samples.csv is removed, and said on stdout, rather than left beside DB2's files.
+TEST(CliReportDamage, ExportWithoutSamplesRemovesAnEarlierSamplesCsv) {
+  auto d = scratch_dir("dmg_stale");
+  const fs::path db1 = copy_db(d);
+  fs::create_directories(d / "two");
+  const fs::path db2 = copy_db(d / "two");
+  sql_exec(db2, "UPDATE sessions SET wall_duration = 123.5;");
+  const fs::path csv = d / "csv";
+  Result r = run_palplab("export " + db1.string() + " --csv " + csv.string() + " --samples", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(csv / "samples.csv"));
+  EXPECT_FALSE(has(r.out, "removed"));
+  r = run_palplab("export " + db2.string() + " --csv " + csv.string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "removed " + (csv / "samples.csv").string())) << r.out;
+  EXPECT_TRUE(has(r.out, "add --samples")) << r.out;
+  EXPECT_FALSE(fs::exists(csv / "samples.csv"));
+  EXPECT_TRUE(has(slurp(csv / "sessions.csv"), ",123.5,"));
+}
+
 TEST(CliReportDamage, CorruptSampleBlobNamesItsSession) {
   auto d = scratch_dir("dmg_blob");
   const fs::path db = copy_db(d);

@@ -192,3 +192,29 @@ TEST(Export, TidyCsvFiles) {
   EXPECT_EQ(std::count(smp.begin(), smp.end(), '\n'), 1 + 1200 + 5);
   EXPECT_TRUE(fs::exists(dir / "out" / "sessions.csv"));
 }
+
+// sessions.csv numbers `ordinal` from 1 (the database's column is 0-based), like `session`: a
+// column contract of the export (docs/FORMATS.md), pinned here.
+TEST(Export, SessionsCsvOrdinalIsOneBased) {
+  auto dir = tmp("export_ordinal");
+  std::string db = (dir / "e.db").string();
+  Store s = Store::create(db);
+  s.write_study({"x", "x", "{}", sha256_hex("{}"), "v", "c", 1, "t", ""}, {}, {{"P01", "A", 0, 1}});
+  SessionData a = make_session("P01", 0, 10), b = make_session("P01", 1, 10);
+  s.write_session(a);
+  s.write_session(b);
+  ASSERT_EQ(s.read_sessions()[1].ordinal, 1);  // 0-based in the database
+  export_csv(s, (dir / "out").string(), false);
+  std::istringstream in(slurp(dir / "out" / "sessions.csv"));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line,
+            "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
+            "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at");
+  std::getline(in, line);
+  EXPECT_EQ(line.substr(0, line.rfind(',')),
+            "P01,A,training,1,1,A,,0,0,0.01,10,0.25,2e-06,9e-06,18446744073709551557");
+  std::getline(in, line);
+  EXPECT_EQ(line.substr(0, line.rfind(',')),
+            "P01,A,post_training,1,2,A,,600,0,0.01,10,0.25,2e-06,9e-06,18446744073709551557");
+}

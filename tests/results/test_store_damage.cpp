@@ -1,15 +1,18 @@
 // A damaged or hand-edited results database is bad input (InputError naming the file and what is
 // wrong), never an internal error: a dropped table, a file cut short, a text in a measure's
-// value, a corrupt sample blob, an empty or impossible path. A failing export leaves an earlier
-// export's files as they were.
+// value, a number column holding text or ±inf, a corrupt sample blob, an empty or impossible
+// path. A failing export leaves an earlier export's files as they were; an export without samples
+// removes an earlier export's samples.csv.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "common/input_error.hpp"
 #include "results/sha256.hpp"
@@ -36,6 +39,8 @@ SessionData session(const std::string& participant, int ordinal, std::size_t n_s
   d.session.prototype = "A";
   d.session.state_after = "{}";
   d.measures = {{"palpation_force", 2.5, "N"}, {"exploration_time", 12.5, "s"}};
+  d.events = {{0.5, "contact_start", 0.0, "feature"}, {1.25, "contact_end", 2.5, ""}};
+  d.session.wall_duration = 0.75;
   d.samples.dt = 0.001;
   for (std::size_t i = 0; i < n_samples; ++i) {
     d.samples.x.insert(d.samples.x.end(), {0.001 * i, 0.0, 0.0});
@@ -61,7 +66,7 @@ std::string make_db(const fs::path& dir, std::size_t n_samples = 1500) {
 using palplab::testing::sql_exec;
 
 // `f` throws an InputError whose message holds every one of `parts`.
-void expect_input_error(const std::function<void()>& f, std::initializer_list<std::string> parts) {
+void expect_input_error(const std::function<void()>& f, const std::vector<std::string>& parts) {
   try {
     f();
     ADD_FAILURE() << "no error";
@@ -181,4 +186,190 @@ TEST(StoreDamage, PathsSayWhatIsWrongWithThem) {
                      {"is not a directory"});
   expect_input_error([&] { Store::create(d.string()); }, {"is a directory"});
   EXPECT_FALSE(fs::exists(d / "missing"));
+}
+
+namespace {
+// The id of P02's session in a make_db database.
+std::string p02_session() {
+  return "(SELECT session FROM sessions WHERE participant = 'P02')";
+}
+}  // namespace
+
+// A hand-edited events row (±inf, text) is refused naming the table, the row and the column,
+// by read_events and so by the export, which kept writing `contact_end,inf` and `t` = 0.
+TEST(StoreDamage, EventValuesThatAreNotFiniteNumbersAreRefused) {
+  auto d = tmp("events");
+  const std::string db = make_db(d);
+  export_csv(Store::open(db), (d / "csv").string(), false);
+  const std::string events = slurp(d / "csv" / "events.csv");
+  ASSERT_NE(events.find("P02,B,post_training,1,1.25,contact_end,2.5,"), std::string::npos)
+      << events;
+  struct Case {
+    std::string sql;
+    std::vector<std::string> parts;
+  };
+  const std::vector<Case> cases = {
+      {"UPDATE events SET value = 9e999 WHERE kind = 'contact_end' AND session = " + p02_session(),
+       {"table events, row (session ", "participant P02", "kind contact_end", "t 1.25",
+        "column value: expected a finite number, got inf"}},
+      {"UPDATE events SET value = -9e999 WHERE kind = 'contact_end' AND session = " + p02_session(),
+       {"table events", "column value: expected a finite number, got -inf"}},
+      {"UPDATE events SET value = 'abc' WHERE kind = 'contact_end' AND session = " + p02_session(),
+       {"table events", "participant P02", "column value: expected a finite number, got 'abc'"}},
+      {"UPDATE events SET t = 'abc' WHERE kind = 'contact_start' AND session = " + p02_session(),
+       {"table events", "participant P02", "kind contact_start",
+        "column t: expected a finite number, got 'abc'"}},
+      {"UPDATE events SET t = x'00ff' WHERE kind = 'contact_start' AND session = " + p02_session(),
+       {"table events", "column t: expected a finite number, got (a blob)"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.sql);
+    const fs::path copy = d / "edited.db";
+    fs::copy_file(db, copy, fs::copy_options::overwrite_existing);
+    sql_exec(copy, c.sql + ";");
+    Store s = Store::open(copy.string());
+    const auto sessions = s.read_sessions();
+    ASSERT_EQ(sessions.size(), 2u);
+    EXPECT_EQ(s.read_events(sessions[0].session).size(), 2u);  // P01's are intact
+    std::vector<std::string> parts = c.parts;
+    parts.push_back(copy.string());
+    parts.push_back("session " + std::to_string(sessions[1].session));
+    expect_input_error([&] { s.read_events(sessions[1].session); }, parts);
+    expect_input_error([&] { export_csv(s, (d / "csv").string(), false); }, parts);
+    EXPECT_EQ(slurp(d / "csv" / "events.csv"), events);  // the earlier export is kept
+  }
+  // A numeric text is stored as a number by the column's REAL affinity and reads as one.
+  sql_exec(db, "UPDATE events SET value = '3.5' WHERE kind = 'contact_end';");
+  Store s = Store::open(db);
+  EXPECT_EQ(s.read_events(s.read_sessions()[1].session)[1].value, 3.5);
+}
+
+// The same for every number column of a sessions row (read_sessions, read_attempts, the
+// export's sessions.csv and the session columns of read_measures), and the participants' and the
+// study's numbers.
+TEST(StoreDamage, SessionNumbersThatAreNotWhatTheSchemaSaysAreRefused) {
+  auto d = tmp("sessions");
+  const std::string db = make_db(d);
+  export_csv(Store::open(db), (d / "csv").string(), false);
+  const std::string sessions_csv = slurp(d / "csv" / "sessions.csv");
+  struct Case {
+    std::string set, column, got;
+  };
+  const std::string int_range = "expected an integer from 0 to 2147483647, got ";
+  const std::vector<Case> cases = {
+      {"loop_median = 9e999", "loop_median", "expected a finite number, got inf"},
+      {"loop_p99 = -9e999", "loop_p99", "expected a finite number, got -inf"},
+      {"wall_duration = 'x'", "wall_duration", "expected a finite number, got 'x'"},
+      {"study_offset = 'soon'", "study_offset", "expected a finite number, got 'soon'"},
+      {"duration = x'01'", "duration", "expected a finite number, got (a blob)"},
+      {"ordinal = 1.5", "ordinal", int_range + "1.5"},
+      {"ordinal = -1", "ordinal", int_range + "-1"},
+      {"phase_index = 'first'", "phase_index", int_range + "'first'"},
+      {"day = 4294967296", "day", int_range + "4294967296"},
+      {"steps = 'many'", "steps", "expected an integer >= 0, got 'many'"},
+      {"attempt = 9e999", "attempt", int_range + "inf"},
+      {"seed = 'abc'", "seed", "expected an unsigned 64-bit integer in decimal, got 'abc'"},
+      {"seed = '-5'", "seed", "expected an unsigned 64-bit integer in decimal, got '-5'"},
+      {"seed = '18446744073709551616'", "seed",
+       "expected an unsigned 64-bit integer in decimal, got '18446744073709551616'"},
+      {"transparency = 2", "transparency", "expected an integer from 0 to 1, got 2"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.set);
+    const fs::path copy = d / "edited.db";
+    fs::copy_file(db, copy, fs::copy_options::overwrite_existing);
+    sql_exec(copy, "UPDATE sessions SET " + c.set + " WHERE participant = 'P02';");
+    Store s = Store::open(copy.string());
+    const std::vector<std::string> parts = {copy.string(), "table sessions, row (session ",
+                                            "participant P02", "phase post_training",
+                                            "column " + c.column + ": " + c.got};
+    expect_input_error([&] { s.read_sessions(); }, parts);
+    expect_input_error([&] { s.read_attempts("P02"); }, parts);
+    EXPECT_EQ(s.read_attempts("P01").size(), 1u);  // P01's row is intact
+    expect_input_error([&] { export_csv(s, (d / "csv").string(), false); }, parts);
+    EXPECT_EQ(slurp(d / "csv" / "sessions.csv"), sessions_csv);
+  }
+  // read_measures reads a session's ordinal and phase_index too.
+  sql_exec(db, "UPDATE sessions SET phase_index = 'x' WHERE participant = 'P02';");
+  expect_input_error([&] { Store::open(db).read_measures(); },
+                     {db, "table sessions", "participant P02", "column phase_index", "got 'x'"});
+  // Participants and the study.
+  sql_exec(db,
+           "UPDATE sessions SET phase_index = 0; UPDATE participants SET number = 'one' WHERE "
+           "participant = 'P02';");
+  expect_input_error([&] { Store::open(db).read_participants(); },
+                     {db, "table participants, row (participant P02) column number", "got 'one'"});
+  sql_exec(db, "UPDATE participants SET number = 1, seed = '' WHERE participant = 'P02';");
+  expect_input_error([&] { Store::open(db).read_participants(); },
+                     {"table participants", "column seed", "got ''"});
+  sql_exec(db, "UPDATE participants SET seed = '2'; UPDATE study SET seed = '1e3';");
+  expect_input_error([&] { Store::open(db).read_study(); },
+                     {"table study, row (id 1) column seed", "got '1e3'"});
+  // What the schema allows still reads: a number stored as numeric text (REAL affinity), NULL
+  // for the transparency that was not recorded, the largest seed.
+  sql_exec(db,
+           "UPDATE study SET seed = '18446744073709551615'; UPDATE sessions SET wall_duration = "
+           "'2.5', transparency = NULL, seed = '18446744073709551615';");
+  Store s = Store::open(db);
+  EXPECT_EQ(s.read_study().seed, 18446744073709551615ull);
+  const auto rows = s.read_sessions();
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].wall_duration, 2.5);
+  EXPECT_EQ(rows[1].seed, 18446744073709551615ull);
+  EXPECT_FALSE(rows[1].transparency.has_value());
+}
+
+TEST(StoreDamage, SampleRowNumbersThatAreNotNumbersAreRefused) {
+  auto d = tmp("samplecols");
+  const std::string db = make_db(d);
+  sql_exec(db,
+           "UPDATE samples SET t0 = 'abc' WHERE second = 1 AND session = " + p02_session() + ";");
+  Store s = Store::open(db);
+  const auto sessions = s.read_sessions();
+  expect_input_error([&] { s.read_samples(sessions[1].session); },
+                     {db, "table samples", "participant P02", "second 1",
+                      "column t0: expected a finite number, got 'abc'"});
+  EXPECT_EQ(s.read_samples(sessions[0].session).size(), 1500u);
+}
+
+// `export DB1 --samples` then `export DB2` (no --samples) into one directory: the samples.csv of
+// DB1 is removed (and reported), not left beside DB2's files; only once the export succeeded.
+TEST(StoreDamage, ExportWithoutSamplesRemovesAnEarlierSamplesCsv) {
+  auto d = tmp("stale");
+  fs::create_directories(d / "one");
+  fs::create_directories(d / "two");
+  const std::string db1 = make_db(d / "one");
+  const std::string db2 = make_db(d / "two");
+  sql_exec(db2, "UPDATE sessions SET wall_duration = 9.5;");
+  const fs::path out = d / "csv";
+  EXPECT_TRUE(export_csv(Store::open(db1), out.string(), true).removed.empty());
+  ASSERT_TRUE(fs::exists(out / "samples.csv"));
+  const std::string samples1 = slurp(out / "samples.csv");
+  // A failing export of DB2 changes nothing, samples.csv included.
+  const fs::path bad = d / "bad.db";
+  fs::copy_file(db2, bad);
+  sql_exec(bad, "UPDATE events SET value = 9e999;");
+  expect_input_error([&] { export_csv(Store::open(bad.string()), out.string(), false); },
+                     {"table events"});
+  EXPECT_EQ(slurp(out / "samples.csv"), samples1);
+  // The export of DB2 without samples writes its three files and removes DB1's samples.csv.
+  const ExportSummary r = export_csv(Store::open(db2), out.string(), false);
+  ASSERT_EQ(r.removed.size(), 1u);
+  EXPECT_EQ(fs::path(r.removed[0]), out / "samples.csv");
+  EXPECT_FALSE(fs::exists(out / "samples.csv"));
+  EXPECT_NE(slurp(out / "sessions.csv").find(",9.5,"), std::string::npos);
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"events.csv", "measures.csv", "sessions.csv"}));
+  // Nothing to remove the next time; with --samples it is written again.
+  EXPECT_TRUE(export_csv(Store::open(db2), out.string(), false).removed.empty());
+  EXPECT_TRUE(export_csv(Store::open(db2), out.string(), true).removed.empty());
+  EXPECT_TRUE(fs::exists(out / "samples.csv"));
+  // A directory named samples.csv is not an export's file: left alone.
+  fs::remove(out / "samples.csv");
+  fs::create_directories(out / "samples.csv");
+  std::ofstream(out / "samples.csv" / "notes.txt") << "mine\n";
+  EXPECT_TRUE(export_csv(Store::open(db2), out.string(), false).removed.empty());
+  EXPECT_EQ(slurp(out / "samples.csv" / "notes.txt"), "mine\n");
 }
