@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
@@ -21,6 +22,7 @@ struct CalibrateArgs {
   palplab::protocols::CalibrateOptions opt;
   bool quiet = false;
   bool no_se = false;
+  bool overwrite = false;  // replace an --out that is not a calibration JSON
 };
 
 palplab::app::CommandRegistration reg{
@@ -51,6 +53,8 @@ palplab::app::CommandRegistration reg{
                       "Also write the fitted values as the defaults into this params.hpp "
                       "(protocols/participants/params.hpp; rebuild afterwards)");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
+      cmd->add_flag("--overwrite", a->overwrite,
+                    "Replace an existing --out that is not a calibration JSON");
       cmd->add_flag("--no-se", a->no_se,
                     "Skip the standard errors (saves the 2p² simulations of the curvature)");
       cmd->callback([a, code] {
@@ -58,7 +62,15 @@ palplab::app::CommandRegistration reg{
         Study s = load_study(a->study, engine_prototype_inspector());
         auto cells = read_human_cells(a->human);
         // The outputs are checked before the fit (which takes minutes to hours).
-        palplab::app::require_writable_file("--out", a->out);
+        // --out is never an input, nor a file of another kind without --overwrite.
+        palplab::app::require_replaceable_output(
+            "--out", a->out, {{"the study file", a->study}, {"the human data", a->human}},
+            [](const std::string& p) {
+              std::ifstream in(p, std::ios::binary);
+              const auto j = nlohmann::json::parse(in, nullptr, false);
+              return !j.is_discarded() && j.is_object() && j.contains("palplab_calibration");
+            },
+            "palplab calibration JSON", a->overwrite);
         if (!a->write_defaults.empty()) {
           if (!std::filesystem::is_regular_file(a->write_defaults))
             throw palplab::InputError(palplab::SourceLocation{"--write-defaults"},

@@ -22,7 +22,7 @@ namespace {
 struct RenderArgs {
   std::string file, out, camera, size = "800x600", press, look_at;
   double force = 0.0, hold = 0.5;
-  bool wireframe = false;
+  bool wireframe = false, overwrite = false;
   std::vector<std::string> alpha;
   std::string transparent;
   double transparent_alpha = 0.15;
@@ -52,6 +52,11 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
 
 int run_render(const RenderArgs& a) {
   using namespace palplab;
+  // --out is never the prototype read, nor a file of another kind without --overwrite.
+  app::require_replaceable_output(
+      "--out", a.out, {{"the prototype file", a.file}},
+      [](const std::string& p) { return app::file_starts_with(p, "\x89PNG\r\n\x1a\n"); },
+      "PNG image", a.overwrite);
   const auto [width, height] = app::parse_image_size("--size", a.size);
   render::Camera cam;
   if (!a.camera.empty()) {
@@ -159,6 +164,7 @@ palplab::app::CommandRegistration reg{
       auto a = std::make_shared<RenderArgs>();
       cmd->add_option("prototype", a->file, "Prototype JSON file")->required();
       cmd->add_option("--out", a->out, "PNG file to write")->required();
+      cmd->add_flag("--overwrite", a->overwrite, "Replace an existing --out that is not a PNG");
       cmd->add_option("--camera", a->camera,
                       "AZIMUTH,ELEVATION[,DISTANCE]: degrees about +z, degrees above the xy "
                       "plane, m from the organ's centre (default 30,25 and fit to view)");

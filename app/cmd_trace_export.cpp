@@ -19,6 +19,7 @@ namespace {
 struct Args {
   std::string db, out;
   long long session = 0;
+  bool overwrite = false;
 };
 
 palplab::app::CommandRegistration reg{
@@ -33,8 +34,15 @@ palplab::app::CommandRegistration reg{
           ->required()
           ->check(palplab::app::count_range(1, std::numeric_limits<long long>::max()));
       cmd->add_option("--out", a->out, "Trace file to write")->required();
+      cmd->add_flag("--overwrite", a->overwrite,
+                    "Replace an existing --out that is not a trace file");
       cmd->callback([a, code] {
         using namespace palplab;
+        // --out is never the database read, nor a file of another kind without --overwrite.
+        app::require_replaceable_output(
+            "--out", a->out, {{"the results database", a->db}},
+            [](const std::string& p) { return app::file_starts_with(p, "# palplab-trace/"); },
+            "palplab trace file", a->overwrite);
         results::Store store = results::Store::open(a->db);
         bool found = false;
         std::string who;

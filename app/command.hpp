@@ -110,6 +110,14 @@ inline std::string describe_existing_file(const std::string& path) {
   return "a file";
 }
 
+// Whether the file at `path` starts with `prefix` (a format's magic bytes).
+inline bool file_starts_with(const std::string& path, const std::string& prefix) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(prefix.size(), '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  return in.gcount() == static_cast<std::streamsize>(prefix.size()) && head == prefix;
+}
+
 // The output file of `flag` (scene build --out, fem reference --out), checked before the command
 // reads or computes anything costly, so that no result and no input is lost:
 // - the same file as one of `inputs` (std::filesystem::equivalent: also through a link or

@@ -129,6 +129,22 @@ TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
   EXPECT_NE(w.err.find("--write-defaults"), std::string::npos) << w.err;
   EXPECT_EQ(w.err.find("evaluation"), std::string::npos) << "the fit ran first: " << w.err;
   EXPECT_FALSE(fs::exists(d / "p.json"));  // the check leaves no empty file behind
+  // Review finding: --out naming an input (or any other file) replaced it after the fit.
+  fs::copy_file(data("exp2_human.csv"), d / "human.csv");
+  const auto bytes = fs::file_size(d / "human.csv");
+  const std::string own = "calibrate " + data("recovery_study.json").string() + " --human " +
+                          (d / "human.csv").string() + " --params weber_fraction --budget 2 ";
+  const Result in = run_palplab(own + "--out " + (d / "human.csv").string() + " --overwrite", d);
+  EXPECT_EQ(in.code, 2) << in.out << in.err;
+  EXPECT_NE(in.err.find("is the human data this command reads"), std::string::npos) << in.err;
+  EXPECT_EQ(fs::file_size(d / "human.csv"), bytes);
+  std::ofstream(d / "notes.json") << "{\"mine\": 1}\n";
+  const Result other = run_palplab(own + "--out " + (d / "notes.json").string(), d);
+  EXPECT_EQ(other.code, 2) << other.out << other.err;
+  EXPECT_NE(other.err.find("exists and is a JSON file, not a palplab calibration JSON"),
+            std::string::npos)
+      << other.err;
+  EXPECT_EQ(other.err.find("evaluation"), std::string::npos) << "the fit ran first: " << other.err;
   fs::remove_all(d);
 }
 

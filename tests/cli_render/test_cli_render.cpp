@@ -116,6 +116,25 @@ TEST(CliRender, BadInputExitsTwo) {
       << ta.out;
 }
 
+// Review finding: `render P.json --out P.json` replaced the prototype with a PNG. Checked before
+// the still, so no EGL is needed for the refusals.
+TEST(CliRender, OutNeverReplacesThePrototypeOrAFileOfAnotherKind) {
+  const fs::path p = tmp("own_A.json");
+  fs::copy_file(proto("A"), p, fs::copy_options::overwrite_existing);
+  const auto bytes = fs::file_size(p);
+  Result r = cli("render " + p.string() + " --out " + p.string() + " --overwrite");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("is the prototype file this command reads"), std::string::npos) << r.out;
+  EXPECT_EQ(fs::file_size(p), bytes);
+  const fs::path other = tmp("other.json");
+  fs::copy_file(proto("B"), other, fs::copy_options::overwrite_existing);
+  r = cli("render " + p.string() + " --out " + other.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("exists and is a JSON file, not a PNG image"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--overwrite"), std::string::npos) << r.out;
+  EXPECT_EQ(fs::file_size(other), fs::file_size(proto("B")));
+}
+
 // An --alpha opacity out of [0, 1] or an unknown region was refused by the renderer with
 // "opacity of region ..." / "unknown region ..." (no flag named), and a region given twice took
 // the last value silently. Checked before the still, so no EGL is needed. --force and

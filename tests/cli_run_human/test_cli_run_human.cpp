@@ -322,4 +322,21 @@ TEST(CliTraceExport, SessionOutOfRangeIsExit2NamingTheRange) {
   ASSERT_EQ(ok.code, 0) << ok.err;
   EXPECT_TRUE(t::has(ok.out, "2000 samples of session 4")) << ok.out;
   EXPECT_EQ(e::read_trace(out.string()).samples.size(), 2000u);
+  // Review finding: --out naming the database replaced it with the trace text.
+  const auto db_bytes = fs::file_size(db);
+  t::expect_exit2(t::run_palplab("trace-export " + db.string() + " --session 4 --out " +
+                                     db.string() + " --overwrite",
+                                 tmp.dir),
+                  {"--out", "is the results database this command reads"});
+  EXPECT_EQ(fs::file_size(db), db_bytes);
+  // Another kind of file is replaced only with --overwrite; a trace file is replaced.
+  const fs::path other = tmp.dir / "notes.txt";
+  std::ofstream(other) << "my notes\n";
+  const std::string to_other =
+      "trace-export " + db.string() + " --session 4 --out " + other.string();
+  t::expect_exit2(t::run_palplab(to_other, tmp.dir),
+                  {"--out", "exists and is a file, not a palplab trace file", "--overwrite"});
+  EXPECT_EQ(fs::file_size(other), 9u);
+  EXPECT_EQ(t::run_palplab(to_other + " --overwrite", tmp.dir).code, 0);
+  EXPECT_EQ(export_session("4").code, 0);  // its own earlier output
 }
