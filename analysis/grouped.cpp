@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "analysis/decimal.hpp"
+#include "analysis/summary.hpp"
 #include "common/input_error.hpp"
 
 namespace palplab::analysis {
@@ -68,7 +69,8 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
         continue;
       }
     }
-    parse_number(t, static_cast<int>(r), vc);  // validates, with the line, before use
+    // Validates, with the line, before use; a long bad field is shown cut (shown_text).
+    parse_number_shown(t, static_cast<int>(r), vc);
     std::string name = trim(t.rows[r][gc]);
     if (name.empty())
       throw InputError(SourceLocation{t.file, t.line[r]},
@@ -127,9 +129,10 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
       std::string lines;
       for (int l : g.lines[k]) lines += (lines.empty() ? "" : ", ") + std::to_string(l);
       throw InputError(SourceLocation{t.file, g.lines[k].front()},
-                       "group '" + g.names[k] + "' (column '" + group_column + "') has " +
-                           std::to_string(g.values[k].size()) + " value(s) (line " + lines +
-                           "); every group needs at least " + std::to_string(min_per_group));
+                       "group '" + shown_text(g.names[k]) + "' (column '" + group_column +
+                           "') has " + std::to_string(g.values[k].size()) + " value(s) (line " +
+                           lines + "); every group needs at least " +
+                           std::to_string(min_per_group));
     }
   if (static_cast<int>(g.names.size()) < min_groups)
     throw InputError(SourceLocation{t.file}, "column '" + group_column + "' has " +

@@ -12,6 +12,8 @@
 #include <sstream>
 
 #include "analysis/distributions.hpp"
+#include "analysis/summary.hpp"
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 
 namespace palplab::analysis {
@@ -20,6 +22,22 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+
+// Column equilibration of a design: a column whose RMS lies outside [2^-10, 2^10] (a covariate
+// in units that make it 1e15) is divided by the power of two nearest its RMS (exact in binary);
+// the others are left as they are. Without it the rank test of the QR measured the intercept
+// against a column 1e15 times larger and called a full-rank design (session x 1e15 beside
+// the intercept) rank deficient. Returns the divisor of each column (1 = unchanged).
+VectorXd equilibrate(MatrixXd& X) {
+  VectorXd scale = VectorXd::Ones(X.cols());
+  for (Eigen::Index j = 0; j < X.cols(); ++j) {
+    const double rms = X.col(j).norm() / std::sqrt(static_cast<double>(X.rows()));
+    if (!(rms > 0) || !std::isfinite(rms) || (rms >= 0x1p-10 && rms <= 0x1p10)) continue;
+    scale(j) = std::exp2(std::round(std::log2(rms)));
+    X.col(j) /= scale(j);
+  }
+  return scale;
+}
 
 std::string trim(const std::string& s) {
   size_t b = s.find_first_not_of(" \t");
@@ -545,7 +563,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     c.numeric = true;
     for (int r : used) {
       try {
-        c.num.push_back(parse_number(t, r, ci[v]));
+        c.num.push_back(parse_number_shown(t, r, ci[v]));
       } catch (const InputError&) {
         if (v == f.response || v == f.slope) throw;  // located "expected a number"
         c.numeric = false;
@@ -568,7 +586,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     for (auto& v : term)
       if (!cols[v].numeric && cols[v].levels.size() < 2)
         throw InputError("column '" + v + "' is a factor with a single level ('" +
-                             cols[v].levels[0] + "') in the rows used",
+                             shown_text(cols[v].levels[0]) + "') in the rows used",
                          t.file);
 
   Model md;
@@ -578,6 +596,10 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   std::vector<int> term_of;
   md.X = design(f.terms, cols, n, false, &names, &term_of);
   md.p = static_cast<int>(md.X.cols());
+  // The model is fitted with equilibrated columns, X = X_s · diag(x_scale): beta = beta_s /
+  // x_scale and V = V_s / (x_scale x_scale'), t, df, p and the F tests unchanged; the REML
+  // criterion's log|X'V^-1 X| gains 2 Σ log x_scale.
+  const VectorXd x_scale = equilibrate(md.X);
   Eigen::ColPivHouseholderQR<MatrixXd> qr(md.X);
   if (qr.rank() < md.p)
     throw InputError("the fixed-effects design is rank deficient (rank " +
@@ -674,6 +696,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   }
   Eval e = evaluate(md, th);
   fit.deviance = profiled(md, e);
+  if (reml) fit.deviance += 2 * x_scale.array().log().sum();
   fit.n = n;
   fit.p = md.p;
   fit.n_groups = md.m;
@@ -701,7 +724,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   const MatrixXd V = s2 * e.Minv;
   fit.vcov.assign(md.p, std::vector<double>(md.p));
   for (int a = 0; a < md.p; ++a)
-    for (int b = 0; b < md.p; ++b) fit.vcov[a][b] = V(a, b);
+    for (int b = 0; b < md.p; ++b) fit.vcov[a][b] = V(a, b) / (x_scale(a) * x_scale(b));
 
   // --- Satterthwaite (lmerTest): A = 2 H^-1 over varpar = (theta, sigma)
   std::vector<double> vp = th;
@@ -756,9 +779,9 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   for (int j = 0; j < md.p; ++j) {
     LmmFixedEffect fe;
     fe.name = names[j];
-    fe.estimate = e.beta(j);
-    fe.se = std::sqrt(V(j, j));
-    fe.t = fe.estimate / fe.se;
+    fe.estimate = e.beta(j) / x_scale(j);
+    fe.se = std::sqrt(V(j, j)) / x_scale(j);
+    fe.t = e.beta(j) / std::sqrt(V(j, j));
     fe.df = satterthwaite(VectorXd::Unit(md.p, j));
     fe.p = t_two_sided_p(fe.t, fe.df);
     fit.fixed.push_back(fe);
@@ -769,6 +792,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   std::vector<std::string> sum_names;
   std::vector<int> sum_term;
   MatrixXd Xs = design(f.terms, cols, n, true, &sum_names, &sum_term);
+  equilibrate(Xs);  // rescales rows of C: the hypotheses (row spaces) stay the same
   MatrixXd C = Xs.colPivHouseholderQr().solve(md.X);
   for (size_t ti = 0; ti < f.terms.size(); ++ti) {
     std::vector<int> rowsL;
@@ -835,14 +859,30 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
 }
 
 namespace {
+// printf of one number into a string of the size needed (a 64-byte buffer cut large numbers
+// printed with %f); "n/a" for NaN or infinity.
 std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
+  if (!std::isfinite(v)) return "n/a";
+  const int n = std::snprintf(nullptr, 0, f, v);
+  std::string out(n > 0 ? static_cast<size_t>(n) : 0, '\0');
+  if (n > 0) std::snprintf(out.data(), out.size() + 1, f, v);
+  return out;
+}
+// A statistic (t, F) with `decimals` decimals, from 1e6 on in scientific notation.
+std::string stat(double v, int decimals) {
+  if (!std::isfinite(v)) return "n/a";
+  const int n = std::snprintf(nullptr, 0, std::fabs(v) < 1e6 ? "%.*f" : "%.*e", decimals, v);
+  std::string out(static_cast<size_t>(std::max(n, 0)), '\0');
+  std::snprintf(out.data(), out.size() + 1, std::fabs(v) < 1e6 ? "%.*f" : "%.*e", decimals, v);
+  return out;
 }
 // Exact p even below 2.2e-16 (R prints "< 2e-16"); the t and F tails are relative-accurate.
 std::string pfmt(double p) {
   return fmt("%.4g", p);
+}
+// Names from the input (columns, factor levels in term names): control characters escaped.
+std::string esc(const std::string& s) {
+  return escape_controls(s, false);
 }
 std::string pad(std::string s, size_t w, bool left = false) {
   if (s.size() >= w) return s;
@@ -854,7 +894,7 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
   std::ostringstream o;
   o << "Linear mixed model fit by " << (fit.reml ? "REML" : "maximum likelihood")
     << ". t-tests use Satterthwaite's method\n";
-  o << "Formula: " << formula << "\n\n";
+  o << "Formula: " << esc(formula) << "\n\n";
   if (fit.reml) {
     o << "REML criterion at convergence: " << fmt("%.6f", fit.deviance) << "\n";
   } else {
@@ -864,43 +904,44 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
   o << "AIC: " << fmt("%.4f", fit.aic) << "   BIC: " << fmt("%.4f", fit.bic)
     << "   (df = " << fit.n_par << ")\n\n";
   o << "Random effects:\n";
-  const size_t gw = std::max<size_t>(9, fit.group.size() + 2);
+  const std::string group = esc(fit.group), slope = esc(fit.slope);
+  const size_t gw = std::max<size_t>(9, group.size() + 2);
   o << " " << pad("Groups", gw, true) << pad("Name", 13, true) << pad("Variance", 14)
     << pad("Std.Dev.", 12) << (fit.slope.empty() ? "" : "   Corr") << "\n";
-  o << " " << pad(fit.group, gw, true) << pad("(Intercept)", 13, true)
+  o << " " << pad(group, gw, true) << pad("(Intercept)", 13, true)
     << pad(fmt("%.6g", fit.sd_intercept * fit.sd_intercept), 14)
     << pad(fmt("%.6g", fit.sd_intercept), 12) << "\n";
   if (!fit.slope.empty())
-    o << " " << pad("", gw, true) << pad(fit.slope, 13, true)
+    o << " " << pad("", gw, true) << pad(slope, 13, true)
       << pad(fmt("%.6g", fit.sd_slope * fit.sd_slope), 14) << pad(fmt("%.6g", fit.sd_slope), 12)
       << "   " << fmt("%.4f", fit.correlation) << "\n";
   o << " " << pad("Residual", gw, true) << pad("", 13, true)
     << pad(fmt("%.6g", fit.sigma * fit.sigma), 14) << pad(fmt("%.6g", fit.sigma), 12) << "\n";
-  o << "Number of obs: " << fit.n << ", groups:  " << fit.group << ", " << fit.n_groups;
+  o << "Number of obs: " << fit.n << ", groups:  " << group << ", " << fit.n_groups;
   if (fit.rows_dropped_na > 0) o << " (" << fit.rows_dropped_na << " rows with NA dropped)";
   o << "\n\nFixed effects:\n";
   size_t nw = 12;
-  for (auto& fe : fit.fixed) nw = std::max(nw, fe.name.size() + 2);
+  for (auto& fe : fit.fixed) nw = std::max(nw, esc(fe.name).size() + 2);
   o << pad("", nw, true) << pad("Estimate", 14) << pad("Std. Error", 13) << pad("df", 11)
     << pad("t value", 10) << pad("Pr(>|t|)", 12) << "\n";
   for (auto& fe : fit.fixed)
-    o << pad(fe.name, nw, true) << pad(fmt("%.6g", fe.estimate), 14) << pad(fmt("%.6g", fe.se), 13)
-      << pad(fmt("%.3f", fe.df), 11) << pad(fmt("%.3f", fe.t), 10) << pad(pfmt(fe.p), 12) << "\n";
+    o << pad(esc(fe.name), nw, true) << pad(fmt("%.6g", fe.estimate), 14)
+      << pad(fmt("%.6g", fe.se), 13) << pad(fmt("%.3f", fe.df), 11) << pad(stat(fe.t, 3), 10)
+      << pad(pfmt(fe.p), 12) << "\n";
   if (!fit.anova.empty()) {
     o << "\nType III Analysis of Variance Table with Satterthwaite's method\n";
     size_t tw = 8;
-    for (auto& a : fit.anova) tw = std::max(tw, a.term.size() + 2);
+    for (auto& a : fit.anova) tw = std::max(tw, esc(a.term).size() + 2);
     o << pad("", tw, true) << pad("Sum Sq", 12) << pad("Mean Sq", 12) << pad("NumDF", 6)
       << pad("DenDF", 10) << pad("F value", 10) << pad("Pr(>F)", 12) << "\n";
     for (auto& a : fit.anova)
-      o << pad(a.term, tw, true) << pad(fmt("%.6g", a.sum_sq), 12)
+      o << pad(esc(a.term), tw, true) << pad(fmt("%.6g", a.sum_sq), 12)
         << pad(fmt("%.6g", a.mean_sq), 12) << pad(std::to_string(a.num_df), 6)
-        << pad(fmt("%.3f", a.den_df), 10) << pad(fmt("%.4f", a.f), 10) << pad(pfmt(a.p), 12)
-        << "\n";
+        << pad(fmt("%.3f", a.den_df), 10) << pad(stat(a.f, 4), 10) << pad(pfmt(a.p), 12) << "\n";
     o << "\nPartial eta^2 [95% CI, noncentral F with the Satterthwaite df]\n";
     for (auto& a : fit.anova)
       if (a.partial_eta_squared_ci.defined)
-        o << pad(a.term, tw, true) << fmt("%.3f", a.partial_eta_squared) << " ["
+        o << pad(esc(a.term), tw, true) << fmt("%.3f", a.partial_eta_squared) << " ["
           << fmt("%.3f", a.partial_eta_squared_ci.pve_low) << ", "
           << fmt("%.3f", a.partial_eta_squared_ci.pve_high) << "]\n";
   }

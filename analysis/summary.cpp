@@ -2,26 +2,100 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <future>
+#include <limits>
 #include <sstream>
 
 #include "analysis/distributions.hpp"
 #include "analysis/parallel.hpp"
+#include "common/escape.hpp"
+#include "common/input_error.hpp"
 
 namespace palplab::analysis {
 
 namespace {
 
+// printf into a string of the size needed: never cut (a fixed buffer cut a t of 1.7e200 printed
+// with %.2f to 62 of its 201 digits, and table rows with long group labels).
+__attribute__((format(printf, 1, 2))) std::string strf(const char* f, ...) {
+  va_list ap, ap2;
+  va_start(ap, f);
+  va_copy(ap2, ap);
+  const int n = std::vsnprintf(nullptr, 0, f, ap);
+  va_end(ap);
+  std::string out(n > 0 ? static_cast<size_t>(n) : 0, '\0');
+  if (n > 0) std::vsnprintf(out.data(), out.size() + 1, f, ap2);
+  va_end(ap2);
+  return out;
+}
+
 std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
+  return strf(f, v);
 }
 
 std::string df_text(double df) {
   if (std::fabs(df - std::round(df)) < 1e-9) return fmt("%.0f", df);
   return fmt("%.2f", df);
+}
+
+// Statistics (t, F, q, g, H) from 1e6 on are printed in scientific notation.
+constexpr double kScientificFrom = 1e6;
+
+// A statistic with `decimals` decimals, from 1e6 on as d.dd…e+XX with as many decimals
+// (-1.73e+200, not 201 digits); "n/a" when not finite.
+std::string stat_text(double v, int decimals) {
+  if (!std::isfinite(v)) return "n/a";
+  return std::fabs(v) < kScientificFrom ? strf("%.*f", decimals, v) : strf("%.*e", decimals, v);
+}
+
+// 10^log10_v in scientific notation with `decimals` decimals, for a positive value beyond the
+// range of a double (an F of 6.00e+400).
+std::string pow10_text(double log10_v, int decimals) {
+  double e = std::floor(log10_v);
+  double m = std::pow(10.0, log10_v - e);
+  if (std::stod(strf("%.*f", decimals, m)) >= 10) {  // 9.999… rounds up to 10.00
+    m /= 10;
+    e += 1;
+  }
+  return strf("%.*fe+%.0f", decimals, m, e);
+}
+
+// An F statistic for text: finite, or beyond a double with its log10 known, or "n/a".
+std::string f_text(double F, double log10_F, int decimals) {
+  if (!std::isfinite(F) && std::isfinite(log10_F)) return pow10_text(log10_F, decimals);
+  return stat_text(F, decimals);
+}
+
+// A t statistic for an APA line: "= -1.73e+200", or a bound when it overflows a double (an SE
+// of subnormal size).
+std::string t_relation_text(double t) {
+  if (std::isinf(t)) return t < 0 ? "< -1.8e+308" : "> 1.8e+308";
+  return "= " + stat_text(t, 2);
+}
+
+std::string apa_f_log(double F, double log10_F, double df1, double df2, double p) {
+  return "F(" + df_text(df1) + ", " + df_text(df2) + ") = " + f_text(F, log10_F, 2) + ", " +
+         apa_p(p);
+}
+
+std::string apa_anova_log(const Anova& a, double log10_F) {
+  if (!a.defined) return "undefined (no variation within groups)";
+  return apa_f_log(a.F, log10_F, a.df_between, a.df_within, a.p);
+}
+
+// An F test whose F = MS_between / MS_within overflowed a double although MS_within > 0 (a
+// group constant at 1e100 beside one spread by 1e-100: F = 1e400): oneway_anova leaves F = inf
+// and p NaN. Its p from log F (f_upper_p_log, usually the bound); returns log10 F, NaN when F
+// did not overflow. `ms_within` in long double (it may be below the range of a double).
+double finish_overflowed_f(Anova& a, long double ms_within) {
+  if (!a.defined || !std::isinf(a.F) || !(ms_within > 0) || !(a.ms_between > 0) ||
+      !std::isfinite(a.ms_between))
+    return std::numeric_limits<double>::quiet_NaN();
+  const long double log_f = std::log(static_cast<long double>(a.ms_between)) - std::log(ms_within);
+  a.p = f_upper_p_log(static_cast<double>(log_f), a.df_between, a.df_within);
+  return static_cast<double>(log_f / std::log(10.0L));
 }
 
 // A number or null (JSON has no NaN / infinity).
@@ -35,6 +109,34 @@ std::string num_text(double v, const char* f = "%.4g") {
 
 }  // namespace
 
+std::string shown_text(std::string_view s, size_t max_chars) {
+  size_t cut = 0, chars = 0;  // byte offset and count of the first max_chars characters
+  for (; cut < s.size() && chars < max_chars; ++chars) {
+    ++cut;  // the lead byte, then its continuation bytes
+    while (cut < s.size() && (static_cast<unsigned char>(s[cut]) & 0xC0) == 0x80) ++cut;
+  }
+  if (cut == s.size()) return escape_controls(s, false);
+  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
+         " bytes)";
+}
+
+double parse_number_shown(const CsvTable& t, int row, int col) {
+  try {
+    return parse_number(t, row, col);
+  } catch (const InputError& e) {
+    const std::string& field = t.rows[row][col];
+    const std::string shown = shown_text(field);
+    if (shown == field) throw;
+    // parse_number echoes the whole field: show its start and length instead.
+    std::vector<Problem> problems = e.problems();
+    for (auto& pr : problems)
+      for (size_t at = pr.what.find(field); at != std::string::npos;
+           at = pr.what.find(field, at + shown.size()))
+        pr.what.replace(at, field.size(), shown);
+    throw InputError(std::move(problems));
+  }
+}
+
 std::string apa_p(double p) {
   if (!std::isfinite(p)) return "p = n/a";
   if (p < 0.001) return "p < .001";
@@ -44,16 +146,15 @@ std::string apa_p(double p) {
 }
 
 std::string apa_f(double F, double df1, double df2, double p) {
-  return "F(" + df_text(df1) + ", " + df_text(df2) + ") = " + num_text(F, "%.2f") + ", " + apa_p(p);
+  return apa_f_log(F, std::numeric_limits<double>::quiet_NaN(), df1, df2, p);
 }
 
 std::string apa_anova(const Anova& a) {
-  if (!a.defined) return "undefined (no variation within groups)";
-  return apa_f(a.F, a.df_between, a.df_within, a.p);
+  return apa_anova_log(a, std::numeric_limits<double>::quiet_NaN());
 }
 
 std::string apa_t(double t, double df, double p) {
-  return "t(" + df_text(df) + ") = " + num_text(t, "%.2f") + ", " + apa_p(p);
+  return "t(" + df_text(df) + ") " + t_relation_text(t) + ", " + apa_p(p);
 }
 
 std::string format_p(double p) {
@@ -105,8 +206,15 @@ StatsSummary summarize(const GroupedData& data, const StatsOptions& options) {
     s.tukey = tukey_kramer(g);
     s.games_howell = games_howell(g);
   }
+  {
+    long double ssw = 0;
+    for (const auto& x : g) ssw += sum_sq_dev(x);
+    s.anova_log10_F = finish_overflowed_f(s.anova, ssw / s.anova.df_within);
+  }
   s.levene = levene(g, LeveneCentre::Mean);
   s.brown_forsythe = levene(g, LeveneCentre::Median);
+  s.levene_log10_F = finish_overflowed_f(s.levene, s.levene.ms_within);
+  s.brown_forsythe_log10_F = finish_overflowed_f(s.brown_forsythe, s.brown_forsythe.ms_within);
   s.kruskal = kruskal_wallis(g);
   if (effect_ci.valid()) s.anova_effect_ci = effect_ci.get();
   return s;
@@ -146,7 +254,8 @@ nlohmann::json to_json(const StatsSummary& s) {
                 {"ms_between", a.ms_between},
                 {"ms_within", a.ms_within},
                 {"p_is_bound", p_is_bound(a.p)},
-                {"apa", apa_anova(a)}};
+                {"apa", apa_anova_log(a, s.anova_log10_F)}};
+  if (std::isfinite(s.anova_log10_F)) j["anova"]["log10_F"] = s.anova_log10_F;
   if (const auto& c = s.anova_effect_ci; c.defined) {
     // One interval for η² and ω²: both estimate the population proportion of variance.
     j["anova"]["effect_size_ci"] = {
@@ -206,6 +315,7 @@ nlohmann::json to_json(const StatsSummary& s) {
                               {"p_low", num(q.p_low)},
                               {"p_high", num(q.p_high)},
                               {"p", num(q.p)},
+                              {"p_is_bound", p_is_bound(q.p)},
                               {"ci", {num(q.ci_low), num(q.ci_high)}},
                               {"ci_level", 1 - 2 * q.alpha},
                               {"verdict", q.verdict}};
@@ -229,11 +339,13 @@ nlohmann::json to_json(const StatsSummary& s) {
     j["tukey"] = range_json(s.tukey);
     j["games_howell"] = range_json(s.games_howell);
   }
-  auto hv = [&](const Anova& h) {
-    return json{{"F", num(h.F)}, {"df1", h.df_between}, {"df2", h.df_within}, {"p", num(h.p)}};
+  auto hv = [&](const Anova& h, double log10_F) {
+    json r{{"F", num(h.F)}, {"df1", h.df_between}, {"df2", h.df_within}, {"p", num(h.p)}};
+    if (std::isfinite(log10_F)) r["log10_F"] = log10_F;
+    return r;
   };
-  j["levene"] = hv(s.levene);
-  j["brown_forsythe"] = hv(s.brown_forsythe);
+  j["levene"] = hv(s.levene, s.levene_log10_F);
+  j["brown_forsythe"] = hv(s.brown_forsythe, s.brown_forsythe_log10_F);
   j["kruskal_wallis"] = {{"H", num(s.kruskal.H)},
                          {"df", s.kruskal.df},
                          {"p", num(s.kruskal.p)},
@@ -243,31 +355,31 @@ nlohmann::json to_json(const StatsSummary& s) {
 
 std::string to_text(const StatsSummary& s) {
   std::ostringstream o;
-  char b[512];
+  // Group labels come from the input: control characters (an escape sequence in a label would
+  // recolour or retitle the terminal) are shown escaped.
+  std::vector<std::string> names;
+  for (const auto& n : s.names) names.push_back(escape_controls(n, false));
+  auto pair_name = [&](int a, int b) { return names[a] + " - " + names[b]; };
   o << "Descriptives\n";
-  std::snprintf(b, sizeof b, "  %-14s %5s %12s %12s %12s %12s %12s %12s %25s\n", "group", "n",
-                "mean", "sd", "se", "median", "min", "max", "95% CI of mean");
-  o << b;
+  o << strf("  %-14s %5s %12s %12s %12s %12s %12s %12s %25s\n", "group", "n", "mean", "sd", "se",
+            "median", "min", "max", "95% CI of mean");
   for (size_t i = 0; i < s.groups.size(); ++i) {
     const auto& d = s.groups[i];
-    std::snprintf(
-        b, sizeof b, "  %-14s %5d %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g   [%10.5g, %10.5g]\n",
-        s.names[i].c_str(), d.n, d.mean, d.sd, d.se, d.median, d.min, d.max, d.ci_low, d.ci_high);
-    o << b;
+    o << strf("  %-14s %5d %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g   [%10.5g, %10.5g]\n",
+              names[i].c_str(), d.n, d.mean, d.sd, d.se, d.median, d.min, d.max, d.ci_low,
+              d.ci_high);
   }
   const auto& a = s.anova;
   o << "\nOne-way ANOVA\n";
-  std::snprintf(b, sizeof b, "  %-10s %8s %14s %14s %10s %10s\n", "source", "df", "SS", "MS", "F",
-                "p");
-  o << b;
-  std::snprintf(b, sizeof b, "  %-10s %8s %14.6g %14.6g %10s %10s\n", "between",
-                df_text(a.df_between).c_str(), a.ss_between, a.ms_between, num_text(a.F).c_str(),
-                format_p(a.p).c_str());
-  o << b;
-  std::snprintf(b, sizeof b, "  %-10s %8s %14.6g %14.6g\n", "within", df_text(a.df_within).c_str(),
-                a.ss_within, a.ms_within);
-  o << b;
-  o << "  " << apa_f(a.F, a.df_between, a.df_within, a.p)
+  o << strf("  %-10s %8s %14s %14s %10s %10s\n", "source", "df", "SS", "MS", "F", "p");
+  o << strf(
+      "  %-10s %8s %14.6g %14.6g %10s %10s\n", "between", df_text(a.df_between).c_str(),
+      a.ss_between, a.ms_between,
+      (std::isfinite(s.anova_log10_F) ? pow10_text(s.anova_log10_F, 3) : num_text(a.F)).c_str(),
+      format_p(a.p).c_str());
+  o << strf("  %-10s %8s %14.6g %14.6g\n", "within", df_text(a.df_within).c_str(), a.ss_within,
+            a.ms_within);
+  o << "  " << apa_f_log(a.F, s.anova_log10_F, a.df_between, a.df_within, a.p)
     << ", eta^2 = " << num_text(a.eta_squared, "%.3f")
     << ", omega^2 = " << num_text(a.omega_squared, "%.3f") << "\n";
   if (const auto& c = s.anova_effect_ci; c.defined)
@@ -283,61 +395,55 @@ std::string to_text(const StatsSummary& s) {
     o << "undefined: a group has zero variance\n";
   o << "\nPairwise " << (s.options.welch_pairwise ? "Welch" : "Student") << " t-tests (df "
     << (s.options.df_mode == DfMode::Floor ? "floored" : "exact") << ", Holm and Bonferroni)\n";
-  std::snprintf(b, sizeof b, "  %-22s %10s %9s %8s %10s %10s %10s %9s\n", "pair", "mean diff", "t",
-                "df", "p", "p Holm", "p Bonf.", "Hedges g");
-  o << b;
-  for (const auto& p : s.pairwise) {
-    std::string pair = s.names[p.a] + " - " + s.names[p.b];
-    std::snprintf(b, sizeof b, "  %-22s %10.4g %9s %8s %10s %10s %10s %9s\n", pair.c_str(),
-                  p.test.mean_diff, num_text(p.test.t, "%.3f").c_str(),
-                  num_text(p.test.df, "%.2f").c_str(), format_p(p.test.p).c_str(),
-                  format_p(p.p_holm).c_str(), format_p(p.p_bonferroni).c_str(),
-                  num_text(p.effect.g, "%.3f").c_str());
-    o << b;
-  }
+  o << strf("  %-22s %10s %9s %8s %10s %10s %10s %9s\n", "pair", "mean diff", "t", "df", "p",
+            "p Holm", "p Bonf.", "Hedges g");
   for (const auto& p : s.pairwise)
-    o << "  " << s.names[p.a] << " vs " << s.names[p.b] << ": "
+    o << strf("  %-22s %10.4g %9s %8s %10s %10s %10s %9s\n", pair_name(p.a, p.b).c_str(),
+              p.test.mean_diff,
+              (std::isinf(p.test.t) ? std::string(p.test.t < 0 ? "< -1.8e+308" : "> 1.8e+308")
+                                    : stat_text(p.test.t, 3))
+                  .c_str(),
+              num_text(p.test.df, "%.2f").c_str(), format_p(p.test.p).c_str(),
+              format_p(p.p_holm).c_str(), format_p(p.p_bonferroni).c_str(),
+              stat_text(p.effect.g, 3).c_str());
+  for (const auto& p : s.pairwise)
+    o << "  " << names[p.a] << " vs " << names[p.b] << ": "
       << (p.test.defined ? apa_t(p.test.t, p.test.df, p.test.p) : std::string("undefined"))
-      << ", g = " << num_text(p.effect.g, "%.2f") << " [" << num_text(p.effect.g_ci_low, "%.2f")
-      << ", " << num_text(p.effect.g_ci_high, "%.2f") << "]\n";
+      << ", g = " << stat_text(p.effect.g, 2) << " [" << stat_text(p.effect.g_ci_low, 2) << ", "
+      << stat_text(p.effect.g_ci_high, 2) << "]\n";
   if (!s.equivalence.empty()) {
     const auto& q0 = s.equivalence.front();
     o << "\nEquivalence (TOST on Welch's t, margins [" << num_text(q0.low) << ", "
       << num_text(q0.high) << "], alpha = " << num_text(q0.alpha) << ")\n";
-    std::snprintf(b, sizeof b, "  %-22s %10s %10s %25s  %s\n", "pair", "mean diff", "p TOST",
-                  (num_text(100 * (1 - 2 * q0.alpha), "%.0f") + "% CI").c_str(), "verdict");
-    o << b;
+    o << strf("  %-22s %10s %10s %25s  %s\n", "pair", "mean diff", "p TOST",
+              (num_text(100 * (1 - 2 * q0.alpha), "%.0f") + "% CI").c_str(), "verdict");
     for (size_t i = 0; i < s.pairwise.size(); ++i) {
       const auto& q = s.equivalence[i];
-      std::string pair = s.names[s.pairwise[i].a] + " - " + s.names[s.pairwise[i].b];
-      std::snprintf(b, sizeof b, "  %-22s %10.4g %10s   [%10s, %10s]  %s\n", pair.c_str(),
-                    q.mean_diff, format_p(q.p).c_str(), num_text(q.ci_low).c_str(),
-                    num_text(q.ci_high).c_str(), q.verdict.c_str());
-      o << b;
+      o << strf("  %-22s %10.4g %10s   [%10s, %10s]  %s\n",
+                pair_name(s.pairwise[i].a, s.pairwise[i].b).c_str(), q.mean_diff,
+                format_p(q.p).c_str(), num_text(q.ci_low).c_str(), num_text(q.ci_high).c_str(),
+                q.verdict.c_str());
     }
   }
   auto range_table = [&](const char* title, const std::vector<RangeComparison>& v) {
     o << "\n" << title << "\n";
-    std::snprintf(b, sizeof b, "  %-22s %10s %9s %8s %10s %25s\n", "pair", "mean diff", "q", "df",
-                  "p", "95% simultaneous CI");
-    o << b;
-    for (const auto& r : v) {
-      std::string pair = s.names[r.a] + " - " + s.names[r.b];
-      std::snprintf(b, sizeof b, "  %-22s %10.4g %9s %8s %10s   [%10s, %10s]\n", pair.c_str(),
-                    r.mean_diff, num_text(r.q, "%.3f").c_str(), num_text(r.df, "%.2f").c_str(),
-                    format_p(r.p).c_str(), num_text(r.ci_low).c_str(), num_text(r.ci_high).c_str());
-      o << b;
-    }
+    o << strf("  %-22s %10s %9s %8s %10s %25s\n", "pair", "mean diff", "q", "df", "p",
+              "95% simultaneous CI");
+    for (const auto& r : v)
+      o << strf("  %-22s %10.4g %9s %8s %10s   [%10s, %10s]\n", pair_name(r.a, r.b).c_str(),
+                r.mean_diff, stat_text(r.q, 3).c_str(), num_text(r.df, "%.2f").c_str(),
+                format_p(r.p).c_str(), num_text(r.ci_low).c_str(), num_text(r.ci_high).c_str());
   };
   if (s.options.post_hoc) {
     range_table("Tukey-Kramer HSD", s.tukey);
     range_table("Games-Howell", s.games_howell);
   }
   o << "\nAssumptions\n";
-  o << "  Levene (mean):           " << apa_anova(s.levene) << "\n";
-  o << "  Brown-Forsythe (median): " << apa_anova(s.brown_forsythe) << "\n";
+  o << "  Levene (mean):           " << apa_anova_log(s.levene, s.levene_log10_F) << "\n";
+  o << "  Brown-Forsythe (median): " << apa_anova_log(s.brown_forsythe, s.brown_forsythe_log10_F)
+    << "\n";
   for (size_t i = 0; i < s.shapiro.size(); ++i)
-    o << "  Shapiro-Wilk " << s.names[i] << ": "
+    o << "  Shapiro-Wilk " << names[i] << ": "
       << (s.shapiro[i].defined
               ? "W = " + num_text(s.shapiro[i].W, "%.4f") + ", " + apa_p(s.shapiro[i].p)
               : std::string("n/a (fewer than 3 values or all equal)"))
@@ -346,7 +452,7 @@ std::string to_text(const StatsSummary& s) {
     << ") = " << num_text(s.kruskal.H, "%.2f") << ", " << apa_p(s.kruskal.p) << "\n";
   for (size_t i = 0; i < s.pairwise.size(); ++i) {
     const auto& m = s.mann_whitney[i];
-    o << "  Mann-Whitney " << s.names[s.pairwise[i].a] << " vs " << s.names[s.pairwise[i].b]
+    o << "  Mann-Whitney " << names[s.pairwise[i].a] << " vs " << names[s.pairwise[i].b]
       << ": W = " << num_text(m.W, "%.1f") << ", " << apa_p(m.p)
       << (m.exact ? " (exact)" : " (normal approx., continuity and tie corrected)") << "\n";
   }

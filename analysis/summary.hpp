@@ -4,9 +4,11 @@
 // Bonferroni adjusted) with Hedges' g, Tukey–Kramer, Games–Howell, Levene, Brown–Forsythe,
 // Shapiro–Wilk per group, Kruskal–Wallis and pairwise Mann–Whitney. JSON keys: see
 // docs/FORMATS.md.
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -45,13 +47,19 @@ struct StatsSummary {
   std::vector<Equivalence> equivalence;   // same order as pairwise; empty without margins
   std::vector<RangeComparison> tukey, games_howell;
   Anova levene, brown_forsythe;
+  // log10 of F where F = MS_between / MS_within exceeds the range of a double (F is then inf,
+  // its p computed from log F, f_upper_p_log); NaN otherwise.
+  double anova_log10_F = std::numeric_limits<double>::quiet_NaN();
+  double levene_log10_F = std::numeric_limits<double>::quiet_NaN();
+  double brown_forsythe_log10_F = std::numeric_limits<double>::quiet_NaN();
   KruskalWallis kruskal;
   StatsOptions options;
 };
 
 StatsSummary summarize(const GroupedData& data, const StatsOptions& options = {});
 
-// APA style pieces: "p = .003", "p < .001", "p > .999"; numbers to 2 decimals.
+// APA style pieces: "p = .003", "p < .001", "p > .999"; numbers to 2 decimals, from 1e6 on in
+// scientific notation ("t(2) = -1.73e+200").
 std::string apa_p(double p);
 // "F(2, 27) = 23.68, p < .001" (fractional df get 2 decimals).
 std::string apa_f(double F, double df1, double df2, double p);
@@ -62,6 +70,13 @@ std::string apa_anova(const Anova& a);
 std::string apa_t(double t, double df, double p);
 // "1e-300" style for tables: "< 1e-300" when the p-value is an underflow bound.
 std::string format_p(double p);
+
+// Text from the input (a group label, a CSV field) as messages show it: control characters
+// escaped (escape_controls), cut after `max_chars` characters (UTF-8 code points) with
+// "… (N bytes)" — a 10 MB field made a 10 MB error message.
+std::string shown_text(std::string_view s, size_t max_chars = 60);
+// parse_number (csv.hpp) whose error message shows the field through shown_text.
+double parse_number_shown(const CsvTable& t, int row, int col);
 
 nlohmann::json to_json(const StatsSummary& s);
 // Human-readable tables and APA lines.

@@ -25,11 +25,27 @@ void finish(TTest& r) {
     r.t = r.p = r.ci_low = r.ci_high = kNaN;
     return;
   }
+  // t may be huge (1.7e200: a constant group beside a tightly spread one), even inf (an SE
+  // of subnormal size): its p is then the bound, never NaN.
   r.t = r.mean_diff / r.se;
-  r.p = t_two_sided_p(r.t, r.df);
+  r.p = t_two_sided_p_wide(r.t, r.df);
   double q = t_quantile(0.975, r.df);
   r.ci_low = r.mean_diff - q * r.se;
   r.ci_high = r.mean_diff + q * r.se;
+}
+// Beyond |t| = 1e150 (t² > 1e300) the series term below is used: there x = df/t² < 1e-290·df,
+// so the neglected terms (relative O(x)) are far below double precision.
+constexpr double kWideT = 1e150;
+
+// log B(a, b) in long double.
+long double log_beta(long double a, long double b) {
+  return std::lgamma(a) + std::lgamma(b) - std::lgamma(a + b);
+}
+
+// log of x^a / (a B(a, b)): the leading term of the regularized incomplete beta function
+// I_x(a, b) = x^a (1 - x)^b / (a B(a, b)) · (1 + O(x)) as x -> 0.
+long double log_beta_inc_leading(long double log_x, long double a, long double b) {
+  return a * log_x - std::log(a) - log_beta(a, b);
 }
 }  // namespace
 
@@ -211,6 +227,39 @@ EffectSize cohens_d_welch(const std::vector<double>& a, const std::vector<double
   return e;
 }
 
+double t_two_sided_p_wide(double t, double df) {
+  if (std::isnan(t) || !(df > 0)) return kNaN;
+  const double at = std::fabs(t);
+  if (at <= kWideT) return t_two_sided_p(t, df);
+  // Normal limit (the F path's own switch): a tail of exp(-t²/2) with |t| > 1e150.
+  if (df > 1e9) return kPFloor;
+  // P(|T| > |t|) = I_x(df/2, 1/2), x = df / (df + t²) = df / t² to relative 1e-290.
+  const long double log_x =
+      std::log(static_cast<long double>(df)) - 2 * std::log(static_cast<long double>(at));
+  const long double log_p = log_beta_inc_leading(log_x, 0.5L * df, 0.5L);
+  return clamp_p(static_cast<double>(std::exp(log_p)));
+}
+
+double t_upper_p(double t, double df) {
+  const double two = t_two_sided_p_wide(t, df);
+  if (std::isnan(two)) return kNaN;
+  // Below the floor the two-sided p is a bound, and so is its half.
+  if (t > 0) return p_is_bound(two) ? kPFloor : clamp_p(two / 2);
+  return clamp_p(1 - two / 2);
+}
+
+double f_upper_p_log(double log_f, double d1, double d2) {
+  if (std::isnan(log_f) || !(d1 > 0) || !(d2 > 0)) return kNaN;
+  if (log_f < std::log(1e300)) return f_upper_p(std::exp(log_f), d1, d2);
+  if (d2 > 1e9) return kPFloor;  // χ²_d1 limit: a tail of exp(-d1·F/2), F > 1e300
+  // P(F > f) = I_x(d2/2, d1/2), x = d2 / (d2 + d1 f) = d2 / (d1 f) to relative 1e-290.
+  const long double log_x = std::log(static_cast<long double>(d2)) -
+                            std::log(static_cast<long double>(d1)) -
+                            static_cast<long double>(log_f);
+  const long double log_p = log_beta_inc_leading(log_x, 0.5L * d2, 0.5L * d1);
+  return clamp_p(static_cast<double>(std::exp(log_p)));
+}
+
 Equivalence tost_welch(const std::vector<double>& a, const std::vector<double>& b, double low,
                        double high, double alpha, DfMode mode) {
   if (!(low < high)) throw std::invalid_argument("TOST: the lower margin must be below the upper");
@@ -230,15 +279,13 @@ Equivalence tost_welch(const std::vector<double>& a, const std::vector<double>& 
     e.verdict = "undefined";
     return e;
   }
-  // One-sided tails from the two-sided p (which keeps its relative accuracy far out).
-  auto upper_tail = [&](double t) {
-    double two = t_two_sided_p(t, w.df);
-    return t > 0 ? two / 2 : 1 - two / 2;
-  };
+  // One-sided tails from the two-sided p (which keeps its relative accuracy far out), for any
+  // t: a margin of 1e160 gives t ~ 1e160, whose square overflows (p was NaN, the verdict
+  // "different"); a tail below 1e-300 is the bound (it was 5e-301, below the floor).
   e.t_low = (w.mean_diff - low) / w.se;
   e.t_high = (w.mean_diff - high) / w.se;
-  e.p_low = upper_tail(e.t_low);
-  e.p_high = upper_tail(-e.t_high);
+  e.p_low = t_upper_p(e.t_low, w.df);
+  e.p_high = t_upper_p(-e.t_high, w.df);
   e.p = std::max(e.p_low, e.p_high);
   const double q = t_quantile(1 - alpha, w.df);
   e.ci_low = w.mean_diff - q * w.se;

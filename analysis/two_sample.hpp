@@ -5,6 +5,21 @@
 
 namespace palplab::analysis {
 
+// Two-sided p of Student's t, P(|T| > |t|), as t_two_sided_p (distributions.hpp) but for every
+// t: t_two_sided_p squares t, which overflows a double beyond |t| ~ 1.3e154 (a t of 1.7e200,
+// one group constant at 1e100 beside one spread by 1e-100, gave p = NaN). There the leading
+// term of the incomplete beta series, x^a / (a B(a, 1/2)) with x = df / t² and a = df/2, in
+// logarithms, is exact to relative O(x) < 1e-290. Clamped to [kPFloor, 1]; |t| = inf gives
+// the bound; NaN only for a NaN t or df <= 0.
+double t_two_sided_p_wide(double t, double df);
+// One-sided P(T > t), clamped to [kPFloor, 1] (a tail below 1e-300 is the bound, p_is_bound).
+double t_upper_p(double t, double df);
+// Upper-tail p of F(d1, d2) at F = exp(log_f), also for F beyond the range of a double (an F
+// of MS_between / MS_within = 1e400): f_upper_p below 1e300, above it the leading term of
+// I_x(d2/2, d1/2), x = d2 / (d1 F), in logarithms (exact to relative O(x)). Clamped to
+// [kPFloor, 1].
+double f_upper_p_log(double log_f, double d1, double d2);
+
 // Degrees of freedom of Welch's test: `Exact` is the Welch–Satterthwaite value; `Floor`
 // truncates it to an integer (at least 1) as MINITAB reports it, and the p-value is then
 // computed with the truncated df, which reproduces MINITAB-based publications.

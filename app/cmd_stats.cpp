@@ -62,6 +62,13 @@ palplab::app::CommandRegistration reg{
         palplab::app::flag_only_with(alpha_opt, a->margin || !a->margins.empty(),
                                      "--margin or --margins (it is the equivalence tests' level)");
         using namespace palplab::analysis;
+        // One column as both values and labels makes every value its own group's label: a
+        // meaningless analysis (it ran, or failed on "group '1' has 1 value").
+        if (a->value == a->group)
+          throw palplab::InputError(palplab::SourceLocation{"--group"},
+                                    "--value and --group name the same column ('" +
+                                        shown_text(a->value) +
+                                        "'); --group takes the column of group labels");
         std::vector<WhereFilter> where;
         for (const auto& w : a->where) where.push_back(parse_where(w));
         CsvTable t = read_csv(a->csv);
@@ -100,8 +107,9 @@ palplab::app::CommandRegistration reg{
                         {"rows_skipped_empty", data.rows_skipped_empty}};
           std::cout << j.dump(2) << "\n";
         } else {
-          std::cout << "palplab stats: " << a->value << " by " << a->group << " (" << data.rows_used
-                    << " rows of " << a->csv
+          std::cout << "palplab stats: " << palplab::escape_controls(a->value, false) << " by "
+                    << palplab::escape_controls(a->group, false) << " (" << data.rows_used
+                    << " rows of " << palplab::escape_controls(a->csv, false)
                     << (data.rows_skipped_empty > 0
                             ? ", " + std::to_string(data.rows_skipped_empty) +
                                   " empty values skipped"

@@ -355,3 +355,93 @@ TEST(LmmFit, RandomEffectsDeterminedByTheFixedEffectsAreRefused) {
             std::string::npos);
   EXPECT_EQ(err("value ~ group * session + (1 + session | participant)"), "no error");
 }
+
+// A covariate in units that make it huge (session x 1e15, as when a time is stored in fs) spans
+// the same full-rank design as session: it was "rank deficient" because the QR's rank test
+// measured the intercept against a column 1e15 times longer. The columns are now equilibrated
+// (divided by a power of two near their RMS) before the rank test and the fit, and the
+// estimates unscaled. Compared with the fit on the covariate itself: on balanced data
+// (sleepstudy: the GLS estimates do not depend on theta) the fixed effects agree to 1e-10
+// relative. Everything that depends on theta agrees as two fits of the same model in other
+// units do: the optimiser fixes theta to ~1e-8 relative (study.csv with session x 2, which needs
+// no scaling, moves theta by 1.1e-8 as well), hence 1e-6 for theta, SEs, t, df and F, and on
+// the unbalanced study.csv 1e-8 for the estimates (5e-10 seen). The REML criterion gains
+// exactly 2 log(scale) per scaled column (its log|X'V^-1 X|), the ML deviance nothing.
+namespace {
+CsvTable with_scaled_column(const std::string& file, int col, const std::string& factor) {
+  CsvTable t = read_csv(kDir + file);
+  t.header.push_back(t.header[col] + "_s");
+  for (auto& row : t.rows) row.push_back(row[col] + factor);
+  t.field_line.clear();  // positions no longer match the widened rows
+  t.field_column.clear();
+  return t;
+}
+
+// `formula` holds S where the covariate goes: once the column itself, once its scaled copy.
+void expect_scaled_fit_equal(const std::string& file, int col, const std::string& formula,
+                             double estimate_tol) {
+  const std::string name = read_csv(kDir + file).header[col];
+  for (const bool reml : {true, false})
+    for (const auto& [factor, scale] :
+         {std::pair{"e15", 1e15}, std::pair{"e-15", 1e-15}, std::pair{"e100", 1e100}}) {
+      const std::string tag = formula + (reml ? " REML " : " ML ") + factor;
+      const CsvTable t = with_scaled_column(file, col, factor);
+      std::string f_plain = formula, f_scaled = formula;
+      f_plain.replace(f_plain.find('S'), 1, name);
+      f_scaled.replace(f_scaled.find('S'), 1, name + "_s");
+      const LmmFit a = fit_lmm(t, parse_lmm_formula(f_plain), {}, reml);
+      LmmFit b;
+      ASSERT_NO_THROW(b = fit_lmm(t, parse_lmm_formula(f_scaled), {}, reml)) << tag;
+      ASSERT_EQ(a.fixed.size(), b.fixed.size());
+      int scaled_columns = 0;
+      auto k = [&](size_t i) {
+        return a.fixed[i].name.find(name) != std::string::npos ? scale : 1;
+      };
+      for (size_t i = 0; i < a.fixed.size(); ++i) {
+        scaled_columns += k(i) != 1;
+        const std::string w = tag + " " + a.fixed[i].name;
+        expect_rel(b.fixed[i].estimate * k(i), a.fixed[i].estimate, estimate_tol, w + " estimate");
+        expect_rel(b.fixed[i].se * k(i), a.fixed[i].se, 1e-6, w + " se");
+        expect_rel(b.fixed[i].t, a.fixed[i].t, 1e-6, w + " t");
+        expect_rel(b.fixed[i].df, a.fixed[i].df, 1e-6, w + " df");
+        // p of t ~ 20 moves by ~t·Δt relative: 4.5e-7 seen for p ~ 3e-13.
+        expect_rel(b.fixed[i].p, a.fixed[i].p, 2e-5, w + " p");
+        for (size_t j = 0; j < a.fixed.size(); ++j)
+          expect_rel(b.vcov[i][j] * k(i) * k(j), a.vcov[i][j], 1e-6, w + " vcov");
+      }
+      EXPECT_GT(scaled_columns, 0) << tag;
+      for (size_t i = 0; i < a.theta.size(); ++i)
+        expect_rel(b.theta[i], a.theta[i], 1e-6, tag + " theta");
+      expect_rel(b.sigma, a.sigma, 1e-7, tag + " sigma");
+      ASSERT_EQ(a.anova.size(), b.anova.size());
+      for (size_t i = 0; i < a.anova.size(); ++i) {
+        expect_rel(b.anova[i].f, a.anova[i].f, 1e-6, tag + " F " + a.anova[i].term);
+        expect_rel(b.anova[i].den_df, a.anova[i].den_df, 1e-6, tag + " DenDF");
+        expect_rel(b.anova[i].sum_sq, a.anova[i].sum_sq, 1e-6, tag + " Sum Sq");
+      }
+      const double shift = reml ? 2 * scaled_columns * std::log(scale) : 0;
+      EXPECT_NEAR(b.deviance - a.deviance, shift, 1e-8 * (1 + std::abs(shift))) << tag;
+    }
+}
+}  // namespace
+
+TEST(LmmFit, BadlyScaledCovariateBalancedEstimatesTo1e10) {
+  expect_scaled_fit_equal("sleepstudy.csv", 1, "Reaction ~ S + (1 | Subject)", 1e-10);
+  expect_scaled_fit_equal("sleepstudy.csv", 1, "Reaction ~ S + (1 + Days | Subject)", 1e-10);
+}
+
+TEST(LmmFit, BadlyScaledCovariateWithInteractions) {
+  expect_scaled_fit_equal("study.csv", 2, "value ~ group * S + (1 | participant)", 1e-8);
+  expect_scaled_fit_equal("study.csv", 2, "value ~ group * S + (1 + session | participant)", 1e-8);
+}
+
+TEST(LmmFit, CollinearColumnsAreRankDeficientAtAnyScale) {
+  const CsvTable t = with_scaled_column("study.csv", 2, "e15");
+  try {
+    fit_lmm(t, parse_lmm_formula("value ~ session + session_s + (1 | participant)"), {}, true);
+    ADD_FAILURE() << "no error";
+  } catch (const palplab::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rank deficient (rank 2 < 3 columns)"), std::string::npos)
+        << e.what();
+  }
+}

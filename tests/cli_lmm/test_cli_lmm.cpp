@@ -173,3 +173,64 @@ TEST(CliLmm, UnidentifiableModelsExitTwo) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("is a directory, expected a CSV file"), std::string::npos) << r.err;
 }
+
+// Review finding: a covariate in units that make it 1e15 (session x 1e15) was "rank deficient
+// (...) some factor combinations are empty or columns are collinear" although the design has
+// full rank; the fit now equals the one on session, the estimates in the column's units.
+// (Numerical agreement: tests/analysis/test_lmm.cpp, LmmFit.BadlyScaledCovariate...)
+TEST(CliLmm, BadlyScaledCovariateFits) {
+  std::string text = palplab::testing::slurp(fixture("study.csv"));
+  std::istringstream in(text);
+  std::string line, out;
+  std::getline(in, line);
+  out += line + ",session_fs\n";
+  while (std::getline(in, line)) {
+    const size_t a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
+    out += line + "," + line.substr(b + 1, c - b - 1) + "e15\n";
+  }
+  const std::string csv = write_temp("scaled_session.csv", out);
+  Result plain = run_palplab("lmm --csv " + csv + " " + kStudy + " --json");
+  Result scaled = run_palplab(
+      "lmm --csv " + csv + " --formula \"value ~ group * session_fs + (1 | participant)\" --json");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  ASSERT_EQ(scaled.code, 0) << scaled.err;
+  const auto a = nlohmann::json::parse(plain.out)["fixed_effects"];
+  const auto b = nlohmann::json::parse(scaled.out)["fixed_effects"];
+  ASSERT_EQ(a.size(), 6u);
+  ASSERT_EQ(b.size(), 6u);
+  EXPECT_EQ(b[3]["term"], "session_fs");
+  for (int i = 0; i < 6; ++i) {
+    const double k = i >= 3 ? 1e15 : 1;
+    const double want = a[i]["estimate"].get<double>();
+    EXPECT_NEAR(b[i]["estimate"].get<double>() * k, want, 1e-7 * std::abs(want)) << i;
+    EXPECT_NEAR(b[i]["t"].get<double>(), a[i]["t"].get<double>(),
+                1e-7 * std::abs(a[i]["t"].get<double>()))
+        << i;
+  }
+  // Truly collinear columns stay an error, at any scale.
+  Result r = run_palplab("lmm --csv " + csv +
+                         " --formula \"value ~ session + session_fs + (1 | participant)\"");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.err.find("rank deficient"), std::string::npos) << r.err;
+}
+
+// Factor levels and column names reach the text tables: control characters are escaped there,
+// and a long bad response value is cut in the error.
+TEST(CliLmm, NamesEscapedAndLongFieldsCut) {
+  std::string csv = "y,g,grp\n";
+  const double y[] = {1.1, 2.3, 1.9, 3.2, 2.8, 3.9, 2.2, 3.1, 4.4, 3.0, 3.8, 5.1};
+  for (int i = 0; i < 12; ++i)
+    csv += std::to_string(y[i]) + ",p" + std::to_string(i % 4) + "," + (i % 2 ? "B\x1b[31m" : "A") +
+           "\n";
+  Result r = run_palplab("lmm --csv " + write_temp("esc_lmm.csv", csv) +
+                         " --formula \"y ~ grp + (1 | g)\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("grpB\\x1b[31m "), std::string::npos) << r.out;
+  const std::string bad = write_temp(
+      "long_lmm.csv", "y,g,x\n1,a,1\n2,a,2\n" + std::string(1'000'000, 'z') + ",b,1\n3,b,2\n");
+  r = run_palplab("lmm --csv " + bad + " --formula \"y ~ x + (1 | g)\"");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_LT(r.err.size(), 400u) << r.err.substr(0, 400);
+  EXPECT_NE(r.err.find("\u2026 (1000000 bytes)'"), std::string::npos) << r.err.substr(0, 400);
+}

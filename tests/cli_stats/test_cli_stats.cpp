@@ -343,3 +343,83 @@ TEST(CliStats, SubnormalValuesDirectoriesAndTooManyGroups) {
       << r.err;
   std::filesystem::remove(many);
 }
+
+// Review findings: values within the documented 1e150 limit (A spread by 1e-100, B constant at
+// 1e100) gave a t of -1.73e200 that the APA line and the tables printed as 62 of its 201 digits
+// (a 64-byte buffer), a null p (t² overflowed), and a null ANOVA F and p beside a positive
+// within-group variance (F = 3e400 overflowed).
+TEST(CliStats, StatisticsBeyondADoubleArePrintedAndBounded) {
+  const std::string csv =
+      write_temp("huge_t.csv", "g,v\nA,1e-100\nA,2e-100\nA,3e-100\nB,1e100\nB,1e100\nB,1e100\n");
+  Result r = run_palplab("stats --csv " + csv + " --value v --group g --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  const auto& pw = j["pairwise"][0];
+  EXPECT_NEAR(pw["t"].get<double>(), -std::sqrt(3.0) * 1e200, 1e-14 * std::sqrt(3.0) * 1e200);
+  EXPECT_EQ(pw["p"], 1e-300);
+  EXPECT_EQ(pw["p_is_bound"], true);
+  EXPECT_EQ(pw["apa"], "t(2) = -1.73e+200, p < .001");
+  EXPECT_TRUE(j["anova"]["F"].is_null());  // 3e400: beyond a double
+  EXPECT_NEAR(j["anova"]["log10_F"].get<double>(), 400 + std::log10(3.0), 1e-12);
+  EXPECT_EQ(j["anova"]["p"], 1e-300);
+  EXPECT_EQ(j["anova"]["p_is_bound"], true);
+  EXPECT_EQ(j["anova"]["apa"], "F(1, 4) = 3.00e+400, p < .001");
+  r = run_palplab("stats --csv " + csv + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("A vs B: t(2) = -1.73e+200, p < .001"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("F(1, 4) = 3.00e+400, p < .001"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("17320508075688772"), std::string::npos) << r.out;
+}
+
+// --margin 1e160 gave null TOST p-values and the verdict "different" although the 90 % CI
+// [-3.9, -1.6] lies far inside ±1e160; --margin 1e100 gave p = 5e-301, below the 1e-300 floor.
+TEST(CliStats, HugeEquivalenceMarginsGiveTheBoundAndEquivalent) {
+  const std::string csv =
+      write_temp("tost_huge.csv", "g,v\nA,1\nA,2\nA,3\nA,2.5\nB,4\nB,5\nB,6\nB,4.5\n");
+  for (const char* m : {"1e100", "1e150", "1e160", "1e300"}) {
+    Result r = run_palplab("stats --csv " + csv + " --value v --group g --json --margin " + m);
+    ASSERT_EQ(r.code, 0) << m << r.err;
+    const auto e = nlohmann::json::parse(r.out)["pairwise"][0]["equivalence"];
+    for (const char* k : {"p", "p_low", "p_high"}) EXPECT_EQ(e[k], 1e-300) << m << " " << k;
+    EXPECT_EQ(e["p_is_bound"], true) << m;
+    EXPECT_EQ(e["verdict"], "equivalent") << m;
+    EXPECT_NEAR(e["ci"][0].get<double>(), -3.923306563779722, 1e-12) << m;
+  }
+}
+
+TEST(CliStats, ValueAndGroupTheSameColumnIsAnInputError) {
+  const std::string csv = write_temp("same_col.csv", "g,v\n1,1\n1,1\n2,2\n2,2\n");
+  for (const char* col : {"g", "v"}) {
+    Result r = run_palplab("stats --csv " + csv + " --value " + col + " --group " + col);
+    EXPECT_EQ(r.code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("--value and --group name the same column ('" + std::string(col) + "')"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+}
+
+// A 10 MB bad field made a 10 MB error message, and an escape sequence in a group label reached
+// the terminal raw through the text tables.
+TEST(CliStats, LongFieldsAreCutAndControlCharactersEscaped) {
+  const std::string csv =
+      write_temp("long_field.csv", "g,v\nA,1\nA," + std::string(10'000'000, 'x') + "\nB,3\nB,4\n");
+  Result r = run_palplab("stats --csv " + csv + " --value v --group g");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_LT(r.err.size(), 400u) << r.err.substr(0, 400);
+  EXPECT_NE(r.err.find(":3:3: column 'v' (field 2): expected a decimal number"), std::string::npos)
+      << r.err.substr(0, 400);
+  EXPECT_NE(r.err.find("\u2026 (10000000 bytes)'"), std::string::npos) << r.err.substr(0, 400);
+  const std::string esc = write_temp("esc_label.csv",
+                                     "g,v\n\x1b[31mA,1\n\x1b[31mA,2\nB,3\nB,4.5\n\x1b]0;t\x07,5\n"
+                                     "\x1b]0;t\x07,6\n");
+  r = run_palplab("stats --csv " + esc + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find('\x07'), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\\x1b[31mA - B"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Shapiro-Wilk \\x1b]0;t\\x07: "), std::string::npos) << r.out;
+  r = run_palplab("stats --csv " + esc + " --value v --group g --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["groups"][0]["name"], "\x1b[31mA");  // JSON escapes it
+}
