@@ -924,26 +924,30 @@ StudyStructure Store::read_structure() const {
                       "audio, instructed, feature, transparency FROM phases ORDER BY position"
                     : "SELECT phase, kind, sessions, session_duration, haptic, visual_deformation, "
                       "audio, instructed, feature FROM phases ORDER BY position");
-    auto cue = [&](int c) { return p.null(c) ? std::optional<bool>() : p.integer(c) != 0; };
+    // Numbers as the schema types them (a hand edit is refused, not read as 0: Typed).
+    const Typed pc(p, path_, "phases", [&] { return "phase " + p.text(0); });
     while (p.step()) {
       PhaseRecord r;
       r.phase = p.text(0);
       r.kind = p.text(1);
-      r.sessions = static_cast<int>(p.integer(2));
-      r.session_duration = p.real(3);
-      r.haptic = cue(4);
-      r.visual_deformation = cue(5);
-      r.audio = cue(6);
-      r.instructed = p.integer(7) != 0;
+      r.sessions = pc.int32(2, "sessions");
+      r.session_duration = pc.real(3, "session_duration");
+      r.haptic = pc.flag(4, "haptic");
+      r.visual_deformation = pc.flag(5, "visual_deformation");
+      r.audio = pc.flag(6, "audio");
+      r.instructed = pc.integer(7, "instructed", 0, 1) != 0;
       r.feature = p.text(8);
-      if (version_ >= 4) r.transparency = cue(9);
+      if (version_ >= 4) r.transparency = pc.flag(9, "transparency");
       out.phases.push_back(r);
     }
     Stmt t(db_, "SELECT phase, region, st, mpf, sft FROM thresholds ORDER BY phase, region");
+    const Typed tc(t, path_, "thresholds",
+                   [&] { return "phase " + t.text(0) + ", region " + t.text(1); });
     while (t.step())
       for (auto& r : out.phases)
         if (r.phase == t.text(0))
-          r.thresholds.push_back({t.text(1), t.real(2), t.real(3), t.real(4)});
+          r.thresholds.push_back(
+              {t.text(1), tc.real(2, "st"), tc.real(3, "mpf"), tc.real(4, "sft")});
     return out;
   });
 }

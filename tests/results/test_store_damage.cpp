@@ -319,6 +319,42 @@ TEST(StoreDamage, SessionNumbersThatAreNotWhatTheSchemaSaysAreRefused) {
   EXPECT_FALSE(rows[1].transparency.has_value());
 }
 
+// The study's structure (phases and thresholds, read by report) is typed the same way.
+TEST(StoreDamage, PhaseAndThresholdNumbersThatAreNotNumbersAreRefused) {
+  auto d = tmp("structure");
+  const std::string db = make_db(d);
+  sql_exec(db,
+           "INSERT INTO phases (phase, position, kind, sessions, session_duration, haptic, "
+           "visual_deformation, audio, instructed, feature, transparency) VALUES ('post', 0, "
+           "'post_training', 1, 120.0, 1, 0, NULL, 0, 'ovary_left', NULL);"
+           "INSERT INTO thresholds VALUES ('post', '*', 2.0, 2.5, 3.0);");
+  const StudyStructure st = Store::open(db).read_structure();
+  ASSERT_EQ(st.phases.size(), 1u);
+  ASSERT_EQ(st.phases[0].thresholds.size(), 1u);
+  EXPECT_EQ(st.phases[0].thresholds[0].mpf, 2.5);
+  EXPECT_EQ(st.phases[0].session_duration, 120.0);
+  EXPECT_FALSE(st.phases[0].audio.has_value());
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"UPDATE phases SET session_duration = 9e999",
+       {"table phases, row (phase ", "column session_duration: expected a finite number, got inf"}},
+      {"UPDATE phases SET sessions = 'four'",
+       {"table phases", "column sessions: expected an integer from 0 to 2147483647, got 'four'"}},
+      {"UPDATE phases SET audio = 7", {"table phases", "column audio", "got 7"}},
+      {"UPDATE phases SET instructed = 0.5", {"table phases", "column instructed", "got 0.5"}},
+      {"UPDATE thresholds SET mpf = 'x'",
+       {"table thresholds, row (phase ", "region ", "column mpf: expected a finite number"}},
+  };
+  for (const auto& [sql, parts] : cases) {
+    SCOPED_TRACE(sql);
+    const fs::path copy = d / "edited.db";
+    fs::copy_file(db, copy, fs::copy_options::overwrite_existing);
+    sql_exec(copy, sql + ";");
+    std::vector<std::string> want = parts;
+    want.insert(want.begin(), copy.string());
+    expect_input_error([&] { Store::open(copy.string()).read_structure(); }, want);
+  }
+}
+
 TEST(StoreDamage, SampleRowNumbersThatAreNotNumbersAreRefused) {
   auto d = tmp("samplecols");
   const std::string db = make_db(d);
