@@ -8,6 +8,7 @@
 
 #include "analysis/descriptives.hpp"
 #include "analysis/distributions.hpp"
+#include "analysis/two_sample.hpp"
 
 namespace palplab::analysis {
 
@@ -54,6 +55,13 @@ Anova oneway_anova(const Groups& groups) {
   if (!no_within) {
     a.F = static_cast<double>(msb / msw);
     a.p = f_upper_p(a.F, a.df_between, a.df_within);
+    // F beyond a double (msw may be far below a double's range, its long double is not): p
+    // from log F, which long double holds.
+    if (std::isinf(a.F) && msb > 0) {
+      const long double log_f = std::log(msb) - std::log(msw);
+      a.p = f_upper_p_log(static_cast<double>(log_f), a.df_between, a.df_within);
+      a.log10_F = static_cast<double>(log_f / std::log(10.0L));
+    }
   } else {
     a.defined = false;
     a.F = msb > 0 ? std::numeric_limits<double>::infinity() : kNaN;

@@ -2,6 +2,7 @@
 // One-way designs: classical and Welch ANOVA, Levene / Brown–Forsythe homogeneity of
 // variance, Kruskal–Wallis. A design is `groups`: #groups samples, each a vector of values
 // (any common shift of all values leaves every result here unchanged, see decimal.hpp).
+#include <limits>
 #include <vector>
 
 namespace palplab::analysis {
@@ -16,6 +17,11 @@ struct Anova {
   double omega_squared = 0;  // (SS_between - df_between·MS_within) / (SS_total + MS_within)
   double residual_sd = 0;    // sqrt(MS_within)
   bool defined = true;       // false when there is no within-group variance (F = ∞)
+  // log10 F when F = MS_between / MS_within exceeds the range of a double although MS_within >
+  // 0 (F is then ∞ and p computed from log F, f_upper_p_log: a group constant at 1e100 beside
+  // one spread by 1e-100; Levene of spreads ~1e-160, whose MS_within underflows a double); NaN
+  // otherwise. Computed from the sums of squares in long double.
+  double log10_F = std::numeric_limits<double>::quiet_NaN();
 };
 // Requires >= 2 groups, each with >= 1 value, and N > #groups.
 Anova oneway_anova(const Groups& groups);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/read_file.hpp"
 
@@ -181,7 +182,8 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
                          "empty column name in the header (column " + std::to_string(a + 1) + ")");
         for (size_t b = 0; b < a; ++b)
           if (t.header[a] == t.header[b])
-            throw error_at(file, record_line, 0, "duplicate column name '" + t.header[a] + "'");
+            throw error_at(file, record_line, 0,
+                           "duplicate column name '" + shown_text(t.header[a]) + "'");
       }
       continue;
     }
@@ -207,13 +209,33 @@ CsvTable read_csv(const std::string& path) {
   return parse_csv(read_file_bounded(path, kMaxCsvFileBytes, "CSV file"), path);
 }
 
+std::string shown_text(std::string_view s, size_t max_chars) {
+  size_t cut = 0, chars = 0;  // byte offset and count of the first max_chars characters
+  for (; cut < s.size() && chars < max_chars; ++chars) {
+    ++cut;  // the lead byte, then its continuation bytes
+    while (cut < s.size() && (static_cast<unsigned char>(s[cut]) & 0xC0) == 0x80) ++cut;
+  }
+  if (cut == s.size()) return escape_controls(s, false);
+  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
+         " bytes)";
+}
+
+std::string shown_columns(const std::vector<std::string>& header, std::string_view quote,
+                          size_t max_columns) {
+  std::string out;
+  for (size_t c = 0; c < header.size() && c < max_columns; ++c)
+    out += (c ? ", " : "") + std::string(quote) + shown_text(header[c]) + std::string(quote);
+  if (header.size() > max_columns)
+    out += ", \u2026 (" + std::to_string(header.size()) + " columns)";
+  return out;
+}
+
 int column_index(const CsvTable& t, std::string_view name) {
   for (size_t c = 0; c < t.header.size(); ++c)
     if (t.header[c] == name) return static_cast<int>(c);
-  std::string avail;
-  for (size_t c = 0; c < t.header.size(); ++c) avail += (c ? ", " : "") + t.header[c];
   throw InputError(SourceLocation{t.file, 1},
-                   "no column '" + std::string(name) + "' in the header; columns are: " + avail);
+                   "no column '" + shown_text(name) +
+                       "' in the header; columns are: " + shown_columns(t.header));
 }
 
 double parse_number(const CsvTable& t, int row, int col) {
@@ -224,25 +246,29 @@ double parse_number(const CsvTable& t, int row, int col) {
   const size_t k = static_cast<size_t>(row) * t.header.size() + static_cast<size_t>(col);
   const bool located = k < t.field_line.size();  // tables built by hand have no positions
   auto fail = [&](const std::string& why) {
-    return InputError(
-        SourceLocation{t.file, located ? t.field_line[k] : t.line[row],
-                       located ? t.field_column[k] : 0},
-        "column '" + t.header[col] + "' (field " + std::to_string(col + 1) + "): " + why);
+    return InputError(SourceLocation{t.file, located ? t.field_line[k] : t.line[row],
+                                     located ? t.field_column[k] : 0},
+                      "column '" + shown_text(t.header[col]) + "' (field " +
+                          std::to_string(col + 1) + "): " + why);
   };
   if (v.empty()) throw fail("empty value; expected a number (missing data are not allowed)");
+  // The field as a message shows it: a long one cut to its start and length (shown_text).
+  auto shown = [&] { return shown_text(s); };
   if (!decimal_form(v))
-    throw fail("expected a decimal number ([+-]digits[.digits][e[+-]digits]), got '" + s + "'");
+    throw fail("expected a decimal number ([+-]digits[.digits][e[+-]digits]), got '" + shown() +
+               "'");
   char* end = nullptr;
   double x = std::strtod(v.c_str(), &end);
   // Only overflow is an error (strtod returns inf). strtod reports underflow with ERANGE too,
   // but a value below the normal range (1e-320, a subnormal) or below the smallest double
   // (1e-400, read as 0) is a valid, correctly rounded number.
   if (end != v.c_str() + v.size() || !std::isfinite(x))
-    throw fail("expected a number within the range of a double (|x| < 1.8e308), got '" + s + "'");
+    throw fail("expected a number within the range of a double (|x| < 1.8e308), got '" + shown() +
+               "'");
   // Squares of larger values (and sums of them) overflow a double: SDs and sums of squares would
   // be inf next to finite, scale-free statistics (F, t) and some tests would go wrong (Tukey q 0).
   if (std::fabs(x) > kMaxCsvMagnitude)
-    throw fail("the magnitude of '" + s +
+    throw fail("the magnitude of '" + shown() +
                "' is above 1e150: the statistics square values and sum the squares, which "
                "overflows a double beyond that; rescale the column (e.g. other units)");
   return x;

@@ -31,7 +31,17 @@ inline constexpr std::size_t kMaxCsvFileBytes = 1024u * 1024 * 1024;
 // kMaxCsvFileBytes is an InputError.
 CsvTable read_csv(const std::string& path);
 
-// Index of column `name`; throws InputError listing the available columns when it is absent.
+// Text from the input (a CSV field, a column name, a group label) as messages show it: control
+// characters escaped (escape_controls), cut after `max_chars` characters (UTF-8 code points)
+// with "… (N bytes)" — a 10 MB field made a 10 MB error message.
+std::string shown_text(std::string_view s, std::size_t max_chars = 60);
+// Column names for a message: the first `max_columns` through shown_text, each between `quote`s,
+// separated by ", ", then "… (N columns)" when there are more.
+std::string shown_columns(const std::vector<std::string>& header, std::string_view quote = "",
+                          std::size_t max_columns = 20);
+
+// Index of column `name`; throws InputError listing the available columns (shown_columns) when
+// it is absent.
 int column_index(const CsvTable& t, std::string_view name);
 
 // The largest magnitude a CSV number may have: squares and sums of squares of larger values
@@ -41,7 +51,8 @@ inline constexpr double kMaxCsvMagnitude = 1e150;
 // Strict number parsing of one field: a decimal number [+-]digits[.digits][(e|E)[+-]digits]
 // (surrounding blanks allowed; no hexadecimal, inf or nan) of magnitude <= kMaxCsvMagnitude;
 // otherwise
-// InputError "file:line:column: column 'c' (field k): expected ..., got '...'".
+// InputError "file:line:column: column 'c' (field k): expected ..., got '...'" (the field and
+// the column name through shown_text).
 double parse_number(const CsvTable& t, int row, int col);
 
 }  // namespace palplab::analysis

@@ -69,8 +69,8 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
         continue;
       }
     }
-    // Validates, with the line, before use; a long bad field is shown cut (shown_text).
-    parse_number_shown(t, static_cast<int>(r), vc);
+    // Validates, with the line, before use (a long bad field is shown cut, shown_text).
+    parse_number(t, static_cast<int>(r), vc);
     std::string name = trim(t.rows[r][gc]);
     if (name.empty())
       throw InputError(SourceLocation{t.file, t.line[r]},

@@ -563,7 +563,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     c.numeric = true;
     for (int r : used) {
       try {
-        c.num.push_back(parse_number_shown(t, r, ci[v]));
+        c.num.push_back(parse_number(t, r, ci[v]));
       } catch (const InputError&) {
         if (v == f.response || v == f.slope) throw;  // located "expected a number"
         c.numeric = false;

@@ -15,25 +15,39 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }
 
-std::vector<double> bonferroni(const std::vector<double>& p) {
+std::vector<double> bonferroni(const std::vector<double>& p, std::vector<bool>* is_bound) {
   size_t m = 0;
   for (double v : p) m += !std::isnan(v);
   std::vector<double> r(p.size());
-  for (size_t i = 0; i < p.size(); ++i) r[i] = std::isnan(p[i]) ? kNaN : std::min(1.0, m * p[i]);
+  if (is_bound) is_bound->assign(p.size(), false);
+  for (size_t i = 0; i < p.size(); ++i) {
+    r[i] = std::isnan(p[i]) ? kNaN : std::min(1.0, m * p[i]);
+    if (is_bound) (*is_bound)[i] = p_is_bound(p[i]) && r[i] < 1;
+  }
   return r;
 }
 
-std::vector<double> holm(const std::vector<double>& p) {
+std::vector<double> holm(const std::vector<double>& p, std::vector<bool>* is_bound) {
   std::vector<size_t> idx;
   for (size_t i = 0; i < p.size(); ++i)
     if (!std::isnan(p[i])) idx.push_back(i);
   std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return p[a] < p[b]; });
   const size_t m = idx.size();
   std::vector<double> r(p.size(), kNaN);
+  if (is_bound) is_bound->assign(p.size(), false);
   double running = 0;
+  bool running_bound = false;  // the running maximum is only known as an upper bound
   for (size_t j = 0; j < m; ++j) {
-    running = std::max(running, std::min(1.0, (m - j) * p[idx[j]]));
+    const double term = std::min(1.0, (m - j) * p[idx[j]]);
+    const bool term_bound = p_is_bound(p[idx[j]]) && term < 1;
+    if (term > running) {
+      running = term;
+      running_bound = term_bound;
+    } else if (term == running) {
+      running_bound = running_bound && term_bound;  // an exact term of the same value: exact
+    }
     r[idx[j]] = running;
+    if (is_bound) (*is_bound)[idx[j]] = running_bound;
   }
   return r;
 }
@@ -56,10 +70,13 @@ std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch, DfMode mode)
   });
   std::vector<double> p;
   for (auto& r : out) p.push_back(r.test.p);
-  auto h = holm(p), bf = bonferroni(p);
+  std::vector<bool> h_bound, bf_bound;
+  auto h = holm(p, &h_bound), bf = bonferroni(p, &bf_bound);
   for (size_t i = 0; i < out.size(); ++i) {
     out[i].p_holm = h[i];
     out[i].p_bonferroni = bf[i];
+    out[i].p_holm_is_bound = h_bound[i];
+    out[i].p_bonferroni_is_bound = bf_bound[i];
   }
   return out;
 }

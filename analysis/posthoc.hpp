@@ -10,14 +10,20 @@
 namespace palplab::analysis {
 
 // Holm (1979) step-down and Bonferroni adjusted p-values, in the input order (as R's
-// p.adjust). NaN entries are left out of the family and stay NaN.
-std::vector<double> holm(const std::vector<double>& p);
-std::vector<double> bonferroni(const std::vector<double>& p);
+// p.adjust). NaN entries are left out of the family and stay NaN. `is_bound` (optional)
+// receives, per entry, whether the adjusted p is itself a bound: it was computed from a p that
+// is the underflow bound (p_is_bound: p < 1e-300), so m·1e-300 = 3e-300 means p < 3e-300 (for
+// Holm: the running maximum was set by such a term and by no exact one; an adjusted p of 1 is
+// exact).
+std::vector<double> holm(const std::vector<double>& p, std::vector<bool>* is_bound = nullptr);
+std::vector<double> bonferroni(const std::vector<double>& p, std::vector<bool>* is_bound = nullptr);
 
 struct PairwiseT {
   int a = 0, b = 0;  // group indices, a < b
   TTest test;
   double p_holm = 1, p_bonferroni = 1;  // over the k(k-1)/2 comparisons
+  // The adjusted p is an upper bound (built from a test p at the 1e-300 floor; see holm).
+  bool p_holm_is_bound = false, p_bonferroni_is_bound = false;
   EffectSize effect;
 };
 // Every pair (a < b, in group order) with Welch's (welch = true) or Student's t.

@@ -56,9 +56,8 @@ bool has_column(const CsvTable& t, const std::string& name) {
 }
 
 std::string no_column(const CsvTable& t, const std::string& name) {
-  std::string columns;
-  for (const auto& h : t.header) columns += (columns.empty() ? "'" : ", '") + h + "'";
-  return "no column '" + name + "' in " + t.file + "; its columns are: " + columns;
+  return "no column '" + shown_text(name) + "' in " + t.file +
+         "; its columns are: " + shown_columns(t.header, "'");
 }
 
 std::string trimmed(const std::string& s) {
@@ -224,6 +223,12 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
       if (!has_column(table, name))
         throw InputError(at(json::path_key(s.contains(key) ? path : "$", key)),
                          no_column(table, name));
+    // One column as both values and labels makes every value its own group's label: refused,
+    // as `palplab stats` refuses --value and --group naming the same column.
+    if (value == group)
+      throw InputError(at(json::path_key(s.contains("group") ? path : "$", "group")),
+                       "\"value\" and \"group\" name the same column ('" + shown_text(group) +
+                           "'); \"group\" takes the column of group labels");
     std::vector<WhereFilter> where;
     const std::string where_path = json::path_key(path, "where");
     if (s.contains("where")) {

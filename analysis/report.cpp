@@ -29,11 +29,30 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// printf of one number into a string of the size needed (never cut); "n/a" when not finite.
+// Statistics (t, F, q, g) go through stat_text / f_text (summary.hpp), as the stats APA lines.
 std::string fmt(double v, const char* f = "%.4g") {
   if (!std::isfinite(v)) return "n/a";
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
+  const int n = std::snprintf(nullptr, 0, f, v);
+  std::string out(static_cast<size_t>(std::max(n, 0)), '\0');
+  if (n > 0) std::snprintf(out.data(), out.size() + 1, f, v);
+  return out;
+}
+
+// A t for a table: stat_text, or a bound when it overflows a double (an SE of subnormal size).
+std::string t_text(double t) {
+  if (std::isinf(t)) return t < 0 ? "< -1.8e+308" : "> 1.8e+308";
+  return stat_text(t, 3);
+}
+
+// "[lo, hi]" of a statistic (a g interval) with stat_text.
+std::string stat_interval(double lo, double hi, int decimals) {
+  std::string s = "[";
+  s += stat_text(lo, decimals);
+  s += ", ";
+  s += stat_text(hi, decimals);
+  s += "]";
+  return s;
 }
 
 // "[lo, hi]" (a helper rather than operator+ chains: GCC 12 warns falsely on those).
@@ -687,10 +706,16 @@ std::vector<Hypothesis> declared_hypotheses(const Context& c) {
   return out;
 }
 
-std::vector<double> corrected(const std::vector<double>& p, const std::string& correction) {
-  if (correction == "bonferroni") return bonferroni(p);
-  if (correction == "none") return p;
-  return holm(p);
+// Adjusted p-values; `is_bound` receives whether each is a bound (built from a p at the floor).
+std::vector<double> corrected(const std::vector<double>& p, const std::string& correction,
+                              std::vector<bool>* is_bound) {
+  if (correction == "bonferroni") return bonferroni(p, is_bound);
+  if (correction == "none") {
+    is_bound->clear();
+    for (double v : p) is_bound->push_back(p_is_bound(v));
+    return p;
+  }
+  return holm(p, is_bound);
 }
 
 // ---- Confirmatory analyses: exactly the declared hypotheses, before anything exploratory
@@ -729,7 +754,7 @@ void section_confirmatory(Context& c, const std::vector<Hypothesis>& hyps) {
       Anova a = oneway_anova(v.data.values);
       const FEffectCi ci = a.defined ? f_effect_ci(a.F, a.df_between, a.df_within) : FEffectCi{};
       doc.table({"test", "F", "df", "p", "η² [95% CI]", "decision"},
-                {{"one-way ANOVA", fmt(a.F, "%.3f"),
+                {{"one-way ANOVA", f_text(a.F, a.log10_F, 3),
                   fmt(a.df_between, "%.0f") + ", " + fmt(a.df_within, "%.0f"), format_p(a.p),
                   fmt(a.eta_squared, "%.3f") +
                       (ci.defined ? " " + interval(ci.pve_low, ci.pve_high, "%.3f") : ""),
@@ -761,7 +786,8 @@ void section_confirmatory(Context& c, const std::vector<Hypothesis>& hyps) {
         p.push_back(tests.back().p);
       }
     }
-    const std::vector<double> padj = corrected(p, h.correction);
+    std::vector<bool> padj_bound;
+    const std::vector<double> padj = corrected(p, h.correction, &padj_bound);
     const std::string diff_head = with_unit("mean diff", unit);
     for (size_t i = 0; i < pairs.size(); ++i) {
       const auto [a, b] = pairs[i];
@@ -769,16 +795,16 @@ void section_confirmatory(Context& c, const std::vector<Hypothesis>& hyps) {
       if (h.test == "tost") {
         const auto& q = eqs[i];
         rows.push_back({pair, fmt(q.mean_diff), interval(q.ci_low, q.ci_high), format_p(q.p),
-                        format_p(padj[i]),
+                        format_p(padj[i], padj_bound[i]),
                         padj[i] < h.alpha ? "equivalent" : "not shown equivalent"});
       } else {
         const auto& t = tests[i];
         const auto& va = v.data.values[a];
         const auto& vb = v.data.values[b];
         EffectSize e = h.test == "student_t" ? cohens_d(va, vb) : cohens_d_welch(va, vb, t);
-        rows.push_back({pair, fmt(t.mean_diff), fmt(t.t, "%.3f"), fmt(t.df, "%.2f"), format_p(t.p),
-                        format_p(padj[i]),
-                        fmt(e.g, "%.2f") + " " + interval(e.g_ci_low, e.g_ci_high, "%.2f"),
+        rows.push_back({pair, fmt(t.mean_diff), t_text(t.t), fmt(t.df, "%.2f"), format_p(t.p),
+                        format_p(padj[i], padj_bound[i]),
+                        stat_text(e.g, 2) + " " + stat_interval(e.g_ci_low, e.g_ci_high, 2),
                         padj[i] < h.alpha ? "different" : "not significant (inconclusive)"});
       }
     }
@@ -914,7 +940,7 @@ void section_analysis(Context& c, const Unit& u) {
     doc.table(
         {"source", "df", "SS", "MS", "F", "p"},
         {{"between groups", fmt(a.df_between, "%.0f"), fmt(a.ss_between), fmt(a.ms_between),
-          fmt(a.F, "%.3f"), format_p(a.p)},
+          f_text(a.F, a.log10_F, 3), format_p(a.p)},
          {"within groups", fmt(a.df_within, "%.0f"), fmt(a.ss_within), fmt(a.ms_within), "", ""}});
     doc.bullets(
         {"Classical: " + apa_anova(a) + ", η² = " + fmt(a.eta_squared, "%.3f") +
@@ -933,14 +959,15 @@ void section_analysis(Context& c, const Unit& u) {
     std::vector<std::vector<std::string>> pr;
     std::vector<std::string> apa;
     for (const auto& p : s.pairwise) {
-      pr.push_back({groups[p.a] + " – " + groups[p.b], fmt(p.test.mean_diff), fmt(p.test.t, "%.3f"),
-                    fmt(p.test.df, "%.2f"), format_p(p.test.p), format_p(p.p_holm),
-                    fmt(p.effect.g, "%.2f") + " " +
-                        interval(p.effect.g_ci_low, p.effect.g_ci_high, "%.2f")});
+      pr.push_back({groups[p.a] + " – " + groups[p.b], fmt(p.test.mean_diff), t_text(p.test.t),
+                    fmt(p.test.df, "%.2f"), format_p(p.test.p),
+                    format_p(p.p_holm, p.p_holm_is_bound),
+                    stat_text(p.effect.g, 2) + " " +
+                        stat_interval(p.effect.g_ci_low, p.effect.g_ci_high, 2)});
       apa.push_back(
           groups[p.a] + " vs " + groups[p.b] + ": " +
           (p.test.defined ? apa_t(p.test.t, p.test.df, p.test.p) : std::string("undefined")) +
-          " (Holm " + apa_p(p.p_holm) + "), g = " + fmt(p.effect.g, "%.2f"));
+          " (Holm " + apa_p(p.p_holm) + "), g = " + stat_text(p.effect.g, 2));
     }
     doc.table({"pair", diff_head, "t", "df", "p", "p (Holm)", "Hedges g [95% CI]"}, pr);
     doc.bullets(apa);
@@ -967,8 +994,8 @@ void section_analysis(Context& c, const Unit& u) {
       for (size_t i = 0; i < s.tukey.size(); ++i) {
         const auto& t = s.tukey[i];
         const auto& g = s.games_howell[i];
-        tr.push_back({groups[t.a] + " – " + groups[t.b], fmt(t.mean_diff), fmt(t.q, "%.3f"),
-                      format_p(t.p), interval(t.ci_low, t.ci_high), fmt(g.q, "%.3f"),
+        tr.push_back({groups[t.a] + " – " + groups[t.b], fmt(t.mean_diff), stat_text(t.q, 3),
+                      format_p(t.p), interval(t.ci_low, t.ci_high), stat_text(g.q, 3),
                       fmt(g.df, "%.2f"), format_p(g.p)});
       }
       doc.table({"pair", diff_head, "Tukey q", "Tukey p", "Tukey 95% CI", "Games–Howell q",
@@ -986,7 +1013,7 @@ void section_analysis(Context& c, const Unit& u) {
                           ? "W = " + fmt(s.shapiro[g].W, "%.3f") + ", " + apa_p(s.shapiro[g].p)
                           : std::string("n/a (n < 3 or constant)")));
   checks.push_back("Kruskal–Wallis: H(" + fmt(s.kruskal.df, "%.0f") +
-                   ") = " + fmt(s.kruskal.H, "%.2f") + ", " + apa_p(s.kruskal.p));
+                   ") = " + stat_text(s.kruskal.H, 2) + ", " + apa_p(s.kruskal.p));
   doc.bullets(checks);
 }
 
@@ -1227,7 +1254,7 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
     std::vector<std::vector<std::string>> fe;
     for (const auto& f : fit.fixed)
       fe.push_back({curve_term_name(f.name, c.groups), fmt(f.estimate), fmt(f.se),
-                    fmt(f.df, "%.2f"), fmt(f.t, "%.3f"), format_p(f.p)});
+                    fmt(f.df, "%.2f"), t_text(f.t), format_p(f.p)});
     c.doc.table({"fixed effect", "estimate", "SE", "df", "t", "p"}, fe);
     std::vector<std::vector<std::string>> sl;
     for (int g : cm.levels) {
@@ -1238,7 +1265,7 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
     c.doc.table({"group", "slope per session", "SE", "95% CI (normal)"}, sl);
     std::vector<std::vector<std::string>> an;
     for (const auto& a : fit.anova)
-      an.push_back({a.term, std::to_string(a.num_df), fmt(a.den_df, "%.2f"), fmt(a.f, "%.3f"),
+      an.push_back({a.term, std::to_string(a.num_df), fmt(a.den_df, "%.2f"), stat_text(a.f, 3),
                     format_p(a.p),
                     a.partial_eta_squared_ci.defined
                         ? fmt(a.partial_eta_squared, "%.3f") + " " +
@@ -1257,7 +1284,7 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
         if (a.term == "group:session")
           c.doc.para("Do the groups learn differently? The group × session interaction: F(" +
                      std::to_string(a.num_df) + ", " + fmt(a.den_df, "%.2f") +
-                     ") = " + fmt(a.f, "%.2f") + ", " + apa_p(a.p) + ".");
+                     ") = " + stat_text(a.f, 2) + ", " + apa_p(a.p) + ".");
   }
   if (!any_curve)
     c.doc.para(training.empty() ? "The study declares no phase of kind \"training\"."

@@ -43,13 +43,6 @@ std::string df_text(double df) {
 // Statistics (t, F, q, g, H) from 1e6 on are printed in scientific notation.
 constexpr double kScientificFrom = 1e6;
 
-// A statistic with `decimals` decimals, from 1e6 on as d.dd…e+XX with as many decimals
-// (-1.73e+200, not 201 digits); "n/a" when not finite.
-std::string stat_text(double v, int decimals) {
-  if (!std::isfinite(v)) return "n/a";
-  return std::fabs(v) < kScientificFrom ? strf("%.*f", decimals, v) : strf("%.*e", decimals, v);
-}
-
 // 10^log10_v in scientific notation with `decimals` decimals, for a positive value beyond the
 // range of a double (an F of 6.00e+400).
 std::string pow10_text(double log10_v, int decimals) {
@@ -62,11 +55,22 @@ std::string pow10_text(double log10_v, int decimals) {
   return strf("%.*fe+%.0f", decimals, m, e);
 }
 
+}  // namespace
+
+// A statistic with `decimals` decimals, from 1e6 on as d.dd…e+XX with as many decimals
+// (-1.73e+200, not 201 digits); "n/a" when not finite.
+std::string stat_text(double v, int decimals) {
+  if (!std::isfinite(v)) return "n/a";
+  return std::fabs(v) < kScientificFrom ? strf("%.*f", decimals, v) : strf("%.*e", decimals, v);
+}
+
 // An F statistic for text: finite, or beyond a double with its log10 known, or "n/a".
 std::string f_text(double F, double log10_F, int decimals) {
   if (!std::isfinite(F) && std::isfinite(log10_F)) return pow10_text(log10_F, decimals);
   return stat_text(F, decimals);
 }
+
+namespace {
 
 // A t statistic for an APA line: "= -1.73e+200", or a bound when it overflows a double (an SE
 // of subnormal size).
@@ -85,19 +89,6 @@ std::string apa_anova_log(const Anova& a, double log10_F) {
   return apa_f_log(a.F, log10_F, a.df_between, a.df_within, a.p);
 }
 
-// An F test whose F = MS_between / MS_within overflowed a double although MS_within > 0 (a
-// group constant at 1e100 beside one spread by 1e-100: F = 1e400): oneway_anova leaves F = inf
-// and p NaN. Its p from log F (f_upper_p_log, usually the bound); returns log10 F, NaN when F
-// did not overflow. `ms_within` in long double (it may be below the range of a double).
-double finish_overflowed_f(Anova& a, long double ms_within) {
-  if (!a.defined || !std::isinf(a.F) || !(ms_within > 0) || !(a.ms_between > 0) ||
-      !std::isfinite(a.ms_between))
-    return std::numeric_limits<double>::quiet_NaN();
-  const long double log_f = std::log(static_cast<long double>(a.ms_between)) - std::log(ms_within);
-  a.p = f_upper_p_log(static_cast<double>(log_f), a.df_between, a.df_within);
-  return static_cast<double>(log_f / std::log(10.0L));
-}
-
 // A number or null (JSON has no NaN / infinity).
 nlohmann::json num(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
@@ -108,34 +99,6 @@ std::string num_text(double v, const char* f = "%.4g") {
 }
 
 }  // namespace
-
-std::string shown_text(std::string_view s, size_t max_chars) {
-  size_t cut = 0, chars = 0;  // byte offset and count of the first max_chars characters
-  for (; cut < s.size() && chars < max_chars; ++chars) {
-    ++cut;  // the lead byte, then its continuation bytes
-    while (cut < s.size() && (static_cast<unsigned char>(s[cut]) & 0xC0) == 0x80) ++cut;
-  }
-  if (cut == s.size()) return escape_controls(s, false);
-  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
-         " bytes)";
-}
-
-double parse_number_shown(const CsvTable& t, int row, int col) {
-  try {
-    return parse_number(t, row, col);
-  } catch (const InputError& e) {
-    const std::string& field = t.rows[row][col];
-    const std::string shown = shown_text(field);
-    if (shown == field) throw;
-    // parse_number echoes the whole field: show its start and length instead.
-    std::vector<Problem> problems = e.problems();
-    for (auto& pr : problems)
-      for (size_t at = pr.what.find(field); at != std::string::npos;
-           at = pr.what.find(field, at + shown.size()))
-        pr.what.replace(at, field.size(), shown);
-    throw InputError(std::move(problems));
-  }
-}
 
 std::string apa_p(double p) {
   if (!std::isfinite(p)) return "p = n/a";
@@ -150,7 +113,7 @@ std::string apa_f(double F, double df1, double df2, double p) {
 }
 
 std::string apa_anova(const Anova& a) {
-  return apa_anova_log(a, std::numeric_limits<double>::quiet_NaN());
+  return apa_anova_log(a, a.log10_F);
 }
 
 std::string apa_t(double t, double df, double p) {
@@ -161,6 +124,11 @@ std::string format_p(double p) {
   if (!std::isfinite(p)) return "n/a";
   if (p_is_bound(p)) return "< 1e-300";
   return fmt("%.4g", p);
+}
+
+std::string format_p(double p, bool is_bound) {
+  if (is_bound && std::isfinite(p) && !p_is_bound(p)) return "< " + fmt("%.4g", p);
+  return format_p(p);
 }
 
 StatsSummary summarize(const GroupedData& data, const StatsOptions& options) {
@@ -206,15 +174,12 @@ StatsSummary summarize(const GroupedData& data, const StatsOptions& options) {
     s.tukey = tukey_kramer(g);
     s.games_howell = games_howell(g);
   }
-  {
-    long double ssw = 0;
-    for (const auto& x : g) ssw += sum_sq_dev(x);
-    s.anova_log10_F = finish_overflowed_f(s.anova, ssw / s.anova.df_within);
-  }
   s.levene = levene(g, LeveneCentre::Mean);
   s.brown_forsythe = levene(g, LeveneCentre::Median);
-  s.levene_log10_F = finish_overflowed_f(s.levene, s.levene.ms_within);
-  s.brown_forsythe_log10_F = finish_overflowed_f(s.brown_forsythe, s.brown_forsythe.ms_within);
+  // F beyond the range of a double: oneway_anova keeps log F and its p (Anova::log10_F).
+  s.anova_log10_F = s.anova.log10_F;
+  s.levene_log10_F = s.levene.log10_F;
+  s.brown_forsythe_log10_F = s.brown_forsythe.log10_F;
   s.kruskal = kruskal_wallis(g);
   if (effect_ci.valid()) s.anova_effect_ci = effect_ci.get();
   return s;
@@ -291,7 +256,9 @@ nlohmann::json to_json(const StatsSummary& s) {
                   {"p", num(t.p)},
                   {"p_holm", num(p.p_holm)},
                   {"p_is_bound", p_is_bound(t.p)},
+                  {"p_holm_is_bound", p.p_holm_is_bound},
                   {"p_bonferroni", num(p.p_bonferroni)},
+                  {"p_bonferroni_is_bound", p.p_bonferroni_is_bound},
                   {"mean_diff", num(t.mean_diff)},
                   {"se", num(t.se)},
                   {"ci_low", num(t.ci_low)},
@@ -404,7 +371,8 @@ std::string to_text(const StatsSummary& s) {
                                     : stat_text(p.test.t, 3))
                   .c_str(),
               num_text(p.test.df, "%.2f").c_str(), format_p(p.test.p).c_str(),
-              format_p(p.p_holm).c_str(), format_p(p.p_bonferroni).c_str(),
+              format_p(p.p_holm, p.p_holm_is_bound).c_str(),
+              format_p(p.p_bonferroni, p.p_bonferroni_is_bound).c_str(),
               stat_text(p.effect.g, 3).c_str());
   for (const auto& p : s.pairwise)
     o << "  " << names[p.a] << " vs " << names[p.b] << ": "

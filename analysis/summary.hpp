@@ -71,12 +71,15 @@ std::string apa_t(double t, double df, double p);
 // "1e-300" style for tables: "< 1e-300" when the p-value is an underflow bound.
 std::string format_p(double p);
 
-// Text from the input (a group label, a CSV field) as messages show it: control characters
-// escaped (escape_controls), cut after `max_chars` characters (UTF-8 code points) with
-// "… (N bytes)" — a 10 MB field made a 10 MB error message.
-std::string shown_text(std::string_view s, size_t max_chars = 60);
-// parse_number (csv.hpp) whose error message shows the field through shown_text.
-double parse_number_shown(const CsvTable& t, int row, int col);
+// A statistic (t, F, q, g) with `decimals` decimals, from 1e6 on in scientific notation with as
+// many decimals ("1.73e+200", never cut); "n/a" when not finite. As the APA lines print them.
+std::string stat_text(double v, int decimals);
+// An F for text: stat_text, or 10^log10_F in scientific notation when F is beyond the range of
+// a double (Anova::log10_F finite: "3.00e+400").
+std::string f_text(double F, double log10_F, int decimals);
+// "< 1e-300" style for an adjusted p whose raw p was a bound (p_holm_is_bound): "< 3e-300";
+// format_p otherwise.
+std::string format_p(double p, bool is_bound);
 
 nlohmann::json to_json(const StatsSummary& s);
 // Human-readable tables and APA lines.

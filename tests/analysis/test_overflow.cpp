@@ -11,6 +11,7 @@
 
 #include "analysis/csv.hpp"
 #include "analysis/grouped.hpp"
+#include "analysis/posthoc.hpp"
 #include "analysis/summary.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
@@ -232,4 +233,139 @@ TEST(ShownText, LabelsInTextTablesAreEscapedAndWhole) {
   EXPECT_NE(text.find("Mann-Whitney " + shown + " vs B: W = "), std::string::npos) << text;
   // JSON keeps the label as it is (JSON escapes it itself).
   EXPECT_EQ(to_json(s)["groups"][0]["name"], label);
+}
+
+// parse_number and column_index cut what they echo themselves (callers other than group_table,
+// e.g. calibrate, showed a 10 MB field whole), and the list of columns stops after 20.
+TEST(ShownText, CsvReaderMessagesAreCut) {
+  const std::string big(100'000, 'x');
+  const auto t = parse_csv("g,v\nA," + big + "\n", "f.csv");
+  const std::string e = error_of([&] { parse_number(t, 0, 1); });
+  EXPECT_LT(e.size(), 300u) << e.substr(0, 300);
+  EXPECT_NE(e.find("got '" + std::string(60, 'x') + "\u2026 (100000 bytes)'"), std::string::npos)
+      << e.substr(0, 300);
+  const auto t2 = parse_csv("g,v\nA,1" + std::string(500, '0') + "\n", "f.csv");
+  const std::string e2 = error_of([&] { parse_number(t2, 0, 1); });
+  EXPECT_NE(e2.find("got '1" + std::string(59, '0') + "\u2026 (501 bytes)'"), std::string::npos)
+      << e2;
+  // A long column name in the message of a bad field, with its control characters escaped.
+  const std::string name = "\x1b[2J" + std::string(200, 'c');
+  const auto t3 = parse_csv("g,\"" + name + "\"\nA,abc\n", "f.csv");
+  const std::string e3 = error_of([&] { parse_number(t3, 0, 1); });
+  EXPECT_NE(e3.find("column '\\x1b[2J" + std::string(56, 'c') + "\u2026 (204 bytes)' (field 2)"),
+            std::string::npos)
+      << e3;
+  EXPECT_EQ(e3.find('\x1b'), std::string::npos) << e3;
+  // column_index: the name asked for and each column cut, only the first 20 columns listed.
+  std::string header;
+  for (int c = 0; c < 500; ++c) header += (c ? ",c" : "c") + std::to_string(c);
+  const auto wide = parse_csv(header + "\n" + std::string(499, ',') + "\n", "w.csv");
+  const std::string e4 = error_of([&] { column_index(wide, std::string(5000, 'n')); });
+  EXPECT_LT(e4.size(), 400u) << e4.substr(0, 400);
+  EXPECT_NE(e4.find("no column '" + std::string(60, 'n') +
+                    "\u2026 (5000 bytes)' in the header; "
+                    "columns are: c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11, c12, c13, "
+                    "c14, c15, c16, c17, c18, c19, \u2026 (500 columns)"),
+            std::string::npos)
+      << e4;
+  const auto long_col = parse_csv("\"" + std::string(1000, 'h') + "\",v\n1,2\n", "f.csv");
+  const std::string e5 = error_of([&] { column_index(long_col, "x"); });
+  EXPECT_NE(e5.find("columns are: " + std::string(60, 'h') + "\u2026 (1000 bytes), v"),
+            std::string::npos)
+      << e5;
+  EXPECT_EQ(shown_columns({"a", "b"}, "'"), "'a', 'b'");
+  // A duplicate long column name is cut too.
+  const std::string dup(300, 'd');
+  const std::string e6 = error_of([&] { parse_csv(dup + "," + dup + "\n", "f.csv"); });
+  EXPECT_NE(e6.find("duplicate column name '" + std::string(60, 'd') + "\u2026 (300 bytes)'"),
+            std::string::npos)
+      << e6;
+}
+
+// An adjusted p built from the 1e-300 bound is a bound itself: 3 × 1e-300 means p < 3e-300.
+TEST(AdjustedP, HolmAndBonferroniOfABoundAreBounds) {
+  std::vector<bool> hb, bb;
+  const auto h = holm({kPFloor, 0.01, 0.04, NAN}, &hb);
+  const auto b = bonferroni({kPFloor, 0.01, 0.04, NAN}, &bb);
+  EXPECT_DOUBLE_EQ(h[0], 3e-300);
+  EXPECT_DOUBLE_EQ(h[1], 0.02);
+  EXPECT_DOUBLE_EQ(h[2], 0.04);
+  EXPECT_TRUE(std::isnan(h[3]));
+  EXPECT_EQ(hb, (std::vector<bool>{true, false, false, false}));
+  EXPECT_DOUBLE_EQ(b[0], 3e-300);
+  EXPECT_EQ(bb, (std::vector<bool>{true, false, false, false}));
+  // Holm's running maximum: a bound term below an exact one is not a bound; two bounds are.
+  const auto h2 = holm({kPFloor, kPFloor, 0.3}, &hb);
+  EXPECT_DOUBLE_EQ(h2[0], 3e-300);
+  EXPECT_DOUBLE_EQ(h2[1], 3e-300);  // max(3e-300, 2e-300): set by the first, a bound
+  EXPECT_EQ(hb, (std::vector<bool>{true, true, false}));
+  // An exact term below the bound's keeps the bound; one equal to it makes the value exact.
+  const auto h3 = holm({kPFloor, 1.5e-300}, &hb);
+  EXPECT_DOUBLE_EQ(h3[1], 2e-300);
+  EXPECT_EQ(hb, (std::vector<bool>{true, true}));
+  const auto h4 = holm({kPFloor, 2e-300}, &hb);
+  EXPECT_EQ(h4[1], 2e-300);
+  EXPECT_EQ(hb, (std::vector<bool>{true, false}));
+  // Adjusted to 1: exact.
+  bonferroni({kPFloor, 0.9}, &bb);
+  EXPECT_EQ(bb, (std::vector<bool>{true, false}));
+  EXPECT_EQ(holm({0.2, 0.6}), (std::vector<double>{0.4, 0.6}));  // no flags asked: unchanged
+
+  // Through stats: A-B at the floor (t = -1.7e200, df 2), A-C and B-C (t ~ 1e100, df 2: p ~
+  // 1e-200) exact.
+  const StatsSummary s = summarize_csv(
+      "g,v\nA,1e-100\nA,2e-100\nA,3e-100\nB,1e100\nB,1e100\nB,1e100\nC,1\nC,2\nC,4\n");
+  const auto j = to_json(s);
+  ASSERT_EQ(j["pairwise"].size(), 3u);
+  const auto& pw = j["pairwise"][0];
+  EXPECT_EQ(pw["p_is_bound"], true) << pw.dump();
+  EXPECT_DOUBLE_EQ(pw["p_holm"].get<double>(), 3e-300) << pw.dump();
+  EXPECT_EQ(pw["p_holm_is_bound"], true) << pw.dump();
+  EXPECT_DOUBLE_EQ(pw["p_bonferroni"].get<double>(), 3e-300) << pw.dump();
+  EXPECT_EQ(pw["p_bonferroni_is_bound"], true) << pw.dump();
+  for (int i : {1, 2}) {
+    EXPECT_EQ(j["pairwise"][i]["p_is_bound"], false) << j["pairwise"][i].dump();
+    EXPECT_EQ(j["pairwise"][i]["p_holm_is_bound"], false) << j["pairwise"][i].dump();
+    EXPECT_EQ(j["pairwise"][i]["p_bonferroni_is_bound"], false) << j["pairwise"][i].dump();
+  }
+  const std::string text = to_text(s);
+  EXPECT_NE(text.find("< 1e-300   < 3e-300   < 3e-300"), std::string::npos) << text;
+  EXPECT_EQ(format_p(3e-300, true), "< 3e-300");
+  EXPECT_EQ(format_p(kPFloor, true), "< 1e-300");
+  EXPECT_EQ(format_p(0.02, false), "0.02");
+}
+
+// Levene / Brown–Forsythe of spreads ~1e-170: MS_within ~ 3e-341 underflows a double to 0, so
+// F (3.7e340) could not be recovered from the stored MS; oneway_anova keeps log F itself.
+TEST(Overflow, LeveneWithMsWithinBelowADouble) {
+  const StatsSummary s = summarize_csv("g,v\nA,0\nA,2\nB,0\nB,1e-170\nB,3e-170\n");
+  // Levene deviations: A 1, 1; B (4, 1, 5)/3 · 1e-170. MS_between = 1.2, MS_within =
+  // (78/81)/3 · 1e-340.
+  EXPECT_EQ(s.levene.ms_within, 0.0);  // below the range of a double
+  expect_rel(s.levene.log10_F, 340 + std::log10(1.2 * 81 / 26), 1e-12, "Levene log10 F");
+  EXPECT_EQ(s.levene_log10_F, s.levene.log10_F);
+  EXPECT_EQ(s.levene.p, kPFloor);
+  // Brown–Forsythe: median deviations A 1, 1; B 1, 0, 2 · 1e-170; MS_within = 2e-340 / 3.
+  expect_rel(s.brown_forsythe.log10_F, 340 + std::log10(1.2 * 3 / 2), 1e-12, "B-F log10 F");
+  EXPECT_EQ(s.brown_forsythe.p, kPFloor);
+  const auto j = to_json(s);
+  EXPECT_TRUE(j["levene"]["F"].is_null());
+  EXPECT_EQ(j["levene"]["p"], kPFloor);
+  EXPECT_TRUE(j["levene"].contains("log10_F"));
+  EXPECT_EQ(j["brown_forsythe"]["p"], kPFloor);
+  EXPECT_NE(to_text(s).find("Levene (mean):           F(1, 3) = 3.74e+340, p < .001"),
+            std::string::npos)
+      << to_text(s);
+  // An F within a double has no log10_F.
+  EXPECT_TRUE(std::isnan(oneway_anova({{1, 2, 3}, {4, 5, 7}}).log10_F));
+  // apa_anova prints the log F by itself.
+  EXPECT_EQ(apa_anova(s.levene), "F(1, 3) = 3.74e+340, p < .001");
+}
+
+TEST(Apa, StatTextAndFText) {
+  EXPECT_EQ(stat_text(1.7320508075688772e200, 2), "1.73e+200");
+  EXPECT_EQ(stat_text(-12.3456, 3), "-12.346");
+  EXPECT_EQ(stat_text(NAN, 3), "n/a");
+  EXPECT_EQ(f_text(INFINITY, 400 + std::log10(3.0), 3), "3.000e+400");
+  EXPECT_EQ(f_text(4.5, NAN, 3), "4.500");
 }

@@ -547,3 +547,40 @@ TEST(Report, ConfirmatoryHypothesesFirst) {
   EXPECT_EQ(md2.find("Exploratory analyses"), std::string::npos);
   fs::remove_all(g.dir);
 }
+
+// The report printed t and F with its own "%.3f" into a 64-byte buffer: a t of 1.4e200 came out
+// as 63 of its digits. It now formats them as the stats APA text does (stat_text / f_text):
+// exploration_time of the post-training test set to 1e100 in group A (constant) and to
+// 1e-100 · (1..5) in B, 2e-100 · (1..5) in C gives t(A–B) = 1.41e+200, an F beyond a double
+// (4.00e+399, from log F) and a Holm p built from the 1e-300 bound (< 3e-300).
+TEST(Report, HugeStatisticsInScientificNotation) {
+  FixtureDb f = make_fixture();
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(f.db.string().c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "UPDATE measures SET value = (SELECT CASE substr(s.participant, 1, 1) "
+                         "WHEN 'A' THEN 1e100 WHEN 'B' THEN 1e-100 * substr(s.participant, 2) "
+                         "ELSE 2e-100 * substr(s.participant, 2) END FROM sessions s WHERE "
+                         "s.session = measures.session) WHERE name = 'exploration_time' AND "
+                         "session IN (SELECT session FROM sessions WHERE phase = 'post_training');",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  const std::string md = slurp(files.markdown);
+  const size_t at = md.find("## Analysis: exploration_time — phase post_training");
+  ASSERT_NE(at, std::string::npos) << md;
+  const std::string section = md.substr(at, md.find("\n## ", at + 5) - at);
+  // No run of digits from a fixed-point printing of a huge number.
+  EXPECT_FALSE(std::regex_search(section, std::regex("[0-9]{20}"))) << section;
+  EXPECT_NE(section.find("| 1.414e+200 |"), std::string::npos) << section;
+  EXPECT_NE(section.find("t(4) = 1.41e+200, p < .001 (Holm p < .001)"), std::string::npos)
+      << section;
+  EXPECT_TRUE(std::regex_search(section, std::regex(R"(\| [1-9]\.[0-9]{3}e\+399 \| < 1e-300 \|)")))
+      << section;
+  EXPECT_TRUE(std::regex_search(
+      section, std::regex(R"(Classical: F\(2, 12\) = [1-9]\.[0-9]{2}e\+399, p < \.001)")))
+      << section;
+  EXPECT_NE(section.find("| < 1e-300 | < 3e-300 |"), std::string::npos) << section;
+  fs::remove_all(f.dir);
+}

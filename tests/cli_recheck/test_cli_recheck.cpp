@@ -274,3 +274,51 @@ TEST(CliRecheck, WhereMatchingNoRowNamesTheKeyNotAFlag) {
     std::filesystem::remove(f);
   }
 }
+
+// "value" and "group" naming the same column makes every value its own group's label; `stats`
+// refuses it (--value and --group), recheck now too, at the statistic's "group" key (or the
+// top-level one it inherits). A CSV of many columns lists only the first 20 in "no column".
+TEST(CliRecheck, ValueAndGroupTheSameColumnIsBadInput) {
+  using palplab::testing::expect_exit2;
+  using palplab::testing::has;
+  const std::string csv_path = src("tests/data/r/unequal.csv");
+  struct Case {
+    const char* json;
+    std::string part;
+  };
+  const std::vector<Case> cases = {
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002","group":"force"}]})",
+       ": $.statistics[0].group: \"value\" and \"group\" name the same column ('force'); "
+       "\"group\" takes the column of group labels"},
+      {R"({"value":"group","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002"}]})",
+       ": $.group: \"value\" and \"group\" name the same column ('group')"},
+      {R"({"group":"group","statistics":[{"text":"t(17) = 1.01, p = .33","value":"group"}]})",
+       ": $.group: \"value\" and \"group\" name the same column ('group')"},
+  };
+  for (const auto& c : cases) {
+    const std::string f = write_temp("same_col.json", c.json);
+    for (const char* json_flag : {"", " --json"}) {
+      const Result r = run_palplab("recheck " + f + " --csv " + csv_path + json_flag);
+      expect_exit2(r, {"error: " + f, c.part});
+      EXPECT_TRUE(r.out.empty()) << r.out;
+    }
+    std::filesystem::remove(f);
+  }
+  // 30 columns: the message lists 20 and the count.
+  std::string header, row;
+  for (int k = 0; k < 30; ++k) {
+    header += (k ? ",c" : "c") + std::to_string(k);
+    row += k ? ",1" : "1";
+  }
+  const std::string wide = write_temp("wide.csv", header + "\n" + row + "\n");
+  const std::string f = write_temp(
+      "wide.json",
+      R"({"value":"c1","group":"nosuch","statistics":[{"text":"F(2, 13) = 11.05, p = .002"}]})");
+  const Result r = run_palplab("recheck " + f + " --csv " + wide);
+  expect_exit2(r, {": $.group: no column 'nosuch' in " + wide +
+                   "; its columns are: 'c0', 'c1', 'c2', 'c3', 'c4', 'c5', 'c6', 'c7', 'c8', "
+                   "'c9', 'c10', 'c11', 'c12', 'c13', 'c14', 'c15', 'c16', 'c17', 'c18', 'c19', "
+                   "\u2026 (30 columns)"});
+  std::filesystem::remove(f);
+  std::filesystem::remove(wide);
+}

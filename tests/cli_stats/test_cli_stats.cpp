@@ -423,3 +423,39 @@ TEST(CliStats, LongFieldsAreCutAndControlCharactersEscaped) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["groups"][0]["name"], "\x1b[31mA");  // JSON escapes it
 }
+
+// The CSV reader's own messages are cut: "no column" lists 20 of 500 columns and cuts the name
+// asked for; a pair whose p is the 1e-300 bound has Holm and Bonferroni p's flagged as bounds.
+TEST(CliStats, NoColumnMessageIsCutAndAdjustedBoundsAreFlagged) {
+  std::string header, row;
+  for (int k = 0; k < 500; ++k) {
+    header += (k ? ",col" : "col") + std::to_string(k);
+    row += k ? ",1" : "1";
+  }
+  const std::string wide = write_temp("wide500.csv", header + "\n" + row + "\n");
+  const std::string name(3000, 'q');
+  Result r = run_palplab("stats --csv " + wide + " --value col1 --group " + name);
+  EXPECT_EQ(r.code, 2) << r.err.substr(0, 500);
+  EXPECT_LT(r.err.size(), 600u) << r.err.substr(0, 600);
+  EXPECT_NE(r.err.find("no column '" + std::string(60, 'q') + "\u2026 (3000 bytes)'"),
+            std::string::npos)
+      << r.err.substr(0, 600);
+  EXPECT_NE(r.err.find("col18, col19, \u2026 (500 columns)"), std::string::npos)
+      << r.err.substr(0, 600);
+  std::filesystem::remove(wide);
+
+  const std::string csv =
+      write_temp("holm_bound.csv",
+                 "g,v\nA,1e-100\nA,2e-100\nA,3e-100\nB,1e100\nB,1e100\nB,1e100\nC,1\nC,2\nC,4\n");
+  r = run_palplab("stats --csv " + csv + " --value v --group g --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto pw = nlohmann::json::parse(r.out)["pairwise"];
+  EXPECT_EQ(pw[0]["p_holm"], 3e-300);
+  EXPECT_EQ(pw[0]["p_holm_is_bound"], true);
+  EXPECT_EQ(pw[0]["p_bonferroni_is_bound"], true);
+  EXPECT_EQ(pw[1]["p_holm_is_bound"], false);
+  r = run_palplab("stats --csv " + csv + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("< 1e-300   < 3e-300   < 3e-300"), std::string::npos) << r.out;
+  std::filesystem::remove(csv);
+}
