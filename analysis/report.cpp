@@ -45,24 +45,23 @@ std::string t_text(double t) {
   return stat_text(t, 3);
 }
 
-// "[lo, hi]" of a statistic (a g interval) with stat_text.
-std::string stat_interval(double lo, double hi, int decimals) {
+// "[lo, hi]" (a helper rather than operator+ chains: GCC 12 warns falsely on those).
+std::string bracket(const std::string& lo, const std::string& hi) {
   std::string s = "[";
-  s += stat_text(lo, decimals);
+  s += lo;
   s += ", ";
-  s += stat_text(hi, decimals);
+  s += hi;
   s += "]";
   return s;
 }
 
-// "[lo, hi]" (a helper rather than operator+ chains: GCC 12 warns falsely on those).
+// "[lo, hi]" of a statistic (a g interval) with stat_text.
+std::string stat_interval(double lo, double hi, int decimals) {
+  return bracket(stat_text(lo, decimals), stat_text(hi, decimals));
+}
+
 std::string interval(double lo, double hi, const char* f = "%.4g") {
-  std::string s = "[";
-  s += fmt(lo, f);
-  s += ", ";
-  s += fmt(hi, f);
-  s += "]";
-  return s;
+  return bracket(fmt(lo, f), fmt(hi, f));
 }
 
 std::string md_cell(const std::string& s) {

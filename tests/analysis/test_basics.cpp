@@ -14,22 +14,10 @@
 #include "analysis/posthoc.hpp"
 #include "analysis/summary.hpp"
 #include "common/input_error.hpp"
+#include "tests/analysis/error_of.hpp"
 
 using namespace palplab::analysis;
 using palplab::InputError;
-
-namespace {
-// The located message of an InputError thrown by f (empty when none is thrown).
-template <class F>
-std::string error_of(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return {};
-}
-}  // namespace
 
 TEST(Csv, QuotingCrLfBomAndEmbeddedNewlines) {
   auto t =

@@ -15,20 +15,12 @@
 #include "analysis/summary.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "tests/analysis/error_of.hpp"
 
 using namespace palplab::analysis;
 using palplab::InputError;
 
 namespace {
-template <class F>
-std::string error_of(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return {};
-}
 
 void expect_rel(double got, double want, double tol, const std::string& what = {}) {
   EXPECT_LE(std::abs(got - want), tol * std::abs(want))
