@@ -1,5 +1,12 @@
 // `palplab mesh ...`: generate, info, check, repair, tetrahedralize, materials (issue 2).
 // Exit codes: 0 success (check: clean), 1 check found defects, 2 bad input / unreadable file.
+// Every file a command writes (generate, repair and tetrahedralize --out, each file of a TetGen
+// set, BASE.vtu, the shoulder's .regions, materials --out) is guarded before the work by
+// app::require_replaceable_output: never one of the command's inputs (exit 2, --overwrite or
+// not; `mesh repair X --out X` is refused: there is no in-place repair), and an existing file
+// that is not of the kind written there (a mesh file of the format its name says, a region seed
+// file, a material table) is replaced only with --overwrite.
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -10,6 +17,8 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
@@ -26,22 +35,155 @@ namespace {
 using namespace palplab::mesh;
 using json = nlohmann::ordered_json;
 
-// The first file a tet mesh output `out` writes, checked (name and writability) before the mesh
-// is made: BASE.vtu -> that file; a surface format is a mistake; otherwise BASE.node.
-std::string check_tet_output(const std::string& out) {
+// ---- What a mesh command may replace (app::require_replaceable_output)
+
+using palplab::app::CommandInput;
+
+// The first `n` bytes of the file at `path` (fewer when it is shorter).
+std::string file_head(const std::string& path, size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::string h(n, '\0');
+  in.read(h.data(), static_cast<std::streamsize>(n));
+  h.resize(static_cast<size_t>(in.gcount()));
+  return h;
+}
+
+// The tokens of the first line of `text` that holds anything besides blanks and a '#' comment.
+std::vector<std::string> first_data_tokens(const std::string& text) {
+  size_t at = 0;
+  while (at < text.size()) {
+    size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(at, end - at);
+    line = line.substr(0, line.find('#'));
+    std::vector<std::string> tokens;
+    size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+      size_t j = i;
+      while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
+      if (j > i) tokens.push_back(line.substr(i, j - i));
+      i = j;
+    }
+    if (!tokens.empty()) return tokens;
+    at = end + 1;
+  }
+  return {};
+}
+
+bool is_integer(const std::string& t) {
+  long long v = 0;
+  const auto r = std::from_chars(t.data(), t.data() + t.size(), v, 10);
+  return r.ec == std::errc() && r.ptr == t.data() + t.size();
+}
+
+// A header line of `lo` ... `hi` integers (TetGen's counts, the .regions and .names counts).
+bool integer_header(const std::string& head, size_t lo, size_t hi) {
+  const auto t = first_data_tokens(head);
+  if (t.size() < lo || t.size() > hi) return false;
+  for (const auto& x : t)
+    if (!is_integer(x)) return false;
+  return true;
+}
+
+// What a mesh command writes at a path, by the path's extension: for the refusal's message.
+std::string output_kind(const std::string& path) {
+  const std::string e = extension(path);
+  if (e == ".obj") return "mesh file (OBJ)";
+  if (e == ".stl") return "mesh file (STL)";
+  if (e == ".off") return "mesh file (OFF)";
+  if (e == ".ply") return "mesh file (PLY)";
+  if (e == ".vtu") return "mesh file (VTK .vtu)";
+  if (e == ".regions") return "region seed file (.regions)";
+  if (e == ".node" || e == ".ele" || e == ".face" || e == ".neigh" || e == ".names")
+    return "TetGen mesh file (" + e + ")";
+  return "mesh file";
+}
+
+// Whether the existing file at `path` is a mesh file of the format its name says, as palplab's
+// writers (and other mesh tools) write it: the kind a mesh command replaces without --overwrite.
+// Told by content, not by name: an SQLite database, a .psim scene, a JSON file or a PNG image
+// never is one, whatever it is called.
+bool is_mesh_output(const std::string& path) {
+  if (palplab::app::describe_existing_file(path) != "a file") return false;  // SQLite, .psim, JSON
+  const std::string h = file_head(path, 65536);
+  if (h.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0) return false;
+  const std::string e = extension(path);
+  const auto t = first_data_tokens(h);
+  if (e == ".obj") {
+    if (t.empty()) return false;
+    for (const char* k : {"v", "vt", "vn", "vp", "f", "l", "p", "g", "o", "s", "usemtl", "mtllib"})
+      if (t[0] == k) return true;
+    return false;
+  }
+  if (e == ".stl") {
+    const auto first = h.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && h.compare(first, 5, "solid") == 0 &&
+        (first + 5 == h.size() || std::isspace(static_cast<unsigned char>(h[first + 5]))))
+      return true;  // ASCII
+    // Binary: an 80-byte header, the triangle count, 50 bytes per triangle.
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec || h.size() < 84) return false;
+    std::uint32_t n = 0;
+    for (int i = 3; i >= 0; --i) n = (n << 8) | static_cast<unsigned char>(h[80 + i]);
+    return size == 84 + 50 * static_cast<std::uintmax_t>(n);
+  }
+  if (e == ".off")
+    return !t.empty() && t[0].size() >= 3 && t[0].size() <= 6 &&
+           t[0].compare(t[0].size() - 3, 3, "OFF") == 0;
+  if (e == ".ply") return h.compare(0, 4, "ply\n") == 0 || h.compare(0, 5, "ply\r\n") == 0;
+  if (e == ".vtu")
+    return h.find("<VTKFile") != std::string::npos &&
+           h.find("UnstructuredGrid") != std::string::npos;
+  if (e == ".regions" || e == ".names") return integer_header(h, 1, 1);
+  if (e == ".node" || e == ".ele" || e == ".face" || e == ".neigh") return integer_header(h, 1, 4);
+  return false;
+}
+
+// Guards each of `files` (written by the command, flag `--out`): none of `inputs`, and a file of
+// another kind only with `overwrite`. Before the command reads or computes anything costly.
+void require_replaceable_mesh_outputs(const std::vector<std::string>& files,
+                                      const std::vector<CommandInput>& inputs, bool overwrite) {
+  for (const std::string& f : files)
+    palplab::app::require_replaceable_output("--out", f, inputs, is_mesh_output, output_kind(f),
+                                             overwrite);
+}
+
+// A material table JSON (`mesh materials --out`): an object with a "materials" array and no
+// "format" but "palplab-materials".
+bool is_material_table(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const json j = json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return false;
+  const auto m = j.find("materials");
+  const auto f = j.find("format");
+  return m != j.end() && m->is_array() &&
+         (f == j.end() || (f->is_string() && f->get<std::string>() == "palplab-materials"));
+}
+
+// The files a tet mesh output `out` writes, checked (names, inputs, kinds, writability) before
+// the mesh is made: BASE.vtu -> that file; a surface format is a mistake; otherwise the TetGen
+// set BASE.node/.ele/.face/.neigh/.names (.names is written or, without regions, removed) and
+// BASE.vtu with `vtu`.
+void check_tet_output(const std::string& out, bool vtu, const std::vector<CommandInput>& inputs,
+                      bool overwrite) {
   const std::string e = extension(out);
   if (e == ".obj" || e == ".stl" || e == ".off" || e == ".ply")
     throw palplab::InputError(
         "a tet mesh is written as TetGen files (BASE, BASE.node) or .vtu, not '" + e + "'", out);
-  const std::string first = e == ".vtu" ? out : tetgen_base(out) + ".node";
-  palplab::app::require_writable_file("--out", first);
-  return first;
+  if (e == ".vtu") return require_replaceable_mesh_outputs({out}, inputs, overwrite);
+  const std::string b = tetgen_base(out);
+  std::vector<std::string> files = {b + ".node", b + ".ele", b + ".face", b + ".neigh",
+                                    b + ".names"};
+  if (vtu) files.push_back(b + ".vtu");
+  require_replaceable_mesh_outputs(files, inputs, overwrite);
 }
 
-// Where a tet mesh goes: BASE.vtu -> VTU only; otherwise TetGen files at BASE (+ VTU if asked).
+// Where a tet mesh goes (after check_tet_output): BASE.vtu -> VTU only; otherwise TetGen files at
+// BASE (+ VTU if asked).
 void write_tet_output(const std::string& out, const TetMesh& m, bool vtu,
                       const MaterialTable& mat) {
-  check_tet_output(out);
   if (extension(out) == ".vtu") {
     write_vtu(out, m, &mat);
     return;
@@ -170,6 +312,10 @@ palplab::app::CommandRegistration reg{
             "64-bit decimal integer)");
         auto* binary_opt = c->add_flag("--binary", *binary, "Binary STL/PLY");
         auto* vtu_opt = c->add_flag("--vtu", *vtu, "model-c: also write BASE.vtu");
+        auto overwrite = std::make_shared<bool>(false);
+        c->add_flag("--overwrite", *overwrite,
+                    "Replace an existing output file that is not a mesh file of the format its "
+                    "name says (or, for the shoulder, a .regions file)");
         c->callback([=] {
           const std::string& n = *name;
           using palplab::app::flag_only_with;
@@ -182,17 +328,19 @@ palplab::app::CommandRegistration reg{
                          "a surface mesh written as .stl or .ply");
           const std::uint64_t seed_value = parse_seed(*seed_text);
           const std::uint64_t* seed = &seed_value;
-          if (n == "model-c") check_tet_output(*out);
+          // Every file written is guarded before the mesh is made (generate reads no file).
+          if (n == "model-c") check_tet_output(*out, *vtu, {}, *overwrite);
           if (n == "shoulder") {
             // Nested tissue surfaces + BASE.regions for `mesh tetrahedralize` (issue 16).
-            ShoulderOptions so;
-            if (*vertices) so.layer_vertices = *vertices;
-            const Shoulder sh = generate_shoulder(so);
             const std::string e = extension(*out);
             const bool surface_ext = e == ".obj" || e == ".stl" || e == ".off" || e == ".ply";
             const std::string file = surface_ext ? *out : *out + ".obj";
             const std::filesystem::path fp(file);
             const std::string regions = (fp.parent_path() / fp.stem()).string() + ".regions";
+            require_replaceable_mesh_outputs({file, regions}, {}, *overwrite);
+            ShoulderOptions so;
+            if (*vertices) so.layer_vertices = *vertices;
+            const Shoulder sh = generate_shoulder(so);
             write_surface(file, sh.surface, {*binary});
             write_region_seeds(regions, sh.seeds);
             std::cout << "shoulder: " << sh.parts.size() << " closed surfaces (";
@@ -214,6 +362,7 @@ palplab::app::CommandRegistration reg{
             *code = 0;
             return;
           }
+          require_replaceable_mesh_outputs({*out}, {}, *overwrite);
           SurfaceMesh m;
           if (n == "model-a")
             m = generate_tract({*vertices ? *vertices : 1500, *seed});
@@ -329,7 +478,13 @@ palplab::app::CommandRegistration reg{
                       "Fill boundary loops up to this many edges (0 = none)")
             ->check(palplab::app::count_range(0, std::numeric_limits<int>::max()));
         c->add_flag("--json", *js, "Print the changes as JSON");
+        auto overwrite = std::make_shared<bool>(false);
+        c->add_flag("--overwrite", *overwrite,
+                    "Replace an existing --out that is not a mesh file of the format its name "
+                    "says (--out is never IN: there is no in-place repair)");
         c->callback([=] {
+          // No in-place repair (--out IN, also through a link): refused, --overwrite or not.
+          require_replaceable_mesh_outputs({*out}, {{"the input mesh", *in}}, *overwrite);
           const SurfaceMesh m = read_surface(*in);
           RepairLog log;
           RepairOptions o = *opt;
@@ -385,6 +540,10 @@ palplab::app::CommandRegistration reg{
                       "Material table JSON defining every tissue attribute of the mesh; its "
                       "values go into the VTU cell data (default: built-in)");
         c->add_flag("--vtu", *vtu, "Also write BASE.vtu");
+        auto overwrite = std::make_shared<bool>(false);
+        c->add_flag("--overwrite", *overwrite,
+                    "Replace existing output files that are not mesh files of the format their "
+                    "names say (an output is never one of the inputs)");
         c->add_option("--timeout", opt->timeout_seconds,
                       "Stop TetGen after this many seconds (it runs in a child process); 0 = none")
             ->capture_default_str()
@@ -411,7 +570,13 @@ palplab::app::CommandRegistration reg{
                                              (attribute_opt->count() ? "" : " (the default)");
           if (o.seeds.empty() || attribute_opt->count())
             require_tissue(materials, o.default_attribute, attribute_what);
-          check_tet_output(*out);  // before TetGen runs (minutes on a fine mesh)
+          // Before TetGen runs (minutes on a fine mesh): no output file is an input or, without
+          // --overwrite, a file of another kind.
+          check_tet_output(*out, *vtu,
+                           {{"the input surface", *in},
+                            {"the region seed file", rf},
+                            {"the material table", *mat}},
+                           *overwrite);
           const TetMesh m = tetrahedralize(s, o);
           for (long t = 0; t < m.T.rows(); ++t)
             require_tissue(
@@ -433,15 +598,24 @@ palplab::app::CommandRegistration reg{
                                        "Print (or write) the default tissue material table (JSON)");
         auto out = std::make_shared<std::string>();
         auto check = std::make_shared<std::string>();
-        c->add_option("--out", *out, "Write the table to this file instead of stdout");
-        c->add_option("--check", *check, "Validate a material table file");
+        auto* out_opt =
+            c->add_option("--out", *out, "Write the table to this file instead of stdout");
+        c->add_option("--check", *check, "Validate a material table file")->excludes(out_opt);
+        auto overwrite = std::make_shared<bool>(false);
+        auto* overwrite_opt = c->add_flag("--overwrite", *overwrite,
+                                          "Replace an existing --out that is not a material table");
         c->callback([=] {
+          palplab::app::flag_only_with(overwrite_opt, !out->empty() && check->empty(),
+                                       "--out (and without --check)");
           if (!check->empty()) {
             const MaterialTable t = read_materials(*check);
             std::cout << *check << ": " << t.materials.size() << " materials, valid\n";
           } else if (out->empty()) {
             std::cout << default_materials_json();
           } else {
+            palplab::app::require_replaceable_output(
+                "--out", *out, {}, is_material_table,
+                "material table JSON (\"format\": \"palplab-materials\")", *overwrite);
             std::ofstream f(*out);
             if (!f) throw palplab::InputError("cannot write file", *out);
             f << default_materials_json();

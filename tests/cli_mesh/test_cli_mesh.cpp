@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include "tests/cli_support.hpp"
+#include "tests/sqlite_support.hpp"
 
 #include <cstdlib>
 #include <filesystem>
@@ -185,6 +186,11 @@ TEST(CliMesh, MaterialsTable) {
   r = run("mesh materials --check " + p("badm.json"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("$.materials[0]"), std::string::npos) << r.err;
+  // --check writes nothing: an --out beside it was silently ignored.
+  r = run("mesh materials --check " + p("m.json") + " --out " + p("m2.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--out excludes --check"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(p("m2.json")));
 }
 
 // Flags that the mesh ignores (--vtu of a surface, --seed of the sphere, --binary of .obj) were
@@ -476,4 +482,158 @@ TEST(CliMesh, MaterialTableIsCheckedStrictly) {
                                       entry + "}]}"))
                 .code,
             0);
+}
+
+// Review: generate, repair and tetrahedralize wrote their --out files without the guard the other
+// commands have (app::require_replaceable_output): `mesh repair X --out X` truncated the input,
+// `tetrahedralize X.vtu --out X.vtu` replaced it, and a database, a study JSON or an image at an
+// output path (BASE.node, the shoulder's BASE.regions, a stale BASE.names TetGen removes) was
+// lost. Now an output is never an input (exit 2, --overwrite or not; there is no in-place
+// repair) and a file of another kind is replaced only with --overwrite; nothing is written
+// before a refusal.
+namespace {
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// Victims: a results database, a study JSON, a PNG image (its 8-byte signature and a little).
+std::string make_database(const std::string& name) {
+  const std::string db = p(name);
+  fs::remove(db);
+  palplab::testing::sql_exec(db, "CREATE TABLE kept(x); INSERT INTO kept VALUES (42);");
+  return db;
+}
+std::string make_study(const std::string& name) {
+  const std::string f = p(name);
+  write_bytes(f, palplab::testing::tiny_study_json("victim", 7));
+  return f;
+}
+std::string make_png(const std::string& name) {
+  const std::string f = p(name);
+  write_bytes(f, std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16) + std::string(40, '\x07'));
+  return f;
+}
+
+// Exit 2 naming --out and the file, stderr holding every one of `parts`, `victim` unchanged.
+void expect_refused(const std::string& args, const std::string& victim,
+                    std::initializer_list<std::string> parts) {
+  SCOPED_TRACE(args);
+  const std::string before = slurp(victim);
+  ASSERT_FALSE(before.empty()) << victim;
+  const Result r = run(args);
+  palplab::testing::expect_exit2(r, {"--out: \"" + victim + "\""});
+  palplab::testing::expect_exit2(r, parts);
+  EXPECT_EQ(slurp(victim), before) << victim << " was changed";
+}
+
+}  // namespace
+
+TEST(CliMeshOutput, RepairNeverReplacesItsInputOrAForeignFile) {
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("rp.obj")).code, 0);
+  const std::string in = p("rp.obj");
+  // In place, under three spellings (the path, another spelling, a symlink): refused.
+  fs::create_symlink(in, p("rp_link.obj"));
+  const std::string dotted = (fs::path(in).parent_path() / "." / "rp.obj").string();
+  for (const std::string& out : {in, dotted, p("rp_link.obj")})
+    for (const char* overwrite : {"", " --overwrite"})
+      expect_refused("mesh repair " + in + " --out " + out + overwrite, out,
+                     {"is the input mesh this command reads", "choose another --out"});
+  // Files of another kind at the output path: refused without --overwrite.
+  const std::string db = make_database("rp_db.obj");
+  expect_refused("mesh repair " + in + " --out " + db, db,
+                 {"exists and is an SQLite database", "not a mesh file (OBJ)", "--overwrite"});
+  EXPECT_EQ(palplab::testing::sql_int(db, "SELECT x FROM kept"), 42);
+  const std::string study = make_study("rp_study.stl");
+  expect_refused("mesh repair " + in + " --out " + study + " --json", study,
+                 {"exists and is a JSON file", "not a mesh file (STL)", "--overwrite"});
+  const std::string png = make_png("rp_png.ply");
+  expect_refused("mesh repair " + in + " --out " + png, png,
+                 {"not a mesh file (PLY)", "give --overwrite to replace it"});
+  // The command's own earlier output (and a mesh file of that format) is replaced silently.
+  ASSERT_EQ(run("mesh repair " + in + " --out " + p("rp_fixed.stl")).code, 0);
+  ASSERT_EQ(run("mesh repair " + in + " --out " + p("rp_fixed.stl") + " --max-hole-edges 0").code,
+            0);
+  EXPECT_EQ(run("mesh check " + p("rp_fixed.stl")).code, 0);
+  // --overwrite replaces a foreign file with the repaired mesh.
+  const Result r = run("mesh repair " + in + " --out " + study + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(run("mesh check " + study).code, 0);
+}
+
+TEST(CliMeshOutput, TetrahedralizeNeverReplacesAnInputOrAForeignFile) {
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("tq.vtu")).code, 0);
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("tq.obj")).code, 0);
+  // The input surface as the VTU output (BASE.vtu or --vtu's BASE.vtu): refused.
+  for (const std::string& args :
+       {"mesh tetrahedralize " + p("tq.vtu") + " --out " + p("tq.vtu"),
+        "mesh tetrahedralize " + p("tq.vtu") + " --out " + p("tq") + " --vtu --overwrite"})
+    expect_refused(args, p("tq.vtu"), {"is the input surface this command reads"});
+  // A region seed file where BASE.names would go.
+  write_bytes(p("tqr.names"), "1\n1 0 0 0 101 0\n");
+  expect_refused(
+      "mesh tetrahedralize " + p("tq.obj") + " --regions " + p("tqr.names") + " --out " + p("tqr"),
+      p("tqr.names"), {"is the region seed file this command reads"});
+  // A database at BASE.node, a study at BASE.ele, an image at BASE.names (a stale .names is
+  // removed when the mesh has no regions): refused, and no file of the set is written.
+  const std::string db = make_database("tqf.node");
+  expect_refused(
+      "mesh tetrahedralize " + p("tq.obj") + " --out " + p("tqf"), db,
+      {"exists and is an SQLite database", "not a TetGen mesh file (.node)", "--overwrite"});
+  EXPECT_EQ(palplab::testing::sql_int(db, "SELECT x FROM kept"), 42);
+  const std::string study = make_study("tqs.ele");
+  expect_refused("mesh tetrahedralize " + p("tq.obj") + " --out " + p("tqs.node"), study,
+                 {"exists and is a JSON file", "not a TetGen mesh file (.ele)"});
+  EXPECT_FALSE(fs::exists(p("tqs.node")));
+  const std::string png = make_png("tqp.names");
+  expect_refused("mesh tetrahedralize " + p("tq.obj") + " --out " + p("tqp"), png,
+                 {"not a TetGen mesh file (.names)"});
+  EXPECT_FALSE(fs::exists(p("tqp.node")));
+  // The command's own earlier output set is replaced without --overwrite.
+  ASSERT_EQ(run("mesh tetrahedralize " + p("tq.obj") + " --out " + p("tqo") + " --vtu").code, 0);
+  const Result again =
+      run("mesh tetrahedralize " + p("tq.obj") + " --out " + p("tqo") + " --vtu --quality 1.5");
+  ASSERT_EQ(again.code, 0) << again.err;
+  // --overwrite replaces the foreign files.
+  const Result r =
+      run("mesh tetrahedralize " + p("tq.obj") + " --out " + p("tqf") + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(run("mesh check " + p("tqf.node")).code, 0);
+}
+
+TEST(CliMeshOutput, GenerateAndMaterialsNeverReplaceAForeignFile) {
+  // A surface, a model-c TetGen set, the shoulder's .regions: each refused without --overwrite.
+  const std::string study = make_study("gs.obj");
+  expect_refused("mesh generate sphere --vertices 162 --out " + study, study,
+                 {"exists and is a JSON file", "not a mesh file (OBJ)", "--overwrite"});
+  const std::string db = make_database("gmc.ele");
+  expect_refused("mesh generate model-c --vertices 750 --out " + p("gmc"), db,
+                 {"exists and is an SQLite database", "not a TetGen mesh file (.ele)"});
+  EXPECT_FALSE(fs::exists(p("gmc.node")));
+  const std::string png = make_png("gsh.regions");
+  expect_refused("mesh generate shoulder --vertices 162 --out " + p("gsh"), png,
+                 {"not a region seed file (.regions)"});
+  EXPECT_FALSE(fs::exists(p("gsh.obj")));
+  const std::string table_victim = make_study("gm.json");
+  expect_refused("mesh materials --out " + table_victim, table_victim,
+                 {"exists and is a JSON file", "not a material table JSON", "--overwrite"});
+  // Own earlier outputs: replaced silently.
+  ASSERT_EQ(run("mesh generate sphere --vertices 162 --out " + p("gown.obj")).code, 0);
+  EXPECT_EQ(run("mesh generate model-a --out " + p("gown.obj")).code, 0);
+  ASSERT_EQ(run("mesh generate shoulder --vertices 162 --out " + p("gown_sh")).code, 0);
+  EXPECT_EQ(run("mesh generate shoulder --vertices 162 --out " + p("gown_sh")).code, 0);
+  ASSERT_EQ(run("mesh materials --out " + p("gown.json")).code, 0);
+  EXPECT_EQ(run("mesh materials --out " + p("gown.json")).code, 0);
+  // --overwrite replaces foreign files.
+  Result r = run("mesh generate sphere --vertices 162 --out " + study + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(run("mesh check " + study).code, 0);
+  r = run("mesh generate shoulder --vertices 162 --out " + p("gsh") + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(p("gsh.regions")), slurp(p("gown_sh.regions")));
+  r = run("mesh materials --out " + table_victim + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(run("mesh materials --check " + table_victim).code, 0);
+  // --overwrite without a file to write would be ignored: an input error.
+  palplab::testing::expect_exit2(run("mesh materials --overwrite"), {"--overwrite: applies only"});
 }
