@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "app/command.hpp"
+#include "app/output_dir.hpp"
 #include "common/input_error.hpp"
 #include "protocols/power.hpp"
 
@@ -69,6 +70,15 @@ palplab::app::CommandRegistration reg{
               ". Merge the directories or files of every shard (a shard that stopped early: "
               "rerun its `palplab power` command, it resumes), or give --allow-partial for a "
               "preliminary summary marked partial");
+        // No replicate file given is overwritten by a summary (`merge D/power.md --out D`), and
+        // a power.md or power.svg in --out that is not palplab's is left alone
+        // (app/output_dir.hpp). The replicate files in --out are only read: `merge A B --out A`
+        // writes A's summary beside them, and a later merge of A reads A's replicates once.
+        std::vector<palplab::app::CommandInput> inputs;
+        for (const auto& f : files) inputs.push_back({"a replicate file", f});
+        palplab::app::require_replaceable_dir_outputs("--out", a->out, "power.json/md/svg",
+                                                      palplab::app::power_summary_outputs(), inputs,
+                                                      "", false);
         palplab::app::require_writable_dir("--out", a->out);
         // As `palplab power` does: never overwrite (or mix in) another study's results.
         palplab::protocols::check_out_dir_study(a->out,

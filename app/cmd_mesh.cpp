@@ -39,15 +39,6 @@ using json = nlohmann::ordered_json;
 
 using palplab::app::CommandInput;
 
-// The first `n` bytes of the file at `path` (fewer when it is shorter).
-std::string file_head(const std::string& path, size_t n) {
-  std::ifstream in(path, std::ios::binary);
-  std::string h(n, '\0');
-  in.read(h.data(), static_cast<std::streamsize>(n));
-  h.resize(static_cast<size_t>(in.gcount()));
-  return h;
-}
-
 // The tokens of the first line of `text` that holds anything besides blanks and a '#' comment.
 std::vector<std::string> first_data_tokens(const std::string& text) {
   size_t at = 0;
@@ -106,7 +97,7 @@ std::string output_kind(const std::string& path) {
 // never is one, whatever it is called.
 bool is_mesh_output(const std::string& path) {
   if (palplab::app::describe_existing_file(path) != "a file") return false;  // SQLite, .psim, JSON
-  const std::string h = file_head(path, 65536);
+  const std::string h = palplab::app::file_head(path, 65536);
   if (h.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0) return false;
   const std::string e = extension(path);
   const auto t = first_data_tokens(h);

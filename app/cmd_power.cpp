@@ -13,14 +13,18 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "app/command.hpp"
+#include "app/output_dir.hpp"
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
 #include "protocols/power.hpp"
 #include "protocols/study.hpp"
+#include "results/sha256.hpp"
 
 namespace {
 
@@ -89,6 +93,48 @@ struct PowerArgs {
   bool quiet = false;
 };
 
+// Whether `path` is (or may be) a replicate file `palplab power` appended to: its first record a
+// JSON object with a "study_sha256", or, when its only line was cut by an interruption, the
+// start of one (records are written with sorted keys: `{"n":...`). The run cuts an incomplete
+// last line and appends (protocols/power.cpp repair_tail): a file of anything else under that
+// name would lose its last line.
+bool is_replicate_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (in.eof()) {  // the first record, without its newline
+      const std::string head = "{\"n\":";
+      return line.compare(0, head.size(), head) == 0 || head.compare(0, line.size(), line) == 0;
+    }
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const nlohmann::json r = nlohmann::json::parse(line, nullptr, false);
+    return r.is_object() && r.contains("study_sha256") && r.at("study_sha256").is_string();
+  }
+  return true;  // blank
+}
+
+// Before any replicate is run or any file of --out touched: the study file is not one of the
+// files written there, a file of the replicate file's name or of a summary's name is palplab's
+// (app/output_dir.hpp; there is no --overwrite: remove it), and the directory holds no other
+// study's summary or replicates (the run checked that only after cutting the replicate file's
+// incomplete last line: another study's file lost it).
+void check_power_out(const PowerArgs& a, const palplab::protocols::Study& s) {
+  using namespace palplab::app;
+  std::vector<DirOutput> outputs;
+  const std::string file = a.opt.shards <= 1
+                               ? "replicates.jsonl"
+                               : "replicates.shard-" + std::to_string(a.opt.shard + 1) + "-of-" +
+                                     std::to_string(a.opt.shards) + ".jsonl";
+  outputs.push_back(
+      {file, "palplab replicate file (" + file + ")", is_replicate_file, "append to"});
+  if (a.opt.shards <= 1)  // a shard writes no summary
+    for (auto& o : power_summary_outputs()) outputs.push_back(std::move(o));
+  require_replaceable_dir_outputs("--out", a.out, "replicates.jsonl and power.json/md/svg", outputs,
+                                  {{"the study file", a.study}}, "", false);
+  palplab::protocols::check_out_dir_study(a.out, palplab::results::sha256_hex(s.json_text));
+}
+
 palplab::app::CommandRegistration reg{
     "power", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
@@ -136,6 +182,7 @@ palplab::app::CommandRegistration reg{
               "the study declares no test to compute the power of: expected at least one "
               "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
         // A one-group study with such a test is refused by the study validator (load_study).
+        check_power_out(*a, s);
         palplab::app::require_writable_dir("--out", a->out);
         const bool tty = isatty(2);
         if (!a->quiet)

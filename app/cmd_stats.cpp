@@ -15,6 +15,7 @@
 #include "analysis/report.hpp"
 #include "analysis/summary.hpp"
 #include "app/command.hpp"
+#include "app/output_dir.hpp"
 #include "app/stills.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
@@ -122,16 +123,45 @@ palplab::app::CommandRegistration reg{
     }};
 }  // namespace
 
-// `palplab report DB --out DIR [--no-stills] [--still-size WxH]`: report.md, self-contained
-// report.html, figures/*.svg and stills/*.png from a results database (analysis/report.hpp).
+// `palplab report DB --out DIR [--no-stills] [--still-size WxH] [--overwrite]`: report.md,
+// self-contained report.html, figures/*.svg and stills/*.png from a results database
+// (analysis/report.hpp).
 // Registered here because it is the statistics' front end; bad input (missing or foreign
 // database, bad size) → exit 2. Stills need EGL: without it the report is written all the same
 // and says in one line why it has none.
 namespace {
 struct ReportArgs {
   std::string db, out, still_size = "480x360";
-  bool no_stills = false;
+  bool no_stills = false, overwrite = false;
 };
+
+// A report.md / report.html written by `palplab report` (the same opening and provenance
+// heading since its first version), replaced without --overwrite.
+bool is_report_md(const std::string& path) {
+  return palplab::app::output_head_has(path, "# ", "\n## Study and provenance\n");
+}
+bool is_report_html(const std::string& path) {
+  return palplab::app::output_head_has(path, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n",
+                                       "<h2>Study and provenance</h2>");
+}
+
+// Before the report is written into --out: the database is not where the report writes
+// (DIR/report.md, DIR/figures/x.svg: it was truncated and replaced by the report), and a
+// report.md or report.html that is not a palplab report (the user's own) is replaced only with
+// --overwrite (app/output_dir.hpp).
+void check_report_out(const ReportArgs& a) {
+  using namespace palplab::app;
+  const std::vector<CommandInput> inputs{{"the results database", a.db}};
+  const std::string contents = "report.md, report.html, figures/ and stills/";
+  require_replaceable_dir_outputs("--out", a.out, contents,
+                                  {{"report.md", "palplab report (report.md)", is_report_md},
+                                   {"report.html", "palplab report (report.html)", is_report_html}},
+                                  inputs, "--overwrite", a.overwrite);
+  require_no_input_under("--out", a.out, "figures", {".svg"}, {}, inputs, "its SVG figures");
+  if (!a.no_stills)
+    require_no_input_under("--out", a.out, "stills", {".png"}, {"stills.json"}, inputs,
+                           "the stills");
+}
 
 palplab::app::CommandRegistration reg_report{
     "report", [](CLI::App& root, int* code) {
@@ -148,6 +178,9 @@ palplab::app::CommandRegistration reg_report{
       auto* size_opt =
           cmd->add_option("--still-size", a->still_size,
                           "Size of each still, WIDTHxHEIGHT in pixels (default 480x360)");
+      cmd->add_flag("--overwrite", a->overwrite,
+                    "Replace a report.md or report.html in --out that is not a palplab report "
+                    "(the database itself is never replaced)");
       cmd->callback([a, size_opt, code] {
         palplab::analysis::ReportOptions opt;
         const auto [w, h] = palplab::app::parse_image_size("--still-size", a->still_size);
@@ -156,6 +189,7 @@ palplab::app::CommandRegistration reg_report{
         // is created (it made an empty directory and then exit 2). An INCOMPLETE run still
         // reports, on the sessions stored, but says so (issue 10).
         const std::string warning = palplab::results::Store::open(a->db).incomplete_warning();
+        check_report_out(*a);
         palplab::app::require_writable_dir("--out", a->out);
         opt.still_width = w;
         opt.still_height = h;

@@ -110,12 +110,42 @@ inline std::string describe_existing_file(const std::string& path) {
   return "a file";
 }
 
+// Up to `limit` bytes from the start of the file at `path` ("" if it cannot be read).
+inline std::string file_head(const std::string& path, std::size_t limit) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(limit, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(limit));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return head;
+}
+
 // Whether the file at `path` starts with `prefix` (a format's magic bytes).
 inline bool file_starts_with(const std::string& path, const std::string& prefix) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(prefix.size(), '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  return in.gcount() == static_cast<std::streamsize>(prefix.size()) && head == prefix;
+  return file_head(path, prefix.size()) == prefix;
+}
+
+// `flag: "DIR/report.md" is the results database this command reads ("r.db"); writing report.md
+// there would destroy it: choose another flag` (`what`: "writing report.md there").
+[[noreturn]] inline void refuse_input_output(const std::string& flag, const std::string& shown,
+                                             const CommandInput& in, const std::string& what) {
+  throw InputError(SourceLocation{flag}, "\"" + shown + "\" is " + in.what + " this command reads" +
+                                             (in.path == shown ? "" : " (\"" + in.path + "\")") +
+                                             "; " + what + " would destroy it: choose another " +
+                                             flag);
+}
+
+// The input among `inputs` that is the same file as `path`, or nullptr.
+inline const CommandInput* same_input(const std::string& path,
+                                      const std::vector<CommandInput>& inputs) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return nullptr;
+  for (const auto& in : inputs) {
+    std::error_code e2;
+    if (!in.path.empty() && fs::exists(in.path, e2) && fs::equivalent(path, in.path, e2))
+      return &in;
+  }
+  return nullptr;
 }
 
 // The output file of `flag` (scene build --out, fem reference --out), checked before the command
@@ -136,14 +166,8 @@ inline void require_replaceable_output(const std::string& flag, const std::strin
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::exists(path, ec)) {
-    for (const auto& in : inputs) {
-      std::error_code e2;
-      if (!in.path.empty() && fs::exists(in.path, e2) && fs::equivalent(path, in.path, e2))
-        throw InputError(SourceLocation{flag},
-                         "\"" + path + "\" is " + in.what + " this command reads" +
-                             (in.path == path ? "" : " (\"" + in.path + "\")") +
-                             "; writing the output there would destroy it: choose another " + flag);
-    }
+    if (const CommandInput* in = same_input(path, inputs))
+      refuse_input_output(flag, path, *in, "writing the output there");
     if (!overwrite && fs::is_regular_file(path, ec) && fs::file_size(path, ec) > 0 && !ec &&
         !is_own_output(path))
       throw InputError(SourceLocation{flag},

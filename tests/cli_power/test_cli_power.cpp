@@ -567,3 +567,98 @@ TEST(Power, MergeOfShardsOfDifferentKIsRefused) {
   EXPECT_EQ(r.err, "");
   fs::remove_all(d);
 }
+
+// `power --out` and `merge --out` checked only for another study's summary and replicates: a
+// study file or a replicate file given to merge saved under a summary's name (DIR/power.md), or
+// the user's own power.md / power.svg in --out, was overwritten; a replicates.jsonl that is not
+// palplab's lost its last line (the resume's cut of an interrupted line), and another study's
+// replicate file lost its incomplete last line before the run refused the directory. Each is
+// exit 2 naming --out and the file, left byte for byte (no --overwrite: remove it). Merging into
+// an input directory stays allowed: its replicate file is only read, and a later merge of it
+// counts each replicate once.
+TEST(Power, OutputDirectoryLosesNoFile) {
+  auto d = scratch_dir("out_safe");
+  auto power_into = [&](const fs::path& study, const fs::path& out) {
+    return run_palplab(
+        "power " + study.string() + " --n 2 --replicates 1 --quiet --out " + out.string(), d);
+  };
+  // The study file saved as DIR/power.md (prototype_dirs made absolute for the copy).
+  std::string study = slurp(null_study());
+  const std::string dirs = "\"prototype_dirs\": [\"../../../prototypes\"]";
+  const auto p = study.find(dirs);
+  ASSERT_NE(p, std::string::npos);
+  study.replace(p, dirs.size(),
+                "\"prototype_dirs\": [\"" + std::string(PALPLAB_SOURCE_DIR) + "/prototypes\"]");
+  fs::create_directories(d / "s");
+  std::ofstream(d / "s" / "power.md") << study;
+  expect_exit2(power_into(d / "s" / "power.md", d / "s"),
+               {"--out: \"" + (d / "s" / "power.md").string() +
+                "\" is the study file this command reads; writing power.md there would destroy "
+                "it: choose another --out"});
+  EXPECT_EQ(slurp(d / "s" / "power.md"), study);
+  EXPECT_FALSE(fs::exists(d / "s" / "replicates.jsonl"));
+  // The user's own power.md and power.svg, for power and for merge.
+  fs::create_directories(d / "mine");
+  const std::string notes = "# Notes on power\n";
+  std::ofstream(d / "mine" / "power.md") << notes;
+  expect_exit2(power_into(null_study(), d / "mine"),
+               {"--out: \"" + (d / "mine" / "power.md").string() +
+                "\" exists and is a file, not a palplab power table (power.md); refusing to "
+                "replace it: choose another --out, or remove it"});
+  EXPECT_EQ(slurp(d / "mine" / "power.md"), notes);
+  EXPECT_FALSE(fs::exists(d / "mine" / "replicates.jsonl"));
+  std::ofstream(d / "r.jsonl") << record(2, 0, 0.01, 0.3).dump() << "\n";
+  expect_exit2(merge({d / "r.jsonl"}, d / "mine", d),
+               {"--out: \"" + (d / "mine" / "power.md").string() + "\"", "or remove it"});
+  EXPECT_EQ(slurp(d / "mine" / "power.md"), notes);
+  fs::remove(d / "mine" / "power.md");
+  const std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\"><circle r=\"3\"/></svg>\n";
+  std::ofstream(d / "mine" / "power.svg") << svg;
+  expect_exit2(merge({d / "r.jsonl"}, d / "mine", d),
+               {"--out: \"" + (d / "mine" / "power.svg").string() +
+                "\" exists and is a file, not a palplab power plot (power.svg)"});
+  EXPECT_EQ(slurp(d / "mine" / "power.svg"), svg);
+  EXPECT_FALSE(fs::exists(d / "mine" / "power.json"));
+  // A replicate file given to merge, saved as DIR/power.md.
+  fs::create_directories(d / "m");
+  fs::copy_file(d / "r.jsonl", d / "m" / "power.md");
+  const std::string records = slurp(d / "r.jsonl");
+  expect_exit2(merge({d / "m" / "power.md"}, d / "m", d),
+               {"--out: \"" + (d / "m" / "power.md").string() +
+                "\" is a replicate file this command reads; writing power.md there"});
+  EXPECT_EQ(slurp(d / "m" / "power.md"), records);
+  // A replicates.jsonl that is not palplab's (its last line without a newline).
+  fs::create_directories(d / "f");
+  const std::string foreign = "line one\nmy data, no newline";
+  std::ofstream(d / "f" / "replicates.jsonl") << foreign;
+  expect_exit2(power_into(null_study(), d / "f"),
+               {"--out: \"" + (d / "f" / "replicates.jsonl").string() +
+                "\" exists and is a file, not a palplab replicate file (replicates.jsonl); "
+                "refusing to append to it"});
+  EXPECT_EQ(slurp(d / "f" / "replicates.jsonl"), foreign);
+  // Another study's replicate file whose last line was being written: left as it is.
+  fs::create_directories(d / "o");
+  const std::string other = record(2, 0, 0.2, 0.1, "0fff").dump() + "\n{\"n\":2,\"repl";
+  std::ofstream(d / "o" / "replicates.jsonl") << other;
+  expect_exit2(power_into(null_study(), d / "o"),
+               {(d / "o" / "replicates.jsonl").string() +
+                    ": the output directory holds replicates of another study",
+                "use another --out"});
+  EXPECT_EQ(slurp(d / "o" / "replicates.jsonl"), other);
+  // `merge A B --out A`: A's replicate file is kept as it is and counted once by a later merge;
+  // its shard still resumes there.
+  ASSERT_NO_FATAL_FAILURE(run_shards_apart(power_cmd("2", 2), 2, d));
+  const fs::path shard1 = d / "s1" / "replicates.shard-1-of-2.jsonl";
+  const std::string shard1_bytes = slurp(shard1);
+  auto r = merge({d / "s1", d / "s2"}, d / "s1", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(shard1), shard1_bytes);
+  r = merge({d / "s1", d / "s2"}, d / "again", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(power_json(d / "again")["replicates"]["2"], 2);
+  EXPECT_EQ(power_json(d / "again"), power_json(d / "s1"));
+  r = run_shard(power_cmd("2", 2), "1/2", d / "s1", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "0 replicates run")) << r.out;
+  fs::remove_all(d);
+}

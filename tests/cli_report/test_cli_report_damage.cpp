@@ -1,11 +1,14 @@
 // `palplab report` and `palplab export` on a damaged or hand-edited database, and into an output
-// directory with a file where a directory goes (or the reverse): exit 2 with a message naming
-// the file and what is wrong, never "internal error" (exit 3); nothing of the user's is deleted.
+// directory with a file where a directory goes (or the reverse), or holding the database or the
+// user's own files under the output's names: exit 2 with a message naming the file and what is
+// wrong, never "internal error" (exit 3); nothing of the user's is deleted or replaced.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "../cli_support.hpp"
 #include "../sqlite_support.hpp"
@@ -207,4 +210,150 @@ TEST(CliReportDamage, MissingDatabaseCreatesNoOutput) {
   expect_exit2(r, {(d / "notes.db").string(), "not a palplab results database"});
   EXPECT_FALSE(fs::exists(d / "csv"));
   EXPECT_EQ(slurp(d / "notes.db"), "my notes\n");
+}
+
+// `report DB --out DIR` truncated a database saved in DIR under a name the report writes
+// (report.md, report.html, figures/x.svg; also through a link or another spelling of DIR) and
+// replaced the user's own report.md. Each is exit 2 naming --out and the file, which is left
+// byte for byte; a report.md that is not a palplab report is replaced only with --overwrite,
+// the database never.
+TEST(CliReportDamage, ReportLosesNoFileInItsDirectory) {
+  auto d = scratch_dir("dmg_report_out");
+  const fs::path db = copy_db(d);
+  const std::string db_bytes = slurp(db);
+  auto report = [&](const fs::path& in, const fs::path& out, const std::string& extra = "") {
+    return run_palplab("report " + in.string() + " --out " + out.string() + " --no-stills" + extra,
+                       d);
+  };
+  // The database as DIR/report.md: refused, --overwrite or not.
+  fs::create_directories(d / "a");
+  fs::copy_file(db, d / "a" / "report.md");
+  for (const std::string extra : {"", " --overwrite"}) {
+    expect_exit2(report(d / "a" / "report.md", d / "a", extra),
+                 {"--out: \"" + (d / "a" / "report.md").string() +
+                      "\" is the results database this command reads",
+                  "writing report.md there would destroy it: choose another --out"});
+    EXPECT_EQ(slurp(d / "a" / "report.md"), db_bytes) << extra;
+    EXPECT_FALSE(fs::exists(d / "a" / "report.html")) << extra;
+  }
+  // As report.html, with --out spelled DIR/../DIR.
+  fs::create_directories(d / "b");
+  fs::copy_file(db, d / "b" / "report.html");
+  const fs::path b_again = d / "b" / ".." / "b";
+  expect_exit2(report(d / "b" / "report.html", b_again),
+               {"--out: \"" + (b_again / "report.html").string() +
+                "\" is the results database this command reads (\"" +
+                (d / "b" / "report.html").string() + "\")"});
+  EXPECT_EQ(slurp(d / "b" / "report.html"), db_bytes);
+  // DIR/report.md a link to the database.
+  fs::create_directories(d / "c");
+  fs::create_symlink(db, d / "c" / "report.md");
+  expect_exit2(report(db, d / "c"),
+               {"--out: \"" + (d / "c" / "report.md").string() +
+                "\" is the results database this command reads (\"" + db.string() + "\")"});
+  EXPECT_EQ(slurp(db), db_bytes);
+  // Among the figures (their names are known only as the report runs: every *.svg counts).
+  fs::create_directories(d / "f" / "figures");
+  fs::copy_file(db, d / "f" / "figures" / "x.svg");
+  expect_exit2(report(d / "f" / "figures" / "x.svg", d / "f"),
+               {"--out: \"" + (d / "f" / "figures" / "x.svg").string() +
+                    "\" is the results database this command reads",
+                "writing its SVG figures there"});
+  EXPECT_EQ(slurp(d / "f" / "figures" / "x.svg"), db_bytes);
+  // --out naming the database itself.
+  expect_exit2(report(db, db), {"--out: \"" + db.string() +
+                                "\" exists and is not a directory (it is the results "
+                                "database this command reads)"});
+  EXPECT_EQ(slurp(db), db_bytes);
+  // The user's own report.md: refused unless --overwrite; palplab's own is replaced as before.
+  fs::create_directories(d / "mine");
+  const std::string mine = "# My report\n\nWritten by hand.\n";
+  std::ofstream(d / "mine" / "report.md") << mine;
+  expect_exit2(report(db, d / "mine"),
+               {"--out: \"" + (d / "mine" / "report.md").string() +
+                "\" exists and is a file, not a palplab report (report.md); refusing to "
+                "replace it: choose another --out, or give --overwrite to replace it"});
+  EXPECT_EQ(slurp(d / "mine" / "report.md"), mine);
+  EXPECT_FALSE(fs::exists(d / "mine" / "report.html"));
+  EXPECT_FALSE(fs::exists(d / "mine" / "figures"));
+  Result r = report(db, d / "mine", " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(slurp(d / "mine" / "report.md"), "## Study and provenance")) << r.err;
+  r = report(db, d / "mine");
+  EXPECT_EQ(r.code, 0) << r.err;
+  std::ofstream(d / "mine" / "report.html", std::ios::trunc) << "<html>mine</html>\n";
+  expect_exit2(report(db, d / "mine"),
+               {"--out: \"" + (d / "mine" / "report.html").string() +
+                "\" exists and is a file, not a palplab report (report.html)"});
+  EXPECT_EQ(slurp(d / "mine" / "report.html"), "<html>mine</html>\n");
+}
+
+// `export DB --csv DIR` replaced a database saved as DIR/measures.csv, removed one saved as
+// DIR/samples.csv (taken for an earlier export's), truncated one saved as DIR/NAME.partial, and
+// replaced or removed the user's own CSV files of those names. Each is exit 2 naming --csv and
+// the file, which is left byte for byte; a file that is not palplab's export (its header) is
+// replaced or removed only with --overwrite, the database never.
+TEST(CliReportDamage, ExportLosesNoFileInItsDirectory) {
+  auto d = scratch_dir("dmg_export_out");
+  const fs::path db = copy_db(d);
+  const std::string db_bytes = slurp(db);
+  auto export_to = [&](const fs::path& in, const fs::path& dir, const std::string& extra = "") {
+    return run_palplab("export " + in.string() + " --csv " + dir.string() + extra, d);
+  };
+  const std::vector<std::tuple<std::string, std::string, std::string>> as_db = {
+      {"measures.csv", "", "writing measures.csv there"},
+      {"measures.csv", " --overwrite", "writing measures.csv there"},
+      {"samples.csv", "", "removing samples.csv there"},
+      {"samples.csv", " --samples --overwrite", "writing samples.csv there"},
+      {"events.csv.partial", "", "writing events.csv.partial there"}};
+  for (const auto& [name, extra, what] : as_db) {
+    SCOPED_TRACE(name + extra);
+    const fs::path dir = d / ("db_as_" + name);
+    fs::create_directories(dir);
+    fs::copy_file(db, dir / name, fs::copy_options::overwrite_existing);
+    expect_exit2(
+        export_to(dir / name, dir, extra),
+        {"--csv: \"" + (dir / name).string() + "\" is the results database this command reads",
+         what + " would destroy it: choose another --csv"});
+    EXPECT_EQ(slurp(dir / name), db_bytes);
+    EXPECT_FALSE(fs::exists(dir / "sessions.csv"));
+  }
+  // The user's own samples.csv: an export without --samples removed it as "left by an earlier
+  // export"; with --samples it was replaced.
+  const fs::path own = d / "own";
+  fs::create_directories(own);
+  const std::string theirs = "subject,t,force\n1,0.1,2.5\n";
+  std::ofstream(own / "samples.csv") << theirs;
+  expect_exit2(export_to(db, own),
+               {"--csv: \"" + (own / "samples.csv").string() +
+                "\" exists and is a file, not a palplab export (samples.csv); refusing to "
+                "remove it (an export without --samples removes the samples.csv of an "
+                "earlier export): choose another --csv, or give --overwrite to remove it"});
+  EXPECT_EQ(slurp(own / "samples.csv"), theirs);
+  EXPECT_FALSE(fs::exists(own / "measures.csv"));
+  expect_exit2(export_to(db, own, " --samples"),
+               {"--csv: \"" + (own / "samples.csv").string() + "\"", "refusing to replace it",
+                "give --overwrite to replace it"});
+  EXPECT_EQ(slurp(own / "samples.csv"), theirs);
+  Result r = export_to(db, own, " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "removed " + (own / "samples.csv").string() +
+                             " (not a palplab export; removed as --overwrite allows"))
+      << r.out;
+  EXPECT_FALSE(fs::exists(own / "samples.csv"));
+  // The user's own measures.csv: refused, then replaced with --overwrite; an export's own files
+  // are replaced as before.
+  std::ofstream(own / "measures.csv", std::ios::trunc) << theirs;
+  expect_exit2(export_to(db, own), {"--csv: \"" + (own / "measures.csv").string() +
+                                    "\" exists and is a file, not a palplab export "
+                                    "(measures.csv); refusing to replace it"});
+  EXPECT_EQ(slurp(own / "measures.csv"), theirs);
+  r = export_to(db, own, " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(slurp(own / "measures.csv").rfind("participant,group,phase,session,measure", 0) == 0);
+  r = export_to(db, own, " --samples");
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = export_to(db, own);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "(left by an earlier export")) << r.out;
 }

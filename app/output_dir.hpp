@@ -1,0 +1,123 @@
+#pragma once
+// The output directory of `report --out`, `export --csv`, `power --out` and `merge --out`,
+// checked before the command writes anything, so that no input and no foreign file is lost (the
+// directory counterpart of require_replaceable_output in app/command.hpp, and worded like it):
+// - the directory path naming an existing non-directory is refused (saying so when it is an
+//   input: `report results.db --out results.db`);
+// - a file the command writes (or removes) in the directory that is one of the command's inputs
+//   (std::filesystem::equivalent: also through a link or another spelling, e.g. the database
+//   saved as DIR/report.md) is refused, --overwrite or not: writing it would destroy the input;
+// - an existing regular, non-empty file at one of those names that `is_own` does not recognise
+//   as the command's own earlier output is refused unless `overwrite` (the command's --overwrite
+//   flag; a command without one says "remove it" instead).
+// An own earlier output, an empty file and a non-regular file (/dev/null) are replaced as before.
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "app/command.hpp"
+#include "common/input_error.hpp"
+
+namespace palplab::app {
+
+// A file a command writes into its output directory: `name` (relative to it, "report.md"),
+// `own_kind` as said in a message ("palplab report (report.md)"), `is_own` recognising the
+// command's own earlier output by its content, `verb`: what the command does to an existing
+// file ("replace", "append to", "remove"), and `why`, said in a refusal when the command removes
+// it (`export` without --samples: "an export without --samples removes the samples.csv of an
+// earlier export").
+struct DirOutput {
+  std::string name, own_kind;
+  std::function<bool(const std::string&)> is_own;
+  std::string verb = "replace", why;
+};
+
+// Whether the file starts with `prefix` and holds `needle` in its first `limit` bytes.
+inline bool output_head_has(const std::string& path, const std::string& prefix,
+                            const std::string& needle, std::size_t limit = std::size_t{1} << 20) {
+  const std::string head = file_head(path, limit);
+  return head.compare(0, prefix.size(), prefix) == 0 && head.find(needle) != std::string::npos;
+}
+
+// A file in the subdirectory `sub` of `dir` with one of `extensions` (".svg") or one of `names`
+// that is one of `inputs`: the command writes such files there under names known only as it
+// runs (the report's figures/*.svg), so every one of them is taken for an output (`what`, "its
+// SVG figures").
+inline void require_no_input_under(const std::string& flag, const std::string& dir,
+                                   const std::string& sub,
+                                   const std::vector<std::string>& extensions,
+                                   const std::vector<std::string>& names,
+                                   const std::vector<CommandInput>& inputs,
+                                   const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path under = fs::path(dir) / sub;
+  if (!fs::is_directory(under, ec)) return;
+  for (fs::directory_iterator it(under, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string(), ext = it->path().extension().string();
+    bool hit = false;
+    for (const auto& e : extensions) hit = hit || ext == e;
+    for (const auto& n : names) hit = hit || name == n;
+    if (!hit) continue;
+    if (const CommandInput* in = same_input(it->path().string(), inputs))
+      refuse_input_output(flag, it->path().string(), *in, "writing " + what + " there");
+  }
+}
+
+// The checks above for the directory `dir` named by `flag` (`contents`, e.g. "report.md,
+// report.html, figures/ and stills/", says what the directory is for). `overwrite_flag` is the
+// command's flag that allows replacing a foreign file ("--overwrite"), empty if it has none.
+// Nothing is created: require_writable_dir comes after.
+inline void require_replaceable_dir_outputs(const std::string& flag, const std::string& dir,
+                                            const std::string& contents,
+                                            const std::vector<DirOutput>& outputs,
+                                            const std::vector<CommandInput>& inputs,
+                                            const std::string& overwrite_flag, bool overwrite) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::status(dir, ec);
+  if (!fs::exists(st)) return;  // created later: nothing in it to lose
+  if (!fs::is_directory(st)) {
+    const CommandInput* in = same_input(dir, inputs);
+    throw InputError(SourceLocation{flag},
+                     "\"" + dir + "\" exists and is not a directory" +
+                         (in ? " (it is " + in->what + " this command reads)" : "") +
+                         "; expected the directory for " + contents + ": choose another " + flag);
+  }
+  for (const auto& o : outputs) {
+    const std::string path = (fs::path(dir) / o.name).string();
+    if (const CommandInput* in = same_input(path, inputs))
+      refuse_input_output(flag, path, *in,
+                          (o.verb == "remove" ? "removing " : "writing ") + o.name + " there");
+    if (overwrite) continue;
+    std::error_code e2;
+    if (!fs::is_regular_file(path, e2) || fs::file_size(path, e2) == 0 || e2 || o.is_own(path))
+      continue;
+    throw InputError(
+        SourceLocation{flag},
+        "\"" + path + "\" exists and is " + describe_existing_file(path) + ", not a " + o.own_kind +
+            "; refusing to " + o.verb + " it" + (o.why.empty() ? "" : " (" + o.why + ")") +
+            ": choose another " + flag +
+            (overwrite_flag.empty() ? ", or remove it"
+                                    : ", or give " + overwrite_flag + " to " + o.verb + " it"));
+  }
+}
+
+// The summary files of `palplab power` and `palplab merge` (protocols::write_power_report): the
+// same openings since their first version. power.json is recognised (and another study's refused)
+// by protocols::check_out_dir_study; here it is only checked not to be an input.
+inline std::vector<DirOutput> power_summary_outputs() {
+  return {
+      {"power.json", "palplab power summary (power.json)", [](const std::string&) { return true; }},
+      {"power.md", "palplab power table (power.md)",
+       [](const std::string& p) { return output_head_has(p, "# Power analysis: ", ""); }},
+      {"power.svg", "palplab power plot (power.svg)", [](const std::string& p) {
+         return output_head_has(p, "<svg xmlns=\"http://www.w3.org/2000/svg\"",
+                                "Power by group size");
+       }}};
+}
+
+}  // namespace palplab::app
