@@ -381,9 +381,13 @@ palplab::app::CommandRegistration reg{
         const bool tty = isatty(2);
         if (!*quiet) {
           opt->progress = [tty](const Progress& p) {
-            const long run = p.sessions_done - p.sessions_resumed;
-            const long left = p.sessions_total - p.sessions_done;
-            const double eta = run > 0 ? p.elapsed / run * left : -1;
+            // The runner's estimate (per prototype's measured cost); "ETA ?" before any session,
+            // "ETA 0m20s (C not timed yet)" while a prototype with sessions left has none run.
+            const std::string eta =
+                hms(p.eta) +
+                (p.eta >= 0 && !p.eta_untimed.empty()
+                     ? " (" + palplab::escape_controls(p.eta_untimed, false) + " not timed yet)"
+                     : "");
             if (tty) {
               const int width = 30;
               int fill = static_cast<int>(width * p.sessions_done / std::max(1L, p.sessions_total));
@@ -391,14 +395,14 @@ palplab::app::CommandRegistration reg{
                            "\r[%s%s] %ld/%ld sessions, %d/%d participants, %s elapsed, ETA %s  ",
                            std::string(fill, '#').c_str(), std::string(width - fill, '.').c_str(),
                            p.sessions_done, p.sessions_total, p.participants_done,
-                           p.participants_total, hms(p.elapsed).c_str(), hms(eta).c_str());
+                           p.participants_total, hms(p.elapsed).c_str(), eta.c_str());
               if (p.sessions_done == p.sessions_total) std::fprintf(stderr, "\n");
             } else {
               std::fprintf(
                   stderr, "session %ld/%ld done (%s), participants %d/%d, elapsed %.1f s, ETA %s\n",
                   p.sessions_done, p.sessions_total,
                   palplab::escape_controls(p.last, false).c_str(), p.participants_done,
-                  p.participants_total, p.elapsed, hms(eta).c_str());
+                  p.participants_total, p.elapsed, eta.c_str());
             }
             std::fflush(stderr);
           };

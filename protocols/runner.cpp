@@ -501,6 +501,41 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   for (const auto& p : plan.participants)
     if (done.count(p.id) && done[p.id].size() == p.sessions.size()) ++progress.participants_done;
 
+  // Simulated time left per prototype, and the wall time and simulated time of the sessions
+  // run so far (for Progress::eta).
+  struct PrototypeCost {
+    double left = 0.0, wall = 0.0, simulated = 0.0;
+  };
+  std::map<std::string, PrototypeCost> cost;
+  std::map<std::string, std::size_t> sessions_left;  // per participant id
+  for (const auto& p : plan.participants) {
+    if (human.count(p.id)) continue;
+    const auto it = done.find(p.id);
+    for (const auto& ss : p.sessions)
+      if (it == done.end() || !it->second.count(ss.ordinal)) {
+        cost[ss.prototype].left += ss.duration;
+        ++sessions_left[p.id];
+      }
+  }
+  auto update_eta = [&] {
+    double dearest = 0.0, work = 0.0;
+    for (const auto& [id, c] : cost)
+      if (c.simulated > 0.0) dearest = std::max(dearest, c.wall / c.simulated);
+    progress.eta_untimed.clear();
+    for (const auto& [id, c] : cost) {
+      if (c.left <= 0.0) continue;
+      if (c.simulated > 0.0) {
+        work += c.left * c.wall / c.simulated;
+      } else {
+        work += c.left * dearest;
+        progress.eta_untimed += (progress.eta_untimed.empty() ? "" : ", ") + id;
+      }
+    }
+    long busy = 0;  // participants with sessions left: at most one thread each
+    for (const auto& [id, n] : sessions_left) busy += n > 0 ? 1 : 0;
+    progress.eta = work / static_cast<double>(std::max(1L, std::min<long>(opt.jobs, busy)));
+  };
+
   const ModelParams mp(study);
   std::mutex mu;
   std::atomic<std::size_t> next{0};
@@ -554,6 +589,12 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
           std::lock_guard lock(mu);
           ++sum.sessions_run;
           sum.simulated += o.data.session.duration;
+          PrototypeCost& c = cost[pp.sessions[k].prototype];
+          c.left -= pp.sessions[k].duration;
+          c.wall += o.data.session.wall_duration;
+          c.simulated += o.data.session.duration;
+          --sessions_left[pp.id];
+          update_eta();
           ++progress.sessions_done;
           progress.simulated = sum.simulated;
           if (k + 1 == pp.sessions.size()) ++progress.participants_done;

@@ -32,6 +32,13 @@ struct Progress {
   double elapsed = 0.0;                        // s wall time of this run
   double simulated = 0.0;                      // s simulated by this run
   std::string last;                            // "P07 training #2" just completed
+  // Estimated wall time left (s; -1 before the first session of this run): the simulated time
+  // left per prototype at that prototype's measured cost (wall time of its sessions per
+  // simulated second), over the worker threads. Prototypes cost very differently (exp2: C is
+  // ≈ 100× A), so a prototype without a session yet is counted at the cost of the dearest one
+  // measured, and `eta_untimed` names it: the ETA is then a guess, not an estimate.
+  double eta = -1.0;
+  std::string eta_untimed;  // "C, D" (prototypes with sessions left and none timed yet)
 };
 
 struct RunOptions {

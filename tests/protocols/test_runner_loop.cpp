@@ -5,8 +5,10 @@
 // trace either), and an instructed session (exp1) logs one sample per planned step.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cstring>
 #include <filesystem>
+#include <map>
 
 #include "engine/haptics/clock.hpp"
 #include "protocols/plan.hpp"
@@ -97,4 +99,44 @@ TEST(RunnerLoop, InstructedSessionLogsEveryPlannedStep) {
   EXPECT_GT(out[0].session.loop_median, 0.0);  // s per step, from the sampled step times
   EXPECT_GE(out[0].session.loop_p99, out[0].session.loop_median);
   EXPECT_LT(out[0].session.loop_median, 0.1);
+}
+
+// The progress ETA is the simulated time left per prototype at that prototype's measured cost
+// (wall time per simulated second of its sessions so far); a prototype not run yet is counted at
+// the dearest measured one and named. One A participant then one B participant (2 sessions of
+// 2 s each, one thread): after A's first session B is untimed and both count at A's cost; after
+// B's first session every prototype is timed; at the end nothing is left.
+TEST(RunnerLoop, ProgressEtaIsEachPrototypesMeasuredCost) {
+  const Study study = reference("exp2_short_term.json");
+  Plan plan;
+  plan.participants = {first_of(study, "A", 2, 2.0), first_of(study, "B", 2, 2.0)};
+  ASSERT_EQ(plan.participants[0].sessions[1].prototype, "A");
+  ASSERT_EQ(plan.participants[1].sessions[0].prototype, "B");
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("palplab_test_eta_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  RunOptions opt;
+  opt.db = (dir / "eta.db").string();
+  opt.samples = false;
+  std::vector<Progress> seen;
+  opt.progress = [&](const Progress& p) { seen.push_back(p); };
+  run_study(study, plan, opt);
+  ASSERT_EQ(seen.size(), 4u);
+  std::map<std::string, double> wall;  // "P.. ordinal" -> the session's wall time
+  for (const auto& r : results::Store::open(opt.db).read_sessions())
+    wall[r.participant + " " + std::to_string(r.ordinal)] = r.wall_duration;
+  const std::string a = plan.participants[0].id, b = plan.participants[1].id;
+  const double a_cost = wall.at(a + " 0") / 2.0;  // s wall per simulated s
+  EXPECT_EQ(seen[0].eta_untimed, "B");
+  EXPECT_NEAR(seen[0].eta, (2.0 + 4.0) * a_cost, 1e-12 * (1.0 + seen[0].eta));
+  const double a_cost2 = (wall.at(a + " 0") + wall.at(a + " 1")) / 4.0;
+  EXPECT_EQ(seen[1].eta_untimed, "B");
+  EXPECT_NEAR(seen[1].eta, 4.0 * a_cost2, 1e-12 * (1.0 + seen[1].eta));
+  const double b_cost = wall.at(b + " 0") / 2.0;
+  EXPECT_EQ(seen[2].eta_untimed, "");
+  EXPECT_NEAR(seen[2].eta, 2.0 * b_cost, 1e-12 * (1.0 + seen[2].eta));
+  EXPECT_EQ(seen[3].eta_untimed, "");
+  EXPECT_EQ(seen[3].eta, 0.0);
+  std::filesystem::remove_all(dir);
 }
