@@ -674,6 +674,18 @@ Store Store::open(const std::string& path, bool exclusive) {
     db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
   } else if (can_write) {
     db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
+  } else if (fs::file_size(path + "-wal", ec) > 0 && !ec) {
+    // Read-only, with writes not yet copied into the file (a run killed before its checkpoint):
+    // they are in PATH-wal, which SQLite reads read-only only through an existing PATH-shm. An
+    // immutable open would silently drop them (sessions missing from export and report).
+    std::error_code e2;
+    if (!fs::exists(path + "-shm", e2) || ::access((path + "-shm").c_str(), R_OK) != 0)
+      throw InputError(
+          "its last writes are in " + fs::path(path + "-wal").filename().string() +
+              ", which cannot be read in a read-only place without its -shm file; copy the "
+              "database and its -wal file to a writable directory and read the copy",
+          path);
+    db = open_db(path, SQLITE_OPEN_READONLY | SQLITE_OPEN_FULLMUTEX);
   } else {
     // Reading from a read-only place (an archive, a mounted share): no -shm can be created, so
     // the file is opened as immutable (nobody may write it meanwhile).

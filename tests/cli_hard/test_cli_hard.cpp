@@ -2,6 +2,7 @@
 // binary. Each must end in exit 2 with a located message (or, where the issue says so, exit 0
 // with a clear warning) — never a signal, a hang or exit 3.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -465,6 +466,52 @@ TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
              d / "out");
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::exists(d / "out" / "csv" / "measures.csv"));
+  ::chmod((d / "ro").c_str(), 0755);
+}
+
+// A run killed before its checkpoint leaves its last writes in PATH-wal. Read from a read-only
+// place, the database was opened immutable and those writes silently dropped (a session missing
+// from export and report); now they are read through the existing -shm, or, without it, refused.
+TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
+  std::string as = "";
+  if (geteuid() == 0) {
+    if (std::system("runuser -u nobody -- true 2>/dev/null") != 0)
+      GTEST_SKIP() << "root ignores directory permissions and runuser is not available";
+    as = "runuser -u nobody -- ";
+  }
+  auto d = tmp("rowal");
+  const fs::path db = incomplete_db(d);
+  fs::create_directories(d / "ro");
+  const fs::path w = d / "ro" / "w.db";
+  fs::copy_file(db, w);
+  {  // One write left in the WAL only (no checkpoint on close), as a killed run leaves it.
+    sqlite3* h = nullptr;
+    ASSERT_EQ(sqlite3_open(w.c_str(), &h), SQLITE_OK);
+    ASSERT_EQ(sqlite3_db_config(h, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(h,
+                           "PRAGMA journal_mode=WAL; PRAGMA wal_autocheckpoint=0; UPDATE measures "
+                           "SET value = 12.375 WHERE rowid = (SELECT min(rowid) FROM measures "
+                           "WHERE value IS NOT NULL);",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(h);
+  }
+  ASSERT_GT(fs::file_size(fs::path(w.string() + "-wal")), 0u);
+  ASSERT_TRUE(fs::exists(w.string() + "-shm"));
+  fs::create_directories(d / "out");
+  ::chmod((d / "out").c_str(), 0777);
+  ::chmod((d / "ro").c_str(), 0555);
+  Result r =
+      cli_as(as, "export " + w.string() + " --csv " + (d / "out" / "csv").string(), d / "out");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(slurp(d / "out" / "csv" / "measures.csv"), ",12.375,")) << "the WAL's write";
+  // Without the -shm the WAL cannot be read in a read-only place: refused, not dropped.
+  ::chmod((d / "ro").c_str(), 0755);
+  fs::remove(w.string() + "-shm");
+  ::chmod((d / "ro").c_str(), 0555);
+  r = cli_as(as, "report " + w.string() + " --out " + (d / "out" / "rep").string(), d / "out");
+  EXPECT_EXIT2_WITH(r, "w.db-wal, which cannot be read in a read-only place");
+  EXPECT_FALSE(fs::exists(d / "out" / "rep"));
   ::chmod((d / "ro").c_str(), 0755);
 }
 
