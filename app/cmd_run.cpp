@@ -46,6 +46,27 @@ extern "C" void on_sigint(int) {
   g_interrupted = true;
 }
 
+// A virtual run interrupted (SIGINT, SIGTERM) stops at once, as the default action would: every
+// session completed before it is already stored (each in its own transaction), the one running
+// is not. The handler only says so and how to continue (write(2) and _exit are
+// async-signal-safe; the text is made before the run).
+std::string g_interrupt_text;
+extern "C" void on_interrupt_virtual(int sig) {
+  const ssize_t ignored = ::write(2, g_interrupt_text.data(), g_interrupt_text.size());
+  (void)ignored;
+  ::_exit(128 + sig);
+}
+
+// `arg` as one shell word (single-quoted unless it is plain).
+std::string shell_word(const std::string& arg) {
+  if (!arg.empty() && arg.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                            "0123456789_./-+=:,@%") == std::string::npos)
+    return arg;
+  std::string q = "'";
+  for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 struct HumanArgs {
   bool human = false;
   std::string participant, device = "mouse", record_trace, mouse_script, size = "1280x800";
@@ -379,15 +400,19 @@ palplab::app::CommandRegistration reg{
           palplab::app::require_writable_dir("--record-trace", human->record_trace);
         opt->record_trace_dir = human->record_trace;
         const bool tty = isatty(2);
+        auto bar_open = std::make_shared<bool>(false);  // a progress bar without its newline
         if (!*quiet) {
-          opt->progress = [tty](const Progress& p) {
-            // The runner's estimate (per prototype's measured cost); "ETA ?" before any session,
-            // "ETA 0m20s (C not timed yet)" while a prototype with sessions left has none run.
+          opt->notice = [](const std::string& m) {
+            std::fprintf(stderr, "%s\n", palplab::escape_controls(m, false).c_str());
+          };
+          opt->progress = [tty, bar_open](const Progress& p) {
+            // The runner's estimate (per prototype's measured cost); "ETA ? (C not timed yet)"
+            // while a prototype with sessions left has none run.
             const std::string eta =
                 hms(p.eta) +
-                (p.eta >= 0 && !p.eta_untimed.empty()
-                     ? " (" + palplab::escape_controls(p.eta_untimed, false) + " not timed yet)"
-                     : "");
+                (p.eta_untimed.empty()
+                     ? ""
+                     : " (" + palplab::escape_controls(p.eta_untimed, false) + " not timed yet)");
             if (tty) {
               const int width = 30;
               int fill = static_cast<int>(width * p.sessions_done / std::max(1L, p.sessions_total));
@@ -396,7 +421,8 @@ palplab::app::CommandRegistration reg{
                            std::string(fill, '#').c_str(), std::string(width - fill, '.').c_str(),
                            p.sessions_done, p.sessions_total, p.participants_done,
                            p.participants_total, hms(p.elapsed).c_str(), eta.c_str());
-              if (p.sessions_done == p.sessions_total) std::fprintf(stderr, "\n");
+              *bar_open = p.sessions_done != p.sessions_total;
+              if (!*bar_open) std::fprintf(stderr, "\n");
             } else {
               std::fprintf(
                   stderr, "session %ld/%ld done (%s), participants %d/%d, elapsed %.1f s, ETA %s\n",
@@ -407,7 +433,17 @@ palplab::app::CommandRegistration reg{
             std::fflush(stderr);
           };
         }
+        g_interrupt_text = "\ninterrupted: the sessions completed before this are stored in " +
+                           palplab::escape_controls(opt->db, false) +
+                           " (the one running is not); continue with:\n  palplab run " +
+                           shell_word(*study) + " --db " + shell_word(opt->db) + " --resume" +
+                           (opt->samples ? "" : " --samples none") + "\n";
+        for (int sig : {SIGINT, SIGTERM})  // a signal the caller ignores (nohup, `&`) stays so
+          if (std::signal(sig, on_interrupt_virtual) == SIG_IGN) std::signal(sig, SIG_IGN);
         RunSummary r = run_study(s, plan, *opt);
+        std::signal(SIGINT, SIG_DFL);
+        std::signal(SIGTERM, SIG_DFL);
+        if (*bar_open) std::fprintf(stderr, "\n");  // stopped by --max-sessions
         if (!*quiet) {
           std::printf(
               "%s: %ld sessions run (%ld already in the database), %.1f s simulated in %.1f s "

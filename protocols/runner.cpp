@@ -427,6 +427,19 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
         "replace it",
         opt.db);
   if (exists && opt.force && !opt.resume) {
+    if (opt.notice && fs::is_regular_file(opt.db)) {
+      std::string what;
+      try {  // what is lost, said before it is (remove_existing refuses anything not palplab's)
+        results::Store old = results::Store::open(opt.db);
+        const results::StudyRecord rec = old.read_study();
+        const std::size_t n = old.read_sessions().size();
+        what = "a run of study " + nlohmann::json(rec.study_id).dump() + ", " + std::to_string(n) +
+               " session" + (n == 1 ? "" : "s") + ", " +
+               (rec.finished_at.empty() ? "INCOMPLETE" : "complete");
+      } catch (const std::exception&) {
+      }
+      if (!what.empty()) opt.notice("replacing " + opt.db + " (--force): " + what);
+    }
     results::Store::remove_existing(opt.db);  // a palplab database only, never any file
   }
   results::Store store =
@@ -517,23 +530,27 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
         ++sessions_left[p.id];
       }
   }
+  if (exists && opt.resume)  // the costs measured by the earlier run(s) of this database
+    for (const auto& r : store.read_sessions())
+      if (r.trainee == "virtual" && r.status == "complete" && cost.count(r.prototype)) {
+        cost[r.prototype].wall += r.wall_duration;
+        cost[r.prototype].simulated += r.duration;
+      }
   auto update_eta = [&] {
-    double dearest = 0.0, work = 0.0;
-    for (const auto& [id, c] : cost)
-      if (c.simulated > 0.0) dearest = std::max(dearest, c.wall / c.simulated);
+    double work = 0.0;
     progress.eta_untimed.clear();
     for (const auto& [id, c] : cost) {
       if (c.left <= 0.0) continue;
-      if (c.simulated > 0.0) {
+      if (c.simulated > 0.0)
         work += c.left * c.wall / c.simulated;
-      } else {
-        work += c.left * dearest;
+      else
         progress.eta_untimed += (progress.eta_untimed.empty() ? "" : ", ") + id;
-      }
     }
     long busy = 0;  // participants with sessions left: at most one thread each
     for (const auto& [id, n] : sessions_left) busy += n > 0 ? 1 : 0;
-    progress.eta = work / static_cast<double>(std::max(1L, std::min<long>(opt.jobs, busy)));
+    progress.eta = !progress.eta_untimed.empty()
+                       ? -1.0
+                       : work / static_cast<double>(std::max(1L, std::min<long>(opt.jobs, busy)));
   };
 
   const ModelParams mp(study);

@@ -32,11 +32,11 @@ struct Progress {
   double elapsed = 0.0;                        // s wall time of this run
   double simulated = 0.0;                      // s simulated by this run
   std::string last;                            // "P07 training #2" just completed
-  // Estimated wall time left (s; -1 before the first session of this run): the simulated time
-  // left per prototype at that prototype's measured cost (wall time of its sessions per
-  // simulated second), over the worker threads. Prototypes cost very differently (exp2: C is
-  // ≈ 100× A), so a prototype without a session yet is counted at the cost of the dearest one
-  // measured, and `eta_untimed` names it: the ETA is then a guess, not an estimate.
+  // Estimated wall time left (s): the simulated time left per prototype at that prototype's
+  // measured cost (wall time of its virtual sessions per simulated second, in this run and, on
+  // resume, the earlier ones), over the worker threads. Prototypes cost very differently (exp2:
+  // C is ≈ 100× A), so while a prototype with sessions left has none timed the ETA is unknown
+  // (-1) and `eta_untimed` names it.
   double eta = -1.0;
   std::string eta_untimed;  // "C, D" (prototypes with sessions left and none timed yet)
 };
@@ -53,6 +53,9 @@ struct RunOptions {
   // DIR/<participant>_<ordinal>_0.trace (replay: `run --human --device trace:FILE`).
   std::string record_trace_dir;
   std::function<void(const Progress&)> progress;  // called after every session (serialised)
+  // Told what --force replaces before it is removed ("replacing r.db: a run of study \"x\", 30
+  // sessions, complete").
+  std::function<void(const std::string&)> notice;
 };
 
 struct RunSummary {

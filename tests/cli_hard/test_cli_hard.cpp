@@ -515,6 +515,46 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
   ::chmod((d / "ro").c_str(), 0755);
 }
 
+// An interrupted virtual run (SIGTERM; SIGINT alike) said nothing: it now says that the
+// completed sessions are stored and prints the command that continues it (with the run's
+// --samples), exits 128 + signal, and that command completes the run.
+TEST(HardDb, InterruptedRunSaysHowToContinue) {
+  auto d = tmp("interrupt");
+  spit(d / "study.json",
+       study(R"([{"id": "G1", "prototype": "A", "size": 4}])", "", 300.0));  // ≈ 2 s of A
+  const fs::path db = d / "r.db";
+  const std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
+                          "/prototypes " + std::string(PALPLAB_BINARY) + " run " +
+                          (d / "study.json").string() + " --db " + db.string() +
+                          " --samples none 2>" + (d / "err.txt").string() + " >/dev/null";
+  const std::string script = "(" + cmd + ") & pid=$!; i=0; while [ ! -s " + db.string() +
+                             " ] && [ $i -lt 300 ]; do sleep 0.02; i=$((i+1)); done; sleep 0.3; "
+                             "kill -TERM $pid; wait $pid; echo $? > " +
+                             (d / "rc.txt").string();
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  const std::string err = slurp(d / "err.txt");
+  if (slurp(d / "rc.txt") == "0\n") GTEST_SKIP() << "the run finished before the signal";
+  EXPECT_EQ(slurp(d / "rc.txt"), "143\n") << err;
+  EXPECT_TRUE(has(err, "interrupted: the sessions completed before this are stored in")) << err;
+  const std::string resume =
+      "run " + (d / "study.json").string() + " --db " + db.string() + " --resume --samples none";
+  EXPECT_TRUE(has(err, "palplab " + resume)) << err;
+  Result r = cli(resume + " --quiet", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(palplab::results::Store::open(db.string()).read_sessions().size(), 12u);
+}
+
+// --force replaced another study's run without a word: it now says what it replaces.
+TEST(HardDb, ForceSaysWhatItReplaces) {
+  auto d = tmp("forcesay");
+  const fs::path db = incomplete_db(d);
+  Result r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --force", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "replacing " + db.string() +
+                             " (--force): a run of study \"hard\", 1 session, INCOMPLETE"))
+      << r.err;
+}
+
 TEST(HardDb, ReportAndExportOfAnIncompleteDatabaseSaySo) {
   auto d = tmp("incomplete");
   const fs::path db = incomplete_db(d);

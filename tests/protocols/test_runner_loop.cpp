@@ -102,16 +102,18 @@ TEST(RunnerLoop, InstructedSessionLogsEveryPlannedStep) {
 }
 
 // The progress ETA is the simulated time left per prototype at that prototype's measured cost
-// (wall time per simulated second of its sessions so far); a prototype not run yet is counted at
-// the dearest measured one and named. One A participant then one B participant (2 sessions of
-// 2 s each, one thread): after A's first session B is untimed and both count at A's cost; after
-// B's first session every prototype is timed; at the end nothing is left.
+// (wall time per simulated second of its sessions so far); while a prototype with sessions left
+// has none timed it is unknown and that prototype is named. One A participant (2 sessions of
+// 2 s) then one B participant (3 sessions of 2 s), one thread. The first run stops after 3
+// sessions (A's two, B's first): B is untimed until its first session, then costs what that one
+// did. The resumed run times B from the stored session too: after B's second session, B's cost
+// is both sessions' wall time over their 4 simulated s. At the end nothing is left.
 TEST(RunnerLoop, ProgressEtaIsEachPrototypesMeasuredCost) {
   const Study study = reference("exp2_short_term.json");
   Plan plan;
-  plan.participants = {first_of(study, "A", 2, 2.0), first_of(study, "B", 2, 2.0)};
+  plan.participants = {first_of(study, "A", 2, 2.0), first_of(study, "B", 3, 2.0)};
   ASSERT_EQ(plan.participants[0].sessions[1].prototype, "A");
-  ASSERT_EQ(plan.participants[1].sessions[0].prototype, "B");
+  ASSERT_EQ(plan.participants[1].sessions[2].prototype, "B");
   const auto dir =
       std::filesystem::temp_directory_path() / ("palplab_test_eta_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
@@ -119,24 +121,30 @@ TEST(RunnerLoop, ProgressEtaIsEachPrototypesMeasuredCost) {
   RunOptions opt;
   opt.db = (dir / "eta.db").string();
   opt.samples = false;
+  opt.max_sessions = 3;
   std::vector<Progress> seen;
   opt.progress = [&](const Progress& p) { seen.push_back(p); };
   run_study(study, plan, opt);
-  ASSERT_EQ(seen.size(), 4u);
+  opt.max_sessions = 0;
+  opt.resume = true;
+  run_study(study, plan, opt);
+  ASSERT_EQ(seen.size(), 5u);
   std::map<std::string, double> wall;  // "P.. ordinal" -> the session's wall time
   for (const auto& r : results::Store::open(opt.db).read_sessions())
     wall[r.participant + " " + std::to_string(r.ordinal)] = r.wall_duration;
-  const std::string a = plan.participants[0].id, b = plan.participants[1].id;
-  const double a_cost = wall.at(a + " 0") / 2.0;  // s wall per simulated s
+  const std::string b = plan.participants[1].id;
   EXPECT_EQ(seen[0].eta_untimed, "B");
-  EXPECT_NEAR(seen[0].eta, (2.0 + 4.0) * a_cost, 1e-12 * (1.0 + seen[0].eta));
-  const double a_cost2 = (wall.at(a + " 0") + wall.at(a + " 1")) / 4.0;
+  EXPECT_EQ(seen[0].eta, -1.0);
   EXPECT_EQ(seen[1].eta_untimed, "B");
-  EXPECT_NEAR(seen[1].eta, 4.0 * a_cost2, 1e-12 * (1.0 + seen[1].eta));
-  const double b_cost = wall.at(b + " 0") / 2.0;
+  EXPECT_EQ(seen[1].eta, -1.0);
   EXPECT_EQ(seen[2].eta_untimed, "");
-  EXPECT_NEAR(seen[2].eta, 2.0 * b_cost, 1e-12 * (1.0 + seen[2].eta));
+  const double b_cost = wall.at(b + " 0") / 2.0;  // s wall per simulated s
+  EXPECT_NEAR(seen[2].eta, 4.0 * b_cost, 1e-12 * (1.0 + seen[2].eta));
+  // Resumed: B's first session (stored by the first run) counts.
   EXPECT_EQ(seen[3].eta_untimed, "");
-  EXPECT_EQ(seen[3].eta, 0.0);
+  const double b_cost2 = (wall.at(b + " 0") + wall.at(b + " 1")) / 4.0;
+  EXPECT_NEAR(seen[3].eta, 2.0 * b_cost2, 1e-12 * (1.0 + seen[3].eta));
+  EXPECT_EQ(seen[4].eta_untimed, "");
+  EXPECT_EQ(seen[4].eta, 0.0);
   std::filesystem::remove_all(dir);
 }
