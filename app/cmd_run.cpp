@@ -375,7 +375,8 @@ palplab::app::CommandRegistration reg{
                       "Write each session's device track to DIR (trace files)");
       // Virtual runs only: with --human they would be silently ignored.
       const std::vector<const CLI::Option*> virtual_only = {jobs_opt, max_sessions_opt};
-      cmd->callback([study, opt, quiet, samples, code, human, scenes, human_only, virtual_only] {
+      cmd->callback([cmd, study, opt, quiet, samples, code, human, scenes, human_only,
+                     virtual_only] {
         using namespace palplab::protocols;
         for (const CLI::Option* o : human_only)
           palplab::app::flag_only_with(o, human->human, "--human (a person at the device)");
@@ -391,6 +392,8 @@ palplab::app::CommandRegistration reg{
         Study s = load_study(*study, engine_prototype_inspector());
         Plan plan = make_plan(s);
         opt->samples = *samples == "full";
+        // Without --samples a resume keeps what the run started with.
+        opt->samples_explicit = cmd->count("--samples") > 0;
         if (human->human) {
           *code = run_human_cmd(s, plan, *opt, *human, *quiet);
           return;
@@ -436,8 +439,7 @@ palplab::app::CommandRegistration reg{
         g_interrupt_text = "\ninterrupted: the sessions completed before this are stored in " +
                            palplab::escape_controls(opt->db, false) +
                            " (the one running is not); continue with:\n  palplab run " +
-                           shell_word(*study) + " --db " + shell_word(opt->db) + " --resume" +
-                           (opt->samples ? "" : " --samples none") + "\n";
+                           shell_word(*study) + " --db " + shell_word(opt->db) + " --resume\n";
         for (int sig : {SIGINT, SIGTERM})  // a signal the caller ignores (nohup, `&`) stays so
           if (std::signal(sig, on_interrupt_virtual) == SIG_IGN) std::signal(sig, SIG_IGN);
         RunSummary r = run_study(s, plan, *opt);
@@ -451,6 +453,9 @@ palplab::app::CommandRegistration reg{
               palplab::escape_controls(opt->db, false).c_str(), r.sessions_run, r.sessions_skipped,
               r.simulated, r.wall, r.wall > 0 ? r.simulated / r.wall : 0.0,
               r.complete ? "complete" : "INCOMPLETE (continue with --resume)");
+        } else if (!r.complete) {  // --quiet: no progress, but never a silent partial result
+          std::fprintf(stderr, "%s: INCOMPLETE (%ld sessions run; continue with --resume)\n",
+                       palplab::escape_controls(opt->db, false).c_str(), r.sessions_run);
         }
         *code = 0;
       });

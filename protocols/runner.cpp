@@ -426,6 +426,15 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
         "the database already exists; use --resume to continue it or --force to "
         "replace it",
         opt.db);
+  // A run interrupted while it created the database leaves an empty file: nothing to resume,
+  // nothing to lose; the run starts in its place.
+  bool fresh = !exists;
+  if (exists && opt.resume && results::Store::is_empty_leftover(opt.db)) {
+    if (opt.notice)
+      opt.notice(opt.db + " holds no run yet (its start was interrupted): starting the run");
+    results::Store::remove_existing(opt.db);
+    fresh = true;
+  }
   if (exists && opt.force && !opt.resume) {
     if (opt.notice && fs::is_regular_file(opt.db)) {
       std::string what;
@@ -444,23 +453,45 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   }
   results::Store store =
       fs::exists(opt.db) ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
+  if (!fresh && opt.resume && !store.has_study()) {  // created, then interrupted before its study
+    if (opt.notice)
+      opt.notice(opt.db + " holds no run yet (its start was interrupted): starting the run");
+    fresh = true;
+  }
   std::map<std::string, std::map<int, std::string>> done;  // participant -> ordinal -> state
   std::map<std::string, std::string> prototype_sha;        // id -> SHA-256 at run start
   std::set<std::string> human;  // participants run with people (`run --human`): not simulated
-  if (exists && opt.resume) {
+  std::vector<results::SessionRecord> stored;  // complete sessions found on resume
+  bool keep_samples = opt.samples;
+  if (!fresh && opt.resume) {
     results::StudyRecord rec = store.read_study();
     if (rec.sha256 != sha)
-      throw InputError("the database holds a run of another study file (SHA-256 " +
-                           rec.sha256.substr(0, 12) + "…, this file " + sha.substr(0, 12) +
-                           "…); resume needs the identical study",
+      throw InputError("the database holds a run of another study file: study " +
+                           nlohmann::json(rec.study_id).dump() + " (SHA-256 " +
+                           rec.sha256.substr(0, 12) + "…), this file is study " +
+                           nlohmann::json(study.id).dump() + " (SHA-256 " + sha.substr(0, 12) +
+                           "…); resume needs the identical study file (to run this one: another "
+                           "--db, or --force "
+                           "to replace that run)",
                        opt.db);
+    if (const auto m = store.read_meta("samples")) {
+      const bool was = *m == "full";
+      if (opt.samples_explicit && was != opt.samples)
+        throw InputError("the run started with --samples " + *m +
+                             ", this resume asks for --samples " + (opt.samples ? "full" : "none") +
+                             "; a database holds the samples of every session or of none "
+                             "(drop --samples to keep the run's setting)",
+                         opt.db);
+      keep_samples = was;
+    }
     auto parts = store.read_participants();
     bool same = parts.size() == plan.participants.size();
     for (std::size_t i = 0; same && i < parts.size(); ++i)
       same = parts[i].participant == plan.participants[i].id &&
              parts[i].group == plan.participants[i].group;
     if (!same) throw InputError("the database's participants differ from the plan", opt.db);
-    for (const auto& s : store.read_sessions()) done[s.participant][s.ordinal] = s.state_after;
+    stored = store.read_sessions();
+    for (const auto& s : stored) done[s.participant][s.ordinal] = s.state_after;
     // Sessions are written in order per participant: what is stored must be the first k of the
     // plan's sessions of a planned participant (a row deleted or edited by hand would otherwise
     // make the resumed run write an ordinal that exists: an SQL error after simulating).
@@ -500,6 +531,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
                          it == study.prototype_files.end() ? opt.db : it->second);
     }
   } else {
+    store.write_meta("samples", keep_samples ? "full" : "none");
     write_new_study(study, plan, sha, store, prototype_sha);
   }
 
@@ -530,24 +562,48 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
         ++sessions_left[p.id];
       }
   }
-  if (exists && opt.resume)  // the costs measured by the earlier run(s) of this database
-    for (const auto& r : store.read_sessions())
-      if (r.trainee == "virtual" && r.status == "complete" && cost.count(r.prototype)) {
-        cost[r.prototype].wall += r.wall_duration;
-        cost[r.prototype].simulated += r.duration;
-      }
+  for (const auto& r : stored)  // the costs measured by the earlier run(s) of this database
+    if (r.trainee == "virtual" && r.status == "complete" && cost.count(r.prototype)) {
+      cost[r.prototype].wall += r.wall_duration;
+      cost[r.prototype].simulated += r.duration;
+    }
+  RunSummary sum;
+  sum.sessions_skipped = progress.sessions_resumed;
   auto update_eta = [&] {
     double work = 0.0;
     progress.eta_untimed.clear();
-    for (const auto& [id, c] : cost) {
-      if (c.left <= 0.0) continue;
-      if (c.simulated > 0.0)
-        work += c.left * c.wall / c.simulated;
-      else
-        progress.eta_untimed += (progress.eta_untimed.empty() ? "" : ", ") + id;
-    }
+    std::set<std::string> untimed;
     long busy = 0;  // participants with sessions left: at most one thread each
-    for (const auto& [id, n] : sessions_left) busy += n > 0 ? 1 : 0;
+    if (opt.max_sessions > 0) {
+      // To the --max-sessions stop: the next sessions not yet done, in plan order (each
+      // participant's in its order; with several threads this is the approximate set).
+      long n = opt.max_sessions - sum.sessions_run;
+      for (const auto& p : plan.participants) {
+        if (n <= 0) break;
+        const auto it = sessions_left.find(p.id);
+        if (it == sessions_left.end() || it->second == 0) continue;
+        ++busy;
+        for (std::size_t k = p.sessions.size() - it->second; k < p.sessions.size() && n > 0;
+             ++k, --n) {
+          const PrototypeCost& c = cost[p.sessions[k].prototype];
+          if (c.simulated > 0.0)
+            work += p.sessions[k].duration * c.wall / c.simulated;
+          else
+            untimed.insert(p.sessions[k].prototype);
+        }
+      }
+    } else {
+      for (const auto& [id, c] : cost) {
+        if (c.left <= 0.0) continue;
+        if (c.simulated > 0.0)
+          work += c.left * c.wall / c.simulated;
+        else
+          untimed.insert(id);
+      }
+      for (const auto& [id, n] : sessions_left) busy += n > 0 ? 1 : 0;
+    }
+    for (const auto& id : untimed)
+      progress.eta_untimed += (progress.eta_untimed.empty() ? "" : ", ") + id;
     progress.eta = !progress.eta_untimed.empty()
                        ? -1.0
                        : work / static_cast<double>(std::max(1L, std::min<long>(opt.jobs, busy)));
@@ -559,8 +615,6 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   std::atomic<long> started{0};
   std::atomic<bool> stop{false};
   std::exception_ptr error;
-  RunSummary sum;
-  sum.sessions_skipped = progress.sessions_resumed;
 
   auto worker = [&] {
     while (!stop) {
@@ -586,7 +640,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
           }
           const bool tracing = !opt.record_trace_dir.empty();
           SessionOutcome o = run_session(study, mp, pp, pp.sessions[k], state,
-                                         opt.samples || tracing, prototype_sha);
+                                         keep_samples || tracing, prototype_sha);
           if (tracing) {
             engine::Trace tr = trace_from_samples(o.data.samples);
             tr.meta = {{"participant", pp.id},
@@ -599,7 +653,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
                  (pp.id + "_" + std::to_string(pp.sessions[k].ordinal) + "_0.trace"))
                     .string(),
                 tr);
-            if (!opt.samples) o.data.samples = results::SampleSeries{};
+            if (!keep_samples) o.data.samples = results::SampleSeries{};
           }
           store.write_session(o.data);
           state = o.state_after;
@@ -721,6 +775,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
                        opt.db);
     for (const auto& p : store.read_prototypes()) prototype_sha[p.prototype] = p.sha256;
   } else {
+    store.write_meta("samples", opt.samples ? "full" : "none");
     write_new_study(study, plan, sha, store, prototype_sha);
   }
   if (int n = store.abort_stale_sessions(pp->id))

@@ -36,7 +36,7 @@ struct Progress {
   // measured cost (wall time of its virtual sessions per simulated second, in this run and, on
   // resume, the earlier ones), over the worker threads. Prototypes cost very differently (exp2:
   // C is ≈ 100× A), so while a prototype with sessions left has none timed the ETA is unknown
-  // (-1) and `eta_untimed` names it.
+  // (-1) and `eta_untimed` names it. With RunOptions::max_sessions: to that stop.
   double eta = -1.0;
   std::string eta_untimed;  // "C, D" (prototypes with sessions left and none timed yet)
 };
@@ -47,6 +47,10 @@ struct RunOptions {
   bool resume = false;  // continue an existing database of the same study
   bool force = false;   // delete an existing database and start again
   bool samples = true;  // store every 1 kHz sample
+  // false: `samples` is only the default of a new run; a resumed run keeps the setting the run
+  // started with (meta "samples"). true: a resume with another setting is refused (a database
+  // must not hold samples for some sessions only).
+  bool samples_explicit = true;
   // Stop (cleanly, as an interruption would) after this many sessions of this run; 0 = no limit.
   long max_sessions = 0;
   // "" = none; else every session's device track (exact positions) as
@@ -54,7 +58,7 @@ struct RunOptions {
   std::string record_trace_dir;
   std::function<void(const Progress&)> progress;  // called after every session (serialised)
   // Told what --force replaces before it is removed ("replacing r.db: a run of study \"x\", 30
-  // sessions, complete").
+  // sessions, complete"), and when a resume finds a database whose start was interrupted.
   std::function<void(const std::string&)> notice;
 };
 

@@ -455,6 +455,29 @@ std::string damaged(const std::string& detail) {
 
 }  // namespace
 
+bool Store::is_empty_leftover(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;
+  if (fs::file_size(path, ec) == 0 && !ec) return true;
+  if (probe_db(path).kind != Probe::kNotPalplab) return false;
+  // An SQLite file without a single table or index (its uncommitted -wal frames, if any, are
+  // not part of it).
+  sqlite3* db = nullptr;
+  const std::string uri = "file:" + path + "?mode=ro";
+  bool empty = false;
+  if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) ==
+      SQLITE_OK) {
+    sqlite3_stmt* st = nullptr;
+    if (sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM sqlite_master", -1, &st, nullptr) ==
+            SQLITE_OK &&
+        sqlite3_step(st) == SQLITE_ROW)
+      empty = sqlite3_column_int64(st, 0) == 0;
+    sqlite3_finalize(st);
+  }
+  sqlite3_close(db);
+  return empty;
+}
+
 void Store::remove_existing(const std::string& path) {
   std::error_code ec;
   const auto st = fs::symlink_status(path, ec);
@@ -464,6 +487,15 @@ void Store::remove_existing(const std::string& path) {
         "refusing to replace it: not a regular file (--force only replaces a palplab "
         "results database)",
         path);
+  // (Before the look inside: in a read-only directory a WAL database cannot even be opened, and
+  // "not a palplab results database" would be the wrong reason.)
+  require_writable(path, true);
+  if (is_empty_leftover(path)) {
+    const int fd = lock_exclusive(path);
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix, ec);
+    ::close(fd);
+    return;
+  }
   if (const Probe p = probe_db(path); p.kind == Probe::kDamaged)
     throw InputError("refusing to replace it: " + damaged(p.detail) +
                          "; palplab cannot tell whether it is a results database (if it is, "
@@ -474,7 +506,6 @@ void Store::remove_existing(const std::string& path) {
         "refusing to replace it: not a palplab results database (--force only "
         "replaces a database written by palplab run)",
         path);
-  require_writable(path, true);
   const int fd = lock_exclusive(path);  // not while another process writes it
   for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix, ec);
   ::close(fd);
@@ -641,11 +672,14 @@ Store Store::create(const std::string& path) {
   Store s(db, path);
   s.lock_fd_ = lock_exclusive(path);
   exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
-  exec(db, "BEGIN;" + schema_sql() + "COMMIT;");
+  // The schema and its meta rows in one transaction: an interruption leaves an empty file (see
+  // is_empty_leftover) or a palplab database, never tables without a schema_version.
+  exec(db, "BEGIN;" + schema_sql());
   Stmt(db, "INSERT INTO meta(key, value) VALUES ('schema_version', ?1)")
       .bind(1, std::to_string(kSchemaVersion))
       .run();
   Stmt(db, "INSERT INTO meta(key, value) VALUES ('created_at', ?1)").bind(1, utc_now()).run();
+  exec(db, "COMMIT;");
   return s;
 }
 
@@ -845,6 +879,32 @@ void Store::write_session(SessionData& d) {
 void Store::set_finished(const std::string& finished_at) {
   std::lock_guard lock(*mu_);
   Stmt(db_, "UPDATE study SET finished_at = ?1 WHERE id = 1").bind(1, finished_at).run();
+}
+
+bool Store::has_study() const {
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT COUNT(*) FROM study");
+    return q.step() && q.integer(0) > 0;
+  });
+}
+
+std::optional<std::string> Store::read_meta(const std::string& key) const {
+  return reading(path_, [&]() -> std::optional<std::string> {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT value FROM meta WHERE key = ?1");
+    q.bind(1, key);
+    if (!q.step()) return std::nullopt;
+    return q.text(0);
+  });
+}
+
+void Store::write_meta(const std::string& key, const std::string& value) {
+  std::lock_guard lock(*mu_);
+  Stmt(db_, "INSERT OR REPLACE INTO meta(key, value) VALUES (?1, ?2)")
+      .bind(1, key)
+      .bind(2, value)
+      .run();
 }
 
 StudyRecord Store::read_study() const {

@@ -150,6 +150,10 @@ class Store {
   // `run --force`: deletes PATH (and PATH-wal, PATH-shm) only when it is a palplab results
   // database that no other process is writing; any other file is refused (InputError).
   static void remove_existing(const std::string& path);
+  // PATH holds nothing: an empty file, or an SQLite file without a single table. What a run
+  // interrupted while creating its database leaves (`run --force` replaces it; `run --resume`
+  // starts the run in it).
+  static bool is_empty_leftover(const std::string& path);
   Store(Store&&) noexcept;
   Store& operator=(Store&&) noexcept;
   ~Store();
@@ -173,6 +177,12 @@ class Store {
   // as aborted; returns how many.
   int abort_stale_sessions(const std::string& participant);
 
+  // The run's settings beside the schema's own rows (docs/FORMATS.md, "meta"): `run` stores
+  // "samples" (full | none) so that a resume keeps what the run started with.
+  std::optional<std::string> read_meta(const std::string& key) const;
+  void write_meta(const std::string& key, const std::string& value);
+  // False while a run's start was interrupted before its study record was written.
+  bool has_study() const;
   StudyRecord read_study() const;
   std::vector<ParticipantRecord> read_participants() const;
   // The read_* functions refuse (InputError naming the table, row and column) a numeric value a

@@ -101,19 +101,21 @@ TEST(RunnerLoop, InstructedSessionLogsEveryPlannedStep) {
   EXPECT_LT(out[0].session.loop_median, 0.1);
 }
 
-// The progress ETA is the simulated time left per prototype at that prototype's measured cost
-// (wall time per simulated second of its sessions so far); while a prototype with sessions left
-// has none timed it is unknown and that prototype is named. One A participant (2 sessions of
-// 2 s) then one B participant (3 sessions of 2 s), one thread. The first run stops after 3
-// sessions (A's two, B's first): B is untimed until its first session, then costs what that one
-// did. The resumed run times B from the stored session too: after B's second session, B's cost
-// is both sessions' wall time over their 4 simulated s. At the end nothing is left.
+// The run's ETA is the simulated time left per prototype at that prototype's measured cost
+// (wall time per simulated second of its stored sessions) over the threads; while a prototype
+// has none timed it is unknown and that prototype is named; with --max-sessions it is the time
+// to that stop. One A participant (2 sessions of 2 s) then one B participant (4 sessions of
+// 2 s), one thread. The first run stops after 3 sessions (A's two, B's first): B is untimed
+// until its first session; after it nothing is left before the stop. The resumed run (stopped
+// after 2 more) times B from the stored session too: after B's second session, B's cost is both
+// sessions' wall time over their 4 simulated s, and one session is left before the stop (two to
+// the end). The last resume finishes: nothing is left.
 TEST(RunnerLoop, ProgressEtaIsEachPrototypesMeasuredCost) {
   const Study study = reference("exp2_short_term.json");
   Plan plan;
-  plan.participants = {first_of(study, "A", 2, 2.0), first_of(study, "B", 3, 2.0)};
+  plan.participants = {first_of(study, "A", 2, 2.0), first_of(study, "B", 4, 2.0)};
   ASSERT_EQ(plan.participants[0].sessions[1].prototype, "A");
-  ASSERT_EQ(plan.participants[1].sessions[2].prototype, "B");
+  ASSERT_EQ(plan.participants[1].sessions[3].prototype, "B");
   const auto dir =
       std::filesystem::temp_directory_path() / ("palplab_test_eta_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
@@ -125,26 +127,28 @@ TEST(RunnerLoop, ProgressEtaIsEachPrototypesMeasuredCost) {
   std::vector<Progress> seen;
   opt.progress = [&](const Progress& p) { seen.push_back(p); };
   run_study(study, plan, opt);
-  opt.max_sessions = 0;
+  opt.max_sessions = 2;
   opt.resume = true;
   run_study(study, plan, opt);
-  ASSERT_EQ(seen.size(), 5u);
+  opt.max_sessions = 0;
+  run_study(study, plan, opt);
+  ASSERT_EQ(seen.size(), 6u);
   std::map<std::string, double> wall;  // "P.. ordinal" -> the session's wall time
   for (const auto& r : results::Store::open(opt.db).read_sessions())
     wall[r.participant + " " + std::to_string(r.ordinal)] = r.wall_duration;
   const std::string b = plan.participants[1].id;
-  EXPECT_EQ(seen[0].eta_untimed, "B");
+  EXPECT_EQ(seen[0].eta_untimed, "B");  // A1 and B0 before the stop
   EXPECT_EQ(seen[0].eta, -1.0);
-  EXPECT_EQ(seen[1].eta_untimed, "B");
+  EXPECT_EQ(seen[1].eta_untimed, "B");  // B0
   EXPECT_EQ(seen[1].eta, -1.0);
-  EXPECT_EQ(seen[2].eta_untimed, "");
-  const double b_cost = wall.at(b + " 0") / 2.0;  // s wall per simulated s
-  EXPECT_NEAR(seen[2].eta, 4.0 * b_cost, 1e-12 * (1.0 + seen[2].eta));
+  EXPECT_EQ(seen[2].eta_untimed, "");  // the stop
+  EXPECT_EQ(seen[2].eta, 0.0);
   // Resumed: B's first session (stored by the first run) counts.
   EXPECT_EQ(seen[3].eta_untimed, "");
-  const double b_cost2 = (wall.at(b + " 0") + wall.at(b + " 1")) / 4.0;
-  EXPECT_NEAR(seen[3].eta, 2.0 * b_cost2, 1e-12 * (1.0 + seen[3].eta));
-  EXPECT_EQ(seen[4].eta_untimed, "");
+  const double b_cost2 = (wall.at(b + " 0") + wall.at(b + " 1")) / 4.0;  // s wall per sim. s
+  EXPECT_NEAR(seen[3].eta, 2.0 * b_cost2, 1e-12 * (1.0 + seen[3].eta));  // B2, not B3 too
   EXPECT_EQ(seen[4].eta, 0.0);
+  EXPECT_EQ(seen[5].eta_untimed, "");
+  EXPECT_EQ(seen[5].eta, 0.0);
   std::filesystem::remove_all(dir);
 }
