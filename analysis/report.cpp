@@ -316,11 +316,20 @@ void section_provenance(Context& c) {
         "**Warning: INCOMPLETE database.** The run did not finish (study.finished_at is NULL): "
         "sessions or participants may be missing, and every result below is provisional.");
   doc.heading(2, "Study and provenance");
-  std::map<std::string, int> per_group;
-  for (const auto& p : c.participants) per_group[p.group]++;
+  std::map<std::string, int> per_group, stored_per_group;
+  std::set<std::string> with_sessions;
+  for (const auto& s : c.sessions) with_sessions.insert(s.participant);
+  for (const auto& p : c.participants) {
+    per_group[p.group]++;
+    stored_per_group[p.group] += with_sessions.count(p.participant) ? 1 : 0;
+  }
+  // An incomplete run: the participants with sessions stored, of those planned.
+  const bool partial = c.study.finished_at.empty();
   std::string design;
   for (const auto& g : c.groups)
-    design += (design.empty() ? "" : ", ") + g + ": " + std::to_string(per_group[g]);
+    design += (design.empty() ? "" : ", ") + g + ": " +
+              (partial ? std::to_string(stored_per_group[g]) + " of " : "") +
+              std::to_string(per_group[g]);
   std::string phases_text;
   for (const auto& ph : c.phase_order) {
     int n = 0;
@@ -336,7 +345,9 @@ void section_provenance(Context& c) {
        {"run by palplab", st.palplab_version + " (" + st.git_commit + ")"},
        {"started", st.started_at},
        {"finished", st.finished_at.empty() ? "INCOMPLETE (run not finished)" : st.finished_at},
-       {"participants per group", design},
+       {partial ? "participants per group (with sessions stored, of planned)"
+                : "participants per group",
+        design},
        {"sessions stored", std::to_string(c.sessions.size()) + " — " + phases_text},
        {"report by palplab", std::string(kVersion) + " (" + kGitCommit + ")"},
        {"database", c.db_path}});
@@ -1395,6 +1406,8 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
   Context c = load(db_path, out_dir, options);
   check_out_dir(out_dir, options.stills != nullptr);
   const std::vector<Unit> units = analysis_units(c);
+  if (c.declared.contains("analyses") && c.declared["analyses"].is_array())
+    c.files.declared = static_cast<int>(c.declared["analyses"].size());
   const std::vector<Hypothesis> hypotheses = declared_hypotheses(c);
   make_out_dir(fs::path(out_dir) / "figures", "its SVG figures");
   section_provenance(c);

@@ -67,7 +67,8 @@ struct ReportFiles {
   std::string stills_skipped;       // non-empty: why the report has no stills (one line)
   std::vector<std::string> stills_missing;  // "PROTOTYPE: why" of each prototype not drawn
   double stills_seconds = 0.0;              // wall time spent on the stills
-  int analyses = 0;                         // analysis units written
+  int analyses = 0;                         // analysis units written (one per measure/phase)
+  int declared = 0;  // entries of the study's "analyses" merged into them (0: the default ones)
 };
 
 // Reads the store at `db_path` (InputError if it is not a palplab results database) and writes

@@ -161,6 +161,37 @@ void check_report_out(const ReportArgs& a) {
   if (!a.no_stills)
     require_no_input_under("--out", a.out, "stills", {".png"}, {"stills.json"}, inputs,
                            "the stills");
+  // The figures' and stills' names are known only as the report runs: a foreign file that could
+  // carry one of them (any SVG under figures/; a PNG named like a still, or stills.json) is
+  // refused unless --overwrite. palplab's own figures open as analysis/svg.cpp writes them; its
+  // stills are the files its stills.json lists.
+  auto ends_with = [](const std::string& s, const std::string& t) {
+    return s.size() >= t.size() && s.compare(s.size() - t.size(), t.size(), t) == 0;
+  };
+  require_own_files_under(
+      "--out", a.out, "figures", [&](const std::string& n) { return ends_with(n, ".svg"); },
+      "palplab report figure",
+      [](const std::string& p) {
+        return palplab::app::output_head_has(p,
+                                             "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"",
+                                             "font-family=\"Helvetica, Arial, sans-serif\"", 4096);
+      },
+      "--overwrite", a.overwrite);
+  if (a.no_stills) return;
+  const std::string listing = (std::filesystem::path(a.out) / "stills" / "stills.json").string();
+  require_own_files_under(
+      "--out", a.out, "stills",
+      [&](const std::string& n) {
+        return n == "stills.json" || ends_with(n, "_pressed.png") || ends_with(n, "_rest.png");
+      },
+      "palplab report still",
+      [&](const std::string& p) {
+        const std::string name = std::filesystem::path(p).filename().string();
+        if (name == "stills.json")
+          return palplab::app::output_head_has(p, "{", "\"camera_convention\"");
+        return palplab::app::output_head_has(listing, "{", "\"stills/" + name + "\"");
+      },
+      "--overwrite", a.overwrite);
 }
 
 palplab::app::CommandRegistration reg_report{
@@ -179,8 +210,8 @@ palplab::app::CommandRegistration reg_report{
           cmd->add_option("--still-size", a->still_size,
                           "Size of each still, WIDTHxHEIGHT in pixels (default 480x360)");
       cmd->add_flag("--overwrite", a->overwrite,
-                    "Replace a report.md or report.html in --out that is not a palplab report "
-                    "(the database itself is never replaced)");
+                    "Replace a report.md, report.html, figures/*.svg or stills file in --out "
+                    "that palplab did not write (the database itself is never replaced)");
       cmd->callback([a, size_opt, code] {
         palplab::analysis::ReportOptions opt;
         const auto [w, h] = palplab::app::parse_image_size("--still-size", a->still_size);
@@ -205,8 +236,14 @@ palplab::app::CommandRegistration reg_report{
         for (const auto& m : files.stills_missing)
           std::cerr << "palplab report: no still of prototype "
                     << palplab::escape_controls(m, false) << "\n";
-        std::cout << "report: " << files.analyses << " analyses, " << files.figures.size()
-                  << " figures, " << files.still_figures << " stills";
+        // Declared analyses of one measure and phase share a section: say how they were merged.
+        std::cout << "report: " << files.analyses << " analyses ("
+                  << (files.declared > 0
+                          ? "the study's " + std::to_string(files.declared) +
+                                " declared, one per measure and phase"
+                          : std::string("none declared: every measure in the last phase"))
+                  << "), " << files.figures.size() << " figures, " << files.still_figures
+                  << " stills";
         if (files.still_figures > 0)
           std::cout << " (" << std::lround(files.stills_seconds * 1000) << " ms)";
         std::cout << "\n  " << files.markdown << "\n  " << files.html << "\n";

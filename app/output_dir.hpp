@@ -67,6 +67,34 @@ inline void require_no_input_under(const std::string& flag, const std::string& d
   }
 }
 
+// Files in the subdirectory `sub` of `dir` that the command writes under names known only as it
+// runs (the report's figures/*.svg, stills/*_pressed.png): an existing regular, non-empty file
+// that `matches` and that `is_own` does not recognise as the command's own earlier output is
+// refused (`own_kind`, "palplab report figure") unless `overwrite`.
+inline void require_own_files_under(const std::string& flag, const std::string& dir,
+                                    const std::string& sub,
+                                    const std::function<bool(const std::string&)>& matches,
+                                    const std::string& own_kind,
+                                    const std::function<bool(const std::string&)>& is_own,
+                                    const std::string& overwrite_flag, bool overwrite) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path under = fs::path(dir) / sub;
+  if (overwrite || !fs::is_directory(under, ec)) return;
+  for (fs::directory_iterator it(under, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string path = it->path().string();
+    std::error_code e2;
+    if (!matches(it->path().filename().string()) || !fs::is_regular_file(path, e2) ||
+        fs::file_size(path, e2) == 0 || e2 || is_own(path))
+      continue;
+    throw InputError(SourceLocation{flag},
+                     "\"" + path + "\" exists and is " + describe_existing_file(path) + ", not a " +
+                         own_kind + "; the command writes its " + sub +
+                         " there and could replace it: choose another " + flag + ", or give " +
+                         overwrite_flag + " to replace such files");
+  }
+}
+
 // The checks above for the directory `dir` named by `flag` (`contents`, e.g. "report.md,
 // report.html, figures/ and stills/", says what the directory is for). `overwrite_flag` is the
 // command's flag that allows replacing a foreign file ("--overwrite"), empty if it has none.

@@ -246,6 +246,7 @@ TEST(Report, FixtureDatabaseHasEverySectionValidSvgAndNoNaN) {
   auto out = f.dir / "report";
   ReportFiles files = write_report(f.db.string(), out.string());
   EXPECT_EQ(files.analyses, 3);  // (force, post), (force, training pooled), (time, post)
+  EXPECT_EQ(files.declared, 4);  // force post's anova and pairwise_t share one section
   std::string md = slurp(files.markdown), html = slurp(files.html);
   for (const char* section :
        {"## Study and provenance", "## Analysis: palpation_force — phase post_training",

@@ -460,6 +460,14 @@ TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
       d / "out");
   EXPECT_EXIT2_WITH(r, "is read-only");
   EXPECT_FALSE(has(r.err, "not a palplab")) << r.err;
+  // --force said "not a palplab results database" there (it could not open the WAL database).
+  r = cli_as(
+      as,
+      "run " + (d / "study.json").string() + " --db " + (d / "ro" / "r.db").string() + " --force",
+      d / "out");
+  EXPECT_EXIT2_WITH(r, "is read-only");
+  EXPECT_FALSE(has(r.err, "not a palplab")) << r.err;
+  EXPECT_TRUE(fs::exists(d / "ro" / "r.db"));
   // Reading from a read-only place works (an archived run).
   r = cli_as(as,
              "export " + (d / "ro" / "r.db").string() + " --csv " + (d / "out" / "csv").string(),
@@ -516,8 +524,8 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
 }
 
 // An interrupted virtual run (SIGTERM; SIGINT alike) said nothing: it now says that the
-// completed sessions are stored and prints the command that continues it (with the run's
-// --samples), exits 128 + signal, and that command completes the run.
+// completed sessions are stored and prints the command that continues it, exits 128 + signal,
+// and that command completes the run (keeping the run's --samples none).
 TEST(HardDb, InterruptedRunSaysHowToContinue) {
   auto d = tmp("interrupt");
   spit(d / "study.json",
@@ -537,11 +545,102 @@ TEST(HardDb, InterruptedRunSaysHowToContinue) {
   EXPECT_EQ(slurp(d / "rc.txt"), "143\n") << err;
   EXPECT_TRUE(has(err, "interrupted: the sessions completed before this are stored in")) << err;
   const std::string resume =
-      "run " + (d / "study.json").string() + " --db " + db.string() + " --resume --samples none";
-  EXPECT_TRUE(has(err, "palplab " + resume)) << err;
+      "run " + (d / "study.json").string() + " --db " + db.string() + " --resume";
+  EXPECT_TRUE(has(err, "palplab " + resume + "\n")) << err;
   Result r = cli(resume + " --quiet", d);
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_EQ(palplab::results::Store::open(db.string()).read_sessions().size(), 12u);
+  const auto st = palplab::results::Store::open(db.string());
+  ASSERT_EQ(st.read_sessions().size(), 12u);
+  for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
+}
+
+// `--samples` was not stored: a resume with the default stored 1 kHz samples for the rest of
+// the sessions only. A resume now keeps the run's setting and refuses another one.
+TEST(HardDb, ResumeKeepsTheRunsSamplesSetting) {
+  auto d = tmp("samplesresume");
+  spit(d / "study.json", study());
+  const fs::path db = d / "r.db";
+  const std::string run = "run " + (d / "study.json").string() + " --db " + db.string();
+  Result r = cli(run + " --samples none --max-sessions 2 --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "INCOMPLETE (2 sessions run; continue with --resume)")) << r.err;
+  r = cli(run + " --resume --samples full", d);
+  EXPECT_EXIT2_WITH(r, "the run started with --samples none, this resume asks for --samples full");
+  r = cli(run + " --resume --samples none --max-sessions 2", d);  // the same value: fine
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = cli(run + " --resume", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  const auto st = palplab::results::Store::open(db.string());
+  ASSERT_EQ(st.read_sessions().size(), 6u);
+  for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
+  EXPECT_EQ(st.read_meta("samples").value_or("?"), "none");
+  // A run with samples keeps them too.
+  r = cli(run + " --force --max-sessions 1 --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = cli(run + " --resume --samples none", d);
+  EXPECT_EXIT2_WITH(r, "the run started with --samples full");
+}
+
+// An interruption while `run` created its database left an empty file (or an SQLite file
+// without tables) that --resume ("not a palplab results database") and --force ("refusing to
+// replace it") both refused: the user had to delete it by hand. Nothing is in it to keep or to
+// lose: --resume starts the run there, --force replaces it. A palplab database whose start
+// stopped before its study record is started in as well.
+TEST(HardDb, AnInterruptedStartIsStartedInOrReplaced) {
+  auto d = tmp("emptystart");
+  spit(d / "study.json", study());
+  const fs::path db = d / "r.db";
+  const std::string run = "run " + (d / "study.json").string() + " --db " + db.string();
+  auto sessions = [&] { return palplab::results::Store::open(db.string()).read_sessions().size(); };
+  spit(db, "");
+  Result r = cli(run + " --resume", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "holds no run yet (its start was interrupted): starting the run"))
+      << r.err;
+  EXPECT_EQ(sessions(), 6u);
+  // An SQLite file without tables (what a start stopped inside its schema transaction leaves).
+  auto empty_sqlite = [&] {
+    fs::remove(db);
+    sqlite3* h = nullptr;
+    ASSERT_EQ(sqlite3_open(db.c_str(), &h), SQLITE_OK);
+    sqlite3_exec(h, "PRAGMA journal_mode=WAL; CREATE TABLE t(x); DROP TABLE t;", nullptr, nullptr,
+                 nullptr);
+    sqlite3_close(h);
+    ASSERT_GT(fs::file_size(db), 0u);
+  };
+  empty_sqlite();
+  r = cli(run + " --force --quiet", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(sessions(), 6u);
+  empty_sqlite();
+  r = cli(run + " --resume --quiet", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(sessions(), 6u);
+  // The schema written, the study record not yet.
+  fs::remove(db);
+  { palplab::results::Store::create(db.string()); }
+  r = cli(run + " --resume", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "holds no run yet")) << r.err;
+  EXPECT_EQ(sessions(), 6u);
+  // A file with something in it is still never taken for a leftover.
+  spit(d / "notes.db", "my notes");
+  r = cli("run " + (d / "study.json").string() + " --db " + (d / "notes.db").string() + " --force",
+          d);
+  EXPECT_EXIT2_WITH(r, "refusing to replace it: not a palplab results database");
+  EXPECT_EQ(slurp(d / "notes.db"), "my notes");
+}
+
+// Resuming with another study file named neither study.
+TEST(HardDb, ResumeWithAnotherStudyNamesBoth) {
+  auto d = tmp("otherstudy");
+  const fs::path db = incomplete_db(d);
+  std::string s = study();
+  s.replace(s.find("\"id\": \"hard\""), 12, "\"id\": \"soft\"");
+  spit(d / "other.json", s);
+  Result r = cli("run " + (d / "other.json").string() + " --db " + db.string() + " --resume", d);
+  EXPECT_EXIT2_WITH(r, "the database holds a run of another study file: study \"hard\" (SHA-256 ");
+  EXPECT_TRUE(has(r.err, "this file is study \"soft\" (SHA-256 ")) << r.err;
 }
 
 // --force replaced another study's run without a word: it now says what it replaces.
@@ -561,6 +660,18 @@ TEST(HardDb, ReportAndExportOfAnIncompleteDatabaseSaySo) {
   Result r = cli("report " + db.string() + " --out " + (d / "rep").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(has(r.err, "is INCOMPLETE")) << r.err;
+  // The participants with sessions stored, not the planned ones (1 session of 1 participant).
+  // (Which group's participant ran first is the plan's randomised order.)
+  const std::string md = slurp(d / "rep" / "report.md");
+  EXPECT_TRUE(has(md,
+                  "| participants per group (with sessions stored, of planned) | "
+                  "G1: 0 of 1, G2: 1 of 1 |") ||
+              has(md,
+                  "| participants per group (with sessions stored, of planned) | "
+                  "G1: 1 of 1, G2: 0 of 1 |"))
+      << md;
+  EXPECT_TRUE(has(r.out, "report: 6 analyses (none declared: every measure in the last phase)"))
+      << r.out;
   r = cli("export " + db.string() + " --csv " + (d / "csv").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(has(r.err, "is INCOMPLETE")) << r.err;

@@ -286,6 +286,39 @@ TEST(CliReportDamage, ReportLosesNoFileInItsDirectory) {
                {"--out: \"" + (d / "mine" / "report.html").string() +
                 "\" exists and is a file, not a palplab report (report.html)"});
   EXPECT_EQ(slurp(d / "mine" / "report.html"), "<html>mine</html>\n");
+  // A foreign SVG among the figures (whose names are known only as the report runs) was replaced
+  // when it had a figure's name: any one that palplab did not write is refused unless
+  // --overwrite; palplab's own are replaced as before.
+  fs::remove(d / "mine" / "report.html");
+  ASSERT_EQ(report(db, d / "mine").code, 0);
+  std::vector<fs::path> figures;
+  for (const auto& e : fs::directory_iterator(d / "mine" / "figures")) figures.push_back(e.path());
+  ASSERT_FALSE(figures.empty());
+  const std::string drawing = "<?xml version=\"1.0\"?>\n<svg>my drawing</svg>\n";
+  std::ofstream(figures[0], std::ios::trunc) << drawing;
+  expect_exit2(
+      report(db, d / "mine"),
+      {"--out: \"" + figures[0].string() + "\" exists and is a file, not a palplab report figure",
+       "choose another --out, or give --overwrite to replace such files"});
+  EXPECT_EQ(slurp(figures[0]), drawing);
+  r = report(db, d / "mine", " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(figures[0]), drawing);
+  // A PNG named like a still, not listed in stills/stills.json (and a foreign stills.json).
+  fs::create_directories(d / "mine" / "stills");
+  std::ofstream(d / "mine" / "stills" / "A_pressed.png") << "my photo";
+  auto with_stills = [&](const std::string& extra) {
+    return run_palplab("report " + db.string() + " --out " + (d / "mine").string() + extra, d);
+  };
+  expect_exit2(with_stills(""),
+               {"A_pressed.png\" exists and is a file, not a palplab report still"});
+  EXPECT_EQ(slurp(d / "mine" / "stills" / "A_pressed.png"), "my photo");
+  EXPECT_EQ(report(db, d / "mine").code, 0) << "without stills, stills/ is not written";
+  fs::remove(d / "mine" / "stills" / "A_pressed.png");
+  std::ofstream(d / "mine" / "stills" / "stills.json") << "{\"mine\": 1}\n";
+  expect_exit2(with_stills(""),
+               {"stills.json\" exists and is a JSON file, not a palplab report still"});
+  EXPECT_EQ(slurp(d / "mine" / "stills" / "stills.json"), "{\"mine\": 1}\n");
 }
 
 // `export DB --csv DIR` replaced a database saved as DIR/measures.csv, removed one saved as
