@@ -334,7 +334,8 @@ void section_provenance(Context& c) {
   for (const auto& ph : c.phase_order) {
     int n = 0;
     for (const auto& s : c.sessions) n += s.phase == ph;
-    phases_text += (phases_text.empty() ? "" : ", ") + ph + " (" + std::to_string(n) + " sessions)";
+    phases_text += (phases_text.empty() ? "" : ", ") + ph + " (" + std::to_string(n) + " session" +
+                   (n == 1 ? "" : "s") + ")";
   }
   const auto& st = c.study;
   doc.table(

@@ -270,6 +270,7 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   o.participant = h.participant;
   o.device_text = spec.text;
   o.samples = ro.samples;
+  o.samples_explicit = ro.samples_explicit;
   o.record_trace_dir = h.record_trace;
   o.device_lost = h.device_lost;
   o.stop = &g_interrupted;
@@ -436,10 +437,14 @@ palplab::app::CommandRegistration reg{
             std::fflush(stderr);
           };
         }
+        // The flags that change what is written come along (--samples is the run's own).
+        std::string again = "palplab run " + shell_word(*study) + " --db " + shell_word(opt->db);
+        for (const auto& sc : *scenes) again += " --scene " + shell_word(sc);
+        if (!human->record_trace.empty())
+          again += " --record-trace " + shell_word(human->record_trace);
         g_interrupt_text = "\ninterrupted: the sessions completed before this are stored in " +
                            palplab::escape_controls(opt->db, false) +
-                           " (the one running is not); continue with:\n  palplab run " +
-                           shell_word(*study) + " --db " + shell_word(opt->db) + " --resume\n";
+                           " (the one running is not); continue with:\n  " + again + " --resume\n";
         for (int sig : {SIGINT, SIGTERM})  // a signal the caller ignores (nohup, `&`) stays so
           if (std::signal(sig, on_interrupt_virtual) == SIG_IGN) std::signal(sig, SIG_IGN);
         RunSummary r = run_study(s, plan, *opt);
@@ -454,8 +459,9 @@ palplab::app::CommandRegistration reg{
               r.simulated, r.wall, r.wall > 0 ? r.simulated / r.wall : 0.0,
               r.complete ? "complete" : "INCOMPLETE (continue with --resume)");
         } else if (!r.complete) {  // --quiet: no progress, but never a silent partial result
-          std::fprintf(stderr, "%s: INCOMPLETE (%ld sessions run; continue with --resume)\n",
-                       palplab::escape_controls(opt->db, false).c_str(), r.sessions_run);
+          std::fprintf(stderr, "%s: INCOMPLETE (%ld session%s run; continue with --resume)\n",
+                       palplab::escape_controls(opt->db, false).c_str(), r.sessions_run,
+                       r.sessions_run == 1 ? "" : "s");
         }
         *code = 0;
       });

@@ -179,16 +179,22 @@ void check_report_out(const ReportArgs& a) {
       "--overwrite", a.overwrite);
   if (a.no_stills) return;
   const std::string listing = (std::filesystem::path(a.out) / "stills" / "stills.json").string();
+  // The listing first: a foreign one would make palplab's own stills look foreign.
+  require_own_files_under(
+      "--out", a.out, "stills", [](const std::string& n) { return n == "stills.json"; },
+      "palplab report stills listing",
+      [](const std::string& p) {
+        return palplab::app::output_head_has(p, "{", "\"camera_convention\"");
+      },
+      "--overwrite", a.overwrite);
   require_own_files_under(
       "--out", a.out, "stills",
       [&](const std::string& n) {
-        return n == "stills.json" || ends_with(n, "_pressed.png") || ends_with(n, "_rest.png");
+        return ends_with(n, "_pressed.png") || ends_with(n, "_rest.png");
       },
       "palplab report still",
       [&](const std::string& p) {
         const std::string name = std::filesystem::path(p).filename().string();
-        if (name == "stills.json")
-          return palplab::app::output_head_has(p, "{", "\"camera_convention\"");
         return palplab::app::output_head_has(listing, "{", "\"stills/" + name + "\"");
       },
       "--overwrite", a.overwrite);

@@ -70,7 +70,7 @@ inline void require_no_input_under(const std::string& flag, const std::string& d
 // Files in the subdirectory `sub` of `dir` that the command writes under names known only as it
 // runs (the report's figures/*.svg, stills/*_pressed.png): an existing regular, non-empty file
 // that `matches` and that `is_own` does not recognise as the command's own earlier output is
-// refused (`own_kind`, "palplab report figure") unless `overwrite`.
+// refused (`own_kind`, "palplab report figure") unless `overwrite`; a symbolic link always.
 inline void require_own_files_under(const std::string& flag, const std::string& dir,
                                     const std::string& sub,
                                     const std::function<bool(const std::string&)>& matches,
@@ -80,12 +80,19 @@ inline void require_own_files_under(const std::string& flag, const std::string& 
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path under = fs::path(dir) / sub;
-  if (overwrite || !fs::is_directory(under, ec)) return;
+  if (!fs::is_directory(under, ec)) return;
   for (fs::directory_iterator it(under, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string path = it->path().string();
     std::error_code e2;
-    if (!matches(it->path().filename().string()) || !fs::is_regular_file(path, e2) ||
-        fs::file_size(path, e2) == 0 || e2 || is_own(path))
+    if (!matches(it->path().filename().string())) continue;
+    // Never written through, even with the overwrite flag: it could point outside `dir`.
+    if (fs::is_symlink(fs::symlink_status(path, e2)))
+      throw InputError(SourceLocation{flag},
+                       "\"" + path + "\" is a symbolic link; the command writes its " + sub +
+                           " there and never through a link (it could write outside " + flag +
+                           "): remove the link or choose another " + flag);
+    if (overwrite || !fs::is_regular_file(path, e2) || fs::file_size(path, e2) == 0 || e2 ||
+        is_own(path))
       continue;
     throw InputError(SourceLocation{flag},
                      "\"" + path + "\" exists and is " + describe_existing_file(path) + ", not a " +

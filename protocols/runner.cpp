@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -370,8 +371,44 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
 }
 
 // A new database: the study, its prototypes (with their SHA-256), participants and structure.
+// The `--samples` setting of a run being continued: meta "samples" (a run started before it was
+// stored: what its first session holds); an explicit other setting is refused (a database holds
+// the samples of every session or of none).
+bool run_samples_setting(results::Store& store, const std::vector<results::SessionRecord>& stored,
+                         bool samples, bool samples_explicit, const std::string& db) {
+  std::optional<std::string> m = store.read_meta("samples");
+  if (!m) {
+    m = stored.empty()                                           ? (samples ? "full" : "none")
+        : store.read_samples(stored.front().session).size() == 0 ? "none"
+                                                                 : "full";
+    store.write_meta("samples", *m);
+  }
+  const bool was = *m == "full";
+  if (samples_explicit && was != samples)
+    throw InputError("the run started with --samples " + *m + ", this one asks for --samples " +
+                         (samples ? "full" : "none") +
+                         "; a database holds the samples of every session or of none (drop "
+                         "--samples to keep the run's setting)",
+                     db);
+  return was;
+}
+
+// "the database holds a run of another study file: ...", naming both (the same id: an edit),
+// then `needs`.
+std::string another_study(const results::StudyRecord& rec, const Study& study,
+                          const std::string& sha, const std::string& needs) {
+  const std::string theirs = nlohmann::json(rec.study_id).dump();
+  const std::string ours = nlohmann::json(study.id).dump();
+  return "the database holds a run of another study file: study " + theirs + " (SHA-256 " +
+         rec.sha256.substr(0, 12) + "…), this file is " +
+         (theirs == ours ? "an edited version of it" : "study " + ours) + " (SHA-256 " +
+         sha.substr(0, 12) + "…); " + needs;
+}
+
+// The run's start, one transaction (with meta "samples": full or none).
 void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
-                     results::Store& store, std::map<std::string, std::string>& prototype_sha) {
+                     results::Store& store, std::map<std::string, std::string>& prototype_sha,
+                     bool samples) {
   results::StudyRecord rec;
   rec.study_id = study.id;
   rec.title = study.title;
@@ -389,8 +426,8 @@ void write_new_study(const Study& study, const Plan& plan, const std::string& sh
   }
   std::vector<results::ParticipantRecord> parts;
   for (const auto& p : plan.participants) parts.push_back({p.id, p.group, p.number, p.seed});
-  store.write_study(rec, protos, parts);
-  store.write_structure(study_structure(study));
+  store.write_start(rec, protos, parts, study_structure(study),
+                    {{"samples", samples ? "full" : "none"}});
 }
 
 }  // namespace
@@ -429,10 +466,9 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   // A run interrupted while it created the database leaves an empty file: nothing to resume,
   // nothing to lose; the run starts in its place.
   bool fresh = !exists;
-  if (exists && opt.resume && results::Store::is_empty_leftover(opt.db)) {
+  if (exists && opt.resume && results::Store::remove_empty_leftover(opt.db)) {
     if (opt.notice)
       opt.notice(opt.db + " holds no run yet (its start was interrupted): starting the run");
-    results::Store::remove_existing(opt.db);
     fresh = true;
   }
   if (exists && opt.force && !opt.resume) {
@@ -453,7 +489,14 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   }
   results::Store store =
       fs::exists(opt.db) ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
-  if (!fresh && opt.resume && !store.has_study()) {  // created, then interrupted before its study
+  if (!fresh && opt.resume && !store.has_study()) {
+    // Created, then interrupted before its start (write_start: one transaction) was written;
+    // rows without a study record are a damaged database instead, never started over.
+    if (const long long n = store.count_run_rows())
+      throw InputError("damaged database: it has no study record but " + std::to_string(n) +
+                           " rows of a run (sessions, participants, ...); palplab cannot "
+                           "resume it (--force replaces it)",
+                       opt.db);
     if (opt.notice)
       opt.notice(opt.db + " holds no run yet (its start was interrupted): starting the run");
     fresh = true;
@@ -466,31 +509,18 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   if (!fresh && opt.resume) {
     results::StudyRecord rec = store.read_study();
     if (rec.sha256 != sha)
-      throw InputError("the database holds a run of another study file: study " +
-                           nlohmann::json(rec.study_id).dump() + " (SHA-256 " +
-                           rec.sha256.substr(0, 12) + "…), this file is study " +
-                           nlohmann::json(study.id).dump() + " (SHA-256 " + sha.substr(0, 12) +
-                           "…); resume needs the identical study file (to run this one: another "
-                           "--db, or --force "
-                           "to replace that run)",
+      throw InputError(another_study(rec, study, sha,
+                                     "resume needs the identical study file (to run this one: "
+                                     "another --db, or --force to replace that run)"),
                        opt.db);
-    if (const auto m = store.read_meta("samples")) {
-      const bool was = *m == "full";
-      if (opt.samples_explicit && was != opt.samples)
-        throw InputError("the run started with --samples " + *m +
-                             ", this resume asks for --samples " + (opt.samples ? "full" : "none") +
-                             "; a database holds the samples of every session or of none "
-                             "(drop --samples to keep the run's setting)",
-                         opt.db);
-      keep_samples = was;
-    }
+    stored = store.read_sessions();
+    keep_samples = run_samples_setting(store, stored, opt.samples, opt.samples_explicit, opt.db);
     auto parts = store.read_participants();
     bool same = parts.size() == plan.participants.size();
     for (std::size_t i = 0; same && i < parts.size(); ++i)
       same = parts[i].participant == plan.participants[i].id &&
              parts[i].group == plan.participants[i].group;
     if (!same) throw InputError("the database's participants differ from the plan", opt.db);
-    stored = store.read_sessions();
     for (const auto& s : stored) done[s.participant][s.ordinal] = s.state_after;
     // Sessions are written in order per participant: what is stored must be the first k of the
     // plan's sessions of a planned participant (a row deleted or edited by hand would otherwise
@@ -531,8 +561,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
                          it == study.prototype_files.end() ? opt.db : it->second);
     }
   } else {
-    store.write_meta("samples", keep_samples ? "full" : "none");
-    write_new_study(study, plan, sha, store, prototype_sha);
+    write_new_study(study, plan, sha, store, prototype_sha, keep_samples);
   }
 
   Progress progress;
@@ -736,16 +765,25 @@ engine::Trace trace_from_samples(const results::SampleSeries& s) {
   return tr;
 }
 
+namespace {
+// Whole seconds, or three significant digits below 10 s (a 0.05 s session is not "0 s").
+std::string seconds_text(double s) {
+  if (s >= 10.0) return std::to_string(std::lround(s));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", s);
+  return buf;
+}
+}  // namespace
+
 std::string session_instructions(const Study& study, const SessionSpec& spec) {
   if (spec.phase >= 0 && spec.phase < static_cast<int>(study.phases.size()))
     if (const std::string* t = study.phases[spec.phase].instructions_for(spec.index)) return *t;
   if (study.task.kind == "needle_insertion")
     return "Palpate the skin with the finger to choose the entry point, then take the needle "
            "(device button 2, or N in the window) and insert it to the " +
-           study.task.feature + ". The session lasts " +
-           std::to_string(std::lround(spec.duration)) + " s.";
+           study.task.feature + ". The session lasts " + seconds_text(spec.duration) + " s.";
   return "Palpate the model and find the " + study.task.feature + ". The session lasts " +
-         std::to_string(std::lround(spec.duration)) + " s.";
+         seconds_text(spec.duration) + " s.";
 }
 
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
@@ -763,20 +801,35 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
   }
   const std::string sha = results::sha256_hex(study.json_text);
   std::map<std::string, std::string> prototype_sha;
-  const bool exists = fs::exists(opt.db);
+  bool exists = fs::exists(opt.db);
+  if (exists && results::Store::remove_empty_leftover(opt.db)) {  // as run_study's --resume
+    say("note: " + opt.db + " holds no run yet (its start was interrupted): starting the run");
+    exists = false;
+  }
   results::Store store =
       exists ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
+  if (exists && !store.has_study()) {
+    if (const long long n = store.count_run_rows())
+      throw InputError("damaged database: it has no study record but " + std::to_string(n) +
+                           " rows of a run (sessions, participants, ...); palplab cannot "
+                           "continue it",
+                       opt.db);
+    say("note: " + opt.db + " holds no run yet (its start was interrupted): starting the run");
+    exists = false;
+  }
+  bool keep_samples = opt.samples;
   if (exists) {
     results::StudyRecord rec = store.read_study();
     if (rec.sha256 != sha)
-      throw InputError("the database holds a run of another study file (SHA-256 " +
-                           rec.sha256.substr(0, 12) + "…, this file " + sha.substr(0, 12) +
-                           "…); human sessions need the identical study",
+      throw InputError(another_study(rec, study, sha,
+                                     "human sessions need the identical study file (to run this "
+                                     "one: another --db)"),
                        opt.db);
+    keep_samples = run_samples_setting(store, store.read_sessions(), opt.samples,
+                                       opt.samples_explicit, opt.db);
     for (const auto& p : store.read_prototypes()) prototype_sha[p.prototype] = p.sha256;
   } else {
-    store.write_meta("samples", opt.samples ? "full" : "none");
-    write_new_study(study, plan, sha, store, prototype_sha);
+    write_new_study(study, plan, sha, store, prototype_sha, keep_samples);
   }
   if (int n = store.abort_stale_sessions(pp->id))
     say("note: " + std::to_string(n) + " session(s) of " + pp->id +
@@ -913,7 +966,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       }
       for (auto& e : dev->take_events()) ev.push_back({e.t, e.kind, e.value, ""});
       if (chunk.size() == 0 && ev.empty()) return;
-      store.append_session_data(rec.session, ev, opt.samples ? chunk : results::SampleSeries{},
+      store.append_session_data(rec.session, ev, keep_samples ? chunk : results::SampleSeries{},
                                 second);
       all.x.insert(all.x.end(), chunk.x.begin(), chunk.x.end());
       all.F.insert(all.F.end(), chunk.F.begin(), chunk.F.end());

@@ -95,6 +95,7 @@ struct HumanOptions {
   std::string stop_reason = "interrupted (Ctrl-C)";
   double device_lost = 2.0;  // s without a fresh hardware sample: the session is aborted
   bool samples = true;
+  bool samples_explicit = true;  // as RunOptions::samples_explicit
   std::string record_trace_dir;  // "" = none; else DIR/<participant>_<ordinal>_<attempt>.trace
   std::int64_t now = -1;         // Unix time "now" (s); -1 = the system clock (tests set it)
   std::function<void(const std::string&)> say;  // instructions, progress (stdout)

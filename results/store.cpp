@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -374,6 +375,15 @@ void require_writable(const std::string& path, bool file_exists) {
                      path);
   if (file_exists && ::access(path.c_str(), W_OK) != 0)
     throw InputError("cannot write the database: the file is read-only", path);
+  // SQLite creates PATH-wal and PATH-shm with the database file's permissions: after a read of
+  // a read-only file, then `chmod u+w` of the file alone, they stay read-only.
+  for (const char* suffix : {"-wal", "-shm"})
+    if (file_exists && fs::exists(path + suffix, ec) &&
+        ::access((path + suffix).c_str(), W_OK) != 0)
+      throw InputError(std::string("cannot write the database: its ") + suffix +
+                           " file is read-only (make it writable like the database, or delete "
+                           "it if it is empty)",
+                       path);
 }
 
 // An exclusive advisory lock held by the one writer (flock: independent of SQLite's own
@@ -399,6 +409,27 @@ struct Probe {
   std::string detail;  // kDamaged: SQLite's words
 };
 
+// An SQLite URI naming exactly `path`: SQLite decodes %HH and ends the path at '?' or '#', so
+// "x%41.db" would name xA.db and "a#b.db" a; every byte outside a safe set is %-encoded (a
+// leading "//" too: it would start an authority).
+std::string sqlite_uri(const std::string& path, const std::string& query) {
+  static const char* hex = "0123456789ABCDEF";
+  std::string out = "file:";
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const auto c = static_cast<unsigned char>(path[i]);
+    const bool safe = std::isalnum(c) || c == '.' || c == '_' || c == '-' || c == '~' ||
+                      (c == '/' && !(i == 1 && path[0] == '/'));
+    if (safe) {
+      out += static_cast<char>(c);
+    } else {
+      out += '%';
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out + "?" + query;
+}
+
 Probe probe_db(const std::string& path) {
   static const std::string kMagic("SQLite format 3\0", 16);
   {
@@ -414,7 +445,7 @@ Probe probe_db(const std::string& path) {
               "the file ends inside the 100-byte SQLite header, at byte " + std::to_string(got)};
   }
   sqlite3* db = nullptr;
-  const std::string uri = "file:" + path + "?mode=ro";
+  const std::string uri = sqlite_uri(path, "mode=ro");
   if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) !=
       SQLITE_OK) {
     sqlite3_close(db);
@@ -457,13 +488,13 @@ std::string damaged(const std::string& detail) {
 
 bool Store::is_empty_leftover(const std::string& path) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return false;
+  if (!fs::is_regular_file(fs::symlink_status(path, ec))) return false;
   if (fs::file_size(path, ec) == 0 && !ec) return true;
   if (probe_db(path).kind != Probe::kNotPalplab) return false;
   // An SQLite file without a single table or index (its uncommitted -wal frames, if any, are
   // not part of it).
   sqlite3* db = nullptr;
-  const std::string uri = "file:" + path + "?mode=ro";
+  const std::string uri = sqlite_uri(path, "mode=ro");
   bool empty = false;
   if (sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) ==
       SQLITE_OK) {
@@ -478,6 +509,22 @@ bool Store::is_empty_leftover(const std::string& path) {
   return empty;
 }
 
+bool Store::remove_empty_leftover(const std::string& path) {
+  if (!is_empty_leftover(path)) return false;
+  require_writable(path, true);
+  const int fd = lock_exclusive(path);  // then looked at again: nobody may have started meanwhile
+  if (!is_empty_leftover(path)) {
+    ::close(fd);
+    throw InputError(
+        "another palplab process started a run in this database meanwhile; nothing was replaced",
+        path);
+  }
+  std::error_code ec;
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix, ec);
+  ::close(fd);
+  return true;
+}
+
 void Store::remove_existing(const std::string& path) {
   std::error_code ec;
   const auto st = fs::symlink_status(path, ec);
@@ -490,12 +537,7 @@ void Store::remove_existing(const std::string& path) {
   // (Before the look inside: in a read-only directory a WAL database cannot even be opened, and
   // "not a palplab results database" would be the wrong reason.)
   require_writable(path, true);
-  if (is_empty_leftover(path)) {
-    const int fd = lock_exclusive(path);
-    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix, ec);
-    ::close(fd);
-    return;
-  }
+  if (remove_empty_leftover(path)) return;
   if (const Probe p = probe_db(path); p.kind == Probe::kDamaged)
     throw InputError("refusing to replace it: " + damaged(p.detail) +
                          "; palplab cannot tell whether it is a results database (if it is, "
@@ -723,7 +765,7 @@ Store Store::open(const std::string& path, bool exclusive) {
   } else {
     // Reading from a read-only place (an archive, a mounted share): no -shm can be created, so
     // the file is opened as immutable (nobody may write it meanwhile).
-    db = open_db("file:" + path + "?immutable=1",
+    db = open_db(sqlite_uri(path, "immutable=1"),
                  SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
   }
   Store s(db, path);
@@ -786,6 +828,38 @@ void Store::write_study(const StudyRecord& s, const std::vector<PrototypeRecord>
   std::lock_guard lock(*mu_);
   exec(db_, "BEGIN IMMEDIATE");
   try {
+    insert_study(s, prototypes, participants);
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+void Store::write_start(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
+                        const std::vector<ParticipantRecord>& participants,
+                        const StudyStructure& structure,
+                        const std::map<std::string, std::string>& meta) {
+  std::lock_guard lock(*mu_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    for (const auto& [key, value] : meta)
+      Stmt(db_, "INSERT OR REPLACE INTO meta(key, value) VALUES (?1, ?2)")
+          .bind(1, key)
+          .bind(2, value)
+          .run();
+    insert_study(s, prototypes, participants);
+    insert_structure(structure);
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+void Store::insert_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
+                         const std::vector<ParticipantRecord>& participants) {
+  {
     Stmt(db_,
          "INSERT INTO study(id, study_id, title, json, sha256, palplab_version, git_commit, seed, "
          "started_at, finished_at) VALUES (1, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)")
@@ -810,10 +884,6 @@ void Store::write_study(const StudyRecord& s, const std::vector<PrototypeRecord>
           .bind(3, p.number)
           .bind(4, std::to_string(p.seed))
           .run();
-    exec(db_, "COMMIT");
-  } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
   }
 }
 
@@ -889,6 +959,26 @@ bool Store::has_study() const {
   });
 }
 
+long long Store::count_run_rows() const {
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    std::vector<std::string> tables;
+    {
+      Stmt q(db_,
+             "SELECT name FROM sqlite_master WHERE type = 'table' AND name != 'meta' AND "
+             "name NOT LIKE 'sqlite_%'");
+      while (q.step()) tables.push_back(q.text(0));
+    }
+    long long n = 0;
+    for (const auto& t : tables) {
+      const std::string sql = "SELECT COUNT(*) FROM \"" + t + "\"";
+      Stmt q(db_, sql.c_str());
+      if (q.step()) n += q.integer(0);
+    }
+    return n;
+  });
+}
+
 std::optional<std::string> Store::read_meta(const std::string& key) const {
   return reading(path_, [&]() -> std::optional<std::string> {
     std::lock_guard lock(*mu_);
@@ -940,12 +1030,22 @@ std::vector<PrototypeRecord> Store::read_prototypes() const {
 
 void Store::write_structure(const StudyStructure& st) {
   std::lock_guard lock(*mu_);
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    insert_structure(st);
+    exec(db_, "COMMIT");
+  } catch (...) {
+    exec(db_, "ROLLBACK");
+    throw;
+  }
+}
+
+void Store::insert_structure(const StudyStructure& st) {
   if (version_ < 2)
     throw InputError("results schema version " + std::to_string(version_) +
                          " has no study structure tables; a run needs a new database",
                      path_);
-  exec(db_, "BEGIN IMMEDIATE");
-  try {
+  {
     Stmt g(db_, "INSERT INTO study_groups(grp, position, prototype) VALUES (?1, ?2, ?3)");
     for (std::size_t i = 0; i < st.groups.size(); ++i)
       g.bind(1, st.groups[i].group)
@@ -976,10 +1076,6 @@ void Store::write_structure(const StudyStructure& st) {
       for (const auto& r : ph.thresholds)
         t.bind(1, ph.phase).bind(2, r.region).bind(3, r.st).bind(4, r.mpf).bind(5, r.sft).run();
     }
-    exec(db_, "COMMIT");
-  } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
   }
 }
 

@@ -6,6 +6,7 @@
 //
 // results knows nothing of meshes or studies beyond these records.
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -154,6 +155,9 @@ class Store {
   // interrupted while creating its database leaves (`run --force` replaces it; `run --resume`
   // starts the run in it).
   static bool is_empty_leftover(const std::string& path);
+  // Removes PATH (and its -wal, -shm) when it is such a leftover, checked again under the
+  // writer's lock; false when it is not one (nothing removed).
+  static bool remove_empty_leftover(const std::string& path);
   Store(Store&&) noexcept;
   Store& operator=(Store&&) noexcept;
   ~Store();
@@ -161,7 +165,12 @@ class Store {
   void write_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
                    const std::vector<ParticipantRecord>& participants);
   void write_structure(const StudyStructure& s);  // once, after write_study
-  void write_session(SessionData& d);             // one transaction; sets d.session.session
+  // A run's start in one transaction: the meta rows (INSERT OR REPLACE), the study with its
+  // prototypes and participants, its structure. Interrupted, it leaves none of them.
+  void write_start(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
+                   const std::vector<ParticipantRecord>& participants,
+                   const StudyStructure& structure, const std::map<std::string, std::string>& meta);
+  void write_session(SessionData& d);  // one transaction; sets d.session.session
   void set_finished(const std::string& finished_at);
 
   // Human sessions, written as they go (docs/FORMATS.md): begin_session inserts the row with
@@ -183,6 +192,8 @@ class Store {
   void write_meta(const std::string& key, const std::string& value);
   // False while a run's start was interrupted before its study record was written.
   bool has_study() const;
+  // Rows in every table but meta (0: nothing of a run is stored yet).
+  long long count_run_rows() const;
   StudyRecord read_study() const;
   std::vector<ParticipantRecord> read_participants() const;
   // The read_* functions refuse (InputError naming the table, row and column) a numeric value a
@@ -208,6 +219,10 @@ class Store {
 
  private:
   Store(sqlite3* db, std::string path);
+  // The rows of write_study / write_structure, inside the caller's transaction and lock.
+  void insert_study(const StudyRecord& s, const std::vector<PrototypeRecord>& prototypes,
+                    const std::vector<ParticipantRecord>& participants);
+  void insert_structure(const StudyStructure& s);
   sqlite3* db_ = nullptr;
   std::string path_;
   std::unique_ptr<std::mutex> mu_;

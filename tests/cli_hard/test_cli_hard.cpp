@@ -14,6 +14,7 @@
 #include <string>
 
 #include "results/store.hpp"
+#include "tests/sqlite_support.hpp"
 
 namespace fs = std::filesystem;
 
@@ -529,7 +530,7 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
 TEST(HardDb, InterruptedRunSaysHowToContinue) {
   auto d = tmp("interrupt");
   spit(d / "study.json",
-       study(R"([{"id": "G1", "prototype": "A", "size": 4}])", "", 300.0));  // ≈ 2 s of A
+       study(R"([{"id": "G1", "prototype": "A", "size": 2}])", "", 300.0));  // ≈ 1 s of A
   const fs::path db = d / "r.db";
   const std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
                           "/prototypes " + std::string(PALPLAB_BINARY) + " run " +
@@ -550,7 +551,7 @@ TEST(HardDb, InterruptedRunSaysHowToContinue) {
   Result r = cli(resume + " --quiet", d);
   EXPECT_EQ(r.code, 0) << r.err;
   const auto st = palplab::results::Store::open(db.string());
-  ASSERT_EQ(st.read_sessions().size(), 12u);
+  ASSERT_EQ(st.read_sessions().size(), 6u);
   for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
 }
 
@@ -565,7 +566,7 @@ TEST(HardDb, ResumeKeepsTheRunsSamplesSetting) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(has(r.err, "INCOMPLETE (2 sessions run; continue with --resume)")) << r.err;
   r = cli(run + " --resume --samples full", d);
-  EXPECT_EXIT2_WITH(r, "the run started with --samples none, this resume asks for --samples full");
+  EXPECT_EXIT2_WITH(r, "the run started with --samples none, this one asks for --samples full");
   r = cli(run + " --resume --samples none --max-sessions 2", d);  // the same value: fine
   EXPECT_EQ(r.code, 0) << r.err;
   r = cli(run + " --resume", d);
@@ -632,6 +633,90 @@ TEST(HardDb, AnInterruptedStartIsStartedInOrReplaced) {
 }
 
 // Resuming with another study file named neither study.
+// SQLite URIs decode %HH and end a path at '?' or '#': the probes of a database named x%41.db
+// looked at xA.db (an empty SQLite file beside it made --resume delete the complete run, and
+// --force a foreign one), and a.b#c.db could be created but never opened again.
+TEST(HardDb, PathsWithUriCharactersNameTheirOwnFile) {
+  auto d = tmp("uripath");
+  spit(d / "study.json", study());
+  auto empty_sqlite = [](const fs::path& p) {
+    sqlite3* h = nullptr;
+    ASSERT_EQ(sqlite3_open(p.c_str(), &h), SQLITE_OK);
+    sqlite3_exec(h, "PRAGMA journal_mode=WAL; CREATE TABLE t(x); DROP TABLE t;", nullptr, nullptr,
+                 nullptr);
+    sqlite3_close(h);
+  };
+  const std::string run = "run " + (d / "study.json").string() + " --db ";
+  const fs::path pct = d / "x%41.db";
+  Result r = cli(run + "'" + pct.string() + "' --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string started = palplab::results::Store::open(pct.string()).read_study().started_at;
+  empty_sqlite(d / "xA.db");
+  r = cli(run + "'" + pct.string() + "' --resume", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.err, "holds no run yet")) << r.err;
+  EXPECT_EQ(palplab::results::Store::open(pct.string()).read_study().started_at, started)
+      << "the complete run was started over";
+  EXPECT_EQ(palplab::results::Store::open(pct.string()).read_sessions().size(), 6u);
+  // --force keeps refusing a foreign SQLite file whatever lies beside it.
+  const fs::path thesis = d / "thesis%41.db";
+  {
+    sqlite3* h = nullptr;
+    ASSERT_EQ(sqlite3_open(thesis.c_str(), &h), SQLITE_OK);
+    sqlite3_exec(h, "CREATE TABLE chapters(x); INSERT INTO chapters VALUES (1);", nullptr, nullptr,
+                 nullptr);
+    sqlite3_close(h);
+  }
+  empty_sqlite(d / "thesisA.db");
+  r = cli(run + "'" + thesis.string() + "' --force", d);
+  EXPECT_EXIT2_WITH(r, "not a palplab results database");
+  EXPECT_TRUE(fs::exists(thesis));
+  for (const std::string name : {"a#b.db", "q?x.db", "p%2.db"}) {
+    const fs::path db = d / name;
+    r = cli(run + "'" + db.string() + "' --max-sessions 2 --quiet", d);
+    ASSERT_EQ(r.code, 0) << name << r.err;
+    r = cli(run + "'" + db.string() + "' --resume --quiet", d);
+    EXPECT_EQ(r.code, 0) << name << r.err;
+    r = cli(
+        "report '" + db.string() + "' --no-stills --out '" + (d / ("rep_" + name)).string() + "'",
+        d);
+    EXPECT_EQ(r.code, 0) << name << r.err;
+  }
+}
+
+// A resume wrote samples for the rest of a run that started with --samples none when the
+// database came from before "samples" was stored (meta row missing): the first session tells.
+TEST(HardDb, ResumeOfARunWithoutTheSamplesRowKeepsWhatItsSessionsHold) {
+  auto d = tmp("oldsamples");
+  spit(d / "study.json", study());
+  const fs::path db = d / "r.db";
+  const std::string run = "run " + (d / "study.json").string() + " --db " + db.string();
+  Result r = cli(run + " --samples none --max-sessions 3 --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  palplab::testing::sql_exec(db, "DELETE FROM meta WHERE key = 'samples'");
+  r = cli(run + " --resume --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto st = palplab::results::Store::open(db.string());
+  ASSERT_EQ(st.read_sessions().size(), 6u);
+  for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
+  EXPECT_EQ(st.read_meta("samples").value_or("?"), "none");
+}
+
+// A database whose study row was deleted but whose sessions remain was taken for an interrupted
+// start ("holds no run yet"), then died on a UNIQUE constraint (exit 3): it is damaged, exit 2.
+TEST(HardDb, RowsWithoutAStudyRecordAreDamagedNotAFreshStart) {
+  auto d = tmp("nostudy");
+  spit(d / "study.json", study());
+  const fs::path db = d / "r.db";
+  const std::string run = "run " + (d / "study.json").string() + " --db " + db.string();
+  Result r = cli(run + " --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  palplab::testing::sql_exec(db, "DELETE FROM study");
+  r = cli(run + " --resume", d);
+  EXPECT_EXIT2_WITH(r, "damaged database: it has no study record but");
+  EXPECT_FALSE(has(r.err, "holds no run yet")) << r.err;
+}
+
 TEST(HardDb, ResumeWithAnotherStudyNamesBoth) {
   auto d = tmp("otherstudy");
   const fs::path db = incomplete_db(d);

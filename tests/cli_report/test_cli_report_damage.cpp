@@ -317,8 +317,17 @@ TEST(CliReportDamage, ReportLosesNoFileInItsDirectory) {
   fs::remove(d / "mine" / "stills" / "A_pressed.png");
   std::ofstream(d / "mine" / "stills" / "stills.json") << "{\"mine\": 1}\n";
   expect_exit2(with_stills(""),
-               {"stills.json\" exists and is a JSON file, not a palplab report still"});
+               {"stills.json\" exists and is a JSON file, not a palplab report stills listing"});
   EXPECT_EQ(slurp(d / "mine" / "stills" / "stills.json"), "{\"mine\": 1}\n");
+  // A link under figures/ is never written through, even with --overwrite (it could point
+  // outside --out): the report wrote another report's figure, or created a file anywhere.
+  fs::remove(d / "mine" / "stills" / "stills.json");
+  std::ofstream(d / "elsewhere.svg") << drawing;
+  fs::remove(figures[0]);
+  fs::create_symlink(d / "elsewhere.svg", figures[0]);
+  expect_exit2(report(db, d / "mine", " --overwrite"),
+               {"\"" + figures[0].string() + "\" is a symbolic link", "remove the link"});
+  EXPECT_EQ(slurp(d / "elsewhere.svg"), drawing);
 }
 
 // `export DB --csv DIR` replaced a database saved as DIR/measures.csv, removed one saved as

@@ -340,3 +340,39 @@ TEST(CliTraceExport, SessionOutOfRangeIsExit2NamingTheRange) {
   EXPECT_EQ(t::run_palplab(to_other + " --overwrite", tmp.dir).code, 0);
   EXPECT_EQ(export_session("4").code, 0);  // its own earlier output
 }
+
+// `run --human` ignored the run's --samples setting (P01's sessions without samples, the next
+// ones with them) and could not continue an empty leftover (a start interrupted while the
+// database was created): it is started in, and the setting is kept or an explicit other one
+// refused, as `run --resume` does.
+TEST(CliRunHuman, HumanSessionsKeepTheRunsSamplesSettingAndStartInALeftover) {
+  Tmp tmp;
+  e::Trace tr;
+  for (int k = 0; k < 2500; ++k) {  // held 5 mm above the model
+    e::TraceSample s;
+    s.t = k * 0.001;
+    s.in.position = Eigen::Vector3d(0.0, 0.0, 0.5);
+    tr.samples.push_back(s);
+  }
+  const std::string device = "trace:" + (tmp.dir / "hold.trace").string();
+  e::write_trace((tmp.dir / "hold.trace").string(), tr);
+  const fs::path db = tmp.dir / "h.db";
+  std::ofstream(db).close();  // 0 bytes
+  Result r = run(human(db, device, "2026-11-24T10:00:00Z", "--samples none"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("holds no run yet (its start was interrupted)"), std::string::npos) << r.out;
+  auto one = [&](const std::string& sql) { return db_rows(db, sql).at(0).at("v"); };
+  EXPECT_EQ(one("SELECT value AS v FROM meta WHERE key = 'samples'"), "none");
+  EXPECT_EQ(one("SELECT COUNT(*) AS v FROM sessions WHERE status = 'complete'"), "1");
+  // The test session (day 2) with another explicit setting: refused, nothing run.
+  r = run(human(db, device, "2026-11-26T10:00:00Z", "--samples full"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.out.find("the run started with --samples none, this one asks for --samples full"),
+            std::string::npos)
+      << r.out;  // (run_command: stderr into out)
+  // Without --samples: the run's setting.
+  r = run(human(db, device, "2026-11-26T10:00:00Z"));
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(one("SELECT COUNT(*) AS v FROM sessions WHERE status = 'complete'"), "2");
+  EXPECT_EQ(one("SELECT COUNT(*) AS v FROM samples"), "0");
+}
