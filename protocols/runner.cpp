@@ -370,7 +370,6 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
                         trainee.state().to_json());
 }
 
-// A new database: the study, its prototypes (with their SHA-256), participants and structure.
 // The `--samples` setting of a run being continued: meta "samples" (a run started before it was
 // stored: what its first session holds); an explicit other setting is refused (a database holds
 // the samples of every session or of none).
@@ -405,7 +404,8 @@ std::string another_study(const results::StudyRecord& rec, const Study& study,
          sha.substr(0, 12) + "…); " + needs;
 }
 
-// The run's start, one transaction (with meta "samples": full or none).
+// A new database: the study, its prototypes (with their SHA-256), participants and structure,
+// and meta "samples" (full or none), in one transaction.
 void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
                      results::Store& store, std::map<std::string, std::string>& prototype_sha,
                      bool samples) {
