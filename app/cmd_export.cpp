@@ -59,7 +59,7 @@ void check_export_dir(const std::string& db, const std::string& dir, bool sample
       {{"the results database", db}}, "--overwrite", overwrite);
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_export{
     "export", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("export", "Export a results database as tidy CSV files");
       auto db = std::make_shared<std::string>();
@@ -94,6 +94,16 @@ palplab::app::CommandRegistration reg{
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";
+        if (*samples) {  // a run with --samples none has none to export: said, not a bare header
+          const auto sessions = store.read_sessions();
+          const auto setting = store.read_meta("samples");
+          if (setting
+                  ? *setting == "none"
+                  : !sessions.empty() && store.read_samples(sessions.front().session).size() == 0)
+            std::cerr << "warning: " << palplab::escape_controls(*db, false)
+                      << ": the run stored no device samples (it ran with --samples none): "
+                         "samples.csv holds its header only\n";
+        }
         const auto summary = palplab::results::export_csv(store, *dir, *samples);
         std::cout << "wrote " << *dir << "/measures.csv, sessions.csv, events.csv"
                   << (*samples ? ", samples.csv" : "") << "\n";

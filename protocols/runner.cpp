@@ -392,6 +392,19 @@ bool run_samples_setting(results::Store& store, const std::vector<results::Sessi
   return was;
 }
 
+// Whether an existing database without a study record is an interrupted start (created, then
+// stopped before write_start, one transaction, was written): start the run in it. Rows of a run
+// without a study record are a damaged database instead (exit 2, never started over); `cannot`
+// ends its message ("resume it (--force replaces it)").
+bool interrupted_start(results::Store& store, const std::string& db, const std::string& cannot) {
+  if (store.has_study()) return false;
+  if (const long long n = store.count_run_rows())
+    throw InputError("damaged database: it has no study record but " + std::to_string(n) +
+                         " rows of a run (sessions, participants, ...); palplab cannot " + cannot,
+                     db);
+  return true;
+}
+
 // "the database holds a run of another study file: ...", naming both (the same id: an edit),
 // then `needs`.
 std::string another_study(const results::StudyRecord& rec, const Study& study,
@@ -489,14 +502,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   }
   results::Store store =
       fs::exists(opt.db) ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
-  if (!fresh && opt.resume && !store.has_study()) {
-    // Created, then interrupted before its start (write_start: one transaction) was written;
-    // rows without a study record are a damaged database instead, never started over.
-    if (const long long n = store.count_run_rows())
-      throw InputError("damaged database: it has no study record but " + std::to_string(n) +
-                           " rows of a run (sessions, participants, ...); palplab cannot "
-                           "resume it (--force replaces it)",
-                       opt.db);
+  if (!fresh && opt.resume && interrupted_start(store, opt.db, "resume it (--force replaces it)")) {
     if (opt.notice)
       opt.notice(opt.db + " holds no run yet (its start was interrupted): starting the run");
     fresh = true;
@@ -667,6 +673,7 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             stop = true;
             break;
           }
+          const auto session_t0 = Clock::now();
           const bool tracing = !opt.record_trace_dir.empty();
           SessionOutcome o = run_session(study, mp, pp, pp.sessions[k], state,
                                          keep_samples || tracing, prototype_sha);
@@ -685,15 +692,17 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             if (!keep_samples) o.data.samples = results::SampleSeries{};
           }
           store.write_session(o.data);
+          const double whole = std::chrono::duration<double>(Clock::now() - session_t0).count();
           state = o.state_after;
           std::lock_guard lock(mu);
           ++sum.sessions_run;
           sum.simulated += o.data.session.duration;
           PrototypeCost& c = cost[pp.sessions[k].prototype];
           c.left -= pp.sessions[k].duration;
-          c.wall += o.data.session.wall_duration;
+          c.wall += whole;  // the whole session, not only its stepping loop (wall_duration)
           c.simulated += o.data.session.duration;
           --sessions_left[pp.id];
+          progress.last_session_wall = whole;
           update_eta();
           ++progress.sessions_done;
           progress.simulated = sum.simulated;
@@ -808,12 +817,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
   }
   results::Store store =
       exists ? results::Store::open(opt.db, true) : results::Store::create(opt.db);
-  if (exists && !store.has_study()) {
-    if (const long long n = store.count_run_rows())
-      throw InputError("damaged database: it has no study record but " + std::to_string(n) +
-                           " rows of a run (sessions, participants, ...); palplab cannot "
-                           "continue it",
-                       opt.db);
+  if (exists && interrupted_start(store, opt.db, "continue it")) {
     say("note: " + opt.db + " holds no run yet (its start was interrupted): starting the run");
     exists = false;
   }

@@ -32,11 +32,17 @@ struct Progress {
   double elapsed = 0.0;                        // s wall time of this run
   double simulated = 0.0;                      // s simulated by this run
   std::string last;                            // "P07 training #2" just completed
+  // s wall time of the session just stored, whole: its scene set-up, the briefing's
+  // demonstration, the stepping, its measures and its database write.
+  double last_session_wall = 0.0;
   // Estimated wall time left (s): the simulated time left per prototype at that prototype's
-  // measured cost (wall time of its virtual sessions per simulated second, in this run and, on
-  // resume, the earlier ones), over the worker threads. Prototypes cost very differently (exp2:
-  // C is ≈ 100× A), so while a prototype with sessions left has none timed the ETA is unknown
-  // (-1) and `eta_untimed` names it. With RunOptions::max_sessions: to that stop.
+  // measured cost (wall time of its virtual sessions per simulated second), over the worker
+  // threads. A session run by this process counts whole (last_session_wall); one stored by an
+  // earlier run of a resumed database counts its stored wall_duration, the stepping loop only
+  // (the set-up is not stored): an underestimate, less so with each session this run times.
+  // Prototypes cost very differently (exp2: C is ≈ 100× A), so while a prototype with sessions
+  // left has none timed the ETA is unknown (-1) and `eta_untimed` names it. With
+  // RunOptions::max_sessions: to that stop.
   double eta = -1.0;
   std::string eta_untimed;  // "C, D" (prototypes with sessions left and none timed yet)
 };

@@ -575,6 +575,10 @@ TEST(HardDb, ResumeKeepsTheRunsSamplesSetting) {
   ASSERT_EQ(st.read_sessions().size(), 6u);
   for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
   EXPECT_EQ(st.read_meta("samples").value_or("?"), "none");
+  // Its export with --samples says that there are none (a header-only samples.csv said nothing).
+  r = cli("export " + db.string() + " --csv " + (d / "csv").string() + " --samples", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "the run stored no device samples (it ran with --samples none)")) << r.err;
   // A run with samples keeps them too.
   r = cli(run + " --force --max-sessions 1 --quiet", d);
   ASSERT_EQ(r.code, 0) << r.err;
