@@ -9,12 +9,11 @@
 #include "analysis/descriptives.hpp"
 #include "analysis/distributions.hpp"
 #include "analysis/two_sample.hpp"
+#include "common/nan.hpp"
 
 namespace palplab::analysis {
 
-namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-}
+namespace {}
 
 Anova oneway_anova(const Groups& groups) {
   const size_t k = groups.size();

@@ -274,4 +274,11 @@ double parse_number(const CsvTable& t, int row, int col) {
   return x;
 }
 
+std::string trim_blanks(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return {};
+  const size_t e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+
 }  // namespace palplab::analysis

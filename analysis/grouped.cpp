@@ -23,19 +23,13 @@ constexpr size_t kMaxGroups = 100;
 // counterpart of kMaxCsvMagnitude (csv.hpp).
 constexpr double kMinCsvSpread = 1e-150;
 
-std::string trim(const std::string& s) {
-  size_t b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return {};
-  size_t e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
-}
 }  // namespace
 
 WhereFilter parse_where(const std::string& spec) {
   size_t eq = spec.find('=');
   if (eq == std::string::npos || eq == 0)
     throw InputError(SourceLocation{"--where"}, "expected COLUMN=VALUE, got '" + spec + "'");
-  return {trim(spec.substr(0, eq)), trim(spec.substr(eq + 1))};
+  return {trim_blanks(spec.substr(0, eq)), trim_blanks(spec.substr(eq + 1))};
 }
 
 GroupedData group_table(const CsvTable& t, const std::string& value_column,
@@ -56,14 +50,14 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
   for (size_t r = 0; r < t.rows.size(); ++r) {
     bool keep = true;
     for (const auto& [col, accepted] : filters) {
-      std::string v = trim(t.rows[r][col]);
+      std::string v = trim_blanks(t.rows[r][col]);
       bool any = false;
       for (const auto& a : accepted) any = any || v == a;
       keep = keep && any;
     }
     if (!keep) continue;
     if (skip_empty) {
-      std::string v = trim(t.rows[r][vc]);
+      std::string v = trim_blanks(t.rows[r][vc]);
       if (v.empty() || v == "NA") {
         ++g.rows_skipped_empty;
         continue;
@@ -71,7 +65,7 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
     }
     // Validates, with the line, before use (a long bad field is shown cut, shown_text).
     parse_number(t, static_cast<int>(r), vc);
-    std::string name = trim(t.rows[r][gc]);
+    std::string name = trim_blanks(t.rows[r][gc]);
     if (name.empty())
       throw InputError(SourceLocation{t.file, t.line[r]},
                        "column '" + group_column + "': empty group label");
@@ -152,7 +146,7 @@ std::vector<int> filter_rows(const CsvTable& t, const std::vector<WhereFilter>& 
   for (size_t r = 0; r < t.rows.size(); ++r) {
     bool keep = true;
     for (const auto& [col, accepted] : filters) {
-      std::string v = trim(t.rows[r][col]);
+      std::string v = trim_blanks(t.rows[r][col]);
       bool any = false;
       for (const auto& a : accepted) any = any || v == a;
       keep = keep && any;

@@ -39,13 +39,6 @@ VectorXd equilibrate(MatrixXd& X) {
   return scale;
 }
 
-std::string trim(const std::string& s) {
-  size_t b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return {};
-  size_t e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
-}
-
 [[noreturn]] void formula_error(int pos, const std::string& what) {
   throw InputError(SourceLocation{"--formula", 0, pos + 1},
                    what + " (at character " + std::to_string(pos + 1) + ")");
@@ -545,7 +538,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   std::vector<int> used;
   for (int r : rows) {
     bool miss = false;
-    for (auto& [v, c] : ci) miss = miss || is_missing(trim(t.rows[r][c]));
+    for (auto& [v, c] : ci) miss = miss || is_missing(trim_blanks(t.rows[r][c]));
     if (miss)
       ++fit.rows_dropped_na;
     else
@@ -575,7 +568,7 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
       c.num.clear();
       std::set<std::string> lv;
       for (int r : used) {
-        c.level.push_back(trim(t.rows[r][ci[v]]));
+        c.level.push_back(trim_blanks(t.rows[r][ci[v]]));
         lv.insert(c.level.back());
       }
       c.levels.assign(lv.begin(), lv.end());  // byte order (R in the C locale)

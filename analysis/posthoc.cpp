@@ -8,12 +8,11 @@
 #include "analysis/descriptives.hpp"
 #include "analysis/distributions.hpp"
 #include "analysis/parallel.hpp"
+#include "common/nan.hpp"
 
 namespace palplab::analysis {
 
-namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-}
+namespace {}
 
 std::vector<double> bonferroni(const std::vector<double>& p, std::vector<bool>* is_bound) {
   size_t m = 0;

@@ -90,7 +90,7 @@ std::string apa_anova_log(const Anova& a, double log10_F) {
 }
 
 // A number or null (JSON has no NaN / infinity).
-nlohmann::json num(double v) {
+nlohmann::json json_num(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
 }
 
@@ -191,29 +191,30 @@ nlohmann::json to_json(const StatsSummary& s) {
   json groups = json::array();
   for (size_t i = 0; i < s.groups.size(); ++i) {
     const auto& d = s.groups[i];
-    groups.push_back({{"name", s.names[i]},
-                      {"n", d.n},
-                      {"mean", num(d.mean)},
-                      {"sd", num(d.sd)},
-                      {"se", num(d.se)},
-                      {"median", num(d.median)},
-                      {"q1", num(d.q1)},
-                      {"q3", num(d.q3)},
-                      {"iqr", num(d.iqr)},
-                      {"min", num(d.min)},
-                      {"max", num(d.max)},
-                      {"ci_low", num(d.ci_low)},
-                      {"ci_high", num(d.ci_high)},
-                      {"shapiro_wilk", {{"W", num(s.shapiro[i].W)}, {"p", num(s.shapiro[i].p)}}}});
+    groups.push_back(
+        {{"name", s.names[i]},
+         {"n", d.n},
+         {"mean", json_num(d.mean)},
+         {"sd", json_num(d.sd)},
+         {"se", json_num(d.se)},
+         {"median", json_num(d.median)},
+         {"q1", json_num(d.q1)},
+         {"q3", json_num(d.q3)},
+         {"iqr", json_num(d.iqr)},
+         {"min", json_num(d.min)},
+         {"max", json_num(d.max)},
+         {"ci_low", json_num(d.ci_low)},
+         {"ci_high", json_num(d.ci_high)},
+         {"shapiro_wilk", {{"W", json_num(s.shapiro[i].W)}, {"p", json_num(s.shapiro[i].p)}}}});
   }
   j["groups"] = groups;
   const auto& a = s.anova;
   j["anova"] = {{"df_between", a.df_between},
                 {"df_within", a.df_within},
-                {"F", num(a.F)},
-                {"p", num(a.p)},
-                {"eta_squared", num(a.eta_squared)},
-                {"omega_squared", num(a.omega_squared)},
+                {"F", json_num(a.F)},
+                {"p", json_num(a.p)},
+                {"eta_squared", json_num(a.eta_squared)},
+                {"omega_squared", json_num(a.omega_squared)},
                 {"ss_between", a.ss_between},
                 {"ss_within", a.ss_within},
                 {"ms_between", a.ms_between},
@@ -225,19 +226,19 @@ nlohmann::json to_json(const StatsSummary& s) {
     // One interval for η² and ω²: both estimate the population proportion of variance.
     j["anova"]["effect_size_ci"] = {
         {"level", c.level},
-        {"lambda", {num(c.lambda_low), num(c.lambda_high)}},
-        {"eta_squared", {num(c.pve_low), num(c.pve_high)}},
-        {"omega_squared", {num(c.pve_low), num(c.pve_high)}},
+        {"lambda", {json_num(c.lambda_low), json_num(c.lambda_high)}},
+        {"eta_squared", {json_num(c.pve_low), json_num(c.pve_high)}},
+        {"omega_squared", {json_num(c.pve_low), json_num(c.pve_high)}},
         {"method",
          "noncentral F inverted in lambda (Steiger 2004); bound = lambda / (lambda + "
          "df_between + df_within + 1)"}};
   }
   const auto& w = s.welch;
   j["welch_anova"] = {{"df_between", w.df_between},
-                      {"df_within", num(w.df_within)},
-                      {"F", num(w.F)},
-                      {"p", num(w.p)},
-                      {"eta_squared", num(w.eta_squared)},
+                      {"df_within", json_num(w.df_within)},
+                      {"F", json_num(w.F)},
+                      {"p", json_num(w.p)},
+                      {"eta_squared", json_num(w.eta_squared)},
                       {"p_is_bound", p_is_bound(w.p)},
                       {"apa", w.defined ? apa_f(w.F, w.df_between, w.df_within, w.p)
                                         : std::string("undefined: a group has zero variance")}};
@@ -249,43 +250,38 @@ nlohmann::json to_json(const StatsSummary& s) {
     const auto& mw = s.mann_whitney[i];
     pw.push_back({{"a", s.names[p.a]},
                   {"b", s.names[p.b]},
-                  {"t", num(t.t)},
-                  {"df", num(t.df)},
-                  {"df_exact", num(t.df_exact)},
+                  {"t", json_num(t.t)},
+                  {"df", json_num(t.df)},
+                  {"df_exact", json_num(t.df_exact)},
                   {"welch", t.welch},
-                  {"p", num(t.p)},
-                  {"p_holm", num(p.p_holm)},
+                  {"p", json_num(t.p)},
+                  {"p_holm", json_num(p.p_holm)},
                   {"p_is_bound", p_is_bound(t.p)},
                   {"p_holm_is_bound", p.p_holm_is_bound},
-                  {"p_bonferroni", num(p.p_bonferroni)},
+                  {"p_bonferroni", json_num(p.p_bonferroni)},
                   {"p_bonferroni_is_bound", p.p_bonferroni_is_bound},
-                  {"mean_diff", num(t.mean_diff)},
-                  {"se", num(t.se)},
-                  {"ci_low", num(t.ci_low)},
-                  {"ci_high", num(t.ci_high)},
-                  {"cohens_d", num(e.d)},
-                  {"cohens_d_ci", {num(e.d_ci_low), num(e.d_ci_high)}},
-                  {"hedges_g", num(e.g)},
-                  {"hedges_g_ci", {num(e.g_ci_low), num(e.g_ci_high)}},
+                  {"mean_diff", json_num(t.mean_diff)},
+                  {"se", json_num(t.se)},
+                  {"ci_low", json_num(t.ci_low)},
+                  {"ci_high", json_num(t.ci_high)},
+                  {"cohens_d", json_num(e.d)},
+                  {"cohens_d_ci", {json_num(e.d_ci_low), json_num(e.d_ci_high)}},
+                  {"hedges_g", json_num(e.g)},
+                  {"hedges_g_ci", {json_num(e.g_ci_low), json_num(e.g_ci_high)}},
                   {"effect_ci_method", e.ci_method},
-                  {"mann_whitney", {{"W", mw.W}, {"p", num(mw.p)}, {"exact", mw.exact}}},
+                  {"mann_whitney", {{"W", mw.W}, {"p", json_num(mw.p)}, {"exact", mw.exact}}},
                   {"apa", t.defined ? apa_t(t.t, t.df, t.p) : std::string("undefined")}});
   }
   if (!s.equivalence.empty())
     for (size_t i = 0; i < s.pairwise.size(); ++i) {
       const auto& q = s.equivalence[i];
-      pw[i]["equivalence"] = {{"margins", {q.low, q.high}},
-                              {"alpha", q.alpha},
-                              {"t_low", num(q.t_low)},
-                              {"t_high", num(q.t_high)},
-                              {"df", num(q.df)},
-                              {"p_low", num(q.p_low)},
-                              {"p_high", num(q.p_high)},
-                              {"p", num(q.p)},
-                              {"p_is_bound", p_is_bound(q.p)},
-                              {"ci", {num(q.ci_low), num(q.ci_high)}},
-                              {"ci_level", 1 - 2 * q.alpha},
-                              {"verdict", q.verdict}};
+      pw[i]["equivalence"] = {
+          {"margins", {q.low, q.high}},    {"alpha", q.alpha},
+          {"t_low", json_num(q.t_low)},    {"t_high", json_num(q.t_high)},
+          {"df", json_num(q.df)},          {"p_low", json_num(q.p_low)},
+          {"p_high", json_num(q.p_high)},  {"p", json_num(q.p)},
+          {"p_is_bound", p_is_bound(q.p)}, {"ci", {json_num(q.ci_low), json_num(q.ci_high)}},
+          {"ci_level", 1 - 2 * q.alpha},   {"verdict", q.verdict}};
     }
   j["pairwise"] = pw;
   j["df_mode"] = s.options.df_mode == DfMode::Floor ? "floor" : "exact";
@@ -294,12 +290,12 @@ nlohmann::json to_json(const StatsSummary& s) {
     for (const auto& r : v)
       arr.push_back({{"a", s.names[r.a]},
                      {"b", s.names[r.b]},
-                     {"mean_diff", num(r.mean_diff)},
-                     {"q", num(r.q)},
-                     {"df", num(r.df)},
-                     {"p", num(r.p)},
-                     {"ci_low", num(r.ci_low)},
-                     {"ci_high", num(r.ci_high)}});
+                     {"mean_diff", json_num(r.mean_diff)},
+                     {"q", json_num(r.q)},
+                     {"df", json_num(r.df)},
+                     {"p", json_num(r.p)},
+                     {"ci_low", json_num(r.ci_low)},
+                     {"ci_high", json_num(r.ci_high)}});
     return arr;
   };
   if (s.options.post_hoc) {
@@ -307,15 +303,15 @@ nlohmann::json to_json(const StatsSummary& s) {
     j["games_howell"] = range_json(s.games_howell);
   }
   auto hv = [&](const Anova& h, double log10_F) {
-    json r{{"F", num(h.F)}, {"df1", h.df_between}, {"df2", h.df_within}, {"p", num(h.p)}};
+    json r{{"F", json_num(h.F)}, {"df1", h.df_between}, {"df2", h.df_within}, {"p", json_num(h.p)}};
     if (std::isfinite(log10_F)) r["log10_F"] = log10_F;
     return r;
   };
   j["levene"] = hv(s.levene, s.levene_log10_F);
   j["brown_forsythe"] = hv(s.brown_forsythe, s.brown_forsythe_log10_F);
-  j["kruskal_wallis"] = {{"H", num(s.kruskal.H)},
+  j["kruskal_wallis"] = {{"H", json_num(s.kruskal.H)},
                          {"df", s.kruskal.df},
-                         {"p", num(s.kruskal.p)},
+                         {"p", json_num(s.kruskal.p)},
                          {"tie_correction", s.kruskal.tie_correction}};
   return j;
 }

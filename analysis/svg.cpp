@@ -43,7 +43,7 @@ std::string group_colour(int i) {
 
 namespace {
 
-std::string num(double v) {
+std::string svg_num(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.2f", v);
   return b;
@@ -105,26 +105,27 @@ struct Frame {
       << xml_escape(title) << "</text>\n";
     // y axis with grid
     for (double t : ticks(y0, y1)) {
-      o << "<line x1=\"" << num(left) << "\" x2=\"" << num(W - right) << "\" y1=\"" << num(py(t))
-        << "\" y2=\"" << num(py(t)) << "\" stroke=\"#e5e5e5\"/>\n";
-      o << "<text x=\"" << num(left - 6) << "\" y=\"" << num(py(t) + 4) << "\" text-anchor=\"end\">"
-        << xml_escape(label(t)) << "</text>\n";
+      o << "<line x1=\"" << svg_num(left) << "\" x2=\"" << svg_num(W - right) << "\" y1=\""
+        << svg_num(py(t)) << "\" y2=\"" << svg_num(py(t)) << "\" stroke=\"#e5e5e5\"/>\n";
+      o << "<text x=\"" << svg_num(left - 6) << "\" y=\"" << svg_num(py(t) + 4)
+        << "\" text-anchor=\"end\">" << xml_escape(label(t)) << "</text>\n";
     }
     if (numeric_x)
       for (double t : ticks(x0, x1, 8)) {
         if (integer_x && std::fabs(t - std::round(t)) > 1e-9) continue;
-        o << "<line x1=\"" << num(px(t)) << "\" x2=\"" << num(px(t)) << "\" y1=\""
-          << num(H - bottom) << "\" y2=\"" << num(H - bottom + 5) << "\" stroke=\"black\"/>\n";
-        o << "<text x=\"" << num(px(t)) << "\" y=\"" << num(H - bottom + 18)
+        o << "<line x1=\"" << svg_num(px(t)) << "\" x2=\"" << svg_num(px(t)) << "\" y1=\""
+          << svg_num(H - bottom) << "\" y2=\"" << svg_num(H - bottom + 5)
+          << "\" stroke=\"black\"/>\n";
+        o << "<text x=\"" << svg_num(px(t)) << "\" y=\"" << svg_num(H - bottom + 18)
           << "\" text-anchor=\"middle\">" << xml_escape(label(t)) << "</text>\n";
       }
-    o << "<line x1=\"" << num(left) << "\" x2=\"" << num(left) << "\" y1=\"" << num(top)
-      << "\" y2=\"" << num(H - bottom) << "\" stroke=\"black\"/>\n";
-    o << "<line x1=\"" << num(left) << "\" x2=\"" << num(W - right) << "\" y1=\"" << num(H - bottom)
-      << "\" y2=\"" << num(H - bottom) << "\" stroke=\"black\"/>\n";
-    o << "<text x=\"" << num((left + W - right) / 2) << "\" y=\"" << num(H - 14)
+    o << "<line x1=\"" << svg_num(left) << "\" x2=\"" << svg_num(left) << "\" y1=\"" << svg_num(top)
+      << "\" y2=\"" << svg_num(H - bottom) << "\" stroke=\"black\"/>\n";
+    o << "<line x1=\"" << svg_num(left) << "\" x2=\"" << svg_num(W - right) << "\" y1=\""
+      << svg_num(H - bottom) << "\" y2=\"" << svg_num(H - bottom) << "\" stroke=\"black\"/>\n";
+    o << "<text x=\"" << svg_num((left + W - right) / 2) << "\" y=\"" << svg_num(H - 14)
       << "\" text-anchor=\"middle\">" << xml_escape(x_label) << "</text>\n";
-    o << "<text transform=\"translate(16," << num((top + H - bottom) / 2)
+    o << "<text transform=\"translate(16," << svg_num((top + H - bottom) / 2)
       << ") rotate(-90)\" text-anchor=\"middle\">" << xml_escape(y_label) << "</text>\n";
     o << body.str();
     o << "</svg>\n";
@@ -158,24 +159,24 @@ std::string svg_box_plot(const std::vector<std::string>& names,
       if (std::isfinite(x)) v.push_back(x);
     const double cx = f.px(g + 0.5), half = std::min(60.0, (f.px(1) - f.px(0)) * 0.3);
     const std::string col = group_colour(g);
-    f.body << "<text x=\"" << num(cx) << "\" y=\"" << num(f.H - f.bottom + 18)
+    f.body << "<text x=\"" << svg_num(cx) << "\" y=\"" << svg_num(f.H - f.bottom + 18)
            << "\" text-anchor=\"middle\">" << xml_escape(names[g]) << " (n = " << v.size()
            << ")</text>\n";
     if (v.empty()) continue;
     std::sort(v.begin(), v.end());
     double q1 = quantile(v, 0.25), md = quantile(v, 0.5), q3 = quantile(v, 0.75);
-    f.body << "<line x1=\"" << num(cx) << "\" x2=\"" << num(cx) << "\" y1=\""
-           << num(f.py(v.front())) << "\" y2=\"" << num(f.py(v.back())) << "\" stroke=\"" << col
-           << "\"/>\n";
+    f.body << "<line x1=\"" << svg_num(cx) << "\" x2=\"" << svg_num(cx) << "\" y1=\""
+           << svg_num(f.py(v.front())) << "\" y2=\"" << svg_num(f.py(v.back())) << "\" stroke=\""
+           << col << "\"/>\n";
     for (double e : {v.front(), v.back()})
-      f.body << "<line x1=\"" << num(cx - half / 2) << "\" x2=\"" << num(cx + half / 2)
-             << "\" y1=\"" << num(f.py(e)) << "\" y2=\"" << num(f.py(e)) << "\" stroke=\"" << col
-             << "\"/>\n";
-    f.body << "<rect x=\"" << num(cx - half) << "\" y=\"" << num(f.py(q3)) << "\" width=\""
-           << num(2 * half) << "\" height=\"" << num(std::max(0.5, f.py(q1) - f.py(q3)))
+      f.body << "<line x1=\"" << svg_num(cx - half / 2) << "\" x2=\"" << svg_num(cx + half / 2)
+             << "\" y1=\"" << svg_num(f.py(e)) << "\" y2=\"" << svg_num(f.py(e)) << "\" stroke=\""
+             << col << "\"/>\n";
+    f.body << "<rect x=\"" << svg_num(cx - half) << "\" y=\"" << svg_num(f.py(q3)) << "\" width=\""
+           << svg_num(2 * half) << "\" height=\"" << svg_num(std::max(0.5, f.py(q1) - f.py(q3)))
            << "\" fill=\"" << col << "\" fill-opacity=\"0.15\" stroke=\"" << col << "\"/>\n";
-    f.body << "<line x1=\"" << num(cx - half) << "\" x2=\"" << num(cx + half) << "\" y1=\""
-           << num(f.py(md)) << "\" y2=\"" << num(f.py(md)) << "\" stroke=\"" << col
+    f.body << "<line x1=\"" << svg_num(cx - half) << "\" x2=\"" << svg_num(cx + half) << "\" y1=\""
+           << svg_num(f.py(md)) << "\" y2=\"" << svg_num(f.py(md)) << "\" stroke=\"" << col
            << "\" stroke-width=\"2.5\"/>\n";
     // Deterministic jitter (golden-ratio sequence) so the figure is reproducible.
     for (size_t i = 0; i < values[g].size(); ++i) {
@@ -184,7 +185,7 @@ std::string svg_box_plot(const std::vector<std::string>& names,
       // Dots in a narrow band right of the box, inside the group's slot.
       double j = std::fmod(0.618033988749895 * (i + 1), 1.0);
       double dx = half + 4 + j * std::min(16.0, 0.35 * half);
-      f.body << "<circle cx=\"" << num(cx + dx) << "\" cy=\"" << num(f.py(x))
+      f.body << "<circle cx=\"" << svg_num(cx + dx) << "\" cy=\"" << svg_num(f.py(x))
              << "\" r=\"3\" fill=\"" << col << "\" fill-opacity=\"0.7\"/>\n";
     }
   }
@@ -206,17 +207,18 @@ std::string svg_participant_plot(const std::vector<std::string>& group_names,
   f.bottom = 90;
   for (size_t i = 0; i < p.size(); ++i) {
     double cx = f.px(i + 0.5);
-    f.body << "<text transform=\"translate(" << num(cx + 3) << "," << num(f.H - f.bottom + 8)
-           << ") rotate(60)\" font-size=\"9\">" << xml_escape(p[i].participant) << "</text>\n";
+    f.body << "<text transform=\"translate(" << svg_num(cx + 3) << ","
+           << svg_num(f.H - f.bottom + 8) << ") rotate(60)\" font-size=\"9\">"
+           << xml_escape(p[i].participant) << "</text>\n";
     if (!std::isfinite(p[i].value)) continue;
-    f.body << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(f.py(p[i].value))
+    f.body << "<circle cx=\"" << svg_num(cx) << "\" cy=\"" << svg_num(f.py(p[i].value))
            << "\" r=\"4\" fill=\"" << group_colour(p[i].group) << "\"/>\n";
   }
   for (size_t g = 0; g < group_names.size(); ++g)
-    f.body << "<rect x=\"" << num(f.W - 150) << "\" y=\"" << num(f.top + 4 + 16 * g)
+    f.body << "<rect x=\"" << svg_num(f.W - 150) << "\" y=\"" << svg_num(f.top + 4 + 16 * g)
            << "\" width=\"10\" height=\"10\" fill=\"" << group_colour(static_cast<int>(g))
-           << "\"/><text x=\"" << num(f.W - 135) << "\" y=\"" << num(f.top + 13 + 16 * g) << "\">"
-           << xml_escape(group_names[g]) << "</text>\n";
+           << "\"/><text x=\"" << svg_num(f.W - 135) << "\" y=\"" << svg_num(f.top + 13 + 16 * g)
+           << "\">" << xml_escape(group_names[g]) << "</text>\n";
   return f.finish(title, "participant", y_label, false);
 }
 
@@ -266,11 +268,11 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
     const auto& r = references[ri];
     if (!std::isfinite(r.y)) continue;
     const bool right = ri % 2 == 1;
-    f.body << "<line x1=\"" << num(f.left) << "\" x2=\"" << num(f.W - f.right) << "\" y1=\""
-           << num(f.py(r.y)) << "\" y2=\"" << num(f.py(r.y)) << "\" stroke=\"" << r.colour
+    f.body << "<line x1=\"" << svg_num(f.left) << "\" x2=\"" << svg_num(f.W - f.right) << "\" y1=\""
+           << svg_num(f.py(r.y)) << "\" y2=\"" << svg_num(f.py(r.y)) << "\" stroke=\"" << r.colour
            << "\" stroke-dasharray=\"6 4\"/>\n<text x=\""
-           << num(right ? f.W - f.right - 4 : f.left + 4) << "\" y=\"" << num(f.py(r.y) - 3) << "\""
-           << (right ? " text-anchor=\"end\"" : "") << " fill=\"" << r.colour << "\">"
+           << svg_num(right ? f.W - f.right - 4 : f.left + 4) << "\" y=\"" << svg_num(f.py(r.y) - 3)
+           << "\"" << (right ? " text-anchor=\"end\"" : "") << " fill=\"" << r.colour << "\">"
            << xml_escape(r.label) << "</text>\n";
   }
   // Fitted lines first so the observed means and their bars stay visible on top.
@@ -280,13 +282,15 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
     if (ft.lo.size() >= m && ft.hi.size() >= m && m >= 2) {
       std::ostringstream band;
       for (size_t i = 0; i < m; ++i)
-        band << num(f.px(ft.x[i])) << "," << num(f.py(ft.hi[i])) << " ";
-      for (size_t i = m; i-- > 0;) band << num(f.px(ft.x[i])) << "," << num(f.py(ft.lo[i])) << " ";
+        band << svg_num(f.px(ft.x[i])) << "," << svg_num(f.py(ft.hi[i])) << " ";
+      for (size_t i = m; i-- > 0;)
+        band << svg_num(f.px(ft.x[i])) << "," << svg_num(f.py(ft.lo[i])) << " ";
       f.body << "<polygon class=\"fitband\" fill=\"" << col
              << "\" fill-opacity=\"0.15\" stroke=\"none\" points=\"" << band.str() << "\"/>\n";
     }
     std::ostringstream pts;
-    for (size_t i = 0; i < m; ++i) pts << num(f.px(ft.x[i])) << "," << num(f.py(ft.y[i])) << " ";
+    for (size_t i = 0; i < m; ++i)
+      pts << svg_num(f.px(ft.x[i])) << "," << svg_num(f.py(ft.y[i])) << " ";
     f.body << "<polyline class=\"fit\" fill=\"none\" stroke=\"" << col
            << "\" stroke-width=\"1.5\" stroke-dasharray=\"5 3\" points=\"" << pts.str() << "\"/>\n";
   }
@@ -298,7 +302,7 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
     std::ostringstream pts;
     for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i)
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]))
-        pts << num(f.px(s.x[i]) + dodge) << "," << num(f.py(s.y[i])) << " ";
+        pts << svg_num(f.px(s.x[i]) + dodge) << "," << svg_num(f.py(s.y[i])) << " ";
     f.body << "<polyline fill=\"none\" stroke=\"" << col << "\" stroke-width=\"1.5\" points=\""
            << pts.str() << "\"/>\n";
     if (markers)
@@ -307,15 +311,16 @@ std::string svg_line_plot(const std::vector<Series>& series, const std::string& 
         double cx = f.px(s.x[i]) + dodge;
         auto [lo, hi] = bar(s, i);
         if (std::isfinite(lo) && std::isfinite(hi))
-          f.body << "<line class=\"errorbar\" x1=\"" << num(cx) << "\" x2=\"" << num(cx)
-                 << "\" y1=\"" << num(f.py(lo)) << "\" y2=\"" << num(f.py(hi)) << "\" stroke=\""
-                 << col << "\"/>\n";
-        f.body << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(f.py(s.y[i]))
+          f.body << "<line class=\"errorbar\" x1=\"" << svg_num(cx) << "\" x2=\"" << svg_num(cx)
+                 << "\" y1=\"" << svg_num(f.py(lo)) << "\" y2=\"" << svg_num(f.py(hi))
+                 << "\" stroke=\"" << col << "\"/>\n";
+        f.body << "<circle cx=\"" << svg_num(cx) << "\" cy=\"" << svg_num(f.py(s.y[i]))
                << "\" r=\"3\" fill=\"" << col << "\"/>\n";
       }
-    f.body << "<rect x=\"" << num(f.W - 150) << "\" y=\"" << num(f.top + 4 + 16 * si)
-           << "\" width=\"10\" height=\"10\" fill=\"" << col << "\"/><text x=\"" << num(f.W - 135)
-           << "\" y=\"" << num(f.top + 13 + 16 * si) << "\">" << xml_escape(s.name) << "</text>\n";
+    f.body << "<rect x=\"" << svg_num(f.W - 150) << "\" y=\"" << svg_num(f.top + 4 + 16 * si)
+           << "\" width=\"10\" height=\"10\" fill=\"" << col << "\"/><text x=\""
+           << svg_num(f.W - 135) << "\" y=\"" << svg_num(f.top + 13 + 16 * si) << "\">"
+           << xml_escape(s.name) << "</text>\n";
   }
   return f.finish(title, x_label, y_label, true);
 }

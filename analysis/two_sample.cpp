@@ -8,11 +8,11 @@
 #include "analysis/anova.hpp"
 #include "analysis/descriptives.hpp"
 #include "analysis/distributions.hpp"
+#include "common/nan.hpp"
 
 namespace palplab::analysis {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void need_two(const std::vector<double>& a, const std::vector<double>& b) {
   if (a.size() < 2 || b.size() < 2)

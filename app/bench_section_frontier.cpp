@@ -315,7 +315,7 @@ double rms(const std::vector<double>& v) {
   return std::sqrt(s / static_cast<double>(v.size()));
 }
 
-struct Variant {
+struct FrontierVariant {
   std::string name, id, what;
   std::function<void(nlohmann::json&, const std::string& region)> edit;
   bool per_region = false;  // the variant depends on the region (condensed: operational region)
@@ -482,13 +482,13 @@ std::string frontier_svg(const std::vector<Point>& pts, bool field, const std::s
       {{"force Weber fraction 7 %", std::log10(0.07), "#aa0000"}});
 }
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_frontier(const BenchOptions& o) {
   const std::vector<std::string> regions =
       o.quick ? std::vector<std::string>{"ovary_left"}
               : std::vector<std::string>{"ovary_left", "horn_right", "body"};
   const int holds = 4, hold_steps = o.quick ? 60 : 100;
   const auto none = [](nlohmann::json&, const std::string&) {};
-  const std::vector<Variant> variants = {
+  const std::vector<FrontierVariant> variants = {
       {"A", "A", "prototype A (rigid surface, Hooke's law on the penetration)", none},
       {"B", "B", "prototype B (ring model, force as A)", none},
       {"C", "C", "prototype C (mass-spring, scope 3 cm + sleeping, area-based refinement)", none},
@@ -522,12 +522,12 @@ std::vector<BenchResult> run(const BenchOptions& o) {
        "prototype D multi-rate co-rotational (patch compliance at 1 kHz, re-linearised at 60 Hz)",
        [](nlohmann::json& j, const std::string&) { j["model"]["deterministic_update"] = true; },
        false, false}};
-  std::vector<const Variant*> used;
-  for (const Variant& v : variants)
+  std::vector<const FrontierVariant*> used;
+  for (const FrontierVariant& v : variants)
     if (!o.quick || v.quick) used.push_back(&v);
 
   std::map<std::string, engine::Scene> shared;  // scenes that do not depend on the region
-  for (const Variant* v : used)
+  for (const FrontierVariant* v : used)
     if (!v->per_region)
       shared.emplace(v->name, prototypes::build_scene(app::prototype_variant(
                                   o, v->id, "frontier_" + v->name,
@@ -557,7 +557,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     std::vector<engine::Scene> regional;  // per-region variants, built for this region
     std::vector<engine::Scene*> scenes;
     regional.reserve(used.size());
-    for (const Variant* v : used) {
+    for (const FrontierVariant* v : used) {
       if (v->per_region) {
         regional.push_back(prototypes::build_scene(
             app::prototype_variant(o, v->id, "frontier_" + v->name + "_" + region,
@@ -586,7 +586,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       }
     const Measured* c_meas = nullptr;
     for (size_t k = 0; k < used.size(); ++k) {
-      const Variant& v = *used[k];
+      const FrontierVariant& v = *used[k];
       const bool hooke = std::string(scenes[k]->model_kind()) == "penalty" ||
                          std::string(scenes[k]->model_kind()) == "ring";
       const double c_ref = hooke ? 1.0 / ref.k : ref.c_ws;
@@ -702,9 +702,9 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_frontier{
     "frontier",
     "speed vs error of every prototype (A, B, C, C1, C2, C full / sleeping / scope, D, D "
     "condensed, D co-rotational) against the converged FEM reference of the same problem",
-    run};
+    run_frontier};
 }  // namespace

@@ -15,7 +15,7 @@ using namespace palplab;
 using palplab::app::BenchOptions;
 using palplab::app::BenchResult;
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_haptic_scope(const BenchOptions& o) {
   const std::vector<int> sizes =
       o.quick ? std::vector<int>{1500, 6000} : std::vector<int>{1442, 3000, 8664, 14392, 23000};
   const std::vector<std::string> scopes = {"rings", "octant", "whole"};
@@ -72,7 +72,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_haptic_scope{
     "haptic_scope", "prototype B haptic step: rings / octant / whole scope, 1.5k-23k vertices",
-    run};
+    run_haptic_scope};
 }  // namespace

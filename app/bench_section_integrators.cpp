@@ -102,7 +102,7 @@ double error(const Run& r, const Run& ref, const MassSpringSystem& s0) {
   return e / scale;
 }
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_integrators(const BenchOptions& o) {
   const double T = o.quick ? 0.05 : 0.2;
   const int reps = 5;
   const std::vector<double> hs = o.quick ? std::vector<double>{1e-4, 1e-3, 5e-3}
@@ -188,9 +188,9 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_integrators{
     "integrators",
     "symplectic Euler, backward Euler (CG / LDLT / frozen LDLT), RK4 at h = 0.1-5 ms: time, error "
     "against a converged reference, largest stable h",
-    run};
+    run_integrators};
 }  // namespace

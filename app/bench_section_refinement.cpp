@@ -142,7 +142,7 @@ void compare(const std::string& name, const std::string& what, AdaptiveMassSprin
   add("graphics_whole", "graphics step after refining the whole mesh", gw, cold[3], whole, gr);
 }
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_refinement(const BenchOptions& o) {
   std::vector<BenchResult> out;
   compare("stomach", "stomach surface (SPEC: 81 vs 91 masses, 214 vs 234 springs)",
           surface_model(mesh::generate_stomach(0)), 5e-5, o, out);
@@ -153,9 +153,9 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_refinement{
     "refinement",
     "area-based vs conventional adaptive vs whole-mesh refinement: new nodes/springs, haptic "
     "and graphics step",
-    run};
+    run_refinement};
 }  // namespace

@@ -27,12 +27,12 @@ struct Case {
   mesh::Positions V;
 };
 
-struct Variant {
+struct SearchVariant {
   std::string name;
   int depth, leaf;  // depth 0 = linear scan
 };
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_search(const BenchOptions& o) {
   std::vector<Case> cases;
   auto sphere = [&](int n) {
     mesh::SurfaceMesh m = mesh::generate_sphere(n);
@@ -58,13 +58,13 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     cases.push_back(
         {"model_c", "Model-C tet nodes, " + std::to_string(tm.V.rows()) + " nodes", tm.V});
   }
-  const std::vector<Variant> variants =
-      o.quick ? std::vector<Variant>{{"linear", 0, 0}, {"octree_d10_l8", 10, 8}}
-              : std::vector<Variant>{{"linear", 0, 0},
-                                     {"octree_d10_l8", 10, 8},
-                                     {"octree_d10_l2", 10, 2},
-                                     {"octree_d10_l32", 10, 32},
-                                     {"octree_d4_l8", 4, 8}};
+  const std::vector<SearchVariant> variants =
+      o.quick ? std::vector<SearchVariant>{{"linear", 0, 0}, {"octree_d10_l8", 10, 8}}
+              : std::vector<SearchVariant>{{"linear", 0, 0},
+                                           {"octree_d10_l8", 10, 8},
+                                           {"octree_d10_l2", 10, 2},
+                                           {"octree_d10_l32", 10, 32},
+                                           {"octree_d4_l8", 4, 8}};
   const int reps = o.quick ? 5 : 9;
   const int nq = o.quick ? 400 : 2000;
   std::vector<BenchResult> out;
@@ -76,7 +76,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
     for (auto& x : q) x = mesh::row3(c.V, pick(rng)) + mesh::Vec3(nd(rng), nd(rng), nd(rng));
     std::vector<spatial::Octree> trees;
     std::vector<double> build_s;
-    for (const Variant& v : variants) {
+    for (const SearchVariant& v : variants) {
       const auto t0 = Clock::now();
       trees.push_back(v.depth ? spatial::build_octree(c.V, v.depth, v.leaf) : spatial::Octree{});
       build_s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
@@ -104,7 +104,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
       }
     const double lin = engine::median(per_query[0]);
     for (size_t k = 0; k < variants.size(); ++k) {
-      const Variant& v = variants[k];
+      const SearchVariant& v = variants[k];
       BenchResult r =
           app::result_from_samples(c.name + "_" + v.name,
                                    c.what + ": " +
@@ -146,6 +146,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
-    "search", "touched-node search: linear scan vs octree (depth, leaf size), per query", run};
+palplab::app::BenchSectionRegistration section_search{
+    "search", "touched-node search: linear scan vs octree (depth, leaf size), per query",
+    run_search};
 }  // namespace

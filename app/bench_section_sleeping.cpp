@@ -22,7 +22,7 @@ using namespace palplab;
 using palplab::app::BenchOptions;
 using palplab::app::BenchResult;
 
-struct Variant {
+struct SleepingVariant {
   std::string name, what;
   double radius;
   int cap;  // 0 = no cap
@@ -31,10 +31,10 @@ struct Variant {
   std::string exterior;  // of the scope: "held" or "linear"
 };
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_sleeping(const BenchOptions& o) {
   // "held": the exterior of the scope stays at rest (prototype C before); "linear": it follows
   // the whole model's linear static response to the contact force (prototype C now).
-  const std::vector<Variant> variants = {
+  const std::vector<SleepingVariant> variants = {
       {"full", "every node every step (reference)", 0, 0, false, 0, "held"},
       {"sleeping", "sleeping only (10 um)", 0, 0, true, 1e-5, "held"},
       {"scope3cm_held", "scope 3 cm + sleeping, exterior held at rest", 0.03, 0, true, 1e-5,
@@ -53,7 +53,7 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   const int steps = o.quick ? 400 : 600;
   const int reps = 5;
   std::vector<engine::Scene> scenes;
-  for (const Variant& v : variants)
+  for (const SleepingVariant& v : variants)
     scenes.push_back(prototypes::build_scene(
         app::prototype_variant(o, "C", "sleep_" + v.name, [&](nlohmann::json& j) {
           auto& m = j["model"];
@@ -113,9 +113,9 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_sleeping{
     "sleeping",
     "prototype C: sleeping / local scope vs integrating every node: speed-up and the error it "
     "costs",
-    run};
+    run_sleeping};
 }  // namespace

@@ -101,7 +101,7 @@ void full_stats(const std::string& csv) {
   (void)sink;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_stats{
     "stats", "palplab stats end to end (CSV text to tables) and the studentized range tail",
     [](const BenchOptions& o) {
       std::vector<BenchResult> r;

@@ -43,7 +43,7 @@ double take_peak_rss() {
   return kb * 1024.0;
 }
 
-std::vector<BenchResult> run(const BenchOptions& o) {
+std::vector<BenchResult> run_throughput(const BenchOptions& o) {
   const std::string root =
       (std::filesystem::path(o.data_dir) / ".." / "..").lexically_normal().string();
   if (!std::getenv("PALPLAB_PROTOTYPE_PATH"))
@@ -104,9 +104,9 @@ std::vector<BenchResult> run(const BenchOptions& o) {
   return out;
 }
 
-palplab::app::BenchSectionRegistration reg{
+palplab::app::BenchSectionRegistration section_throughput{
     "throughput",
     "exp2 with virtual participants: simulated s per wall s at --jobs 1 and 2, peak memory, "
     "database bytes per simulated s",
-    run};
+    run_throughput};
 }  // namespace

@@ -92,7 +92,7 @@ std::string fmt_s(double s) {
   return b;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_bench{
     "bench", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("bench", "Run benchmark sections (median of >= 5 runs)");
       auto a = std::make_shared<BenchArgs>();

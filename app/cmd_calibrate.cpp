@@ -25,7 +25,7 @@ struct CalibrateArgs {
   bool overwrite = false;  // replace an --out that is not a calibration JSON
 };
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_calibrate{
     "calibrate", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("calibrate",
                                       "Fit participant-model parameters to human data (tidy CSV)");

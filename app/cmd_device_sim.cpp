@@ -304,7 +304,7 @@ int run_device_sim(const SimArgs& a) {
   return received > 0 ? 0 : 1;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_device_sim{
     "device-sim", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "device-sim", "Play a scripted hand over the UDP device protocol (for tests)");

@@ -819,7 +819,7 @@ int run_solvers(const SolverArgs& a) {
   return 0;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_fem{
     "fem", [](CLI::App& root, int* code) {
       auto* fem = root.add_subcommand(
           "fem", "Tissue finite element model: verification and the accuracy reference");

@@ -17,7 +17,7 @@ struct LmmArgs {
   bool ml = false, json = false;
 };
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_lmm{
     "lmm", [](CLI::App& root, int* code) {
       auto a = std::make_shared<LmmArgs>();
       auto* cmd = root.add_subcommand(

@@ -24,7 +24,7 @@ struct MergeArgs {
   bool allow_partial = false;
 };
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_merge{
     "merge", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "merge", "Merge the replicate files of sharded `palplab power` runs into one summary");

@@ -270,7 +270,7 @@ void print_info_text(const json& j) {
   std::cout << "regions " << j["regions"].dump() << "\n";
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_mesh{
     "mesh", [](CLI::App& root, int* code) {
       auto* mesh = root.add_subcommand(
           "mesh", "Mesh toolkit: generate, inspect, check, repair, tetrahedralize");

@@ -135,7 +135,7 @@ void check_power_out(const PowerArgs& a, const palplab::protocols::Study& s) {
   palplab::protocols::check_out_dir_study(a.out, palplab::results::sha256_hex(s.json_text));
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_power{
     "power", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "power", "Power analysis: simulate the study many times per group size");

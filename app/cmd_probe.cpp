@@ -139,7 +139,7 @@ int run_probe(const ProbeArgs& a) {
   return nan ? 1 : 0;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_probe{
     "probe", [](CLI::App& root, int* code) {
       auto* cmd =
           root.add_subcommand("probe", "Scripted press and release on a prototype (sanity check)");

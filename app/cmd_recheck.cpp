@@ -20,7 +20,7 @@ struct RecheckArgs {
   bool json = false;
 };
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_recheck{
     "recheck", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "recheck",

@@ -63,7 +63,7 @@ int run_render(const RenderArgs& a) {
     const auto c = parse_numbers("--camera", a.camera, ',', 2, 3,
                                  "AZIMUTH,ELEVATION[,DISTANCE] (degrees, degrees, m)");
     if (c[1] < -90 || c[1] > 90)
-      throw InputError("--camera: elevation " + json::Checker::fmt(c[1]) +
+      throw InputError("--camera: elevation " + palplab::json::Checker::fmt(c[1]) +
                        " outside [-90, 90] degrees");
     cam.azimuth_deg = c[0];
     cam.elevation_deg = c[1];
@@ -158,7 +158,7 @@ int run_render(const RenderArgs& a) {
   return 0;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_render{
     "render", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("render", "Headless still of a prototype's organ (PNG)");
       auto a = std::make_shared<RenderArgs>();

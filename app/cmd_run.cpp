@@ -326,7 +326,7 @@ std::string hms(double s) {
   return buf;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_run{
     "run", [](CLI::App& root, int* code) {
       auto* cmd =
           root.add_subcommand("run", "Run a study with virtual participants into a database");

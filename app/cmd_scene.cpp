@@ -226,7 +226,7 @@ int run_info(const std::string& file, bool json) {
   return 0;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_scene{
     "scene", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("scene", "Simulation files (.psim): precomputed scenes");
       cmd->require_subcommand(1);

@@ -31,7 +31,7 @@ struct StatsArgs {
   double alpha = 0.05;
 };
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_stats{
     "stats", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "stats",

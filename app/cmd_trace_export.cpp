@@ -22,7 +22,7 @@ struct Args {
   bool overwrite = false;
 };
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_trace_export{
     "trace-export", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "trace-export", "Write a stored session's device track (samples) as a trace file");

@@ -45,7 +45,7 @@ std::string needle_scenes(const palplab::protocols::Study& s, const std::string&
   return out;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_validate{
     "validate", [](CLI::App& root, int* code) {
       auto* cmd =
           root.add_subcommand("validate", "Validate a study JSON file and summarise its plan");

@@ -6,7 +6,7 @@
 #include "palplab/version.hpp"
 
 namespace {
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_version{
     "version", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("version", "Print the palplab version and git commit");
       auto json = std::make_shared<bool>(false);

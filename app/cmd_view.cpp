@@ -169,7 +169,7 @@ int run_view(const ViewArgs& a) {
   return 0;
 }
 
-palplab::app::CommandRegistration reg{
+palplab::app::CommandRegistration reg_view{
     "view", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
           "view", "Palpate a prototype in a window with the mouse as the haptic device");

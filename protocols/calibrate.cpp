@@ -14,6 +14,7 @@
 
 #include "analysis/csv.hpp"
 #include "common/input_error.hpp"
+#include "common/nan.hpp"
 #include "protocols/measures.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/power.hpp"
@@ -21,8 +22,6 @@
 namespace palplab::protocols {
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void mean_sd(const std::vector<double>& x, double& m, double& sd) {
   m = std::accumulate(x.begin(), x.end(), 0.0) / std::max<std::size_t>(1, x.size());

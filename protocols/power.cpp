@@ -25,6 +25,7 @@
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "common/nan.hpp"
 #include "common/seed.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
@@ -37,7 +38,6 @@ namespace palplab::protocols {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 nlohmann::json num_or_null(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nullptr;

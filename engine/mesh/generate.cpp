@@ -14,8 +14,6 @@ namespace palplab::mesh {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 double smoothstep(double a, double b, double x) {
   const double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
   return t * t * (3 - 2 * t);
@@ -31,8 +29,9 @@ double jitter(std::uint64_t seed, const char* label) {
 struct TractShape {
   double z_cervix_end = 0.09, z_body_start = 0.12, z_region_split = 0.10, zj = 0.20;
   double r_cervix = 0.019, r_body = 0.025;
-  double xs = 0.0125, tilt = 10 * kPi / 180, straight = 0.12, yaw = 45 * kPi / 180;
-  double Rx = 0.027, Rz = 0.025, shrink = 0.2, alpha_end = 1.2 * kPi;
+  double xs = 0.0125, tilt = 10 * std::numbers::pi / 180, straight = 0.12,
+         yaw = 45 * std::numbers::pi / 180;
+  double Rx = 0.027, Rz = 0.025, shrink = 0.2, alpha_end = 1.2 * std::numbers::pi;
   double r_horn_start = 0.0115, r_horn = 0.0095, r_ovary = 0.0135;
   double u_ovary = 0.82;
 };
@@ -214,7 +213,7 @@ SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
     // not): the points are then not co-spherical and TetGen needs no Steiner points inside.
     const double twist = (nt - i) % 2 ? 0.5 : 0.0;
     for (int p = 0; p < R; ++p) {
-      const double th = kPi * (p + twist) / n;
+      const double th = std::numbers::pi * (p + twist) / n;
       trunk[i].push_back(static_cast<int>(P.size()));
       P.push_back(Vec3(r * std::cos(th), r * std::sin(th), z));
     }
@@ -258,7 +257,7 @@ SurfaceMesh build_tract(const TractShape& sh, const TractCounts& k) {
     const double twist = j % 2 ? 0.5 : 0.0;
     for (int p = 0; p < R; ++p) {
       // + yaw: the frame is turned by -yaw about z against the junction ring's x/y frame.
-      const double phi = kPi / 2 + kPi * (p + twist) / n + sh.yaw;
+      const double phi = std::numbers::pi / 2 + std::numbers::pi * (p + twist) / n + sh.yaw;
       const Vec3 circle = cj + r * (std::cos(phi) * N + std::sin(phi) * B);
       const Vec3 d = P[d_left[p]] + (cj - c0);
       left[j].push_back((1 - w) * d + w * circle);
@@ -318,15 +317,15 @@ SurfaceMesh generate_tract(const TractOptions& opt) {
   int best_n = 4;
   long best_err = -1;
   for (int n = 4; n <= 2000; n += 2) {
-    const long err =
-        std::labs(tract_counts(sh, n, kPi * sh.r_body / n, trunk_len, horn_len).vertices() -
-                  opt.target_vertices);
+    const long err = std::labs(
+        tract_counts(sh, n, std::numbers::pi * sh.r_body / n, trunk_len, horn_len).vertices() -
+        opt.target_vertices);
     if (best_err < 0 || err < best_err) {
       best_err = err;
       best_n = n;
     }
   }
-  const double h0 = kPi * sh.r_body / best_n;
+  const double h0 = std::numbers::pi * sh.r_body / best_n;
   double lo = std::log(0.8 * h0), hi = std::log(1.25 * h0);  // counts fall as the step grows
   TractCounts best = tract_counts(sh, best_n, h0, trunk_len, horn_len);
   for (int it = 0; it < 60 && best.vertices() != opt.target_vertices; ++it) {
@@ -351,7 +350,7 @@ SurfaceMesh generate_stomach(std::uint64_t seed) {
   std::vector<std::array<int, 4>> F;
   std::vector<std::vector<int>> rings(R);
   // Centreline: an arc of radius 0.08 m in the xz plane over 1.3 pi (0.33 m), J-shaped.
-  const double rc = 0.08, a0 = 0.6 * kPi, a1 = 1.9 * kPi;
+  const double rc = 0.08, a0 = 0.6 * std::numbers::pi, a1 = 1.9 * std::numbers::pi;
   for (int i = 0; i < R; ++i) {
     const double u = static_cast<double>(i) / (R - 1);
     const double a = a0 + (a1 - a0) * u;
@@ -361,7 +360,7 @@ SurfaceMesh generate_stomach(std::uint64_t seed) {
     // Wide fundus, narrowing body, narrow pylorus.
     const double r = pylorus + (fundus - pylorus) * (1 - smoothstep(0.1, 0.95, u));
     for (int p = 0; p < S; ++p) {
-      const double phi = 2 * kPi * p / S;
+      const double phi = 2 * std::numbers::pi * p / S;
       rings[i].push_back(static_cast<int>(P.size()));
       P.push_back(c + r * (std::cos(phi) * N + std::sin(phi) * B));
     }

@@ -12,8 +12,6 @@ namespace palplab::mesh {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 // Skin surface: the rounded box |x/a|^3 + |y/b|^3 + |z/c|^3 = 1 (a superellipsoid).
 constexpr double kSkinA = 0.075, kSkinB = 0.070, kSkinC = 0.080, kSkinP = 3.0;
 constexpr double kSkinThickness = 0.002;  // radial, m
@@ -42,7 +40,7 @@ double ellipsoid_radius(const Vec3& u, const Vec3& axes) {
 }
 
 // Appends a part to the shoulder.
-struct Builder {
+struct ShoulderBuilder {
   std::vector<Vec3> V;
   std::vector<std::array<int, 3>> F;
   std::vector<ShoulderPart> parts;
@@ -71,7 +69,7 @@ struct Builder {
 // A star-shaped closed surface: the icosphere's directions u mapped to centre + radius(u) u.
 // Radial mapping keeps the icosphere's outward orientation.
 template <class Radius>
-void add_star(Builder& b, const SurfaceMesh& ico, const Vec3& centre, Radius radius) {
+void add_star(ShoulderBuilder& b, const SurfaceMesh& ico, const Vec3& centre, Radius radius) {
   const int base = static_cast<int>(b.V.size());
   for (int i = 0; i < ico.V.rows(); ++i) {
     const Vec3 u = row3(ico.V, i).normalized();
@@ -84,7 +82,7 @@ void add_star(Builder& b, const SurfaceMesh& ico, const Vec3& centre, Radius rad
 // Stitches ring A (nearer the pole) to ring B: triangles (A_i, B_j, B_j+1) and (A_i, B_j, A_i+1),
 // advancing by angle so that rings of different vertex counts join without slivers. With
 // `flip` the triangles are reversed (the inner face of a shell looks the other way).
-void stitch(Builder& b, const std::vector<int>& A, const std::vector<int>& B, bool flip) {
+void stitch(ShoulderBuilder& b, const std::vector<int>& A, const std::vector<int>& B, bool flip) {
   auto tri = [&](int x, int y, int z) {
     if (flip)
       b.F.push_back({x, z, y});
@@ -114,11 +112,11 @@ void stitch(Builder& b, const std::vector<int>& A, const std::vector<int>& B, bo
 // A closed shell cap: the spherical caps of radii r_in < r_out around `centre`, within
 // `half_angle` degrees of the unit axis w, joined by a conical rim. `rings` rings from the pole
 // to the rim; ring i has round(around · i / rings) vertices (at least 3).
-void add_shell_cap(Builder& b, const Vec3& centre, const Vec3& w, double r_in, double r_out,
+void add_shell_cap(ShoulderBuilder& b, const Vec3& centre, const Vec3& w, double r_in, double r_out,
                    double half_angle, int rings, int around) {
   Vec3 e1 = w.unitOrthogonal();
   Vec3 e2 = w.cross(e1);
-  const double theta_max = half_angle * kPi / 180;
+  const double theta_max = half_angle * std::numbers::pi / 180;
   auto face = [&](double r, bool flip) {
     std::vector<int> prev{b.add(centre + r * w)};
     for (int i = 1; i <= rings; ++i) {
@@ -126,7 +124,7 @@ void add_shell_cap(Builder& b, const Vec3& centre, const Vec3& w, double r_in, d
       const int m = std::max(3, static_cast<int>(std::lround(double(around) * i / rings)));
       std::vector<int> ring(m);
       for (int j = 0; j < m; ++j) {
-        const double ph = 2 * kPi * j / m;
+        const double ph = 2 * std::numbers::pi * j / m;
         ring[j] = b.add(centre + r * (std::cos(th) * w +
                                       std::sin(th) * (std::cos(ph) * e1 + std::sin(ph) * e2)));
       }
@@ -160,7 +158,7 @@ Shoulder generate_shoulder(const ShoulderOptions& opt) {
   const SurfaceMesh acromion = generate_sphere(std::max(162, 10 * (nu / 2) * (nu / 2) + 2));
   const int rings = std::max(4, nu / 2), around = std::max(18, 3 * nu);
 
-  Builder b;
+  ShoulderBuilder b;
   const Vec3 origin = Vec3::Zero();
   b.begin("skin_outer", -1, kSkin);
   add_star(b, layer, origin, [](const Vec3& u) { return skin_radius(u); });

@@ -28,19 +28,8 @@ std::string extension(const std::string& path) {
 
 namespace {
 
-std::ofstream open_out(const std::string& path, bool binary = false) {
-  std::ofstream out(path, binary ? std::ios::binary : std::ios::out);
-  if (!out) throw InputError("cannot write file", path);
-  return out;
-}
-
-void finish(std::ofstream& out, const std::string& path) {
-  out.flush();
-  if (!out) throw InputError("error while writing file", path);
-}
-
 // Collects faces and their region names while reading.
-struct Builder {
+struct SurfaceBuilder {
   std::vector<double> v;
   std::vector<std::array<int, 3>> f;
   std::vector<int> region;
@@ -100,7 +89,7 @@ SurfaceMesh read_obj(const std::string& path) {
         declared.push_back({pre.integer(t[2], "a region id"), name});
       }
     if (!declared.empty()) {
-      Builder probe;
+      SurfaceBuilder probe;
       for (auto& [id, name] : declared)
         if (id != probe.region_id(name))
           pre.fail("`# region` comments must number the regions 0, 1, 2, ... in order");
@@ -108,7 +97,7 @@ SurfaceMesh read_obj(const std::string& path) {
     }
   }
   TextReader r(path);
-  Builder b;
+  SurfaceBuilder b;
   b.names = preset_names;
   int current = -1;
   std::vector<std::string> t;
@@ -154,7 +143,7 @@ SurfaceMesh read_obj(const std::string& path) {
 }
 
 void write_obj(const std::string& path, const SurfaceMesh& m) {
-  auto out = open_out(path);
+  auto out = detail::open_out(path);
   out << "# palplab surface: " << m.V.rows() << " vertices, " << m.F.rows() << " faces (m)\n";
   for (size_t i = 0; i < m.regions.names.size(); ++i)
     out << "# region " << i << " " << m.regions.names[i] << "\n";
@@ -170,7 +159,7 @@ void write_obj(const std::string& path, const SurfaceMesh& m) {
     }
     out << "f " << m.F(f, 0) + 1 << " " << m.F(f, 1) + 1 << " " << m.F(f, 2) + 1 << "\n";
   }
-  finish(out, path);
+  detail::finish_out(out, path);
 }
 
 // ---------------------------------------------------------------- STL
@@ -179,7 +168,7 @@ namespace {
 
 struct Weld {
   std::map<std::array<double, 3>, int> ids;
-  Builder& b;
+  SurfaceBuilder& b;
   int operator()(double x, double y, double z) {
     auto [it, fresh] = ids.emplace(std::array<double, 3>{x, y, z}, static_cast<int>(ids.size()));
     if (fresh) {
@@ -193,7 +182,7 @@ struct Weld {
 
 SurfaceMesh read_stl_ascii(const std::string& path, std::string data) {
   TextReader r(path, std::move(data), '\0');
-  Builder b;
+  SurfaceBuilder b;
   Weld weld{{}, b};
   std::vector<std::string> t;
   std::vector<std::string> solid_names;
@@ -249,7 +238,7 @@ T get_le(const std::string& d, size_t off) {
 
 SurfaceMesh read_stl_binary(const std::string& path, const std::string& d) {
   const std::uint32_t n = get_le<std::uint32_t>(d, 80);
-  Builder b;
+  SurfaceBuilder b;
   Weld weld{{}, b};
   for (std::uint32_t i = 0; i < n; ++i) {
     const size_t base = 84 + 50 * static_cast<size_t>(i);
@@ -292,7 +281,7 @@ SurfaceMesh read_stl(const std::string& path) {
 
 void write_stl(const std::string& path, const SurfaceMesh& m, bool binary) {
   const Positions N = face_normals(m.V, m.F);
-  auto out = open_out(path, binary);
+  auto out = detail::open_out(path, binary);
   if (binary) {
     char header[80] = {};
     std::snprintf(header, sizeof header, "palplab binary STL, %ld triangles, metres",
@@ -332,7 +321,7 @@ void write_stl(const std::string& path, const SurfaceMesh& m, bool binary) {
       out << "endsolid " << name << "\n";
     } while (f < nf);
   }
-  finish(out, path);
+  detail::finish_out(out, path);
 }
 
 // ---------------------------------------------------------------- OFF
@@ -347,7 +336,7 @@ SurfaceMesh read_off(const std::string& path) {
   const long nv = r.integer(t[0], "the vertex count"), nf = r.integer(t[1], "the face count");
   detail::check_count(r, nv, "vertex");
   detail::check_count(r, nf, "face");
-  Builder b;
+  SurfaceBuilder b;
   for (long i = 0; i < nv; ++i) {
     if (!r.tokens(t))
       r.fail("unexpected end of file: " + std::to_string(nv) + " vertices announced, " +
@@ -377,14 +366,14 @@ SurfaceMesh read_off(const std::string& path) {
 }
 
 void write_off(const std::string& path, const SurfaceMesh& m) {
-  auto out = open_out(path);
+  auto out = detail::open_out(path);
   out << "OFF\n" << m.V.rows() << " " << m.F.rows() << " " << m.E.rows() << "\n";
   for (int i = 0; i < m.V.rows(); ++i)
     out << format_exact(m.V(i, 0)) << " " << format_exact(m.V(i, 1)) << " "
         << format_exact(m.V(i, 2)) << "\n";
   for (int f = 0; f < m.F.rows(); ++f)
     out << "3 " << m.F(f, 0) << " " << m.F(f, 1) << " " << m.F(f, 2) << "\n";
-  finish(out, path);
+  detail::finish_out(out, path);
 }
 
 // ---------------------------------------------------------------- PLY
@@ -614,7 +603,7 @@ SurfaceMesh read_ply(const std::string& path) {
   }
   if (!have_format) fail("missing `format` line");
   PlyBody body{path, d, pos, ascii, big, line, {}, 0};
-  Builder b;
+  SurfaceBuilder b;
   std::vector<int> idx;
   bool have_vertices = false;
   for (const PlyElement& e : elements) {
@@ -693,7 +682,7 @@ SurfaceMesh read_ply(const std::string& path) {
 }
 
 void write_ply(const std::string& path, const SurfaceMesh& m, bool binary) {
-  auto out = open_out(path, binary);
+  auto out = detail::open_out(path, binary);
   const bool regions = !m.regions.empty();
   out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
       << "comment palplab surface, metres\n";
@@ -730,7 +719,7 @@ void write_ply(const std::string& path, const SurfaceMesh& m, bool binary) {
       out << "\n";
     }
   }
-  finish(out, path);
+  detail::finish_out(out, path);
 }
 
 // ---------------------------------------------------------------- dispatch

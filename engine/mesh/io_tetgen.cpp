@@ -9,15 +9,11 @@
 
 namespace palplab::mesh {
 
+using detail::finish_out;
+using detail::open_out;
 using detail::TextReader;
 
 namespace {
-
-std::ofstream open_out(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw InputError("cannot write file", path);
-  return out;
-}
 
 // Reads the index of a TetGen record and checks it follows the previous one.
 long record_index(TextReader& r, const std::string& t, long expected, long& base, bool first) {
@@ -148,7 +144,7 @@ void write_tetgen(const std::string& path, const TetMesh& m) {
     for (int i = 0; i < m.V.rows(); ++i)
       out << i << " " << format_exact(m.V(i, 0)) << " " << format_exact(m.V(i, 1)) << " "
           << format_exact(m.V(i, 2)) << "\n";
-    if (!out) throw InputError("error while writing", base + ".node");
+    finish_out(out, base + ".node");
   }
   {
     auto out = open_out(base + ".ele");
@@ -159,7 +155,7 @@ void write_tetgen(const std::string& path, const TetMesh& m) {
       if (regions) out << " " << m.regions.id[t];
       out << "\n";
     }
-    if (!out) throw InputError("error while writing", base + ".ele");
+    finish_out(out, base + ".ele");
   }
   {
     const BoundaryFaces b = boundary_faces(m);
@@ -168,7 +164,7 @@ void write_tetgen(const std::string& path, const TetMesh& m) {
     for (int f = 0; f < b.F.rows(); ++f)
       out << f << " " << b.F(f, 0) << " " << b.F(f, 1) << " " << b.F(f, 2) << " "
           << m.attribute[b.tet[f]] << "\n";
-    if (!out) throw InputError("error while writing", base + ".face");
+    finish_out(out, base + ".face");
   }
   {
     const Tets N = tet_neighbours(m);
@@ -176,13 +172,14 @@ void write_tetgen(const std::string& path, const TetMesh& m) {
     out << N.rows() << " 4\n";
     for (int t = 0; t < N.rows(); ++t)
       out << t << " " << N(t, 0) << " " << N(t, 1) << " " << N(t, 2) << " " << N(t, 3) << "\n";
-    if (!out) throw InputError("error while writing", base + ".neigh");
+    finish_out(out, base + ".neigh");
   }
   if (regions) {
     auto out = open_out(base + ".names");
     out << m.regions.names.size() << "\n";
     for (size_t i = 0; i < m.regions.names.size(); ++i)
       out << i << " " << m.regions.names[i] << "\n";
+    finish_out(out, base + ".names");
   } else {
     std::filesystem::remove(base + ".names");  // a stale table would mislabel the new mesh
   }

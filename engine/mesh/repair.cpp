@@ -7,6 +7,7 @@
 
 #include "common/input_error.hpp"
 #include "engine/mesh/check.hpp"
+#include "engine/mesh/union_find.hpp"
 
 namespace palplab::mesh {
 
@@ -28,15 +29,6 @@ std::vector<std::string> RepairLog::lines() const {
   return s;
 }
 
-namespace {
-
-int find(std::vector<int>& p, int x) {
-  while (p[x] != x) x = p[x] = p[p[x]];
-  return x;
-}
-
-}  // namespace
-
 SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* out_log) {
   RepairLog log;
   const int nv = static_cast<int>(in.V.rows());
@@ -50,17 +42,18 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
   std::vector<int> rep(nv);
   std::iota(rep.begin(), rep.end(), 0);
   for (auto [i, j] : duplicate_vertex_pairs(V, opt.merge_tolerance)) {
-    const int a = find(rep, i), b = find(rep, j);
+    const int a = detail::find_root(rep, i), b = detail::find_root(rep, j);
     if (a != b) rep[std::max(a, b)] = std::min(a, b);
   }
   for (int v = 0; v < nv; ++v)
-    if (find(rep, v) != v) ++log.merged_vertices;
+    if (detail::find_root(rep, v) != v) ++log.merged_vertices;
   // 2. Faces through the map; drop degenerate and duplicate ones (same vertex set).
   std::vector<std::array<int, 3>> F;
   std::vector<int> region;
   std::set<std::array<int, 3>> seen;
   for (int f = 0; f < in.F.rows(); ++f) {
-    std::array<int, 3> t = {find(rep, in.F(f, 0)), find(rep, in.F(f, 1)), find(rep, in.F(f, 2))};
+    std::array<int, 3> t = {detail::find_root(rep, in.F(f, 0)), detail::find_root(rep, in.F(f, 1)),
+                            detail::find_root(rep, in.F(f, 2))};
     const Vec3 a = row3(V, t[0]), b = row3(V, t[1]), c = row3(V, t[2]);
     const double area2 = (b - a).cross(c - a).norm();
     const double lmax =

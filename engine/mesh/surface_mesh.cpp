@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "common/input_error.hpp"
+#include "engine/mesh/union_find.hpp"
 
 namespace palplab::mesh {
 
@@ -206,24 +207,18 @@ int euler_characteristic(const SurfaceMesh& m) {
   return count_used_vertices(m) - static_cast<int>(m.E.rows()) + static_cast<int>(m.F.rows());
 }
 
-namespace {
-int find(std::vector<int>& p, int x) {
-  while (p[x] != x) x = p[x] = p[p[x]];
-  return x;
-}
-}  // namespace
-
 int face_components(const SurfaceMesh& m, Eigen::VectorXi* comp) {
   const int nv = static_cast<int>(m.V.rows());
   std::vector<int> p(nv);
   std::iota(p.begin(), p.end(), 0);
   for (int f = 0; f < m.F.rows(); ++f)
-    for (int k = 1; k < 3; ++k) p[find(p, m.F(f, k))] = find(p, m.F(f, 0));
+    for (int k = 1; k < 3; ++k)
+      p[detail::find_root(p, m.F(f, k))] = detail::find_root(p, m.F(f, 0));
   std::vector<int> id(nv, -1);
   int n = 0;
   if (comp) comp->resize(m.F.rows());
   for (int f = 0; f < m.F.rows(); ++f) {
-    int r = find(p, m.F(f, 0));
+    int r = detail::find_root(p, m.F(f, 0));
     if (id[r] < 0) id[r] = n++;
     if (comp) (*comp)[f] = id[r];
   }

@@ -1,6 +1,7 @@
 #pragma once
-// Internal helpers of the mesh readers: a line reader that knows where it is, strict number
-// parsing and located errors. Not part of the public API.
+// Internal helpers of the mesh readers and writers: a line reader that knows where it is, strict
+// number parsing and located errors; an output file that says when it cannot be written. Not part
+// of the public API.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -13,6 +14,18 @@
 #include "common/input_error.hpp"
 
 namespace palplab::mesh::detail {
+
+inline std::ofstream open_out(const std::string& path, bool binary = false) {
+  std::ofstream out(path, binary ? std::ios::binary : std::ios::out);
+  if (!out) throw InputError("cannot write file", path);
+  return out;
+}
+
+// Flushes `out` and throws if any write to it failed (a full disk, say).
+inline void finish_out(std::ofstream& out, const std::string& path) {
+  out.flush();
+  if (!out) throw InputError("error while writing file", path);
+}
 
 inline std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

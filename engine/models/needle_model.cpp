@@ -331,8 +331,8 @@ class NeedleSceneModel final : public SceneModel {
 };
 
 // The "model" object of a needle prototype (docs/FORMATS.md "Needle").
-void read(json::Checker& c, const nlohmann::json& m, const std::string& P, SceneConfig& cfg,
-          const std::vector<std::string>&) {
+void read_needle(json::Checker& c, const nlohmann::json& m, const std::string& P, SceneConfig& cfg,
+                 const std::vector<std::string>&) {
   c.keys(m, P,
          {"kind", "tool", "axis", "target_tissue", "finger_radius", "stiffening", "bone_stiffness",
           "log_resolution"});
@@ -361,7 +361,7 @@ void read(json::Checker& c, const nlohmann::json& m, const std::string& P, Scene
           .value_or(n.log_resolution);
 }
 
-std::unique_ptr<SceneModel> make(const SceneConfig& cfg, const SceneMesh& cm) {
+std::unique_ptr<SceneModel> make_needle(const SceneConfig& cfg, const SceneMesh& cm) {
   if (!cm.tet)
     throw InputError(
         "model \"needle\" needs a tetrahedral mesh with tissue attributes (generator "
@@ -384,9 +384,9 @@ const ModelKind& needle_model_kind() {
   static const ModelKind k{"needle",
                            "needle insertion through tissue layers with a palpating finger "
                            "(prototype N)",
-                           &read,
+                           &read_needle,
                            nullptr,
-                           &make,
+                           &make_needle,
                            &save};
   return k;
 }

@@ -34,12 +34,12 @@ class PenaltyModel final : public SceneModel {
   double k_;
 };
 
-void read(json::Checker& c, const nlohmann::json& m, const std::string& path, SceneConfig&,
-          const std::vector<std::string>&) {
+void read_penalty(json::Checker& c, const nlohmann::json& m, const std::string& path, SceneConfig&,
+                  const std::vector<std::string>&) {
   c.keys(m, path, {"kind"});
 }
 
-std::unique_ptr<SceneModel> make(const SceneConfig& cfg, const SceneMesh& m) {
+std::unique_ptr<SceneModel> make_penalty(const SceneConfig& cfg, const SceneMesh& m) {
   return std::make_unique<PenaltyModel>(m, cfg.contact.stiffness);
 }
 
@@ -47,7 +47,7 @@ std::unique_ptr<SceneModel> make(const SceneConfig& cfg, const SceneMesh& m) {
 
 const ModelKind& penalty_model_kind() {
   static const ModelKind k{"penalty", "rigid organ, Hooke's law on the penetration (prototype A)",
-                           &read, nullptr, &make};
+                           &read_penalty, nullptr, &make_penalty};
   return k;
 }
 

@@ -9,7 +9,7 @@ namespace palplab::engine {
 
 namespace {
 
-constexpr char kTag[8] = {'F', 'E', 'M', 'L', 'D', 'L', 'T', '2'};
+constexpr char kFactorTag[8] = {'F', 'E', 'M', 'L', 'D', 'L', 'T', '2'};
 
 void put(std::string& s, const void* p, std::size_t n) {
   s.append(static_cast<const char*>(p), n);
@@ -125,7 +125,7 @@ std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& ac
   SparseMatrixd K = K_c;
   K.makeCompressed();  // the same entries in the same order
   std::string s;
-  put(s, kTag, 8);
+  put(s, kFactorTag, 8);
   put(s, d.data(), d.size());
   put(s, &h, sizeof h);
   put_vec(s, act.data(), static_cast<std::int64_t>(act.size()));
@@ -137,7 +137,7 @@ std::string save_linear_fem(const FemInputsDigest& d, const std::vector<int>& ac
 
 bool load_linear_fem(const std::string& blob, const FemInputsDigest& d, long total_dofs,
                      StoredLinearFem& out, LdltFactor& factor) {
-  if (blob.size() < 8 + 32 + 8 || std::memcmp(blob.data(), kTag, 8) != 0 ||
+  if (blob.size() < 8 + 32 + 8 || std::memcmp(blob.data(), kFactorTag, 8) != 0 ||
       std::memcmp(blob.data() + 8, d.data(), 32) != 0)
     return false;
   In in{blob, 40};

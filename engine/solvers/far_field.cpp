@@ -13,7 +13,7 @@ namespace palplab::engine {
 
 namespace {
 
-constexpr char kTag[8] = {'F', 'A', 'R', 'L', 'D', 'L', 'T', '1'};
+constexpr char kFarFieldTag[8] = {'F', 'A', 'R', 'L', 'D', 'L', 'T', '1'};
 using Digest = std::array<std::uint8_t, 32>;
 
 // SHA-256 of everything K is assembled from (lengths keep the fields apart).
@@ -36,12 +36,12 @@ Digest inputs_digest(const MassSpringSystem& sys) {
 
 // The factor of a far_field_save blob made from inputs d for m dofs, or false.
 bool restore(const std::string& blob, const Digest& d, long m, LdltFactor& f) {
-  constexpr std::size_t head = sizeof kTag + 32 + sizeof(std::int64_t);
-  if (blob.size() < head || std::memcmp(blob.data(), kTag, sizeof kTag) != 0 ||
-      std::memcmp(blob.data() + sizeof kTag, d.data(), 32) != 0)
+  constexpr std::size_t head = sizeof kFarFieldTag + 32 + sizeof(std::int64_t);
+  if (blob.size() < head || std::memcmp(blob.data(), kFarFieldTag, sizeof kFarFieldTag) != 0 ||
+      std::memcmp(blob.data() + sizeof kFarFieldTag, d.data(), 32) != 0)
     return false;
   std::int64_t dofs;
-  std::memcpy(&dofs, blob.data() + sizeof kTag + 32, sizeof dofs);
+  std::memcpy(&dofs, blob.data() + sizeof kFarFieldTag + 32, sizeof dofs);
   std::size_t at = head;
   return dofs == m && get_ldlt_factor(blob, at, m, f) && at == blob.size();
 }
@@ -52,7 +52,7 @@ std::string far_field_save(const MassSpringSystem& sys, const FarField& ff) {
   if (!ff.ready() || ff.nodes != sys.nodes() || !ff.factor.L.isCompressed()) return {};
   const Digest d = inputs_digest(sys);
   const std::int64_t dofs = ff.factor.size();
-  std::string s(kTag, sizeof kTag);
+  std::string s(kFarFieldTag, sizeof kFarFieldTag);
   s.append(reinterpret_cast<const char*>(d.data()), d.size());
   s.append(reinterpret_cast<const char*>(&dofs), sizeof dofs);
   put_ldlt_factor(s, ff.factor);

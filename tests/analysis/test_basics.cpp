@@ -14,7 +14,7 @@
 #include "analysis/posthoc.hpp"
 #include "analysis/summary.hpp"
 #include "common/input_error.hpp"
-#include "tests/analysis/error_of.hpp"
+#include "tests/analysis/support.hpp"
 
 using namespace palplab::analysis;
 using palplab::InputError;

@@ -18,6 +18,7 @@
 #include "analysis/csv.hpp"
 #include "analysis/lmm.hpp"
 #include "common/input_error.hpp"
+#include "tests/analysis/support.hpp"
 
 using namespace palplab::analysis;
 
@@ -38,11 +39,6 @@ std::map<std::string, Ref> load_reference() {
     out[t.rows[r][0] + "|" + t.rows[r][1]].v[t.rows[r][2] + "|" + t.rows[r][3]] =
         parse_number(t, static_cast<int>(r), 4);
   return out;
-}
-
-void expect_rel(double got, double want, double tol, const std::string& what) {
-  EXPECT_LE(std::abs(got - want), tol * std::abs(want))
-      << what << ": got " << got << " want " << want;
 }
 
 struct Case {

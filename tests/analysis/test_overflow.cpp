@@ -15,17 +15,12 @@
 #include "analysis/summary.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
-#include "tests/analysis/error_of.hpp"
+#include "tests/analysis/support.hpp"
 
 using namespace palplab::analysis;
 using palplab::InputError;
 
 namespace {
-
-void expect_rel(double got, double want, double tol, const std::string& what = {}) {
-  EXPECT_LE(std::abs(got - want), tol * std::abs(want))
-      << what << ": got " << got << " want " << want;
-}
 
 StatsSummary summarize_csv(const std::string& csv, StatsOptions opt = {}) {
   return summarize(group_table(parse_csv(csv, "t.csv"), "v", "g", {}), opt);

@@ -23,19 +23,13 @@
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
 #include "results/store.hpp"
+#include "tests/analysis/support.hpp"
 
 using namespace palplab;
 using namespace palplab::analysis;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // Minimal XML well-formedness check: balanced, properly nested tags, quoted attributes, valid
 // entities, a single root element. Returns "" when well-formed, else what is wrong.

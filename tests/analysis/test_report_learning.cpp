@@ -16,19 +16,13 @@
 
 #include "analysis/report.hpp"
 #include "results/store.hpp"
+#include "tests/analysis/support.hpp"
 
 using namespace palplab;
 using namespace palplab::analysis;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 constexpr double kSlope[2] = {-0.30, -0.10};  // N per session, groups A and B
 constexpr double kIntercept[2] = {3.0, 2.6};  // N at session 0

@@ -21,13 +21,13 @@ using palplab::testing::run_palplab;
 using palplab::testing::scratch_dir;
 using palplab::testing::slurp;
 
-const std::string kStudy = palplab::testing::tiny_study_json("dmg", 7);
+const std::string kDamageStudy = palplab::testing::tiny_study_json("dmg", 7);
 
 // A fresh, valid database (made once per test process, copied for each test).
 fs::path good_db() {
   static const fs::path db = [] {
     const fs::path d = scratch_dir("report_damage_src");
-    std::ofstream(d / "s.json") << kStudy;
+    std::ofstream(d / "s.json") << kDamageStudy;
     Result r = run_palplab(
         "run " + (d / "s.json").string() + " --db " + (d / "r.db").string() + " --quiet --jobs 1",
         d);

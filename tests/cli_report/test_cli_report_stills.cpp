@@ -27,7 +27,7 @@ using palplab::testing::slurp;
 
 namespace {
 
-const char* kStudy = R"({
+const char* kStillsStudy = R"({
   "palplab_study": 1,
   "id": "cli_report_stills",
   "title": "Report stills check",
@@ -54,7 +54,7 @@ class ReportStills : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = palplab::testing::scratch_dir("cli_report_stills");
-    std::string study = kStudy;
+    std::string study = kStillsStudy;
     study.replace(study.find("@PROTOTYPES@"), 12, std::string(PALPLAB_SOURCE_DIR) + "/prototypes");
     std::ofstream(dir_ / "study.json") << study;
     run_ = run_shell(std::string(PALPLAB_BINARY) + " run " + (dir_ / "study.json").string() +

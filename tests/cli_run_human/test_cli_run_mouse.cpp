@@ -23,7 +23,7 @@ using Result = palplab::testing::CliResult;
 using palplab::testing::db_rows;
 using palplab::testing::have_xvfb;
 using palplab::testing::kNoXvfb;
-const std::string kDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_run_human/";
+const std::string kMouseDir = std::string(PALPLAB_SOURCE_DIR) + "/tests/cli_run_human/";
 constexpr int kW = 400, kH = 300;
 
 // A pixel where the window's default camera sees prototype A's surface head-on, so a press
@@ -51,7 +51,7 @@ fs::path write_script(const fs::path& dir, double close_at) {
 
 Result human(const fs::path& db, const fs::path& script) {
   return palplab::testing::run_command(
-      palplab::testing::mouse_run(kDir + "mouse_study.json", db, script, kW, kH));
+      palplab::testing::mouse_run(kMouseDir + "mouse_study.json", db, script, kW, kH));
 }
 }  // namespace
 
@@ -86,7 +86,7 @@ TEST(CliRunMouse, ScriptedMouseSessionIsStoredLikeAVirtualOne) {
 
   // The same study with virtual participants: the same measures (names, units) per session.
   const Result v =
-      palplab::testing::run_command(std::string(PALPLAB_BINARY) + " run " + kDir +
+      palplab::testing::run_command(std::string(PALPLAB_BINARY) + " run " + kMouseDir +
                                     "mouse_study.json --db " + vdb.string() + " --quiet");
   ASSERT_EQ(v.code, 0) << v.out << v.err;
   auto names = [](const fs::path& d) {
@@ -126,7 +126,7 @@ TEST(CliRunMouse, NoDisplayOrBadScriptExits2) {
   const fs::path dir = palplab::testing::scratch_dir("run_mouse_bad");
   const fs::path db = dir / "human.db";
   const std::string base = "env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(PALPLAB_BINARY) +
-                           " run " + kDir + "mouse_study.json --db " + db.string() +
+                           " run " + kMouseDir + "mouse_study.json --db " + db.string() +
                            " --human --participant P01 ";
   Result r = palplab::testing::run_command(base + "--device mouse");
   EXPECT_EQ(r.code, 2) << r.out;

@@ -33,7 +33,7 @@ constexpr double kK = 200.0;  // probe coupling (N/m): the column is ~100 N/m
 // probe (the nine top nodes, equal weights) at 45 degrees: down and sideways, so that the
 // column bends and its elements rotate (a straight compression has no rotation: co-rotational
 // = linear there).
-struct Column {
+struct TiltedColumn {
   mesh::TetMesh m = fem_block_mesh(2, 2, 4, Eigen::Vector3d(0.02, 0.02, 0.04), 101, 0.0, 5);
   TetMaterials mat = uniform_materials(m.T.rows(), 1e4, 0.45, 1000);
   std::vector<std::uint8_t> fixed;
@@ -41,7 +41,7 @@ struct Column {
   int centre = 1 + 3 * (1 + 3 * 4);
   Eigen::Vector3d n = Eigen::Vector3d(-1, 0, 1).normalized();  // outward probe normal
   double offset = 0;  // the patch's rest gap with the device at the centre node (m, <= 0)
-  Column() {
+  TiltedColumn() {
     fixed.assign(m.V.rows(), 0);
     for (long i = 0; i < m.V.rows(); ++i) {
       fixed[i] = m.V(i, 2) < 1e-12;
@@ -77,7 +77,7 @@ FemModelOptions multirate(bool background, double interval = 1.0 / 60, bool real
 // The static equilibrium of the column with the probe's penalty spring at `depth`: linear FEM
 // (closed form: f = k d / (1 + k e^T K^-1 e)) or co-rotational FEM (Newton with the exact
 // tangent, the contact by Sherman–Morrison). Returns the force on the probe (N, along +z).
-double static_force(const Column& s, double depth, double k, bool corot) {
+double static_force(const TiltedColumn& s, double depth, double k, bool corot) {
   const FemSystem sys = fem_precompute(s.m.V, s.m.T, s.mat);
   const auto fixed_dof = node_to_dof_flags(s.fixed);
   const long n3 = sys.dofs();
@@ -126,7 +126,7 @@ double static_force(const Column& s, double depth, double k, bool corot) {
 }  // namespace
 
 TEST(FemMultirate, BeforeItsFirstUpdateItIsTheLinearStaticResponseAtAnyLoad) {
-  const Column s;
+  const TiltedColumn s;
   for (double depth : {1e-6, 0.004, 0.012}) {
     FemModel f(s.m, s.mat, s.fixed, multirate(true));
     s.touch(f, depth);
@@ -142,7 +142,7 @@ TEST(FemMultirate, SmallLoadEqualsLinear) {
   // After 300 ms (18 updates, converged) the force is the co-rotational equilibrium, which
   // differs from the linear one at relative O(strain) (the tangent's stress terms): 1 um gives
   // strains ~1e-5 (measured 2.7e-5 relative), 0.1 um ten times less.
-  const Column s;
+  const TiltedColumn s;
   for (double depth : {1e-6, 1e-7}) {
     FemModel f(s.m, s.mat, s.fixed, multirate(true));
     s.touch(f, depth);
@@ -155,7 +155,7 @@ TEST(FemMultirate, SmallLoadEqualsLinear) {
 TEST(FemMultirate, HeldPressConvergesOnTheCorotationalEquilibrium) {
   // 12 mm into the 4 cm column at 45 degrees: it bends, the co-rotational force is visibly not
   // linear.
-  const Column s;
+  const TiltedColumn s;
   const double depth = 0.012, k = kK;
   const double ref = static_force(s, depth, k, true), lin = static_force(s, depth, k, false);
   std::printf("12 mm: co-rotational %.6g N, linear %.6g N\n", ref, lin);
@@ -183,7 +183,7 @@ TEST(FemMultirate, RampStaysWithinTheClaimedBoundOfTheEquilibrium) {
   // a quasi-static press of the full model feels). Claimed bound: 1 % of the peak force (the
   // linearisation is one to two intervals old: the probe moved <= 0.7 mm since; measured
   // 0.19 %). Also in real time (the worker adopted when finished: here within the interval).
-  const Column s;
+  const TiltedColumn s;
   const double k = kK, v = 0.02;
   std::vector<double> ref, lin;
   for (int i = 25; i <= 600; i += 25) {  // the reference costs a Newton solve
@@ -229,7 +229,7 @@ TEST(FemMultirate, RampStaysWithinTheClaimedBoundOfTheEquilibrium) {
 }
 
 TEST(FemMultirate, BackgroundUpdateIsDeterministicAndLagsOneInterval) {
-  const Column s;
+  const TiltedColumn s;
   const auto run = [&](bool bg, double interval) {
     FemModel f(s.m, s.mat, s.fixed, multirate(bg, interval));
     std::vector<double> F;
@@ -255,7 +255,7 @@ TEST(FemMultirate, BackgroundUpdateIsDeterministicAndLagsOneInterval) {
 }
 
 TEST(FemMultirate, ResetAndInputErrors) {
-  const Column s;
+  const TiltedColumn s;
   EXPECT_EQ(fem_formulation_from_string("corotational_multirate"),
             FemFormulation::corotational_multirate);
   EXPECT_STREQ(to_string(FemFormulation::corotational_multirate), "corotational_multirate");

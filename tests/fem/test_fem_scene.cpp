@@ -21,15 +21,15 @@
 #include "engine/solvers/fem_assembly.hpp"
 #include "engine/solvers/fem_static.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/fem/quasi_static.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
 
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
 nlohmann::json fem_info(const Scene& s) {
   const SceneStats st = s.stats();
@@ -52,13 +52,7 @@ Eigen::Vector3d hold(Scene& s, int node, double depth, int steps) {
   return last.force;
 }
 
-// Large steps: backward Euler with h = 5 s is a damped fixed-point iteration towards the static
-// equilibrium of the press (the haptic dynamics are not what is compared here).
-SceneConfig quasi_static(const std::string& id) {
-  SceneConfig c = prototypes::load_prototype(proto(id));
-  c.dt = 5.0;
-  return c;
-}
+using palplab::engine::testing::quasi_static;
 
 }  // namespace
 
@@ -257,7 +251,7 @@ TEST(FemScene, BadConfigsAreInputErrors) {
        {std::string("\"formulation\": \"linear\", \"update_rate_hz\": 60"),
         std::string("\"formulation\": \"corotational_multirate\", \"update_rate_hz\": 0"),
         std::string("\"formulation\": \"linear\", \"deterministic_update\": true")}) {
-    const std::string path = testing::TempDir() + "/bad_multirate.json";
+    const std::string path = ::testing::TempDir() + "/bad_multirate.json";
     std::ifstream in(proto("D_multirate"));
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const auto a = text.find("\"formulation\"");

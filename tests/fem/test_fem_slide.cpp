@@ -20,21 +20,17 @@
 #include "engine/haptics/press.hpp"
 #include "engine/models/model.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/fem/quasi_static.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
 
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
-SceneConfig quasi_static(const std::string& id) {
-  SceneConfig c = prototypes::load_prototype(proto(id));
-  c.dt = 5.0;
-  return c;
-}
+using palplab::engine::testing::quasi_static;
 
 // The device `depth` m inside the rest surface at a region's press node, moved `travel` m along
 // a tangent of the node's normal in `steps` equal steps (one Scene step each; `settle` steps at

@@ -22,7 +22,7 @@ using palplab::engine::Rendered;
 using palplab::engine::Scene;
 using palplab::engine::SceneOverrides;
 
-const std::string kN = std::string(PALPLAB_SOURCE_DIR) + "/prototypes/N.json";
+const std::string kNeedleProto = std::string(PALPLAB_SOURCE_DIR) + "/prototypes/N.json";
 
 // The shoulder's joint (engine/mesh/generate.hpp): head centre and the membrane's outer radius.
 const Vector3d kHead(0.022, 0.0, 0.0);
@@ -31,7 +31,7 @@ constexpr double kMembraneOuter = 0.0275;
 Scene transparent_n() {
   SceneOverrides ov;
   ov.transparency = true;
-  return palplab::prototypes::build_scene(kN, ov);
+  return palplab::prototypes::build_scene(kNeedleProto, ov);
 }
 
 struct Logged {
@@ -119,7 +119,7 @@ TEST(NeedleScene, ScriptedPosteriorInsertionReachesTheCapsule) {
 }
 
 TEST(NeedleScene, DistanceIsLoggedAsEventsAndHiddenWithoutTransparency) {
-  Scene s = palplab::prototypes::build_scene(kN, {});
+  Scene s = palplab::prototypes::build_scene(kNeedleProto, {});
   std::vector<std::pair<double, double>> dist;
   // Ends at y = -19 mm, where the direction from the head centre is 38 deg from -x (in the cap).
   const auto ev = insert(s, -0.002, -0.09, -0.019, 0.005, &dist);
@@ -139,7 +139,7 @@ TEST(NeedleScene, DistanceIsLoggedAsEventsAndHiddenWithoutTransparency) {
 }
 
 TEST(NeedleScene, WithdrawingLeavesTheTissuesInReverseAndANewInsertionCounts) {
-  Scene s = palplab::prototypes::build_scene(kN, {});
+  Scene s = palplab::prototypes::build_scene(kNeedleProto, {});
   auto ev = insert(s, -0.002, -0.09, -0.050, 0.005);
   // Pull back out along -y.
   std::vector<std::string> left;
@@ -161,7 +161,7 @@ TEST(NeedleScene, WithdrawingLeavesTheTissuesInReverseAndANewInsertionCounts) {
 }
 
 TEST(NeedleScene, LateralInsertionHitsTheHumerus) {
-  Scene s = palplab::prototypes::build_scene(kN, {});
+  Scene s = palplab::prototypes::build_scene(kNeedleProto, {});
   s.set_tool("needle", -Vector3d::UnitX());
   int bone = 0;
   std::string bone_region;
@@ -197,7 +197,7 @@ double finger_closed_form(double h, double d, const palplab::engine::NeedleScene
 }
 
 TEST(NeedleScene, FingerForceReflectsTheBoneDepth) {
-  Scene s = palplab::prototypes::build_scene(kN, {});
+  Scene s = palplab::prototypes::build_scene(kNeedleProto, {});
   const auto& g = s.geometry();
   // The lateral pole of the skin and a posterior point over the joint line.
   const int lateral = g.nearest_node(Vector3d(0.08, 0.0, 0.0));
@@ -221,7 +221,7 @@ TEST(NeedleScene, FingerForceReflectsTheBoneDepth) {
 }
 
 TEST(NeedleScene, ToolsAreExplicit) {
-  Scene s = palplab::prototypes::build_scene(kN, {});
+  Scene s = palplab::prototypes::build_scene(kNeedleProto, {});
   EXPECT_THROW(s.set_tool("scalpel", Vector3d::UnitY()), palplab::InputError);
   EXPECT_THROW(s.set_tool("needle", Vector3d::Zero()), palplab::InputError);
   s.set_tool("needle", Vector3d::UnitY());

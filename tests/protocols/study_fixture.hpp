@@ -6,7 +6,9 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <vector>
 
+#include "common/input_error.hpp"
 #include "protocols/study.hpp"
 
 namespace fixture {
@@ -47,6 +49,17 @@ inline std::string study_in_dir(const std::string& name, const std::string& stud
 
 inline std::string reference_study(const std::string& file) {
   return read(std::filesystem::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / file);
+}
+
+// The problems load_study reports for the study `text` (saved as <temp>/<name>/study.json beside
+// the shipped prototypes); empty when it loads.
+inline std::vector<palplab::Problem> problems_of(const std::string& name, const std::string& text) {
+  try {
+    palplab::protocols::load_study(study_in_dir(name, text), tract_inspector());
+  } catch (const palplab::InputError& e) {
+    return e.problems();
+  }
+  return {};
 }
 
 }  // namespace fixture

@@ -34,16 +34,7 @@ const char* kValid = R"({
   ]
 })";
 
-// Loads `text` (written as study.json next to prototype stubs) and returns its problems.
-std::vector<Problem> problems_of(const std::string& name, const std::string& text) {
-  std::string f = fixture::study_in_dir(name, text);
-  try {
-    load_study(f, fixture::tract_inspector());
-  } catch (const InputError& e) {
-    return e.problems();
-  }
-  return {};
-}
+using fixture::problems_of;
 
 // Replaces the first occurrence of `from` in kValid by `to`.
 std::string edit(const std::string& from, const std::string& to) {

@@ -31,14 +31,7 @@ std::string study(const std::string& training_instructions, const std::string& t
 })";
 }
 
-std::vector<Problem> problems_of(const std::string& name, const std::string& text) {
-  try {
-    load_study(fixture::study_in_dir(name, text), fixture::tract_inspector());
-  } catch (const InputError& e) {
-    return e.problems();
-  }
-  return {};
-}
+using fixture::problems_of;
 
 }  // namespace
 

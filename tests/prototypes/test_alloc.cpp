@@ -7,6 +7,7 @@
 
 #include "prototypes/factory.hpp"
 #include "tests/prototypes/press_run.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 // Sanitizers bring their own allocator: no counting there (the test skips).
 #if defined(__has_feature)
@@ -48,9 +49,7 @@ using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
 // Counts the allocations inside each Scene::step of the device it wraps (between the read
 // that hands the position over and the write that gets the rendered force back).

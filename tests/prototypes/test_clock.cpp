@@ -7,14 +7,13 @@
 
 #include "engine/haptics/clock.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 // Press the ovary: 2 mm outside to 8 mm inside in 0.5 s, hold, withdraw.
 ScriptedDevice press_device(const Scene& s) {
   const auto& g = s.geometry();

@@ -18,15 +18,14 @@
 #include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
 #include "tests/octahedron.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
 
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
 Scene make(const std::string& id, const std::function<void(SceneConfig&)>& edit = {}) {
   SceneConfig cfg = prototypes::load_prototype(proto(id));

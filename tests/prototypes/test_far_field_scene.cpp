@@ -11,14 +11,13 @@
 #include "engine/haptics/scene_config.hpp"
 #include "prototypes/factory.hpp"
 #include "tests/prototypes/press_run.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 
 namespace {
 
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
 nlohmann::json exterior(const engine::Scene& s) {
   return nlohmann::json::parse(s.stats().model_info)["mass_spring"];

@@ -11,6 +11,7 @@
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 #include "prototypes/factory.hpp"
+#include "tests/prototypes/probe_points.hpp"
 #include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
@@ -72,7 +73,8 @@ PressResult press_near(const std::string& path, const Eigen::Vector3d& point) {
   return r;
 }
 
-const Eigen::Vector3d kOvary(-0.0522, 0.0430, 0.3179), kBody(-0.014, -0.021, 0.152);
+using palplab::engine::testing::kBody;
+using palplab::engine::testing::kOvary;
 
 void expect_within(const std::vector<double>& k, double rel, const std::string& what) {
   double lo = k[0], hi = k[0], mean = 0;

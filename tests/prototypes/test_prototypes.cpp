@@ -11,6 +11,7 @@
 #include "engine/mesh/io.hpp"
 #include "prototypes/factory.hpp"
 #include "tests/prototypes/press_run.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
@@ -20,9 +21,7 @@ using palplab::engine::testing::run_press;
 
 namespace {
 
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
 std::string write_temp(const std::string& name, const std::string& text) {
   const auto p = std::filesystem::temp_directory_path() / ("palplab_test_" + name);

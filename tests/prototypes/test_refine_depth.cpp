@@ -16,13 +16,15 @@
 
 #include "bench/refine_models.hpp"
 #include "engine/models/contact_pad.hpp"
+#include "tests/prototypes/probe_points.hpp"
 
 using namespace palplab;
 using namespace palplab::engine;
 
 namespace {
 
-const Eigen::Vector3d kBody(-0.014, -0.021, 0.152);
+using palplab::engine::testing::kBody;
+using palplab::engine::testing::kOvary;
 
 struct Static {
   double k = 0;       // N/m
@@ -249,7 +251,6 @@ TEST(RefinementDepth, OnOffOverResolutions) {
   // Asserted: on/off within the Weber fraction (7 %) at the ovary; the unrefined and the refined
   // body each within 7 % of its mean over the three resolutions; the patch's mass conserved; the
   // body's on/off gap pinned to the measured values (2 points).
-  const Eigen::Vector3d kOvary(-0.0522, 0.0430, 0.3179);
   const int res[3] = {1600, 2440, 4000};
   const double body_gap[3] = {-14.3, -13.3, -6.2};  // % (measured, see above)
   double body_off[3], body_on[3];

@@ -18,14 +18,13 @@
 
 #include "prototypes/factory.hpp"
 #include "tests/prototypes/press_run.hpp"
+#include "tests/prototypes/prototype_text.hpp"
 
 using namespace palplab;
 
 namespace {
 
-std::string proto(const std::string& id) {
-  return std::string(PALPLAB_SOURCE_DIR) + "/prototypes/" + id + ".json";
-}
+using palplab::engine::testing::proto;
 
 // Prototype C with every node integrated every step (no scope, no sleeping).
 std::string whole_model_c() {

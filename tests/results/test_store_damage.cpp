@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path tmp(const std::string& name) {
+fs::path damage_tmp(const std::string& name) {
   return test_support::tmp("damage", name);
 }
 using test_support::slurp;
@@ -81,7 +81,7 @@ void expect_input_error(const std::function<void()>& f, const std::vector<std::s
 }  // namespace
 
 TEST(StoreDamage, MissingTableIsNamedWhenOpening) {
-  auto d = tmp("notable");
+  auto d = damage_tmp("notable");
   const std::string db = make_db(d);
   sql_exec(db, "DROP TABLE samples; DROP TABLE sessions;");
   expect_input_error([&] { Store::open(db); },
@@ -90,14 +90,14 @@ TEST(StoreDamage, MissingTableIsNamedWhenOpening) {
 }
 
 TEST(StoreDamage, MissingColumnIsNamedWhenOpening) {
-  auto d = tmp("nocolumn");
+  auto d = damage_tmp("nocolumn");
   const std::string db = make_db(d);
   sql_exec(db, "ALTER TABLE measures DROP COLUMN unit;");
   expect_input_error([&] { Store::open(db); }, {db, "table \"measures\" lacks the column(s) unit"});
 }
 
 TEST(StoreDamage, TruncatedFileIsSaidDamagedNotForeign) {
-  auto d = tmp("truncated");
+  auto d = damage_tmp("truncated");
   const std::string db = make_db(d, 20000);  // a few hundred pages
   ASSERT_FALSE(fs::exists(db + "-wal"));
   const std::uintmax_t size = fs::file_size(db);
@@ -116,7 +116,7 @@ TEST(StoreDamage, TruncatedFileIsSaidDamagedNotForeign) {
 }
 
 TEST(StoreDamage, TextInAMeasureValueIsRefusedNotReadAsZero) {
-  auto d = tmp("textvalue");
+  auto d = damage_tmp("textvalue");
   const std::string db = make_db(d);
   sql_exec(db,
            "UPDATE measures SET value = 'abc' WHERE name = 'palpation_force' AND session = "
@@ -136,7 +136,7 @@ TEST(StoreDamage, TextInAMeasureValueIsRefusedNotReadAsZero) {
 }
 
 TEST(StoreDamage, CorruptSampleBlobNamesItsSession) {
-  auto d = tmp("blob");
+  auto d = damage_tmp("blob");
   const std::string db = make_db(d);
   sql_exec(db,
            "UPDATE samples SET data = substr(data, 1, 10) WHERE session = (SELECT session FROM "
@@ -151,7 +151,7 @@ TEST(StoreDamage, CorruptSampleBlobNamesItsSession) {
 }
 
 TEST(StoreDamage, FailingExportKeepsTheEarlierExport) {
-  auto d = tmp("export");
+  auto d = damage_tmp("export");
   const std::string db = make_db(d);
   export_csv(Store::open(db), (d / "csv").string(), true);
   const std::string measures = slurp(d / "csv" / "measures.csv");
@@ -176,7 +176,7 @@ TEST(StoreDamage, FailingExportKeepsTheEarlierExport) {
 }
 
 TEST(StoreDamage, PathsSayWhatIsWrongWithThem) {
-  auto d = tmp("paths");
+  auto d = damage_tmp("paths");
   expect_input_error([] { Store::open(""); }, {"no database file name given"});
   expect_input_error([] { Store::create(""); }, {"no database file name given"});
   expect_input_error([&] { Store::create((d / "missing" / "x.db").string()); },
@@ -198,7 +198,7 @@ std::string p02_session() {
 // A hand-edited events row (±inf, text) is refused naming the table, the row and the column,
 // by read_events and so by the export, which kept writing `contact_end,inf` and `t` = 0.
 TEST(StoreDamage, EventValuesThatAreNotFiniteNumbersAreRefused) {
-  auto d = tmp("events");
+  auto d = damage_tmp("events");
   const std::string db = make_db(d);
   export_csv(Store::open(db), (d / "csv").string(), false);
   const std::string events = slurp(d / "csv" / "events.csv");
@@ -248,7 +248,7 @@ TEST(StoreDamage, EventValuesThatAreNotFiniteNumbersAreRefused) {
 // export's sessions.csv and the session columns of read_measures), and the participants' and the
 // study's numbers.
 TEST(StoreDamage, SessionNumbersThatAreNotWhatTheSchemaSaysAreRefused) {
-  auto d = tmp("sessions");
+  auto d = damage_tmp("sessions");
   const std::string db = make_db(d);
   export_csv(Store::open(db), (d / "csv").string(), false);
   const std::string sessions_csv = slurp(d / "csv" / "sessions.csv");
@@ -321,7 +321,7 @@ TEST(StoreDamage, SessionNumbersThatAreNotWhatTheSchemaSaysAreRefused) {
 
 // The study's structure (phases and thresholds, read by report) is typed the same way.
 TEST(StoreDamage, PhaseAndThresholdNumbersThatAreNotNumbersAreRefused) {
-  auto d = tmp("structure");
+  auto d = damage_tmp("structure");
   const std::string db = make_db(d);
   sql_exec(db,
            "INSERT INTO phases (phase, position, kind, sessions, session_duration, haptic, "
@@ -356,7 +356,7 @@ TEST(StoreDamage, PhaseAndThresholdNumbersThatAreNotNumbersAreRefused) {
 }
 
 TEST(StoreDamage, SampleRowNumbersThatAreNotNumbersAreRefused) {
-  auto d = tmp("samplecols");
+  auto d = damage_tmp("samplecols");
   const std::string db = make_db(d);
   sql_exec(db,
            "UPDATE samples SET t0 = 'abc' WHERE second = 1 AND session = " + p02_session() + ";");
@@ -371,7 +371,7 @@ TEST(StoreDamage, SampleRowNumbersThatAreNotNumbersAreRefused) {
 // `export DB1 --samples` then `export DB2` (no --samples) into one directory: the samples.csv of
 // DB1 is removed (and reported), not left beside DB2's files; only once the export succeeded.
 TEST(StoreDamage, ExportWithoutSamplesRemovesAnEarlierSamplesCsv) {
-  auto d = tmp("stale");
+  auto d = damage_tmp("stale");
   fs::create_directories(d / "one");
   fs::create_directories(d / "two");
   const std::string db1 = make_db(d / "one");
