@@ -510,8 +510,9 @@ bool Store::is_empty_leftover(const std::string& path) {
 }
 
 bool Store::remove_empty_leftover(const std::string& path) {
-  if (!is_empty_leftover(path)) return false;
+  // Only writers call this: refused before the probe's read-only open creates PATH-wal/-shm.
   require_writable(path, true);
+  if (!is_empty_leftover(path)) return false;
   const int fd = lock_exclusive(path);  // then looked at again: nobody may have started meanwhile
   if (!is_empty_leftover(path)) {
     ::close(fd);
@@ -733,6 +734,9 @@ Store Store::open(const std::string& path, bool exclusive) {
     throw InputError("is a directory (expected a results database file)", path);
   if (::access(path.c_str(), R_OK) != 0)
     throw InputError(std::string("cannot read the database: ") + std::strerror(errno), path);
+  // A writer is refused before the probe below opens the file: that read-only open creates
+  // PATH-wal and PATH-shm in a writable directory, which a refused resume left behind.
+  if (exclusive) require_writable(path, true);
   if (::access(dir_of(path).c_str(), W_OK) == 0) {
     // (In a read-only directory a WAL database may be unreadable without its -shm file: the
     // immutable open below decides then.)
@@ -746,7 +750,6 @@ Store Store::open(const std::string& path, bool exclusive) {
   const bool can_write =
       ::access(dir_of(path).c_str(), W_OK) == 0 && ::access(path.c_str(), W_OK) == 0;
   if (exclusive) {
-    require_writable(path, true);
     db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);
   } else if (can_write) {
     db = open_db(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX);

@@ -156,7 +156,8 @@ class Store {
   // starts the run in it).
   static bool is_empty_leftover(const std::string& path);
   // Removes PATH (and its -wal, -shm) when it is such a leftover, checked again under the
-  // writer's lock; false when it is not one (nothing removed).
+  // writer's lock; false when it is not one (nothing removed). For writers only: a PATH (or its
+  // directory) this process cannot write is refused (InputError) before it is opened.
   static bool remove_empty_leftover(const std::string& path);
   Store(Store&&) noexcept;
   Store& operator=(Store&&) noexcept;

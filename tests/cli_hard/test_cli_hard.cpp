@@ -524,6 +524,34 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
   ::chmod((d / "ro").c_str(), 0755);
 }
 
+// A refused resume of a read-only database file left PATH-wal and PATH-shm behind: the probe's
+// read-only open created them (the directory is writable) before the write check refused. The
+// writers' opens (Store::open(path, true), Store::remove_empty_leftover: `run --resume` and
+// `run --human`) refuse before anything is opened now.
+TEST(HardDb, RefusedResumeOfAReadOnlyFileLeavesNoWalOrShm) {
+  std::string as = "";
+  if (geteuid() == 0) {
+    if (std::system("runuser -u nobody -- true 2>/dev/null") != 0)
+      GTEST_SKIP() << "root ignores file permissions and runuser is not available";
+    as = "runuser -u nobody -- ";
+  }
+  auto d = tmp("roresume");
+  const fs::path db = incomplete_db(d);
+  ASSERT_FALSE(fs::exists(db.string() + "-wal"));
+  ASSERT_FALSE(fs::exists(db.string() + "-shm"));
+  fs::create_directories(d / "out");
+  ::chmod((d / "out").c_str(), 0777);
+  ::chmod(d.c_str(), 0777);
+  ::chmod(db.c_str(), 0444);
+  Result r = cli_as(as, "run " + (d / "study.json").string() + " --db " + db.string() + " --resume",
+                    d / "out");
+  EXPECT_EXIT2_WITH(r, "the file is read-only");
+  EXPECT_FALSE(fs::exists(db.string() + "-wal"));
+  EXPECT_FALSE(fs::exists(db.string() + "-shm"));
+  ::chmod(db.c_str(), 0644);
+  ::chmod(d.c_str(), 0755);
+}
+
 // An interrupted virtual run (SIGTERM; SIGINT alike) said nothing: it now says that the
 // completed sessions are stored and prints the command that continues it, exits 128 + signal,
 // and that command completes the run (keeping the run's --samples none).
