@@ -35,13 +35,13 @@ CsvTable read_csv(const std::string& path);
 // characters escaped (escape_controls), cut after `max_chars` characters (UTF-8 code points)
 // with "… (N bytes)" — a 10 MB field made a 10 MB error message.
 std::string shown_text(std::string_view s, std::size_t max_chars = 60);
-
-// `s` without its leading and trailing blanks (spaces and tabs): a cell as typed in a spreadsheet.
-std::string trim_blanks(const std::string& s);
 // Column names for a message: the first `max_columns` through shown_text, each between `quote`s,
 // separated by ", ", then "… (N columns)" when there are more.
 std::string shown_columns(const std::vector<std::string>& header, std::string_view quote = "",
                           std::size_t max_columns = 20);
+
+// `s` without its leading and trailing blanks (spaces and tabs): a cell as typed in a spreadsheet.
+std::string trim_blanks(const std::string& s);
 
 // Index of column `name`; throws InputError listing the available columns (shown_columns) when
 // it is absent.

@@ -22,7 +22,6 @@ constexpr size_t kMaxGroups = 100;
 // The smallest spread of the values (largest |deviation|) the statistics can square: the
 // counterpart of kMaxCsvMagnitude (csv.hpp).
 constexpr double kMinCsvSpread = 1e-150;
-
 }  // namespace
 
 WhereFilter parse_where(const std::string& spec) {
