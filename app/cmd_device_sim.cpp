@@ -21,6 +21,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -201,12 +203,22 @@ int run_device_sim(const SimArgs& a) {
   self.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   ::bind(fd, reinterpret_cast<sockaddr*>(&self), sizeof self);
 
+  // The force-off latency is timed by the kernel's arrival stamp of each datagram
+  // (SO_TIMESTAMPNS, CLOCK_REALTIME), not by when this process gets round to reading it: a loaded
+  // machine can leave the simulator's own polling several ms late, and that is not palplab's
+  // latency. Without the stamp (never on Linux) the read time stands in.
+  const int stamp_on = 1;
+  const bool stamped =
+      ::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &stamp_on, sizeof stamp_on) == 0;
+  using Wall = std::chrono::system_clock;
+
   long sent = 0, received = 0, force_off = 0, bad = 0;
   double max_force = 0.0, first_off_ms = -1.0;
   std::uint32_t last_ack = 0, last_buttons = 0;
   long button_changes = 0;
   const auto t0 = Clock::now();
-  Clock::time_point last_send = t0;
+  Wall::time_point last_send = Wall::now();
+  bool silent = false;  // the send phase is over: the next force off is the one timed
   const auto period =
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / a.rate));
   auto next = t0;
@@ -214,9 +226,24 @@ int run_device_sim(const SimArgs& a) {
   Eigen::Vector3d prev = path.front().second;
   auto receive = [&] {
     std::uint8_t buf[256];
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
     while (true) {
-      const ssize_t n = ::recv(fd, buf, sizeof buf, MSG_DONTWAIT);
+      iovec iov{buf, sizeof buf};
+      msghdr msg{};
+      msg.msg_iov = &iov;
+      msg.msg_iovlen = 1;
+      msg.msg_control = control;
+      msg.msg_controllen = sizeof control;
+      const ssize_t n = ::recvmsg(fd, &msg, MSG_DONTWAIT);
       if (n < 0) break;
+      Wall::time_point arrived = Wall::now();
+      for (cmsghdr* c = CMSG_FIRSTHDR(&msg); stamped && c; c = CMSG_NXTHDR(&msg, c))
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+          timespec ts;
+          std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+          arrived = Wall::time_point(std::chrono::duration_cast<Wall::duration>(
+              std::chrono::seconds(ts.tv_sec) + std::chrono::nanoseconds(ts.tv_nsec)));
+        }
       const auto f = engine::decode_force(buf, static_cast<size_t>(n));
       if (!f) {
         ++bad;
@@ -227,10 +254,8 @@ int run_device_sim(const SimArgs& a) {
       max_force = std::max(max_force, f->f.norm());
       if (f->flags & engine::kUdpForceOff) {
         ++force_off;
-        if (first_off_ms < 0 && sent > 0 &&
-            Clock::now() - t0 >= std::chrono::duration<double>(stop))
-          first_off_ms =
-              std::chrono::duration<double, std::milli>(Clock::now() - last_send).count();
+        if (first_off_ms < 0 && silent && sent > 0 && arrived >= last_send)
+          first_off_ms = std::chrono::duration<double, std::milli>(arrived - last_send).count();
       }
     }
   };
@@ -266,13 +291,14 @@ int run_device_sim(const SimArgs& a) {
       const auto b = engine::encode(m);
       ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
     }
-    last_send = Clock::now();
+    last_send = Wall::now();
     ++sent;
     receive();
     next += period;
     std::this_thread::sleep_until(next);
   }
   // Silent phase: keep receiving (force-off latency), bounded by `linger`.
+  silent = true;
   const auto end =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(
                          std::chrono::duration<double>(a.stop_after >= 0 ? a.linger : 0.02));
