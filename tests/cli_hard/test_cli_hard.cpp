@@ -10,6 +10,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -64,6 +65,14 @@ Result cli_as(const std::string& as, const std::string& args, const fs::path& di
 
 Result cli(const std::string& args, const fs::path& dir) {
   return cli_as("", args, dir);
+}
+
+// Root ignores permissions: as root, the permission tests run palplab as "nobody". The prefix
+// for cli_as ("" when not root), or nothing when that is impossible (root without runuser).
+std::optional<std::string> unprivileged() {
+  if (geteuid() != 0) return std::string();
+  if (std::system("runuser -u nobody -- true 2>/dev/null") != 0) return std::nullopt;
+  return std::string("runuser -u nobody -- ");
 }
 
 bool has(const std::string& s, const std::string& part) {
@@ -441,13 +450,9 @@ TEST(HardDb, ForceReplacesOnlyAPalplabDatabase) {
 }
 
 TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
-  // Root ignores permissions: as root, palplab runs as "nobody" for this test (runuser).
-  std::string as = "";
-  if (geteuid() == 0) {
-    if (std::system("runuser -u nobody -- true 2>/dev/null") != 0)
-      GTEST_SKIP() << "root ignores directory permissions and runuser is not available";
-    as = "runuser -u nobody -- ";
-  }
+  const std::optional<std::string> as_user = unprivileged();
+  if (!as_user) GTEST_SKIP() << "root ignores permissions and runuser is not available";
+  const std::string& as = *as_user;
   auto d = tmp("ro");
   const fs::path db = incomplete_db(d);
   fs::create_directories(d / "ro");
@@ -482,12 +487,9 @@ TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
 // place, the database was opened immutable and those writes silently dropped (a session missing
 // from export and report); now they are read through the existing -shm, or, without it, refused.
 TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
-  std::string as = "";
-  if (geteuid() == 0) {
-    if (std::system("runuser -u nobody -- true 2>/dev/null") != 0)
-      GTEST_SKIP() << "root ignores directory permissions and runuser is not available";
-    as = "runuser -u nobody -- ";
-  }
+  const std::optional<std::string> as_user = unprivileged();
+  if (!as_user) GTEST_SKIP() << "root ignores permissions and runuser is not available";
+  const std::string& as = *as_user;
   auto d = tmp("rowal");
   const fs::path db = incomplete_db(d);
   fs::create_directories(d / "ro");
@@ -529,12 +531,9 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
 // writers' opens (Store::open(path, true), Store::remove_empty_leftover: `run --resume` and
 // `run --human`) refuse before anything is opened now.
 TEST(HardDb, RefusedResumeOfAReadOnlyFileLeavesNoWalOrShm) {
-  std::string as = "";
-  if (geteuid() == 0) {
-    if (std::system("runuser -u nobody -- true 2>/dev/null") != 0)
-      GTEST_SKIP() << "root ignores file permissions and runuser is not available";
-    as = "runuser -u nobody -- ";
-  }
+  const std::optional<std::string> as_user = unprivileged();
+  if (!as_user) GTEST_SKIP() << "root ignores permissions and runuser is not available";
+  const std::string& as = *as_user;
   auto d = tmp("roresume");
   const fs::path db = incomplete_db(d);
   ASSERT_FALSE(fs::exists(db.string() + "-wal"));
