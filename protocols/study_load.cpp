@@ -921,7 +921,7 @@ Study load_study(const std::string& path, const PrototypeInspector& inspect) {
   if (std::filesystem::is_directory(path, ec))
     throw InputError("is a directory (expected a study file, JSON)", path);
   // Bounded like every JSON input: /dev/zero or a pipe that never ends stops at the limit.
-  return parse_study(read_file_bounded(path, palplab::json::kMaxJsonFileBytes, "study file (JSON)"),
+  return parse_study(read_file_bounded(path, palplab::json::kMaxJsonFileBytes, "JSON study file"),
                      path, inspect);
 }
 

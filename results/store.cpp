@@ -743,8 +743,8 @@ Store Store::open(const std::string& path, bool exclusive) {
     const Probe p = probe_db(path);
     if (p.kind == Probe::kDamaged) throw InputError(damaged(p.detail), path);
     if (p.kind != Probe::kPalplab)
-      throw InputError(
-          fs::file_size(path, ec) == 0 ? "is empty (" + not_palplab() + ")" : not_palplab(), path);
+      throw InputError(fs::file_size(path, ec) == 0 ? "is empty: " + not_palplab() : not_palplab(),
+                       path);
   }
   sqlite3* db = nullptr;
   const bool can_write =

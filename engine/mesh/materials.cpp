@@ -224,7 +224,7 @@ MaterialTable read_materials(const std::string& path) {
   if (std::filesystem::is_directory(path, ec))
     throw InputError("is a directory (expected a material table, JSON)", path);
   return parse_materials(
-      read_file_bounded(path, palplab::json::kMaxJsonFileBytes, "material table (JSON)"), path);
+      read_file_bounded(path, palplab::json::kMaxJsonFileBytes, "JSON material table"), path);
 }
 
 std::string materials_to_json(const MaterialTable& t) {

@@ -661,6 +661,14 @@ TEST(HardDb, AnInterruptedStartIsStartedInOrReplaced) {
           d);
   EXPECT_EXIT2_WITH(r, "refusing to replace it: not a palplab results database");
   EXPECT_EQ(slurp(d / "notes.db"), "my notes");
+  // An empty file behind a symbolic link is not deleted through the link: refused, saying why.
+  spit(d / "target.db", "");
+  fs::create_symlink(d / "target.db", d / "link.db");
+  r = cli("run " + (d / "study.json").string() + " --db " + (d / "link.db").string() + " --resume",
+          d);
+  EXPECT_EXIT2_WITH(r, "link.db: is empty: not a palplab results database (expected schema");
+  EXPECT_TRUE(fs::exists(d / "target.db"));
+  EXPECT_TRUE(fs::is_symlink(d / "link.db"));
 }
 
 // Resuming with another study file named neither study.

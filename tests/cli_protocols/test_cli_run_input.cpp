@@ -86,7 +86,7 @@ TEST(CliRunInput, StudyThatIsADirectoryIsSaidAsSuch) {
 TEST(CliRunInput, EndlessStudyInputStopsAtTheSizeLimit) {
   auto d = scratch_dir("run_devzero");
   Result r = run_palplab("validate /dev/zero", d);
-  expect_exit2(r, {"/dev/zero", "more than the 256 MiB accepted for study file (JSON)"});
+  expect_exit2(r, {"/dev/zero", "more than the 256 MiB accepted for JSON study file"});
   r = run_palplab("run /dev/zero --db " + (d / "r.db").string() + " --quiet", d);
   expect_exit2(r, {"/dev/zero", "more than the 256 MiB"});
   EXPECT_FALSE(fs::exists(d / "r.db"));
