@@ -44,15 +44,23 @@ fs::path tmp(const std::string& name) {
   return d;
 }
 
-// Runs palplab with a 60 s limit (`timeout` turns a hang into a failure, not a stuck suite),
-// prefixed by `as` (e.g. runuser) when given.
+// Runs palplab with a time limit (`timeout` turns a hang into a failure, not a stuck suite),
+// prefixed by `as` (e.g. runuser) when given. 60 s; 300 s under the sanitizers, which run
+// palplab ≈ 16 times slower (a resumed run here takes ≈ 1 s in Release, ≈ 20 s under them, and
+// a loaded machine doubles that).
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr int kCommandLimitS = 300;
+#else
+constexpr int kCommandLimitS = 60;
+#endif
 Result cli_as(const std::string& as, const std::string& args, const fs::path& dir) {
   Result r;
   auto out = dir / "stdout.txt", err = dir / "stderr.txt";
   // The repository's prototypes are found last (after the test's own copies in `dir`).
   std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
-                    "/prototypes timeout -s KILL 60 " + as + std::string(PALPLAB_BINARY) + " " +
-                    args + " >" + out.string() + " 2>" + err.string();
+                    "/prototypes timeout -s KILL " + std::to_string(kCommandLimitS) + " " + as +
+                    std::string(PALPLAB_BINARY) + " " + args + " >" + out.string() + " 2>" +
+                    err.string();
   const auto t0 = std::chrono::steady_clock::now();
   int st = std::system(cmd.c_str());
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -165,7 +165,10 @@ TEST(CliNeedleHuman, UdpBridgeWithTheStylusAxisInsertsThroughTheLayers) {
     const double since = std::chrono::duration<double>(Clock::now() - t0).count();
     if (!start && since > 30.0) break;  // palplab never started the session
     const double t = start ? std::chrono::duration<double>(Clock::now() - *start).count() : 0.0;
-    if (t > 3.5) break;
+    // Until palplab has ended (holding the last sample): a loaded machine can stretch the 3 s
+    // session by seconds, and a bridge that fell silent first would abort it (device lost).
+    if (run.wait_for(std::chrono::seconds(0)) == std::future_status::ready) break;
+    if (t > 60.0) break;  // bounded
     const std::size_t k =
         std::min<std::size_t>(static_cast<std::size_t>(t * 1000.0), tr.samples.size() - 1);
     e::UdpPosition m;

@@ -205,11 +205,14 @@ TEST(UdpDevice, SilentBridgeGetsForceOffWithinFiveMs) {
   double off_latency_ms = -1.0, last_force = 0.0;
   double bridge_gap_ms = 0.0;  // the longest the silent bridge itself went without polling
   long forces = 0;
+  // Sends for 80 ms, then listens until the force off has come (bounded at 10 s: a loaded
+  // machine may stall the haptic thread well past a fixed window); the haptic loop runs until
+  // the bridge is done.
   std::thread bridge([&] {
     const auto t0 = Clock::now();
     auto next = t0;
     Clock::time_point last_send = t0, last_poll = t0;
-    while (Clock::now() - t0 < std::chrono::milliseconds(150)) {  // bounded
+    while (off_latency_ms < 0 && Clock::now() - t0 < std::chrono::seconds(10)) {
       const auto now = Clock::now();
       const bool sending = now - t0 < std::chrono::milliseconds(80);
       if (sending) {
@@ -237,13 +240,14 @@ TEST(UdpDevice, SilentBridgeGetsForceOffWithinFiveMs) {
     done = true;
   });
   e::RealtimeOptions ro;
-  ro.duration = 0.14;
+  ro.duration = 20.0;
   ro.frame_period = 0.0;
+  ro.stop = &done;
   std::vector<e::DeviceEvent> events;
   const e::RealtimeStats st = e::run_realtime(scene, dev, ro);
   bridge.join();
   for (auto& ev : dev.take_events()) events.push_back(ev);
-  EXPECT_GT(forces, 50);
+  EXPECT_GT(forces, st.steps / 2) << st.steps << " haptic steps";  // one per step, once connected
   EXPECT_GT(last_force, 0.5);  // it was pressing 3 mm into the organ
   ASSERT_GE(off_latency_ms, 0.0) << "no force-off datagram after the bridge went silent";
   // The timeout counts from the step that read the last position (up to one haptic period after
@@ -275,24 +279,32 @@ TEST(DeviceSelfTest, RefusesASlowDeviceAndAcceptsAFastOne) {
     EXPECT_NE(m.find("below the required 900 Hz"), std::string::npos) << m;
     EXPECT_NE(m.find("udp:"), std::string::npos) << m;
   }
-  // A bridge at 1 kHz measured at >= 500 Hz (the limit is lowered for loaded test machines;
-  // what is checked here is that the count follows the datagrams).
+  // A bridge at 1 kHz: the count follows the datagrams. Never more than were sent while the
+  // rate was measured (what was queued before is not counted), at least half of them, and
+  // >= 500 Hz when the bridge itself kept up (a loaded machine can delay the sending thread).
   std::atomic<bool> stop{false};
+  std::atomic<long> sent{0};
   std::thread t([&] {
     auto next = Clock::now();
     for (int i = 0; i < 400 && !stop; ++i) {
       br.send({0, 0, 0});
+      ++sent;
       next += std::chrono::microseconds(1000);
       std::this_thread::sleep_until(next);
     }
   });
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  const e::DeviceRate r = e::require_device_rate(dev, "udp", 500.0, 0.2);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a backlog before the window
+  const long sent_before = sent;
+  const e::DeviceRate r = e::require_device_rate(dev, "udp", 0.0, 0.2);
+  const long sent_during = sent - sent_before;
   stop = true;
   t.join();
   EXPECT_TRUE(r.hardware);
-  EXPECT_GT(r.rate_hz, 500.0);
-  EXPECT_LT(r.rate_hz, 1300.0);  // a late sender catches up in bursts
+  EXPECT_LE(r.samples, sent_during);
+  EXPECT_GE(r.samples, sent_during / 2) << sent_during << " sent";
+  if (sent_during / r.seconds > 900.0) {
+    EXPECT_GT(r.rate_hz, 500.0);
+  }
 }
 
 // Record a scripted press on prototype C (adaptive refinement, the hardest to reproduce) through

@@ -221,10 +221,14 @@ TEST(FemMultirate, RampStaysWithinTheClaimedBoundOfTheEquilibrium) {
     if (lag <= 1) {
       EXPECT_LT(max_err, 0.01 * peak) << realtime;
     }
-    EXPECT_GT(max_err_lin, 3 * max_err);  // the linear model is not within it
-    // Deterministic: one per update after the first; real time: the same unless the worker
-    // (~1 ms here) was late.
-    EXPECT_GE(f.relinearisations(), realtime ? 10 : 35);
+    if (lag <= 2) {
+      EXPECT_GT(max_err_lin, 3 * max_err);  // the linear model is not within it
+    }
+    // Deterministic: one per update after the first (35 in the 36 intervals); real time: at
+    // least 10, fewer when the machine made the worker (~1 ms here) late: one per `lag`
+    // intervals then.
+    EXPECT_GE(f.relinearisations(), realtime ? std::min(10L, 36 / std::max(lag, 1L) - 1) : 35L)
+        << "largest lag " << lag;
   }
 }
 

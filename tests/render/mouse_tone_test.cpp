@@ -100,21 +100,30 @@ TEST(ToneCue, BlockIsTheSineWithContinuousPhaseAndLinearFade) {
 }
 
 TEST(ToneCue, PlaysThroughAlsaNullDeviceAtRealTimePace) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
   ToneCue tone("null");
   ASSERT_TRUE(tone.available()) << tone.error();
+  // Bounded waits, not fixed sleeps: a loaded machine may starve the audio thread for a while.
+  auto within_10s = [](const auto& done) {
+    const auto end = Clock::now() + std::chrono::seconds(10);
+    while (!done() && Clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    return done();
+  };
+  constexpr long kBlock = ToneCue::kRate / 200;  // the thread's 5 ms blocks
   tone.set_on(true);
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ASSERT_TRUE(within_10s([&] { return tone.tone_frames() > ToneCue::kRate * 0.15; }));
   tone.set_on(false);
   const long on_frames = tone.tone_frames();
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const long off_from = tone.frames_written();
+  ASSERT_TRUE(within_10s([&] { return tone.frames_written() > off_from + ToneCue::kRate / 20; }));
   const long written = tone.frames_written();
-  // Paced by the clock (the null device takes samples at any speed): 300 ms of samples plus at
-  // most the 40 ms lead, not millions.
-  EXPECT_GT(written, ToneCue::kRate * 0.25);
-  EXPECT_LT(written, ToneCue::kRate * 0.60);
-  EXPECT_GT(on_frames, ToneCue::kRate * 0.15);
-  // The tone stopped: at most one fade block after set_on(false).
-  EXPECT_LE(tone.tone_frames() - on_frames, 2 * ToneCue::kRate / 200);
+  const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+  // Paced by the clock (the null device takes samples at any speed): never more than the time
+  // since the thread started plus the 40 ms lead and the block in hand, not millions.
+  EXPECT_LE(written, static_cast<long>((elapsed + 0.040) * ToneCue::kRate) + kBlock);
+  // The tone stopped: at most the block in hand and one fade block after set_on(false).
+  EXPECT_LE(tone.tone_frames() - on_frames, 2 * kBlock);
 }
 
 TEST(ToneCue, NoSoundCardMeansNoToneAndNoFailure) {

@@ -13,6 +13,9 @@ DeviceRate measure_device_rate(Device& device, double seconds) {
   using Clock = std::chrono::steady_clock;
   DeviceRate r;
   r.hardware = device.samples_received() >= 0;
+  // What arrived before the window (a bridge that started earlier, a burst after a stall) is
+  // read first and not counted: the rate is of what arrives while it is measured.
+  device.read(0.0);
   const long before = device.samples_received();
   const auto t0 = Clock::now();
   const auto end =
