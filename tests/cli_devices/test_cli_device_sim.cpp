@@ -290,8 +290,13 @@ TEST(CliDeviceSim, NumericFlagsRefuseNanNegativeAndOutOfRange) {
   std::ofstream(script) << R"({"waypoints": [[-5, 0, 0, 0]]})";
   t::expect_exit2(sim("--script " + script),
                   {script, "the script ends at -5 s", "or give --duration"});
-  // A valid bounded run still runs (nobody answers on port 5000: exit 1, nothing received).
-  const t::CliResult ok = sim("--duration 0.05 --stop-after 0.02 --linger 0 --json");
+  // A valid bounded run still runs (nobody answers on a free port: exit 1, nothing received;
+  // not 5000, where another test's palplab may be listening).
+  const t::CliResult ok =
+      t::run_shell("timeout -k 5 20 " + std::string(PALPLAB_BINARY) + " device-sim --port " +
+                       std::to_string(t::free_udp_port()) +
+                       " --duration 0.05 --stop-after 0.02 --linger 0 --json",
+                   dir);
   EXPECT_EQ(ok.code, 1) << ok.err;
   const auto j = nlohmann::json::parse(ok.out);
   EXPECT_GT(j["sent"].get<long>(), 0);
