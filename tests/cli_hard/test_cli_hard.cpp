@@ -421,6 +421,23 @@ fs::path incomplete_db(const fs::path& d) {
   return db;
 }
 
+// A permission test's set-up: the prefix that runs palplab unprivileged (unprivileged()), a
+// scratch directory `d` with an incomplete run's database `db`, and d/out, which "nobody" can
+// write (its stdout/stderr and outputs). Nothing when palplab cannot run unprivileged.
+struct AsNobody {
+  std::string as;
+  fs::path d, db;
+};
+std::optional<AsNobody> as_nobody(const std::string& name) {
+  const std::optional<std::string> as = unprivileged();
+  if (!as) return std::nullopt;
+  AsNobody s{*as, tmp(name), {}};
+  s.db = incomplete_db(s.d);
+  fs::create_directories(s.d / "out");
+  ::chmod((s.d / "out").c_str(), 0777);
+  return s;
+}
+
 }  // namespace
 
 TEST(HardDb, SecondWriterIsToldTheDatabaseIsInUse) {
@@ -458,15 +475,11 @@ TEST(HardDb, ForceReplacesOnlyAPalplabDatabase) {
 }
 
 TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
-  const std::optional<std::string> as_user = unprivileged();
-  if (!as_user) GTEST_SKIP() << "root ignores permissions and runuser is not available";
-  const std::string& as = *as_user;
-  auto d = tmp("ro");
-  const fs::path db = incomplete_db(d);
+  const std::optional<AsNobody> s = as_nobody("ro");
+  if (!s) GTEST_SKIP() << "root ignores permissions and runuser is not available";
+  const auto& [as, d, db] = *s;
   fs::create_directories(d / "ro");
   fs::copy_file(db, d / "ro" / "r.db");
-  fs::create_directories(d / "out");
-  ::chmod((d / "out").c_str(), 0777);  // where "nobody" writes stdout/stderr and the CSVs
   ::chmod((d / "ro").c_str(), 0555);
   Result r = cli_as(
       as,
@@ -495,11 +508,9 @@ TEST(HardDb, ReadOnlyDirectoryIsSaidAsSuch) {
 // place, the database was opened immutable and those writes silently dropped (a session missing
 // from export and report); now they are read through the existing -shm, or, without it, refused.
 TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
-  const std::optional<std::string> as_user = unprivileged();
-  if (!as_user) GTEST_SKIP() << "root ignores permissions and runuser is not available";
-  const std::string& as = *as_user;
-  auto d = tmp("rowal");
-  const fs::path db = incomplete_db(d);
+  const std::optional<AsNobody> s = as_nobody("rowal");
+  if (!s) GTEST_SKIP() << "root ignores permissions and runuser is not available";
+  const auto& [as, d, db] = *s;
   fs::create_directories(d / "ro");
   const fs::path w = d / "ro" / "w.db";
   fs::copy_file(db, w);
@@ -517,8 +528,6 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
   }
   ASSERT_GT(fs::file_size(fs::path(w.string() + "-wal")), 0u);
   ASSERT_TRUE(fs::exists(w.string() + "-shm"));
-  fs::create_directories(d / "out");
-  ::chmod((d / "out").c_str(), 0777);
   ::chmod((d / "ro").c_str(), 0555);
   Result r =
       cli_as(as, "export " + w.string() + " --csv " + (d / "out" / "csv").string(), d / "out");
@@ -539,15 +548,11 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
 // writers' opens (Store::open(path, true), Store::remove_empty_leftover: `run --resume` and
 // `run --human`) refuse before anything is opened now.
 TEST(HardDb, RefusedResumeOfAReadOnlyFileLeavesNoWalOrShm) {
-  const std::optional<std::string> as_user = unprivileged();
-  if (!as_user) GTEST_SKIP() << "root ignores permissions and runuser is not available";
-  const std::string& as = *as_user;
-  auto d = tmp("roresume");
-  const fs::path db = incomplete_db(d);
+  const std::optional<AsNobody> s = as_nobody("roresume");
+  if (!s) GTEST_SKIP() << "root ignores permissions and runuser is not available";
+  const auto& [as, d, db] = *s;
   ASSERT_FALSE(fs::exists(db.string() + "-wal"));
   ASSERT_FALSE(fs::exists(db.string() + "-shm"));
-  fs::create_directories(d / "out");
-  ::chmod((d / "out").c_str(), 0777);
   ::chmod(d.c_str(), 0777);
   ::chmod(db.c_str(), 0444);
   Result r = cli_as(as, "run " + (d / "study.json").string() + " --db " + db.string() + " --resume",
