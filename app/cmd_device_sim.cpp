@@ -19,6 +19,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -224,6 +225,11 @@ int run_device_sim(const SimArgs& a) {
   auto next = t0;
   std::uint32_t seq = 0;
   Eigen::Vector3d prev = path.front().second;
+  // Intervals between successive sends once the script runs (its own scheduling on a loaded
+  // machine): how stale a position can be when palplab reads it, which a test's timing bound
+  // must allow besides palplab's own loop.
+  std::vector<double> send_gaps_ms;
+  Clock::time_point prev_send{};
   auto receive = [&] {
     std::uint8_t buf[256];
     alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
@@ -292,6 +298,10 @@ int run_device_sim(const SimArgs& a) {
       ::sendto(fd, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
     }
     last_send = Wall::now();
+    const auto now = Clock::now();
+    if (started && sent > 0 && prev_send > s0)
+      send_gaps_ms.push_back(std::chrono::duration<double, std::milli>(now - prev_send).count());
+    prev_send = now;
     ++sent;
     receive();
     next += period;
@@ -307,6 +317,14 @@ int run_device_sim(const SimArgs& a) {
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
   ::close(fd);
+  // p99 and largest send interval (ms; -1 with fewer than two sends after the start).
+  double gap_p99 = -1.0, gap_max = -1.0;
+  if (!send_gaps_ms.empty()) {
+    std::sort(send_gaps_ms.begin(), send_gaps_ms.end());
+    gap_max = send_gaps_ms.back();
+    gap_p99 =
+        send_gaps_ms[static_cast<size_t>(0.99 * static_cast<double>(send_gaps_ms.size() - 1))];
+  }
   nlohmann::json out = {{"port", a.port},
                         {"sent", sent},
                         {"received", received},
@@ -317,7 +335,9 @@ int run_device_sim(const SimArgs& a) {
                         {"stopped_at", stop},
                         {"datagram_type", with_axis ? 3 : 1},
                         {"button_changes", button_changes},
-                        {"force_off_after_stop_ms", first_off_ms}};
+                        {"force_off_after_stop_ms", first_off_ms},
+                        {"send_interval_p99_ms", gap_p99},
+                        {"send_interval_max_ms", gap_max}};
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {

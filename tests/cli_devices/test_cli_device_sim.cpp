@@ -75,6 +75,11 @@ TEST(CliDeviceSim, ScriptedHandPressesAndGetsForceOffWhenSilent) {
   EXPECT_GT(j["received"].get<long>(), 150);  // one force per haptic step once connected
   // Hooke's law of prototype A at 4 mm: k * 0.004 (k = 500 N/m) = 2 N.
   EXPECT_NEAR(j["max_force"].get<double>(), 2.0, 0.25);
+  // Its own send intervals at 1 kHz: the loop keeps to its schedule (a late tick is followed by
+  // quicker ones), so the intervals average a period and their p99 is at least about one.
+  const double gap_p99 = j["send_interval_p99_ms"].get<double>();
+  EXPECT_GE(gap_p99, 0.9) << r.out;
+  EXPECT_LE(gap_p99, j["send_interval_max_ms"].get<double>()) << r.out;
   const double off = j["force_off_after_stop_ms"].get<double>();
   ASSERT_GE(off, 0.0) << r.out;
   // The simulator times the force off by the kernel's arrival stamp (SO_TIMESTAMPNS), so its
