@@ -49,22 +49,32 @@ palplab::app::CommandRegistration reg_calibrate{
                       "Measures to fit (default: the study's declared measures)")
           ->expected(1, -1);
       cmd->add_option("--out", a->out, "Where to write the fitted parameters (JSON)")->required();
-      cmd->add_option("--write-defaults", a->write_defaults,
-                      "Also write the fitted values as the defaults into this params.hpp "
-                      "(protocols/participants/params.hpp; rebuild afterwards)");
+      auto* defaults_opt =
+          cmd->add_option("--write-defaults", a->write_defaults,
+                          "Also write the fitted values as the defaults into this params.hpp "
+                          "(protocols/participants/params.hpp; rebuild afterwards)");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->add_flag("--overwrite", a->overwrite,
                     "Replace an existing --out that is not a calibration JSON");
       cmd->add_flag("--no-se", a->no_se,
                     "Skip the standard errors (saves the 2p² simulations of the curvature)");
-      cmd->callback([a, code] {
+      cmd->callback([a, defaults_opt, code] {
         using namespace palplab::protocols;
         Study s = load_study(a->study, engine_prototype_inspector());
         auto cells = read_human_cells(a->human);
         // The outputs are checked before the fit (which takes minutes to hours).
-        // --out is never an input, nor a file of another kind without --overwrite.
+        const bool defaults = defaults_opt->count() > 0;
+        if (defaults && a->write_defaults.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--write-defaults"},
+                                    "expected the path of the participant model's params.hpp "
+                                    "(protocols/participants/params.hpp), got an empty string");
+        // --out is never an input (nor the params.hpp the defaults go into), nor a file of
+        // another kind without --overwrite.
+        std::vector<palplab::app::CommandInput> not_out = {{"the study file", a->study},
+                                                           {"the human data", a->human}};
+        if (defaults) not_out.push_back({"the --write-defaults file", a->write_defaults});
         palplab::app::require_replaceable_output(
-            "--out", a->out, {{"the study file", a->study}, {"the human data", a->human}},
+            "--out", a->out, not_out,
             [](const std::string& p) {
               std::ifstream in(p, std::ios::binary);
               const auto j = nlohmann::json::parse(in, nullptr, false);
@@ -78,6 +88,16 @@ palplab::app::CommandRegistration reg_calibrate{
                                           "\" (expected the participant model's params.hpp, "
                                           "protocols/participants/params.hpp)");
           palplab::app::require_writable_file("--write-defaults", a->write_defaults);
+          // Its content too: a file write_defaults cannot edit would end a long fit in an error.
+          try {
+            check_defaults_file(a->opt.keys, a->write_defaults);
+          } catch (const palplab::InputError& e) {
+            throw palplab::InputError(palplab::SourceLocation{"--write-defaults"},
+                                      std::string(e.what()) +
+                                          " (expected the participant model's params.hpp, "
+                                          "protocols/participants/params.hpp, with a member "
+                                          "initialiser for every --params name)");
+          }
         }
         a->opt.standard_errors = !a->no_se;
         if (!a->quiet)

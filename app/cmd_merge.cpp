@@ -5,6 +5,7 @@
 // below the largest of an n: protocols::merge_gaps) is refused (exit 2) unless --allow-partial,
 // which writes it with a warning and marks power.json/md partial. Shard files of different K
 // (replicates.shard-I-of-K.jsonl) among the inputs are refused (exit 2) even then.
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -60,6 +61,21 @@ palplab::app::CommandRegistration reg_merge{
             throw palplab::InputError("no such file or directory", in);
           }
         }
+        // A file given twice (also as a directory's file, or through a link) is read once: it is
+        // counted once in the output, and its replicates were never counted twice anyway.
+        {
+          std::vector<std::string> unique;
+          std::vector<fs::path> seen;
+          for (const auto& f : files) {
+            std::error_code ec;
+            const fs::path canon = fs::weakly_canonical(f, ec);
+            const fs::path key = ec ? fs::path(f) : canon;
+            if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
+            seen.push_back(key);
+            unique.push_back(f);
+          }
+          files = std::move(unique);
+        }
         auto summary = palplab::protocols::power_summary(files, a->alpha, a->target);
         // Shards of a sharded run merged without the others gave a summary of part of the
         // replicates that read as the whole result.
@@ -88,8 +104,8 @@ palplab::app::CommandRegistration reg_merge{
           summary["partial"] = gaps.to_json();
         }
         std::cout << palplab::protocols::write_power_report(summary, a->out) << "\nmerged "
-                  << files.size() << " replicate files into " << a->out
-                  << (gaps.complete() ? "" : " (PARTIAL: see the warning above)") << "\n";
+                  << files.size() << " replicate file" << (files.size() == 1 ? "" : "s") << " into "
+                  << a->out << (gaps.complete() ? "" : " (PARTIAL: see the warning above)") << "\n";
         *code = 0;
       });
     }};

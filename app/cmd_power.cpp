@@ -32,6 +32,8 @@ namespace {
 // a non-integer, a size outside [2, 100000] or a size given twice is an input error.
 std::vector<int> parse_sizes(const std::vector<std::string>& args) {
   std::vector<int> out;
+  std::string all;  // every --n argument, for the message of a size given twice across them
+  for (const std::string& arg : args) all += (all.empty() ? "" : " ") + arg;
   for (const std::string& arg : args) {
     const auto fail = [&](const std::string& what) {
       return palplab::InputError(palplab::SourceLocation{"--n"},
@@ -48,7 +50,10 @@ std::vector<int> parse_sizes(const std::vector<std::string>& args) {
       if (ec != std::errc() || end != item.data() + item.size() || v < 2 || v > 100000)
         throw fail("\"" + item + "\" is not a group size");
       if (std::find(out.begin(), out.end(), v) != out.end())
-        throw fail("the size " + item + " is given twice");
+        throw palplab::InputError(palplab::SourceLocation{"--n"},
+                                  "the size " + item + " is given twice in \"" + all +
+                                      "\" (expected group sizes 2 to 100000, separated by "
+                                      "commas, each once)");
       out.push_back(v);
       if (j == arg.size()) break;
       i = j + 1;
@@ -150,17 +155,20 @@ palplab::app::CommandRegistration reg_power{
                       "size once, 2 to 100000");
       cmd->add_option("--jobs", a->opt.jobs, "Replicates simulated in parallel (threads)")
           ->check(palplab::app::count_range(1, 1024));
-      cmd->add_option("--out", a->out, "Output directory (replicates.jsonl, power.json/md/svg)");
+      cmd->add_option("--out", a->out,
+                      "Output directory (replicates.jsonl, power.json/md/svg; default: ./power)");
       cmd->add_option("--alpha", a->opt.alpha, "Significance level")
           ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->opt.target_power, "Power the smallest n must reach")
           ->check(palplab::app::finite_range(0.01, 0.999999));
-      cmd->add_option("--shard", a->shard,
-                      "Run only shard I of K (I/K, 1 <= I <= K <= 100000), for job arrays");
+      auto* shard_opt =
+          cmd->add_option("--shard", a->shard,
+                          "Run only shard I of K (I/K, 1 <= I <= K <= 100000), for job arrays");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
-      cmd->callback([a, code] {
+      cmd->callback([a, shard_opt, code] {
         using namespace palplab::protocols;
-        if (!a->shard.empty()) {
+        // Given at all, even empty (a job array's unset variable): never the whole run instead.
+        if (shard_opt->count() > 0) {
           // Strictly: digits only, no wrap-around (sscanf's %d took 1/4294967297 for 1/1).
           const auto ik = parse_shard(a->shard, "/");
           if (!ik)

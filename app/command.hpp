@@ -63,10 +63,17 @@ inline CLI::Validator count_range(long long lo, long long hi) {
   const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   return CLI::Validator(
       [lo, hi, range](std::string& text) -> std::string {
+        // Decimal digits only: CLI11 converts "010" as octal (8) and "0x10" as hexadecimal (16),
+        // which a user who typed them did not mean; a leading zero is refused rather than read.
+        const std::size_t digits = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+        const bool decimal = text.size() > digits &&
+                             text.find_first_not_of("0123456789", digits) == std::string::npos &&
+                             (text[digits] != '0' || text.size() == digits + 1);
         long long v = 0;
         errno = 0;
-        if (!CLI::detail::lexical_cast(text, v) || errno == ERANGE || v < lo || v > hi)
-          return "expected an integer in " + range + ", got '" + text + "'";
+        if (!decimal || !CLI::detail::lexical_cast(text, v) || errno == ERANGE || v < lo || v > hi)
+          return "expected an integer in " + range + ", got '" + text + "'" +
+                 (decimal ? "" : " (decimal digits without leading zeros)");
         return std::string();
       },
       "INT in " + range);

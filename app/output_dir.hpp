@@ -10,6 +10,7 @@
 // - an existing regular, non-empty file at one of those names that `is_own` does not recognise
 //   as the command's own earlier output is refused unless `overwrite` (the command's --overwrite
 //   flag; a command without one says "remove it" instead).
+// - a directory at one of those names is refused (the command could not write its file).
 // An own earlier output, an empty file and a non-regular file (/dev/null) are replaced as before.
 #include <cstddef>
 #include <filesystem>
@@ -127,8 +128,15 @@ inline void require_replaceable_dir_outputs(const std::string& flag, const std::
     if (const CommandInput* in = same_input(path, inputs))
       refuse_input_output(flag, path, *in,
                           (o.verb == "remove" ? "removing " : "writing ") + o.name + " there");
-    if (overwrite) continue;
     std::error_code e2;
+    // A directory where the command writes (or removes) a file: it could do neither, after
+    // its work (`power` and `merge` read an existing power.json first).
+    if (fs::is_directory(path, e2))
+      throw InputError(SourceLocation{flag}, "\"" + path + "\" is a directory; the command " +
+                                                 (o.verb == "remove" ? "removes" : "writes") +
+                                                 " the file " + o.name + " there: choose another " +
+                                                 flag + ", or remove or rename that directory");
+    if (overwrite) continue;
     if (!fs::is_regular_file(path, e2) || fs::file_size(path, e2) == 0 || e2 || o.is_own(path))
       continue;
     throw InputError(

@@ -113,10 +113,30 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     return f < t.field_line.size() ? SourceLocation{csv_path, t.field_line[f], t.field_column[f]}
                                    : SourceLocation{csv_path, t.line[r], 0};
   };
+  // The optional unit column (as `palplab export` writes it): values are compared in palplab's
+  // units, so a unit that differs from the measure's is an error, never silently converted.
+  int unit_col = -1;
+  for (std::size_t c = 0; c < t.header.size(); ++c)
+    if (t.header[c] == "unit") unit_col = static_cast<int>(c);
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const int s = session_number(t, r, col[2]);
     auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], s, t.rows[r][col[3]]);
     const std::string& participant = t.rows[r][col[5]];
+    if (participant.find_first_not_of(" \t") == std::string::npos)
+      throw InputError(at(r, col[5]),
+                       "column 'participant': expected the participant's id, got an empty field");
+    if (unit_col >= 0) {
+      const std::string& unit = t.rows[r][unit_col];
+      const std::string expected = measure_unit(std::get<3>(key));
+      const std::size_t b = unit.find_first_not_of(" \t"), e = unit.find_last_not_of(" \t");
+      const std::string u = b == std::string::npos ? "" : unit.substr(b, e - b + 1);
+      if (!u.empty() && u != "NA" && !expected.empty() && u != expected)
+        throw InputError(at(r, unit_col), "column 'unit': " + std::get<3>(key) + " is in " +
+                                              expected + ", got '" + unit +
+                                              "' (palplab compares values in its own units: "
+                                              "convert the values and write " +
+                                              expected + ")");
+    }
     if (auto [it, fresh] =
             group_of.emplace(participant, std::make_pair(std::get<0>(key), t.line[r]));
         !fresh && it->second.first != std::get<0>(key))
@@ -380,10 +400,8 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     if (std::find(opt.keys.begin(), opt.keys.begin() + i, opt.keys[i]) != opt.keys.begin() + i)
       throw InputError(SourceLocation{"--params"},
                        "\"" + opt.keys[i] + "\" is named twice (expected each parameter once)");
-  // --measures: the study's measures and those its task computes (all are simulated).
-  std::vector<std::string> simulated = study.measures;
-  for (const auto& m : default_measures(study.task.kind))
-    if (std::find(simulated.begin(), simulated.end(), m) == simulated.end()) simulated.push_back(m);
+  // --measures: every measure a session of the study stores (all are simulated).
+  const std::vector<std::string> simulated = produced_measures(study);
   for (std::size_t i = 0; i < opt.measures.size(); ++i) {
     const std::string& m = opt.measures[i];
     if (std::find(simulated.begin(), simulated.end(), m) == simulated.end())
@@ -514,6 +532,12 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
   r.restarts = nm.restarts;
+  // A point whose loss equals the start's up to rounding is no better fit: moving there would
+  // report a parameter change the data do not support (a parameter without effect on them).
+  if (!(simulate(r.fitted).first < r.loss_before - 1e-9 * std::max(1.0, std::abs(r.loss_before)))) {
+    r.kept_start = r.fitted != r.start;
+    r.fitted = r.start;
+  }
   std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
   r.se.assign(r.fitted.size(), kNaN);
   r.se_computed = opt.standard_errors;
@@ -525,7 +549,12 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   return r;
 }
 
-void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
+namespace {
+// params.hpp with `keys` set to `values` (InputError when the file has no TraineeParams struct or
+// one of the keys no member initialiser): what write_defaults writes, and check_defaults_file
+// tries before the fit.
+std::string defaults_text(const std::string& params_hpp, const std::vector<std::string>& keys,
+                          const std::vector<double>& values) {
   std::string text;
   {
     std::ifstream in(params_hpp, std::ios::binary);
@@ -539,17 +568,27 @@ void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
   if (end == std::string::npos)
     throw InputError("no `struct TraineeParams { ... };` found", params_hpp);
   std::string body = text.substr(begin, end - begin);
-  for (std::size_t i = 0; i < r.keys.size(); ++i) {
-    const std::regex member("(\\bdouble " + r.keys[i] + " = )([^;]+)(;)");
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const std::regex member("(\\bdouble " + keys[i] + " = )([^;]+)(;)");
     std::smatch m;
     if (!std::regex_search(body, m, member))
-      throw InputError("no member initialiser `double " + r.keys[i] + " = ...;`", params_hpp);
+      throw InputError("no member initialiser `double " + keys[i] + " = ...;`", params_hpp);
     char value[64];
-    std::snprintf(value, sizeof value, "%.6g", r.fitted[i]);
+    std::snprintf(value, sizeof value, "%.6g", values[i]);
     // Replace the value by position ("$1" followed by digits would read as another group).
     body.replace(m.position(2), m.length(2), value);
   }
   text.replace(begin, end - begin, body);
+  return text;
+}
+}  // namespace
+
+void check_defaults_file(const std::vector<std::string>& keys, const std::string& params_hpp) {
+  defaults_text(params_hpp, keys, std::vector<double>(keys.size(), 0.0));
+}
+
+void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
+  const std::string text = defaults_text(params_hpp, r.keys, r.fitted);
   std::ofstream out(params_hpp, std::ios::binary);
   out << text;
   if (!out) throw InputError("cannot write", params_hpp);
@@ -598,6 +637,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"standard_errors_computed", r.se_computed},
           {"evaluations", r.evaluations},
           {"restarts", r.restarts},
+          {"kept_start", r.kept_start},
           {"fit_before", fits(r.fit_before)},
           {"fit_after", fits(r.fit_after)},
           {"participant_model", {{"model", "pmm1"}, {"parameters", r.parameters}}}};
@@ -616,9 +656,13 @@ std::string to_text(const CalibrationResult& r) {
                   r.start[i]);
     o << buf;
   }
-  std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n\n",
+  std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n",
                 r.loss_before, r.loss_after, r.evaluations, r.restarts);
   o << buf;
+  if (r.kept_start)
+    o << "no point tried lowered the loss beyond rounding: the start values are kept (the data "
+         "do not constrain these parameters here)\n";
+  o << "\n";
   o << "fit per group and measure (human mean ± SD vs simulated; z in SE units):\n";
   // "mean ± SD" in a fixed width, or "undefined" (explained on a line below the cell's).
   auto moments = [](const CellFit& f) {

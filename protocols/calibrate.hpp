@@ -109,6 +109,8 @@ struct CalibrationResult {
   // Measures of the study found in the human data but not fitted (their cells are ignored;
   // --measures selects), in order of first appearance.
   std::vector<std::string> not_fitted;
+  // The optimiser's best point had the start's loss up to rounding: the start was kept.
+  bool kept_start = false;
 };
 
 // Before any simulation, InputError (with the CSV line) for a cell of a measure the study does
@@ -123,6 +125,8 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
 // defaults are exactly this command's output after a rebuild. InputError when the file or a
 // member is not found.
 void write_defaults(const CalibrationResult& r, const std::string& params_hpp);
+// Before a fit: InputError unless write_defaults could set every one of `keys` in params_hpp.
+void check_defaults_file(const std::vector<std::string>& keys, const std::string& params_hpp);
 
 nlohmann::json to_json(const CalibrationResult& r);
 std::string to_text(const CalibrationResult& r);

@@ -22,6 +22,7 @@
 #endif
 
 #include "analysis/anova.hpp"
+#include "analysis/descriptives.hpp"
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
@@ -354,14 +355,6 @@ std::vector<TestOutcome> run_declared_analyses(const Study& study,
   return out;
 }
 
-std::pair<double, double> wilson_interval(long k, long n, double z) {
-  if (n <= 0) return {0.0, 1.0};
-  const double p = static_cast<double>(k) / n, z2 = z * z;
-  const double c = (p + z2 / (2 * n)) / (1 + z2 / n);
-  const double h = z * std::sqrt(p * (1 - p) / n + z2 / (4.0 * n * n)) / (1 + z2 / n);
-  return {std::max(0.0, c - h), std::min(1.0, c + h)};
-}
-
 std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep) {
   const std::size_t at = text.find(sep);
   if (at == std::string::npos) return std::nullopt;
@@ -527,6 +520,7 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   std::string sha, study_id;
   std::string first;                   // FILE:LINE of the first replicate read
   std::vector<std::string> first_ids;  // its test ids, sorted
+  std::map<std::string, std::pair<std::string, std::string>> effect_of;  // id -> (name, FILE:LINE)
   for (const auto& f : files)
     for (auto& [r, line] : read_replicates(f)) {
       const SourceLocation here{f, line};
@@ -538,6 +532,11 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
                          "replicate of another study (SHA-256 " + s.substr(0, 12) +
                              ") than the one at " + first + " (SHA-256 " + sha.substr(0, 12) +
                              "); merge the shards of one study");
+      // The same study file has one id: another id with its hash is an edited record.
+      if (r.at("study") != study_id)
+        throw InputError(SourceLocation{f, line, 0, -1, "$.study"},
+                         "study id " + shown(r.at("study")) + " differs from \"" + study_id +
+                             "\" at " + first + " (same SHA-256: the record was edited)");
       const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
       if (auto it = reps.find(key); it != reps.end()) {
         if (it->second != r)
@@ -557,6 +556,19 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
         throw InputError(SourceLocation{f, line, 0, -1, "$.tests"},
                          "the replicate's tests differ from those of the replicate at " + first +
                              " (every replicate of a study has the same tests)");
+      }
+      // ... each with one effect size (the test's kind fixes it).
+      const auto& tests = r.at("tests");
+      for (std::size_t i = 0; i < tests.size(); ++i) {
+        const std::string id = tests[i].at("id").get<std::string>();
+        const std::string name = tests[i].at("effect_name").get<std::string>();
+        const auto [it, fresh] = effect_of.emplace(id, std::make_pair(name, at));
+        if (!fresh && it->second.first != name)
+          throw InputError(
+              SourceLocation{f, line, 0, -1, "$.tests[" + std::to_string(i) + "].effect_name"},
+              "test \"" + id + "\" reports effect \"" + name + "\" here but \"" + it->second.first +
+                  "\" at " + it->second.second +
+                  " (a test's effect size is the same in every replicate)");
       }
       reps.emplace(key, std::move(r));
       where.emplace(key, at);
@@ -623,7 +635,10 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
       // An undefined test counts as not significant; with no defined test at all there is no
       // estimate (0 would read as "the test never detects the effect").
       const bool estimable = c.undefined < c.reps;
-      const auto [lo, hi] = wilson_interval(c.significant, c.reps);
+      // Wilson's interval (analysis/descriptives.hpp: exactly 0 at k = 0 and 1 at k = n).
+      const analysis::ProportionInterval ci =
+          analysis::wilson_interval(static_cast<int>(c.significant), static_cast<int>(c.reps));
+      const double lo = ci.low, hi = ci.high;
       const double power = estimable ? static_cast<double>(c.significant) / c.reps : kNaN;
       double mean = kNaN;
       if (!c.effects.empty()) {
@@ -851,11 +866,13 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
       line.x.push_back(c.at("n").get<double>());
       if (!c.at("power").is_number()) {  // undefined in every replicate: no point drawn
         line.y.push_back(kNaN);
-        line.err.push_back(kNaN);
+        line.lo.push_back(kNaN);
+        line.hi.push_back(kNaN);
         continue;
       }
       line.y.push_back(c.at("power").get<double>());
-      line.err.push_back((c.at("ci_high").get<double>() - c.at("ci_low").get<double>()) / 2);
+      line.lo.push_back(c.at("ci_low").get<double>());
+      line.hi.push_back(c.at("ci_high").get<double>());
     }
     series.push_back(line);
   }
@@ -887,9 +904,11 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
   write("power.svg",
         analysis::svg_line_plot(series,
                                 std::string(partial ? "PARTIAL (shards missing): " : "") +
-                                    "Power by group size (bars: half-width of the "
-                                    "95 % Monte Carlo interval)",
-                                "participants per group", "power"));
+                                    "Power by group size (bars: the 95 % Monte Carlo "
+                                    "interval)",
+                                "participants per group", "power", true,
+                                {{"target power " + fmt(s.at("target_power"), 2),
+                                  s.at("target_power").get<double>()}}));
   return table;
 }
 

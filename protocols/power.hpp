@@ -140,7 +140,4 @@ void check_out_dir_study(const std::string& out_dir, const std::string& sha);
 // line under power.md's title and in the figure's title.
 std::string write_power_report(const nlohmann::json& summary, const std::string& out_dir);
 
-// Wilson score 95 % interval of a proportion k/n.
-std::pair<double, double> wilson_interval(long k, long n, double z = 1.959963984540054);
-
 }  // namespace palplab::protocols

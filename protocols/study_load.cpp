@@ -46,6 +46,7 @@ std::string measure_unit(const std::string& m) {
   if (m == "exploration_time") return "s";
   if (m == "feature_identified") return "1";
   if (m == "accuracy") return "%";
+  if (m == "palpations" || m == "sft_reached") return "1";
   if (m == "insertion_attempts" || m == "layers_passed" || m == "bone_contacts") return "1";
   if (m == "tip_to_target_mm") return "mm";
   if (m == "procedure_time") return "s";

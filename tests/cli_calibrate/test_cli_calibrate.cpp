@@ -145,6 +145,67 @@ TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
             std::string::npos)
       << other.err;
   EXPECT_EQ(other.err.find("evaluation"), std::string::npos) << "the fit ran first: " << other.err;
+  // Review findings (2026-12-03): --out naming the --write-defaults file replaced the copy of
+  // params.hpp with the JSON before failing; a --write-defaults file write_defaults cannot edit
+  // was refused only after the fit; an empty --write-defaults was ignored.
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "params.hpp",
+                d / "params.hpp");
+  const std::string params = slurp(d / "params.hpp");
+  const Result same =
+      run_palplab(base + "--out " + (d / "params.hpp").string() + " --overwrite --write-defaults " +
+                      (d / "params.hpp").string(),
+                  d);
+  EXPECT_EQ(same.code, 2) << same.out << same.err;
+  EXPECT_NE(same.err.find("is the --write-defaults file this command reads"), std::string::npos)
+      << same.err;
+  EXPECT_EQ(slurp(d / "params.hpp"), params);
+  std::ofstream(d / "other.hpp") << "// not the participant model's parameters\n";
+  const Result wrong = run_palplab(
+      base + "--out " + (d / "p.json").string() + " --write-defaults " + (d / "other.hpp").string(),
+      d);
+  EXPECT_EQ(wrong.code, 2) << wrong.out << wrong.err;
+  EXPECT_NE(wrong.err.find("--write-defaults: "), std::string::npos) << wrong.err;
+  EXPECT_NE(wrong.err.find("no `struct TraineeParams { ... };` found"), std::string::npos)
+      << wrong.err;
+  EXPECT_EQ(wrong.err.find("evaluation"), std::string::npos) << "the fit ran first: " << wrong.err;
+  const Result empty =
+      run_palplab(base + "--out " + (d / "p.json").string() + " --write-defaults ''", d);
+  EXPECT_EQ(empty.code, 2) << empty.out << empty.err;
+  EXPECT_NE(empty.err.find("--write-defaults: expected the path"), std::string::npos) << empty.err;
+  EXPECT_FALSE(fs::exists(d / "p.json"));
+  fs::remove_all(d);
+}
+
+// A small valid human CSV (two groups of two, one measure) the input checks below edit.
+const std::string kHumanHeader = "participant,group,phase,session,measure,value\n";
+const std::string kHumanRows =
+    "H1,G1,test,1,palpation_force,2.4\n"
+    "H2,G1,test,1,palpation_force,2.9\n"
+    "H3,G2,test,1,palpation_force,2.2\n"
+    "H4,G2,test,1,palpation_force,2.8\n";
+
+// Review finding (2026-12-03): a parameter without any effect on these data (here the hand's
+// lift height between presses: the optimiser's simplex moved to 0.0125 m at the same loss) came
+// out "fitted" at another value with the same loss up to rounding. The start is kept and the output
+// says why. And --measures accepts every measure the study stores (the output had recommended
+// --measures for palpations, which it then refused).
+TEST(Calibrate, AParameterWithoutEffectKeepsItsStart) {
+  auto d = scratch_dir("calibrate_flat");
+  std::ofstream(d / "human.csv") << kHumanHeader << kHumanRows
+                                 << "H1,G1,test,1,palpations,3\nH2,G1,test,1,palpations,5\n"
+                                    "H3,G2,test,1,palpations,4\nH4,G2,test,1,palpations,6\n";
+  auto r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                           (d / "human.csv").string() +
+                           " --params lift_height --budget 4 --sim-n 3 --no-se --quiet "
+                           "--measures palpation_force palpations --out " +
+                           (d / "fit.json").string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_EQ(fit["loss_after"].get<double>(), fit["loss_before"].get<double>()) << fit.dump(1);
+  EXPECT_EQ(fit["fitted"]["lift_height"], fit["start"]["lift_height"]) << fit.dump(1);
+  EXPECT_TRUE(fit["kept_start"].get<bool>()) << fit.dump(1);
+  EXPECT_NE(r.out.find("the start values are kept"), std::string::npos) << r.out;
   fs::remove_all(d);
 }
 
@@ -182,14 +243,6 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   EXPECT_LE(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
   fs::remove_all(d);
 }
-
-// A small valid human CSV (two groups of two, one measure) the input checks below edit.
-const std::string kHumanHeader = "participant,group,phase,session,measure,value\n";
-const std::string kHumanRows =
-    "H1,G1,test,1,palpation_force,2.4\n"
-    "H2,G1,test,1,palpation_force,2.9\n"
-    "H3,G2,test,1,palpation_force,2.2\n"
-    "H4,G2,test,1,palpation_force,2.8\n";
 
 // Input checks made before any simulation. Each was accepted (a row given twice counted the
 // participant twice, --params X X fitted two parameters, feature_identified = 5 was averaged)
@@ -240,6 +293,13 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
        h + ":2:30: column 'value': palpation_force must be a number >= 0 (N), got -2.4"},
       {header + rows + "H1,G1,test,1,exploration_time,-1\n", "--params weber_fraction",
        "exploration_time must be a number >= 0 (s)"},
+      // Review findings (2026-12-03): a unit other than the measure's was ignored (kg fitted
+      // as newtons), an empty participant id was a participant.
+      {"participant,group,phase,session,measure,value,unit\n"
+       "H1,G1,test,1,palpation_force,2.4,kg\n",
+       "--params weber_fraction", h + ":2:34: column 'unit': palpation_force is in N, got 'kg'"},
+      {header + ",G1,test,1,palpation_force,2.4\n" + rows, "--params weber_fraction",
+       h + ":2:1: column 'participant': expected the participant's id, got an empty field"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.csv, c.args);

@@ -165,7 +165,10 @@ TEST(Power, BadArgumentsAreInputErrors) {
       2);
   EXPECT_EQ(merge({d / "nothing"}, d, d).code, 2);
   // NaN and inf pass CLI11's Range (every comparison with NaN is false): refused, exit 2.
-  for (const char* bad : {"--alpha nan", "--alpha inf", "--target-power nan", "--alpha 0.7"}) {
+  // Review findings (2026-12-03): "010" ran 8 replicates (CLI11 reads a leading 0 as octal),
+  // "0x10" 16; an empty --shard (a job array's unset variable) ran the whole job.
+  for (const char* bad : {"--alpha nan", "--alpha inf", "--target-power nan", "--alpha 0.7",
+                          "--replicates 010", "--replicates 0x10", "--jobs 01", "--shard ''"}) {
     const auto r = run_palplab(
         "power " + null_study() + " --replicates 2 " + bad + " --out " + (d / "never").string(), d);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.out << r.err;
@@ -303,6 +306,12 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
        "$.tests[1].id: duplicate test id"},
       {with_test(base, "id", "another test"),
        "$.tests: the replicate's tests differ from those of the replicate at"},
+      // Review findings (2026-12-03): an edited study id or effect name was taken into the
+      // summary (power.json reported study "other", effect "cohen_d" for the ANOVA).
+      {with(base, "study", "other"), "$.study: study id \"other\" differs from"},
+      {with_test(base, "effect_name", "cohen_d"),
+       "$.tests[0].effect_name: test \"anova_oneway palpation_force test\" reports effect "
+       "\"cohen_d\" here but \"eta_squared\""},
   };
   for (const auto& [line, expected] : cases) {
     std::ofstream(d / "r.jsonl", std::ios::trunc) << good << "\n" << line << "\n";
@@ -660,5 +669,24 @@ TEST(Power, OutputDirectoryLosesNoFile) {
   r = run_shard(power_cmd("2", 2), "1/2", d / "s1", d);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(has(r.out, "0 replicates run")) << r.out;
+  // A file given twice (as itself and in its directory) is one file: counted once.
+  r = merge({d / "s1", shard1, d / "s2"}, d / "twice", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "merged 2 replicate files")) << r.out;
+  EXPECT_EQ(power_json(d / "twice"), power_json(d / "again"));
+  // Review findings (2026-12-03): a directory named power.json in --out ended power and merge
+  // in exit 3 (reading it), one named power.md or power.svg only after every replicate had run.
+  for (const char* name : {"power.json", "power.md", "power.svg", "replicates.jsonl"}) {
+    const fs::path out = d / (std::string("dir_") + name);
+    fs::create_directories(out / name);
+    expect_exit2(power_into(null_study(), out), {"--out: \"" + (out / name).string() +
+                                                 "\" is a directory; the command writes "
+                                                 "the file " +
+                                                 name + " there"});
+    EXPECT_FALSE(fs::is_regular_file(out / "replicates.jsonl")) << name;
+    if (std::string(name) != "replicates.jsonl")
+      expect_exit2(merge({d / "r.jsonl"}, out, d),
+                   {"\"" + (out / name).string() + "\" is a directory"});
+  }
   fs::remove_all(d);
 }
