@@ -534,7 +534,12 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   r.restarts = nm.restarts;
   // A point whose loss equals the start's up to rounding is no better fit: moving there would
   // report a parameter change the data do not support (a parameter without effect on them).
-  if (!(simulate(r.fitted).first < r.loss_before - 1e-9 * std::max(1.0, std::abs(r.loss_before)))) {
+  const double best_loss = simulate(r.fitted).first;
+  const bool better =
+      std::isfinite(r.loss_before)
+          ? best_loss < r.loss_before - 1e-9 * std::max(1.0, std::abs(r.loss_before))
+          : best_loss < r.loss_before;
+  if (!better) {
     r.kept_start = r.fitted != r.start;
     r.fitted = r.start;
   }
