@@ -154,9 +154,11 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
     s_.initialised = true;
   } else {
     // Forgetting over the retention interval: the learned part decays back towards what the
-    // briefing left, by a power law of the interval (Wixted & Ebbesen 1991).
+    // briefing left, by a power law of the interval (Wixted & Ebbesen 1991). The uncertainty
+    // always does; the mean by the share forgetting_contraction (0: kept, Laabs 1973).
     const double r = retention(study_time - s_.last_session_end, p_);
-    s_.target_mean = s_.prior_mean + r * (s_.target_mean - s_.prior_mean);
+    const double kept = r + (1.0 - p_.forgetting_contraction) * (1.0 - r);  // = r exactly at 1
+    s_.target_mean = s_.prior_mean + kept * (s_.target_mean - s_.prior_mean);
     s_.target_var = r * r * s_.target_var + (1.0 - r * r) * s_.prior_var;
     s_.place_sd = std::sqrt(s_.place_sd * s_.place_sd +
                             (1.0 - r * r) * std::pow(p_.spatial_forgetting_sd, 2));

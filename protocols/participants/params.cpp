@@ -89,6 +89,11 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       tspec("consolidated_factor", &T::consolidated_factor, 0.0, 1.0, "1",
             "exponent multiplier for the part of a retention interval after consolidation",
             "Walker et al. 2003 (consolidated motor memories are more stable)"),
+      tspec("forgetting_contraction", &T::forgetting_contraction, 0.0, 1.0, "1",
+            "share of the forgetting that moves the remembered target force back towards the "
+            "briefing (1: mean and uncertainty decay; 0: the mean is kept, the uncertainty grows)",
+            "Laabs 1973 (motor short-term memory: the constant error of a reproduction does "
+            "not change with the retention interval, the variable error grows)"),
       tspec("spatial_prior_sd", &T::spatial_prior_sd, 0.0, 1.0, "m",
             "SD of the believed feature position before any session (briefing: anatomy)",
             "model assumption"),

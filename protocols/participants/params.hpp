@@ -33,6 +33,11 @@ struct TraineeParams {
   double forgetting_tau = 60.0;         // s
   double consolidation_time = 21600.0;  // s
   double consolidated_factor = 0.5;     // 1
+  // Share of the forgetting that moves the remembered target back towards the briefing: 1 =
+  // mean and uncertainty both decay towards it (the model up to 2026-12-03); 0 = the mean is
+  // kept and only the uncertainty grows (constant error unchanged by the retention interval:
+  // Laabs 1973; docs/PARTICIPANTS.md "Forgetting").
+  double forgetting_contraction = 1.0;  // 1
   // spatial memory
   double spatial_prior_sd = 0.03;       // m
   double spatial_memory_sd = 0.01;      // m

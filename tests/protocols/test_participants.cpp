@@ -474,6 +474,29 @@ TEST(Trainee, LongerRetentionGivesLargerError) {
   EXPECT_LT(e_1day, e_7days) << e_1day << " " << e_7days;
 }
 
+// forgetting_contraction: the share of the forgetting that moves the remembered target back to
+// the briefing. The uncertainty decays to the briefing's in both cases; the mean by r at 1 (the
+// model before 2026-12-03) and not at all at 0 (constant error unchanged by the retention
+// interval, Laabs 1973), halfway at 0.5.
+TEST(Trainee, ForgettingContractionMovesOnlyTheMeansShare) {
+  FlatTissue tissue;
+  const double week = 7 * 86400.0;
+  for (double c : {1.0, 0.5, 0.0}) {
+    const auto p = trainee_params({{"forgetting_contraction", c}});
+    TraineeState st = briefed_state(tissue, 2.0);
+    st.target_mean = 2.6;
+    st.target_var = 0.01;
+    st.last_session_end = 0.0;
+    Trainee tr(p, st);
+    tr.begin_session(tissue.view(), 2.5, week, 1.0, 7, 1, {});
+    const double r = retention(week, p);
+    ASSERT_GT(r, 0.0);
+    ASSERT_LT(r, 0.9);  // a week forgets a good part
+    EXPECT_NEAR(tr.state().target_mean, 2.0 + (1.0 - c * (1.0 - r)) * 0.6, 1e-12) << c;
+    EXPECT_NEAR(tr.state().target_var, r * r * 0.01 + (1.0 - r * r) * st.prior_var, 1e-12) << c;
+  }
+}
+
 TEST(Instructor, CallsAfterReactionTime) {
   // Fixed reaction times here (cv 0) so the call time is exact; variability is tested below.
   auto p = instructor_params({{"reaction_time_cv", 0.0}});
