@@ -540,8 +540,15 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
           ? best_loss < r.loss_before - 1e-9 * std::max(1.0, std::abs(r.loss_before))
           : best_loss < r.loss_before;
   if (!better) {
-    r.kept_start = r.fitted != r.start;
+    // Whether the optimiser ended at the start or at a point that ties with it: no point tried is
+    // a better fit. Flat when every point tried has the start's loss up to rounding (the data do
+    // not constrain the parameters), not when the start is a minimum its neighbours are worse than.
+    r.kept_start = true;
     r.fitted = r.start;
+    r.loss_flat = std::all_of(memo.begin(), memo.end(), [&](const auto& m) {
+      return std::abs(m.second.first - r.loss_before) <=
+             1e-9 * std::max(1.0, std::abs(r.loss_before));
+    });
   }
   std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
   r.se.assign(r.fitted.size(), kNaN);
@@ -643,6 +650,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"evaluations", r.evaluations},
           {"restarts", r.restarts},
           {"kept_start", r.kept_start},
+          {"loss_flat", r.loss_flat},
           {"fit_before", fits(r.fit_before)},
           {"fit_after", fits(r.fit_after)},
           {"participant_model", {{"model", "pmm1"}, {"parameters", r.parameters}}}};
@@ -665,8 +673,10 @@ std::string to_text(const CalibrationResult& r) {
                 r.loss_before, r.loss_after, r.evaluations, r.restarts);
   o << buf;
   if (r.kept_start)
-    o << "no point tried lowered the loss beyond rounding: the start values are kept (the data "
-         "do not constrain these parameters here)\n";
+    o << "no point tried lowered the loss beyond rounding: the start values are kept "
+      << (r.loss_flat ? "(every point tried had the start's loss: the data do not constrain "
+                        "these parameters here)\n"
+                      : "(the start is the best point tried)\n");
   o << "\n";
   o << "fit per group and measure (human mean ± SD vs simulated; z in SE units):\n";
   // "mean ± SD" in a fixed width, or "undefined" (explained on a line below the cell's).

@@ -109,8 +109,12 @@ struct CalibrationResult {
   // Measures of the study found in the human data but not fitted (their cells are ignored;
   // --measures selects), in order of first appearance.
   std::vector<std::string> not_fitted;
-  // The optimiser's best point had the start's loss up to rounding: the start was kept.
+  // No point tried lowered the start's loss beyond rounding (relatively 1e-9): the start was kept
+  // (the optimiser may have ended there or at a point with the same loss).
   bool kept_start = false;
+  // With kept_start: every point tried had the start's loss up to rounding (the parameters have
+  // no effect on the fitted cells), as opposed to a start that is a minimum of the points tried.
+  bool loss_flat = false;
 };
 
 // Before any simulation, InputError (with the CSV line) for a cell of a measure the study does
