@@ -17,6 +17,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "../cli_support.hpp"
 
@@ -86,7 +88,27 @@ TEST(Calibrate, RecoversKnownParameters) {
   EXPECT_NE(hpp.find(expect), std::string::npos) << expect;
   std::snprintf(expect, sizeof expect, "double explore_speed = %.6g;", sp);
   EXPECT_NE(hpp.find(expect), std::string::npos) << expect;
-  EXPECT_NE(hpp.find("double weber_fraction = 0.08;"), std::string::npos);  // untouched
+  // Every other line is untouched: the two edited lines are the only differences.
+  auto lines = [](const std::string& text) {
+    std::vector<std::string> v;
+    std::size_t a = 0;
+    for (std::size_t b; (b = text.find('\n', a)) != std::string::npos; a = b + 1)
+      v.push_back(text.substr(a, b - a));
+    return v;
+  };
+  const auto before =
+      lines(slurp(fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "params.hpp"));
+  const auto after = lines(hpp);
+  ASSERT_EQ(before.size(), after.size());
+  int changed = 0;
+  for (std::size_t i = 0; i < before.size(); ++i)
+    if (before[i] != after[i]) {
+      ++changed;
+      EXPECT_TRUE(after[i].find("double prior_target_cv = ") != std::string::npos ||
+                  after[i].find("double explore_speed = ") != std::string::npos)
+          << after[i];
+    }
+  EXPECT_EQ(changed, 2);
   // The start (defaults 0.30 and 0.05) is far outside: recovery is not the start value.
   EXPECT_GT(std::abs(0.30 - true_cv), 2 * cv_se);
   fs::remove_all(d);
@@ -205,7 +227,43 @@ TEST(Calibrate, AParameterWithoutEffectKeepsItsStart) {
   EXPECT_EQ(fit["loss_after"].get<double>(), fit["loss_before"].get<double>()) << fit.dump(1);
   EXPECT_EQ(fit["fitted"]["lift_height"], fit["start"]["lift_height"]) << fit.dump(1);
   EXPECT_TRUE(fit["kept_start"].get<bool>()) << fit.dump(1);
-  EXPECT_NE(r.out.find("the start values are kept"), std::string::npos) << r.out;
+  EXPECT_TRUE(fit["loss_flat"].get<bool>()) << fit.dump(1);
+  EXPECT_NE(r.out.find("the start values are kept (every point tried had the start's loss"),
+            std::string::npos)
+      << r.out;
+  fs::remove_all(d);
+}
+
+// The opposite case: data simulated with the defaults themselves (the calibration's seed and
+// size), fitted from the defaults. The start's loss is 0 and every point the optimiser tries is
+// worse, so the start is kept, but the loss is not flat: the data do constrain the parameter.
+TEST(Calibrate, AStartThatIsTheMinimumIsKeptButNotFlat) {
+  auto d = scratch_dir("calibrate_min");
+  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
+  study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
+  std::ofstream(d / "truth.json") << study.dump(1);
+  ASSERT_EQ(run_palplab("run " + (d / "truth.json").string() + " --db " +
+                            (d / "truth.db").string() + " --samples none --quiet",
+                        d)
+                .code,
+            0);
+  ASSERT_EQ(
+      run_palplab("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
+      0);
+  auto r = run_palplab("calibrate " + (d / "truth.json").string() + " --human " +
+                           (d / "csv" / "measures.csv").string() +
+                           " --params prior_target_cv --budget 4 --no-se --out " +
+                           (d / "fit.json").string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_EQ(fit["loss_before"].get<double>(), 0.0) << fit.dump(1);
+  EXPECT_EQ(fit["fitted"]["prior_target_cv"], fit["start"]["prior_target_cv"]);
+  EXPECT_TRUE(fit["kept_start"].get<bool>()) << fit.dump(1);
+  EXPECT_FALSE(fit["loss_flat"].get<bool>()) << fit.dump(1);
+  EXPECT_NE(r.out.find("the start values are kept (the start is the best point tried)"),
+            std::string::npos)
+      << r.out;
   fs::remove_all(d);
 }
 

@@ -154,9 +154,11 @@ TEST(Trainee, MoreReliableCuesGiveSmallerLearnedForceError) {
   const double ref = 2.3;  // the force the cue marks
   int n_av = 0, n_a = 0, n_fine = 0;
   // A sharp visual cue combined by MLE with the haptic one (Ernst & Banks 2002).
-  double e_av =
-      mean_learned_error(with_visual, {{"visual_weber", 0.02}}, 2, 0.0, ref, 60, true, &n_av);
-  double e_a = mean_learned_error(without_visual, {}, 2, 0.0, ref, 60, true, &n_a);
+  // Haptic Weber fraction 0.08 (force JNDs of 7-10 %) against 0.03 for the finer sense below.
+  double e_av = mean_learned_error(with_visual, {{"visual_weber", 0.02}, {"weber_fraction", 0.08}},
+                                   2, 0.0, ref, 60, true, &n_av);
+  double e_a =
+      mean_learned_error(without_visual, {{"weber_fraction", 0.08}}, 2, 0.0, ref, 60, true, &n_a);
   // A finer haptic sense (smaller Weber fraction).
   double e_fine = mean_learned_error(without_visual, {{"weber_fraction", 0.03}}, 2, 0.0, ref, 60,
                                      true, &n_fine);
@@ -414,8 +416,11 @@ TEST(Trainee, SuccessivePressErrorsFollowTheirCorrelation) {
     double lag1, cv, max_excess;
   };
   auto run = [&](double rho) {
-    const auto params = trainee_params(
-        {{"recognition_time", 0.3}, {"miss_probability", 0.0}, {"press_error_correlation", rho}});
+    const auto params = trainee_params({{"recognition_time", 0.3},
+                                        {"miss_probability", 0.0},
+                                        {"press_error_correlation", rho},
+                                        {"motor_noise_cv", 0.05},
+                                        {"weber_fraction", 0.08}});
     double sxy = 0, sxx = 0, syy = 0, sx = 0, sy = 0, s2 = 0, s1 = 0, excess = 0;
     int pairs = 0, n = 0, sessions = 0;
     for (int k = 0; k < 30; ++k) {
@@ -456,7 +461,8 @@ TEST(Trainee, SuccessivePressErrorsFollowTheirCorrelation) {
   EXPECT_LT(std::abs(indep.lag1), 0.15) << indep.lag1;
   EXPECT_NEAR(corr.lag1, 0.8, 0.12) << corr.lag1;
   // Each press keeps the SD of the combined motor and Weber error (sqrt(0.05^2 + 0.08^2) =
-  // 0.094), correlated or not (the sessions' sample SDs are a bit smaller when correlated).
+  // 0.094 with those two set here), correlated or not (the sessions' sample SDs are a bit smaller
+  // when correlated).
   EXPECT_NEAR(indep.cv, 0.094, 0.02) << indep.cv;
   EXPECT_NEAR(corr.cv, 0.094, 0.03) << corr.cv;
   // The session maximum: about +2 SD for ~30 independent presses, clearly less when correlated.
@@ -464,14 +470,24 @@ TEST(Trainee, SuccessivePressErrorsFollowTheirCorrelation) {
   EXPECT_LT(corr.max_excess, indep.max_excess - 0.1) << corr.max_excess << " " << indep.max_excess;
 }
 
-TEST(Trainee, LongerRetentionGivesLargerError) {
+// With forgetting_contraction 1 the remembered mean decays towards the briefing, so the error
+// of the learned target grows with the retention interval; with 0 (the shipped default since
+// 2026-12-03) the mean is kept and the error is the same after 10 minutes as after a week (only
+// the uncertainty grows: ForgettingContractionMovesOnlyTheMeansShare).
+TEST(Trainee, LongerRetentionGivesLargerErrorOnlyWhenTheMeanContracts) {
   FlatTissue tissue;
   const double ref = 2.3;
-  double e_10min = mean_learned_error(tissue, {}, 4, 600.0, ref);
-  double e_1day = mean_learned_error(tissue, {}, 4, 86400.0, ref);
-  double e_7days = mean_learned_error(tissue, {}, 4, 7 * 86400.0, ref);
+  const nlohmann::json contract = {{"forgetting_contraction", 1.0}};
+  double e_10min = mean_learned_error(tissue, contract, 4, 600.0, ref);
+  double e_1day = mean_learned_error(tissue, contract, 4, 86400.0, ref);
+  double e_7days = mean_learned_error(tissue, contract, 4, 7 * 86400.0, ref);
   EXPECT_LT(e_10min, e_1day) << e_10min << " " << e_1day;
   EXPECT_LT(e_1day, e_7days) << e_1day << " " << e_7days;
+  const nlohmann::json keep = {{"forgetting_contraction", 0.0}};
+  const double k_10min = mean_learned_error(tissue, keep, 4, 600.0, ref);
+  const double k_7days = mean_learned_error(tissue, keep, 4, 7 * 86400.0, ref);
+  EXPECT_GT(k_10min, 0.0);
+  EXPECT_DOUBLE_EQ(k_10min, k_7days);
 }
 
 // forgetting_contraction: the share of the forgetting that moves the remembered target back to
