@@ -1,5 +1,6 @@
-// `palplab calibrate STUDY.json --human FILE.csv --params KEYS... [--budget N] [--jobs N]
-//                    [--sim-n N] --out PARAMS.json`: fits the named trainee-model parameters to
+// `palplab calibrate STUDY.json --human FILE.csv --params KEYS... [--bounds NAME=LO:HI...]
+//                    [--budget N] [--jobs N] [--sim-n N] --out PARAMS.json`: fits the named
+//                    trainee-model parameters to
 // human data by Nelder–Mead with restarts over a simulated-moments loss with common random
 // numbers (protocols/calibrate.hpp); prints the fitted values with standard errors, the loss
 // before and after, and the fit per group and measure; writes them all to PARAMS.json (its
@@ -20,6 +21,7 @@ namespace {
 struct CalibrateArgs {
   std::string study, human, out, write_defaults;
   palplab::protocols::CalibrateOptions opt;
+  std::vector<std::string> bounds;  // --bounds NAME=LO:HI, parsed into opt.bounds
   bool quiet = false;
   bool no_se = false;
   bool overwrite = false;  // replace an --out that is not a calibration JSON
@@ -37,6 +39,10 @@ palplab::app::CommandRegistration reg_calibrate{
           ->required();
       cmd->add_option("--params", a->opt.keys, "Trainee parameters to fit (names)")
           ->required()
+          ->expected(1, -1);
+      cmd->add_option("--bounds", a->bounds,
+                      "This fit's bounds of fitted parameters, NAME=LO:HI each (within the "
+                      "parameter's own bounds; default: those)")
           ->expected(1, -1);
       cmd->add_option("--budget", a->opt.budget, "Loss evaluations for the optimiser")
           ->check(palplab::app::count_range(1, 1000000));
@@ -60,6 +66,8 @@ palplab::app::CommandRegistration reg_calibrate{
                     "Skip the standard errors (saves the 2p² simulations of the curvature)");
       cmd->callback([a, defaults_opt, code] {
         using namespace palplab::protocols;
+        a->opt.bounds.clear();
+        for (const auto& b : a->bounds) a->opt.bounds.push_back(parse_bound(b));
         Study s = load_study(a->study, engine_prototype_inspector());
         auto cells = read_human_cells(a->human);
         // The outputs are checked before the fit (which takes minutes to hours).

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -30,7 +31,46 @@ void mean_sd(const std::vector<double>& x, double& m, double& sd) {
   sd = x.size() > 1 ? std::sqrt(ss / (x.size() - 1)) : 0.0;
 }
 
+// A number as the user would write it back (shortest round trip up to 12 digits).
+std::string fmt_num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.12g", v);
+  return b;
+}
+
 }  // namespace
+
+ParamBound parse_bound(const std::string& text) {
+  auto fail = [&](const std::string& why) {
+    return InputError(SourceLocation{"--bounds"},
+                      "\"" + text + "\": " + why +
+                          "; expected NAME=LO:HI with finite numbers LO < HI, e.g. "
+                          "weber_fraction=0.04:0.10");
+  };
+  const std::size_t eq = text.find('=');
+  if (eq == std::string::npos) throw fail("no '='");
+  ParamBound b;
+  b.name = text.substr(0, eq);
+  if (b.name.empty()) throw fail("no parameter name before '='");
+  const std::string range = text.substr(eq + 1);
+  const std::size_t colon = range.find(':');
+  if (colon == std::string::npos) throw fail("no ':' between LO and HI");
+  auto number = [&](const std::string& t, const char* which) {
+    double v = 0.0;
+    const char* end = t.data() + t.size();
+    const auto [ptr, ec] = std::from_chars(t.data(), end, v);
+    if (ec == std::errc::result_out_of_range && ptr == end)
+      throw fail(std::string(which) + " \"" + t + "\" is beyond the range of a double");
+    if (t.empty() || ec != std::errc() || ptr != end)
+      throw fail(std::string(which) + " \"" + t + "\" is not a number");
+    if (!std::isfinite(v)) throw fail(std::string(which) + " is not finite");
+    return v;
+  };
+  b.lo = number(range.substr(0, colon), "LO");
+  b.hi = number(range.substr(colon + 1), "HI");
+  if (!(b.lo < b.hi)) throw fail("LO is not below HI");
+  return b;
+}
 
 namespace {
 
@@ -286,7 +326,12 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
     std::vector<std::vector<double>> pts(d + 1, best_z);
     std::vector<double> fv(d + 1, best_f);
     for (std::size_t i = 0; i < d && res.evaluations < budget; ++i) {
+      // Towards the other side where a step up would be cut back onto the point by its upper
+      // bound: a simplex point equal to its neighbour has its loss, and the search would end as
+      // converged where it started (a start on the upper bound never moved before).
+      const double at = to_x(pts[i + 1])[i];
       pts[i + 1][i] += 1.0;
+      if (to_x(pts[i + 1])[i] == at) pts[i + 1][i] -= 2.0;
       fv[i + 1] = eval(pts[i + 1]);
     }
     const double start_f = best_f;
@@ -483,6 +528,24 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
               "; expected at least 2 participants with a value in every fitted cell (an SD "
               "needs 2): add participants, or leave the measure out with --measures");
   }
+  // --bounds: each names a fitted parameter once, within its table's bounds.
+  for (std::size_t i = 0; i < opt.bounds.size(); ++i) {
+    const ParamBound& b = opt.bounds[i];
+    if (std::find(opt.keys.begin(), opt.keys.end(), b.name) == opt.keys.end())
+      throw InputError(SourceLocation{"--bounds"}, "\"" + b.name +
+                                                       "\" is not one of the fitted parameters "
+                                                       "(--params: " +
+                                                       join(opt.keys) + ")");
+    for (std::size_t k = 0; k < i; ++k)
+      if (opt.bounds[k].name == b.name)
+        throw InputError(SourceLocation{"--bounds"},
+                         "\"" + b.name + "\" is bounded twice; expected one NAME=LO:HI per name");
+  }
+  auto bound_of = [&](const std::string& k) -> const ParamBound* {
+    for (const auto& b : opt.bounds)
+      if (b.name == k) return &b;
+    return nullptr;
+  };
   std::vector<double> lo, hi, step;
   const pm::TraineeParams current = pm::trainee_params(study.participant_parameters, study.file);
   for (const auto& k : opt.keys) {
@@ -495,12 +558,34 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
                        "\"; expected one of: " + names);
     }
     const double x0 = current.*(s->trainee);
+    double l = s->min, h = s->max;
+    if (const ParamBound* b = bound_of(k)) {
+      char range[160];
+      std::snprintf(range, sizeof range, "%g:%g", s->min, s->max);
+      if (b->lo < s->min || b->hi > s->max)
+        throw InputError(SourceLocation{"--bounds"},
+                         k + "=" + fmt_num(b->lo) + ":" + fmt_num(b->hi) +
+                             " reaches outside the parameter's own bounds " + range +
+                             " (protocols/participants/params.cpp); expected a range within them");
+      if (x0 < b->lo || x0 > b->hi)
+        throw InputError(SourceLocation{"--bounds"},
+                         k + "=" + fmt_num(b->lo) + ":" + fmt_num(b->hi) +
+                             " does not hold the start value " + fmt_num(x0) +
+                             " (the study's participant_model.parameters, else the default); "
+                             "expected bounds around it, or set a start inside them in the study");
+      l = b->lo;
+      h = b->hi;
+    }
     r.start.push_back(x0);
-    lo.push_back(s->min);
-    hi.push_back(s->max);
-    // A quarter of the value (or a tenth of a bounded range when the value is 0).
-    step.push_back(x0 != 0 ? 0.25 * std::abs(x0) : 0.1 * std::min(s->max - s->min, 1.0));
+    lo.push_back(l);
+    hi.push_back(h);
+    // A quarter of the value (or a tenth of a bounded range when the value is 0), at most half
+    // the bounds' range (a narrow --bounds would otherwise cut every simplex step at a bound).
+    step.push_back(std::min(x0 != 0 ? 0.25 * std::abs(x0) : 0.1 * std::min(s->max - s->min, 1.0),
+                            0.5 * (h - l)));
   }
+  r.lo = lo;
+  r.hi = hi;
   Study base = study;
   if (opt.sim_n > 0)
     base = resized_study(study, opt.sim_n, study.seed);  // same seed: common random numbers
@@ -633,16 +718,18 @@ nlohmann::json to_json(const CalibrationResult& r) {
     return a;
   };
   nlohmann::json fitted = nlohmann::json::object(), se = nlohmann::json::object(),
-                 start = nlohmann::json::object();
+                 start = nlohmann::json::object(), bounds = nlohmann::json::object();
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
     fitted[r.keys[i]] = r.fitted[i];
     se[r.keys[i]] = num(r.se[i]);
     start[r.keys[i]] = r.start[i];
+    if (i < r.lo.size()) bounds[r.keys[i]] = {r.lo[i], r.hi[i]};
   }
   return {{"palplab_calibration", 1},
           {"fitted", fitted},
           {"standard_errors", se},
           {"start", start},
+          {"bounds", bounds},
           {"loss_before", num(r.loss_before)},
           {"loss_after", num(r.loss_after)},
           {"measures_not_fitted", r.not_fitted},
@@ -661,13 +748,22 @@ std::string to_text(const CalibrationResult& r) {
   char buf[256];
   o << "fitted parameters (SE from the loss curvature):\n";
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g)\n", r.keys[i].c_str(),
+    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g", r.keys[i].c_str(),
                   r.fitted[i],
                   std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str()
                   : r.se_computed        ? "not estimable"
                                          : "not computed (--no-se)",
                   r.start[i]);
     o << buf;
+    if (i < r.lo.size()) {
+      // A value on a bound is the bound's, not the data's: said, so it is not read as a fit.
+      const char* at = r.fitted[i] <= r.lo[i]   ? ", AT ITS LOWER BOUND"
+                       : r.fitted[i] >= r.hi[i] ? ", AT ITS UPPER BOUND"
+                                                : "";
+      std::snprintf(buf, sizeof buf, ", bounds %g:%g%s", r.lo[i], r.hi[i], at);
+      o << buf;
+    }
+    o << ")\n";
   }
   std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n",
                 r.loss_before, r.loss_after, r.evaluations, r.restarts);

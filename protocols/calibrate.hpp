@@ -82,9 +82,22 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
                              const std::vector<double>& lo, const std::vector<double>& hi,
                              int budget);
 
+// A fit's own bounds for one parameter (`--bounds NAME=LO:HI`), narrower than or equal to the
+// parameter table's (protocols/participants/params.cpp).
+struct ParamBound {
+  std::string name;
+  double lo = 0.0, hi = 0.0;
+};
+// Parses "NAME=LO:HI" (LO < HI, both finite numbers); InputError at "--bounds" otherwise. Whether
+// NAME is fitted and LO:HI lies within its table's bounds is checked by calibrate().
+ParamBound parse_bound(const std::string& text);
+
 struct CalibrateOptions {
   std::vector<std::string> keys;  // trainee parameter names to fit
-  int budget = 200;               // loss evaluations for the optimiser (the SEs need 2p² more)
+  // Bounds of this fit for some of `keys` (the others keep their table's bounds). Each must lie
+  // within its table's bounds and hold the start value; InputError at "--bounds" otherwise.
+  std::vector<ParamBound> bounds;
+  int budget = 200;  // loss evaluations for the optimiser (the SEs need 2p² more)
   int jobs = 1;
   int sim_n = 0;  // simulated participants per group; 0 = the study's group sizes
   // Measures to fit (cells of other measures in the CSV are ignored); empty = the study's
@@ -101,6 +114,7 @@ struct CalibrateOptions {
 struct CalibrationResult {
   std::vector<std::string> keys;
   std::vector<double> start, fitted, se;  // se NaN when the curvature is not positive definite
+  std::vector<double> lo, hi;             // the bounds searched (--bounds, else the table's)
   bool se_computed = true;                // false with CalibrateOptions::standard_errors off
   double loss_before = 0.0, loss_after = 0.0;
   int evaluations = 0, restarts = 0;

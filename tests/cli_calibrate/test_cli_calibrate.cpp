@@ -34,16 +34,9 @@ fs::path data(const std::string& f) {
   return fs::path(PALPLAB_SOURCE_DIR) / "tests" / "data" / "calibration" / f;
 }
 
-}  // namespace
-
-TEST(Calibrate, RecoversKnownParameters) {
-  auto d = scratch_dir("calibrate");
-  const double true_cv = 0.15, true_speed = 0.03;
-  // The "human" data: the study with known parameters, 12 per group.
-  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
-  for (auto& g : study["groups"]) g["size"] = 12;
-  study["participant_model"]["parameters"]["prior_target_cv"] = true_cv;
-  study["participant_model"]["parameters"]["explore_speed"] = true_speed;
+// Writes `study` to DIR/truth.json (with the repository's prototypes), runs it and exports its
+// measures: the "human" data of a recovery test, DIR/csv/measures.csv.
+void simulate_human_data(const fs::path& d, nlohmann::json study) {
   study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
   std::ofstream(d / "truth.json") << study.dump(1);
   ASSERT_EQ(run_palplab("run " + (d / "truth.json").string() + " --db " +
@@ -54,6 +47,20 @@ TEST(Calibrate, RecoversKnownParameters) {
   ASSERT_EQ(
       run_palplab("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
       0);
+}
+
+}  // namespace
+
+TEST(Calibrate, RecoversKnownParameters) {
+  auto d = scratch_dir("calibrate");
+  const double true_cv = 0.15, true_speed = 0.03;
+  // The "human" data: the study with known parameters, 12 per group.
+  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
+  for (auto& g : study["groups"]) g["size"] = 12;
+  study["participant_model"]["parameters"]["prior_target_cv"] = true_cv;
+  study["participant_model"]["parameters"]["explore_speed"] = true_speed;
+  simulate_human_data(d, study);
+  if (::testing::Test::HasFatalFailure()) return;
   // --write-defaults edits a copy of the real params.hpp.
   fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "params.hpp",
                 d / "params.hpp");
@@ -240,16 +247,8 @@ TEST(Calibrate, AParameterWithoutEffectKeepsItsStart) {
 TEST(Calibrate, AStartThatIsTheMinimumIsKeptButNotFlat) {
   auto d = scratch_dir("calibrate_min");
   auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
-  study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
-  std::ofstream(d / "truth.json") << study.dump(1);
-  ASSERT_EQ(run_palplab("run " + (d / "truth.json").string() + " --db " +
-                            (d / "truth.db").string() + " --samples none --quiet",
-                        d)
-                .code,
-            0);
-  ASSERT_EQ(
-      run_palplab("export " + (d / "truth.db").string() + " --csv " + (d / "csv").string(), d).code,
-      0);
+  simulate_human_data(d, study);
+  if (::testing::Test::HasFatalFailure()) return;
   auto r = run_palplab("calibrate " + (d / "truth.json").string() + " --human " +
                            (d / "csv" / "measures.csv").string() +
                            " --params prior_target_cv --budget 4 --no-se --out " +
@@ -264,6 +263,32 @@ TEST(Calibrate, AStartThatIsTheMinimumIsKeptButNotFlat) {
   EXPECT_NE(r.out.find("the start values are kept (the start is the best point tried)"),
             std::string::npos)
       << r.out;
+  fs::remove_all(d);
+}
+
+// --bounds: a fit bounded away from the truth ends on the bound nearest to it and says so; the
+// JSON records the bounds searched. The data are simulated with prior_target_cv 0.15, the fit
+// starts at the default 0.30 and may only go down to 0.28.
+TEST(Calibrate, ABoundedFitStaysInItsBoundsAndSaysWhenItEndsOnOne) {
+  auto d = scratch_dir("calibrate_bounds");
+  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
+  study["participant_model"]["parameters"]["prior_target_cv"] = 0.15;
+  simulate_human_data(d, study);
+  if (::testing::Test::HasFatalFailure()) return;
+  auto r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                           (d / "csv" / "measures.csv").string() +
+                           " --params prior_target_cv explore_speed --bounds "
+                           "prior_target_cv=0.28:0.3 --budget 12 --no-se --quiet --out " +
+                           (d / "fit.json").string(),
+                       d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_EQ(fit["bounds"]["prior_target_cv"], nlohmann::json({0.28, 0.3})) << fit.dump(1);
+  // The other parameter keeps its table's bounds (params.cpp: explore_speed 1e-4 to 2 m/s).
+  EXPECT_EQ(fit["bounds"]["explore_speed"], nlohmann::json({1e-4, 2.0})) << fit.dump(1);
+  EXPECT_DOUBLE_EQ(fit["fitted"]["prior_target_cv"].get<double>(), 0.28) << fit.dump(1);
+  EXPECT_LT(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
+  EXPECT_NE(r.out.find("bounds 0.28:0.3, AT ITS LOWER BOUND"), std::string::npos) << r.out;
   fs::remove_all(d);
 }
 
@@ -358,6 +383,22 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
        "--params weber_fraction", h + ":2:34: column 'unit': palpation_force is in N, got 'kg'"},
       {header + ",G1,test,1,palpation_force,2.4\n" + rows, "--params weber_fraction",
        h + ":2:1: column 'participant': expected the participant's id, got an empty field"},
+      // --bounds (2026-12-04): a fit's own range, checked against the fitted names, the
+      // parameter table and the start (recovery_study.json leaves weber_fraction at 0.03).
+      {header + rows, "--params weber_fraction --bounds prior_target_cv=0.1:0.5",
+       "--bounds: \"prior_target_cv\" is not one of the fitted parameters (--params: "
+       "weber_fraction)"},
+      {header + rows, "--params weber_fraction --bounds weber_fraction=0.001:0.1",
+       "--bounds: weber_fraction=0.001:0.1 reaches outside the parameter's own bounds 0.01:0.5"},
+      {header + rows, "--params weber_fraction --bounds weber_fraction=0.04:0.1",
+       "--bounds: weber_fraction=0.04:0.1 does not hold the start value 0.03"},
+      {header + rows,
+       "--params weber_fraction --bounds weber_fraction=0.01:0.1 weber_fraction=0.02:0.1",
+       "--bounds: \"weber_fraction\" is bounded twice"},
+      {header + rows, "--params weber_fraction --bounds weber_fraction=nan:0.1",
+       "--bounds: \"weber_fraction=nan:0.1\": LO is not finite"},
+      {header + rows, "--params weber_fraction --bounds weber_fraction=0.1:0.04",
+       "--bounds: \"weber_fraction=0.1:0.04\": LO is not below HI"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.csv, c.args);
