@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -31,11 +32,12 @@ void mean_sd(const std::vector<double>& x, double& m, double& sd) {
   sd = x.size() > 1 ? std::sqrt(ss / (x.size() - 1)) : 0.0;
 }
 
-// A number as the user would write it back (shortest round trip up to 12 digits).
+// The shortest text that reads back as exactly `v` (so 0.30000000000000004 is not shown as 0.3
+// in a message that says it differs from 0.3).
 std::string fmt_num(double v) {
   char b[64];
-  std::snprintf(b, sizeof b, "%.12g", v);
-  return b;
+  const auto res = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, res.ptr);
 }
 
 }  // namespace
@@ -55,16 +57,25 @@ ParamBound parse_bound(const std::string& text) {
   const std::string range = text.substr(eq + 1);
   const std::size_t colon = range.find(':');
   if (colon == std::string::npos) throw fail("no ':' between LO and HI");
-  auto number = [&](const std::string& t, const char* which) {
+  auto number = [&](const std::string& text_in, const char* which) {
+    // Decimal notation as written in a shell: surrounding blanks and one leading '+' allowed.
+    std::string t = text_in;
+    t.erase(0, t.find_first_not_of(" \t"));
+    t.erase(t.find_last_not_of(" \t") + 1);
+    const std::string digits = !t.empty() && t[0] == '+' ? t.substr(1) : t;
     double v = 0.0;
-    const char* end = t.data() + t.size();
-    const auto [ptr, ec] = std::from_chars(t.data(), end, v);
-    if (ec == std::errc::result_out_of_range && ptr == end)
-      throw fail(std::string(which) + " \"" + t + "\" is beyond the range of a double");
-    if (t.empty() || ec != std::errc() || ptr != end)
-      throw fail(std::string(which) + " \"" + t + "\" is not a number");
+    const char* end = digits.data() + digits.size();
+    const auto [ptr, ec] = std::from_chars(digits.data(), end, v);
+    if (ec == std::errc::result_out_of_range && ptr == end) {
+      const double approx = std::strtod(digits.c_str(), nullptr);  // ±HUGE_VAL or a tiny value
+      throw fail(std::string(which) + " \"" + text_in + "\" is " +
+                 (std::isinf(approx) ? "too large" : "too small (below the smallest double)") +
+                 " in magnitude");
+    }
+    if (digits.empty() || digits[0] == '+' || ec != std::errc() || ptr != end)
+      throw fail(std::string(which) + " \"" + text_in + "\" is not a number");
     if (!std::isfinite(v)) throw fail(std::string(which) + " is not finite");
-    return v;
+    return v + 0.0;  // -0 is 0
   };
   b.lo = number(range.substr(0, colon), "LO");
   b.hi = number(range.substr(colon + 1), "HI");
@@ -395,43 +406,48 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
 namespace {
 
 // Standard errors from the curvature of the loss at r.fitted (loss ≈ -2 log L, Cov ≈ 2 H⁻¹);
-// r.se stays NaN where H is not positive definite.
+// r.se stays NaN where H is not positive definite. A parameter on one of its bounds has no SE
+// (the optimum there is the bound's, and a stencil cut at the bound would measure a slope, not a
+// curvature): the others' come from the curvature with it held at its bound.
 void standard_errors(CalibrationResult& r, const std::vector<double>& step,
                      const std::vector<double>& lo, const std::vector<double>& hi,
                      const std::function<double(const std::vector<double>&)>& loss) {
   // Curvature at the optimum by central differences, h = 20 % of the starting step (5 % of the
   // starting value): wide enough to average over the small steps that common random numbers
   // leave in the loss (a discrete event, such as a press more or less, moves it by a step).
-  const std::size_t d = r.fitted.size();
+  std::vector<std::size_t> free;
+  for (std::size_t i = 0; i < r.fitted.size(); ++i)
+    if (r.fitted[i] > lo[i] && r.fitted[i] < hi[i]) free.push_back(i);
+  const std::size_t d = free.size();
+  if (d == 0) return;
   Eigen::MatrixXd H(d, d);
   std::vector<double> h(d);
-  for (std::size_t i = 0; i < d; ++i) {
-    h[i] = 0.2 * step[i];
+  for (std::size_t a = 0; a < d; ++a) {
+    const std::size_t i = free[a];
     // Keep the stencil inside the bounds.
-    const double room = std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]);
-    if (room > 0) h[i] = std::min(h[i], room);
+    h[a] = std::min(0.2 * step[i], std::min(r.fitted[i] - lo[i], hi[i] - r.fitted[i]));
   }
-  auto at = [&](std::size_t i, double di, std::size_t j, double dj) {
+  auto at = [&](std::size_t a, double da, std::size_t b, double db) {
     std::vector<double> x = r.fitted;
-    x[i] += di;
-    x[j] += dj;
-    for (std::size_t k = 0; k < d; ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
+    x[free[a]] += da;
+    x[free[b]] += db;
+    for (std::size_t k = 0; k < x.size(); ++k) x[k] = std::clamp(x[k], lo[k], hi[k]);
     return loss(x);
   };
   const double f0 = r.loss_after;
-  for (std::size_t i = 0; i < d; ++i) {
-    H(i, i) = (at(i, h[i], i, 0) - 2 * f0 + at(i, -h[i], i, 0)) / (h[i] * h[i]);
-    for (std::size_t j = 0; j < i; ++j) {
-      const double v = (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) +
-                        at(i, -h[i], j, -h[j])) /
-                       (4 * h[i] * h[j]);
-      H(i, j) = H(j, i) = v;
+  for (std::size_t a = 0; a < d; ++a) {
+    H(a, a) = (at(a, h[a], a, 0) - 2 * f0 + at(a, -h[a], a, 0)) / (h[a] * h[a]);
+    for (std::size_t b = 0; b < a; ++b) {
+      const double v = (at(a, h[a], b, h[b]) - at(a, h[a], b, -h[b]) - at(a, -h[a], b, h[b]) +
+                        at(a, -h[a], b, -h[b])) /
+                       (4 * h[a] * h[b]);
+      H(a, b) = H(b, a) = v;
     }
   }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
   if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
     const Eigen::MatrixXd cov = 2.0 * H.inverse();
-    for (std::size_t i = 0; i < d; ++i) r.se[i] = std::sqrt(cov(i, i));
+    for (std::size_t a = 0; a < d; ++a) r.se[free[a]] = std::sqrt(cov(a, a));
   }
 }
 
@@ -560,12 +576,11 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     const double x0 = current.*(s->trainee);
     double l = s->min, h = s->max;
     if (const ParamBound* b = bound_of(k)) {
-      char range[160];
-      std::snprintf(range, sizeof range, "%g:%g", s->min, s->max);
       if (b->lo < s->min || b->hi > s->max)
         throw InputError(SourceLocation{"--bounds"},
                          k + "=" + fmt_num(b->lo) + ":" + fmt_num(b->hi) +
-                             " reaches outside the parameter's own bounds " + range +
+                             " reaches outside the parameter's own bounds " + fmt_num(s->min) +
+                             ":" + fmt_num(s->max) +
                              " (protocols/participants/params.cpp); expected a range within them");
       if (x0 < b->lo || x0 > b->hi)
         throw InputError(SourceLocation{"--bounds"},
@@ -748,21 +763,21 @@ std::string to_text(const CalibrationResult& r) {
   char buf[256];
   o << "fitted parameters (SE from the loss curvature):\n";
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %g", r.keys[i].c_str(),
+    // A value on a bound is the bound's, not the data's: said, so it is not read as a fit.
+    const bool bounded = i < r.lo.size();
+    const char* at = !bounded                 ? ""
+                     : r.fitted[i] <= r.lo[i] ? ", AT ITS LOWER BOUND"
+                     : r.fitted[i] >= r.hi[i] ? ", AT ITS UPPER BOUND"
+                                              : "";
+    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %s", r.keys[i].c_str(),
                   r.fitted[i],
                   std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str()
-                  : r.se_computed        ? "not estimable"
-                                         : "not computed (--no-se)",
-                  r.start[i]);
+                  : !r.se_computed       ? "not computed (--no-se)"
+                  : *at                  ? "not estimable: on a bound"
+                                         : "not estimable",
+                  fmt_num(r.start[i]).c_str());
     o << buf;
-    if (i < r.lo.size()) {
-      // A value on a bound is the bound's, not the data's: said, so it is not read as a fit.
-      const char* at = r.fitted[i] <= r.lo[i]   ? ", AT ITS LOWER BOUND"
-                       : r.fitted[i] >= r.hi[i] ? ", AT ITS UPPER BOUND"
-                                                : "";
-      std::snprintf(buf, sizeof buf, ", bounds %g:%g%s", r.lo[i], r.hi[i], at);
-      o << buf;
-    }
+    if (bounded) o << ", bounds " << fmt_num(r.lo[i]) << ":" << fmt_num(r.hi[i]) << at;
     o << ")\n";
   }
   std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n",

@@ -278,7 +278,7 @@ TEST(Calibrate, ABoundedFitStaysInItsBoundsAndSaysWhenItEndsOnOne) {
   auto r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
                            (d / "csv" / "measures.csv").string() +
                            " --params prior_target_cv explore_speed --bounds "
-                           "prior_target_cv=0.28:0.3 --budget 12 --no-se --quiet --out " +
+                           "prior_target_cv=0.28:0.3 --budget 12 --quiet --out " +
                            (d / "fit.json").string(),
                        d);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -289,6 +289,26 @@ TEST(Calibrate, ABoundedFitStaysInItsBoundsAndSaysWhenItEndsOnOne) {
   EXPECT_DOUBLE_EQ(fit["fitted"]["prior_target_cv"].get<double>(), 0.28) << fit.dump(1);
   EXPECT_LT(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
   EXPECT_NE(r.out.find("bounds 0.28:0.3, AT ITS LOWER BOUND"), std::string::npos) << r.out;
+  // No SE for a value on a bound (a stencil cut there measures a slope); the free parameter's
+  // SE comes from the curvature with the bounded one held.
+  EXPECT_TRUE(fit["standard_errors"]["prior_target_cv"].is_null()) << fit.dump(1);
+  EXPECT_GT(fit["standard_errors"]["explore_speed"].get<double>(), 0.0) << fit.dump(1);
+  EXPECT_NE(r.out.find("(SE not estimable: on a bound, start 0.3, bounds 0.28:0.3"),
+            std::string::npos)
+      << r.out;
+  // Bounds are shown as they read back: a range one rounding above 0.3 is not "0.3:0.3".
+  const Result close = run_palplab(
+      "calibrate " + data("recovery_study.json").string() + " --human " +
+          (d / "csv" / "measures.csv").string() +
+          " --params prior_target_cv --bounds prior_target_cv=0.30000000000000004:0.5 --budget 1 "
+          "--no-se --out " +
+          (d / "close.json").string(),
+      d);
+  EXPECT_EQ(close.code, 2);
+  EXPECT_NE(close.err.find("prior_target_cv=0.30000000000000004:0.5 does not hold the start "
+                           "value 0.3 "),
+            std::string::npos)
+      << close.err;
   fs::remove_all(d);
 }
 

@@ -42,6 +42,12 @@ TEST(ParseBound, NameLowHigh) {
   const auto n = parse_bound("x=-2:-1");
   EXPECT_DOUBLE_EQ(n.lo, -2);
   EXPECT_DOUBLE_EQ(n.hi, -1);
+  // As a shell user may write them: blanks around a number, one leading '+'; -0 is 0.
+  const auto w = parse_bound("x= 0.04 :+0.1");
+  EXPECT_DOUBLE_EQ(w.lo, 0.04);
+  EXPECT_DOUBLE_EQ(w.hi, 0.1);
+  const auto z = parse_bound("x=-0:1");
+  EXPECT_FALSE(std::signbit(z.lo));
 }
 
 TEST(ParseBound, BadTextSaysWhatIsWrong) {
@@ -52,10 +58,12 @@ TEST(ParseBound, BadTextSaysWhatIsWrong) {
       {"weber_fraction=:0.1", "LO \"\" is not a number"},
       {"weber_fraction=0.04:", "HI \"\" is not a number"},
       {"weber_fraction=0.04:0.1x", "HI \"0.1x\" is not a number"},
-      {"weber_fraction= 0.04:0.1", "LO \" 0.04\" is not a number"},
+      {"weber_fraction=++0.04:0.1", "LO \"++0.04\" is not a number"},
+      {"weber_fraction=0x1p-3:0.5", "LO \"0x1p-3\" is not a number"},
+      {"weber_fraction=1e-400:0.5", "LO \"1e-400\" is too small (below the smallest double)"},
       {"weber_fraction=nan:0.1", "LO is not finite"},
       {"weber_fraction=0:inf", "HI is not finite"},
-      {"weber_fraction=1e999:2e999", "LO \"1e999\" is beyond the range of a double"},
+      {"weber_fraction=1e999:2e999", "LO \"1e999\" is too large in magnitude"},
       {"weber_fraction=0.1:0.04", "LO is not below HI"},
       {"weber_fraction=0.1:0.1", "LO is not below HI"},
       {"weber_fraction=0.1:0.2:0.3", "HI \"0.2:0.3\" is not a number"},
