@@ -645,16 +645,19 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     // not constrain the parameters), not when the start is a minimum its neighbours are worse than.
     r.kept_start = true;
     r.fitted = r.start;
-    r.loss_flat = std::all_of(memo.begin(), memo.end(), [&](const auto& m) {
-      return std::abs(m.second.first - r.loss_before) <=
-             1e-9 * std::max(1.0, std::abs(r.loss_before));
-    });
+    // One point (the start) says nothing about flatness: --budget 1 only evaluates the start.
+    r.loss_flat = memo.size() > 1 && std::all_of(memo.begin(), memo.end(), [&](const auto& m) {
+                    return std::abs(m.second.first - r.loss_before) <=
+                           1e-9 * std::max(1.0, std::abs(r.loss_before));
+                  });
   }
+  r.points_tried = static_cast<int>(memo.size());
   std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
   r.se.assign(r.fitted.size(), kNaN);
   r.se_computed = opt.standard_errors;
   if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
   r.evaluations = evaluations;
+  r.budget = opt.budget;
   r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
                                                           : nlohmann::json::object();
   for (std::size_t i = 0; i < r.keys.size(); ++i) r.parameters[r.keys[i]] = r.fitted[i];
@@ -752,6 +755,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"evaluations", r.evaluations},
           {"restarts", r.restarts},
           {"kept_start", r.kept_start},
+          {"points_tried", r.points_tried},
           {"loss_flat", r.loss_flat},
           {"fit_before", fits(r.fit_before)},
           {"fit_after", fits(r.fit_after)},
@@ -783,7 +787,10 @@ std::string to_text(const CalibrationResult& r) {
   std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n",
                 r.loss_before, r.loss_after, r.evaluations, r.restarts);
   o << buf;
-  if (r.kept_start)
+  if (r.kept_start && r.points_tried <= 1)
+    o << "only the start was simulated (--budget " << r.budget
+      << "): its loss is reported, nothing was fitted\n";
+  else if (r.kept_start)
     o << "no point tried lowered the loss beyond rounding: the start values are kept "
       << (r.loss_flat ? "(every point tried had the start's loss: the data do not constrain "
                         "these parameters here)\n"

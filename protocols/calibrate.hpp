@@ -129,6 +129,10 @@ struct CalibrationResult {
   // With kept_start: every point tried had the start's loss up to rounding (the parameters have
   // no effect on the fitted cells), as opposed to a start that is a minimum of the points tried.
   bool loss_flat = false;
+  // Distinct parameter points simulated by the optimiser (the start included; the SE stencil's
+  // points not): 1 when --budget 1 only evaluated the start, so nothing was fitted.
+  int points_tried = 0;
+  int budget = 0;  // the optimiser's budget (CalibrateOptions::budget)
 };
 
 // Before any simulation, InputError (with the CSV line) for a cell of a measure the study does

@@ -260,6 +260,7 @@ TEST(Calibrate, AStartThatIsTheMinimumIsKeptButNotFlat) {
   EXPECT_EQ(fit["fitted"]["prior_target_cv"], fit["start"]["prior_target_cv"]);
   EXPECT_TRUE(fit["kept_start"].get<bool>()) << fit.dump(1);
   EXPECT_FALSE(fit["loss_flat"].get<bool>()) << fit.dump(1);
+  EXPECT_GT(fit["points_tried"].get<int>(), 1) << fit.dump(1);
   EXPECT_NE(r.out.find("the start values are kept (the start is the best point tried)"),
             std::string::npos)
       << r.out;
@@ -573,6 +574,14 @@ TEST(Calibrate, UndefinedSimulatedCellsSayWhyNeverNan) {
   EXPECT_FALSE(has(text, "nan")) << text;
   const auto fit = nlohmann::json::parse(text);
   ASSERT_EQ(fit["fit_after"].size(), 4u) << text;
+  // --budget 1 simulates the start only: its loss, not a fit, and not "flat" (review finding
+  // 2026-12-04: one point was reported as "every point tried had the start's loss").
+  EXPECT_EQ(fit["points_tried"], 1) << text;
+  EXPECT_FALSE(fit["loss_flat"].get<bool>()) << text;
+  EXPECT_TRUE(has(r.out,
+                  "only the start was simulated (--budget 1): its loss is reported, "
+                  "nothing was fitted\n"))
+      << r.out;
   for (const auto& cells : {fit["fit_before"], fit["fit_after"]})
     for (const auto& c : cells) {
       EXPECT_TRUE(c["simulated"]["mean"].is_null()) << c.dump();
