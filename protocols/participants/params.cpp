@@ -157,8 +157,10 @@ const std::vector<ParamSpec>& trainee_param_specs() {
             "chance that touching the feature does not lead to recognising it (search goes on)",
             "model assumption (novices misjudge what they touch)"),
       tspec("practice_exponent", &T::practice_exponent, 0.0, 2.0, "1",
-            "recognition time * (1 + sessions in which the feature was found)^-exponent",
-            "Newell & Rosenbloom 1981 (power law of practice)"),
+            "recognition time * (1 + sessions in which the feature was found)^-exponent; landmark "
+            "time * (1 + landmark judgements made)^-exponent",
+            "Newell & Rosenbloom 1981 (power law of practice); value fitted to exp2 A/B "
+            "(2026-12-04)"),
       tspec("individual_cv", &T::individual_cv, 0.0, 2.0, "1",
             "between-person SD (log scale) of a speed factor on exploration and recognition",
             "model assumption (individual differences in motor speed)"),
@@ -172,7 +174,8 @@ const std::vector<ParamSpec>& trainee_param_specs() {
             "median time a novice of average speed needs to judge where the hand is at one "
             "landmark (light touch; shortened by practice like recognition_time)",
             "Lederman & Klatzky 1987 (an exploratory procedure takes ~1-10 s, contour following "
-            "the longest); Klatzky, Lederman & Metzger 1985 (1-2 s per object); value fitted"),
+            "the longest); Klatzky, Lederman & Metzger 1985 (1-2 s per object); value fitted "
+            "with practice_exponent to exp2 A/B (2026-12-04)"),
       tspec("trace_speed", &T::trace_speed, 1e-4, 1.0, "m/s",
             "hand speed from one landmark to the next while orienting (slower than a seen reach)",
             "Lederman & Klatzky 1987 (deliberate exploratory movements of a few cm/s); value "

@@ -67,10 +67,12 @@ struct TraineeParams {
   // protocols/participants/exp2_calibration.json; commands in docs/PARTICIPANTS.md "The shipped
   // calibration (2026-11-25)"). Both act on trainees who expect a marker (exp2: group A);
   // marker_wait_overshoot also bounds a visually aimed press (1.5 * (1 + overshoot)), which rarely
-  // binds (exp2 A/B run: 2 of B's 60 sessions changed, by 0.01 N). landmark_time: the A/B
-  // calibration of 2026-11-24 (same section); visual_recognition_gain: refitted with it on the
-  // whole exp2 on 2026-12-02 (protocols/participants/exp2_calibration_explore.json; "The shipped
-  // calibration (2026-12-02, afternoon)"; landmark_time kept its value).
+  // binds (exp2 A/B run: 2 of B's 60 sessions changed, by 0.01 N). visual_recognition_gain:
+  // fitted on the whole exp2 on 2026-12-02 (protocols/participants/exp2_calibration_explore.json;
+  // "The shipped calibration (2026-12-02, afternoon)"). landmark_time and practice_exponent:
+  // fitted together on exp2 A/B at 30 per group on 2026-12-04
+  // (protocols/participants/exp2_calibration_practice.json; "The shipped calibration
+  // (2026-12-04)").
   double guidance_dependence = 0.6;   // 1, share of marker learning withheld at full reliance
   double guidance_rate = 0.2;         // 1, reliance gained per press with a marker
   double extinction_rate = 0.472119;  // 1, reliance lost per press whose expected marker failed
@@ -80,11 +82,11 @@ struct TraineeParams {
   double visual_recognition_gain = 2.58855;  // 1, recognition speed-up when the part deforms
   double recognition_cv = 0.3;               // 1, trial-to-trial SD / mean of a recognition time
   double miss_probability = 0.2;             // 1, chance the feature is not recognised on a touch
-  double practice_exponent = 0.3;            // 1, power law of practice for recognition
+  double practice_exponent = 0.51709;        // 1, power law of practice for recognition
   double individual_cv = 0.15;               // 1, between-person SD of speed (log scale)
   // orienting on landmarks before the search (blind haptic navigation along the organ)
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
-  double landmark_time = 12.9513;  // s, median novice judgement time at one landmark
+  double landmark_time = 34.1162;  // s, median novice judgement time at one landmark
   double trace_speed = 0.02;       // m/s, hand speed from one landmark to the next
   // where the presses go once the feature is found: 1 = at the place where the target press was
   // demonstrated (the feature's centre, each press a reach with visual_spatial_sd scatter),

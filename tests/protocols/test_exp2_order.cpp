@@ -5,11 +5,12 @@
 // B 2.67 ± 0.18 N. The seed is fixed, so the run is deterministic. What the test can claim:
 // each group's mean lies within 3 human standard errors of the human mean (the previous defaults,
 // with independent press errors, failed it: B 2.98 N = +5.4 human SE), and the group order is
-// the human one. With the defaults of 2026-12-03 (forgetting that keeps the mean) the model gives
+// the human one. With the defaults of 2026-12-03 (forgetting that keeps the mean) the model gave
 // A 2.95 ± 0.35 N, B 2.67 ± 0.11 N: A - B 0.29 N = 2.4 SEs of a difference of two means of 10
-// (people 0.31 N; before: 0.24 N = 1.6 SE), so an unrelated change of the random streams flips
-// the order with a probability of about 1 %; A's spread (0.35 N, people 0.22) is what keeps
-// the SE up.
+// (people 0.31 N; before: 0.24 N = 1.6 SE). With the power law of practice fitted on 2026-12-04
+// (fewer presses in A's test, whose search is longer): A 3.05 ± 0.31 N, B 2.67 ± 0.11 N, A - B
+// 3.7 SE. The exploration time of the same run is checked the same way (people A 43.4 ± 8.3 s >
+// B 29.9 ± 3.9 s, Welch p < .001); before 2026-12-04 A's mean was 7 s short of people's.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,14 +31,18 @@ TEST(Exp2Order, PostTrainingForceOfGroupsAAndBNearPeoples) {
                                .string();
   const Study study = load_study(path, engine_prototype_inspector());
   const Plan plan = make_plan(study);
-  std::map<std::string, std::vector<double>> force;
+  std::map<std::string, std::vector<double>> force, explore;
   for (const auto& pp : plan.participants)
     for (const auto& s : simulate_participant(study, pp))
       if (s.session.phase == "post_training")
-        for (const auto& m : s.measures)
+        for (const auto& m : s.measures) {
           if (m.name == "palpation_force" && m.value) force[pp.group].push_back(*m.value);
+          if (m.name == "exploration_time" && m.value) explore[pp.group].push_back(*m.value);
+        }
   ASSERT_EQ(force["A"].size(), 10u);
   ASSERT_EQ(force["B"].size(), 10u);
+  ASSERT_EQ(explore["A"].size(), 10u);
+  ASSERT_EQ(explore["B"].size(), 10u);
   auto mean_var = [](const std::vector<double>& v) {
     double m = 0, q = 0;
     for (double x : v) m += x;
@@ -55,4 +60,12 @@ TEST(Exp2Order, PostTrainingForceOfGroupsAAndBNearPeoples) {
   // Both group means near the human ones (within 3 human SEs: A 2.98 ± 0.07, B 2.67 ± 0.06 N).
   EXPECT_NEAR(ma, 2.98, 3 * 0.22 / std::sqrt(10.0));
   EXPECT_NEAR(mb, 2.67, 3 * 0.18 / std::sqrt(10.0));
+  const auto [ta, vta] = mean_var(explore["A"]);
+  const auto [tb, vtb] = mean_var(explore["B"]);
+  std::printf("post-training exploration: A %.1f ± %.1f s, B %.1f ± %.1f s, A - B %.2f SE\n", ta,
+              std::sqrt(vta), tb, std::sqrt(vtb), (ta - tb) / std::sqrt(vta / 10.0 + vtb / 10.0));
+  EXPECT_GT(ta, tb);
+  // Within 3 human SEs: A 43.4 ± 7.9 s, B 29.9 ± 3.7 s.
+  EXPECT_NEAR(ta, 43.4, 3 * 8.32 / std::sqrt(10.0));
+  EXPECT_NEAR(tb, 29.9, 3 * 3.90 / std::sqrt(10.0));
 }

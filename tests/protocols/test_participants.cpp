@@ -74,6 +74,16 @@ double mean_learned_error(FlatTissue tissue, const nlohmann::json& overrides, in
   return err / std::max(counted, 1);
 }
 
+// A quick, sure searcher, for tests about pressing and learning rather than about how long a
+// search takes: short recognition and landmark judgements, no misses. (Since the power law of
+// practice was fitted on 2026-12-04 a novice's first landmark judgement takes ~34 s, so with the
+// defaults a 60 s session is mostly search.)
+nlohmann::json quick_searcher(nlohmann::json extra = nlohmann::json::object()) {
+  nlohmann::json j = {{"recognition_time", 0.3}, {"landmark_time", 1.0}, {"miss_probability", 0.0}};
+  j.update(extra);
+  return j;
+}
+
 // A briefed trainee who believes the target is `target` N (the variance of a 30 % briefing of
 // 2.5 N) and knows where the feature is (3 mm).
 TraineeState briefed_state(const FlatTissue& tissue, double target) {
@@ -121,8 +131,7 @@ TEST(Memory, RetentionIsAPowerLawThatSlowsAfterConsolidation) {
 TEST(Trainee, FindsTheFeatureAndPresses) {
   FlatTissue tissue;
   // A quick, sure recogniser: this test is about pressing, not about how long a search takes.
-  Trainee tr(trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}}),
-             TraineeState{});
+  Trainee tr(trainee_params(quick_searcher()), TraineeState{});
   auto peaks = run_session(tr, tissue, 0.0, 60.0, 5, 6);
   EXPECT_TRUE(tr.identified());
   EXPECT_GE(peaks.size(), 5u);
@@ -155,13 +164,17 @@ TEST(Trainee, MoreReliableCuesGiveSmallerLearnedForceError) {
   int n_av = 0, n_a = 0, n_fine = 0;
   // A sharp visual cue combined by MLE with the haptic one (Ernst & Banks 2002).
   // Haptic Weber fraction 0.08 (force JNDs of 7-10 %) against 0.03 for the finer sense below.
-  double e_av = mean_learned_error(with_visual, {{"visual_weber", 0.02}, {"weber_fraction", 0.08}},
-                                   2, 0.0, ref, 60, true, &n_av);
+  // Landmark judgements of 1 s: the two minutes are for learning the force, not for searching.
+  double e_av = mean_learned_error(
+      with_visual, {{"visual_weber", 0.02}, {"weber_fraction", 0.08}, {"landmark_time", 1.0}}, 2,
+      0.0, ref, 60, true, &n_av);
   double e_a =
-      mean_learned_error(without_visual, {{"weber_fraction", 0.08}}, 2, 0.0, ref, 60, true, &n_a);
+      mean_learned_error(without_visual, {{"weber_fraction", 0.08}, {"landmark_time", 1.0}}, 2, 0.0,
+                         ref, 60, true, &n_a);
   // A finer haptic sense (smaller Weber fraction).
-  double e_fine = mean_learned_error(without_visual, {{"weber_fraction", 0.03}}, 2, 0.0, ref, 60,
-                                     true, &n_fine);
+  double e_fine =
+      mean_learned_error(without_visual, {{"weber_fraction", 0.03}, {"landmark_time", 1.0}}, 2, 0.0,
+                         ref, 60, true, &n_fine);
   ASSERT_GE(n_a, 15) << e_a;
   ASSERT_GE(n_av, 15) << e_av;
   ASSERT_GE(n_fine, 15) << e_fine;
@@ -191,7 +204,7 @@ TEST(Trainee, AMissedMarkerBelowTheBeliefRaisesIt) {
   // extinguishes and the presses stay at the belief).
   FlatTissue tissue;
   tissue.visual = false;
-  const auto params = trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}});
+  const auto params = trainee_params(quick_searcher());
   int climbed = 0;
   const int n = 10;
   for (int k = 0; k < n; ++k) {
@@ -217,7 +230,7 @@ TEST(Trainee, AMissedMarkerFarAboveTheBeliefTeachesLittle) {
   FlatTissue tissue;
   tissue.visual = false;
   tissue.audio = false;
-  const auto params = trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}});
+  const auto params = trainee_params(quick_searcher());
   TraineeState st;
   st.initialised = true;
   st.prior_mean = 2.5;
@@ -344,7 +357,7 @@ TEST(Trainee, APressStoppedShortOfTheRememberedPictureRaisesTheBelief) {
   // such presses: the belief stayed at 0.9 N with no observation in four training sessions.
   FlatTissue tissue;
   tissue.audio = false;
-  const auto params = trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}});
+  const auto params = trainee_params(quick_searcher());
   const int n = 10;
   int learned = 0;
   for (int k = 0; k < n; ++k) {
@@ -369,7 +382,7 @@ TEST(Trainee, AnInstructedTraineeWaitsForTheCallWithoutADemonstratedSound) {
   // call ever comes and nothing is learned (as P13 in all four sessions before the change).
   FlatTissue tissue;
   tissue.audio = false;
-  const auto params = trainee_params({{"recognition_time", 0.3}, {"miss_probability", 0.0}});
+  const auto params = trainee_params(quick_searcher());
   const auto iparams = instructor_params({});
   const Channels trainee_ch{true, false, false, true};
   const Channels instructor_ch{false, true, true, false};
@@ -416,11 +429,8 @@ TEST(Trainee, SuccessivePressErrorsFollowTheirCorrelation) {
     double lag1, cv, max_excess;
   };
   auto run = [&](double rho) {
-    const auto params = trainee_params({{"recognition_time", 0.3},
-                                        {"miss_probability", 0.0},
-                                        {"press_error_correlation", rho},
-                                        {"motor_noise_cv", 0.05},
-                                        {"weber_fraction", 0.08}});
+    const auto params = trainee_params(quick_searcher(
+        {{"press_error_correlation", rho}, {"motor_noise_cv", 0.05}, {"weber_fraction", 0.08}}));
     double sxy = 0, sxx = 0, syy = 0, sx = 0, sy = 0, s2 = 0, s1 = 0, excess = 0;
     int pairs = 0, n = 0, sessions = 0;
     for (int k = 0; k < 30; ++k) {

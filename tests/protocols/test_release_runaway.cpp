@@ -124,7 +124,9 @@ TEST(TraineeRelease, ForceAboveTheLimitMakesTheHandYield) {
 
 // The case found in the demo: participant P14 of exp2 (group A). Its second training session had
 // palpation_force 1385 N. Replays P14's pre-training and first two training sessions on the real
-// prototype A (about 1 s) and checks every session's measure.
+// prototype A (about 1 s) and checks every session's measure. Both training sessions must have
+// one (the feature found and pressed); the 2-minute pre-training may end in the search (since the
+// power law of practice fitted on 2026-12-04, a novice's first search on A takes ~100 s).
 TEST(TraineeRelease, Exp2ParticipantP14StaysBelow20N) {
   using namespace palplab::protocols;
   const std::string path =
@@ -144,12 +146,12 @@ TEST(TraineeRelease, Exp2ParticipantP14StaysBelow20N) {
   opt.samples = false;
   run_study(study, one, opt);
   results::Store store = results::Store::open(opt.db);
-  int n = 0;
+  int n_training = 0;
   for (const auto& m : store.read_measures())
     if (m.name == "palpation_force" && m.value) {
-      ++n;
+      if (m.phase == "training") ++n_training;
       EXPECT_LT(*m.value, 20.0) << m.phase << " #" << m.phase_index + 1;
     }
-  EXPECT_EQ(n, 3);
+  EXPECT_EQ(n_training, 2);
   std::filesystem::remove_all(dir);
 }
