@@ -165,7 +165,6 @@ MannWhitney mann_whitney_sorted(const std::vector<double>& a, const std::vector<
   return mw;
 }
 
-namespace {
 // d and g of cohens_d, without an interval (cohens_d_welch replaces the pooled one).
 EffectSize cohens_d_point(const std::vector<double>& a, const std::vector<double>& b,
                           double level) {
@@ -184,7 +183,6 @@ EffectSize cohens_d_point(const std::vector<double>& a, const std::vector<double
   e.g = j * e.d;
   return e;
 }
-}  // namespace
 
 EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b, double level) {
   EffectSize e = cohens_d_point(a, b, level);

@@ -72,6 +72,10 @@ struct EffectSize {
 };
 EffectSize cohens_d(const std::vector<double>& a, const std::vector<double>& b,
                     double level = 0.95);
+// The same d and g without the interval (its two root searches on the noncentral t skipped; the
+// interval fields are 0): for callers that need the point values only, many times (power).
+EffectSize cohens_d_point(const std::vector<double>& a, const std::vector<double>& b,
+                          double level = 0.95);
 // Cohen's d / Hedges' g (same point values as cohens_d) with the interval that matches the
 // Welch test `w` (welch_t(a, b, mode) with the same mode, so floored df stay consistent).
 EffectSize cohens_d_welch(const std::vector<double>& a, const std::vector<double>& b,

@@ -1,5 +1,6 @@
 // `palplab power STUDY.json --replicates R [--n 6,8,10,...] [--jobs N] [--out DIR]
-//                [--shard I/K] [--alpha A]`: simulates the whole study R times per group size
+//                [--shard I/K] [--alpha A] [--human FILE.csv]`: simulates the whole study R times
+//                per group size
 // and reports the power of every declared test (protocols/power.hpp). Replicates are appended
 // to DIR/replicates.jsonl as they finish; running the same command again resumes, and the
 // summary covers exactly the sizes and replicates asked for (a directory holding more, from an
@@ -17,11 +18,14 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "app/command.hpp"
 #include "app/output_dir.hpp"
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
+#include "protocols/calibrate.hpp"
+#include "protocols/people_verdicts.hpp"
 #include "protocols/power.hpp"
 #include "protocols/study.hpp"
 #include "results/sha256.hpp"
@@ -92,7 +96,7 @@ std::string left_out_note(const palplab::protocols::LeftOut& l, const std::strin
 }
 
 struct PowerArgs {
-  std::string study, out = "power", shard;
+  std::string study, out = "power", shard, human;
   std::vector<std::string> n;  // "6,8,10" (or several arguments), parsed by parse_sizes
   palplab::protocols::PowerOptions opt;
   bool quiet = false;
@@ -164,8 +168,12 @@ palplab::app::CommandRegistration reg_power{
       auto* shard_opt =
           cmd->add_option("--shard", a->shard,
                           "Run only shard I of K (I/K, 1 <= I <= K <= 100000), for job arrays");
+      auto* human_opt = cmd->add_option(
+          "--human", a->human,
+          "People's data of this study (tidy CSV: participant,group,phase,session,measure,value): "
+          "also report how often the replicates reach the people's verdicts");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
-      cmd->callback([a, shard_opt, code] {
+      cmd->callback([a, shard_opt, human_opt, code] {
         using namespace palplab::protocols;
         // Given at all, even empty (a job array's unset variable): never the whole run instead.
         if (shard_opt->count() > 0) {
@@ -190,6 +198,15 @@ palplab::app::CommandRegistration reg_power{
               "the study declares no test to compute the power of: expected at least one "
               "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
         // A one-group study with such a test is refused by the study validator (load_study).
+        // People's verdicts before any simulation: bad data are found at once.
+        std::optional<PeopleVerdicts> people;
+        if (human_opt->count() > 0) {
+          if (a->opt.shards > 1)
+            throw palplab::InputError(
+                "--human: a shard writes no summary to compare with people's verdicts; run "
+                "`palplab power` without --shard (its --out holding every replicate) for that");
+          people = people_verdicts(s, read_human_cells(a->human), a->opt.alpha);
+        }
         check_power_out(*a, s);
         palplab::app::require_writable_dir("--out", a->out);
         const bool tty = isatty(2);
@@ -219,9 +236,9 @@ palplab::app::CommandRegistration reg_power{
         // other --n) than the directory holds leaves the others in the file, unused.
         const std::string file = (std::filesystem::path(a->out) / "replicates.jsonl").string();
         LeftOut left_out;
-        auto summary =
-            power_summary({file}, a->opt.alpha, a->opt.target_power,
-                          SummaryScope{power_sizes(s, a->opt), a->opt.replicates}, &left_out);
+        auto summary = power_summary({file}, a->opt.alpha, a->opt.target_power,
+                                     SummaryScope{power_sizes(s, a->opt), a->opt.replicates},
+                                     &left_out, people ? &*people : nullptr);
         std::cout << write_power_report(summary, a->out);
         if (left_out.total() > 0)
           std::cout << "\n" << left_out_note(left_out, file, a->opt.replicates) << "\n";

@@ -151,6 +151,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   std::vector<Key> order;
   std::map<Key, int> undefined;
   std::map<Key, std::vector<int>> value_lines, undefined_lines;
+  std::map<Key, std::vector<std::string>> who, who_undefined;
   std::map<Key, int> measure_column;
   // (participant, cell) -> the line it was first given on: one value per participant and cell.
   std::map<std::pair<std::string, Key>, int> seen;
@@ -212,6 +213,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
       ++undefined[key];
       values[key];
       undefined_lines[key].push_back(t.line[r]);
+      who_undefined[key].push_back(participant);
       continue;
     }
     const double v = analysis::parse_number(t, static_cast<int>(r), col[4]);
@@ -220,6 +222,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
                                           expected + ", got " + field);
     values[key].push_back(v);
     value_lines[key].push_back(t.line[r]);
+    who[key].push_back(participant);
   }
   if (order.empty()) throw InputError("no data rows", csv_path);
   std::vector<HumanCell> cells;
@@ -232,6 +235,9 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     c.measure_column = measure_column[key];
     c.value_lines = value_lines[key];
     c.undefined_lines = undefined_lines[key];
+    c.participants = who[key];
+    c.undefined_participants = who_undefined[key];
+    c.values = v;
     mean_sd(v, c.mean, c.sd);  // only cells with n >= 2 are fitted (checked by calibrate)
     cells.push_back(c);
   }

@@ -38,6 +38,10 @@ struct HumanCell {
   int line = 0;
   int measure_column = 0;  // the column of that row's measure field (0: unknown)
   std::vector<int> value_lines, undefined_lines;  // the lines of its values / undefined rows
+  // Who gave what: the participants of its defined values (parallel to `values`, in file order)
+  // and of its undefined ones (`palplab power --human` reanalyses and resamples them).
+  std::vector<std::string> participants, undefined_participants;
+  std::vector<double> values;
 };
 
 // Reads a tidy CSV (columns participant, group, phase, session, measure, value) into cells

@@ -267,6 +267,24 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
 
 }  // namespace
 
+bool significant(double p, double alpha) {
+  return std::isfinite(p) && p < alpha;
+}
+
+double median_of_counts(const std::vector<long>& counts) {
+  long total = 0;
+  for (long c : counts) total += c;
+  if (total == 0) return kNaN;
+  // The values at 0-based ranks (total - 1) / 2 and total / 2.
+  auto at_rank = [&](long rank) {
+    long seen = 0;
+    for (std::size_t k = 0; k < counts.size(); ++k)
+      if ((seen += counts[k]) > rank) return static_cast<double>(k);
+    return kNaN;  // unreachable: rank < total
+  };
+  return 0.5 * (at_rank((total - 1) / 2) + at_rank(total / 2));
+}
+
 std::vector<SimValue> simulate_study(const Study& study, int jobs) {
   const Plan plan = make_plan(study);
   std::vector<std::vector<SimValue>> per(plan.participants.size());
@@ -345,7 +363,7 @@ std::vector<TestOutcome> run_declared_analyses(const Study& study,
             const analysis::TTest r = a.welch ? analysis::welch_t(groups[i], groups[j])
                                               : analysis::student_t(groups[i], groups[j]);
             if (r.defined) t.p = r.p;
-            const analysis::EffectSize e = analysis::cohens_d(groups[i], groups[j]);
+            const analysis::EffectSize e = analysis::cohens_d_point(groups[i], groups[j]);
             if (e.defined) t.effect = e.g;
           }
           out.push_back(t);
@@ -501,6 +519,84 @@ long run_power(const Study& study, const PowerOptions& opt) {
   return run_here;
 }
 
+namespace {
+
+// power_summary's comparison with people's verdicts (power.hpp, PeopleVerdicts).
+void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohmann::json>& reps,
+                const PeopleVerdicts& people, double alpha) {
+  std::map<std::string, const TestOutcome*> theirs;
+  for (const auto& t : people.tests) theirs[t.id] = &t;
+  for (const auto& t : people.tests)
+    if (std::none_of(out.at("tests").begin(), out.at("tests").end(),
+                     [&](const nlohmann::json& x) { return x.at("id") == t.id; }))
+      throw InputError("the people's test \"" + t.id +
+                           "\" is not among the replicates' tests (were they simulated from "
+                           "another version of the study?)",
+                       people.file);
+  const std::size_t k = people.tests.size();
+  struct Agreement {
+    long replicates = 0, all = 0;
+    std::vector<long> agreeing;  // replicates by the number of tests agreeing
+    std::map<std::string, long> per_test;
+  };
+  std::map<int, Agreement> by_n;
+  for (const auto& [key, r] : reps) {
+    Agreement& a = by_n[key.first];
+    if (a.agreeing.empty()) a.agreeing.assign(k + 1, 0);
+    ++a.replicates;
+    std::size_t same = 0;
+    for (const auto& t : r.at("tests")) {
+      const auto it = theirs.find(t.at("id").get<std::string>());
+      if (it == theirs.end()) continue;
+      if (significant(num_or_nan(t.at("p")), alpha) == significant(it->second->p, alpha))
+        ++same, ++a.per_test[it->first];
+    }
+    ++a.agreeing[same];
+    if (same == k) ++a.all;
+  }
+  for (auto& t : out["tests"]) {
+    const auto it = theirs.find(t.at("id").get<std::string>());
+    if (it == theirs.end()) continue;
+    t["people"] = {{"p", num_or_null(it->second->p)},
+                   {"effect", num_or_null(it->second->effect)},
+                   {"significant", significant(it->second->p, alpha)}};
+    for (auto& c : t["by_n"]) c["agree"] = by_n[c.at("n").get<int>()].per_test[it->first];
+  }
+  const double resamples = static_cast<double>(people.resamples);
+  const auto rci = analysis::wilson_interval(static_cast<int>(people.resampled_all_agree),
+                                             static_cast<int>(people.resamples));
+  nlohmann::json resampled = {{"resamples", people.resamples},
+                              {"seed", std::to_string(people.seed)},
+                              {"all_agree", num_or_null(people.resampled_all_agree / resamples)},
+                              {"all_agree_ci_low", rci.low},
+                              {"all_agree_ci_high", rci.high},
+                              {"median_agreeing", num_or_null(people.resampled_median_agreeing)},
+                              {"agree", nlohmann::json::object()}};
+  for (const auto& t : people.tests) {
+    const auto it = people.resampled_agree.find(t.id);
+    resampled["agree"][t.id] =
+        num_or_null((it == people.resampled_agree.end() ? 0 : it->second) / resamples);
+  }
+  nlohmann::json p = {{"file", people.file},
+                      {"n", people.n},
+                      {"tests", k},
+                      {"resampled", resampled},
+                      {"by_n", nlohmann::json::array()}};
+  for (const auto& [n, a] : by_n) {
+    const auto ci =
+        analysis::wilson_interval(static_cast<int>(a.all), static_cast<int>(a.replicates));
+    p["by_n"].push_back({{"n", n},
+                         {"replicates", a.replicates},
+                         {"all_agree", a.all},
+                         {"ci_low", ci.low},
+                         {"ci_high", ci.high},
+                         {"median_agreeing", num_or_null(median_of_counts(a.agreeing))}});
+  }
+  out["people"] = p;
+}
+
+}  // namespace
+
 bool SummaryScope::covers(int n, int replicate) const {
   return (sizes.empty() || std::find(sizes.begin(), sizes.end(), n) != sizes.end()) &&
          (replicates <= 0 || replicate < replicates);
@@ -514,7 +610,8 @@ long LeftOut::total() const {
 }
 
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
-                             double target_power, const SummaryScope& scope, LeftOut* left_out) {
+                             double target_power, const SummaryScope& scope, LeftOut* left_out,
+                             const PeopleVerdicts* people) {
   std::map<std::pair<int, int>, nlohmann::json> reps;
   std::map<std::pair<int, int>, std::string> where;  // FILE:LINE each replicate came from
   std::string sha, study_id;
@@ -662,6 +759,7 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
     t["smallest_n"] = smallest;
     out["tests"].push_back(t);
   }
+  if (people) add_people(out, reps, *people, alpha);
   return out;
 }
 
@@ -892,6 +990,53 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
                ? ""
                : " (the test was undefined in every replicate at n = " + undefined_at + ")")
        << "\n";
+  }
+  if (s.contains("people")) {
+    const auto& p = s.at("people");
+    const auto& rs = p.at("resampled");
+    std::string sizes;
+    for (const auto& [g, n] : p.at("n").items())
+      sizes += (sizes.empty() ? "" : ", ") + g + " " + std::to_string(n.get<int>());
+    const std::string of = " of " + std::to_string(p.at("tests").get<long>());
+    md << "\n## Agreement with people's verdicts (" << p.at("file").get<std::string>()
+       << ")\n\nPeople per group: " << sizes
+       << ". A verdict is significant (p < alpha) or not (an undefined test counts as not). "
+          "\"Replicates agreeing\" counts the simulated replicates above whose verdict is the "
+          "people's; \"people resampled\" is the people's own study replicated "
+       << rs.at("resamples").get<long>() << " times by resampling its participants within their "
+       << "groups (seed " << rs.at("seed").get<std::string>()
+       << "): how often a study like theirs reaches their verdict if the truth is what they "
+          "showed, i.e. what to expect of a model that is right.\n\n"
+       << "| test | people's p | people's effect | people's verdict | replicates agreeing (n: "
+          "k/R) | people resampled |\n|---|---:|---:|---|---|---:|\n";
+    for (const auto& t : s.at("tests")) {
+      if (!t.contains("people")) continue;
+      const auto& pt = t.at("people");
+      std::string model;
+      for (const auto& c : t.at("by_n"))
+        model += (model.empty() ? "" : "; ") + std::to_string(c.at("n").get<int>()) + ": " +
+                 std::to_string(c.at("agree").get<long>()) + "/" +
+                 std::to_string(c.at("replicates").get<long>());
+      const std::string id = t.at("id").get<std::string>();
+      std::string p_text = fmt(pt.at("p"), 4);
+      if (pt.at("p").is_number() && pt.at("p").get<double>() < 1e-3) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.1e", pt.at("p").get<double>());
+        p_text = buf;
+      }
+      md << "| " << id << " | " << p_text << " | " << fmt(pt.at("effect"), 2) << " | "
+         << (pt.at("significant").get<bool>() ? "significant" : "not significant") << " | " << model
+         << " | " << fmt(rs.at("agree").at(id), 3) << " |\n";
+    }
+    std::string model;
+    for (const auto& c : p.at("by_n"))
+      model += (model.empty() ? "" : "; ") + std::to_string(c.at("n").get<int>()) + ": " +
+               std::to_string(c.at("all_agree").get<long>()) + "/" +
+               std::to_string(c.at("replicates").get<long>()) + " [" + fmt(c.at("ci_low"), 2) +
+               ", " + fmt(c.at("ci_high"), 2) + "], median " + fmt(c.at("median_agreeing"), 1) + of;
+    md << "| **all verdicts** | | | | " << model << " | " << fmt(rs.at("all_agree"), 3) << " ["
+       << fmt(rs.at("all_agree_ci_low"), 2) << ", " << fmt(rs.at("all_agree_ci_high"), 2)
+       << "], median " << fmt(rs.at("median_agreeing"), 1) << of << " |\n";
   }
   const std::string table = md.str();
   auto write = [&](const std::string& name, const std::string& text) {

@@ -96,13 +96,39 @@ struct LeftOut {
   long total() const;
 };
 
+// People's verdicts on the study's declared tests (`palplab power --human FILE.csv`;
+// protocols/people_verdicts.cpp), and how often the people's own study, replicated by
+// resampling its participants within their groups, reaches the same verdicts: the agreement a
+// model could reach if the truth were what the people showed (a p near alpha replicates about
+// half the time; Goodman 1992).
+struct PeopleVerdicts {
+  std::string file;                // the human CSV
+  std::vector<TestOutcome> tests;  // the declared tests run on the people's values
+  std::map<std::string, int> n;    // group -> participants with a value in the tested cells
+  long resamples = 0;
+  std::uint64_t seed = 0;
+  std::map<std::string, long> resampled_agree;  // test id -> resamples with people's verdict
+  long resampled_all_agree = 0;                 // resamples with every verdict people's
+  double resampled_median_agreeing = 0.0;       // median number of tests agreeing
+};
+// A verdict: significant (finite p < alpha) or not (an undefined test counts as not).
+bool significant(double p, double alpha);
+// The median of values 0, 1, 2, ... given by their counts (counts[k] = how many were k); the
+// mean of the two middle values for an even total; NaN when there are none.
+double median_of_counts(const std::vector<long>& counts);
+
 // The summary of the replicates found in `files` (replicates.jsonl from one or more shards;
 // duplicates must agree) that `scope` covers; those it does not are counted in `*left_out`
 // (when given). Every record is checked, in scope or not. InputError when files hold different
 // studies or settings, or no replicate in scope.
+// With `people`, every test also gets people's p, effect and verdict and, per n, how many
+// replicates reached that verdict; "people" holds per n how many replicates reached all of
+// people's verdicts (Wilson 95 % interval) and the median number agreeing, beside the same for
+// the resampled people's study. InputError when a test of `people` is not among the
+// replicates' tests.
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
                              double target_power, const SummaryScope& scope = {},
-                             LeftOut* left_out = nullptr);
+                             LeftOut* left_out = nullptr, const PeopleVerdicts* people = nullptr);
 // What a merge of `files` is known to lack (`palplab merge`; docs/PARTICIPANTS.md "Power
 // analysis"): shards I of a `--shard I/K` run whose file replicates.shard-I-of-K.jsonl is not
 // among `files` (K read from the names of those that are), and, per n, replicate indices below

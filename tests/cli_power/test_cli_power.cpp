@@ -690,3 +690,69 @@ TEST(Power, OutputDirectoryLosesNoFile) {
   }
   fs::remove_all(d);
 }
+
+// --human: people's verdicts beside the replicates'. People with a large force difference
+// (significant); the null study's replicates rarely are, so a test's agreement is exactly its
+// count of significant replicates. Bad people's data are refused before any replicate is run.
+TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
+  auto d = scratch_dir("human");
+  const fs::path csv = d / "people.csv";
+  {
+    std::ofstream o(csv);
+    o << "participant,group,phase,session,measure,value\n";
+    const double g1[] = {2.0, 2.1, 2.2, 2.3}, g2[] = {3.0, 3.1, 3.2, 3.3};
+    for (int k = 0; k < 4; ++k)
+      o << "a" << k << ",G1,test,1,palpation_force," << g1[k] << "\n"
+        << "b" << k << ",G2,test,1,palpation_force," << g2[k] << "\n";
+  }
+  auto r = run_palplab(
+      power_cmd("3", 4) + " --human " + csv.string() + " --out " + (d / "out").string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = power_json(d / "out");
+  ASSERT_TRUE(j.contains("people"));
+  EXPECT_EQ(j["people"]["n"]["G1"], 4);
+  long least = 4;
+  for (const auto& t : j["tests"]) {
+    ASSERT_TRUE(t["people"]["significant"].get<bool>()) << t["id"];
+    EXPECT_LT(t["people"]["p"].get<double>(), 1e-4) << t["id"];
+    const auto& c = t["by_n"][0];
+    EXPECT_EQ(c["agree"], c["significant"]) << t["id"];
+    least = std::min(least, c["agree"].get<long>());
+    EXPECT_GT(j["people"]["resampled"]["agree"][t["id"].get<std::string>()].get<double>(), 0.99);
+  }
+  EXPECT_LE(j["people"]["by_n"][0]["all_agree"].get<long>(), least);
+  EXPECT_NE(slurp(d / "out" / "power.md").find("## Agreement with people's verdicts"),
+            std::string::npos);
+  // Bad people's data, and --human with --shard: exit 2, nothing simulated.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
+       "x2,G1,test,1,palpation_force,2.1\nx3,G3,test,1,palpation_force,2\n",
+       "group \"G3\" is not a group of the study"},
+      {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
+       "x2,G1,test,1,palpation_force,2.1\nx3,G2,test,1,palpation_force,2\n",
+       "group G2 has 1 value of palpation_force"},
+      {"participant,group,phase,measure,value\nx1,G1,test,palpation_force,2\n",
+       "no column 'session'"},
+      {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,nan\n",
+       "people.csv:2"}};
+  for (const auto& [text, needle] : bad) {
+    std::ofstream(csv) << text;
+    const auto e = run_palplab(
+        power_cmd("3", 2) + " --human " + csv.string() + " --out " + (d / "never").string(), d);
+    EXPECT_EQ(e.code, 2) << needle << ": " << e.out << e.err;
+    EXPECT_TRUE(has(e.err, needle)) << e.err;
+    EXPECT_FALSE(fs::exists(d / "never" / "replicates.jsonl")) << needle;
+  }
+  const auto s = run_palplab(power_cmd("3", 2) + " --human " + csv.string() + " --shard 1/2" +
+                                 " --out " + (d / "never").string(),
+                             d);
+  EXPECT_EQ(s.code, 2) << s.out << s.err;
+  EXPECT_TRUE(has(s.err, "--human")) << s.err;
+  EXPECT_FALSE(fs::exists(d / "never" / "replicates.shard-1-of-2.jsonl"));
+  EXPECT_EQ(run_palplab(power_cmd("3", 2) + " --human " + (d / "missing.csv").string() + " --out " +
+                            (d / "never").string(),
+                        d)
+                .code,
+            2);
+  fs::remove_all(d);
+}

@@ -1,0 +1,99 @@
+#include "protocols/people_verdicts.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <string>
+
+#include "common/input_error.hpp"
+#include "common/seed.hpp"
+#include "protocols/rng.hpp"
+
+namespace palplab::protocols {
+
+PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>& cells,
+                               double alpha, long resamples) {
+  if (cells.empty()) throw InputError("no human data");
+  PeopleVerdicts out;
+  out.file = cells.front().file;
+  std::string expected;
+  for (const auto& g : study.groups) expected += (expected.empty() ? "" : ", ") + g.id;
+  std::map<std::string, std::vector<SimValue>> values_of;   // participant -> its values
+  std::map<std::string, std::vector<std::string>> members;  // group -> participants, file order
+  std::vector<SimValue> all;
+  for (const auto& c : cells) {
+    if (std::none_of(study.groups.begin(), study.groups.end(),
+                     [&](const Group& g) { return g.id == c.group; }))
+      throw InputError(SourceLocation{c.file, c.line, 1},
+                       "group \"" + c.group + "\" is not a group of the study (expected one of " +
+                           expected + ")");
+    auto add = [&](const std::string& who, std::optional<double> v) {
+      SimValue s{who, c.group, c.phase, c.session, c.measure, v};
+      auto& mine = values_of[who];
+      if (mine.empty()) members[c.group].push_back(who);
+      mine.push_back(s);
+      all.push_back(s);
+    };
+    for (std::size_t i = 0; i < c.values.size(); ++i) add(c.participants[i], c.values[i]);
+    for (const auto& who : c.undefined_participants) add(who, std::nullopt);
+  }
+  // Every tested cell must be testable in the people's data, as in the replicates.
+  for (std::size_t i = 0; i < study.analyses.size(); ++i) {
+    const Analysis& a = study.analyses[i];
+    if (a.kind != "anova_oneway" && a.kind != "pairwise_t") continue;
+    const std::string where = "the study's $.analyses[" + std::to_string(i) + "] (" + a.kind +
+                              " of " + a.measure + " in phase " + a.phase + ")";
+    int last = 0;
+    for (const auto& c : cells)
+      if (c.phase == a.phase && c.measure == a.measure) last = std::max(last, c.session);
+    if (last == 0)
+      throw InputError(SourceLocation{out.file},
+                       "no values of " + a.measure + " in phase " + a.phase + ", which " + where +
+                           " tests (expected rows with that measure and phase)");
+    for (const auto& g : study.groups) {
+      int n = 0, line = 0;
+      for (const auto& c : cells)
+        if (c.group == g.id && c.phase == a.phase && c.measure == a.measure &&
+            (a.pooled || c.session == last))
+          n += c.n, line = line ? line : c.line;
+      if (n < 2)
+        throw InputError(SourceLocation{out.file, line, line ? 1 : 0},
+                         "group " + g.id + " has " + std::to_string(n) + " value" +
+                             (n == 1 ? "" : "s") + " of " + a.measure + " in phase " + a.phase +
+                             (a.pooled ? "" : " session " + std::to_string(last)) + "; " + where +
+                             " needs at least 2 per group");
+    }
+  }
+  out.tests = run_declared_analyses(study, all);
+  for (const auto& [g, who] : members) out.n[g] = static_cast<int>(who.size());
+
+  // The people's study again, its participants drawn with replacement within their groups.
+  out.resamples = resamples;
+  out.seed = derive_seed(study.seed, "people_resample");
+  Rng rng(out.seed);
+  const std::size_t k = out.tests.size();
+  std::vector<long> agreeing(k + 1, 0);  // resamples by the number of tests agreeing
+  std::vector<SimValue> drawn;
+  for (long r = 0; r < resamples; ++r) {
+    drawn.clear();
+    for (const auto& g : study.groups) {
+      const auto& who = members[g.id];
+      for (std::size_t j = 0; j < who.size(); ++j)
+        for (SimValue v : values_of[who[rng.below(who.size())]]) {
+          v.participant = g.id + "#" + std::to_string(j);  // each draw a participant of its own
+          drawn.push_back(std::move(v));
+        }
+    }
+    const auto tests = run_declared_analyses(study, drawn);
+    std::size_t same = 0;
+    for (std::size_t t = 0; t < k; ++t)
+      if (significant(tests[t].p, alpha) == significant(out.tests[t].p, alpha))
+        ++same, ++out.resampled_agree[out.tests[t].id];
+    ++agreeing[same];
+    if (same == k) ++out.resampled_all_agree;
+  }
+  out.resampled_median_agreeing = median_of_counts(agreeing);
+  return out;
+}
+
+}  // namespace palplab::protocols

@@ -1,0 +1,220 @@
+// People's verdicts on a study's declared tests and their reproducibility (`palplab power
+// --human`): the verdicts are those of the analysis functions on the people's values, the
+// resampled study keeps each group's participants (a p near alpha replicates about half the
+// time, a tiny p nearly always), and power_summary counts the replicates that agree.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "analysis/anova.hpp"
+#include "analysis/two_sample.hpp"
+#include "common/input_error.hpp"
+#include "protocols/calibrate.hpp"
+#include "protocols/people_verdicts.hpp"
+#include "protocols/power.hpp"
+#include "protocols/study.hpp"
+
+using namespace palplab::protocols;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kSource = PALPLAB_SOURCE_DIR;
+
+Study exp2() {
+  return load_study((kSource / "protocols" / "studies" / "exp2_short_term.json").string(),
+                    engine_prototype_inspector());
+}
+
+std::string human_csv() {
+  return (kSource / "tests/data/calibration/exp2_human.csv").string();
+}
+
+// The people's values per measure and group, read here with a plain parser (not
+// read_human_cells): participant,group,phase,session,measure,value[,unit].
+std::map<std::string, std::map<std::string, std::vector<double>>> plain_values() {
+  std::map<std::string, std::map<std::string, std::vector<double>>> out;
+  std::ifstream in(human_csv());
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::vector<std::string> f;
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    out[f[4]][f[1]].push_back(std::stod(f[5]));
+  }
+  return out;
+}
+
+const TestOutcome& find(const std::vector<TestOutcome>& tests, const std::string& id) {
+  for (const auto& t : tests)
+    if (t.id == id) return t;
+  throw std::runtime_error("no test " + id);
+}
+
+fs::path scratch(const std::string& name) {
+  auto d = fs::temp_directory_path() / ("palplab_people_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST(PeopleVerdicts, AreTheAnalysesOfThePeoplesValues) {
+  const Study study = exp2();
+  const PeopleVerdicts v = people_verdicts(study, read_human_cells(human_csv()), 0.05, 10);
+  const auto values = plain_values();
+  // Every declared test: 2 ANOVAs and 3 pairs per measure.
+  ASSERT_EQ(v.tests.size(), 8u);
+  for (const std::string m : {"palpation_force", "exploration_time"}) {
+    const auto& g = values.at(m);
+    const auto anova = palplab::analysis::oneway_anova({g.at("A"), g.at("B"), g.at("C")});
+    EXPECT_DOUBLE_EQ(find(v.tests, "anova_oneway " + m + " post_training").p, anova.p) << m;
+    for (const auto& [a, b] : {std::pair{"A", "B"}, {"A", "C"}, {"B", "C"}}) {
+      const std::string id = "pairwise_t " + m + " post_training " + a + "-" + b;
+      const auto w = palplab::analysis::welch_t(g.at(a), g.at(b));
+      EXPECT_DOUBLE_EQ(find(v.tests, id).p, w.p) << id;
+      EXPECT_DOUBLE_EQ(find(v.tests, id).effect, palplab::analysis::cohens_d(g.at(a), g.at(b)).g)
+          << id;
+    }
+  }
+  // The published pattern (docs/PARTICIPANTS.md): force B - C p = .046, time B - C p = .114.
+  EXPECT_NEAR(find(v.tests, "pairwise_t palpation_force post_training B-C").p, 0.046, 0.001);
+  EXPECT_NEAR(find(v.tests, "pairwise_t exploration_time post_training B-C").p, 0.114, 0.001);
+  EXPECT_EQ(v.n.at("A"), 10);
+  EXPECT_EQ(v.n.at("C"), 10);
+}
+
+TEST(PeopleVerdicts, ResamplingKeepsTheGroupsSoBorderlineVerdictsReplicateAboutHalfTheTime) {
+  // A verdict whose p is near alpha is reached again about half the time when the truth is the
+  // observed effect (Goodman 1992); one with p = 1e-4 nearly always. Resampling without
+  // replacement would give every verdict 1.0; resampling across groups would erase the effects
+  // (the force A - C agreement would fall to about alpha).
+  const PeopleVerdicts v = people_verdicts(exp2(), read_human_cells(human_csv()), 0.05, 2000);
+  EXPECT_EQ(v.resamples, 2000);
+  const double bc = v.resampled_agree.at("pairwise_t palpation_force post_training B-C") / 2000.0;
+  EXPECT_GT(bc, 0.45);
+  EXPECT_LT(bc, 0.75);
+  EXPECT_GT(v.resampled_agree.at("pairwise_t palpation_force post_training A-C") / 2000.0, 0.99);
+  // All eight together: at most the least reproducible one.
+  EXPECT_LE(v.resampled_all_agree,
+            v.resampled_agree.at("pairwise_t palpation_force post_training B-C"));
+  EXPECT_GT(v.resampled_all_agree, 0);
+  EXPECT_GE(v.resampled_median_agreeing, 6.0);
+  EXPECT_LE(v.resampled_median_agreeing, 8.0);
+  // Seeded from the study: the same numbers again.
+  const PeopleVerdicts again = people_verdicts(exp2(), read_human_cells(human_csv()), 0.05, 2000);
+  EXPECT_EQ(again.resampled_all_agree, v.resampled_all_agree);
+}
+
+TEST(PeopleVerdicts, DataThatCannotBeTestedAreInputErrors) {
+  const Study study = exp2();
+  const auto d = scratch("bad");
+  auto expect_error = [&](const std::string& name, const std::string& text,
+                          const std::string& needle) {
+    const std::string path = (d / name).string();
+    std::ofstream(path) << "participant,group,phase,session,measure,value\n" << text;
+    try {
+      people_verdicts(study, read_human_cells(path), 0.05, 10);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const palplab::InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(needle), std::string::npos) << name << ": " << what;
+      EXPECT_NE(what.find(path), std::string::npos) << name << ": " << what;
+    }
+  };
+  std::string ok;  // two people per group, both measures
+  for (const char* g : {"A", "B", "C"})
+    for (int k = 1; k <= 2; ++k)
+      for (const char* m : {"palpation_force", "exploration_time"})
+        ok += std::string(g) + std::to_string(k) + "," + g + ",post_training,1," + m + "," +
+              std::to_string(2.0 + k) + "\n";
+  expect_error("unknown_group.csv", ok + "Z1,Z,post_training,1,palpation_force,2.5\n",
+               "group \"Z\" is not a group of the study (expected one of A, B, C)");
+  // Group C with one force value only.
+  std::string one_c;
+  for (const char* g : {"A", "B", "C"})
+    for (int k = 1; k <= (g[0] == 'C' ? 1 : 2); ++k)
+      one_c += std::string(g) + std::to_string(k) + "," + g +
+               ",post_training,1,palpation_force,2." + std::to_string(k) + "\n";
+  expect_error("one_value.csv", one_c, "group C has 1 value of palpation_force");
+  // Only the force: the exploration time's tests have nothing to test.
+  std::string force_only;
+  for (const char* g : {"A", "B", "C"})
+    for (int k = 1; k <= 2; ++k)
+      force_only += std::string(g) + std::to_string(k) + "," + g +
+                    ",post_training,1,palpation_force,2." + std::to_string(k) + "\n";
+  expect_error("force_only.csv", force_only,
+               "no values of exploration_time in phase post_training");
+  fs::remove_all(d);
+}
+
+TEST(PeopleVerdicts, TheSummaryCountsReplicatesThatReachThePeoplesVerdicts) {
+  // Four replicates of a study with two tests; people: T1 significant, T2 not.
+  const auto d = scratch("summary");
+  const std::string file = (d / "replicates.jsonl").string();
+  {
+    std::ofstream o(file);
+    const double p1[4] = {0.01, 0.2, 0.001, NAN}, p2[4] = {0.5, 0.01, 0.3, 0.9};
+    for (int r = 0; r < 4; ++r) {
+      nlohmann::json rec = {{"n", 5},
+                            {"replicate", r},
+                            {"seed", 1},
+                            {"study", "s"},
+                            {"study_sha256", std::string(64, 'a')},
+                            {"tests", nlohmann::json::array()}};
+      auto test = [](const char* id, double p) {
+        return nlohmann::json{{"id", id},
+                              {"p", std::isfinite(p) ? nlohmann::json(p) : nlohmann::json()},
+                              {"effect", 0.5},
+                              {"effect_name", "hedges_g"}};
+      };
+      rec["tests"].push_back(test("T1", p1[r]));
+      rec["tests"].push_back(test("T2", p2[r]));
+      o << rec.dump() << "\n";
+    }
+  }
+  PeopleVerdicts people;
+  people.file = "people.csv";
+  people.tests = {{"T1", 0.003, 1.2, "hedges_g"}, {"T2", 0.3, 0.2, "hedges_g"}};
+  people.n = {{"G1", 5}, {"G2", 5}};
+  people.resamples = 10;
+  people.resampled_agree = {{"T1", 9}, {"T2", 6}};
+  people.resampled_all_agree = 5;
+  people.resampled_median_agreeing = 1.5;
+  const auto s = power_summary({file}, 0.05, 0.8, {}, nullptr, &people);
+  // T1 agrees in replicates 0 and 2 (the undefined one counts as not significant), T2 in 0, 2, 3.
+  for (const auto& t : s.at("tests")) {
+    const bool t1 = t.at("id") == "T1";
+    EXPECT_EQ(t.at("by_n")[0].at("agree").get<long>(), t1 ? 2 : 3);
+    EXPECT_EQ(t.at("people").at("significant").get<bool>(), t1);
+  }
+  const auto& p = s.at("people");
+  EXPECT_EQ(p.at("by_n")[0].at("all_agree").get<long>(), 2);  // replicates 0 and 2
+  // Agreeing per replicate: 2, 0, 2, 1 -> median 1.5.
+  EXPECT_DOUBLE_EQ(p.at("by_n")[0].at("median_agreeing").get<double>(), 1.5);
+  EXPECT_DOUBLE_EQ(p.at("resampled").at("all_agree").get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(p.at("resampled").at("agree").at("T1").get<double>(), 0.9);
+  // A people's test the replicates do not have: another version of the study.
+  people.tests.push_back({"T3", 0.5, 0.0, "hedges_g"});
+  EXPECT_THROW(power_summary({file}, 0.05, 0.8, {}, nullptr, &people), palplab::InputError);
+  fs::remove_all(d);
+}
+
+TEST(PeopleVerdicts, MedianOfCounts) {
+  EXPECT_DOUBLE_EQ(median_of_counts({0, 0, 3}), 2.0);
+  EXPECT_DOUBLE_EQ(median_of_counts({1, 1}), 0.5);
+  EXPECT_DOUBLE_EQ(median_of_counts({2, 0, 1}), 0.0);
+  EXPECT_DOUBLE_EQ(median_of_counts({1, 0, 0, 1}), 1.5);
+  EXPECT_TRUE(std::isnan(median_of_counts({0, 0})));
+  EXPECT_FALSE(significant(NAN, 0.05));
+  EXPECT_FALSE(significant(0.05, 0.05));
+  EXPECT_TRUE(significant(0.0499, 0.05));
+}
