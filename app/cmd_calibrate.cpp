@@ -69,6 +69,9 @@ palplab::app::CommandRegistration reg_calibrate{
         a->opt.bounds.clear();
         for (const auto& b : a->bounds) a->opt.bounds.push_back(parse_bound(b));
         Study s = load_study(a->study, engine_prototype_inspector());
+        if (a->human.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--human"},
+                                    "expected the people's CSV file, got an empty path");
         auto cells = read_human_cells(a->human);
         // The outputs are checked before the fit (which takes minutes to hours).
         const bool defaults = defaults_opt->count() > 0;

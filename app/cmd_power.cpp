@@ -205,7 +205,15 @@ palplab::app::CommandRegistration reg_power{
             throw palplab::InputError(
                 "--human: a shard writes no summary to compare with people's verdicts; run "
                 "`palplab power` without --shard (its --out holding every replicate) for that");
+          if (a->human.empty())
+            throw palplab::InputError(palplab::SourceLocation{"--human"},
+                                      "expected the people's CSV file, got an empty path");
           people = people_verdicts(s, read_human_cells(a->human), a->opt.alpha);
+          for (const auto& t : people->tests)
+            if (!std::isfinite(t.p))
+              std::cerr << "warning: --human: the test \"" << t.id
+                        << "\" is undefined on the people's data (a group without variance?): "
+                           "it has no verdict and is not compared\n";
         }
         check_power_out(*a, s);
         palplab::app::require_writable_dir("--out", a->out);

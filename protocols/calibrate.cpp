@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -152,7 +153,7 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   std::map<Key, int> undefined;
   std::map<Key, std::vector<int>> value_lines, undefined_lines;
   std::map<Key, std::vector<std::string>> who, who_undefined;
-  std::map<Key, int> measure_column;
+  std::map<Key, int> measure_column, group_column, phase_column, session_column;
   // (participant, cell) -> the line it was first given on: one value per participant and cell.
   std::map<std::pair<std::string, Key>, int> seen;
   // participant -> (group, line of its first row): groups are between-participant, so a
@@ -168,13 +169,29 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   // The optional unit column (as `palplab export` writes it): values are compared in palplab's
   // units, so a unit that differs from the measure's is an error, never silently converted.
   int unit_col = -1;
-  for (std::size_t c = 0; c < t.header.size(); ++c)
-    if (t.header[c] == "unit") unit_col = static_cast<int>(c);
+  // Its header in any case, "unit" or "units" ("Unit" was ignored, and values in another unit
+  // passed unchecked).
+  for (std::size_t c = 0; c < t.header.size(); ++c) {
+    std::string h = t.header[c];
+    for (char& ch : h) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (h == "unit" || h == "units") {
+      if (unit_col >= 0)
+        throw InputError(SourceLocation{csv_path, 1, 1},
+                         "two unit columns (\"" + t.header[unit_col] + "\" and \"" + t.header[c] +
+                             "\"); expected at most one");
+      unit_col = static_cast<int>(c);
+    }
+  }
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const int s = session_number(t, r, col[2]);
     auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], s, t.rows[r][col[3]]);
-    const std::string& participant = t.rows[r][col[5]];
-    if (participant.find_first_not_of(" \t") == std::string::npos)
+    // Ids are compared without surrounding blanks ("P1 " is P1: a participant given twice or in
+    // two groups must not pass as another person).
+    const std::string& raw_id = t.rows[r][col[5]];
+    const std::size_t id_b = raw_id.find_first_not_of(" \t"), id_e = raw_id.find_last_not_of(" \t");
+    const std::string participant =
+        id_b == std::string::npos ? std::string() : raw_id.substr(id_b, id_e - id_b + 1);
+    if (participant.empty())
       throw InputError(at(r, col[5]),
                        "column 'participant': expected the participant's id, got an empty field");
     if (unit_col >= 0) {
@@ -208,7 +225,10 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     // An undefined measure (empty or NA, as `palplab export` and R write it) is no value.
     const std::string& field = t.rows[r][col[4]];
     if (!values.count(key))
-      order.push_back(key), first_line[key] = t.line[r], measure_column[key] = at(r, col[3]).column;
+      order.push_back(key), first_line[key] = t.line[r], measure_column[key] = at(r, col[3]).column,
+                            group_column[key] = at(r, col[0]).column,
+                            phase_column[key] = at(r, col[1]).column,
+                            session_column[key] = at(r, col[2]).column;
     if (field.find_first_not_of(" \t") == std::string::npos || field == "NA") {
       ++undefined[key];
       values[key];
@@ -233,6 +253,9 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     c.file = csv_path;
     c.line = first_line[key];
     c.measure_column = measure_column[key];
+    c.group_column = group_column[key];
+    c.phase_column = phase_column[key];
+    c.session_column = session_column[key];
     c.value_lines = value_lines[key];
     c.undefined_lines = undefined_lines[key];
     c.participants = who[key];
@@ -459,6 +482,44 @@ void standard_errors(CalibrationResult& r, const std::vector<double>& step,
 
 }  // namespace
 
+void check_human_measure(const Study& study, const std::vector<HumanCell>& cells,
+                         const HumanCell& c) {
+  const std::vector<std::string> produced = produced_measures(study);
+  if (std::find(produced.begin(), produced.end(), c.measure) != produced.end()) return;
+  int rows = 0;
+  for (const auto& o : cells)
+    if (o.measure == c.measure) rows += o.n + o.undefined;
+  throw InputError(
+      SourceLocation{c.file, c.line, c.measure_column},
+      "column 'measure': \"" + c.measure + "\" is not a measure the study " + study.file +
+          " produces (" +
+          (rows == 1 ? std::string("1 row") : std::to_string(rows) + " rows, the first here") +
+          "); expected one of: " + join(produced));
+}
+
+void check_human_cell(const Study& study, const HumanCell& c) {
+  auto fail = [&](int column, const std::string& what) {
+    return InputError(SourceLocation{c.file, c.line, column},
+                      "the human data have a cell the study does not simulate: " + what);
+  };
+  std::vector<std::string> ids;
+  for (const auto& g : study.groups) ids.push_back(g.id);
+  if (std::find(ids.begin(), ids.end(), c.group) == ids.end())
+    throw fail(c.group_column, "group \"" + c.group + "\" (the study's groups: " + join(ids) + ")");
+  ids.clear();
+  const Phase* phase = nullptr;
+  for (const auto& p : study.phases) {
+    ids.push_back(p.id);
+    if (p.id == c.phase) phase = &p;
+  }
+  if (!phase)
+    throw fail(c.phase_column, "phase \"" + c.phase + "\" (the study's phases: " + join(ids) + ")");
+  if (c.session > phase->sessions)
+    throw fail(c.session_column, "session " + std::to_string(c.session) + " of phase " + c.phase +
+                                     " (it has " + std::to_string(phase->sessions) + " session" +
+                                     (phase->sessions == 1 ? "" : "s") + ")");
+}
+
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
                             const CalibrateOptions& opt) {
   namespace pm = participants;
@@ -485,20 +546,9 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   // Cells of measures not fitted are ignored (docs/PARTICIPANTS.md: --measures selects), but
   // only measures the study produces: any other (a typo, another task's measure) would be
   // ignored silently, so it is an error at its first row.
-  const std::vector<std::string> produced = produced_measures(study);
   std::vector<HumanCell> used;
   for (const auto& c : cells) {
-    if (std::find(produced.begin(), produced.end(), c.measure) == produced.end()) {
-      int rows = 0;
-      for (const auto& o : cells)
-        if (o.measure == c.measure) rows += o.n + o.undefined;
-      throw InputError(
-          SourceLocation{c.file, c.line, c.measure_column},
-          "column 'measure': \"" + c.measure + "\" is not a measure the study " + study.file +
-              " produces (" +
-              (rows == 1 ? std::string("1 row") : std::to_string(rows) + " rows, the first here") +
-              "); expected one of: " + join(produced));
-    }
+    check_human_measure(study, cells, c);
     if (std::find(measures.begin(), measures.end(), c.measure) != measures.end())
       used.push_back(c);
     else if (std::find(r.not_fitted.begin(), r.not_fitted.end(), c.measure) == r.not_fitted.end())
@@ -516,25 +566,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   }
   // Every cell fitted must be one the study simulates: checked now, not after a simulation.
   for (const auto& c : used) {
-    auto fail = [&](const std::string& what) {
-      return InputError(SourceLocation{c.file, c.line},
-                        "the human data have a cell the study does not simulate: " + what);
-    };
-    std::vector<std::string> ids;
-    for (const auto& g : study.groups) ids.push_back(g.id);
-    if (std::find(ids.begin(), ids.end(), c.group) == ids.end())
-      throw fail("group \"" + c.group + "\" (the study's groups: " + join(ids) + ")");
-    ids.clear();
-    const Phase* phase = nullptr;
-    for (const auto& p : study.phases) {
-      ids.push_back(p.id);
-      if (p.id == c.phase) phase = &p;
-    }
-    if (!phase) throw fail("phase \"" + c.phase + "\" (the study's phases: " + join(ids) + ")");
-    if (c.session > phase->sessions)
-      throw fail("session " + std::to_string(c.session) + " of phase " + c.phase + " (it has " +
-                 std::to_string(phase->sessions) + " session" + (phase->sessions == 1 ? "" : "s") +
-                 ")");
+    check_human_cell(study, c);
     // The loss compares SDs (and divides by n - 1): a fitted cell needs 2 values.
     if (c.n < 2)
       throw InputError(

@@ -37,6 +37,7 @@ struct HumanCell {
   std::string file;  // the CSV and the line of the cell's first row, for messages
   int line = 0;
   int measure_column = 0;  // the column of that row's measure field (0: unknown)
+  int group_column = 0, phase_column = 0, session_column = 0;  // and of its other key fields
   std::vector<int> value_lines, undefined_lines;  // the lines of its values / undefined rows
   // Who gave what: the participants of its defined values (parallel to `values`, in file order)
   // and of its undefined ones (`palplab power --human` reanalyses and resamples them).
@@ -69,6 +70,14 @@ std::string not_compared_reason(const CellFit& f);
 // sessions compute, e.g. palpations and sft_reached beside the palpation measures): the
 // measures a tidy CSV of this study (`palplab export`) can hold.
 std::vector<std::string> produced_measures(const Study& study);
+
+// InputError at `c`'s first row (its measure field) when the study never produces its measure
+// (produced_measures; `cells`: all of them, to count that measure's rows).
+void check_human_measure(const Study& study, const std::vector<HumanCell>& cells,
+                         const HumanCell& c);
+// InputError at `c`'s first row (the field at fault) when it is a cell the study does not
+// simulate: a group or phase the study does not have, a session beyond the phase's sessions.
+void check_human_cell(const Study& study, const HumanCell& c);
 
 // Simulates `study` and compares it with `cells`; returns the loss (see above).
 double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int jobs,

@@ -1,6 +1,7 @@
 #include "protocols/people_verdicts.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <set>
 #include <string>
@@ -16,17 +17,14 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
   if (cells.empty()) throw InputError("no human data");
   PeopleVerdicts out;
   out.file = cells.front().file;
-  std::string expected;
-  for (const auto& g : study.groups) expected += (expected.empty() ? "" : ", ") + g.id;
   std::map<std::string, std::vector<SimValue>> values_of;   // participant -> its values
   std::map<std::string, std::vector<std::string>> members;  // group -> participants, file order
   std::vector<SimValue> all;
   for (const auto& c : cells) {
-    if (std::none_of(study.groups.begin(), study.groups.end(),
-                     [&](const Group& g) { return g.id == c.group; }))
-      throw InputError(SourceLocation{c.file, c.line, 1},
-                       "group \"" + c.group + "\" is not a group of the study (expected one of " +
-                           expected + ")");
+    // As `calibrate`: every row a cell the study simulates (a misspelt phase or a session the
+    // study does not have would otherwise leave the tests silently or replace their values).
+    check_human_measure(study, cells, c);
+    check_human_cell(study, c);
     auto add = [&](const std::string& who, std::optional<double> v) {
       SimValue s{who, c.group, c.phase, c.session, c.measure, v};
       auto& mine = values_of[who];
@@ -66,13 +64,22 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
   }
   out.tests = run_declared_analyses(study, all);
   for (const auto& [g, who] : members) out.n[g] = static_cast<int>(who.size());
+  // A test undefined on the people's data (no variance in any group, say) has no verdict to
+  // compare: it is left out of every agreement (power.hpp). With none defined there is nothing.
+  std::vector<bool> defined;
+  for (const auto& t : out.tests) defined.push_back(std::isfinite(t.p));
+  if (std::none_of(defined.begin(), defined.end(), [](bool d) { return d; }))
+    throw InputError(SourceLocation{out.file},
+                     "none of the study's tests is defined on the people's data (every group's "
+                     "values without variance?): there is no verdict to compare");
 
   // The people's study again, its participants drawn with replacement within their groups.
   out.resamples = resamples;
   out.seed = derive_seed(study.seed, "people_resample");
   Rng rng(out.seed);
   const std::size_t k = out.tests.size();
-  std::vector<long> agreeing(k + 1, 0);  // resamples by the number of tests agreeing
+  const auto k_defined = static_cast<std::size_t>(std::count(defined.begin(), defined.end(), true));
+  std::vector<long> agreeing(k_defined + 1, 0);  // resamples by the number of tests agreeing
   std::vector<SimValue> drawn;
   for (long r = 0; r < resamples; ++r) {
     drawn.clear();
@@ -87,10 +94,10 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
     const auto tests = run_declared_analyses(study, drawn);
     std::size_t same = 0;
     for (std::size_t t = 0; t < k; ++t)
-      if (significant(tests[t].p, alpha) == significant(out.tests[t].p, alpha))
+      if (defined[t] && significant(tests[t].p, alpha) == significant(out.tests[t].p, alpha))
         ++same, ++out.resampled_agree[out.tests[t].id];
     ++agreeing[same];
-    if (same == k) ++out.resampled_all_agree;
+    if (same == k_defined) ++out.resampled_all_agree;
   }
   out.resampled_median_agreeing = median_of_counts(agreeing);
   return out;

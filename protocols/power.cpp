@@ -524,8 +524,10 @@ namespace {
 // power_summary's comparison with people's verdicts (power.hpp, PeopleVerdicts).
 void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohmann::json>& reps,
                 const PeopleVerdicts& people, double alpha) {
+  // Only the tests with a people's verdict are compared (undefined ones have none).
   std::map<std::string, const TestOutcome*> theirs;
-  for (const auto& t : people.tests) theirs[t.id] = &t;
+  for (const auto& t : people.tests)
+    if (std::isfinite(t.p)) theirs[t.id] = &t;
   for (const auto& t : people.tests)
     if (std::none_of(out.at("tests").begin(), out.at("tests").end(),
                      [&](const nlohmann::json& x) { return x.at("id") == t.id; }))
@@ -533,7 +535,7 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
                            "\" is not among the replicates' tests (were they simulated from "
                            "another version of the study?)",
                        people.file);
-  const std::size_t k = people.tests.size();
+  const std::size_t k = theirs.size();
   struct Agreement {
     long replicates = 0, all = 0;
     std::vector<long> agreeing;  // replicates by the number of tests agreeing
@@ -555,12 +557,18 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
     if (same == k) ++a.all;
   }
   for (auto& t : out["tests"]) {
-    const auto it = theirs.find(t.at("id").get<std::string>());
-    if (it == theirs.end()) continue;
-    t["people"] = {{"p", num_or_null(it->second->p)},
-                   {"effect", num_or_null(it->second->effect)},
-                   {"significant", significant(it->second->p, alpha)}};
-    for (auto& c : t["by_n"]) c["agree"] = by_n[c.at("n").get<int>()].per_test[it->first];
+    const std::string id = t.at("id").get<std::string>();
+    const auto mine = std::find_if(people.tests.begin(), people.tests.end(),
+                                   [&](const TestOutcome& x) { return x.id == id; });
+    if (mine == people.tests.end()) continue;
+    const bool has_verdict = theirs.count(id) > 0;
+    t["people"] = {{"p", num_or_null(mine->p)},
+                   {"effect", num_or_null(mine->effect)},
+                   {"significant",
+                    has_verdict ? nlohmann::json(significant(mine->p, alpha)) : nlohmann::json()}};
+    for (auto& c : t["by_n"])
+      c["agree"] =
+          has_verdict ? nlohmann::json(by_n[c.at("n").get<int>()].per_test[id]) : nlohmann::json();
   }
   const double resamples = static_cast<double>(people.resamples);
   const auto rci = analysis::wilson_interval(static_cast<int>(people.resampled_all_agree),
@@ -572,9 +580,9 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
                               {"all_agree_ci_high", rci.high},
                               {"median_agreeing", num_or_null(people.resampled_median_agreeing)},
                               {"agree", nlohmann::json::object()}};
-  for (const auto& t : people.tests) {
-    const auto it = people.resampled_agree.find(t.id);
-    resampled["agree"][t.id] =
+  for (const auto& [id, t] : theirs) {
+    const auto it = people.resampled_agree.find(id);
+    resampled["agree"][id] =
         num_or_null((it == people.resampled_agree.end() ? 0 : it->second) / resamples);
   }
   nlohmann::json p = {{"file", people.file},
@@ -1012,6 +1020,11 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     for (const auto& t : s.at("tests")) {
       if (!t.contains("people")) continue;
       const auto& pt = t.at("people");
+      if (pt.at("significant").is_null()) {  // undefined on the people's data: not compared
+        md << "| " << t.at("id").get<std::string>()
+           << " | — | — | undefined (no verdict; not compared) | — | — |\n";
+        continue;
+      }
       std::string model;
       for (const auto& c : t.at("by_n"))
         model += (model.empty() ? "" : "; ") + std::to_string(c.at("n").get<int>()) + ": " +

@@ -377,17 +377,17 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
        "exploration_time"},
       {header + rows + "H5,Z,test,1,palpation_force,2.4\nH6,Z,test,1,palpation_force,2.5\n",
        "--params weber_fraction",
-       h + ":6: the human data have a cell the study does not simulate: group \"Z\" (the study's "
+       h + ":6:4: the human data have a cell the study does not simulate: group \"Z\" (the study's "
            "groups: G1, G2)"},
       {header + rows +
            "H1,G1,retention,1,palpation_force,2.4\nH2,G1,retention,1,"
            "palpation_force,2.5\n",
        "--params weber_fraction",
-       h + ":6: the human data have a cell the study does not "
+       h + ":6:7: the human data have a cell the study does not "
            "simulate: phase \"retention\""},
       {header + rows + "H1,G1,test,7,palpation_force,2.4\nH2,G1,test,7,palpation_force,2.5\n",
        "--params weber_fraction",
-       h + ":6: the human data have a cell the study does not "
+       h + ":6:12: the human data have a cell the study does not "
            "simulate: session 7 of phase test (it has 1 session)"},
       {header + rows + "H1,G1,test,1,feature_identified,5\n", "--params weber_fraction",
        h + ":6:33: column 'value': feature_identified must be 0 or 1, got 5"},

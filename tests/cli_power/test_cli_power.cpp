@@ -727,7 +727,14 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
        "x2,G1,test,1,palpation_force,2.1\nx3,G3,test,1,palpation_force,2\n",
-       "group \"G3\" is not a group of the study"},
+       "group \"G3\" (the study's groups: G1, G2)"},
+      {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
+       "x2,G1,test,1,palpation_force,2.1\nx3,G2,test,1,palpation_force,2\n"
+       "x4,G2,test,1,palpation_force,3\nx1,G1,test,2,palpation_force,9\n",
+       "session 2 of phase test (it has 1 session)"},
+      {"participant,group,phase,session,measure,value,Unit\nx1,G1,test,1,palpation_force,2,kg\n",
+       "column 'unit': palpation_force is in N, got 'kg'"},
+      {std::string("\xFF\xFEp\0a\0r\0", 8), "UTF-16"},
       {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
        "x2,G1,test,1,palpation_force,2.1\nx3,G2,test,1,palpation_force,2\n",
        "group G2 has 1 value of palpation_force"},

@@ -136,8 +136,29 @@ TEST(PeopleVerdicts, DataThatCannotBeTestedAreInputErrors) {
       for (const char* m : {"palpation_force", "exploration_time"})
         ok += std::string(g) + std::to_string(k) + "," + g + ",post_training,1," + m + "," +
               std::to_string(2.0 + k) + "\n";
+  // Rows of cells the study does not simulate (review 2026-12-04: a session 2 replaced the
+  // tested values, a misspelt phase or a blank after it left a value out, all silently).
   expect_error("unknown_group.csv", ok + "Z1,Z,post_training,1,palpation_force,2.5\n",
-               "group \"Z\" is not a group of the study (expected one of A, B, C)");
+               "group \"Z\" (the study's groups: A, B, C)");
+  expect_error("session2.csv", ok + "A1,A,post_training,2,palpation_force,9\n",
+               "session 2 of phase post_training (it has 1 session)");
+  expect_error("phase_typo.csv", ok + "A3,A,post_trainnig,1,palpation_force,2.5\n",
+               "phase \"post_trainnig\"");
+  expect_error("phase_blank.csv", ok + "A3,A,post_training ,1,palpation_force,2.5\n",
+               "phase \"post_training \"");
+  expect_error("measure_typo.csv", ok + "A3,A,post_training,1,palpation_forse,2.5\n",
+               "\"palpation_forse\" is not a measure the study");
+  // An id with a blank is the same participant: given twice, or in two groups.
+  expect_error("blank_id.csv", ok + "A1 ,A,post_training,1,palpation_force,9\n", "given twice");
+  expect_error("blank_id_group.csv", ok + "A1\t,B,post_training,1,palpation_force,9\n",
+               "is in group \"B\" here but in group \"A\"");
+  // No variance anywhere: no test has a verdict.
+  std::string flat;
+  for (const char* g : {"A", "B", "C"})
+    for (int k = 1; k <= 2; ++k)
+      for (const char* m : {"palpation_force", "exploration_time"})
+        flat += std::string(g) + std::to_string(k) + "," + g + ",post_training,1," + m + ",2\n";
+  expect_error("flat.csv", flat, "none of the study's tests is defined on the people's data");
   // Group C with one force value only.
   std::string one_c;
   for (const char* g : {"A", "B", "C"})
@@ -202,6 +223,19 @@ TEST(PeopleVerdicts, TheSummaryCountsReplicatesThatReachThePeoplesVerdicts) {
   EXPECT_DOUBLE_EQ(p.at("by_n")[0].at("median_agreeing").get<double>(), 1.5);
   EXPECT_DOUBLE_EQ(p.at("resampled").at("all_agree").get<double>(), 0.5);
   EXPECT_DOUBLE_EQ(p.at("resampled").at("agree").at("T1").get<double>(), 0.9);
+  // A people's test undefined on their data has no verdict: not compared, not counted.
+  PeopleVerdicts half = people;
+  half.tests[1].p = NAN;
+  half.resampled_agree.erase("T2");
+  const auto h = power_summary({file}, 0.05, 0.8, {}, nullptr, &half);
+  for (const auto& t : h.at("tests")) {
+    const bool t1 = t.at("id") == "T1";
+    EXPECT_EQ(t.at("people").at("significant").is_null(), !t1);
+    EXPECT_EQ(t.at("by_n")[0].at("agree").is_null(), !t1);
+  }
+  EXPECT_EQ(h.at("people").at("tests").get<int>(), 1);
+  EXPECT_EQ(h.at("people").at("by_n")[0].at("all_agree").get<long>(), 2);  // T1 alone: 0 and 2
+  EXPECT_FALSE(h.at("people").at("resampled").at("agree").contains("T2"));
   // A people's test the replicates do not have: another version of the study.
   people.tests.push_back({"T3", 0.5, 0.0, "hedges_g"});
   EXPECT_THROW(power_summary({file}, 0.05, 0.8, {}, nullptr, &people), palplab::InputError);
