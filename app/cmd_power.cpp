@@ -170,8 +170,9 @@ palplab::app::CommandRegistration reg_power{
                           "Run only shard I of K (I/K, 1 <= I <= K <= 100000), for job arrays");
       auto* human_opt = cmd->add_option(
           "--human", a->human,
-          "People's data of this study (tidy CSV: participant,group,phase,session,measure,value): "
-          "also report how often the replicates reach the people's verdicts");
+          "People's data of this study (tidy CSV: participant,group,phase,session,measure,value"
+          "[,unit], as `calibrate --human`): also report the people's verdicts and how often the "
+          "replicates, and the people's study resampled, reach them (not with --shard)");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, shard_opt, human_opt, code] {
         using namespace palplab::protocols;
