@@ -62,6 +62,10 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
     }
   }
   out.tests = run_declared_analyses(study, all);
+  out.groups = tested_group_descriptives(study, all);
+  std::map<std::string, std::string> order;  // tested cell -> the people's order of group means
+  for (const auto& g : out.groups)
+    if (!order.count(g.cell)) order[g.cell] = order_of_means(out.groups, g.cell);
   for (const auto& [g, who] : members) out.n[g] = static_cast<int>(who.size());
   // A test undefined on the people's data (no variance in any group, say) has no verdict to
   // compare: it is left out of every agreement (power.hpp). With none defined there is nothing.
@@ -97,6 +101,20 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
         ++same, ++out.resampled_agree[out.tests[t].id];
     ++agreeing[same];
     if (same == k_defined) ++out.resampled_all_agree;
+    const auto groups = tested_group_descriptives(study, drawn);
+    bool all_orders = true, all_inside = true;
+    for (const auto& [cell, people_order] : order) {
+      const bool same_order = order_of_means(groups, cell) == people_order;
+      if (same_order) ++out.resampled_same_order[cell];
+      all_orders = all_orders && same_order;
+    }
+    for (std::size_t g = 0; g < groups.size(); ++g)
+      if (std::isfinite(out.groups[g].ci_low))
+        all_inside = all_inside && groups[g].mean >= out.groups[g].ci_low &&
+                     groups[g].mean <= out.groups[g].ci_high;
+    out.resampled_all_orders += all_orders;
+    out.resampled_all_inside += all_inside;
+    out.resampled_pattern += same == k_defined && all_orders && all_inside;
   }
   out.resampled_median_agreeing = median_of_counts(agreeing);
   return out;

@@ -226,6 +226,55 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
                  std::string("expected the effect size, ") + (eta ? "η² in [0, 1]" : "a number") +
                      ", or null (undefined), " + (e == t.end() ? "missing" : "got " + shown(*e)));
   }
+  // The group descriptives of the tested cells (records written before 2026-12-05 have none).
+  auto groups = r.find("groups");
+  if (groups == r.end()) return;
+  const std::string group_what = "{\"cell\", \"group\", \"n\", \"mean\", \"sd\"}";
+  if (!groups->is_array())
+    throw fail("$.groups", "expected an array of " + group_what + ", got " + shown(*groups));
+  for (std::size_t i = 0; i < groups->size(); ++i) {
+    const nlohmann::json& g = (*groups)[i];
+    const std::string gp = "$.groups[" + std::to_string(i) + "]";
+    if (!g.is_object()) throw fail(gp, "expected " + group_what + ", got " + shown(g));
+    for (const char* key : {"cell", "group"}) {
+      auto it = g.find(key);
+      if (it == g.end() || !it->is_string() || it->get<std::string>().empty())
+        throw fail(gp + "." + key, it == g.end()
+                                       ? "missing (expected a string)"
+                                       : "expected a non-empty string, got " + shown(*it));
+    }
+    for (std::size_t j = 0; j < i; ++j)
+      if ((*groups)[j].value("cell", "") == g.at("cell") &&
+          (*groups)[j].value("group", "") == g.at("group"))
+        throw fail(gp, "group " + shown(g.at("group")) + " of " + shown(g.at("cell")) +
+                           " given twice (already $.groups[" + std::to_string(j) + "])");
+    auto n = g.find("n");
+    if (n == g.end() || !integer_in(*n, 0, kMaxN))
+      throw fail(gp + ".n", "expected the number of values, an integer from 0 to " +
+                                std::to_string(kMaxN) + ", " +
+                                (n == g.end() ? "missing" : "got " + shown(*n)));
+    const long long k = n->get<long long>();
+    auto m = g.find("mean");
+    if (m == g.end() || !(k == 0 ? m->is_null() : m->is_number()))
+      throw fail(gp + ".mean", std::string(k == 0 ? "expected null (no values)"
+                                                  : "expected the group mean, a number") +
+                                   ", " + (m == g.end() ? "missing" : "got " + shown(*m)));
+    auto sd = g.find("sd");
+    if (sd == g.end() || !(k < 2 ? sd->is_null() : sd->is_number() && sd->get<double>() >= 0))
+      throw fail(gp + ".sd", std::string(k < 2 ? "expected null (fewer than 2 values)"
+                                               : "expected the group SD, a number >= 0") +
+                                 ", " + (sd == g.end() ? "missing" : "got " + shown(*sd)));
+  }
+}
+
+// The group descriptives a replicate record holds (check_replicate has checked them).
+std::vector<GroupDescriptive> record_groups(const nlohmann::json& r) {
+  std::vector<GroupDescriptive> out;
+  for (const auto& g : r.at("groups"))
+    out.push_back({g.at("cell").get<std::string>(), g.at("group").get<std::string>(),
+                   g.at("n").get<int>(), num_or_nan(g.at("mean")), num_or_nan(g.at("sd")), kNaN,
+                   kNaN});
+  return out;
 }
 
 struct ReplicateLine {
@@ -328,23 +377,40 @@ Study resized_study(const Study& study, int n, std::uint64_t seed) {
   return s;
 }
 
+namespace {
+
+bool is_test(const Analysis& a) {
+  return a.kind == "anova_oneway" || a.kind == "pairwise_t";
+}
+std::string cell_id(const Analysis& a) {
+  return a.measure + " " + a.phase + (a.pooled ? " pooled" : "");
+}
+// The values of each group (study order) a declared test takes: its measure in its phase, the
+// last session of the phase or all of them pooled (as the report does).
+analysis::Groups tested_values(const Study& study, const Analysis& a,
+                               const std::vector<SimValue>& values) {
+  int last = 0;
+  for (const auto& v : values)
+    if (v.phase == a.phase && v.measure == a.measure) last = std::max(last, v.session);
+  analysis::Groups groups(study.groups.size());
+  for (const auto& v : values) {
+    if (v.phase != a.phase || v.measure != a.measure || !v.value) continue;
+    if (!a.pooled && v.session != last) continue;
+    for (std::size_t g = 0; g < study.groups.size(); ++g)
+      if (study.groups[g].id == v.group) groups[g].push_back(*v.value);
+  }
+  return groups;
+}
+
+}  // namespace
+
 std::vector<TestOutcome> run_declared_analyses(const Study& study,
                                                const std::vector<SimValue>& values) {
   std::vector<TestOutcome> out;
   for (const auto& a : study.analyses) {
-    if (a.kind != "anova_oneway" && a.kind != "pairwise_t") continue;
-    // The last session of the phase, or all of them pooled (as the report does).
-    int last = 0;
-    for (const auto& v : values)
-      if (v.phase == a.phase && v.measure == a.measure) last = std::max(last, v.session);
-    analysis::Groups groups(study.groups.size());
-    for (const auto& v : values) {
-      if (v.phase != a.phase || v.measure != a.measure || !v.value) continue;
-      if (!a.pooled && v.session != last) continue;
-      for (std::size_t g = 0; g < study.groups.size(); ++g)
-        if (study.groups[g].id == v.group) groups[g].push_back(*v.value);
-    }
-    const std::string base = a.kind + " " + a.measure + " " + a.phase + (a.pooled ? " pooled" : "");
+    if (!is_test(a)) continue;
+    const analysis::Groups groups = tested_values(study, a, values);
+    const std::string base = a.kind + " " + cell_id(a);
     auto enough = [](const std::vector<double>& x) { return x.size() >= 2; };
     if (a.kind == "anova_oneway") {
       TestOutcome t{base, kNaN, kNaN, "eta_squared"};
@@ -371,6 +437,40 @@ std::vector<TestOutcome> run_declared_analyses(const Study& study,
     }
   }
   return out;
+}
+
+std::vector<GroupDescriptive> tested_group_descriptives(const Study& study,
+                                                        const std::vector<SimValue>& values) {
+  std::vector<GroupDescriptive> out;
+  std::set<std::string> seen;
+  for (const auto& a : study.analyses) {
+    if (!is_test(a) || !seen.insert(cell_id(a)).second) continue;
+    const analysis::Groups groups = tested_values(study, a, values);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const auto& x = groups[g];
+      const analysis::Descriptives d = analysis::describe(x);
+      out.push_back({cell_id(a), study.groups[g].id, d.n, x.empty() ? kNaN : d.mean,
+                     x.size() < 2 ? kNaN : d.sd, x.size() < 2 ? kNaN : d.ci_low,
+                     x.size() < 2 ? kNaN : d.ci_high});
+    }
+  }
+  return out;
+}
+
+std::string order_of_means(const std::vector<GroupDescriptive>& groups, const std::string& cell) {
+  std::vector<const GroupDescriptive*> of;
+  for (const auto& g : groups)
+    if (g.cell == cell) {
+      if (!std::isfinite(g.mean)) return "";
+      of.push_back(&g);
+    }
+  std::stable_sort(of.begin(), of.end(), [](const GroupDescriptive* a, const GroupDescriptive* b) {
+    return a->mean > b->mean;
+  });
+  std::string order;
+  for (std::size_t i = 0; i < of.size(); ++i)
+    order += (i == 0 ? "" : of[i - 1]->mean == of[i]->mean ? " = " : " > ") + of[i]->group;
+  return order;
 }
 
 std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep) {
@@ -478,14 +578,25 @@ long run_power(const Study& study, const PowerOptions& opt) {
               derive_seed(study.seed, label_hash("power"), static_cast<std::uint64_t>(t.n),
                           static_cast<std::uint64_t>(t.replicate));
           const Study s = resized_study(study, t.n, seed);
-          nlohmann::json rec = {
-              {"study_sha256", sha},      {"study", study.id}, {"n", t.n},
-              {"replicate", t.replicate}, {"seed", seed},      {"tests", nlohmann::json::array()}};
-          for (const auto& o : run_declared_analyses(s, simulate_study(s, 1)))
+          nlohmann::json rec = {{"study_sha256", sha},
+                                {"study", study.id},
+                                {"n", t.n},
+                                {"replicate", t.replicate},
+                                {"seed", seed},
+                                {"tests", nlohmann::json::array()},
+                                {"groups", nlohmann::json::array()}};
+          const std::vector<SimValue> values = simulate_study(s, 1);
+          for (const auto& o : run_declared_analyses(s, values))
             rec["tests"].push_back({{"id", o.id},
                                     {"p", num_or_null(o.p)},
                                     {"effect", num_or_null(o.effect)},
                                     {"effect_name", o.effect_name}});
+          for (const auto& d : tested_group_descriptives(s, values))
+            rec["groups"].push_back({{"cell", d.cell},
+                                     {"group", d.group},
+                                     {"n", d.n},
+                                     {"mean", num_or_null(d.mean)},
+                                     {"sd", num_or_null(d.sd)}});
           lines[k - begin] = rec.dump() + "\n";
         } catch (...) {
           std::lock_guard lock(mu);
@@ -521,6 +632,70 @@ long run_power(const Study& study, const PowerOptions& opt) {
 
 namespace {
 
+// power_summary's group means and orders of the tested cells, from the records that hold them:
+// out["groups"] (per cell and group, per n: the group mean's median and 2.5/97.5 % quantiles,
+// the SD's median) and out["orders"] (per cell, per n: how many replicates had each order of the
+// group means). Neither when no record holds group descriptives.
+void add_groups(nlohmann::json& out, const std::map<std::pair<int, int>, nlohmann::json>& reps) {
+  struct Acc {
+    std::vector<double> means, sds;
+  };
+  std::vector<std::pair<std::string, std::string>> keys;  // (cell, group), first seen first
+  std::map<std::pair<std::string, std::string>, std::map<int, Acc>> acc;
+  std::vector<std::string> cells;
+  std::map<std::string, std::map<int, std::map<std::string, long>>> orders;  // cell, n, order
+  std::map<int, long> with;                                                  // n -> records
+  for (const auto& [key, r] : reps) {
+    if (!r.contains("groups")) continue;
+    ++with[key.first];
+    const auto gs = record_groups(r);
+    for (const auto& g : gs) {
+      const auto k = std::make_pair(g.cell, g.group);
+      if (!acc.count(k)) keys.push_back(k);
+      Acc& a = acc[k][key.first];
+      if (std::isfinite(g.mean)) a.means.push_back(g.mean);
+      if (std::isfinite(g.sd)) a.sds.push_back(g.sd);
+      if (std::find(cells.begin(), cells.end(), g.cell) == cells.end()) cells.push_back(g.cell);
+    }
+    std::set<std::string> done;
+    for (const auto& g : gs)
+      if (done.insert(g.cell).second) {
+        const std::string o = order_of_means(gs, g.cell);
+        if (!o.empty()) ++orders[g.cell][key.first][o];
+      }
+  }
+  if (with.empty()) return;
+  out["groups"] = nlohmann::json::array();
+  for (const auto& k : keys) {
+    nlohmann::json g = {{"cell", k.first}, {"group", k.second}, {"by_n", nlohmann::json::array()}};
+    for (auto& [n, a] : acc[k]) {
+      std::sort(a.means.begin(), a.means.end());
+      std::sort(a.sds.begin(), a.sds.end());
+      g["by_n"].push_back({{"n", n},
+                           {"replicates", a.means.size()},
+                           {"mean_median", num_or_null(quantile(a.means, 0.5))},
+                           {"mean_q025", num_or_null(quantile(a.means, 0.025))},
+                           {"mean_q975", num_or_null(quantile(a.means, 0.975))},
+                           {"sd_median", num_or_null(quantile(a.sds, 0.5))}});
+    }
+    out["groups"].push_back(g);
+  }
+  out["orders"] = nlohmann::json::array();
+  for (const auto& c : cells) {
+    nlohmann::json o = {{"cell", c}, {"by_n", nlohmann::json::array()}};
+    for (const auto& [n, k] : with) {
+      // Most frequent first.
+      std::vector<std::pair<std::string, long>> by(orders[c][n].begin(), orders[c][n].end());
+      std::stable_sort(by.begin(), by.end(),
+                       [](const auto& a, const auto& b) { return a.second > b.second; });
+      nlohmann::json counts = nlohmann::json::array();
+      for (const auto& [order, count] : by) counts.push_back({{"order", order}, {"count", count}});
+      o["by_n"].push_back({{"n", n}, {"replicates", k}, {"orders", counts}});
+    }
+    out["orders"].push_back(o);
+  }
+}
+
 // power_summary's comparison with people's verdicts (power.hpp, PeopleVerdicts).
 void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohmann::json>& reps,
                 const PeopleVerdicts& people, double alpha) {
@@ -540,7 +715,12 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
     long replicates = 0, all = 0;
     std::vector<long> agreeing;  // replicates by the number of tests agreeing
     std::map<std::string, long> per_test;
+    long with_groups = 0, all_orders = 0, all_inside = 0, pattern = 0;
+    std::map<std::string, long> same_order, inside;  // cell / "cell\tgroup" -> replicates
   };
+  std::map<std::string, std::string> people_order;  // cell -> the people's order of group means
+  for (const auto& g : people.groups)
+    if (!people_order.count(g.cell)) people_order[g.cell] = order_of_means(people.groups, g.cell);
   std::map<int, Agreement> by_n;
   for (const auto& [key, r] : reps) {
     Agreement& a = by_n[key.first];
@@ -555,6 +735,29 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
     }
     ++a.agreeing[same];
     if (same == k) ++a.all;
+    // The people's order of the group means in every cell, every group mean inside the people's
+    // 95 % interval, and the whole pattern (with every verdict): records with group descriptives.
+    if (!r.contains("groups")) continue;
+    const auto gs = record_groups(r);
+    ++a.with_groups;
+    bool orders = true, inside = true;
+    for (const auto& [cell, order] : people_order) {
+      const bool same_order = order_of_means(gs, cell) == order;
+      orders = orders && same_order;
+      a.same_order[cell] += same_order;
+    }
+    for (const auto& p : people.groups) {
+      if (!std::isfinite(p.ci_low)) continue;
+      const auto it = std::find_if(gs.begin(), gs.end(), [&](const GroupDescriptive& g) {
+        return g.cell == p.cell && g.group == p.group;
+      });
+      const bool in = it != gs.end() && it->mean >= p.ci_low && it->mean <= p.ci_high;
+      inside = inside && in;
+      a.inside[p.cell + "\t" + p.group] += in;
+    }
+    a.all_orders += orders;
+    a.all_inside += inside;
+    a.pattern += same == k && orders && inside;
   }
   for (auto& t : out["tests"]) {
     const std::string id = t.at("id").get<std::string>();
@@ -585,6 +788,42 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
     resampled["agree"][id] =
         num_or_null((it == people.resampled_agree.end() ? 0 : it->second) / resamples);
   }
+  const bool groups = out.contains("groups");
+  if (groups) {
+    resampled["same_order"] = nlohmann::json::object();
+    for (const auto& [cell, order] : people_order) {
+      const auto it = people.resampled_same_order.find(cell);
+      resampled["same_order"][cell] =
+          num_or_null((it == people.resampled_same_order.end() ? 0 : it->second) / resamples);
+    }
+    resampled["all_orders"] = num_or_null(people.resampled_all_orders / resamples);
+    resampled["all_inside"] = num_or_null(people.resampled_all_inside / resamples);
+    resampled["pattern"] = num_or_null(people.resampled_pattern / resamples);
+    for (auto& g : out["groups"]) {
+      const auto it =
+          std::find_if(people.groups.begin(), people.groups.end(), [&](const GroupDescriptive& x) {
+            return x.cell == g.at("cell") && x.group == g.at("group");
+          });
+      if (it == people.groups.end()) continue;
+      g["people"] = {{"n", it->n},
+                     {"mean", num_or_null(it->mean)},
+                     {"sd", num_or_null(it->sd)},
+                     {"ci_low", num_or_null(it->ci_low)},
+                     {"ci_high", num_or_null(it->ci_high)}};
+      for (auto& c : g["by_n"])
+        c["inside"] =
+            std::isfinite(it->ci_low)
+                ? nlohmann::json(by_n[c.at("n").get<int>()].inside[it->cell + "\t" + it->group])
+                : nlohmann::json();
+    }
+    for (auto& o : out["orders"]) {
+      const auto it = people_order.find(o.at("cell").get<std::string>());
+      if (it == people_order.end()) continue;
+      o["people"] = {{"order", it->second.empty() ? nlohmann::json() : nlohmann::json(it->second)},
+                     {"resampled", resampled["same_order"][it->first]}};
+      for (auto& c : o["by_n"]) c["same"] = by_n[c.at("n").get<int>()].same_order[it->first];
+    }
+  }
   nlohmann::json p = {{"file", people.file},
                       {"n", people.n},
                       {"tests", k},
@@ -599,6 +838,13 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
                          {"ci_low", ci.low},
                          {"ci_high", ci.high},
                          {"median_agreeing", num_or_null(median_of_counts(a.agreeing))}});
+    if (groups) {
+      nlohmann::json& b = p["by_n"].back();
+      b["group_replicates"] = a.with_groups;
+      b["all_orders"] = a.all_orders;
+      b["all_inside"] = a.all_inside;
+      b["pattern"] = a.pattern;
+    }
   }
   out["people"] = p;
 }
@@ -767,6 +1013,7 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
     t["smallest_n"] = smallest;
     out["tests"].push_back(t);
   }
+  add_groups(out, reps);
   if (people) add_people(out, reps, *people, alpha);
   return out;
 }
@@ -999,7 +1246,60 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
                : " (the test was undefined in every replicate at n = " + undefined_at + ")")
        << "\n";
   }
-  if (s.contains("people")) {
+  const bool with_people = s.contains("people");
+  if (s.contains("groups")) {
+    md << "\n## Group means\n\nPer tested cell and group, the replicates' group mean (median "
+          "[2.5 %, 97.5 %] over the replicates) and SD (median)"
+       << (with_people ? "; the people's mean with its 95 % interval (t) and SD, and how many "
+                         "replicates' group means lie inside that interval"
+                       : "")
+       << ".\n\n| cell | group | n | replicates | mean median [2.5 %, 97.5 %] | SD median |"
+       << (with_people ? " people's mean [95 % CI] | people's SD | inside people's CI |" : "")
+       << "\n|---|---|---:|---:|---|---:|" << (with_people ? "---|---:|---|" : "") << "\n";
+    for (const auto& g : s.at("groups"))
+      for (const auto& c : g.at("by_n")) {
+        md << "| " << g.at("cell").get<std::string>() << " | " << g.at("group").get<std::string>()
+           << " | " << c.at("n").get<int>() << " | " << c.at("replicates").get<long>() << " | "
+           << fmt(c.at("mean_median"), 3) << " [" << fmt(c.at("mean_q025"), 3) << ", "
+           << fmt(c.at("mean_q975"), 3) << "] | " << fmt(c.at("sd_median"), 3) << " |";
+        if (with_people) {
+          if (g.contains("people")) {
+            const auto& pg = g.at("people");
+            md << " " << fmt(pg.at("mean"), 3) << " [" << fmt(pg.at("ci_low"), 3) << ", "
+               << fmt(pg.at("ci_high"), 3) << "] | " << fmt(pg.at("sd"), 3) << " | "
+               << (c.at("inside").is_number() ? std::to_string(c.at("inside").get<long>()) + "/" +
+                                                    std::to_string(c.at("replicates").get<long>())
+                                              : std::string("—"))
+               << " |";
+          } else {
+            md << " — | — | — |";
+          }
+        }
+        md << "\n";
+      }
+    md << "\nOrder of the group means (largest first), replicates per order:\n\n";
+    for (const auto& o : s.at("orders")) {
+      md << "- " << o.at("cell").get<std::string>() << ":";
+      for (const auto& c : o.at("by_n")) {
+        md << " n = " << c.at("n").get<int>() << ":";
+        std::string list;
+        for (const auto& x : c.at("orders"))
+          list += (list.empty() ? " " : ", ") + x.at("order").get<std::string>() + " " +
+                  std::to_string(x.at("count").get<long>()) + "/" +
+                  std::to_string(c.at("replicates").get<long>());
+        md << list << ".";
+        if (c.contains("same"))
+          md << " The people's order ("
+             << (o.at("people").at("order").is_string()
+                     ? o.at("people").at("order").get<std::string>()
+                     : std::string("undefined"))
+             << "): " << c.at("same").get<long>() << "/" << c.at("replicates").get<long>()
+             << " (people resampled " << fmt(o.at("people").at("resampled"), 3) << ").";
+      }
+      md << "\n";
+    }
+  }
+  if (with_people) {
     const auto& p = s.at("people");
     const auto& rs = p.at("resampled");
     std::string sizes;
@@ -1050,6 +1350,29 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     md << "| **all verdicts** | | | | " << model << " | " << fmt(rs.at("all_agree"), 3) << " ["
        << fmt(rs.at("all_agree_ci_low"), 2) << ", " << fmt(rs.at("all_agree_ci_high"), 2)
        << "], median " << fmt(rs.at("median_agreeing"), 1) << of << " |\n";
+    if (rs.contains("pattern")) {
+      md << "\nThe people's pattern (every verdict above, the people's order of the group means "
+            "in every cell, every group mean inside the people's 95 % interval), replicates "
+            "reaching it (Wilson 95 %) and the resampled people's share:\n\n"
+         << "| n | replicates | every order | every mean inside | whole pattern |\n"
+         << "|---:|---:|---|---|---|\n";
+      auto share = [&](long k, long r) {
+        const auto ci = analysis::wilson_interval(static_cast<int>(k), static_cast<int>(r));
+        return std::to_string(k) + "/" + std::to_string(r) + " [" + fmt(ci.low, 2) + ", " +
+               fmt(ci.high, 2) + "]";
+      };
+      for (const auto& c : p.at("by_n")) {
+        const long r = c.at("group_replicates").get<long>();
+        if (r == 0) continue;
+        md << "| " << c.at("n").get<int>() << " | " << r << " | "
+           << share(c.at("all_orders").get<long>(), r) << " | "
+           << share(c.at("all_inside").get<long>(), r) << " | "
+           << share(c.at("pattern").get<long>(), r) << " |\n";
+      }
+      md << "| people resampled | " << rs.at("resamples").get<long>() << " | "
+         << fmt(rs.at("all_orders"), 3) << " | " << fmt(rs.at("all_inside"), 3) << " | "
+         << fmt(rs.at("pattern"), 3) << " |\n";
+    }
   }
   const std::string table = md.str();
   auto write = [&](const std::string& name, const std::string& text) {

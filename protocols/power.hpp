@@ -53,6 +53,24 @@ struct TestOutcome {
 std::vector<TestOutcome> run_declared_analyses(const Study& study,
                                                const std::vector<SimValue>& values);
 
+// One group's values in one tested cell: the measure in the phase as a declared test takes it
+// (its last session, or all sessions pooled). `cell` is "MEASURE PHASE" (+ " pooled"), the
+// test ids' middle part.
+struct GroupDescriptive {
+  std::string cell, group;
+  int n = 0;                           // defined values
+  double mean = 0.0;                   // NaN when n = 0
+  double sd = 0.0;                     // sample SD; NaN when n < 2
+  double ci_low = 0.0, ci_high = 0.0;  // 95 % interval of the mean (t, n - 1 df); NaN if n < 2
+};
+// The order of the group means of `cell` in `groups`, largest first: "A > B > C", equal means
+// joined by " = " in study order ("A = B > C"); empty when a group of the cell has no mean.
+std::string order_of_means(const std::vector<GroupDescriptive>& groups, const std::string& cell);
+// Every group in every cell a declared test (anova_oneway, pairwise_t) takes, cells in the order
+// the analyses name them, groups in study order: what the tests compared.
+std::vector<GroupDescriptive> tested_group_descriptives(const Study& study,
+                                                        const std::vector<SimValue>& values);
+
 struct PowerOptions {
   std::vector<int> n;  // group sizes; empty = the study's own (all groups equal)
   int replicates = 100;
@@ -110,6 +128,13 @@ struct PeopleVerdicts {
   std::map<std::string, long> resampled_agree;  // test id -> resamples with people's verdict
   long resampled_all_agree = 0;                 // resamples with every verdict people's
   double resampled_median_agreeing = 0.0;       // median number of tests agreeing
+  // The people's group descriptives in the tested cells (tested_group_descriptives), and of the
+  // resamples: how many had the people's order of the group means in a cell, in every cell,
+  // every group mean inside the people's 95 % interval, and the whole pattern (every verdict,
+  // every order, every mean inside).
+  std::vector<GroupDescriptive> groups;
+  std::map<std::string, long> resampled_same_order;  // cell -> resamples
+  long resampled_all_orders = 0, resampled_all_inside = 0, resampled_pattern = 0;
 };
 // A verdict: significant (finite p < alpha) or not (an undefined test counts as not).
 bool significant(double p, double alpha);

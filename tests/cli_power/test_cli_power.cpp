@@ -312,6 +312,36 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
       {with_test(base, "effect_name", "cohen_d"),
        "$.tests[0].effect_name: test \"anova_oneway palpation_force test\" reports effect "
        "\"cohen_d\" here but \"eta_squared\""},
+      // The group descriptives (records since 2026-12-05).
+      {with(base, "groups", "A"), "$.groups: expected an array of"},
+      {with(base, "groups", nlohmann::json::array({5})), "$.groups[0]: expected {"},
+      {with(base, "groups", nlohmann::json::array({{{"group", "A"}, {"n", 2}}})),
+       "$.groups[0].cell: missing (expected a string)"},
+      {with(base, "groups",
+            nlohmann::json::array(
+                {{{"cell", "f t"}, {"group", "A"}, {"n", -1}, {"mean", 1}, {"sd", 0}}})),
+       "$.groups[0].n: expected the number of values, an integer from 0 to 100000, got -1"},
+      {with(base, "groups",
+            nlohmann::json::array(
+                {{{"cell", "f t"}, {"group", "A"}, {"n", 3}, {"mean", "2"}, {"sd", 0}}})),
+       "$.groups[0].mean: expected the group mean, a number, got \"2\""},
+      {with(base, "groups",
+            nlohmann::json::array(
+                {{{"cell", "f t"}, {"group", "A"}, {"n", 0}, {"mean", 2}, {"sd", nullptr}}})),
+       "$.groups[0].mean: expected null (no values), got 2"},
+      {with(base, "groups",
+            nlohmann::json::array(
+                {{{"cell", "f t"}, {"group", "A"}, {"n", 3}, {"mean", 2}, {"sd", -0.1}}})),
+       "$.groups[0].sd: expected the group SD, a number >= 0, got -0.1"},
+      {with(base, "groups",
+            nlohmann::json::array(
+                {{{"cell", "f t"}, {"group", "A"}, {"n", 1}, {"mean", 2}, {"sd", 0}}})),
+       "$.groups[0].sd: expected null (fewer than 2 values), got 0"},
+      {with(base, "groups",
+            nlohmann::json::array(
+                {{{"cell", "f t"}, {"group", "A"}, {"n", 2}, {"mean", 2}, {"sd", 0}},
+                 {{"cell", "f t"}, {"group", "A"}, {"n", 2}, {"mean", 3}, {"sd", 0}}})),
+       "$.groups[1]: group \"A\" of \"f t\" given twice (already $.groups[0])"},
   };
   for (const auto& [line, expected] : cases) {
     std::ofstream(d / "r.jsonl", std::ios::trunc) << good << "\n" << line << "\n";
@@ -723,6 +753,21 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
   EXPECT_LE(j["people"]["by_n"][0]["all_agree"].get<long>(), least);
   EXPECT_NE(slurp(d / "out" / "power.md").find("## Agreement with people's verdicts"),
             std::string::npos);
+  // The replicates' group means beside the people's: every record holds them, the people's
+  // G1 mean is 2.15 with its t interval, their order G2 > G1.
+  std::istringstream replicates(slurp(d / "out" / "replicates.jsonl"));
+  int records = 0;
+  for (std::string line; std::getline(replicates, line); ++records)
+    EXPECT_EQ(nlohmann::json::parse(line)["groups"].size(), 2u) << line;
+  EXPECT_EQ(records, 4);
+  ASSERT_TRUE(j.contains("groups"));
+  const auto& people_g1 = j["groups"][0]["people"];
+  EXPECT_DOUBLE_EQ(people_g1["mean"].get<double>(), 2.15);
+  EXPECT_NEAR(people_g1["ci_high"].get<double>() - 2.15, 3.182446 * std::sqrt(1.0 / 60) / 2.0,
+              1e-5);
+  EXPECT_EQ(j["orders"][0]["people"]["order"], "G2 > G1");
+  EXPECT_EQ(j["people"]["by_n"][0]["group_replicates"], 4);
+  EXPECT_NE(slurp(d / "out" / "power.md").find("## Group means"), std::string::npos);
   // Bad people's data, and --human with --shard: exit 2, nothing simulated.
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"

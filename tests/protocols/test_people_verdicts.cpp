@@ -4,15 +4,18 @@
 // time, a tiny p nearly always), and power_summary counts the replicates that agree.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "analysis/anova.hpp"
+#include "analysis/descriptives.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
 #include "protocols/calibrate.hpp"
@@ -109,6 +112,35 @@ TEST(PeopleVerdicts, ResamplingKeepsTheGroupsSoBorderlineVerdictsReplicateAboutH
   EXPECT_GT(v.resampled_all_agree, 0);
   EXPECT_GE(v.resampled_median_agreeing, 6.0);
   EXPECT_LE(v.resampled_median_agreeing, 8.0);
+  // The order of the group means and the means inside the people's intervals, in the same
+  // resamples: the people's force order A > B > C holds unless B and C swap (B - C p = .046),
+  // their exploration order A > B > C unless B and C swap (p = .114, swapped more often).
+  const auto& order = v.resampled_same_order;
+  const double force_order = order.at("palpation_force post_training") / 2000.0;
+  const double time_order = order.at("exploration_time post_training") / 2000.0;
+  EXPECT_GT(force_order, 0.9);
+  EXPECT_LT(time_order, force_order);
+  EXPECT_GT(time_order, 0.8);
+  EXPECT_LE(v.resampled_all_orders, order.at("exploration_time post_training"));
+  // Six group means each inside its own 95 % interval about 95 % of the time.
+  EXPECT_GT(v.resampled_all_inside / 2000.0, 0.5);
+  EXPECT_LT(v.resampled_all_inside / 2000.0, 1.0);
+  EXPECT_LE(v.resampled_pattern,
+            std::min({v.resampled_all_agree, v.resampled_all_orders, v.resampled_all_inside}));
+  EXPECT_GT(v.resampled_pattern, 0);
+  // The people's group descriptives are those of their values.
+  const auto values = plain_values();
+  ASSERT_EQ(v.groups.size(), 6u);
+  for (const auto& g : v.groups) {
+    const std::string measure = g.cell.substr(0, g.cell.find(' '));
+    const auto d = palplab::analysis::describe(values.at(measure).at(g.group));
+    EXPECT_EQ(g.n, 10);
+    EXPECT_DOUBLE_EQ(g.mean, d.mean) << g.cell << " " << g.group;
+    EXPECT_DOUBLE_EQ(g.sd, d.sd) << g.cell << " " << g.group;
+    EXPECT_DOUBLE_EQ(g.ci_low, d.ci_low) << g.cell << " " << g.group;
+  }
+  EXPECT_EQ(order_of_means(v.groups, "palpation_force post_training"), "A > B > C");
+  EXPECT_EQ(order_of_means(v.groups, "exploration_time post_training"), "A > B > C");
   // Seeded from the study: the same numbers again.
   const PeopleVerdicts again = people_verdicts(exp2(), read_human_cells(human_csv()), 0.05, 2000);
   EXPECT_EQ(again.resampled_all_agree, v.resampled_all_agree);
@@ -239,6 +271,133 @@ TEST(PeopleVerdicts, TheSummaryCountsReplicatesThatReachThePeoplesVerdicts) {
   // A people's test the replicates do not have: another version of the study.
   people.tests.push_back({"T3", 0.5, 0.0, "hedges_g"});
   EXPECT_THROW(power_summary({file}, 0.05, 0.8, {}, nullptr, &people), palplab::InputError);
+  fs::remove_all(d);
+}
+
+TEST(PeopleVerdicts, GroupDescriptivesAreThoseOfTheTestedValues) {
+  // The tested session is the phase's last (session 2 here), unpooled; groups in study order;
+  // a group without values has no mean, one with one value no SD; undefined values left out.
+  Study study = exp2();
+  study.analyses.resize(1);  // descriptives of palpation_force: no test, no cell
+  Analysis a;
+  a.kind = "pairwise_t";
+  a.measure = "palpation_force";
+  a.phase = "training";
+  study.analyses.push_back(a);
+  a.kind = "anova_oneway";  // the same cell again: listed once
+  study.analyses.push_back(a);
+  std::vector<SimValue> values = {
+      {"p1", "A", "training", 1, "palpation_force", 9.0},  // not the last session
+      {"p1", "A", "training", 2, "palpation_force", 2.0},
+      {"p2", "A", "training", 2, "palpation_force", 4.0},
+      {"p3", "A", "training", 2, "palpation_force", std::nullopt},
+      {"p4", "B", "training", 2, "palpation_force", 5.0},
+      {"p5", "B", "training", 2, "exploration_time", 1.0},  // another measure
+  };
+  const auto d = tested_group_descriptives(study, values);
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_EQ(d[0].cell, "palpation_force training");
+  EXPECT_EQ(d[0].group, "A");
+  EXPECT_EQ(d[0].n, 2);
+  EXPECT_DOUBLE_EQ(d[0].mean, 3.0);
+  EXPECT_DOUBLE_EQ(d[0].sd, std::sqrt(2.0));
+  // t(0.975, 1) = 12.706: 3 ± 12.706 · 1
+  EXPECT_NEAR(d[0].ci_low, 3.0 - 12.7062, 1e-3);
+  EXPECT_EQ(d[1].group, "B");
+  EXPECT_EQ(d[1].n, 1);
+  EXPECT_DOUBLE_EQ(d[1].mean, 5.0);
+  EXPECT_TRUE(std::isnan(d[1].sd));
+  EXPECT_TRUE(std::isnan(d[1].ci_low));
+  EXPECT_EQ(d[2].group, "C");
+  EXPECT_EQ(d[2].n, 0);
+  EXPECT_TRUE(std::isnan(d[2].mean));
+  // No order while a group has no mean; with one, largest first, ties in study order.
+  EXPECT_EQ(order_of_means(d, "palpation_force training"), "");
+  values.push_back({"p6", "C", "training", 2, "palpation_force", 3.0});
+  EXPECT_EQ(order_of_means(tested_group_descriptives(study, values), "palpation_force training"),
+            "B > A = C");
+}
+
+TEST(PeopleVerdicts, TheSummaryGivesGroupMeansOrdersAndThePeoplesPattern) {
+  // Four replicates of a two-group study with one test (people: significant, G1 > G2, people's
+  // intervals G1 [2, 3], G2 [1, 2]); the fourth replicate is an older record without groups.
+  const auto d = scratch("groups");
+  const std::string file = (d / "replicates.jsonl").string();
+  const double p[4] = {0.01, 0.01, 0.3, 0.01};
+  const double m1[3] = {2.5, 2.5, 1.5}, m2[3] = {1.5, 2.5, 1.8};  // #1 ties, #2 order swapped
+  {
+    std::ofstream o(file);
+    for (int r = 0; r < 4; ++r) {
+      nlohmann::json rec = {
+          {"n", 5},
+          {"replicate", r},
+          {"seed", 1},
+          {"study", "s"},
+          {"study_sha256", std::string(64, 'a')},
+          {"tests", {{{"id", "T"}, {"p", p[r]}, {"effect", 1.0}, {"effect_name", "hedges_g"}}}}};
+      if (r < 3)
+        rec["groups"] = {
+            {{"cell", "f t"}, {"group", "G1"}, {"n", 5}, {"mean", m1[r]}, {"sd", 0.1 * (r + 1)}},
+            {{"cell", "f t"}, {"group", "G2"}, {"n", 5}, {"mean", m2[r]}, {"sd", 0.2}}};
+      o << rec.dump() << "\n";
+    }
+  }
+  const auto plain = power_summary({file}, 0.05, 0.8);
+  ASSERT_TRUE(plain.contains("groups"));
+  ASSERT_EQ(plain.at("groups").size(), 2u);
+  const auto& g1 = plain.at("groups")[0].at("by_n")[0];
+  EXPECT_EQ(g1.at("replicates").get<long>(), 3);  // the older record has none
+  EXPECT_DOUBLE_EQ(g1.at("mean_median").get<double>(), 2.5);
+  EXPECT_DOUBLE_EQ(g1.at("mean_q025").get<double>(), 1.5 + 0.05 * 1.0);  // type 7
+  EXPECT_DOUBLE_EQ(g1.at("sd_median").get<double>(), 0.2);
+  const auto& orders = plain.at("orders")[0].at("by_n")[0].at("orders");
+  ASSERT_EQ(orders.size(), 3u);  // once each: a tie is no order
+  std::set<std::string> seen;
+  for (const auto& x : orders) {
+    seen.insert(x.at("order").get<std::string>());
+    EXPECT_EQ(x.at("count").get<long>(), 1);
+  }
+  EXPECT_EQ(seen, (std::set<std::string>{"G1 > G2", "G1 = G2", "G2 > G1"}));
+
+  PeopleVerdicts people;
+  people.file = "people.csv";
+  people.tests = {{"T", 0.001, 1.5, "hedges_g"}};
+  people.n = {{"G1", 5}, {"G2", 5}};
+  people.resamples = 100;
+  people.resampled_agree = {{"T", 90}};
+  people.resampled_all_agree = 90;
+  people.resampled_median_agreeing = 1;
+  people.groups = {{"f t", "G1", 5, 2.5, 0.4, 2.0, 3.0}, {"f t", "G2", 5, 1.5, 0.4, 1.0, 2.0}};
+  people.resampled_same_order = {{"f t", 95}};
+  people.resampled_all_orders = 95;
+  people.resampled_all_inside = 80;
+  people.resampled_pattern = 70;
+  const auto s = power_summary({file}, 0.05, 0.8, {}, nullptr, &people);
+  // Inside: G1 in #0, #1 (2.5); G2 in #0 (1.5), #2 (1.8), not #1 (2.5).
+  EXPECT_EQ(s.at("groups")[0].at("by_n")[0].at("inside").get<long>(), 2);
+  EXPECT_EQ(s.at("groups")[1].at("by_n")[0].at("inside").get<long>(), 2);
+  EXPECT_DOUBLE_EQ(s.at("groups")[0].at("people").at("ci_high").get<double>(), 3.0);
+  const auto& o = s.at("orders")[0];
+  EXPECT_EQ(o.at("people").at("order"), "G1 > G2");
+  EXPECT_DOUBLE_EQ(o.at("people").at("resampled").get<double>(), 0.95);
+  EXPECT_EQ(o.at("by_n")[0].at("same").get<long>(), 1);  // #0 (#1 is a tie)
+  const auto& b = s.at("people").at("by_n")[0];
+  EXPECT_EQ(b.at("group_replicates").get<long>(), 3);
+  EXPECT_EQ(b.at("all_orders").get<long>(), 1);
+  EXPECT_EQ(b.at("all_inside").get<long>(), 1);  // #0
+  EXPECT_EQ(b.at("pattern").get<long>(), 1);     // #0: significant, in order, inside
+  EXPECT_DOUBLE_EQ(s.at("people").at("resampled").at("pattern").get<double>(), 0.7);
+  // The report shows both.
+  const std::string md = write_power_report(s, (d / "out").string());
+  EXPECT_NE(md.find("## Group means"), std::string::npos);
+  EXPECT_NE(md.find("| f t | G2 | 5 | 3 | 1.800 [1.515, 2.465] | 0.200 | 1.500 [1.000, 2.000] | "
+                    "0.400 | 2/3 |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("The people's order (G1 > G2): 1/3 (people resampled 0.950)"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| 5 | 3 | 1/3 ["), std::string::npos) << md;
   fs::remove_all(d);
 }
 
