@@ -12,7 +12,7 @@
 namespace palplab::protocols {
 
 PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>& cells,
-                               double alpha, long resamples) {
+                               double alpha, const std::vector<int>& sizes, long resamples) {
   if (cells.empty()) throw InputError("no human data");
   PeopleVerdicts out;
   out.file = cells.front().file;
@@ -63,9 +63,6 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
   }
   out.tests = run_declared_analyses(study, all);
   out.groups = tested_group_descriptives(study, all);
-  std::map<std::string, std::string> order;  // tested cell -> the people's order of group means
-  for (const auto& g : out.groups)
-    if (!order.count(g.cell)) order[g.cell] = order_of_means(out.groups, g.cell);
   for (const auto& [g, who] : members) out.n[g] = static_cast<int>(who.size());
   // A test undefined on the people's data (no variance in any group, say) has no verdict to
   // compare: it is left out of every agreement (power.hpp). With none defined there is nothing.
@@ -76,47 +73,42 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
                      "none of the study's tests is defined on the people's data (every group's "
                      "values without variance?): there is no verdict to compare");
 
-  // The people's study again, its participants drawn with replacement within their groups.
+  // A right model at each n: the people's study drawn again from its participants (with
+  // replacement within groups: a truth their data allow), and n per group drawn from that.
   out.resamples = resamples;
   out.seed = derive_seed(study.seed, "people_resample");
   Rng rng(out.seed);
-  const std::size_t k = out.tests.size();
-  const auto k_defined = static_cast<std::size_t>(std::count(defined.begin(), defined.end(), true));
-  std::vector<long> agreeing(k_defined + 1, 0);  // resamples by the number of tests agreeing
+  const auto verdicts = static_cast<std::size_t>(std::count(defined.begin(), defined.end(), true));
   std::vector<SimValue> drawn;
-  for (long r = 0; r < resamples; ++r) {
-    drawn.clear();
-    for (const auto& g : study.groups) {
-      const auto& who = members[g.id];
-      for (std::size_t j = 0; j < who.size(); ++j)
-        for (SimValue v : values_of[who[rng.below(who.size())]]) {
-          v.participant = g.id + "#" + std::to_string(j);  // each draw a participant of its own
-          drawn.push_back(std::move(v));
-        }
+  std::vector<const std::string*> truth;
+  for (int n : sizes) {
+    RightModel& m = out.right[n];
+    std::vector<long> agreeing(verdicts + 1, 0);  // draws by the number of tests agreeing
+    for (long r = 0; r < resamples; ++r) {
+      drawn.clear();
+      for (const auto& g : study.groups) {
+        const auto& who = members[g.id];
+        truth.clear();
+        for (std::size_t j = 0; j < who.size(); ++j) truth.push_back(&who[rng.below(who.size())]);
+        for (int j = 0; j < n; ++j)
+          for (SimValue v : values_of[*truth[rng.below(truth.size())]]) {
+            v.participant = g.id + "#" + std::to_string(j);  // each draw a participant of its own
+            drawn.push_back(std::move(v));
+          }
+      }
+      const Comparison c = compare_with_people(out, run_declared_analyses(study, drawn),
+                                               tested_group_descriptives(study, drawn), alpha);
+      for (const auto& id : c.agree) ++m.agree[id];
+      for (const auto& cell : c.same_order) ++m.same_order[cell];
+      for (const auto& key : c.inside) ++m.inside[key];
+      ++agreeing[c.agree.size()];
+      m.all_agree += c.all_agree;
+      m.all_orders += c.all_orders;
+      m.all_inside += c.all_inside;
+      m.pattern += c.pattern();
     }
-    const auto tests = run_declared_analyses(study, drawn);
-    std::size_t same = 0;
-    for (std::size_t t = 0; t < k; ++t)
-      if (defined[t] && significant(tests[t].p, alpha) == significant(out.tests[t].p, alpha))
-        ++same, ++out.resampled_agree[out.tests[t].id];
-    ++agreeing[same];
-    if (same == k_defined) ++out.resampled_all_agree;
-    const auto groups = tested_group_descriptives(study, drawn);
-    bool all_orders = true, all_inside = true;
-    for (const auto& [cell, people_order] : order) {
-      const bool same_order = order_of_means(groups, cell) == people_order;
-      if (same_order) ++out.resampled_same_order[cell];
-      all_orders = all_orders && same_order;
-    }
-    for (std::size_t g = 0; g < groups.size(); ++g)
-      if (std::isfinite(out.groups[g].ci_low))
-        all_inside = all_inside && groups[g].mean >= out.groups[g].ci_low &&
-                     groups[g].mean <= out.groups[g].ci_high;
-    out.resampled_all_orders += all_orders;
-    out.resampled_all_inside += all_inside;
-    out.resampled_pattern += same == k_defined && all_orders && all_inside;
+    m.median_agreeing = median_of_counts(agreeing);
   }
-  out.resampled_median_agreeing = median_of_counts(agreeing);
   return out;
 }
 

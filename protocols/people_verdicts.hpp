@@ -10,14 +10,16 @@
 namespace palplab::protocols {
 
 // Runs the study's declared tests (run_declared_analyses) on the people's values in `cells`
-// (read_human_cells), then replicates the people's study `resamples` times by resampling its
-// participants with replacement within their groups (each drawn participant brings all its
-// values, so measures stay paired as they were; Efron & Tibshirani 1993) and counts how often
-// each verdict, and all of them together, come out as the people's. Seeded from the study seed
-// (the same numbers on every run); 2000 resamples put a share near 0.4 within ±0.02 (95 %).
-// InputError, naming the CSV, when its data hold a group the
-// study does not have, or a tested group has fewer than 2 values in a tested cell.
+// (read_human_cells) and describes their groups (tested_group_descriptives); then, for every
+// group size in `sizes`, draws `resamples` times what a right model would give (RightModel: the
+// people's study resampled by participants within groups, then n per group resampled from that;
+// each drawn participant brings all its values, so measures stay paired as they were; Efron &
+// Tibshirani 1993) and counts the draws reaching the people's verdicts, orders (a cell whose
+// people's means tie is not compared) and intervals. Seeded from the study seed (the same
+// numbers on every run); 2000 draws put a share near 0.4 within ±0.02 (95 %).
+// InputError, naming the CSV, when its data hold a cell the study does not simulate, or a tested
+// group has fewer than 2 values in a tested cell.
 PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>& cells,
-                               double alpha, long resamples = 2000);
+                               double alpha, const std::vector<int>& sizes, long resamples = 2000);
 
 }  // namespace palplab::protocols

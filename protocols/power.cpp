@@ -232,6 +232,10 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
   const std::string group_what = "{\"cell\", \"group\", \"n\", \"mean\", \"sd\"}";
   if (!groups->is_array())
     throw fail("$.groups", "expected an array of " + group_what + ", got " + shown(*groups));
+  if (groups->empty())
+    throw fail("$.groups",
+               "expected the groups of the tested cells (a study with tests has "
+               "them), got []");
   for (std::size_t i = 0; i < groups->size(); ++i) {
     const nlohmann::json& g = (*groups)[i];
     const std::string gp = "$.groups[" + std::to_string(i) + "]";
@@ -299,14 +303,20 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
     nlohmann::json r;
     try {
       r = nlohmann::json::parse(line);
-    } catch (const std::exception&) {
+    } catch (const std::exception& e) {
       if (unterminated)
         throw InputError(SourceLocation{path, no, 1},
                          "the last line is incomplete (the run writing this file was interrupted "
                          "mid-line); rerun that `palplab power` command with the same --out (and "
                          "--shard): it resumes, cuts the incomplete line and simulates the "
                          "replicate again. Or delete the line to merge without it");
-      throw InputError(SourceLocation{path, no, 1}, "not a replicate record (JSON line)");
+      // nlohmann's message names the byte and what it expected (a NaN, 1e400, a cut string).
+      const auto* pe = dynamic_cast<const nlohmann::json::parse_error*>(&e);
+      const int column = pe && pe->byte > 0 ? static_cast<int>(pe->byte) : 1;
+      std::string why = e.what();
+      if (const auto k = why.find("parse error"); k != std::string::npos) why = why.substr(k);
+      throw InputError(SourceLocation{path, no, column},
+                       "not a replicate record (JSON line): " + why);
     }
     check_replicate(r, path, no);
     out.push_back({std::move(r), no});
@@ -464,13 +474,55 @@ std::string order_of_means(const std::vector<GroupDescriptive>& groups, const st
       if (!std::isfinite(g.mean)) return "";
       of.push_back(&g);
     }
-  std::stable_sort(of.begin(), of.end(), [](const GroupDescriptive* a, const GroupDescriptive* b) {
-    return a->mean > b->mean;
+  std::sort(of.begin(), of.end(), [](const GroupDescriptive* a, const GroupDescriptive* b) {
+    return a->mean > b->mean || (a->mean == b->mean && a->group < b->group);
   });
   std::string order;
   for (std::size_t i = 0; i < of.size(); ++i)
     order += (i == 0 ? "" : of[i - 1]->mean == of[i]->mean ? " = " : " > ") + of[i]->group;
   return order;
+}
+
+std::string compared_order(const std::vector<GroupDescriptive>& groups, const std::string& cell) {
+  const std::string order = order_of_means(groups, cell);
+  return order.find(" = ") == std::string::npos ? order : "";
+}
+
+Comparison compare_with_people(const PeopleVerdicts& people, const std::vector<TestOutcome>& tests,
+                               const std::vector<GroupDescriptive>& groups, double alpha) {
+  Comparison c;
+  std::size_t verdicts = 0;
+  for (const auto& t : people.tests) {
+    if (!std::isfinite(t.p)) continue;  // no verdict: not compared
+    ++verdicts;
+    const auto it = std::find_if(tests.begin(), tests.end(),
+                                 [&](const TestOutcome& x) { return x.id == t.id; });
+    if (it != tests.end() && significant(it->p, alpha) == significant(t.p, alpha))
+      c.agree.push_back(t.id);
+  }
+  c.all_agree = c.agree.size() == verdicts;
+  std::set<std::string> cells;
+  for (const auto& g : people.groups) cells.insert(g.cell);
+  c.all_orders = c.all_inside = true;
+  for (const auto& cell : cells) {
+    const std::string theirs = compared_order(people.groups, cell);
+    if (theirs.empty()) continue;
+    if (order_of_means(groups, cell) == theirs)
+      c.same_order.push_back(cell);
+    else
+      c.all_orders = false;
+  }
+  for (const auto& p : people.groups) {
+    if (!std::isfinite(p.ci_low)) continue;
+    const auto it = std::find_if(groups.begin(), groups.end(), [&](const GroupDescriptive& g) {
+      return g.cell == p.cell && g.group == p.group;
+    });
+    if (it != groups.end() && it->mean >= p.ci_low && it->mean <= p.ci_high)
+      c.inside.push_back(p.cell + "\t" + p.group);
+    else
+      c.all_inside = false;
+  }
+  return c;
 }
 
 std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep) {
@@ -696,13 +748,11 @@ void add_groups(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
   }
 }
 
-// power_summary's comparison with people's verdicts (power.hpp, PeopleVerdicts).
+// power_summary's comparison with the people's results (power.hpp, PeopleVerdicts): each
+// replicate compared (compare_with_people) and counted per n, beside what a right model reaches
+// at that n (RightModel; null for an n it was not drawn for).
 void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohmann::json>& reps,
                 const PeopleVerdicts& people, double alpha) {
-  // Only the tests with a people's verdict are compared (undefined ones have none).
-  std::map<std::string, const TestOutcome*> theirs;
-  for (const auto& t : people.tests)
-    if (std::isfinite(t.p)) theirs[t.id] = &t;
   for (const auto& t : people.tests)
     if (std::none_of(out.at("tests").begin(), out.at("tests").end(),
                      [&](const nlohmann::json& x) { return x.at("id") == t.id; }))
@@ -710,95 +760,78 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
                            "\" is not among the replicates' tests (were they simulated from "
                            "another version of the study?)",
                        people.file);
-  const std::size_t k = theirs.size();
-  struct Agreement {
+  const bool groups = out.contains("groups");
+  if (groups)
+    for (const auto& g : people.groups)
+      if (std::none_of(out.at("groups").begin(), out.at("groups").end(),
+                       [&](const nlohmann::json& x) {
+                         return x.at("cell") == g.cell && x.at("group") == g.group;
+                       }))
+        throw InputError("the people's group " + g.group + " in " + g.cell +
+                             " is not among the replicates' groups (were they simulated from "
+                             "another version of the study?)",
+                         people.file);
+  std::size_t verdicts = 0;
+  for (const auto& t : people.tests) verdicts += std::isfinite(t.p);
+  struct Counts {
     long replicates = 0, all = 0;
     std::vector<long> agreeing;  // replicates by the number of tests agreeing
-    std::map<std::string, long> per_test;
+    std::map<std::string, long> per_test, same_order, inside;
     long with_groups = 0, all_orders = 0, all_inside = 0, pattern = 0;
-    std::map<std::string, long> same_order, inside;  // cell / "cell\tgroup" -> replicates
   };
-  std::map<std::string, std::string> people_order;  // cell -> the people's order of group means
-  for (const auto& g : people.groups)
-    if (!people_order.count(g.cell)) people_order[g.cell] = order_of_means(people.groups, g.cell);
-  std::map<int, Agreement> by_n;
+  std::map<int, Counts> by_n;
   for (const auto& [key, r] : reps) {
-    Agreement& a = by_n[key.first];
-    if (a.agreeing.empty()) a.agreeing.assign(k + 1, 0);
+    Counts& a = by_n[key.first];
+    if (a.agreeing.empty()) a.agreeing.assign(verdicts + 1, 0);
     ++a.replicates;
-    std::size_t same = 0;
-    for (const auto& t : r.at("tests")) {
-      const auto it = theirs.find(t.at("id").get<std::string>());
-      if (it == theirs.end()) continue;
-      if (significant(num_or_nan(t.at("p")), alpha) == significant(it->second->p, alpha))
-        ++same, ++a.per_test[it->first];
-    }
-    ++a.agreeing[same];
-    if (same == k) ++a.all;
-    // The people's order of the group means in every cell, every group mean inside the people's
-    // 95 % interval, and the whole pattern (with every verdict): records with group descriptives.
-    if (!r.contains("groups")) continue;
-    const auto gs = record_groups(r);
+    std::vector<TestOutcome> tests;
+    for (const auto& t : r.at("tests"))
+      tests.push_back({t.at("id").get<std::string>(), num_or_nan(t.at("p")), kNaN, ""});
+    const bool has_groups = r.contains("groups");
+    const Comparison c = compare_with_people(
+        people, tests, has_groups ? record_groups(r) : std::vector<GroupDescriptive>{}, alpha);
+    for (const auto& id : c.agree) ++a.per_test[id];
+    ++a.agreeing[c.agree.size()];
+    a.all += c.all_agree;
+    if (!has_groups) continue;  // an older record: verdicts only
     ++a.with_groups;
-    bool orders = true, inside = true;
-    for (const auto& [cell, order] : people_order) {
-      const bool same_order = order_of_means(gs, cell) == order;
-      orders = orders && same_order;
-      a.same_order[cell] += same_order;
-    }
-    for (const auto& p : people.groups) {
-      if (!std::isfinite(p.ci_low)) continue;
-      const auto it = std::find_if(gs.begin(), gs.end(), [&](const GroupDescriptive& g) {
-        return g.cell == p.cell && g.group == p.group;
-      });
-      const bool in = it != gs.end() && it->mean >= p.ci_low && it->mean <= p.ci_high;
-      inside = inside && in;
-      a.inside[p.cell + "\t" + p.group] += in;
-    }
-    a.all_orders += orders;
-    a.all_inside += inside;
-    a.pattern += same == k && orders && inside;
+    for (const auto& cell : c.same_order) ++a.same_order[cell];
+    for (const auto& k : c.inside) ++a.inside[k];
+    a.all_orders += c.all_orders;
+    a.all_inside += c.all_inside;
+    a.pattern += c.pattern();
   }
+  const double draws = static_cast<double>(people.resamples);
+  // A right model's share at n of `count` (a RightModel member), null without draws at n.
+  auto right = [&](int n, auto count) -> nlohmann::json {
+    const auto it = people.right.find(n);
+    if (it == people.right.end() || people.resamples <= 0) return nullptr;
+    return count(it->second) / draws;
+  };
+  auto in = [](const std::map<std::string, long>& m, const std::string& k) {
+    const auto it = m.find(k);
+    return it == m.end() ? 0L : it->second;
+  };
   for (auto& t : out["tests"]) {
     const std::string id = t.at("id").get<std::string>();
     const auto mine = std::find_if(people.tests.begin(), people.tests.end(),
                                    [&](const TestOutcome& x) { return x.id == id; });
     if (mine == people.tests.end()) continue;
-    const bool has_verdict = theirs.count(id) > 0;
+    const bool has_verdict = std::isfinite(mine->p);
     t["people"] = {{"p", num_or_null(mine->p)},
                    {"effect", num_or_null(mine->effect)},
                    {"significant",
                     has_verdict ? nlohmann::json(significant(mine->p, alpha)) : nlohmann::json()}};
-    for (auto& c : t["by_n"])
-      c["agree"] =
-          has_verdict ? nlohmann::json(by_n[c.at("n").get<int>()].per_test[id]) : nlohmann::json();
-  }
-  const double resamples = static_cast<double>(people.resamples);
-  const auto rci = analysis::wilson_interval(static_cast<int>(people.resampled_all_agree),
-                                             static_cast<int>(people.resamples));
-  nlohmann::json resampled = {{"resamples", people.resamples},
-                              {"seed", std::to_string(people.seed)},
-                              {"all_agree", num_or_null(people.resampled_all_agree / resamples)},
-                              {"all_agree_ci_low", rci.low},
-                              {"all_agree_ci_high", rci.high},
-                              {"median_agreeing", num_or_null(people.resampled_median_agreeing)},
-                              {"agree", nlohmann::json::object()}};
-  for (const auto& [id, t] : theirs) {
-    const auto it = people.resampled_agree.find(id);
-    resampled["agree"][id] =
-        num_or_null((it == people.resampled_agree.end() ? 0 : it->second) / resamples);
-  }
-  const bool groups = out.contains("groups");
-  if (groups) {
-    resampled["same_order"] = nlohmann::json::object();
-    for (const auto& [cell, order] : people_order) {
-      const auto it = people.resampled_same_order.find(cell);
-      resampled["same_order"][cell] =
-          num_or_null((it == people.resampled_same_order.end() ? 0 : it->second) / resamples);
+    for (auto& c : t["by_n"]) {
+      const int n = c.at("n").get<int>();
+      c["agree"] = has_verdict ? nlohmann::json(in(by_n[n].per_test, id)) : nlohmann::json();
+      c["right_model"] =
+          has_verdict
+              ? right(n, [&](const RightModel& m) { return static_cast<double>(in(m.agree, id)); })
+              : nlohmann::json();
     }
-    resampled["all_orders"] = num_or_null(people.resampled_all_orders / resamples);
-    resampled["all_inside"] = num_or_null(people.resampled_all_inside / resamples);
-    resampled["pattern"] = num_or_null(people.resampled_pattern / resamples);
+  }
+  if (groups) {
     for (auto& g : out["groups"]) {
       const auto it =
           std::find_if(people.groups.begin(), people.groups.end(), [&](const GroupDescriptive& x) {
@@ -810,41 +843,71 @@ void add_people(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
                      {"sd", num_or_null(it->sd)},
                      {"ci_low", num_or_null(it->ci_low)},
                      {"ci_high", num_or_null(it->ci_high)}};
-      for (auto& c : g["by_n"])
-        c["inside"] =
-            std::isfinite(it->ci_low)
-                ? nlohmann::json(by_n[c.at("n").get<int>()].inside[it->cell + "\t" + it->group])
+      const std::string key = it->cell + "\t" + it->group;
+      const bool compared = std::isfinite(it->ci_low);
+      for (auto& c : g["by_n"]) {
+        const int n = c.at("n").get<int>();
+        c["inside"] = compared ? nlohmann::json(in(by_n[n].inside, key)) : nlohmann::json();
+        c["right_model"] =
+            compared
+                ? right(n,
+                        [&](const RightModel& m) { return static_cast<double>(in(m.inside, key)); })
                 : nlohmann::json();
+      }
     }
     for (auto& o : out["orders"]) {
-      const auto it = people_order.find(o.at("cell").get<std::string>());
-      if (it == people_order.end()) continue;
-      o["people"] = {{"order", it->second.empty() ? nlohmann::json() : nlohmann::json(it->second)},
-                     {"resampled", resampled["same_order"][it->first]}};
-      for (auto& c : o["by_n"]) c["same"] = by_n[c.at("n").get<int>()].same_order[it->first];
+      const std::string cell = o.at("cell").get<std::string>();
+      const std::string order = order_of_means(people.groups, cell);
+      const bool compared = !compared_order(people.groups, cell).empty();
+      o["people"] = {{"order", order.empty() ? nlohmann::json() : nlohmann::json(order)},
+                     {"compared", compared}};
+      for (auto& c : o["by_n"]) {
+        const int n = c.at("n").get<int>();
+        c["same"] = compared ? nlohmann::json(in(by_n[n].same_order, cell)) : nlohmann::json();
+        c["right_model"] = compared ? right(n,
+                                            [&](const RightModel& m) {
+                                              return static_cast<double>(in(m.same_order, cell));
+                                            })
+                                    : nlohmann::json();
+      }
     }
   }
   nlohmann::json p = {{"file", people.file},
                       {"n", people.n},
-                      {"tests", k},
-                      {"resampled", resampled},
+                      {"tests", verdicts},
+                      {"resamples", people.resamples},
+                      {"seed", std::to_string(people.seed)},
                       {"by_n", nlohmann::json::array()}};
   for (const auto& [n, a] : by_n) {
     const auto ci =
         analysis::wilson_interval(static_cast<int>(a.all), static_cast<int>(a.replicates));
-    p["by_n"].push_back({{"n", n},
-                         {"replicates", a.replicates},
-                         {"all_agree", a.all},
-                         {"ci_low", ci.low},
-                         {"ci_high", ci.high},
-                         {"median_agreeing", num_or_null(median_of_counts(a.agreeing))}});
+    nlohmann::json b = {{"n", n},
+                        {"replicates", a.replicates},
+                        {"all_agree", a.all},
+                        {"ci_low", ci.low},
+                        {"ci_high", ci.high},
+                        {"median_agreeing", num_or_null(median_of_counts(a.agreeing))}};
     if (groups) {
-      nlohmann::json& b = p["by_n"].back();
       b["group_replicates"] = a.with_groups;
       b["all_orders"] = a.all_orders;
       b["all_inside"] = a.all_inside;
       b["pattern"] = a.pattern;
     }
+    const auto it = people.right.find(n);
+    if (it != people.right.end() && people.resamples > 0) {
+      const RightModel& m = it->second;
+      nlohmann::json rm = {{"all_agree", m.all_agree / draws},
+                           {"median_agreeing", num_or_null(m.median_agreeing)}};
+      if (groups) {
+        rm["all_orders"] = m.all_orders / draws;
+        rm["all_inside"] = m.all_inside / draws;
+        rm["pattern"] = m.pattern / draws;
+      }
+      b["right_model"] = rm;
+    } else {
+      b["right_model"] = nullptr;
+    }
+    p["by_n"].push_back(b);
   }
   out["people"] = p;
 }
@@ -869,8 +932,10 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   std::map<std::pair<int, int>, nlohmann::json> reps;
   std::map<std::pair<int, int>, std::string> where;  // FILE:LINE each replicate came from
   std::string sha, study_id;
-  std::string first;                   // FILE:LINE of the first replicate read
-  std::vector<std::string> first_ids;  // its test ids, sorted
+  std::string first;                     // FILE:LINE of the first replicate read
+  std::vector<std::string> first_ids;    // its test ids, sorted
+  std::vector<std::string> first_cells;  // "cell\tgroup" of the first record with groups, sorted
+  std::string first_cells_at;
   std::map<std::string, std::pair<std::string, std::string>> effect_of;  // id -> (name, FILE:LINE)
   for (const auto& f : files)
     for (auto& [r, line] : read_replicates(f)) {
@@ -888,8 +953,35 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
         throw InputError(SourceLocation{f, line, 0, -1, "$.study"},
                          "study id " + shown(r.at("study")) + " differs from \"" + study_id +
                              "\" at " + first + " (same SHA-256: the record was edited)");
+      // Every replicate of one study has the same tested cells and groups (when it has them).
+      if (r.contains("groups")) {
+        std::vector<std::string> cells;
+        for (const auto& g : r.at("groups"))
+          cells.push_back(g.at("cell").get<std::string>() + "\t" +
+                          g.at("group").get<std::string>());
+        std::sort(cells.begin(), cells.end());
+        if (first_cells.empty()) {
+          first_cells = cells, first_cells_at = at;
+        } else if (cells != first_cells) {
+          throw InputError(SourceLocation{f, line, 0, -1, "$.groups"},
+                           "the replicate's groups (cells and groups) differ from those of the "
+                           "replicate at " +
+                               first_cells_at + " (every replicate of a study has the same)");
+        }
+      }
       const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
       if (auto it = reps.find(key); it != reps.end()) {
+        // The same replicate from a palplab before group descriptives (2026-12-05) and after:
+        // equal but for "groups", which the newer one adds; keep that one.
+        nlohmann::json a = it->second, b = r;
+        if (a.contains("groups") != b.contains("groups")) {
+          a.erase("groups");
+          b.erase("groups");
+          if (a == b) {
+            if (r.contains("groups")) it->second = std::move(r), where[key] = at;
+            continue;
+          }
+        }
         if (it->second != r)
           throw InputError(here, "replicate n=" + std::to_string(key.first) + " #" +
                                      std::to_string(key.second) + " differs from the one at " +
@@ -1180,8 +1272,10 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
   fs::create_directories(out_dir, ec);
   auto fmt = [](const nlohmann::json& v, int digits) {
     if (!v.is_number()) return std::string("—");
+    const double x = v.get<double>();
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v.get<double>());
+    // Far beyond any measure's range (an edited record): exponent form rather than 300 digits.
+    std::snprintf(buf, sizeof buf, std::fabs(x) < 1e12 ? "%.*f" : "%.*e", digits, x);
     return std::string(buf);
   };
   std::ostringstream md;
@@ -1247,13 +1341,34 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
        << "\n";
   }
   const bool with_people = s.contains("people");
+  // "k/R" and, when known, what a right model reaches at that n: "k/R (right model 0.83)".
+  auto count_of = [&](const nlohmann::json& k, const nlohmann::json& r,
+                      const nlohmann::json& right) {
+    if (!k.is_number()) return std::string("—");
+    return std::to_string(k.get<long>()) + "/" + std::to_string(r.get<long>()) +
+           (right.is_number() ? " (right model " + fmt(right, 3) + ")" : "");
+  };
   if (s.contains("groups")) {
+    long with = 0, all = 0;
+    for (const auto& [n, k] : s.at("replicates").items()) all += k.get<long>();
+    for (const auto& o : s.at("orders"))
+      for (const auto& c : o.at("by_n")) with += c.at("replicates").get<long>();
+    with /= std::max<long>(1, static_cast<long>(s.at("orders").size()));
     md << "\n## Group means\n\nPer tested cell and group, the replicates' group mean (median "
           "[2.5 %, 97.5 %] over the replicates) and SD (median)"
        << (with_people ? "; the people's mean with its 95 % interval (t) and SD, and how many "
-                         "replicates' group means lie inside that interval"
+                         "replicates' group means lie inside that interval, beside the share a "
+                         "right model reaches (the people's study and a study of n drawn from "
+                         "theirs: a 95 % interval holds a replication's mean about 83 % of the "
+                         "time at equal n)"
                        : "")
-       << ".\n\n| cell | group | n | replicates | mean median [2.5 %, 97.5 %] | SD median |"
+       << "."
+       << (with < all
+               ? " Group means are in " + std::to_string(with) + " of the " + std::to_string(all) +
+                     " replicates (records written before 2026-12-05 have none)."
+               : "")
+       << "\n\n| cell | group | n per group | replicates | mean median [2.5 %, 97.5 %] | SD median "
+          "|"
        << (with_people ? " people's mean [95 % CI] | people's SD | inside people's CI |" : "")
        << "\n|---|---|---:|---:|---|---:|" << (with_people ? "---|---:|---|" : "") << "\n";
     for (const auto& g : s.at("groups"))
@@ -1267,41 +1382,50 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
             const auto& pg = g.at("people");
             md << " " << fmt(pg.at("mean"), 3) << " [" << fmt(pg.at("ci_low"), 3) << ", "
                << fmt(pg.at("ci_high"), 3) << "] | " << fmt(pg.at("sd"), 3) << " | "
-               << (c.at("inside").is_number() ? std::to_string(c.at("inside").get<long>()) + "/" +
-                                                    std::to_string(c.at("replicates").get<long>())
-                                              : std::string("—"))
-               << " |";
+               << count_of(c.at("inside"), c.at("replicates"), c.at("right_model")) << " |";
           } else {
             md << " — | — | — |";
           }
         }
         md << "\n";
       }
-    md << "\nOrder of the group means (largest first), replicates per order:\n\n";
+    md << "\nOrder of the group means (largest first; equal means \"=\"), replicates per order"
+       << (with_people ? ", and how many have the people's order beside the share a right "
+                         "model reaches"
+                       : "")
+       << ":\n\n";
     for (const auto& o : s.at("orders")) {
-      md << "- " << o.at("cell").get<std::string>() << ":";
-      for (const auto& c : o.at("by_n")) {
-        md << " n = " << c.at("n").get<int>() << ":";
-        std::string list;
-        for (const auto& x : c.at("orders"))
-          list += (list.empty() ? " " : ", ") + x.at("order").get<std::string>() + " " +
-                  std::to_string(x.at("count").get<long>()) + "/" +
-                  std::to_string(c.at("replicates").get<long>());
-        md << list << ".";
-        if (c.contains("same"))
-          md << " The people's order ("
-             << (o.at("people").at("order").is_string()
-                     ? o.at("people").at("order").get<std::string>()
-                     : std::string("undefined"))
-             << "): " << c.at("same").get<long>() << "/" << c.at("replicates").get<long>()
-             << " (people resampled " << fmt(o.at("people").at("resampled"), 3) << ").";
+      md << "- " << o.at("cell").get<std::string>();
+      if (o.contains("people")) {
+        const auto& po = o.at("people");
+        md << " (people: "
+           << (po.at("order").is_string() ? po.at("order").get<std::string>() : "undefined")
+           << (po.at("compared").get<bool>() ? "" : "; a tie or undefined: not compared") << ")";
       }
       md << "\n";
+      for (const auto& c : o.at("by_n")) {
+        const long r = c.at("replicates").get<long>();
+        md << "  - n = " << c.at("n").get<int>() << ":";
+        long listed = 0;
+        std::string list;
+        for (const auto& x : c.at("orders")) {
+          list += (list.empty() ? " " : ", ") + x.at("order").get<std::string>() + " " +
+                  std::to_string(x.at("count").get<long>()) + "/" + std::to_string(r);
+          listed += x.at("count").get<long>();
+        }
+        if (listed < r)
+          list += (list.empty() ? " " : ", ") + std::string("undefined (a group without values) ") +
+                  std::to_string(r - listed) + "/" + std::to_string(r);
+        md << list << ".";
+        if (c.contains("same") && c.at("same").is_number())
+          md << " The people's order: "
+             << count_of(c.at("same"), c.at("replicates"), c.at("right_model")) << ".";
+        md << "\n";
+      }
     }
   }
   if (with_people) {
     const auto& p = s.at("people");
-    const auto& rs = p.at("resampled");
     std::string sizes;
     for (const auto& [g, n] : p.at("n").items())
       sizes += (sizes.empty() ? "" : ", ") + g + " " + std::to_string(n.get<int>());
@@ -1310,13 +1434,13 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
        << ")\n\nPeople per group: " << sizes
        << ". A verdict is significant (p < alpha) or not (an undefined test counts as not). "
           "\"Replicates agreeing\" counts the simulated replicates above whose verdict is the "
-          "people's; \"people resampled\" is the people's own study replicated "
-       << rs.at("resamples").get<long>() << " times by resampling its participants within their "
-       << "groups (seed " << rs.at("seed").get<std::string>()
-       << "): how often a study like theirs reaches their verdict if the truth is what they "
-          "showed, i.e. what to expect of a model that is right.\n\n"
+          "people's; \"right model\" is how often a model that is right reaches it at that n: "
+          "the people's study drawn again from its participants (within groups, with "
+          "replacement: a truth their data allow) and a study of n per group drawn from that, "
+       << p.at("resamples").get<long>() << " times (seed " << p.at("seed").get<std::string>()
+       << "), so that both studies' sampling errors are in it.\n\n"
        << "| test | people's p | people's effect | people's verdict | replicates agreeing (n: "
-          "k/R) | people resampled |\n|---|---:|---:|---|---|---:|\n";
+          "k/R) | right model (n: share) |\n|---|---:|---:|---|---|---|\n";
     for (const auto& t : s.at("tests")) {
       if (!t.contains("people")) continue;
       const auto& pt = t.at("people");
@@ -1325,11 +1449,13 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
            << " | — | — | undefined (no verdict; not compared) | — | — |\n";
         continue;
       }
-      std::string model;
-      for (const auto& c : t.at("by_n"))
-        model += (model.empty() ? "" : "; ") + std::to_string(c.at("n").get<int>()) + ": " +
-                 std::to_string(c.at("agree").get<long>()) + "/" +
+      std::string model, right;
+      for (const auto& c : t.at("by_n")) {
+        const std::string n = std::to_string(c.at("n").get<int>()) + ": ";
+        model += (model.empty() ? "" : "; ") + n + std::to_string(c.at("agree").get<long>()) + "/" +
                  std::to_string(c.at("replicates").get<long>());
+        right += (right.empty() ? "" : "; ") + n + fmt(c.at("right_model"), 3);
+      }
       const std::string id = t.at("id").get<std::string>();
       std::string p_text = fmt(pt.at("p"), 4);
       if (pt.at("p").is_number() && pt.at("p").get<double>() < 1e-3) {
@@ -1339,39 +1465,53 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
       }
       md << "| " << id << " | " << p_text << " | " << fmt(pt.at("effect"), 2) << " | "
          << (pt.at("significant").get<bool>() ? "significant" : "not significant") << " | " << model
-         << " | " << fmt(rs.at("agree").at(id), 3) << " |\n";
+         << " | " << right << " |\n";
     }
-    std::string model;
-    for (const auto& c : p.at("by_n"))
-      model += (model.empty() ? "" : "; ") + std::to_string(c.at("n").get<int>()) + ": " +
-               std::to_string(c.at("all_agree").get<long>()) + "/" +
-               std::to_string(c.at("replicates").get<long>()) + " [" + fmt(c.at("ci_low"), 2) +
-               ", " + fmt(c.at("ci_high"), 2) + "], median " + fmt(c.at("median_agreeing"), 1) + of;
-    md << "| **all verdicts** | | | | " << model << " | " << fmt(rs.at("all_agree"), 3) << " ["
-       << fmt(rs.at("all_agree_ci_low"), 2) << ", " << fmt(rs.at("all_agree_ci_high"), 2)
-       << "], median " << fmt(rs.at("median_agreeing"), 1) << of << " |\n";
-    if (rs.contains("pattern")) {
-      md << "\nThe people's pattern (every verdict above, the people's order of the group means "
-            "in every cell, every group mean inside the people's 95 % interval), replicates "
-            "reaching it (Wilson 95 %) and the resampled people's share:\n\n"
-         << "| n | replicates | every order | every mean inside | whole pattern |\n"
-         << "|---:|---:|---|---|---|\n";
-      auto share = [&](long k, long r) {
+    std::string model, right;
+    for (const auto& c : p.at("by_n")) {
+      const std::string n = std::to_string(c.at("n").get<int>()) + ": ";
+      model += (model.empty() ? "" : "; ") + n + std::to_string(c.at("all_agree").get<long>()) +
+               "/" + std::to_string(c.at("replicates").get<long>()) + " [" +
+               fmt(c.at("ci_low"), 2) + ", " + fmt(c.at("ci_high"), 2) + "], median " +
+               fmt(c.at("median_agreeing"), 1) + of;
+      const auto& rm = c.at("right_model");
+      right += (right.empty() ? "" : "; ") + n +
+               (rm.is_object() ? fmt(rm.at("all_agree"), 3) + ", median " +
+                                     fmt(rm.at("median_agreeing"), 1) + of
+                               : std::string("—"));
+    }
+    md << "| **all verdicts** | | | | " << model << " | " << right << " |\n";
+    bool pattern = false;
+    for (const auto& c : p.at("by_n")) pattern = pattern || c.contains("pattern");
+    if (pattern) {
+      md << "\nThe people's whole pattern: replicates (with group means) reaching every verdict "
+            "above, the people's order of the group means in every compared cell, every group "
+            "mean inside the people's 95 % interval, and all of these (Wilson 95 %), each beside "
+            "the share a right model reaches:\n\n"
+         << "| n | replicates | every verdict | every order | every mean inside | whole pattern "
+            "|\n|---:|---:|---|---|---|---|\n";
+      auto share = [&](long k, long r, const nlohmann::json& rm, const char* key) {
         const auto ci = analysis::wilson_interval(static_cast<int>(k), static_cast<int>(r));
         return std::to_string(k) + "/" + std::to_string(r) + " [" + fmt(ci.low, 2) + ", " +
-               fmt(ci.high, 2) + "]";
+               fmt(ci.high, 2) + "]" +
+               (rm.is_object() ? " (right model " + fmt(rm.at(key), 3) + ")" : std::string());
       };
       for (const auto& c : p.at("by_n")) {
+        if (!c.contains("pattern")) continue;
         const long r = c.at("group_replicates").get<long>();
         if (r == 0) continue;
-        md << "| " << c.at("n").get<int>() << " | " << r << " | "
-           << share(c.at("all_orders").get<long>(), r) << " | "
-           << share(c.at("all_inside").get<long>(), r) << " | "
-           << share(c.at("pattern").get<long>(), r) << " |\n";
+        const auto& rm = c.at("right_model");
+        md << "| " << c.at("n").get<int>() << " | " << r << " | ";
+        // Every verdict among the replicates with group means is not stored: show the count of
+        // all replicates when every one has groups (the same set), else leave it to the table.
+        if (r == c.at("replicates").get<long>())
+          md << share(c.at("all_agree").get<long>(), r, rm, "all_agree");
+        else
+          md << "(above)";
+        md << " | " << share(c.at("all_orders").get<long>(), r, rm, "all_orders") << " | "
+           << share(c.at("all_inside").get<long>(), r, rm, "all_inside") << " | "
+           << share(c.at("pattern").get<long>(), r, rm, "pattern") << " |\n";
       }
-      md << "| people resampled | " << rs.at("resamples").get<long>() << " | "
-         << fmt(rs.at("all_orders"), 3) << " | " << fmt(rs.at("all_inside"), 3) << " | "
-         << fmt(rs.at("pattern"), 3) << " |\n";
     }
   }
   const std::string table = md.str();

@@ -64,7 +64,8 @@ struct GroupDescriptive {
   double ci_low = 0.0, ci_high = 0.0;  // 95 % interval of the mean (t, n - 1 df); NaN if n < 2
 };
 // The order of the group means of `cell` in `groups`, largest first: "A > B > C", equal means
-// joined by " = " in study order ("A = B > C"); empty when a group of the cell has no mean.
+// joined by " = " in alphabetical order ("A = B > C"); empty when a group of the cell has no
+// mean.
 std::string order_of_means(const std::vector<GroupDescriptive>& groups, const std::string& cell);
 // Every group in every cell a declared test (anova_oneway, pairwise_t) takes, cells in the order
 // the analyses name them, groups in study order: what the tests compared.
@@ -114,28 +115,49 @@ struct LeftOut {
   long total() const;
 };
 
-// People's verdicts on the study's declared tests (`palplab power --human FILE.csv`;
-// protocols/people_verdicts.cpp), and how often the people's own study, replicated by
-// resampling its participants within their groups, reaches the same verdicts: the agreement a
-// model could reach if the truth were what the people showed (a p near alpha replicates about
-// half the time; Goodman 1992).
+// How a model that is right would fare against the people's results, at one group size n: the
+// people's study is drawn again from its participants (resampled with replacement within each
+// group: a truth the people's data allow), and a study of n per group from that (the model's
+// replicate); both draws' sampling errors are in it, as they are between the model's replicate
+// and the people's study (the predictive view of replication: Killeen 2005; a 95 % interval
+// captures the mean of a same-size replication about 83 % of the time, not 95 %: Cumming &
+// Maillardet 2006). Counts over PeopleVerdicts::resamples draws.
+struct RightModel {
+  std::map<std::string, long> agree;       // test id -> draws reaching the people's verdict
+  long all_agree = 0;                      // draws reaching every verdict
+  double median_agreeing = 0.0;            // median number of tests agreeing
+  std::map<std::string, long> same_order;  // cell -> draws with the people's order
+  std::map<std::string, long> inside;      // GroupDescriptive key "cell\tgroup" -> draws inside
+  long all_orders = 0, all_inside = 0, pattern = 0;  // every order / mean inside / both + verdicts
+};
+
+// People's results on the study's declared tests (`palplab power --human FILE.csv`;
+// protocols/people_verdicts.cpp): their verdicts, group means and orders, and per group size
+// what a right model would reach (RightModel).
 struct PeopleVerdicts {
   std::string file;                // the human CSV
   std::vector<TestOutcome> tests;  // the declared tests run on the people's values
   std::map<std::string, int> n;    // group -> participants with a value in the tested cells
+  // The people's group descriptives in the tested cells (tested_group_descriptives).
+  std::vector<GroupDescriptive> groups;
   long resamples = 0;
   std::uint64_t seed = 0;
-  std::map<std::string, long> resampled_agree;  // test id -> resamples with people's verdict
-  long resampled_all_agree = 0;                 // resamples with every verdict people's
-  double resampled_median_agreeing = 0.0;       // median number of tests agreeing
-  // The people's group descriptives in the tested cells (tested_group_descriptives), and of the
-  // resamples: how many had the people's order of the group means in a cell, in every cell,
-  // every group mean inside the people's 95 % interval, and the whole pattern (every verdict,
-  // every order, every mean inside).
-  std::vector<GroupDescriptive> groups;
-  std::map<std::string, long> resampled_same_order;  // cell -> resamples
-  long resampled_all_orders = 0, resampled_all_inside = 0, resampled_pattern = 0;
+  std::map<int, RightModel> right;  // n -> what a right model reaches at n per group
 };
+// The people's order of the group means in `cell` as compared: empty when undefined or with a
+// tie (equal means have no order to reach; such a cell is not compared).
+std::string compared_order(const std::vector<GroupDescriptive>& groups, const std::string& cell);
+// One study's results (a replicate, or a right model's draw) against the people's: which tests
+// reach the people's verdict (tests without one are not compared), which cells have the
+// people's order (compared_order), which groups' means lie inside the people's 95 % interval
+// ("cell\tgroup"; groups without an interval are not compared; a missing mean is outside).
+struct Comparison {
+  std::vector<std::string> agree, same_order, inside;
+  bool all_agree = false, all_orders = false, all_inside = false;
+  bool pattern() const { return all_agree && all_orders && all_inside; }
+};
+Comparison compare_with_people(const PeopleVerdicts& people, const std::vector<TestOutcome>& tests,
+                               const std::vector<GroupDescriptive>& groups, double alpha);
 // A verdict: significant (finite p < alpha) or not (an undefined test counts as not).
 bool significant(double p, double alpha);
 // The median of values 0, 1, 2, ... given by their counts (counts[k] = how many were k); the
@@ -147,10 +169,12 @@ double median_of_counts(const std::vector<long>& counts);
 // (when given). Every record is checked, in scope or not. InputError when files hold different
 // studies or settings, or no replicate in scope.
 // With `people`, every test also gets people's p, effect and verdict and, per n, how many
-// replicates reached that verdict; "people" holds per n how many replicates reached all of
-// people's verdicts (Wilson 95 % interval) and the median number agreeing, beside the same for
-// the resampled people's study. InputError when a test of `people` is not among the
-// replicates' tests.
+// replicates reached that verdict; every group the people's mean and interval and per n the
+// replicates inside it; every cell the people's order and per n the replicates with it;
+// "people" holds per n the replicates reaching all verdicts (Wilson 95 % interval), every order,
+// every mean inside, the whole pattern — each beside what a right model reaches at that n
+// (RightModel, "right_model"). InputError when a test or a group of `people` is not among the
+// replicates'.
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
                              double target_power, const SummaryScope& scope = {},
                              LeftOut* left_out = nullptr, const PeopleVerdicts* people = nullptr);
