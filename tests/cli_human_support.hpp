@@ -47,7 +47,7 @@ inline std::string mouse_run(const std::string& study, const std::filesystem::pa
       "--size " + std::to_string(w) + "x" + std::to_string(h) + " --mouse-script " +
           script.string(),
       kHumanNow,
-      "PALPLAB_AUDIO_DEVICE=null timeout -k 10 300 xvfb-run -a -s '-screen 0 640x480x24' ");
+      "PALPLAB_AUDIO_DEVICE=null " + xvfb_run("640x480x24", db.parent_path() / "Xauthority"));
 }
 
 // The pixel where the window's default camera (the renderer centres the rest bounding sphere)

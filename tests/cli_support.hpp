@@ -60,6 +60,15 @@ inline const std::filesystem::path& process_scratch() {
   return d;
 }
 
+// The prefix that runs a command under Xvfb (screen e.g. "640x480x24"), bounded at 300 s, with
+// the X authority file `auth` (a path in the test's scratch directory). With -f xvfb-run makes
+// no temporary directory of its own: under load its `rm -r` of that directory failed now and
+// then after the command had ended correctly (exit 5, "problem while cleaning up temporary
+// directory"; CliRunMouse.ClosingTheWindowMidSessionAbortsItKeptAndFlagged, 2026-12-05).
+inline std::string xvfb_run(const std::string& screen, const std::filesystem::path& auth) {
+  return "timeout -k 10 300 xvfb-run -a -f " + auth.string() + " -s '-screen 0 " + screen + "' ";
+}
+
 // Runs `PALPLAB_BINARY args` in the process's scratch directory.
 inline CliResult run_palplab(const std::string& args) {
   return run_palplab(args, process_scratch());

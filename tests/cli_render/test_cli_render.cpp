@@ -172,7 +172,7 @@ TEST(CliView, FramesAndScreenshotUnderXvfb) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
   const fs::path shot = tmp("view.png");
-  const Result r = run("timeout -k 10 300 xvfb-run -a -s '-screen 0 1024x768x24' " +
+  const Result r = run(palplab::testing::xvfb_run("1024x768x24", tmp("Xauthority")) +
                        std::string(PALPLAB_BINARY) + " view " + proto("A") +
                        " --frames 30 --size 640x480 --screenshot " + shot.string());
   ASSERT_EQ(r.code, 0) << r.out;
@@ -208,7 +208,7 @@ TEST(CliView, RecordTraceThenReplayItUnderXvfb) {
     GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
   const fs::path trace = tmp("view.trace"), shot = tmp("replay.png");
   const std::string xvfb =
-      "timeout -k 10 300 xvfb-run -a -s '-screen 0 800x600x24' " + std::string(PALPLAB_BINARY);
+      palplab::testing::xvfb_run("800x600x24", tmp("Xauthority")) + std::string(PALPLAB_BINARY);
   Result r = run(xvfb + " view " + proto("B") + " --frames 20 --size 320x240 --record-trace " +
                  trace.string());
   ASSERT_EQ(r.code, 0) << r.out;
@@ -249,11 +249,11 @@ TEST(CliView, StCueFlashesTheBorderWhenTheForceCrossesSt) {
         << ", \"y\": " << px->y << ", \"left\": true}, {\"t\": 0.05, \"wheel\": " << notches
         << "}]}";
     }
-    const Result r =
-        run("PALPLAB_AUDIO_DEVICE=null timeout -k 10 300 xvfb-run -a -s '-screen 0 640x480x24' " +
-            std::string(PALPLAB_BINARY) + " view " + proto("A") + " --size " + std::to_string(W) +
-            "x" + std::to_string(H) + " --mouse-script " + script.string() +
-            " --frames 20 --screenshot " + shot.string());
+    const Result r = run("PALPLAB_AUDIO_DEVICE=null " +
+                         palplab::testing::xvfb_run("640x480x24", tmp("Xauthority")) +
+                         std::string(PALPLAB_BINARY) + " view " + proto("A") + " --size " +
+                         std::to_string(W) + "x" + std::to_string(H) + " --mouse-script " +
+                         script.string() + " --frames 20 --screenshot " + shot.string());
     EXPECT_EQ(r.code, 0) << r.out << r.err;
     // How long the tone sounded (the haptic thread switches it; ALSA's null device plays it).
     const auto at = r.out.find("ST tone: ");
