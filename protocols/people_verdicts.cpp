@@ -11,6 +11,14 @@
 
 namespace palplab::protocols {
 
+namespace {
+// The number of tests with a verdict (a p) in `v`.
+std::size_t verdicts_of(const PeopleVerdicts& v) {
+  return static_cast<std::size_t>(std::count_if(
+      v.tests.begin(), v.tests.end(), [](const TestOutcome& t) { return std::isfinite(t.p); }));
+}
+}  // namespace
+
 PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>& cells,
                                double alpha, const std::vector<int>& sizes, long resamples) {
   if (cells.empty()) throw InputError("no human data");
@@ -73,35 +81,42 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
                      "none of the study's tests is defined on the people's data (every group's "
                      "values without variance?): there is no verdict to compare");
 
-  // A right model at each n: the people's study drawn again from its participants (with
-  // replacement within groups: a truth their data allow), and n per group drawn from that.
+  // A right model at each n: a people's study of the same size and a replicate of n per group,
+  // drawn independently from the people's participants (with replacement within groups: the
+  // truth taken as their distribution), the replicate compared with the drawn people's study.
   out.resamples = resamples;
   out.seed = derive_seed(study.seed, "people_resample");
-  Rng rng(out.seed);
-  const auto verdicts = static_cast<std::size_t>(std::count(defined.begin(), defined.end(), true));
-  std::vector<SimValue> drawn;
-  std::vector<const std::string*> truth;
+  std::vector<SimValue> people_draw, model_draw;
+  // `count` participants of each group drawn into `drawn`.
+  auto draw = [&](Rng& rng, std::vector<SimValue>& drawn, int count) {
+    drawn.clear();
+    for (const auto& g : study.groups) {
+      const auto& who = members[g.id];
+      const int k = count > 0 ? count : static_cast<int>(who.size());
+      for (int j = 0; j < k; ++j)
+        for (SimValue v : values_of[who[rng.below(who.size())]]) {
+          v.participant = g.id + "#" + std::to_string(j);  // each draw a participant of its own
+          drawn.push_back(std::move(v));
+        }
+    }
+  };
   for (int n : sizes) {
+    Rng rng(derive_seed(out.seed, static_cast<std::uint64_t>(n)));  // n's draws alone
     RightModel& m = out.right[n];
-    std::vector<long> agreeing(verdicts + 1, 0);  // draws by the number of tests agreeing
+    std::vector<long> agreeing(verdicts_of(out) + 1, 0);  // draws by the number agreeing
     for (long r = 0; r < resamples; ++r) {
-      drawn.clear();
-      for (const auto& g : study.groups) {
-        const auto& who = members[g.id];
-        truth.clear();
-        for (std::size_t j = 0; j < who.size(); ++j) truth.push_back(&who[rng.below(who.size())]);
-        for (int j = 0; j < n; ++j)
-          for (SimValue v : values_of[*truth[rng.below(truth.size())]]) {
-            v.participant = g.id + "#" + std::to_string(j);  // each draw a participant of its own
-            drawn.push_back(std::move(v));
-          }
-      }
-      const Comparison c = compare_with_people(out, run_declared_analyses(study, drawn),
-                                               tested_group_descriptives(study, drawn), alpha);
+      draw(rng, people_draw, 0);
+      draw(rng, model_draw, n);
+      PeopleVerdicts drawn_people;
+      drawn_people.tests = run_declared_analyses(study, people_draw);
+      drawn_people.groups = tested_group_descriptives(study, people_draw);
+      const Comparison c =
+          compare_with_people(drawn_people, run_declared_analyses(study, model_draw),
+                              tested_group_descriptives(study, model_draw), alpha);
       for (const auto& id : c.agree) ++m.agree[id];
       for (const auto& cell : c.same_order) ++m.same_order[cell];
       for (const auto& key : c.inside) ++m.inside[key];
-      ++agreeing[c.agree.size()];
+      ++agreeing[std::min(c.agree.size(), agreeing.size() - 1)];
       m.all_agree += c.all_agree;
       m.all_orders += c.all_orders;
       m.all_inside += c.all_inside;

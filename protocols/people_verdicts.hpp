@@ -11,12 +11,13 @@ namespace palplab::protocols {
 
 // Runs the study's declared tests (run_declared_analyses) on the people's values in `cells`
 // (read_human_cells) and describes their groups (tested_group_descriptives); then, for every
-// group size in `sizes`, draws `resamples` times what a right model would give (RightModel: the
-// people's study resampled by participants within groups, then n per group resampled from that;
+// group size in `sizes`, draws `resamples` times what a right model would give (RightModel: a
+// people's study and a replicate of n per group, both resampled by participants within groups;
 // each drawn participant brings all its values, so measures stay paired as they were; Efron &
-// Tibshirani 1993) and counts the draws reaching the people's verdicts, orders (a cell whose
-// people's means tie is not compared) and intervals. Seeded from the study seed (the same
-// numbers on every run); 2000 draws put a share near 0.4 within ±0.02 (95 %).
+// Tibshirani 1993) and counts the draws whose replicate reaches the drawn people's verdicts,
+// orders (a tie is not compared) and intervals. Seeded from the study seed and n (the same
+// numbers on every run, whatever other sizes are asked for); 2000 draws put a share near 0.4
+// within ±0.02 (95 %).
 // InputError, naming the CSV, when its data hold a cell the study does not simulate, or a tested
 // group has fewer than 2 values in a tested cell.
 PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>& cells,

@@ -725,6 +725,7 @@ void add_groups(nlohmann::json& out, const std::map<std::pair<int, int>, nlohman
       std::sort(a.sds.begin(), a.sds.end());
       g["by_n"].push_back({{"n", n},
                            {"replicates", a.means.size()},
+                           {"records", with[n]},
                            {"mean_median", num_or_null(quantile(a.means, 0.5))},
                            {"mean_q025", num_or_null(quantile(a.means, 0.025))},
                            {"mean_q975", num_or_null(quantile(a.means, 0.975))},
@@ -1358,9 +1359,9 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
           "[2.5 %, 97.5 %] over the replicates) and SD (median)"
        << (with_people ? "; the people's mean with its 95 % interval (t) and SD, and how many "
                          "replicates' group means lie inside that interval, beside the share a "
-                         "right model reaches (the people's study and a study of n drawn from "
-                         "theirs: a 95 % interval holds a replication's mean about 83 % of the "
-                         "time at equal n)"
+                         "right model reaches (a people's study and a study of n drawn "
+                         "independently from the people: a 95 % t interval holds a same-size "
+                         "replication's mean only about 86 % of the time at n = 10)"
                        : "")
        << "."
        << (with < all
@@ -1382,7 +1383,7 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
             const auto& pg = g.at("people");
             md << " " << fmt(pg.at("mean"), 3) << " [" << fmt(pg.at("ci_low"), 3) << ", "
                << fmt(pg.at("ci_high"), 3) << "] | " << fmt(pg.at("sd"), 3) << " | "
-               << count_of(c.at("inside"), c.at("replicates"), c.at("right_model")) << " |";
+               << count_of(c.at("inside"), c.at("records"), c.at("right_model")) << " |";
           } else {
             md << " — | — | — |";
           }
@@ -1434,9 +1435,10 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
        << ")\n\nPeople per group: " << sizes
        << ". A verdict is significant (p < alpha) or not (an undefined test counts as not). "
           "\"Replicates agreeing\" counts the simulated replicates above whose verdict is the "
-          "people's; \"right model\" is how often a model that is right reaches it at that n: "
-          "the people's study drawn again from its participants (within groups, with "
-          "replacement: a truth their data allow) and a study of n per group drawn from that, "
+          "people's; \"right model\" is how often a model that is right agrees at that n: a "
+          "people's study and a study of n per group drawn independently from the people's "
+          "participants (within groups, with replacement: the truth taken as their "
+          "distribution), the second compared with the first, "
        << p.at("resamples").get<long>() << " times (seed " << p.at("seed").get<std::string>()
        << "), so that both studies' sampling errors are in it.\n\n"
        << "| test | people's p | people's effect | people's verdict | replicates agreeing (n: "

@@ -115,13 +115,14 @@ struct LeftOut {
   long total() const;
 };
 
-// How a model that is right would fare against the people's results, at one group size n: the
-// people's study is drawn again from its participants (resampled with replacement within each
-// group: a truth the people's data allow), and a study of n per group from that (the model's
-// replicate); both draws' sampling errors are in it, as they are between the model's replicate
-// and the people's study (the predictive view of replication: Killeen 2005; a 95 % interval
-// captures the mean of a same-size replication about 83 % of the time, not 95 %: Cumming &
-// Maillardet 2006). Counts over PeopleVerdicts::resamples draws.
+// How a model that is right would fare against the people's results, at one group size n: a
+// people's study of their size and a replicate of n per group are drawn independently from the
+// people's participants (with replacement within each group: the truth taken as their
+// distribution), and the replicate is compared with the drawn people's study as a model's
+// replicate is with theirs — so both studies' sampling errors are in it (the predictive view of
+// replication, Killeen 2005: a 95 % interval holds a same-size replication's mean about 83 % of
+// the time with a z interval, Cumming & Maillardet 2006; ≈ 86 % with t intervals at n = 10).
+// Counts over PeopleVerdicts::resamples draws, seeded per n.
 struct RightModel {
   std::map<std::string, long> agree;       // test id -> draws reaching the people's verdict
   long all_agree = 0;                      // draws reaching every verdict

@@ -96,14 +96,16 @@ TEST(PeopleVerdicts, AreTheAnalysesOfThePeoplesValues) {
 }
 
 TEST(PeopleVerdicts, ARightModelsDrawsHoldBothStudiesSamplingErrors) {
-  // A right model's replicate and the people's study are two samples of one truth. A verdict
-  // whose p is near alpha is then reached about half the time (Goodman 1992; Killeen 2005), one
-  // with p = 7e-5 nearly always; a group mean falls inside the people's 95 % interval about
-  // 83 % of the time at equal n (Cumming & Maillardet 2006; a little more here: the t interval
-  // of n = 10, and the bootstrap's spread is (n - 1)/n of the sampling variance), and nearly
-  // always for a large simulated n, whose own error vanishes. Drawing only the people's study
-  // again (the truth taken as what they showed, 2026-12-04) gave ~0.98 at every n; drawing
-  // without replacement gives every share 1.0; drawing across groups erases the effects.
+  // A right model's replicate and the people's study are two samples of one truth, drawn here
+  // independently from the people's participants. A verdict the people reached with p near
+  // alpha is then reached by the other study about half the time (Goodman 1992; Killeen 2005),
+  // one with p = 7e-5 nearly always; at a large n the replicate is nearly always significant, so
+  // it agrees only as often as the people's own study is: about half the time for B - C. A
+  // group mean falls inside the people's 95 % t interval about 86 % of the time at equal
+  // n = 10 (normal data: P(|t9| < t9,.975 / sqrt 2); 83 % for a z interval, Cumming &
+  // Maillardet 2006) and towards 95 % for a large n. The review of 2026-12-05 found the first
+  // version (the people's study drawn again, the replicate drawn from that, compared with the
+  // observed interval) at 0.91-0.93; drawing only the people's study gave 0.98.
   const PeopleVerdicts v =
       people_verdicts(exp2(), read_human_cells(human_csv()), 0.05, {10, 100}, 2000);
   EXPECT_EQ(v.resamples, 2000);
@@ -112,8 +114,13 @@ TEST(PeopleVerdicts, ARightModelsDrawsHoldBothStudiesSamplingErrors) {
   EXPECT_GT(bc, 0.35);
   EXPECT_LT(bc, 0.70);
   EXPECT_GT(m.agree.at("pairwise_t palpation_force post_training A-C") / 2000.0, 0.9);
-  // At n = 100 the B - C force difference the people showed is found nearly always.
-  EXPECT_GT(v.right.at(100).agree.at("pairwise_t palpation_force post_training B-C") / 2000.0, 0.9);
+  // At n = 100 the replicate finds the B - C force difference nearly always, the people's study
+  // about half the time: they agree about half the time.
+  const double bc100 =
+      v.right.at(100).agree.at("pairwise_t palpation_force post_training B-C") / 2000.0;
+  EXPECT_GT(bc100, 0.35);
+  EXPECT_LT(bc100, 0.75);
+  EXPECT_GT(v.right.at(100).agree.at("pairwise_t palpation_force post_training A-C") / 2000.0, 0.9);
   // All eight together: at most the least reproducible one.
   EXPECT_LE(m.all_agree, m.agree.at("pairwise_t palpation_force post_training B-C"));
   EXPECT_GT(m.all_agree, 0);
@@ -122,16 +129,16 @@ TEST(PeopleVerdicts, ARightModelsDrawsHoldBothStudiesSamplingErrors) {
   for (const auto& g : v.groups) {
     const std::string key = g.cell + "\t" + g.group;
     const double at10 = m.inside.at(key) / 2000.0, at100 = v.right.at(100).inside.at(key) / 2000.0;
-    EXPECT_GT(at10, 0.82) << key;
-    EXPECT_LT(at10, 0.95) << key;
-    EXPECT_GT(at100, at10) << key;
-    EXPECT_GT(at100, 0.95) << key;
+    EXPECT_GT(at10, 0.78) << key;
+    EXPECT_LT(at10, 0.91) << key;
+    EXPECT_GT(at100, at10 + 0.03) << key;
+    EXPECT_GT(at100, 0.9) << key;
   }
   // Six means inside together: fewer. The people's force order A > B > C holds unless B and C
   // swap (B - C p = .046), their exploration order A > B > C unless B and C swap (p = .114,
   // more often).
-  EXPECT_LT(m.all_inside / 2000.0, 0.8);
-  EXPECT_GT(m.all_inside / 2000.0, 0.3);
+  EXPECT_LT(m.all_inside / 2000.0, 0.7);
+  EXPECT_GT(m.all_inside / 2000.0, 0.2);
   const double force_order = m.same_order.at("palpation_force post_training") / 2000.0;
   const double time_order = m.same_order.at("exploration_time post_training") / 2000.0;
   EXPECT_GT(force_order, 0.75);
