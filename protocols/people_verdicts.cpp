@@ -74,9 +74,7 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
   for (const auto& [g, who] : members) out.n[g] = static_cast<int>(who.size());
   // A test undefined on the people's data (no variance in any group, say) has no verdict to
   // compare: it is left out of every agreement (power.hpp). With none defined there is nothing.
-  std::vector<bool> defined;
-  for (const auto& t : out.tests) defined.push_back(std::isfinite(t.p));
-  if (std::none_of(defined.begin(), defined.end(), [](bool d) { return d; }))
+  if (verdicts_of(out) == 0)
     throw InputError(SourceLocation{out.file},
                      "none of the study's tests is defined on the people's data (every group's "
                      "values without variance?): there is no verdict to compare");

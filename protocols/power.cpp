@@ -1350,11 +1350,9 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
            (right.is_number() ? " (right model " + fmt(right, 3) + ")" : "");
   };
   if (s.contains("groups")) {
-    long with = 0, all = 0;
+    long with = 0, all = 0;  // replicates with group descriptives, and all of them
     for (const auto& [n, k] : s.at("replicates").items()) all += k.get<long>();
-    for (const auto& o : s.at("orders"))
-      for (const auto& c : o.at("by_n")) with += c.at("replicates").get<long>();
-    with /= std::max<long>(1, static_cast<long>(s.at("orders").size()));
+    for (const auto& c : s.at("groups").front().at("by_n")) with += c.at("records").get<long>();
     md << "\n## Group means\n\nPer tested cell and group, the replicates' group mean (median "
           "[2.5 %, 97.5 %] over the replicates) and SD (median)"
        << (with_people ? "; the people's mean with its 95 % interval (t) and SD, and how many "
