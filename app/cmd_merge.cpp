@@ -1,10 +1,14 @@
-// `palplab merge DIR_OR_FILE... --out DIR [--alpha A] [--target-power P] [--allow-partial]`:
+// `palplab merge DIR_OR_FILE... --out DIR [--alpha A] [--target-power P] [--allow-partial]
+//                [--human FILE.csv --study STUDY.json]`:
 // combines the replicate files of `palplab power --shard I/K` runs (every replicates*.jsonl in
 // the given directories, or the files given) and writes the power summary, identical to a single
 // run. A merge known to lack replicates (a shard's file not among the inputs, or indices missing
 // below the largest of an n: protocols::merge_gaps) is refused (exit 2) unless --allow-partial,
 // which writes it with a warning and marks power.json/md partial. Shard files of different K
 // (replicates.shard-I-of-K.jsonl) among the inputs are refused (exit 2) even then.
+// With --human FILE.csv --study STUDY.json the summary also compares the replicates with the
+// people's results as `palplab power --human` does (the records name their study only by its
+// SHA-256, so the study file is needed for its tests; it must be the records' study).
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
@@ -13,14 +17,18 @@
 #include "app/command.hpp"
 #include "app/output_dir.hpp"
 #include "common/input_error.hpp"
+#include "protocols/calibrate.hpp"
+#include "protocols/people_verdicts.hpp"
 #include "protocols/power.hpp"
+#include "protocols/study.hpp"
+#include "results/sha256.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 struct MergeArgs {
   std::vector<std::string> inputs;
-  std::string out;
+  std::string out, human, study;
   double alpha = 0.05, target = 0.80;
   bool allow_partial = false;
 };
@@ -41,7 +49,15 @@ palplab::app::CommandRegistration reg_merge{
       cmd->add_flag("--allow-partial", a->allow_partial,
                     "Merge even when shards or replicates are missing (a preliminary summary, "
                     "marked partial in power.json/md; a warning names what is missing)");
-      cmd->callback([a, code] {
+      auto* human_opt = cmd->add_option(
+          "--human", a->human,
+          "People's data of this study (tidy CSV, as `power --human`): also compare the "
+          "replicates with the people's verdicts, group means and orders (needs --study)");
+      auto* study_opt = cmd->add_option(
+          "--study", a->study,
+          "The study file the replicates simulated (its SHA-256 must be the records'); with "
+          "--human its declared tests are run on the people's data");
+      cmd->callback([a, human_opt, study_opt, code] {
         // The inputs before the outputs: a missing input creates no --out directory.
         std::vector<std::string> files;
         for (const auto& in : a->inputs) {
@@ -77,6 +93,37 @@ palplab::app::CommandRegistration reg_merge{
           files = std::move(unique);
         }
         auto summary = palplab::protocols::power_summary(files, a->alpha, a->target);
+        if (human_opt->count() > 0 && study_opt->count() == 0)
+          throw palplab::InputError(
+              "--human: give --study STUDY.json too (the replicate records name their study only "
+              "by its SHA-256; its declared tests are what is run on the people's data)");
+        if (study_opt->count() > 0) {
+          const palplab::protocols::Study s = palplab::protocols::load_study(
+              a->study, palplab::protocols::engine_prototype_inspector());
+          const std::string sha = palplab::results::sha256_hex(s.json_text),
+                            theirs = summary.at("study_sha256").get<std::string>();
+          if (sha != theirs)
+            throw palplab::InputError(palplab::SourceLocation{a->study},
+                                      "--study: not the study the replicates simulated (SHA-256 " +
+                                          sha.substr(0, 12) + ", the records' " +
+                                          theirs.substr(0, 12) + ")");
+          if (human_opt->count() > 0) {
+            if (a->human.empty())
+              throw palplab::InputError(palplab::SourceLocation{"--human"},
+                                        "expected the people's CSV file, got an empty path");
+            // Every group size merged, compared as `palplab power --human` compares its own.
+            std::vector<int> sizes;
+            for (const auto& [n, count] : summary.at("replicates").items())
+              sizes.push_back(std::stoi(n));
+            std::sort(sizes.begin(), sizes.end());
+            const auto people = palplab::protocols::people_verdicts(
+                s, palplab::protocols::read_human_cells(a->human), a->alpha, sizes);
+            for (const auto& w : palplab::protocols::people_warnings(people))
+              std::cerr << "warning: --human: " << w << "\n";
+            summary =
+                palplab::protocols::power_summary(files, a->alpha, a->target, {}, nullptr, &people);
+          }
+        }
         // Shards of a sharded run merged without the others gave a summary of part of the
         // replicates that read as the whole result.
         const palplab::protocols::MergeGaps gaps = palplab::protocols::merge_gaps(files);

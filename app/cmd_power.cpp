@@ -213,17 +213,8 @@ palplab::app::CommandRegistration reg_power{
                                       "expected the people's CSV file, got an empty path");
           people =
               people_verdicts(s, read_human_cells(a->human), a->opt.alpha, power_sizes(s, a->opt));
-          for (const auto& t : people->tests)
-            if (!std::isfinite(t.p))
-              std::cerr << "warning: --human: the test \"" << t.id
-                        << "\" is undefined on the people's data (a group without variance?): "
-                           "it has no verdict and is not compared\n";
-          std::set<std::string> cells;
-          for (const auto& g : people->groups)
-            if (cells.insert(g.cell).second && compared_order(people->groups, g.cell).empty())
-              std::cerr << "warning: --human: the people's group means of " << g.cell << " tie ("
-                        << order_of_means(people->groups, g.cell)
-                        << "): there is no order to reach, and it is not compared\n";
+          for (const auto& w : people_warnings(*people))
+            std::cerr << "warning: --human: " << w << "\n";
         }
         check_power_out(*a, s);
         palplab::app::require_writable_dir("--out", a->out);

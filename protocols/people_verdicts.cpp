@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <string>
 
 #include "common/input_error.hpp"
@@ -122,6 +123,22 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
     }
     m.median_agreeing = median_of_counts(agreeing);
   }
+  return out;
+}
+
+std::vector<std::string> people_warnings(const PeopleVerdicts& people) {
+  std::vector<std::string> out;
+  for (const auto& t : people.tests)
+    if (!std::isfinite(t.p))
+      out.push_back("the test \"" + t.id +
+                    "\" is undefined on the people's data (a group without variance?): it has no "
+                    "verdict and is not compared");
+  std::set<std::string> cells;
+  for (const auto& g : people.groups)
+    if (cells.insert(g.cell).second && compared_order(people.groups, g.cell).empty())
+      out.push_back("the people's group means of " + g.cell + " tie (" +
+                    order_of_means(people.groups, g.cell) +
+                    "): there is no order to reach, and it is not compared");
   return out;
 }
 

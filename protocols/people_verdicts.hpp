@@ -1,6 +1,7 @@
 #pragma once
 // People's verdicts on a study's declared tests, and how reproducible they are (`palplab power
 // --human FILE.csv`; docs/PARTICIPANTS.md "Agreement with people's verdicts").
+#include <string>
 #include <vector>
 
 #include "protocols/calibrate.hpp"
@@ -22,5 +23,10 @@ namespace palplab::protocols {
 // group has fewer than 2 values in a tested cell.
 PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>& cells,
                                double alpha, const std::vector<int>& sizes, long resamples = 2000);
+
+// What is not compared, one line each (`palplab power` and `palplab merge` print them as
+// warnings): a test undefined on the people's data (no verdict), a cell whose people's group
+// means tie (no order to reach).
+std::vector<std::string> people_warnings(const PeopleVerdicts& people);
 
 }  // namespace palplab::protocols

@@ -803,6 +803,29 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
   EXPECT_EQ(j["orders"][0]["people"]["order"], "G2 > G1");
   EXPECT_EQ(j["people"]["by_n"][0]["group_replicates"], 4);
   EXPECT_NE(slurp(d / "out" / "power.md").find("## Group means"), std::string::npos);
+  // The same replicates as shards, merged with the people's data and the study: the single
+  // run's summary, people's comparison included (the right model's draws are seeded per n).
+  ASSERT_NO_FATAL_FAILURE(run_shards_apart(power_cmd("3", 4), 2, d));
+  const std::string people_args = " --human " + csv.string() + " --study " + null_study();
+  const auto m = merge({d / "s1", d / "s2"}, d / "merged", d, people_args);
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(power_json(d / "merged"), j);
+  EXPECT_EQ(slurp(d / "merged" / "power.md"), slurp(d / "out" / "power.md"));
+  // --human needs --study; --study must be the replicates' study; bad people's data: exit 2,
+  // no summary written.
+  for (const auto& [extra, needle] : std::vector<std::pair<std::string, std::string>>{
+           {" --human " + csv.string(), "--study"},
+           {" --study " +
+                (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / "exp2_short_term.json")
+                    .string(),
+            "not the study the replicates simulated"},
+           {" --human " + (d / "missing.csv").string() + " --study " + null_study(),
+            "missing.csv"}}) {
+    const auto e = merge({d / "s1", d / "s2"}, d / "never", d, extra);
+    EXPECT_EQ(e.code, 2) << extra << ": " << e.out << e.err;
+    EXPECT_TRUE(has(e.err, needle)) << e.err;
+    EXPECT_FALSE(fs::exists(d / "never" / "power.json")) << extra;
+  }
   // Bad people's data, and --human with --shard: exit 2, nothing simulated.
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
