@@ -180,6 +180,7 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
   dwell_start_ = -1.0;
   release_at_ = -1.0;
   t_prev_ = 0.0;
+  prev_landmark_k_ = -1.0;
   last_ = Percept{};
   plan_route();
   next_probe();
@@ -333,6 +334,21 @@ double Trainee::draw_landmark_time() {
          std::exp(p_.recognition_cv * rng_.normal());
 }
 
+bool Trainee::landmark_felt_distinct() {
+  // The light touch at a landmark also tells how soft the part is: felt force over the hand's
+  // travel since it first touched (pressing to judge hardness: Lederman & Klatzky 1987). A
+  // landmark that feels softer or harder than the previous one by more than the stiffness JND
+  // (Jones & Hunter 1990: 23 %) is identified by feel as well as by shape, a second haptic cue
+  // (counted like a seen judgement: compliance_recognition_gain). A simulator whose surface feels
+  // equally stiff everywhere (a penalty contact on a rigid surface) never gives it.
+  if (!ch_.haptic || !last_.contact) return false;
+  const double travel = (pos_ - touch_pos_).dot(press_dir_), f = last_.force.norm();
+  if (!(travel > 0.0) || !(f > 0.0)) return false;
+  const double k = f / travel, prev = prev_landmark_k_;
+  prev_landmark_k_ = k;
+  return prev > 0.0 && std::abs(std::log(k / prev)) > std::log1p(p_.stiffness_weber);
+}
+
 void Trainee::learn_target(double observed, double variance, double gain_scale) {
   // Kalman update of the target belief from a cue that marks "target reached"; gain_scale < 1
   // when part of the learning is withheld (guidance).
@@ -459,7 +475,8 @@ Eigen::Vector3d Trainee::command(double t) {
           }
         } else {
           if (orienting_)
-            s_.landmark_practice += dwell_saw_d_ ? 1.0 + p_.visual_recognition_gain : 1.0;
+            s_.landmark_practice += (dwell_saw_d_ ? 1.0 + p_.visual_recognition_gain : 1.0) +
+                                    (landmark_felt_distinct() ? p_.compliance_recognition_gain : 0);
           // Not the feature (or a landmark passed): the next landmark, or probe elsewhere
           // (travel lifts off the surface on the way).
           next_probe();
@@ -638,6 +655,7 @@ void Trainee::perceive(const Percept& p, bool call) {
     mode_start_ = p.t;
     rec_time_ = orienting_ ? draw_landmark_time() : draw_recognition_time();
     dwell_saw_d_ = false;
+    touch_pos_ = pos_;
   }
   if (mode_ == Mode::dwell && ch_.visual && p.contact && p.visible_deformation > 0)
     dwell_saw_d_ = true;

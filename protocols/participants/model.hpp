@@ -159,6 +159,9 @@ class Trainee {
   void learn_lower_bound(double felt, double trust);
   double draw_recognition_time();
   double draw_landmark_time();
+  // At the end of a landmark judgement: whether this landmark felt softer or harder than the
+  // session's previous one by more than the stiffness JND (and remember its stiffness).
+  bool landmark_felt_distinct();
   void start_press();
   void begin_release(double t);
   // Where the next press goes: the feature's surface node nearest a point aimed at the place
@@ -204,6 +207,10 @@ class Trainee {
   // This press stopped at its bound while aiming at the remembered picture (not reached).
   bool visual_bound_stop_ = false;
   double rec_time_ = 0.0;
+  // Felt compliance of a landmark: where the hand first touched in this dwell, and the stiffness
+  // (felt force / hand travel since that touch) of this session's previous landmark (< 0: none).
+  Eigen::Vector3d touch_pos_ = Eigen::Vector3d::Zero();
+  double prev_landmark_k_ = -1.0;
   double peak_seen_d_ = 0.0, peak_felt_ = 0.0;
   double press_d0_ = -1.0;  // m, seen deformation when this press first touched (-1: not yet)
   double t_prev_ = 0.0;

@@ -150,6 +150,15 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       tspec("visual_recognition_gain", &T::visual_recognition_gain, 0.0, 10.0, "1",
             "recognition time / (1 + gain) when the touched part visibly deforms",
             "Ernst & Banks 2002 (a second cue makes the judgement more reliable, so faster)"),
+      tspec("compliance_recognition_gain", &T::compliance_recognition_gain, 0.0, 10.0, "1",
+            "a landmark judgement whose felt stiffness (force / hand travel since the touch) "
+            "differs from the session's previous landmark's by more than stiffness_weber counts "
+            "gain more practice judgements (0: off)",
+            "Lederman & Klatzky 1987 (pressure reveals hardness); Ernst & Banks 2002 (a second "
+            "cue)"),
+      tspec("stiffness_weber", &T::stiffness_weber, 0.01, 2.0, "1",
+            "stiffness JND / stiffness: the felt difference between landmarks that counts",
+            "Jones & Hunter 1990 (stiffness Weber fraction 23 %)"),
       tspec("recognition_cv", &T::recognition_cv, 0.0, 2.0, "1",
             "trial-to-trial SD / mean of a recognition time (lognormal)",
             "Luce 1986 (decision times are right-skewed)"),

@@ -80,10 +80,16 @@ struct TraineeParams {
   // visual learning and search
   double visual_spatial_sd = 0.004;          // m, SD of locating the touched point by eye
   double visual_recognition_gain = 2.58855;  // 1, recognition speed-up when the part deforms
-  double recognition_cv = 0.3;               // 1, trial-to-trial SD / mean of a recognition time
-  double miss_probability = 0.2;             // 1, chance the feature is not recognised on a touch
-  double practice_exponent = 0.51709;        // 1, power law of practice for recognition
-  double individual_cv = 0.15;               // 1, between-person SD of speed (log scale)
+  // a landmark felt softer or harder than the previous one counts this much more practice (0:
+  // off). Output of `palplab calibrate` on the whole exp2 at 20 per group (2026-12-05; started
+  // at the visual gain, which it kept: SE 0.83; protocols/participants/
+  // exp2_calibration_compliance.json; docs/PARTICIPANTS.md "Feeling the landmarks' compliance").
+  double compliance_recognition_gain = 2.58855;  // 1
+  double stiffness_weber = 0.23;                 // 1, stiffness JND / stiffness
+  double recognition_cv = 0.3;         // 1, trial-to-trial SD / mean of a recognition time
+  double miss_probability = 0.2;       // 1, chance the feature is not recognised on a touch
+  double practice_exponent = 0.51709;  // 1, power law of practice for recognition
+  double individual_cv = 0.15;         // 1, between-person SD of speed (log scale)
   // orienting on landmarks before the search (blind haptic navigation along the organ)
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
   double landmark_time = 34.1162;  // s, median novice judgement time at one landmark

@@ -21,7 +21,12 @@ struct FlatTissue {
   // core_radius from its centre the tissue is softer, k_edge (0 = uniform k).
   double k_edge = 0.0;       // N/m
   double core_radius = 0.0;  // m
-  double st = 2.3;           // N
+  // Optional stiffness near the start: within start_radius (in the plane) of the point below the
+  // start position the tissue has stiffness k_start (0 = uniform k), so that landmarks on the
+  // route feel different.
+  double k_start = 0.0;       // N/m
+  double start_radius = 0.0;  // m
+  double st = 2.3;            // N
   bool visual = true, audio = true;
 
   FlatTissue() {
@@ -49,6 +54,7 @@ struct FlatTissue {
   }
   double stiffness(const Eigen::Vector3d& x) const {
     const double r = (Eigen::Vector3d(x.x(), x.y(), 0) - feature).norm();
+    if (k_start > 0 && std::hypot(x.x(), x.y()) < start_radius) return k_start;
     return k_edge > 0 && r >= core_radius && r < 0.015 ? k_edge : k;
   }
   Percept render(double t, const Eigen::Vector3d& x) const {

@@ -141,6 +141,37 @@ TEST(Trainee, FindsTheFeatureAndPresses) {
   }
 }
 
+// Feeling the landmarks' compliance: a landmark whose felt stiffness differs from the previous
+// one's by more than stiffness_weber counts compliance_recognition_gain more practice; on a
+// tissue that feels equally stiff everywhere (as A's and B's penalty contact) the gain changes
+// nothing at all, and neither does a difference below the JND.
+TEST(Trainee, ALandmarkThatFeelsDifferentCountsMorePractice) {
+  auto practice = [](const FlatTissue& tissue, double gain) {
+    Trainee tr(trainee_params(quick_searcher({{"compliance_recognition_gain", gain}})),
+               TraineeState{});
+    run_session(tr, tissue, 0.0, 60.0, 5, 6);
+    EXPECT_TRUE(tr.identified());
+    return tr.state().landmark_practice;
+  };
+  FlatTissue uniform;
+  const double base = practice(uniform, 0.0);
+  EXPECT_GE(base, 2.0);  // the route has landmarks before the feature
+  EXPECT_EQ(practice(uniform, 3.0), base);
+  // The first landmark (below the start) three times softer than the others: the second feels
+  // different (one distinct landmark), the ones after it do not.
+  FlatTissue soft_start;
+  soft_start.k_start = soft_start.k / 3.0;
+  soft_start.start_radius = 0.02;
+  const double soft0 = practice(soft_start, 0.0);
+  EXPECT_EQ(soft0, base);  // without the gain the stiffness does not matter to the practice
+  EXPECT_EQ(practice(soft_start, 3.0), soft0 + 3.0);
+  // 10 % softer: below the 23 % JND, nothing.
+  FlatTissue slightly;
+  slightly.k_start = slightly.k / 1.1;
+  slightly.start_radius = 0.02;
+  EXPECT_EQ(practice(slightly, 3.0), base);
+}
+
 TEST(Trainee, SameSeedSameBehaviour) {
   FlatTissue tissue;
   auto params = trainee_params({});
