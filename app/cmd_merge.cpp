@@ -58,6 +58,17 @@ palplab::app::CommandRegistration reg_merge{
           "The study file the replicates simulated (its SHA-256 must be the records'); with "
           "--human its declared tests are run on the people's data");
       cmd->callback([a, human_opt, study_opt, code] {
+        // The flags' own errors first: they need no replicate read.
+        if (human_opt->count() > 0 && study_opt->count() == 0)
+          throw palplab::InputError(
+              "--human: give --study STUDY.json too (the replicate records name their study only "
+              "by its SHA-256; its declared tests are what is run on the people's data)");
+        if (human_opt->count() > 0 && a->human.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--human"},
+                                    "expected the people's CSV file, got an empty path");
+        if (study_opt->count() > 0 && a->study.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--study"},
+                                    "expected the study file, got an empty path");
         // The inputs before the outputs: a missing input creates no --out directory.
         std::vector<std::string> files;
         for (const auto& in : a->inputs) {
@@ -93,10 +104,6 @@ palplab::app::CommandRegistration reg_merge{
           files = std::move(unique);
         }
         auto summary = palplab::protocols::power_summary(files, a->alpha, a->target);
-        if (human_opt->count() > 0 && study_opt->count() == 0)
-          throw palplab::InputError(
-              "--human: give --study STUDY.json too (the replicate records name their study only "
-              "by its SHA-256; its declared tests are what is run on the people's data)");
         if (study_opt->count() > 0) {
           const palplab::protocols::Study s = palplab::protocols::load_study(
               a->study, palplab::protocols::engine_prototype_inspector());
@@ -108,9 +115,6 @@ palplab::app::CommandRegistration reg_merge{
                                           sha.substr(0, 12) + ", the records' " +
                                           theirs.substr(0, 12) + ")");
           if (human_opt->count() > 0) {
-            if (a->human.empty())
-              throw palplab::InputError(palplab::SourceLocation{"--human"},
-                                        "expected the people's CSV file, got an empty path");
             // Every group size merged, compared as `palplab power --human` compares its own.
             std::vector<int> sizes;
             for (const auto& [n, count] : summary.at("replicates").items())

@@ -694,6 +694,11 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   r.se.assign(r.fitted.size(), kNaN);
   r.se_computed = opt.standard_errors;
   if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
+  // A stencil point better than the fit: said, not adopted (see CalibrationResult).
+  for (const auto& [x, v] : memo)
+    if (v.first < r.loss_after - 1e-9 * std::max(1.0, std::abs(r.loss_after)) &&
+        (r.stencil_lower.empty() || v.first < r.stencil_lower_loss))
+      r.stencil_lower = x, r.stencil_lower_loss = v.first;
   r.evaluations = evaluations;
   r.budget = opt.budget;
   r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
@@ -781,6 +786,13 @@ nlohmann::json to_json(const CalibrationResult& r) {
     start[r.keys[i]] = r.start[i];
     if (i < r.lo.size()) bounds[r.keys[i]] = {r.lo[i], r.hi[i]};
   }
+  // A lower loss found by the SE stencil: its point and loss, else null.
+  nlohmann::json stencil_lower;
+  if (!r.stencil_lower.empty()) {
+    nlohmann::json at = nlohmann::json::object();
+    for (std::size_t i = 0; i < r.keys.size(); ++i) at[r.keys[i]] = r.stencil_lower[i];
+    stencil_lower = {{"parameters", at}, {"loss", num(r.stencil_lower_loss)}};
+  }
   return {{"palplab_calibration", 1},
           {"fitted", fitted},
           {"standard_errors", se},
@@ -795,6 +807,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"kept_start", r.kept_start},
           {"points_tried", r.points_tried},
           {"loss_flat", r.loss_flat},
+          {"stencil_lower", stencil_lower},
           {"fit_before", fits(r.fit_before)},
           {"fit_after", fits(r.fit_after)},
           {"participant_model", {{"model", "pmm1"}, {"parameters", r.parameters}}}};
@@ -833,6 +846,22 @@ std::string to_text(const CalibrationResult& r) {
       << (r.loss_flat ? "(every point tried had the start's loss: the data do not constrain "
                         "these parameters here)\n"
                       : "(the start is the best point tried)\n");
+  if (!r.stencil_lower.empty()) {
+    std::snprintf(buf, sizeof buf, "the SE stencil found a lower loss, %.4g (fit %.4g), at",
+                  r.stencil_lower_loss, r.loss_after);
+    o << buf;
+    for (std::size_t i = 0; i < r.keys.size(); ++i) {
+      o << " " << r.keys[i] << " " << fmt_num(r.stencil_lower[i]);
+      if (std::isfinite(r.se[i])) {
+        std::snprintf(buf, sizeof buf, " (%+.2f SE from the fit)",
+                      (r.stencil_lower[i] - r.fitted[i]) / r.se[i]);
+        o << buf;
+      }
+    }
+    o << ": the fit is no minimum at the stencil's scale. It is not moved there (its SEs are "
+         "the fit's curvature); to fit from that point, set it in the study's "
+         "\"participant_model\" parameters (the start) and run again\n";
+  }
   o << "\n";
   o << "fit per group and measure (human mean ± SD vs simulated; z in SE units):\n";
   // "mean ± SD" in a fixed width, or "undefined" (explained on a line below the cell's).

@@ -146,6 +146,12 @@ struct CalibrationResult {
   // points not): 1 when --budget 1 only evaluated the start, so nothing was fitted.
   int points_tried = 0;
   int budget = 0;  // the optimiser's budget (CalibrateOptions::budget)
+  // The lowest loss among the SE stencil's points when it is below loss_after beyond rounding
+  // (empty otherwise): the optimiser's end point is then no minimum at the stencil's scale. The
+  // fit is not moved there (its SEs are the end point's curvature); the report says where it is,
+  // so a refit can start from it.
+  std::vector<double> stencil_lower;
+  double stencil_lower_loss = 0.0;
 };
 
 // Before any simulation, InputError (with the CSV line) for a cell of a measure the study does

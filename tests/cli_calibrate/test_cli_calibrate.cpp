@@ -261,9 +261,36 @@ TEST(Calibrate, AStartThatIsTheMinimumIsKeptButNotFlat) {
   EXPECT_TRUE(fit["kept_start"].get<bool>()) << fit.dump(1);
   EXPECT_FALSE(fit["loss_flat"].get<bool>()) << fit.dump(1);
   EXPECT_GT(fit["points_tried"].get<int>(), 1) << fit.dump(1);
+  EXPECT_TRUE(fit["stencil_lower"].is_null()) << fit.dump(1);
   EXPECT_NE(r.out.find("the start values are kept (the start is the best point tried)"),
             std::string::npos)
       << r.out;
+  fs::remove_all(d);
+}
+
+// The SE stencil's points are simulated too: one with a lower loss than the fit is reported
+// (where, how much lower, how many SEs away), not silently dropped — and not adopted, since the
+// SEs are the fit's curvature. With --budget 1 only the start (0.30) is "fitted", the data are
+// simulated with 0.15: the stencil's step towards the truth (0.30 − 5 %) has the lower loss.
+TEST(Calibrate, AStencilPointBelowTheFitIsReported) {
+  auto d = scratch_dir("calibrate_stencil");
+  auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
+  study["participant_model"]["parameters"]["prior_target_cv"] = 0.15;
+  simulate_human_data(d, study);
+  if (::testing::Test::HasFatalFailure()) return;
+  auto r =
+      run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                      (d / "csv" / "measures.csv").string() +
+                      " --params prior_target_cv --budget 1 --out " + (d / "fit.json").string(),
+                  d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_EQ(fit["fitted"]["prior_target_cv"], 0.30) << fit.dump(1);
+  ASSERT_TRUE(fit["stencil_lower"].is_object()) << fit.dump(1);
+  EXPECT_LT(fit["stencil_lower"]["parameters"]["prior_target_cv"].get<double>(), 0.30);
+  EXPECT_LT(fit["stencil_lower"]["loss"].get<double>(), fit["loss_after"].get<double>());
+  EXPECT_NE(r.out.find("the SE stencil found a lower loss"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("prior_target_cv 0.285"), std::string::npos) << r.out;
   fs::remove_all(d);
 }
 

@@ -819,8 +819,9 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
                 (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "studies" / "exp2_short_term.json")
                     .string(),
             "not the study the replicates simulated"},
-           {" --human " + (d / "missing.csv").string() + " --study " + null_study(),
-            "missing.csv"}}) {
+           {" --human " + (d / "missing.csv").string() + " --study " + null_study(), "missing.csv"},
+           {" --human " + csv.string() + " --study ''", "--study: expected the study file"},
+           {" --human '' --study " + null_study(), "--human: expected the people's CSV"}}) {
     const auto e = merge({d / "s1", d / "s2"}, d / "never", d, extra);
     EXPECT_EQ(e.code, 2) << extra << ": " << e.out << e.err;
     EXPECT_TRUE(has(e.err, needle)) << e.err;
