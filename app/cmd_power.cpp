@@ -174,7 +174,8 @@ palplab::app::CommandRegistration reg_power{
           "--human", a->human,
           "People's data of this study (tidy CSV: participant,group,phase,session,measure,value"
           "[,unit], as `calibrate --human`): also report the people's verdicts and how often the "
-          "replicates, and the people's study resampled, reach them (not with --shard)");
+          "replicates reach them, beside what a right model would (drawn from the people's "
+          "participants); not with --shard");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, shard_opt, human_opt, code] {
         using namespace palplab::protocols;
