@@ -4,18 +4,23 @@
 # wall time, exports the measures and prints per group the post-training palpation force and
 # exploration time (mean ± SD, n) next to the human values of exp2_human.csv, the z of each
 # simulated mean in units of the human group's standard error, and whether the order of the
-# group means of both measures is the human one.
-# Exit status: 0 = both orders as in the human data, 1 = an order differs, 2 = a run failed.
+# group means of both measures is the human one; then, from `palplab stats` on both CSVs, the
+# verdict at .05 of the one-way ANOVA and of every pairwise Welch t-test (human p, model p, same
+# or DIFFERENT) and whether each model mean lies inside the human group's 95 % t interval.
+# Exit status: 0 = both orders as in the human data, 1 = an order differs, 2 = a run failed
+# (the verdicts and intervals are reported, not part of the status).
 # Usage (from the repository root, after building):
 #   protocols/participants/exp2_check.sh [OUTDIR]
 #   PALPLAB (default build/palplab), JOBS (default 2), STUDY (default the exp2 study file),
-#   HUMAN (default tests/data/calibration/exp2_human.csv), EXTRA (extra `palplab run` flags).
+#   HUMAN (default tests/data/calibration/exp2_human.csv), EXTRA (extra `palplab run` flags),
+#   PHASE (default post_training: the phase compared).
 set -uo pipefail
 out=${1:-exp2_check}
 palplab=${PALPLAB:-build/palplab}
 jobs=${JOBS:-2}
 study=${STUDY:-protocols/studies/exp2_short_term.json}
 human=${HUMAN:-tests/data/calibration/exp2_human.csv}
+phase=${PHASE:-post_training}
 mkdir -p "$out"
 start=$(date +%s.%N)
 # shellcheck disable=SC2086
@@ -26,9 +31,9 @@ end=$(date +%s.%N)
 wall=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }')
 echo "wall time of \`palplab run\` (--jobs $jobs): $wall s"
 # Both CSVs: participant,group,phase,session,measure,value[,...]; the post-training phase only.
-awk -F, '
+awk -F, -v phase="$phase" '
   FNR == 1 { file++; next }
-  $3 != "post_training" || ($5 != "palpation_force" && $5 != "exploration_time") { next }
+  $3 != phase || ($5 != "palpation_force" && $5 != "exploration_time") { next }
   $6 == "" || $6 == "NA" { undef[file, $2, $5]++; next }
   { k = file SUBSEP $2 SUBSEP $5; n[k]++; s1[k] += $6; s2[k] += $6 * $6; groups[$2] = 1 }
   END {
@@ -69,3 +74,55 @@ awk -F, '
     for (mi = 1; mi <= 2; mi++) print order[mi];
     exit bad
   }' "$out/csv/measures.csv" "$human"
+status=$?
+
+# The verdicts and intervals, from palplab's own statistics on both CSVs (the study's analyses:
+# one-way ANOVA, pairwise Welch t-tests with exact df). One line per item:
+#   test ANOVA <p> | test <a>-vs-<b> <p> | group <g> <mean> <ci low> <ci high>
+stats_lines() {
+  "$palplab" stats --csv "$1" --value value --group group --where "phase=$phase" \
+    --where "measure=$2" --skip-empty |
+    awk '
+      /^[A-Z]/ { s = $0; next }
+      s == "Descriptives" && $1 != "group" && /\[/ {
+        ci = $0; sub(/.*\[/, "", ci); sub(/\].*/, "", ci); split(ci, c, ",");
+        print "group", $1, $3, c[1] + 0, c[2] + 0 }
+      s == "One-way ANOVA" && $1 == "between" { print "test", "ANOVA", $6 }
+      s ~ /^Pairwise/ && $2 == "-" { print "test", $1 "-vs-" $3, $7 }'
+}
+# Field $3 of the item of kind $1 named $2 in the lines $4 (field 3: the p or the mean).
+value_of() { awk -v k="$1" -v n="$2" -v f="$3" '$1 == k && $2 == n { print $f }' <<<"$4"; }
+echo
+verdicts=0 same=0 means=0 inside=0
+for m in palpation_force exploration_time; do
+  h=$(stats_lines "$human" "$m") || exit 2
+  s=$(stats_lines "$out/csv/measures.csv" "$m") || exit 2
+  if [ -z "$h" ] || [ -z "$s" ]; then continue; fi
+  echo "| $m | test | human p | model p | verdict at .05 |"
+  echo "|---|---|---|---|---|"
+  while read -r _ name hp; do
+    mp=$(value_of test "$name" 3 "$s")
+    [ -n "$mp" ] || continue
+    verdict=$(awk -v hp="$hp" -v mp="$mp" 'BEGIN {
+      hs = hp + 0 < 0.05; ms = mp + 0 < 0.05;
+      printf "%s: %s", hs == ms ? "same" : "DIFFERENT", hs ? "significant" : "not significant";
+      if (hs != ms) printf " (model: %s)", ms ? "significant" : "not significant" }')
+    verdicts=$((verdicts + 1))
+    [ "${verdict%%:*}" = same ] && same=$((same + 1))
+    echo "| $m | ${name//-vs-/ - } | $hp | $mp | $verdict |"
+  done < <(grep '^test ' <<<"$h")
+  echo
+  echo "| $m | group | human 95 % CI of the mean | model mean | inside |"
+  echo "|---|---|---|---|---|"
+  while read -r _ g _ lo hi; do
+    mm=$(value_of group "$g" 3 "$s")
+    [ -n "$mm" ] || continue
+    in=$(awk -v m="$mm" -v lo="$lo" -v hi="$hi" 'BEGIN { print (m + 0 >= lo + 0 && m + 0 <= hi + 0) ? "yes" : "NO" }')
+    means=$((means + 1))
+    [ "$in" = yes ] && inside=$((inside + 1))
+    echo "| $m | $g | [$lo, $hi] | $mm | $in |"
+  done < <(grep '^group ' <<<"$h")
+  echo
+done
+echo "verdicts as the human's: $same of $verdicts; model means inside the human 95 % CI: $inside of $means"
+exit $status

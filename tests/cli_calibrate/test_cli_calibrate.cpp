@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -622,5 +623,70 @@ TEST(Calibrate, UndefinedSimulatedCellsSayWhyNeverNan) {
           << c.dump();
       EXPECT_EQ(c["human"]["n"], 2) << c.dump();
     }
+  fs::remove_all(d);
+}
+
+// protocols/participants/exp2_check.sh, the documented full check of item 1 (orders, verdicts,
+// intervals), on the small recovery study against hand-made people's data: the people's p and
+// 95 % intervals are palplab stats' (G1 2.4..2.8 N, G2 3.4..3.8 N: Welch t(8) = 10, p = 8.5e-6;
+// G1's interval 2.6 ± t(4, .975) · 0.158 / √5), every test and group gets its line, and the
+// closing counts are the lines'. A study that does not run is exit 2.
+TEST(Exp2Check, ReportsOrdersVerdictsAndIntervals) {
+  using palplab::testing::has;
+  auto d = scratch_dir("exp2_check");
+  {
+    std::ofstream h(d / "people.csv");
+    h << "participant,group,phase,session,measure,value\n";
+    for (int i = 1; i <= 5; ++i)
+      h << "a" << i << ",G1,test,1,palpation_force,2." << i + 3 << "\n"
+        << "b" << i << ",G2,test,1,palpation_force,3." << i + 3 << "\n"
+        << "a" << i << ",G1,test,1,exploration_time," << i + 5 << "\n"
+        << "b" << i << ",G2,test,1,exploration_time," << i + 6 << "\n";
+  }
+  const std::string script =
+      (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "exp2_check.sh").string();
+  auto env = [&](const std::string& study) {
+    return "PALPLAB=" + std::string(PALPLAB_BINARY) + " STUDY=" + study +
+           " HUMAN=" + (d / "people.csv").string() + " PHASE=test JOBS=1 bash " + script + " " +
+           (d / "out").string();
+  };
+  const auto r = palplab::testing::run_shell(env(data("recovery_study.json").string()), d);
+  ASSERT_TRUE(r.code == 0 || r.code == 1) << r.out << r.err;
+  EXPECT_TRUE(has(r.out, "order of palpation_force: human G2 > G1, model ")) << r.out;
+  EXPECT_TRUE(has(r.out, "| palpation_force | ANOVA | 8.488e-06 | ")) << r.out;
+  EXPECT_TRUE(has(r.out, "| palpation_force | G1 - G2 | 8.488e-06 | ")) << r.out;
+  EXPECT_TRUE(has(r.out, "| exploration_time | G1 - G2 | 0.3466 | ")) << r.out;
+  EXPECT_TRUE(has(r.out, "| palpation_force | G1 | [2.4037, 2.7963] | ")) << r.out;
+  EXPECT_TRUE(has(r.out, "| palpation_force | G2 | [3.4037, 3.7963] | ")) << r.out;
+  // The counts are the lines': 4 tests, 4 group means.
+  int same = 0, inside = 0, tests = 0, groups = 0;
+  std::istringstream lines(r.out);
+  for (std::string l; std::getline(lines, l);) {
+    if (has(l, " | same: ") || has(l, " | DIFFERENT: ")) {
+      ++tests, same += has(l, " | same: ");
+      // | measure | test | human p | model p | verdict |: the verdict is the two p's at .05.
+      std::vector<std::string> c;
+      std::istringstream cells(l);
+      for (std::string x; std::getline(cells, x, '|');) c.push_back(x);
+      ASSERT_GE(c.size(), 6u) << l;
+      const bool hs = std::stod(c[3]) < 0.05, ms = std::stod(c[4]) < 0.05;
+      const std::string verdict = std::string(hs == ms ? " same: " : " DIFFERENT: ") +
+                                  (hs ? "significant" : "not significant") +
+                                  (hs == ms ? ""
+                                   : ms     ? " (model: significant)"
+                                            : " (model: not significant)") +
+                                  " ";
+      EXPECT_EQ(c[5], verdict) << l;
+    }
+    if (has(l, "] | ")) ++groups, inside += has(l, " | yes |");
+  }
+  EXPECT_EQ(tests, 4) << r.out;
+  EXPECT_EQ(groups, 4) << r.out;
+  EXPECT_TRUE(has(r.out, "verdicts as the human's: " + std::to_string(same) +
+                             " of 4; model means inside the human 95 % CI: " +
+                             std::to_string(inside) + " of 4"))
+      << r.out;
+  const auto bad = palplab::testing::run_shell(env((d / "missing.json").string()), d);
+  EXPECT_EQ(bad.code, 2) << bad.out << bad.err;
   fs::remove_all(d);
 }
