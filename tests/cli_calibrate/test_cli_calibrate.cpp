@@ -629,64 +629,88 @@ TEST(Calibrate, UndefinedSimulatedCellsSayWhyNeverNan) {
 // protocols/participants/exp2_check.sh, the documented full check of item 1 (orders, verdicts,
 // intervals), on the small recovery study against hand-made people's data: the people's p and
 // 95 % intervals are palplab stats' (G1 2.4..2.8 N, G2 3.4..3.8 N: Welch t(8) = 10, p = 8.5e-6;
-// G1's interval 2.6 ± t(4, .975) · 0.158 / √5), every test and group gets its line, and the
-// closing counts are the lines'. A study that does not run is exit 2.
+// G1's interval 2.6 ± t(4, .975) · 0.158 / √5), every test and group gets its line, each
+// verdict is its two p's at .05 and the closing counts are the lines'. The people's rows are
+// written G2 first, so stats names their pair "G2 - G1" and the model's "G1 - G2": matched.
+// People's data that cannot be compared are exit 2 with the reason: a measure they lack (before
+// the simulation: no database written), groups that are not the model's; a study that does not
+// run too.
 TEST(Exp2Check, ReportsOrdersVerdictsAndIntervals) {
   using palplab::testing::has;
   auto d = scratch_dir("exp2_check");
-  {
-    std::ofstream h(d / "people.csv");
+  auto people = [&](const std::string& name, bool with_time, const std::string& g2) {
+    std::ofstream h(d / name);
     h << "participant,group,phase,session,measure,value\n";
-    for (int i = 1; i <= 5; ++i)
-      h << "a" << i << ",G1,test,1,palpation_force,2." << i + 3 << "\n"
-        << "b" << i << ",G2,test,1,palpation_force,3." << i + 3 << "\n"
-        << "a" << i << ",G1,test,1,exploration_time," << i + 5 << "\n"
-        << "b" << i << ",G2,test,1,exploration_time," << i + 6 << "\n";
-  }
+    for (int i = 1; i <= 5; ++i) {
+      h << "b" << i << "," << g2 << ",test,1,palpation_force,3." << i + 3 << "\n"
+        << "a" << i << ",G1,test,1,palpation_force,2." << i + 3 << "\n";
+      if (with_time)
+        h << "b" << i << "," << g2 << ",test,1,exploration_time," << i + 6 << "\n"
+          << "a" << i << ",G1,test,1,exploration_time," << i + 5 << "\n";
+    }
+  };
+  people("people.csv", true, "G2");
+  people("no_time.csv", false, "G2");
+  people("other_group.csv", true, "G3");
   const std::string script =
       (fs::path(PALPLAB_SOURCE_DIR) / "protocols" / "participants" / "exp2_check.sh").string();
-  auto env = [&](const std::string& study) {
-    return "PALPLAB=" + std::string(PALPLAB_BINARY) + " STUDY=" + study +
-           " HUMAN=" + (d / "people.csv").string() + " PHASE=test JOBS=1 bash " + script + " " +
-           (d / "out").string();
+  auto check = [&](const std::string& study, const std::string& csv, const std::string& out) {
+    return palplab::testing::run_shell(
+        "PALPLAB=" + std::string(PALPLAB_BINARY) + " STUDY=" + study + " HUMAN=" +
+            (d / csv).string() + " PHASE=test JOBS=1 bash " + script + " " + (d / out).string(),
+        d);
   };
-  const auto r = palplab::testing::run_shell(env(data("recovery_study.json").string()), d);
+  const std::string study = data("recovery_study.json").string();
+  const auto r = check(study, "people.csv", "out");
   ASSERT_TRUE(r.code == 0 || r.code == 1) << r.out << r.err;
-  EXPECT_TRUE(has(r.out, "order of palpation_force: human G2 > G1, model ")) << r.out;
+  EXPECT_TRUE(has(r.out, "order of palpation_force: people G2 > G1, model ")) << r.out;
   EXPECT_TRUE(has(r.out, "| palpation_force | ANOVA | 8.488e-06 | ")) << r.out;
   EXPECT_TRUE(has(r.out, "| palpation_force | G1 - G2 | 8.488e-06 | ")) << r.out;
   EXPECT_TRUE(has(r.out, "| exploration_time | G1 - G2 | 0.3466 | ")) << r.out;
-  EXPECT_TRUE(has(r.out, "| palpation_force | G1 | [2.4037, 2.7963] | ")) << r.out;
-  EXPECT_TRUE(has(r.out, "| palpation_force | G2 | [3.4037, 3.7963] | ")) << r.out;
-  // The counts are the lines': 4 tests, 4 group means.
-  int same = 0, inside = 0, tests = 0, groups = 0;
-  std::istringstream lines(r.out);
-  for (std::string l; std::getline(lines, l);) {
-    if (has(l, " | same: ") || has(l, " | DIFFERENT: ")) {
-      ++tests, same += has(l, " | same: ");
-      // | measure | test | human p | model p | verdict |: the verdict is the two p's at .05.
+  EXPECT_TRUE(has(r.out, "| palpation_force | G1 | 2.60 ± 0.16 (5) | ")) << r.out;
+  EXPECT_TRUE(has(r.out, " | [2.404, 2.796] | ")) << r.out;
+  EXPECT_TRUE(has(r.out, " | [3.404, 3.796] | ")) << r.out;
+  // Per measure: the verdict of each test line, and the closing counts are the lines'.
+  for (const std::string m : {"palpation_force", "exploration_time"}) {
+    int same = 0, inside = 0, tests = 0, groups = 0;
+    std::istringstream lines(r.out);
+    for (std::string l; std::getline(lines, l);) {
+      if (l.rfind("| " + m + " | ", 0) != 0) continue;
       std::vector<std::string> c;
       std::istringstream cells(l);
       for (std::string x; std::getline(cells, x, '|');) c.push_back(x);
-      ASSERT_GE(c.size(), 6u) << l;
-      const bool hs = std::stod(c[3]) < 0.05, ms = std::stod(c[4]) < 0.05;
-      const std::string verdict = std::string(hs == ms ? " same: " : " DIFFERENT: ") +
-                                  (hs ? "significant" : "not significant") +
-                                  (hs == ms ? ""
-                                   : ms     ? " (model: significant)"
-                                            : " (model: not significant)") +
-                                  " ";
-      EXPECT_EQ(c[5], verdict) << l;
+      if (has(l, " | same: ") || has(l, " | DIFFERENT: ")) {
+        // | measure | test | people p | model p | verdict |
+        ++tests, same += has(l, " | same: ");
+        ASSERT_GE(c.size(), 6u) << l;
+        const bool hs = std::stod(c[3]) < 0.05, ms = std::stod(c[4]) < 0.05;
+        EXPECT_EQ(c[5], std::string(hs == ms ? " same: " : " DIFFERENT: ") +
+                            (hs ? "significant" : "not significant") +
+                            (hs == ms ? ""
+                             : ms     ? " (model: significant)"
+                                      : " (model: not significant)") +
+                            " ")
+            << l;
+      } else if (has(l, " | yes |") || has(l, " | NO |")) {
+        ++groups, inside += has(l, " | yes |");
+      }
     }
-    if (has(l, "] | ")) ++groups, inside += has(l, " | yes |");
+    EXPECT_EQ(tests, 2) << m << "\n" << r.out;
+    EXPECT_EQ(groups, 2) << m << "\n" << r.out;
+    EXPECT_TRUE(has(r.out, m + ": verdicts as the people's " + std::to_string(same) +
+                               " of 2, model means inside the people's 95 % CI " +
+                               std::to_string(inside) + " of 2"))
+        << r.out;
   }
-  EXPECT_EQ(tests, 4) << r.out;
-  EXPECT_EQ(groups, 4) << r.out;
-  EXPECT_TRUE(has(r.out, "verdicts as the human's: " + std::to_string(same) +
-                             " of 4; model means inside the human 95 % CI: " +
-                             std::to_string(inside) + " of 4"))
-      << r.out;
-  const auto bad = palplab::testing::run_shell(env((d / "missing.json").string()), d);
+  const auto no_time = check(study, "no_time.csv", "out_no_time");
+  EXPECT_EQ(no_time.code, 2) << no_time.out << no_time.err;
+  EXPECT_TRUE(has(no_time.err, "measure exploration_time, phase test")) << no_time.err;
+  EXPECT_FALSE(fs::exists(d / "out_no_time" / "exp2.db"));
+  const auto other = check(study, "other_group.csv", "out_other");
+  EXPECT_EQ(other.code, 2) << other.out << other.err;
+  EXPECT_TRUE(has(other.err, "the people's groups (G1,G3) are not the model's (G1,G2)"))
+      << other.err;
+  const auto bad = check((d / "missing.json").string(), "people.csv", "out_bad");
   EXPECT_EQ(bad.code, 2) << bad.out << bad.err;
   fs::remove_all(d);
 }
