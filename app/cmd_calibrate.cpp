@@ -113,11 +113,12 @@ palplab::app::CommandRegistration reg_calibrate{
         a->opt.standard_errors = !a->no_se;
         if (!a->quiet)
           a->opt.progress = [keys = a->opt.keys](int e, double l, double best,
-                                                 const std::vector<double>& x) {
+                                                 const std::vector<double>& x, bool stencil) {
             std::string at;
             for (std::size_t i = 0; i < x.size(); ++i)
               at += " " + keys[i] + "=" + std::to_string(x[i]);
-            std::fprintf(stderr, "evaluation %d: loss %.4g (best %.4g) at%s\n", e, l, best,
+            std::fprintf(stderr, "evaluation %d%s: loss %.4g (%s %.4g) at%s\n", e,
+                         stencil ? " (SE stencil)" : "", l, stencil ? "fit" : "best", best,
                          at.c_str());
           };
         CalibrationResult r = calibrate(s, cells, a->opt);

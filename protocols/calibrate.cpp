@@ -649,6 +649,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   };
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
+  bool in_stencil = false;  // the standard errors' points: reported, not the optimiser's
   // Common random numbers make a simulation a deterministic function of x, so a point already
   // simulated (the start, which the optimiser evaluates again; the optimum, whose fit is
   // reported) is looked up, not simulated again: with exp2 at full size one simulation takes
@@ -661,8 +662,8 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     std::vector<CellFit> fit;
     const double l = moment_loss(with(x), used, opt.jobs, &fit);
     ++evaluations;
-    best = std::min(best, l);
-    if (opt.progress) opt.progress(evaluations, l, best, x);
+    if (!in_stencil) best = std::min(best, l);
+    if (opt.progress) opt.progress(evaluations, l, best, x, in_stencil);
     return memo.emplace(x, std::make_pair(l, std::move(fit))).first->second;
   };
   auto loss = [&](const std::vector<double>& x) { return simulate(x).first; };
@@ -693,6 +694,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
   r.se.assign(r.fitted.size(), kNaN);
   r.se_computed = opt.standard_errors;
+  in_stencil = true;
   if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
   // A stencil point better than the fit: said, not adopted (see CalibrationResult).
   for (const auto& [x, v] : memo)
@@ -835,8 +837,9 @@ std::string to_text(const CalibrationResult& r) {
     if (bounded) o << ", bounds " << fmt_num(r.lo[i]) << ":" << fmt_num(r.hi[i]) << at;
     o << ")\n";
   }
-  std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluations, %d restarts)\n",
-                r.loss_before, r.loss_after, r.evaluations, r.restarts);
+  std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluation%s, %d restart%s)\n",
+                r.loss_before, r.loss_after, r.evaluations, r.evaluations == 1 ? "" : "s",
+                r.restarts, r.restarts == 1 ? "" : "s");
   o << buf;
   if (r.kept_start && r.points_tried <= 1)
     o << "only the start was simulated (--budget " << r.budget

@@ -119,8 +119,11 @@ struct CalibrateOptions {
   // false: skip the curvature stencil (2p² extra simulations) when time is short; the
   // SEs are then reported as not computed.
   bool standard_errors = true;
-  // Called after every simulation (a point simulated once is not simulated again).
-  std::function<void(int evaluation, double loss, double best, const std::vector<double>& x)>
+  // Called after every simulation (a point simulated once is not simulated again); `best` is the
+  // optimiser's best loss so far, `stencil` true for the points of the standard errors' stencil
+  // (simulated after the fit; they do not change `best`, see CalibrationResult::stencil_lower).
+  std::function<void(int evaluation, double loss, double best, const std::vector<double>& x,
+                     bool stencil)>
       progress;
 };
 

@@ -292,6 +292,11 @@ TEST(Calibrate, AStencilPointBelowTheFitIsReported) {
   EXPECT_LT(fit["stencil_lower"]["loss"].get<double>(), fit["loss_after"].get<double>());
   EXPECT_NE(r.out.find("the SE stencil found a lower loss"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("prior_target_cv 0.285"), std::string::npos) << r.out;
+  // The stencil's evaluations are labelled as such in the progress, beside the fit's loss (they
+  // were shown as a new "best" the fit then did not report).
+  EXPECT_NE(r.err.find("evaluation 2 (SE stencil): loss "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" (fit "), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("(3 evaluations, 0 restarts)"), std::string::npos) << r.out;
   fs::remove_all(d);
 }
 
