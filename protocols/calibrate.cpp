@@ -650,6 +650,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
   bool in_stencil = false;  // the standard errors' points: reported, not the optimiser's
+  std::vector<std::vector<double>> stencil_points;  // those simulated for the first time there
   // Common random numbers make a simulation a deterministic function of x, so a point already
   // simulated (the start, which the optimiser evaluates again; the optimum, whose fit is
   // reported) is looked up, not simulated again: with exp2 at full size one simulation takes
@@ -663,6 +664,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     const double l = moment_loss(with(x), used, opt.jobs, &fit);
     ++evaluations;
     if (!in_stencil) best = std::min(best, l);
+    if (in_stencil) stencil_points.push_back(x);
     if (opt.progress) opt.progress(evaluations, l, best, x, in_stencil);
     return memo.emplace(x, std::make_pair(l, std::move(fit))).first->second;
   };
@@ -697,10 +699,12 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   in_stencil = true;
   if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
   // A stencil point better than the fit: said, not adopted (see CalibrationResult).
-  for (const auto& [x, v] : memo)
-    if (v.first < r.loss_after - 1e-9 * std::max(1.0, std::abs(r.loss_after)) &&
-        (r.stencil_lower.empty() || v.first < r.stencil_lower_loss))
-      r.stencil_lower = x, r.stencil_lower_loss = v.first;
+  for (const auto& x : stencil_points) {
+    const double v = memo.at(x).first;
+    if (v < r.loss_after - 1e-9 * std::max(1.0, std::abs(r.loss_after)) &&
+        (r.stencil_lower.empty() || v < r.stencil_lower_loss))
+      r.stencil_lower = x, r.stencil_lower_loss = v;
+  }
   r.evaluations = evaluations;
   r.budget = opt.budget;
   r.parameters = study.participant_parameters.is_object() ? study.participant_parameters
