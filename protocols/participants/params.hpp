@@ -78,7 +78,10 @@ struct TraineeParams {
   double extinction_rate = 0.472119;  // 1, reliance lost per press whose expected marker failed
   double marker_wait_overshoot = 0.108033;  // 1, press beyond the intended force awaiting a marker
   // visual learning and search
-  double visual_spatial_sd = 0.004;          // m, SD of locating the touched point by eye
+  // visual_spatial_sd: output of `palplab calibrate` on the whole exp2 at 20 per group
+  // (2026-12-05; protocols/participants/exp2_calibration_aim_scatter.json; docs/PARTICIPANTS.md
+  // "C's force follows the scatter of the re-aimed presses"); 4 mm (an assumption) before.
+  double visual_spatial_sd = 0.006;          // m, SD of locating the touched point by eye
   double visual_recognition_gain = 2.58855;  // 1, recognition speed-up when the part deforms
   // a landmark felt softer or harder than the previous one counts this much more practice (0:
   // off). Output of `palplab calibrate` on the whole exp2 at 20 per group (2026-12-05; started
