@@ -482,6 +482,48 @@ void standard_errors(CalibrationResult& r, const std::vector<double>& step,
 
 }  // namespace
 
+std::vector<double> quadratic_se(const std::vector<std::vector<double>>& x,
+                                 const std::vector<double>& f, const std::vector<double>& centre,
+                                 const std::vector<double>& scale, const std::vector<bool>& free) {
+  const std::size_t d = centre.size();
+  std::vector<double> se(d, kNaN);
+  const std::size_t terms = 1 + d + d * (d + 1) / 2;
+  if (x.size() != f.size() || x.size() < terms + 1) return se;
+  // Columns: 1, u_i, then ½u_i² (diagonal) and u_i·u_j (i < j), so the coefficients are H's.
+  Eigen::MatrixXd A(x.size(), terms);
+  Eigen::VectorXd b(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (x[k].size() != d || !std::isfinite(f[k])) return se;
+    std::vector<double> u(d);
+    for (std::size_t i = 0; i < d; ++i) u[i] = (x[k][i] - centre[i]) / scale[i];
+    std::size_t c = 0;
+    A(k, c++) = 1.0;
+    for (std::size_t i = 0; i < d; ++i) A(k, c++) = u[i];
+    for (std::size_t i = 0; i < d; ++i)
+      for (std::size_t j = i; j < d; ++j) A(k, c++) = i == j ? 0.5 * u[i] * u[i] : u[i] * u[j];
+    b(k) = f[k];
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < static_cast<Eigen::Index>(terms)) return se;
+  const Eigen::VectorXd coef = qr.solve(b);
+  std::vector<std::size_t> fr;
+  for (std::size_t i = 0; i < d; ++i)
+    if (free[i]) fr.push_back(i);
+  if (fr.empty()) return se;
+  Eigen::MatrixXd H_all(d, d);
+  std::size_t c = 1 + d;
+  for (std::size_t i = 0; i < d; ++i)
+    for (std::size_t j = i; j < d; ++j) H_all(i, j) = H_all(j, i) = coef(c++);
+  Eigen::MatrixXd H(fr.size(), fr.size());
+  for (std::size_t a = 0; a < fr.size(); ++a)
+    for (std::size_t bb = 0; bb < fr.size(); ++bb) H(a, bb) = H_all(fr[a], fr[bb]);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  if (es.info() != Eigen::Success || !(es.eigenvalues().minCoeff() > 0)) return se;
+  const Eigen::MatrixXd cov = 2.0 * H.inverse();  // in u units: back by the scale
+  for (std::size_t a = 0; a < fr.size(); ++a) se[fr[a]] = std::sqrt(cov(a, a)) * scale[fr[a]];
+  return se;
+}
+
 void check_human_measure(const Study& study, const std::vector<HumanCell>& cells,
                          const HumanCell& c) {
   const std::vector<std::string> produced = produced_measures(study);
@@ -698,6 +740,21 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   r.se_computed = opt.standard_errors;
   in_stencil = true;
   if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
+  {
+    std::vector<std::vector<double>> xs;
+    std::vector<double> fs;
+    // The points whose loss is within kQuadraticRegion of the fit's: where a quadratic loss lies
+    // within 3 SEs of its minimum (Δloss = k² at k SEs), the scale the SEs are about. Points
+    // farther out (the start of a long search, say) would make it the curvature of a region
+    // where the loss need not be quadratic.
+    for (const auto& [x, v] : memo)
+      if (v.first <= r.loss_after + kQuadraticRegion) xs.push_back(x), fs.push_back(v.first);
+    std::vector<bool> free(r.fitted.size());
+    for (std::size_t i = 0; i < free.size(); ++i)
+      free[i] = r.fitted[i] > lo[i] && r.fitted[i] < hi[i];
+    r.se_quadratic = quadratic_se(xs, fs, r.fitted, step, free);
+    r.quadratic_points = static_cast<int>(xs.size());
+  }
   // A stencil point better than the fit: said, not adopted (see CalibrationResult).
   for (const auto& x : stencil_points) {
     const double v = memo.at(x).first;
@@ -785,10 +842,12 @@ nlohmann::json to_json(const CalibrationResult& r) {
     return a;
   };
   nlohmann::json fitted = nlohmann::json::object(), se = nlohmann::json::object(),
-                 start = nlohmann::json::object(), bounds = nlohmann::json::object();
+                 start = nlohmann::json::object(), bounds = nlohmann::json::object(),
+                 se_quadratic = nlohmann::json::object();
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
     fitted[r.keys[i]] = r.fitted[i];
     se[r.keys[i]] = num(r.se[i]);
+    se_quadratic[r.keys[i]] = num(i < r.se_quadratic.size() ? r.se_quadratic[i] : kNaN);
     start[r.keys[i]] = r.start[i];
     if (i < r.lo.size()) bounds[r.keys[i]] = {r.lo[i], r.hi[i]};
   }
@@ -802,6 +861,8 @@ nlohmann::json to_json(const CalibrationResult& r) {
   return {{"palplab_calibration", 1},
           {"fitted", fitted},
           {"standard_errors", se},
+          {"standard_errors_quadratic", se_quadratic},
+          {"quadratic_points", r.quadratic_points},
           {"start", start},
           {"bounds", bounds},
           {"loss_before", num(r.loss_before)},
@@ -822,7 +883,8 @@ nlohmann::json to_json(const CalibrationResult& r) {
 std::string to_text(const CalibrationResult& r) {
   std::ostringstream o;
   char buf[256];
-  o << "fitted parameters (SE from the loss curvature):\n";
+  o << "fitted parameters (SE from the loss curvature at the fit; over the points: from the "
+       "quadratic through the points tried near the fit):\n";
   for (std::size_t i = 0; i < r.keys.size(); ++i) {
     // A value on a bound is the bound's, not the data's: said, so it is not read as a fit.
     const bool bounded = i < r.lo.size();
@@ -839,8 +901,25 @@ std::string to_text(const CalibrationResult& r) {
                   fmt_num(r.start[i]).c_str());
     o << buf;
     if (bounded) o << ", bounds " << fmt_num(r.lo[i]) << ":" << fmt_num(r.hi[i]) << at;
+    if (i < r.se_quadratic.size() && std::isfinite(r.se_quadratic[i])) {
+      std::snprintf(buf, sizeof buf,
+                    "; SE %g over the %d points with a loss within %g of the fit's",
+                    r.se_quadratic[i], r.quadratic_points, kQuadraticRegion);
+      o << buf;
+    }
     o << ")\n";
   }
+  // The stencil's curvature and the whole search's disagree: the loss is no one quadratic (rough
+  // at the stencil's scale, where common random numbers leave steps, or far from quadratic over
+  // the region searched).
+  for (std::size_t i = 0; i < r.keys.size() && i < r.se_quadratic.size(); ++i)
+    if (std::isfinite(r.se[i]) && std::isfinite(r.se_quadratic[i]) &&
+        std::max(r.se[i], r.se_quadratic[i]) > 2 * std::min(r.se[i], r.se_quadratic[i])) {
+      o << "the two SEs of " << r.keys[i]
+        << " differ by more than 2x: the loss is not one quadratic near the fit (rough at the "
+           "stencil's scale, where a press more or less moves it by a step, or curved otherwise "
+           "farther out); neither describes it alone, the larger is the cautious one\n";
+    }
   std::snprintf(buf, sizeof buf, "loss before %.4g, after %.4g (%d evaluation%s, %d restart%s)\n",
                 r.loss_before, r.loss_after, r.evaluations, r.evaluations == 1 ? "" : "s",
                 r.restarts, r.restarts == 1 ? "" : "s");

@@ -95,6 +95,22 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
                              const std::vector<double>& lo, const std::vector<double>& hi,
                              int budget);
 
+// Standard errors from the loss's average curvature over a set of simulated points: the
+// least-squares quadratic q(x) = c + gᵀu + ½ uᵀHu, u = (x − centre) / scale per coordinate, through
+// every (x[k], f[k]); Cov = 2 H⁻¹ (loss ≈ −2 log L) over the coordinates with free[i] true (the
+// others held, as the curvature stencil holds a parameter on its bound). NaN for every coordinate
+// when the points do not determine the quadratic with a residual to spare (fewer than its
+// 1 + d + d(d+1)/2 coefficients plus one, or collinear) and where the free block of H is not
+// positive definite. Beside the stencil's curvature at the fit (CalibrationResult::se), which a
+// loss that is rough at the stencil's scale makes far too small, this is the curvature of the
+// whole region the search covered.
+// The points calibrate() gives quadratic_se(): those with a loss within this of the fit's, the
+// region within 3 SEs of a quadratic loss's minimum (loss ≈ −2 log L: Δloss = k² at k SEs).
+inline constexpr double kQuadraticRegion = 9.0;
+std::vector<double> quadratic_se(const std::vector<std::vector<double>>& x,
+                                 const std::vector<double>& f, const std::vector<double>& centre,
+                                 const std::vector<double>& scale, const std::vector<bool>& free);
+
 // A fit's own bounds for one parameter (`--bounds NAME=LO:HI`), narrower than or equal to the
 // parameter table's (protocols/participants/params.cpp).
 struct ParamBound {
@@ -155,6 +171,11 @@ struct CalibrationResult {
   // so a refit can start from it.
   std::vector<double> stencil_lower;
   double stencil_lower_loss = 0.0;
+  // quadratic_se() over the points simulated (the optimiser's and the stencil's) whose loss is
+  // within kQuadraticRegion of loss_after (NaN when too few): the loss's curvature over the
+  // region the SEs are about, reported beside `se`; quadratic_points of them.
+  std::vector<double> se_quadratic;
+  int quadratic_points = 0;
 };
 
 // Before any simulation, InputError (with the CSV line) for a cell of a measure the study does

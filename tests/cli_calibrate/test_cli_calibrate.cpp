@@ -89,6 +89,20 @@ TEST(Calibrate, RecoversKnownParameters) {
   EXPECT_LE(std::abs(sp - true_speed), 2 * sp_se) << sp << " ± " << sp_se;
   EXPECT_LE(std::abs(cv - true_cv), 0.1 * true_cv) << cv;
   EXPECT_LE(std::abs(sp - true_speed), 0.1 * true_speed) << sp;
+  // The SEs from the quadratic through the points simulated near the fit (the search's and the
+  // stencil's): computed from the points calibrate really simulated, the truth within two of them.
+  ASSERT_TRUE(fit["standard_errors_quadratic"]["prior_target_cv"].is_number() &&
+              fit["standard_errors_quadratic"]["explore_speed"].is_number())
+      << fit.dump(1);
+  EXPECT_GT(fit["quadratic_points"].get<int>(), 6);  // the 2-D quadratic's 6 coefficients
+  EXPECT_LE(std::abs(cv - true_cv),
+            2 * fit["standard_errors_quadratic"]["prior_target_cv"].get<double>());
+  EXPECT_LE(std::abs(sp - true_speed),
+            2 * fit["standard_errors_quadratic"]["explore_speed"].get<double>());
+  EXPECT_NE(r.out.find(" over the " + std::to_string(fit["quadratic_points"].get<int>()) +
+                       " points with a loss within 9 of the fit's"),
+            std::string::npos)
+      << r.out;
   // The fitted values are now the defaults in the edited params.hpp (%.6g, as written).
   const std::string hpp = slurp(d / "params.hpp");
   char expect[96];
@@ -297,6 +311,9 @@ TEST(Calibrate, AStencilPointBelowTheFitIsReported) {
   EXPECT_NE(r.err.find("evaluation 2 (SE stencil): loss "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(" (fit "), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("(3 evaluations, 0 restarts)"), std::string::npos) << r.out;
+  // Three points (the start and the stencil's two) do not determine a quadratic with a residual.
+  EXPECT_TRUE(fit["standard_errors_quadratic"]["prior_target_cv"].is_null()) << fit.dump(1);
+  EXPECT_EQ(fit["quadratic_points"], 3);
   fs::remove_all(d);
 }
 
