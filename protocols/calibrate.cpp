@@ -434,6 +434,17 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
 
 namespace {
 
+// sqrt(diag(2 H⁻¹)) (loss ≈ −2 log L, Cov ≈ 2 H⁻¹), or NaN for each when H is not positive
+// definite: what both standard errors make of their curvature matrix.
+std::vector<double> se_from_curvature(const Eigen::MatrixXd& H) {
+  std::vector<double> se(H.rows(), kNaN);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  if (es.info() != Eigen::Success || !(es.eigenvalues().minCoeff() > 0)) return se;
+  const Eigen::MatrixXd cov = 2.0 * H.inverse();
+  for (Eigen::Index a = 0; a < H.rows(); ++a) se[a] = std::sqrt(cov(a, a));
+  return se;
+}
+
 // Standard errors from the curvature of the loss at r.fitted (loss ≈ -2 log L, Cov ≈ 2 H⁻¹);
 // r.se stays NaN where H is not positive definite. A parameter on one of its bounds has no SE
 // (the optimum there is the bound's, and a stencil cut at the bound would measure a slope, not a
@@ -473,11 +484,8 @@ void standard_errors(CalibrationResult& r, const std::vector<double>& step,
       H(a, b) = H(b, a) = v;
     }
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-  if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 0) {
-    const Eigen::MatrixXd cov = 2.0 * H.inverse();
-    for (std::size_t a = 0; a < d; ++a) r.se[free[a]] = std::sqrt(cov(a, a));
-  }
+  const std::vector<double> se = se_from_curvature(H);
+  for (std::size_t a = 0; a < d; ++a) r.se[free[a]] = se[a];
 }
 
 }  // namespace
@@ -517,10 +525,8 @@ std::vector<double> quadratic_se(const std::vector<std::vector<double>>& x,
   Eigen::MatrixXd H(fr.size(), fr.size());
   for (std::size_t a = 0; a < fr.size(); ++a)
     for (std::size_t bb = 0; bb < fr.size(); ++bb) H(a, bb) = H_all(fr[a], fr[bb]);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-  if (es.info() != Eigen::Success || !(es.eigenvalues().minCoeff() > 0)) return se;
-  const Eigen::MatrixXd cov = 2.0 * H.inverse();  // in u units: back by the scale
-  for (std::size_t a = 0; a < fr.size(); ++a) se[fr[a]] = std::sqrt(cov(a, a)) * scale[fr[a]];
+  const std::vector<double> se_u = se_from_curvature(H);  // in u units: back by the scale
+  for (std::size_t a = 0; a < fr.size(); ++a) se[fr[a]] = se_u[a] * scale[fr[a]];
   return se;
 }
 
