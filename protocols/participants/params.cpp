@@ -172,7 +172,7 @@ const std::vector<ParamSpec>& trainee_param_specs() {
             "(2026-12-04)"),
       tspec("individual_cv", &T::individual_cv, 0.0, 2.0, "1",
             "between-person SD (log scale) of a speed factor on exploration and recognition",
-            "model assumption (individual differences in motor speed)"),
+            "individual differences in speed; value fitted to the whole exp2 (2026-12-05)"),
       tspec("landmark_spacing", &T::landmark_spacing, 0.0, 1.0, "m",
             "orienting: distance between the landmarks touched on the route from where the hand "
             "first meets the organ to the believed feature position (0: no orienting, the "

@@ -92,7 +92,10 @@ struct TraineeParams {
   double recognition_cv = 0.3;         // 1, trial-to-trial SD / mean of a recognition time
   double miss_probability = 0.2;       // 1, chance the feature is not recognised on a touch
   double practice_exponent = 0.51709;  // 1, power law of practice for recognition
-  double individual_cv = 0.15;         // 1, between-person SD of speed (log scale)
+  // individual_cv: output of `palplab calibrate` on the whole exp2 at 20 per group (2026-12-05,
+  // fourth session; protocols/participants/exp2_calibration_individual.json; docs/PARTICIPANTS.md
+  // "How much people differ in speed"); 0.15 (an assumption) before.
+  double individual_cv = 0.075;  // 1, between-person SD of speed (log scale)
   // orienting on landmarks before the search (blind haptic navigation along the organ)
   double landmark_spacing = 0.03;  // m, distance between landmarks touched on the route (0 = off)
   double landmark_time = 34.1162;  // s, median novice judgement time at one landmark
