@@ -106,8 +106,9 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
   t.file = file;
   require_utf8(text, file);
   size_t i = 0;
-  // A UTF-8 byte-order mark (Excel writes one) is not part of the first column name.
-  if (text.substr(0, 3) == "\xEF\xBB\xBF") i = 3;
+  // A UTF-8 byte-order mark (Excel writes one) is not part of the first column name (nor is a
+  // second one, left by a tool that prepended its own).
+  while (text.substr(i, 3) == "\xEF\xBB\xBF") i += 3;
   int line = 1;
   // Field columns: code points from the start of the current line, counted incrementally.
   size_t line_start = i, counted_to = i;
@@ -187,6 +188,8 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
     if (!have_header) {
       t.header = std::move(fields);
       have_header = true;
+      // Blanks around a name are not part of it ("participant, group"), as around a value.
+      for (auto& name : t.header) name = trim_blanks(name);
       for (size_t a = 0; a < t.header.size(); ++a) {
         if (t.header[a].empty())
           throw error_at(file, record_line, 0,

@@ -73,6 +73,8 @@ palplab::app::CommandRegistration reg_calibrate{
           throw palplab::InputError(palplab::SourceLocation{"--human"},
                                     "expected the people's CSV file, got an empty path");
         auto cells = read_human_cells(a->human);
+        for (const auto& w : sd_floor_warnings(cells))
+          std::cerr << "warning: --human: " << w << "\n";
         // The outputs are checked before the fit (which takes minutes to hours).
         const bool defaults = defaults_opt->count() > 0;
         if (defaults && a->write_defaults.empty())

@@ -147,6 +147,7 @@ palplab::app::CommandRegistration reg_merge{
                                                       palplab::app::power_summary_outputs(), inputs,
                                                       "", false);
         palplab::app::require_writable_dir("--out", a->out);
+        palplab::app::require_writable_power_summary("--out", a->out);
         // As `palplab power` does: never overwrite (or mix in) another study's results.
         palplab::protocols::check_out_dir_study(a->out,
                                                 summary.at("study_sha256").get<std::string>());

@@ -202,6 +202,9 @@ palplab::app::CommandRegistration reg_power{
               "the study declares no test to compute the power of: expected at least one "
               "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
         // A one-group study with such a test is refused by the study validator (load_study).
+        // Every size resizes before --out is touched: an explicit assignment, or a plan beyond
+        // the validator's limit, is refused here, not after the directory was made.
+        for (const int n : power_sizes(s, a->opt)) (void)resized_study(s, n, s.seed);
         // People's verdicts before any simulation: bad data are found at once.
         std::optional<PeopleVerdicts> people;
         if (human_opt->count() > 0) {
@@ -219,6 +222,7 @@ palplab::app::CommandRegistration reg_power{
         }
         check_power_out(*a, s);
         palplab::app::require_writable_dir("--out", a->out);
+        if (a->opt.shards <= 1) palplab::app::require_writable_power_summary("--out", a->out);
         const bool tty = isatty(2);
         if (!a->quiet)
           a->opt.progress = [tty](long done, long total, double elapsed) {

@@ -7,6 +7,8 @@
 // --where) → InputError → exit 2 with the CSV line.
 #include <cmath>
 #include <iostream>
+#include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -31,6 +33,52 @@ struct StatsArgs {
   double alpha = 0.05;
 };
 
+// The tidy tables palplab writes (`export`'s measures.csv, `calibrate --human`) hold every
+// measure in one value column: a `measure` or `unit` column with more than one value among the
+// rows used means numbers of different quantities pooled into one analysis (review 2026-12-06:
+// accuracy in %, times in s and forces in N compared as one variable, exit 0). A participant
+// with several rows (sessions, phases) is pooled too: allowed, but said, since the tests take
+// every row as an independent observation.
+void check_one_measure(const palplab::analysis::CsvTable& t, const std::vector<int>& rows,
+                       const std::string& value_column) {
+  auto column = [&](const std::string& name) {
+    for (std::size_t c = 0; c < t.header.size(); ++c)
+      if (t.header[c] == name && name != value_column) return static_cast<int>(c);
+    return -1;
+  };
+  for (const char* name : {"measure", "unit"}) {
+    const int c = column(name);
+    if (c < 0 || rows.empty()) continue;
+    const std::string first = palplab::analysis::trim_blanks(t.rows[rows[0]][c]);
+    for (const int r : rows) {
+      const std::string v = palplab::analysis::trim_blanks(t.rows[r][c]);
+      if (v == first) continue;
+      throw palplab::InputError(palplab::SourceLocation{t.file, t.line[r]},
+                                std::string("the rows analysed mix ") + name + "s: '" +
+                                    palplab::analysis::shown_text(first) + "' (line " +
+                                    std::to_string(t.line[rows[0]]) + ") and '" +
+                                    palplab::analysis::shown_text(v) + "' (column '" + name +
+                                    "'); analyse one at a time with --where " + name + "=" +
+                                    palplab::analysis::shown_text(first));
+    }
+  }
+  const int p = column("participant");
+  if (p < 0) return;
+  std::map<std::string, int> count;
+  for (const int r : rows) ++count[palplab::analysis::trim_blanks(t.rows[r][p])];
+  int repeated = 0;
+  std::string example;
+  for (const auto& [id, k] : count)
+    if (k > 1 && repeated++ == 0)
+      example = "'" + palplab::analysis::shown_text(id) + "' " + std::to_string(k) + " rows";
+  if (repeated > 0)
+    std::cerr << "warning: " << t.file << ": " << repeated
+              << " participant(s) have more than one row among those analysed (" << example
+              << "); the tests take every row as an independent observation: select one row per "
+                 "participant (--where session=..., --where phase=...) or average each "
+                 "participant's rows first\n";
+}
+
 palplab::app::CommandRegistration reg_stats{
     "stats", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
@@ -51,13 +99,17 @@ palplab::app::CommandRegistration reg_stats{
                     "failing; their number is reported");
       cmd->add_option("--margin", a->margin,
                       "Equivalence margin M (> 0, data units): every pair also gets a TOST of "
-                      "|mean difference| < M and a verdict (equivalent/different/inconclusive)");
+                      "|mean difference| < M and a verdict (equivalent/different/inconclusive)")
+          ->check(palplab::app::finite_range(0, std::numeric_limits<double>::max(), true));
       cmd->add_option("--margins", a->margins,
-                      "Asymmetric equivalence margins LOW,HIGH (LOW < HIGH, data units)")
+                      "Asymmetric equivalence margins LOW,HIGH (LOW < 0 < HIGH, data units)")
           ->delimiter(',')
-          ->expected(2);
+          ->expected(2)
+          ->check(palplab::app::finite_range(-std::numeric_limits<double>::max(),
+                                             std::numeric_limits<double>::max()));
       auto* alpha_opt =
-          cmd->add_option("--alpha", a->alpha, "Level of the equivalence tests (default 0.05)");
+          cmd->add_option("--alpha", a->alpha, "Level of the equivalence tests (default 0.05)")
+              ->check(palplab::app::finite_range(1e-9, 0.5, false, true));
       cmd->add_flag("--json", a->json, "Print JSON instead of tables");
       cmd->callback([a, alpha_opt, code] {
         palplab::app::flag_only_with(alpha_opt, a->margin || !a->margins.empty(),
@@ -74,27 +126,23 @@ palplab::app::CommandRegistration reg_stats{
         for (const auto& w : a->where) where.push_back(parse_where(w));
         CsvTable t = read_csv(a->csv);
         GroupedData data = group_table(t, a->value, a->group, where, 2, 2, a->skip_empty);
+        check_one_measure(t, filter_rows(t, where), a->value);
         StatsOptions opt;
         opt.df_mode = a->df_mode == "floor" ? DfMode::Floor : DfMode::Exact;
-        if (!(a->alpha > 0 && a->alpha < 0.5))
-          throw palplab::InputError(
-              palplab::SourceLocation{"--alpha"},
-              "expected a level in (0, 0.5), got " + std::to_string(a->alpha));
-        opt.alpha = a->alpha;
+        opt.alpha = a->alpha;  // in [1e-9, 0.5) (the option's check)
         if (a->margin && !a->margins.empty())
           throw palplab::InputError(palplab::SourceLocation{"--margin"},
                                     "give either --margin or --margins, not both");
-        if (a->margin) {
-          if (!(*a->margin > 0) || !std::isfinite(*a->margin))
-            throw palplab::InputError(palplab::SourceLocation{"--margin"},
-                                      "expected a finite margin > 0");
-          opt.margins = std::make_pair(-*a->margin, *a->margin);
-        }
+        if (a->margin) opt.margins = std::make_pair(-*a->margin, *a->margin);  // > 0 (checked)
         if (!a->margins.empty()) {
-          if (!(a->margins[0] < a->margins[1]) || !std::isfinite(a->margins[0]) ||
-              !std::isfinite(a->margins[1]))
-            throw palplab::InputError(palplab::SourceLocation{"--margins"},
-                                      "expected LOW,HIGH with LOW < HIGH (finite numbers)");
+          // An equivalence region holds "no difference", as a study's tost margins must.
+          if (!(a->margins[0] < 0 && a->margins[1] > 0))
+            throw palplab::InputError(
+                palplab::SourceLocation{"--margins"},
+                "expected LOW,HIGH with LOW < 0 < HIGH (the region of differences taken as "
+                "equivalent), got " +
+                    palplab::app::shown_number(a->margins[0]) + "," +
+                    palplab::app::shown_number(a->margins[1]));
           opt.margins = std::make_pair(a->margins[0], a->margins[1]);
         }
         StatsSummary s = summarize(data, opt);

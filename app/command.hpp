@@ -42,15 +42,18 @@ inline std::string shown_number(double x) {
   return b;
 }
 
-// A finite number in [lo, hi] ((lo, hi] when lo_open).
-inline CLI::Validator finite_range(double lo, double hi, bool lo_open = false) {
+// A finite number in [lo, hi] (open at lo / hi when lo_open / hi_open), written in decimal:
+// CLI11 also reads hexadecimal ("0x0.1p0" as 0.0625), which CSV values and --bounds refuse.
+inline CLI::Validator finite_range(double lo, double hi, bool lo_open = false,
+                                   bool hi_open = false) {
   const std::string range =
-      (lo_open ? "(" : "[") + shown_number(lo) + ", " + shown_number(hi) + "]";
+      (lo_open ? "(" : "[") + shown_number(lo) + ", " + shown_number(hi) + (hi_open ? ")" : "]");
   return CLI::Validator(
-      [lo, hi, lo_open, range](std::string& text) -> std::string {
+      [lo, hi, lo_open, hi_open, range](std::string& text) -> std::string {
         double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < lo || v > hi ||
-            (lo_open && v == lo))
+        if (text.empty() || text.find_first_not_of("0123456789.eE+-") != std::string::npos ||
+            !CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < lo || v > hi ||
+            (lo_open && v == lo) || (hi_open && v == hi))
           return "expected a finite number in " + range + ", got '" + text + "'";
         return std::string();
       },
@@ -88,6 +91,11 @@ inline void require_writable_file(const std::string& flag, const std::string& pa
   if (fs::is_directory(path, ec))
     throw InputError(SourceLocation{flag}, "\"" + path + "\" is a directory; expected a file name");
   const bool existed = fs::exists(path, ec);
+  // A link to a missing file: the probe would create its target and then remove the link.
+  if (!existed && fs::is_symlink(fs::symlink_status(path, ec)))
+    throw InputError(SourceLocation{flag}, "cannot write \"" + path +
+                                               "\" (a symbolic link to a missing file), checked "
+                                               "before the work starts");
   std::ofstream probe(path, std::ios::app | std::ios::binary);
   const int why = errno;
   if (!probe)

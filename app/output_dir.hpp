@@ -163,4 +163,12 @@ inline std::vector<DirOutput> power_summary_outputs() {
        }}};
 }
 
+// Each summary file of `palplab power` and `palplab merge` in `dir` checked for writing before
+// any replicate is run or read (require_writable_file: a read-only power.json, or a link to a
+// missing file, was found only after the simulation).
+inline void require_writable_power_summary(const std::string& flag, const std::string& dir) {
+  for (const auto& o : power_summary_outputs())
+    require_writable_file(flag, (std::filesystem::path(dir) / o.name).string());
+}
+
 }  // namespace palplab::app

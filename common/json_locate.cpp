@@ -336,6 +336,22 @@ SourceLocation JsonLocator::locate(const std::string& file, std::string_view pat
   return loc;
 }
 
+std::size_t too_deep_at(std::string_view t) {
+  int depth = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const char c = t[i];
+    if (c == '"') {  // skip the string
+      for (++i; i < t.size() && t[i] != '"'; ++i)
+        if (t[i] == '\\') ++i;
+    } else if (c == '{' || c == '[') {
+      if (++depth > kMaxDepth) return i;
+    } else if (c == '}' || c == ']') {
+      --depth;
+    }
+  }
+  return std::string_view::npos;
+}
+
 namespace {
 
 // Checks made before nlohmann sees the text, so that hostile input ends in a located error:
@@ -353,7 +369,9 @@ std::size_t prescan(std::string_view t, const std::string& file) {
     loc.column = p.column;
     throw InputError(loc, what);
   };
-  int depth = 0;
+  if (const std::size_t deep = too_deep_at(t); deep != std::string_view::npos)
+    fail(deep, "invalid JSON: nested deeper than " + std::to_string(kMaxDepth) +
+                   " levels (palplab files need a few)");
   std::size_t keys = 0;
   for (std::size_t i = 0; i < t.size(); ++i) {
     const char c = t[i];
@@ -362,12 +380,6 @@ std::size_t prescan(std::string_view t, const std::string& file) {
     } else if (c == '"') {  // skip the string
       for (++i; i < t.size() && t[i] != '"'; ++i)
         if (t[i] == '\\') ++i;
-    } else if (c == '{' || c == '[') {
-      if (++depth > kMaxDepth)
-        fail(i, "invalid JSON: nested deeper than " + std::to_string(kMaxDepth) +
-                    " levels (palplab files need a few)");
-    } else if (c == '}' || c == ']') {
-      --depth;
     } else if (c == '-' || (c >= '0' && c <= '9')) {
       std::size_t j = i;
       while (j < t.size() && (std::isdigit(static_cast<unsigned char>(t[j])) || t[j] == '-' ||

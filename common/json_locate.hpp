@@ -31,6 +31,11 @@ TextPos offset_to_pos(std::string_view text, std::size_t offset);
 // Deepest nesting of objects/arrays accepted in a palplab JSON file (they need about 6).
 inline constexpr int kMaxDepth = 64;
 
+// Byte offset of the first '{' or '[' nested deeper than kMaxDepth (strings skipped), or npos.
+// For text parsed without parse_located (a line of a replicate file): nlohmann parses any depth,
+// but printing or walking such a value recurses without bound.
+std::size_t too_deep_at(std::string_view text);
+
 // Parses JSON text; a syntax error becomes an InputError located at FILE:LINE:COL with what was
 // expected. Duplicate member keys are an error too (nlohmann would silently keep the last), and
 // so are nesting deeper than kMaxDepth and numbers that overflow a double (1e400).

@@ -93,9 +93,14 @@ std::string out_of_range(const std::string& measure, double v) {
   if (measure == "palpations" || measure == "sft_reached" || measure == "insertion_attempts" ||
       measure == "layers_passed" || measure == "bone_contacts")
     return v >= 0 && v == std::floor(v) ? "" : "a count, a whole number >= 0";
-  if (measure == "palpation_force" || measure == "exploration_time" ||
-      measure == "procedure_time" || measure == "tip_to_target_mm")
-    return v >= 0 ? "" : "a number >= 0 (" + measure_unit(measure) + ")";
+  // A force or time beyond what any study can produce is a typo or a unit error (1e100 was
+  // taken, and its SD then took the cell out of the loss).
+  if (measure == "palpation_force")
+    return v >= 0 && v <= kMaxTaskForce ? "" : "a force from 0 to 1e6 N";
+  if (measure == "exploration_time" || measure == "procedure_time")
+    return v >= 0 && v <= kMaxSessionSeconds ? ""
+                                             : "a time from 0 to 86400 s (a session's longest)";
+  if (measure == "tip_to_target_mm") return v >= 0 ? "" : "a number >= 0 (mm)";
   return "";
 }
 
@@ -134,6 +139,26 @@ int session_number(const analysis::CsvTable& t, std::size_t r, int col) {
 }
 
 }  // namespace
+
+double loss_sd(const HumanCell& c) {
+  return std::max(c.sd, std::max(0.01 * std::abs(c.mean), 1e-9));
+}
+
+std::vector<std::string> sd_floor_warnings(const std::vector<HumanCell>& cells) {
+  std::vector<std::string> out;
+  for (const auto& c : cells) {
+    if (c.n < 2 || c.sd >= loss_sd(c)) continue;
+    char b[96];
+    std::snprintf(b, sizeof b, "SD %.4g is below 1 %% of the mean %.4g; the loss uses %.4g", c.sd,
+                  c.mean, loss_sd(c));
+    out.push_back(c.file + ":" + std::to_string(c.line) + ": group " + c.group + ", phase " +
+                  c.phase + ", session " + std::to_string(c.session) + ", measure " + c.measure +
+                  ": " + b +
+                  " (the cell's values are nearly equal: it weighs far more than the "
+                  "others in the fit)");
+  }
+  return out;
+}
 
 std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
   const analysis::CsvTable t = analysis::read_csv(csv_path);
@@ -326,8 +351,7 @@ double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int 
       loss += 1e3;  // nothing to compare: far worse than any fit
     } else {
       mean_sd(x, f.mean, f.sd);
-      const double sd_floor = std::max(0.01 * std::abs(c.mean), 1e-9);
-      const double s2 = std::pow(std::max(c.sd, sd_floor), 2);
+      const double s2 = std::pow(loss_sd(c), 2);
       const double var_m = s2 / c.n + s2 / f.n_sim;
       const double var_s = s2 / (2.0 * (c.n - 1)) + s2 / (2.0 * (f.n_sim - 1));
       f.z_mean = (f.mean - c.mean) / std::sqrt(var_m);

@@ -49,11 +49,18 @@ struct HumanCell {
 // (empty or NA values, i.e. undefined measures, are left out);
 // InputError with the line for missing columns, a session that is not a positive integer,
 // non-numbers, a value outside its measure's range (feature_identified 0 or 1, accuracy 0–100 %,
-// counts whole numbers >= 0, forces, times and distances >= 0), a (participant, group, phase,
-// session, measure) given twice or a participant given in two groups (groups are
+// counts whole numbers >= 0, forces 0-1e6 N, times 0-86400 s, distances >= 0), a (participant,
+// group, phase, session, measure) given twice or a participant given in two groups (groups are
 // between-participant). Cells with fewer than 2 values are kept: calibrate() refuses them among
 // the cells it fits. Measures are checked against the study by calibrate().
 std::vector<HumanCell> read_human_cells(const std::string& csv_path);
+
+// The SD the loss divides by for a human cell: its SD, but at least 1 % of |mean| (and 1e-9), so
+// that a cell of equal values (SD 0) does not make the loss infinite; such a cell still weighs
+// far more than the others (`palplab calibrate` warns about it: sd_floor_warnings).
+double loss_sd(const HumanCell& c);
+// One line per cell with at least 2 values whose SD is below that floor.
+std::vector<std::string> sd_floor_warnings(const std::vector<HumanCell>& cells);
 
 struct CellFit {
   HumanCell human;

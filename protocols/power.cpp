@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +28,7 @@
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "common/json_locate.hpp"
 #include "common/nan.hpp"
 #include "common/seed.hpp"
 #include "protocols/plan.hpp"
@@ -174,9 +177,18 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
     if (it == r.end()) throw fail("$", "missing \"" + std::string(key) + "\" (" + expected + ")");
     return *it;
   };
-  for (const char* key : {"study_sha256", "study"})
+  // Names are printed into power.md and messages: a control character (an escape sequence
+  // edited into a record) is refused, not echoed to the terminal.
+  auto control_free = [&](const nlohmann::json& v, const std::string& json_path) {
+    for (const unsigned char c : v.get_ref<const std::string&>())
+      if (c < 0x20 || c == 0x7f)
+        throw fail(json_path, "expected text without control characters, got " + shown(v));
+  };
+  for (const char* key : {"study_sha256", "study"}) {
     if (!member(key, "a string").is_string())
       throw fail(std::string("$.") + key, "expected a string, got " + shown(r.at(key)));
+    control_free(r.at(key), std::string("$.") + key);
+  }
   const std::string n_what = "the group size, an integer from 2 to " + std::to_string(kMaxN);
   if (!integer_in(member("n", n_what), 2, kMaxN))
     throw fail("$.n", "expected " + n_what + ", got " + shown(r.at("n")));
@@ -207,6 +219,7 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
         throw fail(tp + "." + key, it == t.end()
                                        ? "missing (expected a string)"
                                        : "expected a non-empty string, got " + shown(*it));
+      control_free(*it, tp + "." + key);
     }
     for (std::size_t j = 0; j < i; ++j)
       if (tests[j].is_object() && tests[j].value("id", "") == t.at("id"))
@@ -246,6 +259,7 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
         throw fail(gp + "." + key, it == g.end()
                                        ? "missing (expected a string)"
                                        : "expected a non-empty string, got " + shown(*it));
+      control_free(*it, gp + "." + key);
     }
     for (std::size_t j = 0; j < i; ++j)
       if ((*groups)[j].value("cell", "") == g.at("cell") &&
@@ -300,6 +314,11 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
     const bool unterminated = in.eof();
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
+    // Printing or checking a value nested without bound would recurse without bound.
+    if (const std::size_t deep = palplab::json::too_deep_at(line); deep != std::string::npos)
+      throw InputError(SourceLocation{path, no, static_cast<int>(deep) + 1},
+                       "not a replicate record (JSON line): nested deeper than " +
+                           std::to_string(palplab::json::kMaxDepth) + " levels");
     nlohmann::json r;
     try {
       r = nlohmann::json::parse(line);
@@ -381,6 +400,19 @@ Study resized_study(const Study& study, int n, std::uint64_t seed) {
         "balanced_random assignment for a power analysis)",
         study.file);
   if (n < 2) throw InputError("group size must be >= 2, got " + std::to_string(n));
+  // The validator's bound on the plan, for the resized study (a typo such as n = 100000 would
+  // otherwise take all memory).
+  long long sessions = 0;
+  for (const auto& p : study.phases) sessions += p.sessions;
+  const long long planned =
+      static_cast<long long>(n) * static_cast<long long>(study.groups.size()) * sessions;
+  if (planned > kMaxPlannedSessions)
+    throw InputError(
+        "group size " + std::to_string(n) + ": the study resized to it plans " + std::to_string(n) +
+            " x " + std::to_string(study.groups.size()) + " participants x " +
+            std::to_string(sessions) + " sessions = " + std::to_string(planned) +
+            " sessions; palplab runs at most " + std::to_string(kMaxPlannedSessions) + " per study",
+        study.file);
   Study s = study;
   for (auto& g : s.groups) g.size = n;
   s.seed = seed;
@@ -1516,9 +1548,13 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
   }
   const std::string table = md.str();
   auto write = [&](const std::string& name, const std::string& text) {
+    errno = 0;
     std::ofstream o(fs::path(out_dir) / name, std::ios::binary);
     o << text;
-    if (!o) throw InputError("cannot write", (fs::path(out_dir) / name).string());
+    if (!o)
+      throw InputError(
+          std::string("cannot write (") + (errno ? std::strerror(errno) : "write failed") + ")",
+          (fs::path(out_dir) / name).string());
   };
   write("power.json", s.dump(2) + "\n");
   write("power.md", table);

@@ -115,6 +115,16 @@ struct Hypothesis {
   bool pooled = false;              // participant means over the phase's sessions, else the last
 };
 
+// Participants x sessions each that one study may plan (the validator's limit; power and
+// calibrate hold a resized study to it too): beyond it a study is a typo that would take all
+// memory.
+inline constexpr long long kMaxPlannedSessions = 1000000;
+// The longest session (24 h of 1 kHz samples) and the largest task force (as the thresholds,
+// prototypes::read_thresholds) a study may declare: also the bounds of a measured time and force
+// in people's data (calibrate --human).
+inline constexpr double kMaxSessionSeconds = 86400;  // s
+inline constexpr double kMaxTaskForce = 1e6;         // N
+
 struct Study {
   std::string file;       // path it was loaded from
   std::string json_text;  // the exact bytes (hashed and stored with results)

@@ -62,19 +62,16 @@ std::string join(const std::vector<std::string>& v) {
 }
 
 // Bounds on counts and times: beyond them a study is a typo (or an integer that would wrap).
-constexpr long long kMaxDays = 3650;          // 10 years
-constexpr long long kMaxSessions = 10000;     // per phase
-constexpr double kMaxSessionSeconds = 86400;  // 24 h of 1 kHz samples per session
+constexpr long long kMaxDays = 3650;       // 10 years
+constexpr long long kMaxSessions = 10000;  // per phase
 // The longest haptic step a prototype may have (prototypes/factory.cpp, "haptic_step" <= 0.01 s):
 // a session at least this long runs at least one step of any prototype (a shorter one would
 // store a session of 0 steps).
 constexpr double kMinSessionSeconds = 0.01;
 // Task fields: forces are bounded as the thresholds are (prototypes::read_thresholds, 1e6 N); a
 // dwell longer than a minute on the feature is no longer "touching it to identify it".
-constexpr double kMaxTaskForce = 1e6;     // N
 constexpr double kMaxIdentifyDwell = 60;  // s
 constexpr long long kMaxGroupSize = 100000;
-constexpr long long kMaxPlannedSessions = 1000000;  // participants x sessions each
 
 // The one validator shared with prototypes (common/json_check.hpp): same wording everywhere.
 using Ctx = palplab::json::Checker;

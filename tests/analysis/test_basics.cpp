@@ -32,6 +32,14 @@ TEST(Csv, QuotingCrLfBomAndEmbeddedNewlines) {
   EXPECT_EQ(t.line[1], 3);
   EXPECT_EQ(t.line[2], 6);  // the quoted newline and the blank line both count
   EXPECT_EQ(t.rows[2][1], "3");
+  // Review (2026-12-06): blanks after the commas of a header ("participant, group") stayed in
+  // the names ("no column 'group'"), and a second byte-order mark in the first one.
+  const auto u =
+      parse_csv("\xEF\xBB\xBF\xEF\xBB\xBFparticipant, group ,\tvalue\np1,A,1\n", "f.csv");
+  EXPECT_EQ(u.header, (std::vector<std::string>{"participant", "group", "value"}));
+  EXPECT_EQ(column_index(u, "group"), 1);
+  EXPECT_NE(error_of([] { parse_csv("a, a\n1,2\n", "f.csv"); }).find("duplicate"),
+            std::string::npos);
 }
 
 TEST(Csv, ErrorsCarryTheLine) {

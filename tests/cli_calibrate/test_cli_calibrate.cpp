@@ -444,9 +444,15 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
       {header + rows + "H1,G1,test,1,accuracy,150\n", "--params weber_fraction",
        h + ":6:23: column 'value': accuracy must be a percentage from 0 to 100, got 150"},
       {header + "H1,G1,test,1,palpation_force,-2.4\n" + rows, "--params weber_fraction",
-       h + ":2:30: column 'value': palpation_force must be a number >= 0 (N), got -2.4"},
+       h + ":2:30: column 'value': palpation_force must be a force from 0 to 1e6 N, got -2.4"},
       {header + rows + "H1,G1,test,1,exploration_time,-1\n", "--params weber_fraction",
-       "exploration_time must be a number >= 0 (s)"},
+       "exploration_time must be a time from 0 to 86400 s (a session's longest)"},
+      // Review findings (2026-12-06): impossible sizes were taken (1e100 N fitted; its SD took
+      // the cell out of the loss).
+      {header + "H1,G1,test,1,palpation_force,1e100\n" + rows, "--params weber_fraction",
+       h + ":2:30: column 'value': palpation_force must be a force from 0 to 1e6 N, got 1e100"},
+      {header + rows + "H1,G1,test,1,exploration_time,86401\n", "--params weber_fraction",
+       "exploration_time must be a time from 0 to 86400 s (a session's longest), got 86401"},
       // Review findings (2026-12-03): a unit other than the measure's was ignored (kg fitted
       // as newtons), an empty participant id was a participant.
       {"participant,group,phase,session,measure,value,unit\n"
@@ -532,6 +538,19 @@ TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
   r = run(header + rows + "H1,G1,test,1,exploration_time,30\n", "--measures palpation_force");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_TRUE(fs::exists(d / "fit.json"));
+  // A cell of equal values: the loss's SD floor (1 % of the mean) is said, with the cell
+  // (review 2026-12-06: it made the loss 1552 against 37 without a word).
+  fs::remove(d / "fit.json");
+  r = run(header + "H1,G1,test,1,palpation_force,2.5\nH2,G1,test,1,palpation_force,2.5\n" +
+              rows.substr(rows.find("H3")),
+          "");
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.err.find("warning: --human: " + h +
+                       ":2: group G1, phase test, session 1, measure palpation_force: SD 0 is "
+                       "below 1 % of the mean 2.5; the loss uses 0.025"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("group G2"), std::string::npos) << r.err;
   fs::remove_all(d);
 }
 

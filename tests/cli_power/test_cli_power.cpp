@@ -209,6 +209,38 @@ TEST(Power, SizesStudyAndOutputAreCheckedFirst) {
   EXPECT_EQ(nt.code, 2) << nt.out << nt.err;
   EXPECT_NE(nt.err.find("no_tests.json: $.analyses:"), std::string::npos) << nt.err;
   EXPECT_FALSE(fs::exists(d / "never"));
+  // Review findings (2026-12-06): a size whose plan is beyond the validator's limit was
+  // simulated (1.4 GB for one replicate before it was stopped), and an explicit assignment was
+  // refused only after --out had been made (with a shard's empty file, which tells merge the
+  // shard is done).
+  std::string six = slurp(null_study());
+  six.replace(six.find("\"sessions\": 1"), 13, "\"sessions\": 6, \"gap\": {\"minutes\": 1}");
+  six.replace(six.find(dirs), dirs.size(),
+              "\"prototype_dirs\": [\"" + std::string(PALPLAB_SOURCE_DIR) + "/prototypes\"]");
+  std::ofstream(d / "six.json") << six;
+  const auto big =
+      run_palplab("power " + (d / "six.json").string() +
+                      " --replicates 1 --quiet --n 3,100000 --out " + (d / "never").string(),
+                  d);
+  EXPECT_EQ(big.code, 2) << big.out << big.err;
+  EXPECT_NE(big.err.find("group size 100000: the study resized to it plans 100000 x 2 "
+                         "participants x 6 sessions = 1200000 sessions; palplab runs at most "
+                         "1000000 per study"),
+            std::string::npos)
+      << big.err;
+  EXPECT_FALSE(fs::exists(d / "never"));
+  std::string expl = six;
+  expl.replace(expl.find("\"size\": 3}"), 10, "\"participants\": [\"a\", \"b\"]}");
+  expl.replace(expl.find("\"size\": 3}"), 10, "\"participants\": [\"c\", \"d\"]}");
+  expl.replace(expl.find("\"seed\": 7,"), 10, "\"seed\": 7, \"assignment\": \"explicit\",");
+  std::ofstream(d / "explicit.json") << expl;
+  const auto ex =
+      run_palplab("power " + (d / "explicit.json").string() +
+                      " --replicates 1 --quiet --n 3 --shard 2/3 --out " + (d / "never").string(),
+                  d);
+  EXPECT_EQ(ex.code, 2) << ex.out << ex.err;
+  EXPECT_NE(ex.err.find("assigns participants explicitly"), std::string::npos) << ex.err;
+  EXPECT_FALSE(fs::exists(d / "never"));
   // --out under a regular file cannot be created.
   std::ofstream(d / "file") << "x";
   const auto w = run_palplab(
@@ -309,6 +341,12 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
       // Review findings (2026-12-03): an edited study id or effect name was taken into the
       // summary (power.json reported study "other", effect "cohen_d" for the ANOVA).
       {with(base, "study", "other"), "$.study: study id \"other\" differs from"},
+      // Review findings (2026-12-06): an escape sequence in a name reached the terminal and
+      // power.md.
+      {with(base, "study", "t\x1b[31m"),
+       "$.study: expected text without control characters, got "
+       "\"t\\u001b[31m\""},
+      {with_test(base, "id", "a\tb"), "$.tests[0].id: expected text without control characters"},
       {with_test(base, "effect_name", "cohen_d"),
        "$.tests[0].effect_name: test \"anova_oneway palpation_force test\" reports effect "
        "\"cohen_d\" here but \"eta_squared\""},
@@ -359,6 +397,17 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find((d / "r.jsonl").string() + ":2:"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("not a replicate record (JSON line): parse error"), std::string::npos)
+      << bad.err;
+  // A line nested without bound (review 2026-12-06: merge and the power resume died of a stack
+  // overflow, SIGSEGV, printing it): refused at the bracket beyond the limit.
+  std::ofstream(d / "r.jsonl", std::ios::trunc)
+      << good << "\n"
+      << std::string(100000, '[') << std::string(100000, ']') << "\n";
+  bad = merge({d / "r.jsonl"}, d / "out", d);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find((d / "r.jsonl").string() +
+                         ":2:65: not a replicate record (JSON line): nested deeper than 64 levels"),
+            std::string::npos)
       << bad.err;
   // Group descriptives (2026-12-05): records that disagree on the cells and groups are refused;
   // the same replicate with and without them (an older palplab's record) is taken with them.

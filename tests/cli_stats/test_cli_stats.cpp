@@ -257,6 +257,24 @@ TEST(CliStats, EquivalenceMarginsAndVerdicts) {
     r = run_palplab("stats --csv " + csv + " --value value --group group " + bad);
     EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
   }
+  // Review findings (2026-12-06): an empty --margin was ignored (no TOST, exit 0); margins not
+  // around 0 gave verdicts; --alpha 1e-320 gave null intervals; hexadecimal was read.
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"--margin ''", "--margin: expected a finite number in (0, "},
+      {"--margin 0x1p0", "got '0x1p0'"},
+      {"--margins 1,2", "--margins: expected LOW,HIGH with LOW < 0 < HIGH"},
+      {"--margins -1,0", "got -1,0"},
+      {"--margin 1 --alpha 1e-320", "--alpha: expected a finite number in [1e-09, 0.5), got"},
+      {"--margin 1 --alpha 0.5", "[1e-09, 0.5)"},
+      {"--margin 1 --alpha ''", "got ''"},
+      {"--margin 1 --alpha 0x0.1p0", "got '0x0.1p0'"}};
+  for (const auto& [bad, expected] : refused) {
+    r = run_palplab("stats --csv " + csv + " --value value --group group " + bad);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.out << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << bad << ": " << r.err;
+  }
+  r = run_palplab("stats --csv " + csv + " --value value --group group --margins -0.5,1e-9");
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 // A Latin-1 label (0xE9 = é) made `stats --json` crash (exit 3: JSON output is UTF-8 only); it is
