@@ -590,6 +590,22 @@ void check_human_cell(const Study& study, const HumanCell& c) {
     throw fail(c.session_column, "session " + std::to_string(c.session) + " of phase " + c.phase +
                                      " (it has " + std::to_string(phase->sessions) + " session" +
                                      (phase->sessions == 1 ? "" : "s") + ")");
+  // A time within a session cannot be longer than the session (25 s in a 20 s session was
+  // taken: review 2026-12-06).
+  if (c.measure == "exploration_time" || c.measure == "procedure_time")
+    for (std::size_t i = 0; i < c.values.size() && i < c.value_lines.size(); ++i)
+      if (c.values[i] > phase->session_duration) {
+        auto g = [](double x) {
+          char b[32];
+          std::snprintf(b, sizeof b, "%.6g", x);
+          return std::string(b);
+        };
+        throw InputError(SourceLocation{c.file, c.value_lines[i]},
+                         "column 'value': " + c.measure + " " + g(c.values[i]) +
+                             " s is longer than the sessions of phase " + c.phase + " (" +
+                             g(phase->session_duration) +
+                             " s): expected at most the session's duration");
+      }
 }
 
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,

@@ -453,6 +453,9 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
        h + ":2:30: column 'value': palpation_force must be a force from 0 to 1e6 N, got 1e100"},
       {header + rows + "H1,G1,test,1,exploration_time,86401\n", "--params weber_fraction",
        "exploration_time must be a time from 0 to 86400 s (a session's longest), got 86401"},
+      {header + rows + "H1,G1,test,1,exploration_time,10\nH2,G1,test,1,exploration_time,99\n",
+       "--params weber_fraction",
+       h + ":7: column 'value': exploration_time 99 s is longer than the sessions of phase test ("},
       // Review findings (2026-12-03): a unit other than the measure's was ignored (kg fitted
       // as newtons), an empty participant id was a participant.
       {"participant,group,phase,session,measure,value,unit\n"
@@ -531,11 +534,11 @@ TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
                        "expected at least 2 participants with a value in every fitted cell (an "
                        "SD needs 2): add participants, or leave the measure out with --measures"});
   EXPECT_TRUE(r.err.find("evaluation") == std::string::npos) << "the fit ran first: " << r.err;
-  r = run(header + rows + "H1,G1,test,1,exploration_time,30\n", "");
+  r = run(header + rows + "H1,G1,test,1,exploration_time,15\n", "");
   expect_exit2(r, {h + ":6: group G1, phase test, session 1, measure exploration_time: 1 "
                        "participant with a value (line 6); expected at least 2"});
   // The same cell of a measure that is not fitted is ignored.
-  r = run(header + rows + "H1,G1,test,1,exploration_time,30\n", "--measures palpation_force");
+  r = run(header + rows + "H1,G1,test,1,exploration_time,15\n", "--measures palpation_force");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_TRUE(fs::exists(d / "fit.json"));
   // A cell of equal values: the loss's SD floor (1 % of the mean) is said, with the cell
@@ -620,10 +623,10 @@ TEST(Calibrate, UndefinedSimulatedCellsSayWhyNeverNan) {
   study["prototype_dirs"] = {(fs::path(PALPLAB_SOURCE_DIR) / "prototypes").string()};
   std::ofstream(d / "short.json") << study.dump(1);
   std::ofstream(d / "h.csv") << kHumanHeader + kHumanRows +
-                                    "H1,G1,test,1,exploration_time,12\n"
-                                    "H2,G1,test,1,exploration_time,14\n"
-                                    "H3,G2,test,1,exploration_time,10\n"
-                                    "H4,G2,test,1,exploration_time,11\n";
+                                    "H1,G1,test,1,exploration_time,0.6\n"
+                                    "H2,G1,test,1,exploration_time,0.8\n"
+                                    "H3,G2,test,1,exploration_time,0.5\n"
+                                    "H4,G2,test,1,exploration_time,0.55\n";
   const Result r = run_palplab(
       "calibrate " + (d / "short.json").string() + " --human " + (d / "h.csv").string() +
           " --params weber_fraction --budget 1 --no-se --quiet --sim-n 3 --out " +
@@ -633,7 +636,7 @@ TEST(Calibrate, UndefinedSimulatedCellsSayWhyNeverNan) {
   EXPECT_FALSE(has(r.out, "nan")) << r.out;
   EXPECT_FALSE(has(r.out, "inf")) << r.out;
   EXPECT_TRUE(has(r.out,
-                  "  G1   test               exploration_time   human   13.000 ± 1.414   before "
+                  "  G1   test               exploration_time   human    0.700 ± 0.141   before "
                   "undefined          after undefined          z not computed (3 undefined)\n"
                   "       before and after: undefined (no simulated participant produced this "
                   "measure: all 3 undefined)\n"))
