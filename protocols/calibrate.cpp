@@ -594,18 +594,12 @@ void check_human_cell(const Study& study, const HumanCell& c) {
   // taken: review 2026-12-06).
   if (c.measure == "exploration_time" || c.measure == "procedure_time")
     for (std::size_t i = 0; i < c.values.size() && i < c.value_lines.size(); ++i)
-      if (c.values[i] > phase->session_duration) {
-        auto g = [](double x) {
-          char b[32];
-          std::snprintf(b, sizeof b, "%.6g", x);
-          return std::string(b);
-        };
+      if (c.values[i] > phase->session_duration)
         throw InputError(SourceLocation{c.file, c.value_lines[i]},
-                         "column 'value': " + c.measure + " " + g(c.values[i]) +
+                         "column 'value': " + c.measure + " " + fmt_num(c.values[i]) +
                              " s is longer than the sessions of phase " + c.phase + " (" +
-                             g(phase->session_duration) +
+                             fmt_num(phase->session_duration) +
                              " s): expected at most the session's duration");
-      }
 }
 
 CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& cells,
