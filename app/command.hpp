@@ -111,9 +111,15 @@ struct CommandInput {
   std::string what, path;
 };
 
-// What an existing file looks like, for a message ("an SQLite database", "a JSON file").
+// What an existing file looks like, for a message ("an SQLite database", "a JSON file"; "a file
+// this user cannot read (Permission denied)": its kind is unknown, and so whether it is the
+// command's own).
 inline std::string describe_existing_file(const std::string& path) {
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
+  if (!in)
+    return std::string("a file this user cannot read (") +
+           (errno ? std::strerror(errno) : "open failed") + ")";
   char head[16] = {};
   in.read(head, sizeof head);
   const std::string h(head, static_cast<size_t>(in.gcount()));

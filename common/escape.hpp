@@ -32,4 +32,18 @@ inline std::string escape_controls(std::string_view s, bool keep_newlines = true
   return out;
 }
 
+// Text from user files (ids, names, paths) written into Markdown (a table cell, a list item, a
+// heading): the characters that would end a table cell (|), open inline HTML (<) or a code span
+// (`), or escape what follows (\) are backslash-escaped (CommonMark lets any ASCII punctuation
+// be), so a name renders as written and never as markup: a test id "<script>" stays text.
+inline std::string markdown_text(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    if (c == '|' || c == '<' || c == '`' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
 }  // namespace palplab

@@ -27,6 +27,7 @@
 #include "analysis/descriptives.hpp"
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
 #include "common/nan.hpp"
@@ -56,7 +57,10 @@ double quantile(const std::vector<double>& sorted, double q) {
   const double h = (sorted.size() - 1) * q;
   const std::size_t lo = static_cast<std::size_t>(std::floor(h));
   const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
-  return sorted[lo] + (h - lo) * (sorted[hi] - sorted[lo]);
+  const double w = h - lo, a = sorted[lo], b = sorted[hi];
+  // Finite values whose difference overflows (an edited g of -1.7e308 and 1.7e308) have opposite
+  // signs, and then the weighted sum cannot overflow.
+  return std::isfinite(b - a) ? a + w * (b - a) : (1 - w) * a + w * b;
 }
 
 // Which process this is when launched by mpirun with an MPI build; a single process otherwise.
@@ -1116,12 +1120,8 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
           analysis::wilson_interval(static_cast<int>(c.significant), static_cast<int>(c.reps));
       const double lo = ci.low, hi = ci.high;
       const double power = estimable ? static_cast<double>(c.significant) / c.reps : kNaN;
-      double mean = kNaN;
-      if (!c.effects.empty()) {
-        mean = 0;
-        for (double e : c.effects) mean += e;
-        mean /= c.effects.size();
-      }
+      // Summed in long double (analysis::mean): edited effects of 1.7e308 do not overflow it.
+      const double mean = analysis::mean(c.effects);
       t["by_n"].push_back({{"n", n},
                            {"replicates", c.reps},
                            {"significant", c.significant},
@@ -1312,11 +1312,11 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     return std::string(buf);
   };
   std::ostringstream md;
-  md << "# Power analysis: " << s.at("study").get<std::string>() << "\n\n";
+  md << "# Power analysis: " << markdown_text(s.at("study").get<std::string>()) << "\n\n";
   const bool partial = s.contains("partial");
   if (partial)
     md << "**Partial result** (`palplab merge --allow-partial`): "
-       << s.at("partial").at("message").get<std::string>()
+       << markdown_text(s.at("partial").at("message").get<std::string>())
        << ". The table covers only the replicates merged; power and the smallest n may change "
           "once every shard is merged.\n\n";
   md << "alpha = " << s.at("alpha").get<double>() << ", target power "
@@ -1335,7 +1335,7 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     line.name = t.at("id").get<std::string>();
     line.colour = colour++;
     for (const auto& c : t.at("by_n")) {
-      md << "| " << line.name << " | " << c.at("n").get<int>() << " | "
+      md << "| " << markdown_text(line.name) << " | " << c.at("n").get<int>() << " | "
          << c.at("replicates").get<long>() << " | " << c.value("undefined", 0L) << " | "
          << fmt(c.at("power"), 3) << " | "
          << (c.at("ci_low").is_number()
@@ -1358,7 +1358,7 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
   }
   md << "\nSmallest n per group reaching the target power:\n\n";
   for (const auto& t : s.at("tests")) {
-    md << "- " << t.at("id").get<std::string>() << ": ";
+    md << "- " << markdown_text(t.at("id").get<std::string>()) << ": ";
     if (!t.at("smallest_n").is_null()) {
       md << t.at("smallest_n").get<int>() << "\n";
       continue;
@@ -1404,10 +1404,11 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
        << "\n|---|---|---:|---:|---|---:|" << (with_people ? "---|---:|---|" : "") << "\n";
     for (const auto& g : s.at("groups"))
       for (const auto& c : g.at("by_n")) {
-        md << "| " << g.at("cell").get<std::string>() << " | " << g.at("group").get<std::string>()
-           << " | " << c.at("n").get<int>() << " | " << c.at("replicates").get<long>() << " | "
-           << fmt(c.at("mean_median"), 3) << " [" << fmt(c.at("mean_q025"), 3) << ", "
-           << fmt(c.at("mean_q975"), 3) << "] | " << fmt(c.at("sd_median"), 3) << " |";
+        md << "| " << markdown_text(g.at("cell").get<std::string>()) << " | "
+           << markdown_text(g.at("group").get<std::string>()) << " | " << c.at("n").get<int>()
+           << " | " << c.at("replicates").get<long>() << " | " << fmt(c.at("mean_median"), 3)
+           << " [" << fmt(c.at("mean_q025"), 3) << ", " << fmt(c.at("mean_q975"), 3) << "] | "
+           << fmt(c.at("sd_median"), 3) << " |";
         if (with_people) {
           if (g.contains("people")) {
             const auto& pg = g.at("people");
@@ -1426,11 +1427,12 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
                        : "")
        << ":\n\n";
     for (const auto& o : s.at("orders")) {
-      md << "- " << o.at("cell").get<std::string>();
+      md << "- " << markdown_text(o.at("cell").get<std::string>());
       if (o.contains("people")) {
         const auto& po = o.at("people");
         md << " (people: "
-           << (po.at("order").is_string() ? po.at("order").get<std::string>() : "undefined")
+           << (po.at("order").is_string() ? markdown_text(po.at("order").get<std::string>())
+                                          : "undefined")
            << (po.at("compared").get<bool>() ? "" : "; a tie or undefined: not compared") << ")";
       }
       md << "\n";
@@ -1440,8 +1442,8 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
         long listed = 0;
         std::string list;
         for (const auto& x : c.at("orders")) {
-          list += (list.empty() ? " " : ", ") + x.at("order").get<std::string>() + " " +
-                  std::to_string(x.at("count").get<long>()) + "/" + std::to_string(r);
+          list += (list.empty() ? " " : ", ") + markdown_text(x.at("order").get<std::string>()) +
+                  " " + std::to_string(x.at("count").get<long>()) + "/" + std::to_string(r);
           listed += x.at("count").get<long>();
         }
         if (listed < r)
@@ -1459,10 +1461,10 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     const auto& p = s.at("people");
     std::string sizes;
     for (const auto& [g, n] : p.at("n").items())
-      sizes += (sizes.empty() ? "" : ", ") + g + " " + std::to_string(n.get<int>());
+      sizes += (sizes.empty() ? "" : ", ") + markdown_text(g) + " " + std::to_string(n.get<int>());
     const std::string of = " of " + std::to_string(p.at("tests").get<long>());
-    md << "\n## Agreement with people's verdicts (" << p.at("file").get<std::string>()
-       << ")\n\nPeople per group: " << sizes
+    md << "\n## Agreement with people's verdicts ("
+       << markdown_text(p.at("file").get<std::string>()) << ")\n\nPeople per group: " << sizes
        << ". A verdict is significant (p < alpha) or not (an undefined test counts as not). "
           "\"Replicates agreeing\" counts the simulated replicates above whose verdict is the "
           "people's; \"right model\" is how often a model that is right agrees at that n: a "
@@ -1477,7 +1479,7 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
       if (!t.contains("people")) continue;
       const auto& pt = t.at("people");
       if (pt.at("significant").is_null()) {  // undefined on the people's data: not compared
-        md << "| " << t.at("id").get<std::string>()
+        md << "| " << markdown_text(t.at("id").get<std::string>())
            << " | — | — | undefined (no verdict; not compared) | — | — |\n";
         continue;
       }
@@ -1488,7 +1490,7 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
                  std::to_string(c.at("replicates").get<long>());
         right += (right.empty() ? "" : "; ") + n + fmt(c.at("right_model"), 3);
       }
-      const std::string id = t.at("id").get<std::string>();
+      const std::string id = markdown_text(t.at("id").get<std::string>());
       std::string p_text = fmt(pt.at("p"), 4);
       if (pt.at("p").is_number() && pt.at("p").get<double>() < 1e-3) {
         char buf[32];

@@ -539,6 +539,65 @@ TEST(Power, UndefinedTestsAreShownAndNotPowerZero) {
   fs::remove_all(d);
 }
 
+// Review findings (2026-12-06, minor): markup in a hand-edited test id went raw into power.md
+// (the SVG escaped it), and Hedges' g of -1.7e308 and 1.7e308 made the interpolated median
+// overflow to null (and two of 1.7e308 the mean).
+TEST(Power, EditedNamesStayTextAndHugeEffectsStayFinite) {
+  auto d = scratch_dir("merge_markup");
+  const std::string id = "<script>x</script> | `y`";
+  auto rec = [&](int replicate, double g) {
+    auto r = record(2, replicate, 0.01, g);
+    r["tests"][0]["id"] = id;
+    r["tests"][0]["effect_name"] = "hedges_g";
+    return r.dump();
+  };
+  std::ofstream(d / "r.jsonl") << rec(0, -1.7e308) << "\n" << rec(1, 1.7e308) << "\n";
+  std::ofstream(d / "same.jsonl") << rec(0, 1.7e308) << "\n" << rec(1, 1.7e308) << "\n";
+  const auto same = merge({d / "same.jsonl"}, d / "same", d);
+  ASSERT_EQ(same.code, 0) << same.err;
+  EXPECT_EQ(power_json(d / "same")["tests"][0]["by_n"][0]["effect_mean"], 1.7e308);
+  const auto r = merge({d / "r.jsonl"}, d / "out", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto c = power_json(d / "out")["tests"][0]["by_n"][0];
+  EXPECT_EQ(c["effect_median"], 0.0) << c;
+  ASSERT_TRUE(c["effect_q025"].is_number()) << c;
+  ASSERT_TRUE(c["effect_q975"].is_number()) << c;
+  EXPECT_NEAR(c["effect_q025"].get<double>(), -0.95 * 1.7e308, 1e295) << c;
+  EXPECT_NEAR(c["effect_q975"].get<double>(), 0.95 * 1.7e308, 1e295) << c;
+  const std::string md = slurp(d / "out" / "power.md");
+  const std::string shown = "\\<script>x\\</script> \\| \\`y\\`";
+  EXPECT_TRUE(has(md, "| " + shown + " | 2 | 2 | 0 | 1.000 |")) << md;
+  EXPECT_TRUE(has(md, "- " + shown + ": 2")) << md;
+  for (std::size_t at = md.find("<script"); at != std::string::npos;
+       at = md.find("<script", at + 1))
+    EXPECT_TRUE(at > 0 && md[at - 1] == '\\') << "raw markup at " << at << ": " << md;
+  EXPECT_TRUE(has(slurp(d / "out" / "power.svg"), "&lt;script&gt;"));
+  fs::remove_all(d);
+}
+
+// A power.md the user cannot read is not called "a file, not a palplab power table" (its kind is
+// unknown): the message says it cannot be read. Root reads every file, so as root the command
+// runs as the user nobody (setpriv, util-linux).
+TEST(Power, AnUnreadableOutputFileIsSaidToBeUnreadable) {
+  auto d = scratch_dir("merge_unreadable");
+  fs::permissions(d, fs::perms::all);  // nobody's merge reads its input here
+  std::ofstream(d / "r.jsonl") << record(2, 0, 0.01, 0.3).dump() << "\n";
+  fs::create_directories(d / "mine");
+  std::ofstream(d / "mine" / "power.md") << "# Notes on power\n";
+  fs::permissions(d / "mine" / "power.md", fs::perms::none);
+  const std::string as_user =
+      ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
+  const auto r = run_shell(as_user + PALPLAB_BINARY + " merge " + (d / "r.jsonl").string() +
+                               " --out " + (d / "mine").string(),
+                           d);
+  expect_exit2(r, {"--out: \"" + (d / "mine" / "power.md").string() +
+                   "\" exists and is a file this user cannot read (Permission denied), not a "
+                   "palplab power table (power.md); refusing to replace it"});
+  fs::permissions(d / "mine" / "power.md", fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_EQ(slurp(d / "mine" / "power.md"), "# Notes on power\n");
+  fs::remove_all(d);
+}
+
 // A one-way ANOVA (or a pair) of a one-group study is never defined: power reported 0.
 TEST(Power, OneGroupStudyIsRefused) {
   auto d = scratch_dir("one_group");
