@@ -69,6 +69,7 @@ nlohmann::json TraineeState::to_json() const {
           {"reliance", reliance},
           {"finds", finds},
           {"speed_factor", speed_factor},
+          {"overshoot_factor", overshoot_factor},
           {"k_log_sum", k_log_sum},
           {"k_log_sq", k_log_sq},
           {"landmark_practice", landmark_practice},
@@ -98,6 +99,7 @@ TraineeState TraineeState::from_json(const nlohmann::json& j) {
   s.reliance = j.value("reliance", 0.0);
   s.finds = j.value("finds", 0);
   s.speed_factor = j.value("speed_factor", 1.0);
+  s.overshoot_factor = j.value("overshoot_factor", 1.0);
   s.k_log_sum = j.value("k_log_sum", 0.0);
   s.k_log_sq = j.value("k_log_sq", 0.0);
   s.landmark_practice = j.value("landmark_practice", 0.0);
@@ -151,6 +153,9 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
         s_.demo_d = demo_->deformation * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
       }
     }
+    // How far this person's press goes on awaiting a marker (lognormal, median 1). Drawn last,
+    // so that every draw above is the same whatever overshoot_individual_cv is.
+    s_.overshoot_factor = std::exp(p_.overshoot_individual_cv * brief.normal());
     s_.initialised = true;
   } else {
     // Forgetting over the retention interval: the learned part decays back towards what the
@@ -711,9 +716,12 @@ void Trainee::perceive(const Percept& p, bool call) {
     }
     // Without an expected marker the press stops at the intended force; waiting for a marker it
     // goes on, to a limit that grows with the reliance and with each marker that failed.
-    const double wait = expect_marker_ ? std::pow(1.0 + p_.marker_wait_overshoot * s_.reliance,
-                                                  1 + std::min(misses_, 3))
-                                       : 1.0;
+    // (How far is this person's: overshoot_factor.)
+    const double wait =
+        expect_marker_
+            ? std::pow(1.0 + p_.marker_wait_overshoot * s_.overshoot_factor * s_.reliance,
+                       1 + std::min(misses_, 3))
+            : 1.0;
     // While the trainee sees the part deform and knows what the target looks like, the press
     // aims at that picture (it ends at the visual marker above), bounded like a marker wait.
     const bool aiming_visually = ch_.visual && s_.demo_d > 0 && q.visible_deformation > 0;

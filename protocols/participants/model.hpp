@@ -99,11 +99,12 @@ struct TraineeState {
   int feedback_count = 0;                     // target markers experienced so far
   double last_session_end = 0.0;              // s of study time
   // What the briefing's demonstration press showed (on the first session's simulator).
-  bool demo_sound = false;    // a sound came on the way to the target force
-  double demo_d = 0.0;        // m, visible deformation at the target as remembered (0 = none)
-  double reliance = 0.0;      // 0..1, reliance on a binary marker (guidance hypothesis)
-  int finds = 0;              // sessions in which the feature was found (practice)
-  double speed_factor = 1.0;  // individual speed (>1 faster), drawn at the briefing
+  bool demo_sound = false;        // a sound came on the way to the target force
+  double demo_d = 0.0;            // m, visible deformation at the target as remembered (0 = none)
+  double reliance = 0.0;          // 0..1, reliance on a binary marker (guidance hypothesis)
+  int finds = 0;                  // sessions in which the feature was found (practice)
+  double speed_factor = 1.0;      // individual speed (>1 faster), drawn at the briefing
+  double overshoot_factor = 1.0;  // individual factor on marker_wait_overshoot, drawn at briefing
   double k_log_sum = 0.0, k_log_sq = 0.0;  // Σ log(felt/seen), Σ log² over calibrating presses
   // Landmark judgements practised so far; one confirmed by seeing the touched part deform
   // counts 1 + visual_recognition_gain (orienting practice, see draw_landmark_time).

@@ -143,6 +143,11 @@ const std::vector<ParamSpec>& trainee_param_specs() {
       tspec("marker_wait_overshoot", &T::marker_wait_overshoot, 0.0, 2.0, "1",
             "a press awaiting a marker goes on to intended*(1+overshoot*reliance) per miss",
             "Winstein & Schmidt 1990 (performance drops once the guiding feedback is withdrawn)"),
+      tspec("overshoot_individual_cv", &T::overshoot_individual_cv, 0.0, 2.0, "1",
+            "between-person SD (log scale) of a factor on marker_wait_overshoot: how far this "
+            "person's press goes on awaiting a marker (lognormal, median 1, drawn at the briefing)",
+            "Park, Shea & Wright 2000 (dependence on concurrent feedback, shown by the error once "
+            "it is withdrawn); its spread between people: a model assumption fitted to exp2"),
       tspec("visual_spatial_sd", &T::visual_spatial_sd, 1e-5, 1.0, "m",
             "SD of locating the touched point by eye when it visibly deforms; combined with the "
             "haptic SD (spatial_memory_sd) by inverse variances",

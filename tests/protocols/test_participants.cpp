@@ -447,6 +447,59 @@ TEST(Trainee, AnInstructedTraineeWaitsForTheCallWithoutADemonstratedSound) {
   EXPECT_EQ(learned, n);
 }
 
+TEST(Trainee, HowFarAPressWaitsForTheWithdrawnSoundIsThePersonsOwn) {
+  // The haptic-only test after training with the sound: a trainee who relies on it presses on
+  // past the intended force awaiting it, to intended * (1 + marker_wait_overshoot * factor) on
+  // the first press, the factor being the person's own (overshoot_individual_cv).
+  FlatTissue tissue;
+  tissue.audio = false;
+  const auto params = trainee_params(quick_searcher());
+  auto first_peak = [&](double factor) {
+    TraineeState st = briefed_state(tissue, 2.5);
+    st.demo_sound = true;
+    st.reliance = 1.0;
+    st.overshoot_factor = factor;
+    Trainee tr(params, st);
+    tr.begin_session(tissue.view(), 2.5, 0.0, 30.0, 7, 8, Channels{});
+    // The first press: the first touch beyond the light touches (< 0.3 N) of the search.
+    double peak = 0.0;
+    for (int i = 1; i <= 30000; ++i) {
+      const Percept p = tissue.render(i * 0.001, tr.command(i * 0.001));
+      tr.perceive(p, false);
+      if (p.contact) peak = std::max(peak, p.force.norm());
+      if (!p.contact && peak > 1.0) break;
+      if (!p.contact) peak = 0.0;
+    }
+    return peak;
+  };
+  const double ov = params.marker_wait_overshoot, p1 = first_peak(1.0), p3 = first_peak(3.0);
+  ASSERT_GT(p1, 1.0);
+  EXPECT_NEAR(p3 / p1, (1 + 3 * ov) / (1 + ov), 0.005) << p1 << " " << p3;
+  EXPECT_NEAR(first_peak(0.0) / p1, 1 / (1 + ov), 0.005);
+
+  // The factor is drawn at the briefing, lognormal with median 1 and the given log-scale SD,
+  // after every other draw of the briefing: those are the same whatever the spread.
+  const auto spread = trainee_params(quick_searcher({{"overshoot_individual_cv", 0.5}}));
+  const int n = 400;
+  double sum = 0.0, sq = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const std::uint64_t ps = derive_seed(21, static_cast<std::uint64_t>(k));
+    Trainee a(spread, TraineeState{}), b(params, TraineeState{});
+    a.begin_session(tissue.view(), 2.5, 0.0, 1.0, ps, 1, {});
+    b.begin_session(tissue.view(), 2.5, 0.0, 1.0, ps, 1, {});
+    ASSERT_EQ(b.state().overshoot_factor, 1.0);
+    ASSERT_EQ(a.state().prior_mean, b.state().prior_mean);
+    ASSERT_EQ(a.state().place, b.state().place);
+    ASSERT_EQ(a.state().speed_factor, b.state().speed_factor);
+    const double z = std::log(a.state().overshoot_factor);
+    sum += z;
+    sq += z * z;
+  }
+  const double mean = sum / n, sd = std::sqrt((sq - n * mean * mean) / (n - 1));
+  EXPECT_NEAR(mean, 0.0, 0.075);  // 3 SE (0.5 / sqrt(400))
+  EXPECT_NEAR(sd, 0.5, 0.055);    // 3 SE (0.5 / sqrt(2 * 399))
+}
+
 TEST(Trainee, SuccessivePressErrorsFollowTheirCorrelation) {
   // A haptic-only session with a learned belief and nothing to learn from: each press's force
   // scatters around the belief by motor and Weber noise. With press_error_correlation rho the
