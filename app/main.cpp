@@ -4,7 +4,10 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 
 #include "app/command.hpp"
@@ -74,6 +77,15 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "internal error: " << e.what() << "\n";
     return 3;
+  }
+  // What the command printed must have reached standard output: `palplab stats --json >
+  // /dev/full` (a full disk, a closed pipe's file) lost it and exited 0.
+  errno = 0;
+  std::cout.flush();
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::cerr << "error: cannot write to standard output ("
+              << (errno ? std::strerror(errno) : "write failed") << "); the output is lost\n";
+    return code != 0 ? code : 2;
   }
   return code;
 }

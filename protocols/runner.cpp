@@ -11,6 +11,7 @@
 #include <mutex>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "common/input_error.hpp"
@@ -527,7 +528,28 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
       same = parts[i].participant == plan.participants[i].id &&
              parts[i].group == plan.participants[i].group;
     if (!same) throw InputError("the database's participants differ from the plan", opt.db);
-    for (const auto& s : stored) done[s.participant][s.ordinal] = s.state_after;
+    for (const auto& s : stored) {
+      done[s.participant][s.ordinal] = s.state_after;
+      // The state a virtual trainee resumes from, checked before any work (an edited one was a
+      // segfault or an "internal error").
+      if (s.trainee == "human") continue;
+      const auto j = nlohmann::json::parse(s.state_after, nullptr, false);
+      try {
+        if (j.is_discarded())
+          throw std::invalid_argument(
+              "text that is not JSON: " +
+              nlohmann::json(s.state_after.substr(0, 40) + (s.state_after.size() > 40 ? "..." : ""))
+                  .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+        (void)pm::TraineeState::from_json(j);
+      } catch (const std::invalid_argument& e) {
+        throw InputError("table sessions, row (session " + std::to_string(s.session) +
+                             ", participant " + s.participant + ", phase " + s.phase +
+                             ") column state_after: " + e.what() +
+                             " (not the virtual trainee's state palplab run wrote); resume needs "
+                             "the database palplab run wrote",
+                         opt.db);
+      }
+    }
     // Sessions are written in order per participant: what is stored must be the first k of the
     // plan's sessions of a planned participant (a row deleted or edited by hand would otherwise
     // make the resumed run write an ordinal that exists: an SQL error after simulating).

@@ -120,6 +120,26 @@ void exec(sqlite3* db, const std::string& sql) {
   }
 }
 
+// Ends a failed write transaction and rethrows what failed (inside a catch block). SQLite has
+// already rolled back after some errors (a full disk): a ROLLBACK then fails with "no
+// transaction is active", which used to replace the real error ("internal error: cannot
+// rollback"). A full disk or an I/O error is said as such (exit 2), with what is kept.
+[[noreturn]] void roll_back_and_rethrow(sqlite3* db, const std::string& path) {
+  if (!sqlite3_get_autocommit(db)) sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+  try {
+    throw;
+  } catch (const SqliteError& e) {
+    if (e.code != SQLITE_FULL && e.code != SQLITE_IOERR) throw;
+    throw InputError(std::string("cannot write the database: ") +
+                         (e.code == SQLITE_FULL ? "the disk is full" : "an input/output error") +
+                         " (sqlite: " + e.detail +
+                         "); what it held before this write is kept: make room, then continue "
+                         "the run with `palplab run STUDY --db " +
+                         path + " --resume`",
+                     path);
+  }
+}
+
 // Shortest text that reads back as the same double (no "15.633000000000001" artefacts).
 std::string num(double v) {
   char buf[64];
@@ -509,9 +529,25 @@ bool Store::is_empty_leftover(const std::string& path) {
   return empty;
 }
 
+// A run killed inside its first transaction (the schema, before the file is switched to WAL)
+// leaves PATH-journal, a hot rollback journal: read-only connections cannot read the file until
+// it is rolled back, which SQLite does on the first read of a read-write connection. Only
+// writers call this (SQLite's own recovery, as any writer's first read would do it).
+namespace {
+void roll_back_hot_journal(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path + "-journal", ec)) return;
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK)
+    sqlite3_exec(db, "SELECT COUNT(*) FROM sqlite_master", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+}
+}  // namespace
+
 bool Store::remove_empty_leftover(const std::string& path) {
   // Only writers call this: refused before the probe's read-only open creates PATH-wal/-shm.
   require_writable(path, true);
+  roll_back_hot_journal(path);
   if (!is_empty_leftover(path)) return false;
   const int fd = lock_exclusive(path);  // then looked at again: nobody may have started meanwhile
   if (!is_empty_leftover(path)) {
@@ -521,7 +557,7 @@ bool Store::remove_empty_leftover(const std::string& path) {
         path);
   }
   std::error_code ec;
-  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix, ec);
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path + suffix, ec);
   ::close(fd);
   return true;
 }
@@ -589,7 +625,7 @@ void migrate_sessions_to_v3(sqlite3* db) {
              "PRAGMA user_version = 3;");
     exec(db, "COMMIT");
   } catch (...) {
-    exec(db, "ROLLBACK");
+    if (!sqlite3_get_autocommit(db)) sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
     exec(db, "PRAGMA foreign_keys=ON");
     throw;
   }
@@ -617,7 +653,7 @@ void migrate_to_v4(sqlite3* db) {
              "PRAGMA user_version = 4;");
     exec(db, "COMMIT");
   } catch (...) {
-    exec(db, "ROLLBACK");
+    if (!sqlite3_get_autocommit(db)) sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
 }
@@ -834,8 +870,7 @@ void Store::write_study(const StudyRecord& s, const std::vector<PrototypeRecord>
     insert_study(s, prototypes, participants);
     exec(db_, "COMMIT");
   } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
+    roll_back_and_rethrow(db_, path_);
   }
 }
 
@@ -855,8 +890,7 @@ void Store::write_start(const StudyRecord& s, const std::vector<PrototypeRecord>
     insert_structure(structure);
     exec(db_, "COMMIT");
   } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
+    roll_back_and_rethrow(db_, path_);
   }
 }
 
@@ -944,8 +978,7 @@ void Store::write_session(SessionData& d) {
     }
     exec(db_, "COMMIT");
   } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
+    roll_back_and_rethrow(db_, path_);
   }
 }
 
@@ -1038,8 +1071,7 @@ void Store::write_structure(const StudyStructure& st) {
     insert_structure(st);
     exec(db_, "COMMIT");
   } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
+    roll_back_and_rethrow(db_, path_);
   }
 }
 
@@ -1251,8 +1283,7 @@ void Store::append_session_data(long long id, const std::vector<EventRecord>& ev
     }
     exec(db_, "COMMIT");
   } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
+    roll_back_and_rethrow(db_, path_);
   }
 }
 
@@ -1281,8 +1312,7 @@ void Store::finish_session(const SessionData& d) {
     }
     exec(db_, "COMMIT");
   } catch (...) {
-    exec(db_, "ROLLBACK");
-    throw;
+    roll_back_and_rethrow(db_, path_);
   }
 }
 

@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
 
 #include "common/seed.hpp"
 #include "engine/haptics/scene.hpp"
@@ -78,33 +82,82 @@ nlohmann::json TraineeState::to_json() const {
 }
 
 TraineeState TraineeState::from_json(const nlohmann::json& j) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
+  auto shown = [](const nlohmann::json& v) {
+    std::string t = v.dump();
+    return t.size() > 40 ? t.substr(0, 40) + "..." : t;
+  };
+  if (!j.is_object()) fail("expected a JSON object (the trainee's state), got " + shown(j));
+  // A number of the state in [lo, hi]; `fallback` when the key is absent (nullopt: required).
+  // The bounds are what the model can produce, generously: a state edited to a negative
+  // variance or a speed factor of 1e300 would be simulated from silently.
+  auto num = [&](const char* key, double lo, double hi,
+                 std::optional<double> fallback = std::nullopt) -> double {
+    const auto it = j.find(key);
+    if (it == j.end()) {
+      if (!fallback) fail(std::string("missing \"") + key + "\"");
+      return *fallback;
+    }
+    if (!it->is_number() || !std::isfinite(it->get<double>()) || it->get<double>() < lo ||
+        it->get<double>() > hi) {
+      char range[64];
+      std::snprintf(range, sizeof range, "a number in [%g, %g]", lo, hi);
+      fail(std::string("\"") + key + "\": expected " + range + ", got " + shown(*it));
+    }
+    return it->get<double>();
+  };
+  auto count = [&](const char* key, std::optional<double> fallback = std::nullopt) {
+    const double v = num(key, 0, 1e9, fallback);
+    if (v != std::floor(v))
+      fail(std::string("\"") + key + "\": expected a count, got " + shown(j.at(key)));
+    return static_cast<int>(v);
+  };
+  auto flag = [&](const char* key, std::optional<bool> fallback = std::nullopt) {
+    const auto it = j.find(key);
+    if (it == j.end()) {
+      if (!fallback) fail(std::string("missing \"") + key + "\"");
+      return *fallback;
+    }
+    if (!it->is_boolean())
+      fail(std::string("\"") + key + "\": expected true or false, got " + shown(*it));
+    return it->get<bool>();
+  };
+  constexpr double kForce = 1e6, kLength = 1e3, kTime = 1e12, kBig = 1e300;
   TraineeState s;
-  s.initialised = j.at("initialised").get<bool>();
-  s.target_mean = j.at("target_mean").get<double>();
-  s.target_var = j.at("target_var").get<double>();
-  s.prior_mean = j.at("prior_mean").get<double>();
-  s.prior_var = j.at("prior_var").get<double>();
-  s.place = {j.at("place")[0].get<double>(), j.at("place")[1].get<double>(),
-             j.at("place")[2].get<double>()};
-  s.place_sd = j.at("place_sd").get<double>();
-  s.k_hat = j.at("k_hat").get<double>();
-  s.k_count = j.at("k_count").get<int>();
-  s.k_felt_sum = j.at("k_felt_sum").get<double>();
-  s.k_seen_sum = j.at("k_seen_sum").get<double>();
-  s.feedback_count = j.at("feedback_count").get<int>();
-  s.last_session_end = j.at("last_session_end").get<double>();
+  s.initialised = flag("initialised");
+  s.target_mean = num("target_mean", -kForce, kForce);
+  s.target_var = num("target_var", 0, kForce * kForce);
+  s.prior_mean = num("prior_mean", -kForce, kForce);
+  s.prior_var = num("prior_var", 0, kForce * kForce);
+  const auto place = j.find("place");
+  if (place == j.end()) fail("missing \"place\"");
+  if (!place->is_array() || place->size() != 3)
+    fail("\"place\": expected [x, y, z] in m, got " + shown(*place));
+  for (int i = 0; i < 3; ++i) {
+    const auto& c = (*place)[i];
+    if (!c.is_number() || !std::isfinite(c.get<double>()) || std::abs(c.get<double>()) > kLength)
+      fail("\"place\": expected [x, y, z] in m (finite, at most 1000 m), got " + shown(*place));
+    s.place[i] = c.get<double>();
+  }
+  s.place_sd = num("place_sd", 0, kLength);
+  s.k_hat = num("k_hat", 0, kBig);
+  s.k_count = count("k_count");
+  s.k_felt_sum = num("k_felt_sum", 0, kBig);
+  s.k_seen_sum = num("k_seen_sum", 0, kBig);
+  s.feedback_count = count("feedback_count");
+  s.last_session_end = num("last_session_end", 0, kTime);
   // Added with the guidance / visual-learning mechanisms (older states lack them).
-  s.demo_sound = j.value("demo_sound", false);
-  s.demo_d = j.value("demo_d", 0.0);
-  s.reliance = j.value("reliance", 0.0);
-  s.finds = j.value("finds", 0);
-  s.speed_factor = j.value("speed_factor", 1.0);
-  s.overshoot_factor = j.value("overshoot_factor", 1.0);
-  s.k_log_sum = j.value("k_log_sum", 0.0);
-  s.k_log_sq = j.value("k_log_sq", 0.0);
-  s.landmark_practice = j.value("landmark_practice", 0.0);
-  s.depth_mean = j.value("depth_mean", 0.0);  // added with the needle task
-  s.depth_var = j.value("depth_var", 0.0);
+  s.demo_sound = flag("demo_sound", false);
+  s.demo_d = num("demo_d", 0, kLength, 0.0);
+  s.reliance = num("reliance", 0, 1, 0.0);
+  s.finds = count("finds", 0.0);
+  s.speed_factor = num("speed_factor", 1e-6, 1e6, 1.0);
+  s.overshoot_factor = num("overshoot_factor", 0, 1e6, 1.0);
+  s.k_log_sum = num("k_log_sum", -kBig, kBig, 0.0);
+  s.k_log_sq = num("k_log_sq", 0, kBig, 0.0);
+  s.landmark_practice = num("landmark_practice", 0, kBig, 0.0);
+  s.depth_mean = num("depth_mean", -kLength, kLength, 0.0);  // added with the needle task
+  s.depth_var = num("depth_var", 0, kLength * kLength, 0.0);
   return s;
 }
 

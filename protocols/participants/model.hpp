@@ -112,6 +112,9 @@ struct TraineeState {
   // Needle task: belief about the target's depth below the skin (m, m^2; 0 = not briefed yet).
   double depth_mean = 0.0, depth_var = 0.0;
   nlohmann::json to_json() const;
+  // The state as to_json wrote it (keys added later may be missing: their defaults). Throws
+  // std::invalid_argument naming the key and what was expected for anything else (a state edited
+  // in the database: a missing key, a wrong type, a non-finite or impossible value).
   static TraineeState from_json(const nlohmann::json& j);
 };
 

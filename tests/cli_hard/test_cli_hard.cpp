@@ -661,6 +661,25 @@ TEST(HardDb, AnInterruptedStartIsStartedInOrReplaced) {
   r = cli(run + " --resume --quiet", d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(sessions(), 6u);
+  // A start killed inside its schema transaction, before the switch to WAL: the database's
+  // uncommitted first page and a hot rollback journal beside it (tests/data/interrupted_start,
+  // what `run` left when killed after 30 ms; review finding 2026-12-06: --resume said "not a
+  // palplab results database" and --force refused, because the read-only probes cannot read the
+  // file until the journal is rolled back).
+  const fs::path killed = fs::path(PALPLAB_SOURCE_DIR) / "tests" / "data" / "interrupted_start";
+  for (const std::string how : {" --resume", " --force"}) {
+    SCOPED_TRACE(how);
+    fs::remove(db);
+    fs::copy_file(killed / "killed_start.db", db);
+    fs::copy_file(killed / "killed_start.db-journal", db.string() + "-journal");
+    r = cli(run + how, d);
+    EXPECT_EQ(r.code, 0) << r.err;
+    if (how == " --resume") {
+      EXPECT_TRUE(has(r.err, "holds no run yet")) << r.err;
+    }
+    EXPECT_EQ(sessions(), 6u);
+    EXPECT_FALSE(fs::exists(db.string() + "-journal"));
+  }
   // The schema written, the study record not yet.
   fs::remove(db);
   { palplab::results::Store::create(db.string()); }
@@ -862,4 +881,73 @@ TEST(HardDb, EscapeSequencesInNamesAreNeverEchoedRaw) {
   EXPECT_FALSE(has(r.err, "\x1b")) << r.err;
   EXPECT_FALSE(has(r.err, "\x07")) << r.err;
   EXPECT_TRUE(has(r.err, "\\x1b]0;pwned\\x07")) << r.err;
+}
+
+// Review finding (2026-12-06): output that could not be written (a full disk: /dev/full) was lost
+// and the command exited 0 (`lmm`, `validate`, `version`, `stats --json`, ...). It is exit 2 with
+// the reason.
+TEST(HardOutput, AFailedWriteToStandardOutputIsAnError) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "this system has no /dev/full";
+  auto d = tmp("devfull");
+  spit(d / "study.json", study());
+  for (const std::string& args :
+       {std::string("version"), "validate " + (d / "study.json").string()}) {
+    SCOPED_TRACE(args);
+    const std::string cmd = "{ " + std::string(PALPLAB_BINARY) + " " + args +
+                            " > /dev/full; } 2> " + (d / "err.txt").string();
+    const int st = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(st));
+    EXPECT_EQ(WEXITSTATUS(st), 2);
+    EXPECT_TRUE(has(slurp(d / "err.txt"),
+                    "error: cannot write to standard output (No space left on device); the "
+                    "output is lost"))
+        << slurp(d / "err.txt");
+  }
+}
+
+// Review finding (2026-12-06): a full disk during `run` was "internal error: sqlite: cannot
+// rollback - no transaction is active" (exit 3): SQLite had rolled back already, and the second
+// ROLLBACK's error replaced the first. A file-size limit stands in for the full disk (the write
+// fails alike, EFBIG for ENOSPC): exit 2 saying what failed and how to go on; what was stored is
+// kept, and --resume completes the run with the measures of an uninterrupted one.
+TEST(HardDb, AFailedWriteDuringARunIsSaidAndResumable) {
+  auto d = tmp("fsize");
+  spit(d / "study.json", study(kGroups, "", 2.0));
+  const std::string env =
+      "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) + "/prototypes ";
+  auto run = [&](const fs::path& db) {
+    return env + PALPLAB_BINARY + " run " + (d / "study.json").string() + " --db " + db.string() +
+           " --quiet";
+  };
+  ASSERT_EQ(std::system((run(d / "full.db") + " 2> " + (d / "e0.txt").string()).c_str()), 0)
+      << slurp(d / "e0.txt");
+  const auto full = fs::file_size(d / "full.db");
+  // The limit in 512-byte blocks (POSIX sh): 1.5 x the finished database. The -wal file, where a
+  // run writes, outgrows the database (each transaction appends every page it touched): this
+  // limit stops the run after 2 of its 6 sessions (1.2 x: 1, 2 x: 4, 3 x: none).
+  const auto blocks = full * 3 / 2 / 512;
+  const fs::path db = d / "r.db";
+  const int st = std::system(("(trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " +
+                              run(db) + ") 2> " + (d / "e1.txt").string())
+                                 .c_str());
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 2);
+  const std::string err = slurp(d / "e1.txt");
+  EXPECT_TRUE(
+      has(err, db.string() + ": cannot write the database: an input/output error (sqlite: "))
+      << err;
+  EXPECT_TRUE(has(err, "make room, then continue the run with `palplab run STUDY --db " +
+                           db.string() + " --resume`"))
+      << err;
+  EXPECT_FALSE(has(err, "internal error")) << err;
+  const long long kept =
+      palplab::testing::sql_int(db, "SELECT count(*) FROM sessions WHERE status = 'complete'");
+  EXPECT_GE(kept, 1);
+  EXPECT_LT(kept, 6);
+  ASSERT_EQ(std::system((run(db) + " --resume 2> " + (d / "e2.txt").string()).c_str()), 0)
+      << slurp(d / "e2.txt");
+  EXPECT_EQ(palplab::testing::sql_int(db, "SELECT count(*) FROM sessions"), 6);
+  const std::string same =
+      "SELECT count(*) FROM measures m JOIN sessions s USING (session) WHERE m.value IS NOT NULL";
+  EXPECT_EQ(palplab::testing::sql_int(db, same), palplab::testing::sql_int(d / "full.db", same));
 }

@@ -113,3 +113,45 @@ TEST(CliRunInput, ResumeOfADatabaseWithAMissingSessionIsRefused) {
   // Nothing was simulated or written: the one remaining session is all there is.
   EXPECT_EQ(sql_int(db, "SELECT count(*) FROM sessions"), 1);
 }
+
+// Review finding (2026-12-06): a stored trainee state edited by hand was resumed from — a
+// segfault ("place": []), an "internal error" with the JSON library's text (a missing key, a
+// string), or silently simulated (a negative variance, a speed factor of 1e300). Each is exit 2
+// naming the table, the row and the column before anything is simulated.
+TEST(CliRunInput, ResumeFromAnEditedTraineeStateIsRefused) {
+  auto d = scratch_dir("run_resume_state");
+  std::ofstream(d / "s.json") << kStudy;
+  const fs::path db = d / "r.db";
+  const std::string run = "run " + (d / "s.json").string() + " --db " + db.string();
+  Result r = run_palplab(run + " --max-sessions 1 --jobs 1 --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  fs::copy_file(db, d / "good.db");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"json_set(state_after, '$.place', json('[]'))",
+       "\"place\": expected [x, y, z] in m, got []"},
+      {"json_remove(state_after, '$.initialised')", "missing \"initialised\""},
+      {"json_set(state_after, '$.place_sd', 'x')",
+       "\"place_sd\": expected a number in [0, 1000], got \"x\""},
+      {"json_set(state_after, '$.prior_var', -1)",
+       "\"prior_var\": expected a number in [0, 1e+12], got -1"},
+      {"json_set(state_after, '$.speed_factor', 1e300)",
+       "\"speed_factor\": expected a number in [1e-06, 1e+06], got 1e+300"},
+      {"json_set(state_after, '$.k_count', 1.5)", "\"k_count\": expected a count, got 1.5"},
+      {"'{bad'", "text that is not JSON: \"{bad\""},
+      {"'[]'", "expected a JSON object (the trainee's state), got []"},
+  };
+  for (const auto& [edit, says] : cases) {
+    SCOPED_TRACE(edit);
+    fs::copy_file(d / "good.db", db, fs::copy_options::overwrite_existing);
+    sql_exec(db, "UPDATE sessions SET state_after = " + edit);
+    r = run_palplab(run + " --resume --jobs 1 --quiet", d);
+    expect_exit2(r, {db.string(), "table sessions, row (session 1, participant ",
+                     "column state_after: " + says,
+                     "(not the virtual trainee's state palplab run wrote); resume needs"});
+    EXPECT_EQ(sql_int(db, "SELECT count(*) FROM sessions"), 1);
+  }
+  // The state as written resumes.
+  fs::copy_file(d / "good.db", db, fs::copy_options::overwrite_existing);
+  r = run_palplab(run + " --resume --jobs 1 --quiet", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+}

@@ -347,6 +347,20 @@ TEST(CliTraceExport, SessionOutOfRangeIsExit2NamingTheRange) {
   EXPECT_EQ(fs::file_size(other), 9u);
   EXPECT_EQ(t::run_palplab(to_other + " --overwrite", tmp.dir).code, 0);
   EXPECT_EQ(export_session("4").code, 0);  // its own earlier output
+  // Review finding (2026-12-06): a write that failed half-way (a full disk) left a truncated
+  // trace in place of the earlier one. A file-size limit of 64 KiB (`ulimit -f 128`: 512-byte
+  // blocks in POSIX sh; above the database's 32 KiB -shm) makes the write fail (EFBIG, SIGXFSZ
+  // ignored): exit 2, and the earlier trace is unchanged, with no .partial left.
+  const std::string before = t::slurp(out);
+  ASSERT_GT(before.size(), 65536u);
+  t::expect_exit2(
+      t::run_shell("trap '' XFSZ; ulimit -f 128; " + std::string(PALPLAB_BINARY) +
+                       " trace-export " + db.string() + " --session 4 --out " + out.string(),
+                   tmp.dir),
+      {out.string() + ": writing the trace failed (File too large); the file there "
+                      "before is unchanged"});
+  EXPECT_EQ(t::slurp(out), before);
+  EXPECT_FALSE(fs::exists(out.string() + ".partial"));
 }
 
 // `run --human` ignored the run's --samples setting (P01's sessions without samples, the next

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -99,8 +100,18 @@ Trace read_trace(const std::string& path) {
 }
 
 void write_trace(const std::string& path, const Trace& trace) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw InputError(path + ": cannot write the trace: " + std::strerror(errno));
+  // Written beside the target (PATH.partial) and renamed over it, so that a failed write (a full
+  // disk) never leaves half a trace in place of the earlier one. A target that is a link or not a
+  // regular file (/dev/stdout, a pipe) is written directly, as it was.
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::symlink_status(path, ec);
+  const bool direct = fs::exists(st) && !fs::is_regular_file(st);
+  const std::string tmp = direct ? path : path + ".partial";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f)
+    throw InputError(path + ": cannot write the trace: " + std::strerror(errno) +
+                     (direct ? "" : " (writing " + tmp + ")"));
   std::fprintf(f, "%s\n", kMagic);
   for (const auto& [k, v] : trace.meta) std::fprintf(f, "# %s=%s\n", k.c_str(), v.c_str());
   // The axis columns only when the device reported an axis (older readers read the rest).
@@ -117,9 +128,24 @@ void write_trace(const std::string& path, const Trace& trace) {
     if (axis) std::fprintf(f, ",%.17g,%.17g,%.17g", a.x(), a.y(), a.z());
     std::fputc('\n', f);
   }
-  const bool ok = std::fflush(f) == 0;
-  std::fclose(f);
-  if (!ok) throw InputError(path + ": writing the trace failed");
+  errno = 0;
+  bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  const int why = errno;
+  ok = std::fclose(f) == 0 && ok;
+  if (!ok) {
+    if (!direct) fs::remove(tmp, ec);
+    throw InputError(
+        path + ": writing the trace failed (" + (why ? std::strerror(why) : "write error") + ")" +
+        (direct || !fs::exists(path, ec) ? std::string() : "; the file there before is unchanged"));
+  }
+  if (!direct) {
+    fs::rename(tmp, path, ec);
+    if (ec) {
+      std::error_code e2;
+      fs::remove(tmp, e2);
+      throw InputError(path + ": cannot write the trace: " + ec.message());
+    }
+  }
 }
 
 DeviceInput TraceRecorder::read(double t) {
