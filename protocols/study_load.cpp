@@ -624,11 +624,21 @@ Study parse_study(const std::string& text, const std::string& file,
     if (!m->is_array() || m->empty()) {
       c.err("$.measures", "expected a non-empty array of measure names: " + join(known_measures()));
     } else {
+      // The measures of the study's task: a needle measure in a palpation study (or the reverse)
+      // was accepted, and the task's own measures were recorded and reported instead.
+      const auto& tm = default_measures(s.task.kind);
       for (std::size_t i = 0; i < m->size(); ++i) {
         const json& e = (*m)[i];
         auto& km = known_measures();
         if (!e.is_string() || std::find(km.begin(), km.end(), e.get<std::string>()) == km.end()) {
-          c.err(path_index("$.measures", i), "expected a measure name, one of: " + join(km));
+          c.err(path_index("$.measures", i),
+                "expected a measure name of the " + s.task.kind + " task, one of: " + join(tm));
+          continue;
+        }
+        if (std::find(tm.begin(), tm.end(), e.get<std::string>()) == tm.end()) {
+          c.err(path_index("$.measures", i),
+                "\"" + e.get<std::string>() + "\" is not a measure of this study's " + s.task.kind +
+                    " task (its measures: " + join(tm) + ")");
           continue;
         }
         const std::string name = e.get<std::string>();

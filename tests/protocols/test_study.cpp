@@ -346,6 +346,27 @@ TEST(Study, DuplicateMeasureNamesItsIndex) {
              "duplicate measure \"palpation_force\" (already $.measures[0])");
 }
 
+// Review finding (2026-12-06): a palpation study declaring needle measures validated and ran,
+// recording and reporting the palpation measures instead. A measure must be one of the task's.
+TEST(Study, MeasuresMustBeTheTasks) {
+  auto ps =
+      problems_of("meastask", edit("\"phases\": [",
+                                   "\"measures\": [\"palpation_force\", \"tip_to_target_mm\", "
+                                   "\"speed\"], \"phases\": ["));
+  ASSERT_EQ(ps.size(), 2u) << (ps.empty() ? "no problem" : InputError(ps).what());
+  EXPECT_EQ(ps[0].where.json_path, "$.measures[1]");
+  EXPECT_NE(ps[0].what.find("\"tip_to_target_mm\" is not a measure of this study's palpation "
+                            "task (its measures: palpation_force, exploration_time, "
+                            "feature_identified, accuracy)"),
+            std::string::npos)
+      << ps[0].what;
+  EXPECT_EQ(ps[1].where.json_path, "$.measures[2]");
+  EXPECT_NE(ps[1].what.find("expected a measure name of the palpation task, one of: "
+                            "palpation_force, exploration_time, feature_identified, accuracy"),
+            std::string::npos)
+      << ps[1].what;
+}
+
 // Ids end up in file names, database text and CSV cells: one grammar for every kind of id
 // (docs/FORMATS.md "Ids"). Control characters (C0, DEL, C1) were the first thing refused; '/'
 // and ',' were accepted (a figure path with a directory in it, a CSV cell that splits).
