@@ -1443,6 +1443,16 @@ SampleSeries Store::read_samples(long long session) const {
         out.t0 = t0;
         out.dt = dt;
         first = false;
+      } else {
+        // The rows of a session are contiguous (each starts where the one before ended): a row
+        // deleted by hand made every later sample read as 1 s earlier.
+        const double expected = out.t0 + static_cast<double>(out.size()) * out.dt;
+        if (dt != out.dt || !(std::abs(t0 - expected) <= 0.5 * dt))
+          throw InputError(where(second) + ": the samples are not contiguous (this row starts at " +
+                               num(t0) + " s with step " + num(dt) + " s; the rows before end at " +
+                               num(expected) + " s with step " + num(out.dt) +
+                               " s): a row is missing or edited; the database is damaged",
+                           path_);
       }
       try {
         decode_samples(q.blob(4), static_cast<std::size_t>(n), t0, dt, out);

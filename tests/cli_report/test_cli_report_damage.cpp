@@ -151,6 +151,31 @@ TEST(CliReportDamage, CorruptSampleBlobNamesItsSession) {
   expect_both_refuse(d, db, {db.string(), "corrupt sample blob", "participant"});
 }
 
+// Review finding (2026-12-06): a samples row deleted by hand made every later sample of the
+// session read 1 s early (export --samples, trace-export). A session's rows must be contiguous:
+// a row that does not start where the rows before it end, or with another step, is refused.
+TEST(CliReportDamage, SampleRowsThatAreNotContiguousAreRefused) {
+  auto d = scratch_dir("dmg_gap");
+  const fs::path db = copy_db(d);
+  ASSERT_EQ(palplab::testing::sql_int(db, "SELECT count(*) FROM samples WHERE session = 1"), 2);
+  // export --samples and trace-export read the session's samples (the report reads other ones).
+  auto expect_refused = [&](std::initializer_list<std::string> parts) {
+    expect_exit2(
+        run_palplab("export " + db.string() + " --csv " + (d / "csv").string() + " --samples", d),
+        parts);
+    expect_exit2(
+        run_palplab(
+            "trace-export " + db.string() + " --session 1 --out " + (d / "t.trace").string(), d),
+        parts);
+  };
+  sql_exec(db, "UPDATE samples SET t0 = t0 + 1 WHERE session = 1 AND second = 1;");
+  expect_refused({db.string(), "second 1: the samples are not contiguous (this row starts at 2",
+                  "the rows before end at 1 s with step 0.001 s): a row is missing or edited"});
+  sql_exec(db, "UPDATE samples SET t0 = t0 - 1, dt = 0.002 WHERE session = 1 AND second = 1;");
+  expect_refused({"with step 0.002 s; the rows before end at 1 s with step 0.001 s"});
+  EXPECT_FALSE(fs::exists(d / "t.trace"));
+}
+
 TEST(CliReportDamage, FileWhereTheReportPutsADirectory) {
   auto d = scratch_dir("dmg_out");
   const fs::path db = copy_db(d);
