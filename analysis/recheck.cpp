@@ -165,7 +165,7 @@ std::string classify_p(const std::string& relation, double reported, int decimal
 }
 
 std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& table,
-                                 const std::string& file, std::string_view text) {
+                                 const std::string& file, std::string_view text, bool skip_empty) {
   // Errors at a JSON path, with the line:column when the text is at hand (located on the first
   // error only).
   auto at = [&](const std::string& path, bool at_key = false) {
@@ -265,7 +265,8 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
                                                      "' (select groups with \"where\")");
     // Every group of the rows used with at least 1 value: which groups a test needs (and how
     // many values) is the test's own matter, and too few is "not recomputable", not bad input.
-    GroupedData d = group_table(table, value, group, where, 1, 1);
+    GroupedData d = group_table(table, value, group, where, 1, 1, skip_empty);
+    item.rows_skipped_empty = d.rows_skipped_empty;
     double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
     std::string why;  // why the test is undefined on these rows
     const std::string col = "column '" + group + "'";

@@ -53,14 +53,17 @@ struct RecheckItem {
   std::string verdict;         // worst of the parts
   std::string recomputed_apa;  // empty when a part is not recomputable
   std::string reason;          // why parts are not recomputable; empty when every part is
+  int rows_skipped_empty = 0;  // rows left out for an empty value (skip_empty)
 };
 
 // Recomputes every statistic of a REPORTED.json document on `table`. `file` labels errors;
 // with the document's `text` (json::parse_json_file), errors also give its line:column. Bad
 // input (no statistics, unknown or inapplicable keys, impossible printed values, duplicate ids)
-// is an InputError at its JSON path.
+// is an InputError at its JSON path. With `skip_empty`, rows whose value is empty or NA
+// (undefined measures in palplab's own export) are left out and counted, as `stats --skip-empty`.
 std::vector<RecheckItem> recheck(const nlohmann::json& reported, const CsvTable& table,
-                                 const std::string& file, std::string_view text = {});
+                                 const std::string& file, std::string_view text = {},
+                                 bool skip_empty = false);
 
 // Classifies a printed number against a recomputed one (decimals as printed); a recomputed
 // value that is not finite is "not recomputable".

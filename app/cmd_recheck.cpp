@@ -17,7 +17,7 @@
 namespace {
 struct RecheckArgs {
   std::string reported, csv;
-  bool json = false;
+  bool json = false, skip_empty = false;
 };
 
 palplab::app::CommandRegistration reg_recheck{
@@ -31,6 +31,9 @@ palplab::app::CommandRegistration reg_recheck{
       cmd->add_option("--csv", a->csv, "Raw data CSV the statistics were computed from")
           ->required();
       cmd->add_flag("--json", a->json, "Print JSON");
+      cmd->add_flag("--skip-empty", a->skip_empty,
+                    "Leave out rows whose value is empty or NA (undefined measures, as in "
+                    "palplab's own measures.csv) instead of failing; their number is reported");
       cmd->callback([a, code] {
         using namespace palplab::analysis;
         // The JSON reader of study files: located syntax errors, duplicate keys (nlohmann
@@ -38,7 +41,7 @@ palplab::app::CommandRegistration reg_recheck{
         std::string text;
         const nlohmann::json rep = palplab::json::parse_json_file(a->reported, &text);
         CsvTable t = read_csv(a->csv);
-        auto items = recheck(rep, t, a->reported, text);
+        auto items = recheck(rep, t, a->reported, text, a->skip_empty);
         int inconsistent = 0, undefined = 0;
         nlohmann::json out = nlohmann::json::array();
         for (const auto& it : items) {
@@ -61,6 +64,7 @@ palplab::app::CommandRegistration reg_recheck{
                                                        : nlohmann::json(it.recomputed_apa)},
               {"parts", parts}};
           if (!it.reason.empty()) item["not_recomputable"] = it.reason;
+          if (a->skip_empty) item["rows_skipped_empty"] = it.rows_skipped_empty;
           out.push_back(item);
         }
         if (a->json) {
@@ -78,6 +82,10 @@ palplab::app::CommandRegistration reg_recheck{
               std::cout << it.verdict << " (in part not recomputable: " << it.reason << ")\n";
             else
               std::cout << it.verdict << " (recomputed: " << it.recomputed_apa << ")\n";
+            if (it.rows_skipped_empty > 0)
+              std::cout << "    " << it.rows_skipped_empty
+                        << (it.rows_skipped_empty == 1 ? " row" : " rows")
+                        << " with an empty value left out (--skip-empty)\n";
             for (const auto& p : it.parts)
               if (p.verdict == "not recomputable")
                 std::cout << "    " << p.name << ": printed " << p.reported

@@ -322,3 +322,34 @@ TEST(CliRecheck, ValueAndGroupTheSameColumnIsBadInput) {
   std::filesystem::remove(f);
   std::filesystem::remove(wide);
 }
+
+// Review finding (2026-12-06): palplab's own measures.csv (an undefined measure is an empty
+// value) was refused by recheck ("empty value ... missing data are not allowed"), with no way
+// round it as `stats --skip-empty`. With --skip-empty the rows are left out and counted, and the
+// statistic recomputes as on the data without them.
+TEST(CliRecheck, SkipEmptyLeavesOutUndefinedValues) {
+  using palplab::testing::expect_exit2;
+  using palplab::testing::has;
+  const std::string rows =
+      "participant,group,value\nP1,A,2.1\nP2,A,2.6\nP3,A,2.4\nP4,B,2.9\n"
+      "P5,B,3.3\nP6,B,3.0\n";
+  const std::string with_empty = write_temp("skip_empty.csv", rows + "P7,B,\n");
+  const std::string without = write_temp("skip_none.csv", rows);
+  const std::string f = write_temp(
+      "skip_empty.json",
+      R"({"value":"value","group":"group","statistics":[{"text":"t(4) = 3.00, p = .040","test":"student_t","pair":["A","B"]}]})");
+  expect_exit2(run_palplab("recheck " + f + " --csv " + with_empty),
+               {"empty value; expected a number"});
+  const Result skipped = run_palplab("recheck " + f + " --csv " + with_empty + " --skip-empty");
+  const Result clean = run_palplab("recheck " + f + " --csv " + without);
+  ASSERT_NE(skipped.code, 2) << skipped.err;
+  EXPECT_EQ(skipped.code, clean.code);
+  EXPECT_TRUE(has(skipped.out, "    1 row with an empty value left out (--skip-empty)"))
+      << skipped.out;
+  const Result sj = run_palplab("recheck " + f + " --csv " + with_empty + " --skip-empty --json");
+  const Result cj = run_palplab("recheck " + f + " --csv " + without + " --json");
+  auto js = nlohmann::json::parse(sj.out), jc = nlohmann::json::parse(cj.out);
+  EXPECT_EQ(js["statistics"][0]["rows_skipped_empty"], 1);
+  EXPECT_EQ(js["statistics"][0]["recomputed"], jc["statistics"][0]["recomputed"]);
+  EXPECT_FALSE(jc["statistics"][0].contains("rows_skipped_empty"));
+}
