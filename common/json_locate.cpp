@@ -410,6 +410,14 @@ std::size_t count_members(const nlohmann::json& j) {
 }  // namespace
 
 nlohmann::json parse_located(std::string_view text, const std::string& file) {
+  // nlohmann's lexer takes a NUL byte for the end of the input: what followed it was ignored (a
+  // study whose keys after a NUL were "missing", garbage after a valid document accepted).
+  if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
+    const TextPos p = offset_to_pos(text, nul);
+    throw InputError(SourceLocation{file, p.line, p.column},
+                     "invalid JSON: a NUL byte (JSON text has none: a binary file, or text "
+                     "damaged by a NUL)");
+  }
   const std::size_t keys = prescan(text, file);
   nlohmann::json j;
   try {

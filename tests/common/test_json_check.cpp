@@ -151,6 +151,13 @@ TEST(JsonParse, HostileTextIsALocatedError) {
   EXPECT_NE(located_error("{\"a\": -1e999}").find("t.json:1:7:"), std::string::npos);
   EXPECT_EQ(located_error("{\"a\": \"1e400 [[[[\"}"), "");  // inside a string: just text
   EXPECT_EQ(located_error("{\"a\": 1e-400}"), "");          // underflow is 0, not an error
+  // Review finding (2026-12-06): the parser took a NUL byte for the end of the input, so what
+  // followed was ignored (garbage after a document accepted, keys after it "missing").
+  const std::string nul = "{\"a\": 1,\n \"b\": [2]}" + std::string(1, '\0') + "{garbage";
+  EXPECT_EQ(located_error(nul),
+            "t.json:2:11: invalid JSON: a NUL byte (JSON text has none: a binary file, or text "
+            "damaged by a NUL)");
+  EXPECT_EQ(located_error("{\"a\": " + std::string(1, '\0') + "1}").substr(0, 12), "t.json:1:7: ");
 }
 
 TEST(Escape, ControlCharactersAreShownEscaped) {
