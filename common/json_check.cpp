@@ -334,4 +334,73 @@ std::optional<std::array<double, 3>> Checker::vec3(const json& o, const std::str
   return out;
 }
 
+// Ids end up in file names (figures, traces), database text and CSV cells, so every id (study,
+// phase, group, participant, instructor, hypothesis) follows one grammar (docs/FORMATS.md "Ids"):
+// 1 to kMaxIdLength ASCII letters, digits, '_', '-' and '.', the first a letter or digit — no
+// '/', ',', quotes, spaces, control characters or other Unicode. The problem is recorded; the
+// caller keeps the id so that references to it do not report a second time.
+namespace {
+constexpr std::size_t kMaxIdLength = 64;
+constexpr const char* kIdRule =
+    "expected an id of 1 to 64 ASCII letters, digits, '_', '-' or '.', starting with a letter or "
+    "digit (ids become file names and CSV cells)";
+}  // namespace
+
+namespace {
+bool id_char(unsigned char b) {
+  return (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || (b >= '0' && b <= '9') || b == '_' ||
+         b == '-' || b == '.';
+}
+}  // namespace
+
+void check_id(Checker& c, const std::string& id, const std::string& path) {
+  // The id as shown in the message: a JSON string (quotes, backslashes and control characters
+  // escaped, so that an id holding '"' or a newline cannot garble the message), cut after
+  // kShownChars characters, with its length: "xxxx"… (65 characters).
+  auto shown = [&] {
+    constexpr std::size_t kShownChars = 40;
+    std::size_t cut = 0, n = 0;  // byte offset and count of the first kShownChars characters
+    for (; cut < id.size() && n < kShownChars; ++n) {
+      ++cut;  // the lead byte, then its continuation bytes
+      while (cut < id.size() && (static_cast<unsigned char>(id[cut]) & 0xC0) == 0x80) ++cut;
+    }
+    std::size_t total = n;
+    for (std::size_t i = cut; i < id.size(); ++i)
+      total += (static_cast<unsigned char>(id[i]) & 0xC0) != 0x80;
+    const auto quoted = [](const std::string& t) {
+      return json(t).dump(-1, ' ', false, json::error_handler_t::replace);
+    };
+    if (cut == id.size()) return quoted(id);
+    return quoted(id.substr(0, cut)) + "… (" + std::to_string(total) + " characters)";
+  };
+  std::size_t chars = 0;  // characters (UTF-8 code points) before i
+  for (std::size_t i = 0; i < id.size(); ++chars) {
+    const auto b = static_cast<unsigned char>(id[i]);
+    // One UTF-8 character (the JSON parser has checked the encoding).
+    std::size_t len = b < 0x80 ? 1 : b >> 5 == 0x6 ? 2 : b >> 4 == 0xE ? 3 : 4;
+    len = std::min(len, id.size() - i);
+    const bool first = i == 0;
+    if (len == 1 && id_char(b) && !(first && (b == '_' || b == '-' || b == '.'))) {
+      ++i;
+      continue;
+    }
+    unsigned cp = len == 1 ? b : b & (0x7F >> len);
+    for (std::size_t k = 1; k < len; ++k)
+      cp = cp << 6 | (static_cast<unsigned char>(id[i + k]) & 0x3F);
+    char u[16];
+    std::snprintf(u, sizeof u, "U+%04X", cp);
+    const bool printable = cp >= 0x20 && cp != 0x7f && !(cp >= 0x80 && cp <= 0x9f);
+    const std::string what = printable ? "'" + id.substr(i, len) + "' (" + u + ")" : std::string(u);
+    c.err(path, std::string(kIdRule) + ", got " + shown() + ": " +
+                    (first && len == 1 && id_char(b)
+                         ? "it starts with " + what
+                         : what + " at character " + std::to_string(chars + 1)));
+    return;
+  }
+  if (chars == 0)
+    c.err(path, std::string(kIdRule) + ", got an empty id");
+  else if (chars > kMaxIdLength)  // shown() gives the length
+    c.err(path, std::string(kIdRule) + ", got " + shown());
+}
+
 }  // namespace palplab::json

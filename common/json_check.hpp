@@ -127,4 +127,10 @@ class Checker {
   std::vector<Problem> problems_;
 };
 
+// Ids end up in file names (figures, traces, stills), database text and CSV cells, so every id
+// (study, phase, group, participant, instructor, hypothesis, prototype) follows one grammar
+// (docs/FORMATS.md "Ids"): 1 to 64 ASCII letters, digits, '_', '-' and '.', the first a letter
+// or digit. A violation is recorded on `c` at `path`, naming the first offending character.
+void check_id(Checker& c, const std::string& id, const std::string& path);
+
 }  // namespace palplab::json

@@ -165,6 +165,9 @@ SceneConfig load_prototype(const std::string& path) {
       c.err("$.format", "unsupported format \"" + *f + "\" (expected \"palplab-prototype/1\")");
   }
   s.id = c.text(root, R, "id", true).value_or("");
+  // The id is a study's prototype name, a figure's and a still's file name and database text:
+  // the ids' grammar (an id with an escape sequence reached the terminal through `probe`).
+  if (root.contains("id") && root["id"].is_string()) palplab::json::check_id(c, s.id, "$.id");
   s.scene = c.text(root, R, "scene", false).value_or("");
   s.description = c.text(root, R, "description", false).value_or("");
   s.dt = c.number(root, R, "haptic_step", false, 1e-5, 0.01, "the haptic step (s)", false)

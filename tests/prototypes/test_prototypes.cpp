@@ -212,6 +212,14 @@ TEST(Prototypes, BadFilesGiveLocatedErrors) {
   EXPECT_NE(e.find(":" + std::to_string(line_of(proto("B"), "\"scope\"")) + ":"), std::string::npos)
       << e;
   EXPECT_NE(e.find("$.model.scop"), std::string::npos) << e;
+  // The id follows the ids' grammar (review finding 2026-12-06: an escape sequence in it reached
+  // the terminal through `probe`, "A/B" was accepted).
+  e = error_of(mutated("A", "\"id\": \"A\"", "\"id\": \"A\\u001b[2J\""));
+  EXPECT_NE(e.find("$.id: expected an id of 1 to 64 ASCII letters"), std::string::npos) << e;
+  EXPECT_NE(e.find("U+001B at character 2"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\x1b'), std::string::npos) << e;
+  e = error_of(mutated("A", "\"id\": \"A\"", "\"id\": \"A/B\""));
+  EXPECT_NE(e.find("'/' (U+002F) at character 2"), std::string::npos) << e;
   // Out-of-range value.
   e = error_of(mutated("A", "\"stiffness\": 500.0", "\"stiffness\": -3"));
   EXPECT_NE(e.find("$.contact.stiffness"), std::string::npos) << e;
