@@ -59,6 +59,15 @@ int main(int argc, char** argv) {
   auto& reg = command_registry();
   std::sort(reg.begin(), reg.end(), [](auto& a, auto& b) { return a.name < b.name; });
   for (auto& c : reg) c.setup(cli, &code);
+  // A first word that is no command: CLI11 said only "A subcommand is required".
+  if (argc > 1 && argv[1][0] != '-' &&
+      std::none_of(reg.begin(), reg.end(), [&](auto& c) { return c.name == argv[1]; })) {
+    std::string names;
+    for (const auto& c : reg) names += (names.empty() ? "" : ", ") + c.name;
+    std::cerr << "error: unknown command '" << palplab::escape_controls(argv[1], false)
+              << "'; the commands are: " << names << " (palplab --help describes them)\n";
+    return 2;
+  }
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -334,19 +334,14 @@ std::optional<std::array<double, 3>> Checker::vec3(const json& o, const std::str
   return out;
 }
 
-// Ids end up in file names (figures, traces), database text and CSV cells, so every id (study,
-// phase, group, participant, instructor, hypothesis) follows one grammar (docs/FORMATS.md "Ids"):
-// 1 to kMaxIdLength ASCII letters, digits, '_', '-' and '.', the first a letter or digit — no
-// '/', ',', quotes, spaces, control characters or other Unicode. The problem is recorded; the
-// caller keeps the id so that references to it do not report a second time.
+// The ids' grammar (declared in json_check.hpp): the problem is recorded; the caller keeps the
+// id so that references to it do not report a second time.
 namespace {
 constexpr std::size_t kMaxIdLength = 64;
 constexpr const char* kIdRule =
     "expected an id of 1 to 64 ASCII letters, digits, '_', '-' or '.', starting with a letter or "
     "digit (ids become file names and CSV cells)";
-}  // namespace
 
-namespace {
 bool id_char(unsigned char b) {
   return (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || (b >= '0' && b <= '9') || b == '_' ||
          b == '-' || b == '.';

@@ -4,6 +4,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+
 #include "common/input_error.hpp"
 
 namespace palplab {
@@ -20,8 +23,12 @@ std::string size_text(std::size_t bytes) {
 std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
                               const std::string& what) {
   // POSIX reads: an ifstream's locale and buffer set-up cost more than reading a prototype.
+  if (path.empty()) throw InputError("an empty file name, expected the path of a " + what);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw InputError("cannot open file (expected a readable " + what + ")", path);
+  if (fd < 0)
+    throw InputError(std::string("cannot open file: ") + std::strerror(errno) +
+                         " (expected a readable " + what + ")",
+                     path);
   struct stat st {};
   if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
     ::close(fd);

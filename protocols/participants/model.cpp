@@ -769,7 +769,7 @@ void Trainee::perceive(const Percept& p, bool call) {
     }
     // Without an expected marker the press stops at the intended force; waiting for a marker it
     // goes on, to a limit that grows with the reliance and with each marker that failed.
-    // (How far is this person's: overshoot_factor.)
+    // How far it goes on is also this person's own (overshoot_factor).
     const double wait =
         expect_marker_
             ? std::pow(1.0 + p_.marker_wait_overshoot * s_.overshoot_factor * s_.reliance,

@@ -78,7 +78,8 @@ struct TraineeParams {
   double extinction_rate = 0.472119;  // 1, reliance lost per press whose expected marker failed
   double marker_wait_overshoot = 0.108033;  // 1, press beyond the intended force awaiting a marker
   // How much people differ in that overshoot (log-scale SD of a factor on it, drawn per person at
-  // the briefing; docs/PARTICIPANTS.md "People differ in how far they wait for the sound").
+  // the briefing; 0 = off; docs/PARTICIPANTS.md "The press-error model is no lever for C's spread
+  // by itself").
   double overshoot_individual_cv = 0.0;  // 1
   // visual learning and search
   // visual_spatial_sd: output of `palplab calibrate` on the whole exp2 at 20 per group

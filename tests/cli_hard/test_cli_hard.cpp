@@ -951,3 +951,18 @@ TEST(HardDb, AFailedWriteDuringARunIsSaidAndResumable) {
       "SELECT count(*) FROM measures m JOIN sessions s USING (session) WHERE m.value IS NOT NULL";
   EXPECT_EQ(palplab::testing::sql_int(db, same), palplab::testing::sql_int(d / "full.db", same));
 }
+
+// Review findings (2026-12-06): `palplab nosuch` said only "A subcommand is required", and
+// `validate ""` "cannot open file" with no name; a missing file now gives the system's reason.
+TEST(HardCli, UnknownCommandsAndEmptyPathsAreSaidAsSuch) {
+  auto d = tmp("cli_words");
+  Result r = cli("nosuch", d);
+  EXPECT_EXIT2_WITH(r, "error: unknown command 'nosuch'; the commands are: bench, calibrate,");
+  r = cli("validate ''", d);
+  EXPECT_EXIT2_WITH(r, "error: an empty file name, expected the path of a JSON study file");
+  r = cli("validate " + (d / "none.json").string(), d);
+  EXPECT_EXIT2_WITH(r,
+                    "none.json: cannot open file: No such file or directory (expected a "
+                    "readable JSON study file)");
+  EXPECT_EQ(cli("version", d).code, 0);
+}
