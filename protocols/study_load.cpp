@@ -715,6 +715,7 @@ Study parse_study(const std::string& text, const std::string& file,
             c.err(PP, "expected a non-empty array of [group, group] pairs, got " +
                           std::string(kind_name(*pj)));
           } else {
+            std::vector<std::size_t> at;  // the JSON index of each pair kept in h.pairs
             for (std::size_t k = 0; k < pj->size(); ++k) {
               const json& pr = (*pj)[k];
               const std::string PK = path_index(PP, k);
@@ -730,10 +731,19 @@ Study parse_study(const std::string& text, const std::string& file,
                                 join(std::vector<std::string>(group_ids.begin(), group_ids.end())));
                   ok = false;
                 }
+              // The same comparison twice (either order) would be counted twice by the Holm
+              // correction over the pairs.
+              const auto same = std::find_if(h.pairs.begin(), h.pairs.end(), [&](const auto& q) {
+                return (q.first == a && q.second == b) || (q.first == b && q.second == a);
+              });
               if (ok && a == b)
                 c.err(PK, "a pair needs two different groups, got \"" + a + "\" twice");
+              else if (ok && same != h.pairs.end())
+                c.err(PK, "the pair [\"" + a + "\", \"" + b + "\"] repeats the comparison " +
+                              path_index(PP, at[static_cast<std::size_t>(same - h.pairs.begin())]) +
+                              " (the Holm correction over the pairs would count it twice)");
               else if (ok)
-                h.pairs.push_back({a, b});
+                h.pairs.push_back({a, b}), at.push_back(k);
             }
           }
         }

@@ -281,6 +281,12 @@ TEST(Study, HypothesesChecked) {
              "$.hypotheses[0].pairs[0]", 22, "unknown group id \"Z\"");
   expect_one(problems_of("hysame", with(base + R"("test": "welch_t", "pairs": [["B", "B"]]})")),
              "$.hypotheses[0].pairs[0]", 22, "two different groups");
+  // Review finding (2026-12-06): the same comparison twice was counted twice by Holm.
+  expect_one(problems_of("hytwice",
+                         with(base + R"("test": "welch_t", "pairs": [["A", "B"], ["B", "A"]]})")),
+             "$.hypotheses[0].pairs[1]", 22,
+             "the pair [\"B\", \"A\"] repeats the comparison $.hypotheses[0].pairs[0] (the Holm "
+             "correction over the pairs would count it twice)");
   expect_one(problems_of("hytost", with(base + R"("test": "tost"})")), "$.hypotheses[0]", 22,
              "missing required key \"margins\"");
   expect_one(problems_of("hyalpha", with(base + R"("test": "welch_t", "alpha": 0.9})")),
