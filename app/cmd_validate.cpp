@@ -1,6 +1,7 @@
 // `palplab validate STUDY.json`: checks the study and every prototype it names; exit 0 and a
 // one-screen plan summary when valid, exit 2 with every problem (FILE:LINE:COL: $.path: what)
 // otherwise.
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
@@ -78,6 +79,17 @@ palplab::app::CommandRegistration reg_validate{
                       << "every session of a participant as an independent observation "
                       << "(pseudo-replication: df and p-values overstate the evidence); "
                       << "participant means (the default) or `palplab lmm` are valid\n";
+        // Valid but impossible: a feature that needs a longer touch than any session lasts is
+        // never identified (every exploration time undefined).
+        double longest = 0;
+        for (const auto& ph : s.phases) longest = std::max(longest, ph.session_duration);
+        if (s.task.kind == "palpation" && s.task.identify_dwell > longest)
+          std::cerr << palplab::escape_controls(*study)
+                    << ": warning: $.task.identify_dwell: " << s.task.identify_dwell
+                    << " s of contact on the feature identifies it, longer than every session ("
+                    << "the longest is " << longest
+                    << " s): no session can identify the feature (feature_identified 0, "
+                    << "exploration_time undefined in every session)\n";
         *code = 0;
       });
     }};

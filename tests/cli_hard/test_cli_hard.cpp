@@ -966,3 +966,24 @@ TEST(HardCli, UnknownCommandsAndEmptyPathsAreSaidAsSuch) {
                     "readable JSON study file)");
   EXPECT_EQ(cli("version", d).code, 0);
 }
+
+// Review finding (2026-12-06): a touch needed to identify the feature longer than every session
+// validated without a word; the study then runs with every exploration time undefined. Valid
+// (exit 0), with a warning naming the key and the longest session.
+TEST(HardCli, AnIdentificationLongerThanEverySessionIsWarnedOf) {
+  auto d = tmp("dwell");
+  std::string s = study(kGroups, "", 20.0);
+  s.replace(s.find("\"feature\": \"ovary_left\","), 24,
+            "\"feature\": \"ovary_left\", \"identify_dwell\": 50,");
+  spit(d / "dwell.json", s);
+  Result r = cli("validate " + (d / "dwell.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err,
+                  "warning: $.task.identify_dwell: 50 s of contact on the feature "
+                  "identifies it, longer than every session (the longest is 20 s)"))
+      << r.err;
+  spit(d / "ok.json", study(kGroups, "", 20.0));
+  r = cli("validate " + (d / "ok.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.err, "warning")) << r.err;
+}
