@@ -89,11 +89,16 @@ int main(int argc, char** argv) {
   }
   // What the command printed must have reached standard output: `palplab stats --json >
   // /dev/full` (a full disk, a closed pipe's file) lost it and exited 0.
+  // The reason is known only when this last flush is the write that failed (an earlier one,
+  // e.g. cout flushed because stderr was written, left errno to later calls).
+  const bool failed_before = std::ferror(stdout) != 0;
   errno = 0;
   std::cout.flush();
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    const int why = errno;
     std::cerr << "error: cannot write to standard output ("
-              << (errno ? std::strerror(errno) : "write failed") << "); the output is lost\n";
+              << (!failed_before && why ? std::strerror(why) : "a write failed")
+              << "); the output is lost\n";
     return code != 0 ? code : 2;
   }
   return code;
