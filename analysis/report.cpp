@@ -20,6 +20,7 @@
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 #include "palplab/version.hpp"
 #include "results/store.hpp"
 
@@ -64,10 +65,9 @@ std::string interval(double lo, double hi, const char* f = "%.4g") {
   return bracket(fmt(lo, f), fmt(hi, f));
 }
 
+// A table cell's text: palplab::markdown_text (no markup from a name or a path).
 std::string md_cell(const std::string& s) {
-  std::string o;
-  for (char c : s) o += c == '|' ? std::string("\\|") : std::string(1, c);
-  return o;
+  return markdown_text(s);
 }
 
 // Builds the Markdown and the HTML documents side by side.
@@ -186,9 +186,7 @@ struct Context {
   }
   void save_figure(const std::string& name, const std::string& svg, const std::string& caption) {
     const fs::path file = fs::path(out_dir) / "figures" / name;
-    std::ofstream out(file);
-    out << svg;
-    if (!out) throw InputError("cannot write the figure (expected a writable file)", file.string());
+    write_file(file.string(), svg, "the figure");
     files.figures.push_back((fs::path(out_dir) / "figures" / name).string());
     doc.figure(svg, name, caption);
   }
@@ -538,12 +536,8 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
       "the press and cameras in stills/stills.json.");
   for (const auto& m : missing) c.doc.para("No still of prototype " + m + ".");
   c.files.stills_missing = missing;
-  {
-    std::ofstream json(dir / "stills.json");
-    json << side.dump(2) << "\n";
-    if (!json)
-      throw InputError("cannot write the stills' description", (dir / "stills.json").string());
-  }
+  write_file((dir / "stills.json").string(), side.dump(2) + "\n", "the stills' description");
+  c.files.stills_listing = (dir / "stills.json").string();
   if (done.empty()) {
     c.files.stills_skipped = "no prototype could be drawn";
   } else {
@@ -1374,12 +1368,8 @@ void section_force_traces(Context& c, const std::vector<Unit>& units) {
 void write_documents(Context& c) {
   c.files.markdown = (fs::path(c.out_dir) / "report.md").string();
   c.files.html = (fs::path(c.out_dir) / "report.html").string();
-  {
-    std::ofstream md(c.files.markdown);
-    md << c.doc.md.str();
-    if (!md) throw InputError("cannot write the report", c.files.markdown);
-  }
-  std::ofstream html(c.files.html);
+  write_file(c.files.markdown, c.doc.md.str(), "the report");
+  std::ostringstream html;
   html << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
        << xml_escape(c.study.title) << "</title>\n<style>\n"
        << "body{font-family:Helvetica,Arial,sans-serif;max-width:960px;margin:2em auto;padding:0 "
@@ -1397,7 +1387,7 @@ void write_documents(Context& c) {
           "border:1px solid #ddd;margin-bottom:4px}\n"
        << "</style>\n</head>\n<body>\n"
        << c.doc.html.str() << "</body>\n</html>\n";
-  if (!html) throw InputError("cannot write the report", c.files.html);
+  write_file(c.files.html, html.str(), "the report");
 }
 
 }  // namespace

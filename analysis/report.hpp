@@ -63,6 +63,7 @@ struct ReportFiles {
   std::string markdown, html;
   std::vector<std::string> figures;
   std::vector<std::string> stills;  // PNG files written (pressed and rest, per prototype)
+  std::string stills_listing;       // stills/stills.json when written, else empty
   int still_figures = 0;            // <figure>s of stills in report.html (one per prototype)
   std::string stills_skipped;       // non-empty: why the report has no stills (one line)
   std::vector<std::string> stills_missing;  // "PROTOTYPE: why" of each prototype not drawn

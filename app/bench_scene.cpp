@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
 
@@ -37,7 +38,7 @@ std::string prototype_variant(const BenchOptions& o, const std::string& id, cons
   nlohmann::json j = nlohmann::json::parse(in);
   edit(j);
   const std::string file = (bench_scratch_dir() / (id + "_" + tag + ".json")).string();
-  std::ofstream(file) << j.dump(2) << "\n";
+  write_file(file, j.dump(2) + "\n", "a prototype variant for the benchmark");
   return file;
 }
 
@@ -77,9 +78,7 @@ double max_rel_diff(const std::vector<double>& a, const std::vector<double>& b) 
 void write_figure(const BenchOptions& o, const std::string& file, const std::string& svg) {
   if (o.svg_dir.empty()) return;
   const std::string path = o.svg_dir + "/" + file;
-  std::ofstream out(path);
-  if (!out) throw InputError("cannot write the figure", path);
-  out << svg;
+  write_file(path, svg, "the figure");
 }
 
 }  // namespace palplab::app

@@ -14,6 +14,7 @@
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 #include "protocols/calibrate.hpp"
 #include "protocols/study.hpp"
 
@@ -129,9 +130,7 @@ palplab::app::CommandRegistration reg_calibrate{
         j["human"] = a->human;
         j["sim_n"] = a->opt.sim_n;
         j["budget"] = a->opt.budget;
-        std::ofstream o(a->out, std::ios::binary);
-        o << j.dump(2) << "\n";
-        if (!o) throw palplab::InputError("cannot write the parameter file", a->out);
+        palplab::write_file(a->out, j.dump(2) + "\n", "the parameter file");
         std::cout << to_text(r) << "wrote " << a->out << "\n";
         if (!a->write_defaults.empty()) {
           write_defaults(r, a->write_defaults);

@@ -32,6 +32,7 @@
 #include "app/command.hpp"
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
+#include "common/write_file.hpp"
 #include "engine/haptics/press.hpp"
 #include "engine/haptics/scene_file.hpp"
 #include "engine/models/fem_reference.hpp"
@@ -464,10 +465,7 @@ int run_reference(const ReferenceArgs& a) {
                     {"non_elliptic_tets", non_elliptic},
                     {"solve_ms", ms}};
   }
-  std::ofstream f(a.out);
-  if (!f) throw InputError("--out: cannot write \"" + a.out + "\"");
-  f << out.dump(1) << "\n";
-  if (!f) throw InputError("--out: writing \"" + a.out + "\" failed");
+  write_file(a.out, out.dump(1) + "\n", "the --out JSON");
   std::printf("%5s %8s %8s %12s %10s %12s %12s %10s %8s %10s %10s\n", "level", "tets", "dofs",
               "h (m)", "h_press", "k (N/m)", "u (m)", "est_error", "solver", "factor_ms",
               "factor_MB");
@@ -810,9 +808,7 @@ int run_solvers(const SolverArgs& a) {
                 {"mem_limit_applied", kAddressLimitWorks},
                 {"cpu_limit_s", a.cpu_limit_s},
                 {"runs", js}};
-    std::ofstream f(a.out);
-    if (!f) throw InputError("--out: cannot write \"" + a.out + "\"");
-    f << out.dump(2) << "\n";
+    write_file(a.out, out.dump(2) + "\n", "the --out JSON");
   }
   for (const auto& r : runs)
     if (r.status != "ok") return 1;

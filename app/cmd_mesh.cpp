@@ -22,6 +22,7 @@
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 #include "engine/mesh/check.hpp"
 #include "engine/mesh/generate.hpp"
 #include "engine/mesh/info.hpp"
@@ -607,9 +608,7 @@ palplab::app::CommandRegistration reg_mesh{
             palplab::app::require_replaceable_output(
                 "--out", *out, {}, is_material_table,
                 "material table JSON (\"format\": \"palplab-materials\")", *overwrite);
-            std::ofstream f(*out);
-            if (!f) throw palplab::InputError("cannot write file", *out);
-            f << default_materials_json();
+            palplab::write_file(*out, default_materials_json(), "the material table");
             std::cout << "wrote " << *out << "\n";
           }
           *code = 0;

@@ -383,7 +383,7 @@ palplab::app::CommandRegistration reg_run{
           palplab::app::flag_only_with(o, human->human, "--human (a person at the device)");
         for (const CLI::Option* o : virtual_only)
           palplab::app::flag_only_with(o, !human->human, "virtual participants (without --human)");
-        palplab::app::preload_scenes(*scenes);
+        const std::vector<std::string> scene_sources = palplab::app::preload_scenes(*scenes);
         if (opt->resume && opt->force)
           throw palplab::InputError("--resume and --force exclude each other");
         if (opt->db.empty())
@@ -391,6 +391,12 @@ palplab::app::CommandRegistration reg_run{
                                     "no database file name given (an empty string): expected "
                                     "FILE.db");
         Study s = load_study(*study, engine_prototype_inspector());
+        {
+          std::vector<std::string> used;
+          for (const auto& [id, file] : s.prototype_files) used.push_back(file);
+          for (const auto& w : palplab::app::unused_scene_warnings(*scenes, scene_sources, used))
+            std::cerr << palplab::escape_controls(w, false) << "\n";
+        }
         Plan plan = make_plan(s);
         opt->samples = *samples == "full";
         // Without --samples a resume keeps what the run started with.

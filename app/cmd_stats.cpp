@@ -11,6 +11,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
+
+#include <nlohmann/json.hpp>
 
 #include "analysis/csv.hpp"
 #include "analysis/grouped.hpp"
@@ -248,6 +251,78 @@ void check_report_out(const ReportArgs& a) {
       "--overwrite", a.overwrite);
 }
 
+// The files of an earlier palplab report in DIR that a new report may not write again: its
+// figures (figures/*.svg as analysis/svg.cpp writes them) and its stills (the PNGs
+// DIR/stills/stills.json lists, and that listing). Regular files only; a file that is not
+// recognised as palplab's is not among them.
+std::vector<std::filesystem::path> earlier_report_files(const std::string& out) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> found;
+  std::error_code ec;
+  auto regular = [](const fs::path& p) {
+    std::error_code e;
+    return fs::is_regular_file(fs::symlink_status(p, e));
+  };
+  for (fs::directory_iterator it(fs::path(out) / "figures", ec), end; !ec && it != end;
+       it.increment(ec))
+    if (it->path().extension() == ".svg" && regular(it->path()) &&
+        palplab::app::output_head_has(it->path().string(),
+                                      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"",
+                                      "font-family=\"Helvetica, Arial, sans-serif\"", 4096))
+      found.push_back(it->path().lexically_normal());
+  const fs::path listing = fs::path(out) / "stills" / "stills.json";
+  if (!regular(listing) ||
+      !palplab::app::output_head_has(listing.string(), "{", "\"camera_convention\""))
+    return found;
+  nlohmann::json js;
+  try {
+    js = nlohmann::json::parse(palplab::app::file_head(listing.string(), std::size_t{64} << 20));
+  } catch (const nlohmann::json::exception&) {
+    return found;  // not a listing this palplab can read: its stills are left alone
+  }
+  found.push_back(listing.lexically_normal());
+  if (!js.contains("stills") || !js["stills"].is_array()) return found;
+  for (const auto& s : js["stills"])
+    for (const char* key : {"pressed", "rest"}) {
+      if (!s.is_object() || !s.contains(key) || !s[key].is_string()) continue;
+      // Only a file directly in DIR/stills, as the report names them ("stills/A_pressed.png").
+      const fs::path rel = s[key].get<std::string>();
+      if (rel.parent_path() != "stills" || rel.filename().empty() || rel.filename() == ".." ||
+          rel.filename() == ".")
+        continue;
+      const fs::path p = fs::path(out) / "stills" / rel.filename();
+      if (regular(p)) found.push_back(p.lexically_normal());
+    }
+  return found;
+}
+
+// After the report is written: the files of an earlier report (earlier_report_files) that this
+// one did not write are removed, so that DIR holds one report (review 2026-12-06: a report into
+// a directory with another study's report kept that study's figures and stills beside it).
+std::vector<std::string> remove_stale_report_files(
+    const std::vector<std::filesystem::path>& earlier, const palplab::analysis::ReportFiles& files,
+    const std::string& db) {
+  namespace fs = std::filesystem;
+  std::set<fs::path> written;
+  for (const auto& f : files.figures) written.insert(fs::path(f).lexically_normal());
+  for (const auto& f : files.stills) written.insert(fs::path(f).lexically_normal());
+  if (!files.stills_listing.empty())
+    written.insert(fs::path(files.stills_listing).lexically_normal());
+  std::vector<std::string> removed;
+  for (const auto& p : earlier) {
+    std::error_code ec;
+    if (written.count(p) || fs::equivalent(p, db, ec)) continue;  // the database: never
+    fs::remove(p, ec);
+    if (ec)
+      throw palplab::InputError(
+          "cannot remove this file of an earlier report, which the new report does not have (" +
+              ec.message() + "); the new report is written, remove the file by hand",
+          p.string());
+    removed.push_back(p.string());
+  }
+  return removed;
+}
+
 palplab::app::CommandRegistration reg_report{
     "report", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand(
@@ -283,7 +358,9 @@ palplab::app::CommandRegistration reg_report{
         else
           opt.stills = palplab::app::make_still_maker();
         if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
+        const auto earlier = earlier_report_files(a->out);
         auto files = palplab::analysis::write_report(a->db, a->out, opt);
+        const auto removed = remove_stale_report_files(earlier, files, a->db);
         if (!files.stills_skipped.empty())
           std::cerr << "palplab report: stills skipped: "
                     << palplab::escape_controls(files.stills_skipped, false) << "\n";
@@ -301,6 +378,13 @@ palplab::app::CommandRegistration reg_report{
         if (files.still_figures > 0)
           std::cout << " (" << std::lround(files.stills_seconds * 1000) << " ms)";
         std::cout << "\n  " << files.markdown << "\n  " << files.html << "\n";
+        if (!removed.empty()) {
+          std::cout << "removed " << removed.size() << (removed.size() == 1 ? " file" : " files")
+                    << " of an earlier report in " << palplab::escape_controls(a->out, false)
+                    << " that this report does not have:";
+          for (const auto& r : removed) std::cout << "\n  " << palplab::escape_controls(r, false);
+          std::cout << "\n";
+        }
         *code = 0;
       });
     }};

@@ -90,6 +90,20 @@ palplab::app::CommandRegistration reg_validate{
                     << "the longest is " << longest
                     << " s): no session can identify the feature (feature_identified 0, "
                     << "exploration_time undefined in every session)\n";
+        // Valid but questionable: a palpation must reach palpation_onset, and a press to the
+        // target force (the feature's MPF) does not: `palpations` then counts only presses
+        // beyond the target (review 2026-12-06).
+        if (s.task.kind == "palpation") {
+          auto it = s.task.thresholds.find(s.task.feature);
+          if (it == s.task.thresholds.end()) it = s.task.thresholds.find("*");
+          if (it != s.task.thresholds.end() && s.task.palpation_onset > it->second.mpf)
+            std::cerr << palplab::escape_controls(*study)
+                      << ": warning: $.task.palpation_onset: " << s.task.palpation_onset
+                      << " N is above the feature's target force (MPF " << it->second.mpf
+                      << " N, SFT " << it->second.sft << " N"
+                      << "): a press to the target is not counted as a palpation (`palpations` "
+                      << "counts only presses beyond it)\n";
+        }
         *code = 0;
       });
     }};

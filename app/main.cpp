@@ -76,6 +76,21 @@ int main(int argc, char** argv) {
     return cli.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return cli.exit(e);
+  } catch (const CLI::ExtrasError&) {
+    // CLI11 names the extra arguments in reverse order ("not expected: -1 --seed" for
+    // `run --seed -1`): they are said in the order given, with the command they were given to.
+    std::string command = "palplab";
+    for (const CLI::App* sub = &cli; !sub->get_subcommands().empty();) {
+      sub = sub->get_subcommands().back();
+      command += " " + sub->get_name();
+    }
+    std::string extras;
+    for (const auto& a : cli.remaining(true))
+      extras += (extras.empty() ? "" : " ") + palplab::escape_controls(a, false);
+    std::cerr << "error: " << command << ": unexpected argument(s): " << extras
+              << " (no such option, or more arguments than the command takes; `" << command
+              << " --help` lists what it takes)\n";
+    return 2;
   } catch (const CLI::ParseError& e) {
     // Usage errors are bad input too: exit 2 whatever CLI11's own code would be.
     cli.exit(e);

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "common/input_error.hpp"
 #include "engine/haptics/scene_file.hpp"
@@ -87,14 +88,35 @@ std::string scene_prototype(const std::string& positional, const std::vector<std
   return proto;
 }
 
-void preload_scenes(const std::vector<std::string>& scenes) {
+std::vector<std::string> preload_scenes(const std::vector<std::string>& scenes) {
+  std::vector<std::string> sources;
   for (const auto& v : scenes) {
     refuse_directory_as_scene("--scene \"" + v + "\"", v);
     if (!is_scene_file(v))
       throw InputError("--scene \"" + v +
                        "\": run takes simulation files (.psim); the study names its prototypes");
-    load_psim(v);
+    sources.push_back(load_psim(v));
   }
+  return sources;
+}
+
+std::vector<std::string> unused_scene_warnings(const std::vector<std::string>& scenes,
+                                               const std::vector<std::string>& sources,
+                                               const std::vector<std::string>& used) {
+  std::vector<std::string> out;
+  std::set<std::string> used_files, seen;
+  for (const auto& u : used) used_files.insert(canonical(u));
+  for (std::size_t i = 0; i < scenes.size() && i < sources.size(); ++i) {
+    if (!seen.insert(canonical(scenes[i])).second) {
+      out.push_back("warning: --scene \"" + scenes[i] +
+                    "\" is given more than once (it is used once)");
+      continue;
+    }
+    if (!used_files.count(canonical(sources[i])))
+      out.push_back("warning: --scene \"" + scenes[i] + "\" was built from " + sources[i] +
+                    ", a prototype this study does not use: it has no effect on the run");
+  }
+  return out;
 }
 
 }  // namespace palplab::app

@@ -23,8 +23,16 @@ CLI::Option* add_scene_option(CLI::App* cmd, std::vector<std::string>& scenes, b
 std::string scene_prototype(const std::string& positional, const std::vector<std::string>& scenes);
 
 // Installs the precomputation of every --scene file (run: the study's prototypes then start from
-// them); a prototype key is refused here (a study names its prototypes itself).
-void preload_scenes(const std::vector<std::string>& scenes);
+// them); a prototype key is refused here (a study names its prototypes itself). Returns the
+// prototype file each was built from, in the order given.
+std::vector<std::string> preload_scenes(const std::vector<std::string>& scenes);
+
+// The notices for --scene files that do nothing (review 2026-12-06: they passed without a
+// word): one given twice, or built from a prototype file none of `used` (the study's prototype
+// files) is. One line each, "warning: --scene ...".
+std::vector<std::string> unused_scene_warnings(const std::vector<std::string>& scenes,
+                                               const std::vector<std::string>& sources,
+                                               const std::vector<std::string>& used);
 
 // True when `value` names a .psim file (by extension or by its magic bytes).
 bool is_scene_file(const std::string& value);

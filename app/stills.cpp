@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 #include "engine/render/headless.hpp"
 #include "engine/render/still.hpp"
 #include "protocols/input_pins.hpp"
@@ -89,7 +90,7 @@ class EglStillMaker : public analysis::StillMaker {
         return r;
       }
       file = (stored_dir() / (q.prototype + ".json")).string();
-      std::ofstream(file, std::ios::binary) << q.json;
+      write_file(file, q.json, "a scratch copy of the stored prototype");
       r.note = "drawn from the prototype JSON stored with the results: " + what;
     }
     std::optional<engine::Scene> scene, rest;

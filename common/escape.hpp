@@ -36,11 +36,20 @@ inline std::string escape_controls(std::string_view s, bool keep_newlines = true
 // heading): the characters that would end a table cell (|), open inline HTML (<) or a code span
 // (`), or escape what follows (\) are backslash-escaped (CommonMark lets any ASCII punctuation
 // be), so a name renders as written and never as markup: a test id "<script>" stays text.
+// '<' is escaped where it could open markup (before a letter, '/', '!' or '?': a tag, a
+// comment, an autolink) and '&' where it could start an entity (before a letter or '#'), so
+// that "p < .001" and "A & B" stay as written in the Markdown source.
 inline std::string markdown_text(std::string_view s) {
   std::string out;
   out.reserve(s.size());
-  for (const char c : s) {
-    if (c == '|' || c == '<' || c == '`' || c == '\\') out += '\\';
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const char c = s[i];
+    const char next = i + 1 < s.size() ? s[i + 1] : '\0';
+    const bool letter = (next >= 'a' && next <= 'z') || (next >= 'A' && next <= 'Z');
+    if (c == '|' || c == '`' || c == '\\' ||
+        (c == '<' && (letter || next == '/' || next == '!' || next == '?')) ||
+        (c == '&' && (letter || next == '#')))
+      out += '\\';
     out += c;
   }
   return out;

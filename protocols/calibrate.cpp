@@ -18,6 +18,7 @@
 #include "analysis/csv.hpp"
 #include "common/input_error.hpp"
 #include "common/nan.hpp"
+#include "common/write_file.hpp"
 #include "protocols/measures.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/power.hpp"
@@ -850,9 +851,7 @@ void check_defaults_file(const std::vector<std::string>& keys, const std::string
 
 void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
   const std::string text = defaults_text(params_hpp, r.keys, r.fitted);
-  std::ofstream out(params_hpp, std::ios::binary);
-  out << text;
-  if (!out) throw InputError("cannot write", params_hpp);
+  write_file(params_hpp, text, "the parameter defaults");
 }
 
 nlohmann::json to_json(const CalibrationResult& r) {

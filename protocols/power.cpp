@@ -32,6 +32,7 @@
 #include "common/json_locate.hpp"
 #include "common/nan.hpp"
 #include "common/seed.hpp"
+#include "common/write_file.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
 #include "results/sha256.hpp"
@@ -1550,13 +1551,7 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
   }
   const std::string table = md.str();
   auto write = [&](const std::string& name, const std::string& text) {
-    errno = 0;
-    std::ofstream o(fs::path(out_dir) / name, std::ios::binary);
-    o << text;
-    if (!o)
-      throw InputError(
-          std::string("cannot write (") + (errno ? std::strerror(errno) : "write failed") + ")",
-          (fs::path(out_dir) / name).string());
+    write_file((fs::path(out_dir) / name).string(), text, "the power summary");
   };
   write("power.json", s.dump(2) + "\n");
   write("power.md", table);

@@ -655,6 +655,19 @@ Study parse_study(const std::string& text, const std::string& file,
                        (a.phase.empty() ? "" : " in phase " + a.phase) +
                        " needs at least 2 groups to compare; the study has 1 (add a group, make "
                        "it \"descriptives\" or remove the analysis)");
+        // The same analysis twice (a copy-paste) would be run, reported and counted in power
+        // twice (review 2026-12-06: it passed without a word).
+        for (std::size_t k = 0; k < s.analyses.size(); ++k) {
+          const Analysis& b = s.analyses[k];
+          if (!a.kind.empty() && !a.measure.empty() && !a.phase.empty() && a.kind == b.kind &&
+              a.measure == b.measure && a.phase == b.phase && a.welch == b.welch &&
+              a.pooled == b.pooled && a.pool_sessions == b.pool_sessions && a.margin == b.margin) {
+            c.err(A, "the same analysis as " + path_index("$.analyses", k) + " (\"" + a.kind +
+                         "\" of " + a.measure + " in phase " + a.phase +
+                         ", with the same options): remove one");
+            break;
+          }
+        }
         s.analyses.push_back(a);
       }
     }

@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 
 namespace fs = std::filesystem;
 
@@ -425,8 +426,8 @@ int lock_exclusive(const std::string& path) {
 // damaged (a truncated copy: SQLITE_CORRUPT / SQLITE_NOTADB, or a failing quick_check), an
 // SQLite file without palplab's meta table, or a palplab results database.
 struct Probe {
-  enum Kind { kNotSqlite, kDamaged, kNotPalplab, kPalplab } kind = kNotSqlite;
-  std::string detail;  // kDamaged: SQLite's words
+  enum Kind { kNotSqlite, kDamaged, kNotPalplab, kPalplab, kUnreadable } kind = kNotSqlite;
+  std::string detail;  // kDamaged: SQLite's words; kUnreadable: theirs and the system's reason
 };
 
 // An SQLite URI naming exactly `path`: SQLite decodes %HH and ends the path at '?' or '#', so
@@ -476,10 +477,22 @@ Probe probe_db(const std::string& path) {
   int rc = sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'schema_version'", -1, &st,
                               nullptr);
   if (rc == SQLITE_OK) rc = sqlite3_step(st);
+  // An I/O failure (a full disk or a file-size limit when SQLite makes PATH-shm for a WAL
+  // database) says nothing of the file's content: it is said as such, not as "not palplab's".
+  auto io_failure = [&](int code) {
+    const int c = code & 0xff;
+    if (c != SQLITE_IOERR && c != SQLITE_FULL && c != SQLITE_CANTOPEN && c != SQLITE_NOMEM)
+      return false;
+    const int sys = sqlite3_system_errno(db);
+    out = {Probe::kUnreadable, std::string(sqlite3_errmsg(db)) +
+                                   (sys != 0 ? std::string(": ") + std::strerror(sys) : "")};
+    return true;
+  };
   if (rc == SQLITE_ROW) {
     out.kind = Probe::kPalplab;
   } else if ((rc & 0xff) == SQLITE_CORRUPT || (rc & 0xff) == SQLITE_NOTADB) {
     out = {Probe::kDamaged, sqlite3_errmsg(db)};
+  } else if (io_failure(rc)) {
   } else {
     // No meta table: another SQLite file, or one damaged where the meta table was. Only
     // here (a refusal anyway) does the whole file get checked.
@@ -493,6 +506,8 @@ Probe probe_db(const std::string& path) {
       if (r != "ok") out = {Probe::kDamaged, "quick_check: " + r};
     } else if ((rc & 0xff) == SQLITE_CORRUPT || (rc & 0xff) == SQLITE_NOTADB) {
       out = {Probe::kDamaged, sqlite3_errmsg(db)};
+    } else {
+      io_failure(rc);
     }
   }
   sqlite3_finalize(st);
@@ -575,7 +590,9 @@ void Store::remove_existing(const std::string& path) {
   // "not a palplab results database" would be the wrong reason.)
   require_writable(path, true);
   if (remove_empty_leftover(path)) return;
-  if (const Probe p = probe_db(path); p.kind == Probe::kDamaged)
+  if (const Probe p = probe_db(path); p.kind == Probe::kUnreadable)
+    throw InputError("refusing to replace it: cannot read it (" + p.detail + ")", path);
+  else if (p.kind == Probe::kDamaged)
     throw InputError("refusing to replace it: " + damaged(p.detail) +
                          "; palplab cannot tell whether it is a results database (if it is, "
                          "move or delete it yourself)",
@@ -778,6 +795,8 @@ Store Store::open(const std::string& path, bool exclusive) {
     // immutable open below decides then.)
     const Probe p = probe_db(path);
     if (p.kind == Probe::kDamaged) throw InputError(damaged(p.detail), path);
+    if (p.kind == Probe::kUnreadable)
+      throw InputError("cannot read the database (" + p.detail + ")", path);
     if (p.kind != Probe::kPalplab)
       throw InputError(fs::file_size(path, ec) == 0 ? "is empty: " + not_palplab() : not_palplab(),
                        path);
@@ -1492,6 +1511,7 @@ class Outputs {
     std::ofstream o(part, std::ios::binary);
     if (!o) throw InputError("cannot write (expected a writable directory)", part.string());
     files_.push_back({part, p});
+    on_signal_.push_back(std::make_unique<RemoveOnSignal>(part.string()));
     return o;
   }
   void check(const std::ofstream& o) const {
@@ -1524,6 +1544,7 @@ class Outputs {
                          final.string());
     }
     files_.clear();
+    on_signal_.clear();
     return removed;
   }
   ~Outputs() {
@@ -1533,6 +1554,8 @@ class Outputs {
 
  private:
   std::vector<std::pair<fs::path, fs::path>> files_;
+  // The partial files are removed if the export is interrupted (SIGINT, SIGTERM) before commit.
+  std::vector<std::unique_ptr<RemoveOnSignal>> on_signal_;
   std::vector<fs::path> stale_;
 };
 }  // namespace

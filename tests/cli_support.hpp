@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -47,6 +48,15 @@ inline CliResult run_shell(const std::string& cmdline, const std::filesystem::pa
   const std::string cmd = cmdline + " > " + o.string() + " 2> " + e.string();
   const int st = std::system(cmd.c_str());
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
+}
+
+// Root ignores permissions: as root, a permission test runs palplab as "nobody". The prefix
+// for a command line ("" when not root), or nothing when that is impossible (root without
+// runuser).
+inline std::optional<std::string> unprivileged() {
+  if (::geteuid() != 0) return std::string();
+  if (std::system("runuser -u nobody -- true 2>/dev/null") != 0) return std::nullopt;
+  return std::string("runuser -u nobody -- ");
 }
 
 // Runs `PALPLAB_BINARY args` (stdout/stderr captured in files of `dir`).

@@ -23,6 +23,7 @@
 #include <type_traits>
 
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 #include "engine/haptics/contact.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/materials.hpp"
@@ -817,13 +818,8 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
 
   // Written next to the target and renamed: a failed write never leaves a half file behind.
   const std::string tmp = out + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw InputError("cannot write the scene file", out);
-    f.write(h.data(), static_cast<std::streamsize>(h.size()));
-    f.write(p.data(), static_cast<std::streamsize>(p.size()));
-    if (!f) throw InputError("error while writing the scene file", out);
-  }
+  write_file(tmp, {std::string_view(h.data(), h.size()), std::string_view(p.data(), p.size())},
+             "the scene file");
   std::error_code ec;
   fs::rename(tmp, out, ec);
   if (ec) throw InputError("cannot write the scene file: " + ec.message(), out);

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "results/store.hpp"
+#include "tests/cli_support.hpp"
 #include "tests/sqlite_support.hpp"
 
 namespace fs = std::filesystem;
@@ -73,14 +74,6 @@ Result cli_as(const std::string& as, const std::string& args, const fs::path& di
 
 Result cli(const std::string& args, const fs::path& dir) {
   return cli_as("", args, dir);
-}
-
-// Root ignores permissions: as root, the permission tests run palplab as "nobody". The prefix
-// for cli_as ("" when not root), or nothing when that is impossible (root without runuser).
-std::optional<std::string> unprivileged() {
-  if (geteuid() != 0) return std::string();
-  if (std::system("runuser -u nobody -- true 2>/dev/null") != 0) return std::nullopt;
-  return std::string("runuser -u nobody -- ");
 }
 
 bool has(const std::string& s, const std::string& part) {
@@ -421,15 +414,16 @@ fs::path incomplete_db(const fs::path& d) {
   return db;
 }
 
-// A permission test's set-up: the prefix that runs palplab unprivileged (unprivileged()), a
-// scratch directory `d` with an incomplete run's database `db`, and d/out, which "nobody" can
-// write (its stdout/stderr and outputs). Nothing when palplab cannot run unprivileged.
+// A permission test's set-up: the prefix that runs palplab unprivileged
+// (palplab::testing::unprivileged()), a scratch directory `d` with an incomplete run's database
+// `db`, and d/out, which "nobody" can write (its stdout/stderr and outputs). Nothing when palplab
+// cannot run unprivileged.
 struct AsNobody {
   std::string as;
   fs::path d, db;
 };
 std::optional<AsNobody> as_nobody(const std::string& name) {
-  const std::optional<std::string> as = unprivileged();
+  const std::optional<std::string> as = palplab::testing::unprivileged();
   if (!as) return std::nullopt;
   AsNobody s{*as, tmp(name), {}};
   s.db = incomplete_db(s.d);
@@ -593,6 +587,35 @@ TEST(HardDb, InterruptedRunSaysHowToContinue) {
   const auto st = palplab::results::Store::open(db.string());
   ASSERT_EQ(st.read_sessions().size(), 6u);
   for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
+}
+
+// An export interrupted by SIGTERM left its NAME.partial files in --csv (review 2026-12-06; the
+// next export replaced them, but a user saw cut-off CSVs): they are removed on the signal, the
+// earlier export's files stay as they were, and the export still ends by the signal (143).
+TEST(HardDb, AnInterruptedExportLeavesNoPartialFiles) {
+  auto d = tmp("exportkill");
+  spit(d / "study.json", study(R"([{"id": "G1", "prototype": "A", "size": 2}])", "", 60.0));
+  const fs::path db = d / "r.db", csv = d / "csv";
+  Result r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = cli("export " + db.string() + " --csv " + csv.string(), d);  // the earlier export
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string measures = slurp(csv / "measures.csv");
+  // 360 000 samples: the signal comes while samples.csv.partial is being written.
+  const std::string cmd = std::string(PALPLAB_BINARY) + " export " + db.string() + " --csv " +
+                          csv.string() + " --samples 2>" + (d / "err.txt").string() + " >/dev/null";
+  const std::string script = "(" + cmd + ") & pid=$!; i=0; while [ ! -e " +
+                             (csv / "samples.csv.partial").string() +
+                             " ] && [ $i -lt 2000 ]; do sleep 0.005; i=$((i+1)); done; "
+                             "kill -TERM $pid; wait $pid; echo $? > " +
+                             (d / "rc.txt").string();
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  if (slurp(d / "rc.txt") == "0\n") GTEST_SKIP() << "the export finished before the signal";
+  EXPECT_EQ(slurp(d / "rc.txt"), "143\n") << slurp(d / "err.txt");
+  for (const auto& e : fs::directory_iterator(csv))
+    EXPECT_EQ(e.path().extension(), ".csv") << e.path() << " left behind";
+  EXPECT_FALSE(fs::exists(csv / "samples.csv"));
+  EXPECT_EQ(slurp(csv / "measures.csv"), measures);
 }
 
 // `--samples` was not stored: a resume with the default stored 1 kHz samples for the rest of
@@ -989,4 +1012,67 @@ TEST(HardCli, AnIdentificationLongerThanEverySessionIsWarnedOf) {
   r = cli("validate " + (d / "ok.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.err, "warning")) << r.err;
+}
+
+// Review finding (2026-12-06): a palpation onset above the feature's target force validated
+// without a word; `palpations` then counts only presses beyond the target. Valid, with a warning.
+TEST(HardCli, APalpationOnsetAboveTheTargetForceIsWarnedOf) {
+  auto d = tmp("onset");
+  std::string s = study(kGroups, "", 20.0);
+  s.replace(s.find("\"feature\": \"ovary_left\","), 24,
+            "\"feature\": \"ovary_left\", \"palpation_onset\": 3,");
+  spit(d / "onset.json", s);
+  Result r = cli("validate " + (d / "onset.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err,
+                  "warning: $.task.palpation_onset: 3 N is above the feature's target force "
+                  "(MPF 2.5 N, SFT 3.5 N): a press to the target is not counted as a palpation"))
+      << r.err;
+  s.replace(s.find("\"palpation_onset\": 3"), 20, "\"palpation_onset\": 2.5");  // at the MPF
+  spit(d / "at.json", s);
+  r = cli("validate " + (d / "at.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.err, "warning")) << r.err;
+}
+
+// Review finding (2026-12-06): the same analysis declared twice (a copy-paste) validated and was
+// run, reported and counted in power twice. Exit 2 naming both entries; the same test with
+// another option (Student instead of Welch) is a different analysis.
+TEST(HardCli, TheSameAnalysisTwiceIsRefused) {
+  auto d = tmp("dupanalysis");
+  const std::string one =
+      R"({"kind": "pairwise_t", "measure": "palpation_force", "phase": "post"})";
+  spit(d / "dup.json",
+       study(kGroups,
+             R"( "analyses": [)" + one +
+                 R"(, {"kind": "anova_oneway", "measure": "palpation_force", "phase": "post"}, )" +
+                 one + "],"));
+  Result r = cli("validate " + (d / "dup.json").string(), d);
+  EXPECT_EXIT2_WITH(r,
+                    "$.analyses[2]: the same analysis as $.analyses[0] (\"pairwise_t\" of "
+                    "palpation_force in phase post, with the same options): remove one");
+  spit(
+      d / "other.json",
+      study(
+          kGroups,
+          R"( "analyses": [)" + one +
+              R"(, {"kind": "pairwise_t", "measure": "palpation_force", "phase": "post", "welch": false}],)"));
+  r = cli("validate " + (d / "other.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// Review finding (2026-12-06): `run STUDY --seed -1` (run has no --seed) was CLI11's "The
+// following arguments were not expected: -1 --seed", the words reversed. They are said in the
+// order given, with the command.
+TEST(HardCli, UnexpectedArgumentsAreSaidInTheOrderGiven) {
+  auto d = tmp("extras");
+  Result r = cli("run study.json --seed -1 --db x.db", d);
+  EXPECT_EXIT2_WITH(r,
+                    "error: palplab run: unexpected argument(s): --seed -1 (no such option, "
+                    "or more arguments than the command takes; `palplab run --help` lists "
+                    "what it takes)");
+  r = cli("validate a.json b.json", d);
+  EXPECT_EXIT2_WITH(r, "error: palplab validate: unexpected argument(s): b.json");
+  r = cli("scene info x.psim y.psim", d);
+  EXPECT_EXIT2_WITH(r, "error: palplab scene info: unexpected argument(s): y.psim");
 }

@@ -577,7 +577,7 @@ TEST(Power, EditedNamesStayTextAndHugeEffectsStayFinite) {
 
 // A power.md the user cannot read is not called "a file, not a palplab power table" (its kind is
 // unknown): the message says it cannot be read. Root reads every file, so as root the command
-// runs as the user nobody (setpriv, util-linux).
+// runs as the user nobody (palplab::testing::unprivileged).
 TEST(Power, AnUnreadableOutputFileIsSaidToBeUnreadable) {
   auto d = scratch_dir("merge_unreadable");
   fs::permissions(d, fs::perms::all);  // nobody's merge reads its input here
@@ -585,9 +585,9 @@ TEST(Power, AnUnreadableOutputFileIsSaidToBeUnreadable) {
   fs::create_directories(d / "mine");
   std::ofstream(d / "mine" / "power.md") << "# Notes on power\n";
   fs::permissions(d / "mine" / "power.md", fs::perms::none);
-  const std::string as_user =
-      ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
-  const auto r = run_shell(as_user + PALPLAB_BINARY + " merge " + (d / "r.jsonl").string() +
+  const std::optional<std::string> as_user = palplab::testing::unprivileged();
+  if (!as_user) GTEST_SKIP() << "running as root without runuser: cannot test as another user";
+  const auto r = run_shell(*as_user + PALPLAB_BINARY + " merge " + (d / "r.jsonl").string() +
                                " --out " + (d / "mine").string(),
                            d);
   expect_exit2(r, {"--out: \"" + (d / "mine" / "power.md").string() +

@@ -230,3 +230,96 @@ TEST_F(ReportStills, PrototypeFileGoneIsDrawnFromTheStoredCopyOrSkippedWithWhy) 
             std::string::npos);
   EXPECT_FALSE(fs::exists(dir_ / "moved2" / "stills" / "A_pressed.png"));
 }
+
+// A report written into a directory that holds an earlier report leaves only its own figures
+// and stills: the earlier report's figures and the stills its stills.json listed that this
+// report does not write are removed and named on stdout (review 2026-12-06: another study's
+// report kept its figures and stills beside the new one); the user's files are never touched.
+TEST_F(ReportStills, AnEarlierReportsFiguresAndStillsDoNotStayBesideTheNewOne) {
+  const fs::path rep = dir_ / "again";
+  CliResult r = report("again", "--still-size 64x48");
+  ASSERT_EQ(r.code, 0) << r.err;
+  if (r.err.find("stills skipped: no headless OpenGL") != std::string::npos)
+    GTEST_SKIP() << "no EGL device on this machine: " << r.err;
+  EXPECT_EQ(r.out.find("removed"), std::string::npos) << r.out;  // nothing earlier
+  // An earlier report of another study: a figure and a prototype Z this one does not have.
+  fs::copy_file(rep / "figures" / "force_traces.svg", rep / "figures" / "other_study.svg");
+  fs::copy_file(rep / "stills" / "A_pressed.png", rep / "stills" / "Z_pressed.png");
+  fs::copy_file(rep / "stills" / "A_rest.png", rep / "stills" / "Z_rest.png");
+  auto side = nlohmann::json::parse(slurp(rep / "stills" / "stills.json"));
+  side["stills"].push_back({{"prototype", "Z"},
+                            {"pressed", "stills/Z_pressed.png"},
+                            {"rest", "stills/Z_rest.png"},
+                            {"escape", "stills/../report.md"}});
+  side["stills"].push_back({{"prototype", "Y"}, {"pressed", "../report.md"}});
+  std::ofstream(rep / "stills" / "stills.json") << side.dump(2);
+  // The user's own files there, and a file named like a still that no listing names.
+  std::ofstream(rep / "figures" / "notes.txt") << "mine\n";
+  std::ofstream(rep / "stills" / "readme.txt") << "mine\n";
+  fs::copy_file(rep / "stills" / "A_rest.png", rep / "stills" / "X_rest.png");
+
+  // X_rest.png is refused as not palplab's (no listing names it) unless --overwrite.
+  r = report("again", "--still-size 64x48");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("X_rest.png"), std::string::npos) << r.err;
+  r = report("again", "--still-size 64x48 --overwrite");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("removed 3 files of an earlier report in " + rep.string() +
+                       " that this report does not have:\n  " +
+                       (rep / "figures" / "other_study.svg").string()),
+            std::string::npos)
+      << r.out;
+  for (const char* gone : {"figures/other_study.svg", "stills/Z_pressed.png", "stills/Z_rest.png"})
+    EXPECT_FALSE(fs::exists(rep / gone)) << gone;
+  for (const char* kept :
+       {"figures/notes.txt", "stills/readme.txt", "stills/X_rest.png", "stills/A_pressed.png",
+        "stills/B_rest.png", "figures/force_traces.svg", "report.md"})
+    EXPECT_TRUE(fs::exists(rep / kept)) << kept;
+
+  // A report without stills leaves none of the earlier report's stills, nor their listing.
+  r = report("again", "--no-stills");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("removed 5 files of an earlier report"), std::string::npos) << r.out;
+  for (const char* gone : {"stills/A_pressed.png", "stills/A_rest.png", "stills/B_pressed.png",
+                           "stills/B_rest.png", "stills/stills.json"})
+    EXPECT_FALSE(fs::exists(rep / gone)) << gone;
+  for (const char* kept : {"stills/readme.txt", "stills/X_rest.png", "figures/force_traces.svg"})
+    EXPECT_TRUE(fs::exists(rep / kept)) << kept;
+}
+
+// A still that cannot be written (a full disk; here a file-size limit of 64 KiB, below the
+// PNGs at 800×600) is named with the system's reason, without libpng's own "libpng error: Write
+// Error" line, and no cut-off PNG is left; the report is written without stills and says why
+// (review 2026-12-06). A limit below SQLite's 32 KiB -shm file stops the report at the
+// database, said as an I/O failure (it was "not a palplab results database"). sh's `ulimit -f`
+// counts 512-byte blocks.
+TEST_F(ReportStills, AStillThatCannotBeWrittenIsNamedWithTheReason) {
+  const fs::path out = dir_ / "full";
+  auto limited = [&](int blocks) {
+    return run_shell("trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " +
+                         std::string(PALPLAB_BINARY) + " report " + (dir_ / "s.db").string() +
+                         " --out " + out.string() + " --still-size 800x600",
+                     dir_);
+  };
+  CliResult r = limited(128);
+  if (r.err.find("stills skipped: no headless OpenGL") != std::string::npos)
+    GTEST_SKIP() << "no EGL device on this machine: " << r.err;
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  for (const char* id : {"A", "B"}) {
+    EXPECT_NE(r.err.find("palplab report: no still of prototype " + std::string(id) + ": " +
+                         (out / "stills" / (std::string(id) + "_pressed.png")).string() +
+                         ": cannot write the PNG (File too large)\n"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(out / "stills" / (std::string(id) + "_pressed.png"))) << id;
+  }
+  EXPECT_EQ(r.err.find("libpng"), std::string::npos) << r.err;
+  EXPECT_NE(slurp(out / "report.md").find("## Example force traces"), std::string::npos);
+
+  r = limited(1);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find((dir_ / "s.db").string() +
+                       ": cannot read the database (disk I/O error: File too large)"),
+            std::string::npos)
+      << r.err;
+}

@@ -335,6 +335,29 @@ TEST(CliScene, RunWithSceneFilesStoresTheSameResults) {
                       (dir / "A.psim").string() + " --scene " + (dir / "B.psim").string(),
                   dir);
   ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.err, "warning")) << r.err;
+  // A --scene that does nothing is said (review 2026-12-06: it passed without a word): the same
+  // file twice, and one of a prototype the study does not use (a study of A alone).
+  const std::string a_only = (dir / "a_only.json").string();
+  std::ofstream(a_only) << R"({"palplab_study": 1, "id": "a_only", "title": "A alone", "seed": 1,
+    "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+    "groups": [{"id": "G", "prototype": "A", "size": 1}],
+    "phases": [{"id": "t", "kind": "post_training", "sessions": 1, "session_duration": 0.1}]})";
+  const std::string a_psim = (dir / "A.psim").string(), b_psim = (dir / "B.psim").string();
+  r = run_palplab("run " + a_only + " --db " + (dir / "a.db").string() + " --quiet --scene " +
+                      a_psim + " --scene " + b_psim + " --scene " + a_psim,
+                  dir);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "warning: --scene \"" + b_psim + "\" was built from " +
+                             fs::absolute(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "B.json")
+                                 .lexically_normal()
+                                 .string() +
+                             ", a prototype this study does not use: it has no effect on the run"))
+      << r.err;
+  EXPECT_TRUE(
+      has(r.err, "warning: --scene \"" + a_psim + "\" is given more than once (it is used once)"))
+      << r.err;
+  EXPECT_FALSE(has(r.err, "--scene \"" + a_psim + "\" was built")) << r.err;
   for (const char* db : {"plain", "psim"}) {
     r = run_palplab(std::string("export ") + (dir / (std::string(db) + ".db")).string() +
                         " --csv " + (dir / db).string(),

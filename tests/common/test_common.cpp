@@ -33,3 +33,16 @@ TEST(Seed, DerivedSeedsAreDistinctAndStable) {
   EXPECT_NE(derive_seed(42, "exploration"), derive_seed(42, "perception"));
   EXPECT_NE(derive_seed(1, 2, 3), derive_seed(1, 3, 2));
 }
+
+// Text from user files in Markdown (power.md, report.md cells): what could end a cell, open
+// markup or an entity, or escape the next character is escaped; what cannot stays as written.
+TEST(MarkdownText, EscapesWhatCouldBeMarkupAndNothingElse) {
+  EXPECT_EQ(palplab::markdown_text("<script>x</script> | `y`"),
+            "\\<script>x\\</script> \\| \\`y\\`");
+  EXPECT_EQ(palplab::markdown_text("<!-- c --> <?php <https://x> a\\b"),
+            "\\<!-- c --> \\<?php \\<https://x> a\\\\b");
+  EXPECT_EQ(palplab::markdown_text("&lt; &#60; &"), "\\&lt; \\&#60; &");
+  // p-values, comparisons and the report's own words are unchanged.
+  for (const char* kept : {"< .001", "p < 0.05", "A & B", "2 <= 3", "η² [95% CI]", "G1 – G2", "<"})
+    EXPECT_EQ(palplab::markdown_text(kept), kept);
+}

@@ -7,9 +7,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 
 namespace palplab::engine {
 
@@ -108,6 +110,9 @@ void write_trace(const std::string& path, const Trace& trace) {
   const auto st = fs::symlink_status(path, ec);
   const bool direct = fs::exists(st) && !fs::is_regular_file(st);
   const std::string tmp = direct ? path : path + ".partial";
+  // Removed if the process is interrupted before the rename (not the target written directly).
+  std::optional<RemoveOnSignal> partial;
+  if (!direct) partial.emplace(tmp);
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f)
     throw InputError(path + ": cannot write the trace: " + std::strerror(errno) +

@@ -1,0 +1,27 @@
+#pragma once
+// Output files that are not yet whole (an export's NAME.partial, a trace's FILE.partial, a
+// report file being written) are removed when the process is ended by SIGINT, SIGTERM or SIGHUP
+// while they are registered, so that an interrupted command leaves no cut-off file behind; the
+// process then ends by the same signal, as it would have without the handler (exit status
+// 128 + signal in a shell).
+//
+// The handler is installed at each registration, for each of those signals whose
+// disposition is still the default: a signal the caller ignores (nohup) stays ignored, and a
+// command with its own handler (`run`) keeps it. At most 64 files are registered at once (a
+// further one is simply not removed on a signal); paths longer than PATH_MAX are not registered.
+#include <string>
+
+namespace palplab {
+
+class RemoveOnSignal {
+ public:
+  explicit RemoveOnSignal(const std::string& path);
+  ~RemoveOnSignal();  // deregisters (the file is whole, renamed or removed by its writer)
+  RemoveOnSignal(const RemoveOnSignal&) = delete;
+  RemoveOnSignal& operator=(const RemoveOnSignal&) = delete;
+
+ private:
+  int slot_ = -1;
+};
+
+}  // namespace palplab

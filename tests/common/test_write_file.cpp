@@ -1,0 +1,100 @@
+// Writing a whole output file (common/write_file.hpp): every failure is an InputError with the
+// system's reason, also one that happens only when the buffered bytes are flushed (a file smaller
+// than the stdio buffer on a full disk: an ofstream checked before its close said nothing).
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "common/input_error.hpp"
+#include "common/write_file.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string error_of(const std::string& path, const std::string& content) {
+  try {
+    palplab::write_file(path, content, "the report");
+  } catch (const palplab::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+fs::path scratch() {
+  const fs::path d =
+      fs::temp_directory_path() / ("palplab_write_file_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST(WriteFile, WritesThePartsInOrderAndReplacesAnEarlierFile) {
+  const fs::path d = scratch();
+  const std::string f = (d / "out.txt").string();
+  std::ofstream(f) << "an earlier, longer content\n";
+  palplab::write_file(f, {"abc", std::string_view("de\0f", 4), ""}, "the file");
+  EXPECT_EQ(slurp(f), std::string("abcde\0f", 7));
+  palplab::write_file(f, "", "the file");
+  EXPECT_TRUE(fs::exists(f));
+  EXPECT_EQ(fs::file_size(f), 0u);
+  fs::remove_all(d);
+}
+
+TEST(WriteFile, EveryFailureNamesTheFileAndTheReason) {
+  const fs::path d = scratch();
+  EXPECT_EQ(error_of((d / "no" / "x.md").string(), "x"),
+            (d / "no" / "x.md").string() + ": cannot write the report (No such file or directory)");
+  EXPECT_EQ(error_of(d.string(), "x"), d.string() + ": cannot write the report (Is a directory)");
+  EXPECT_NE(error_of("", "x").find("an empty file name"), std::string::npos);
+  // A device is written to, never removed.
+  if (fs::exists("/dev/full")) {
+    EXPECT_EQ(error_of("/dev/full", "x"),
+              "/dev/full: cannot write the report (No space left on device)");
+    EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  }
+  fs::remove_all(d);
+}
+
+// A file-size limit of 1000 bytes makes the disk "full" at byte 1000: 3000 bytes (below the
+// stdio buffer, so the failure comes at the flush) and 100 000 bytes (at a write) both fail with
+// the reason, and the cut-off file is removed.
+TEST(WriteFile, AFailureAtTheFlushIsSaidAndTheCutOffFileRemoved) {
+  const fs::path d = scratch();
+  rlimit old{};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
+  if (old.rlim_max != RLIM_INFINITY && old.rlim_max < 1000) GTEST_SKIP() << "hard limit below 1000";
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit small = old;
+  small.rlim_cur = 1000;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string e3k, e100k;
+  e3k = error_of((d / "small.md").string(), std::string(3000, 'a'));
+  e100k = error_of((d / "big.md").string(), std::string(100000, 'b'));
+  const std::string ok = error_of((d / "fits.md").string(), std::string(999, 'c'));
+  ::setrlimit(RLIMIT_FSIZE, &old);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_EQ(e3k, (d / "small.md").string() + ": cannot write the report (File too large)");
+  EXPECT_EQ(e100k, (d / "big.md").string() + ": cannot write the report (File too large)");
+  EXPECT_EQ(ok, "");
+  EXPECT_FALSE(fs::exists(d / "small.md"));
+  EXPECT_FALSE(fs::exists(d / "big.md"));
+  EXPECT_EQ(fs::file_size(d / "fits.md"), 999u);
+  fs::remove_all(d);
+}
