@@ -27,6 +27,7 @@
 #include "app/scene_option.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
 #include "engine/haptics/devices/monitored_device.hpp"
 #include "engine/haptics/devices/mouse_device.hpp"
@@ -48,10 +49,11 @@ extern "C" void on_sigint(int) {
 
 // A virtual run interrupted (SIGINT, SIGTERM) stops at once, as the default action would: every
 // session completed before it is already stored (each in its own transaction), the one running
-// is not. The handler only says so and how to continue (write(2) and _exit are
+// is not. The handler only says so and how to continue (write(2), unlink and _exit are
 // async-signal-safe; the text is made before the run).
 std::string g_interrupt_text;
 extern "C" void on_interrupt_virtual(int sig) {
+  palplab::remove_registered_files();  // a --record-trace FILE.partial being written
   const ssize_t ignored = ::write(2, g_interrupt_text.data(), g_interrupt_text.size());
   (void)ignored;
   ::_exit(128 + sig);

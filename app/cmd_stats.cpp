@@ -202,6 +202,18 @@ bool is_report_html(const std::string& path) {
 // --overwrite (app/output_dir.hpp).
 void check_report_out(const ReportArgs& a) {
   using namespace palplab::app;
+  // The report writes into (and removes an earlier report's files from) DIR/figures and
+  // DIR/stills: a link there would make it write or remove files outside --out.
+  for (const char* sub : {"figures", "stills"}) {
+    const std::string p = (std::filesystem::path(a.out) / sub).string();
+    std::error_code ec;
+    if (std::filesystem::is_symlink(std::filesystem::symlink_status(p, ec)))
+      throw palplab::InputError(
+          palplab::SourceLocation{"--out"},
+          "\"" + p + "\" is a symbolic link; the report writes its " + sub +
+              " there and never through a link (it could write or remove files outside --out): "
+              "remove the link or choose another --out");
+  }
   const std::vector<CommandInput> inputs{{"the results database", a.db}};
   const std::string contents = "report.md, report.html, figures/ and stills/";
   require_replaceable_dir_outputs("--out", a.out, contents,
@@ -285,10 +297,14 @@ std::vector<std::filesystem::path> earlier_report_files(const std::string& out) 
   for (const auto& s : js["stills"])
     for (const char* key : {"pressed", "rest"}) {
       if (!s.is_object() || !s.contains(key) || !s[key].is_string()) continue;
-      // Only a file directly in DIR/stills, as the report names them ("stills/A_pressed.png").
+      // Only a still directly in DIR/stills, named as the report names them
+      // ("stills/A_pressed.png"): any other name a listing holds is left alone.
       const fs::path rel = s[key].get<std::string>();
-      if (rel.parent_path() != "stills" || rel.filename().empty() || rel.filename() == ".." ||
-          rel.filename() == ".")
+      const std::string name = rel.filename().string();
+      auto ends_with = [&](const std::string& t) {
+        return name.size() > t.size() && name.compare(name.size() - t.size(), t.size(), t) == 0;
+      };
+      if (rel.parent_path() != "stills" || !(ends_with("_pressed.png") || ends_with("_rest.png")))
         continue;
       const fs::path p = fs::path(out) / "stills" / rel.filename();
       if (regular(p)) found.push_back(p.lexically_normal());
@@ -299,28 +315,33 @@ std::vector<std::filesystem::path> earlier_report_files(const std::string& out) 
 // After the report is written: the files of an earlier report (earlier_report_files) that this
 // one did not write are removed, so that DIR holds one report (review 2026-12-06: a report into
 // a directory with another study's report kept that study's figures and stills beside it).
-std::vector<std::string> remove_stale_report_files(
-    const std::vector<std::filesystem::path>& earlier, const palplab::analysis::ReportFiles& files,
-    const std::string& db) {
+struct StaleFiles {
+  std::vector<std::string> removed;
+  std::vector<palplab::Problem> kept;  // could not be removed (said after the summary: exit 2)
+};
+StaleFiles remove_stale_report_files(const std::vector<std::filesystem::path>& earlier,
+                                     const palplab::analysis::ReportFiles& files,
+                                     const std::string& db) {
   namespace fs = std::filesystem;
   std::set<fs::path> written;
   for (const auto& f : files.figures) written.insert(fs::path(f).lexically_normal());
   for (const auto& f : files.stills) written.insert(fs::path(f).lexically_normal());
   if (!files.stills_listing.empty())
     written.insert(fs::path(files.stills_listing).lexically_normal());
-  std::vector<std::string> removed;
+  StaleFiles out;
   for (const auto& p : earlier) {
     std::error_code ec;
     if (written.count(p) || fs::equivalent(p, db, ec)) continue;  // the database: never
     fs::remove(p, ec);
     if (ec)
-      throw palplab::InputError(
-          "cannot remove this file of an earlier report, which the new report does not have (" +
-              ec.message() + "); the new report is written, remove the file by hand",
-          p.string());
-    removed.push_back(p.string());
+      out.kept.push_back({palplab::SourceLocation{p.string()},
+                          "cannot remove this file of an earlier report, which the new report "
+                          "does not have (" +
+                              ec.message() + "); the new report is written: remove it by hand"});
+    else
+      out.removed.push_back(p.string());
   }
-  return removed;
+  return out;
 }
 
 palplab::app::CommandRegistration reg_report{
@@ -360,7 +381,7 @@ palplab::app::CommandRegistration reg_report{
         if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
         const auto earlier = earlier_report_files(a->out);
         auto files = palplab::analysis::write_report(a->db, a->out, opt);
-        const auto removed = remove_stale_report_files(earlier, files, a->db);
+        const StaleFiles stale = remove_stale_report_files(earlier, files, a->db);
         if (!files.stills_skipped.empty())
           std::cerr << "palplab report: stills skipped: "
                     << palplab::escape_controls(files.stills_skipped, false) << "\n";
@@ -378,6 +399,7 @@ palplab::app::CommandRegistration reg_report{
         if (files.still_figures > 0)
           std::cout << " (" << std::lround(files.stills_seconds * 1000) << " ms)";
         std::cout << "\n  " << files.markdown << "\n  " << files.html << "\n";
+        const auto& removed = stale.removed;
         if (!removed.empty()) {
           std::cout << "removed " << removed.size() << (removed.size() == 1 ? " file" : " files")
                     << " of an earlier report in " << palplab::escape_controls(a->out, false)
@@ -385,6 +407,7 @@ palplab::app::CommandRegistration reg_report{
           for (const auto& r : removed) std::cout << "\n  " << palplab::escape_controls(r, false);
           std::cout << "\n";
         }
+        if (!stale.kept.empty()) throw palplab::InputError(stale.kept);
         *code = 0;
       });
     }};

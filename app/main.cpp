@@ -4,6 +4,7 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -46,6 +47,16 @@ void tune_allocator() {
   if (!std::getenv("MALLOC_TRIM_THRESHOLD_")) mallopt(M_TRIM_THRESHOLD, 128 << 20);
 }
 
+// "palplab CMD SUB" of the command line being parsed (the deepest subcommand given).
+std::string deepest_command(const CLI::App& cli) {
+  std::string command = "palplab";
+  for (const CLI::App* sub = &cli; !sub->get_subcommands().empty();) {
+    sub = sub->get_subcommands().back();
+    command += " " + sub->get_name();
+  }
+  return command;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,18 +89,47 @@ int main(int argc, char** argv) {
     return cli.exit(e);
   } catch (const CLI::ExtrasError&) {
     // CLI11 names the extra arguments in reverse order ("not expected: -1 --seed" for
-    // `run --seed -1`): they are said in the order given, with the command they were given to.
-    std::string command = "palplab";
-    for (const CLI::App* sub = &cli; !sub->get_subcommands().empty();) {
-      sub = sub->get_subcommands().back();
-      command += " " + sub->get_name();
+    // `run --seed -1`): they are said in the order given, with the command they were given to,
+    // and an unknown option first of all.
+    const bool top = !cli.remaining(false).empty();
+    const std::string command = top ? "palplab" : deepest_command(cli);
+    std::string extras, unknown;
+    for (const auto& a : cli.remaining(true)) {
+      const std::string shown = palplab::escape_controls(a, false);
+      extras += (extras.empty() ? "" : " ") + shown;
+      const bool option = a.size() > 1 && a[0] == '-' &&
+                          !(std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.');
+      if (option && unknown.empty()) unknown = shown;
     }
-    std::string extras;
-    for (const auto& a : cli.remaining(true))
-      extras += (extras.empty() ? "" : " ") + palplab::escape_controls(a, false);
-    std::cerr << "error: " << command << ": unexpected argument(s): " << extras
-              << " (no such option, or more arguments than the command takes; `" << command
-              << " --help` lists what it takes)\n";
+    if (!unknown.empty())
+      std::cerr << "error: " << command << ": unknown option " << unknown << " (`" << command
+                << " --help` lists its options)\n";
+    else
+      std::cerr << "error: " << command << ": unexpected argument(s): " << extras
+                << " (more arguments than the command takes; `" << command
+                << " --help` lists what it takes)\n";
+    return 2;
+  } catch (const CLI::RequiredError& e) {
+    // A command group given without one of its commands, or with a word that is none of them
+    // (`palplab mesh bogus`): CLI11 said only "A subcommand is required".
+    const CLI::App* sub = &cli;
+    while (!sub->get_subcommands().empty()) sub = sub->get_subcommands().back();
+    if (sub != &cli && !sub->get_subcommands({}).empty() &&
+        std::string(e.what()).find("subcommand") != std::string::npos) {
+      std::string names;
+      for (const CLI::App* c : sub->get_subcommands({}))
+        names += (names.empty() ? "" : ", ") + c->get_name();
+      const auto rest = cli.remaining(true);
+      const std::string command = deepest_command(cli);
+      std::cerr << "error: " << command << ": "
+                << (rest.empty()
+                        ? std::string("which command?")
+                        : "unknown command '" + palplab::escape_controls(rest.front(), false) + "'")
+                << " — its commands are: " << names << " (`" << command
+                << " --help` describes them)\n";
+      return 2;
+    }
+    cli.exit(e);
     return 2;
   } catch (const CLI::ParseError& e) {
     // Usage errors are bad input too: exit 2 whatever CLI11's own code would be.

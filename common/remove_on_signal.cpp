@@ -26,8 +26,7 @@ Slot g_slots[kSlots];
 std::mutex g_claim;  // registrations from several threads claim distinct slots
 
 extern "C" void remove_registered_and_reraise(int sig) {
-  for (auto& s : g_slots)
-    if (s.used.load(std::memory_order_acquire)) ::unlink(s.path);
+  remove_registered_files();
   std::signal(sig, SIG_DFL);
   std::raise(sig);
 }
@@ -43,6 +42,11 @@ void install() {
 }
 
 }  // namespace
+
+void remove_registered_files() noexcept {
+  for (auto& s : g_slots)
+    if (s.used.load(std::memory_order_acquire)) ::unlink(s.path);
+}
 
 RemoveOnSignal::RemoveOnSignal(const std::string& path) {
   if (path.empty() || path.size() >= PATH_MAX) return;

@@ -13,6 +13,10 @@
 
 namespace palplab {
 
+// Unlinks every registered file now: for a command's own signal handler that ends the process
+// (`run`'s), which replaces the one installed here. Async-signal-safe.
+void remove_registered_files() noexcept;
+
 class RemoveOnSignal {
  public:
   explicit RemoveOnSignal(const std::string& path);

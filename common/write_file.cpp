@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 
 #include "common/input_error.hpp"
@@ -12,29 +13,39 @@
 
 namespace palplab {
 
+namespace fs = std::filesystem;
+
 void write_file(const std::string& path, std::string_view content, const std::string& what) {
   write_file(path, {content}, what);
 }
 
 void write_file(const std::string& path, std::initializer_list<std::string_view> parts,
                 const std::string& what) {
-  // Only a regular file is removed: never a device or a FIFO named as the output (/dev/full).
-  bool regular = false;
   auto fail = [&](int why) {
-    if (regular) std::remove(path.c_str());
     throw InputError("cannot write " + what + " (" +
                          (why != 0 ? std::string(std::strerror(why)) : "a write failed") + ")",
                      path);
   };
   if (path.empty()) throw InputError("an empty file name, expected where to write " + what);
-  errno = 0;
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) fail(errno);
+  // A device, a FIFO or a directory (the error is the system's) is written directly and never
+  // removed (/dev/full, /dev/stdout). A regular file — or the file a link points to — is written
+  // beside itself as FILE.partial and renamed over it when whole: a failure or an interruption
+  // leaves the earlier file as it was (an in-place write truncated it first).
   struct stat st {};
-  regular = ::fstat(::fileno(f), &st) == 0 && S_ISREG(st.st_mode);
-  // An interruption while the bytes are written removes the cut-off file, as a failure does.
-  std::optional<RemoveOnSignal> cut_off;
-  if (regular) cut_off.emplace(path);
+  const bool exists = ::stat(path.c_str(), &st) == 0;
+  const bool direct = exists && !S_ISREG(st.st_mode);
+  std::string target = path;
+  if (exists && !direct) {
+    std::error_code ec;
+    const fs::path resolved = fs::canonical(path, ec);  // through links: the link stays a link
+    if (!ec) target = resolved.string();
+  }
+  const std::string tmp = direct ? path : target + ".partial";
+  std::optional<RemoveOnSignal> partial;
+  if (!direct) partial.emplace(tmp);
+  errno = 0;
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) fail(errno);
   errno = 0;
   bool written = true;
   for (const auto& part : parts)
@@ -43,8 +54,16 @@ void write_file(const std::string& path, std::initializer_list<std::string_view>
   const int write_errno = errno;
   errno = 0;
   const bool closed = std::fclose(f) == 0;
-  if (!written) fail(write_errno);
-  if (!closed) fail(errno);
+  const int close_errno = errno;
+  if (!written || !closed) {
+    if (!direct) std::remove(tmp.c_str());
+    fail(!written ? write_errno : close_errno);
+  }
+  if (!direct && std::rename(tmp.c_str(), target.c_str()) != 0) {
+    const int why = errno;
+    std::remove(tmp.c_str());
+    fail(why);
+  }
 }
 
 }  // namespace palplab

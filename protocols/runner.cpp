@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "common/seed.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/devices/tool_switch.hpp"
@@ -534,21 +535,27 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
       // segfault or an "internal error").
       if (s.trainee == "human") continue;
       const auto j = nlohmann::json::parse(s.state_after, nullptr, false);
-      try {
-        if (j.is_discarded())
-          throw std::invalid_argument(
-              "text that is not JSON: " +
-              nlohmann::json(s.state_after.substr(0, 40) + (s.state_after.size() > 40 ? "..." : ""))
-                  .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
-        (void)pm::TraineeState::from_json(j);
-      } catch (const std::invalid_argument& e) {
+      std::string problems;
+      if (j.is_discarded()) {
+        problems =
+            "text that is not JSON: " +
+            nlohmann::json(s.state_after.substr(0, 40) + (s.state_after.size() > 40 ? "..." : ""))
+                .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+      } else {
+        // The one validator; the problems are said by JSON path (the column's line:column says
+        // nothing more in one line of JSON).
+        palplab::json::Checker c("state_after", s.state_after);
+        (void)pm::TraineeState::from_json(j, c);
+        for (const auto& p : c.problems())
+          problems += (problems.empty() ? "" : "; ") + p.where.json_path + ": " + p.what;
+      }
+      if (!problems.empty())
         throw InputError("table sessions, row (session " + std::to_string(s.session) +
                              ", participant " + s.participant + ", phase " + s.phase +
-                             ") column state_after: " + e.what() +
+                             ") column state_after: " + problems +
                              " (not the virtual trainee's state palplab run wrote); resume needs "
                              "the database palplab run wrote",
                          opt.db);
-      }
     }
     // Sessions are written in order per participant: what is stored must be the first k of the
     // plan's sessions of a planned participant (a row deleted or edited by hand would otherwise

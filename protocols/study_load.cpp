@@ -610,6 +610,7 @@ Study parse_study(const std::string& text, const std::string& file,
     if (!an->is_array()) {
       c.err("$.analyses", std::string("expected an array, got ") + kind_name(*an));
     } else {
+      std::vector<std::size_t> source;  // s.analyses[k] is $.analyses[source[k]]
       for (std::size_t i = 0; i < an->size(); ++i) {
         std::string A = path_index("$.analyses", i);
         const json& aj = (*an)[i];
@@ -662,13 +663,14 @@ Study parse_study(const std::string& text, const std::string& file,
           if (!a.kind.empty() && !a.measure.empty() && !a.phase.empty() && a.kind == b.kind &&
               a.measure == b.measure && a.phase == b.phase && a.welch == b.welch &&
               a.pooled == b.pooled && a.pool_sessions == b.pool_sessions && a.margin == b.margin) {
-            c.err(A, "the same analysis as " + path_index("$.analyses", k) + " (\"" + a.kind +
-                         "\" of " + a.measure + " in phase " + a.phase +
+            c.err(A, "the same analysis as " + path_index("$.analyses", source[k]) + " (\"" +
+                         a.kind + "\" of " + a.measure + " in phase " + a.phase +
                          ", with the same options): remove one");
             break;
           }
         }
         s.analyses.push_back(a);
+        source.push_back(i);
       }
     }
   }

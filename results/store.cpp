@@ -785,6 +785,10 @@ Store Store::open(const std::string& path, bool exclusive) {
   if (!fs::exists(path, ec)) throw InputError("no such database", path);
   if (fs::is_directory(path, ec))
     throw InputError("is a directory (expected a results database file)", path);
+  // A FIFO or a device would block the first read (a hang, review 2026-12-06) or be no file.
+  if (!fs::is_regular_file(path, ec))
+    throw InputError("is not a regular file (a FIFO or a device; expected a results database file)",
+                     path);
   if (::access(path.c_str(), R_OK) != 0)
     throw InputError(std::string("cannot read the database: ") + std::strerror(errno), path);
   // A writer is refused before the probe below opens the file: that read-only open creates

@@ -816,13 +816,9 @@ SceneFileInfo write_scene_file(const std::string& out, const SceneConfig& cfg) {
   const Digest hd = sha256(h.data(), kHeaderCheckAt);
   std::memcpy(h.data() + kHeaderCheckAt, hd.data(), 8);
 
-  // Written next to the target and renamed: a failed write never leaves a half file behind.
-  const std::string tmp = out + ".tmp";
-  write_file(tmp, {std::string_view(h.data(), h.size()), std::string_view(p.data(), p.size())},
+  // Whole or not at all (written beside the target and renamed; a device or a FIFO directly).
+  write_file(out, {std::string_view(h.data(), h.size()), std::string_view(p.data(), p.size())},
              "the scene file");
-  std::error_code ec;
-  fs::rename(tmp, out, ec);
-  if (ec) throw InputError("cannot write the scene file: " + ec.message(), out);
   info.bytes = h.size() + p.size();
   return info;
 }

@@ -15,7 +15,7 @@ namespace palplab::mesh {
 
 namespace {
 
-void header(std::ofstream& out, const Positions& V, long cells, const Regions& r) {
+void header(std::ostringstream& out, const Positions& V, long cells, const Regions& r) {
   out << "<?xml version=\"1.0\"?>\n";
   if (!r.empty()) {
     out << "<!-- palplab regions:";
@@ -33,7 +33,7 @@ void header(std::ofstream& out, const Positions& V, long cells, const Regions& r
 }
 
 template <class M>
-void cells(std::ofstream& out, const M& C, int type) {
+void cells(std::ostringstream& out, const M& C, int type) {
   out << "<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   for (int c = 0; c < C.rows(); ++c) {
     for (int k = 0; k < C.cols(); ++k) out << (k ? " " : "") << C(c, k);
@@ -47,23 +47,21 @@ void cells(std::ofstream& out, const M& C, int type) {
 }
 
 template <class F>
-void cell_array(std::ofstream& out, const char* type, const char* name, long n, F value) {
+void cell_array(std::ostringstream& out, const char* type, const char* name, long n, F value) {
   out << "<DataArray type=\"" << type << "\" Name=\"" << name << "\" format=\"ascii\">\n";
   for (long i = 0; i < n; ++i) out << value(i) << "\n";
   out << "</DataArray>\n";
 }
 
-void footer(std::ofstream& out, const std::string& path) {
+void footer(std::ostringstream& out, const std::string& path) {
   out << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-  out.flush();
-  if (!out) throw InputError("error while writing file", path);
+  detail::finish_out(out, path);
 }
 
 }  // namespace
 
 void write_vtu(const std::string& path, const SurfaceMesh& m) {
-  std::ofstream out(path);
-  if (!out) throw InputError("cannot write file", path);
+  std::ostringstream out;
   header(out, m.V, m.F.rows(), m.regions);
   cells(out, m.F, 5);
   if (!m.regions.empty()) {
@@ -83,8 +81,7 @@ void write_vtu(const std::string& path, const TetMesh& m, const MaterialTable* m
                              mat->source + " does not define (it defines " + mat->describe() +
                              "): no material cell data for it",
                          path);
-  std::ofstream out(path);
-  if (!out) throw InputError("cannot write file", path);
+  std::ostringstream out;
   header(out, m.V, m.T.rows(), m.regions);
   cells(out, m.T, 10);
   out << "<CellData Scalars=\"attribute\">\n";

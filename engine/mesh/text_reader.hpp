@@ -1,6 +1,6 @@
 #pragma once
 // Internal helpers of the mesh readers and writers: a line reader that knows where it is, strict
-// number parsing and located errors; an output file that says when it cannot be written. Not part
+// number parsing and located errors; an output file written whole or not at all. Not part
 // of the public API.
 #include <algorithm>
 #include <charconv>
@@ -12,19 +12,18 @@
 #include <vector>
 
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 
 namespace palplab::mesh::detail {
 
-inline std::ofstream open_out(const std::string& path, bool binary = false) {
-  std::ofstream out(path, binary ? std::ios::binary : std::ios::out);
-  if (!out) throw InputError("cannot write file", path);
-  return out;
+// A mesh file is composed in memory (open_out) and written whole or not at all (finish_out:
+// common/write_file — a full disk says why and leaves no cut-off file, nor does an interruption).
+inline std::ostringstream open_out(const std::string& /*path*/, bool /*binary*/ = false) {
+  return std::ostringstream(std::ios::out | std::ios::binary);
 }
 
-// Flushes `out` and throws if any write to it failed (a full disk, say).
-inline void finish_out(std::ofstream& out, const std::string& path) {
-  out.flush();
-  if (!out) throw InputError("error while writing file", path);
+inline void finish_out(std::ostringstream& out, const std::string& path) {
+  write_file(path, out.view(), "the mesh file");
 }
 
 inline std::string read_file(const std::string& path) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/input_error.hpp"
+#include "common/write_file.hpp"
 
 namespace palplab::render {
 
@@ -22,62 +23,52 @@ using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 }  // namespace
 
 namespace {
-// libpng's errors are kept for our message instead of being printed ("libpng error: Write
-// Error" on stderr, then the exception); errno is taken when the error is raised, before the
-// clean-up can change it.
-struct PngWriteError {
+// libpng's errors are kept for our message instead of being printed ("libpng error: ..." on
+// stderr, then the exception).
+struct PngWriteState {
+  std::string bytes;  // the encoded PNG
   std::string message;
-  int errno_at_error = 0;
 };
 [[noreturn]] void on_png_error(png_structp png, png_const_charp message) {
-  auto* e = static_cast<PngWriteError*>(png_get_error_ptr(png));
-  e->errno_at_error = errno;
-  e->message = message ? message : "";
+  auto* st = static_cast<PngWriteState*>(png_get_error_ptr(png));
+  st->message = message ? message : "";
   png_longjmp(png, 1);
 }
 void on_png_warning(png_structp, png_const_charp) {}
+void on_png_write(png_structp png, png_bytep data, png_size_t n) {
+  static_cast<PngWriteState*>(png_get_io_ptr(png))->bytes.append(reinterpret_cast<char*>(data), n);
+}
+void on_png_flush(png_structp) {}
 }  // namespace
 
 void write_png(const std::string& path, const Image& img) {
   if (img.width <= 0 || img.height <= 0 ||
       img.rgba.size() != static_cast<size_t>(img.width) * img.height * 4)
     throw std::invalid_argument("write_png: image size does not match its pixels");
-  FilePtr f(std::fopen(path.c_str(), "wb"));
-  if (!f) throw InputError(path + ": cannot open for writing: " + std::strerror(errno));
-  // On the heap: an automatic object changed between setjmp and longjmp would be indeterminate.
-  const auto error = std::make_unique<PngWriteError>();
+  // Encoded in memory, then written whole or not at all (common/write_file: a full disk or an
+  // interruption leaves no cut-off PNG, a device given as the output is never removed). On the
+  // heap: an automatic object changed between setjmp and longjmp would be indeterminate.
+  const auto state = std::make_unique<PngWriteState>();
   png_structp png =
-      png_create_write_struct(PNG_LIBPNG_VER_STRING, error.get(), on_png_error, on_png_warning);
+      png_create_write_struct(PNG_LIBPNG_VER_STRING, state.get(), on_png_error, on_png_warning);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info) {
     png_destroy_write_struct(&png, &info);
     throw std::runtime_error("write_png: out of memory");
   }
-  // A PNG not written whole is removed (a cut-off file would pass for a still).
-  auto fail = [&](const std::string& why) {
-    f.reset();
-    std::remove(path.c_str());
-    throw InputError(path + ": cannot write the PNG (" + why + ")");
-  };
   // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    fail(error->errno_at_error != 0 ? std::string(std::strerror(error->errno_at_error))
-                                    : "libpng: " + error->message);
+    throw std::runtime_error("write_png: libpng: " + state->message);
   }
-  png_init_io(png, f.get());
+  png_set_write_fn(png, state.get(), on_png_write, on_png_flush);
   png_set_IHDR(png, info, img.width, img.height, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   for (int y = 0; y < img.height; ++y) png_write_row(png, const_cast<png_bytep>(img.pixel(0, y)));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  // Buffered bytes are written at the close: its failure (a full disk) is the PNG's too.
-  errno = 0;
-  const bool flushed = std::fflush(f.get()) == 0;
-  const int flush_errno = errno;
-  const bool closed = std::fclose(f.release()) == 0;
-  if (!flushed || !closed) fail(std::strerror(!flushed ? flush_errno : errno));
+  write_file(path, state->bytes, "the PNG");
 }
 
 Image read_png(const std::string& path) {

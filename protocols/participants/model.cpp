@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/json_check.hpp"
 #include "common/seed.hpp"
 #include "engine/haptics/scene.hpp"
 
@@ -81,83 +82,58 @@ nlohmann::json TraineeState::to_json() const {
           {"depth_var", depth_var}};
 }
 
-TraineeState TraineeState::from_json(const nlohmann::json& j) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
-  auto shown = [](const nlohmann::json& v) {
-    std::string t = v.dump();
-    return t.size() > 40 ? t.substr(0, 40) + "..." : t;
-  };
-  if (!j.is_object()) fail("expected a JSON object (the trainee's state), got " + shown(j));
-  // A number of the state in [lo, hi]; `fallback` when the key is absent (nullopt: required).
-  // The bounds are what the model can produce, generously: a state edited to a negative
-  // variance or a speed factor of 1e300 would be simulated from silently.
-  auto num = [&](const char* key, double lo, double hi,
-                 std::optional<double> fallback = std::nullopt) -> double {
-    const auto it = j.find(key);
-    if (it == j.end()) {
-      if (!fallback) fail(std::string("missing \"") + key + "\"");
-      return *fallback;
-    }
-    if (!it->is_number() || !std::isfinite(it->get<double>()) || it->get<double>() < lo ||
-        it->get<double>() > hi) {
-      char range[64];
-      std::snprintf(range, sizeof range, "a number in [%g, %g]", lo, hi);
-      fail(std::string("\"") + key + "\": expected " + range + ", got " + shown(*it));
-    }
-    return it->get<double>();
-  };
-  auto count = [&](const char* key, std::optional<double> fallback = std::nullopt) {
-    const double v = num(key, 0, 1e9, fallback);
-    if (v != std::floor(v))
-      fail(std::string("\"") + key + "\": expected a count, got " + shown(j.at(key)));
-    return static_cast<int>(v);
-  };
-  auto flag = [&](const char* key, std::optional<bool> fallback = std::nullopt) {
-    const auto it = j.find(key);
-    if (it == j.end()) {
-      if (!fallback) fail(std::string("missing \"") + key + "\"");
-      return *fallback;
-    }
-    if (!it->is_boolean())
-      fail(std::string("\"") + key + "\": expected true or false, got " + shown(*it));
-    return it->get<bool>();
-  };
-  constexpr double kForce = 1e6, kLength = 1e3, kTime = 1e12, kBig = 1e300;
+TraineeState TraineeState::from_json(const nlohmann::json& j, palplab::json::Checker& c) {
   TraineeState s;
-  s.initialised = flag("initialised");
-  s.target_mean = num("target_mean", -kForce, kForce);
-  s.target_var = num("target_var", 0, kForce * kForce);
-  s.prior_mean = num("prior_mean", -kForce, kForce);
-  s.prior_var = num("prior_var", 0, kForce * kForce);
-  const auto place = j.find("place");
-  if (place == j.end()) fail("missing \"place\"");
-  if (!place->is_array() || place->size() != 3)
-    fail("\"place\": expected [x, y, z] in m, got " + shown(*place));
-  for (int i = 0; i < 3; ++i) {
-    const auto& c = (*place)[i];
-    if (!c.is_number() || !std::isfinite(c.get<double>()) || std::abs(c.get<double>()) > kLength)
-      fail("\"place\": expected [x, y, z] in m (finite, at most 1000 m), got " + shown(*place));
-    s.place[i] = c.get<double>();
-  }
-  s.place_sd = num("place_sd", 0, kLength);
-  s.k_hat = num("k_hat", 0, kBig);
-  s.k_count = count("k_count");
-  s.k_felt_sum = num("k_felt_sum", 0, kBig);
-  s.k_seen_sum = num("k_seen_sum", 0, kBig);
-  s.feedback_count = count("feedback_count");
-  s.last_session_end = num("last_session_end", 0, kTime);
+  const std::string R = "$";
+  if (!c.expect_object(j, R)) return s;
+  // Each number in the bounds the model can produce, generously: a state edited to a negative
+  // variance or a speed factor of 1e300 would be simulated from silently. Keys added after the
+  // first states were written are optional (their defaults: the state before the mechanism).
+  constexpr double kForce = 1e6, kLength = 1e3, kTime = 1e12, kBig = 1e300;
+  auto num = [&](const char* key, double lo, double hi, const char* what, double& into,
+                 bool required = true) {
+    if (auto v = c.number(j, R, key, required, lo, hi, what)) into = *v;
+  };
+  auto count = [&](const char* key, const char* what, int& into, bool required = true) {
+    if (auto v = c.integer(j, R, key, required, 0, 1000000000, what)) into = static_cast<int>(*v);
+  };
+  if (auto v = c.boolean(j, R, "initialised", true)) s.initialised = *v;
+  num("target_mean", -kForce, kForce, "the target force believed (N)", s.target_mean);
+  num("target_var", 0, kForce * kForce, "its variance (N²)", s.target_var);
+  num("prior_mean", -kForce, kForce, "the briefed target force (N)", s.prior_mean);
+  num("prior_var", 0, kForce * kForce, "its variance (N²)", s.prior_var);
+  if (auto v =
+          c.vec3(j, R, "place", true, -kLength, kLength, "the remembered place of the feature (m)"))
+    s.place = {(*v)[0], (*v)[1], (*v)[2]};
+  num("place_sd", 0, kLength, "the spread of that memory (m)", s.place_sd);
+  num("k_hat", 0, kBig, "the stiffness estimate (N/m)", s.k_hat);
+  count("k_count", "the presses the stiffness estimate is made of", s.k_count);
+  num("k_felt_sum", 0, kBig, "the sum of felt stiffness", s.k_felt_sum);
+  num("k_seen_sum", 0, kBig, "the sum of seen stiffness", s.k_seen_sum);
+  count("feedback_count", "the feedback events received", s.feedback_count);
+  num("last_session_end", 0, kTime, "the study time of the last session's end (s)",
+      s.last_session_end);
   // Added with the guidance / visual-learning mechanisms (older states lack them).
-  s.demo_sound = flag("demo_sound", false);
-  s.demo_d = num("demo_d", 0, kLength, 0.0);
-  s.reliance = num("reliance", 0, 1, 0.0);
-  s.finds = count("finds", 0.0);
-  s.speed_factor = num("speed_factor", 1e-6, 1e6, 1.0);
-  s.overshoot_factor = num("overshoot_factor", 0, 1e6, 1.0);
-  s.k_log_sum = num("k_log_sum", -kBig, kBig, 0.0);
-  s.k_log_sq = num("k_log_sq", 0, kBig, 0.0);
-  s.landmark_practice = num("landmark_practice", 0, kBig, 0.0);
-  s.depth_mean = num("depth_mean", -kLength, kLength, 0.0);  // added with the needle task
-  s.depth_var = num("depth_var", 0, kLength * kLength, 0.0);
+  if (auto v = c.boolean(j, R, "demo_sound")) s.demo_sound = *v;
+  num("demo_d", 0, kLength, "the deformation the demonstration showed (m)", s.demo_d, false);
+  num("reliance", 0, 1, "the reliance on a marker", s.reliance, false);
+  count("finds", "the sessions that found the feature", s.finds, false);
+  num("speed_factor", 1e-6, 1e6, "the individual speed factor", s.speed_factor, false);
+  num("overshoot_factor", 0, 1e6, "the individual overshoot factor", s.overshoot_factor, false);
+  num("k_log_sum", -kBig, kBig, "a sum of log stiffness ratios", s.k_log_sum, false);
+  num("k_log_sq", 0, kBig, "a sum of squared log stiffness ratios", s.k_log_sq, false);
+  num("landmark_practice", 0, kBig, "the landmark judgements practised", s.landmark_practice,
+      false);
+  num("depth_mean", -kLength, kLength, "the believed target depth (m)", s.depth_mean, false);
+  num("depth_var", 0, kLength * kLength, "its variance (m²)", s.depth_var, false);
+  return s;
+}
+
+TraineeState TraineeState::from_json(const nlohmann::json& j) {
+  const std::string text = j.dump();
+  palplab::json::Checker c("trainee state", text);
+  TraineeState s = from_json(j, c);
+  c.throw_if_any();
   return s;
 }
 

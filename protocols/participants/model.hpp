@@ -28,6 +28,10 @@ namespace palplab::engine {
 struct Rendered;
 }
 
+namespace palplab::json {
+class Checker;
+}
+
 namespace palplab::protocols::participants {
 
 // What one haptic step renders, as a participant perceives it (a copy of engine::Rendered's
@@ -112,9 +116,12 @@ struct TraineeState {
   // Needle task: belief about the target's depth below the skin (m, m^2; 0 = not briefed yet).
   double depth_mean = 0.0, depth_var = 0.0;
   nlohmann::json to_json() const;
-  // The state as to_json wrote it (keys added later may be missing: their defaults). Throws
-  // std::invalid_argument naming the key and what was expected for anything else (a state edited
-  // in the database: a missing key, a wrong type, a non-finite or impossible value).
+  // The state as to_json wrote it (keys added later may be missing: their defaults). Anything
+  // else (a state edited in the database: a missing key, a wrong type, a non-finite or
+  // impossible value) is a problem recorded on `c` (the one JSON validator, common/json_check) at
+  // its JSON path; the caller decides how to say them.
+  static TraineeState from_json(const nlohmann::json& j, palplab::json::Checker& c);
+  // The same, throwing the problems as one InputError ("trainee state: $.key: ...").
   static TraineeState from_json(const nlohmann::json& j);
 };
 

@@ -1033,6 +1033,20 @@ TEST(HardCli, APalpationOnsetAboveTheTargetForceIsWarnedOf) {
   r = cli("validate " + (d / "at.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.err, "warning")) << r.err;
+  // Every digit that matters; the default named as such when the study does not set it.
+  s.replace(s.find("\"palpation_onset\": 2.5"), 22, "\"palpation_onset\": 2.5000000001");
+  spit(d / "just.json", s);
+  r = cli("validate " + (d / "just.json").string(), d);
+  EXPECT_TRUE(has(r.err, "$.task.palpation_onset: 2.5000000001 N is above")) << r.err;
+  std::string low = study(kGroups, "", 20.0);
+  low.replace(low.find("\"MPF\": 2.5"), 10, "\"MPF\": 0.4");
+  spit(d / "low.json", low);
+  r = cli("validate " + (d / "low.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err,
+                  "warning: $.task: the default palpation_onset 0.5 N is above the "
+                  "feature's target force (MPF 0.4 N, SFT 3.5 N)"))
+      << r.err;
 }
 
 // Review finding (2026-12-06): the same analysis declared twice (a copy-paste) validated and was
@@ -1059,20 +1073,48 @@ TEST(HardCli, TheSameAnalysisTwiceIsRefused) {
               R"(, {"kind": "pairwise_t", "measure": "palpation_force", "phase": "post", "welch": false}],)"));
   r = cli("validate " + (d / "other.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
+  // Named by their places in the file, also after an entry that is no analysis.
+  spit(d / "after.json", study(kGroups, R"( "analyses": ["oops", )" + one + ", " + one + "],"));
+  r = cli("validate " + (d / "after.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.analyses[2]: the same analysis as $.analyses[1]");
 }
 
 // Review finding (2026-12-06): `run STUDY --seed -1` (run has no --seed) was CLI11's "The
-// following arguments were not expected: -1 --seed", the words reversed. They are said in the
-// order given, with the command.
+// following arguments were not expected: -1 --seed", the words reversed. An unknown option is
+// named as such with its command; other extra words in the order given; a command group with
+// a word that is none of its commands lists them (it was "A subcommand is required").
 TEST(HardCli, UnexpectedArgumentsAreSaidInTheOrderGiven) {
   auto d = tmp("extras");
   Result r = cli("run study.json --seed -1 --db x.db", d);
   EXPECT_EXIT2_WITH(r,
-                    "error: palplab run: unexpected argument(s): --seed -1 (no such option, "
-                    "or more arguments than the command takes; `palplab run --help` lists "
-                    "what it takes)");
-  r = cli("validate a.json b.json", d);
-  EXPECT_EXIT2_WITH(r, "error: palplab validate: unexpected argument(s): b.json");
+                    "error: palplab run: unknown option --seed (`palplab run --help` lists "
+                    "its options)");
+  r = cli("validate a.json b.json c.json", d);
+  EXPECT_EXIT2_WITH(r,
+                    "error: palplab validate: unexpected argument(s): b.json c.json (more "
+                    "arguments than the command takes");
   r = cli("scene info x.psim y.psim", d);
   EXPECT_EXIT2_WITH(r, "error: palplab scene info: unexpected argument(s): y.psim");
+  r = cli("--bogus validate f.json", d);
+  EXPECT_EXIT2_WITH(r, "error: palplab: unknown option --bogus");
+  r = cli("mesh bogus", d);
+  EXPECT_EXIT2_WITH(r, "error: palplab mesh: unknown command 'bogus' — its commands are: ");
+  EXPECT_FALSE(has(r.err, "A subcommand is required")) << r.err;
+  r = cli("scene", d);
+  EXPECT_EXIT2_WITH(r, "error: palplab scene: which command? — its commands are: ");
+}
+
+// Review finding (2026-12-06): a FIFO given as the database hung the command (its first read
+// blocks). Exit 2 at once.
+TEST(HardDb, AFifoAsTheDatabaseIsRefusedWithoutWaiting) {
+  auto d = tmp("fifo");
+  ASSERT_EQ(::mkfifo((d / "x.db").c_str(), 0644), 0);
+  for (const std::string& cmd :
+       {"report " + (d / "x.db").string() + " --out " + (d / "r").string(),
+        "export " + (d / "x.db").string() + " --csv " + (d / "c").string()}) {
+    Result r = cli(cmd, d);
+    EXPECT_EXIT2_WITH(r,
+                      "x.db: is not a regular file (a FIFO or a device; expected a results "
+                      "database file)");
+  }
 }

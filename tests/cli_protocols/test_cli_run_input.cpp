@@ -126,19 +126,30 @@ TEST(CliRunInput, ResumeFromAnEditedTraineeStateIsRefused) {
   Result r = run_palplab(run + " --max-sessions 1 --jobs 1 --quiet", d);
   ASSERT_EQ(r.code, 0) << r.err;
   fs::copy_file(db, d / "good.db");
+  // The problems as the one JSON validator (common/json_check) says them, by JSON path.
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"json_set(state_after, '$.place', json('[]'))",
-       "\"place\": expected [x, y, z] in m, got []"},
-      {"json_remove(state_after, '$.initialised')", "missing \"initialised\""},
+       "$.place: expected [x, y, z]: the remembered place of the feature (m), got an array of 0"},
+      {"json_remove(state_after, '$.initialised')",
+       "$: missing required key \"initialised\" (true or false)"},
       {"json_set(state_after, '$.place_sd', 'x')",
-       "\"place_sd\": expected a number in [0, 1000], got \"x\""},
+       "$.place_sd: expected a number: the spread of that memory (m), got a string"},
       {"json_set(state_after, '$.prior_var', -1)",
-       "\"prior_var\": expected a number in [0, 1e+12], got -1"},
+       "$.prior_var: value -1 out of range: expected its variance (N²) in [0.0, "
+       "1000000000000.0]"},
       {"json_set(state_after, '$.speed_factor', 1e300)",
-       "\"speed_factor\": expected a number in [1e-06, 1e+06], got 1e+300"},
-      {"json_set(state_after, '$.k_count', 1.5)", "\"k_count\": expected a count, got 1.5"},
+       "$.speed_factor: value 1e+300 out of range: expected the individual speed factor in "
+       "[1e-06, 1000000.0]"},
+      {"json_set(state_after, '$.k_count', 1.5)",
+       "$.k_count: expected an integer: the presses the stiffness estimate is made of in [0, "
+       "1000000000], got 1.5"},
+      // Every problem of the state, not only the first.
+      {"json_set(state_after, '$.prior_var', -1, '$.reliance', 2)",
+       "$.prior_var: value -1 out of range: expected its variance (N²) in [0.0, "
+       "1000000000000.0]; $.reliance: value 2 out of range: expected the reliance on a marker in "
+       "[0.0, 1.0]"},
       {"'{bad'", "text that is not JSON: \"{bad\""},
-      {"'[]'", "expected a JSON object (the trainee's state), got []"},
+      {"'[]'", "$: expected an object, got an array"},
   };
   for (const auto& [edit, says] : cases) {
     SCOPED_TRACE(edit);

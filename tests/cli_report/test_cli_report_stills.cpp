@@ -252,6 +252,8 @@ TEST_F(ReportStills, AnEarlierReportsFiguresAndStillsDoNotStayBesideTheNewOne) {
                             {"rest", "stills/Z_rest.png"},
                             {"escape", "stills/../report.md"}});
   side["stills"].push_back({{"prototype", "Y"}, {"pressed", "../report.md"}});
+  // A listing may name only stills: the user's file it lists is not one (review 2026-12-06).
+  side["stills"].push_back({{"prototype", "N"}, {"pressed", "stills/readme.txt"}});
   std::ofstream(rep / "stills" / "stills.json") << side.dump(2);
   // The user's own files there, and a file named like a still that no listing names.
   std::ofstream(rep / "figures" / "notes.txt") << "mine\n";
@@ -285,6 +287,22 @@ TEST_F(ReportStills, AnEarlierReportsFiguresAndStillsDoNotStayBesideTheNewOne) {
     EXPECT_FALSE(fs::exists(rep / gone)) << gone;
   for (const char* kept : {"stills/readme.txt", "stills/X_rest.png", "figures/force_traces.svg"})
     EXPECT_TRUE(fs::exists(rep / kept)) << kept;
+
+  // figures/ or stills/ a link to a directory elsewhere: refused (the report would write and
+  // remove files outside --out), nothing there touched.
+  const fs::path elsewhere = dir_ / "elsewhere";
+  fs::create_directories(elsewhere);
+  fs::copy_file(rep / "figures" / "force_traces.svg", elsewhere / "old.svg");
+  fs::create_directories(dir_ / "linked");
+  fs::create_directory_symlink(elsewhere, dir_ / "linked" / "figures");
+  r = report("linked", "--no-stills");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find((dir_ / "linked" / "figures").string() +
+                       "\" is a symbolic link; the report writes its figures there and never "
+                       "through a link"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::exists(elsewhere / "old.svg"));
 }
 
 // A still that cannot be written (a full disk; here a file-size limit of 64 KiB, below the

@@ -74,9 +74,12 @@ TEST(WriteFile, EveryFailureNamesTheFileAndTheReason) {
 
 // A file-size limit of 1000 bytes makes the disk "full" at byte 1000: 3000 bytes (below the
 // stdio buffer, so the failure comes at the flush) and 100 000 bytes (at a write) both fail with
-// the reason, and the cut-off file is removed.
-TEST(WriteFile, AFailureAtTheFlushIsSaidAndTheCutOffFileRemoved) {
+// the reason; no cut-off file is left, and an earlier file at that name is as it was (it was
+// truncated first when written in place: a failed `calibrate --write-defaults` lost params.hpp).
+TEST(WriteFile, AFailureLeavesTheEarlierFileAndNoCutOffFile) {
   const fs::path d = scratch();
+  const std::string earlier = "the earlier content\n";
+  std::ofstream(d / "small.md") << earlier;
   rlimit old{};
   ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
   if (old.rlim_max != RLIM_INFINITY && old.rlim_max < 1000) GTEST_SKIP() << "hard limit below 1000";
@@ -93,8 +96,22 @@ TEST(WriteFile, AFailureAtTheFlushIsSaidAndTheCutOffFileRemoved) {
   EXPECT_EQ(e3k, (d / "small.md").string() + ": cannot write the report (File too large)");
   EXPECT_EQ(e100k, (d / "big.md").string() + ": cannot write the report (File too large)");
   EXPECT_EQ(ok, "");
-  EXPECT_FALSE(fs::exists(d / "small.md"));
+  EXPECT_EQ(slurp(d / "small.md"), earlier);
   EXPECT_FALSE(fs::exists(d / "big.md"));
   EXPECT_EQ(fs::file_size(d / "fits.md"), 999u);
+  for (const auto& e : fs::directory_iterator(d))
+    EXPECT_NE(e.path().extension(), ".partial") << e.path();
+  fs::remove_all(d);
+}
+
+// Through a link the file it points to is written and the link stays a link (a failure removed
+// the link and left the target cut off).
+TEST(WriteFile, ALinkIsWrittenThroughAndStaysALink) {
+  const fs::path d = scratch();
+  std::ofstream(d / "target.json") << "old";
+  fs::create_symlink("target.json", d / "link.json");
+  palplab::write_file((d / "link.json").string(), "new", "the file");
+  EXPECT_TRUE(fs::is_symlink(d / "link.json"));
+  EXPECT_EQ(slurp(d / "target.json"), "new");
   fs::remove_all(d);
 }
