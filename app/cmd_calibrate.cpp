@@ -16,11 +16,12 @@
 #include "common/input_error.hpp"
 #include "common/write_file.hpp"
 #include "protocols/calibrate.hpp"
+#include "protocols/calibrate_journal.hpp"
 #include "protocols/study.hpp"
 
 namespace {
 struct CalibrateArgs {
-  std::string study, human, out, write_defaults;
+  std::string study, human, out, write_defaults, journal;
   palplab::protocols::CalibrateOptions opt;
   std::vector<std::string> bounds;  // --bounds NAME=LO:HI, parsed into opt.bounds
   bool quiet = false;
@@ -60,12 +61,16 @@ palplab::app::CommandRegistration reg_calibrate{
           cmd->add_option("--write-defaults", a->write_defaults,
                           "Also write the fitted values as the defaults into this params.hpp "
                           "(protocols/participants/params.hpp; rebuild afterwards)");
+      auto* journal_opt = cmd->add_option(
+          "--journal", a->journal,
+          "Where every evaluation is written as it finishes (default: next to --out, "
+          "PARAMS.evals.jsonl); the same command resumes an interrupted fit from it");
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->add_flag("--overwrite", a->overwrite,
                     "Replace an existing --out that is not a calibration JSON");
       cmd->add_flag("--no-se", a->no_se,
                     "Skip the standard errors (saves the 2p² simulations of the curvature)");
-      cmd->callback([a, defaults_opt, code] {
+      cmd->callback([a, defaults_opt, journal_opt, code] {
         using namespace palplab::protocols;
         a->opt.bounds.clear();
         for (const auto& b : a->bounds) a->opt.bounds.push_back(parse_bound(b));
@@ -95,6 +100,26 @@ palplab::app::CommandRegistration reg_calibrate{
               return !j.is_discarded() && j.is_object() && j.contains("palplab_calibration");
             },
             "palplab calibration JSON", a->overwrite);
+        // The journal: next to --out unless given; never an input or --out; a file of another
+        // kind only with --overwrite (then removed: the journal is appended to and read back).
+        if (journal_opt->count() > 0 && a->journal.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--journal"},
+                                    "expected where to write the evaluations, got an empty path");
+        if (a->journal.empty())
+          a->journal = std::filesystem::path(a->out).replace_extension(".evals.jsonl").string();
+        {
+          std::vector<palplab::app::CommandInput> not_journal = not_out;
+          not_journal.push_back({"--out", a->out});
+          palplab::app::require_replaceable_output(
+              "--journal", a->journal, not_journal,
+              [](const std::string& p) { return palplab::protocols::is_calibration_journal(p); },
+              "palplab calibration journal", a->overwrite);
+          std::error_code ec;
+          if (a->overwrite && std::filesystem::is_regular_file(a->journal, ec) &&
+              !palplab::protocols::is_calibration_journal(a->journal))
+            std::filesystem::remove(a->journal, ec);
+        }
+        a->opt.journal = a->journal;
         if (!a->write_defaults.empty()) {
           if (!std::filesystem::is_regular_file(a->write_defaults))
             throw palplab::InputError(palplab::SourceLocation{"--write-defaults"},

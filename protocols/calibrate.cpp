@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <tuple>
@@ -19,6 +20,7 @@
 #include "common/input_error.hpp"
 #include "common/nan.hpp"
 #include "common/write_file.hpp"
+#include "protocols/calibrate_journal.hpp"
 #include "protocols/measures.hpp"
 #include "protocols/participants/params.hpp"
 #include "protocols/power.hpp"
@@ -739,20 +741,50 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   // reported) is looked up, not simulated again: with exp2 at full size one simulation takes
   // minutes.
   std::map<std::vector<double>, std::pair<double, std::vector<CellFit>>> memo;
+  // Every simulation is appended to the journal as it finishes; an evaluation found there is
+  // taken instead (after the start, which is simulated and compared with its stored one).
+  std::optional<CalibrationJournal> journal;
+  if (!opt.journal.empty())
+    journal.emplace(opt.journal, calibration_setup(study, opt.sim_n, opt.keys, used), used);
+  bool replay = false;
   auto simulate =
       [&](const std::vector<double>& x) -> const std::pair<double, std::vector<CellFit>>& {
     auto it = memo.find(x);
     if (it != memo.end()) return it->second;
-    std::vector<CellFit> fit;
-    const double l = moment_loss(with(x), used, opt.jobs, &fit);
+    const auto* stored = journal ? journal->find(x) : nullptr;
+    std::pair<double, std::vector<CellFit>> e;
+    if (replay && stored) {
+      e = *stored;
+      ++r.replayed;
+    } else {
+      e.first = moment_loss(with(x), used, opt.jobs, &e.second);
+      if (journal && !stored) journal->append(x, e.first, e.second);
+    }
+    const double l = e.first;
     ++evaluations;
     if (!in_stencil) best = std::min(best, l);
     if (in_stencil) stencil_points.push_back(x);
     if (opt.progress) opt.progress(evaluations, l, best, x, in_stencil);
-    return memo.emplace(x, std::make_pair(l, std::move(fit))).first->second;
+    return memo.emplace(x, std::move(e)).first->second;
   };
   auto loss = [&](const std::vector<double>& x) { return simulate(x).first; };
   std::tie(r.loss_before, r.fit_before) = simulate(r.start);
+  if (journal) {
+    // The stored evaluations are this palplab's only if it simulates the start exactly as
+    // stored (bit for bit: common random numbers make the loss a deterministic function).
+    if (const auto* stored = journal->find(r.start);
+        stored && !(stored->first == r.loss_before ||
+                    (std::isnan(stored->first) && std::isnan(r.loss_before))))
+      throw InputError(SourceLocation{"--journal"},
+                       "\"" + journal->path() +
+                           "\" holds this fit's evaluations, but its loss at "
+                           "the start (" +
+                           fmt_num(stored->first) + ") is not this palplab's (" +
+                           fmt_num(r.loss_before) +
+                           "): it was written by a palplab that simulates differently; remove "
+                           "it (or give another --journal) to start the fit afresh");
+    replay = true;
+  }
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
   r.restarts = nm.restarts;
@@ -909,6 +941,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"measures_not_fitted", r.not_fitted},
           {"standard_errors_computed", r.se_computed},
           {"evaluations", r.evaluations},
+          {"evaluations_from_journal", r.replayed},
           {"restarts", r.restarts},
           {"kept_start", r.kept_start},
           {"points_tried", r.points_tried},
@@ -963,6 +996,9 @@ std::string to_text(const CalibrationResult& r) {
                 r.loss_before, r.loss_after, r.evaluations, r.evaluations == 1 ? "" : "s",
                 r.restarts, r.restarts == 1 ? "" : "s");
   o << buf;
+  if (r.replayed > 0)
+    o << r.replayed << " of the evaluations taken from the journal (not simulated again: an "
+      << "earlier run of this fit stored them)\n";
   if (r.kept_start && r.points_tried <= 1)
     o << "only the start was simulated (--budget " << r.budget
       << "): its loss is reported, nothing was fitted\n";

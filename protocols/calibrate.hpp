@@ -148,6 +148,12 @@ struct CalibrateOptions {
   std::function<void(int evaluation, double loss, double best, const std::vector<double>& x,
                      bool stencil)>
       progress;
+  // Where every simulated evaluation is appended as it finishes (protocols/calibrate_journal.hpp;
+  // empty: nowhere). The evaluations of the same set-up found there are taken instead of
+  // simulated again, so the same command resumes an interrupted fit and ends with the result of
+  // an uninterrupted one; the start is always simulated and must equal its stored evaluation
+  // (InputError otherwise: a palplab that simulates differently wrote the file).
+  std::string journal;
 };
 
 struct CalibrationResult {
@@ -172,6 +178,9 @@ struct CalibrationResult {
   // points not): 1 when --budget 1 only evaluated the start, so nothing was fitted.
   int points_tried = 0;
   int budget = 0;  // the optimiser's budget (CalibrateOptions::budget)
+  // Evaluations taken from CalibrateOptions::journal instead of simulated (counted in
+  // `evaluations` as well: the fit is the same as an uninterrupted one's).
+  int replayed = 0;
   // The lowest loss among the SE stencil's points when it is below loss_after beyond rounding
   // (empty otherwise): the optimiser's end point is then no minimum at the stencil's scale. The
   // fit is not moved there (its SEs are the end point's curvature); the report says where it is,

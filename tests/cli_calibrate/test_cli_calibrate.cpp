@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -756,5 +757,97 @@ TEST(Exp2Check, ReportsOrdersVerdictsAndIntervals) {
       << other.err;
   const auto bad = check((d / "missing.json").string(), "people.csv", "out_bad");
   EXPECT_EQ(bad.code, 2) << bad.out << bad.err;
+  fs::remove_all(d);
+}
+
+// Results are never lost: every evaluation is appended to the journal (PARAMS.evals.jsonl
+// beside --out) as it finishes, and the same command resumes an interrupted fit from it — the
+// optimiser retraces its path from the stored evaluations without simulating and ends with the
+// result of an uninterrupted run (the start is simulated again and must equal its stored
+// evaluation). A fit of hours (exp2's joint fit) can so run in parts.
+TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
+  auto d = scratch_dir("calibrate_journal");
+  std::ofstream(d / "human.csv") << "participant,group,phase,session,measure,value\n"
+                                    "H1,G1,test,1,palpation_force,2.4\n"
+                                    "H2,G1,test,1,palpation_force,2.9\n"
+                                    "H3,G1,test,1,palpation_force,2.6\n"
+                                    "H4,G2,test,1,palpation_force,2.2\n"
+                                    "H5,G2,test,1,palpation_force,2.8\n"
+                                    "H6,G2,test,1,palpation_force,2.5\n";
+  const std::string cmd = "calibrate " + data("recovery_study.json").string() + " --human " +
+                          (d / "human.csv").string() +
+                          " --params prior_target_cv --budget 6 --sim-n 3 --out " +
+                          (d / "fit.json").string();
+  const fs::path journal = d / "fit.evals.jsonl";
+  Result r = run_palplab(cmd, d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto whole = nlohmann::json::parse(slurp(d / "fit.json"));
+  const int evaluations = whole["evaluations"].get<int>();
+  EXPECT_EQ(whole["evaluations_from_journal"], 0);
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(slurp(journal));
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+  }
+  // One line per simulation, the SE stencil's included.
+  ASSERT_EQ(static_cast<int>(lines.size()), evaluations) << slurp(journal);
+  auto same_fit = [&](nlohmann::json fit, int replayed) {
+    EXPECT_EQ(fit["evaluations_from_journal"], replayed);
+    fit["evaluations_from_journal"] = 0;
+    EXPECT_EQ(fit.dump(), whole.dump());
+  };
+
+  // Run again: everything but the start is taken from the journal; the same fit, to the bit.
+  r = run_palplab(cmd, d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(
+      r.out.find(std::to_string(evaluations - 1) + " of the evaluations taken from the journal"),
+      std::string::npos)
+      << r.out;
+  same_fit(nlohmann::json::parse(slurp(d / "fit.json")), evaluations - 1);
+  const std::string again = slurp(journal);
+  EXPECT_EQ(static_cast<int>(std::count(again.begin(), again.end(), '\n')),
+            evaluations);  // nothing appended twice
+
+  // Interrupted after three evaluations, in the middle of writing the fourth.
+  std::ofstream(journal, std::ios::trunc) << lines[0] << "\n"
+                                          << lines[1] << "\n"
+                                          << lines[2] << "\n"
+                                          << lines[3].substr(0, 40);
+  r = run_palplab(cmd + " --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  same_fit(nlohmann::json::parse(slurp(d / "fit.json")), 2);
+  // The cut line is gone, the rest simulated again and appended: the journal of the whole fit.
+  std::string all;
+  for (const auto& l : lines) all += l + "\n";
+  EXPECT_EQ(slurp(journal), all);
+
+  // A journal whose start is not what this palplab simulates (another palplab's, or edited).
+  auto start = nlohmann::json::parse(lines[0]);
+  start["loss"] = start["loss"].get<double>() + 1.0;
+  std::ofstream(journal, std::ios::trunc) << start.dump() << "\n" << lines[1] << "\n";
+  r = run_palplab(cmd + " --quiet", d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--journal: \"" + journal.string() +
+                       "\" holds this fit's evaluations, "
+                       "but its loss at the start"),
+            std::string::npos)
+      << r.err;
+  // A file that is no journal, at the journal's place: refused before any simulation.
+  std::ofstream(journal, std::ios::trunc) << "my notes\n";
+  r = run_palplab(cmd + " --quiet", d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("not a palplab calibration journal"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(journal), "my notes\n");
+  // Another fit (another parameter) in the same journal: its lines are kept but not used.
+  fs::remove(journal);
+  ASSERT_EQ(run_palplab(cmd + " --quiet", d).code, 0);
+  r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                      (d / "human.csv").string() +
+                      " --params weber_fraction --budget 2 --sim-n 3 --no-se --quiet --out " +
+                      (d / "fit.json").string(),
+                  d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(d / "fit.json"))["evaluations_from_journal"], 0);
   fs::remove_all(d);
 }

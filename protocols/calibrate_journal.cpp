@@ -1,0 +1,173 @@
+#include "protocols/calibrate_journal.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "common/input_error.hpp"
+#include "palplab/version.hpp"
+#include "results/sha256.hpp"
+
+namespace palplab::protocols {
+
+namespace {
+
+constexpr const char* kTag = "palplab_calibration_eval";
+
+// Exact in JSON: finite doubles as numbers (written to round-trip), the others as text.
+nlohmann::json enc(double x) {
+  if (std::isfinite(x)) return x;
+  return std::isnan(x) ? "nan" : (x > 0 ? "inf" : "-inf");
+}
+bool dec(const nlohmann::json& j, double& x) {
+  if (j.is_number()) {
+    x = j.get<double>();
+    return true;
+  }
+  if (!j.is_string()) return false;
+  const std::string s = j.get<std::string>();
+  if (s == "nan")
+    x = std::numeric_limits<double>::quiet_NaN();
+  else if (s == "inf")
+    x = std::numeric_limits<double>::infinity();
+  else if (s == "-inf")
+    x = -std::numeric_limits<double>::infinity();
+  else
+    return false;
+  return true;
+}
+
+}  // namespace
+
+std::string calibration_setup(const Study& study, int sim_n, const std::vector<std::string>& keys,
+                              const std::vector<HumanCell>& used) {
+  nlohmann::json j;
+  j["study_sha256"] = results::sha256_hex(study.json_text);
+  j["sim_n"] = sim_n;
+  j["keys"] = keys;
+  j["palplab"] = std::string(kVersion) + " " + kGitCommit;
+  nlohmann::json cells = nlohmann::json::array();
+  for (const auto& c : used) {
+    nlohmann::json v = nlohmann::json::array();
+    for (double x : c.values) v.push_back(enc(x));
+    cells.push_back({c.group, c.phase, c.session, c.measure, c.undefined, v});
+  }
+  j["cells"] = cells;
+  return results::sha256_hex(j.dump());
+}
+
+bool is_calibration_journal(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string first;
+  std::getline(in, first);
+  const auto j = nlohmann::json::parse(first, nullptr, false);
+  return !j.is_discarded() && j.is_object() && j.contains(kTag);
+}
+
+CalibrationJournal::CalibrationJournal(const std::string& path, const std::string& setup,
+                                       const std::vector<HumanCell>& used)
+    : path_(path), setup_(setup) {
+  std::string text;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (in) {
+      std::ostringstream ss;
+      ss << in.rdbuf();
+      text = ss.str();
+    }
+  }
+  // A last line without its newline was cut by an interruption: cut off (its evaluation is
+  // simulated again).
+  const std::size_t complete = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+  if (complete < text.size()) {
+    std::error_code ec;
+    std::filesystem::resize_file(path, complete, ec);
+    if (ec)
+      throw InputError("cannot cut the journal's incomplete last line (" + ec.message() + ")",
+                       path);
+    text.resize(complete);
+  }
+  std::istringstream lines(text);
+  std::string line;
+  int at = 0;
+  while (std::getline(lines, line)) {
+    ++at;
+    const auto j = nlohmann::json::parse(line, nullptr, false);
+    auto bad = [&](const std::string& why) {
+      throw InputError(SourceLocation{path, at},
+                       "not a calibration evaluation (" + why +
+                           "); the journal holds the evaluations palplab calibrate wrote: give "
+                           "another --journal, or remove the file to start the fit afresh");
+    };
+    if (j.is_discarded() || !j.is_object() || !j.contains(kTag)) bad("not such a JSON line");
+    if (j.value("setup", std::string()) != setup) continue;  // another fit's
+    std::vector<double> x;
+    double loss = 0;
+    if (!j.contains("x") || !j["x"].is_array() || !j.contains("loss") || !dec(j["loss"], loss))
+      bad("no x or loss");
+    for (const auto& v : j["x"]) {
+      double d = 0;
+      if (!dec(v, d)) bad("x holds " + v.dump());
+      x.push_back(d);
+    }
+    const auto& cells = j.value("cells", nlohmann::json::array());
+    if (!cells.is_array() || cells.size() != used.size()) bad("its cells are not the fit's");
+    std::vector<CellFit> fit;
+    for (std::size_t i = 0; i < used.size(); ++i) {
+      const auto& c = cells[i];
+      CellFit f;
+      f.human = used[i];
+      if (!c.is_array() || c.size() != 6 || !c[0].is_number_integer() ||
+          !c[1].is_number_integer() || !dec(c[2], f.mean) || !dec(c[3], f.sd) ||
+          !dec(c[4], f.z_mean) || !dec(c[5], f.z_sd))
+        bad("cell " + std::to_string(i) + " is " + c.dump());
+      f.n_sim = c[0].get<int>();
+      f.undefined = c[1].get<int>();
+      fit.push_back(std::move(f));
+    }
+    stored_.emplace(std::move(x), std::make_pair(loss, std::move(fit)));
+  }
+  file_ = std::fopen(path.c_str(), "ab");
+  if (!file_)
+    throw InputError(std::string("cannot write the journal (") + std::strerror(errno) + ")", path);
+}
+
+CalibrationJournal::~CalibrationJournal() {
+  if (file_) std::fclose(file_);
+}
+
+const std::pair<double, std::vector<CellFit>>* CalibrationJournal::find(
+    const std::vector<double>& x) const {
+  const auto it = stored_.find(x);
+  return it == stored_.end() ? nullptr : &it->second;
+}
+
+void CalibrationJournal::append(const std::vector<double>& x, double loss,
+                                const std::vector<CellFit>& fit) {
+  nlohmann::json j;
+  j[kTag] = 1;
+  j["setup"] = setup_;
+  nlohmann::json xs = nlohmann::json::array();
+  for (double v : x) xs.push_back(enc(v));
+  j["x"] = xs;
+  j["loss"] = enc(loss);
+  nlohmann::json cells = nlohmann::json::array();
+  for (const auto& f : fit)
+    cells.push_back({f.n_sim, f.undefined, enc(f.mean), enc(f.sd), enc(f.z_mean), enc(f.z_sd)});
+  j["cells"] = cells;
+  const std::string line = j.dump() + "\n";
+  errno = 0;
+  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
+    throw InputError(std::string("cannot write the journal (") +
+                         (errno ? std::strerror(errno) : "a write failed") +
+                         "); the evaluations before this one are kept: make room and run the "
+                         "same command again, it resumes",
+                     path_);
+}
+
+}  // namespace palplab::protocols
