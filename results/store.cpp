@@ -492,8 +492,7 @@ Probe probe_db(const std::string& path) {
     out.kind = Probe::kPalplab;
   } else if ((rc & 0xff) == SQLITE_CORRUPT || (rc & 0xff) == SQLITE_NOTADB) {
     out = {Probe::kDamaged, sqlite3_errmsg(db)};
-  } else if (io_failure(rc)) {
-  } else {
+  } else if (!io_failure(rc)) {
     // No meta table: another SQLite file, or one damaged where the meta table was. Only
     // here (a refusal anyway) does the whole file get checked.
     sqlite3_finalize(st);

@@ -51,6 +51,17 @@ void simulate_human_data(const fs::path& d, nlohmann::json study) {
       0);
 }
 
+// Six people's forces in the recovery study's two groups: the human data of the quick fits.
+void write_small_human_csv(const fs::path& file) {
+  std::ofstream(file) << "participant,group,phase,session,measure,value\n"
+                         "H1,G1,test,1,palpation_force,2.4\n"
+                         "H2,G1,test,1,palpation_force,2.9\n"
+                         "H3,G1,test,1,palpation_force,2.6\n"
+                         "H4,G2,test,1,palpation_force,2.2\n"
+                         "H5,G2,test,1,palpation_force,2.8\n"
+                         "H6,G2,test,1,palpation_force,2.5\n";
+}
+
 }  // namespace
 
 TEST(Calibrate, RecoversKnownParameters) {
@@ -371,13 +382,7 @@ TEST(Calibrate, ABoundedFitStaysInItsBoundsAndSaysWhenItEndsOnOne) {
 // for the SEs).
 TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   auto d = scratch_dir("calibrate_nose");
-  std::ofstream(d / "human.csv") << "participant,group,phase,session,measure,value\n"
-                                    "H1,G1,test,1,palpation_force,2.4\n"
-                                    "H2,G1,test,1,palpation_force,2.9\n"
-                                    "H3,G1,test,1,palpation_force,2.6\n"
-                                    "H4,G2,test,1,palpation_force,2.2\n"
-                                    "H5,G2,test,1,palpation_force,2.8\n"
-                                    "H6,G2,test,1,palpation_force,2.5\n";
+  write_small_human_csv(d / "human.csv");
   auto r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
                            (d / "human.csv").string() +
                            " --params prior_target_cv --budget 5 --sim-n 3 --no-se --out " +
@@ -767,13 +772,7 @@ TEST(Exp2Check, ReportsOrdersVerdictsAndIntervals) {
 // evaluation). A fit of hours (exp2's joint fit) can so run in parts.
 TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
   auto d = scratch_dir("calibrate_journal");
-  std::ofstream(d / "human.csv") << "participant,group,phase,session,measure,value\n"
-                                    "H1,G1,test,1,palpation_force,2.4\n"
-                                    "H2,G1,test,1,palpation_force,2.9\n"
-                                    "H3,G1,test,1,palpation_force,2.6\n"
-                                    "H4,G2,test,1,palpation_force,2.2\n"
-                                    "H5,G2,test,1,palpation_force,2.8\n"
-                                    "H6,G2,test,1,palpation_force,2.5\n";
+  write_small_human_csv(d / "human.csv");
   const std::string cmd = "calibrate " + data("recovery_study.json").string() + " --human " +
                           (d / "human.csv").string() +
                           " --params prior_target_cv --budget 6 --sim-n 3 --out " +
