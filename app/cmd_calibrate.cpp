@@ -141,13 +141,14 @@ palplab::app::CommandRegistration reg_calibrate{
         a->opt.standard_errors = !a->no_se;
         if (!a->quiet)
           a->opt.progress = [keys = a->opt.keys](int e, double l, double best,
-                                                 const std::vector<double>& x, bool stencil) {
+                                                 const std::vector<double>& x, bool stencil,
+                                                 bool from_journal) {
             std::string at;
             for (std::size_t i = 0; i < x.size(); ++i)
               at += " " + keys[i] + "=" + std::to_string(x[i]);
-            std::fprintf(stderr, "evaluation %d%s: loss %.4g (%s %.4g) at%s\n", e,
-                         stencil ? " (SE stencil)" : "", l, stencil ? "fit" : "best", best,
-                         at.c_str());
+            std::fprintf(stderr, "evaluation %d%s%s: loss %.4g (%s %.4g) at%s\n", e,
+                         stencil ? " (SE stencil)" : "", from_journal ? " (from the journal)" : "",
+                         l, stencil ? "fit" : "best", best, at.c_str());
           };
         CalibrationResult r = calibrate(s, cells, a->opt);
         auto j = to_json(r);

@@ -753,7 +753,8 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     if (it != memo.end()) return it->second;
     const auto* stored = journal ? journal->find(x) : nullptr;
     std::pair<double, std::vector<CellFit>> e;
-    if (replay && stored) {
+    const bool from_journal = replay && stored;
+    if (from_journal) {
       e = *stored;
       ++r.replayed;
     } else {
@@ -764,7 +765,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     ++evaluations;
     if (!in_stencil) best = std::min(best, l);
     if (in_stencil) stencil_points.push_back(x);
-    if (opt.progress) opt.progress(evaluations, l, best, x, in_stencil);
+    if (opt.progress) opt.progress(evaluations, l, best, x, in_stencil, from_journal);
     return memo.emplace(x, std::move(e)).first->second;
   };
   auto loss = [&](const std::vector<double>& x) { return simulate(x).first; };

@@ -145,8 +145,9 @@ struct CalibrateOptions {
   // Called after every simulation (a point simulated once is not simulated again); `best` is the
   // optimiser's best loss so far, `stencil` true for the points of the standard errors' stencil
   // (simulated after the fit; they do not change `best`, see CalibrationResult::stencil_lower).
+  // `from_journal`: the evaluation was read from `journal`, not simulated.
   std::function<void(int evaluation, double loss, double best, const std::vector<double>& x,
-                     bool stencil)>
+                     bool stencil, bool from_journal)>
       progress;
   // Where every simulated evaluation is appended as it finishes (protocols/calibrate_journal.hpp;
   // empty: nowhere). The evaluations of the same set-up found there are taken instead of

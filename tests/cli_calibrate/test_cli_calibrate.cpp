@@ -804,6 +804,8 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
       std::string::npos)
       << r.out;
   same_fit(nlohmann::json::parse(slurp(d / "fit.json")), evaluations - 1);
+  EXPECT_NE(r.err.find("evaluation 2 (from the journal): loss"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("evaluation 1 (from the journal)"), std::string::npos) << r.err;
   const std::string again = slurp(journal);
   EXPECT_EQ(static_cast<int>(std::count(again.begin(), again.end(), '\n')),
             evaluations);  // nothing appended twice
