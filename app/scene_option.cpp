@@ -3,6 +3,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include "common/input_error.hpp"
@@ -105,11 +106,19 @@ std::vector<std::string> unused_scene_warnings(const std::vector<std::string>& s
                                                const std::vector<std::string>& used) {
   std::vector<std::string> out;
   std::set<std::string> used_files, seen;
+  std::map<std::string, std::string> scene_of_source;  // prototype file -> first --scene of it
   for (const auto& u : used) used_files.insert(canonical(u));
   for (std::size_t i = 0; i < scenes.size() && i < sources.size(); ++i) {
     if (!seen.insert(canonical(scenes[i])).second) {
       out.push_back("warning: --scene \"" + scenes[i] +
                     "\" is given more than once (it is used once)");
+      continue;
+    }
+    const auto [first, fresh] = scene_of_source.emplace(canonical(sources[i]), scenes[i]);
+    if (!fresh) {
+      out.push_back("warning: --scene \"" + scenes[i] +
+                    "\" was built from the same prototype as --scene \"" + first->second + "\" (" +
+                    sources[i] + "): both hold its precomputation, one of them is enough");
       continue;
     }
     if (!used_files.count(canonical(sources[i])))

@@ -28,8 +28,9 @@ std::string scene_prototype(const std::string& positional, const std::vector<std
 std::vector<std::string> preload_scenes(const std::vector<std::string>& scenes);
 
 // The notices for --scene files that do nothing (review 2026-12-06: they passed without a
-// word): one given twice, or built from a prototype file none of `used` (the study's prototype
-// files) is. One line each, "warning: --scene ...".
+// word): one given twice, one built from the same prototype as an earlier one, or one built from
+// a prototype file none of `used` (the study's prototype files) is. One line each, "warning:
+// --scene ...".
 std::vector<std::string> unused_scene_warnings(const std::vector<std::string>& scenes,
                                                const std::vector<std::string>& sources,
                                                const std::vector<std::string>& used);

@@ -358,6 +358,16 @@ TEST(CliScene, RunWithSceneFilesStoresTheSameResults) {
       has(r.err, "warning: --scene \"" + a_psim + "\" is given more than once (it is used once)"))
       << r.err;
   EXPECT_FALSE(has(r.err, "--scene \"" + a_psim + "\" was built")) << r.err;
+  // Two files of the same prototype: one is enough.
+  fs::copy_file(a_psim, dir / "A2.psim");
+  const std::string a2_psim = (dir / "A2.psim").string();
+  r = run_palplab("run " + a_only + " --db " + (dir / "a2.db").string() + " --quiet --scene " +
+                      a_psim + " --scene " + a2_psim,
+                  dir);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "warning: --scene \"" + a2_psim +
+                             "\" was built from the same prototype as --scene \"" + a_psim + "\""))
+      << r.err;
   for (const char* db : {"plain", "psim"}) {
     r = run_palplab(std::string("export ") + (dir / (std::string(db) + ".db")).string() +
                         " --csv " + (dir / db).string(),
