@@ -91,6 +91,8 @@ palplab::app::CommandRegistration reg_calibrate{
         // another kind without --overwrite.
         std::vector<palplab::app::CommandInput> not_out = {{"the study file", a->study},
                                                            {"the human data", a->human}};
+        for (const auto& [id, file] : s.prototype_files)
+          not_out.push_back({"prototype " + id + " of the study", file});
         if (defaults) not_out.push_back({"the --write-defaults file", a->write_defaults});
         palplab::app::require_replaceable_output(
             "--out", a->out, not_out,
@@ -100,18 +102,30 @@ palplab::app::CommandRegistration reg_calibrate{
               return !j.is_discarded() && j.is_object() && j.contains("palplab_calibration");
             },
             "palplab calibration JSON", a->overwrite);
-        // The journal: next to --out unless given; never an input or --out; a file of another
-        // kind only with --overwrite (then removed: the journal is appended to and read back).
+        // The journal: next to --out unless given (/dev/null: none); never an input or --out; a
+        // file of another kind only with --overwrite (then removed: the journal is appended to
+        // and read back).
         if (journal_opt->count() > 0 && a->journal.empty())
           throw palplab::InputError(palplab::SourceLocation{"--journal"},
                                     "expected where to write the evaluations, got an empty path");
         if (a->journal.empty())
           a->journal = std::filesystem::path(a->out).replace_extension(".evals.jsonl").string();
-        {
-          std::vector<palplab::app::CommandInput> not_journal = not_out;
-          not_journal.push_back({"--out", a->out});
+        auto same_path = [](const std::string& x, const std::string& y) {
+          std::error_code e1, e2;
+          const auto cx = std::filesystem::weakly_canonical(std::filesystem::absolute(x), e1);
+          const auto cy = std::filesystem::weakly_canonical(std::filesystem::absolute(y), e2);
+          return !e1 && !e2 && cx == cy;
+        };
+        if (same_path(a->journal, a->out))
+          throw palplab::InputError(palplab::SourceLocation{"--journal"},
+                                    "\"" + a->journal +
+                                        "\" is --out too (the fitted parameters go there); "
+                                        "expected another file for the evaluations");
+        if (same_path(a->journal, "/dev/null")) {
+          a->journal.clear();  // no journal (the fit is not resumable)
+        } else {
           palplab::app::require_replaceable_output(
-              "--journal", a->journal, not_journal,
+              "--journal", a->journal, not_out,
               [](const std::string& p) { return palplab::protocols::is_calibration_journal(p); },
               "palplab calibration journal", a->overwrite);
           std::error_code ec;

@@ -351,7 +351,6 @@ double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int 
     f.n_sim = static_cast<int>(x.size());
     if (x.size() < 2) {
       f.mean = f.sd = f.z_mean = f.z_sd = kNaN;
-      loss += 1e3;  // nothing to compare: far worse than any fit
     } else {
       mean_sd(x, f.mean, f.sd);
       const double s2 = std::pow(loss_sd(c), 2);
@@ -359,13 +358,22 @@ double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int 
       const double var_s = s2 / (2.0 * (c.n - 1)) + s2 / (2.0 * (f.n_sim - 1));
       f.z_mean = (f.mean - c.mean) / std::sqrt(var_m);
       f.z_sd = (f.sd - c.sd) / std::sqrt(var_s);
-      loss += f.z_mean * f.z_mean + f.z_sd * f.z_sd;
     }
-    const double u_h = static_cast<double>(c.undefined) / (c.n + c.undefined);
-    loss += 25.0 * std::abs(static_cast<double>(f.undefined) / total - u_h);
+    add_cell_loss(loss, f);
     if (fit) fit->push_back(f);
   }
   return loss;
+}
+
+void add_cell_loss(double& loss, const CellFit& f) {
+  if (f.n_sim < 2)
+    loss += 1e3;  // nothing to compare: far worse than any fit
+  else
+    loss += f.z_mean * f.z_mean + f.z_sd * f.z_sd;
+  const HumanCell& c = f.human;
+  const int total = f.n_sim + f.undefined;
+  const double u_h = static_cast<double>(c.undefined) / (c.n + c.undefined);
+  loss += 25.0 * std::abs(static_cast<double>(f.undefined) / total - u_h);
 }
 
 NelderMeadResult nelder_mead(const std::function<double(const std::vector<double>&)>& f,
@@ -785,6 +793,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
                            "): it was written by a palplab that simulates differently; remove "
                            "it (or give another --journal) to start the fit afresh");
     replay = true;
+    r.journal_other_build = journal->other_build();
   }
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
@@ -1000,6 +1009,9 @@ std::string to_text(const CalibrationResult& r) {
   if (r.replayed > 0)
     o << r.replayed << " of the evaluations taken from the journal (not simulated again: an "
       << "earlier run of this fit stored them)\n";
+  if (r.replayed > 0 && r.journal_other_build > 0)
+    o << r.journal_other_build << " of the journal's lines of this fit were written by another "
+      << "palplab build; used, since this one simulates the start exactly as stored\n";
   if (r.kept_start && r.points_tried <= 1)
     o << "only the start was simulated (--budget " << r.budget
       << "): its loss is reported, nothing was fitted\n";

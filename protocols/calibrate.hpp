@@ -86,6 +86,10 @@ void check_human_measure(const Study& study, const std::vector<HumanCell>& cells
 // simulate: a group or phase the study does not have, a session beyond the phase's sessions.
 void check_human_cell(const Study& study, const HumanCell& c);
 
+// One cell's terms of the loss, added to `loss` in the order moment_loss adds them (so that a
+// loss recomputed from its cells — the journal's check — is the same to the bit).
+void add_cell_loss(double& loss, const CellFit& f);
+
 // Simulates `study` and compares it with `cells`; returns the loss (see above).
 double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int jobs,
                    std::vector<CellFit>* fit = nullptr);
@@ -182,6 +186,9 @@ struct CalibrationResult {
   // Evaluations taken from CalibrateOptions::journal instead of simulated (counted in
   // `evaluations` as well: the fit is the same as an uninterrupted one's).
   int replayed = 0;
+  // Lines of this fit in the journal written by another palplab build (used: the start's check
+  // passed; said in the text).
+  int journal_other_build = 0;
   // The lowest loss among the SE stencil's points when it is below loss_after beyond rounding
   // (empty otherwise): the optimiser's end point is then no minimum at the stencil's scale. The
   // fit is not moved there (its SEs are the end point's curvature); the report says where it is,

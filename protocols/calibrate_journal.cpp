@@ -11,6 +11,7 @@
 
 #include "common/input_error.hpp"
 #include "palplab/version.hpp"
+#include "protocols/input_pins.hpp"
 #include "results/sha256.hpp"
 
 namespace palplab::protocols {
@@ -18,6 +19,11 @@ namespace palplab::protocols {
 namespace {
 
 constexpr const char* kTag = "palplab_calibration_eval";
+
+// Which palplab wrote a line (said, not part of the set-up: the start's check decides).
+std::string palplab_build() {
+  return std::string(kVersion) + " " + kGitCommit;
+}
 
 // Exact in JSON: finite doubles as numbers (written to round-trip), the others as text.
 nlohmann::json enc(double x) {
@@ -50,7 +56,8 @@ std::string calibration_setup(const Study& study, int sim_n, const std::vector<s
   j["study_sha256"] = results::sha256_hex(study.json_text);
   j["sim_n"] = sim_n;
   j["keys"] = keys;
-  j["palplab"] = std::string(kVersion) + " " + kGitCommit;
+  // The prototypes as simulated (their files and meshes): a changed one changes every loss.
+  for (const auto& [id, file] : study.prototype_files) j["prototypes"][id] = prototype_sha256(file);
   nlohmann::json cells = nlohmann::json::array();
   for (const auto& c : used) {
     nlohmann::json v = nlohmann::json::array();
@@ -66,12 +73,23 @@ bool is_calibration_journal(const std::string& path) {
   std::string first;
   std::getline(in, first);
   const auto j = nlohmann::json::parse(first, nullptr, false);
-  return !j.is_discarded() && j.is_object() && j.contains(kTag);
+  if (!j.is_discarded() && j.is_object() && j.contains(kTag)) return true;
+  // Its first line cut by an interruption (no newline yet): a line as append() writes it starts
+  // so (nlohmann orders the keys).
+  return in.eof() && first.rfind("{\"cells\":[", 0) == 0;
 }
 
 CalibrationJournal::CalibrationJournal(const std::string& path, const std::string& setup,
                                        const std::vector<HumanCell>& used)
     : path_(path), setup_(setup) {
+  // A device or a FIFO would be read without end (/dev/zero) or block (a FIFO).
+  std::error_code ec0;
+  const auto st = std::filesystem::status(path, ec0);
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+    throw InputError(SourceLocation{"--journal"},
+                     "\"" + path +
+                         "\" is not a regular file (a directory, a FIFO or a device); expected "
+                         "the journal's file (or /dev/null for none)");
   std::string text;
   {
     std::ifstream in(path, std::ios::binary);
@@ -97,6 +115,7 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
   int at = 0;
   while (std::getline(lines, line)) {
     ++at;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;  // a blank line
     const auto j = nlohmann::json::parse(line, nullptr, false);
     auto bad = [&](const std::string& why) {
       throw InputError(SourceLocation{path, at},
@@ -105,14 +124,15 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
                            "another --journal, or remove the file to start the fit afresh");
     };
     if (j.is_discarded() || !j.is_object() || !j.contains(kTag)) bad("not such a JSON line");
-    if (j.value("setup", std::string()) != setup) continue;  // another fit's
+    if (!j.contains("setup") || !j["setup"].is_string()) bad("no setup");
+    if (j["setup"].get<std::string>() != setup) continue;  // another fit's
     std::vector<double> x;
     double loss = 0;
     if (!j.contains("x") || !j["x"].is_array() || !j.contains("loss") || !dec(j["loss"], loss))
       bad("no x or loss");
     for (const auto& v : j["x"]) {
       double d = 0;
-      if (!dec(v, d)) bad("x holds " + v.dump());
+      if (!dec(v, d) || !std::isfinite(d)) bad("x holds " + v.dump() + ": parameters are finite");
       x.push_back(d);
     }
     const auto& cells = j.value("cells", nlohmann::json::array());
@@ -128,8 +148,18 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
         bad("cell " + std::to_string(i) + " is " + c.dump());
       f.n_sim = c[0].get<int>();
       f.undefined = c[1].get<int>();
+      if (f.n_sim < 0 || f.undefined < 0 || f.n_sim + f.undefined == 0)
+        bad("cell " + std::to_string(i) + " counts " + c[0].dump() + " and " + c[1].dump() +
+            " participants");
       fit.push_back(std::move(f));
     }
+    // The loss is its cells' (an edited loss or cell would steer the fit).
+    double recomputed = 0.0;
+    for (const auto& f : fit) add_cell_loss(recomputed, f);
+    if (!(recomputed == loss || (std::isnan(recomputed) && std::isnan(loss))))
+      bad("its loss " + j["loss"].dump() + " is not its cells' (" +
+          nlohmann::json(recomputed).dump() + ")");
+    if (j.value("palplab", std::string()) != palplab_build()) ++other_build_;
     stored_.emplace(std::move(x), std::make_pair(loss, std::move(fit)));
   }
   file_ = std::fopen(path.c_str(), "ab");
@@ -152,6 +182,7 @@ void CalibrationJournal::append(const std::vector<double>& x, double loss,
   nlohmann::json j;
   j[kTag] = 1;
   j["setup"] = setup_;
+  j["palplab"] = palplab_build();
   nlohmann::json xs = nlohmann::json::array();
   for (double v : x) xs.push_back(enc(v));
   j["x"] = xs;

@@ -14,9 +14,11 @@
 
 namespace palplab::protocols {
 
-// What a simulated loss depends on besides the parameters: the study as simulated (its text and
-// the group size), the fitted names, the human cells the loss compares with, and the palplab
-// that simulates. Lines of another set-up are kept in the file but not used.
+// What a simulated loss depends on besides the parameters: the study as simulated (its text, the
+// group size and its prototypes' files), the fitted names and the human cells the loss compares
+// with. Lines of another set-up are kept in the file but not used. The palplab that simulates is
+// not part of it (a fit of hours runs in parts, across builds): each line names the build that
+// wrote it, and the start, simulated again, must equal its stored evaluation.
 std::string calibration_setup(const Study& study, int sim_n, const std::vector<std::string>& keys,
                               const std::vector<HumanCell>& used);
 
@@ -37,11 +39,14 @@ class CalibrationJournal {
   void append(const std::vector<double>& x, double loss, const std::vector<CellFit>& fit);
   // Evaluations of this set-up read from the file.
   int stored() const { return static_cast<int>(stored_.size()); }
+  // Of those, how many another palplab build wrote (used when the start's check passes).
+  int other_build() const { return other_build_; }
   const std::string& path() const { return path_; }
 
  private:
   std::string path_, setup_;
   std::FILE* file_ = nullptr;
+  int other_build_ = 0;
   std::map<std::vector<double>, std::pair<double, std::vector<CellFit>>> stored_;
 };
 

@@ -824,8 +824,10 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
   EXPECT_EQ(slurp(journal), all);
 
   // A journal whose start is not what this palplab simulates (another palplab's, or edited).
+  // (A line consistent in itself: every cell with one simulated participant, 1000 each.)
   auto start = nlohmann::json::parse(lines[0]);
-  start["loss"] = start["loss"].get<double>() + 1.0;
+  for (auto& c : start["cells"]) c = {1, 0, "nan", "nan", "nan", "nan"};
+  start["loss"] = 1000.0 * static_cast<double>(start["cells"].size());
   std::ofstream(journal, std::ios::trunc) << start.dump() << "\n" << lines[1] << "\n";
   r = run_palplab(cmd + " --quiet", d);
   EXPECT_EQ(r.code, 2) << r.err;
@@ -834,6 +836,51 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
                        "but its loss at the start"),
             std::string::npos)
       << r.err;
+  // Lines checked as they are read (review 2026-12-06: a NaN parameter matched every point and
+  // gave a wrong fit with exit 0; an edited loss steered it).
+  auto edited = [&](const std::string& key, const nlohmann::json& value) {
+    auto e = nlohmann::json::parse(lines[1]);
+    e[key] = value;
+    std::ofstream(journal, std::ios::trunc) << lines[0] << "\n" << e.dump() << "\n";
+    return run_palplab(cmd + " --quiet", d);
+  };
+  r = edited("x", nlohmann::json::array({"nan"}));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(journal.string() + ":2: not a calibration evaluation (x holds \"nan\": "
+                                          "parameters are finite)"),
+            std::string::npos)
+      << r.err;
+  r = edited("loss", -5.0);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(":2: not a calibration evaluation (its loss -5.0 is not its cells'"),
+            std::string::npos)
+      << r.err;
+  r = edited("setup", 5);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(":2: not a calibration evaluation (no setup)"), std::string::npos) << r.err;
+  // The first line cut by an interruption: cut off, the fit starts afresh (and ends the same).
+  std::ofstream(journal, std::ios::trunc) << lines[0].substr(0, 30);
+  r = run_palplab(cmd + " --quiet", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  same_fit(nlohmann::json::parse(slurp(d / "fit.json")), 0);
+  // Not a regular file, or --out itself: refused before any simulation; /dev/null: no journal.
+  if (fs::exists("/dev/full")) {
+    r = run_palplab(cmd + " --quiet --journal /dev/full", d);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--journal: \"/dev/full\" is not a regular file"), std::string::npos)
+        << r.err;
+  }
+  r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                      (d / "human.csv").string() + " --params prior_target_cv --quiet --out " +
+                      (d / "new.json").string() + " --journal " + (d / "new.json").string(),
+                  d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("is --out too"), std::string::npos) << r.err;
+  fs::remove(journal);
+  r = run_palplab(cmd + " --quiet --journal /dev/null", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(journal));
+  same_fit(nlohmann::json::parse(slurp(d / "fit.json")), 0);
   // A file that is no journal, at the journal's place: refused before any simulation.
   std::ofstream(journal, std::ios::trunc) << "my notes\n";
   r = run_palplab(cmd + " --quiet", d);
