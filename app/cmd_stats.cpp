@@ -27,6 +27,14 @@
 #include "results/store.hpp"
 
 namespace {
+
+// A still's file name as the report writes it: "<prototype>_pressed.png" or "<prototype>_rest.png".
+bool named_like_a_still(const std::string& name) {
+  for (const std::string_view suffix : {"_pressed.png", "_rest.png"})
+    if (name.size() > suffix.size() && name.ends_with(suffix)) return true;
+  return false;
+}
+
 struct StatsArgs {
   std::string csv, value, group, df_mode = "exact";
   std::vector<std::string> where;
@@ -228,11 +236,8 @@ void check_report_out(const ReportArgs& a) {
   // carry one of them (any SVG under figures/; a PNG named like a still, or stills.json) is
   // refused unless --overwrite. palplab's own figures open as analysis/svg.cpp writes them; its
   // stills are the files its stills.json lists.
-  auto ends_with = [](const std::string& s, const std::string& t) {
-    return s.size() >= t.size() && s.compare(s.size() - t.size(), t.size(), t) == 0;
-  };
   require_own_files_under(
-      "--out", a.out, "figures", [&](const std::string& n) { return ends_with(n, ".svg"); },
+      "--out", a.out, "figures", [](const std::string& n) { return n.ends_with(".svg"); },
       "palplab report figure",
       [](const std::string& p) {
         return palplab::app::output_head_has(p,
@@ -251,11 +256,7 @@ void check_report_out(const ReportArgs& a) {
       },
       "--overwrite", a.overwrite);
   require_own_files_under(
-      "--out", a.out, "stills",
-      [&](const std::string& n) {
-        return ends_with(n, "_pressed.png") || ends_with(n, "_rest.png");
-      },
-      "palplab report still",
+      "--out", a.out, "stills", named_like_a_still, "palplab report still",
       [&](const std::string& p) {
         const std::string name = std::filesystem::path(p).filename().string();
         return palplab::app::output_head_has(listing, "{", "\"stills/" + name + "\"");
@@ -301,11 +302,7 @@ std::vector<std::filesystem::path> earlier_report_files(const std::string& out) 
       // ("stills/A_pressed.png"): any other name a listing holds is left alone.
       const fs::path rel = s[key].get<std::string>();
       const std::string name = rel.filename().string();
-      auto ends_with = [&](const std::string& t) {
-        return name.size() > t.size() && name.compare(name.size() - t.size(), t.size(), t) == 0;
-      };
-      if (rel.parent_path() != "stills" || !(ends_with("_pressed.png") || ends_with("_rest.png")))
-        continue;
+      if (rel.parent_path() != "stills" || !named_like_a_still(name)) continue;
       const fs::path p = fs::path(out) / "stills" / rel.filename();
       if (regular(p)) found.push_back(p.lexically_normal());
     }

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "common/read_file.hpp"
 #include "palplab/version.hpp"
 #include "protocols/input_pins.hpp"
 #include "results/sha256.hpp"
@@ -90,15 +91,12 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
                      "\"" + path +
                          "\" is not a regular file (a directory, a FIFO or a device); expected "
                          "the journal's file (or /dev/null for none)");
-  std::string text;
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (in) {
-      std::ostringstream ss;
-      ss << in.rdbuf();
-      text = ss.str();
-    }
-  }
+  // A line is a few kB (its cells); 256 MiB is tens of thousands of evaluations, far beyond any
+  // --budget, and keeps a runaway file from being read until memory runs out.
+  constexpr std::size_t kMaxJournalBytes = std::size_t{256} << 20;
+  std::string text = std::filesystem::exists(st)
+                         ? read_file_bounded(path, kMaxJournalBytes, "calibration journal")
+                         : std::string();
   // A last line without its newline was cut by an interruption: cut off (its evaluation is
   // simulated again).
   const std::size_t complete = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;

@@ -1,17 +1,16 @@
 #include "engine/haptics/devices/trace_device.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
-#include <optional>
 #include <sstream>
 
 #include "common/input_error.hpp"
-#include "common/remove_on_signal.hpp"
+#include "common/write_file.hpp"
 
 namespace palplab::engine {
 
@@ -102,55 +101,35 @@ Trace read_trace(const std::string& path) {
 }
 
 void write_trace(const std::string& path, const Trace& trace) {
-  // Written beside the target (PATH.partial) and renamed over it, so that a failed write (a full
-  // disk) never leaves half a trace in place of the earlier one. A target that is a link or not a
-  // regular file (/dev/stdout, a pipe) is written directly, as it was.
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const auto st = fs::symlink_status(path, ec);
-  const bool direct = fs::exists(st) && !fs::is_regular_file(st);
-  const std::string tmp = direct ? path : path + ".partial";
-  // Removed if the process is interrupted before the rename (not the target written directly).
-  std::optional<RemoveOnSignal> partial;
-  if (!direct) partial.emplace(tmp);
-  std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f)
-    throw InputError(path + ": cannot write the trace: " + std::strerror(errno) +
-                     (direct ? "" : " (writing " + tmp + ")"));
-  std::fprintf(f, "%s\n", kMagic);
-  for (const auto& [k, v] : trace.meta) std::fprintf(f, "# %s=%s\n", k.c_str(), v.c_str());
+  // Composed in memory and written by write_file: whole or not at all (a full disk or an
+  // interruption leaves the earlier trace as it was); a link is written through, a device or a
+  // pipe (/dev/stdout) directly.
+  std::string text;
+  text.reserve(64 + trace.samples.size() * 160);
+  char buf[512];
+  auto add = [&](int n) {
+    // The longest line is 11 numbers of at most 24 characters; snprintf cannot truncate here.
+    text.append(buf, static_cast<size_t>(std::max(n, 0)));
+  };
+  text += kMagic;
+  text += '\n';
+  for (const auto& [k, v] : trace.meta) text += "# " + k + "=" + v + "\n";
   // The axis columns only when the device reported an axis (older readers read the rest).
   bool axis = false;
   for (const auto& s : trace.samples) axis = axis || s.in.stylus_axis != Eigen::Vector3d::Zero();
-  std::fprintf(f, "%s\n", axis ? kHeaderAxis : kHeader);
+  text += axis ? kHeaderAxis : kHeader;
+  text += '\n';
   for (const auto& s : trace.samples) {
     const auto& p = s.in.position;
     const auto& v = s.in.velocity;
     const unsigned b = s.in.buttons | (s.in.button ? 1u : 0u);
-    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u", s.t, p.x(), p.y(), p.z(), v.x(),
-                 v.y(), v.z(), b);
+    add(std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u", s.t, p.x(),
+                      p.y(), p.z(), v.x(), v.y(), v.z(), b));
     const auto& a = s.in.stylus_axis;
-    if (axis) std::fprintf(f, ",%.17g,%.17g,%.17g", a.x(), a.y(), a.z());
-    std::fputc('\n', f);
+    if (axis) add(std::snprintf(buf, sizeof buf, ",%.17g,%.17g,%.17g", a.x(), a.y(), a.z()));
+    text += '\n';
   }
-  errno = 0;
-  bool ok = std::fflush(f) == 0 && !std::ferror(f);
-  const int why = errno;
-  ok = std::fclose(f) == 0 && ok;
-  if (!ok) {
-    if (!direct) fs::remove(tmp, ec);
-    throw InputError(
-        path + ": writing the trace failed (" + (why ? std::strerror(why) : "write error") + ")" +
-        (direct || !fs::exists(path, ec) ? std::string() : "; the file there before is unchanged"));
-  }
-  if (!direct) {
-    fs::rename(tmp, path, ec);
-    if (ec) {
-      std::error_code e2;
-      fs::remove(tmp, e2);
-      throw InputError(path + ": cannot write the trace: " + ec.message());
-    }
-  }
+  write_file(path, text, "the trace");
 }
 
 DeviceInput TraceRecorder::read(double t) {
