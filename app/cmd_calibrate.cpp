@@ -154,6 +154,10 @@ palplab::app::CommandRegistration reg_calibrate{
         }
         a->opt.standard_errors = !a->no_se;
         if (!a->quiet)
+          a->opt.notice = [](const std::string& m) {
+            std::fprintf(stderr, "calibrate: %s\n", m.c_str());
+          };
+        if (!a->quiet)
           a->opt.progress = [keys = a->opt.keys](int e, double l, double best,
                                                  const std::vector<double>& x, bool stencil,
                                                  bool from_journal) {

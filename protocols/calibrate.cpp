@@ -754,6 +754,15 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   std::optional<CalibrationJournal> journal;
   if (!opt.journal.empty())
     journal.emplace(opt.journal, calibration_setup(study, opt.sim_n, opt.keys, used), used);
+  if (journal && opt.notice) {
+    const int k = journal->stored();
+    opt.notice(k == 0 ? "each evaluation is appended to " + journal->path() +
+                            " as it finishes (the same command resumes an interrupted fit)"
+                      : journal->path() + " holds " + std::to_string(k) + " evaluation" +
+                            (k == 1 ? "" : "s") +
+                            " of this fit: the start is simulated again to check them, then "
+                            "they are taken without simulating");
+  }
   bool replay = false;
   auto simulate =
       [&](const std::vector<double>& x) -> const std::pair<double, std::vector<CellFit>>& {

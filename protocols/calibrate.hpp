@@ -159,6 +159,10 @@ struct CalibrateOptions {
   // an uninterrupted one; the start is always simulated and must equal its stored evaluation
   // (InputError otherwise: a palplab that simulates differently wrote the file).
   std::string journal;
+  // Said once, before the first simulation: where the evaluations go and how many of this fit's
+  // the journal already holds (a resumed fit first simulates its start again, which takes as
+  // long as any evaluation, before the stored ones are replayed).
+  std::function<void(const std::string& message)> notice;
 };
 
 struct CalibrationResult {

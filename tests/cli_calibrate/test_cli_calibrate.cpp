@@ -780,6 +780,12 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
   const fs::path journal = d / "fit.evals.jsonl";
   Result r = run_palplab(cmd, d);
   ASSERT_EQ(r.code, 0) << r.err;
+  // Said before the first simulation: where the evaluations go (then how many it holds).
+  EXPECT_NE(r.err.find("calibrate: each evaluation is appended to " + journal.string() +
+                       " as it finishes"),
+            std::string::npos)
+      << r.err;
+  EXPECT_LT(r.err.find("calibrate: each evaluation"), r.err.find("evaluation 1"));
   auto whole = nlohmann::json::parse(slurp(d / "fit.json"));
   const int evaluations = whole["evaluations"].get<int>();
   EXPECT_EQ(whole["evaluations_from_journal"], 0);
@@ -804,6 +810,10 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
       std::string::npos)
       << r.out;
   same_fit(nlohmann::json::parse(slurp(d / "fit.json")), evaluations - 1);
+  EXPECT_NE(r.err.find("calibrate: " + journal.string() + " holds " + std::to_string(evaluations) +
+                       " evaluations of this fit: the start is simulated again"),
+            std::string::npos)
+      << r.err;
   EXPECT_NE(r.err.find("evaluation 2 (from the journal): loss"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("evaluation 1 (from the journal)"), std::string::npos) << r.err;
   const std::string again = slurp(journal);
