@@ -1,11 +1,16 @@
 #include "protocols/calibrate_journal.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -91,12 +96,32 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
                      "\"" + path +
                          "\" is not a regular file (a directory, a FIFO or a device); expected "
                          "the journal's file (or /dev/null for none)");
+  // Opened (created) and locked before it is read: a second calibrate on the same journal would
+  // simulate the same points and interleave its lines with the first's.
+  errno = 0;
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw InputError(std::string("cannot write the journal (") + std::strerror(errno) + ")", path);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(::fdopen(fd, "ab"), &std::fclose);
+  if (!file) {
+    const int why = errno;
+    ::close(fd);
+    throw InputError(std::string("cannot write the journal (") + std::strerror(why) + ")", path);
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int why = errno;
+    throw InputError(
+        SourceLocation{"--journal"},
+        "\"" + path + "\" is in use: " +
+            (why == EWOULDBLOCK ? std::string("another palplab calibrate is running this fit; wait "
+                                              "for it to end (it is resumed from the journal by "
+                                              "the same command) or give another --journal")
+                                : std::string("it cannot be locked (") + std::strerror(why) + ")"));
+  }
   // A line is a few kB (its cells); 256 MiB is tens of thousands of evaluations, far beyond any
   // --budget, and keeps a runaway file from being read until memory runs out.
   constexpr std::size_t kMaxJournalBytes = std::size_t{256} << 20;
-  std::string text = std::filesystem::exists(st)
-                         ? read_file_bounded(path, kMaxJournalBytes, "calibration journal")
-                         : std::string();
+  std::string text = read_file_bounded(path, kMaxJournalBytes, "calibration journal");
   // A last line without its newline was cut by an interruption: cut off (its evaluation is
   // simulated again).
   const std::size_t complete = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
@@ -160,9 +185,7 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
     if (j.value("palplab", std::string()) != palplab_build()) ++other_build_;
     stored_.emplace(std::move(x), std::make_pair(loss, std::move(fit)));
   }
-  file_ = std::fopen(path.c_str(), "ab");
-  if (!file_)
-    throw InputError(std::string("cannot write the journal (") + std::strerror(errno) + ")", path);
+  file_ = file.release();  // appends at the end (O_APPEND), after the cut above
 }
 
 CalibrationJournal::~CalibrationJournal() {

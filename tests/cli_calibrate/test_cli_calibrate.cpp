@@ -8,7 +8,9 @@
 // group the curvature-based SEs are then on the small side — see docs/PARTICIPANTS.md.) Slow for a
 // test (~20-40 s on one core: every loss evaluation simulates the whole small study); that is the
 // price of testing recovery on the code path `calibrate` really uses.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -819,6 +821,23 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
   const std::string again = slurp(journal);
   EXPECT_EQ(static_cast<int>(std::count(again.begin(), again.end(), '\n')),
             evaluations);  // nothing appended twice
+
+  // A second calibrate on a journal in use (here locked by this test, as a running fit locks
+  // it) is refused before it simulates: its lines would interleave with the first's.
+  {
+    const int fd = ::open(journal.c_str(), O_RDONLY | O_CLOEXEC);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    r = run_palplab(cmd, d);
+    ::close(fd);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--journal: \"" + journal.string() +
+                         "\" is in use: another palplab calibrate is running this fit"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("evaluation 1"), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(journal), again);
+  }
 
   // Interrupted after three evaluations, in the middle of writing the fourth.
   std::ofstream(journal, std::ios::trunc) << lines[0] << "\n"
