@@ -4,15 +4,18 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 #include "common/write_file.hpp"
 
 namespace fs = std::filesystem;
@@ -113,5 +116,51 @@ TEST(WriteFile, ALinkIsWrittenThroughAndStaysALink) {
   palplab::write_file((d / "link.json").string(), "new", "the file");
   EXPECT_TRUE(fs::is_symlink(d / "link.json"));
   EXPECT_EQ(slurp(d / "target.json"), "new");
+  fs::remove_all(d);
+}
+
+// common/remove_on_signal: a file registered while a signal ends the process is removed, and the
+// process ends by that signal; a file deregistered before is kept; a signal the process ignores
+// (nohup) stays ignored. Each case in a child process.
+TEST(RemoveOnSignal, ARegisteredFileIsRemovedAndTheSignalStillEndsTheProcess) {
+  const fs::path d = scratch();
+  auto in_child = [](const std::function<void()>& body) {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      body();
+      ::_exit(7);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return status;
+  };
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    const fs::path p = d / ("registered_" + std::to_string(sig) + ".partial");
+    std::ofstream(p) << "half";
+    const int status = in_child([&] {
+      palplab::RemoveOnSignal r(p.string());
+      std::raise(sig);
+    });
+    ASSERT_TRUE(WIFSIGNALED(status)) << sig << " " << status;
+    EXPECT_EQ(WTERMSIG(status), sig);
+    EXPECT_FALSE(fs::exists(p)) << sig;
+  }
+  const fs::path kept = d / "deregistered";
+  std::ofstream(kept) << "whole";
+  int status = in_child([&] {
+    { palplab::RemoveOnSignal r(kept.string()); }
+    std::raise(SIGTERM);
+  });
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  EXPECT_EQ(slurp(kept), "whole");
+  const fs::path ignored = d / "ignored.partial";
+  std::ofstream(ignored) << "half";
+  status = in_child([&] {
+    std::signal(SIGTERM, SIG_IGN);
+    palplab::RemoveOnSignal r(ignored.string());
+    std::raise(SIGTERM);
+  });
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 7) << status;
+  EXPECT_TRUE(fs::exists(ignored));
   fs::remove_all(d);
 }
