@@ -91,6 +91,16 @@ palplab::app::CommandRegistration reg_export{
             std::filesystem::file_size(samples_csv, ec) > 0 && !ec &&
             palplab::app::file_head(samples_csv, std::string(kSamplesHeader).size()) !=
                 kSamplesHeader;
+        // A directory made here is removed again if the export fails (a damaged database): it
+        // would be left empty (review 2026-12-06, second).
+        struct RemoveIfMadeAndEmpty {
+          std::filesystem::path dir;
+          bool made = false, done = false;
+          ~RemoveIfMadeAndEmpty() {
+            std::error_code e;
+            if (made && !done && std::filesystem::is_empty(dir, e)) std::filesystem::remove(dir, e);
+          }
+        } made{*dir, !std::filesystem::exists(std::filesystem::symlink_status(*dir, ec))};
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";
@@ -105,6 +115,7 @@ palplab::app::CommandRegistration reg_export{
                          "samples.csv holds its header only\n";
         }
         const auto summary = palplab::results::export_csv(store, *dir, *samples);
+        made.done = true;
         std::cout << "wrote " << *dir << "/measures.csv, sessions.csv, events.csv"
                   << (*samples ? ", samples.csv" : "") << "\n";
         // Without --samples, an earlier export's samples.csv is not left beside these files.

@@ -10,6 +10,7 @@
 #include <sys/resource.h>
 #include <time.h>
 #include <algorithm>
+#include <filesystem>
 
 #include <chrono>
 #include <cstdio>
@@ -134,6 +135,17 @@ int run_build(const BuildArgs& a) {
     load.push_back(ms_since(t0));
   };
   double rebuild_total = 0, load_total = 0;
+  // A file that cannot be loaded back is not left behind (the error names what is wrong with
+  // it; its source is the prototype).
+  struct RemoveUnlessLoaded {
+    const std::string& path;
+    const bool& written;
+    bool loaded = false;
+    ~RemoveUnlessLoaded() {
+      std::error_code ec;
+      if (written && !loaded) std::filesystem::remove(path, ec);
+    }
+  } guard{a.out, written};
   for (int i = 0;; ++i) {
     if (a.repeat > 0 ? i >= a.repeat
                      : i >= kAutoMax || (i >= kAutoMin && rebuild_total >= kAutoCpuMs &&
@@ -149,6 +161,7 @@ int run_build(const BuildArgs& a) {
     rebuild_total += rebuild_cpu.back();
     load_total += load_cpu.back();
   }
+  guard.loaded = true;
   const int pairs = static_cast<int>(rebuild.size());
   // The machine's load when the timings were taken (1, 5, 15 min): the ratio on a busy shared
   // machine is noisier than on an idle one.

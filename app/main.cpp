@@ -154,7 +154,9 @@ int main(int argc, char** argv) {
     std::cerr << "error: cannot write to standard output ("
               << (!failed_before && why ? std::strerror(why) : "a write failed")
               << "); the output is lost\n";
-    return code != 0 ? code : 2;
+    // 2 also where the command's verdict was 1 (recheck's "inconsistent", mesh check's
+    // defects): a script must not read the lost output as that verdict.
+    return code >= 2 ? code : 2;
   }
   return code;
 }

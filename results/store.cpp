@@ -1484,6 +1484,25 @@ SampleSeries Store::read_samples(long long session) const {
                          path_);
       }
     }
+    // Every step of a complete session is one sample (unless the run stored none): rows deleted
+    // at the start or the end (the contiguity check above sees only gaps between rows) leave
+    // fewer (review 2026-12-06, second: 59 of 60 s exported without a word).
+    Stmt s(db_,
+           "SELECT steps, status, (SELECT value FROM meta WHERE key = 'samples') FROM sessions "
+           "WHERE session = ?1");
+    s.bind(1, session);
+    if (s.step() && s.type(0) == SQLITE_INTEGER && s.type(1) == SQLITE_TEXT &&
+        s.text(1) == "complete" &&
+        (out.size() > 0 || (s.type(2) == SQLITE_TEXT && s.text(2) == "full"))) {
+      const long long steps = s.integer(0);
+      if (static_cast<long long>(out.size()) != steps)
+        throw InputError("samples of " + describe_session(db_, session) + ": " +
+                             std::to_string(out.size()) + " stored, but the session ran " +
+                             std::to_string(steps) + " steps (one sample each" +
+                             (out.size() == 0 ? ", the run stored them: --samples full" : "") +
+                             "): rows are missing or edited; the database is damaged",
+                         path_);
+    }
     return out;
   });
 }

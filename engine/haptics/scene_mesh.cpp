@@ -87,11 +87,30 @@ mesh::TetMesh shoulder_tets(int layer_vertices) {
   return tm;
 }
 
+// A prototype's mesh file is a piece of tissue in metres: one far outside that (a mesh in
+// millimetres is 1000x too large; 1e150 overflowed the contact search into an internal error)
+// is refused where it is named, before anything is built from it.
+constexpr double kMinMeshExtent = 1e-4, kMaxMeshExtent = 10.0;  // m
+void check_mesh_extent(const mesh::Positions& V, const std::string& file) {
+  if (V.rows() == 0) return;  // the readers refuse an empty mesh
+  const double extent = (V.colwise().maxCoeff() - V.colwise().minCoeff()).maxCoeff();
+  if (!V.allFinite())
+    throw InputError("a vertex has a coordinate that is not a finite number (NaN or inf)", file);
+  if (!(extent >= kMinMeshExtent && extent <= kMaxMeshExtent))
+    throw InputError("the mesh is " + mesh::format_exact(extent) +
+                         " m across, expected a piece of tissue in metres (" +
+                         mesh::format_exact(kMinMeshExtent) + " to " +
+                         mesh::format_exact(kMaxMeshExtent) +
+                         " m; a mesh in millimetres is 1000 times too large)",
+                     file);
+}
+
 std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
   auto c = std::make_shared<SceneMesh>();
   mesh::SurfaceMesh sm;
   if (!m.file.empty()) {
     mesh::AnyMesh am = mesh::read_mesh(m.file);
+    check_mesh_extent(am.is_tet ? am.tet.V : am.surface.V, m.file);
     if (am.is_tet)
       build_tet(*c, sm, am.tet);
     else

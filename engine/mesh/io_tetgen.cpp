@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/text_reader.hpp"
@@ -109,15 +110,29 @@ TetMesh read_tetgen(const std::string& path) {
     const long n = rr.integer(t[0], "the region count");
     detail::check_count(rr, n, "region", 100000);
     regions.names.assign(n, "");
+    // Each id once, each name once, nothing after the last (review 2026-12-06, second: an id
+    // given twice left another without a name; a shorter list read lines of nothing).
+    std::vector<char> named(n, 0);
+    std::map<std::string, long> id_of;
     for (long i = 0; i < n; ++i) {
-      if (!rr.tokens(t) || t.size() < 2) rr.fail("expected `<id> <name>`");
+      if (!rr.tokens(t))
+        rr.fail("the file announces " + std::to_string(n) + " region names but holds " +
+                std::to_string(i));
+      if (t.size() < 2) rr.fail("expected `<id> <name>`");
       const long id = rr.integer(t[0], "a region id");
       if (id < 0 || id >= n)
         rr.fail("region id " + t[0] + " out of range [0, " + std::to_string(n) + ")");
+      if (named[id]) rr.fail("region id " + t[0] + " is named twice");
       std::string name = t[1];
       for (size_t c = 2; c < t.size(); ++c) name += " " + t[c];
+      if (const auto [it, fresh] = id_of.emplace(name, id); !fresh)
+        rr.fail("region name \"" + name + "\" is given to ids " + std::to_string(it->second) +
+                " and " + t[0] + " (expected one id per region)");
+      named[id] = 1;
       regions.names[id] = name;
     }
+    if (rr.tokens(t))
+      rr.fail("more lines than the " + std::to_string(n) + " region names the file announces");
     if (ta < 2)
       throw InputError(base + ".names gives region names but " + base +
                        ".ele has no second (region) attribute");

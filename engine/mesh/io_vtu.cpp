@@ -144,6 +144,30 @@ std::vector<double> numbers(const std::string& path, const std::string& text, in
   return v;
 }
 
+// The count a <Piece> declares (NumberOfPoints, NumberOfCells), when it declares one: it must
+// match what the arrays hold (a file cut or edited by hand).
+void check_declared_count(const std::string& path, const std::string& d, const char* attribute,
+                          size_t actual) {
+  const size_t piece = d.find("<Piece");
+  if (piece == std::string::npos) return;
+  const size_t close = d.find('>', piece);
+  const std::string tag =
+      d.substr(piece, close == std::string::npos ? std::string::npos : close - piece);
+  const std::string key = std::string(attribute) + "=\"";
+  const size_t at = tag.find(key);
+  if (at == std::string::npos) return;
+  const size_t from = at + key.size(), to = tag.find('"', from);
+  const std::string text = tag.substr(from, to == std::string::npos ? 0 : to - from);
+  size_t n = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), n);
+  const int line = 1 + static_cast<int>(std::count(d.begin(), d.begin() + piece, '\n'));
+  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || n != actual)
+    throw InputError(SourceLocation{path, line},
+                     std::string(attribute) + "=\"" + text.substr(0, 40) +
+                         "\" but the arrays hold " + std::to_string(actual) +
+                         " (expected the count of what the file holds)");
+}
+
 }  // namespace
 
 AnyMesh read_mesh(const std::string& path) {
@@ -191,6 +215,8 @@ AnyMesh read_mesh(const std::string& path) {
   const int k = type == 5 ? 3 : 4;
   if (conn.size() != types.size() * k) throw InputError("VTU: connectivity size mismatch", path);
   const long nv = static_cast<long>(pts.size() / 3);
+  check_declared_count(path, d, "NumberOfPoints", pts.size() / 3);
+  check_declared_count(path, d, "NumberOfCells", types.size());
   Positions V(nv, 3);
   for (long i = 0; i < nv; ++i) V.row(i) << pts[3 * i], pts[3 * i + 1], pts[3 * i + 2];
   Eigen::MatrixXi C(types.size(), k);

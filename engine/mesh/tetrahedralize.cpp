@@ -415,6 +415,35 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
       throw InputError("region seed " + std::to_string(g.index) + " is not finite");
   check_tetgen_input(s);
   check_region_seeds_inside(s, opt.seeds, opt.regions_file);
+  // A volume bound that asks for more tetrahedra than memory holds: TetGen grew by ~55 MB/s
+  // until --timeout (1e-30 m³ in a 5 cm sphere). Each tetrahedron is at most the bound, so the
+  // surface's volume over the bound is a lower limit of their number. A region seed's bound is
+  // held to the same limit for a region of 1/10000 of the whole (its own volume is not known
+  // before TetGen runs).
+  constexpr double kMaxTets = 2e7, kSmallestRegion = 1e-4;
+  const double volume = std::abs(enclosed_volume(s.V, s.F));
+  auto refuse_tiny = [&](double bound, double share, const std::string& what,
+                         const std::string& source, int line) {
+    if (!(bound > 0) || volume * share / bound <= kMaxTets) return;
+    auto g3 = [](double x) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%.3g", x);
+      return std::string(b);
+    };
+    const std::string why =
+        what + " " + g3(bound) + " m^3 asks for more than " + g3(volume * share / bound) +
+        " tetrahedra (" + (share < 1 ? "in a region of 1/10000 of " : "in ") + "the " + g3(volume) +
+        " m^3 the surface encloses); palplab meshes at most 2e7: expected a "
+        "bound of at least " +
+        g3(volume * share / kMaxTets) + " m^3";
+    if (!source.empty()) throw InputError(SourceLocation{source, line}, why);
+    throw InputError(why);
+  };
+  refuse_tiny(opt.max_volume, 1.0, "--max-volume", "", 0);
+  for (const RegionSeed& g : opt.seeds)
+    refuse_tiny(g.max_volume, kSmallestRegion,
+                "region seed " + std::to_string(g.index) + "'s volume bound",
+                g.line > 0 ? opt.regions_file : std::string(), g.line);
   const RawTets out = run_tetgen_isolated(s, opt);
   const int np = static_cast<int>(out.points.size() / 3),
             nt = static_cast<int>(out.tets.size() / 4);

@@ -337,6 +337,45 @@ TEST(HardMesh, ObjWithoutGeometryFailsCheckAndValidate) {
   EXPECT_EXIT2_WITH(r, "organ.obj: no geometry");
 }
 
+// Review finding (2026-12-06, second): a prototype's mesh 1e150 m across (or 1e308) overflowed
+// the contact search into "internal error" (exit 3), and one in millimetres ran silently (mass
+// 4e8 kg). A prototype's mesh is refused where it is named unless it is 1e-4 to 10 m across.
+TEST(HardMesh, APrototypesMeshOutsideTissueSizesIsRefusedNamingTheFile) {
+  auto d = tmp("meshsize");
+  Result r = cli("mesh generate model-a --out " + (d / "organ.obj").string(), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string metres = slurp(d / "organ.obj");
+  std::string a = slurp(src("prototypes/A.json"));
+  const std::string gen = "{\"generator\": \"tract\", \"vertices\": 1500, \"seed\": 0}";
+  a.replace(a.find(gen), gen.size(), "{\"file\": \"organ.obj\"}");
+  spit(d / "A.json", a);
+  const std::string probe =
+      "probe " + (d / "A.json").string() + " --press 0 --force 1 --duration 0.05";
+  ASSERT_EQ(cli(probe, d).code, 0);
+  for (const double scale : {1e3, 1e150, 1e-6}) {
+    std::istringstream in(metres);
+    std::string out, line;
+    while (std::getline(in, line)) {
+      if (line.rfind("v ", 0) == 0) {
+        std::istringstream v(line.substr(2));
+        double x, y, z;
+        v >> x >> y >> z;
+        std::ostringstream o;
+        o.precision(17);
+        o << "v " << x * scale << " " << y * scale << " " << z * scale;
+        line = o.str();
+      }
+      out += line + "\n";
+    }
+    spit(d / "organ.obj", out);
+    SCOPED_TRACE(scale);
+    r = cli(probe, d);
+    EXPECT_EXIT2_WITH(r, "organ.obj: the mesh is ");
+    EXPECT_TRUE(has(r.err, " m across, expected a piece of tissue in metres (0.0001 to 10 m"))
+        << r.err;
+  }
+}
+
 namespace {
 
 // A surface VTU written by palplab, with its regions (Model-A).
@@ -387,14 +426,28 @@ TEST(HardMesh, NanCoordinatesAreReportedByCheck) {
   EXPECT_EXIT2_WITH(r, "vertex 0 has a coordinate that is not a finite number");
   r = cli("mesh repair " + (d / "nan.vtu").string() + " --out " + (d / "f.obj").string(), d);
   EXPECT_EXIT2_WITH(r, "cannot repair: vertex 0");
+  // As a prototype's mesh (review 2026-12-06, second: `probe` was "internal error", exit 3;
+  // `render` drew it with exit 0): refused where it is named.
+  std::string a = slurp(src("prototypes/A.json"));
+  const std::string gen = "{\"generator\": \"tract\", \"vertices\": 1500, \"seed\": 0}";
+  a.replace(a.find(gen), gen.size(), "{\"file\": \"nan.vtu\"}");
+  spit(d / "A.json", a);
+  for (const std::string& cmd :
+       {"probe " + (d / "A.json").string() + " --press 0 --force 1 --duration 0.05",
+        "scene build " + (d / "A.json").string() + " --out " + (d / "A.psim").string()}) {
+    r = cli(cmd, d);
+    EXPECT_EXIT2_WITH(r, "nan.vtu: a vertex has a coordinate that is not a finite number");
+  }
+  EXPECT_FALSE(fs::exists(d / "A.psim"));
 }
 
 TEST(HardMesh, TetGenTimeoutIsAnErrorNotAHang) {
   auto d = tmp("timeout");
   ASSERT_EQ(cli("mesh generate sphere --vertices 2562 --out " + (d / "s.obj").string(), d).code, 0);
-  // A tiny max volume makes TetGen work for long; the limit stops it.
+  // A tiny max volume (≈ 2e7 tetrahedra, just inside what palplab meshes) makes TetGen work for
+  // long; the limit stops it.
   Result r = cli("mesh tetrahedralize " + (d / "s.obj").string() + " --out " + (d / "t").string() +
-                     " --max-volume 1e-12 --timeout 0.5",
+                     " --max-volume 3e-11 --timeout 0.5",
                  d);
   EXPECT_EXIT2_WITH(r, "TetGen did not finish within 0.5 s");
   EXPECT_LT(r.seconds, 20);
@@ -918,7 +971,12 @@ TEST(HardOutput, AFailedWriteToStandardOutputIsAnError) {
   // write fails earlier, and its reason is not known at the end.
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"version", "(No space left on device); the output is lost"},
-      {"validate " + (d / "study.json").string(), "(a write failed); the output is lost"}};
+      {"validate " + (d / "study.json").string(), "(a write failed); the output is lost"},
+      // A verdict of 1 (defects found) is not what a script may read from lost output (review
+      // 2026-12-06, second: it stayed 1).
+      {"mesh check " + (d / "flat.obj").string(), "(No space left on device); the output is lost"}};
+  spit(d / "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  ASSERT_EQ(cli("mesh check " + (d / "flat.obj").string(), d).code, 1);
   for (const auto& [args, why] : cases) {
     SCOPED_TRACE(args);
     const std::string cmd = "{ " + std::string(PALPLAB_BINARY) + " " + args +

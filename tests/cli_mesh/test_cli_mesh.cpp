@@ -265,7 +265,11 @@ TEST(CliMesh, OptionValuesAreCheckedWithTheirRange) {
            {tet + " --max-volume 0",
             "--max-volume: expected a finite number in (0, 1e+18], got '0'"},
            {tet + " --max-volume -1", "got '-1'"},
-           {tet + " --max-volume nan", "got 'nan'"}}) {
+           {tet + " --max-volume nan", "got 'nan'"},
+           // Review 2026-12-06 (second): 1e-30 grew TetGen by ~55 MB/s until --timeout.
+           {tet + " --max-volume 1e-30",
+            "--max-volume 1e-30 m^3 asks for more than 5.06e+26 tetrahedra (in the 0.000506 m^3 "
+            "the surface encloses)"}}) {
     r = run(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.out << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;

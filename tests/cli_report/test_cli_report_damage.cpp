@@ -174,6 +174,23 @@ TEST(CliReportDamage, SampleRowsThatAreNotContiguousAreRefused) {
   sql_exec(db, "UPDATE samples SET t0 = t0 - 1, dt = 0.002 WHERE session = 1 AND second = 1;");
   expect_refused({"with step 0.002 s; the rows before end at 1 s with step 0.001 s"});
   EXPECT_FALSE(fs::exists(d / "t.trace"));
+  // Rows deleted at the end (or all of them): fewer samples than the session's steps (review
+  // 2026-12-06, second: the contiguity check saw only gaps between rows). The export directory
+  // the failed export made is not left behind empty.
+  const long long steps =
+      palplab::testing::sql_int(db, "SELECT steps FROM sessions WHERE session = 1");
+  const long long first =
+      palplab::testing::sql_int(db, "SELECT n FROM samples WHERE session = 1 AND second = 0");
+  ASSERT_GT(steps, first);
+  sql_exec(db, "DELETE FROM samples WHERE session = 1 AND second = 1;");
+  expect_refused({db.string(), "samples of session 1 (participant ",
+                  std::to_string(first) + " stored, but the session ran " + std::to_string(steps) +
+                      " steps (one sample each): rows are missing or edited"});
+  sql_exec(db, "DELETE FROM samples WHERE session = 1;");
+  expect_refused({"0 stored, but the session ran " + std::to_string(steps) +
+                  " steps (one sample each, the run stored them: --samples full)"});
+  EXPECT_FALSE(fs::exists(d / "csv"));
+  EXPECT_FALSE(fs::exists(d / "t.trace"));
 }
 
 TEST(CliReportDamage, FileWhereTheReportPutsADirectory) {

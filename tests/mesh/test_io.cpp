@@ -3,6 +3,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "common/input_error.hpp"
 #include "engine/mesh/generate.hpp"
@@ -23,6 +24,11 @@ std::string tmp(const std::string& name) {
 
 void write_text(const std::string& path, const std::string& s) {
   std::ofstream(path, std::ios::binary) << s;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // Same faces with the same corner coordinates and region names, vertex numbering aside (STL
@@ -250,9 +256,44 @@ TEST(Io, MalformedFilesAreLocated) {
   write_text(base + ".node", "2 3 0 0\n0 0 0 0\n2 1 0 0\n");
   expect_located([&] { read_tetgen(base); }, base + ".node", 3);
 
+  // palplab's .names side table (review 2026-12-06, second: an id named twice left another
+  // without a name, a name given to two ids and lines after the last were accepted).
+  const std::string named = tmp("names_tg");
+  write_text(named + ".node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+  write_text(named + ".ele", "1 4 2\n0 0 1 2 3 101 0\n");
+  write_text(named + ".names", "2\n1 cervix\n0 body\n");
+  EXPECT_EQ(read_tetgen(named).regions.names, (std::vector<std::string>{"body", "cervix"}));
+  for (const auto& [text, line] :
+       std::vector<std::pair<std::string, int>>{{"2\n0 body\n0 cervix\n", 3},
+                                                {"2\n0 body\n1 body\n", 3},
+                                                {"1\n0 body\ngarbage here\n", 3},
+                                                {"3\n0 body\n", 2}}) {
+    write_text(named + ".names", text);
+    SCOPED_TRACE(text);
+    expect_located([&] { read_tetgen(named); }, named + ".names", line);
+  }
+
   p = tmp("bad.regions");
   write_text(p, "2\n1 0 0 0 101 0\n");
   expect_located([&] { read_region_seeds(p); }, p, 2);
+  // VTU (review 2026-12-06, second): the counts <Piece> declares were not checked. (A NaN
+  // coordinate is read: `mesh check` reports it, a prototype refuses it, HardMesh tests.)
+  p = tmp("sphere.vtu");
+  write_surface(p, generate_sphere(42), {});
+  const std::string vtu = read_text(p);
+  for (const char* count : {"41", "-1", "99999999999999999999", "x"}) {
+    std::string edited = vtu;
+    edited.replace(edited.find("NumberOfPoints=\"42\""), 20,
+                   std::string("NumberOfPoints=\"") + count + "\"");
+    write_text(p, edited);
+    SCOPED_TRACE(count);
+    expect_located([&] { read_mesh(p); }, p, 4);
+  }
+  std::string cells = vtu;
+  cells.replace(cells.find("NumberOfCells=\"80\""), 18, "NumberOfCells=\"79\"");
+  write_text(p, cells);
+  expect_located([&] { read_mesh(p); }, p, 4);
+
   EXPECT_THROW(read_surface(tmp("missing.obj")), palplab::InputError);
   EXPECT_THROW(read_surface(tmp("x.unknown")), palplab::InputError);
 }

@@ -41,6 +41,9 @@ SessionData session(const std::string& participant, int ordinal, std::size_t n_s
   d.measures = {{"palpation_force", 2.5, "N"}, {"exploration_time", 12.5, "s"}};
   d.events = {{0.5, "contact_start", 0.0, "feature"}, {1.25, "contact_end", 2.5, ""}};
   d.session.wall_duration = 0.75;
+  // One sample per step, as a run stores them (a complete session's count is checked).
+  d.session.steps = static_cast<long long>(n_samples);
+  d.session.duration = 0.001 * static_cast<double>(n_samples);
   d.samples.dt = 0.001;
   for (std::size_t i = 0; i < n_samples; ++i) {
     d.samples.x.insert(d.samples.x.end(), {0.001 * i, 0.0, 0.0});
