@@ -94,6 +94,21 @@ TEST(CliMesh, GenerateIsDeterministic) {
   EXPECT_EQ(j["genus"], 0);
 }
 
+// A vertex count the generator cannot come near is said, not silently replaced (review
+// 2026-12-06, second); a count it meets is not.
+TEST(CliMesh, GenerateSaysWhenTheCountIsFarFromTheOneAskedFor) {
+  Result r = run("mesh generate model-a --vertices 200 --out " + p("few.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("model-a: 478 vertices"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("note: model-a has 478 vertices, the closest to --vertices 200 this "
+                       "generator makes"),
+            std::string::npos)
+      << r.err;
+  r = run("mesh generate model-a --vertices 1500 --out " + p("many.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("note:"), std::string::npos) << r.err;
+}
+
 TEST(CliMesh, CheckExitCodesAndJson) {
   // Clean: 0.
   ASSERT_EQ(run("mesh generate sphere --vertices 2562 --out " + p("sp.stl")).code, 0);
