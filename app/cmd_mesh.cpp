@@ -528,13 +528,15 @@ palplab::app::CommandRegistration reg_mesh{
         c->add_option("--regions", *regions,
                       ".regions file (default: IN's stem + .regions when present)");
         c->add_option("--quality", opt->quality,
-                      "Radius-edge ratio bound (TetGen -q), >= 1.0; 0 = off");
+                      "Radius-edge ratio bound (TetGen -q), >= 1.0; 0 = off")
+            ->check(palplab::app::finite_range(0, 1e6));
         c->add_option("--max-volume", opt->max_volume, "Maximum tet volume (m^3, TetGen -a), > 0")
             ->check(palplab::app::finite_range(0, 1e18, true));
         auto* attribute_opt =
             c->add_option("--attribute", opt->default_attribute,
                           "Attribute (tissue type) of tets outside seeded regions (default 0 = "
-                          "undefined tissue); must be defined by the material table");
+                          "undefined tissue); must be defined by the material table")
+                ->check(palplab::app::count_range(0, 1000000000));
         c->add_option("--materials", *mat,
                       "Material table JSON defining every tissue attribute of the mesh; its "
                       "values go into the VTU cell data (default: built-in)");

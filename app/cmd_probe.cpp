@@ -45,8 +45,8 @@ int run_probe(const ProbeArgs& a) {
   if (!a.integrator.empty() && std::string(scene.model_kind()) != "mass_spring")
     throw InputError("--integrator: prototype " + scene.prototype() + " has a " +
                      scene.model_kind() +
-                     " model, which is not time-integrated (the option applies to mass_spring "
-                     "prototypes)");
+                     " model, which integrates with its own fixed scheme (the option chooses "
+                     "the integrator of mass_spring prototypes only)");
   const auto& g = scene.geometry();
   int node = -1;
   try {
@@ -116,6 +116,15 @@ int run_probe(const ProbeArgs& a) {
       {"events", events}};
   // Model-specific sections (model "fem": "fem": {formulation, dofs, solver, factor_ms, ...}).
   if (!s1.model_info.empty()) out.update(nlohmann::json::parse(s1.model_info));
+  // Said, not left to be inferred (review 2026-12-06, second): a target above the device's
+  // force limit cannot be reached, and a diverged simulation's numbers mean nothing.
+  const double limit = scene.config().contact.force_limit;
+  if (!reached && a.force > limit)
+    std::cerr << "note: --force " << a.force << " N is above the prototype's device force limit ("
+              << limit << " N, contact.force_limit): the force on the hand is clamped there\n";
+  if (nan)
+    std::cerr << "warning: the simulation produced NaN (" << s1.divergences
+              << " divergences): the numbers reported are not valid; exit 1\n";
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {

@@ -179,7 +179,8 @@ palplab::app::CommandRegistration reg_render{
                       "TISSUE[,TISSUE..]: draw these regions see-through (needle scenes: 'soft' "
                       "= the soft tissues), so the bone and target inside show");
       auto* talpha_opt = cmd->add_option("--transparent-alpha", a->transparent_alpha,
-                                         "Opacity of the --transparent regions (default 0.15)");
+                                         "Opacity of the --transparent regions (default 0.15)")
+                             ->check(palplab::app::finite_range(0, 1, false, true));
       cmd->add_option("--press", a->press, "Region name or surface node index to press");
       cmd->add_option("--force", a->force, "Target device force of the press (N), in (0, 100]")
           ->check(palplab::app::finite_range(0, 100, true));

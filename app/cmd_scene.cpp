@@ -39,7 +39,6 @@ struct BuildArgs {
   std::string prototype, out;
   int repeat = 0;  // timed pairs (--repeat); 0 without it: until enough CPU time (run_build)
   bool json = false;
-  bool repeat_given = false;
   bool overwrite = false;  // --overwrite: replace an existing --out that is not a .psim file
 };
 
@@ -89,8 +88,6 @@ double median_ratio(const std::vector<double>& a, const std::vector<double>& b) 
 }
 
 int run_build(const BuildArgs& a) {
-  if (a.repeat < 0 || a.repeat > 1000 || (a.repeat == 0 && a.repeat_given))
-    throw InputError("--repeat: expected 1..1000");
   const engine::SceneConfig cfg = prototypes::load_prototype(a.prototype);
   // Checked before anything is written: --out is none of the sources (the prototype, its mesh
   // files) and replaces no file of another kind (the first 8 bytes: the .psim magic).
@@ -248,18 +245,15 @@ palplab::app::CommandRegistration reg_scene{
       auto a = std::make_shared<BuildArgs>();
       b->add_option("prototype", a->prototype, "Prototype JSON file")->required();
       b->add_option("--out", a->out, "Simulation file to write (.psim)")->required();
-      auto* repeat = b->add_option(
-          "--repeat", a->repeat,
-          "Timed pairs of rebuild and load (median; default: 7 to 201 pairs, until each "
-          "side has used 0.3 s of CPU)");
+      b->add_option("--repeat", a->repeat,
+                    "Timed pairs of rebuild and load (median; default: 7 to 201 pairs, until each "
+                    "side has used 0.3 s of CPU)")
+          ->check(palplab::app::count_range(1, 1000));
       b->add_flag("--json", a->json, "Print JSON");
       b->add_flag("--overwrite", a->overwrite,
                   "Replace an existing --out file that is not a .psim file (never one of the "
                   "prototype's sources)");
-      b->callback([a, repeat, code] {
-        a->repeat_given = repeat->count() > 0;
-        *code = run_build(*a);
-      });
+      b->callback([a, code] { *code = run_build(*a); });
       auto* i = cmd->add_subcommand("info", "Verify a .psim file and print what it holds");
       auto file = std::make_shared<std::string>();
       auto json = std::make_shared<bool>(false);

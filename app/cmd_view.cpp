@@ -176,14 +176,16 @@ palplab::app::CommandRegistration reg_view{
       auto a = std::make_shared<ViewArgs>();
       cmd->add_option("prototype", a->file, "Prototype JSON file (or --scene)");
       palplab::app::add_scene_option(cmd, a->scene, false);
-      cmd->add_option("--frames", a->frames, "Close after N frames (0 = run until closed)");
+      cmd->add_option("--frames", a->frames, "Close after N frames (0 = run until closed)")
+          ->check(palplab::app::count_range(0, 1000000000));
       cmd->add_option("--screenshot", a->screenshot, "Save the last frame as PNG (with --frames)");
       cmd->add_option("--size", a->size, "Window size WIDTHxHEIGHT (default 1280x800)");
       cmd->add_option("--device", a->device,
                       "mouse (default), udp:PORT (a bridge on 127.0.0.1, docs/DEVICES.md) or "
                       "trace:FILE (replay a recorded device track)");
       cmd->add_option("--min-device-rate", a->min_rate,
-                      "Refuse a hardware device slower than this (Hz, default 900)");
+                      "Refuse a hardware device slower than this (Hz, default 900)")
+          ->check(palplab::app::finite_range(0, 100000));
       cmd->add_option("--record-trace", a->record_trace, "Write the device track to FILE");
       cmd->add_option("--mouse-script", a->mouse_script,
                       "Scripted mouse input instead of the window's (JSON, docs/DEVICES.md)");

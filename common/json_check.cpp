@@ -153,6 +153,7 @@ const json* Checker::object(const json& o, const std::string& path, const char* 
 
 std::string Checker::fmt(double x) {
   if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  if (std::isnan(x)) return "nan";  // JSON would say null
   return json(x).dump();
 }
 

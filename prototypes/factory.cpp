@@ -50,7 +50,9 @@ void read_mesh(Checker& c, const json& m, const std::string& path, MeshSource& o
       std::error_code ec;
       if (!fs::is_regular_file(fp, ec) &&
           !fs::is_regular_file(fs::path(fp).replace_extension(".node"), ec))
-        c.err("$.mesh.file", "no such mesh file: " + fp.string() +
+        c.err("$.mesh.file", (fs::is_directory(fp, ec) ? "a directory, not a mesh file: "
+                                                       : "no such mesh file: ") +
+                                 fp.string() +
                                  " (expected .obj, .stl, .off, .ply, .vtu or TetGen .node/.ele, "
                                  "relative to the prototype file)");
       else

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/input_error.hpp"
+#include "common/read_file.hpp"
 #include "common/write_file.hpp"
 
 namespace palplab::mesh::detail {
@@ -26,12 +27,10 @@ inline void finish_out(std::ostringstream& out, const std::string& path) {
   write_file(path, out.view(), "the mesh file");
 }
 
+// A mesh file's bytes: the system's reason when it cannot be read, a directory said as such, a
+// FIFO or device read only up to the limit (2 000 000 vertices as text are ≈ 300 MB).
 inline std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open file", path);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  return read_file_bounded(path, std::size_t{2} << 30, "mesh file");
 }
 
 inline std::vector<std::string> split_ws(const std::string& s) {

@@ -110,14 +110,26 @@ TEST(CliProbe, ExplicitIntegratorsDivergeOnModelCAndAreCaught) {
   // symplectic Euler (and RK4) are unstable at h = 1 ms on stiff tissue; the scene
   // detects the blow-up, renders no force for it and the probe exits 1.
   for (const char* integ : {"symplectic_euler", "rk4"}) {
-    const Result r =
-        run("probe " + proto("C") +
-            " --press ovary_left --force 2.5 --duration 0.3 --json --integrator " + integ);
-    EXPECT_EQ(r.code, 1) << integ << r.out;
+    const auto r = palplab::testing::run_palplab(
+        "probe " + proto("C") +
+        " --press ovary_left --force 2.5 --duration 0.3 --json --integrator " + integ);
+    EXPECT_EQ(r.code, 1) << integ << r.out << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_TRUE(j["nan_detected"].get<bool>()) << integ;
     EXPECT_LT(j["peak_force"].get<double>(), 100.0) << integ;
+    // Said on stderr (review 2026-12-06, second: "NaN detected" beside valid-looking numbers).
+    EXPECT_NE(r.err.find("warning: the simulation produced NaN ("), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("the numbers reported are not valid; exit 1"), std::string::npos) << r.err;
   }
+  // A target above the device's force limit cannot be reached: said, with the limit.
+  const auto over = palplab::testing::run_palplab(
+      "probe " + proto("A") + " --press ovary_left --force 20 --duration 0.2 --json");
+  EXPECT_EQ(over.code, 0) << over.err;
+  EXPECT_FALSE(nlohmann::json::parse(over.out)["force_reached"].get<bool>());
+  EXPECT_NE(over.err.find("note: --force 20 N is above the prototype's device force limit (8.5 "
+                          "N, contact.force_limit)"),
+            std::string::npos)
+      << over.err;
   const Result ok =
       run("probe " + proto("C") +
           " --press ovary_left --force 2.5 --duration 0.3 --json --integrator backward_euler");

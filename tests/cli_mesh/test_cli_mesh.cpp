@@ -281,6 +281,10 @@ TEST(CliMesh, OptionValuesAreCheckedWithTheirRange) {
             "--max-volume: expected a finite number in (0, 1e+18], got '0'"},
            {tet + " --max-volume -1", "got '-1'"},
            {tet + " --max-volume nan", "got 'nan'"},
+           // Review 2026-12-06 (second): CLI11's bare "Could not convert: --quality = x".
+           {tet + " --quality x", "--quality: expected a finite number in [0, 1e+06], got 'x'"},
+           {tet + " --attribute 1e99",
+            "--attribute: expected an integer in [0, 1000000000], got '1e99'"},
            // Review 2026-12-06 (second): 1e-30 grew TetGen by ~55 MB/s until --timeout.
            {tet + " --max-volume 1e-30",
             "--max-volume 1e-30 m^3 asks for more than 5.06e+26 tetrahedra (in the 0.000506 m^3 "

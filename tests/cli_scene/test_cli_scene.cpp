@@ -84,7 +84,15 @@ TEST(CliScene, BuildReportsLoadAndRebuildTimes) {
   const auto zero = run_palplab(
       "scene build " + f.proto.string() + " --out " + out.string() + " --repeat 0", f.dir);
   EXPECT_EQ(zero.code, 2) << zero.err;
-  EXPECT_NE(zero.err.find("--repeat: expected 1..1000"), std::string::npos) << zero.err;
+  EXPECT_NE(zero.err.find("--repeat: expected an integer in [1, 1000], got '0'"), std::string::npos)
+      << zero.err;
+  // Review 2026-12-06 (second): CLI11's bare "Could not convert: --repeat = 1e9".
+  const auto huge = run_palplab(
+      "scene build " + f.proto.string() + " --out " + out.string() + " --repeat 1e9", f.dir);
+  EXPECT_EQ(huge.code, 2) << huge.err;
+  EXPECT_NE(huge.err.find("--repeat: expected an integer in [1, 1000], got '1e9'"),
+            std::string::npos)
+      << huge.err;
 }
 
 TEST(CliScene, ProbeThroughTheFileEqualsProbeThroughThePrototype) {

@@ -158,6 +158,14 @@ TEST(JsonParse, HostileTextIsALocatedError) {
             "t.json:2:11: invalid JSON: a NUL byte (JSON text has none: a binary file, or text "
             "damaged by a NUL)");
   EXPECT_EQ(located_error("{\"a\": " + std::string(1, '\0') + "1}").substr(0, 12), "t.json:1:7: ");
+  // UTF-16 (with or without its byte-order mark, either byte order) is said as such (review
+  // 2026-12-06, second: "a NUL byte" at 1:4 left the researcher guessing).
+  const std::string utf16 =
+      "t.json:1:1: invalid JSON: the file is UTF-16 text (expected UTF-8: save it as UTF-8)";
+  EXPECT_EQ(located_error(std::string("\xff\xfe{\0}\0", 6)), utf16);
+  EXPECT_EQ(located_error(std::string("\xfe\xff\0{\0}", 6)), utf16);
+  EXPECT_EQ(located_error(std::string("{\0\n\0}\0", 6)), utf16);
+  EXPECT_EQ(located_error(std::string("\0{\0\n\0}", 6)), utf16);
 }
 
 TEST(Escape, ControlCharactersAreShownEscaped) {
