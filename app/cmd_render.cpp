@@ -65,11 +65,17 @@ int run_render(const RenderArgs& a) {
     if (c[1] < -90 || c[1] > 90)
       throw InputError("--camera: elevation " + palplab::json::Checker::fmt(c[1]) +
                        " outside [-90, 90] degrees");
+    // Azimuth in one turn either way; a distance the organ (≤ 10 m across, the prototype
+    // check) is still visible from (review 2026-12-06, second: 1e300 drew a white image, exit 0).
+    if (c[0] < -360 || c[0] > 360)
+      throw InputError("--camera: azimuth " + palplab::json::Checker::fmt(c[0]) +
+                       " outside [-360, 360] degrees");
     cam.azimuth_deg = c[0];
     cam.elevation_deg = c[1];
     if (c.size() == 3) {
-      if (!(c[2] > 0.0))
-        throw InputError("--camera: distance must be > 0 m (omit it to fit the organ in view)");
+      if (!(c[2] > 0.0) || c[2] > 100.0)
+        throw InputError("--camera: distance " + palplab::json::Checker::fmt(c[2]) +
+                         " m outside (0, 100] m (omit it to fit the organ in view)");
       cam.distance = c[2];
     }
   }
@@ -166,8 +172,9 @@ palplab::app::CommandRegistration reg_render{
       cmd->add_option("--out", a->out, "PNG file to write")->required();
       cmd->add_flag("--overwrite", a->overwrite, "Replace an existing --out that is not a PNG");
       cmd->add_option("--camera", a->camera,
-                      "AZIMUTH,ELEVATION[,DISTANCE]: degrees about +z, degrees above the xy "
-                      "plane, m from the organ's centre (default 30,25 and fit to view)");
+                      "AZIMUTH,ELEVATION[,DISTANCE]: degrees about +z in [-360, 360], degrees "
+                      "above the xy plane in [-90, 90], m from the organ's centre in (0, 100] "
+                      "(default 30,25 and fit to view)");
       cmd->add_option("--size", a->size, "Image size WIDTHxHEIGHT in pixels (default 800x600)");
       cmd->add_option("--look-at", a->look_at,
                       "Region whose centroid the camera aims at (default: the organ's centre)");

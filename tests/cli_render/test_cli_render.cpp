@@ -101,6 +101,12 @@ TEST(CliRender, BadInputExitsTwo) {
   EXPECT_EQ(cli("render " + proto("A") + " --size 10x10" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --camera 10" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --camera 0,95" + out).code, 2);
+  // Review 2026-12-06 (second): a camera 1e300 m away drew a white image with exit 0.
+  for (const char* camera : {"30,20,1e300", "30,20,101", "30,20,0", "1e10,20", "-361,0"}) {
+    const Result r = cli("render " + proto("A") + " --camera " + camera + out);
+    EXPECT_EQ(r.code, 2) << camera << r.out;
+    EXPECT_NE(r.out.find("--camera: "), std::string::npos) << r.out;
+  }
   EXPECT_EQ(cli("render " + proto("A") + " --press liver --force 2" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --press ovary_left" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --alpha body" + out).code, 2);
