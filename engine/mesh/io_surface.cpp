@@ -134,7 +134,14 @@ SurfaceMesh read_obj(const std::string& path) {
                k == "mtllib" || k == "l" || k == "p") {
       // Not geometry we use (normals, texture, materials, lines, points).
     } else {
-      r.fail("unsupported OBJ statement '" + k +
+      // A binary file read as OBJ text: said as such, its bytes shown cut.
+      const bool binary = std::any_of(k.begin(), k.end(), [](char c) {
+        return (static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == '\x7f';
+      });
+      if (binary)
+        r.fail("not OBJ text: control bytes (a binary file?) in '" + k.substr(0, 16) +
+               (k.size() > 16 ? "…" : "") + "'");
+      r.fail("unsupported OBJ statement '" + k.substr(0, 40) + (k.size() > 40 ? "…" : "") +
              "' (palplab reads v, f, g and ignores vn, vt, "
              "vp, o, s, usemtl, mtllib, l, p)");
     }

@@ -404,18 +404,20 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
   const long nm = cm.model_V.rows(), nt = cm.model_T.rows();
   // An inverted tet has no element stiffness (the FEM needs every tet positively oriented):
   // refused, naming the file (a TetGen mesh's .ele, where the tets are) and the element.
+  // Where a tet's problem is said: the mesh file (a TetGen mesh's .ele), else the prototype with
+  // its generator.
+  std::string file = cfg.mesh.file, where = "mesh " + cfg.mesh.key() + ": ";
+  if (!file.empty()) {
+    const std::filesystem::path fp(file);
+    if (fp.extension() == ".node" || fp.extension() == ".ele")
+      file = std::filesystem::path(fp).replace_extension(".ele").string();
+    where.clear();
+  } else {
+    file = cfg.source;
+  }
   for (long t = 0; t < nt; ++t) {
     const double v = mesh::signed_volume(cm.model_V, cm.model_T, static_cast<int>(t));
     if (v < 0) {
-      std::string file = cfg.mesh.file, where = "mesh " + cfg.mesh.key() + ": ";
-      if (!file.empty()) {
-        const std::filesystem::path fp(file);
-        if (fp.extension() == ".node" || fp.extension() == ".ele")
-          file = std::filesystem::path(fp).replace_extension(".ele").string();
-        where.clear();
-      } else {
-        file = cfg.source;
-      }
       std::string nodes;
       for (int k = 0; k < 4; ++k) {
         if (k) nodes += ' ';
@@ -432,7 +434,12 @@ std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm
   }
   mesh::TetMesh tm = mesh::make_tet_mesh(cm.model_V, cm.model_T, cm.tet_attribute);
   const mesh::MaterialTable& table = mesh::default_materials();
-  TetMaterials mat = tet_materials(tm, table);  // per tet from the attribute (tissue table)
+  TetMaterials mat;
+  try {
+    mat = tet_materials(tm, table);  // per tet from the attribute (tissue table)
+  } catch (const InputError& e) {
+    throw InputError(where + e.what(), file);  // named (review 2026-12-06, second)
+  }
   const MaterialConfig& mc = cfg.material;
   if (!mc.tissue.empty() || mc.youngs_modulus || mc.density) {
     const mesh::Material* named = mc.tissue.empty() ? nullptr : find_tissue(mc.tissue);

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -529,4 +530,37 @@ TEST(CliFemD, SolversLimitsAndOutputCheckedFirst) {
   EXPECT_EQ(v.code, 2) << v.out << v.err;
   EXPECT_NE(v.err.find("--volume-scale: applies only with"), std::string::npos) << v.err;
   fs::remove_all(d);
+}
+
+// A tet whose tissue attribute the material table lacks is named with the mesh file it is in
+// (review 2026-12-06, second: "tet 0 has attribute 999 ..." without a file).
+TEST(CliFemD, ATetOfAnUnknownTissueNamesTheMeshFile) {
+  const fs::path d = tmp("attr");
+  ASSERT_EQ(run("mesh generate model-c --vertices 750 --out " + (d / "mc").string(), d).code, 0);
+  std::string ele = slurp(d / "mc.ele");
+  const auto line2 = ele.find('\n') + 1;
+  const auto end2 = ele.find('\n', line2);
+  std::istringstream first(ele.substr(line2, end2 - line2));
+  std::vector<std::string> fields;
+  for (std::string f; first >> f;) fields.push_back(f);
+  ASSERT_GE(fields.size(), 6u);
+  ASSERT_EQ(fields[5], "101");  // index, 4 nodes, the tissue attribute (then the region)
+  fields[5] = "999";
+  std::string edited;
+  for (const auto& f : fields) edited += (edited.empty() ? "" : " ") + f;
+  ele.replace(line2, end2 - line2, edited);
+  const std::string tet = fields[0];
+  std::ofstream(d / "mc.ele") << ele;
+  std::string t = slurp(proto("D"));
+  const std::string gen = "{\"generator\": \"model_c\", \"vertices\": 1600, \"seed\": 0}";
+  ASSERT_NE(t.find(gen), std::string::npos);
+  t.replace(t.find(gen), gen.size(), "{\"file\": \"mc.node\"}");
+  std::ofstream(d / "D.json") << t;
+  const Result r =
+      run("probe " + (d / "D.json").string() + " --press 0 --force 1 --duration 0.05", d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find((d / "mc.ele").string() + ": tet " + tet +
+                       " has attribute 999 (tissue type) which the material table does not cover"),
+            std::string::npos)
+      << r.err;
 }

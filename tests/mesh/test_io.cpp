@@ -218,6 +218,19 @@ TEST(Io, MalformedFilesAreLocated) {
   expect_located([&] { read_obj(p); }, p, 1);
   write_text(p, "v 0 0 0\ncurv 0 1 1 2\n");
   expect_located([&] { read_obj(p); }, p, 2);
+  // A binary file named .obj (review 2026-12-06, second: 1.3 KB of escaped bytes echoed).
+  write_text(p, std::string("\x7f"
+                            "ELF\x02\x01\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\n",
+                            25));
+  expect_located([&] { read_obj(p); }, p, 1);
+  try {
+    read_obj(p);
+  } catch (const palplab::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not OBJ text: control bytes (a binary file?)"),
+              std::string::npos)
+        << e.what();
+    EXPECT_LT(std::string(e.what()).size(), 200u) << e.what();
+  }
 
   p = tmp("bad.off");
   write_text(p, "OFF\n3 1 0\n0 0 0\n1 0 0\n");
