@@ -71,6 +71,7 @@ std::vector<RegionSeed> read_region_seeds(const std::string& path) {
   const int count_line = r.line;
   static const char* kFields[] = {"index", "x", "y", "z", "region_id", "attribute"};
   std::vector<RegionSeed> seeds;
+  std::map<int, int> line_of_index;
   while (r.tokens(tok)) {
     if (tok.size() != 6) {
       std::string got = tok.size() < 6 ? "the " + std::string(kFields[tok.size()]) + " is missing"
@@ -84,6 +85,9 @@ std::vector<RegionSeed> read_region_seeds(const std::string& path) {
     RegionSeed s;
     s.line = r.line;
     s.index = r.int32(tok[0], "the index (field 1)");
+    if (const auto [it, fresh] = line_of_index.emplace(s.index, s.line); !fresh)
+      r.fail("index " + tok[0] + " is given twice (also on line " + std::to_string(it->second) +
+             "; expected one line per region)");
     s.point.x() = r.number(tok[1], "x (field 2)");
     s.point.y() = r.number(tok[2], "y (field 3)");
     s.point.z() = r.number(tok[3], "z (field 4)");

@@ -405,6 +405,8 @@ TEST(CliMesh, RegionsFileIsParsedStrictly) {
            {"1\n1 0 0 0 101 nan\n", "rs.regions:2:", "attribute (field 6"},
            {"1abc\n1 0 0 0 101 0\n", "rs.regions:1:", "the number of regions"},
            {"1\n1 0 0 0 101.5 0\n", "rs.regions:2:", "region_id (field 5"},
+           {"2\n1 0 0 0 101 0\n1 0 0 0.001 102 0\n",
+            "rs.regions:3:", "index 1 is given twice (also on line 2"},
            {"1\n1 0 0x 0 101 0\n", "rs.regions:2:", "y (field 3)"},
            {"1\n1 0 0 0 101 0 7\n", "rs.regions:2:", "unexpected text '7' after the attribute"},
            {"-1\n", "rs.regions:1:", "the number of regions"},
