@@ -79,12 +79,10 @@ int run_render(const RenderArgs& a) {
       cam.distance = c[2];
     }
   }
-  // --force (0 = not given) and --hold are range-checked by their validators (app/command.hpp).
+  // --force (0 = not given), --hold and --transparent-alpha are range-checked by their
+  // validators (app/command.hpp).
   if (a.press.empty() != (a.force == 0.0))
     throw InputError("--press and --force go together (REGION_OR_NODE and a force in N)");
-  if (!a.transparent.empty() && !(a.transparent_alpha >= 0.0 && a.transparent_alpha < 1.0))
-    throw InputError("--transparent-alpha: expected an opacity in [0, 1), got " +
-                     app::shown_number(a.transparent_alpha));
   engine::Scene scene = prototypes::build_scene(a.file);
   const auto& g = scene.geometry();
   std::string region_list;  // for the messages on unknown regions

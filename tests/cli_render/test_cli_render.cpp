@@ -162,7 +162,8 @@ TEST(CliRender, AlphaAndNumericErrorsNameTheFlag) {
       {"--alpha body=0.5 --alpha body=0.4", {"--alpha:", "\"body\" given twice"}},
       {"--press ovary_left --force nan", {"--force:", "got 'nan'"}},
       {"--press ovary_left --force 2 --hold inf", {"--hold:", "got 'inf'"}},
-      {"--transparent body --transparent-alpha nan", {"--transparent-alpha:", "got nan"}},
+      {"--transparent body --transparent-alpha nan", {"--transparent-alpha:", "got 'nan'"}},
+      {"--transparent body --transparent-alpha 1", {"--transparent-alpha:", "[0, 1)", "got '1'"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.args);
