@@ -32,6 +32,39 @@ inline std::string escape_controls(std::string_view s, bool keep_newlines = true
   return out;
 }
 
+// Whether `s` is well-formed UTF-8 (no overlong forms, surrogates or code points above
+// U+10FFFF): names from user files go into JSON, which holds UTF-8 only.
+inline bool is_valid_utf8(std::string_view s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    int n = 0;
+    unsigned long cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1, cp = c & 0x1F;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2, cp = c & 0x0F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3, cp = c & 0x07;
+    } else {
+      return false;
+    }
+    for (int k = 1; k <= n; ++k) {
+      if (i + k >= s.size()) return false;
+      const auto d = static_cast<unsigned char>(s[i + k]);
+      if ((d & 0xC0) != 0x80) return false;
+      cp = (cp << 6) | (d & 0x3F);
+    }
+    if ((n == 2 && (cp < 0x800 || (cp >= 0xD800 && cp <= 0xDFFF))) ||
+        (n == 3 && (cp < 0x10000 || cp > 0x10FFFF)))
+      return false;
+    i += n + 1;
+  }
+  return true;
+}
+
 // Text from user files (ids, names, paths) written into Markdown (a table cell, a list item, a
 // heading): the characters that would end a table cell (|), open inline HTML (<) or a code span
 // (`), or escape what follows (\) are backslash-escaped (CommonMark lets any ASCII punctuation

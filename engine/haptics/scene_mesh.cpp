@@ -137,6 +137,23 @@ std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
   const Eigen::VectorXi vr = mesh::vertex_regions(sm);
   c->vertex_region.assign(sm.V.rows(), -1);
   for (long i = 0; i < vr.size(); ++i) c->vertex_region[i] = vr[i];
+  // A contact is in the region of the touched vertex: a named region none of whose vertices is
+  // its own could never be touched, pressed or aimed at (review 2026-12-06, second: an internal
+  // error, exit 3, when a study's feature was such a region).
+  std::vector<char> has_vertex(sm.regions.names.size(), 0);
+  for (long i = 0; i < vr.size(); ++i)
+    if (vr[i] >= 0 && vr[i] < static_cast<long>(has_vertex.size())) has_vertex[vr[i]] = 1;
+  for (std::size_t r = 0; r < has_vertex.size(); ++r)
+    if (!has_vertex[r] && !sm.regions.names[r].empty()) {
+      const std::string why =
+          "region \"" + sm.regions.names[r] +
+          "\" has no vertex of its own (a vertex belongs to the first region, in file order, of "
+          "the faces around it, and every vertex of this region's faces belongs to another): "
+          "it could never be touched; give it vertices of its own or merge it into its "
+          "neighbour";
+      if (!m.file.empty()) throw InputError(why, m.file);
+      throw InputError("mesh " + m.key() + ": " + why);
+    }
   const Eigen::VectorXd fa = mesh::face_areas(sm.V, sm.F);
   c->vertex_area.setZero(sm.V.rows());
   for (long f = 0; f < sm.F.rows(); ++f)

@@ -752,6 +752,7 @@ SurfaceMesh read_surface_any(const std::string& path) {
 
 SurfaceMesh read_surface(const std::string& path) {
   SurfaceMesh m = read_surface_any(path);
+  detail::check_region_names(m.regions.names, path);
   // A file without triangles is no surface: every consumer (check, tetrahedralize, a prototype's
   // mesh.file, the simulation) needs at least one.
   if (m.F.rows() == 0)

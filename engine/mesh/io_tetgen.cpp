@@ -144,6 +144,7 @@ TetMesh read_tetgen(const std::string& path) {
     regions.id = R;
   }
   try {
+    detail::check_region_names(regions.names, names_path);
     return make_tet_mesh(std::move(V), std::move(T), std::move(A), std::move(regions));
   } catch (const InputError& e) {
     throw InputError(e.what(), base + ".ele");

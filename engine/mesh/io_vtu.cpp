@@ -292,6 +292,7 @@ AnyMesh read_mesh(const std::string& path) {
   }
   if ((a.is_tet ? a.tet.T.rows() : a.surface.F.rows()) == 0)
     throw InputError("no geometry: the VTU file holds no cells", path);
+  detail::check_region_names(a.is_tet ? a.tet.regions.names : a.surface.regions.names, path);
   return a;
 }
 

@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/read_file.hpp"
 #include "common/write_file.hpp"
@@ -110,6 +112,30 @@ inline void check_count(const TextReader& r, long n, const char* what, long max 
   if (n < 0 || n > max || n > left / 2 + 1)
     r.fail(std::string("implausible ") + what + " count " + std::to_string(n) + " (the file has " +
            std::to_string(left) + " bytes left)");
+}
+
+// Region names go into JSON (mesh info, the results database, the report): each must be UTF-8
+// without control characters (review 2026-12-06, second: a Latin-1 name was an internal error).
+inline void check_region_names(const std::vector<std::string>& names, const std::string& path) {
+  for (const std::string& n : names) {
+    const bool control = std::any_of(n.begin(), n.end(), [](char c) {
+      return static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+    });
+    if (!is_valid_utf8(n) || control) {
+      std::string shown;  // every byte outside printable ASCII as \xNN
+      for (const char c : n.substr(0, 64)) {
+        const auto u = static_cast<unsigned char>(c);
+        char b[8];
+        std::snprintf(b, sizeof b, "\\x%02x", u);
+        shown += (u < 0x20 || u >= 0x7f) ? std::string(b) : std::string(1, c);
+      }
+      throw InputError("region name \"" + shown + "\" is " +
+                           (control ? "not printable text (control characters)"
+                                    : "not UTF-8 text (another encoding?)") +
+                           ": expected UTF-8 names",
+                       path);
+    }
+  }
 }
 
 }  // namespace palplab::mesh::detail

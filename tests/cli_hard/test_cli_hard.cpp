@@ -376,6 +376,26 @@ TEST(HardMesh, APrototypesMeshOutsideTissueSizesIsRefusedNamingTheFile) {
   }
 }
 
+// Review finding (2026-12-06, second): a named region whose vertices all belong to another
+// region (a vertex takes the first region of its faces) was "internal error" (exit 3) when
+// pressed or made a study's feature, and `validate` passed the study. Refused naming the file.
+TEST(HardMesh, ARegionWithoutVerticesOfItsOwnIsRefusedNamingTheFile) {
+  auto d = tmp("lump");
+  ASSERT_EQ(cli("mesh generate sphere --vertices 642 --out " + (d / "s.obj").string(), d).code, 0);
+  const std::string obj = slurp(d / "s.obj");
+  const auto first_face = obj.find("\nf ") + 1, last_face = obj.rfind("\nf ") + 1;
+  spit(d / "organ.obj", obj.substr(0, first_face) + "g skin\n" +
+                            obj.substr(first_face, last_face - first_face) + "g lump\n" +
+                            obj.substr(last_face));
+  std::string a = slurp(src("prototypes/A.json"));
+  const std::string gen = "{\"generator\": \"tract\", \"vertices\": 1500, \"seed\": 0}";
+  a.replace(a.find(gen), gen.size(), "{\"file\": \"organ.obj\"}");
+  spit(d / "A.json", a);
+  const Result r =
+      cli("probe " + (d / "A.json").string() + " --press lump --force 1 --duration 0.05", d);
+  EXPECT_EXIT2_WITH(r, "organ.obj: region \"lump\" has no vertex of its own");
+}
+
 namespace {
 
 // A surface VTU written by palplab, with its regions (Model-A).

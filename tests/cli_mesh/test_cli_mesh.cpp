@@ -287,8 +287,8 @@ TEST(CliMesh, OptionValuesAreCheckedWithTheirRange) {
             "--attribute: expected an integer in [0, 1000000000], got '1e99'"},
            // Review 2026-12-06 (second): 1e-30 grew TetGen by ~55 MB/s until --timeout.
            {tet + " --max-volume 1e-30",
-            "--max-volume 1e-30 m^3 asks for more than 5.06e+26 tetrahedra (in the 0.000506 m^3 "
-            "the surface encloses)"}}) {
+            "--max-volume 1e-30 m^3 asks for at least 5.06e+26 tetrahedra (the surface encloses "
+            "0.000506 m^3)"}}) {
     r = run(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.out << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
@@ -407,6 +407,9 @@ TEST(CliMesh, RegionsFileIsParsedStrictly) {
            {"1\n1 0 0 0 101.5 0\n", "rs.regions:2:", "region_id (field 5"},
            {"2\n1 0 0 0 101 0\n1 0 0 0.001 102 0\n",
             "rs.regions:3:", "index 1 is given twice (also on line 2"},
+           // Review 2026-12-06 (second): a seed's bound let TetGen grow until --timeout.
+           {"1\n1 0 0 0 101 1e-12\n",
+            "rs.regions:2:", "region seed 1's volume bound 1e-12 m^3 asks for up to"},
            {"1\n1 0 0x 0 101 0\n", "rs.regions:2:", "y (field 3)"},
            {"1\n1 0 0 0 101 0 7\n", "rs.regions:2:", "unexpected text '7' after the attribute"},
            {"-1\n", "rs.regions:1:", "the number of regions"},

@@ -168,6 +168,18 @@ TEST(JsonParse, HostileTextIsALocatedError) {
   EXPECT_EQ(located_error(std::string("\0{\0\n\0}", 6)), utf16);
 }
 
+TEST(Escape, Utf8IsToldFromOtherBytes) {
+  EXPECT_TRUE(palplab::is_valid_utf8(""));
+  EXPECT_TRUE(palplab::is_valid_utf8("ovary_left"));
+  EXPECT_TRUE(palplab::is_valid_utf8("ov\xc3\xa1rio \xe2\x82\xac \xf0\x9f\x99\x82"));
+  EXPECT_FALSE(palplab::is_valid_utf8("m\xe9"));             // Latin-1
+  EXPECT_FALSE(palplab::is_valid_utf8("\xc3"));              // cut short
+  EXPECT_FALSE(palplab::is_valid_utf8("\xc0\xaf"));          // overlong '/'
+  EXPECT_FALSE(palplab::is_valid_utf8("\xed\xa0\x80"));      // a surrogate
+  EXPECT_FALSE(palplab::is_valid_utf8("\xf4\x90\x80\x80"));  // above U+10FFFF
+  EXPECT_FALSE(palplab::is_valid_utf8("\xe2\x82"));          // cut short
+}
+
 TEST(Escape, ControlCharactersAreShownEscaped) {
   EXPECT_EQ(escape_controls("G\x1b[31mred\x07\n"), "G\\x1b[31mred\\x07\n");
   EXPECT_EQ(escape_controls("a\nb", false), "a\\x0ab");

@@ -218,6 +218,23 @@ TEST(Io, MalformedFilesAreLocated) {
   expect_located([&] { read_obj(p); }, p, 1);
   write_text(p, "v 0 0 0\ncurv 0 1 1 2\n");
   expect_located([&] { read_obj(p); }, p, 2);
+  // A region name that is not UTF-8 (Latin-1 "mé") was an internal error in `mesh info`'s JSON
+  // (review 2026-12-06, second); UTF-8 names are read.
+  write_text(p,
+             "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\ng ov\xc3\xa1rio\nf 1 3 2\nf 1 2 4\n"
+             "g m\xe9\nf 1 4 3\nf 2 3 4\n");
+  try {
+    read_surface(p);
+    ADD_FAILURE() << "a Latin-1 region name was read";
+  } catch (const palplab::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("region name \"m\\xe9\" is not UTF-8 text"),
+              std::string::npos)
+        << e.what();
+  }
+  write_text(p,
+             "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\ng ov\xc3\xa1rio\nf 1 3 2\nf 1 2 4\n"
+             "g m\nf 1 4 3\nf 2 3 4\n");
+  EXPECT_EQ(read_surface(p).regions.names[0], "ov\xc3\xa1rio");
   // A binary file named .obj (review 2026-12-06, second: 1.3 KB of escaped bytes echoed).
   write_text(p, std::string("\x7f"
                             "ELF\x02\x01\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\n",
