@@ -69,7 +69,10 @@ Eigen::Vector3d SceneGeometry::region_centroid(const std::string& name) const {
       c += V.row(i).transpose();
       ++n;
     }
-  if (n == 0) throw std::out_of_range("region '" + name + "' has no vertices");
+  if (n == 0)
+    throw InputError("region '" + name +
+                     "' has no vertex on the surface (a tissue inside the body): it cannot be "
+                     "pressed, touched or aimed at");
   return c / static_cast<double>(n);
 }
 

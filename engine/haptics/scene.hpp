@@ -128,7 +128,8 @@ struct SceneGeometry {
   Eigen::Vector3d start_position = Eigen::Vector3d::Zero();  // m, where the HCP starts
 
   int region_index(const std::string& name) const;  // -1 if unknown
-  // Mean rest position of the region's vertices (m). Throws std::out_of_range if unknown.
+  // Mean rest position of the region's vertices (m). Throws std::out_of_range if unknown,
+  // InputError if it has no surface vertex (an inner tissue of a tet mesh).
   Eigen::Vector3d region_centroid(const std::string& name) const;
   // Surface node nearest to p (octree search).
   int nearest_node(const Eigen::Vector3d& p) const;

@@ -137,10 +137,11 @@ std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
   const Eigen::VectorXi vr = mesh::vertex_regions(sm);
   c->vertex_region.assign(sm.V.rows(), -1);
   for (long i = 0; i < vr.size(); ++i) c->vertex_region[i] = vr[i];
-  // A contact is in the region of the touched vertex: a named region none of whose vertices is
-  // its own could never be touched, pressed or aimed at (review 2026-12-06, second: an internal
-  // error, exit 3, when a study's feature was such a region).
-  std::vector<char> has_vertex(sm.regions.names.size(), 0);
+  // A contact is in the region of the touched vertex: a named region of a surface mesh none of
+  // whose vertices is its own could never be touched, pressed or aimed at (review 2026-12-06,
+  // second: an internal error, exit 3, when a study's feature was such a region). A tet mesh's
+  // inner tissues have no surface vertices by nature (SceneGeometry::region_centroid says so).
+  std::vector<char> has_vertex(c->tet ? 0 : sm.regions.names.size(), 0);
   for (long i = 0; i < vr.size(); ++i)
     if (vr[i] >= 0 && vr[i] < static_cast<long>(has_vertex.size())) has_vertex[vr[i]] = 1;
   for (std::size_t r = 0; r < has_vertex.size(); ++r)
