@@ -91,16 +91,28 @@ palplab::app::CommandRegistration reg_export{
             std::filesystem::file_size(samples_csv, ec) > 0 && !ec &&
             palplab::app::file_head(samples_csv, std::string(kSamplesHeader).size()) !=
                 kSamplesHeader;
-        // A directory made here is removed again if the export fails (a damaged database): it
-        // would be left empty (review 2026-12-06, second).
+        // The directories made here (--csv and any missing parents) are removed again if the
+        // export fails (a damaged database): they would be left empty (review 2026-12-06,
+        // second; `--csv nest1/nest2` left nest1).
         struct RemoveIfMadeAndEmpty {
-          std::filesystem::path dir;
-          bool made = false, done = false;
+          std::filesystem::path dir, top;  // top: the outermost directory that did not exist
+          bool done = false;
           ~RemoveIfMadeAndEmpty() {
+            if (done || top.empty()) return;
             std::error_code e;
-            if (made && !done && std::filesystem::is_empty(dir, e)) std::filesystem::remove(dir, e);
+            for (auto p = dir; std::filesystem::is_empty(p, e) && !e; p = p.parent_path()) {
+              std::filesystem::remove(p, e);
+              if (e || p == top || !p.has_parent_path()) break;
+            }
           }
-        } made{*dir, !std::filesystem::exists(std::filesystem::symlink_status(*dir, ec))};
+        } made{std::filesystem::absolute(*dir, ec).lexically_normal(), {}};
+        if (!made.dir.has_filename()) made.dir = made.dir.parent_path();  // "out/" -> "out"
+        for (auto p = made.dir;
+             !p.empty() && !std::filesystem::exists(std::filesystem::symlink_status(p, ec));
+             p = p.parent_path()) {
+          made.top = p;
+          if (p == p.parent_path()) break;
+        }
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";

@@ -45,7 +45,8 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
       throw palplab::InputError(flag + ": \"" + text + "\": expected " + expected);
     v.push_back(x);
   }
-  if (v.size() < min_n || v.size() > max_n)
+  // getline drops an empty last item: "30,25," was read as "30,25".
+  if (v.size() < min_n || v.size() > max_n || (!text.empty() && text.back() == sep))
     throw palplab::InputError(flag + ": \"" + text + "\": expected " + expected);
   return v;
 }

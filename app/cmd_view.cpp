@@ -102,8 +102,8 @@ int run_view(const ViewArgs& a) {
     ui = std::make_unique<app::PalpationUi>(W, H, "palplab view - prototype " + scene.prototype(),
                                             std::move(script));
   } catch (const render::NoWindowError& e) {
-    std::cerr << "palplab view: " << e.what() << "\n";
-    return 3;
+    // No display is the user's environment, not an internal error (as `run --device mouse`).
+    throw InputError(std::string("view needs a window: ") + e.what());
   }
   ui->set_scene(app::UiScene::of(scene));
   app::ToneSwitch cued(monitor, ui->tone());

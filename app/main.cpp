@@ -57,6 +57,27 @@ std::string deepest_command(const CLI::App& cli) {
   return command;
 }
 
+// What the command printed must have reached standard output: `palplab stats --json >
+// /dev/full` (a full disk, a closed pipe's file) lost it and exited 0; so did `--help` and
+// `--version`, which CLI11 prints. The reason is known only when this last flush is the write
+// that failed (an earlier one, e.g. cout flushed because stderr was written, left errno to
+// later calls). `printed_errno`: errno after a print that began with errno 0 and did nothing
+// but write (CLI11's help and version end with std::endl, which flushes: its failure is theirs).
+int checked_stdout(int code, int printed_errno = 0) {
+  const bool failed_before = std::ferror(stdout) != 0;
+  errno = 0;
+  std::cout.flush();
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    const int why = failed_before ? printed_errno : errno;
+    std::cerr << "error: cannot write to standard output ("
+              << (why ? std::strerror(why) : "a write failed") << "); the output is lost\n";
+    // 2 also where the command's verdict was 1 (recheck's "inconsistent", mesh check's
+    // defects): a script must not read the lost output as that verdict.
+    return code >= 2 ? code : 2;
+  }
+  return code;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -82,11 +103,17 @@ int main(int argc, char** argv) {
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return cli.exit(e);
+    errno = 0;
+    const int c = cli.exit(e);
+    return checked_stdout(c, errno);
   } catch (const CLI::CallForAllHelp& e) {
-    return cli.exit(e);
+    errno = 0;
+    const int c = cli.exit(e);
+    return checked_stdout(c, errno);
   } catch (const CLI::CallForVersion& e) {
-    return cli.exit(e);
+    errno = 0;
+    const int c = cli.exit(e);
+    return checked_stdout(c, errno);
   } catch (const CLI::ExtrasError&) {
     // CLI11 names the extra arguments in reverse order ("not expected: -1 --seed" for
     // `run --seed -1`): they are said in the order given, with the command they were given to,
@@ -142,21 +169,5 @@ int main(int argc, char** argv) {
     std::cerr << "internal error: " << e.what() << "\n";
     return 3;
   }
-  // What the command printed must have reached standard output: `palplab stats --json >
-  // /dev/full` (a full disk, a closed pipe's file) lost it and exited 0.
-  // The reason is known only when this last flush is the write that failed (an earlier one,
-  // e.g. cout flushed because stderr was written, left errno to later calls).
-  const bool failed_before = std::ferror(stdout) != 0;
-  errno = 0;
-  std::cout.flush();
-  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
-    const int why = errno;
-    std::cerr << "error: cannot write to standard output ("
-              << (!failed_before && why ? std::strerror(why) : "a write failed")
-              << "); the output is lost\n";
-    // 2 also where the command's verdict was 1 (recheck's "inconsistent", mesh check's
-    // defects): a script must not read the lost output as that verdict.
-    return code >= 2 ? code : 2;
-  }
-  return code;
+  return checked_stdout(code);
 }

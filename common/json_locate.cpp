@@ -414,16 +414,25 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
   // study whose keys after a NUL were "missing", garbage after a valid document accepted).
   if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
     const TextPos p = offset_to_pos(text, nul);
-    // UTF-16 (a file saved as "Unicode" by some editors) has a NUL in every ASCII character.
+    // UTF-16 (a file saved as "Unicode" by some editors) has a NUL in every ASCII character,
+    // UTF-32 three; either with or without its byte-order mark.
+    const auto at = [&](std::size_t i) { return i < text.size() ? text[i] : '\x01'; };
+    const bool utf32 = (at(0) == '\xff' && at(1) == '\xfe' && at(2) == '\0' && at(3) == '\0') ||
+                       (at(0) == '\0' && at(1) == '\0' && at(2) == '\xfe' && at(3) == '\xff') ||
+                       (nul <= 2 && text.size() >= 8 &&
+                        ((at(0) != '\0' && at(1) == '\0' && at(2) == '\0' && at(3) == '\0') ||
+                         (at(0) == '\0' && at(1) == '\0' && at(2) == '\0' && at(3) != '\0')));
     const bool utf16 =
-        text.size() >= 2 &&
+        !utf32 && text.size() >= 2 &&
         ((text[0] == '\xff' && text[1] == '\xfe') || (text[0] == '\xfe' && text[1] == '\xff') ||
          (nul <= 1 && text.size() >= 4 && (text[0] == '\0') != (text[1] == '\0')));
-    throw InputError(SourceLocation{file, utf16 ? 1 : p.line, utf16 ? 1 : p.column},
-                     utf16 ? std::string("invalid JSON: the file is UTF-16 text (expected UTF-8: "
-                                         "save it as UTF-8)")
-                           : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
-                                         "file, or text damaged by a NUL)"));
+    const bool wide = utf16 || utf32;
+    throw InputError(SourceLocation{file, wide ? 1 : p.line, wide ? 1 : p.column},
+                     wide ? std::string("invalid JSON: the file is ") +
+                                (utf32 ? "UTF-32" : "UTF-16") +
+                                " text (expected UTF-8: save it as UTF-8)"
+                          : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
+                                        "file, or text damaged by a NUL)"));
   }
   const std::size_t keys = prescan(text, file);
   nlohmann::json j;

@@ -156,8 +156,9 @@ std::string measure_unit(const std::string& measure);
 // tests may pass their own. Throws palplab::InputError for a bad prototype file.
 struct PrototypeInfo {
   std::vector<std::string> region_names;
-  std::string scene;  // may be empty
-  std::string id;     // the file's "id" (may be empty: not checked)
+  std::string scene;                       // may be empty
+  std::string id;                          // the file's "id" (may be empty: not checked)
+  std::vector<std::string> inner_regions;  // no vertex on the surface: never a palpation feature
 };
 using PrototypeInspector = std::function<PrototypeInfo(const std::string& prototype_path)>;
 PrototypeInspector engine_prototype_inspector();

@@ -868,6 +868,20 @@ Study parse_study(const std::string& text, const std::string& file,
         c.err("$.task.feature", "region \"" + s.task.feature +
                                     "\" is not a region of prototype(s) " + join(ids) +
                                     " (regions: " + regions(ids) + ")");
+    // A palpation feature is found by touch: a tissue inside the body (a tet mesh's inner region)
+    // cannot be one (review 2026-12-06, second: `validate` passed, `run` stopped at its first
+    // session with a database made). A needle's target is such a tissue.
+    if (!s.task.feature.empty() && s.task.kind != "needle_insertion") {
+      std::vector<std::string> ids;
+      for (auto& [id, info] : infos)
+        if (std::find(info.inner_regions.begin(), info.inner_regions.end(), s.task.feature) !=
+            info.inner_regions.end())
+          ids.push_back(id);
+      if (!ids.empty())
+        c.err("$.task.feature", "region \"" + s.task.feature + "\" of prototype(s) " + join(ids) +
+                                    " is a tissue inside the body (no vertex on its surface): a "
+                                    "palpation task's feature must be touchable");
+    }
     for (auto& [r, lim] : s.task.thresholds)
       if (r != "*")
         if (auto ids = lacking(r); !ids.empty())

@@ -258,7 +258,7 @@ SceneConfig load_prototype(const std::string& path) {
 
 PrototypeSummary inspect_prototype(const std::string& path) {
   const SceneConfig s = load_prototype(path);
-  return {s.id, s.scene, s.model, mesh_region_names(s.mesh)};
+  return {s.id, s.scene, s.model, mesh_region_names(s.mesh), mesh_inner_region_names(s.mesh)};
 }
 
 engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {

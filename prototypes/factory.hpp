@@ -36,6 +36,8 @@ struct PrototypeSummary {
   std::string scene;  // e.g. "bovine_reproductive_tract"
   std::string model;  // a registered model kind: "penalty", "ring", "mass_spring", "fem", ...
   std::vector<std::string> region_names;
+  std::vector<std::string>
+      inner_regions;  // regions with no surface vertex (mesh_inner_region_names)
 };
 PrototypeSummary inspect_prototype(const std::string& prototype_json_path);
 

@@ -156,5 +156,9 @@ Scene make_scene(const SceneConfig& cfg);
 
 // Region names of a mesh source without building a scene (generators: fixed; files: read).
 const std::vector<std::string>& mesh_region_names(const MeshSource& m);
+// The regions of a mesh source with no vertex on its surface (a tet mesh's inner tissues: the
+// shoulder's bones, a file's inner regions): they can be reached by a needle, never touched.
+// Empty for the surface generators.
+std::vector<std::string> mesh_inner_region_names(const MeshSource& m);
 
 }  // namespace palplab::engine

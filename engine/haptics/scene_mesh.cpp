@@ -6,6 +6,7 @@
 #include <map>
 #include <mutex>
 
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/contact.hpp"
 #include "engine/haptics/scene_config.hpp"
@@ -97,12 +98,12 @@ void check_mesh_extent(const mesh::Positions& V, const std::string& file) {
   if (!V.allFinite())
     throw InputError("a vertex has a coordinate that is not a finite number (NaN or inf)", file);
   if (!(extent >= kMinMeshExtent && extent <= kMaxMeshExtent))
-    throw InputError("the mesh is " + mesh::format_exact(extent) +
-                         " m across, expected a piece of tissue in metres (" +
-                         mesh::format_exact(kMinMeshExtent) + " to " +
-                         mesh::format_exact(kMaxMeshExtent) +
-                         " m; a mesh in millimetres is 1000 times too large)",
-                     file);
+    throw InputError(
+        "the mesh is " + format_g(extent) + " m across, expected a piece of tissue in metres (" +
+            format_g(kMinMeshExtent) + " to " + format_g(kMaxMeshExtent) + " m" +
+            (extent > kMaxMeshExtent ? "; a mesh in millimetres is 1000 times too large)"
+                                     : "; a mesh in kilometres is 1000 times too small)"),
+        file);
 }
 
 std::shared_ptr<const SceneMesh> prepare(const MeshSource& m) {
@@ -230,6 +231,18 @@ const std::vector<std::string>& mesh_region_names(const MeshSource& m) {
   if (m.file.empty())
     return m.generator == "tract" || m.generator == "model_c" ? mesh::tract_region_names() : none;
   return scene_mesh(m)->region_names;
+}
+
+std::vector<std::string> mesh_inner_region_names(const MeshSource& m) {
+  if (m.file.empty() && m.generator != "shoulder") return {};
+  const auto sm = scene_mesh(m);
+  std::vector<char> on_surface(sm->region_names.size(), 0);
+  for (int r : sm->vertex_region)
+    if (r >= 0 && r < static_cast<int>(on_surface.size())) on_surface[r] = 1;
+  std::vector<std::string> inner;
+  for (std::size_t r = 0; r < on_surface.size(); ++r)
+    if (!on_surface[r]) inner.push_back(sm->region_names[r]);
+  return inner;
 }
 
 }  // namespace palplab::engine

@@ -134,13 +134,26 @@ SurfaceMesh read_obj(const std::string& path) {
                k == "mtllib" || k == "l" || k == "p") {
       // Not geometry we use (normals, texture, materials, lines, points).
     } else {
-      // A binary file read as OBJ text: said as such, its bytes shown cut.
-      const bool binary = std::any_of(k.begin(), k.end(), [](char c) {
+      // A binary file read as OBJ text (a binary STL, a database, an image): control bytes or
+      // bytes that are not UTF-8 anywhere on the line; said as such, its first bytes shown cut,
+      // every byte outside printable ASCII as \xNN.
+      const auto binary_byte = [](char c) {
         return (static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == '\x7f';
+      };
+      const bool binary = std::any_of(t.begin(), t.end(), [&](const std::string& w) {
+        return std::any_of(w.begin(), w.end(), binary_byte) || !is_valid_utf8(w);
       });
-      if (binary)
-        r.fail("not OBJ text: control bytes (a binary file?) in '" + k.substr(0, 16) +
+      if (binary) {
+        std::string shown;
+        for (size_t i = 0; i < k.size() && i < 16; ++i) {
+          const auto c = static_cast<unsigned char>(k[i]);
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\x%02x", c);
+          shown += c >= 0x20 && c < 0x7f ? std::string(1, k[i]) : std::string(buf);
+        }
+        r.fail("not OBJ text: binary bytes (a binary STL, a database, an image?) in '" + shown +
                (k.size() > 16 ? "…" : "") + "'");
+      }
       r.fail("unsupported OBJ statement '" + k.substr(0, 40) + (k.size() > 40 ? "…" : "") +
              "' (palplab reads v, f, g and ignores vn, vt, "
              "vp, o, s, usemtl, mtllib, l, p)");

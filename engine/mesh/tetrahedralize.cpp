@@ -22,6 +22,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "engine/mesh/check.hpp"
 #include "engine/mesh/io.hpp"
@@ -450,18 +451,15 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
   // TetGen runs). The child's memory limit (limit_child_memory) backs this up.
   constexpr double kMaxTets = 2e7;
   const double volume = std::abs(enclosed_volume(s.V, s.F));
-  auto g3 = [](double x) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.3g", x);
-    return std::string(b);
-  };
   auto refuse_tiny = [&](double bound, const std::string& what, const char* asks,
                          const std::string& source, int line) {
     if (!(bound > 0) || volume / bound <= kMaxTets) return;
-    const std::string why = what + " " + g3(bound) + " m^3 asks for " + asks + " " +
-                            g3(volume / bound) + " tetrahedra (the surface encloses " + g3(volume) +
+    const std::string why = what + " " + format_g(bound) + " m^3 asks for " +
+                            (std::isfinite(volume / bound) ? asks + (" " + format_g(volume / bound))
+                                                           : std::string("more than 1e308")) +
+                            " tetrahedra (the surface encloses " + format_g(volume) +
                             " m^3); palplab meshes at most 2e7: expected a bound of at least " +
-                            g3(volume / kMaxTets) + " m^3";
+                            format_g(volume / kMaxTets) + " m^3";
     if (!source.empty()) throw InputError(SourceLocation{source, line}, why);
     throw InputError(why);
   };

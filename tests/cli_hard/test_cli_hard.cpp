@@ -373,6 +373,11 @@ TEST(HardMesh, APrototypesMeshOutsideTissueSizesIsRefusedNamingTheFile) {
     EXPECT_EXIT2_WITH(r, "organ.obj: the mesh is ");
     EXPECT_TRUE(has(r.err, " m across, expected a piece of tissue in metres (0.0001 to 10 m"))
         << r.err;
+    // The size to 3 digits, and the hint that fits it (review 2026-12-06, second: 17 digits,
+    // and a mesh too small was told it was in millimetres).
+    EXPECT_TRUE(has(r.err, scale > 1 ? "1000 times too large" : "1000 times too small")) << r.err;
+    const auto at = r.err.find("the mesh is ") + 12;
+    EXPECT_LE(r.err.find(' ', at) - at, 9u) << r.err;
   }
 }
 
@@ -394,6 +399,34 @@ TEST(HardMesh, ARegionWithoutVerticesOfItsOwnIsRefusedNamingTheFile) {
   const Result r =
       cli("probe " + (d / "A.json").string() + " --press lump --force 1 --duration 0.05", d);
   EXPECT_EXIT2_WITH(r, "organ.obj: region \"lump\" has no vertex of its own");
+}
+
+// Review finding (2026-12-06, second): a palpation study whose feature is a tissue inside a tet
+// mesh (prototype N's joint capsule) passed `validate`; `run` stopped at its first session with
+// a database made. `validate` and `run` refuse it before anything is stored; a needle's target
+// is such a tissue and stays valid.
+TEST(HardMesh, APalpationFeatureInsideTheBodyIsRefusedByValidate) {
+  auto d = tmp("inner_feature");
+  const std::string study = R"({
+  "palplab_study": 1, "id": "inner_feature", "title": "t", "seed": 1,
+  "task": {"feature": "membrane", "thresholds": {"*": {"ST": 6.0, "MPF": 7.0, "SFT": 8.0}}},
+  "groups": [{"id": "N", "prototype": "N", "size": 2}],
+  "phases": [{"id": "training", "kind": "training", "sessions": 1, "session_duration": 5}]
+})";
+  spit(d / "s.json", study);
+  const std::string says =
+      "$.task.feature: region \"membrane\" of prototype(s) N is a tissue inside the body (no "
+      "vertex on its surface)";
+  EXPECT_EXIT2_WITH(cli("validate " + (d / "s.json").string(), d), says);
+  EXPECT_EXIT2_WITH(
+      cli("run " + (d / "s.json").string() + " --db " + (d / "r.db").string() + " --quiet", d),
+      says);
+  EXPECT_FALSE(fs::exists(d / "r.db"));
+  std::string skin = study;
+  skin.replace(skin.find("membrane"), 8, "skin");
+  spit(d / "skin.json", skin);
+  EXPECT_EQ(cli("validate " + (d / "skin.json").string(), d).code, 0);
+  EXPECT_EQ(cli("validate " + src("protocols/studies/needle_insertion.json"), d).code, 0);
 }
 
 namespace {
@@ -994,7 +1027,11 @@ TEST(HardOutput, AFailedWriteToStandardOutputIsAnError) {
       {"validate " + (d / "study.json").string(), "(a write failed); the output is lost"},
       // A verdict of 1 (defects found) is not what a script may read from lost output (review
       // 2026-12-06, second: it stayed 1).
-      {"mesh check " + (d / "flat.obj").string(), "(No space left on device); the output is lost"}};
+      {"mesh check " + (d / "flat.obj").string(), "(No space left on device); the output is lost"},
+      // Help and version, which CLI11 prints itself, exited 0 (review 2026-12-06, second).
+      {"--help", "(No space left on device); the output is lost"},
+      {"run --help", "(No space left on device); the output is lost"},
+      {"--version", "(No space left on device); the output is lost"}};
   spit(d / "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
   ASSERT_EQ(cli("mesh check " + (d / "flat.obj").string(), d).code, 1);
   for (const auto& [args, why] : cases) {

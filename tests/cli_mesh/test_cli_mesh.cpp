@@ -107,6 +107,17 @@ TEST(CliMesh, GenerateSaysWhenTheCountIsFarFromTheOneAskedFor) {
   r = run("mesh generate model-a --vertices 1500 --out " + p("many.obj"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err.find("note:"), std::string::npos) << r.err;
+  // The shoulder's layers and model-c's surface too (review 2026-12-06, second: no note).
+  r = run("mesh generate shoulder --vertices 700 --out " + p("sh700"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("note: shoulder has 642 vertices per skin layer, the closest to "
+                       "--vertices 700"),
+            std::string::npos)
+      << r.err;
+  r = run("mesh generate model-c --vertices 1000 --out " + p("c1000.node"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("surface vertices, the closest to --vertices 1000"), std::string::npos)
+      << r.err;
 }
 
 TEST(CliMesh, CheckExitCodesAndJson) {
@@ -288,7 +299,9 @@ TEST(CliMesh, OptionValuesAreCheckedWithTheirRange) {
            // Review 2026-12-06 (second): 1e-30 grew TetGen by ~55 MB/s until --timeout.
            {tet + " --max-volume 1e-30",
             "--max-volume 1e-30 m^3 asks for at least 5.06e+26 tetrahedra (the surface encloses "
-            "0.000506 m^3)"}}) {
+            "0.000506 m^3)"},
+           {tet + " --max-volume 4.9e-324",
+            "--max-volume 4.94e-324 m^3 asks for more than 1e308 tetrahedra"}}) {
     r = run(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.out << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;

@@ -102,7 +102,9 @@ TEST(CliRender, BadInputExitsTwo) {
   EXPECT_EQ(cli("render " + proto("A") + " --camera 10" + out).code, 2);
   EXPECT_EQ(cli("render " + proto("A") + " --camera 0,95" + out).code, 2);
   // Review 2026-12-06 (second): a camera 1e300 m away drew a white image with exit 0.
-  for (const char* camera : {"30,20,1e300", "30,20,101", "30,20,0", "1e10,20", "-361,0"}) {
+  // "30,25,": the empty last item was dropped (review 2026-12-06, second).
+  for (const char* camera :
+       {"30,20,1e300", "30,20,101", "30,20,0", "1e10,20", "-361,0", "30,25,", "30,,1"}) {
     const Result r = cli("render " + proto("A") + " --camera " + camera + out);
     EXPECT_EQ(r.code, 2) << camera << r.out;
     EXPECT_NE(r.out.find("--camera: "), std::string::npos) << r.out;
@@ -208,6 +210,14 @@ TEST(CliView, SlowUdpDeviceIsRefusedBeforeAnyWindowOpens) {
   EXPECT_NE(r.out.find("below the required 900 Hz"), std::string::npos) << r.out;
   EXPECT_EQ(cli("view " + proto("A") + " --device serial:1 --frames 1").code, 2);
   EXPECT_EQ(cli("view " + proto("A") + " --device trace:/nonexistent.trace --frames 1").code, 2);
+}
+
+TEST(CliView, NoDisplayExits2) {
+  const Result r = run("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(PALPLAB_BINARY) +
+                       " view " + proto("A") + " --frames 1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("view needs a window"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("DISPLAY"), std::string::npos) << r.out;
 }
 
 TEST(CliView, RecordTraceThenReplayItUnderXvfb) {

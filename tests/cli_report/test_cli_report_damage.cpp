@@ -191,6 +191,16 @@ TEST(CliReportDamage, SampleRowsThatAreNotContiguousAreRefused) {
                   " steps (one sample each, the run stored them: --samples full)"});
   EXPECT_FALSE(fs::exists(d / "csv"));
   EXPECT_FALSE(fs::exists(d / "t.trace"));
+  // Nor the parents it made (review 2026-12-06, second: `--csv nest1/nest2` left nest1), while
+  // a directory that was there stays.
+  fs::create_directories(d / "kept");
+  for (const char* sub : {"nest1/nest2", "nest1/nest2/", "kept/nest3/nest4"})
+    expect_exit2(
+        run_palplab("export " + db.string() + " --csv " + (d / sub).string() + " --samples", d),
+        {"0 stored, but the session ran"});
+  EXPECT_FALSE(fs::exists(d / "nest1"));
+  EXPECT_TRUE(fs::is_directory(d / "kept"));
+  EXPECT_FALSE(fs::exists(d / "kept" / "nest3"));
 }
 
 TEST(CliReportDamage, FileWhereTheReportPutsADirectory) {

@@ -166,6 +166,13 @@ TEST(JsonParse, HostileTextIsALocatedError) {
   EXPECT_EQ(located_error(std::string("\xfe\xff\0{\0}", 6)), utf16);
   EXPECT_EQ(located_error(std::string("{\0\n\0}\0", 6)), utf16);
   EXPECT_EQ(located_error(std::string("\0{\0\n\0}", 6)), utf16);
+  // UTF-32 was called UTF-16 (review 2026-12-06, second).
+  const std::string utf32 =
+      "t.json:1:1: invalid JSON: the file is UTF-32 text (expected UTF-8: save it as UTF-8)";
+  EXPECT_EQ(located_error(std::string("\xff\xfe\0\0{\0\0\0}\0\0\0", 12)), utf32);
+  EXPECT_EQ(located_error(std::string("\0\0\xfe\xff\0\0\0{\0\0\0}", 12)), utf32);
+  EXPECT_EQ(located_error(std::string("{\0\0\0}\0\0\0", 8)), utf32);
+  EXPECT_EQ(located_error(std::string("\0\0\0{\0\0\0}", 8)), utf32);
 }
 
 TEST(Escape, Utf8IsToldFromOtherBytes) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -243,10 +244,31 @@ TEST(Io, MalformedFilesAreLocated) {
   try {
     read_obj(p);
   } catch (const palplab::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("not OBJ text: control bytes (a binary file?)"),
+    EXPECT_NE(std::string(e.what()).find("not OBJ text: binary bytes (a binary STL, a database, "
+                                         "an image?) in '\\x7fELF\\x02\\x01\\x01"),
               std::string::npos)
         << e.what();
     EXPECT_LT(std::string(e.what()).size(), 200u) << e.what();
+  }
+  // Binary files whose first word is printable (review 2026-12-06, second: "unsupported OBJ
+  // statement", the bytes >= 0x80 echoed raw): a binary STL's header, an SQLite database, a PNG.
+  for (const std::string& head :
+       {std::string("palplab binary STL header\x80\x81\xfe\xff\0\0\n", 33),
+        std::string("SQLite format 3\0\x10\0\x01\x01\n", 23),
+        std::string("\x89PNG\r\n\x1a\n", 8)}) {
+    SCOPED_TRACE(head.substr(0, 8));
+    write_text(p, head);
+    try {
+      read_obj(p);
+      ADD_FAILURE() << "read";
+    } catch (const palplab::InputError& e) {
+      std::string what = e.what();
+      EXPECT_NE(what.find("not OBJ text: binary bytes"), std::string::npos) << what;
+      for (size_t at; (at = what.find("…")) != std::string::npos;) what.erase(at, 3);
+      EXPECT_TRUE(std::none_of(what.begin(), what.end(), [](char c) {
+        return static_cast<unsigned char>(c) >= 0x80;
+      })) << what;  // every byte of the file outside printable ASCII shown as \xNN
+    }
   }
 
   p = tmp("bad.off");
