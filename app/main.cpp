@@ -102,15 +102,7 @@ int main(int argc, char** argv) {
   }
   try {
     cli.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    errno = 0;
-    const int c = cli.exit(e);
-    return checked_stdout(c, errno);
-  } catch (const CLI::CallForAllHelp& e) {
-    errno = 0;
-    const int c = cli.exit(e);
-    return checked_stdout(c, errno);
-  } catch (const CLI::CallForVersion& e) {
+  } catch (const CLI::Success& e) {  // --help, --help-all, --version: CLI11 prints them
     errno = 0;
     const int c = cli.exit(e);
     return checked_stdout(c, errno);
