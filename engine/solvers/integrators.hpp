@@ -91,6 +91,12 @@ struct CompactCg {
     int ia, ib;
   };
   std::vector<InnerBlock> iblocks;
+  // Per active spring this step's unit direction d = du / |du|, |du| and 1 / |du| (the spring
+  // pass's first loop: its square roots and divisions off the second loop's critical path).
+  struct Direction {
+    double d0, d1, d2, len, il;
+  };
+  std::vector<Direction> dirs;
   std::vector<Sym3> Ds, Pinv;
   Eigen::VectorXd rhs;
   // warm_start == extrapolated: the solutions of the last two steps on this set (3m each) and
