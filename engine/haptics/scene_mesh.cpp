@@ -76,15 +76,22 @@ mesh::TetMesh shoulder_tets(int layer_vertices) {
   std::vector<int> tissues(tm.attribute.data(), tm.attribute.data() + tm.attribute.size());
   std::sort(tissues.begin(), tissues.end());
   tissues.erase(std::unique(tissues.begin(), tissues.end()), tissues.end());
+  // One region per tissue name: the humerus (200) and the scapula (201) are both "bone" (a
+  // second region of the same name was listed twice and never used: regions are found by name).
   tm.regions.names.clear();
+  std::vector<int> region_of_tissue;
   for (int a : tissues) {
     const mesh::Material* mat = mesh::default_materials().find(a);
-    tm.regions.names.push_back(mat ? mat->name : "tissue " + std::to_string(a));
+    const std::string name = mat ? mat->name : "tissue " + std::to_string(a);
+    const auto it = std::find(tm.regions.names.begin(), tm.regions.names.end(), name);
+    region_of_tissue.push_back(static_cast<int>(it - tm.regions.names.begin()));
+    if (it == tm.regions.names.end()) tm.regions.names.push_back(name);
   }
   tm.regions.id.resize(tm.T.rows());
   for (long t = 0; t < tm.T.rows(); ++t)
-    tm.regions.id[t] = static_cast<int>(
-        std::lower_bound(tissues.begin(), tissues.end(), tm.attribute[t]) - tissues.begin());
+    tm.regions.id[t] =
+        region_of_tissue[std::lower_bound(tissues.begin(), tissues.end(), tm.attribute[t]) -
+                         tissues.begin()];
   return tm;
 }
 

@@ -177,6 +177,10 @@ TEST(NeedleScene, LateralInsertionHitsTheHumerus) {
   }
   EXPECT_EQ(bone, 1);
   EXPECT_EQ(bone_region, "bone");
+  // One region per tissue name: the humerus and the scapula are one "bone" (it was listed twice,
+  // the second never used).
+  EXPECT_EQ(s.geometry().region_names,
+            (std::vector<std::string>{"skin", "soft tissue", "membrane", "bone", "muscle"}));
   // Pressed 6 mm into the bone wall: the force is the device's limit, along +x (out).
   EXPECT_NEAR(f.x(), s.config().contact.force_limit, 1e-9);
 }
