@@ -46,7 +46,10 @@ palplab::app::CommandRegistration reg_calibrate{
                       "This fit's bounds of fitted parameters, NAME=LO:HI each (within the "
                       "parameter's own bounds; default: those)")
           ->expected(1, -1);
-      cmd->add_option("--budget", a->opt.budget, "Loss evaluations for the optimiser")
+      cmd->add_option("--budget", a->opt.budget,
+                      "Loss evaluations for the optimiser (each simulates the study once at "
+                      "--sim-n per group)")
+          ->capture_default_str()
           ->check(palplab::app::count_range(1, 1000000));
       cmd->add_option("--jobs", a->opt.jobs, "Participants simulated in parallel (threads)")
           ->check(palplab::app::count_range(1, 1024));

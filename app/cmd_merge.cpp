@@ -43,8 +43,10 @@ palplab::app::CommandRegistration reg_merge{
           ->expected(1, -1);
       cmd->add_option("--out", a->out, "Output directory for power.json/md/svg")->required();
       cmd->add_option("--alpha", a->alpha, "Significance level")
+          ->capture_default_str()
           ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->target, "Power the smallest n must reach")
+          ->capture_default_str()
           ->check(palplab::app::finite_range(0.01, 0.999999));
       cmd->add_flag("--allow-partial", a->allow_partial,
                     "Merge even when shards or replicates are missing (a preliminary summary, "
@@ -143,6 +145,8 @@ palplab::app::CommandRegistration reg_merge{
         // writes A's summary beside them, and a later merge of A reads A's replicates once.
         std::vector<palplab::app::CommandInput> inputs;
         for (const auto& f : files) inputs.push_back({"a replicate file", f});
+        if (!a->human.empty()) inputs.push_back({"the human data", a->human});
+        if (!a->study.empty()) inputs.push_back({"the study file", a->study});
         palplab::app::require_replaceable_dir_outputs("--out", a->out, "power.json/md/svg",
                                                       palplab::app::power_summary_outputs(), inputs,
                                                       "", false);

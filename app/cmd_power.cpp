@@ -114,13 +114,19 @@ bool is_replicate_file(const std::string& path) {
   std::string line;
   while (std::getline(in, line)) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    if (in.eof()) {  // the first record, without its newline
-      const std::string head = "{\"n\":";
-      return line.compare(0, head.size(), head) == 0 || head.compare(0, line.size(), line) == 0;
-    }
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const nlohmann::json r = nlohmann::json::parse(line, nullptr, false);
-    return r.is_object() && r.contains("study_sha256") && r.at("study_sha256").is_string();
+    if (r.is_object() && r.contains("study_sha256") && r.at("study_sha256").is_string())
+      return true;
+    if (!in.eof()) return false;
+    // The first record cut by an interruption (no newline): the start of a record as palplab
+    // writes it (keys in sorted order: "groups" first since 2026-12-05, "n" before). It is cut
+    // off by the resume (review 2026-12-06, third: refused as "a JSON file", because only the
+    // older start was recognised).
+    for (const std::string head : {"{\"groups\":", "{\"n\":"})
+      if (line.compare(0, head.size(), head) == 0 || head.compare(0, line.size(), line) == 0)
+        return true;
+    return false;
   }
   return true;  // blank
 }
@@ -141,8 +147,10 @@ void check_power_out(const PowerArgs& a, const palplab::protocols::Study& s) {
       {file, "palplab replicate file (" + file + ")", is_replicate_file, "append to"});
   if (a.opt.shards <= 1)  // a shard writes no summary
     for (auto& o : power_summary_outputs()) outputs.push_back(std::move(o));
+  std::vector<CommandInput> inputs = {{"the study file", a.study}};
+  if (!a.human.empty()) inputs.push_back({"the human data", a.human});
   require_replaceable_dir_outputs("--out", a.out, "replicates.jsonl and power.json/md/svg", outputs,
-                                  {{"the study file", a.study}}, "", false);
+                                  inputs, "", false);
   palplab::protocols::check_out_dir_study(a.out, palplab::results::sha256_hex(s.json_text));
 }
 
@@ -164,8 +172,10 @@ palplab::app::CommandRegistration reg_power{
       cmd->add_option("--out", a->out,
                       "Output directory (replicates.jsonl, power.json/md/svg; default: ./power)");
       cmd->add_option("--alpha", a->opt.alpha, "Significance level")
+          ->capture_default_str()
           ->check(palplab::app::finite_range(1e-9, 0.5));
       cmd->add_option("--target-power", a->opt.target_power, "Power the smallest n must reach")
+          ->capture_default_str()
           ->check(palplab::app::finite_range(0.01, 0.999999));
       auto* shard_opt =
           cmd->add_option("--shard", a->shard,

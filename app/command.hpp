@@ -3,6 +3,7 @@
 // commands with a static CommandRegistration; main() builds the CLI11 parser from them.
 // A command's run function returns the process exit code; it throws palplab::InputError for
 // bad input (exit 2, message on stderr).
+#include <fcntl.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <cerrno>
@@ -96,12 +97,18 @@ inline void require_writable_file(const std::string& flag, const std::string& pa
     throw InputError(SourceLocation{flag}, "cannot write \"" + path +
                                                "\" (a symbolic link to a missing file), checked "
                                                "before the work starts");
-  std::ofstream probe(path, std::ios::app | std::ios::binary);
+  // Non-blocking: a FIFO that no process reads blocked this probe for ever (review 2026-12-06,
+  // third: `calibrate --journal FIFO`); one with a reader is written as a device is.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_NONBLOCK | O_CLOEXEC, 0644);
   const int why = errno;
-  if (!probe)
+  if (fd < 0 && why == ENXIO)
+    throw InputError(SourceLocation{flag}, "\"" + path +
+                                               "\" is a FIFO that no process reads (the command "
+                                               "would wait for ever); expected a file name");
+  if (fd < 0)
     throw InputError(SourceLocation{flag}, "cannot write \"" + path + "\" (" + std::strerror(why) +
                                                "), checked before the work starts");
-  probe.close();
+  ::close(fd);
   if (!existed) fs::remove(path, ec);
 }
 
@@ -186,6 +193,11 @@ inline void require_replaceable_output(const std::string& flag, const std::strin
                                        const std::string& own_kind, bool overwrite) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  // The output is written as PATH.partial and renamed (common/write_file): an input there is
+  // destroyed as surely (review 2026-12-06: `calibrate st.json.partial --out st.json`).
+  if (const CommandInput* in = same_input(path + ".partial", inputs))
+    refuse_input_output(flag, path + ".partial", *in,
+                        "writing " + path + " (written there first, then renamed)");
   if (fs::exists(path, ec)) {
     if (const CommandInput* in = same_input(path, inputs))
       refuse_input_output(flag, path, *in, "writing the output there");

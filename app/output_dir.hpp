@@ -12,6 +12,7 @@
 //   flag; a command without one says "remove it" instead).
 // - a directory at one of those names is refused (the command could not write its file).
 // An own earlier output, an empty file and a non-regular file (/dev/null) are replaced as before.
+#include <algorithm>
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +129,14 @@ inline void require_replaceable_dir_outputs(const std::string& flag, const std::
     if (const CommandInput* in = same_input(path, inputs))
       refuse_input_output(flag, path, *in,
                           (o.verb == "remove" ? "removing " : "writing ") + o.name + " there");
+    // Written as NAME.partial first, then renamed (common/write_file), unless the command lists
+    // NAME.partial as an output of its own (export).
+    if (o.verb == "replace" &&
+        std::none_of(outputs.begin(), outputs.end(),
+                     [&](const DirOutput& q) { return q.name == o.name + ".partial"; }))
+      if (const CommandInput* in = same_input(path + ".partial", inputs))
+        refuse_input_output(flag, path + ".partial", *in,
+                            "writing " + o.name + " (written there first, then renamed)");
     std::error_code e2;
     // A directory where the command writes (or removes) a file: it could do neither, after
     // its work (`power` and `merge` read an existing power.json first).
@@ -136,6 +145,15 @@ inline void require_replaceable_dir_outputs(const std::string& flag, const std::
                                                  (o.verb == "remove" ? "removes" : "writes") +
                                                  " the file " + o.name + " there: choose another " +
                                                  flag + ", or remove or rename that directory");
+    // A FIFO or socket there: the command reads its earlier file first (it blocked for ever on
+    // a FIFO; review 2026-12-06, third) and writes a regular file.
+    if (const auto t = fs::status(path, e2).type();
+        t == fs::file_type::fifo || t == fs::file_type::socket)
+      throw InputError(SourceLocation{flag},
+                       "\"" + path + "\" is a " + (t == fs::file_type::fifo ? "FIFO" : "socket") +
+                           "; the command " + (o.verb == "remove" ? "removes" : "writes") +
+                           " the file " + o.name + " there: choose another " + flag +
+                           ", or remove it");
     if (overwrite) continue;
     if (!fs::is_regular_file(path, e2) || fs::file_size(path, e2) == 0 || e2 || o.is_own(path))
       continue;

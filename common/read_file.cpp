@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "common/input_error.hpp"
+#include "common/inputs.hpp"
 
 namespace palplab {
 
@@ -34,6 +35,7 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
     ::close(fd);
     throw InputError("is a directory, expected a " + what, path);
   }
+  if (S_ISREG(st.st_mode)) note_input(path);
   std::string text;
   if (S_ISREG(st.st_mode) && st.st_size > 0) {
     if (static_cast<unsigned long long>(st.st_size) > max_bytes) {

@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "common/input_error.hpp"
+#include "common/inputs.hpp"
 #include "common/remove_on_signal.hpp"
 
 namespace palplab {
@@ -41,6 +42,15 @@ void write_file(const std::string& path, std::initializer_list<std::string_view>
     if (!ec) target = resolved.string();
   }
   const std::string tmp = direct ? path : target + ".partial";
+  // Never through a file this command reads (common/inputs.hpp): FILE itself is each command's
+  // own check (some replace a file they read on purpose); FILE.partial, where FILE is written
+  // first, was not checked (a database named report.md.partial was overwritten and renamed away).
+  if (!direct && is_noted_input(tmp))
+    throw InputError("is a file this command reads; " + what + " is written to " + path +
+                         " through " + tmp +
+                         " first, which would destroy it: rename that input "
+                         "or choose another output",
+                     tmp);
   std::optional<RemoveOnSignal> partial;
   if (!direct) partial.emplace(tmp);
   errno = 0;

@@ -1,5 +1,9 @@
 #include "protocols/power.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
@@ -33,6 +37,7 @@
 #include "common/nan.hpp"
 #include "common/seed.hpp"
 #include "common/write_file.hpp"
+#include "protocols/input_pins.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
 #include "results/sha256.hpp"
@@ -193,6 +198,11 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
     if (!member(key, "a string").is_string())
       throw fail(std::string("$.") + key, "expected a string, got " + shown(r.at(key)));
     control_free(r.at(key), std::string("$.") + key);
+  }
+  // Optional (records written before it existed lack it): the prototypes' pin.
+  if (auto it = r.find("prototypes_sha256"); it != r.end()) {
+    if (!it->is_string()) throw fail("$.prototypes_sha256", "expected a string, got " + shown(*it));
+    control_free(*it, "$.prototypes_sha256");
   }
   const std::string n_what = "the group size, an integer from 2 to " + std::to_string(kMaxN);
   if (!integer_in(member("n", n_what), 2, kMaxN))
@@ -589,6 +599,17 @@ std::vector<int> power_sizes(const Study& study, const PowerOptions& opt) {
   return {study.groups.front().size};
 }
 
+// The prototypes a replicate was simulated with (their files and meshes, input_pins.hpp), one
+// SHA-256 over "id=hash" lines in id order: a record names its study by the study file's hash,
+// which does not change when a prototype file does (review 2026-12-06, third: a resumed power
+// mixed replicates of two contact stiffnesses in one summary, exit 0).
+std::string prototypes_sha256(const Study& study) {
+  std::string lines;
+  for (const auto& [id, file] : study.prototype_files)
+    lines += id + "=" + prototype_sha256(file) + "\n";
+  return results::sha256_hex(lines);
+}
+
 long run_power(const Study& study, const PowerOptions& opt) {
   const Ranks ranks = init_ranks();
   const std::vector<int> ns = power_sizes(study, opt);
@@ -596,24 +617,48 @@ long run_power(const Study& study, const PowerOptions& opt) {
   if (opt.shards < 1 || opt.shards > kMaxShards || opt.shard < 0 || opt.shard >= opt.shards)
     throw InputError("--shard I/K needs 1 <= I <= K <= " + std::to_string(kMaxShards));
   const std::string sha = results::sha256_hex(study.json_text);
+  const std::string protos = prototypes_sha256(study);
   const std::string file = replicate_file(opt);
 
   // Every (n, replicate) has a global index; shard I of K takes index % K == I - 1.
   std::set<std::pair<int, int>> done;
+  // Held until the run ends: a second `power` on the same replicate file would simulate the
+  // same replicates and interleave its lines (review 2026-12-06, third: every replicate twice).
+  struct Lock {
+    int fd = -1;
+    ~Lock() {
+      if (fd >= 0) ::close(fd);
+    }
+  } lock;
   if (ranks.rank == 0) {
     std::error_code ec;
     fs::create_directories(opt.out_dir, ec);
     if (!fs::is_directory(opt.out_dir))
       throw InputError("cannot create the output directory", opt.out_dir);
+    lock.fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (lock.fd < 0)
+      throw InputError(
+          std::string("cannot write the replicate file (") + std::strerror(errno) + ")", file);
+    if (::flock(lock.fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK)
+      throw InputError(
+          "is in use: another palplab power is running with this --out (its "
+          "replicates would be simulated twice); wait for it, or use another --out",
+          file);
     repair_tail(file);
-    // The file exists even when this shard has nothing to run (K above the replicate count):
-    // `palplab merge` takes a shard without its file for a missing one.
-    if (!fs::exists(file)) std::ofstream(file, std::ios::app | std::ios::binary);
+    // (The file exists, created above, even when this shard has nothing to run — K above the
+    // replicate count: `palplab merge` takes a shard without its file for a missing one.)
     if (fs::exists(file))
       for (const auto& [r, line] : read_replicates(file)) {
         if (r.at("study_sha256") != sha)
           throw InputError(
               "the replicate file holds another study (SHA-256 differs); use another --out", file);
+        // (Records written before the prototypes were pinned have no such key.)
+        if (r.contains("prototypes_sha256") && r.at("prototypes_sha256") != protos)
+          throw InputError(
+              SourceLocation{file, line, 0, -1, "$.prototypes_sha256"},
+              "replicate simulated with other prototype files than the study's now (a prototype "
+              "or its mesh changed since): its results would be mixed with the new ones; restore "
+              "them, or use another --out");
         done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
       }
     check_out_dir_study(opt.out_dir, sha);  // its power.json and other shards' files
@@ -668,6 +713,7 @@ long run_power(const Study& study, const PowerOptions& opt) {
                           static_cast<std::uint64_t>(t.replicate));
           const Study s = resized_study(study, t.n, seed);
           nlohmann::json rec = {{"study_sha256", sha},
+                                {"prototypes_sha256", protos},
                                 {"study", study.id},
                                 {"n", t.n},
                                 {"replicate", t.replicate},
@@ -974,6 +1020,7 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   std::vector<std::string> first_ids;    // its test ids, sorted
   std::vector<std::string> first_cells;  // "cell\tgroup" of the first record with groups, sorted
   std::string first_cells_at;
+  std::string protos, protos_at;  // the first record's prototypes_sha256 and its FILE:LINE
   std::map<std::string, std::pair<std::string, std::string>> effect_of;  // id -> (name, FILE:LINE)
   for (const auto& f : files)
     for (auto& [r, line] : read_replicates(f)) {
@@ -991,6 +1038,21 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
         throw InputError(SourceLocation{f, line, 0, -1, "$.study"},
                          "study id " + shown(r.at("study")) + " differs from \"" + study_id +
                              "\" at " + first + " (same SHA-256: the record was edited)");
+      // Shards simulated with other prototype files (a prototype or its mesh changed between
+      // them) are not one study's replicates.
+      if (r.contains("prototypes_sha256")) {
+        const std::string ps = r.at("prototypes_sha256").get<std::string>();
+        if (protos.empty()) {
+          protos = ps, protos_at = at;
+        } else if (ps != protos) {
+          throw InputError(SourceLocation{f, line, 0, -1, "$.prototypes_sha256"},
+                           "replicate simulated with other prototype files (SHA-256 " +
+                               ps.substr(0, 12) + ") than the one at " + protos_at + " (SHA-256 " +
+                               protos.substr(0, 12) +
+                               "): a prototype or its mesh changed between the shards; rerun "
+                               "those shards with the same files");
+        }
+      }
       // Every replicate of one study has the same tested cells and groups (when it has them).
       if (r.contains("groups")) {
         std::vector<std::string> cells;

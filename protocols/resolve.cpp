@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 
@@ -49,7 +50,14 @@ std::vector<std::string> prototype_search_dirs(const std::string& study_file,
   if (auto t = source_tree_dir(); !t.empty()) dirs.push_back((fs::path(t) / "prototypes").string());
   if (auto e = exe_dir(); !e.empty())
     dirs.push_back((fs::path(e) / ".." / "share" / "palplab" / "prototypes").lexically_normal());
-  return dirs;
+  // Each directory once, in its first place (PALPLAB_PROTOTYPE_PATH often names the source
+  // tree's prototypes again): a message lists the search path without repeats.
+  std::vector<std::string> once;
+  for (auto& d : dirs) {
+    const std::string n = fs::path(d).lexically_normal().string();
+    if (std::find(once.begin(), once.end(), n) == once.end()) once.push_back(n);
+  }
+  return once;
 }
 
 std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs) {

@@ -821,7 +821,13 @@ Study parse_study(const std::string& text, const std::string& file,
     if (infos.count(id) || failed.count(id)) continue;
     std::string f = resolve_prototype(id, dirs);
     if (f.empty()) {
-      c.err(path, "unresolved prototype \"" + id + "\": no " + id + ".json in " + join(dirs));
+      if (id.empty() || id.find('/') != std::string::npos || id[0] == '.')
+        c.err(path,
+              "prototype \"" + id +
+                  "\" is not a prototype id (a file name without \".json\", no \"/\", not "
+                  "starting with \".\"): put the prototype's directory in \"prototype_dirs\"");
+      else
+        c.err(path, "unresolved prototype \"" + id + "\": no " + id + ".json in " + join(dirs));
       failed.insert(id);
       continue;
     }

@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "common/input_error.hpp"
+#include "common/inputs.hpp"
 #include "common/remove_on_signal.hpp"
 
 namespace fs = std::filesystem;
@@ -243,6 +244,7 @@ class Typed {
 };
 
 sqlite3* open_db(const std::string& path, int flags) {
+  note_input(path);  // never written through by an output (common/inputs.hpp)
   sqlite3* db = nullptr;
   if (sqlite3_open_v2(path.c_str(), &db, flags, nullptr) != SQLITE_OK) {
     std::string m = db ? sqlite3_errmsg(db) : "out of memory";

@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -899,6 +900,22 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
     EXPECT_NE(r.err.find("--journal: \"/dev/full\" is not a regular file"), std::string::npos)
         << r.err;
   }
+  // A FIFO that no process reads, as the journal or --out: it blocked for ever in the
+  // writability probe (review 2026-12-06, third).
+  ASSERT_EQ(::mkfifo((d / "fifo").c_str(), 0644), 0);
+  for (const std::string flag : {"--journal", "--out"}) {
+    std::string c = cmd;
+    if (flag == "--out") c = c.substr(0, c.rfind(" --out ")) + " --journal /dev/null";
+    r = palplab::testing::run_shell("timeout 60 " + std::string(PALPLAB_BINARY) + " " + c +
+                                        " --quiet " + flag + " " + (d / "fifo").string(),
+                                    d);
+    EXPECT_EQ(r.code, 2) << flag << r.err;
+    EXPECT_NE(r.err.find(flag + ": \"" + (d / "fifo").string() +
+                         "\" is a FIFO that no process reads (the command would wait for ever)"),
+              std::string::npos)
+        << r.err;
+  }
+  fs::remove(d / "fifo");
   r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
                       (d / "human.csv").string() + " --params prior_target_cv --quiet --out " +
                       (d / "new.json").string() + " --journal " + (d / "new.json").string(),

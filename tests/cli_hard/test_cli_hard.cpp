@@ -962,6 +962,33 @@ TEST(HardDb, ReportAndExportOfAnIncompleteDatabaseSaySo) {
   EXPECT_TRUE(has(r.err, "is INCOMPLETE")) << r.err;
 }
 
+// Review finding (2026-12-06, third): an input named like an output's FILE.partial (where the
+// output is written before it is renamed) was overwritten and renamed away, exit 0: the results
+// database as DIR/report.md.partial, the study as st.json.partial of `calibrate --out st.json`.
+// Refused before any work, the input left byte for byte.
+TEST(HardDb, AnInputNamedLikeAnOutputsPartialFileIsRefused) {
+  auto d = tmp("partial_input");
+  const fs::path db = incomplete_db(d);
+  fs::create_directories(d / "rep");
+  fs::copy_file(db, d / "rep" / "report.md.partial");
+  const std::string bytes = slurp(d / "rep" / "report.md.partial");
+  Result r = cli("report " + (d / "rep" / "report.md.partial").string() + " --out " +
+                     (d / "rep").string() + " --no-stills",
+                 d);
+  EXPECT_EXIT2_WITH(r,
+                    "report.md.partial\" is the results database this command reads; "
+                    "writing report.md (written there first, then renamed) would destroy it");
+  EXPECT_EQ(slurp(d / "rep" / "report.md.partial"), bytes);
+  EXPECT_FALSE(fs::exists(d / "rep" / "report.md"));
+  spit(d / "st.json.partial", study());
+  r = cli("calibrate " + (d / "st.json.partial").string() + " --human " +
+              src("tests/data/calibration/exp2_human.csv") + " --params weber_fraction --out " +
+              (d / "st.json").string(),
+          d);
+  EXPECT_EXIT2_WITH(r, "st.json.partial\" is the study file this command reads; writing");
+  EXPECT_EQ(slurp(d / "st.json.partial"), study());
+}
+
 TEST(HardDb, MeshFileChangedBetweenRunAndResumeIsRefused) {
   auto d = tmp("meshpin");
   ASSERT_EQ(cli("mesh generate model-a --out " + (d / "organ.obj").string(), d).code, 0);

@@ -5,7 +5,10 @@
 // process. The null test needs many replicates to say
 // anything about alpha, so it is the slow one (~10 s on one core): replicates are tiny
 // (2 x 3 participants, one 12 s session).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -973,5 +976,67 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
                         d)
                 .code,
             2);
+  fs::remove_all(d);
+}
+
+// Review findings (2026-12-06, third):
+// - a resume after a prototype file changed mixed the replicates of both in one summary (the
+//   records named only the study file's hash): refused at the first stored record, and merge
+//   refuses shards of different prototypes;
+// - a replicate file whose only record was cut by an interruption was refused as "a JSON file":
+//   it is cut and resumed;
+// - two runs on one --out both simulated every replicate: the second is refused;
+// - a FIFO where power writes a file blocked for ever.
+TEST(Power, ResumeChecksThePrototypesTheCutFirstRecordTheLockAndFifos) {
+  const fs::path d = scratch_dir("power_pins");
+  fs::create_directories(d / "prototypes");
+  fs::copy_file(fs::path(PALPLAB_SOURCE_DIR) / "prototypes" / "A.json",
+                d / "prototypes" / "A.json");
+  std::string study = slurp(null_study());
+  study.replace(study.find("\"../../../prototypes\""), 21, "\"prototypes\"");
+  std::ofstream(d / "s.json") << study;
+  const std::string cmd = "power " + (d / "s.json").string() + " --n 2 --quiet";
+  auto out = [&](const std::string& name) { return " --out " + (d / name).string(); };
+  ASSERT_EQ(run_palplab(cmd + " --replicates 2" + out("p"), d).code, 0);
+  ASSERT_EQ(run_palplab(cmd + " --replicates 2 --shard 1/2" + out("s1"), d).code, 0);
+  const std::string before = slurp(d / "p" / "power.json");
+  EXPECT_TRUE(has(slurp(d / "p" / "replicates.jsonl"), "\"prototypes_sha256\":\""));
+  std::string a = slurp(d / "prototypes" / "A.json");
+  a.replace(a.find("\"stiffness\": 500.0"), 18, "\"stiffness\": 5000.0");
+  std::ofstream(d / "prototypes" / "A.json") << a;
+  expect_exit2(run_palplab(cmd + " --replicates 3" + out("p"), d),
+               {(d / "p" / "replicates.jsonl").string() + ":1: $.prototypes_sha256:",
+                "replicate simulated with other prototype files"});
+  EXPECT_EQ(slurp(d / "p" / "power.json"), before);
+  ASSERT_EQ(run_palplab(cmd + " --replicates 2 --shard 2/2" + out("s2"), d).code, 0);
+  expect_exit2(merge({d / "s1", d / "s2"}, d / "m", d),
+               {"$.prototypes_sha256: replicate simulated with other prototype files",
+                "a prototype or its mesh changed between the shards"});
+  // The only record cut: resumed to the same summary as a run without the cut.
+  fs::create_directories(d / "cut");
+  ASSERT_EQ(run_palplab(cmd + " --replicates 2" + out("whole"), d).code, 0);
+  std::ofstream(d / "cut" / "replicates.jsonl")
+      << slurp(d / "whole" / "replicates.jsonl").substr(0, 300);
+  const Result r = run_palplab(cmd + " --replicates 2" + out("cut"), d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(d / "cut" / "power.json"), slurp(d / "whole" / "power.json"));
+  // A second run on an --out in use (the lock held here, as a running power holds it).
+  const int fd = ::open((d / "whole" / "replicates.jsonl").c_str(), O_RDONLY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  expect_exit2(run_palplab(cmd + " --replicates 3" + out("whole"), d),
+               {"replicates.jsonl: is in use: another palplab power is running with this --out"});
+  ::close(fd);
+  // FIFOs.
+  for (const char* name : {"power.json", "replicates.jsonl", "power.svg"}) {
+    SCOPED_TRACE(name);
+    const fs::path dir = d / (std::string("fifo_") + name);
+    fs::create_directories(dir);
+    ASSERT_EQ(::mkfifo((dir / name).c_str(), 0644), 0);
+    expect_exit2(run_shell("timeout 60 " + std::string(PALPLAB_BINARY) + " " + cmd +
+                               " --replicates 1 --out " + dir.string(),
+                           d),
+                 {"is a FIFO; the command writes the file " + std::string(name) + " there"});
+  }
   fs::remove_all(d);
 }

@@ -15,6 +15,8 @@
 #include <string>
 
 #include "common/input_error.hpp"
+#include "common/inputs.hpp"
+#include "common/read_file.hpp"
 #include "common/remove_on_signal.hpp"
 #include "common/write_file.hpp"
 
@@ -122,6 +124,32 @@ TEST(WriteFile, ALinkIsWrittenThroughAndStaysALink) {
 // common/remove_on_signal: a file registered while a signal ends the process is removed, and the
 // process ends by that signal; a file deregistered before is kept; a signal the process ignores
 // (nohup) stays ignored. Each case in a child process.
+// Review finding (2026-12-06): an input named FILE.partial (a results database saved as
+// report.md.partial) was overwritten by the write of FILE and renamed away, exit 0. A file this
+// process read (read_file_bounded, a database opened) is never written through; a stale
+// FILE.partial that is no input is still replaced.
+TEST(WriteFile, NeverWritesThroughAFileThisProcessRead) {
+  const fs::path d = scratch();
+  const std::string out = (d / "report.md").string(), partial = out + ".partial";
+  std::ofstream(partial) << "the study\n";
+  palplab::write_file(out, "stale partial replaced\n", "the report");  // not read: no input
+  EXPECT_EQ(slurp(out), "stale partial replaced\n");
+  std::ofstream(partial) << "the study\n";
+  EXPECT_EQ(palplab::read_file_bounded(partial, 1024, "study file"), "the study\n");
+  const std::string err = error_of(out, "x");
+  EXPECT_NE(err.find(partial + ": is a file this command reads; the report is written to " + out +
+                     " through " + partial + " first, which would destroy it"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(slurp(partial), "the study\n");
+  EXPECT_EQ(slurp(out), "stale partial replaced\n");
+  // Also through a link to it.
+  fs::create_symlink(partial, d / "link.partial");
+  EXPECT_TRUE(palplab::is_noted_input((d / "link.partial").string()));
+  EXPECT_FALSE(error_of((d / "link").string(), "x").empty());
+  fs::remove_all(d);
+}
+
 TEST(RemoveOnSignal, ARegisteredFileIsRemovedAndTheSignalStillEndsTheProcess) {
   const fs::path d = scratch();
   auto in_child = [](const std::function<void()>& body) {

@@ -4,6 +4,7 @@
 
 #include "common/input_error.hpp"
 #include "protocols/participants/params.hpp"
+#include "protocols/resolve.hpp"
 #include "protocols/study.hpp"
 #include "study_fixture.hpp"
 
@@ -119,6 +120,15 @@ TEST(Study, WrongType) {
 TEST(Study, UnresolvedPrototype) {
   auto ps = problems_of("unresolved", edit("\"prototype\": \"B\"", "\"prototype\": \"Z\""));
   expect_one(ps, "$.groups[1].prototype", 12, "unresolved prototype \"Z\"");
+  // The search path without repeats (review 2026-12-06, third: the source tree's prototypes
+  // twice when PALPLAB_PROTOTYPE_PATH names them too).
+  const auto dirs = palplab::protocols::prototype_search_dirs("x/s.json", {"p", "./p", "p/"});
+  for (std::size_t i = 0; i < dirs.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j) EXPECT_NE(dirs[i], dirs[j]) << i << " " << j;
+  // A path is no id: said as such, not as a file missing from the search path.
+  ps = problems_of("path_id", edit("\"prototype\": \"B\"", "\"prototype\": \"../B\""));
+  expect_one(ps, "$.groups[1].prototype", 12,
+             "prototype \"../B\" is not a prototype id (a file name without \".json\", no \"/\"");
 }
 
 TEST(Study, UnknownRegion) {
