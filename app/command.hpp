@@ -4,6 +4,7 @@
 // A command's run function returns the process exit code; it throws palplab::InputError for
 // bad input (exit 2, message on stderr).
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <cerrno>
@@ -108,6 +109,11 @@ inline void require_writable_file(const std::string& flag, const std::string& pa
   if (fd < 0)
     throw InputError(SourceLocation{flag}, "cannot write \"" + path + "\" (" + std::strerror(why) +
                                                "), checked before the work starts");
+  // A FIFO's reader sees the end of its input when the last writer closes: the probe's end stays
+  // open until the process ends (closing it made `cat FIFO` stop before the output came, and the
+  // command's own open then waited for ever).
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && S_ISFIFO(st.st_mode)) return;
   ::close(fd);
   if (!existed) fs::remove(path, ec);
 }

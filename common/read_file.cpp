@@ -25,7 +25,10 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
                               const std::string& what) {
   // POSIX reads: an ifstream's locale and buffer set-up cost more than reading a prototype.
   if (path.empty()) throw InputError("an empty file name, expected the path of a " + what);
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Opened without blocking (a FIFO with no writer blocked here for ever; now it reads as
+  // empty), then read blocking as usual.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd >= 0) ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
   if (fd < 0)
     throw InputError(std::string("cannot open file: ") + std::strerror(errno) +
                          " (expected a readable " + what + ")",

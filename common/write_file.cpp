@@ -51,10 +51,20 @@ void write_file(const std::string& path, std::initializer_list<std::string_view>
                          " first, which would destroy it: rename that input "
                          "or choose another output",
                      tmp);
+  // A leftover FILE.partial (an earlier write killed) is replaced itself, never written
+  // through: a link there pointed the write at another file, a FIFO there blocked it for ever
+  // (review 2026-12-06, third); a directory there is said as such.
+  if (struct stat lt{}; !direct && ::lstat(tmp.c_str(), &lt) == 0) {
+    if (S_ISDIR(lt.st_mode))
+      throw InputError("is a directory where " + what + " is written first (then renamed to " +
+                           path + "): remove or rename it",
+                       tmp);
+    if (std::remove(tmp.c_str()) != 0) fail(errno);
+  }
   std::optional<RemoveOnSignal> partial;
   if (!direct) partial.emplace(tmp);
   errno = 0;
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  std::FILE* f = std::fopen(tmp.c_str(), direct ? "wb" : "wbx");  // x: made here, no link followed
   if (!f) fail(errno);
   errno = 0;
   bool written = true;

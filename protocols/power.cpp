@@ -201,8 +201,13 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
   }
   // Optional (records written before it existed lack it): the prototypes' pin.
   if (auto it = r.find("prototypes_sha256"); it != r.end()) {
-    if (!it->is_string()) throw fail("$.prototypes_sha256", "expected a string, got " + shown(*it));
-    control_free(*it, "$.prototypes_sha256");
+    const auto hex = [](const nlohmann::json& v) {
+      const auto& s = v.get_ref<const std::string&>();
+      return s.size() == 64 && s.find_first_not_of("0123456789abcdef") == std::string::npos;
+    };
+    if (!it->is_string() || !hex(*it))
+      throw fail("$.prototypes_sha256",
+                 "expected a SHA-256 (64 lowercase hexadecimal digits), got " + shown(*it));
   }
   const std::string n_what = "the group size, an integer from 2 to " + std::to_string(kMaxN);
   if (!integer_in(member("n", n_what), 2, kMaxN))

@@ -821,7 +821,8 @@ Study parse_study(const std::string& text, const std::string& file,
     if (infos.count(id) || failed.count(id)) continue;
     std::string f = resolve_prototype(id, dirs);
     if (f.empty()) {
-      if (id.empty() || id.find('/') != std::string::npos || id[0] == '.')
+      if (id.empty() || id.find('/') != std::string::npos || id[0] == '.' ||
+          (id.size() > 5 && id.compare(id.size() - 5, 5, ".json") == 0))
         c.err(path,
               "prototype \"" + id +
                   "\" is not a prototype id (a file name without \".json\", no \"/\", not "

@@ -1012,6 +1012,15 @@ TEST(Power, ResumeChecksThePrototypesTheCutFirstRecordTheLockAndFifos) {
   expect_exit2(merge({d / "s1", d / "s2"}, d / "m", d),
                {"$.prototypes_sha256: replicate simulated with other prototype files",
                 "a prototype or its mesh changed between the shards"});
+  // A value that is no SHA-256 (merge accepted "" and "abc" when every record had it).
+  std::string edited = slurp(d / "s1" / "replicates.shard-1-of-2.jsonl");
+  const auto at = edited.find("\"prototypes_sha256\":\"") + 21;
+  edited.replace(at, 64, "abc");
+  fs::create_directories(d / "bad");
+  std::ofstream(d / "bad" / "replicates.shard-1-of-2.jsonl") << edited;
+  expect_exit2(merge({d / "bad"}, d / "mb", d, " --allow-partial"),
+               {"$.prototypes_sha256: expected a SHA-256 (64 lowercase hexadecimal digits), got "
+                "\"abc\""});
   // The only record cut: resumed to the same summary as a run without the cut.
   fs::create_directories(d / "cut");
   ASSERT_EQ(run_palplab(cmd + " --replicates 2" + out("whole"), d).code, 0);

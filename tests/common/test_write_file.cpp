@@ -129,7 +129,11 @@ TEST(WriteFile, ALinkIsWrittenThroughAndStaysALink) {
 // process read (read_file_bounded, a database opened) is never written through; a stale
 // FILE.partial that is no input is still replaced.
 TEST(WriteFile, NeverWritesThroughAFileThisProcessRead) {
-  const fs::path d = scratch();
+  // Its own directory, kept to the process's end: a removed input's inode may be reused by a
+  // later test's file, which would then count as read (a process keeps its inputs).
+  const fs::path d =
+      fs::temp_directory_path() / ("palplab_write_file_inputs_" + std::to_string(::getpid()));
+  fs::create_directories(d);
   const std::string out = (d / "report.md").string(), partial = out + ".partial";
   std::ofstream(partial) << "the study\n";
   palplab::write_file(out, "stale partial replaced\n", "the report");  // not read: no input
@@ -147,6 +151,29 @@ TEST(WriteFile, NeverWritesThroughAFileThisProcessRead) {
   fs::create_symlink(partial, d / "link.partial");
   EXPECT_TRUE(palplab::is_noted_input((d / "link.partial").string()));
   EXPECT_FALSE(error_of((d / "link").string(), "x").empty());
+}
+
+// Review finding (2026-12-06, third): a leftover FILE.partial that was a link to another file
+// had that file overwritten, one that was a FIFO blocked the write for ever, a directory was
+// said as "FILE: Is a directory". The leftover entry is replaced itself; a directory is named.
+TEST(WriteFile, ALeftoverPartialIsReplacedNeverWrittenThrough) {
+  const fs::path d = scratch();
+  const std::string out = (d / "o.txt").string(), partial = out + ".partial";
+  std::ofstream(d / "precious.txt") << "precious\n";
+  fs::create_symlink(d / "precious.txt", partial);
+  palplab::write_file(out, "new\n", "the file");
+  EXPECT_EQ(slurp(d / "precious.txt"), "precious\n");
+  EXPECT_EQ(slurp(out), "new\n");
+  EXPECT_FALSE(fs::exists(fs::symlink_status(partial)));
+  ASSERT_EQ(::mkfifo(partial.c_str(), 0644), 0);
+  palplab::write_file(out, "newer\n", "the file");  // would block for ever on the FIFO
+  EXPECT_EQ(slurp(out), "newer\n");
+  fs::create_directory(partial);
+  EXPECT_EQ(error_of(out, "x"), partial +
+                                    ": is a directory where the report is written first "
+                                    "(then renamed to " +
+                                    out + "): remove or rename it");
+  EXPECT_EQ(slurp(out), "newer\n");
   fs::remove_all(d);
 }
 

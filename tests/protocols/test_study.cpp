@@ -129,6 +129,8 @@ TEST(Study, UnresolvedPrototype) {
   ps = problems_of("path_id", edit("\"prototype\": \"B\"", "\"prototype\": \"../B\""));
   expect_one(ps, "$.groups[1].prototype", 12,
              "prototype \"../B\" is not a prototype id (a file name without \".json\", no \"/\"");
+  ps = problems_of("json_id", edit("\"prototype\": \"B\"", "\"prototype\": \"B.json\""));
+  expect_one(ps, "$.groups[1].prototype", 12, "prototype \"B.json\" is not a prototype id");
 }
 
 TEST(Study, UnknownRegion) {
