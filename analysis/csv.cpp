@@ -49,15 +49,12 @@ size_t utf8_sequence(std::string_view s, size_t i) {
 void require_utf8(std::string_view text, const std::string& file) {
   // UTF-16 (Excel's "Unicode text", PowerShell's default) starts with its byte order mark, or
   // has a zero byte beside each ASCII one: not Latin-1, so not that advice.
-  const auto u = [&](size_t i) {
-    return i < text.size() ? static_cast<unsigned char>(text[i]) : 1;
-  };
-  if ((u(0) == 0xFF && u(1) == 0xFE) || (u(0) == 0xFE && u(1) == 0xFF) ||
-      (text.size() >= 4 && u(0) >= 0x20 && u(0) < 0x80 && u(1) == 0 && u(3) == 0) ||
-      (text.size() >= 4 && u(0) == 0 && u(2) == 0 && u(1) >= 0x20 && u(1) < 0x80))
+  // UTF-32 likewise (three zero bytes; it was called UTF-16, or Latin-1, or a NUL-filled column).
+  if (const char* enc = wide_unicode(text))
     throw error_at(file, 1, 1,
-                   "the file is UTF-16, not UTF-8: CSV files are read as UTF-8; save it as UTF-8 "
-                   "(Excel: \"CSV UTF-8\"; or iconv -f UTF-16 -t UTF-8 IN.csv > OUT.csv)");
+                   std::string("the file is ") + enc +
+                       ", not UTF-8: CSV files are read as UTF-8; save it as UTF-8 (Excel: \"CSV "
+                       "UTF-8\"; or iconv -f " + enc + " -t UTF-8 IN.csv > OUT.csv)");
   int line = 1, column = 1;
   for (size_t i = 0; i < text.size();) {
     const size_t len = utf8_sequence(text, i);

@@ -32,6 +32,23 @@ inline std::string escape_controls(std::string_view s, bool keep_newlines = true
   return out;
 }
 
+// "UTF-32", "UTF-16" or nullptr: whether `text` is wide Unicode (an editor's "Unicode" save),
+// with or without its byte-order mark, either byte order — an ASCII character has three or one
+// zero bytes beside it. JSON and CSV files are read as UTF-8 and say so at 1:1.
+inline const char* wide_unicode(std::string_view text) {
+  const auto u = [&](std::size_t i) { return i < text.size() ? int(static_cast<unsigned char>(text[i])) : -1; };
+  const auto ascii = [](int c) { return c >= 0x09 && c < 0x80; };
+  if ((u(0) == 0xFF && u(1) == 0xFE && u(2) == 0 && u(3) == 0) ||
+      (u(0) == 0 && u(1) == 0 && u(2) == 0xFE && u(3) == 0xFF) ||
+      (ascii(u(0)) && u(1) == 0 && u(2) == 0 && u(3) == 0) ||
+      (u(0) == 0 && u(1) == 0 && u(2) == 0 && ascii(u(3))))
+    return "UTF-32";
+  if ((u(0) == 0xFF && u(1) == 0xFE) || (u(0) == 0xFE && u(1) == 0xFF) ||
+      (ascii(u(0)) && u(1) == 0 && u(3) == 0) || (u(0) == 0 && ascii(u(1)) && u(2) == 0))
+    return "UTF-16";
+  return nullptr;
+}
+
 // Whether `s` is well-formed UTF-8 (no overlong forms, surrogates or code points above
 // U+10FFFF): names from user files go into JSON, which holds UTF-8 only.
 inline bool is_valid_utf8(std::string_view s) {

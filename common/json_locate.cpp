@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
 
 namespace palplab::json {
@@ -414,22 +415,12 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
   // study whose keys after a NUL were "missing", garbage after a valid document accepted).
   if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
     const TextPos p = offset_to_pos(text, nul);
-    // UTF-16 (a file saved as "Unicode" by some editors) has a NUL in every ASCII character,
-    // UTF-32 three; either with or without its byte-order mark.
-    const auto at = [&](std::size_t i) { return i < text.size() ? text[i] : '\x01'; };
-    const bool utf32 = (at(0) == '\xff' && at(1) == '\xfe' && at(2) == '\0' && at(3) == '\0') ||
-                       (at(0) == '\0' && at(1) == '\0' && at(2) == '\xfe' && at(3) == '\xff') ||
-                       (nul <= 2 && text.size() >= 8 &&
-                        ((at(0) != '\0' && at(1) == '\0' && at(2) == '\0' && at(3) == '\0') ||
-                         (at(0) == '\0' && at(1) == '\0' && at(2) == '\0' && at(3) != '\0')));
-    const bool utf16 =
-        !utf32 && text.size() >= 2 &&
-        ((text[0] == '\xff' && text[1] == '\xfe') || (text[0] == '\xfe' && text[1] == '\xff') ||
-         (nul <= 1 && text.size() >= 4 && (text[0] == '\0') != (text[1] == '\0')));
-    const bool wide = utf16 || utf32;
+    // UTF-16 or UTF-32 (a file saved as "Unicode" by some editors) has NULs beside every ASCII
+    // character.
+    const char* const encoding = wide_unicode(text);
+    const bool wide = encoding != nullptr;
     throw InputError(SourceLocation{file, wide ? 1 : p.line, wide ? 1 : p.column},
-                     wide ? std::string("invalid JSON: the file is ") +
-                                (utf32 ? "UTF-32" : "UTF-16") +
+                     wide ? std::string("invalid JSON: the file is ") + encoding +
                                 " text (expected UTF-8: save it as UTF-8)"
                           : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
                                         "file, or text damaged by a NUL)"));

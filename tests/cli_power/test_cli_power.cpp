@@ -950,6 +950,11 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
       {"participant,group,phase,session,measure,value,Unit\nx1,G1,test,1,palpation_force,2,kg\n",
        "column 'unit': palpation_force is in N, got 'kg'"},
       {std::string("\xFF\xFEp\0a\0r\0", 8), "UTF-16"},
+      // UTF-32 was called UTF-16, Latin-1 or read as NUL-filled columns (review 2026-12-06).
+      {std::string("\xFF\xFE\0\0p\0\0\0a\0\0\0", 12), "the file is UTF-32, not UTF-8"},
+      {std::string("p\0\0\0a\0\0\0", 8), "iconv -f UTF-32 -t UTF-8"},
+      {std::string("\0\0\0p\0\0\0a", 8), "the file is UTF-32, not UTF-8"},
+      {std::string("\0\0\xFE\xFF\0\0\0p", 8), "the file is UTF-32, not UTF-8"},
       {"participant,group,phase,session,measure,value\nx1,G1,test,1,palpation_force,2\n"
        "x2,G1,test,1,palpation_force,2.1\nx3,G2,test,1,palpation_force,2\n",
        "group G2 has 1 value of palpation_force"},
