@@ -252,10 +252,10 @@ TEST(Io, MalformedFilesAreLocated) {
   }
   // Binary files whose first word is printable (review 2026-12-06, second: "unsupported OBJ
   // statement", the bytes >= 0x80 echoed raw): a binary STL's header, an SQLite database, a PNG.
+  const auto bytes = [](const auto& literal) { return std::string(literal, sizeof literal - 1); };
   for (const std::string& head :
-       {std::string("palplab binary STL header\x80\x81\xfe\xff\0\0\n", 33),
-        std::string("SQLite format 3\0\x10\0\x01\x01\n", 23),
-        std::string("\x89PNG\r\n\x1a\n", 8)}) {
+       {bytes("palplab binary STL header\x80\x81\xfe\xff\0\0\n"),
+        bytes("SQLite format 3\0\x10\0\x01\x01\n"), bytes("\x89PNG\r\n\x1a\n")}) {
     SCOPED_TRACE(head.substr(0, 8));
     write_text(p, head);
     try {
