@@ -54,7 +54,8 @@ void require_utf8(std::string_view text, const std::string& file) {
     throw error_at(file, 1, 1,
                    std::string("the file is ") + enc +
                        ", not UTF-8: CSV files are read as UTF-8; save it as UTF-8 (Excel: \"CSV "
-                       "UTF-8\"; or iconv -f " + enc + " -t UTF-8 IN.csv > OUT.csv)");
+                       "UTF-8\"; or iconv -f " +
+                       enc + " -t UTF-8 IN.csv > OUT.csv)");
   int line = 1, column = 1;
   for (size_t i = 0; i < text.size();) {
     const size_t len = utf8_sequence(text, i);

@@ -36,7 +36,9 @@ inline std::string escape_controls(std::string_view s, bool keep_newlines = true
 // with or without its byte-order mark, either byte order — an ASCII character has three or one
 // zero bytes beside it. JSON and CSV files are read as UTF-8 and say so at 1:1.
 inline const char* wide_unicode(std::string_view text) {
-  const auto u = [&](std::size_t i) { return i < text.size() ? int(static_cast<unsigned char>(text[i])) : -1; };
+  const auto u = [&](std::size_t i) {
+    return i < text.size() ? int(static_cast<unsigned char>(text[i])) : -1;
+  };
   const auto ascii = [](int c) { return c >= 0x09 && c < 0x80; };
   if ((u(0) == 0xFF && u(1) == 0xFE && u(2) == 0 && u(3) == 0) ||
       (u(0) == 0 && u(1) == 0 && u(2) == 0xFE && u(3) == 0xFF) ||
