@@ -138,11 +138,29 @@ palplab::app::CommandRegistration reg_calibrate{
         }
         a->opt.journal = a->journal;
         if (!a->write_defaults.empty()) {
-          if (!std::filesystem::is_regular_file(a->write_defaults))
-            throw palplab::InputError(palplab::SourceLocation{"--write-defaults"},
-                                      "no file \"" + a->write_defaults +
-                                          "\" (expected the participant model's params.hpp, "
-                                          "protocols/participants/params.hpp)");
+          namespace fs = std::filesystem;
+          std::error_code ec;
+          const auto type = fs::status(a->write_defaults, ec).type();
+          if (type != fs::file_type::regular)
+            throw palplab::InputError(
+                palplab::SourceLocation{"--write-defaults"},
+                (type == fs::file_type::not_found || type == fs::file_type::none
+                     ? "no file \"" + a->write_defaults + "\""
+                     : "\"" + a->write_defaults + "\" is " +
+                           (type == fs::file_type::directory ? std::string("a directory")
+                            : type == fs::file_type::fifo    ? std::string("a FIFO")
+                            : type == fs::file_type::socket  ? std::string("a socket")
+                                                             : std::string("not a regular file"))) +
+                    " (expected the participant model's params.hpp, "
+                    "protocols/participants/params.hpp, which the fitted defaults are written "
+                    "into)");
+          // It is rewritten through PARAMS.partial (common/write_file): an input there would be
+          // destroyed after the fit.
+          if (const auto* in = palplab::app::same_input(a->write_defaults + ".partial", not_out))
+            palplab::app::refuse_input_output(
+                "--write-defaults", a->write_defaults + ".partial", *in,
+                "writing the fitted defaults into " + a->write_defaults +
+                    " (written there first, then renamed)");
           palplab::app::require_writable_file("--write-defaults", a->write_defaults);
           // Its content too: a file write_defaults cannot edit would end a long fit in an error.
           try {

@@ -193,6 +193,18 @@ inline const CommandInput* same_input(const std::string& path,
 // - then require_writable_file.
 // A file the command wrote before (own output), an empty file and a non-regular file (/dev/null)
 // are replaced without --overwrite.
+// A directory at PATH.partial, where common/write_file writes PATH first: refused before the
+// command's work (it was found when the output was written, after a power analysis's hours).
+inline void require_no_directory_at_partial(const std::string& flag, const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(std::filesystem::symlink_status(path + ".partial", ec)))
+    throw InputError(SourceLocation{flag},
+                     "\"" + path + ".partial\" is a directory; the command writes " + path +
+                         " there first, then renames it: remove "
+                         "or rename that directory, or choose another " +
+                         flag);
+}
+
 inline void require_replaceable_output(const std::string& flag, const std::string& path,
                                        const std::vector<CommandInput>& inputs,
                                        const std::function<bool(const std::string&)>& is_own_output,
@@ -204,6 +216,7 @@ inline void require_replaceable_output(const std::string& flag, const std::strin
   if (const CommandInput* in = same_input(path + ".partial", inputs))
     refuse_input_output(flag, path + ".partial", *in,
                         "writing " + path + " (written there first, then renamed)");
+  require_no_directory_at_partial(flag, path);
   if (fs::exists(path, ec)) {
     if (const CommandInput* in = same_input(path, inputs))
       refuse_input_output(flag, path, *in, "writing the output there");

@@ -2,6 +2,7 @@
 // Exit codes: 0 success, 1 a command's own "found something" result (e.g. mesh defects),
 // 2 bad input (flags, files, JSON, CSV) with a located message on stderr, 3 internal error.
 #include <malloc.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -68,7 +69,14 @@ int checked_stdout(int code, int printed_errno = 0) {
   errno = 0;
   std::cout.flush();
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
-    const int why = failed_before ? printed_errno : errno;
+    int why = failed_before ? printed_errno : errno;
+    // A write that failed while the command printed (more than a buffer's worth: `recheck
+    // --json > /dev/full`) left no reason: one more byte written directly to the lost output
+    // asks the system again.
+    if (why == 0) {
+      errno = 0;
+      if (::write(STDOUT_FILENO, "\n", 1) < 0) why = errno;
+    }
     std::cerr << "error: cannot write to standard output ("
               << (why ? std::strerror(why) : "a write failed") << "); the output is lost\n";
     // 2 also where the command's verdict was 1 (recheck's "inconsistent", mesh check's

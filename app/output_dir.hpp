@@ -47,7 +47,9 @@ inline bool output_head_has(const std::string& path, const std::string& prefix,
 // A file in the subdirectory `sub` of `dir` with one of `extensions` (".svg") or one of `names`
 // that is one of `inputs`: the command writes such files there under names known only as it
 // runs (the report's figures/*.svg), so every one of them is taken for an output (`what`, "its
-// SVG figures").
+// SVG figures"). So is each such name with ".partial" appended, where common/write_file writes
+// the file first (a database at stills/A_pressed.png.partial cost the report that still, exit 0;
+// at figures/x.svg.partial it was refused only after the report's work).
 inline void require_no_input_under(const std::string& flag, const std::string& dir,
                                    const std::string& sub,
                                    const std::vector<std::string>& extensions,
@@ -59,13 +61,18 @@ inline void require_no_input_under(const std::string& flag, const std::string& d
   const fs::path under = fs::path(dir) / sub;
   if (!fs::is_directory(under, ec)) return;
   for (fs::directory_iterator it(under, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string(), ext = it->path().extension().string();
+    std::string name = it->path().filename().string();
+    const bool partial = name.size() > 8 && name.ends_with(".partial");
+    if (partial) name.resize(name.size() - 8);
     bool hit = false;
-    for (const auto& e : extensions) hit = hit || ext == e;
+    for (const auto& e : extensions) hit = hit || fs::path(name).extension().string() == e;
     for (const auto& n : names) hit = hit || name == n;
     if (!hit) continue;
     if (const CommandInput* in = same_input(it->path().string(), inputs))
-      refuse_input_output(flag, it->path().string(), *in, "writing " + what + " there");
+      refuse_input_output(
+          flag, it->path().string(), *in,
+          "writing " + what + " there" +
+              (partial ? " (each written as NAME.partial first, then renamed)" : ""));
   }
 }
 
@@ -88,11 +95,19 @@ inline void require_own_files_under(const std::string& flag, const std::string& 
     std::error_code e2;
     if (!matches(it->path().filename().string())) continue;
     // Never written through, even with the overwrite flag: it could point outside `dir`.
-    if (fs::is_symlink(fs::symlink_status(path, e2)))
+    const auto lt = fs::symlink_status(path, e2).type();
+    if (lt == fs::file_type::symlink)
       throw InputError(SourceLocation{flag},
                        "\"" + path + "\" is a symbolic link; the command writes its " + sub +
                            " there and never through a link (it could write outside " + flag +
                            "): remove the link or choose another " + flag);
+    // A FIFO would be written directly (common/write_file), blocking until a reader came; a
+    // listing there was read first and blocked for ever (review 2026-12-06, third).
+    if (lt == fs::file_type::fifo || lt == fs::file_type::socket)
+      throw InputError(SourceLocation{flag},
+                       "\"" + path + "\" is a " + (lt == fs::file_type::fifo ? "FIFO" : "socket") +
+                           "; the command writes its " + sub +
+                           " there as regular files: remove it or choose another " + flag);
     if (overwrite || !fs::is_regular_file(path, e2) || fs::file_size(path, e2) == 0 || e2 ||
         is_own(path))
       continue;
@@ -137,6 +152,7 @@ inline void require_replaceable_dir_outputs(const std::string& flag, const std::
       if (const CommandInput* in = same_input(path + ".partial", inputs))
         refuse_input_output(flag, path + ".partial", *in,
                             "writing " + o.name + " (written there first, then renamed)");
+    if (o.verb == "replace") require_no_directory_at_partial(flag, path);
     std::error_code e2;
     // A directory where the command writes (or removes) a file: it could do neither, after
     // its work (`power` and `merge` read an existing power.json first).

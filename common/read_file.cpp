@@ -26,7 +26,7 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
   // POSIX reads: an ifstream's locale and buffer set-up cost more than reading a prototype.
   if (path.empty()) throw InputError("an empty file name, expected the path of a " + what);
   // Opened without blocking (a FIFO with no writer blocked here for ever; now it reads as
-  // empty), then read blocking as usual.
+  // nothing and is refused below), then read blocking as usual.
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd >= 0) ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
   if (fd < 0)
@@ -66,6 +66,15 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
     text.append(chunk, static_cast<std::size_t>(k));
   }
   ::close(fd);
+  // A named FIFO that no writer held open when it was opened reads as nothing: said as such, not
+  // as an empty file of the kind expected.
+  if (S_ISFIFO(st.st_mode) && text.empty())
+    throw InputError(
+        "is a FIFO and nothing was written to it (no writer had it open when it was "
+        "read: start the writer first, or give the input as <(command)); expected "
+        "a " +
+            what,
+        path);
   return text;
 }
 

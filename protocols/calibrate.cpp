@@ -732,9 +732,14 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   }
   r.lo = lo;
   r.hi = hi;
+  // --sim-n equal to every group's size is the study itself: the same fit, whose journal it
+  // resumes (it was another fit's, simulated again from its start).
+  const bool own_size = std::all_of(study.groups.begin(), study.groups.end(),
+                                    [&](const auto& g) { return g.size == opt.sim_n; });
+  const int sim_n = opt.sim_n > 0 && !own_size ? opt.sim_n : 0;
   Study base = study;
-  if (opt.sim_n > 0)
-    base = resized_study(study, opt.sim_n, study.seed);  // same seed: common random numbers
+  if (sim_n > 0)
+    base = resized_study(study, sim_n, study.seed);  // same seed: common random numbers
   auto with = [&](const std::vector<double>& x) {
     Study s = base;
     for (std::size_t i = 0; i < x.size(); ++i) s.participant_parameters[opt.keys[i]] = x[i];
@@ -753,7 +758,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   // taken instead (after the start, which is simulated and compared with its stored one).
   std::optional<CalibrationJournal> journal;
   if (!opt.journal.empty())
-    journal.emplace(opt.journal, calibration_setup(study, opt.sim_n, opt.keys, used), used);
+    journal.emplace(opt.journal, calibration_setup(study, sim_n, opt.keys, used), used);
   if (journal && opt.notice) {
     const int k = journal->stored();
     opt.notice(k == 0 ? "each evaluation is appended to " + journal->path() +
@@ -902,7 +907,7 @@ void check_defaults_file(const std::vector<std::string>& keys, const std::string
 
 void write_defaults(const CalibrationResult& r, const std::string& params_hpp) {
   const std::string text = defaults_text(params_hpp, r.keys, r.fitted);
-  write_file(params_hpp, text, "the parameter defaults");
+  write_file(params_hpp, text, "the file of parameter defaults");
 }
 
 nlohmann::json to_json(const CalibrationResult& r) {

@@ -601,6 +601,14 @@ std::vector<int> power_sizes(const Study& study, const PowerOptions& opt) {
   for (const auto& g : study.groups)
     if (g.size != study.groups.front().size)
       throw InputError("groups differ in size; give the sizes to simulate with --n", study.file);
+  // The study's own size: a group of one has no variance to test (a pilot study of one per
+  // group was "group size must be >= 2, got 1" with no file and no way out named).
+  if (study.groups.front().size < 2)
+    throw InputError("$.groups[*].size: the study's groups have " +
+                         std::to_string(study.groups.front().size) +
+                         " participant each; a power analysis needs at least 2 per group: give "
+                         "the sizes to simulate with --n (e.g. --n 6,8,10)",
+                     study.file);
   return {study.groups.front().size};
 }
 

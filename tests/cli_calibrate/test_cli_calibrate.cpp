@@ -232,6 +232,42 @@ TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
   EXPECT_EQ(empty.code, 2) << empty.out << empty.err;
   EXPECT_NE(empty.err.find("--write-defaults: expected the path"), std::string::npos) << empty.err;
   EXPECT_FALSE(fs::exists(d / "p.json"));
+  // Review findings (2026-12-06, third): a FIFO as --write-defaults was "no file"; the human
+  // data saved as PARAMS.partial (where the defaults are written first) was refused only after
+  // the fit; a directory at --out's FILE.partial likewise.
+  ASSERT_EQ(::mkfifo((d / "fifo.hpp").c_str(), 0644), 0);
+  const Result fifo = run_palplab(
+      base + "--out " + (d / "p.json").string() + " --write-defaults " + (d / "fifo.hpp").string(),
+      d);
+  EXPECT_EQ(fifo.code, 2) << fifo.out << fifo.err;
+  EXPECT_NE(fifo.err.find("--write-defaults: \"" + (d / "fifo.hpp").string() +
+                          "\" is a FIFO (expected the participant model's params.hpp"),
+            std::string::npos)
+      << fifo.err;
+  fs::copy_file(data("exp2_human.csv"), d / "params.hpp.partial");
+  const std::string human_bytes = slurp(d / "params.hpp.partial");
+  const Result partial = run_palplab(
+      "calibrate " + data("recovery_study.json").string() + " --human " +
+          (d / "params.hpp.partial").string() + " --params weber_fraction --budget 2 --out " +
+          (d / "p.json").string() + " --write-defaults " + (d / "params.hpp").string(),
+      d);
+  EXPECT_EQ(partial.code, 2) << partial.out << partial.err;
+  EXPECT_NE(partial.err.find("--write-defaults: \"" + (d / "params.hpp.partial").string() +
+                             "\" is the human data this command reads"),
+            std::string::npos)
+      << partial.err;
+  EXPECT_EQ(partial.err.find("evaluation"), std::string::npos) << partial.err;
+  EXPECT_EQ(slurp(d / "params.hpp.partial"), human_bytes);
+  EXPECT_EQ(slurp(d / "params.hpp"), params);
+  fs::create_directories(d / "p.json.partial");
+  const Result dir = run_palplab(base + "--out " + (d / "p.json").string(), d);
+  EXPECT_EQ(dir.code, 2) << dir.out << dir.err;
+  EXPECT_NE(dir.err.find("--out: \"" + (d / "p.json").string() +
+                         ".partial\" is a directory; the command writes"),
+            std::string::npos)
+      << dir.err;
+  EXPECT_EQ(dir.err.find("evaluation"), std::string::npos) << dir.err;
+  EXPECT_FALSE(fs::exists(d / "p.json"));
   fs::remove_all(d);
 }
 
@@ -765,6 +801,37 @@ TEST(Exp2Check, ReportsOrdersVerdictsAndIntervals) {
       << other.err;
   const auto bad = check((d / "missing.json").string(), "people.csv", "out_bad");
   EXPECT_EQ(bad.code, 2) << bad.out << bad.err;
+  fs::remove_all(d);
+}
+
+// --sim-n equal to every group's size simulates the study itself: the same fit, so it resumes
+// the journal of the fit run without --sim-n (review 2026-12-06, third: it was another fit's,
+// every evaluation simulated again).
+TEST(Calibrate, SimNOfTheStudysOwnSizeIsTheSameFit) {
+  auto d = scratch_dir("calibrate_own_size");
+  write_small_human_csv(d / "human.csv");
+  const std::string cmd = "calibrate " + data("recovery_study.json").string() + " --human " +
+                          (d / "human.csv").string() +
+                          " --params prior_target_cv --budget 3 --no-se --out " +
+                          (d / "fit.json").string();
+  Result r = run_palplab(cmd, d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto first = nlohmann::json::parse(slurp(d / "fit.json"));
+  const int evaluations = first["evaluations"].get<int>();
+  ASSERT_GE(evaluations, 2);
+  r = run_palplab(cmd + " --sim-n 8", d);  // recovery_study.json: two groups of 8
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("holds " + std::to_string(evaluations) + " evaluations of this fit"),
+            std::string::npos)
+      << r.err;
+  const auto again = nlohmann::json::parse(slurp(d / "fit.json"));
+  EXPECT_EQ(again["evaluations_from_journal"], evaluations - 1);
+  EXPECT_EQ(again["loss_after"], first["loss_after"]);
+  EXPECT_EQ(again["sim_n"], 8);  // as given
+  // Another size is another fit.
+  r = run_palplab(cmd + " --sim-n 3", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(d / "fit.json"))["evaluations_from_journal"], 0);
   fs::remove_all(d);
 }
 

@@ -244,6 +244,22 @@ TEST(Power, SizesStudyAndOutputAreCheckedFirst) {
   EXPECT_EQ(ex.code, 2) << ex.out << ex.err;
   EXPECT_NE(ex.err.find("assigns participants explicitly"), std::string::npos) << ex.err;
   EXPECT_FALSE(fs::exists(d / "never"));
+  // A pilot study of one per group without --n was "group size must be >= 2, got 1": no file,
+  // no way out named.
+  std::string one = six;
+  one.replace(one.find("\"size\": 3}"), 10, "\"size\": 1}");
+  one.replace(one.find("\"size\": 3}"), 10, "\"size\": 1}");
+  std::ofstream(d / "one.json") << one;
+  const auto pilot = run_palplab("power " + (d / "one.json").string() +
+                                     " --replicates 1 --quiet --out " + (d / "never").string(),
+                                 d);
+  EXPECT_EQ(pilot.code, 2) << pilot.out << pilot.err;
+  EXPECT_NE(pilot.err.find("one.json: $.groups[*].size: the study's groups have 1 participant "
+                           "each; a power analysis needs at least 2 per group: give the sizes to "
+                           "simulate with --n"),
+            std::string::npos)
+      << pilot.err;
+  EXPECT_FALSE(fs::exists(d / "never"));
   // --out under a regular file cannot be created.
   std::ofstream(d / "file") << "x";
   const auto w = run_palplab(

@@ -3,6 +3,7 @@
 // user's own files under the output's names: exit 2 with a message naming the file and what is
 // wrong, never "internal error" (exit 3); nothing of the user's is deleted or replaced.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -380,6 +381,57 @@ TEST(CliReportDamage, ReportLosesNoFileInItsDirectory) {
   expect_exit2(report(db, d / "mine", " --overwrite"),
                {"\"" + figures[0].string() + "\" is a symbolic link", "remove the link"});
   EXPECT_EQ(slurp(d / "elsewhere.svg"), drawing);
+}
+
+// Review findings (2026-12-06, third): a FIFO where the report writes a figure, a still or the
+// stills' listing blocked it for ever (a figure is written directly into a FIFO; the listing was
+// read first); the database saved as stills/A_pressed.png.partial cost the report that still with
+// exit 0, and saved as figures/x.svg.partial or stills/stills.json.partial it was refused only
+// after the report's work. Each is exit 2 before anything is written, the input left whole.
+TEST(CliReportDamage, AFifoOrTheDatabaseWhereAFigureOrStillIsWrittenIsRefusedFirst) {
+  auto d = scratch_dir("dmg_report_fifo");
+  const fs::path db = copy_db(d);
+  const std::string db_bytes = slurp(db);
+  auto report = [&](const fs::path& in, const fs::path& out) {
+    return palplab::testing::run_shell("timeout 120 " + std::string(PALPLAB_BINARY) + " report " +
+                                           in.string() + " --out " + out.string(),
+                                       d);
+  };
+  // Where an earlier report wrote them (the names are known only as a report runs).
+  ASSERT_EQ(report(db, d / "rep").code, 0);
+  ASSERT_TRUE(fs::exists(d / "rep" / "figures" / "force_traces.svg"));
+  for (const std::string name :
+       {"figures/force_traces.svg", "stills/A_pressed.png", "stills/stills.json"}) {
+    SCOPED_TRACE(name);
+    const fs::path out = d / ("f" + std::to_string(name.size()));
+    fs::create_directories((out / name).parent_path());
+    ASSERT_EQ(::mkfifo((out / name).c_str(), 0644), 0);
+    Result r = report(db, out);
+    expect_exit2(r, {"--out: \"" + (out / name).string() + "\" is a FIFO; the command writes its " +
+                     fs::path(name).parent_path().string() +
+                     " there as regular files: remove it or choose another --out"});
+    EXPECT_FALSE(fs::exists(out / "report.md"));
+  }
+  for (const std::string name : {"figures/force_traces.svg.partial", "stills/A_pressed.png.partial",
+                                 "stills/stills.json.partial"}) {
+    SCOPED_TRACE(name);
+    const fs::path out = d / ("p" + std::to_string(name.size()));
+    fs::create_directories((out / name).parent_path());
+    fs::copy_file(db, out / name);
+    Result r = report(out / name, out);
+    expect_exit2(
+        r, {"--out: \"" + (out / name).string() + "\" is the results database this command reads",
+            "(each written as NAME.partial first, then renamed)"});
+    EXPECT_EQ(slurp(out / name), db_bytes);
+    EXPECT_FALSE(fs::exists(out / "report.md"));
+  }
+  // A directory where report.md is written first: refused before the work too.
+  fs::create_directories(d / "dir" / "report.md.partial");
+  expect_exit2(report(db, d / "dir"),
+               {"--out: \"" + (d / "dir" / "report.md").string() +
+                ".partial\" is a directory; the command writes " +
+                (d / "dir" / "report.md").string() + " there first, then renames it"});
+  EXPECT_FALSE(fs::exists(d / "dir" / "figures"));
 }
 
 // `export DB --csv DIR` replaced a database saved as DIR/measures.csv, removed one saved as
