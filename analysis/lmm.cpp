@@ -14,6 +14,7 @@
 #include "analysis/distributions.hpp"
 #include "analysis/summary.hpp"
 #include "common/escape.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 
 namespace palplab::analysis {
@@ -600,6 +601,17 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
                          " columns): some factor combinations are empty or columns are collinear",
                      t.file);
   md.y = Eigen::Map<const VectorXd>(cols[f.response].num.data(), n);
+  // A response far from order 1 is fitted on the scale of a power of two near its largest
+  // magnitude (exact: no digit changes) and the results scaled back at the end: a response of
+  // order 1e100 (or 1e-100) squared beyond the doubles' range, and the fit lost its df and p
+  // without a word. Within 2^-50..2^50 nothing is rescaled (the optimiser's stopping tests are
+  // relative to the deviance, which rescaling shifts: ordinary data keep their fit to the bit).
+  double y_scale = 1.0;
+  if (const double ymax = md.y.cwiseAbs().maxCoeff();
+      ymax > 0 && std::isfinite(ymax) && (ymax > 0x1p50 || ymax < 0x1p-50)) {
+    y_scale = std::ldexp(1.0, std::ilogb(ymax));
+    md.y /= y_scale;
+  }
   const Column& gc = cols[f.group];
   md.m = static_cast<int>(gc.levels.size());
   std::map<std::string, int> gidx;
@@ -710,6 +722,28 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     fit.warnings.push_back(
         "singular fit: a random-effect variance or correlation is on the "
         "boundary of its range");
+  // The other boundary: a response that hardly varies within the levels of the grouping factor
+  // (a participant-level value repeated on each row, a measure a participant always scores the
+  // same). Theta, the random-effect SD over the residual SD, grows without bound and the
+  // penalised least squares lose precision as theta² (measured on a balanced one-way layout
+  // against its closed form: df 5.0002 at theta 2e3, 5.08 at 2e4, 10.8 at 2e5, -4.2 at 2e7;
+  // review 2026-12-06, fourth). Beyond 1e5 no number of the fit can be trusted.
+  double theta_max = 0;
+  for (double t : th) theta_max = std::max(theta_max, std::abs(t));
+  if (theta_max > 1e5)
+    throw InputError("the response '" + f.response + "' hardly varies within the levels of '" +
+                         f.group + "' (the residual SD is " + format_g(1.0 / theta_max) +
+                         " times the random-effect SD): the mixed model is degenerate and "
+                         "cannot be fitted reliably; analyse one value per level of '" +
+                         f.group + "' (e.g. their means with palplab stats) instead",
+                     t.file);
+  if (theta_max > 1e3)
+    fit.warnings.push_back("the residual SD is " + format_g(1.0 / theta_max) +
+                           " times the random-effect SD (the response hardly varies within the "
+                           "levels of '" +
+                           f.group +
+                           "'): the fit loses precision as the square of that ratio; standard "
+                           "errors and Satterthwaite df may be off by a few per cent");
   fit.n_par = md.p + static_cast<int>(th.size()) + 1;
   fit.loglik = -fit.deviance / 2;
   fit.aic = fit.deviance + 2 * fit.n_par;
@@ -763,11 +797,17 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
         "the Hessian of the deviance w.r.t. the variance parameters is not "
         "positive definite: Satterthwaite df are unreliable");
   const MatrixXd A = 2 * H.inverse();
+  bool df_undefined = false;
   auto satterthwaite = [&](const VectorXd& l) {
     VectorXd grad(nv);
     for (size_t j = 0; j < nv; ++j) grad(j) = l.dot(J[j] * l);
     const double v = l.dot(V * l);
-    return 2 * v * v / grad.dot(A * grad);
+    const double df = 2 * v * v / grad.dot(A * grad);
+    // A df that is not positive is no df (a Hessian that is not positive definite gave -4.2):
+    // no t or F test rather than a p from it.
+    if (df > 0) return df;
+    df_undefined = true;
+    return std::numeric_limits<double>::quiet_NaN();
   };
   for (int j = 0; j < md.p; ++j) {
     LmmFixedEffect fe;
@@ -847,6 +887,31 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
       ft.partial_eta_squared_ci = f_effect_ci(ft.f, q, ft.den_df);
     }
     fit.anova.push_back(ft);
+  }
+  if (df_undefined)
+    fit.warnings.push_back(
+        "a Satterthwaite df came out not positive (the variance parameters' Hessian is not "
+        "usable): its test is shown as n/a");
+  // Back to the response's own scale (t, F, df, p and theta do not depend on it).
+  if (y_scale != 1.0) {
+    const double dof = reml ? n - md.p : n;
+    fit.sigma *= y_scale;
+    fit.sd_intercept *= y_scale;
+    fit.sd_slope *= y_scale;
+    fit.deviance += 2 * dof * std::log(y_scale);
+    fit.loglik = -fit.deviance / 2;
+    fit.aic = fit.deviance + 2 * fit.n_par;
+    fit.bic = fit.deviance + std::log(static_cast<double>(n)) * fit.n_par;
+    for (auto& row : fit.vcov)
+      for (double& v : row) v *= y_scale * y_scale;
+    for (auto& fe : fit.fixed) {
+      fe.estimate *= y_scale;
+      fe.se *= y_scale;
+    }
+    for (auto& ft : fit.anova) {
+      ft.mean_sq *= y_scale * y_scale;
+      ft.sum_sq *= y_scale * y_scale;
+    }
   }
   return fit;
 }

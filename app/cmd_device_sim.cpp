@@ -25,6 +25,7 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -34,6 +35,7 @@
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "engine/haptics/device.hpp"
 #include "engine/haptics/devices/udp_device.hpp"
 
@@ -83,75 +85,89 @@ Eigen::Vector3d unit_axis(double x, double y, double z, const std::string& where
   return a.normalized();
 }
 
-// Reads the optional "buttons" and "axis" arrays of a script (see the top of the file).
-void read_stylus(const nlohmann::json& j, const std::string& path, StylusScript& s) {
-  if (j.contains("buttons")) {
-    const auto& b = j["buttons"];
-    if (!b.is_array() || b.empty())
-      throw InputError(path + ": $.buttons: expected a non-empty array of [t, mask]");
-    for (std::size_t i = 0; i < b.size(); ++i) {
-      const std::string where = path + ": $.buttons[" + std::to_string(i) + "]";
-      const auto& e = b[i];
-      if (!e.is_array() || e.size() != 2 || !e[0].is_number() ||
-          !std::isfinite(e[0].get<double>()) || !e[1].is_number_unsigned() ||
-          e[1].get<std::uint64_t>() > 0xFFFFFFFFull)
-        throw InputError(where + ": expected [t, mask] (s, an integer 0..4294967295)");
-      const double t = e[0].get<double>();
-      if (!s.buttons.empty() && t <= s.buttons.back().first)
-        throw InputError(where + ": times must increase");
-      s.buttons.emplace_back(t, static_cast<std::uint32_t>(e[1].get<std::uint64_t>()));
-    }
+// The script through the one JSON reader and validator (common/json_check): syntax errors,
+// numbers beyond a double (1e999: "internal error", exit 3, before), duplicate keys and every
+// value out of range are located FILE:LINE:COL: $.path problems, all reported at once.
+// Each entry of `key` is a row of `width` numbers: the time (s, |t| <= 86400) and `width` - 1
+// values in [lo, hi] (`what` names the row, "[t, x, y, z] (s, m)"); `take` gets the valid rows.
+void read_rows(json::Checker& c, const nlohmann::json& root, const char* key, bool required,
+               std::size_t width, double lo, double hi, const char* what,
+               const std::function<void(const std::string&, const std::vector<double>&)>& take) {
+  const std::string P = std::string("$.") + key;
+  const nlohmann::json* rows = c.member(root, "$", key, required, "a non-empty array");
+  if (!rows) return;
+  if (!rows->is_array() || rows->empty()) {
+    c.err(P, std::string("expected a non-empty array of ") + what + ", got " +
+                 (rows->is_array() ? std::string("an empty array") : json::kind_name(*rows)));
+    return;
   }
-  if (j.contains("axis")) {
-    const auto& a = j["axis"];
-    if (!a.is_array() || a.empty())
-      throw InputError(path + ": $.axis: expected a non-empty array of [t, ax, ay, az]");
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      const std::string where = path + ": $.axis[" + std::to_string(i) + "]";
-      const auto& e = a[i];
-      if (!e.is_array() || e.size() != 4)
-        throw InputError(where + ": expected [t, ax, ay, az] (s, a direction)");
-      for (const auto& v : e)
-        if (!v.is_number() || !std::isfinite(v.get<double>()))
-          throw InputError(where + ": expected four finite numbers");
-      const double t = e[0].get<double>();
-      if (!s.axis.empty() && t <= s.axis.back().first)
-        throw InputError(where + ": times must increase");
-      s.axis.emplace_back(
-          t, unit_axis(e[1].get<double>(), e[2].get<double>(), e[3].get<double>(), where));
+  double last_t = 0.0;
+  for (std::size_t i = 0; i < rows->size(); ++i) {
+    const std::string R = P + "[" + std::to_string(i) + "]";
+    const nlohmann::json& e = (*rows)[i];
+    if (!e.is_array() || e.size() != width) {
+      c.err(R, std::string("expected ") + what + ", got " +
+                   (e.is_array() ? "an array of " + std::to_string(e.size())
+                                 : std::string(json::kind_name(e))));
+      continue;
     }
+    std::vector<double> v(width);
+    bool ok = true;
+    for (std::size_t k = 0; k < width; ++k) {
+      const std::string V = R + "[" + std::to_string(k) + "]";
+      const double l = k == 0 ? -86400.0 : lo, h = k == 0 ? 86400.0 : hi;
+      if (!e[k].is_number()) {
+        c.err(V, std::string("expected a number, got ") + json::kind_name(e[k]));
+        ok = false;
+      } else if (v[k] = e[k].get<double>(); !(v[k] >= l && v[k] <= h)) {
+        c.err(V, std::string("expected ") + (k == 0 ? "a time (s)" : "a value") + " in [" +
+                     json::Checker::fmt(l) + ", " + json::Checker::fmt(h) + "] of " + what +
+                     ", got " + json::Checker::fmt(v[k]));
+        ok = false;
+      }
+    }
+    if (!ok) continue;
+    if (i > 0 && v[0] <= last_t)
+      c.err(R + "[0]", "expected times that increase (the previous entry is at " +
+                           json::Checker::fmt(last_t) + " s), got " + json::Checker::fmt(v[0]));
+    last_t = v[0];
+    take(R, v);
   }
 }
 
 std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& path,
                                                             StylusScript& stylus) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the script");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path + ": " + e.what());
-  }
-  if (!j.is_object() || !j.contains("waypoints") || !j["waypoints"].is_array() ||
-      j["waypoints"].empty())
-    throw InputError(path + ": $.waypoints: expected a non-empty array of [t, x, y, z]");
+  std::string text;
+  const nlohmann::json root = json::parse_json_file(path, &text);
+  json::Checker c(path, text);
   std::vector<std::pair<double, Eigen::Vector3d>> w;
-  for (size_t i = 0; i < j["waypoints"].size(); ++i) {
-    const auto& p = j["waypoints"][i];
-    const std::string where = path + ": $.waypoints[" + std::to_string(i) + "]";
-    if (!p.is_array() || p.size() != 4) throw InputError(where + ": expected [t, x, y, z] (s, m)");
-    for (const auto& v : p)
-      if (!v.is_number() || !std::isfinite(v.get<double>()))
-        throw InputError(where + ": expected four finite numbers");
-    const double t = p[0].get<double>();
-    if (!w.empty() && t <= w.back().first) throw InputError(where + ": times must increase");
-    w.emplace_back(t, Eigen::Vector3d(p[1].get<double>(), p[2].get<double>(), p[3].get<double>()));
+  if (c.expect_object(root, "$")) {
+    c.keys(root, "$", {"waypoints", "buttons", "axis"});
+    // Positions within 10 m of the device origin (as a study's start_position).
+    read_rows(c, root, "waypoints", true, 4, -10.0, 10.0, "[t, x, y, z] (s, m)",
+              [&](const std::string&, const std::vector<double>& v) {
+                w.emplace_back(v[0], Eigen::Vector3d(v[1], v[2], v[3]));
+              });
+    read_rows(c, root, "buttons", false, 2, 0.0, 4294967295.0,
+              "[t, mask] (s, an integer 0..4294967295)",
+              [&](const std::string& R, const std::vector<double>& v) {
+                if (v[1] != std::floor(v[1]))
+                  c.err(R + "[1]", "expected an integer button mask 0..4294967295, got " +
+                                       json::Checker::fmt(v[1]));
+                stylus.buttons.emplace_back(v[0], static_cast<std::uint32_t>(v[1]));
+              });
+    read_rows(c, root, "axis", false, 4, -1e6, 1e6, "[t, ax, ay, az] (s, a direction)",
+              [&](const std::string& R, const std::vector<double>& v) {
+                const Eigen::Vector3d a(v[1], v[2], v[3]);
+                if (!(a.norm() > 1e-9))
+                  c.err(R, "expected a non-zero stylus axis (handle to tip), got [" +
+                               json::Checker::fmt(v[1]) + ", " + json::Checker::fmt(v[2]) + ", " +
+                               json::Checker::fmt(v[3]) + "]");
+                else
+                  stylus.axis.emplace_back(v[0], a.normalized());
+              });
   }
-  for (const auto& [k, v] : j.items())
-    if (k != "waypoints" && k != "buttons" && k != "axis")
-      throw InputError(path + ": $." + k + ": unknown key (expected waypoints, buttons, axis)");
-  read_stylus(j, path, stylus);
+  c.throw_if_any();
   return w;
 }
 

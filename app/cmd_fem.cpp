@@ -829,7 +829,8 @@ palplab::app::CommandRegistration reg_fem{
           ->add_option("--levels", *levels,
                        "Cantilever refinement levels (4-5; elements through the thickness "
                        "1, 2, ..., 2^(levels-1); 5 takes minutes)")
-          ->capture_default_str();
+          ->capture_default_str()
+          ->check(palplab::app::count_range(4, 5));
       verify->callback([=] { *code = run_verify(*json_out, *levels); });
       auto* ref = fem->add_subcommand(
           "reference",
@@ -840,7 +841,9 @@ palplab::app::CommandRegistration reg_fem{
       ref->add_option("--press", ra->press, "Region name or surface node index to press")
           ->required();
       ref->add_option("--force", ra->force, "Press force (N), in (0, 1000]")->required();
-      ref->add_option("--levels", ra->levels, "Refinement levels (3-6)")->capture_default_str();
+      ref->add_option("--levels", ra->levels, "Refinement levels (3-6)")
+          ->capture_default_str()
+          ->check(palplab::app::count_range(3, 6));
       ref->add_option("--out", ra->out,
                       "Output JSON file (never the prototype or its mesh; an existing file that "
                       "is not a fem reference JSON only with --overwrite)")

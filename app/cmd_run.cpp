@@ -313,8 +313,15 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
               palplab::escape_controls(ro.db, false).c_str(), h.participant.c_str(), r.sessions_run,
               r.aborted, r.remaining,
               r.remaining > 0 && !r.next_due.empty() ? ("; next due " + r.next_due).c_str() : "");
-  // An aborted session is kept in the database, flagged; the exit code says it happened.
-  return r.aborted > 0 ? 3 : 0;
+  // An aborted session is kept in the database, flagged: a result of the run, not a failure of
+  // palplab (3 is "internal error", and it said nothing on stderr: review 2026-12-06, fourth).
+  // Exit 1, the command's own "found something", and a line on stderr for scripts' logs.
+  if (r.aborted > 0)
+    std::fprintf(stderr,
+                 "palplab run: %d session(s) of participant %s aborted (kept in %s, flagged "
+                 "status 'aborted' with the reason; the next run repeats them)\n",
+                 r.aborted, h.participant.c_str(), palplab::escape_controls(ro.db, false).c_str());
+  return r.aborted > 0 ? 1 : 0;
 }
 
 std::string hms(double s) {
@@ -392,6 +399,11 @@ palplab::app::CommandRegistration reg_run{
           throw palplab::InputError(palplab::SourceLocation{"--db"},
                                     "no database file name given (an empty string): expected "
                                     "FILE.db");
+        // Given but empty (an unset shell variable): the run went on and wrote no trace.
+        if (cmd->count("--record-trace") > 0 && human->record_trace.empty())
+          throw palplab::InputError(palplab::SourceLocation{"--record-trace"},
+                                    "no directory given (an empty string): expected the "
+                                    "directory the trace files go into");
         Study s = load_study(*study, engine_prototype_inspector());
         {
           std::vector<std::string> used;

@@ -276,6 +276,13 @@ JsonLocator::JsonLocator(std::string_view text) {
   entries_.reserve(raw.size());
   for (auto& [path, o] : raw) entries_[path] = Entry{pos.at(o.first), pos.at(o.second)};
   for (auto& [path, o] : dups) {
+    // The values under a repeated key repeat its path's children: only the key is a duplicate
+    // (`"w": [[0]], "w": [[1]]` was reported at $.w, $.w[0] and $.w[0][0]).
+    const bool under_another = std::any_of(dups.begin(), dups.end(), [&](const auto& e) {
+      return e.first.size() < path.size() && path.compare(0, e.first.size(), e.first) == 0 &&
+             (path[e.first.size()] == '.' || path[e.first.size()] == '[');
+    });
+    if (under_another) continue;
     DuplicateKey d;
     d.path = path;
     d.first = pos.at(o.first);
@@ -419,11 +426,20 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
     // character.
     const char* const encoding = wide_unicode(text);
     const bool wide = encoding != nullptr;
-    throw InputError(SourceLocation{file, wide ? 1 : p.line, wide ? 1 : p.column},
+    // palplab's own binary files, named where JSON goes (a scene given as the prototype: `probe
+    // A.psim`; the results database as the study), are said by name.
+    const char* own = text.starts_with(std::string_view("PALPSIM\0", 8))
+                          ? "a palplab scene file (.psim): give it with --scene, and the "
+                            "prototype's JSON file or id where a prototype goes"
+                      : text.starts_with(std::string_view("SQLite format 3\0", 16))
+                          ? "an SQLite database (a results database?), not a JSON file"
+                          : nullptr;
+    throw InputError(SourceLocation{file, wide || own ? 1 : p.line, wide || own ? 1 : p.column},
                      wide ? std::string("invalid JSON: the file is ") + encoding +
                                 " text (expected UTF-8: save it as UTF-8)"
-                          : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
-                                        "file, or text damaged by a NUL)"));
+                     : own ? std::string("not JSON: the file is ") + own
+                           : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
+                                         "file, or text damaged by a NUL)"));
   }
   const std::size_t keys = prescan(text, file);
   nlohmann::json j;

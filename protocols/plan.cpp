@@ -25,7 +25,7 @@ std::string fmt_offset(double s) {
 }  // namespace
 
 std::vector<Slot> schedule(const std::vector<Phase>& phases,
-                           std::vector<std::pair<int, std::string>>* problems) {
+                           std::vector<ScheduleProblem>* problems) {
   std::vector<Slot> out;
   double prev_start = 0.0, prev_end = 0.0;
   for (std::size_t pi = 0; pi < phases.size(); ++pi) {
@@ -45,11 +45,11 @@ std::vector<Slot> schedule(const std::vector<Phase>& phases,
         start = p.gap.calendar ? prev_start + p.gap.days * kDay : prev_end + p.gap.seconds;
       }
       if (!out.empty() && start < prev_end - 1e-9 && problems)
-        problems->push_back(
-            {static_cast<int>(pi), "session " + std::to_string(k + 1) + " of phase \"" + p.id +
-                                       "\" would start at " + fmt_offset(start) +
-                                       ", before the previous session ends (" +
-                                       fmt_offset(prev_end) + "); expected a later start"});
+        problems->push_back({static_cast<int>(pi), k == 0 ? "start" : "gap",
+                             "session " + std::to_string(k + 1) + " of phase \"" + p.id +
+                                 "\" would start at " + fmt_offset(start) +
+                                 ", before the previous session ends (" + fmt_offset(prev_end) +
+                                 "); expected a later start"});
       Slot s;
       s.phase = static_cast<int>(pi);
       s.index = k;

@@ -20,10 +20,17 @@ struct Slot {
   int day = 0;            // calendar day (0 = first day), from offset
 };
 
+// A session that would start before the previous one ends: its phase (index), the phase's key
+// that sets the start ("start" for its first session, "gap" for the others) and the message.
+struct ScheduleProblem {
+  int phase = 0;
+  std::string key, message;
+};
+
 // Offsets of every session; throws nothing, but `problems` receives sessions that would start
-// before the previous one ends (as "phase index: message").
+// before the previous one ends.
 std::vector<Slot> schedule(const std::vector<Phase>& phases,
-                           std::vector<std::pair<int, std::string>>* problems = nullptr);
+                           std::vector<ScheduleProblem>* problems = nullptr);
 
 struct SessionSpec {
   int ordinal = 0;  // 0-based position in the participant's timeline

@@ -341,10 +341,12 @@ Study parse_study(const std::string& text, const std::string& file,
           p.instructions = parse_instructions(c, *in, path_key(P, "instructions"), p.sessions);
         s.phases.push_back(p);
       }
-      std::vector<std::pair<int, std::string>> sched_problems;
+      std::vector<ScheduleProblem> sched_problems;
       if (c.problems().empty()) schedule(s.phases, &sched_problems);
-      for (auto& [pi, msg] : sched_problems)
-        c.err(path_key(path_index("$.phases", pi), "start"), msg);
+      // At the key that sets the start: a phase's second session too close was said to be
+      // at its "start" (review 2026-12-06, fourth: `"gap": {"days": 0}`).
+      for (const auto& sp : sched_problems)
+        c.err(path_key(path_index("$.phases", sp.phase), sp.key.c_str()), sp.message);
     }
   }
 

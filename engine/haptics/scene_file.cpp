@@ -829,8 +829,16 @@ SceneFileData read_scene_file(const std::string& path) {
   const auto mapping = std::make_shared<const FileBytes>(path, "no such scene file", true);
   const FileBytes& bytes = *mapping;
   const std::string rebuild = " (rebuild it with `palplab scene build`)";
+  if (bytes.size() == 0)
+    throw InputError("is empty (0 bytes), not a palplab scene file (.psim)" + rebuild, path);
+  // A file shorter than the magic that is its start: cut off (an interrupted copy).
+  if (bytes.size() < 8 && std::memcmp(bytes.data(), kMagic, bytes.size()) == 0)
+    throw InputError("truncated scene file: " + std::to_string(bytes.size()) +
+                         " bytes, shorter than the " + std::to_string(kSceneFileHeaderBytes) +
+                         "-byte header" + rebuild,
+                     path);
   if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
-    throw InputError("not a palplab scene file (.psim): bad magic bytes", path);
+    throw InputError("not a palplab scene file (.psim): it does not start with PALPSIM", path);
   if (bytes.size() < kSceneFileHeaderBytes)
     throw InputError("truncated scene file: " + std::to_string(bytes.size()) +
                          " bytes, shorter than the " + std::to_string(kSceneFileHeaderBytes) +

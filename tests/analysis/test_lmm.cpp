@@ -441,3 +441,115 @@ TEST(LmmFit, CollinearColumnsAreRankDeficientAtAnyScale) {
         << e.what();
   }
 }
+
+// The response in other units (x 1e100, x 1e-100, x 1e-170: within what the CSV reader accepts)
+// is the same fit: df and p were n/a at 1e100 and the SDs 0 at 1e-170 (review 2026-12-06,
+// fourth). Estimates, SEs, SDs and vcov scale with it; theta, t, df, p and F do not; the REML
+// criterion gains 2 (n - p) log(scale), the ML deviance 2 n log(scale).
+TEST(LmmFit, TheResponsesUnitsDoNotChangeTheFit) {
+  CsvTable base = read_csv(kDir + "sleepstudy.csv");
+  const int y = column_index(base, "Reaction");
+  for (const bool reml : {true, false})
+    for (const auto& [factor, scale] :
+         {std::pair{"e100", 1e100}, std::pair{"e-100", 1e-100}, std::pair{"e-170", 1e-170}}) {
+      const std::string tag = std::string(reml ? "REML " : "ML ") + factor;
+      const bool squares = scale * scale > 1e-300;
+      CsvTable t = base;
+      for (auto& row : t.rows) row[y] += factor;
+      const auto f = parse_lmm_formula("Reaction ~ Days + (1 + Days | Subject)");
+      const LmmFit a = fit_lmm(base, f, {}, reml);
+      LmmFit b;
+      ASSERT_NO_THROW(b = fit_lmm(t, f, {}, reml)) << tag;
+      EXPECT_TRUE(b.warnings == a.warnings) << tag;
+      ASSERT_EQ(a.fixed.size(), b.fixed.size());
+      for (size_t i = 0; i < a.fixed.size(); ++i) {
+        const std::string w = tag + " " + a.fixed[i].name;
+        expect_rel(b.fixed[i].estimate / scale, a.fixed[i].estimate, 1e-9, w + " estimate");
+        expect_rel(b.fixed[i].se / scale, a.fixed[i].se, 1e-6, w + " se");
+        expect_rel(b.fixed[i].t, a.fixed[i].t, 1e-6, w + " t");
+        expect_rel(b.fixed[i].df, a.fixed[i].df, 1e-6, w + " df");
+        expect_rel(b.fixed[i].p, a.fixed[i].p, 2e-5, w + " p");
+        if (squares)  // 1e-340 is below the doubles' range: vcov and Sum Sq are 0 there
+          expect_rel(b.vcov[i][i] / scale / scale, a.vcov[i][i], 1e-6, w + " vcov");
+      }
+      for (size_t i = 0; i < a.theta.size(); ++i)
+        expect_rel(b.theta[i], a.theta[i], 1e-6, tag + " theta");
+      expect_rel(b.sigma / scale, a.sigma, 1e-7, tag + " sigma");
+      expect_rel(b.sd_intercept / scale, a.sd_intercept, 1e-6, tag + " sd intercept");
+      expect_rel(b.sd_slope / scale, a.sd_slope, 1e-6, tag + " sd slope");
+      ASSERT_EQ(a.anova.size(), b.anova.size());
+      for (size_t i = 0; i < a.anova.size(); ++i) {
+        expect_rel(b.anova[i].f, a.anova[i].f, 1e-6, tag + " F");
+        if (squares)
+          expect_rel(b.anova[i].sum_sq / scale / scale, a.anova[i].sum_sq, 1e-6, tag + " Sum Sq");
+      }
+      const double shift = 2.0 * (reml ? a.n - a.p : a.n) * std::log(scale);
+      EXPECT_NEAR(b.deviance - a.deviance, shift, 1e-8 * std::abs(shift)) << tag;
+    }
+}
+
+// A response that hardly varies within participant (value = participant number + N(0, eps),
+// 6 participants x 4 rows): the balanced one-way layout has the closed form
+// sd_participant² = (MSB - MSW) / 4, SE(intercept) = sqrt(MSB / 24), df = 6 - 1 = 5. The fit
+// loses precision as theta² (theta = sd_participant / sigma): with uniform noise of width 3e-3
+// (theta ~2e3) it is the closed form to 2e-5 (the estimate to 1e-7) with a warning that says so; at
+// eps 1e-6 (theta ~2e6) it gave df 21.6 and at eps 0 df 21.8 with no warning, at 1e-8 df -4.2
+// (review 2026-12-06, fourth): now exit 2 naming the cause.
+TEST(LmmFit, AResponseThatHardlyVariesWithinParticipantIsSaidSo) {
+  auto table = [](double eps) {
+    std::string text = "participant,value\n";
+    std::uint64_t u = 12345;
+    for (int g = 1; g <= 6; ++g)
+      for (int j = 0; j < 4; ++j) {
+        u = u * 6364136223846793005ull + 1442695040888963407ull;  // a fixed LCG: no std::rand
+        const double noise = (static_cast<double>(u >> 11) / 9007199254740992.0 - 0.5) * eps;
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "P%d,%.17g\n", g, g + noise);
+        text += buf;
+      }
+    return parse_csv(text, "within.csv");
+  };
+  const auto f = parse_lmm_formula("value ~ 1 + (1 | participant)");
+  {
+    const CsvTable t = table(3e-3);
+    const int y = column_index(t, "value");
+    std::vector<double> mean(6, 0.0);
+    double grand = 0;
+    for (size_t r = 0; r < t.rows.size(); ++r) {
+      const double v = std::stod(t.rows[r][y]);
+      mean[r / 4] += v / 4;
+      grand += v / 24;
+    }
+    double ssb = 0, ssw = 0;
+    for (size_t r = 0; r < t.rows.size(); ++r) {
+      const double v = std::stod(t.rows[r][y]);
+      ssw += (v - mean[r / 4]) * (v - mean[r / 4]);
+    }
+    for (double m : mean) ssb += 4 * (m - grand) * (m - grand);
+    const double msb = ssb / 5, msw = ssw / 18;
+    const LmmFit fit = fit_lmm(t, f, {}, true);
+    expect_rel(fit.sd_intercept, std::sqrt((msb - msw) / 4), 2e-5, "sd participant");
+    expect_rel(fit.sigma, std::sqrt(msw), 1e-4, "sigma");
+    expect_rel(fit.fixed[0].estimate, grand, 1e-7, "intercept");
+    expect_rel(fit.fixed[0].se, std::sqrt(msb / 24), 2e-5, "se");
+    expect_rel(fit.fixed[0].df, 5.0, 1e-3, "df");
+    ASSERT_EQ(fit.warnings.size(), 1u);
+    EXPECT_NE(fit.warnings[0].find("times the random-effect SD (the response hardly varies "
+                                   "within the levels of 'participant')"),
+              std::string::npos)
+        << fit.warnings[0];
+  }
+  for (const double eps : {1e-6, 1e-8, 0.0}) {
+    std::string what = "no error";
+    try {
+      fit_lmm(table(eps), f, {}, true);
+    } catch (const palplab::InputError& e) {
+      what = e.what();
+    }
+    EXPECT_NE(what.find("within.csv: the response 'value' hardly varies within the levels of "
+                        "'participant'"),
+              std::string::npos)
+        << eps << ": " << what;
+    EXPECT_NE(what.find("the mixed model is degenerate"), std::string::npos) << what;
+  }
+}

@@ -234,6 +234,30 @@ TEST(CliDeviceSim, RejectsBadButtonsAndAxes) {
     EXPECT_EQ(r.code, 2) << c.script.dump();
     EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.script.dump() << ": " << r.out;
   }
+  // Review findings (2026-12-06, fourth): the script had its own reader: 1e999 was "internal
+  // error" (exit 3), a repeated key was taken silently, a syntax error was the library's text
+  // and a position of 1e300 m was sent. Now the one JSON reader: each FILE:LINE:COL: $.path.
+  const std::vector<std::pair<std::string, std::string>> texts = {
+      {R"({"waypoints": [[1e999, 0, 0, 0]]})", ":1:17: number 1e999 is out of range"},
+      {R"({"waypoints": [[0, 0, 0, 0]], "waypoints": [[0, 1, 1, 1]]})",
+       ":1:31: $.waypoints: duplicate key (first defined at line 1, column 15)"},
+      {"{\"waypoints\": [[0, 0, 0,\n", ":2:1: invalid JSON: syntax error"},
+      {R"({"waypoints": [[0, 0, 0, 1e300]]})",
+       ":1:26: $.waypoints[0][3]: expected a value in [-10.0, 10.0] of [t, x, y, z] (s, m), got "
+       "1e+300"},
+      {R"({"waypoints": [[0, 0, 0, 0]], "buttons": [[0, 1e999]]})",
+       ":1:47: number 1e999 is out of range"},
+      {R"({"waypoints": [[0, 0, 0, 0], [0, 1, 0, 0]]})",
+       ":1:31: $.waypoints[1][0]: expected times that increase (the previous entry is at 0.0 s), "
+       "got 0.0"}};
+  for (const auto& [text, expect] : texts) {
+    std::ofstream(script) << text;
+    const Result r = run(sim + "--script " + script.string());
+    EXPECT_EQ(r.code, 2) << text << ": " << r.out;
+    EXPECT_NE(r.out.find(script.string() + expect), std::string::npos) << text << ": " << r.out;
+    EXPECT_EQ(r.out.find("duplicate key", r.out.find("duplicate key") + 1), std::string::npos)
+        << "one duplicate, said once: " << r.out;
+  }
   EXPECT_EQ(run(sim + "--axis 0 0 0").code, 2);
   EXPECT_EQ(run(sim + "--axis 1 0").code, 2);
   EXPECT_EQ(run(sim + "--buttons -1").code, 2);

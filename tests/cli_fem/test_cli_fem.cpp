@@ -63,5 +63,9 @@ TEST(CliFem, BadLevelsIsAnInputError) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--levels"), std::string::npos) << r.err;
   EXPECT_EQ(run("fem").code, 2);  // a sub-command is required: a usage error
-  EXPECT_EQ(run("fem verify --levels x").code, 2);
+  // CLI11's bare "Could not convert: --levels = x" before (review 2026-12-06, fourth).
+  const Result x = run("fem verify --levels x");
+  EXPECT_EQ(x.code, 2);
+  EXPECT_NE(x.err.find("--levels: expected an integer in [4, 5], got 'x'"), std::string::npos)
+      << x.err;
 }

@@ -107,7 +107,7 @@ TEST(CliRunMouse, ClosingTheWindowMidSessionAbortsItKeptAndFlagged) {
   const fs::path dir = palplab::testing::scratch_dir("run_mouse_close");
   const fs::path db = dir / "human.db";
   const Result r = human(db, write_script(dir, 0.6));
-  ASSERT_EQ(r.code, 3) << r.out << r.err;
+  ASSERT_EQ(r.code, 1) << r.out << r.err;
   auto s = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(s.size(), 1u);
   EXPECT_EQ(s[0]["status"], "aborted");

@@ -148,7 +148,9 @@ TEST(CliScene, DamagedFilesAreRejectedWithExit2) {
   const std::string& b = f.bytes;
   ASSERT_GT(b.size(), 4096u);
   // Truncated: inside the magic, inside the header, right after it, mid-payload, last byte.
-  expect_rejected(b.substr(0, 5), "not a palplab scene file", "truncated at 5");
+  // (Empty, and cut inside the magic: said as such, no longer "bad magic bytes".)
+  expect_rejected("", "is empty (0 bytes), not a palplab scene file", "empty");
+  expect_rejected(b.substr(0, 5), "truncated scene file: 5 bytes", "truncated at 5");
   expect_rejected(b.substr(0, 64), "truncated scene file", "truncated at 64");
   expect_rejected(b.substr(0, 128), "truncated scene file", "truncated at 128");
   expect_rejected(b.substr(0, b.size() / 2), "truncated scene file", "truncated at half");

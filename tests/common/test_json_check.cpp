@@ -173,6 +173,14 @@ TEST(JsonParse, HostileTextIsALocatedError) {
   EXPECT_EQ(located_error(std::string("\0\0\xfe\xff\0\0\0{\0\0\0}", 12)), utf32);
   EXPECT_EQ(located_error(std::string("{\0\0\0}\0\0\0", 8)), utf32);
   EXPECT_EQ(located_error(std::string("\0\0\0{\0\0\0}", 8)), utf32);
+  // palplab's own binary files where JSON goes are named (review 2026-12-06, fourth: `probe
+  // A.psim` said "a NUL byte").
+  EXPECT_EQ(located_error(std::string("PALPSIM\0\1\0\0\0", 12)),
+            "t.json:1:1: not JSON: the file is a palplab scene file (.psim): give it with "
+            "--scene, and the prototype's JSON file or id where a prototype goes");
+  EXPECT_EQ(located_error(std::string("SQLite format 3\0\x10\0", 18)),
+            "t.json:1:1: not JSON: the file is an SQLite database (a results database?), not a "
+            "JSON file");
 }
 
 TEST(Escape, Utf8IsToldFromOtherBytes) {

@@ -185,6 +185,10 @@ TEST(Study, EmptyGroups) {
 TEST(Study, OverlappingScheduleIsRejected) {
   auto ps = problems_of("overlap", edit("{\"after_previous\": {\"minutes\": 10}}", "{\"day\": 0}"));
   expect_one(ps, "$.phases[1].start", 18, "before the previous session ends");
+  // A phase's second session too close to its first: at the gap that sets it (it was said to be
+  // at $.phases[0].start, which the phase does not have).
+  auto gap = problems_of("gapzero", edit("\"gap\": {\"minutes\": 10}", "\"gap\": {\"days\": 0}"));
+  expect_one(gap, "$.phases[0].gap", 16, "session 2 of phase \"training\" would start");
 }
 
 TEST(Study, SyntaxErrorIsLocated) {
