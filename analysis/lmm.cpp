@@ -204,14 +204,21 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       if (std::find(terms.begin(), terms.end(), sub) == terms.end()) {
         std::string name;
         for (auto& v : t) name += (name.empty() ? "" : ":") + v;
-        formula_error(0, "interaction '" + name +
-                             "' without all its lower-order terms is not supported (use '*')");
+        // At its first variable (it said character 1, review 2026-12-06, fourth).
+        const auto at_var = fixed_pos.find(t.front());
+        formula_error(at_var != fixed_pos.end() ? at_var->second : 0,
+                      "interaction '" + name +
+                          "' without all its lower-order terms is not supported (use '*')");
       }
     }
   }
   for (const auto& t : terms)
     for (const auto& v : t)
-      if (v == f.response) formula_error(0, "the response '" + v + "' is also a predictor");
+      if (v == f.response) {
+        const auto at_var = fixed_pos.find(v);
+        formula_error(at_var != fixed_pos.end() ? at_var->second : 0,
+                      "the response '" + v + "' is also a predictor");
+      }
   // Models that cannot be estimated (they used to print df 0 and p 1e-8, or crash):
   if (f.group == f.response)
     formula_error(group_pos, "the response '" + f.response + "' is also the grouping factor");
@@ -558,8 +565,15 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     for (int r : used) {
       try {
         c.num.push_back(parse_number(t, r, ci[v]));
-      } catch (const InputError&) {
-        if (v == f.response || v == f.slope) throw;  // located "expected a number"
+      } catch (const InputError& e) {
+        if (v == f.response) throw;  // located "expected a number"
+        // A factor as random slope (`(group | participant)`) was "expected a decimal number":
+        // a data error for a model this implementation does not have.
+        if (v == f.slope)
+          throw InputError(std::string(e.what()) + "; the random slope '" + v +
+                           "' must be a numeric covariate (e.g. a session number): a factor "
+                           "as random slope, as in (" +
+                           v + " | " + f.group + "), is not supported");
         c.numeric = false;
         break;
       }

@@ -351,7 +351,9 @@ int run_device_sim(const SimArgs& a) {
                         {"stopped_at", stop},
                         {"datagram_type", with_axis ? 3 : 1},
                         {"button_changes", button_changes},
-                        {"force_off_after_stop_ms", first_off_ms},
+                        // null when no force off came (was -1, a time).
+                        {"force_off_after_stop_ms",
+                         first_off_ms >= 0 ? nlohmann::json(first_off_ms) : nlohmann::json()},
                         {"send_interval_p99_ms", gap_p99},
                         {"send_interval_max_ms", gap_max}};
   if (a.json) {
@@ -359,8 +361,10 @@ int run_device_sim(const SimArgs& a) {
   } else {
     std::cout << "device-sim: sent " << sent << " positions to 127.0.0.1:" << a.port
               << ", received " << received << " forces (max " << max_force << " N)";
-    if (a.stop_after >= 0)
+    if (a.stop_after >= 0 && first_off_ms >= 0)
       std::cout << "; force off " << first_off_ms << " ms after the last position";
+    else if (a.stop_after >= 0)
+      std::cout << "; no force off came after the last position";
     std::cout << "\n";
   }
   return received > 0 ? 0 : 1;

@@ -80,6 +80,16 @@ palplab::app::CommandRegistration reg_validate{
                       << "every session of a participant as an independent observation "
                       << "(pseudo-replication: df and p-values overstate the evidence); "
                       << "participant means (the default) or `palplab lmm` are valid\n";
+        // Valid but without effect: the gap of a phase of one session (left behind when its
+        // sessions were cut to one; review 2026-12-06, fourth).
+        if (const auto js = nlohmann::json::parse(s.json_text, nullptr, false);
+            js.is_object() && js.contains("phases") && js["phases"].is_array())
+          for (std::size_t i = 0; i < s.phases.size() && i < js["phases"].size(); ++i)
+            if (s.phases[i].sessions == 1 && js["phases"][i].is_object() &&
+                js["phases"][i].contains("gap"))
+              std::cerr << palplab::escape_controls(*study) << ": warning: $.phases[" << i
+                        << "].gap: the phase has one session, so the gap between its sessions "
+                           "has no effect (the next phase's start is set by its own \"start\")\n";
         // Valid but impossible: a feature that needs a longer touch than any session lasts is
         // never identified (every exploration time undefined).
         double longest = 0;

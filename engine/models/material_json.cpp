@@ -21,7 +21,7 @@ void read_material(json::Checker& c, const nlohmann::json& m, const std::string&
     c.keys(*mat, Q, {"tissue", "youngs_modulus", "density"});
     mc.tissue = c.text(*mat, Q, "tissue", false).value_or("");
     mc.youngs_modulus =
-        c.number(*mat, Q, "youngs_modulus", false, 0, 1e11, "Young's modulus E (Pa)", true);
+        c.number(*mat, Q, "youngs_modulus", false, 1, 1e11, "Young's modulus E (Pa)");
     mc.density = c.number(*mat, Q, "density", false, 0, 1e5, "the density (kg/m^3)", true);
   } else {
     c.err(Q, std::string("expected a tissue name or an object, got ") + json::kind_name(*mat));

@@ -225,6 +225,14 @@ TEST(LmmFormula, LocatedErrorsOutsideTheGrammar) {
   EXPECT_NE(err("y ~ a + (0 + x | g)").find("--formula"), std::string::npos);
   EXPECT_NE(err("y ~ a").find("random-effects term"), std::string::npos);
   EXPECT_NE(err("y ~ a:b + (1 | g)").find("lower-order"), std::string::npos);
+  // At the interaction's first variable, and at the response used as a predictor (both said
+  // character 1: review 2026-12-06, fourth).
+  EXPECT_NE(err("y ~ group:session + (1 | g)").find("(use '*') (at character 5)"),
+            std::string::npos)
+      << err("y ~ group:session + (1 | g)");
+  EXPECT_NE(err("y ~ a + y + (1 | g)").find("is also a predictor (at character 9)"),
+            std::string::npos)
+      << err("y ~ a + y + (1 | g)");
   EXPECT_NE(err("y ~ log(a) + (1 | g)").find("--formula"), std::string::npos);
   EXPECT_NE(err("y ~ a + (1 | g/h)").find("unexpected character '/'"), std::string::npos);
   EXPECT_NE(err("y a + (1|g)").find("'~'"), std::string::npos);
@@ -552,4 +560,23 @@ TEST(LmmFit, AResponseThatHardlyVariesWithinParticipantIsSaidSo) {
         << eps << ": " << what;
     EXPECT_NE(what.find("the mixed model is degenerate"), std::string::npos) << what;
   }
+}
+
+// A factor as random slope was a data error ("expected a decimal number ... got 'A'"): it is
+// a model this implementation does not have, and the message now says so (review 2026-12-06,
+// fourth), keeping the CSV location.
+TEST(LmmFit, AFactorAsRandomSlopeIsSaidToBeUnsupported) {
+  const CsvTable t = parse_csv(
+      "participant,group,value\nP1,A,1\nP1,A,2\nP2,A,2\nP2,A,3\nP3,B,3\nP3,B,4\nP4,B,2\n"
+      "P4,B,5\n",
+      "f.csv");
+  std::string what = "no error";
+  try {
+    fit_lmm(t, parse_lmm_formula("value ~ group + (group | participant)"), {}, true);
+  } catch (const palplab::InputError& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("f.csv:2:4: column 'group'"), std::string::npos) << what;
+  EXPECT_NE(what.find("the random slope 'group' must be a numeric covariate"), std::string::npos)
+      << what;
 }

@@ -330,5 +330,14 @@ TEST(CliDeviceSim, NumericFlagsRefuseNanNegativeAndOutOfRange) {
   const auto j = nlohmann::json::parse(ok.out);
   EXPECT_GT(j["sent"].get<long>(), 0);
   EXPECT_EQ(j["stopped_at"].get<double>(), 0.02);
+  // No force off came: null, and said so in the text (it was -1 ms, a time; review 2026-12-06,
+  // fourth).
+  EXPECT_TRUE(j["force_off_after_stop_ms"].is_null()) << ok.out;
+  const t::CliResult text = t::run_shell(
+      "timeout -k 5 20 " + std::string(PALPLAB_BINARY) + " device-sim --port " +
+          std::to_string(t::free_udp_port()) + " --duration 0.05 --stop-after 0.02 --linger 0",
+      dir);
+  EXPECT_NE(text.out.find("; no force off came after the last position"), std::string::npos)
+      << text.out;
   std::filesystem::remove_all(dir);
 }

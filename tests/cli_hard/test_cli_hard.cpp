@@ -1155,6 +1155,17 @@ TEST(HardCli, AnIdentificationLongerThanEverySessionIsWarnedOf) {
   r = cli("validate " + (d / "ok.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.err, "warning")) << r.err;
+  // The gap of a phase cut to one session has no effect (review 2026-12-06, fourth): valid,
+  // with a warning at it.
+  std::string one = study(kGroups, "", 20.0);
+  one.replace(one.find("\"sessions\": 2,"), 14, "\"sessions\": 1,");
+  spit(d / "one.json", one);
+  r = cli("validate " + (d / "one.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err,
+                  "warning: $.phases[1].gap: the phase has one session, so the gap "
+                  "between its sessions has no effect"))
+      << r.err;
 }
 
 // Review finding (2026-12-06): a palpation onset above the feature's target force validated

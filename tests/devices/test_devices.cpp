@@ -376,5 +376,36 @@ TEST(TraceDevice, BadFilesAreLocated) {
   }
   write("# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n0.002,1,2,3,0,0,0,0\n0.001,1,2,3,0,0,0,0\n");
   EXPECT_THROW(e::read_trace(path.string()), palplab::InputError);
+  // A trace is replayed one sample per 1 ms haptic step: a 2 kHz trace (played at half speed), a
+  // gap, a negative start and positions or velocities no hand has were taken (review
+  // 2026-12-06, fourth). Each is refused at its line.
+  const std::string head = "# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n0,0,0,0,0,0,0,0\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {head + "0.0005,0,0,0,0,0,0,0\n", ":4: t: expected one sample per 1 ms haptic step"},
+      {head + "0.001,0,0,0,0,0,0,0\n0.011,0,0,0,0,0,0,0\n",
+       ":5: t: expected one sample per 1 ms haptic step"},
+      {"# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n-1,0,0,0,0,0,0,0\n",
+       ":3: t: expected the first sample's time in [0, 86400] s"},
+      {head + "0.001,0,0,1e300,0,0,0,0\n",
+       ":4: column 4: expected a position within 10 m of the device origin"},
+      {head + "0.001,0,0,0,0,-2e3,0,0\n", ":4: column 6: expected a velocity within 1000 m/s"}};
+  for (const auto& [text, expect] : cases) {
+    write(text);
+    try {
+      e::read_trace(path.string());
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const palplab::InputError& err) {
+      EXPECT_NE(std::string(err.what()).find(expect), std::string::npos) << err.what();
+    }
+  }
+  // Steps of 1 ms as written with %.17g (k * 0.001) are taken.
+  std::string ok = "# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n";
+  for (int k = 0; k < 5000; ++k) {
+    char line[96];
+    std::snprintf(line, sizeof line, "%.17g,0,0,0.05,0,0,0,0\n", k * 0.001);
+    ok += line;
+  }
+  write(ok);
+  EXPECT_EQ(e::read_trace(path.string()).samples.size(), 5000u);
   std::filesystem::remove(path);
 }

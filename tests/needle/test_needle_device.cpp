@@ -160,7 +160,8 @@ TEST(NeedleDevice, MouseDeviceCarriesTheLatchedToolAndTheViewAxis) {
 
 TEST(NeedleDevice, TraceAndUdpCarryTheStylusAxis) {
   e::Trace tr;
-  for (const auto& d : insertion(Vector3d(0.6, 0.8, 0.0), true)) tr.samples.push_back({0.0, d});
+  for (const auto& d : insertion(Vector3d(0.6, 0.8, 0.0), true))
+    tr.samples.push_back({0.001 * static_cast<double>(tr.samples.size()), d});
   const auto path = std::filesystem::temp_directory_path() /
                     ("palplab_axis_trace_" + std::to_string(getpid()) + ".csv");
   e::write_trace(path.string(), tr);

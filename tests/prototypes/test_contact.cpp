@@ -618,6 +618,60 @@ TEST(ContactHard, ContactRadiusIsRefusedWithWhatToDoInstead) {
     EXPECT_NO_THROW(prototypes::load_prototype(proto(id))) << id;
 }
 
+// A membrane thickness on C (mass-spring on a tet mesh) had no effect and was taken (the probe
+// byte-identical to C's; review 2026-12-06, fourth): refused when the scene is built, naming the
+// key and why; on a surface mass-spring model it is the membrane's thickness, as before.
+TEST(ContactHard, AMembraneThicknessOnATetMeshIsRefused) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "palplab_test_thickness";
+  fs::create_directories(dir);
+  std::ifstream in(proto("C"));
+  std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto a = s.find("\"kind\": \"mass_spring\",");
+  ASSERT_NE(a, std::string::npos);
+  s.insert(a, "\"thickness\": 0.01, ");
+  const std::string p = (dir / "C_thick.json").string();
+  std::ofstream(p) << s;
+  try {
+    (void)prototypes::build_scene(p);
+    FAIL() << "thickness on a tet mesh accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(p + ": $.model.thickness: applies to a surface mesh's membrane"),
+              std::string::npos)
+        << what;
+  }
+  fs::remove_all(dir);
+}
+
+// A Young's modulus of 1e-12 Pa was taken and ended in "singular stiffness (the constraints
+// leave a rigid-body mode free)", blaming the constraints (review 2026-12-06, fourth): the
+// reader's range is 1 Pa to 1e11 Pa, located.
+TEST(ContactHard, AYoungsModulusBelowOnePascalIsRefusedWhereItIsWritten) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "palplab_test_youngs";
+  fs::create_directories(dir);
+  std::ifstream in(proto("D"));
+  std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string e5 = "\"youngs_modulus\": 100000.0";
+  const auto a = s.find(e5);
+  ASSERT_NE(a, std::string::npos);
+  s.replace(a, e5.size(), "\"youngs_modulus\": 1e-12");
+  const std::string p = (dir / "D_soft.json").string();
+  std::ofstream(p) << s;
+  try {
+    (void)prototypes::load_prototype(p);
+    FAIL() << "E = 1e-12 Pa accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("$.model.material.youngs_modulus: value 1e-12 out of range: expected "
+                        "Young's modulus E (Pa) in [1.0, 100000000000.0]"),
+              std::string::npos)
+        << what;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(ContactHard, CurrentSurfaceOfATetMassSpringModelIsItsSurface) {
   // Scene::current_surface promises the surface: for C (mass-spring on a tet mesh) the rows are
   // the surface vertices in the geometry's order, then the refinement nodes; no interior node.

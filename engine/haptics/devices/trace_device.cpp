@@ -11,6 +11,7 @@
 
 #include "common/input_error.hpp"
 #include "common/write_file.hpp"
+#include "engine/haptics/scene_config.hpp"
 
 namespace palplab::engine {
 
@@ -83,6 +84,24 @@ Trace read_trace(const std::string& path) {
     if (!tr.samples.empty() && v[0] < tr.samples.back().t)
       fail("time goes backwards (" + std::to_string(v[0]) + " s after " +
            std::to_string(tr.samples.back().t) + " s)");
+    // A trace is replayed one sample per haptic step: its t must say so. A 2 kHz trace played at
+    // half speed, a gap of 10 ms was replayed as if nothing were missing and a first t of -1 s or
+    // a position of 1e300 m was taken (review 2026-12-06, fourth).
+    if (tr.samples.empty() && !(v[0] >= 0.0 && v[0] <= 86400.0))
+      fail("t: expected the first sample's time in [0, 86400] s, got " + std::to_string(v[0]));
+    if (!tr.samples.empty() && std::abs(v[0] - tr.samples.back().t - kHapticStep) > 1e-6)
+      fail("t: expected one sample per 1 ms haptic step (a trace is replayed step by step), got " +
+           std::to_string(v[0]) + " s after " + std::to_string(tr.samples.back().t) +
+           " s (a gap, or a device sampled at another rate: resample it to 1 kHz)");
+    for (int k = 1; k <= 3; ++k)
+      if (std::abs(v[k]) > 10.0)
+        fail("column " + std::to_string(k + 1) +
+             ": expected a position within 10 m of the device origin, got " + std::to_string(v[k]) +
+             " m");
+    for (int k = 4; k <= 6; ++k)
+      if (std::abs(v[k]) > 1e3)
+        fail("column " + std::to_string(k + 1) + ": expected a velocity within 1000 m/s, got " +
+             std::to_string(v[k]) + " m/s");
     TraceSample s;
     s.t = v[0];
     s.in.position = {v[1], v[2], v[3]};
