@@ -97,6 +97,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
     if (std::find(var_order.begin(), var_order.end(), v) == var_order.end()) var_order.push_back(v);
   };
   std::vector<std::vector<std::string>> raw_terms;
+  std::vector<int> raw_pos;              // where each raw term's product chain starts in the text
   std::map<std::string, int> fixed_pos;  // fixed-effect variable -> position in the text
   int group_pos = 0, slope_pos = 0;
   bool have_random = false, expect_operand = true;
@@ -152,6 +153,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
     if (tok[i].kind != 'n') formula_error(tok[i].pos, "expected a variable name");
     // product chain: segments separated by '*', each a ':'-joined interaction
     std::vector<std::vector<std::string>> segments{{}};
+    const int chain_pos = tok[i].pos;
     while (true) {
       if (i >= tok.size() || tok[i].kind != 'n') formula_error(at(i), "expected a variable name");
       note_var(tok[i].text);
@@ -173,6 +175,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
         if (mask & (size_t{1} << s))
           term.insert(term.end(), segments[s].begin(), segments[s].end());
       raw_terms.push_back(term);
+      raw_pos.push_back(chain_pos);
     }
     expect_operand = false;
   }
@@ -186,9 +189,12 @@ LmmFormula parse_lmm_formula(const std::string& text) {
     return std::find(var_order.begin(), var_order.end(), v) - var_order.begin();
   };
   std::vector<std::vector<std::string>> terms;
-  for (auto t : raw_terms) {
+  std::map<std::vector<std::string>, int> term_pos;  // where a term is first written
+  for (std::size_t r = 0; r < raw_terms.size(); ++r) {
+    auto t = raw_terms[r];
     std::sort(t.begin(), t.end(), [&](auto& a, auto& b) { return rank(a) < rank(b); });
     t.erase(std::unique(t.begin(), t.end()), t.end());
+    term_pos.emplace(t, raw_pos[r]);
     if (std::find(terms.begin(), terms.end(), t) == terms.end()) terms.push_back(t);
   }
   std::stable_sort(terms.begin(), terms.end(),
@@ -204,9 +210,10 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       if (std::find(terms.begin(), terms.end(), sub) == terms.end()) {
         std::string name;
         for (auto& v : t) name += (name.empty() ? "" : ":") + v;
-        // At its first variable (it said character 1, review 2026-12-06, fourth).
-        const auto at_var = fixed_pos.find(t.front());
-        formula_error(at_var != fixed_pos.end() ? at_var->second : 0,
+        // Where the term is written (it said character 1, review 2026-12-06, fourth; then the
+        // first mention of its first variable, fifth).
+        const auto at_term = term_pos.find(t);
+        formula_error(at_term != term_pos.end() ? at_term->second : 0,
                       "interaction '" + name +
                           "' without all its lower-order terms is not supported (use '*')");
       }
@@ -621,6 +628,16 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
   // without a word. Within 2^-50..2^50 nothing is rescaled (the optimiser's stopping tests are
   // relative to the deviance, which rescaling shifts: ordinary data keep their fit to the bit).
   double y_scale = 1.0;
+  // Below 1e-150 the variances, vcov and sums of squares the fit reports (squares of the
+  // response's units) underflow a double and print as 0 beside finite SDs and F (review
+  // 2026-12-06, fifth): refused as `stats` refuses such a column.
+  if (const double ymax = md.y.cwiseAbs().maxCoeff(); ymax > 0 && ymax < 1e-150)
+    throw InputError("column '" + f.response + "': the response's values are at most " +
+                         format_g(ymax) +
+                         " in magnitude: below 1e-150 the variances and sums of squares of the "
+                         "fit underflow a double (they would be 0); rescale the column (e.g. "
+                         "other units)",
+                     t.file);
   if (const double ymax = md.y.cwiseAbs().maxCoeff();
       ymax > 0 && std::isfinite(ymax) && (ymax > 0x1p50 || ymax < 0x1p-50)) {
     y_scale = std::ldexp(1.0, std::ilogb(ymax));
@@ -957,7 +974,9 @@ std::string esc(const std::string& s) {
   return escape_controls(s, false);
 }
 std::string pad(std::string s, size_t w, bool left = false) {
-  if (s.size() >= w) return s;
+  // A value wider than its column keeps a space from its neighbour ("7.28498e-2018.53521e-101"
+  // ran two columns together: review 2026-12-06, fifth).
+  if (s.size() >= w) return left ? s + " " : " " + s;
   return left ? s + std::string(w - s.size(), ' ') : std::string(w - s.size(), ' ') + s;
 }
 }  // namespace

@@ -124,6 +124,25 @@ palplab::app::CommandRegistration reg_calibrate{
                                     "\"" + a->journal +
                                         "\" is --out too (the fitted parameters go there); "
                                         "expected another file for the evaluations");
+        // The outputs written through FILE.partial (common/write_file) must not be one another:
+        // --out at the defaults' PARAMS.partial was renamed away after the fit, exit 0; the
+        // journal at --out's or the defaults' .partial ended hours of fitting in exit 2
+        // (review 2026-12-06, fifth).
+        {
+          std::vector<std::pair<std::string, std::string>> through = {{"--out", a->out}};
+          if (defaults) through.push_back({"--write-defaults", a->write_defaults});
+          const std::vector<std::pair<std::string, std::string>> others = {
+              {"--out", a->out}, {"--journal", a->journal}};
+          for (const auto& [flag, file] : through)
+            for (const auto& [oflag, other] : others)
+              if (flag != oflag && same_path(other, file + ".partial"))
+                throw palplab::InputError(
+                    palplab::SourceLocation{oflag},
+                    "\"" + other + "\" is where " + flag + " (" + file +
+                        ") is written first, then renamed, which would take it away: choose "
+                        "another " +
+                        oflag);
+        }
         if (same_path(a->journal, "/dev/null")) {
           a->journal.clear();  // no journal (the fit is not resumable)
         } else {

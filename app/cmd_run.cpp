@@ -26,6 +26,7 @@
 #include "app/palpation_ui.hpp"
 #include "app/scene_option.hpp"
 #include "common/escape.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "common/remove_on_signal.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
@@ -39,6 +40,7 @@
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
 #include "protocols/study.hpp"
+#include "prototypes/factory.hpp"
 
 namespace {
 
@@ -259,6 +261,18 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
     if (trace->samples.empty())
       throw InputError(SourceLocation{"--device"},
                        "\"" + h.device + "\": the trace has no samples (expected a device track)");
+    // Replayed one sample per haptic step of each session's scene: the trace's step must be
+    // theirs (a 2 kHz trace played at half speed: review 2026-12-06, fourth).
+    if (trace->samples.size() > 1)
+      for (const auto& [id, file] : s.prototype_files)
+        if (const double dt = prototypes::load_prototype(file).dt;
+            std::abs(trace->step - dt) > 1e-3 * dt)
+          throw InputError(SourceLocation{"--device"},
+                           "\"" + h.device + "\": the trace has a sample every " +
+                               format_g(trace->step * 1e3, 6) + " ms, prototype " + id +
+                               "'s haptic step is " + format_g(dt * 1e3, 6) +
+                               " ms (a trace is replayed one sample per step: record or "
+                               "resample it at that step)");
   }
   // A UDP device is bound and measured once before the database is touched: a port in use or a
   // bridge that does not send is exit 2 with no output file. (Each session binds it again.)

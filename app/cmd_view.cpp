@@ -29,6 +29,7 @@
 #include "app/command.hpp"
 #include "app/palpation_ui.hpp"
 #include "app/scene_option.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/devices/device_spec.hpp"
@@ -85,7 +86,16 @@ int run_view(const ViewArgs& a) {
     udp = std::make_unique<engine::UdpDevice>(engine::UdpDeviceOptions{spec.port, 0.002});
     inner = udp.get();
   } else if (spec.kind == "trace") {
-    replay = std::make_unique<engine::TraceDevice>(engine::read_trace(spec.file));
+    engine::Trace tr = engine::read_trace(spec.file);
+    // One sample per haptic step of this scene (a trace of another step plays too fast or
+    // slow).
+    if (tr.samples.size() > 1 && std::abs(tr.step - scene.dt()) > 1e-3 * scene.dt())
+      throw InputError(SourceLocation{"--device"},
+                       "\"" + spec.text + "\": the trace has a sample every " +
+                           format_g(tr.step * 1e3, 6) + " ms, the scene's haptic step is " +
+                           format_g(scene.dt() * 1e3, 6) +
+                           " ms (a trace is replayed one sample per step)");
+    replay = std::make_unique<engine::TraceDevice>(std::move(tr));
     inner = replay.get();
   }
   if (inner->samples_received() >= 0) {  // a hardware device: is it fast enough?

@@ -93,9 +93,22 @@ inline void require_own_files_under(const std::string& flag, const std::string& 
   for (fs::directory_iterator it(under, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string path = it->path().string();
     std::error_code e2;
-    if (!matches(it->path().filename().string())) continue;
-    // Never written through, even with the overwrite flag: it could point outside `dir`.
+    std::string name = it->path().filename().string();
+    const bool partial = name.size() > 8 && name.ends_with(".partial");
+    if (partial) name.resize(name.size() - 8);
+    if (!matches(name)) continue;
     const auto lt = fs::symlink_status(path, e2).type();
+    // A directory where a file is written (or first written, as NAME.partial): found only
+    // after the other files were written, or a still skipped with exit 0 (review 2026-12-06,
+    // fifth).
+    if (lt == fs::file_type::directory)
+      throw InputError(SourceLocation{flag},
+                       "\"" + path + "\" is a directory; the command writes its " + sub +
+                           " there as files" +
+                           (partial ? " (each first as NAME.partial, then renamed)" : "") +
+                           ": remove or rename it, or choose another " + flag);
+    if (partial) continue;  // a leftover NAME.partial file is replaced (common/write_file)
+    // Never written through, even with the overwrite flag: it could point outside `dir`.
     if (lt == fs::file_type::symlink)
       throw InputError(SourceLocation{flag},
                        "\"" + path + "\" is a symbolic link; the command writes its " + sub +

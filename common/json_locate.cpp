@@ -277,10 +277,13 @@ JsonLocator::JsonLocator(std::string_view text) {
   for (auto& [path, o] : raw) entries_[path] = Entry{pos.at(o.first), pos.at(o.second)};
   for (auto& [path, o] : dups) {
     // The values under a repeated key repeat its path's children: only the key is a duplicate
-    // (`"w": [[0]], "w": [[1]]` was reported at $.w, $.w[0] and $.w[0][0]).
+    // (`"w": [[0]], "w": [[1]]` was reported at $.w, $.w[0] and $.w[0][0]). A key repeated
+    // inside the first copy is a duplicate of its own (it was hidden: review 2026-12-06,
+    // fifth): only those whose repeat lies in a later copy of a repeated parent are dropped.
     const bool under_another = std::any_of(dups.begin(), dups.end(), [&](const auto& e) {
       return e.first.size() < path.size() && path.compare(0, e.first.size(), e.first) == 0 &&
-             (path[e.first.size()] == '.' || path[e.first.size()] == '[');
+             (path[e.first.size()] == '.' || path[e.first.size()] == '[') &&
+             o.second >= e.second.second;
     });
     if (under_another) continue;
     DuplicateKey d;

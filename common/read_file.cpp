@@ -70,9 +70,8 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
   // as an empty file of the kind expected.
   if (S_ISFIFO(st.st_mode) && text.empty())
     throw InputError(
-        "is a FIFO and nothing was written to it (no writer had it open when it was "
-        "read: start the writer first, or give the input as <(command)); expected "
-        "a " +
+        "is a FIFO and nothing was written to it (its writer wrote nothing, or no writer had "
+        "it open when it was read: start the writer first); expected a " +
             what,
         path);
   return text;

@@ -325,8 +325,31 @@ struct ReplicateLine {
 // and simulates that replicate again, so it is an error here rather than silently dropped.
 std::vector<ReplicateLine> read_replicates(const std::string& path) {
   std::vector<ReplicateLine> out;
+  // A FIFO blocked the open for ever (review 2026-12-06, fifth); a directory or a device is no
+  // replicate file either.
+  std::error_code ec;
+  if (const auto st = fs::status(path, ec); fs::exists(st) && !fs::is_regular_file(st))
+    throw InputError(
+        "is not a regular file (a directory, a FIFO or a device): expected a replicate file of "
+        "palplab power (replicates*.jsonl, JSON lines)",
+        path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read replicate file", path);
+  {
+    // palplab's own binary files given as replicates are named (a scene file was "invalid
+    // literal; last read: 'P'").
+    char head[16] = {};
+    in.read(head, sizeof head);
+    const std::string h(head, static_cast<std::size_t>(in.gcount()));
+    if (h.rfind(std::string("PALPSIM\0", 8), 0) == 0 || h == std::string("SQLite format 3\0", 16))
+      throw InputError(std::string("not a replicate file: it is ") +
+                           (h[0] == 'P' ? "a palplab scene file (.psim)"
+                                        : "an SQLite database (a results database?)") +
+                           "; expected the replicates*.jsonl of palplab power",
+                       path);
+    in.clear();
+    in.seekg(0);
+  }
   std::string line;
   int no = 0;
   while (std::getline(in, line)) {
@@ -1364,6 +1387,10 @@ void check_out_dir_study(const std::string& out_dir, const std::string& sha) {
   for (const auto& e : fs::directory_iterator(out_dir, ec)) {
     const std::string name = e.path().filename().string();
     if (name.rfind("replicates", 0) != 0 || e.path().extension() != ".jsonl") continue;
+    if (std::error_code e2; !fs::is_regular_file(e.path(), e2))
+      throw refuse(e.path(),
+                   "the output directory holds a replicate file that is not a regular "
+                   "file (a directory, a FIFO or a device)");
     std::ifstream in(e.path(), std::ios::binary);
     std::string line;
     while (std::getline(in, line) && line.find_first_not_of(" \t\r") == std::string::npos) {

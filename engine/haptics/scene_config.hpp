@@ -22,10 +22,6 @@
 namespace palplab::engine {
 
 // Where the mesh comes from: a generator of engine/mesh or a mesh file.
-// palplab's haptic step (1 kHz): the default of every scene (no prototype file changes it), and
-// the step a device trace is recorded and replayed at (devices/trace_device).
-inline constexpr double kHapticStep = 1e-3;  // s
-
 struct MeshSource {
   std::string generator = "tract";  // tract | model_c | stomach | sphere
   int vertices = 1500;
@@ -145,7 +141,7 @@ struct SceneConfig {
   ContactConfig contact;
   WatchdogConfig watchdog;
   Cues cues;
-  double dt = kHapticStep;                        // s, haptic step
+  double dt = 1e-3;                               // s, haptic step
   Thresholds default_thresholds{2.0, 2.5, 3.0};   // N, for regions the file does not list
   std::map<std::string, Thresholds> thresholds;   // region -> limits; "*" = every region
   std::optional<Eigen::Vector3d> start_position;  // m; default 5 cm in front of the organ

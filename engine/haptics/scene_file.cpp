@@ -70,12 +70,15 @@ class FileBytes {
   // `missing`: the message when the file cannot be opened; `regular`: anything but a regular
   // file (a directory, a device) is that error too.
   FileBytes(const std::string& path, const char* missing, bool regular = false) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    // Opened without blocking (a FIFO with no writer blocked here for ever: review 2026-12-06,
+    // fifth), then read blocking as usual.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) throw InputError(missing, path);
+    ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
     struct stat st {};
     if (regular && (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))) {
       ::close(fd);
-      throw InputError(missing, path);
+      throw InputError("is not a regular file (a directory, a FIFO or a device)", path);
     }
     // A small file (a prototype) is cheaper to read than to map and unmap.
     if ((regular || ::fstat(fd, &st) == 0) && S_ISREG(st.st_mode) && st.st_size > kMapFrom) {

@@ -230,6 +230,8 @@ TEST(LmmFormula, LocatedErrorsOutsideTheGrammar) {
   EXPECT_NE(err("y ~ group:session + (1 | g)").find("(use '*') (at character 5)"),
             std::string::npos)
       << err("y ~ group:session + (1 | g)");
+  EXPECT_NE(err("y ~ x + (1 | g) + c:x").find("(use '*') (at character 19)"), std::string::npos)
+      << err("y ~ x + (1 | g) + c:x");
   EXPECT_NE(err("y ~ a + y + (1 | g)").find("is also a predictor (at character 9)"),
             std::string::npos)
       << err("y ~ a + y + (1 | g)");
@@ -450,18 +452,18 @@ TEST(LmmFit, CollinearColumnsAreRankDeficientAtAnyScale) {
   }
 }
 
-// The response in other units (x 1e100, x 1e-100, x 1e-170: within what the CSV reader accepts)
-// is the same fit: df and p were n/a at 1e100 and the SDs 0 at 1e-170 (review 2026-12-06,
-// fourth). Estimates, SEs, SDs and vcov scale with it; theta, t, df, p and F do not; the REML
-// criterion gains 2 (n - p) log(scale), the ML deviance 2 n log(scale).
+// The response in other units (x 1e100, x 1e-100, x 1e-140) is the same fit: df and p were n/a
+// at 1e100 and the SDs 0 at 1e-170 (review 2026-12-06, fourth). Estimates, SEs, SDs and vcov
+// scale with it; theta, t, df, p and F do not; the REML criterion gains 2 (n - p) log(scale),
+// the ML deviance 2 n log(scale). Below 1e-150 the reported variances would underflow: refused
+// (review 2026-12-06, fifth: variance 0 beside an SD of 1e-170).
 TEST(LmmFit, TheResponsesUnitsDoNotChangeTheFit) {
   CsvTable base = read_csv(kDir + "sleepstudy.csv");
   const int y = column_index(base, "Reaction");
   for (const bool reml : {true, false})
     for (const auto& [factor, scale] :
-         {std::pair{"e100", 1e100}, std::pair{"e-100", 1e-100}, std::pair{"e-170", 1e-170}}) {
+         {std::pair{"e100", 1e100}, std::pair{"e-100", 1e-100}, std::pair{"e-140", 1e-140}}) {
       const std::string tag = std::string(reml ? "REML " : "ML ") + factor;
-      const bool squares = scale * scale > 1e-300;
       CsvTable t = base;
       for (auto& row : t.rows) row[y] += factor;
       const auto f = parse_lmm_formula("Reaction ~ Days + (1 + Days | Subject)");
@@ -477,8 +479,7 @@ TEST(LmmFit, TheResponsesUnitsDoNotChangeTheFit) {
         expect_rel(b.fixed[i].t, a.fixed[i].t, 1e-6, w + " t");
         expect_rel(b.fixed[i].df, a.fixed[i].df, 1e-6, w + " df");
         expect_rel(b.fixed[i].p, a.fixed[i].p, 2e-5, w + " p");
-        if (squares)  // 1e-340 is below the doubles' range: vcov and Sum Sq are 0 there
-          expect_rel(b.vcov[i][i] / scale / scale, a.vcov[i][i], 1e-6, w + " vcov");
+        expect_rel(b.vcov[i][i] / scale / scale, a.vcov[i][i], 1e-6, w + " vcov");
       }
       for (size_t i = 0; i < a.theta.size(); ++i)
         expect_rel(b.theta[i], a.theta[i], 1e-6, tag + " theta");
@@ -488,12 +489,22 @@ TEST(LmmFit, TheResponsesUnitsDoNotChangeTheFit) {
       ASSERT_EQ(a.anova.size(), b.anova.size());
       for (size_t i = 0; i < a.anova.size(); ++i) {
         expect_rel(b.anova[i].f, a.anova[i].f, 1e-6, tag + " F");
-        if (squares)
-          expect_rel(b.anova[i].sum_sq / scale / scale, a.anova[i].sum_sq, 1e-6, tag + " Sum Sq");
+        expect_rel(b.anova[i].sum_sq / scale / scale, a.anova[i].sum_sq, 1e-6, tag + " Sum Sq");
       }
       const double shift = 2.0 * (reml ? a.n - a.p : a.n) * std::log(scale);
       EXPECT_NEAR(b.deviance - a.deviance, shift, 1e-8 * std::abs(shift)) << tag;
     }
+  CsvTable tiny = base;
+  for (auto& row : tiny.rows) row[y] += "e-170";
+  std::string what = "no error";
+  try {
+    fit_lmm(tiny, parse_lmm_formula("Reaction ~ Days + (1 + Days | Subject)"), {}, true);
+  } catch (const palplab::InputError& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("column 'Reaction': the response's values are at most"), std::string::npos)
+      << what;
+  EXPECT_NE(what.find("rescale the column"), std::string::npos) << what;
 }
 
 // A response that hardly varies within participant (value = participant number + N(0, eps),

@@ -268,6 +268,31 @@ TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
       << dir.err;
   EXPECT_EQ(dir.err.find("evaluation"), std::string::npos) << dir.err;
   EXPECT_FALSE(fs::exists(d / "p.json"));
+  // One output at another's FILE.partial (review 2026-12-06, fifth): --out at the defaults'
+  // PARAMS.partial was renamed away after the fit (exit 0); the journal at --out's .partial ended
+  // the fit in exit 2. Both refused before it.
+  fs::remove_all(d / "p.json.partial");
+  fs::remove(d / "params.hpp.partial");
+  const Result out_at =
+      run_palplab(base + "--out " + (d / "params.hpp.partial").string() +
+                      " --journal /dev/null --write-defaults " + (d / "params.hpp").string(),
+                  d);
+  EXPECT_EQ(out_at.code, 2) << out_at.out << out_at.err;
+  EXPECT_NE(out_at.err.find("--out: \"" + (d / "params.hpp.partial").string() +
+                            "\" is where --write-defaults"),
+            std::string::npos)
+      << out_at.err;
+  EXPECT_EQ(out_at.err.find("evaluation"), std::string::npos) << out_at.err;
+  const Result journal_at = run_palplab(
+      base + "--out " + (d / "p.json").string() + " --journal " + (d / "p.json.partial").string(),
+      d);
+  EXPECT_EQ(journal_at.code, 2) << journal_at.out << journal_at.err;
+  EXPECT_NE(
+      journal_at.err.find("--journal: \"" + (d / "p.json.partial").string() + "\" is where --out"),
+      std::string::npos)
+      << journal_at.err;
+  EXPECT_EQ(journal_at.err.find("evaluation"), std::string::npos) << journal_at.err;
+  EXPECT_EQ(slurp(d / "params.hpp"), params);
   fs::remove_all(d);
 }
 

@@ -1268,9 +1268,9 @@ TEST(HardInput, AFifoWithoutAWriterIsSaidSoAndAPipeIsRead) {
   ASSERT_EQ(::mkfifo((d / "s_fifo.json").c_str(), 0644), 0);
   Result r = cli("validate " + (d / "s_fifo.json").string(), d);
   EXPECT_EXIT2_WITH(r,
-                    "s_fifo.json: is a FIFO and nothing was written to it (no writer had it "
-                    "open when it was read: start the writer first, or give the input as "
-                    "<(command)); expected a ");
+                    "s_fifo.json: is a FIFO and nothing was written to it (its writer wrote "
+                    "nothing, or no writer had it open when it was read: start the writer "
+                    "first); expected a ");
   const auto piped = palplab::testing::run_shell(
       "cat " + (d / "s.json").string() + " | PALPLAB_PROTOTYPE_PATH=" +
           std::string(PALPLAB_SOURCE_DIR) + "/prototypes timeout -s KILL " +

@@ -425,6 +425,20 @@ TEST(CliReportDamage, AFifoOrTheDatabaseWhereAFigureOrStillIsWrittenIsRefusedFir
     EXPECT_EQ(slurp(out / name), db_bytes);
     EXPECT_FALSE(fs::exists(out / "report.md"));
   }
+  // A directory where a figure, a still or the listing is written (or first written, as
+  // NAME.partial): found after the other files, or a still skipped with exit 0 (review
+  // 2026-12-06, fifth). Refused before anything is written.
+  for (const std::string name : {"figures/force_traces.svg.partial", "stills/stills.json.partial",
+                                 "stills/A_rest.png.partial", "stills/A_rest.png"}) {
+    SCOPED_TRACE(name);
+    const fs::path out = d / ("dir" + std::to_string(name.size()) + name.substr(0, 1));
+    fs::create_directories(out / name);
+    expect_exit2(report(db, out), {"--out: \"" + (out / name).string() +
+                                   "\" is a directory; the "
+                                   "command writes its " +
+                                   fs::path(name).parent_path().string() + " there as files"});
+    EXPECT_FALSE(fs::exists(out / "report.md"));
+  }
   // A directory where report.md is written first: refused before the work too.
   fs::create_directories(d / "dir" / "report.md.partial");
   expect_exit2(report(db, d / "dir"),

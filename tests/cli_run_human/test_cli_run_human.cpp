@@ -259,6 +259,13 @@ TEST(CliRunHuman, BadDeviceOrArgumentsExit2BeforeTheDatabaseExists) {
     for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
     e::write_trace(good, tr);
   }
+  // At 2 kHz: played at half speed before (review 2026-12-06, fourth).
+  const std::string half = (tmp.dir / "half.trace").string();
+  {
+    e::Trace tr;
+    for (int k = 0; k < 4000; ++k) tr.samples.push_back({k * 0.0005, e::DeviceInput{}});
+    e::write_trace(half, tr);
+  }
   const std::string no_samples = (tmp.dir / "empty.trace").string();
   e::write_trace(no_samples, e::Trace{});
   const std::string a_file = (tmp.dir / "file").string();
@@ -274,6 +281,7 @@ TEST(CliRunHuman, BadDeviceOrArgumentsExit2BeforeTheDatabaseExists) {
        "cannot open the trace"},
       {"trace:" + kDir + "human_study.json", "", "human_study.json", "not a palplab trace"},
       {"trace:" + no_samples, "", "--device", "the trace has no samples"},
+      {"trace:" + half, "", "--device", "the trace has a sample every 0.5 ms, prototype"},
       {"udp:" + std::to_string(silent_port), "", "udp:" + std::to_string(silent_port),
        "below the required 900 Hz"},
       {"trace:" + good, "--record-trace " + a_file + "/sub", "--record-trace", "/sub"},

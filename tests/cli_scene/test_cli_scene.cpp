@@ -2,6 +2,7 @@
 // .psim file prints the same numbers as through the prototype, and every damaged file (truncated,
 // flipped byte in header or payload, wrong version, stale source) is a clear error, exit 2.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <filesystem>
@@ -308,6 +309,17 @@ TEST(CliScene, ADirectoryIsNamedAsSuch) {
                     dir);
     expect_exit2(r,
                  {"--scene \"" + d.string() + "\": is a directory, expected a .psim scene file"});
+  }
+  // A FIFO with no writer blocked `scene info`, `probe --scene` and `run --scene` for ever
+  // (review 2026-12-06, fifth).
+  ASSERT_EQ(::mkfifo((dir / "f.psim").c_str(), 0644), 0);
+  for (const std::string& cmd : {"scene info " + (dir / "f.psim").string(),
+                                 "probe --scene " + (dir / "f.psim").string() + kProbe}) {
+    SCOPED_TRACE(cmd);
+    const auto r =
+        palplab::testing::run_shell("timeout 60 " + std::string(PALPLAB_BINARY) + " " + cmd, dir);
+    expect_exit2(r, {(dir / "f.psim").string() + ": is not a regular file (a directory, a FIFO or "
+                                                 "a device)"});
   }
   // A directory named like a prototype key in the working directory does not hide the key.
   fs::create_directories(dir / "A");

@@ -173,6 +173,16 @@ TEST(JsonParse, HostileTextIsALocatedError) {
   EXPECT_EQ(located_error(std::string("\0\0\xfe\xff\0\0\0{\0\0\0}", 12)), utf32);
   EXPECT_EQ(located_error(std::string("{\0\0\0}\0\0\0", 8)), utf32);
   EXPECT_EQ(located_error(std::string("\0\0\0{\0\0\0}", 8)), utf32);
+  // A repeated key is reported once, not again at every value under its second copy (a
+  // device-sim script's repeated "waypoints" was reported at $.waypoints[0][0] ...; review
+  // 2026-12-06, fourth); a key repeated inside the first copy is reported too (it was hidden by
+  // that filter: fifth).
+  const std::string dups =
+      located_error("{\"a\": {\"b\": 1, \"b\": 2, \"c\": [1]},\n \"a\": {\"b\": 3, \"c\": [2]}}");
+  EXPECT_NE(dups.find("t.json:1:16: $.a.b: duplicate key"), std::string::npos) << dups;
+  EXPECT_NE(dups.find("t.json:2:2: $.a: duplicate key"), std::string::npos) << dups;
+  EXPECT_EQ(dups.find("$.a.c"), std::string::npos) << dups;
+  EXPECT_EQ(std::count(dups.begin(), dups.end(), '\n'), 1) << dups;  // two lines
   // palplab's own binary files where JSON goes are named (review 2026-12-06, fourth: `probe
   // A.psim` said "a NUL byte").
   EXPECT_EQ(located_error(std::string("PALPSIM\0\1\0\0\0", 12)),

@@ -376,14 +376,13 @@ TEST(TraceDevice, BadFilesAreLocated) {
   }
   write("# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n0.002,1,2,3,0,0,0,0\n0.001,1,2,3,0,0,0,0\n");
   EXPECT_THROW(e::read_trace(path.string()), palplab::InputError);
-  // A trace is replayed one sample per 1 ms haptic step: a 2 kHz trace (played at half speed), a
-  // gap, a negative start and positions or velocities no hand has were taken (review
-  // 2026-12-06, fourth). Each is refused at its line.
+  // A trace is replayed one sample per haptic step: a gap, a negative start and positions or
+  // velocities no hand has were taken (review 2026-12-06, fourth). Each is refused at its line.
   const std::string head = "# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n0,0,0,0,0,0,0,0\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {head + "0.0005,0,0,0,0,0,0,0\n", ":4: t: expected one sample per 1 ms haptic step"},
       {head + "0.001,0,0,0,0,0,0,0\n0.011,0,0,0,0,0,0,0\n",
-       ":5: t: expected one sample per 1 ms haptic step"},
+       ":5: t: expected one sample per haptic step, 1 ms as between the first two"},
+      {head + "0.02,0,0,0,0,0,0,0\n", ":4: t: expected a step between samples of 0.01 to 10 ms"},
       {"# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n-1,0,0,0,0,0,0,0\n",
        ":3: t: expected the first sample's time in [0, 86400] s"},
       {head + "0.001,0,0,1e300,0,0,0,0\n",
@@ -407,5 +406,10 @@ TEST(TraceDevice, BadFilesAreLocated) {
   }
   write(ok);
   EXPECT_EQ(e::read_trace(path.string()).samples.size(), 5000u);
+  EXPECT_NEAR(e::read_trace(path.string()).step, 0.001, 1e-15);
+  // A 2 kHz trace is read with its step (the scene it is replayed into compares it: run --human
+  // and view refuse a step that is not the scene's).
+  write(head + "0.0005,0,0,0,0,0,0,0\n0.001,0,0,0,0,0,0,0\n");
+  EXPECT_NEAR(e::read_trace(path.string()).step, 0.0005, 1e-15);
   std::filesystem::remove(path);
 }

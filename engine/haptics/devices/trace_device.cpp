@@ -9,9 +9,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "common/write_file.hpp"
-#include "engine/haptics/scene_config.hpp"
 
 namespace palplab::engine {
 
@@ -84,15 +84,25 @@ Trace read_trace(const std::string& path) {
     if (!tr.samples.empty() && v[0] < tr.samples.back().t)
       fail("time goes backwards (" + std::to_string(v[0]) + " s after " +
            std::to_string(tr.samples.back().t) + " s)");
-    // A trace is replayed one sample per haptic step: its t must say so. A 2 kHz trace played at
-    // half speed, a gap of 10 ms was replayed as if nothing were missing and a first t of -1 s or
-    // a position of 1e300 m was taken (review 2026-12-06, fourth).
+    // A trace is replayed one sample per haptic step: its t must say so (the step of the scene
+    // it is replayed into is compared by the caller with `step`). A 2 kHz trace played at half
+    // speed, a gap of 10 ms was replayed as if nothing were missing and a first t of -1 s or a
+    // position of 1e300 m was taken (review 2026-12-06, fourth).
     if (tr.samples.empty() && !(v[0] >= 0.0 && v[0] <= 86400.0))
       fail("t: expected the first sample's time in [0, 86400] s, got " + std::to_string(v[0]));
-    if (!tr.samples.empty() && std::abs(v[0] - tr.samples.back().t - kHapticStep) > 1e-6)
-      fail("t: expected one sample per 1 ms haptic step (a trace is replayed step by step), got " +
-           std::to_string(v[0]) + " s after " + std::to_string(tr.samples.back().t) +
-           " s (a gap, or a device sampled at another rate: resample it to 1 kHz)");
+    if (tr.samples.size() == 1) {
+      tr.step = v[0] - tr.samples.back().t;
+      if (!(tr.step >= 1e-5 && tr.step <= 0.01))
+        fail("t: expected a step between samples of 0.01 to 10 ms (a haptic step), got " +
+             format_g(tr.step * 1e3, 6) + " ms");
+    } else if (tr.samples.size() > 1 &&
+               std::abs(v[0] - tr.samples.back().t - tr.step) > 1e-3 * tr.step) {
+      fail("t: expected one sample per haptic step, " + format_g(tr.step * 1e3, 6) +
+           " ms as between the first two (± 0.1 %: a trace is replayed step by step), got a step "
+           "of " +
+           format_g((v[0] - tr.samples.back().t) * 1e3, 6) +
+           " ms (a gap, or a device sampled at another rate: resample it)");
+    }
     for (int k = 1; k <= 3; ++k)
       if (std::abs(v[k]) > 10.0)
         fail("column " + std::to_string(k + 1) +

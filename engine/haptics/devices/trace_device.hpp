@@ -26,6 +26,7 @@ struct TraceSample {
 struct Trace {
   std::map<std::string, std::string> meta;  // from "# key=value" lines
   std::vector<TraceSample> samples;
+  double step = 0.0;  // s between samples, as read (0: fewer than two); uniform, checked
 };
 
 // Throws palplab::InputError (FILE:LINE: what) on a bad file.
