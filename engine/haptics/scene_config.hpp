@@ -36,7 +36,6 @@ struct MaterialConfig {
   std::optional<double> youngs_modulus;  // Pa, overrides the table
   std::optional<double> density;         // kg/m^3, overrides the table
   double thickness = 0.005;              // m, membrane thickness of a surface model
-  bool thickness_given = false;          // the file gave it (refused for a tet mesh: no effect)
   double rayleigh_beta = 0.002;          // s, stiffness-proportional damping kd = beta ks
 };
 

@@ -634,7 +634,15 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
   if (auto h = c.number(m, P, "thickness", false, 0, 1,
                         "the membrane thickness of a surface model (m)", true)) {
     mc.thickness = *h;
-    mc.thickness_given = true;
+    // A membrane's thickness has no part in a volume (the tets give every spring and mass): the
+    // key was taken and ignored (review 2026-12-06, fourth), then refused only when the scene
+    // was built, so `validate` passed it (fifth). Asked of the mesh (loaded and cached; only
+    // when the key is given and the file is otherwise valid).
+    if (c.ok() && scene_mesh(cfg.mesh)->tet)
+      c.err(P + ".thickness",
+            "applies to a surface mesh's membrane; this prototype's mesh is tetrahedral (its "
+            "springs and masses come from the tets' volume and material): remove the key",
+            true);
   }
   mc.rayleigh_beta =
       c.number(m, P, "rayleigh_beta", false, 0, 10, "the stiffness-proportional damping kd/ks (s)")
@@ -741,14 +749,6 @@ AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh&
   Eigen::VectorXd face_membrane;
   CoarseTets tets;  // empty: a membrane refines in its plane only
   if (cm.tet) {
-    // A membrane's thickness has no part in a volume (the tets give every spring and mass): the
-    // key was taken and ignored (review 2026-12-06, fourth).
-    if (mc.thickness_given)
-      throw InputError(
-          "$.model.thickness: applies to a surface mesh's membrane; this prototype's "
-          "mesh is tetrahedral (its springs and masses come from the tets' volume "
-          "and material): remove the key",
-          cfg.source);
     const long nt = cm.model_T.rows();
     Eigen::VectorXd E(nt), rho(nt), nu(nt);
     for (long t = 0; t < nt; ++t) {

@@ -619,8 +619,8 @@ TEST(ContactHard, ContactRadiusIsRefusedWithWhatToDoInstead) {
 }
 
 // A membrane thickness on C (mass-spring on a tet mesh) had no effect and was taken (the probe
-// byte-identical to C's; review 2026-12-06, fourth): refused when the scene is built, naming the
-// key and why; on a surface mass-spring model it is the membrane's thickness, as before.
+// byte-identical to C's; review 2026-12-06, fourth): refused when the prototype is read, at the
+// key, saying why; on a surface mass-spring model it is the membrane's thickness, as before.
 TEST(ContactHard, AMembraneThicknessOnATetMeshIsRefused) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / "palplab_test_thickness";
@@ -632,12 +632,14 @@ TEST(ContactHard, AMembraneThicknessOnATetMeshIsRefused) {
   s.insert(a, "\"thickness\": 0.01, ");
   const std::string p = (dir / "C_thick.json").string();
   std::ofstream(p) << s;
+  // Refused when the prototype is read (what `validate` of a study using it does too), located.
   try {
-    (void)prototypes::build_scene(p);
+    (void)prototypes::load_prototype(p);
     FAIL() << "thickness on a tet mesh accepted";
   } catch (const InputError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find(p + ": $.model.thickness: applies to a surface mesh's membrane"),
+    EXPECT_NE(what.find(p + ":"), std::string::npos) << what;
+    EXPECT_NE(what.find(": $.model.thickness: applies to a surface mesh's membrane"),
               std::string::npos)
         << what;
   }
