@@ -182,17 +182,6 @@ inline const CommandInput* same_input(const std::string& path,
   return nullptr;
 }
 
-// The output file of `flag` (scene build --out, fem reference --out), checked before the command
-// reads or computes anything costly, so that no result and no input is lost:
-// - the same file as one of `inputs` (std::filesystem::equivalent: also through a link or
-//   another spelling) is an input error, --overwrite or not: writing it would destroy the input
-//   the command reads;
-// - an existing regular, non-empty file that `is_own_output` does not recognise as this
-//   command's own output (`own_kind`, e.g. "palplab scene file (.psim)") is refused unless
-//   `overwrite` (the --overwrite flag) is given: `--out results.db` must not replace a database;
-// - then require_writable_file.
-// A file the command wrote before (own output), an empty file and a non-regular file (/dev/null)
-// are replaced without --overwrite.
 // A directory at PATH.partial, where common/write_file writes PATH first: refused before the
 // command's work (it was found when the output was written, after a power analysis's hours).
 inline void require_no_directory_at_partial(const std::string& flag, const std::string& path) {
@@ -205,6 +194,18 @@ inline void require_no_directory_at_partial(const std::string& flag, const std::
                          flag);
 }
 
+// The output file of `flag` (scene build --out, fem reference --out), checked before the command
+// reads or computes anything costly, so that no result and no input is lost:
+// - the same file as one of `inputs` (std::filesystem::equivalent: also through a link or
+//   another spelling) is an input error, --overwrite or not: writing it would destroy the input
+//   the command reads;
+// - an existing regular, non-empty file that `is_own_output` does not recognise as this
+//   command's own output (`own_kind`, e.g. "palplab scene file (.psim)") is refused unless
+//   `overwrite` (the --overwrite flag) is given: `--out results.db` must not replace a database;
+// - a directory at PATH.partial is refused (require_no_directory_at_partial);
+// - then require_writable_file.
+// A file the command wrote before (own output), an empty file and a non-regular file (/dev/null)
+// are replaced without --overwrite.
 inline void require_replaceable_output(const std::string& flag, const std::string& path,
                                        const std::vector<CommandInput>& inputs,
                                        const std::function<bool(const std::string&)>& is_own_output,
