@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "common/file_kind.hpp"
 #include "common/input_error.hpp"
 
 namespace palplab::app {
@@ -136,9 +137,7 @@ inline std::string describe_existing_file(const std::string& path) {
   char head[16] = {};
   in.read(head, sizeof head);
   const std::string h(head, static_cast<size_t>(in.gcount()));
-  if (h.size() == 16 && h == std::string("SQLite format 3\0", 16)) return "an SQLite database";
-  if (h.size() >= 8 && h.compare(0, 8, std::string("PALPSIM\0", 8)) == 0)
-    return "a palplab scene file (.psim)";
+  if (const char* kind = binary_file_kind(h)) return kind;
   const auto first = h.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && (h[first] == '{' || h[first] == '[')) return "a JSON file";
   return "a file";

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/escape.hpp"
+#include "common/file_kind.hpp"
 #include "common/read_file.hpp"
 
 namespace palplab::json {
@@ -431,18 +432,19 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
     const bool wide = encoding != nullptr;
     // palplab's own binary files, named where JSON goes (a scene given as the prototype: `probe
     // A.psim`; the results database as the study), are said by name.
-    const char* own = text.starts_with(std::string_view("PALPSIM\0", 8))
-                          ? "a palplab scene file (.psim): give it with --scene, and the "
-                            "prototype's JSON file or id where a prototype goes"
-                      : text.starts_with(std::string_view("SQLite format 3\0", 16))
-                          ? "an SQLite database (a results database?), not a JSON file"
-                          : nullptr;
-    throw InputError(SourceLocation{file, wide || own ? 1 : p.line, wide || own ? 1 : p.column},
+    const char* kind = binary_file_kind(text);
+    const std::string own = !kind ? std::string()
+                            : text[0] == 'P'
+                                ? std::string(kind) +
+                                      ": give it with --scene, and the prototype's JSON file or id "
+                                      "where a prototype goes"
+                                : std::string(kind) + " (a results database?), not a JSON file";
+    throw InputError(SourceLocation{file, wide || kind ? 1 : p.line, wide || kind ? 1 : p.column},
                      wide ? std::string("invalid JSON: the file is ") + encoding +
                                 " text (expected UTF-8: save it as UTF-8)"
-                     : own ? std::string("not JSON: the file is ") + own
-                           : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
-                                         "file, or text damaged by a NUL)"));
+                     : kind ? "not JSON: the file is " + own
+                            : std::string("invalid JSON: a NUL byte (JSON text has none: a binary "
+                                          "file, or text damaged by a NUL)"));
   }
   const std::size_t keys = prescan(text, file);
   nlohmann::json j;

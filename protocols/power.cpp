@@ -32,6 +32,7 @@
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/escape.hpp"
+#include "common/file_kind.hpp"
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
 #include "common/nan.hpp"
@@ -341,10 +342,9 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
     char head[16] = {};
     in.read(head, sizeof head);
     const std::string h(head, static_cast<std::size_t>(in.gcount()));
-    if (h.rfind(std::string("PALPSIM\0", 8), 0) == 0 || h == std::string("SQLite format 3\0", 16))
-      throw InputError(std::string("not a replicate file: it is ") +
-                           (h[0] == 'P' ? "a palplab scene file (.psim)"
-                                        : "an SQLite database (a results database?)") +
+    if (const char* kind = binary_file_kind(h))
+      throw InputError(std::string("not a replicate file: it is ") + kind +
+                           (h[0] == 'P' ? "" : " (a results database?)") +
                            "; expected the replicates*.jsonl of palplab power",
                        path);
     in.clear();

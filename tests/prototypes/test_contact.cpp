@@ -621,17 +621,26 @@ TEST(ContactHard, ContactRadiusIsRefusedWithWhatToDoInstead) {
 // A membrane thickness on C (mass-spring on a tet mesh) had no effect and was taken (the probe
 // byte-identical to C's; review 2026-12-06, fourth): refused when the prototype is read, at the
 // key, saying why; on a surface mass-spring model it is the membrane's thickness, as before.
-TEST(ContactHard, AMembraneThicknessOnATetMeshIsRefused) {
+// A copy of shipped prototype `id` with the first `from` in its text replaced by `to`, written
+// as `name`.json in a fresh temporary directory (removed by the caller); its path.
+std::string edited_prototype(const char* id, const std::string& name, const std::string& from,
+                             const std::string& to) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "palplab_test_thickness";
+  const fs::path dir = fs::temp_directory_path() / ("palplab_test_" + name);
   fs::create_directories(dir);
-  std::ifstream in(proto("C"));
+  std::ifstream in(proto(id));
   std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto a = s.find("\"kind\": \"mass_spring\",");
-  ASSERT_NE(a, std::string::npos);
-  s.insert(a, "\"thickness\": 0.01, ");
-  const std::string p = (dir / "C_thick.json").string();
+  const auto a = s.find(from);
+  EXPECT_NE(a, std::string::npos) << from;
+  if (a != std::string::npos) s.replace(a, from.size(), to);
+  const std::string p = (dir / (name + ".json")).string();
   std::ofstream(p) << s;
+  return p;
+}
+
+TEST(ContactHard, AMembraneThicknessOnATetMeshIsRefused) {
+  const std::string p = edited_prototype("C", "C_thick", "\"kind\": \"mass_spring\",",
+                                         "\"thickness\": 0.01, \"kind\": \"mass_spring\",");
   // Refused when the prototype is read (what `validate` of a study using it does too), located.
   try {
     (void)prototypes::load_prototype(p);
@@ -643,24 +652,15 @@ TEST(ContactHard, AMembraneThicknessOnATetMeshIsRefused) {
               std::string::npos)
         << what;
   }
-  fs::remove_all(dir);
+  std::filesystem::remove_all(std::filesystem::path(p).parent_path());
 }
 
 // A Young's modulus of 1e-12 Pa was taken and ended in "singular stiffness (the constraints
 // leave a rigid-body mode free)", blaming the constraints (review 2026-12-06, fourth): the
 // reader's range is 1 Pa to 1e11 Pa, located.
 TEST(ContactHard, AYoungsModulusBelowOnePascalIsRefusedWhereItIsWritten) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "palplab_test_youngs";
-  fs::create_directories(dir);
-  std::ifstream in(proto("D"));
-  std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string e5 = "\"youngs_modulus\": 100000.0";
-  const auto a = s.find(e5);
-  ASSERT_NE(a, std::string::npos);
-  s.replace(a, e5.size(), "\"youngs_modulus\": 1e-12");
-  const std::string p = (dir / "D_soft.json").string();
-  std::ofstream(p) << s;
+  const std::string p =
+      edited_prototype("D", "D_soft", "\"youngs_modulus\": 100000.0", "\"youngs_modulus\": 1e-12");
   try {
     (void)prototypes::load_prototype(p);
     FAIL() << "E = 1e-12 Pa accepted";
@@ -671,7 +671,7 @@ TEST(ContactHard, AYoungsModulusBelowOnePascalIsRefusedWhereItIsWritten) {
               std::string::npos)
         << what;
   }
-  fs::remove_all(dir);
+  std::filesystem::remove_all(std::filesystem::path(p).parent_path());
 }
 
 TEST(ContactHard, CurrentSurfaceOfATetMassSpringModelIsItsSurface) {
