@@ -138,8 +138,10 @@ void read_rows(json::Checker& c, const nlohmann::json& root, const char* key, bo
 std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& path,
                                                             StylusScript& stylus) {
   std::string text;
-  const nlohmann::json root = json::parse_json_file(path, &text);
+  std::vector<Problem> repeated;  // reported with the file's other problems
+  const nlohmann::json root = json::parse_json_file(path, &text, &repeated);
   json::Checker c(path, text);
+  c.add(repeated);
   std::vector<std::pair<double, Eigen::Vector3d>> w;
   if (c.expect_object(root, "$")) {
     c.keys(root, "$", {"waypoints", "buttons", "axis"});

@@ -280,7 +280,7 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
     engine::UdpDevice probe(engine::UdpDeviceOptions{spec.port, 0.002});
     engine::require_device_rate(probe, spec.text, h.min_rate);
   }
-  if (!h.record_trace.empty()) app::require_writable_dir("--record-trace", h.record_trace);
+  if (!h.record_trace.empty()) app::require_creatable_dir("--record-trace", h.record_trace);
   protocols::HumanOptions o;
   o.db = ro.db;
   o.participant = h.participant;
@@ -330,11 +330,14 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   // An aborted session is kept in the database, flagged: a result of the run, not a failure of
   // palplab (3 is "internal error", and it said nothing on stderr: review 2026-12-06, fourth).
   // Exit 1, the command's own "found something", and a line on stderr for scripts' logs.
+  // The reason is said there too (with --quiet stdout says nothing).
   if (r.aborted > 0)
     std::fprintf(stderr,
-                 "palplab run: %d session(s) of participant %s aborted (kept in %s, flagged "
+                 "palplab run: %d session(s) of participant %s aborted: %s (kept in %s, flagged "
                  "status 'aborted' with the reason; the next run repeats them)\n",
-                 r.aborted, h.participant.c_str(), palplab::escape_controls(ro.db, false).c_str());
+                 r.aborted, h.participant.c_str(),
+                 palplab::escape_controls(r.abort_reason, false).c_str(),
+                 palplab::escape_controls(ro.db, false).c_str());
   return r.aborted > 0 ? 1 : 0;
 }
 
@@ -435,7 +438,7 @@ palplab::app::CommandRegistration reg_run{
         }
         if (!human->participant.empty()) throw palplab::InputError("--participant needs --human");
         if (!human->record_trace.empty())
-          palplab::app::require_writable_dir("--record-trace", human->record_trace);
+          palplab::app::require_creatable_dir("--record-trace", human->record_trace);
         opt->record_trace_dir = human->record_trace;
         const bool tty = isatty(2);
         auto bar_open = std::make_shared<bool>(false);  // a progress bar without its newline

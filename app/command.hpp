@@ -251,6 +251,28 @@ inline void require_writable_dir(const std::string& flag, const std::string& dir
   fs::remove(probe, ec);
 }
 
+// An output directory that is made only when something is written into it (a run that writes
+// nothing, or fails, leaves no empty directory behind): checked before the work starts without
+// creating it. An existing one is checked as require_writable_dir does; a missing one needs its
+// nearest existing ancestor to be a directory palplab may create entries in.
+inline void require_creatable_dir(const std::string& flag, const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(dir, ec)) {
+    require_writable_dir(flag, dir);
+    return;
+  }
+  fs::path up = fs::absolute(fs::path(dir), ec).lexically_normal();
+  while (up.has_parent_path() && up != up.parent_path() && !fs::exists(up, ec))
+    up = up.parent_path();
+  const auto fail = [&](const std::string& why) {
+    throw InputError(SourceLocation{flag}, "cannot create the directory \"" + dir + "\" (" + why +
+                                               "), checked before the work starts");
+  };
+  if (!fs::is_directory(up, ec)) fail("\"" + up.string() + "\" is not a directory");
+  if (::access(up.c_str(), W_OK | X_OK) != 0) fail(up.string() + ": " + std::strerror(errno));
+}
+
 // A flag that only means something together with another flag or value (`needed`, e.g.
 // "--refinement nested and --grade auto"): given without it, it would be silently ignored, so it
 // is an input error naming both.

@@ -46,8 +46,9 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
   return d[b.size()];
 }
 
-json parse_json_file(const std::string& path, std::string* text_out) {
-  return parse_file_located(path, text_out);
+json parse_json_file(const std::string& path, std::string* text_out,
+                     std::vector<Problem>* duplicates) {
+  return parse_file_located(path, text_out, duplicates);
 }
 
 namespace {

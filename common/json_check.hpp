@@ -32,8 +32,11 @@ const char* kind_name(const nlohmann::json& j);
 std::size_t edit_distance(std::string_view a, std::string_view b);
 
 // Reads a JSON file: missing/unreadable file, syntax errors, nesting deeper than kMaxDepth,
-// numbers that overflow a double (1e400) and duplicate keys are located InputErrors.
-nlohmann::json parse_json_file(const std::string& path, std::string* text_out = nullptr);
+// numbers that overflow a double (1e400) and duplicate keys are located InputErrors (with
+// `duplicates`, repeated keys go there instead: add them to the file's Checker, so they are
+// reported with its other problems).
+nlohmann::json parse_json_file(const std::string& path, std::string* text_out = nullptr,
+                               std::vector<Problem>* duplicates = nullptr);
 
 class Checker {
  public:
@@ -52,6 +55,9 @@ class Checker {
   void err(const std::string& path, const std::string& what, bool at_key = false);
   // Problems found elsewhere (another file) join this report.
   void add(const Problem& p) { problems_.push_back(p); }
+  void add(const std::vector<Problem>& ps) {
+    problems_.insert(problems_.end(), ps.begin(), ps.end());
+  }
   std::vector<Problem>& problems() { return problems_; }
   bool ok() const { return problems_.empty(); }
   // Throws every problem at once as one InputError, sorted in file order (this file first).

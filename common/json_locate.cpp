@@ -118,8 +118,8 @@ class Scanner {
     long voff = static_cast<long>(i_);
     auto [it, inserted] = out_.emplace(path, std::make_pair(voff, key_off < 0 ? voff : key_off));
     if (!inserted) {
-      dups_.push_back({path, it->second});
-      dups_.back().second.second = key_off < 0 ? voff : key_off;
+      // Both definitions at their keys (array elements have none: their values).
+      dups_.push_back({path, {it->second.second, key_off < 0 ? voff : key_off}});
       // Later members win in nlohmann::json, so point at the later one.
       it->second = {voff, key_off < 0 ? voff : key_off};
     }
@@ -421,7 +421,8 @@ std::size_t count_members(const nlohmann::json& j) {
 
 }  // namespace
 
-nlohmann::json parse_located(std::string_view text, const std::string& file) {
+nlohmann::json parse_located(std::string_view text, const std::string& file,
+                             std::vector<Problem>* duplicates) {
   // nlohmann's lexer takes a NUL byte for the end of the input: what followed it was ignored (a
   // study whose keys after a NUL were "missing", garbage after a valid document accepted).
   if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
@@ -482,15 +483,17 @@ nlohmann::json parse_located(std::string_view text, const std::string& file) {
                                ", column " + std::to_string(d.first.column) +
                                "); each key may appear once"});
     }
-    throw InputError(std::move(ps));
+    if (!duplicates) throw InputError(std::move(ps));
+    duplicates->insert(duplicates->end(), ps.begin(), ps.end());
   }
   return j;
 }
 
-nlohmann::json parse_file_located(const std::string& path, std::string* text_out) {
+nlohmann::json parse_file_located(const std::string& path, std::string* text_out,
+                                  std::vector<Problem>* duplicates) {
   // A palplab JSON file (study, prototype, material table, reported statistics) is kilobytes.
   std::string text = read_file_bounded(path, kMaxJsonFileBytes, "JSON file");
-  nlohmann::json j = parse_located(text, path);
+  nlohmann::json j = parse_located(text, path, duplicates);
   if (text_out) *text_out = std::move(text);
   return j;
 }

@@ -39,14 +39,18 @@ std::size_t too_deep_at(std::string_view text);
 // Parses JSON text; a syntax error becomes an InputError located at FILE:LINE:COL with what was
 // expected. Duplicate member keys are an error too (nlohmann would silently keep the last), and
 // so are nesting deeper than kMaxDepth and numbers that overflow a double (1e400).
-nlohmann::json parse_located(std::string_view text, const std::string& file);
+// With `duplicates`, repeated keys are appended there instead of thrown (the later value is
+// kept), so a validator can report them together with the file's other problems.
+nlohmann::json parse_located(std::string_view text, const std::string& file,
+                             std::vector<Problem>* duplicates = nullptr);
 
 // Largest JSON file read (parse_file_located): 256 MiB, far above any study or prototype.
 inline constexpr std::size_t kMaxJsonFileBytes = 256u * 1024 * 1024;
 
 // Reads and parses a file; a missing/unreadable file, a directory or one above
 // kMaxJsonFileBytes (checked while reading: /dev/zero stops there) is an InputError naming it.
-nlohmann::json parse_file_located(const std::string& path, std::string* text_out = nullptr);
+nlohmann::json parse_file_located(const std::string& path, std::string* text_out = nullptr,
+                                  std::vector<Problem>* duplicates = nullptr);
 
 // Child paths in the message syntax: path_key("$", "groups") == "$.groups",
 // path_key("$", "a b") == "$[\"a b\"]", path_index("$.groups", 1) == "$.groups[1]".

@@ -1064,6 +1064,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
         " us");
     if (!reason.empty()) {
       ++sum.aborted;
+      sum.abort_reason = reason;
       break;
     }
     ++sum.sessions_run;

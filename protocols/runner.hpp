@@ -121,7 +121,8 @@ std::string session_instructions(const Study& study, const SessionSpec& spec);
 
 struct HumanSummary {
   int sessions_run = 0, aborted = 0, remaining = 0;
-  std::string next_due;  // "YYYY-MM-DD" of the next pending session; "" when all are done
+  std::string next_due;      // "YYYY-MM-DD" of the next pending session; "" when all are done
+  std::string abort_reason;  // why the aborted session stopped (as stored); "" when none was
 };
 
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt);

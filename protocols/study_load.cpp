@@ -204,8 +204,10 @@ static std::vector<std::string> parse_instructions(Ctx& c, const json& j, const 
 
 Study parse_study(const std::string& text, const std::string& file,
                   const PrototypeInspector& inspect) {
-  json root = palplab::json::parse_located(text, file);
+  std::vector<Problem> repeated;  // reported with the file's other problems
+  json root = palplab::json::parse_located(text, file, &repeated);
   Ctx c(file, text);
+  c.add(repeated);
   Study s;
   s.file = file;
   s.json_text = text;
@@ -835,8 +837,10 @@ Study parse_study(const std::string& text, const std::string& file,
       continue;
     }
     try {
-      std::string text;  // exists and parses, located errors otherwise
-      palplab::json::parse_file_located(f, &text);
+      std::string text;               // exists and parses, located errors otherwise
+      std::vector<Problem> repeated;  // the inspector reports them with the file's others
+      palplab::json::parse_file_located(f, &text, &repeated);
+      if (!inspect && !repeated.empty()) throw InputError(std::move(repeated));
       const PrototypeInfo info = inspect ? inspect(f) : PrototypeInfo{};
       // A study names a prototype by its file (ID.json); the file's own "id" must agree, or
       // the database would store one name while `probe`, `scene` and the report show another.

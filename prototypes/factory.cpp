@@ -150,8 +150,10 @@ void check_support(Checker& c, const json& model, const SceneConfig& s) {
 
 SceneConfig load_prototype(const std::string& path) {
   std::string text;
-  const json root = pj::parse_file_located(path, &text);
+  std::vector<Problem> repeated;  // reported with the file's other problems
+  const json root = pj::parse_file_located(path, &text, &repeated);
   Checker c(path, text);
+  c.add(repeated);
   SceneConfig s;  // every default comes from here
   s.source = path;
   const std::string R = "$";

@@ -6,13 +6,16 @@ namespace palplab::render {
 
 MouseScript MouseScript::load(const std::string& path) {
   std::string text;
-  json::parse_json_file(path, &text);
+  std::vector<Problem> repeated;  // parse() reports them with the script's other problems
+  json::parse_json_file(path, &text, &repeated);
   return parse(text, path);
 }
 
 MouseScript MouseScript::parse(const std::string& text, const std::string& file) {
-  const nlohmann::json root = json::parse_located(text, file);
+  std::vector<Problem> repeated;  // reported with the file's other problems
+  const nlohmann::json root = json::parse_located(text, file, &repeated);
   json::Checker c(file, text);
+  c.add(repeated);
   MouseScript s;
   if (c.expect_object(root, "$")) {
     c.keys(root, "$", {"palplab_mouse_script", "instructions_seconds", "events"});

@@ -177,6 +177,32 @@ TEST(CliValidate, OneGroupStudyWithAGroupComparisonIsRefused) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
+// A repeated key was reported alone: the file's other problems showed only once it was removed
+// (2026-12-06, noticed). Now every problem at once, in the study and in its prototype, and both
+// definitions of the key are located at their keys.
+TEST(CliValidate, RepeatedKeysAreReportedWithTheOtherProblems) {
+  auto d = scratch_dir("repeated_keys");
+  copy_prototype("A", d, "A");
+  copy_prototype("B", d, "B");
+  std::string proto = slurp(d / "B.json");
+  proto.replace(proto.find("\"haptic_step\": 0.001,"), 21,
+                "\"haptic_step\": 0.001,\n  \"haptic_step\": 0.002, \"hapticstep\": 1,");
+  proto.replace(proto.find("\"home_stiffness\": 20.0"), 22, "\"home_stiffness\": -20.0");
+  std::ofstream(d / "B.json") << proto;
+  std::string study = small_study("A", "B", 2, 10);
+  study.replace(study.find("\"seed\": 42"), 10, "\"seed\": 42, \"seed\": \"x\"");
+  study.replace(study.find("\"title\": \"small\""), 16, "\"title\": 7");
+  std::ofstream(d / "s.json") << study;
+  const std::string f = (d / "s.json").string(), b = (d / "B.json").string();
+  Result r = run_palplab("validate " + f, d);
+  expect_exit2(r, {f + ":1:61: $.seed: duplicate key (first defined at line 1, column 49)",
+                   ": $.seed: expected an integer", ": $.title: expected",
+                   b + ":16:3: $.haptic_step"
+                       ": duplicate key (first defined at line 15, column 3)",
+                   ": $.hapticstep: unknown key",
+                   ": $.model.home_stiffness: ", "prototype \"B\" (" + b + ") is not valid"});
+}
+
 // Review finding: ids with '/' or ',' were accepted; they become file names and CSV cells.
 TEST(CliValidate, IdsOutsideTheGrammarAreRefused) {
   auto d = scratch_dir("id_grammar");

@@ -166,3 +166,25 @@ TEST(CliRunInput, ResumeFromAnEditedTraineeStateIsRefused) {
   r = run_palplab(run + " --resume --jobs 1 --quiet", d);
   EXPECT_EQ(r.code, 0) << r.err;
 }
+
+// `--record-trace DIR` made DIR before the run's other checks: a refused run (an existing
+// database without --resume) and a resumed run with nothing left to run left an empty DIR behind
+// (2026-12-06, noticed). DIR is made by the first trace written; a DIR that cannot be made is
+// still refused before the work.
+TEST(CliRunInput, RecordTraceDirectoryIsMadeOnlyWhenATraceIsWritten) {
+  auto d = scratch_dir("run_record_trace");
+  std::ofstream(d / "s.json") << kStudy;
+  const std::string run = "run " + (d / "s.json").string() + " --quiet --db " +
+                          (d / "r.db").string() + " --record-trace ";
+  ASSERT_EQ(run_palplab(run + (d / "t1").string(), d).code, 0);
+  EXPECT_TRUE(fs::exists(d / "t1" / "P01_0_0.trace"));
+  Result r = run_palplab(run + (d / "t2").string(), d);  // the database exists: refused
+  expect_exit2(r, {"already exists", "--resume"});
+  EXPECT_FALSE(fs::exists(d / "t2"));
+  r = run_palplab(run + (d / "t3" / "deeper").string() + " --resume", d);  // nothing left
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(d / "t3"));
+  std::ofstream(d / "a_file") << "x";
+  r = run_palplab(run + (d / "a_file" / "sub").string() + " --resume", d);
+  expect_exit2(r, {"--record-trace", "a_file\" is not a directory", "before the work starts"});
+}

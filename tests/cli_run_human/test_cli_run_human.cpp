@@ -219,6 +219,10 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
   sim.get();
   EXPECT_EQ(r.code, 1) << r.out;  // a session aborted: kept, said on stderr
   EXPECT_NE(r.out.find("1 session(s) of participant"), std::string::npos) << r.out;  // 2>&1
+  // with its reason (it was in the database only: 2026-12-06, noticed)
+  EXPECT_NE(r.out.find("aborted: device udp:" + std::to_string(port) + " lost: no position for"),
+            std::string::npos)
+      << r.out;
   auto rows = db_rows(db, "SELECT * FROM sessions");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["status"], "aborted");
