@@ -51,34 +51,50 @@ struct Token {
   int pos;
 };
 
+// Positions count characters (UTF-8 code points), as editors and the message do. Names are
+// letters, digits, '_' and '.', and any non-ASCII character (R takes a locale's letters in names:
+// a column "Größe"), so a CSV's non-ASCII header can be named.
 std::vector<Token> tokenize(const std::string& s) {
   std::vector<Token> out;
+  const auto name_char = [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return std::isalnum(u) || c == '_' || c == '.' || u >= 0x80;
+  };
+  const auto continuation = [](char c) { return (static_cast<unsigned char>(c) & 0xC0) == 0x80; };
+  int cp = 0;  // the character index of s[i]
   for (size_t i = 0; i < s.size();) {
     char c = s[i];
     if (c == ' ' || c == '\t') {
       ++i;
-    } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_' || c == '.' ||
-               std::isdigit(static_cast<unsigned char>(c))) {
+      ++cp;
+    } else if (name_char(c)) {
       size_t j = i;
-      while (j < s.size() &&
-             (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == '_' || s[j] == '.'))
-        ++j;
+      int n = 0;
+      for (; j < s.size() && name_char(s[j]); ++j) n += !continuation(s[j]);
       std::string w = s.substr(i, j - i);
       if (std::isdigit(static_cast<unsigned char>(w[0])) && w != "1")
-        formula_error(static_cast<int>(i),
-                      "only the number 1 (intercept) may appear in a formula, got '" + w + "'");
-      out.push_back({w == "1" ? '1' : 'n', w, static_cast<int>(i)});
+        formula_error(cp, "only the number 1 (intercept) may appear in a formula, got '" +
+                              shown_text(w) + "'");
+      out.push_back({w == "1" ? '1' : 'n', w, cp});
       i = j;
+      cp += n;
     } else if (std::string("~+*:()|").find(c) != std::string::npos) {
-      out.push_back({c, std::string(1, c), static_cast<int>(i)});
+      out.push_back({c, std::string(1, c), cp});
       ++i;
+      ++cp;
     } else {
-      formula_error(static_cast<int>(i),
-                    std::string("unexpected character '") + c +
-                        "' (supported: y ~ a * b + c:d + (1 | g) or (1 + x | g))");
+      formula_error(cp, "unexpected character '" + shown_text(std::string(1, c)) +
+                            "' (supported: y ~ a * b + c:d + (1 | g) or (1 + x | g))");
     }
   }
   return out;
+}
+
+// The formula's length in characters (the position of "the end").
+int char_count(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  return n;
 }
 
 }  // namespace
@@ -87,8 +103,10 @@ LmmFormula parse_lmm_formula(const std::string& text) {
   auto tok = tokenize(text);
   LmmFormula f;
   size_t i = 0;
-  auto at = [&](size_t k) { return k < tok.size() ? tok[k].pos : static_cast<int>(text.size()); };
+  const int end = char_count(text);
+  auto at = [&](size_t k) { return k < tok.size() ? tok[k].pos : end; };
   if (i >= tok.size() || tok[i].kind != 'n') formula_error(at(i), "expected the response name");
+  f.positions.emplace(tok[i].text, tok[i].pos);
   f.response = tok[i++].text;
   if (i >= tok.size() || tok[i].kind != '~') formula_error(at(i), "expected '~' after response");
   ++i;
@@ -117,6 +135,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       // (1 | g), (1 + x | g) or lme4's shorthand (x | g), which includes the intercept
       if (i < tok.size() && tok[i].kind == 'n') {
         slope_pos = tok[i].pos;
+        f.positions.emplace(tok[i].text, tok[i].pos);
         f.slope = tok[i++].text;
       } else {
         if (i >= tok.size() || tok[i].kind != '1')
@@ -127,6 +146,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
           if (i >= tok.size() || tok[i].kind != 'n')
             formula_error(at(i), "expected the random slope variable after '1 +'");
           slope_pos = tok[i].pos;
+          f.positions.emplace(tok[i].text, tok[i].pos);
           f.slope = tok[i++].text;
         }
       }
@@ -136,6 +156,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       if (i >= tok.size() || tok[i].kind != 'n')
         formula_error(at(i), "expected the grouping factor after '|'");
       group_pos = tok[i].pos;
+      f.positions.emplace(tok[i].text, tok[i].pos);
       f.group = tok[i++].text;
       if (i >= tok.size() || tok[i].kind != ')')
         formula_error(at(i),
@@ -158,6 +179,7 @@ LmmFormula parse_lmm_formula(const std::string& text) {
       if (i >= tok.size() || tok[i].kind != 'n') formula_error(at(i), "expected a variable name");
       note_var(tok[i].text);
       fixed_pos.emplace(tok[i].text, tok[i].pos);  // the first mention
+      f.positions.emplace(tok[i].text, tok[i].pos);
       segments.back().push_back(tok[i++].text);
       if (i < tok.size() && tok[i].kind == ':') {
         ++i;
@@ -179,11 +201,8 @@ LmmFormula parse_lmm_formula(const std::string& text) {
     }
     expect_operand = false;
   }
-  if (expect_operand)
-    formula_error(static_cast<int>(text.size()), "formula ends after an operator");
-  if (!have_random)
-    formula_error(static_cast<int>(text.size()),
-                  "a random-effects term (1 | g) or (1 + x | g) is required");
+  if (expect_operand) formula_error(end, "formula ends after an operator");
+  if (!have_random) formula_error(end, "a random-effects term (1 | g) or (1 + x | g) is required");
   // canonical terms: variables in order of first appearance, duplicates removed, sorted by degree
   auto rank = [&](const std::string& v) {
     return std::find(var_order.begin(), var_order.end(), v) - var_order.begin();
@@ -547,7 +566,18 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     for (auto& v : term)
       if (std::find(vars.begin(), vars.end(), v) == vars.end()) vars.push_back(v);
   std::map<std::string, int> ci;
-  for (auto& v : vars) ci[v] = column_index(t, v);
+  for (auto& v : vars) {
+    // A name that is no column is the formula's mistake (or the file's): said at the name.
+    if (std::find(t.header.begin(), t.header.end(), v) == t.header.end()) {
+      const auto at = f.positions.find(v);
+      const int pos = at != f.positions.end() ? at->second : 0;
+      throw InputError(SourceLocation{"--formula", 0, pos + 1},
+                       "no column '" + shown_text(v) + "' in " + t.file + " (at character " +
+                           std::to_string(pos + 1) +
+                           "); its columns are: " + shown_columns(t.header));
+    }
+    ci[v] = column_index(t, v);
+  }
   LmmFit fit;
   fit.reml = reml;
   std::vector<int> used;

@@ -6,6 +6,7 @@
 // freedom from the gradient of each contrast's variance w.r.t. the variance parameters
 // (theta, sigma) and the inverse Hessian of the (unprofiled) deviance, both by numerical
 // differentiation; type III F tests with Satterthwaite denominator df.
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -21,9 +22,10 @@ namespace palplab::analysis {
 struct LmmFormula {
   std::string response;
   std::vector<std::vector<std::string>>
-      terms;          // e.g. {{"group"}, {"session"}, {"group","session"}}
-  std::string group;  // random-effects grouping factor
-  std::string slope;  // random slope covariate; empty for (1 | g)
+      terms;                             // e.g. {{"group"}, {"session"}, {"group","session"}}
+  std::string group;                     // random-effects grouping factor
+  std::string slope;                     // random slope covariate; empty for (1 | g)
+  std::map<std::string, int> positions;  // every name's first mention (0-based character)
 };
 // Throws InputError (located as "--formula", column = 1-based character) for anything outside
 // the supported grammar.

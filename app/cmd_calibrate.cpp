@@ -82,7 +82,8 @@ palplab::app::CommandRegistration reg_calibrate{
           throw palplab::InputError(palplab::SourceLocation{"--human"},
                                     "expected the people's CSV file, got an empty path");
         auto cells = read_human_cells(a->human);
-        for (const auto& w : sd_floor_warnings(cells))
+        for (const auto& w :
+             sd_floor_warnings(cells, a->opt.measures.empty() ? s.measures : a->opt.measures))
           std::cerr << "warning: --human: " << w << "\n";
         // The outputs are checked before the fit (which takes minutes to hours).
         const bool defaults = defaults_opt->count() > 0;

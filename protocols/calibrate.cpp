@@ -147,10 +147,12 @@ double loss_sd(const HumanCell& c) {
   return std::max(c.sd, std::max(0.01 * std::abs(c.mean), 1e-9));
 }
 
-std::vector<std::string> sd_floor_warnings(const std::vector<HumanCell>& cells) {
+std::vector<std::string> sd_floor_warnings(const std::vector<HumanCell>& cells,
+                                           const std::vector<std::string>& fitted) {
   std::vector<std::string> out;
   for (const auto& c : cells) {
     if (c.n < 2 || c.sd >= loss_sd(c)) continue;
+    if (std::find(fitted.begin(), fitted.end(), c.measure) == fitted.end()) continue;
     char b[96];
     std::snprintf(b, sizeof b, "SD %.4g is below 1 %% of the mean %.4g; the loss uses %.4g", c.sd,
                   c.mean, loss_sd(c));

@@ -59,8 +59,10 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path);
 // that a cell of equal values (SD 0) does not make the loss infinite; such a cell still weighs
 // far more than the others (`palplab calibrate` warns about it: sd_floor_warnings).
 double loss_sd(const HumanCell& c);
-// One line per cell with at least 2 values whose SD is below that floor.
-std::vector<std::string> sd_floor_warnings(const std::vector<HumanCell>& cells);
+// One line per cell of the `fitted` measures with at least 2 values whose SD is below that floor
+// (cells of other measures are not in the loss).
+std::vector<std::string> sd_floor_warnings(const std::vector<HumanCell>& cells,
+                                           const std::vector<std::string>& fitted);
 
 struct CellFit {
   HumanCell human;

@@ -239,6 +239,35 @@ TEST(LmmFormula, LocatedErrorsOutsideTheGrammar) {
   EXPECT_NE(err("y ~ a + (1 | g/h)").find("unexpected character '/'"), std::string::npos);
   EXPECT_NE(err("y a + (1|g)").find("'~'"), std::string::npos);
   EXPECT_NE(err("y ~ a + (1 | g").find("')'"), std::string::npos);
+  // Positions count characters, not bytes, and a non-ASCII name is a name (a CSV column
+  // "Größe"); a non-ASCII symbol between names is said whole (it was echoed as a lone byte of
+  // its UTF-8 and located by bytes: 2026-12-06, noticed).
+  const LmmFormula f = parse_lmm_formula("Größe ~ Tag + (1 | Proband)");
+  EXPECT_EQ(f.response, "Größe");
+  EXPECT_EQ(f.positions.at("Tag"), 8);
+  EXPECT_EQ(f.positions.at("Proband"), 19);
+  EXPECT_NE(err("Größe ~ Tag/2 + (1 | g)")
+                .find("unexpected character '/' (supported: y ~ a * b "
+                      "+ c:d + (1 | g) or (1 + x | g)) (at character 12)"),
+            std::string::npos)
+      << err("Größe ~ Tag/2 + (1 | g)");
+  EXPECT_NE(err("y ~ a × b + (1 | g)").find("expected '+' between terms (at character 7)"),
+            std::string::npos)
+      << err("y ~ a × b + (1 | g)");
+}
+
+// A formula's name that is no column of the CSV was located at the CSV's header line; it is the
+// formula's mistake as often as the file's: said at the name, with the file's columns.
+TEST(LmmFormula, UnknownColumnIsLocatedAtTheName) {
+  const CsvTable t = read_csv(kDir + "sleepstudy.csv");
+  try {
+    fit_lmm(t, parse_lmm_formula("Reaction ~ Dayz + (1 | Subject)"), {}, true);
+    FAIL();
+  } catch (const palplab::InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--formula: no column 'Dayz' in " + kDir +
+                  "sleepstudy.csv (at character 12); its columns are: Reaction, Days, Subject");
+  }
 }
 
 // A singular random-slope fit (no participant slope variation: theta[2] on its bound 0), the

@@ -624,6 +624,12 @@ TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(r.err.find("group G2"), std::string::npos) << r.err;
+  // Not for a measure that is not fitted (it warned about cells outside the loss).
+  fs::remove(d / "fit.json");
+  r = run(header + rows + "H1,G1,test,1,exploration_time,20\nH2,G1,test,1,exploration_time,20\n",
+          "--measures palpation_force");
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
   fs::remove_all(d);
 }
 
