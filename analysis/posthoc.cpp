@@ -82,68 +82,85 @@ std::vector<PairwiseT> pairwise_t(const Groups& groups, bool welch, DfMode mode)
 
 RangeQuantiles::RangeQuantiles(double level, int k, const std::vector<double>& dfs)
     : level_(level), k_(k) {
-  std::vector<double> big;  // the df interpolated over
+  std::vector<double> small, big;
   for (double v : dfs)
-    if (v > 0 && std::isfinite(v)) (v >= kMinInterpolatedDf ? big : direct_df_).push_back(v);
-  std::sort(direct_df_.begin(), direct_df_.end());
-  direct_df_.erase(std::unique(direct_df_.begin(), direct_df_.end()), direct_df_.end());
-  std::sort(big.begin(), big.end());
-  big.erase(std::unique(big.begin(), big.end()), big.end());
-  if (big.size() <= kDirectMax) {
-    direct_df_.insert(direct_df_.end(), big.begin(), big.end());
-  } else {
-    // Interpolate in x = 1/ν on Chebyshev points of the second kind (barycentric form):
-    // q(x) is analytic there, so the error falls geometrically with the number of nodes.
-    // The error is measured at the df of three pairs between nodes; more nodes when it is
-    // above kInterpolationTol, all pairs directly if even kMaxNodes do not reach it.
-    x_lo_ = 1 / big.back();
-    x_hi_ = 1 / big.front();
-    const double checks[] = {big[big.size() / 3], big[big.size() / 2], big[2 * big.size() / 3]};
-    double exact[3];
-    parallel_for(
-        3, [&](size_t c) { exact[c] = studentized_range_quantile(level, k, checks[c]); }, 2);
-    // A narrow df range (e.g. Welch df that differ only by rounding) needs 2 or 3 nodes.
-    const int first = x_hi_ - x_lo_ < 1e-3 * x_hi_ ? 2 : 9;
-    for (int n = first; n <= kMaxNodes && nodes_.empty(); n = 2 * n - 1) {
-      std::vector<double> x(n), q(n);
-      for (int i = 0; i < n; ++i)
-        x[i] = 0.5 * (x_lo_ + x_hi_) + 0.5 * (x_hi_ - x_lo_) * std::cos(M_PI * i / (n - 1));
-      parallel_for(
-          n, [&](size_t i) { q[i] = studentized_range_quantile(level, k, 1 / x[i]); }, 2);
-      nodes_ = x;
-      values_ = q;
-      double worst = 0;
-      for (int c = 0; c < 3; ++c)
-        worst = std::max(worst, std::fabs(interpolate(1 / checks[c]) - exact[c]) / exact[c]);
-      if (!(worst <= kInterpolationTol)) nodes_.clear();
-    }
-    if (nodes_.empty()) direct_df_.insert(direct_df_.end(), big.begin(), big.end());
+    if (v > 0 && std::isfinite(v)) (v < kSmallDf ? small : big).push_back(v);
+  for (auto* v : {&small, &big}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
   }
+  cover(small, true);
+  cover(big, false);
+  std::sort(direct_df_.begin(), direct_df_.end());
   direct_q_.resize(direct_df_.size());
   parallel_for(
       direct_df_.size(),
       [&](size_t i) { direct_q_[i] = studentized_range_quantile(level, k, direct_df_[i]); }, 2);
 }
 
-double RangeQuantiles::interpolate(double x) const {
+void RangeQuantiles::cover(const std::vector<double>& dfs, bool log_q) {
+  if (dfs.size() <= kDirectMax) {
+    direct_df_.insert(direct_df_.end(), dfs.begin(), dfs.end());
+    return;
+  }
+  // Interpolate in x = 1/ν on Chebyshev points of the second kind (barycentric form): q(x) (and
+  // log q(x)) is analytic there, so the error falls geometrically with the number of nodes. The
+  // error is measured at the df of three pairs between nodes; more nodes when it is above
+  // kInterpolationTol, all pairs directly if even kMaxNodes do not reach it.
+  Piece pc;
+  pc.log_q = log_q;
+  pc.x_lo = 1 / dfs.back();
+  pc.x_hi = 1 / dfs.front();
+  const double checks[] = {dfs[dfs.size() / 3], dfs[dfs.size() / 2], dfs[2 * dfs.size() / 3]};
+  double exact[3];
+  parallel_for(
+      3, [&](size_t c) { exact[c] = studentized_range_quantile(level_, k_, checks[c]); }, 2);
+  // A narrow df range (e.g. Welch df that differ only by rounding) needs 2 or 3 nodes.
+  const int first = pc.x_hi - pc.x_lo < 1e-3 * pc.x_hi ? 2 : 9;
+  for (int n = first; n <= kMaxNodes; n = 2 * n - 1) {
+    std::vector<double> x(n), q(n);
+    for (int i = 0; i < n; ++i)
+      x[i] = 0.5 * (pc.x_lo + pc.x_hi) + 0.5 * (pc.x_hi - pc.x_lo) * std::cos(M_PI * i / (n - 1));
+    parallel_for(
+        n,
+        [&](size_t i) {
+          const double v = studentized_range_quantile(level_, k_, 1 / x[i]);
+          q[i] = log_q ? std::log(v) : v;
+        },
+        2);
+    pc.nodes = x;
+    pc.values = q;
+    double worst = 0;
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(worst, std::fabs(pc(1 / checks[c]) - exact[c]) / exact[c]);
+    if (worst <= kInterpolationTol) {
+      pieces_.push_back(std::move(pc));
+      return;
+    }
+  }
+  direct_df_.insert(direct_df_.end(), dfs.begin(), dfs.end());
+}
+
+double RangeQuantiles::Piece::operator()(double x) const {
   // Barycentric weights of Chebyshev points of the second kind: (-1)^i, halved at the ends.
-  const size_t n = nodes_.size();
+  const size_t n = nodes.size();
   double num = 0, den = 0;
   for (size_t i = 0; i < n; ++i) {
-    double d = x - nodes_[i];
-    if (d == 0) return values_[i];
+    double d = x - nodes[i];
+    if (d == 0) return log_q ? std::exp(values[i]) : values[i];
     double w = (i % 2 ? -1.0 : 1.0) * (i == 0 || i + 1 == n ? 0.5 : 1.0) / d;
-    num += w * values_[i];
+    num += w * values[i];
     den += w;
   }
-  return num / den;
+  return log_q ? std::exp(num / den) : num / den;
 }
 
 double RangeQuantiles::operator()(double df) const {
   auto it = std::lower_bound(direct_df_.begin(), direct_df_.end(), df);
   if (it != direct_df_.end() && *it == df) return direct_q_[it - direct_df_.begin()];
   const double x = 1 / df;
-  if (!nodes_.empty() && x >= x_lo_ && x <= x_hi_) return interpolate(x);
+  for (const Piece& pc : pieces_)
+    if (x >= pc.x_lo && x <= pc.x_hi) return pc(x);
   return studentized_range_quantile(level_, k_, df);
 }
 

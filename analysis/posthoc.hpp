@@ -41,27 +41,34 @@ struct RangeComparison {
   bool defined = true;
 };
 // Critical values q with P(Q(k, ν) <= q) = level for the df of many comparisons at once
-// (Games–Howell has one df per pair). Up to kDirectMax distinct df (and every df below
-// kMinInterpolatedDf) are solved one by one; more are interpolated in 1/ν on Chebyshev nodes
-// (each node one root search), accepted only when three pairs' df solved directly agree to
-// kInterpolationTol relative, else every df is solved directly.
+// (Games–Howell has one df per pair). Up to kDirectMax distinct df are solved one by one; more
+// are interpolated in x = 1/ν on Chebyshev nodes (each node one root search), separately below
+// and above kSmallDf (below it, ν of groups of 2 or 3, in log q: q grows steeply as ν -> 1),
+// each piece accepted only when three pairs' df solved directly agree to kInterpolationTol
+// relative, else its df are solved directly.
 class RangeQuantiles {
  public:
   static constexpr std::size_t kDirectMax = 12;
-  static constexpr double kMinInterpolatedDf = 4;
+  static constexpr double kSmallDf = 4;
   static constexpr int kMaxNodes = 33;
   static constexpr double kInterpolationTol = 1e-11;
   RangeQuantiles(double level, int k, const std::vector<double>& dfs);
   double operator()(double df) const;
-  bool interpolated() const { return !nodes_.empty(); }
+  bool interpolated() const { return !pieces_.empty(); }
 
  private:
-  double interpolate(double x) const;
+  struct Piece {  // a Chebyshev interpolant of q (or log q) over x in [x_lo, x_hi]
+    double x_lo = 0, x_hi = 0;
+    bool log_q = false;
+    std::vector<double> nodes, values;
+    double operator()(double x) const;
+  };
+  // Interpolates the df of `dfs` (sorted, distinct) or, failing that, adds them to direct_df_.
+  void cover(const std::vector<double>& dfs, bool log_q);
   double level_;
   int k_;
   std::vector<double> direct_df_, direct_q_;  // sorted df and their quantiles
-  std::vector<double> nodes_, values_;        // Chebyshev nodes in x = 1/ν and q there
-  double x_lo_ = 0, x_hi_ = 0;
+  std::vector<Piece> pieces_;
 };
 
 // Tukey–Kramer HSD (pooled MS_within and df of the ANOVA; as R's TukeyHSD).

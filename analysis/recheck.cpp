@@ -152,6 +152,14 @@ std::string classify_number(double reported, int decimals, double recomputed) {
   return "inconsistent";
 }
 
+// A df that is a count by definition (k - 1, N - k, n1 + n2 - 2): it is printed exactly or it
+// is wrong (a group too many, N - k off by one: the slip the check exists to catch), never a
+// rounding difference.
+std::string classify_count(double reported, double recomputed) {
+  if (!std::isfinite(recomputed)) return kNotRecomputable;
+  return reported == recomputed ? "consistent" : "inconsistent";
+}
+
 std::string classify_p(const std::string& relation, double reported, int decimals,
                        double recomputed) {
   if (!std::isfinite(recomputed)) return kNotRecomputable;
@@ -345,10 +353,15 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
       std::snprintf(b, sizeof b, "%.*f", dec, v);
       return std::string(b);
     };
+    // Every df but Welch's denominators (the t's, the F's df2) is a whole count.
+    const bool df1_count = item.test != "welch_t";
+    const bool df2_count = item.test == "anova";
     part(a.kind == 'F' ? "df1" : "df", show(a.df1, a.df1_decimals),
-         classify_number(a.df1, a.df1_decimals, df1), df1);
+         df1_count ? classify_count(a.df1, df1) : classify_number(a.df1, a.df1_decimals, df1), df1);
     if (a.kind == 'F')
-      part("df2", show(a.df2, a.df2_decimals), classify_number(a.df2, a.df2_decimals, df2), df2);
+      part("df2", show(a.df2, a.df2_decimals),
+           df2_count ? classify_count(a.df2, df2) : classify_number(a.df2, a.df2_decimals, df2),
+           df2);
     part("statistic", show(a.value, a.value_decimals),
          classify_number(a.value, a.value_decimals, stat), stat);
     part("p", a.p_relation + " " + show(a.p, a.p_decimals),

@@ -162,6 +162,19 @@ TEST(StudentizedRange, CriticalValuesInterpolatedOverDf) {
   for (int i = 0; i < 36; ++i) near.push_back(4000 * (1 + 1e-13 * i));
   RangeQuantiles nq(0.95, 9, near);
   EXPECT_NEAR(nq(near[17]), studentized_range_quantile(0.95, 9, near[17]), 1e-12);
+  // The df of groups of 2 and 3 (Welch's ν between 1 and 4; review 2026-12-06, seventh: 100
+  // groups of 2 solved 4950 roots one by one and took over 15 minutes): interpolated in log q,
+  // the same values as the roots.
+  for (int k : {6, 100}) {
+    std::vector<double> small;
+    for (int i = 0; i < 60; ++i) small.push_back(1.02 + 0.049 * i + 1e-4 * i * i);
+    RangeQuantiles sq(0.95, k, small);
+    EXPECT_TRUE(sq.interpolated()) << k;
+    for (double df : {1.03, 1.5, 2.2, 3.3}) {
+      double exact = studentized_range_quantile(0.95, k, df);
+      EXPECT_NEAR(sq(df), exact, 1e-10 * exact) << k << " " << df;
+    }
+  }
   // Few distinct df: each solved directly.
   RangeQuantiles few(0.95, 3, {10, 20, 20, 30});
   EXPECT_FALSE(few.interpolated());

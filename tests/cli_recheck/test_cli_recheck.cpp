@@ -72,6 +72,38 @@ TEST(CliRecheck, AllConsistentExitsZero) {
   std::filesystem::remove(f);
 }
 
+// Review finding (2026-12-06, seventh): F(3, 14) for F(2, 13) and t(8) for Student's t(7) were
+// "rounding" differences (one unit of the last printed digit), exit 0. A df that is a count is
+// exact or wrong; Welch's fractional df keeps the rounding grade.
+TEST(CliRecheck, CountDegreesOfFreedomAreExact) {
+  std::string f = write_temp("dfcount.json", R"({"value": "force", "group": "group", "statistics": [
+      {"text": "F(3, 14) = 11.05, p = .002", "where": ["phase=post"]},
+      {"text": "t(8) = -3.44, p = .011", "pair": ["A", "C"], "test": "student_t",
+       "where": ["phase=post"]},
+      {"text": "F(3, 5.45) = 4.07, p = .083", "test": "welch_anova", "where": ["phase=post"]},
+      {"text": "t(7) = -3.44, p = .011", "pair": ["A", "C"], "test": "student_t",
+       "where": ["phase=post"]},
+      {"text": "t(3.6) = -2.88, p = .051", "pair": ["B", "C"], "where": ["phase=post"]}]})");
+  Result r = run_palplab("recheck " + f + " --csv " + src("tests/data/r/unequal.csv") + " --json");
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto& s = j["statistics"];
+  ASSERT_EQ(s.size(), 5u);
+  const auto verdict = [&](int i, const std::string& part) {
+    for (const auto& p : s[i]["parts"])
+      if (p["part"] == part) return p["verdict"].get<std::string>();
+    return std::string("no part ") + part;
+  };
+  EXPECT_EQ(verdict(0, "df1"), "inconsistent");
+  EXPECT_EQ(verdict(0, "df2"), "inconsistent");
+  EXPECT_EQ(verdict(1, "df"), "inconsistent");
+  EXPECT_EQ(verdict(2, "df1"), "inconsistent");
+  EXPECT_EQ(verdict(3, "df"), "consistent");
+  EXPECT_EQ(verdict(4, "df"), "consistent");  // Welch's 3.59 printed with one decimal
+  EXPECT_EQ(j["inconsistent"], 3);
+  std::filesystem::remove(f);
+}
+
 TEST(CliRecheck, BadInputIsExitTwo) {
   const std::string csv = " --csv " + src("tests/data/r/unequal.csv");
   for (
