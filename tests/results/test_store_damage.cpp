@@ -412,3 +412,38 @@ TEST(StoreDamage, ExportWithoutSamplesRemovesAnEarlierSamplesCsv) {
   EXPECT_TRUE(export_csv(Store::open(db2), out.string(), false).removed.empty());
   EXPECT_EQ(slurp(out / "samples.csv" / "notes.txt"), "mine\n");
 }
+
+// Review finding (2026-12-06, seventh): a session whose participant was edited to one the
+// participants table lacks was left out of every CSV of the export (its measures and events
+// too), exit 0. Rows that name a row that is not there are refused when the database is opened.
+TEST(StoreDamage, RowsThatNameAMissingRowAreRefusedWhenOpening) {
+  auto d = damage_tmp("references");
+  const std::string db = make_db(d);
+  struct Case {
+    std::string sql;
+    std::vector<std::string> parts;
+  };
+  const std::vector<Case> cases = {
+      {"UPDATE sessions SET participant = 'ZZZ' WHERE participant = 'P02'",
+       {"table sessions: session ",
+        " names participant 'ZZZ', which table participants does "
+        "not hold"}},
+      {"UPDATE measures SET session = 999 WHERE rowid = 1",
+       {"table measures: a row (measure '", "') names session 999"}},
+      {"UPDATE events SET session = 999 WHERE rowid = 1",
+       {"table events: a row (event '",
+        "') names session 999, which table sessions does not "
+        "hold"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.sql);
+    const fs::path copy = d / "edited.db";
+    fs::copy_file(db, copy, fs::copy_options::overwrite_existing);
+    sql_exec(copy, c.sql + ";");
+    std::vector<std::string> parts = c.parts;
+    parts.push_back(copy.string());
+    parts.push_back("not a consistent palplab results database");
+    expect_input_error([&] { Store::open(copy.string()); }, parts);
+  }
+  EXPECT_NO_THROW(Store::open(db));
+}
