@@ -4,6 +4,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "engine/mesh/union_find.hpp"
 #include "engine/spatial/bvh.hpp"
 
 // Shewchuk's robust predicates, compiled into TetGen's library (libtet): tetgen.h declares
@@ -17,7 +18,7 @@ const std::vector<std::string>& defect_kinds() {
   static const std::vector<std::string> k{
       "open_edge",       "non_manifold_edge",        "non_manifold_vertex", "duplicate_vertex",
       "degenerate_face", "inconsistent_orientation", "self_intersection",   "inverted_tet",
-      "sliver_tet",      "non_finite_vertex",        "empty_mesh"};
+      "sliver_tet",      "non_finite_vertex",        "empty_mesh",          "inside_out"};
   return k;
 }
 
@@ -261,6 +262,38 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
     const int a = m.E(e, 0), b = m.E(e, 1);
     add(r, o, {"inconsistent_orientation", {a, b}, edge_faces[e], {}, {P(a), P(b)}, 0});
   }
+  // A closed, consistently oriented part whose normals point inwards (negative enclosed volume):
+  // consistent, so no edge shows it, but every normal and the inside/outside of the part are
+  // the wrong way round (it was "clean" while `info` gave a negative volume).
+  if (geometric && o.expect_closed && F.rows() > 0) {
+    std::vector<int> parent(F.rows());
+    for (int f = 0; f < F.rows(); ++f) parent[f] = f;
+    for (int h = 0; h < 3 * F.rows(); ++h)
+      if (m.twin[h] >= 0)
+        parent[detail::find_root(parent, h / 3)] = detail::find_root(parent, m.twin[h] / 3);
+    std::vector<char> open(F.rows(), 0);
+    std::vector<double> volume(F.rows(), 0.0);
+    std::vector<int> first(F.rows(), -1);
+    for (int f = 0; f < F.rows(); ++f) {
+      const int c = detail::find_root(parent, f);
+      if (first[c] < 0) first[c] = f;
+      for (int k = 0; k < 3; ++k) open[c] |= m.twin[3 * f + k] < 0;
+      // Relative to the part's first vertex (exact for a closed part, better conditioned).
+      const Vec3 o3 = P(F(first[c], 0));
+      volume[c] += (P(F(f, 0)) - o3).dot((P(F(f, 1)) - o3).cross(P(F(f, 2)) - o3)) / 6;
+    }
+    for (int c = 0; c < F.rows(); ++c)
+      if (first[c] >= 0 && !open[c] && volume[c] < 0) {
+        const int f = first[c];
+        add(r, o,
+            {"inside_out",
+             {F(f, 0), F(f, 1), F(f, 2)},
+             {f},
+             {},
+             {(P(F(f, 0)) + P(F(f, 1)) + P(F(f, 2))) / 3},
+             volume[c]});
+      }
+  }
   if (o.self_intersections && geometric) {
     std::vector<Vec3> pts;
     auto pairs = self_intersections(V, F, &pts);
@@ -312,6 +345,7 @@ CheckReport check_tets(const TetMesh& m, const CheckOptions& o) {
   CheckReport sr = check_surface(s, so);
   for (auto& d : sr.defects) {
     if (d.kind == "degenerate_face" || d.kind == "duplicate_vertex") continue;  // tets report those
+    if (d.kind == "inside_out") continue;  // the tets' own orientation is inverted_tet
     for (int& f : d.faces) {
       d.tets.push_back(b.tet[f]);
     }

@@ -82,18 +82,46 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
     return make_surface_mesh(V, Fm, r);
   };
   SurfaceMesh m = build();
+  // Whether each input face (after merging) ends up reversed (counted at the end).
+  std::vector<char> reversed(F.size(), 0);
+  // Closed parts point outwards: a part (faces linked through consistent edges) without a
+  // boundary edge and with negative enclosed volume is reversed whole. True when any was.
+  auto point_outwards = [&]() {
+    const int nf = static_cast<int>(F.size());
+    std::vector<int> parent(nf);
+    for (int f = 0; f < nf; ++f) parent[f] = f;
+    for (int h = 0; h < 3 * nf; ++h)
+      if (m.twin[h] >= 0)
+        parent[detail::find_root(parent, h / 3)] = detail::find_root(parent, m.twin[h] / 3);
+    std::vector<char> open(nf, 0);
+    std::vector<double> vol(nf, 0);
+    for (int f = 0; f < nf; ++f) {
+      const int c = detail::find_root(parent, f);
+      for (int k = 0; k < 3; ++k) open[c] |= m.twin[3 * f + k] < 0;
+      const Vec3 a = row3(V, F[f][0]), b = row3(V, F[f][1]), c3 = row3(V, F[f][2]);
+      vol[c] += a.dot(b.cross(c3));
+    }
+    bool any = false;
+    for (int f = 0; f < nf; ++f) {
+      const int c = detail::find_root(parent, f);
+      if (open[c] || !(vol[c] < 0)) continue;
+      std::swap(F[f][1], F[f][2]);
+      if (static_cast<std::size_t>(f) < reversed.size()) reversed[f] ^= 1;
+      any = true;
+    }
+    if (any) m = build();
+    return any;
+  };
   // 3. Orientation: breadth-first over edges with exactly two faces; a neighbour traversing the
   // shared edge in the same direction gets flipped. Non-orientable parts keep their first choice.
   {
     const int nf = static_cast<int>(F.size());
     std::vector<std::vector<int>> by_edge(m.E.rows());
     for (int h = 0; h < 3 * nf; ++h) by_edge[m.he_edge[h]].push_back(h);
-    std::vector<int> flip(nf, -1), comp(nf, -1), queue;
-    int ncomp = 0;
+    std::vector<int> flip(nf, -1), queue;
     for (int s = 0; s < nf; ++s) {
       if (flip[s] >= 0) continue;
       flip[s] = 0;
-      comp[s] = ncomp;
       queue.assign(1, s);
       for (size_t q = 0; q < queue.size(); ++q) {
         const int f = queue[q];
@@ -105,30 +133,17 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
           if (g == f || flip[g] >= 0) continue;
           const bool same_dir = he_origin(m, h) == he_origin(m, o);
           flip[g] = flip[f] ^ (same_dir ? 1 : 0);
-          comp[g] = ncomp;
           queue.push_back(g);
         }
       }
-      ++ncomp;
     }
     for (int f = 0; f < nf; ++f)
-      if (flip[f]) std::swap(F[f][1], F[f][2]);
-    // Closed components point outwards: negative enclosed volume -> flip the whole component.
-    std::vector<double> vol(ncomp, 0);
-    for (int f = 0; f < nf; ++f) {
-      const Vec3 a = row3(V, F[f][0]), b = row3(V, F[f][1]), c = row3(V, F[f][2]);
-      vol[comp[f]] += a.dot(b.cross(c));
-    }
+      if (flip[f]) {
+        std::swap(F[f][1], F[f][2]);
+        reversed[f] = 1;
+      }
     m = build();
-    std::vector<char> closed(ncomp, 1);
-    for (int h = 0; h < 3 * nf; ++h)
-      if (m.edge_faces[m.he_edge[h]] != 2) closed[comp[h / 3]] = 0;
-    for (int f = 0; f < nf; ++f) {
-      const bool outward_flip = closed[comp[f]] && vol[comp[f]] < 0;
-      if (outward_flip) std::swap(F[f][1], F[f][2]);
-      if ((flip[f] != 0) != outward_flip) ++log.flipped_faces;
-    }
-    m = build();
+    point_outwards();
   }
   // 4. Holes: each boundary loop of at most max_hole_edges edges gets a centre vertex and a fan.
   if (opt.fill_holes) {
@@ -160,6 +175,13 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
       log.added_faces += static_cast<int>(loop.size());
     }
   }
+  // A part that a filled hole closed points outwards too (it was left inside out when the
+  // orientation before the filling followed its first face: review 2026-12-06, seventh).
+  if (log.filled_holes > 0) {
+    m = build();
+    point_outwards();
+  }
+  for (char r : reversed) log.flipped_faces += r;
   // 5. Drop vertices no face uses (merged duplicates, isolated points), keeping the order.
   std::vector<int> remap(V.rows(), -1);
   for (auto& t : F)

@@ -360,7 +360,7 @@ void check_tetgen_input(const SurfaceMesh& s) {
   // Every kind TetGen cannot take (orientation alone is harmless to it).
   std::string list, first;
   for (const auto& [kind, n] : rep.counts) {
-    if (kind == "inconsistent_orientation") continue;
+    if (kind == "inconsistent_orientation" || kind == "inside_out") continue;
     list += (list.empty() ? "" : ", ") + std::to_string(n) + " " + kind;
     if (first.empty())
       for (const Defect& d : rep.defects)

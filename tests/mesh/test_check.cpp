@@ -126,6 +126,28 @@ TEST(Check, DuplicateVertexAndDegenerateFace) {
   EXPECT_EQ(first(r2, "degenerate_face")->faces, std::vector<int>{12});
 }
 
+// Review finding (2026-12-06, seventh): a closed surface with every face reversed was "clean"
+// (`info` gave volume -1/6, `repair` flipped 4 faces). An inside-out part is reported, an
+// outward one beside it is not, the surface repaired is clean.
+TEST(Check, InsideOutClosedPartIsReported) {
+  SurfaceMesh c = cube();
+  EXPECT_EQ(count(check_surface(c), "inside_out"), 0);
+  SurfaceMesh two = two_cubes(Vec3(3, 0, 0));
+  Faces F = two.F;
+  for (int f = 12; f < 24; ++f) std::swap(F(f, 1), F(f, 2));  // the second cube inside out
+  const SurfaceMesh bad = make_surface_mesh(two.V, F);
+  CheckReport r = check_surface(bad);
+  EXPECT_EQ(r.counts.size(), 1u);
+  ASSERT_EQ(count(r, "inside_out"), 1);
+  const Defect* d = first(r, "inside_out");
+  EXPECT_EQ(d->faces, std::vector<int>{12});
+  EXPECT_NEAR(d->value, -1.0, 1e-12);  // the unit cube's volume, negative
+  CheckOptions open;
+  open.expect_closed = false;
+  EXPECT_EQ(count(check_surface(bad, open), "inside_out"), 0);
+  EXPECT_TRUE(check_surface(repair(bad)).counts.empty());
+}
+
 TEST(Check, InconsistentOrientation) {
   SurfaceMesh c = cube();
   Faces F = c.F;
