@@ -252,11 +252,19 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
       add(r, o, {"duplicate_vertex", {i, j}, {}, {}, {P(i), P(j)}, (P(i) - P(j)).norm()});
   for (int f = 0; geometric && f < F.rows(); ++f) {
     const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
-    const double area2 = (P(b) - P(a)).cross(P(c) - P(a)).norm();
-    const double lmax = std::max(
-        {(P(b) - P(a)).squaredNorm(), (P(c) - P(b)).squaredNorm(), (P(a) - P(c)).squaredNorm()});
+    // The test is scale-free, so it runs on the edges divided by their largest component: at
+    // coordinates of 1e300 the area and squared lengths overflow (inf <= inf called every face
+    // degenerate, with an area of inf printed as null).
+    const Vec3 ab = P(b) - P(a), ac = P(c) - P(a), bc = P(c) - P(b);
+    const double s =
+        std::max({ab.cwiseAbs().maxCoeff(), ac.cwiseAbs().maxCoeff(), bc.cwiseAbs().maxCoeff()});
+    const double u = s > 0 && std::isfinite(s) ? 1 / s : 1;
+    const double area2 = (ab * u).cross(ac * u).norm();
+    const double lmax =
+        std::max({(ab * u).squaredNorm(), (bc * u).squaredNorm(), (ac * u).squaredNorm()});
     if (a == b || b == c || a == c || area2 <= o.degenerate_ratio * lmax)
-      add(r, o, {"degenerate_face", {a, b, c}, {f}, {}, {(P(a) + P(b) + P(c)) / 3}, area2 / 2});
+      add(r, o,
+          {"degenerate_face", {a, b, c}, {f}, {}, {(P(a) + P(b) + P(c)) / 3}, area2 / 2 * s * s});
   }
   for (int e : m.inconsistent_edges) {
     const int a = m.E(e, 0), b = m.E(e, 1);

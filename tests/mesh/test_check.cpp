@@ -148,6 +148,23 @@ TEST(Check, InsideOutClosedPartIsReported) {
   EXPECT_TRUE(check_surface(repair(bad)).counts.empty());
 }
 
+// Review finding (2026-12-06, seventh): at coordinates of 1e300 every face was a
+// degenerate_face (its area overflowed: inf <= inf) with the value inf (null in JSON). The test
+// is scale-free; a cube that large is clean, a sliver is still found, with its area.
+TEST(Check, DegenerateFaceTestIsScaleFree) {
+  SurfaceMesh c = cube();
+  EXPECT_TRUE(check_surface(make_surface_mesh(c.V * 1e300, c.F)).counts.empty());
+  Positions V(3, 3);
+  V << 0, 0, 0, 1e150, 0, 0, 2e150, 1e135, 0;  // height 1e-15 of the longest edge
+  Faces F(1, 3);
+  F << 0, 1, 2;
+  CheckOptions open;
+  open.expect_closed = false;
+  CheckReport r = check_surface(make_surface_mesh(V, F), open);
+  ASSERT_EQ(count(r, "degenerate_face"), 1);
+  EXPECT_NEAR(first(r, "degenerate_face")->value, 5e284, 1e270);
+}
+
 TEST(Check, InconsistentOrientation) {
   SurfaceMesh c = cube();
   Faces F = c.F;
