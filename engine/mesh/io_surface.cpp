@@ -690,6 +690,15 @@ SurfaceMesh read_ply(const std::string& path) {
     if (is_vertex) have_vertices = true;
   }
   if (!have_vertices) throw InputError("PLY file has no vertex element", path);
+  // Data past the elements the header announces: a count that is wrong (OFF says the same).
+  const size_t extra = ascii ? d.find_first_not_of(" \t\r\n", std::min(body.pos, d.size()))
+                             : (body.pos < d.size() ? body.pos : std::string::npos);
+  if (extra != std::string::npos) {
+    if (ascii)
+      body.line += 1 + static_cast<int>(std::count(d.begin() + body.pos, d.begin() + extra, '\n'));
+    body.fail(std::string("unexpected data after the last element the header announces") +
+              (ascii ? "" : " (" + std::to_string(d.size() - body.pos) + " bytes)"));
+  }
   if (b.any_region) {
     // Region ids as given; names from the header comments (gaps get generic names).
     int maxid = -1;

@@ -68,6 +68,10 @@ TetMesh read_tetgen(const std::string& path) {
     record_index(rn, t[0], i, node_base, i == 0);
     for (int c = 0; c < 3; ++c) V(i, c) = rn.number(t[1 + c], "a coordinate");
   }
+  // A line past the announced count is a count that is wrong (or a file cut and joined): taken
+  // silently, the mesh would lose it.
+  if (rn.tokens(t))
+    rn.fail("unexpected data after the " + std::to_string(nv) + " points the file announces");
   // .ele
   TextReader re(base + ".ele");
   if (!re.tokens(t) || t.size() < 2) re.fail("expected `<#tets> <nodes per tet> [<#attributes>]`");
@@ -102,6 +106,8 @@ TetMesh read_tetgen(const std::string& path) {
       (a == 0 ? A : R)[i] = static_cast<int>(x);
     }
   }
+  if (re.tokens(t))
+    re.fail("unexpected data after the " + std::to_string(nt) + " tets the file announces");
   Regions regions;
   const std::string names_path = base + ".names";
   if (std::filesystem::exists(names_path)) {
@@ -218,6 +224,8 @@ Faces read_tetgen_face(const std::string& path, Eigen::VectorXi* markers) {
     for (int k = 0; k < 3; ++k) F(i, k) = r.int32(t[1 + k], "a node index", base);
     if (nm && markers) (*markers)[i] = r.int32(t[4], "a marker");
   }
+  if (r.tokens(t))
+    r.fail("unexpected data after the " + std::to_string(n) + " faces the file announces");
   return F;
 }
 
@@ -237,6 +245,8 @@ Tets read_tetgen_neigh(const std::string& path) {
       N(i, k) = v < 0 ? -1 : r.int32(t[1 + k], "a neighbour index", base);
     }
   }
+  if (r.tokens(t))
+    r.fail("unexpected data after the " + std::to_string(n) + " tets the file announces");
   return N;
 }
 

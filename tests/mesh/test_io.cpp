@@ -195,6 +195,19 @@ TEST(Io, TetgenOneBasedFilesAreRead) {
   EXPECT_EQ(m.T.row(0), Eigen::RowVector4i(0, 1, 2, 3));
   EXPECT_EQ(m.attribute[0], -7);
   EXPECT_NEAR(m.volume[0], 1.0 / 6, 1e-16);
+  // Lines past the announced counts were ignored (review 2026-12-06, seventh; OFF refused them):
+  // located, in each file; comments and blank lines after the data are fine.
+  write_text(base + ".ele", "1 4 1\n1 1 2 3 4 -7\n\n# made by hand\n");
+  EXPECT_NO_THROW(read_tetgen(base));
+  write_text(base + ".ele", "1 4 1\n1 1 2 3 4 -7\n2 1 2 3 4 -7\n");
+  expect_located([&] { read_tetgen(base); }, base + ".ele", 3);
+  write_text(base + ".ele", "1 4 1\n1 1 2 3 4 -7\n");
+  write_text(base + ".node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n");
+  expect_located([&] { read_tetgen(base); }, base + ".node", 6);
+  write_text(base + ".face", "1 0\n1 1 2 3\n2 1 3 4\n");
+  expect_located([&] { read_tetgen_face(base + ".face"); }, base + ".face", 3);
+  write_text(base + ".neigh", "1 4\n1 -1 -1 -1 -1\n2 -1 -1 -1 -1\n");
+  expect_located([&] { read_tetgen_neigh(base + ".neigh"); }, base + ".neigh", 3);
 }
 
 TEST(Io, RegionSeedsRoundTrip) {
@@ -298,6 +311,15 @@ TEST(Io, MalformedFilesAreLocated) {
       "vertex_indices\nend_header\n";
   write_text(p, head + std::string(12 + 4, '\0'));
   expect_located([&] { read_ply(p); }, p, 0, static_cast<long>(head.size() + 16));
+  // Data past the announced elements (review 2026-12-06, seventh: a fifth face was ignored).
+  write_text(p, head + std::string(24 + 5, '\0'));
+  expect_located([&] { read_ply(p); }, p, 0, static_cast<long>(head.size() + 24));
+  p = tmp("extra.ply");
+  write_text(p,
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+             "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n3 0 2 1\n");
+  expect_located([&] { read_ply(p); }, p, 15);
   p = tmp("bad_ascii.ply");
   write_text(p,
              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
