@@ -221,6 +221,53 @@ bool report_non_finite(CheckReport& r, const CheckOptions& o, const Positions& V
 
 }  // namespace
 
+std::vector<SurfacePart> inside_out_parts(const SurfaceMesh& m) {
+  const Faces& F = m.F;
+  const int nf = static_cast<int>(F.rows());
+  auto P = [&](int v) { return row3(m.V, v); };
+  std::vector<int> parent(nf);
+  for (int f = 0; f < nf; ++f) parent[f] = f;
+  for (int h = 0; h < 3 * nf; ++h)
+    if (m.twin[h] >= 0)
+      parent[detail::find_root(parent, h / 3)] = detail::find_root(parent, m.twin[h] / 3);
+  std::vector<int> part(nf), first(nf, -1);
+  std::vector<char> open(nf, 0);
+  std::vector<double> volume(nf, 0.0);
+  for (int f = 0; f < nf; ++f) {
+    const int c = part[f] = detail::find_root(parent, f);
+    if (first[c] < 0) first[c] = f;
+    for (int k = 0; k < 3; ++k) open[c] |= m.twin[3 * f + k] < 0;
+    // Relative to the part's first vertex (exact for a closed part, better conditioned).
+    const Vec3 o = P(F(first[c], 0));
+    volume[c] += (P(F(f, 0)) - o).dot((P(F(f, 1)) - o).cross(P(F(f, 2)) - o)) / 6;
+  }
+  // Winding number at x of the closed parts other than `skip`: the sum of their faces' solid
+  // angles (Van Oosterom & Strackee 1983) over 4π.
+  const auto winding = [&](const Vec3& x, int skip) {
+    double w = 0;
+    for (int f = 0; f < nf; ++f) {
+      if (part[f] == skip || open[part[f]]) continue;
+      const Vec3 a = P(F(f, 0)) - x, b = P(F(f, 1)) - x, c = P(F(f, 2)) - x;
+      const double la = a.norm(), lb = b.norm(), lc = c.norm();
+      w += 2 * std::atan2(a.dot(b.cross(c)),
+                          la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la);
+    }
+    return w / (4 * M_PI);
+  };
+  std::vector<SurfacePart> out;
+  for (int c = 0; c < nf; ++c) {
+    if (first[c] < 0 || open[c] || !(volume[c] < 0)) continue;
+    const int f = first[c];
+    if (winding((P(F(f, 0)) + P(F(f, 1)) + P(F(f, 2))) / 3, c) >= 0.5) continue;  // a cavity
+    SurfacePart p;
+    p.volume = volume[c];
+    for (int g = f; g < nf; ++g)
+      if (part[g] == c) p.faces.push_back(g);
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
 CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
   CheckReport r;
   const Positions& V = m.V;
@@ -270,38 +317,19 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
     const int a = m.E(e, 0), b = m.E(e, 1);
     add(r, o, {"inconsistent_orientation", {a, b}, edge_faces[e], {}, {P(a), P(b)}, 0});
   }
-  // A closed, consistently oriented part whose normals point inwards (negative enclosed volume):
-  // consistent, so no edge shows it, but every normal and the inside/outside of the part are
-  // the wrong way round (it was "clean" while `info` gave a negative volume).
-  if (geometric && o.expect_closed && F.rows() > 0) {
-    std::vector<int> parent(F.rows());
-    for (int f = 0; f < F.rows(); ++f) parent[f] = f;
-    for (int h = 0; h < 3 * F.rows(); ++h)
-      if (m.twin[h] >= 0)
-        parent[detail::find_root(parent, h / 3)] = detail::find_root(parent, m.twin[h] / 3);
-    std::vector<char> open(F.rows(), 0);
-    std::vector<double> volume(F.rows(), 0.0);
-    std::vector<int> first(F.rows(), -1);
-    for (int f = 0; f < F.rows(); ++f) {
-      const int c = detail::find_root(parent, f);
-      if (first[c] < 0) first[c] = f;
-      for (int k = 0; k < 3; ++k) open[c] |= m.twin[3 * f + k] < 0;
-      // Relative to the part's first vertex (exact for a closed part, better conditioned).
-      const Vec3 o3 = P(F(first[c], 0));
-      volume[c] += (P(F(f, 0)) - o3).dot((P(F(f, 1)) - o3).cross(P(F(f, 2)) - o3)) / 6;
+  // Consistent, so no edge shows it, but every normal and the inside and outside of the part
+  // are the wrong way round (it was "clean" while `info` gave a negative volume).
+  if (geometric && o.expect_closed)
+    for (const SurfacePart& p : inside_out_parts(m)) {
+      const int f = p.faces.front();
+      add(r, o,
+          {"inside_out",
+           {F(f, 0), F(f, 1), F(f, 2)},
+           {f},
+           {},
+           {(P(F(f, 0)) + P(F(f, 1)) + P(F(f, 2))) / 3},
+           p.volume});
     }
-    for (int c = 0; c < F.rows(); ++c)
-      if (first[c] >= 0 && !open[c] && volume[c] < 0) {
-        const int f = first[c];
-        add(r, o,
-            {"inside_out",
-             {F(f, 0), F(f, 1), F(f, 2)},
-             {f},
-             {},
-             {(P(F(f, 0)) + P(F(f, 1)) + P(F(f, 2))) / 3},
-             volume[c]});
-      }
-  }
   if (o.self_intersections && geometric) {
     std::vector<Vec3> pts;
     auto pairs = self_intersections(V, F, &pts);

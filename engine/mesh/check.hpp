@@ -54,6 +54,17 @@ struct CheckReport {
 const std::vector<std::string>& defect_kinds();
 
 CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& opt = {});
+
+// A closed, consistently oriented part of a surface (faces linked through consistent edges).
+struct SurfacePart {
+  std::vector<int> faces;  // ascending
+  double volume = 0;       // enclosed signed volume (m^3), < 0 when the normals point inwards
+};
+// The parts that are inside out: negative volume and no cavity (a hollow body's inner shell
+// points into the cavity by right; a part is one when its first face's centroid lies inside
+// the other closed parts, their winding number there >= 1/2). `mesh check` reports them,
+// `mesh repair` reverses them. The coordinates must be finite.
+std::vector<SurfacePart> inside_out_parts(const SurfaceMesh& m);
 // Tets (inverted, sliver), duplicate vertices and the manifoldness of the boundary surface.
 CheckReport check_tets(const TetMesh& m, const CheckOptions& opt = {});
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <unordered_map>
@@ -102,8 +103,11 @@ SurfaceMesh read_obj(const std::string& path) {
   int current = -1;
   std::vector<std::string> t;
   std::vector<int> idx;
+  long n_vt = 0, n_vn = 0;  // texture coordinates and normals defined so far
   while (r.tokens(t)) {
     const std::string& k = t[0];
+    if (k == "vt") ++n_vt;
+    if (k == "vn") ++n_vn;
     if (k == "v") {
       if (t.size() < 4) r.fail("expected `v x y z`");
       for (int c = 1; c <= 3; ++c) b.v.push_back(r.number(t[c], "a coordinate"));
@@ -113,6 +117,30 @@ SurfaceMesh read_obj(const std::string& path) {
       const long nv = static_cast<long>(b.v.size() / 3);
       for (size_t c = 1; c < t.size(); ++c) {
         const std::string s = t[c].substr(0, t[c].find('/'));
+        // v, v/vt, v//vn or v/vt/vn: the texture and normal indices are not used, but must be
+        // indices of what the file defines (`3/x` was taken).
+        std::vector<std::string> parts{""};
+        for (char ch : t[c]) {
+          if (ch == '/')
+            parts.emplace_back();
+          else
+            parts.back().push_back(ch);
+        }
+        if (parts.size() > 3)
+          r.fail("expected a face corner v, v/vt, v//vn or v/vt/vn, got '" + t[c] + "'");
+        for (size_t j = 1; j < parts.size(); ++j) {
+          if (parts[j].empty()) {
+            if (j == 1 && parts.size() == 3) continue;  // v//vn
+            r.fail("expected a face corner v, v/vt, v//vn or v/vt/vn, got '" + t[c] + "'");
+          }
+          const long defined = j == 1 ? n_vt : n_vn;
+          long q = r.integer(parts[j], j == 1 ? "a texture index" : "a normal index");
+          if (q < 0 && q >= -defined) q = defined + q + 1;
+          if (q < 1 || q > defined)
+            r.fail(std::string(j == 1 ? "texture" : "normal") + " index " + parts[j] +
+                   " out of range (" + std::to_string(defined) + (j == 1 ? " vt" : " vn") +
+                   " defined so far)");
+        }
         long i = r.integer(s, "a vertex index");
         if (i < 0 && i >= -nv) i = nv + i + 1;  // relative index (-1 = the last vertex)
         if (i < 1 || i > nv)
@@ -766,6 +794,19 @@ SurfaceMesh read_surface_any(const std::string& path) {
     if (a.is_tet) throw InputError("expected a surface but the VTU file holds tetrahedra", path);
     return a.surface;
   }
+  // The format is told by the extension; a directory or a file without one said as such (a
+  // directory /tmp was "unknown surface format ''").
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(
+        "is a directory (expected a mesh file: .obj, .stl, .off, .ply, .vtu, or "
+        "TetGen .node/.ele)",
+        path);
+  if (e.empty())
+    throw InputError(
+        "the file name has no extension, which tells the mesh format (expected "
+        ".obj, .stl, .off, .ply, .vtu, or TetGen .node/.ele)",
+        path);
   throw InputError("unknown surface format '" + e + "' (expected .obj, .stl, .off, .ply, .vtu)",
                    path);
 }

@@ -84,33 +84,16 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
   SurfaceMesh m = build();
   // Whether each input face (after merging) ends up reversed (counted at the end).
   std::vector<char> reversed(F.size(), 0);
-  // Closed parts point outwards: a part (faces linked through consistent edges) without a
-  // boundary edge and with negative enclosed volume is reversed whole. True when any was.
+  // Closed parts point outwards: an inside-out part (not a cavity's shell, which points into
+  // the cavity by right: check.hpp) is reversed whole.
   auto point_outwards = [&]() {
-    const int nf = static_cast<int>(F.size());
-    std::vector<int> parent(nf);
-    for (int f = 0; f < nf; ++f) parent[f] = f;
-    for (int h = 0; h < 3 * nf; ++h)
-      if (m.twin[h] >= 0)
-        parent[detail::find_root(parent, h / 3)] = detail::find_root(parent, m.twin[h] / 3);
-    std::vector<char> open(nf, 0);
-    std::vector<double> vol(nf, 0);
-    for (int f = 0; f < nf; ++f) {
-      const int c = detail::find_root(parent, f);
-      for (int k = 0; k < 3; ++k) open[c] |= m.twin[3 * f + k] < 0;
-      const Vec3 a = row3(V, F[f][0]), b = row3(V, F[f][1]), c3 = row3(V, F[f][2]);
-      vol[c] += a.dot(b.cross(c3));
-    }
-    bool any = false;
-    for (int f = 0; f < nf; ++f) {
-      const int c = detail::find_root(parent, f);
-      if (open[c] || !(vol[c] < 0)) continue;
-      std::swap(F[f][1], F[f][2]);
-      if (static_cast<std::size_t>(f) < reversed.size()) reversed[f] ^= 1;
-      any = true;
-    }
-    if (any) m = build();
-    return any;
+    const auto parts = inside_out_parts(m);
+    for (const SurfacePart& p : parts)
+      for (int f : p.faces) {
+        std::swap(F[f][1], F[f][2]);
+        if (static_cast<std::size_t>(f) < reversed.size()) reversed[f] ^= 1;
+      }
+    if (!parts.empty()) m = build();
   };
   // 3. Orientation: breadth-first over edges with exactly two faces; a neighbour traversing the
   // shared edge in the same direction gets flipped. Non-orientable parts keep their first choice.

@@ -62,7 +62,7 @@ std::vector<RegionSeed> read_region_seeds(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError("is a directory (expected a .regions file)", path);
-  detail::TextReader r(path);
+  detail::TextReader r(path, read_file_bounded(path, std::size_t{1} << 26, ".regions file"), '#');
   std::vector<std::string> tok;
   if (!r.tokens(tok))
     throw InputError("empty region file (expected the number of regions on the first line)", path);

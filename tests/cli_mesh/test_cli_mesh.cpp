@@ -335,6 +335,21 @@ TEST(CliMesh, NamedMaterialsFileMustExist) {
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
   ASSERT_EQ(run("mesh materials --out " + p("m2.json")).code, 0);
   EXPECT_EQ(run("mesh info " + p("m162.obj") + " --materials " + p("m2.json")).code, 0);
+  // A directory and a file without an extension as the mesh (both were "unknown surface format
+  // ''": review 2026-12-06, seventh); a missing .regions file is not "a mesh file".
+  r = run("mesh info " + p("mdir"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("is a directory (expected a mesh file"), std::string::npos) << r.err;
+  std::ofstream(p("noext")) << "v 0 0 0\n";
+  r = run("mesh info " + p("noext"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("the file name has no extension, which tells the mesh format"),
+            std::string::npos)
+      << r.err;
+  r = run("mesh tetrahedralize " + p("m162.obj") + " --regions " + p("none.regions") + " --out " +
+          p("t.node"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("(expected a readable .regions file)"), std::string::npos) << r.err;
 }
 
 // A tissue attribute the material table does not define (--attribute 999, a seed's region_id

@@ -146,6 +146,20 @@ TEST(Check, InsideOutClosedPartIsReported) {
   open.expect_closed = false;
   EXPECT_EQ(count(check_surface(bad, open), "inside_out"), 0);
   EXPECT_TRUE(check_surface(repair(bad)).counts.empty());
+  // A hollow body: its inner shell points into the cavity by right, and is not reported; the
+  // same shell outside the outer one is.
+  SurfaceMesh big = cube();
+  Positions V(16, 3);
+  V.topRows(8) = big.V * 3.0;
+  V.bottomRows(8) = c.V.rowwise() + Vec3(1, 1, 1).transpose();
+  Faces H(24, 3);
+  H.topRows(12) = big.F;
+  H.bottomRows(12) = big.F.array() + 8;
+  for (int f = 12; f < 24; ++f) std::swap(H(f, 1), H(f, 2));
+  EXPECT_TRUE(check_surface(make_surface_mesh(V, H)).counts.empty());
+  EXPECT_EQ(repair(make_surface_mesh(V, H)).F, H);  // repair leaves the cavity's shell as it is
+  V.bottomRows(8) = c.V.rowwise() + Vec3(5, 1, 1).transpose();
+  EXPECT_EQ(count(check_surface(make_surface_mesh(V, H)), "inside_out"), 1);
 }
 
 // Review finding (2026-12-06, seventh): at coordinates of 1e300 every face was a

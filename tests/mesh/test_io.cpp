@@ -232,6 +232,16 @@ TEST(Io, MalformedFilesAreLocated) {
   expect_located([&] { read_obj(p); }, p, 1);
   write_text(p, "v 0 0 0\ncurv 0 1 1 2\n");
   expect_located([&] { read_obj(p); }, p, 2);
+  // Texture and normal indices must be indices (review 2026-12-06, seventh: `3/x` was taken).
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+  write_text(p, tri + "f 1/1/1 2//1 3/1\nf 1/-1/-1 2 3\n");
+  EXPECT_EQ(read_obj(p).F.rows(), 2);
+  for (const char* bad : {"f 1/1/1 2//2 3\n", "f 1/x 2 3\n", "f 1/2 2 3\n", "f 1/1/1/1 2 3\n",
+                          "f 1/ 2 3\n", "f 1/1/ 2 3\n"}) {
+    SCOPED_TRACE(bad);
+    write_text(p, tri + bad);
+    expect_located([&] { read_obj(p); }, p, 6);
+  }
   // A region name that is not UTF-8 (Latin-1 "mé") was an internal error in `mesh info`'s JSON
   // (review 2026-12-06, second); UTF-8 names are read.
   write_text(p,
