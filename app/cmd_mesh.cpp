@@ -500,6 +500,14 @@ palplab::app::CommandRegistration reg_mesh{
           RepairOptions o = *opt;
           o.fill_holes = o.max_hole_edges > 0;
           const SurfaceMesh r = repair(m, o, &log);
+          // A mesh every face of which was dropped is no repair: nothing is written (it wrote
+          // an empty file that no command reads, exit 0).
+          if (r.F.rows() == 0)
+            throw palplab::InputError(
+                "repair dropped every face (" + std::to_string(log.dropped_degenerate_faces) +
+                    " degenerate, " + std::to_string(log.dropped_duplicate_faces) +
+                    " duplicate): nothing is left to write; see `palplab mesh check`",
+                *in);
           write_surface(*out, r);
           if (*js) {
             json j = {{"merged_vertices", log.merged_vertices},

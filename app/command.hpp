@@ -252,25 +252,35 @@ inline void require_writable_dir(const std::string& flag, const std::string& dir
 }
 
 // An output directory that is made only when something is written into it (a run that writes
-// nothing, or fails, leaves no empty directory behind): checked before the work starts without
-// creating it. An existing one is checked as require_writable_dir does; a missing one needs its
-// nearest existing ancestor to be a directory palplab may create entries in.
+// nothing, or fails, leaves no empty directory behind): checked before the work starts by making
+// the missing part of the path and removing it again (asking the file system is the only sure
+// test: /proc/x or a dangling symlink pass every look from outside and failed after the run,
+// exit 3). An existing one is checked as require_writable_dir does.
 inline void require_creatable_dir(const std::string& flag, const std::string& dir) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (fs::exists(dir, ec)) {
+  if (fs::is_directory(dir, ec)) {
     require_writable_dir(flag, dir);
     return;
   }
-  fs::path up = fs::absolute(fs::path(dir), ec).lexically_normal();
-  while (up.has_parent_path() && up != up.parent_path() && !fs::exists(up, ec))
-    up = up.parent_path();
-  const auto fail = [&](const std::string& why) {
+  std::vector<fs::path> missing;  // deepest last
+  for (fs::path p = fs::path(dir).lexically_normal();
+       !p.empty() && !fs::exists(fs::symlink_status(p, ec)); p = p.parent_path()) {
+    missing.insert(missing.begin(), p);
+    if (p == p.parent_path()) break;
+  }
+  std::size_t made = 0;
+  std::string why;
+  for (; made < missing.size(); ++made)
+    if (::mkdir(missing[made].c_str(), 0777) != 0) {
+      why = missing[made].string() + ": " + std::strerror(errno);
+      break;
+    }
+  for (std::size_t k = made; k-- > 0;) ::rmdir(missing[k].c_str());
+  if (missing.empty()) why = "\"" + dir + "\" exists and is not a directory";
+  if (!why.empty())
     throw InputError(SourceLocation{flag}, "cannot create the directory \"" + dir + "\" (" + why +
                                                "), checked before the work starts");
-  };
-  if (!fs::is_directory(up, ec)) fail("\"" + up.string() + "\" is not a directory");
-  if (::access(up.c_str(), W_OK | X_OK) != 0) fail(up.string() + ": " + std::strerror(errno));
 }
 
 // A flag that only means something together with another flag or value (`needed`, e.g.

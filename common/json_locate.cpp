@@ -279,12 +279,13 @@ JsonLocator::JsonLocator(std::string_view text) {
   for (auto& [path, o] : dups) {
     // The values under a repeated key repeat its path's children: only the key is a duplicate
     // (`"w": [[0]], "w": [[1]]` was reported at $.w, $.w[0] and $.w[0][0]). A key repeated
-    // inside the first copy is a duplicate of its own (it was hidden: review 2026-12-06,
-    // fifth): only those whose repeat lies in a later copy of a repeated parent are dropped.
+    // inside one copy is a duplicate of its own (inside the first copy it was hidden: review
+    // 2026-12-06, fifth; inside the kept, later copy too: seventh): only a pair that straddles
+    // the parent's repeat (its earlier half before the parent's later key) is dropped.
     const bool under_another = std::any_of(dups.begin(), dups.end(), [&](const auto& e) {
       return e.first.size() < path.size() && path.compare(0, e.first.size(), e.first) == 0 &&
              (path[e.first.size()] == '.' || path[e.first.size()] == '[') &&
-             o.second >= e.second.second;
+             o.first < e.second.second && o.second >= e.second.second;
     });
     if (under_another) continue;
     DuplicateKey d;
@@ -479,7 +480,7 @@ nlohmann::json parse_located(std::string_view text, const std::string& file,
       where.line = d.second.line;
       where.column = d.second.column;
       where.json_path = d.path;
-      ps.push_back({where, "duplicate key (first defined at line " + std::to_string(d.first.line) +
+      ps.push_back({where, "duplicate key (also defined at line " + std::to_string(d.first.line) +
                                ", column " + std::to_string(d.first.column) +
                                "); each key may appear once"});
     }

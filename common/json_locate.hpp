@@ -62,8 +62,8 @@ std::string path_index(std::string_view parent, std::size_t index);
 std::string normalize_path(std::string_view path_or_pointer);
 
 struct DuplicateKey {
-  std::string path;  // path of the repeated member
-  TextPos first, second;
+  std::string path;       // path of the repeated member
+  TextPos first, second;  // the key before it (the previous copy) and the repeat
 };
 
 class JsonLocator {

@@ -22,6 +22,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/inputs.hpp"
 #include "common/remove_on_signal.hpp"
@@ -748,36 +749,37 @@ void check_tables(sqlite3* db, int version, const std::string& path) {
 
 // Rows that refer to a row that is not there (a hand edit with foreign keys off, a foreign tool):
 // the readers join the tables, so a session of a participant the database does not hold (and
-// its measures and events) would be left out of every export and report without a word. The
-// samples (millions of rows) are not scanned here.
+// its measures, events and samples) would be left out of every export and report without a
+// word. (Samples are stored one row per second of a session: a scan is cheap.)
 void check_references(sqlite3* db, const std::string& path) {
   struct Ref {
-    const char *sql, *what;
+    const char *table, *held, *sql;
   };
+  // Each names the referring row and the value it refers to as stored (a hand edit may have put
+  // 2.5 or 'abc' there, which must not be shown as 2 or 0).
   const Ref refs[] = {
-      {"SELECT s.session, s.participant FROM sessions s LEFT JOIN participants p ON "
-       "p.participant = s.participant WHERE p.participant IS NULL LIMIT 1",
-       "participant"},
-      {"SELECT m.session, m.name FROM measures m LEFT JOIN sessions s ON s.session = m.session "
-       "WHERE s.session IS NULL LIMIT 1",
-       "measure"},
-      {"SELECT e.session, e.kind FROM events e LEFT JOIN sessions s ON s.session = e.session "
-       "WHERE s.session IS NULL LIMIT 1",
-       "event"},
+      {"sessions", "participants",
+       "SELECT 'session ' || x.session, 'participant ' || quote(x.participant) FROM sessions x "
+       "LEFT JOIN participants p ON p.participant = x.participant WHERE p.participant IS NULL "
+       "LIMIT 1"},
+      {"measures", "sessions",
+       "SELECT 'measure ' || quote(x.name), 'session ' || quote(x.session) FROM measures x "
+       "LEFT JOIN sessions s ON s.session = x.session WHERE s.session IS NULL LIMIT 1"},
+      {"events", "sessions",
+       "SELECT 'event ' || quote(x.kind), 'session ' || quote(x.session) FROM events x "
+       "LEFT JOIN sessions s ON s.session = x.session WHERE s.session IS NULL LIMIT 1"},
+      {"samples", "sessions",
+       "SELECT 'samples of second ' || quote(x.second), 'session ' || quote(x.session) FROM "
+       "samples x LEFT JOIN sessions s ON s.session = x.session WHERE s.session IS NULL LIMIT 1"},
   };
   for (const Ref& r : refs) {
     Stmt q(db, r.sql);
     if (!q.step()) continue;
-    const std::string row =
-        std::string(r.what) == "participant"
-            ? "table sessions: session " + std::to_string(q.integer(0)) + " names participant '" +
-                  q.text(1) + "', which table participants does not hold"
-            : "table " + std::string(r.what) + "s: a row (" + r.what + " '" + q.text(1) +
-                  "') names session " + std::to_string(q.integer(0)) +
-                  ", which table sessions does not hold";
-    throw InputError("not a consistent palplab results database: " + row +
-                         " (edited by hand or by another tool? its rows would be left out of "
-                         "every export and report)",
+    throw InputError("not a consistent palplab results database: table " + std::string(r.table) +
+                         ": " + escape_controls(q.text(0), false) + " names " +
+                         escape_controls(q.text(1), false) + ", which table " + r.held +
+                         " does not hold (edited by hand or by another tool? its rows would be "
+                         "left out of every export and report)",
                      path);
   }
 }

@@ -173,7 +173,8 @@ std::vector<std::pair<int, int>> duplicate_vertex_pairs(const Positions& V, doub
           auto it = grid.find(key(cx + dx, cy + dy, cz + dz));
           if (it == grid.end()) continue;
           for (int j : it->second)
-            if ((V.row(i) - V.row(j)).norm() <= tol) out.push_back({j, i});
+            // stableNorm: at 1e-300 the squares underflow and distinct points were 0 apart.
+            if ((V.row(i) - V.row(j)).stableNorm() <= tol) out.push_back({j, i});
         }
     grid[key(cx, cy, cz)].push_back(i);
   }
@@ -221,6 +222,39 @@ bool report_non_finite(CheckReport& r, const CheckOptions& o, const Positions& V
 
 }  // namespace
 
+namespace {
+// The edges of a triangle divided by their largest component (1 when they are all 0 or not
+// finite), and that divisor: areas and lengths computed from them neither overflow at 1e300 nor
+// underflow at 1e-300.
+struct ScaledEdges {
+  Vec3 ab, ac, bc;
+  double s;
+};
+ScaledEdges scaled_edges(const Vec3& a, const Vec3& b, const Vec3& c) {
+  ScaledEdges e{b - a, c - a, c - b, 1};
+  const double s = std::max(
+      {e.ab.cwiseAbs().maxCoeff(), e.ac.cwiseAbs().maxCoeff(), e.bc.cwiseAbs().maxCoeff()});
+  if (s > 0 && std::isfinite(s)) {
+    e.ab /= s;
+    e.ac /= s;
+    e.bc /= s;
+    e.s = s;
+  }
+  return e;
+}
+}  // namespace
+
+double triangle_flatness(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const ScaledEdges e = scaled_edges(a, b, c);
+  const double lmax = std::max({e.ab.squaredNorm(), e.ac.squaredNorm(), e.bc.squaredNorm()});
+  return lmax > 0 ? e.ab.cross(e.ac).norm() / lmax : 0.0;
+}
+
+double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const ScaledEdges e = scaled_edges(a, b, c);
+  return e.ab.cross(e.ac).norm() / 2 * e.s * e.s;
+}
+
 std::vector<SurfacePart> inside_out_parts(const SurfaceMesh& m) {
   const Faces& F = m.F;
   const int nf = static_cast<int>(F.rows());
@@ -233,13 +267,19 @@ std::vector<SurfacePart> inside_out_parts(const SurfaceMesh& m) {
   std::vector<int> part(nf), first(nf, -1);
   std::vector<char> open(nf, 0);
   std::vector<double> volume(nf, 0.0);
+  // Volumes on coordinates divided by the mesh's largest extent (the sign at 1e300 and 1e-120
+  // was lost to overflow and underflow), scaled back when reported.
+  double s = 0;
+  for (int v = 0; v < m.V.rows(); ++v)
+    s = std::max(s, (m.V.row(v) - m.V.row(0)).cwiseAbs().maxCoeff());
+  const double u = s > 0 && std::isfinite(s) ? 1 / s : 1;
   for (int f = 0; f < nf; ++f) {
     const int c = part[f] = detail::find_root(parent, f);
     if (first[c] < 0) first[c] = f;
     for (int k = 0; k < 3; ++k) open[c] |= m.twin[3 * f + k] < 0;
     // Relative to the part's first vertex (exact for a closed part, better conditioned).
     const Vec3 o = P(F(first[c], 0));
-    volume[c] += (P(F(f, 0)) - o).dot((P(F(f, 1)) - o).cross(P(F(f, 2)) - o)) / 6;
+    volume[c] += ((P(F(f, 0)) - o) * u).dot(((P(F(f, 1)) - o) * u).cross((P(F(f, 2)) - o) * u)) / 6;
   }
   // Winding number at x of the closed parts other than `skip`: the sum of their faces' solid
   // angles (Van Oosterom & Strackee 1983) over 4π.
@@ -260,7 +300,7 @@ std::vector<SurfacePart> inside_out_parts(const SurfaceMesh& m) {
     const int f = first[c];
     if (winding((P(F(f, 0)) + P(F(f, 1)) + P(F(f, 2))) / 3, c) >= 0.5) continue;  // a cavity
     SurfacePart p;
-    p.volume = volume[c];
+    p.volume = volume[c] / (u * u * u);
     for (int g = f; g < nf; ++g)
       if (part[g] == c) p.faces.push_back(g);
     out.push_back(std::move(p));
@@ -296,22 +336,17 @@ CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& o) {
   for (int v : m.non_manifold_vertices) add(r, o, {"non_manifold_vertex", {v}, {}, {}, {P(v)}, 0});
   if (geometric)
     for (auto [i, j] : duplicate_vertex_pairs(V, o.duplicate_tolerance))
-      add(r, o, {"duplicate_vertex", {i, j}, {}, {}, {P(i), P(j)}, (P(i) - P(j)).norm()});
+      add(r, o, {"duplicate_vertex", {i, j}, {}, {}, {P(i), P(j)}, (P(i) - P(j)).stableNorm()});
   for (int f = 0; geometric && f < F.rows(); ++f) {
     const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
-    // The test is scale-free, so it runs on the edges divided by their largest component: at
-    // coordinates of 1e300 the area and squared lengths overflow (inf <= inf called every face
-    // degenerate, with an area of inf printed as null).
-    const Vec3 ab = P(b) - P(a), ac = P(c) - P(a), bc = P(c) - P(b);
-    const double s =
-        std::max({ab.cwiseAbs().maxCoeff(), ac.cwiseAbs().maxCoeff(), bc.cwiseAbs().maxCoeff()});
-    const double u = s > 0 && std::isfinite(s) ? 1 / s : 1;
-    const double area2 = (ab * u).cross(ac * u).norm();
-    const double lmax =
-        std::max({(ab * u).squaredNorm(), (bc * u).squaredNorm(), (ac * u).squaredNorm()});
-    if (a == b || b == c || a == c || area2 <= o.degenerate_ratio * lmax)
+    if (a == b || b == c || a == c || triangle_flatness(P(a), P(b), P(c)) <= o.degenerate_ratio)
       add(r, o,
-          {"degenerate_face", {a, b, c}, {f}, {}, {(P(a) + P(b) + P(c)) / 3}, area2 / 2 * s * s});
+          {"degenerate_face",
+           {a, b, c},
+           {f},
+           {},
+           {(P(a) + P(b) + P(c)) / 3},
+           triangle_area(P(a), P(b), P(c))});
   }
   for (int e : m.inconsistent_edges) {
     const int a = m.E(e, 0), b = m.E(e, 1);

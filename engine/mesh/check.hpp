@@ -55,6 +55,13 @@ const std::vector<std::string>& defect_kinds();
 
 CheckReport check_surface(const SurfaceMesh& m, const CheckOptions& opt = {});
 
+// Twice the area of triangle (a, b, c) over its longest edge squared (0 for a repeated point);
+// `degenerate_ratio` compares against it. Computed on edges scaled by their largest component,
+// so it is the same at 1e-300 and 1e300 (check and repair share it).
+double triangle_flatness(const Vec3& a, const Vec3& b, const Vec3& c);
+// The triangle's area (m^2), from the scaled edges (inf only when the area itself overflows).
+double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
+
 // A closed, consistently oriented part of a surface (faces linked through consistent edges).
 struct SurfacePart {
   std::vector<int> faces;  // ascending

@@ -54,11 +54,10 @@ SurfaceMesh repair(const SurfaceMesh& in, const RepairOptions& opt, RepairLog* o
   for (int f = 0; f < in.F.rows(); ++f) {
     std::array<int, 3> t = {detail::find_root(rep, in.F(f, 0)), detail::find_root(rep, in.F(f, 1)),
                             detail::find_root(rep, in.F(f, 2))};
-    const Vec3 a = row3(V, t[0]), b = row3(V, t[1]), c = row3(V, t[2]);
-    const double area2 = (b - a).cross(c - a).norm();
-    const double lmax =
-        std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || area2 <= opt.degenerate_ratio * lmax) {
+    // The same scale-free test as check's (at 1e300 every face of a clean mesh was dropped and an
+    // empty mesh written, exit 0: review 2026-12-06, seventh).
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+        triangle_flatness(row3(V, t[0]), row3(V, t[1]), row3(V, t[2])) <= opt.degenerate_ratio) {
       ++log.dropped_degenerate_faces;
       continue;
     }

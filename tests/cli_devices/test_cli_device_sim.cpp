@@ -240,7 +240,7 @@ TEST(CliDeviceSim, RejectsBadButtonsAndAxes) {
   const std::vector<std::pair<std::string, std::string>> texts = {
       {R"({"waypoints": [[1e999, 0, 0, 0]]})", ":1:17: number 1e999 is out of range"},
       {R"({"waypoints": [[0, 0, 0, 0]], "waypoints": [[0, 1, 1, 1]]})",
-       ":1:31: $.waypoints: duplicate key (first defined at line 1, column 2)"},
+       ":1:31: $.waypoints: duplicate key (also defined at line 1, column 2)"},
       {"{\"waypoints\": [[0, 0, 0,\n", ":2:1: invalid JSON: syntax error"},
       {R"({"waypoints": [[0, 0, 0, 1e300]]})",
        ":1:26: $.waypoints[0][3]: expected a value in [-10.0, 10.0] of [t, x, y, z] (s, m), got "

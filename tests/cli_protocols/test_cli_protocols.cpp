@@ -195,10 +195,10 @@ TEST(CliValidate, RepeatedKeysAreReportedWithTheOtherProblems) {
   std::ofstream(d / "s.json") << study;
   const std::string f = (d / "s.json").string(), b = (d / "B.json").string();
   Result r = run_palplab("validate " + f, d);
-  expect_exit2(r, {f + ":1:61: $.seed: duplicate key (first defined at line 1, column 49)",
+  expect_exit2(r, {f + ":1:61: $.seed: duplicate key (also defined at line 1, column 49)",
                    ": $.seed: expected an integer", ": $.title: expected",
                    b + ":16:3: $.haptic_step"
-                       ": duplicate key (first defined at line 15, column 3)",
+                       ": duplicate key (also defined at line 15, column 3)",
                    ": $.hapticstep: unknown key",
                    ": $.model.home_stiffness: ", "prototype \"B\" (" + b + ") is not valid"});
 }

@@ -186,5 +186,17 @@ TEST(CliRunInput, RecordTraceDirectoryIsMadeOnlyWhenATraceIsWritten) {
   EXPECT_FALSE(fs::exists(d / "t3"));
   std::ofstream(d / "a_file") << "x";
   r = run_palplab(run + (d / "a_file" / "sub").string() + " --resume", d);
-  expect_exit2(r, {"--record-trace", "a_file\" is not a directory", "before the work starts"});
+  expect_exit2(r, {"--record-trace", "a_file/sub: Not a directory", "before the work starts"});
+  // Places only the file system can judge (review 2026-12-06, seventh: exit 3 after the run,
+  // with a database of no session left behind): a dangling symlink, a directory under /proc.
+  fs::create_directory_symlink("/nonexistent_palplab/x", d / "dangling");
+  for (const fs::path& where : {d / "dangling", fs::path("/proc/palplab_x")}) {
+    SCOPED_TRACE(where.string());
+    const fs::path db = d / "fresh.db";
+    r = run_palplab("run " + (d / "s.json").string() + " --quiet --db " + db.string() +
+                        " --record-trace " + where.string(),
+                    d);
+    expect_exit2(r, {"--record-trace", "cannot create the directory", "before the work starts"});
+    EXPECT_FALSE(fs::exists(db));
+  }
 }

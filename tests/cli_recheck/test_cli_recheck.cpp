@@ -132,7 +132,7 @@ TEST(CliRecheck, MalformedReportsAreExitTwoWithTheLocation) {
   };
   const std::vector<Case> cases = {
       {R"({"value":"force","value":"x","group":"group","statistics":[{"text":"F(2, 13) = 1.2, p = .3"}]})",
-       ":1:18: $.value:", "duplicate key (first defined at line 1, column 2)"},
+       ":1:18: $.value:", "duplicate key (also defined at line 1, column 2)"},
       {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = -7.14, p = .026"}]})",
        ":1:56: $.statistics[0].text:", "an F statistic is never negative"},
       {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p = 1.5"}]})",

@@ -183,6 +183,21 @@ TEST(JsonParse, HostileTextIsALocatedError) {
   EXPECT_NE(dups.find("t.json:2:2: $.a: duplicate key"), std::string::npos) << dups;
   EXPECT_EQ(dups.find("$.a.c"), std::string::npos) << dups;
   EXPECT_EQ(std::count(dups.begin(), dups.end(), '\n'), 1) << dups;  // two lines
+  // A key repeated inside the kept (later) copy is reported too (review 2026-12-06, seventh);
+  // three copies: each repeat names the one before it.
+  const std::string kept = located_error("{\"a\": {\"b\": 1},\n \"a\": {\"b\": 2, \"b\": 3}}");
+  EXPECT_NE(kept.find("t.json:2:16: $.a.b: duplicate key (also defined at line 2, column 8)"),
+            std::string::npos)
+      << kept;
+  EXPECT_NE(kept.find("t.json:2:2: $.a: duplicate key"), std::string::npos) << kept;
+  EXPECT_EQ(std::count(kept.begin(), kept.end(), '\n'), 1) << kept;
+  const std::string three = located_error("{\"x\": 1,\n \"x\": 2,\n \"x\": 3}");
+  EXPECT_NE(three.find("t.json:2:2: $.x: duplicate key (also defined at line 1, column 2)"),
+            std::string::npos)
+      << three;
+  EXPECT_NE(three.find("t.json:3:2: $.x: duplicate key (also defined at line 2, column 2)"),
+            std::string::npos)
+      << three;
   // palplab's own binary files where JSON goes are named (review 2026-12-06, fourth: `probe
   // A.psim` said "a NUL byte").
   EXPECT_EQ(located_error(std::string("PALPSIM\0\1\0\0\0", 12)),

@@ -177,6 +177,20 @@ TEST(Check, DegenerateFaceTestIsScaleFree) {
   CheckReport r = check_surface(make_surface_mesh(V, F), open);
   ASSERT_EQ(count(r, "degenerate_face"), 1);
   EXPECT_NEAR(first(r, "degenerate_face")->value, 5e284, 1e270);
+  // repair judges faces the same way (it dropped every face of that cube, exit 0), and distinct
+  // points at 1e-300 are not duplicates at tolerance 0 (their squared distance underflowed).
+  RepairOptions ro;
+  ro.merge_tolerance = 0;
+  EXPECT_EQ(repair(make_surface_mesh(c.V * 1e300, c.F), ro).F.rows(), 12);
+  EXPECT_EQ(repair(make_surface_mesh(c.V * 1e-300, c.F), ro).F.rows(), 12);
+  CheckOptions exact;
+  exact.duplicate_tolerance = 0;
+  EXPECT_TRUE(check_surface(make_surface_mesh(c.V * 1e-300, c.F), exact).counts.empty());
+  // An inside-out part is found at any scale (the volume's sign was lost to over/underflow).
+  Faces R = c.F;
+  for (int f = 0; f < R.rows(); ++f) std::swap(R(f, 1), R(f, 2));
+  for (double k : {1e300, 1e-120, 1.0})
+    EXPECT_EQ(count(check_surface(make_surface_mesh(c.V * k, R), exact), "inside_out"), 1) << k;
 }
 
 TEST(Check, InconsistentOrientation) {

@@ -104,7 +104,7 @@ TEST(JsonLocate, DuplicateKeysAreErrors) {
     EXPECT_EQ(e.problems()[0].where.column, 2);
     EXPECT_EQ(e.problems()[0].where.json_path, "$.a");
     // Both definitions at their keys (the first was at its value).
-    EXPECT_NE(e.problems()[0].what.find("first defined at line 1, column 2)"), std::string::npos)
+    EXPECT_NE(e.problems()[0].what.find("also defined at line 1, column 2)"), std::string::npos)
         << e.problems()[0].what;
   }
   // Deferred: the later value is kept and the repeat is handed back, for the file's validator
@@ -114,7 +114,7 @@ TEST(JsonLocate, DuplicateKeysAreErrors) {
   EXPECT_EQ(j.at("a"), 2);
   ASSERT_EQ(repeated.size(), 1u);
   EXPECT_EQ(repeated[0].format(),
-            "d.json:2:2: $.a: duplicate key (first defined at line 1, column 2); each key may "
+            "d.json:2:2: $.a: duplicate key (also defined at line 1, column 2); each key may "
             "appear once");
 }
 

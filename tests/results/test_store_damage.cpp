@@ -429,10 +429,16 @@ TEST(StoreDamage, RowsThatNameAMissingRowAreRefusedWhenOpening) {
         " names participant 'ZZZ', which table participants does "
         "not hold"}},
       {"UPDATE measures SET session = 999 WHERE rowid = 1",
-       {"table measures: a row (measure '", "') names session 999"}},
-      {"UPDATE events SET session = 999 WHERE rowid = 1",
-       {"table events: a row (event '",
-        "') names session 999, which table sessions does not "
+       {"table measures: measure '", "' names session 999, which table sessions does not hold"}},
+      // The value as stored (it showed session 2 for 2.5, 0 for 'abc': review 2026-12-06,
+      // seventh).
+      {"UPDATE measures SET session = 2.5 WHERE rowid = 1", {"' names session 2.5, which"}},
+      {"UPDATE events SET session = 'abc' WHERE rowid = 1",
+       {"table events: event '", "' names session 'abc', which table sessions does not hold"}},
+      // Samples too (an orphan's samples were dropped from the export, exit 0).
+      {"UPDATE samples SET session = 99 WHERE rowid = 1",
+       {"table samples: samples of second ",
+        " names session 99, which table sessions does not "
         "hold"}},
   };
   for (const auto& c : cases) {
