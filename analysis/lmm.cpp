@@ -1003,11 +1003,16 @@ std::string pfmt(double p) {
 std::string esc(const std::string& s) {
   return escape_controls(s, false);
 }
+// Width on screen: characters, not bytes (a name "Größe" took 2 columns too many).
+size_t width(const std::string& s) {
+  return static_cast<size_t>(char_count(s));
+}
 std::string pad(std::string s, size_t w, bool left = false) {
   // A value wider than its column keeps a space from its neighbour ("7.28498e-2018.53521e-101"
   // ran two columns together: review 2026-12-06, fifth).
-  if (s.size() >= w) return left ? s + " " : " " + s;
-  return left ? s + std::string(w - s.size(), ' ') : std::string(w - s.size(), ' ') + s;
+  const size_t n = width(s);
+  if (n >= w) return left ? s + " " : " " + s;
+  return left ? s + std::string(w - n, ' ') : std::string(w - n, ' ') + s;
 }
 }  // namespace
 
@@ -1026,7 +1031,7 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
     << "   (df = " << fit.n_par << ")\n\n";
   o << "Random effects:\n";
   const std::string group = esc(fit.group), slope = esc(fit.slope);
-  const size_t gw = std::max<size_t>(9, group.size() + 2);
+  const size_t gw = std::max<size_t>(9, width(group) + 2);
   o << " " << pad("Groups", gw, true) << pad("Name", 13, true) << pad("Variance", 14)
     << pad("Std.Dev.", 12) << (fit.slope.empty() ? "" : "   Corr") << "\n";
   o << " " << pad(group, gw, true) << pad("(Intercept)", 13, true)
@@ -1042,7 +1047,7 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
   if (fit.rows_dropped_na > 0) o << " (" << fit.rows_dropped_na << " rows with NA dropped)";
   o << "\n\nFixed effects:\n";
   size_t nw = 12;
-  for (auto& fe : fit.fixed) nw = std::max(nw, esc(fe.name).size() + 2);
+  for (auto& fe : fit.fixed) nw = std::max(nw, width(esc(fe.name)) + 2);
   o << pad("", nw, true) << pad("Estimate", 14) << pad("Std. Error", 13) << pad("df", 11)
     << pad("t value", 10) << pad("Pr(>|t|)", 12) << "\n";
   for (auto& fe : fit.fixed)
@@ -1052,7 +1057,7 @@ std::string to_text(const LmmFit& fit, const std::string& formula) {
   if (!fit.anova.empty()) {
     o << "\nType III Analysis of Variance Table with Satterthwaite's method\n";
     size_t tw = 8;
-    for (auto& a : fit.anova) tw = std::max(tw, esc(a.term).size() + 2);
+    for (auto& a : fit.anova) tw = std::max(tw, width(esc(a.term)) + 2);
     o << pad("", tw, true) << pad("Sum Sq", 12) << pad("Mean Sq", 12) << pad("NumDF", 6)
       << pad("DenDF", 10) << pad("F value", 10) << pad("Pr(>F)", 12) << "\n";
     for (auto& a : fit.anova)

@@ -256,6 +256,25 @@ TEST(LmmFormula, LocatedErrorsOutsideTheGrammar) {
       << err("y ~ a × b + (1 | g)");
 }
 
+// Non-ASCII names line up in the text tables (they were padded by bytes: "Größe" two columns
+// off; review 2026-12-06, seventh): the sleepstudy with its columns renamed prints the same
+// table shape as with ASCII names of the same length.
+TEST(LmmFormula, NonAsciiNamesLineUpInTheTables) {
+  CsvTable t = read_csv(kDir + "sleepstudy.csv");
+  CsvTable u = t;
+  u.header = {"Reaktionszeit_ä", "Tagé", "Proband_ö"};
+  t.header = {"Reaktionszeit_a", "Tage", "Proband_o"};
+  const auto text = [](const CsvTable& c, const std::string& f) {
+    return to_text(fit_lmm(c, parse_lmm_formula(f), {}, true), f);
+  };
+  std::string a = text(t, "Reaktionszeit_a ~ Tage + (1 | Proband_o)");
+  std::string b = text(u, "Reaktionszeit_ä ~ Tagé + (1 | Proband_ö)");
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{{"ä", "a"}, {"é", "e"}, {"ö", "o"}})
+    for (std::size_t at; (at = b.find(from)) != std::string::npos;) b.replace(at, from.size(), to);
+  EXPECT_EQ(a, b);
+}
+
 // A formula's name that is no column of the CSV was located at the CSV's header line; it is the
 // formula's mistake as often as the file's: said at the name, with the file's columns.
 TEST(LmmFormula, UnknownColumnIsLocatedAtTheName) {
