@@ -19,32 +19,6 @@ InputError error_at(const std::string& file, int line, int column, std::string w
   return InputError(SourceLocation{file, line, column}, std::move(what));
 }
 
-// Length of the well-formed UTF-8 sequence at s[i] (Unicode 15, table 3-7), 0 if ill-formed.
-size_t utf8_sequence(std::string_view s, size_t i) {
-  const auto b = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
-  const unsigned char c = b(i);
-  if (c < 0x80) return 1;
-  size_t len = 0;
-  unsigned char lo = 0x80, hi = 0xBF;  // the second byte's range
-  if (c >= 0xC2 && c <= 0xDF) {
-    len = 2;
-  } else if (c >= 0xE0 && c <= 0xEF) {
-    len = 3;
-    if (c == 0xE0) lo = 0xA0;  // no overlong forms
-    if (c == 0xED) hi = 0x9F;  // no surrogates
-  } else if (c >= 0xF0 && c <= 0xF4) {
-    len = 4;
-    if (c == 0xF0) lo = 0x90;
-    if (c == 0xF4) hi = 0x8F;  // <= U+10FFFF
-  } else {
-    return 0;
-  }
-  if (i + len > s.size() || b(i + 1) < lo || b(i + 1) > hi) return 0;
-  for (size_t k = 2; k < len; ++k)
-    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
-  return len;
-}
-
 // The whole text must be UTF-8: the first ill-formed byte is an error at its line:column.
 void require_utf8(std::string_view text, const std::string& file) {
   // UTF-16 (Excel's "Unicode text", PowerShell's default) starts with its byte order mark, or
@@ -58,8 +32,8 @@ void require_utf8(std::string_view text, const std::string& file) {
                        enc + " -t UTF-8 IN.csv > OUT.csv)");
   int line = 1, column = 1;
   for (size_t i = 0; i < text.size();) {
-    const size_t len = utf8_sequence(text, i);
-    if (len == 0) {
+    size_t len = 1;
+    if (utf8_code_point(text, i, &len) == 0xFFFD && len == 1) {  // ill-formed (U+FFFD is 3 bytes)
       char hex[8];
       std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned char>(text[i]));
       throw error_at(file, line, column,
@@ -124,8 +98,10 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
     while (!record_done) {
       field.clear();
       if (counted_to < line_start) counted_to = line_start, counted = 0;
-      for (; counted_to < i; ++counted_to)
-        if ((static_cast<unsigned char>(text[counted_to]) & 0xC0) != 0x80) ++counted;
+      if (counted_to < i) {
+        counted += utf8_length(std::string_view(text).substr(counted_to, i - counted_to));
+        counted_to = i;
+      }
       f_line.push_back(line);
       f_col.push_back(counted + 1);
       if (i < n && text[i] == '"') {
@@ -222,11 +198,7 @@ CsvTable read_csv(const std::string& path) {
 }
 
 std::string shown_text(std::string_view s, size_t max_chars) {
-  size_t cut = 0, chars = 0;  // byte offset and count of the first max_chars characters
-  for (; cut < s.size() && chars < max_chars; ++chars) {
-    ++cut;  // the lead byte, then its continuation bytes
-    while (cut < s.size() && (static_cast<unsigned char>(s[cut]) & 0xC0) == 0x80) ++cut;
-  }
+  const size_t cut = utf8_prefix(s, max_chars);
   if (cut == s.size()) return escape_controls(s, false);
   return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
          " bytes)";

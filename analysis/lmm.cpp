@@ -51,40 +51,76 @@ struct Token {
   int pos;
 };
 
+// A non-ASCII character that looks like an operator or a space, pasted from a word processor or
+// a paper (a Unicode minus, ×, a no-break space): what it is taken for, said in the error. It
+// would otherwise be read as part of a name ("a×b" one name, "a\u00A0" a column not found).
+const char* lookalike(char32_t cp) {
+  static const std::vector<std::pair<std::u32string, const char*>> kinds = {
+      {U"\u00A0\u1680\u202F\u205F\u3000\uFEFF", "a Unicode space: use an ordinary space"},
+      {U"\u00D7\u00B7\u22C5\u2217\u2219", "use '*' for an interaction"},
+      {U"\u2212\u2010\u2011\u2012\u2013\u2014\uFE63\uFF0D",
+       "a minus or dash: terms are only added ('+'; no '- 1')"},
+      {U"\uFF0B\u2795", "use the ASCII '+'"},
+      {U"\uFF5E\u223C\u301C", "use the ASCII '~'"},
+      {U"\uFF5C\u2223\u00A6\u2502", "use the ASCII '|'"},
+      {U"\uFF1A\u2236", "use the ASCII ':'"},
+      {U"\uFF08\uFF09", "use the ASCII '(' and ')'"},
+      {U"\u2018\u2019\u201C\u201D\u00AB\u00BB", "names are written without quotes"},
+      {U"\uFFFD", "not UTF-8"}};
+  for (const auto& [cps, what] : kinds)
+    if (cps.find(cp) != std::u32string::npos) return what;
+  return cp >= 0x2000 && cp <= 0x200B ? "a Unicode space: use an ordinary space" : nullptr;
+}
+
 // Positions count characters (UTF-8 code points), as editors and the message do. Names are
-// letters, digits, '_' and '.', and any non-ASCII character (R takes a locale's letters in names:
-// a column "Größe"), so a CSV's non-ASCII header can be named.
+// letters, digits, '_' and '.', and any non-ASCII character but the look-alikes above (R takes a
+// locale's letters in names: a column "Größe"), so a CSV's non-ASCII header can be named.
 std::vector<Token> tokenize(const std::string& s) {
   std::vector<Token> out;
-  const auto name_char = [](char c) {
-    const auto u = static_cast<unsigned char>(c);
-    return std::isalnum(u) || c == '_' || c == '.' || u >= 0x80;
+  const std::string supported = "supported: y ~ a * b + c:d + (1 | g) or (1 + x | g)";
+  // The character at s[i]: its length, and whether it belongs to a name.
+  const auto at = [&](size_t i, size_t* len) {
+    const char32_t cp = utf8_code_point(s, i, len);
+    const bool name = cp < 0x80 ? std::isalnum(static_cast<int>(cp)) || cp == '_' || cp == '.'
+                                : lookalike(cp) == nullptr;
+    return std::pair{cp, name};
   };
-  const auto continuation = [](char c) { return (static_cast<unsigned char>(c) & 0xC0) == 0x80; };
-  int cp = 0;  // the character index of s[i]
+  int cp_index = 0;  // the character index of s[i]
   for (size_t i = 0; i < s.size();) {
-    char c = s[i];
+    size_t len = 1;
+    const auto [cp, name] = at(i, &len);
+    const char c = s[i];
     if (c == ' ' || c == '\t') {
       ++i;
-      ++cp;
-    } else if (name_char(c)) {
+      ++cp_index;
+    } else if (name) {
       size_t j = i;
       int n = 0;
-      for (; j < s.size() && name_char(s[j]); ++j) n += !continuation(s[j]);
+      for (size_t l = 1; j < s.size() && at(j, &l).second; j += l) ++n;
       std::string w = s.substr(i, j - i);
       if (std::isdigit(static_cast<unsigned char>(w[0])) && w != "1")
-        formula_error(cp, "only the number 1 (intercept) may appear in a formula, got '" +
-                              shown_text(w) + "'");
-      out.push_back({w == "1" ? '1' : 'n', w, cp});
+        formula_error(cp_index, "only the number 1 (intercept) may appear in a formula, got '" +
+                                    shown_text(w) + "'");
+      out.push_back({w == "1" ? '1' : 'n', w, cp_index});
       i = j;
-      cp += n;
-    } else if (std::string("~+*:()|").find(c) != std::string::npos) {
-      out.push_back({c, std::string(1, c), cp});
+      cp_index += n;
+    } else if (cp < 0x80 && std::string("~+*:()|").find(c) != std::string::npos) {
+      out.push_back({c, std::string(1, c), cp_index});
       ++i;
-      ++cp;
+      ++cp_index;
+    } else if (const char* what = lookalike(cp)) {
+      char u[16];
+      if (cp == 0xFFFD && len == 1) {  // an ill-formed byte (U+FFFD itself is 3 bytes)
+        std::snprintf(u, sizeof u, "0x%02X", static_cast<unsigned char>(c));
+        formula_error(cp_index,
+                      std::string("unexpected byte ") + u + " (not UTF-8; " + supported + ")");
+      }
+      std::snprintf(u, sizeof u, "U+%04X", static_cast<unsigned>(cp));
+      formula_error(cp_index, "unexpected character '" + shown_text(s.substr(i, len)) + "' (" + u +
+                                  ", " + what + "; " + supported + ")");
     } else {
-      formula_error(cp, "unexpected character '" + shown_text(std::string(1, c)) +
-                            "' (supported: y ~ a * b + c:d + (1 | g) or (1 + x | g))");
+      formula_error(cp_index, "unexpected character '" + shown_text(s.substr(i, len)) + "' (" +
+                                  supported + ")");
     }
   }
   return out;
@@ -92,9 +128,7 @@ std::vector<Token> tokenize(const std::string& s) {
 
 // The formula's length in characters (the position of "the end").
 int char_count(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
-  return n;
+  return static_cast<int>(utf8_length(s));
 }
 
 }  // namespace
@@ -571,10 +605,31 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     if (std::find(t.header.begin(), t.header.end(), v) == t.header.end()) {
       const auto at = f.positions.find(v);
       const int pos = at != f.positions.end() ? at->second : 0;
+      // An accent typed as a letter plus a combining mark (U+0300..U+036F, NFD: macOS file
+      // names, some keyboards) never equals the precomposed letter (NFC) that looks the same.
+      const auto combining = [](const std::string& x) {
+        for (size_t i = 0, n = 0; i < x.size(); i += n)
+          if (const char32_t c = utf8_code_point(x, i, &n); c >= 0x300 && c <= 0x36F) return true;
+        return false;
+      };
+      std::string hint;
+      if (combining(v))
+        hint = " ('" + shown_text(v) +
+               "' is written with a combining accent (Unicode NFD), which never equals a "
+               "precomposed letter (NFC) that looks the same: type the name again)";
+      else if (utf8_length(v) != v.size())
+        for (const auto& h : t.header)
+          if (combining(h)) {
+            hint = " (the column '" + shown_text(h) +
+                   "' is written with a combining accent (Unicode NFD), which never equals a "
+                   "precomposed letter (NFC) that looks the same: copy the name from the CSV, "
+                   "or save the CSV in NFC)";
+            break;
+          }
       throw InputError(SourceLocation{"--formula", 0, pos + 1},
                        "no column '" + shown_text(v) + "' in " + t.file + " (at character " +
                            std::to_string(pos + 1) +
-                           "); its columns are: " + shown_columns(t.header));
+                           "); its columns are: " + shown_columns(t.header) + hint);
     }
     ci[v] = column_index(t, v);
   }

@@ -32,6 +32,52 @@ inline std::string escape_controls(std::string_view s, bool keep_newlines = true
   return out;
 }
 
+// UTF-8 text counted in characters (code points), as columns and lengths are said to users:
+// a continuation byte (10xxxxxx) belongs to the character before it.
+inline bool utf8_continuation(char c) {
+  return (static_cast<unsigned char>(c) & 0xC0) == 0x80;
+}
+
+inline std::size_t utf8_length(std::string_view s) {
+  std::size_t n = 0;
+  for (char c : s) n += !utf8_continuation(c);
+  return n;
+}
+
+// The byte length of `s`'s first `max_chars` characters (all of `s` when it is shorter): where
+// to cut it without splitting a character.
+inline std::size_t utf8_prefix(std::string_view s, std::size_t max_chars) {
+  std::size_t cut = 0;
+  for (std::size_t chars = 0; cut < s.size() && chars < max_chars; ++chars) {
+    ++cut;  // the lead byte, then its continuation bytes
+    while (cut < s.size() && utf8_continuation(s[cut])) ++cut;
+  }
+  return cut;
+}
+
+// The code point of the UTF-8 character at s[i] and its length in bytes (*length); an ill-formed
+// or cut sequence is U+FFFD of length 1, so a scan always advances.
+inline char32_t utf8_code_point(std::string_view s, std::size_t i, std::size_t* length) {
+  const auto c = static_cast<unsigned char>(s[i]);
+  *length = 1;
+  if (c < 0x80) return c;
+  const std::size_t n = c >= 0xC2 && c <= 0xDF   ? 1
+                        : c >= 0xE0 && c <= 0xEF ? 2
+                        : c >= 0xF0 && c <= 0xF4 ? 3
+                                                 : 0;
+  if (n == 0 || i + n >= s.size()) return 0xFFFD;
+  char32_t cp = c & (0x3F >> n);
+  for (std::size_t k = 1; k <= n; ++k) {
+    if (!utf8_continuation(s[i + k])) return 0xFFFD;
+    cp = cp << 6 | (static_cast<unsigned char>(s[i + k]) & 0x3F);
+  }
+  if ((n == 2 && (cp < 0x800 || (cp >= 0xD800 && cp <= 0xDFFF))) ||
+      (n == 3 && (cp < 0x10000 || cp > 0x10FFFF)))
+    return 0xFFFD;
+  *length = n + 1;
+  return cp;
+}
+
 // "UTF-32", "UTF-16" or nullptr: whether `text` is wide Unicode (an editor's "Unicode" save),
 // with or without its byte-order mark, either byte order — an ASCII character has three or one
 // zero bytes beside it. JSON and CSV files are read as UTF-8 and say so at 1:1.
@@ -54,33 +100,8 @@ inline const char* wide_unicode(std::string_view text) {
 // Whether `s` is well-formed UTF-8 (no overlong forms, surrogates or code points above
 // U+10FFFF): names from user files go into JSON, which holds UTF-8 only.
 inline bool is_valid_utf8(std::string_view s) {
-  for (std::size_t i = 0; i < s.size();) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    int n = 0;
-    unsigned long cp = 0;
-    if (c < 0x80) {
-      ++i;
-      continue;
-    } else if (c >= 0xC2 && c <= 0xDF) {
-      n = 1, cp = c & 0x1F;
-    } else if (c >= 0xE0 && c <= 0xEF) {
-      n = 2, cp = c & 0x0F;
-    } else if (c >= 0xF0 && c <= 0xF4) {
-      n = 3, cp = c & 0x07;
-    } else {
-      return false;
-    }
-    for (int k = 1; k <= n; ++k) {
-      if (i + k >= s.size()) return false;
-      const auto d = static_cast<unsigned char>(s[i + k]);
-      if ((d & 0xC0) != 0x80) return false;
-      cp = (cp << 6) | (d & 0x3F);
-    }
-    if ((n == 2 && (cp < 0x800 || (cp >= 0xD800 && cp <= 0xDFFF))) ||
-        (n == 3 && (cp < 0x10000 || cp > 0x10FFFF)))
-      return false;
-    i += n + 1;
-  }
+  for (std::size_t i = 0, n = 0; i < s.size(); i += n)
+    if (utf8_code_point(s, i, &n) == 0xFFFD && n == 1) return false;  // U+FFFD itself is 3 bytes
   return true;
 }
 

@@ -1,5 +1,7 @@
 #include "common/json_check.hpp"
 
+#include "common/escape.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -356,14 +358,7 @@ void check_id(Checker& c, const std::string& id, const std::string& path) {
   // kShownChars characters, with its length: "xxxx"… (65 characters).
   auto shown = [&] {
     constexpr std::size_t kShownChars = 40;
-    std::size_t cut = 0, n = 0;  // byte offset and count of the first kShownChars characters
-    for (; cut < id.size() && n < kShownChars; ++n) {
-      ++cut;  // the lead byte, then its continuation bytes
-      while (cut < id.size() && (static_cast<unsigned char>(id[cut]) & 0xC0) == 0x80) ++cut;
-    }
-    std::size_t total = n;
-    for (std::size_t i = cut; i < id.size(); ++i)
-      total += (static_cast<unsigned char>(id[i]) & 0xC0) != 0x80;
+    const std::size_t cut = utf8_prefix(id, kShownChars), total = utf8_length(id);
     const auto quoted = [](const std::string& t) {
       return json(t).dump(-1, ' ', false, json::error_handler_t::replace);
     };

@@ -24,10 +24,7 @@ TextPos offset_to_pos(std::string_view text, std::size_t offset) {
       ++p.line;
       line_start = i + 1;
     }
-  int col = 1;
-  for (std::size_t i = line_start; i < offset; ++i)
-    if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) ++col;  // skip UTF-8 continuations
-  p.column = col;
+  p.column = 1 + static_cast<int>(utf8_length(text.substr(line_start, offset - line_start)));
   return p;
 }
 
@@ -249,7 +246,7 @@ class PosTable {
         if (text[i] == '\n') {
           ++p.line;
           p.column = 1;
-        } else if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) {
+        } else if (!utf8_continuation(text[i])) {
           ++p.column;
         }
       }

@@ -251,9 +251,37 @@ TEST(LmmFormula, LocatedErrorsOutsideTheGrammar) {
                       "+ c:d + (1 | g) or (1 + x | g)) (at character 12)"),
             std::string::npos)
       << err("Größe ~ Tag/2 + (1 | g)");
-  EXPECT_NE(err("y ~ a × b + (1 | g)").find("expected '+' between terms (at character 7)"),
+  // Operator and space look-alikes pasted from a word processor are said as what they look like
+  // (they were read as names: "a × b" said "expected '+' between terms", "a\u00A0+ b" looked
+  // for a column "a\u00A0"; 2026-12-06, noticed).
+  const std::string supported =
+      "; supported: y ~ a * b + c:d + (1 | g) or (1 + x | g)) (at character ";
+  for (const auto& [formula, said] : std::vector<std::pair<std::string, std::string>>{
+           {"y ~ a × b + (1 | g)", "'×' (U+00D7, use '*' for an interaction" + supported + "7)"},
+           {"y ~ a·b + (1 | g)", "'·' (U+00B7, use '*' for an interaction" + supported + "6)"},
+           {"y ~ a − 1 + (1 | g)",
+            "'−' (U+2212, a minus or dash: terms are only added ('+'; no '- 1')" + supported +
+                "7)"},
+           {"y ~ a – b + (1 | g)", "'–' (U+2013, a minus or dash"},
+           {"y ~ a\u00A0+ b + (1 | g)",
+            "'\u00A0' (U+00A0, a Unicode space: use an ordinary space" + supported + "6)"},
+           {"y ～ a + (1 | g)", "'～' (U+FF5E, use the ASCII '~'" + supported + "3)"},
+           {"y ~ a + (1 ｜ g)", "'｜' (U+FF5C, use the ASCII '|'"},
+           {"y ~ “a” + (1 | g)",
+            "'“' (U+201C, names are written without quotes" + supported + "5)"},
+           {"y ~ a\u2009+ b + (1 | g)", "'\u2009' (U+2009, a Unicode space"}}) {
+    const std::string e = err(formula);
+    EXPECT_NE(e.find("--formula: unexpected character " + said), std::string::npos) << e;
+  }
+  EXPECT_NE(err("y ~ a\xff + (1 | g)")
+                .find("--formula: unexpected byte 0xFF (not UTF-8; supported: y ~ a * b + c:d + "
+                      "(1 | g) or (1 + x | g)) (at character 6)"),
             std::string::npos)
-      << err("y ~ a × b + (1 | g)");
+      << err("y ~ a\xff + (1 | g)");
+  // Letters beyond ASCII stay names (µ, accents, Greek, CJK, a superscript).
+  const LmmFormula g = parse_lmm_formula("Fläche_m² ~ µ + Δt + 時間 + (1 | Proband)");
+  EXPECT_EQ(g.response, "Fläche_m²");
+  EXPECT_EQ(g.positions.at("時間"), 21);
 }
 
 // Non-ASCII names line up in the text tables (they were padded by bytes: "Größe" two columns
@@ -287,6 +315,33 @@ TEST(LmmFormula, UnknownColumnIsLocatedAtTheName) {
               "--formula: no column 'Dayz' in " + kDir +
                   "sleepstudy.csv (at character 12); its columns are: Reaction, Days, Subject");
   }
+  // A name typed with a combining accent (NFD) never equals the column's precomposed letter
+  // (NFC) that looks the same, and the other way round: said, as neither shows it.
+  CsvTable u = t;
+  u.header = {"Reaktion", "Tage", "Proband\u00F6"};  // Probandö, precomposed
+  const auto message = [](const CsvTable& c, const std::string& f) {
+    try {
+      fit_lmm(c, parse_lmm_formula(f), {}, true);
+    } catch (const palplab::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string m = message(u, "Reaktion ~ Tage + (1 | Probando\u0308)");
+  EXPECT_NE(m.find("no column 'Probando\u0308' in " + kDir +
+                   "sleepstudy.csv (at character 24); its columns are: Reaktion, Tage, "
+                   "Proband\u00F6 ('Probando\u0308' is written with a combining accent (Unicode "
+                   "NFD), which never equals a precomposed letter (NFC) that looks the same: type "
+                   "the name again)"),
+            std::string::npos)
+      << m;
+  u.header = {"Reaktion", "Tage", "Probando\u0308"};
+  m = message(u, "Reaktion ~ Tage + (1 | Proband\u00F6)");
+  EXPECT_NE(m.find("(the column 'Probando\u0308' is written with a combining accent"),
+            std::string::npos)
+      << m;
+  // The same names in the same form fit.
+  EXPECT_EQ(message(u, "Reaktion ~ Tage + (1 | Probando\u0308)"), "no error");
 }
 
 // A singular random-slope fit (no participant slope variation: theta[2] on its bound 0), the
