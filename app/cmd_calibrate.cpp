@@ -82,9 +82,6 @@ palplab::app::CommandRegistration reg_calibrate{
           throw palplab::InputError(palplab::SourceLocation{"--human"},
                                     "expected the people's CSV file, got an empty path");
         auto cells = read_human_cells(a->human);
-        for (const auto& w :
-             sd_floor_warnings(cells, a->opt.measures.empty() ? s.measures : a->opt.measures))
-          std::cerr << "warning: --human: " << w << "\n";
         // The outputs are checked before the fit (which takes minutes to hours).
         const bool defaults = defaults_opt->count() > 0;
         if (defaults && a->write_defaults.empty())
@@ -194,6 +191,9 @@ palplab::app::CommandRegistration reg_calibrate{
           }
         }
         a->opt.standard_errors = !a->no_se;
+        a->opt.warning = [](const std::string& w) {
+          std::cerr << "warning: --human: " << w << "\n";
+        };
         if (!a->quiet)
           a->opt.notice = [](const std::string& m) {
             std::fprintf(stderr, "calibrate: %s\n", m.c_str());

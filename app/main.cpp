@@ -78,7 +78,8 @@ int checked_stdout(int code, int printed_errno = 0) {
       if (::write(STDOUT_FILENO, "\n", 1) < 0) why = errno;
     }
     std::cerr << "error: cannot write to standard output ("
-              << (why ? std::strerror(why) : "a write failed") << "); the output is lost\n";
+              << (why ? std::strerror(why) : "a write failed")
+              << "); the output is lost (files the command wrote are not affected)\n";
     // 2 also where the command's verdict was 1 (recheck's "inconsistent", mesh check's
     // defects): a script must not read the lost output as that verdict.
     return code >= 2 ? code : 2;

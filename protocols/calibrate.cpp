@@ -761,6 +761,8 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   std::optional<CalibrationJournal> journal;
   if (!opt.journal.empty())
     journal.emplace(opt.journal, calibration_setup(study, sim_n, opt.keys, used), used);
+  if (opt.warning)
+    for (const auto& w : sd_floor_warnings(cells, measures)) opt.warning(w);
   if (journal && opt.notice) {
     const int k = journal->stored();
     opt.notice(k == 0 ? "each evaluation is appended to " + journal->path() +

@@ -165,6 +165,9 @@ struct CalibrateOptions {
   // the journal already holds (a resumed fit first simulates its start again, which takes as
   // long as any evaluation, before the stored ones are replayed).
   std::function<void(const std::string& message)> notice;
+  // Called for every line of sd_floor_warnings() of the fitted measures, once the inputs have
+  // been checked (not before an input error that refuses the fit), before the first simulation.
+  std::function<void(const std::string& message)> warning;
 };
 
 struct CalibrationResult {

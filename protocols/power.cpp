@@ -695,7 +695,22 @@ long run_power(const Study& study, const PowerOptions& opt) {
               "replicate simulated with other prototype files than the study's now (a prototype "
               "or its mesh changed since): its results would be mixed with the new ones; restore "
               "them, or use another --out");
-        done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
+        // Its seed is the one derived from the study's seed for its n and index: otherwise the
+        // record was edited (a line copied to fill a gap, its index changed) or written for
+        // another seed, and it would stand for a replicate never simulated.
+        const int n = r.at("n").get<int>(), rep = r.at("replicate").get<int>();
+        const std::uint64_t expected =
+            derive_seed(study.seed, label_hash("power"), static_cast<std::uint64_t>(n),
+                        static_cast<std::uint64_t>(rep));
+        if (r.at("seed").get<std::uint64_t>() != expected)
+          throw InputError(SourceLocation{file, line, 0, -1, "$.seed"},
+                           "replicate n=" + std::to_string(n) + " #" + std::to_string(rep) +
+                               " has seed " + r.at("seed").dump() + ", not " +
+                               std::to_string(expected) +
+                               ", the one derived for it from the study's seed: the record was "
+                               "edited (its n or index changed) or simulated with another seed; "
+                               "remove the line to simulate that replicate again");
+        done.insert({n, rep});
       }
     check_out_dir_study(opt.out_dir, sha);  // its power.json and other shards' files
   }
@@ -1050,7 +1065,8 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
                              double target_power, const SummaryScope& scope, LeftOut* left_out,
                              const PeopleVerdicts* people) {
   std::map<std::pair<int, int>, nlohmann::json> reps;
-  std::map<std::pair<int, int>, std::string> where;  // FILE:LINE each replicate came from
+  std::map<std::pair<int, int>, std::string> where;      // FILE:LINE each replicate came from
+  std::map<std::uint64_t, std::pair<int, int>> seed_of;  // the (n, replicate) of each seed
   std::string sha, study_id;
   std::string first;                     // FILE:LINE of the first replicate read
   std::vector<std::string> first_ids;    // its test ids, sorted
@@ -1106,6 +1122,17 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
         }
       }
       const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
+      // Every replicate has its own seed (derived from the study's, its n and its index): one
+      // seed under two (n, index) is a record copied to fill a gap with its index edited.
+      if (auto [it, fresh] = seed_of.emplace(r.at("seed").get<std::uint64_t>(), key);
+          !fresh && it->second != key)
+        throw InputError(SourceLocation{f, line, 0, -1, "$.seed"},
+                         "replicate n=" + std::to_string(key.first) + " #" +
+                             std::to_string(key.second) +
+                             " has the seed of replicate n=" + std::to_string(it->second.first) +
+                             " #" + std::to_string(it->second.second) + " at " + where[it->second] +
+                             " (each replicate has a seed of its own: one of the two records "
+                             "was copied and its n or index edited)");
       if (auto it = reps.find(key); it != reps.end()) {
         // The same replicate from a palplab before group descriptives (2026-12-05) and after:
         // equal but for "groups", which the newer one adds; keep that one.

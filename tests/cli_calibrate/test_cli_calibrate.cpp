@@ -624,6 +624,13 @@ TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(r.err.find("group G2"), std::string::npos) << r.err;
+  // Not before an input error that refuses the fit: the error alone (it warned first).
+  fs::remove(d / "fit.json");
+  r = run(header + "H1,G1,test,1,palpation_force,2.5\nH2,G1,test,1,palpation_force,2.5\n" +
+              rows.substr(rows.find("H3")),
+          "--bounds visual_weber=0:1");
+  expect_exit2(r, {"--bounds: \"visual_weber\" is not one of the fitted parameters"});
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
   // Not for a measure that is not fitted (it warned about cells outside the loss).
   fs::remove(d / "fit.json");
   r = run(header + rows + "H1,G1,test,1,exploration_time,20\nH2,G1,test,1,exploration_time,20\n",

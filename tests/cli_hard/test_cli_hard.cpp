@@ -1051,7 +1051,9 @@ TEST(HardOutput, AFailedWriteToStandardOutputIsAnError) {
   // write fails earlier, and its reason, lost then, is asked again by one more byte written
   // ("a write failed", no reason, before: review 2026-12-06, third).
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"version", "(No space left on device); the output is lost"},
+      {"version",
+       "(No space left on device); the output is lost (files the command wrote are not "
+       "affected)"},
       {"validate " + (d / "study.json").string(), "(No space left on device); the output is lost"},
       // A verdict of 1 (defects found) is not what a script may read from lost output (review
       // 2026-12-06, second: it stayed 1).

@@ -316,7 +316,8 @@ nlohmann::json record(int n, int replicate, const nlohmann::json& p, const nlohm
           {"study", "power_null"},
           {"n", n},
           {"replicate", replicate},
-          {"seed", 12345678901234567890ull},
+          {"seed", 12345678901234567890ull + 1000003ull * static_cast<unsigned>(n) +
+                       static_cast<unsigned>(replicate)},
           {"tests", nlohmann::json::array({{{"id", "anova_oneway palpation_force test"},
                                             {"p", p},
                                             {"effect", effect},
@@ -454,6 +455,48 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
   EXPECT_EQ(j["replicates"]["2"], 1);
   ASSERT_TRUE(j.contains("groups"));
   EXPECT_EQ(j["orders"][0]["by_n"][0]["orders"][0]["order"], "B > A");
+  fs::remove_all(d);
+}
+
+// A record copied to fill a gap, its index edited, stood for a replicate never simulated: merge
+// counted it and the power resume skipped that replicate (2026-12-06, noticed). Each replicate's
+// seed is derived from its n and index: the resume checks it exactly, merge (which has no study)
+// that no seed stands for two replicates.
+TEST(Power, AnEditedReplicateIndexIsRefused) {
+  auto d = scratch_dir("edited_index");
+  const fs::path dir = d / "dir", file = dir / "replicates.jsonl";
+  ASSERT_EQ(run_palplab(power_cmd("2", 2) + " --out " + dir.string(), d).code, 0);
+  const std::string text = slurp(file);
+  const std::string first = text.substr(0, text.find('\n'));
+  auto copy = nlohmann::json::parse(first);
+  copy["replicate"] = 2;
+  std::ofstream(d / "filled.jsonl") << text << copy.dump() << "\n";
+  const auto m = merge({d / "filled.jsonl"}, d / "merged", d);
+  EXPECT_EQ(m.code, 2) << m.out << m.err;
+  EXPECT_TRUE(has(m.err, (d / "filled.jsonl").string() +
+                             ":3: $.seed: replicate n=2 #2 has the seed of replicate n=2 #0 at " +
+                             (d / "filled.jsonl").string() +
+                             ":1 (each replicate has a seed of its own: one of the two records "
+                             "was copied and its n or index edited)"))
+      << m.err;
+  EXPECT_FALSE(fs::exists(d / "merged" / "power.json"));
+  // The resume: the study's seed gives each replicate's seed; a record whose seed is not its
+  // own is refused at its line before anything is simulated.
+  copy["replicate"] = 1;
+  std::ofstream(file, std::ios::trunc) << first << "\n" << copy.dump() << "\n";
+  const auto r = run_palplab(power_cmd("2", 3) + " --out " + dir.string(), d);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_TRUE(has(r.err, file.string() + ":2: $.seed: replicate n=2 #1 has seed " +
+                             copy["seed"].dump() + ", not "))
+      << r.err;
+  EXPECT_TRUE(has(r.err,
+                  "the record was edited (its n or index changed) or simulated with "
+                  "another seed; remove the line to simulate that replicate again"))
+      << r.err;
+  // Removing it, as said, simulates it again: the uninterrupted result.
+  std::ofstream(file, std::ios::trunc) << first << "\n";
+  ASSERT_EQ(run_palplab(power_cmd("2", 2) + " --out " + dir.string(), d).code, 0);
+  EXPECT_EQ(slurp(file), text);
   fs::remove_all(d);
 }
 

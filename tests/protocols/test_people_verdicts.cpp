@@ -240,7 +240,7 @@ TEST(PeopleVerdicts, TheSummaryCountsReplicatesThatReachThePeoplesVerdicts) {
     for (int r = 0; r < 4; ++r) {
       nlohmann::json rec = {{"n", 5},
                             {"replicate", r},
-                            {"seed", 1},
+                            {"seed", r + 1},
                             {"study", "s"},
                             {"study_sha256", std::string(64, 'a')},
                             {"tests", nlohmann::json::array()}};
@@ -353,7 +353,7 @@ TEST(PeopleVerdicts, TheSummaryGivesGroupMeansOrdersAndThePeoplesPattern) {
       nlohmann::json rec = {
           {"n", 5},
           {"replicate", r},
-          {"seed", 1},
+          {"seed", r + 1},
           {"study", "s"},
           {"study_sha256", std::string(64, 'a')},
           {"tests", {{{"id", "T"}, {"p", p[r]}, {"effect", 1.0}, {"effect_name", "hedges_g"}}}}};
