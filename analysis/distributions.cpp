@@ -473,9 +473,16 @@ double noncentral_t_cdf(double t, double df, double delta) {
   const double tt = t, dd = delta, nud = df;
   const double s0d = nud > 2 ? std::sqrt((nud - 1) / nud) : 1;
   const double lmode = static_cast<double>(chi.log_density(s0d));
+  // For ν <= 2 the exponent's terms are of order 1 (no cancellation): double, as below — in
+  // long double (expl, logl) it was 70 % of `palplab stats` on 100 groups of 2 (Cohen's d
+  // intervals at df 2).
+  const double lnorm = static_cast<double>(chi.log_norm);
   auto dens = [&](ld sl) {
     if (!(sl > 0)) return 0.0;
-    if (!(nud > 2)) return static_cast<double>(std::exp(chi.log_density(sl)));
+    if (!(nud > 2)) {
+      const double sd = static_cast<double>(sl);
+      return std::exp(lnorm + (nud - 1) * std::log(sd) - 0.5 * nud * sd * sd);
+    }
     const double x = static_cast<double>(sl) / s0d - 1;
     return std::exp(lmode + (nud - 1) * (std::log1p(x) - x - 0.5 * x * x));
   };

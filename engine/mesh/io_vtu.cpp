@@ -179,6 +179,14 @@ AnyMesh read_mesh(const std::string& path) {
       throw InputError("no geometry: the TetGen files hold no tetrahedra", path);
     return a;
   }
+  // TetGen's other files are read with the mesh, from its .node/.ele: given alone, they were
+  // "unknown surface format '.face'" with the surface formats only.
+  if (const std::string e = extension(path); e == ".face" || e == ".neigh" || e == ".names")
+    throw InputError("a TetGen mesh's " + e + " file is read with the mesh: give its .ele (" +
+                         path.substr(0, path.size() - e.size()) +
+                         ".ele) or .node (expected a mesh file: .obj, .stl, .off, .ply, .vtu, or "
+                         "TetGen .node/.ele)",
+                     path);
   if (extension(path) != ".vtu") {
     a.surface = read_surface(path);
     return a;

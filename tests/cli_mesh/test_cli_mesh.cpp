@@ -350,6 +350,19 @@ TEST(CliMesh, NamedMaterialsFileMustExist) {
           p("t.node"));
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("(expected a readable .regions file)"), std::string::npos) << r.err;
+  // A TetGen mesh's .face or .neigh given alone points to its .ele (it was "unknown surface
+  // format '.face'" with the surface formats only: 2026-12-06, noticed); the .ele is read.
+  ASSERT_EQ(run("mesh generate model-c --out " + p("tg")).code, 0);
+  for (const char* e : {".face", ".neigh", ".names"}) {
+    r = run("mesh check " + p("tg") + e);
+    EXPECT_EQ(r.code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(p("tg") + e + ": a TetGen mesh's " + e +
+                         " file is read with the mesh: give its .ele (" + p("tg") +
+                         ".ele) or .node (expected a mesh file"),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_EQ(run("mesh info " + p("tg.ele")).code, 0);
 }
 
 // A tissue attribute the material table does not define (--attribute 999, a seed's region_id
