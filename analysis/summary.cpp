@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 
+#include "analysis/csv.hpp"
 #include "analysis/distributions.hpp"
 #include "analysis/parallel.hpp"
 #include "common/escape.hpp"
@@ -319,9 +320,18 @@ nlohmann::json to_json(const StatsSummary& s) {
 std::string to_text(const StatsSummary& s) {
   std::ostringstream o;
   // Group labels come from the input: control characters (an escape sequence in a label would
-  // recolour or retitle the terminal) are shown escaped.
+  // recolour or retitle the terminal) are shown escaped, and a label longer than 60 characters
+  // cut to its start and length (shown_text: three labels of 3 MB were printed whole on every
+  // line that names them, 36 MB of text) unless that would make two labels look the same. The
+  // JSON keeps them whole.
   std::vector<std::string> names;
-  for (const auto& n : s.names) names.push_back(escape_controls(n, false));
+  for (const auto& n : s.names) names.push_back(shown_text(n));
+  std::vector<std::string> sorted = names;
+  std::sort(sorted.begin(), sorted.end());
+  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+    names.clear();
+    for (const auto& n : s.names) names.push_back(escape_controls(n, false));
+  }
   auto pair_name = [&](int a, int b) { return names[a] + " - " + names[b]; };
   o << "Descriptives\n";
   o << strf("  %-14s %5s %12s %12s %12s %12s %12s %12s %25s\n", "group", "n", "mean", "sd", "se",

@@ -440,6 +440,28 @@ TEST(CliStats, LongFieldsAreCutAndControlCharactersEscaped) {
   r = run_palplab("stats --csv " + esc + " --value v --group g --json");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["groups"][0]["name"], "\x1b[31mA");  // JSON escapes it
+  // A label of 1 MB is cut in the text tables (its start and length), kept whole in the JSON;
+  // three of them were printed whole on every line naming them (2026-12-06, noticed). Labels
+  // that would look the same cut are printed whole.
+  const std::string big(1'000'000, 'L');
+  const std::string labels =
+      write_temp("big_labels.csv", "g,v\n" + big + ",1\n" + big + ",2\nB,3\nB,4.5\nC,5\nC,7\n");
+  r = run_palplab("stats --csv " + labels + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_LT(r.out.size(), 20'000u);
+  EXPECT_NE(r.out.find(std::string(60, 'L') + "\u2026 (1000000 bytes) - B"), std::string::npos)
+      << r.out.substr(0, 2000);
+  r = run_palplab("stats --csv " + labels + " --value v --group g --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["groups"][0]["name"], big);
+  const std::string twins = write_temp(
+      "twin_labels.csv", "g,v\n" + std::string(70, 'L') + "a,1\n" + std::string(70, 'L') + "a,2\n" +
+                             std::string(70, 'L') + "b,3\n" + std::string(70, 'L') + "b,4.5\n");
+  r = run_palplab("stats --csv " + twins + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(std::string(70, 'L') + "a - " + std::string(70, 'L') + "b"),
+            std::string::npos)
+      << r.out;
 }
 
 // The CSV reader's own messages are cut: "no column" lists 20 of 500 columns and cuts the name
