@@ -169,6 +169,7 @@ struct Context {
   nlohmann::json declared;  // the stored study JSON: its description and declared analyses only
   std::vector<std::string> groups, phase_order;
   std::map<std::string, std::string> unit_of;
+  std::map<std::string, double> scale_of;  // proportion_scale()
   Doc doc;
   ReportFiles files;
 
@@ -178,6 +179,14 @@ struct Context {
   std::string unit(const std::string& measure) const {
     auto it = unit_of.find(measure);
     return it == unit_of.end() ? "" : it->second;
+  }
+  // A measure that is a proportion: unit "1" (0..1) or "%" (0..100) with every stored value on
+  // that scale; its scale maximum, 0 for any other measure. A dimensionless count (palpations,
+  // insertion_attempts, layers_passed: unit "1" too) is no proportion: it was given intervals
+  // clipped to [0, 1] ("[11.23, 1]" for a mean of 12.67) and error bars that missed the mean.
+  double proportion_scale(const std::string& measure) const {
+    auto it = scale_of.find(measure);
+    return it == scale_of.end() ? 0.0 : it->second;
   }
   const results::PhaseRecord* phase(const std::string& id) const {
     for (const auto& p : structure.phases)
@@ -259,6 +268,10 @@ Context load(const std::string& db_path, const std::string& out_dir, const Repor
     if (std::find(c.groups.begin(), c.groups.end(), p.group) == c.groups.end())
       c.groups.push_back(p.group);
   for (const auto& m : c.measures) c.unit_of[m.name] = m.unit;
+  for (const auto& [name, unit] : c.unit_of)
+    c.scale_of[name] = unit == "1" ? 1.0 : unit == "%" ? 100.0 : 0.0;
+  for (const auto& m : c.measures)
+    if (m.value && !(*m.value >= 0 && *m.value <= c.scale_of[m.name])) c.scale_of[m.name] = 0;
   for (const auto& p : c.structure.phases) c.phase_order.push_back(p.phase);
   for (const auto& s : c.sessions)
     if (std::find(c.phase_order.begin(), c.phase_order.end(), s.phase) == c.phase_order.end())
@@ -583,11 +596,6 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A measure that is a proportion: unit "1" (0..1) or "%" (0..100); its scale maximum.
-double proportion_scale(const std::string& unit) {
-  return unit == "1" ? 1.0 : unit == "%" ? 100.0 : 0.0;
-}
-
 // The 95 % CI cell of a group's values: Wilson for a binary proportion (every value 0 or the
 // scale maximum), the t interval clipped to [0, scale] for other proportions (a mean of
 // per-session percentages), the t interval otherwise. `note` says which was used.
@@ -864,7 +872,7 @@ void section_analysis(Context& c, const Unit& u) {
   doc.heading(3, "Descriptives");
   std::vector<std::vector<std::string>> rows;
   std::set<std::string> ci_notes;
-  const double scale = proportion_scale(unit);
+  const double scale = c.proportion_scale(u.measure);
   for (size_t g = 0; g < groups.size(); ++g) {
     if (data.values[g].empty()) {
       rows.push_back({groups[g], "0", "", "", "", "", "", "", "", ""});
@@ -1166,7 +1174,7 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
     if (cell.empty()) continue;
     any_curve = true;
     const std::string unit = c.unit(mname);
-    const double scale = proportion_scale(unit);
+    const double scale = c.proportion_scale(mname);
     bool wilson = false;
     std::vector<Series> ser;
     for (size_t g = 0; g < c.groups.size(); ++g) {

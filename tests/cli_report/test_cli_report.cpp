@@ -168,3 +168,49 @@ TEST(CliReport, RendersInChromiumWithoutCutAndWithEveryFigure) {
   EXPECT_GT(bad["scrollWidth"].get<int>(), bad["clientWidth"].get<int>()) << bad.dump();
   fs::remove_all(dir);
 }
+
+// A dimensionless count (palpations, unit "1" like a proportion) was given the interval of a
+// mean proportion clipped to [0, 1] ("[11.23, 1]" for a mean of 12.67) and learning-curve error
+// bars clipped there too, missing the mean (review 2026-12-06, eighth). A measure is a
+// proportion only when every stored value lies on its scale; feature_identified (0 or 1) still is.
+TEST(CliReport, CountsAreNoProportions) {
+  const fs::path d = scratch_dir("report_counts");
+  std::ofstream(d / "s.json") << R"({"palplab_study": 1, "id": "counts", "title": "counts",
+  "seed": 1, "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "A", "prototype": "A", "size": 3}, {"id": "B", "prototype": "B", "size": 3}],
+  "phases": [
+    {"id": "training", "kind": "training", "sessions": 2, "session_duration": 60, "gap": {"minutes": 5}},
+    {"id": "test", "kind": "post_training", "session_duration": 60,
+     "start": {"after_previous": {"minutes": 10}}}]})";
+  Result r = palplab::testing::run_palplab("run " + (d / "s.json").string() + " --db " +
+                                               (d / "r.db").string() + " --quiet --samples none",
+                                           d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = palplab::testing::run_palplab(
+      "report " + (d / "r.db").string() + " --out " + (d / "rep").string() + " --no-stills", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string md = slurp(d / "rep" / "report.md");
+  const auto section = [&](const std::string& measure) {
+    const size_t at = md.find("## Analysis: " + measure + " — phase test");
+    EXPECT_NE(at, std::string::npos) << measure;
+    return md.substr(at, md.find("\n## ", at + 1) - at);
+  };
+  // Every descriptives row of palpations: its 95 % CI holds its mean (column 3; CI last).
+  const std::string p = section("palpations");
+  EXPECT_EQ(p.find("clipped to [0, 1]"), std::string::npos) << p;
+  EXPECT_EQ(p.find("Wilson"), std::string::npos) << p;
+  const std::regex row(R"(\n\| (A|B) \| 3 \| ([0-9.]+) \|[^\n]*\| \[([-0-9.]+), ([-0-9.]+)\] \|)");
+  int rows = 0, above_one = 0;
+  for (std::sregex_iterator it(p.begin(), p.end(), row), end; it != end; ++it, ++rows) {
+    const double mean = std::stod((*it)[2]), lo = std::stod((*it)[3]), hi = std::stod((*it)[4]);
+    above_one += mean > 1;
+    EXPECT_LE(lo, mean) << (*it)[0];
+    EXPECT_GE(hi, mean) << (*it)[0];
+  }
+  EXPECT_EQ(rows, 2) << p;
+  EXPECT_GE(above_one, 1) << "a mean count above 1 is what this test needs:\n" << p;
+  // A 0/1 measure keeps the interval of a proportion.
+  EXPECT_NE(section("feature_identified").find("Wilson score interval of the proportion"),
+            std::string::npos);
+  fs::remove_all(d);
+}
