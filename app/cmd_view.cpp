@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -50,6 +51,7 @@ struct ViewArgs {
   std::string file, screenshot, size = "1280x800", device = "mouse", record_trace, mouse_script;
   long frames = 0;
   double min_rate = 900.0;
+  bool overwrite = false;
   std::vector<std::string> scene;  // --scene FILE.psim | KEY (app/scene_option.hpp)
 };
 
@@ -70,6 +72,31 @@ int run_view(const ViewArgs& a) {
   if (!a.screenshot.empty() && a.frames == 0)
     throw InputError("--screenshot needs --frames N (the frame to save)");
   const engine::DeviceSpec spec = engine::parse_device_spec(a.device);
+  // The outputs are never an input, each other, nor a file of another kind without --overwrite
+  // (both replaced a results database silently: review 2026-12-06, eighth).
+  std::vector<app::CommandInput> inputs;
+  if (!a.file.empty()) inputs.push_back({"the prototype file", a.file});
+  for (const auto& sc : a.scene) inputs.push_back({"the --scene file", sc});
+  if (!a.mouse_script.empty()) inputs.push_back({"the --mouse-script file", a.mouse_script});
+  if (spec.kind == "trace") inputs.push_back({"the --device trace", spec.file});
+  if (!a.screenshot.empty())
+    app::require_replaceable_output(
+        "--screenshot", a.screenshot, inputs,
+        [](const std::string& p) { return app::file_starts_with(p, "\x89PNG\r\n\x1a\n"); },
+        "PNG image", a.overwrite);
+  if (!a.record_trace.empty()) {
+    std::error_code e1, e2;
+    namespace fs = std::filesystem;
+    if (!a.screenshot.empty() && fs::weakly_canonical(fs::absolute(a.screenshot), e1) ==
+                                     fs::weakly_canonical(fs::absolute(a.record_trace), e2))
+      throw InputError(SourceLocation{"--record-trace"},
+                       "\"" + a.record_trace +
+                           "\" is the --screenshot file too; expected another file for the trace");
+    app::require_replaceable_output(
+        "--record-trace", a.record_trace, inputs,
+        [](const std::string& p) { return app::file_starts_with(p, "# palplab-trace/"); },
+        "palplab trace file", a.overwrite);
+  }
   if (!a.mouse_script.empty() && spec.kind != "mouse")
     throw InputError("--mouse-script needs --device mouse (it scripts the window's mouse)");
   if (!(a.min_rate >= 0.0) || a.min_rate > 100000.0)
@@ -199,6 +226,8 @@ palplab::app::CommandRegistration reg_view{
       cmd->add_option("--record-trace", a->record_trace, "Write the device track to FILE");
       cmd->add_option("--mouse-script", a->mouse_script,
                       "Scripted mouse input instead of the window's (JSON, docs/DEVICES.md)");
+      cmd->add_flag("--overwrite", a->overwrite,
+                    "Replace an existing --screenshot or --record-trace file of another kind");
       cmd->callback([a, code] { *code = run_view(*a); });
     }};
 

@@ -220,6 +220,39 @@ TEST(CliView, NoDisplayExits2) {
   EXPECT_NE(r.out.find("DISPLAY"), std::string::npos) << r.out;
 }
 
+// --screenshot and --record-trace replaced any file, a results database too (review 2026-12-06,
+// eighth): a file of another kind is refused before any window opens (no display needed), as by
+// render, report and trace-export; --overwrite replaces it; an input is never an output.
+TEST(CliView, OutputsNeverReplaceAFileOfAnotherKindOrAnInput) {
+  const fs::path db = tmp("victim.db");
+  {
+    std::ofstream o(db, std::ios::binary);
+    o << std::string("SQLite format 3\0", 16) << std::string(4080, '\0');
+  }
+  const std::string before = palplab::testing::slurp(db);
+  const std::string headless = "env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(PALPLAB_BINARY);
+  for (const std::string flag : {"--screenshot", "--record-trace"}) {
+    Result r = run(headless + " view " + proto("A") + " --frames 1 " + flag + " " + db.string());
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_TRUE(palplab::testing::has(
+        r.out, flag + ": \"" + db.string() + "\" exists and is an SQLite database, not a "))
+        << r.out;
+    EXPECT_TRUE(palplab::testing::has(r.out, "give --overwrite to replace it")) << r.out;
+    EXPECT_EQ(palplab::testing::slurp(db), before);
+    // With --overwrite the check passes (the run then needs a window: no display here).
+    r = run(headless + " view " + proto("A") + " --frames 1 --overwrite " + flag + " " +
+            db.string());
+    EXPECT_TRUE(palplab::testing::has(r.out, "view needs a window")) << r.out;
+  }
+  Result r = run(headless + " view " + proto("A") + " --frames 1 --screenshot " + proto("A"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_TRUE(palplab::testing::has(r.out, "the prototype file")) << r.out;
+  r = run(headless + " view " + proto("A") + " --frames 1 --screenshot " + tmp("s.png").string() +
+          " --record-trace " + tmp("s.png").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_TRUE(palplab::testing::has(r.out, "is the --screenshot file too")) << r.out;
+}
+
 TEST(CliView, RecordTraceThenReplayItUnderXvfb) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "xvfb-run not installed (.ci/install-deps installs xvfb)";
