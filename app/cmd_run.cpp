@@ -280,7 +280,10 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
     engine::UdpDevice probe(engine::UdpDeviceOptions{spec.port, 0.002});
     engine::require_device_rate(probe, spec.text, h.min_rate);
   }
-  if (!h.record_trace.empty()) app::require_creatable_dir("--record-trace", h.record_trace);
+  if (!h.record_trace.empty()) {
+    app::require_creatable_dir("--record-trace", h.record_trace);
+    protocols::require_trace_dir_of(h.record_trace, ro.db);
+  }
   protocols::HumanOptions o;
   o.db = ro.db;
   o.participant = h.participant;
@@ -437,8 +440,10 @@ palplab::app::CommandRegistration reg_run{
           return;
         }
         if (!human->participant.empty()) throw palplab::InputError("--participant needs --human");
-        if (!human->record_trace.empty())
+        if (!human->record_trace.empty()) {
           palplab::app::require_creatable_dir("--record-trace", human->record_trace);
+          palplab::protocols::require_trace_dir_of(human->record_trace, opt->db);
+        }
         opt->record_trace_dir = human->record_trace;
         const bool tty = isatty(2);
         auto bar_open = std::make_shared<bool>(false);  // a progress bar without its newline

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -711,7 +712,9 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
             tr.meta = {{"participant", pp.id},
                        {"ordinal", std::to_string(pp.sessions[k].ordinal)},
                        {"prototype", pp.sessions[k].prototype},
-                       {"source", "virtual participant (exact positions)"}};
+                       {"source", "virtual participant (exact positions)"},
+                       {"database", trace_database(opt.db)},
+                       {"study", study.id}};
             fs::create_directories(opt.record_trace_dir);
             engine::write_trace(
                 (fs::path(opt.record_trace_dir) /
@@ -1052,6 +1055,8 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       tr.meta["participant"] = pp->id;
       tr.meta["ordinal"] = std::to_string(spec.ordinal);
       tr.meta["prototype"] = spec.prototype;
+      tr.meta["database"] = trace_database(opt.db);
+      tr.meta["study"] = study.id;
       engine::write_trace(
           (fs::path(opt.record_trace_dir) / (pp->id + "_" + std::to_string(spec.ordinal) + "_" +
                                              std::to_string(rec.attempt) + ".trace"))
@@ -1076,6 +1081,38 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       if (sum.next_due.empty()) sum.next_due = utc_date((day0 + spec.day) * 86400);
     }
   return sum;
+}
+
+std::string trace_database(const std::string& db) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(db), ec);
+  return ec ? fs::absolute(db).lexically_normal().string() : p.string();
+}
+
+void require_trace_dir_of(const std::string& dir, const std::string& db) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return;  // made by the run
+  const std::string mine = trace_database(db);
+  static const std::regex name(R"(.+_[0-9]+_[0-9]+\.trace)");
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (std::regex_match(e.path().filename().string(), name)) files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  for (const auto& f : files) {
+    const auto meta = engine::read_trace_meta(f);
+    const auto it = meta.find("database");
+    if (it != meta.end() && it->second == mine) continue;
+    throw InputError(
+        SourceLocation{"--record-trace"},
+        "\"" + dir + "\" holds " + f + ", " +
+            (meta.empty() ? std::string("a file that is no palplab trace")
+             : it == meta.end()
+                 ? std::string("a trace that does not name its run (an older palplab's, or one "
+                               "written by hand)")
+                 : "a trace of another run (database " + it->second + ")") +
+            ", with a name this run writes: its sessions' tracks would replace such files; "
+            "choose another directory (one per database)");
+  }
 }
 
 }  // namespace palplab::protocols

@@ -131,4 +131,12 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
 // replay reproduces the measures within that quantisation, not bit for bit).
 engine::Trace trace_from_samples(const results::SampleSeries& s);
 
+// --record-trace DIR: every trace a run writes names its run in its metadata, "database" (the
+// results database's absolute path, trace_database) and "study" (the study id). A DIR holding a
+// trace of the names a run writes (<participant>_<ordinal>_<attempt>.trace) from another
+// database, or from a palplab that did not name it, is refused (InputError at --record-trace)
+// before the run: its files would be replaced (a person's recorded sessions by another study's).
+std::string trace_database(const std::string& db);
+void require_trace_dir_of(const std::string& dir, const std::string& db);
+
 }  // namespace palplab::protocols

@@ -16,6 +16,7 @@ namespace {
 using Result = palplab::testing::CliResult;
 using palplab::testing::run_palplab;
 using palplab::testing::scratch_dir;
+using palplab::testing::slurp;
 
 const std::string kStudy = palplab::testing::tiny_study_json("inp", 3);
 using palplab::testing::expect_exit2;
@@ -199,4 +200,48 @@ TEST(CliRunInput, RecordTraceDirectoryIsMadeOnlyWhenATraceIsWritten) {
     expect_exit2(r, {"--record-trace", "cannot create the directory", "before the work starts"});
     EXPECT_FALSE(fs::exists(db));
   }
+}
+
+// `--record-trace DIR` replaced the traces another run had written there (the file names are the
+// participant's id, the session's ordinal and attempt only): a person's recorded sessions by
+// another study's (review 2026-12-06, eighth). The traces name their database; a DIR with a trace
+// of another run (or one that does not name its run) under a name this run writes is refused
+// before the run; the same database (--force, --resume) writes into it.
+TEST(CliRunInput, RecordTraceNeverReplacesAnotherRunsTraces) {
+  auto d = scratch_dir("run_record_trace_other");
+  std::ofstream(d / "s.json") << kStudy;
+  const auto run = [&](const std::string& db, const std::string& more) {
+    return run_palplab("run " + (d / "s.json").string() + " --quiet --db " + (d / db).string() +
+                           " --record-trace " + (d / "t").string() + more,
+                       d);
+  };
+  ASSERT_EQ(run("a.db", "").code, 0);
+  const fs::path trace = d / "t" / "P01_0_0.trace";
+  const std::string first = slurp(trace);
+  EXPECT_TRUE(palplab::testing::has(first, "# database=" + fs::canonical(d / "a.db").string()))
+      << first.substr(0, 400);
+  EXPECT_TRUE(palplab::testing::has(first, "# study=")) << first.substr(0, 400);
+  Result r = run("b.db", "");
+  expect_exit2(
+      r, {"--record-trace: \"" + (d / "t").string() + "\" holds ",
+          "P01_0_0.trace, a trace of another run (database " + fs::canonical(d / "a.db").string() +
+              "), with a name this run writes: its sessions' tracks would replace such "
+              "files; choose another directory (one per database)"});
+  EXPECT_FALSE(fs::exists(d / "b.db"));
+  EXPECT_EQ(slurp(trace), first);
+  // The same database again: --force replaces its own traces (the same run, so the same bytes).
+  ASSERT_EQ(run("a.db", " --force").code, 0);
+  EXPECT_EQ(slurp(trace), first);
+  // A trace that does not name its run (an older palplab's, or written by hand).
+  std::string unnamed = first;
+  unnamed.erase(unnamed.find("# database="),
+                unnamed.find('\n', unnamed.find("# database=")) - unnamed.find("# database=") + 1);
+  std::ofstream(trace, std::ios::trunc) << unnamed;
+  expect_exit2(run("a.db", " --force"), {"a trace that does not name its run"});
+  // Files of other names are no concern of the run's.
+  fs::remove_all(d / "t");
+  fs::create_directory(d / "t");
+  std::ofstream(d / "t" / "mine.trace") << "x";
+  ASSERT_EQ(run("c.db", "").code, 0);
+  EXPECT_EQ(slurp(d / "t" / "mine.trace"), "x");
 }

@@ -22,6 +22,29 @@ const char* kHeader = "t,x,y,z,vx,vy,vz,buttons";
 const char* kHeaderAxis = "t,x,y,z,vx,vy,vz,buttons,ax,ay,az";
 }  // namespace
 
+namespace {
+// A "# key=value" comment line into `meta` (other comments are ignored).
+void add_meta(const std::string& line, std::map<std::string, std::string>& meta) {
+  const auto eq = line.find('=');
+  if (eq == std::string::npos) return;
+  std::string key = line.substr(1, eq - 1);
+  key.erase(0, key.find_first_not_of(' '));
+  meta[key] = line.substr(eq + 1);
+}
+}  // namespace
+
+std::map<std::string, std::string> read_trace_meta(const std::string& path) {
+  std::map<std::string, std::string> meta;
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind(kMagic, 0) != 0) return meta;
+  while (std::getline(in, line) && !line.empty() && line[0] == '#') {
+    if (line.back() == '\r') line.pop_back();
+    add_meta(line, meta);
+  }
+  return meta;
+}
+
 Trace read_trace(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open the trace: " + std::strerror(errno));
@@ -43,12 +66,7 @@ Trace read_trace(const std::string& path) {
         magic = true;
         continue;
       }
-      const auto eq = line.find('=');
-      if (eq != std::string::npos) {
-        std::string key = line.substr(1, eq - 1);
-        key.erase(0, key.find_first_not_of(' '));
-        tr.meta[key] = line.substr(eq + 1);
-      }
+      add_meta(line, tr.meta);
       continue;
     }
     if (!magic) fail("not a palplab trace (expected \"" + std::string(kMagic) + "\")");

@@ -31,6 +31,9 @@ struct Trace {
 
 // Throws palplab::InputError (FILE:LINE: what) on a bad file.
 Trace read_trace(const std::string& path);
+// The "# key=value" lines before the first sample of the trace at `path` (its metadata), read
+// without the samples; empty when the file is no palplab trace or cannot be read.
+std::map<std::string, std::string> read_trace_meta(const std::string& path);
 void write_trace(const std::string& path, const Trace& trace);
 
 // Passes another device through and records every read() (the device track of a session).
