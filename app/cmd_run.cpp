@@ -493,17 +493,29 @@ palplab::app::CommandRegistration reg_run{
         std::signal(SIGINT, SIG_DFL);
         std::signal(SIGTERM, SIG_DFL);
         if (*bar_open) std::fprintf(stderr, "\n");  // stopped by --max-sessions
+        // What is left to run: virtual sessions (--resume), or only people's (run --human).
+        std::string how = "continue with --resume";
+        if (!r.complete && r.left.size() == r.people_left.size()) {
+          std::string ids;
+          for (std::size_t k = 0; k < r.people_left.size() && k < 10; ++k)
+            ids += (k ? ", " : "") + r.people_left[k];
+          if (r.people_left.size() > 10) ids += ", …";
+          how = "the virtual participants are done; people's sessions remain (" + ids +
+                "): `palplab run STUDY --db " + opt->db + " --human --participant ID`";
+        }
         if (!*quiet) {
           std::printf(
               "%s: %ld sessions run (%ld already in the database), %.1f s simulated in %.1f s "
               "wall (%.1fx real time), %s\n",
               palplab::escape_controls(opt->db, false).c_str(), r.sessions_run, r.sessions_skipped,
               r.simulated, r.wall, r.wall > 0 ? r.simulated / r.wall : 0.0,
-              r.complete ? "complete" : "INCOMPLETE (continue with --resume)");
+              r.complete ? "complete"
+                         : palplab::escape_controls("INCOMPLETE (" + how + ")", false).c_str());
         } else if (!r.complete) {  // --quiet: no progress, but never a silent partial result
-          std::fprintf(stderr, "%s: INCOMPLETE (%ld session%s run; continue with --resume)\n",
+          std::fprintf(stderr, "%s: INCOMPLETE (%ld session%s run; %s)\n",
                        palplab::escape_controls(opt->db, false).c_str(), r.sessions_run,
-                       r.sessions_run == 1 ? "" : "s");
+                       r.sessions_run == 1 ? "" : "s",
+                       palplab::escape_controls(how, false).c_str());
         }
         *code = 0;
       });

@@ -422,6 +422,21 @@ std::string another_study(const results::StudyRecord& rec, const Study& study,
 
 // A new database: the study, its prototypes (with their SHA-256), participants and structure,
 // and meta "samples" (full or none), in one transaction.
+// The planned participants with a session not complete in the database, in plan order.
+std::vector<std::string> participants_left(const Plan& plan, const results::Store& store) {
+  std::set<std::pair<std::string, int>> done;
+  for (const auto& s : store.read_attempts())
+    if (s.status == "complete") done.insert({s.participant, s.ordinal});
+  std::vector<std::string> left;
+  for (const auto& p : plan.participants)
+    for (const auto& ss : p.sessions)
+      if (!done.count({p.id, ss.ordinal})) {
+        left.push_back(p.id);
+        break;
+      }
+  return left;
+}
+
 void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
                      results::Store& store, std::map<std::string, std::string>& prototype_sha,
                      bool samples) {
@@ -758,10 +773,13 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
   if (error) std::rethrow_exception(error);
 
   sum.wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  long virtual_done = 0;
-  for (const auto& r : store.read_sessions()) virtual_done += human.count(r.participant) ? 0 : 1;
-  // Human participants finish on their own schedule; the virtual part is complete here.
-  sum.complete = virtual_done == progress.sessions_total && human.empty();
+  // Human participants finish on their own schedule: the study is finished when every planned
+  // session is complete, whoever ran it (run_human marks it when a person's is the last; before,
+  // a database with any person's session was never marked finished, its report "provisional").
+  sum.left = participants_left(plan, store);
+  for (const auto& id : sum.left)
+    if (human.count(id)) sum.people_left.push_back(id);
+  sum.complete = sum.left.empty();
   if (sum.complete) store.set_finished(results::utc_now());
   return sum;
 }
@@ -1080,6 +1098,9 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       ++sum.remaining;
       if (sum.next_due.empty()) sum.next_due = utc_date((day0 + spec.day) * 86400);
     }
+  // This person's last session may be the study's last (as run_study marks it).
+  if (sum.remaining == 0 && participants_left(plan, store).empty())
+    store.set_finished(results::utc_now());
   return sum;
 }
 

@@ -72,7 +72,11 @@ struct RunSummary {
   long sessions_run = 0, sessions_skipped = 0;
   double wall = 0.0;       // s
   double simulated = 0.0;  // s
-  bool complete = false;   // every planned session is in the database
+  bool complete = false;   // every planned session is complete in the database (people's too)
+  // The planned participants with a session not complete, in plan order; of them, those run by
+  // people (`run --human`): the database stays unfinished until they come (--resume does not
+  // run them).
+  std::vector<std::string> left, people_left;
 };
 
 RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt);

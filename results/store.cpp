@@ -921,7 +921,8 @@ std::string Store::incomplete_warning() const {
            " has not finished (" + std::to_string(n) +
            " sessions stored); results cover only those sessions. Continue it with "
            "`palplab run STUDY --db " +
-           path_ + " --resume`.";
+           path_ + " --resume` (virtual participants), or `palplab run STUDY --db " + path_ +
+           " --human --participant ID` (a person's sessions).";
   });
 }
 

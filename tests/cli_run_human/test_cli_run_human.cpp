@@ -412,3 +412,66 @@ TEST(CliRunHuman, HumanSessionsKeepTheRunsSamplesSettingAndStartInALeftover) {
   EXPECT_EQ(one("SELECT COUNT(*) AS v FROM sessions WHERE status = 'complete'"), "2");
   EXPECT_EQ(one("SELECT COUNT(*) AS v FROM samples"), "0");
 }
+
+// A study whose every participant is run by a person was never marked finished (finished_at
+// stayed NULL when the last session was done: its report "provisional" for ever, and the advice
+// "continue with --resume" looped), nor one whose people and virtual participants (--resume) had
+// all finished (review 2026-12-06, eighth). The study is finished when every planned session is
+// complete, whoever ran it; until then a virtual run whose part is done names the people left.
+TEST(CliRunHuman, AStudyIsFinishedWhenItsLastSessionIsAPersons) {
+  Tmp tmp;
+  e::Trace tr;  // 2 s at rest above the organ: a session that touches nothing
+  for (int k = 0; k < 2000; ++k) {
+    e::TraceSample s;
+    s.t = k * 0.001;
+    s.in.position = Eigen::Vector3d(0, 0, 0.2);
+    tr.samples.push_back(s);
+  }
+  const std::string trace = (tmp.dir / "rest.trace").string();
+  e::write_trace(trace, tr);
+  const auto person = [&](const fs::path& db, const std::string& who, const std::string& now) {
+    return run("PALPLAB_NOW=" + now + " " + std::string(PALPLAB_BINARY) + " run " + kDir +
+               "human_study.json --db " + db.string() + " --human --participant " + who +
+               " --device trace:" + trace);
+  };
+  const auto finished = [](const fs::path& db) {
+    return db_rows(db, "SELECT finished_at FROM study").at(0).at("finished_at");
+  };
+  // Everyone a person: P01 and P02, day 0 and day 2.
+  const fs::path db = tmp.dir / "people.db";
+  for (const char* who : {"P01", "P02"})
+    for (const char* now : {"2026-11-24T10:00:00Z", "2026-11-26T10:00:00Z"}) {
+      const Result r = person(db, who, now);
+      ASSERT_EQ(r.code, 0) << r.out;
+      if (std::string(who) == "P01") {
+        EXPECT_EQ(finished(db), "NULL");
+      }
+    }
+  EXPECT_NE(finished(db), "NULL");
+  Result r = run(std::string(PALPLAB_BINARY) + " report " + db.string() + " --out " +
+                 (tmp.dir / "rep").string() + " --no-stills");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_FALSE(palplab::testing::has(r.out, "INCOMPLETE")) << r.out;
+  // P01 a person, P02 virtual (--resume): finished by the virtual run.
+  const fs::path mixed = tmp.dir / "mixed.db";
+  for (const char* now : {"2026-11-24T10:00:00Z", "2026-11-26T10:00:00Z"})
+    ASSERT_EQ(person(mixed, "P01", now).code, 0);
+  r = run(std::string(PALPLAB_BINARY) + " run " + kDir + "human_study.json --db " + mixed.string() +
+          " --resume");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(palplab::testing::has(r.out, ", complete")) << r.out;
+  EXPECT_NE(finished(mixed), "NULL");
+  // The virtual part done, a person's sessions left: said, with the command that runs them.
+  const fs::path waiting = tmp.dir / "waiting.db";
+  ASSERT_EQ(person(waiting, "P02", "2026-11-24T10:00:00Z").code, 0);
+  r = run(std::string(PALPLAB_BINARY) + " run " + kDir + "human_study.json --db " +
+          waiting.string() + " --resume");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(palplab::testing::has(
+      r.out,
+      "INCOMPLETE (the virtual participants are done; people's sessions remain (P02): "
+      "`palplab run STUDY --db " +
+          waiting.string() + " --human --participant ID`)"))
+      << r.out;
+  EXPECT_EQ(finished(waiting), "NULL");
+}
