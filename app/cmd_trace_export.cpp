@@ -8,6 +8,8 @@
 #include <memory>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "app/command.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
@@ -72,6 +74,17 @@ palplab::app::CommandRegistration reg_trace_export{
         engine::Trace tr = protocols::trace_from_samples(ss);
         tr.meta["session"] = std::to_string(a->session);
         engine::write_trace(a->out, tr);
+        // The samples hold the positions only: a needle session's tool switch and stylus axis
+        // are not in the database, so the track replays as the finger's (review 2026-12-06,
+        // eighth: the replay had no insertion, silently). `run --record-trace` keeps them.
+        const nlohmann::json study = nlohmann::json::parse(store.read_study().json, nullptr, false);
+        if (study.is_object() && study.contains("task") && study["task"].is_object() &&
+            study["task"].value("kind", "") == "needle_insertion")
+          std::fprintf(stderr,
+                       "warning: session %lld is a needle insertion: the database holds no tool "
+                       "switch or stylus axis, so %s replays as the finger's positions only (no "
+                       "insertion); `palplab run --record-trace DIR` records the whole track\n",
+                       a->session, escape_controls(a->out, false).c_str());
         std::printf("%s: %zu samples of session %lld (%s)\n",
                     escape_controls(a->out, false).c_str(), tr.samples.size(), a->session,
                     escape_controls(who, false).c_str());

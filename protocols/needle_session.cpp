@@ -25,8 +25,14 @@ using Clock = std::chrono::steady_clock;
 class TraineeDevice : public engine::Device {
  public:
   static constexpr long kTimedEvery = 8;  // as the palpation sessions (runner.cpp)
-  TraineeDevice(pm::NeedleTrainee& trainee, engine::Scene& scene, std::vector<float>& loop)
-      : trainee_(trainee), scene_(scene), loop_(loop), tool_(scene.tool()), dt_(scene.dt()) {}
+  TraineeDevice(pm::NeedleTrainee& trainee, engine::Scene& scene, std::vector<float>& loop,
+                engine::Trace* track)
+      : trainee_(trainee),
+        scene_(scene),
+        loop_(loop),
+        track_(track),
+        tool_(scene.tool()),
+        dt_(scene.dt()) {}
 
   engine::DeviceInput read(double) override {
     const pm::ToolCommand cmd = trainee_.command(static_cast<double>(k_ + 1) * dt_);
@@ -41,6 +47,12 @@ class TraineeDevice : public engine::Device {
     }
     engine::DeviceInput in;
     in.position = x_ = cmd.x;
+    // What a person's device gives for the same command (engine::ToolSwitchDevice reads it);
+    // the scene ignores it here (the tool is set above), the recorded track keeps it.
+    in.buttons = cmd.tool == "needle" ? engine::kNeedleToolButton : 0u;
+    in.button = (in.buttons & 1u) != 0;
+    in.stylus_axis = cmd.axis;
+    if (track_) track_->samples.push_back({static_cast<double>(k_ - 1) * dt_, in});
     return in;
   }
   const Eigen::Vector3d& last_position() const { return x_; }  // the command of the last read
@@ -53,6 +65,7 @@ class TraineeDevice : public engine::Device {
   pm::NeedleTrainee& trainee_;
   engine::Scene& scene_;
   std::vector<float>& loop_;
+  engine::Trace* track_;
   std::string tool_;
   Eigen::Vector3d axis_ = Eigen::Vector3d::Zero(), x_ = Eigen::Vector3d::Zero();
   double dt_;
@@ -66,7 +79,7 @@ class TraineeDevice : public engine::Device {
 NeedleSessionRun run_needle_session(const Study& study, const pm::TraineeParams& params,
                                     std::uint64_t participant_seed, const SessionSpec& spec,
                                     const pm::TraineeState& before, engine::Scene& scene,
-                                    bool keep_samples) {
+                                    bool keep_samples, bool record_track) {
   const engine::SceneGeometry& g = scene.geometry();
   if (scene.tool() == "probe")
     throw InputError("prototype \"" + spec.prototype + "\" (model \"" + scene.model_kind() +
@@ -96,7 +109,8 @@ NeedleSessionRun run_needle_session(const Study& study, const pm::TraineeParams&
   samples.F.reserve(3 * steps);
   samples.node.reserve(steps);
   out.loop.reserve(steps / TraineeDevice::kTimedEvery + 1);
-  TraineeDevice device(trainee, scene, out.loop);
+  if (record_track) out.track.samples.reserve(steps);
+  TraineeDevice device(trainee, scene, out.loop, record_track ? &out.track : nullptr);
   engine::LockstepOptions lo;
   lo.duration = spec.duration;
   lo.frame_period = 0.0;

@@ -239,6 +239,9 @@ class VirtualParticipant : public engine::Device {
 struct SessionOutcome {
   results::SessionData data;
   pm::TraineeState state_after;
+  // The device track when the session records its own (needle sessions: the tool and the stylus
+  // axis, which the samples lack); empty otherwise (the track is the samples' positions).
+  engine::Trace track;
 };
 
 // The model parameters of a study, converted from its (validated) JSON once per run.
@@ -284,7 +287,8 @@ SessionOutcome finish_session(const ParticipantPlan& pp, const SessionSpec& spec
 SessionOutcome run_session(const Study& study, const ModelParams& mp, const ParticipantPlan& pp,
                            const SessionSpec& spec, const pm::TraineeState& state_before,
                            bool keep_samples,
-                           const std::map<std::string, std::string>& prototype_sha) {
+                           const std::map<std::string, std::string>& prototype_sha,
+                           bool record_track = false) {
   // The scene is built from the file; it must still be the file recorded when the run started,
   // or the database would mix two simulators under one name.
   if (auto it = prototype_sha.find(spec.prototype);
@@ -295,12 +299,14 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
         spec.prototype_file);
   engine::Scene scene = session_scene(study, spec);
   if (study.task.kind == "needle_insertion") {
-    NeedleSessionRun nr =
-        run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene, keep_samples);
+    NeedleSessionRun nr = run_needle_session(study, mp.trainee, pp.seed, spec, state_before, scene,
+                                             keep_samples, record_track);
     nr.data.session.transparency = scene.config().cues.transparency;
-    return finish_session(pp, spec, std::move(nr.data), nr.steps, scene.dt(), nr.wall,
-                          engine::summarize_times({nr.loop.begin(), nr.loop.end()}), 1.0,
-                          nr.state_after.to_json());
+    SessionOutcome o = finish_session(pp, spec, std::move(nr.data), nr.steps, scene.dt(), nr.wall,
+                                      engine::summarize_times({nr.loop.begin(), nr.loop.end()}),
+                                      1.0, nr.state_after.to_json());
+    o.track = std::move(nr.track);
+    return o;
   }
   const engine::SceneGeometry& g = scene.geometry();
   const int feature = g.region_index(study.task.feature);
@@ -721,9 +727,10 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
           const auto session_t0 = Clock::now();
           const bool tracing = !opt.record_trace_dir.empty();
           SessionOutcome o = run_session(study, mp, pp, pp.sessions[k], state,
-                                         keep_samples || tracing, prototype_sha);
+                                         keep_samples || tracing, prototype_sha, tracing);
           if (tracing) {
-            engine::Trace tr = trace_from_samples(o.data.samples);
+            engine::Trace tr =
+                o.track.samples.empty() ? trace_from_samples(o.data.samples) : std::move(o.track);
             tr.meta = {{"participant", pp.id},
                        {"ordinal", std::to_string(pp.sessions[k].ordinal)},
                        {"prototype", pp.sessions[k].prototype},

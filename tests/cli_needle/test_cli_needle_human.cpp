@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <map>
 #include <optional>
 #include <string>
@@ -262,3 +263,51 @@ TEST(CliNeedleHuman, APrototypeWithoutToolsIsRefused) {
 }
 
 }  // namespace
+
+// A virtual needle session recorded with `run --record-trace` replayed as a finger-only session
+// (the track was made from the stored samples, which hold neither the tool nor the stylus axis):
+// no insertion, silently (review 2026-12-06, eighth). The track now records what a person's
+// device gives (buttons bit 1, the axis), and its replay by `run --human` stores the recorded
+// session's measures exactly; `trace-export` of a needle session warns that it cannot.
+TEST(CliNeedleHuman, ARecordedVirtualSessionReplaysAsTheSameSession) {
+  const fs::path dir = palplab::testing::scratch_dir("needle_replay");
+  nlohmann::json study;
+  {
+    std::ifstream in(kDir + "needle_human_study.json");
+    study = nlohmann::json::parse(in);
+  }
+  // A trainee quick enough to insert within the session (3.3 s here).
+  study["id"] = "needle_replay";
+  study["phases"][0]["session_duration"] = 6;
+  study["participant_model"] = {
+      {"parameters", {{"palpation_grid", 2}, {"needle_speed", 0.03}, {"palpation_speed", 0.2}}}};
+  const std::string s = (dir / "s.json").string();
+  std::ofstream(s) << study.dump(1);
+  const auto v = palplab::testing::run_command(std::string(PALPLAB_BINARY) + " run " + s +
+                                               " --quiet --db " + (dir / "v.db").string() +
+                                               " --record-trace " + (dir / "tr").string());
+  ASSERT_EQ(v.code, 0) << v.out;
+  const auto measures = [](const fs::path& db) {
+    std::map<std::string, std::string> m;
+    for (auto& r : db_rows(db, "SELECT name, value FROM measures")) m[r["name"]] = r["value"];
+    return m;
+  };
+  const auto virtual_m = measures(dir / "v.db");
+  ASSERT_EQ(virtual_m.at("insertion_attempts"), "1.0") << "the trainee must insert in the session";
+  ASSERT_NE(virtual_m.at("layers_passed"), "0.0");
+  const std::string track = palplab::testing::slurp(dir / "tr" / "P01_0_0.trace");
+  EXPECT_TRUE(palplab::testing::has(track, "t,x,y,z,vx,vy,vz,buttons,ax,ay,az\n"));
+  const auto h = palplab::testing::run_command(
+      human_run(s, dir / "h.db", "trace:" + (dir / "tr" / "P01_0_0.trace").string()));
+  ASSERT_EQ(h.code, 0) << h.out;
+  EXPECT_EQ(measures(dir / "h.db"), virtual_m);
+  const auto x = palplab::testing::run_command(std::string(PALPLAB_BINARY) + " trace-export " +
+                                               (dir / "v.db").string() + " --session 1 --out " +
+                                               (dir / "x.trace").string());
+  EXPECT_EQ(x.code, 0) << x.out;
+  EXPECT_TRUE(palplab::testing::has(x.out,
+                                    "warning: session 1 is a needle insertion: the database "
+                                    "holds no tool switch or stylus axis"))
+      << x.out;
+  fs::remove_all(dir);
+}
