@@ -387,7 +387,17 @@ TEST(TraceDevice, BadFilesAreLocated) {
        ":3: t: expected the first sample's time in [0, 86400] s"},
       {head + "0.001,0,0,1e300,0,0,0,0\n",
        ":4: column 4: expected a position within 10 m of the device origin"},
-      {head + "0.001,0,0,0,0,-2e3,0,0\n", ":4: column 6: expected a velocity within 1000 m/s"}};
+      {head + "0.001,0,0,0,0,-2e3,0,0\n", ":4: column 6: expected a velocity within 1000 m/s"},
+      // A field with text after its number is that field's error (it was "expected 8
+      // comma-separated columns" on a line of 8: review 2026-12-06, eighth); too few and too
+      // many columns are said as such.
+      {head + "0.001abc,0,0,0,0,0,0,0\n", ":4: column 1: expected a finite number, got '0.001abc'"},
+      {head + "0.001,0.01 x,0,0,0,0,0,0\n", ":4: column 2: expected a finite number, got '0.01 x'"},
+      {head + "0.001,0,0,0,0,0,0,5abc\n", ":4: column 8: expected a finite number, got '5abc'"},
+      {head + "0.001,,0,0,0,0,0,0\n", ":4: column 2: expected a finite number, got ''"},
+      {head + "0.001,0,0,0,0,0,0\n",
+       ":4: expected 8 comma-separated columns (t,x,y,z,vx,vy,vz,buttons), got 7"},
+      {head + "0.001,0,0,0,0,0,0,0,1\n", ":4: unexpected text after the 8th column"}};
   for (const auto& [text, expect] : cases) {
     write(text);
     try {

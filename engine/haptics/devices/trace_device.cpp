@@ -1,5 +1,7 @@
 #include "engine/haptics/devices/trace_device.hpp"
 
+#include "common/escape.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -82,20 +84,28 @@ Trace read_trace(const std::string& path) {
     double v[11] = {};
     const char* p = line.c_str();
     const std::string names = cols == 8 ? kHeader : kHeaderAxis;
+    // The columns first (a field with text after its number, "0.01abc", was "expected 8
+    // comma-separated columns" on a line of 8: review 2026-12-06, eighth), then each a number.
+    const auto commas = std::count(line.begin(), line.end(), ',');
+    if (commas < cols - 1)
+      fail("expected " + std::to_string(cols) + " comma-separated columns (" + names + "), got " +
+           std::to_string(commas + 1));
     for (int k = 0; k < cols; ++k) {
+      const char* field_end = std::strchr(p, ',');
+      if (!field_end || k == cols - 1) field_end = p + std::strlen(p);
+      const std::string field(p, field_end);
       char* end = nullptr;
       errno = 0;
       v[k] = std::strtod(p, &end);
-      if (end == p || errno == ERANGE || !std::isfinite(v[k]))
-        fail("column " + std::to_string(k + 1) + ": expected a finite number");
-      p = end;
-      if (k < cols - 1) {
-        if (*p != ',')
-          fail("expected " + std::to_string(cols) + " comma-separated columns (" + names + ")");
-        ++p;
-      } else if (*p != '\0') {
-        fail("unexpected text after the " + std::to_string(cols) + "th column");
+      while (end < field_end && (*end == ' ' || *end == '\t')) ++end;
+      if (end == p || end != field_end || errno == ERANGE || !std::isfinite(v[k])) {
+        if (k == cols - 1 && end != p && end < field_end && *end == ',')
+          fail("unexpected text after the " + std::to_string(cols) + "th column");
+        fail("column " + std::to_string(k + 1) + ": expected a finite number, got '" +
+             escape_controls(field.substr(0, 40), false) + (field.size() > 40 ? "…" : "") + "'");
       }
+      p = field_end;
+      if (k < cols - 1) ++p;
     }
     if (v[7] < 0 || v[7] != std::floor(v[7]) || v[7] > 4294967295.0)
       fail("buttons: expected a non-negative whole number (bit mask)");
