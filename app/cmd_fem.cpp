@@ -217,8 +217,9 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
       std::snprintf(note, sizeof note,
                     "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
                     "per level; a graded level 0, --grade, is larger): this takes "
-                    "minutes and GBs of memory; a coarser copy of the prototype (mesh "
-                    "\"vertices\": 400) runs in about a minute\n",
+                    "minutes and GBs of memory; one level fewer (--levels) is 8x smaller (a "
+                    "coarser copy of the prototype is not: --grade auto refines its level 0 "
+                    "around the press back towards the same size)\n",
                     finest);
       su.note = note;
     }

@@ -96,7 +96,8 @@ int run_probe(const ProbeArgs& a) {
       {"region", g.vertex_region[node] >= 0 ? g.region_names[g.vertex_region[node]] : ""},
       {"target_force", a.force},
       {"force_reached", reached},
-      {"time_to_force", time_to_force},
+      // null when the force was not reached (it was -1, a time: review 2026-12-06, eighth).
+      {"time_to_force", reached ? nlohmann::json(time_to_force) : nlohmann::json(nullptr)},
       {"peak_force", peak_force},
       {"peak_displacement", peak_disp},
       {"mass_initial", s0.total_mass},

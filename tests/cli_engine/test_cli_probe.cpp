@@ -126,6 +126,8 @@ TEST(CliProbe, ExplicitIntegratorsDivergeOnModelCAndAreCaught) {
       "probe " + proto("A") + " --press ovary_left --force 20 --duration 0.2 --json");
   EXPECT_EQ(over.code, 0) << over.err;
   EXPECT_FALSE(nlohmann::json::parse(over.out)["force_reached"].get<bool>());
+  // Its time to the force is null, not a time (-1: review 2026-12-06, eighth).
+  EXPECT_TRUE(nlohmann::json::parse(over.out)["time_to_force"].is_null()) << over.out;
   EXPECT_NE(over.err.find("note: --force 20 N is above the prototype's device force limit (8.5 "
                           "N, contact.force_limit)"),
             std::string::npos)
