@@ -398,9 +398,17 @@ std::size_t prescan(std::string_view t, const std::string& file) {
       const std::string lit(t.substr(i, j - i));
       if (lit.size() > 1 || std::isdigit(static_cast<unsigned char>(c))) {
         const double x = std::strtod(lit.c_str(), nullptr);
+        const std::string shown = lit.size() > 40 ? lit.substr(0, 40) + "..." : lit;
         if (std::isinf(x))
-          fail(i, "number " + (lit.size() > 40 ? lit.substr(0, 40) + "..." : lit) +
+          fail(i, "number " + shown +
                       " is out of range (a JSON number must fit a double, |x| <= 1.8e308)");
+        // A nonzero number below the smallest double was read as 0 ("got 0.0" said of 1e-400:
+        // review 2026-12-06, eighth).
+        const std::string mantissa = lit.substr(0, lit.find_first_of("eE"));
+        if (x == 0 && mantissa.find_first_of("123456789") != std::string::npos)
+          fail(i, "number " + shown +
+                      " underflows to 0 (a nonzero JSON number must fit a double, |x| >= "
+                      "4.9e-324): write 0, or the value in other units");
       }
       i = j - 1;
     }

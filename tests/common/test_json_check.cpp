@@ -150,7 +150,14 @@ TEST(JsonParse, HostileTextIsALocatedError) {
             std::string::npos);
   EXPECT_NE(located_error("{\"a\": -1e999}").find("t.json:1:7:"), std::string::npos);
   EXPECT_EQ(located_error("{\"a\": \"1e400 [[[[\"}"), "");  // inside a string: just text
-  EXPECT_EQ(located_error("{\"a\": 1e-400}"), "");          // underflow is 0, not an error
+  // A nonzero number below the smallest double was read as 0 and said "got 0.0" by the
+  // checks (review 2026-12-06, eighth): refused at its place; subnormals and zeros are numbers.
+  EXPECT_EQ(located_error("{\"a\":\n  1e-400}"),
+            "t.json:2:3: number 1e-400 underflows to 0 (a nonzero JSON number must fit a double, "
+            "|x| >= 4.9e-324): write 0, or the value in other units");
+  EXPECT_NE(located_error("{\"a\": -2.5E-999}").find("t.json:1:7: number -2.5E-999 underflows"),
+            std::string::npos);
+  EXPECT_EQ(located_error("{\"a\": [1e-310, 0e-400, 0.000e-999, -0.0]}"), "");
   // Review finding (2026-12-06): the parser took a NUL byte for the end of the input, so what
   // followed was ignored (garbage after a document accepted, keys after it "missing").
   const std::string nul = "{\"a\": 1,\n \"b\": [2]}" + std::string(1, '\0') + "{garbage";
