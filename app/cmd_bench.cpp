@@ -92,6 +92,13 @@ std::string fmt_s(double s) {
   return b;
 }
 
+// A time column of a result: 0 is "not measured" (a case without repetitions, a section that
+// times no CPU or no cold run), shown empty, not as a time of 0 s beside one of 6 s (review
+// 2026-12-06, eighth). bench.json keeps the 0 (its readers test for it).
+std::string time_cell(double s, const char* none = "") {
+  return s == 0 ? none : fmt_s(s);
+}
+
 palplab::app::CommandRegistration reg_bench{
     "bench", [](CLI::App& root, int* code) {
       auto* cmd = root.add_subcommand("bench", "Run benchmark sections (median of >= 5 runs)");
@@ -156,10 +163,10 @@ palplab::app::CommandRegistration reg_bench{
             std::printf(
                 "  %-20s median %9s s  min %9s  max %9s  cold %9s  cpu %9s  cold cpu %9s  (%d "
                 "reps)%s\n",
-                r.name.c_str(), fmt_s(r.median_s).c_str(), fmt_s(r.min_s).c_str(),
-                fmt_s(r.max_s).c_str(), fmt_s(r.cold_s).c_str(), fmt_s(r.median_cpu_s).c_str(),
-                fmt_s(r.cold_cpu_s).c_str(), r.reps,
-                r.goal_s > 0 ? ("  goal <= " + fmt_s(r.goal_s) + " s").c_str() : "");
+                r.name.c_str(), time_cell(r.median_s, "-").c_str(), time_cell(r.min_s, "-").c_str(),
+                time_cell(r.max_s, "-").c_str(), time_cell(r.cold_s, "-").c_str(),
+                time_cell(r.median_cpu_s, "-").c_str(), time_cell(r.cold_cpu_s, "-").c_str(),
+                r.reps, r.goal_s > 0 ? ("  goal <= " + fmt_s(r.goal_s) + " s").c_str() : "");
             std::string mtext;
             nlohmann::json metrics = nlohmann::json::object();
             for (const auto& [k, v] : r.metrics) {
@@ -184,8 +191,8 @@ palplab::app::CommandRegistration reg_bench{
             if (!r.metrics.empty()) e["metrics"] = metrics;
             arr.push_back(e);
             md += "| " + s->name + " | " + r.what + " | " + std::to_string(r.reps) + " | " +
-                  fmt_s(r.median_s) + " | " + fmt_s(r.min_s) + " | " + fmt_s(r.max_s) + " | " +
-                  fmt_s(r.cold_s) + " | " + fmt_s(r.median_cpu_s) + " | " +
+                  time_cell(r.median_s) + " | " + time_cell(r.min_s) + " | " + time_cell(r.max_s) +
+                  " | " + time_cell(r.cold_s) + " | " + time_cell(r.median_cpu_s) + " | " +
                   (r.goal_s > 0 ? fmt_s(r.goal_s) : "") + " | " + mtext + " |\n";
           }
           j[s->name] = {{"description", s->description}, {"quick", a->quick}, {"results", arr}};
