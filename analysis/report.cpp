@@ -1,5 +1,7 @@
 #include "analysis/report.hpp"
 
+#include "results/measure_kind.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -181,9 +183,11 @@ struct Context {
     return it == unit_of.end() ? "" : it->second;
   }
   // A measure that is a proportion: unit "1" (0..1) or "%" (0..100) with every stored value on
-  // that scale; its scale maximum, 0 for any other measure. A dimensionless count (palpations,
-  // insertion_attempts, layers_passed: unit "1" too) is no proportion: it was given intervals
-  // clipped to [0, 1] ("[11.23, 1]" for a mean of 12.67) and error bars that missed the mean.
+  // that scale, and not one of palplab's counts (results/measure_kind.hpp); its scale maximum, 0
+  // for any other measure. A dimensionless count (palpations, insertion_attempts, layers_passed:
+  // unit "1" too) is no proportion: it was given intervals clipped to [0, 1] ("[11.23, 1]" for a
+  // mean of 12.67) and error bars that missed the mean, and with every value 1 (one insertion
+  // each) a Wilson interval [0.34, 1].
   double proportion_scale(const std::string& measure) const {
     auto it = scale_of.find(measure);
     return it == scale_of.end() ? 0.0 : it->second;
@@ -269,7 +273,10 @@ Context load(const std::string& db_path, const std::string& out_dir, const Repor
       c.groups.push_back(p.group);
   for (const auto& m : c.measures) c.unit_of[m.name] = m.unit;
   for (const auto& [name, unit] : c.unit_of)
-    c.scale_of[name] = unit == "1" ? 1.0 : unit == "%" ? 100.0 : 0.0;
+    c.scale_of[name] = results::is_count_measure(name) ? 0.0
+                       : unit == "1"                   ? 1.0
+                       : unit == "%"                   ? 100.0
+                                                       : 0.0;
   for (const auto& m : c.measures)
     if (m.value && !(*m.value >= 0 && *m.value <= c.scale_of[m.name])) c.scale_of[m.name] = 0;
   for (const auto& p : c.structure.phases) c.phase_order.push_back(p.phase);

@@ -130,7 +130,10 @@ int run_probe(const ProbeArgs& a) {
     std::cout << out.dump(2) << "\n";
   } else {
     std::cout << "prototype " << scene.prototype() << " (" << scene.model_kind() << "), press node "
-              << node << " (" << out["region"].get<std::string>() << ")\n"
+              << node << " ("
+              << (out["region"].get<std::string>().empty() ? std::string("in no region")
+                                                           : out["region"].get<std::string>())
+              << ")\n"
               << "  peak force " << peak_force << " N" << (reached ? "" : " (target NOT reached)")
               << ", peak visible displacement " << peak_disp * 1e3 << " mm\n"
               << "  mass " << s0.total_mass << " -> " << s1.total_mass

@@ -1,5 +1,7 @@
 #include "protocols/calibrate.hpp"
 
+#include "results/measure_kind.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cctype>
@@ -93,8 +95,7 @@ namespace {
 std::string out_of_range(const std::string& measure, double v) {
   if (measure == "feature_identified") return v == 0 || v == 1 ? "" : "0 or 1";
   if (measure == "accuracy") return v >= 0 && v <= 100 ? "" : "a percentage from 0 to 100";
-  if (measure == "palpations" || measure == "sft_reached" || measure == "insertion_attempts" ||
-      measure == "layers_passed" || measure == "bone_contacts")
+  if (results::is_count_measure(measure))
     return v >= 0 && v == std::floor(v) ? "" : "a count, a whole number >= 0";
   // A force or time beyond what any study can produce is a typo or a unit error (1e100 was
   // taken, and its SD then took the cell out of the loss).

@@ -209,6 +209,11 @@ TEST(CliReport, CountsAreNoProportions) {
   }
   EXPECT_EQ(rows, 2) << p;
   EXPECT_GE(above_one, 1) << "a mean count above 1 is what this test needs:\n" << p;
+  // A count whose values are all 0 or 1 (sft_reached here: at most once a session) is still a
+  // count (it had the Wilson interval of a proportion: review of the fix, 2026-12-06, eighth).
+  const std::string sft = section("sft_reached");
+  EXPECT_EQ(sft.find("Wilson"), std::string::npos) << sft;
+  EXPECT_EQ(sft.find("proportion"), std::string::npos) << sft;
   // A 0/1 measure keeps the interval of a proportion.
   EXPECT_NE(section("feature_identified").find("Wilson score interval of the proportion"),
             std::string::npos);
