@@ -57,7 +57,9 @@ struct Token {
 const char* lookalike(char32_t cp) {
   static const std::vector<std::pair<std::u32string, const char*>> kinds = {
       {U"\u00A0\u1680\u202F\u205F\u3000\uFEFF", "a Unicode space: use an ordinary space"},
-      {U"\u00D7\u00B7\u22C5\u2217\u2219", "use '*' for an interaction"},
+      {U"\u00D7\u00B7\u22C5\u2217\u2219\uFF0A\u2715\u2716", "use '*' for an interaction"},
+      {U"\u200C\u200D\u2060\u00AD\u2028\u2029",
+       "an invisible character (a joiner, a soft hyphen or a line separator): delete it"},
       {U"\u2212\u2010\u2011\u2012\u2013\u2014\uFE63\uFF0D",
        "a minus or dash: terms are only added ('+'; no '- 1')"},
       {U"\uFF0B\u2795", "use the ASCII '+'"},
@@ -607,11 +609,13 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
       const int pos = at != f.positions.end() ? at->second : 0;
       // An accent typed as a letter plus a combining mark (U+0300..U+036F, NFD: macOS file
       // names, some keyboards) never equals the precomposed letter (NFC) that looks the same.
-      const auto combining = [](const std::string& x) {
+      const auto combining_count = [](const std::string& x) {
+        size_t k = 0;
         for (size_t i = 0, n = 0; i < x.size(); i += n)
-          if (const char32_t c = utf8_code_point(x, i, &n); c >= 0x300 && c <= 0x36F) return true;
-        return false;
+          if (const char32_t c = utf8_code_point(x, i, &n); c >= 0x300 && c <= 0x36F) ++k;
+        return k;
       };
+      const auto combining = [&](const std::string& x) { return combining_count(x) > 0; };
       std::string hint;
       if (combining(v))
         hint = " ('" + shown_text(v) +
@@ -619,7 +623,8 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
                "precomposed letter (NFC) that looks the same: type the name again)";
       else if (utf8_length(v) != v.size())
         for (const auto& h : t.header)
-          if (combining(h)) {
+          // The column looks like the name: as many characters once its accents are not counted.
+          if (combining(h) && utf8_length(h) - combining_count(h) == utf8_length(v)) {
             hint = " (the column '" + shown_text(h) +
                    "' is written with a combining accent (Unicode NFD), which never equals a "
                    "precomposed letter (NFC) that looks the same: copy the name from the CSV, "

@@ -1,5 +1,7 @@
 #include "protocols/runner.hpp"
 
+#include "common/escape.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -1119,8 +1121,8 @@ std::string trace_database(const std::string& db) {
 
 void require_trace_dir_of(const std::string& dir, const std::string& db) {
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) return;  // made by the run
-  const std::string mine = trace_database(db);
+  if (!fs::is_directory(dir, ec)) return;                               // made by the run
+  const std::string mine = escape_controls(trace_database(db), false);  // as write_trace writes it
   static const std::regex name(R"(.+_[0-9]+_[0-9]+\.trace)");
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(dir, ec))

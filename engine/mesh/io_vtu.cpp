@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -182,7 +183,8 @@ AnyMesh read_mesh(const std::string& path) {
   // TetGen's other files are read with the mesh, from its .node/.ele: given alone, they were
   // "unknown surface format '.face'" with the surface formats only.
   if (const std::string e = extension(path); e == ".face" || e == ".neigh" || e == ".names")
-    throw InputError("a TetGen mesh's " + e + " file is read with the mesh: give its .ele (" +
+    throw InputError(std::string(std::filesystem::exists(path) ? "" : "no such file; ") +
+                         "a TetGen mesh's " + e + " file is read with the mesh: give its .ele (" +
                          path.substr(0, path.size() - e.size()) +
                          ".ele) or .node (expected a mesh file: .obj, .stl, .off, .ply, .vtu, or "
                          "TetGen .node/.ele)",

@@ -269,7 +269,12 @@ TEST(LmmFormula, LocatedErrorsOutsideTheGrammar) {
            {"y ~ a + (1 ｜ g)", "'｜' (U+FF5C, use the ASCII '|'"},
            {"y ~ “a” + (1 | g)",
             "'“' (U+201C, names are written without quotes" + supported + "5)"},
-           {"y ~ a\u2009+ b + (1 | g)", "'\u2009' (U+2009, a Unicode space"}}) {
+           {"y ~ a\u2009+ b + (1 | g)", "'\u2009' (U+2009, a Unicode space"},
+           {"y ~ a＊b + (1 | g)", "'＊' (U+FF0A, use '*' for an interaction"},
+           {"y ~ a ✕ b + (1 | g)", "'✕' (U+2715, use '*' for an interaction"},
+           {"y ~ a\u200C + (1 | g)", "'\u200C' (U+200C, an invisible character"},
+           {"y ~ a\u00AD + (1 | g)", "'\u00AD' (U+00AD, an invisible character"},
+           {"y ~ a\u2060 + (1 | g)", "'\u2060' (U+2060, an invisible character"}}) {
     const std::string e = err(formula);
     EXPECT_NE(e.find("--formula: unexpected character " + said), std::string::npos) << e;
   }
@@ -340,6 +345,9 @@ TEST(LmmFormula, UnknownColumnIsLocatedAtTheName) {
   EXPECT_NE(m.find("(the column 'Probando\u0308' is written with a combining accent"),
             std::string::npos)
       << m;
+  // Not for a name that only happens to be non-ASCII (the hint named an unrelated column).
+  m = message(u, "Reaktion ~ Tage + (1 | Zeit\u00E4)");
+  EXPECT_EQ(m.find("combining accent"), std::string::npos) << m;
   // The same names in the same form fit.
   EXPECT_EQ(message(u, "Reaktion ~ Tage + (1 | Probando\u0308)"), "no error");
 }

@@ -363,6 +363,11 @@ TEST(CliMesh, NamedMaterialsFileMustExist) {
         << r.err;
   }
   EXPECT_EQ(run("mesh info " + p("tg.ele")).code, 0);
+  r = run("mesh check " + p("nothere.face"));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(p("nothere.face") + ": no such file; a TetGen mesh's .face file"),
+            std::string::npos)
+      << r.err;
 }
 
 // A tissue attribute the material table does not define (--attribute 999, a seed's region_id

@@ -397,7 +397,10 @@ TEST(TraceDevice, BadFilesAreLocated) {
       {head + "0.001,,0,0,0,0,0,0\n", ":4: column 2: expected a finite number, got ''"},
       {head + "0.001,0,0,0,0,0,0\n",
        ":4: expected 8 comma-separated columns (t,x,y,z,vx,vy,vz,buttons), got 7"},
-      {head + "0.001,0,0,0,0,0,0,0,1\n", ":4: unexpected text after the 8th column"}};
+      {head + "0.001,0,0,0,0,0,0,0,1\n", ":4: unexpected text after the 8th column"},
+      // Decimal numbers only (strtod reads hexadecimal: 0x1p-3 was taken as 0.125 m).
+      {head + "0.001,0x1p-3,0,0,0,0,0,0\n",
+       ":4: column 2: expected a finite number, got '0x1p-3'"}};
   for (const auto& [text, expect] : cases) {
     write(text);
     try {
@@ -406,6 +409,19 @@ TEST(TraceDevice, BadFilesAreLocated) {
     } catch (const palplab::InputError& err) {
       EXPECT_NE(std::string(err.what()).find(expect), std::string::npos) << err.what();
     }
+  }
+  // A metadata value with a newline (a database path may hold one) is written escaped: the file
+  // stays a trace (it was cut into a comment and a bad header line; review 2026-12-06, eighth).
+  {
+    e::Trace tr;
+    tr.meta["database"] = "/tmp/a\nb.db";
+    tr.samples.push_back({0.0, {}});
+    tr.samples.push_back({0.001, {}});
+    e::write_trace(path.string(), tr);
+    const e::Trace back = e::read_trace(path.string());
+    EXPECT_EQ(back.meta.at("database"), "/tmp/a\\x0ab.db");
+    EXPECT_EQ(back.samples.size(), 2u);
+    EXPECT_EQ(e::read_trace_meta(path.string()).at("database"), "/tmp/a\\x0ab.db");
   }
   // Steps of 1 ms as written with %.17g (k * 0.001) are taken.
   std::string ok = "# palplab-trace/1\nt,x,y,z,vx,vy,vz,buttons\n";

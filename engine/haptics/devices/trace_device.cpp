@@ -96,7 +96,11 @@ Trace read_trace(const std::string& path) {
       const std::string field(p, field_end);
       char* end = nullptr;
       errno = 0;
-      v[k] = std::strtod(p, &end);
+      // Decimal numbers only: strtod also reads hexadecimal ("0x1p-3" was taken as 0.125 m).
+      if (field.find_first_of("xX") != std::string::npos)
+        end = const_cast<char*>(p);
+      else
+        v[k] = std::strtod(p, &end);
       while (end < field_end && (*end == ' ' || *end == '\t')) ++end;
       if (end == p || end != field_end || errno == ERANGE || !std::isfinite(v[k])) {
         if (k == cols - 1 && end != p && end < field_end && *end == ',')
@@ -170,7 +174,10 @@ void write_trace(const std::string& path, const Trace& trace) {
   };
   text += kMagic;
   text += '\n';
-  for (const auto& [k, v] : trace.meta) text += "# " + k + "=" + v + "\n";
+  // A value with a newline (a database path may hold one) would end its comment line and break
+  // the file: control characters are written escaped (\x0a).
+  for (const auto& [k, v] : trace.meta)
+    text += "# " + escape_controls(k, false) + "=" + escape_controls(v, false) + "\n";
   // The axis columns only when the device reported an axis (older readers read the rest).
   bool axis = false;
   for (const auto& s : trace.samples) axis = axis || s.in.stylus_axis != Eigen::Vector3d::Zero();
