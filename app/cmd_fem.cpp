@@ -210,16 +210,17 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
       throw InputError("--levels: " + std::to_string(built_levels) + " nested levels of " + cfg.id +
                        "'s " + std::to_string(tets) + " tets give " +
                        std::to_string(static_cast<long>(finest)) +
-                       " tets on the finest level (limit 2e6): use fewer levels or a coarser "
-                       "copy of the prototype (mesh \"vertices\")");
+                       " tets on the finest level (limit 2e6): use fewer levels (3 at least), "
+                       "or a coarser copy of the prototype (mesh \"vertices\") with --grade 0 "
+                       "(--grade auto refines its level 0 around the press again)");
     if (finest > 2e5) {
-      char note[400];
+      char note[512];
       std::snprintf(note, sizeof note,
                     "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
                     "per level; a graded level 0, --grade, is larger): this takes "
-                    "minutes and GBs of memory; one level fewer (--levels) is 8x smaller (a "
-                    "coarser copy of the prototype is not: --grade auto refines its level 0 "
-                    "around the press back towards the same size)\n",
+                    "minutes and GBs of memory (each level fewer, down to --levels 3, is 8x "
+                    "smaller; a coarser copy of the prototype is only with --grade 0: --grade "
+                    "auto refines its level 0 around the press again)\n",
                     finest);
       su.note = note;
     }

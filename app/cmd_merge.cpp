@@ -116,6 +116,8 @@ palplab::app::CommandRegistration reg_merge{
                                       "--study: not the study the replicates simulated (SHA-256 " +
                                           sha.substr(0, 12) + ", the records' " +
                                           theirs.substr(0, 12) + ")");
+          // With the study, each record's seed is checked exactly (as a power resume does).
+          palplab::protocols::check_replicate_seeds(s, files);
           if (human_opt->count() > 0) {
             // Every group size merged, compared as `palplab power --human` compares its own.
             std::vector<int> sizes;

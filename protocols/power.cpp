@@ -386,6 +386,25 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
   return out;
 }
 
+// The seed of replicate `replicate` of group size `n` (what run_power simulates it with).
+std::uint64_t replicate_seed(const Study& study, int n, int replicate) {
+  return derive_seed(study.seed, label_hash("power"), static_cast<std::uint64_t>(n),
+                     static_cast<std::uint64_t>(replicate));
+}
+
+void require_replicate_seed(const Study& study, const nlohmann::json& r, const std::string& file,
+                            int line) {
+  const int n = r.at("n").get<int>(), rep = r.at("replicate").get<int>();
+  const std::uint64_t expected = replicate_seed(study, n, rep);
+  if (r.at("seed").get<std::uint64_t>() != expected)
+    throw InputError(SourceLocation{file, line, 0, -1, "$.seed"},
+                     "replicate n=" + std::to_string(n) + " #" + std::to_string(rep) +
+                         " has seed " + r.at("seed").dump() + ", not " + std::to_string(expected) +
+                         ", the one derived for it from the study's seed: the record was edited "
+                         "(its n or index changed) or simulated with another seed; remove the "
+                         "line to simulate that replicate again");
+}
+
 }  // namespace
 
 bool significant(double p, double alpha) {
@@ -698,19 +717,8 @@ long run_power(const Study& study, const PowerOptions& opt) {
         // Its seed is the one derived from the study's seed for its n and index: otherwise the
         // record was edited (a line copied to fill a gap, its index changed) or written for
         // another seed, and it would stand for a replicate never simulated.
-        const int n = r.at("n").get<int>(), rep = r.at("replicate").get<int>();
-        const std::uint64_t expected =
-            derive_seed(study.seed, label_hash("power"), static_cast<std::uint64_t>(n),
-                        static_cast<std::uint64_t>(rep));
-        if (r.at("seed").get<std::uint64_t>() != expected)
-          throw InputError(SourceLocation{file, line, 0, -1, "$.seed"},
-                           "replicate n=" + std::to_string(n) + " #" + std::to_string(rep) +
-                               " has seed " + r.at("seed").dump() + ", not " +
-                               std::to_string(expected) +
-                               ", the one derived for it from the study's seed: the record was "
-                               "edited (its n or index changed) or simulated with another seed; "
-                               "remove the line to simulate that replicate again");
-        done.insert({n, rep});
+        require_replicate_seed(study, r, file, line);
+        done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
       }
     check_out_dir_study(opt.out_dir, sha);  // its power.json and other shards' files
   }
@@ -759,9 +767,7 @@ long run_power(const Study& study, const PowerOptions& opt) {
       threads.emplace_back([&, k] {
         try {
           const Task t = mine[k];
-          const std::uint64_t seed =
-              derive_seed(study.seed, label_hash("power"), static_cast<std::uint64_t>(t.n),
-                          static_cast<std::uint64_t>(t.replicate));
+          const std::uint64_t seed = replicate_seed(study, t.n, t.replicate);
           const Study s = resized_study(study, t.n, seed);
           nlohmann::json rec = {{"study_sha256", sha},
                                 {"prototypes_sha256", protos},
@@ -1293,6 +1299,11 @@ std::string index_list(const std::vector<T>& v, long total) {
 }
 
 }  // namespace
+
+void check_replicate_seeds(const Study& study, const std::vector<std::string>& files) {
+  for (const auto& f : files)
+    for (const auto& [r, line] : read_replicates(f)) require_replicate_seed(study, r, f, line);
+}
 
 MergeGaps merge_gaps(const std::vector<std::string>& files) {
   MergeGaps g;

@@ -207,6 +207,11 @@ struct MergeGaps {
 // Shard files of different K among `files` are an InputError (which replicates a run of
 // another K should hold cannot be told from the records): merge the files of one run.
 MergeGaps merge_gaps(const std::vector<std::string>& files);
+// Every record's seed is the one derived from the study's seed for its n and replicate index
+// (InputError at FILE:LINE: $.seed otherwise: a record edited, e.g. a line copied to fill a gap
+// with its index changed, or simulated with another seed). The power resume checks its file;
+// merge checks its inputs when given the study (--study).
+void check_replicate_seeds(const Study& study, const std::vector<std::string>& files);
 
 // InputError when `out_dir` holds results of a study other than the one with SHA-256 `sha`
 // (a power.json or replicates*.jsonl of another study), so they are not overwritten or mixed.

@@ -480,6 +480,18 @@ TEST(Power, AnEditedReplicateIndexIsRefused) {
                              "was copied and its n or index edited)"))
       << m.err;
   EXPECT_FALSE(fs::exists(d / "merged" / "power.json"));
+  // The highest record renumbered into the gap below it looks complete without the study;
+  // merge --study checks every seed exactly.
+  auto second = nlohmann::json::parse(text.substr(text.find('\n') + 1));
+  second["replicate"] = 0;
+  std::ofstream(d / "renumbered.jsonl") << second.dump() << "\n";
+  EXPECT_EQ(merge({d / "renumbered.jsonl"}, d / "m2", d).code, 0);
+  const auto ms = merge({d / "renumbered.jsonl"}, d / "m3", d, " --study " + null_study());
+  EXPECT_EQ(ms.code, 2) << ms.out << ms.err;
+  EXPECT_TRUE(
+      has(ms.err, (d / "renumbered.jsonl").string() + ":1: $.seed: replicate n=2 #0 has seed "))
+      << ms.err;
+  EXPECT_FALSE(fs::exists(d / "m3" / "power.json"));
   // The resume: the study's seed gives each replicate's seed; a record whose seed is not its
   // own is refused at its line before anything is simulated.
   copy["replicate"] = 1;
