@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <future>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "analysis/csv.hpp"
@@ -322,16 +323,14 @@ std::string to_text(const StatsSummary& s) {
   // Group labels come from the input: control characters (an escape sequence in a label would
   // recolour or retitle the terminal) are shown escaped, and a label longer than 60 characters
   // cut to its start and length (shown_text: three labels of 3 MB were printed whole on every
-  // line that names them, 36 MB of text) unless that would make two labels look the same. The
-  // JSON keeps them whole.
+  // line that names them, 36 MB of text); labels that look the same cut are told apart by their
+  // place in the descriptives ("#2"). The JSON keeps them whole.
   std::vector<std::string> names;
   for (const auto& n : s.names) names.push_back(shown_text(n));
-  std::vector<std::string> sorted = names;
-  std::sort(sorted.begin(), sorted.end());
-  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
-    names.clear();
-    for (const auto& n : s.names) names.push_back(escape_controls(n, false));
-  }
+  std::map<std::string, int> seen;
+  for (const auto& n : names) ++seen[n];
+  for (size_t i = 0; i < names.size(); ++i)
+    if (seen[names[i]] > 1) names[i] += " #" + std::to_string(i + 1);
   auto pair_name = [&](int a, int b) { return names[a] + " - " + names[b]; };
   o << "Descriptives\n";
   o << strf("  %-14s %5s %12s %12s %12s %12s %12s %12s %25s\n", "group", "n", "mean", "sd", "se",
