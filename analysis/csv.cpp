@@ -35,7 +35,24 @@ void require_utf8(std::string_view text, const std::string& file) {
     size_t len = 1;
     if (utf8_code_point(text, i, &len) == 0xFFFD && len == 1) {  // ill-formed (U+FFFD is 3 bytes)
       char hex[8];
-      std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned char>(text[i]));
+      const auto b = static_cast<unsigned char>(text[i]);
+      std::snprintf(hex, sizeof hex, "0x%02X", b);
+      // A lead byte followed by continuation bytes is UTF-8 gone wrong (a surrogate, an overlong
+      // form, a code point above U+10FFFF, or a character cut off at the end), not Latin-1: the
+      // Latin-1 advice was given for those too (review 2026-12-06, eighth).
+      const size_t need = b >= 0xF0 ? 3 : b >= 0xE0 ? 2 : 1;  // continuation bytes of the lead
+      size_t k = 1;
+      while (i + k < text.size() && k <= need && utf8_continuation(text[i + k])) ++k;
+      const bool cut_off = b >= 0xC2 && b <= 0xF4 && i + k == text.size() && k <= need;
+      if (cut_off || (b >= 0xC0 && k > 1))
+        throw error_at(file, line, column,
+                       std::string("byte ") + hex +
+                           (cut_off ? " begins a UTF-8 character that the file cuts off (a "
+                                      "truncated file?)"
+                                    : " begins an ill-formed UTF-8 sequence (a surrogate, an "
+                                      "overlong form or a code point above U+10FFFF: written by "
+                                      "a faulty encoder, or damaged)") +
+                           "; CSV files are read as UTF-8");
       throw error_at(file, line, column,
                      std::string("byte ") + hex +
                          " is not UTF-8: CSV files are read as UTF-8, and this one looks like "

@@ -287,7 +287,12 @@ TEST(CliStats, NonUtf8HexAndHugeValuesAreInputErrors) {
     std::string csv, extra, expect1, expect2;
   };
   const std::vector<Case> cases = {
-      {"group,value\nA,1\nA,2\nCaf\xE9,3\nCaf\xE9,4\n", " --json", ":4:4:", "UTF-8"},
+      {"group,value\nA,1\nA,2\nCaf\xE9,3\nCaf\xE9,4\n", " --json", ":4:4:", "looks like Latin-1"},
+      // UTF-8 gone wrong is not called Latin-1 (review 2026-12-06, eighth): a surrogate, an
+      // overlong form, a character cut off at the end of the file.
+      {"group,value\nA,1\nA,2\nB\xED\xA0\x80,3\n", "", ":4:2:", "ill-formed UTF-8 sequence"},
+      {"group,value\nA,1\nA,2\nB\xC0\xAF,3\n", "", ":4:2:", "ill-formed UTF-8 sequence"},
+      {"group,value\nA,1\nA,2\nB,3\xE2\x82", "", ":4:4:", "that the file cuts off"},
       {"group,value\nA,1\nA,2\nB,0x10\nB,4\n", "", ":4:3:", "decimal number"},
       {"group,value\nA,1\nA,2\nB,3\n\"B\",  inf\n", "", ":5:5:", "decimal number"},
       {"group,value\nA,1\nA,nan\nB,3\nB,4\n", "", ":3:3:", "decimal number"},
