@@ -428,8 +428,6 @@ std::string another_study(const results::StudyRecord& rec, const Study& study,
          sha.substr(0, 12) + "…); " + needs;
 }
 
-// A new database: the study, its prototypes (with their SHA-256), participants and structure,
-// and meta "samples" (full or none), in one transaction.
 // The planned participants with a session not complete in the database, in plan order.
 std::vector<std::string> participants_left(const Plan& plan, const results::Store& store) {
   std::set<std::pair<std::string, int>> done;
@@ -445,6 +443,8 @@ std::vector<std::string> participants_left(const Plan& plan, const results::Stor
   return left;
 }
 
+// A new database: the study, its prototypes (with their SHA-256), participants and structure,
+// and meta "samples" (full or none), in one transaction.
 void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
                      results::Store& store, std::map<std::string, std::string>& prototype_sha,
                      bool samples) {

@@ -207,14 +207,16 @@ TEST(ShownText, BadFieldsAndLabelsInErrorsAreCut) {
       << e4;
 }
 
-TEST(ShownText, LabelsInTextTablesAreEscapedAndWhole) {
+TEST(ShownText, LabelsInTextTablesAreEscapedAndTheSameInEveryRow) {
   const std::string label = "\x1b]0;pwned\x07" + std::string(600, 'G');
   const auto s = summarize_csv("g,v\n\"" + label + "\",1\n\"" + label + "\",2\nB,3\nB,4.5\n");
   const std::string text = to_text(s);
   EXPECT_EQ(text.find('\x1b'), std::string::npos);
   EXPECT_EQ(text.find('\x07'), std::string::npos);
-  const std::string shown = "\\x1b]0;pwned\\x07" + std::string(600, 'G');
-  // Whole in every table row (a 512-byte buffer cut the pair rows), e.g. the pairwise row.
+  // Cut to its first 60 characters and its length (2026-12-06, eighth: 3 MB labels were printed
+  // whole on every line), the same in every table row (a 512-byte buffer once cut the pair rows
+  // silently), e.g. the pairwise row.
+  const std::string shown = "\\x1b]0;pwned\\x07" + std::string(50, 'G') + "\u2026 (610 bytes)";
   EXPECT_NE(text.find("  " + shown + " - B "), std::string::npos) << text;
   EXPECT_NE(text.find("  " + shown + " vs B: t("), std::string::npos) << text;
   EXPECT_NE(text.find("Mann-Whitney " + shown + " vs B: W = "), std::string::npos) << text;
