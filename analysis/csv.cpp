@@ -214,13 +214,6 @@ CsvTable read_csv(const std::string& path) {
   return parse_csv(read_file_bounded(path, kMaxCsvFileBytes, "CSV file"), path);
 }
 
-std::string shown_text(std::string_view s, size_t max_chars) {
-  const size_t cut = utf8_prefix(s, max_chars);
-  if (cut == s.size()) return escape_controls(s, false);
-  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
-         " bytes)";
-}
-
 std::string shown_columns(const std::vector<std::string>& header, std::string_view quote,
                           size_t max_columns) {
   std::string out;

@@ -10,6 +10,8 @@
 #include <string_view>
 #include <vector>
 
+#include "common/escape.hpp"
+
 namespace palplab::analysis {
 
 struct CsvTable {
@@ -31,10 +33,9 @@ inline constexpr std::size_t kMaxCsvFileBytes = 1024u * 1024 * 1024;
 // kMaxCsvFileBytes is an InputError.
 CsvTable read_csv(const std::string& path);
 
-// Text from the input (a CSV field, a column name, a group label) as messages show it: control
-// characters escaped (escape_controls), cut after `max_chars` characters (UTF-8 code points)
-// with "… (N bytes)" — a 10 MB field made a 10 MB error message.
-std::string shown_text(std::string_view s, std::size_t max_chars = 60);
+// Text from the input (a CSV field, a column name, a group label) as messages show it: cut and
+// escaped by common/escape.hpp's shown_text.
+using ::palplab::shown_text;
 // Column names for a message: the first `max_columns` through shown_text, each between `quote`s,
 // separated by ", ", then "… (N columns)" when there are more.
 std::string shown_columns(const std::vector<std::string>& header, std::string_view quote = "",

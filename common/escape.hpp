@@ -55,6 +55,16 @@ inline std::size_t utf8_prefix(std::string_view s, std::size_t max_chars) {
   return cut;
 }
 
+// Text from user input (a CSV field, a column name, a trace field, a mesh keyword) as messages
+// show it: control characters escaped (escape_controls), cut after `max_chars` characters
+// (UTF-8 code points, never inside one) with "… (N bytes)": a 10 MB field made a 10 MB message.
+inline std::string shown_text(std::string_view s, std::size_t max_chars = 60) {
+  const std::size_t cut = utf8_prefix(s, max_chars);
+  if (cut == s.size()) return escape_controls(s, false);
+  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
+         " bytes)";
+}
+
 // The code point of the UTF-8 character at s[i] and its length in bytes (*length); an ill-formed
 // or cut sequence is U+FFFD of length 1, so a scan always advances.
 inline char32_t utf8_code_point(std::string_view s, std::size_t i, std::size_t* length) {

@@ -1129,6 +1129,12 @@ void require_trace_dir_of(const std::string& dir, const std::string& db) {
     if (std::regex_match(e.path().filename().string(), name)) files.push_back(e.path().string());
   std::sort(files.begin(), files.end());
   for (const auto& f : files) {
+    // Never opened unless a regular file: a pipe of such a name would block the open.
+    if (!fs::is_regular_file(f, ec))
+      throw InputError(SourceLocation{"--record-trace"},
+                       "\"" + dir + "\" holds " + f +
+                           ", which is no regular file (a pipe, a device or a directory), with "
+                           "a name this run writes: choose another directory (one per database)");
     const auto meta = engine::read_trace_meta(f);
     const auto it = meta.find("database");
     if (it != meta.end() && it->second == mine) continue;

@@ -160,11 +160,6 @@ std::string session_label(const MeasureRow& r) {
   return session_label(r.session, r.participant, r.phase, r.phase_index);
 }
 
-// A stored text shown in a message: at most 40 characters.
-std::string shown(const std::string& s) {
-  return s.size() <= 40 ? s : s.substr(0, 40) + "...";
-}
-
 // A stored value as a message shows it: 2.5, inf, 'abc', (a blob), NULL.
 std::string stored_value(const Stmt& q, int c) {
   switch (q.type(c)) {
@@ -173,7 +168,7 @@ std::string stored_value(const Stmt& q, int c) {
     case SQLITE_FLOAT:
       return num(q.real(c));
     case SQLITE_TEXT:
-      return "'" + shown(q.text(c)) + "'";
+      return "'" + shown_text(q.text(c), 40) + "'";
     case SQLITE_BLOB:
       return "(a blob)";
     default:
@@ -1463,7 +1458,7 @@ std::vector<EventRecord> Store::read_events(long long session) const {
     const Typed col(q, path_, "events", [&] {
       const int tt = q.type(0);
       const bool t_ok = (tt == SQLITE_FLOAT || tt == SQLITE_INTEGER) && std::isfinite(q.real(0));
-      return describe_session(db_, session) + ", kind " + shown(q.text(1)) +
+      return describe_session(db_, session) + ", kind " + shown_text(q.text(1), 40) +
              (t_ok ? ", t " + num(q.real(0)) : std::string()) + ", rowid " +
              std::to_string(q.integer(4));
     });
@@ -1495,8 +1490,8 @@ SampleSeries Store::read_samples(long long session) const {
     while (q.step()) {
       const long long second = col.integer(5, "second", 0, std::numeric_limits<long long>::max());
       if (q.text(3) != "qdv1")
-        throw InputError(where(second) + ": unknown sample encoding \"" + shown(q.text(3)) +
-                             "\" (expected qdv1)",
+        throw InputError(where(second) + ": unknown sample encoding \"" +
+                             shown_text(q.text(3), 40) + "\" (expected qdv1)",
                          path_);
       const double t0 = col.real(0, "t0");
       const double dt = col.real(1, "dt");

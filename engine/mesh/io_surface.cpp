@@ -11,6 +11,7 @@
 #include <map>
 #include <unordered_map>
 
+#include "common/escape.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/text_reader.hpp"
 
@@ -182,7 +183,7 @@ SurfaceMesh read_obj(const std::string& path) {
         r.fail("not OBJ text: binary bytes (a binary STL, a database, an image?) in '" + shown +
                (k.size() > 16 ? "…" : "") + "'");
       }
-      r.fail("unsupported OBJ statement '" + k.substr(0, 40) + (k.size() > 40 ? "…" : "") +
+      r.fail("unsupported OBJ statement '" + shown_text(k, 40) +
              "' (palplab reads v, f, g and ignores vn, vt, "
              "vp, o, s, usemtl, mtllib, l, p)");
     }

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "common/escape.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/materials.hpp"
 #include "engine/mesh/text_reader.hpp"
@@ -164,7 +165,7 @@ void check_declared_count(const std::string& path, const std::string& d, const c
   const int line = 1 + static_cast<int>(std::count(d.begin(), d.begin() + piece, '\n'));
   if (r.ec != std::errc() || r.ptr != text.data() + text.size() || n != actual)
     throw InputError(SourceLocation{path, line},
-                     std::string(attribute) + "=\"" + text.substr(0, 40) +
+                     std::string(attribute) + "=\"" + shown_text(text, 40) +
                          "\" but the arrays hold " + std::to_string(actual) +
                          " (expected the count of what the file holds)");
 }
@@ -254,7 +255,7 @@ AnyMesh read_mesh(const std::string& path) {
       int id = -1;
       auto rc = std::from_chars(item.data(), item.data() + eq, id);
       if (rc.ec != std::errc() || rc.ptr != item.data() + eq || id < 0 || id > 100000)
-        throw InputError("VTU: region list entry '" + item.substr(0, 40) +
+        throw InputError("VTU: region list entry '" + shown_text(item, 40) +
                              "' is not <id>=<name> with an id in [0, 100000]",
                          path);
       names[id] = item.substr(eq + 1);

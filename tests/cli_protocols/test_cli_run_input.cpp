@@ -2,6 +2,7 @@
 // --resume path, --max-sessions 0, a --db in a missing directory, a directory given as --db or as
 // the study, an empty --db — and nothing is created or deleted because of them.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -244,4 +245,15 @@ TEST(CliRunInput, RecordTraceNeverReplacesAnotherRunsTraces) {
   std::ofstream(d / "t" / "mine.trace") << "x";
   ASSERT_EQ(run("c.db", "").code, 0);
   EXPECT_EQ(slurp(d / "t" / "mine.trace"), "x");
+  // A pipe with a name the run writes is refused unopened (opening it to read its header blocked
+  // the run for ever; review 2026-12-07). Bounded, so that a regression fails instead of hanging.
+  fs::remove_all(d / "t");
+  fs::create_directory(d / "t");
+  ASSERT_EQ(::mkfifo((d / "t" / "P01_0_0.trace").c_str(), 0600), 0);
+  r = palplab::testing::run_shell(
+      "timeout -k 5 60 " + std::string(PALPLAB_BINARY) + " run " + (d / "s.json").string() +
+          " --quiet --db " + (d / "e.db").string() + " --record-trace " + (d / "t").string(),
+      d);
+  expect_exit2(r, {"P01_0_0.trace, which is no regular file (a pipe, a device or a directory)"});
+  EXPECT_FALSE(fs::exists(d / "e.db"));
 }

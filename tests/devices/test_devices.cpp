@@ -399,8 +399,12 @@ TEST(TraceDevice, BadFilesAreLocated) {
        ":4: expected 8 comma-separated columns (t,x,y,z,vx,vy,vz,buttons), got 7"},
       {head + "0.001,0,0,0,0,0,0,0,1\n", ":4: unexpected text after the 8th column"},
       // Decimal numbers only (strtod reads hexadecimal: 0x1p-3 was taken as 0.125 m).
-      {head + "0.001,0x1p-3,0,0,0,0,0,0\n",
-       ":4: column 2: expected a finite number, got '0x1p-3'"}};
+      {head + "0.001,0x1p-3,0,0,0,0,0,0\n", ":4: column 2: expected a finite number, got '0x1p-3'"},
+      // A long field is shown cut after 40 characters, never inside one (the cut was at 40
+      // bytes: the 40th byte of 39 ASCII and a "ß" left half a character in the message).
+      {head + "0.001," + std::string(39, '1') + "\u00df\u00df,0,0,0,0,0,0\n",
+       ":4: column 2: expected a finite number, got '" + std::string(39, '1') +
+           "\u00df\u2026 (43 bytes)'"}};
   for (const auto& [text, expect] : cases) {
     write(text);
     try {

@@ -106,7 +106,7 @@ Trace read_trace(const std::string& path) {
         if (k == cols - 1 && end != p && end < field_end && *end == ',')
           fail("unexpected text after the " + std::to_string(cols) + "th column");
         fail("column " + std::to_string(k + 1) + ": expected a finite number, got '" +
-             escape_controls(field.substr(0, 40), false) + (field.size() > 40 ? "…" : "") + "'");
+             shown_text(field, 40) + "'");
       }
       p = field_end;
       if (k < cols - 1) ++p;
