@@ -11,6 +11,7 @@
 #include "analysis/summary.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "common/json_locate.hpp"
 
 namespace palplab::analysis {
@@ -163,10 +164,8 @@ std::string classify_count(double reported, double recomputed) {
 std::string classify_p(const std::string& relation, double reported, int decimals,
                        double recomputed) {
   if (!std::isfinite(recomputed)) return kNotRecomputable;
-  const double unit = decimals > 0 ? std::pow(10.0, -decimals) : 1;
   // A bound is a claim ("p < .05" with p = .051 claims significance that is not there): it
   // holds or it is inconsistent; no rounding slack.
-  (void)unit;
   if (relation == "<") return recomputed < reported ? "consistent" : "inconsistent";
   if (relation == ">") return recomputed > reported ? "consistent" : "inconsistent";
   return classify_number(reported, decimals, recomputed);
@@ -199,185 +198,208 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
   const std::string def_group = rep.contains("group") ? str(rep, "group", "$", "") : "";
   std::vector<RecheckItem> out;
   std::map<std::string, size_t> ids;  // id -> index of the statistic that has it
+  // Every statistic is checked, and the problems of all of them are said at once (one per
+  // statistic, every unknown key): a paper's list is fixed in one pass, not one run per error.
+  std::vector<Problem> problems;
+  const auto report = [&](const InputError& e) {
+    for (const auto& p : e.problems())
+      if (std::none_of(problems.begin(), problems.end(), [&](const Problem& q) {
+            return q.format_raw() == p.format_raw();  // "$.value" names no column: said once
+          }))
+        problems.push_back(p);
+  };
+  {
+    json::Checker keys(file, text);
+    keys.keys(rep, "$", {"comment", "value", "group", "statistics"});
+    problems = keys.problems();
+  }
   for (size_t i = 0; i < rep["statistics"].size(); ++i) {
-    const auto& s = rep["statistics"][i];
-    const std::string path = json::path_index("$.statistics", i);
-    if (!s.is_object()) throw InputError(at(path), "expected an object");
-    for (auto it = s.begin(); it != s.end(); ++it)
-      if (it.key() != "id" && it.key() != "text" && it.key() != "test" && it.key() != "value" &&
-          it.key() != "group" && it.key() != "where" && it.key() != "pair")
-        throw InputError(at(json::path_key(path, it.key()), true),
-                         "unknown key (expected id, text, test, value, group, where, pair)");
-    RecheckItem item;
-    item.id = s.contains("id") ? str(s, "id", path, "") : std::to_string(i + 1);
-    if (auto [first, fresh] = ids.emplace(item.id, i); !fresh)
-      throw InputError(at(path + ".id"), "duplicate id \"" + item.id + "\" (also $.statistics[" +
-                                             std::to_string(first->second) +
-                                             "]); each statistic needs its own id");
-    item.text = str(s, "text", path, "");
-    ApaStatistic a;
     try {
-      a = parse_apa(item.text, SourceLocation{file, 0, 0, -1, path + ".text"});
-    } catch (const InputError& e) {
-      throw InputError(at(path + ".text"), e.problems().front().what);
-    }
-    item.test =
-        s.contains("test") ? str(s, "test", path, "") : (a.kind == 'F' ? "anova" : "welch_t");
-    const std::string value = str(s, "value", path, def_value);
-    const std::string group = str(s, "group", path, def_group);
-    // The columns are checked here, at the key that names them (the CSV reader's own message
-    // has no JSON path).
-    for (const auto& [key, name] : {std::pair{"value", value}, std::pair{"group", group}})
-      if (!has_column(table, name))
-        throw InputError(at(json::path_key(s.contains(key) ? path : "$", key)),
-                         no_column(table, name));
-    // One column as both values and labels makes every value its own group's label: refused,
-    // as `palplab stats` refuses --value and --group naming the same column.
-    if (value == group)
-      throw InputError(at(json::path_key(s.contains("group") ? path : "$", "group")),
-                       "\"value\" and \"group\" name the same column ('" + shown_text(group) +
-                           "'); \"group\" takes the column of group labels");
-    std::vector<WhereFilter> where;
-    const std::string where_path = json::path_key(path, "where");
-    if (s.contains("where")) {
-      if (!s["where"].is_array())
-        throw InputError(at(where_path), "expected an array of \"COL=VALUE\" strings");
-      for (size_t k = 0; k < s["where"].size(); ++k) {
-        const auto& w = s["where"][k];
-        const std::string wp = json::path_index(where_path, k);
-        const bool text = w.is_string() && w.get<std::string>().find('=') != std::string::npos;
-        const WhereFilter f = text ? parse_where(w) : WhereFilter{};
-        if (f.column.empty())  // not a string, no '=', or nothing before it
-          throw InputError(at(wp), "expected a \"COL=VALUE\" string, got " + w.dump());
-        if (!has_column(table, f.column)) throw InputError(at(wp), no_column(table, f.column));
-        where.push_back(f);
+      const auto& s = rep["statistics"][i];
+      const std::string path = json::path_index("$.statistics", i);
+      if (!s.is_object()) throw InputError(at(path), "expected an object");
+      json::Checker keys(file, text);
+      keys.keys(s, path, {"id", "text", "test", "value", "group", "where", "pair", "comment"});
+      keys.throw_if_any();
+      RecheckItem item;
+      item.id = s.contains("id") ? str(s, "id", path, "") : std::to_string(i + 1);
+      if (auto [first, fresh] = ids.emplace(item.id, i); !fresh)
+        throw InputError(at(path + ".id"), "duplicate id \"" + item.id + "\" (also $.statistics[" +
+                                               std::to_string(first->second) +
+                                               "]); each statistic needs its own id");
+      item.text = str(s, "text", path, "");
+      ApaStatistic a;
+      try {
+        a = parse_apa(item.text, SourceLocation{file, 0, 0, -1, path + ".text"});
+      } catch (const InputError& e) {
+        throw InputError(at(path + ".text"), e.problems().front().what);
       }
-      // group_table would say "no data rows match the --where filters": a flag recheck does
-      // not have.
-      if (!where.empty() && filter_rows(table, where).empty())
-        throw InputError(at(where_path), no_row_matches(table, where, s["where"].dump()));
-    }
-    const bool f_test = item.test == "anova" || item.test == "welch_anova";
-    const bool t_test = item.test == "welch_t" || item.test == "student_t";
-    if (!f_test && !t_test)
-      throw InputError(
-          at(path + ".test"),
-          "expected anova, welch_anova, welch_t or student_t, got \"" + item.test + "\"");
-    if ((a.kind == 'F') != f_test)
-      throw InputError(at(path + ".test"),
-                       "test \"" + item.test + "\" does not print as " + std::string(1, a.kind));
-    if (f_test && s.contains("pair"))
-      throw InputError(at(path + ".pair", true), "\"pair\" applies to t-tests only; an F test (" +
-                                                     item.test +
-                                                     ") compares all groups of column '" + group +
-                                                     "' (select groups with \"where\")");
-    // Every group of the rows used with at least 1 value: which groups a test needs (and how
-    // many values) is the test's own matter, and too few is "not recomputable", not bad input.
-    GroupedData d = group_table(table, value, group, where, 1, 1, skip_empty);
-    item.rows_skipped_empty = d.rows_skipped_empty;
-    double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
-    std::string why;  // why the test is undefined on these rows
-    const std::string col = "column '" + group + "'";
-    if (f_test && d.names.size() < 2) {
-      why = "the rows used hold one group of " + col + " ('" + d.names[0] +
-            "'); an F test compares at least 2";
-    } else if (item.test == "anova") {
-      size_t n = 0;
-      for (const auto& g : d.values) n += g.size();
-      df1 = static_cast<double>(d.names.size() - 1);
-      if (n <= d.names.size()) {
-        why = "every group of " + col +
-              " has a single value: no variation within groups to "
-              "compare with (df2 = 0)";
-      } else {
-        Anova r = oneway_anova(d.values);
-        df2 = r.df_within;
-        if (r.defined)
-          stat = r.F, p = r.p;
-        else
-          why = "no variation within any group of " + col +
-                " (the values of each group are all equal): F and p are undefined";
+      item.test =
+          s.contains("test") ? str(s, "test", path, "") : (a.kind == 'F' ? "anova" : "welch_t");
+      const std::string value = str(s, "value", path, def_value);
+      const std::string group = str(s, "group", path, def_group);
+      // The columns are checked here, at the key that names them (the CSV reader's own message
+      // has no JSON path).
+      for (const auto& [key, name] : {std::pair{"value", value}, std::pair{"group", group}})
+        if (!has_column(table, name))
+          throw InputError(at(json::path_key(s.contains(key) ? path : "$", key)),
+                           no_column(table, name));
+      // One column as both values and labels makes every value its own group's label: refused,
+      // as `palplab stats` refuses --value and --group naming the same column.
+      if (value == group)
+        throw InputError(at(json::path_key(s.contains("group") ? path : "$", "group")),
+                         "\"value\" and \"group\" name the same column ('" + shown_text(group) +
+                             "'); \"group\" takes the column of group labels");
+      std::vector<WhereFilter> where;
+      const std::string where_path = json::path_key(path, "where");
+      if (s.contains("where")) {
+        if (!s["where"].is_array())
+          throw InputError(at(where_path), "expected an array of \"COL=VALUE\" strings");
+        for (size_t k = 0; k < s["where"].size(); ++k) {
+          const auto& w = s["where"][k];
+          const std::string wp = json::path_index(where_path, k);
+          const bool text = w.is_string() && w.get<std::string>().find('=') != std::string::npos;
+          const WhereFilter f = text ? parse_where(w) : WhereFilter{};
+          if (f.column.empty())  // not a string, no '=', or nothing before it
+            throw InputError(at(wp), "expected a \"COL=VALUE\" string, got " + w.dump());
+          if (!has_column(table, f.column)) throw InputError(at(wp), no_column(table, f.column));
+          where.push_back(f);
+        }
+        // group_table would say "no data rows match the --where filters": a flag recheck does
+        // not have.
+        if (!where.empty() && filter_rows(table, where).empty())
+          throw InputError(at(where_path), no_row_matches(table, where, s["where"].dump()));
       }
-    } else if (item.test == "welch_anova") {
-      df1 = static_cast<double>(d.names.size() - 1);
-      for (size_t g = 0; g < d.names.size() && why.empty(); ++g)
-        if (d.values[g].size() < 2) why = too_few(d, g) + "; Welch's F needs at least 2 per group";
-      if (why.empty()) {
-        WelchAnova r = welch_anova(d.values);
-        if (r.defined)
-          df2 = r.df_within, stat = r.F, p = r.p;
-        else
-          for (size_t g = 0; g < d.names.size() && why.empty(); ++g)
-            if (std::all_of(d.values[g].begin(), d.values[g].end(),
-                            [&](double x) { return x == d.values[g].front(); }))
-              why = "group '" + d.names[g] +
-                    "' has no variation (its values are all equal): Welch's F weights each "
-                    "group by 1/variance and is undefined";
-      }
-    } else {
-      if (!s.contains("pair") || !s["pair"].is_array() || s["pair"].size() != 2 ||
-          !s["pair"][0].is_string() || !s["pair"][1].is_string())
-        throw InputError(at(path + ".pair"),
-                         "a t-test needs \"pair\": [\"GROUP_A\", \"GROUP_B\"] (t = A − B)");
-      int ia = -1, ib = -1;
-      for (size_t g = 0; g < d.names.size(); ++g) {
-        if (d.names[g] == s["pair"][0].get<std::string>()) ia = static_cast<int>(g);
-        if (d.names[g] == s["pair"][1].get<std::string>()) ib = static_cast<int>(g);
-      }
-      if (ia < 0 || ib < 0 || ia == ib)
-        throw InputError(at(path + ".pair"),
-                         "both groups must be distinct groups of " + col + " in the rows used");
-      for (int g : {ia, ib})
-        if (why.empty() && d.values[g].size() < 2)
-          why = too_few(d, g) + "; a t-test needs at least 2 per group";
-      if (why.empty()) {
-        TTest r = item.test == "welch_t" ? welch_t(d.values[ia], d.values[ib])
-                                         : student_t(d.values[ia], d.values[ib]);
-        df1 = r.df;
-        if (r.defined) {
-          stat = r.t, p = r.p;
-          // A printed t may be the |t| of a pair written the other way round.
-          if (a.value >= 0 && stat < 0) stat = -stat;
+      const bool f_test = item.test == "anova" || item.test == "welch_anova";
+      const bool t_test = item.test == "welch_t" || item.test == "student_t";
+      if (!f_test && !t_test)
+        throw InputError(
+            at(path + ".test"),
+            "expected anova, welch_anova, welch_t or student_t, got \"" + item.test + "\"");
+      if ((a.kind == 'F') != f_test)
+        throw InputError(at(path + ".test"),
+                         "test \"" + item.test + "\" does not print as " + std::string(1, a.kind));
+      if (f_test && s.contains("pair"))
+        throw InputError(at(path + ".pair", true), "\"pair\" applies to t-tests only; an F test (" +
+                                                       item.test +
+                                                       ") compares all groups of column '" + group +
+                                                       "' (select groups with \"where\")");
+      // Every group of the rows used with at least 1 value: which groups a test needs (and how
+      // many values) is the test's own matter, and too few is "not recomputable", not bad input.
+      GroupedData d = group_table(table, value, group, where, 1, 1, skip_empty);
+      item.rows_skipped_empty = d.rows_skipped_empty;
+      double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;
+      std::string why;  // why the test is undefined on these rows
+      const std::string col = "column '" + group + "'";
+      if (f_test && d.names.size() < 2) {
+        why = "the rows used hold one group of " + col + " ('" + d.names[0] +
+              "'); an F test compares at least 2";
+      } else if (item.test == "anova") {
+        size_t n = 0;
+        for (const auto& g : d.values) n += g.size();
+        df1 = static_cast<double>(d.names.size() - 1);
+        if (n <= d.names.size()) {
+          why = "every group of " + col +
+                " has a single value: no variation within groups to "
+                "compare with (df2 = 0)";
         } else {
-          why = "no variation within groups '" + d.names[ia] + "' and '" + d.names[ib] +
-                "' (the values of each are all equal): t and p are undefined";
+          Anova r = oneway_anova(d.values);
+          df2 = r.df_within;
+          if (r.defined)
+            stat = r.F, p = r.p;
+          else
+            why = "no variation within any group of " + col +
+                  " (the values of each group are all equal): F and p are undefined";
+        }
+      } else if (item.test == "welch_anova") {
+        df1 = static_cast<double>(d.names.size() - 1);
+        for (size_t g = 0; g < d.names.size() && why.empty(); ++g)
+          if (d.values[g].size() < 2)
+            why = too_few(d, g) + "; Welch's F needs at least 2 per group";
+        if (why.empty()) {
+          WelchAnova r = welch_anova(d.values);
+          if (r.defined)
+            df2 = r.df_within, stat = r.F, p = r.p;
+          else
+            for (size_t g = 0; g < d.names.size() && why.empty(); ++g)
+              if (std::all_of(d.values[g].begin(), d.values[g].end(),
+                              [&](double x) { return x == d.values[g].front(); }))
+                why = "group '" + d.names[g] +
+                      "' has no variation (its values are all equal): Welch's F weights each "
+                      "group by 1/variance and is undefined";
+        }
+      } else {
+        if (!s.contains("pair") || !s["pair"].is_array() || s["pair"].size() != 2 ||
+            !s["pair"][0].is_string() || !s["pair"][1].is_string())
+          throw InputError(at(path + ".pair"),
+                           "a t-test needs \"pair\": [\"GROUP_A\", \"GROUP_B\"] (t = A − B)");
+        int ia = -1, ib = -1;
+        for (size_t g = 0; g < d.names.size(); ++g) {
+          if (d.names[g] == s["pair"][0].get<std::string>()) ia = static_cast<int>(g);
+          if (d.names[g] == s["pair"][1].get<std::string>()) ib = static_cast<int>(g);
+        }
+        if (ia < 0 || ib < 0 || ia == ib)
+          throw InputError(at(path + ".pair"),
+                           "both groups must be distinct groups of " + col + " in the rows used");
+        for (int g : {ia, ib})
+          if (why.empty() && d.values[g].size() < 2)
+            why = too_few(d, g) + "; a t-test needs at least 2 per group";
+        if (why.empty()) {
+          TTest r = item.test == "welch_t" ? welch_t(d.values[ia], d.values[ib])
+                                           : student_t(d.values[ia], d.values[ib]);
+          df1 = r.df;
+          if (r.defined) {
+            stat = r.t, p = r.p;
+            // A printed t may be the |t| of a pair written the other way round.
+            if (a.value >= 0 && stat < 0) stat = -stat;
+          } else {
+            why = "no variation within groups '" + d.names[ia] + "' and '" + d.names[ib] +
+                  "' (the values of each are all equal): t and p are undefined";
+          }
         }
       }
+      auto part = [&](const std::string& name, const std::string& shown, std::string verdict,
+                      double v) {
+        item.parts.push_back({name, shown, v, std::move(verdict)});
+      };
+      char b[64];
+      auto show = [&](double v, int dec) {
+        std::snprintf(b, sizeof b, "%.*f", dec, v);
+        return std::string(b);
+      };
+      // Every df but Welch's denominators (the t's, the F's df2) is a whole count.
+      const bool df1_count = item.test != "welch_t";
+      const bool df2_count = item.test == "anova";
+      part(a.kind == 'F' ? "df1" : "df", show(a.df1, a.df1_decimals),
+           df1_count ? classify_count(a.df1, df1) : classify_number(a.df1, a.df1_decimals, df1),
+           df1);
+      if (a.kind == 'F')
+        part("df2", show(a.df2, a.df2_decimals),
+             df2_count ? classify_count(a.df2, df2) : classify_number(a.df2, a.df2_decimals, df2),
+             df2);
+      part("statistic", show(a.value, a.value_decimals),
+           classify_number(a.value, a.value_decimals, stat), stat);
+      part("p", a.p_relation + " " + show(a.p, a.p_decimals),
+           classify_p(a.p_relation, a.p, a.p_decimals, p), p);
+      item.verdict = "consistent";
+      bool undefined = false;
+      for (const auto& pt : item.parts) {
+        if (rank(pt.verdict) > rank(item.verdict)) item.verdict = pt.verdict;
+        undefined = undefined || pt.verdict == kNotRecomputable;
+      }
+      if (undefined)
+        item.reason = why.empty() ? "the test is undefined on the rows used" : why;
+      else
+        item.recomputed_apa = a.kind == 'F' ? apa_f(stat, df1, df2, p) : apa_t(stat, df1, p);
+      out.push_back(std::move(item));
+    } catch (const InputError& e) {
+      report(e);
     }
-    auto part = [&](const std::string& name, const std::string& shown, std::string verdict,
-                    double v) {
-      item.parts.push_back({name, shown, v, std::move(verdict)});
-    };
-    char b[64];
-    auto show = [&](double v, int dec) {
-      std::snprintf(b, sizeof b, "%.*f", dec, v);
-      return std::string(b);
-    };
-    // Every df but Welch's denominators (the t's, the F's df2) is a whole count.
-    const bool df1_count = item.test != "welch_t";
-    const bool df2_count = item.test == "anova";
-    part(a.kind == 'F' ? "df1" : "df", show(a.df1, a.df1_decimals),
-         df1_count ? classify_count(a.df1, df1) : classify_number(a.df1, a.df1_decimals, df1), df1);
-    if (a.kind == 'F')
-      part("df2", show(a.df2, a.df2_decimals),
-           df2_count ? classify_count(a.df2, df2) : classify_number(a.df2, a.df2_decimals, df2),
-           df2);
-    part("statistic", show(a.value, a.value_decimals),
-         classify_number(a.value, a.value_decimals, stat), stat);
-    part("p", a.p_relation + " " + show(a.p, a.p_decimals),
-         classify_p(a.p_relation, a.p, a.p_decimals, p), p);
-    item.verdict = "consistent";
-    bool undefined = false;
-    for (const auto& pt : item.parts) {
-      if (rank(pt.verdict) > rank(item.verdict)) item.verdict = pt.verdict;
-      undefined = undefined || pt.verdict == kNotRecomputable;
-    }
-    if (undefined)
-      item.reason = why.empty() ? "the test is undefined on the rows used" : why;
-    else
-      item.recomputed_apa = a.kind == 'F' ? apa_f(stat, df1, df2, p) : apa_t(stat, df1, p);
-    out.push_back(std::move(item));
   }
+  std::stable_sort(problems.begin(), problems.end(), [](const Problem& a, const Problem& b) {
+    return std::pair{a.where.line, a.where.column} < std::pair{b.where.line, b.where.column};
+  });  // in file order (an object's keys come sorted by name)
+  if (!problems.empty()) throw InputError(problems);
   return out;
 }
 

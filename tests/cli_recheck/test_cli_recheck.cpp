@@ -167,6 +167,45 @@ TEST(CliRecheck, MalformedReportsAreExitTwoWithTheLocation) {
   }
 }
 
+// Every statistic is checked and every problem said in one run (the first one was, and a paper's
+// list of ten statistics took ten runs to fix): one per statistic, every unknown key (the top
+// level's too: a misspelled "valeu" was ignored), a top-level column that does not exist said
+// once, not once per statistic using it.
+TEST(CliRecheck, EveryStatisticsProblemIsSaidAtOnce) {
+  const std::string csv = " --csv " + src("tests/data/r/unequal.csv");
+  const std::string f =
+      write_temp("several.json", R"({"value":"force","group":"group","paper":"x","statistics":[)"
+                                 R"({"text":"F(2, 6) = 7.14, p = .026","typo":1,"tset":"anova"},)"
+                                 R"({"text":"F(2, 6) = 7.14, p = 1.5"},)"
+                                 R"({"text":"F(2, 13) = 1.2, p = .3"},)"
+                                 R"({"text":"t(3) = 1.2, p = .3","pair":["A","Z"]},)"
+                                 R"({"text":"F(2, 13) = 1.2, p = .3","value":"nosuch"}]})");
+  const Result r = run_palplab("recheck " + f + csv);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  for (const char* want :
+       {"$.paper: unknown key \"paper\"; expected one of: comment, value, group, statistics",
+        "$.statistics[0].typo: unknown key", "$.statistics[0].tset: unknown key",
+        "$.statistics[1].text: a p-value is at most 1",
+        "$.statistics[3].pair: both groups must be distinct groups",
+        "$.statistics[4].value: no column 'nosuch'"})
+    EXPECT_NE(r.err.find(want), std::string::npos) << want << " in: " << r.err;
+  EXPECT_EQ(r.err.find("$.statistics[2]"), std::string::npos) << r.err;  // a valid one
+  // Nothing is printed as checked while the file has problems.
+  EXPECT_EQ(r.out.find("consistent"), std::string::npos) << r.out;
+  // A top-level "value" naming no column: said once, at $.value, for the three that use it.
+  const std::string g = write_temp(
+      "toplevel.json",
+      R"({"value":"nosuch","group":"group","statistics":[{"text":"F(2, 13) = 1.2, p = .3"},)"
+      R"({"text":"F(2, 13) = 1.3, p = .3"},{"text":"F(2, 13) = 1.4, p = .3"}]})");
+  const Result t = run_palplab("recheck " + g + csv);
+  EXPECT_EQ(t.code, 2) << t.out << t.err;
+  const auto first = t.err.find("$.value: no column 'nosuch'");
+  ASSERT_NE(first, std::string::npos) << t.err;
+  EXPECT_EQ(t.err.find("$.value: no column", first + 1), std::string::npos) << t.err;
+  std::filesystem::remove(f);
+  std::filesystem::remove(g);
+}
+
 // Review finding: a statistic the raw data do not define (no variation within the groups, a
 // group of the test with one value, one group for an F) was graded "inconsistent" with nan as
 // the recomputed value. It is now "not recomputable" with the reason; a part that can be
