@@ -672,6 +672,28 @@ Study parse_study(const std::string& text, const std::string& file,
                          ", with the same options): remove one");
             break;
           }
+          // The report makes one section per measure, phase and pooling, holding every kind
+          // declared for it: welch, pool_sessions and margin are that section's options. Two
+          // entries that set one differently had the last one win silently (a declared
+          // Student t and its margin vanished from the report: review 2026-12-07).
+          if (a.measure.empty() || a.measure != b.measure || a.phase != b.phase ||
+              a.pooled != b.pooled)
+            continue;
+          const json& bj = (*an)[source[k]];
+          const bool both_t = a.kind == "pairwise_t" && b.kind == "pairwise_t";
+          const auto said = [](const json& e, const char* key, bool welch) {
+            return e.contains(key) ? e[key].dump()
+                                   : json(welch).dump() + " (the default)";  // welch only
+          };
+          for (const char* key : {"welch", "pool_sessions", "margin"})
+            if ((aj.contains(key) && bj.contains(key) && aj[key] != bj[key]) ||
+                (both_t && key == std::string("welch") && a.welch != b.welch))
+              c.err(path_key(A, key),
+                    said(aj, key, a.welch) + " here but " + said(bj, key, b.welch) + " in " +
+                        path_index("$.analyses", source[k]) + ", an analysis of the same " +
+                        "measure and phase" + (a.pooled ? " (pooled)" : "") +
+                        ": the report makes one section of them, and " + key +
+                        " is that section's option (declare it once, or give both the same)");
         }
         s.analyses.push_back(a);
         source.push_back(i);

@@ -1206,8 +1206,8 @@ TEST(HardCli, APalpationOnsetAboveTheTargetForceIsWarnedOf) {
 }
 
 // Review finding (2026-12-06): the same analysis declared twice (a copy-paste) validated and was
-// run, reported and counted in power twice. Exit 2 naming both entries; the same test with
-// another option (Student instead of Welch) is a different analysis.
+// run, reported and counted in power twice. Exit 2 naming both entries; so is the same test with
+// another option (Student instead of Welch), which the report's one section could not hold.
 TEST(HardCli, TheSameAnalysisTwiceIsRefused) {
   auto d = tmp("dupanalysis");
   const std::string one =
@@ -1228,6 +1228,29 @@ TEST(HardCli, TheSameAnalysisTwiceIsRefused) {
           R"( "analyses": [)" + one +
               R"(, {"kind": "pairwise_t", "measure": "palpation_force", "phase": "post", "welch": false}],)"));
   r = cli("validate " + (d / "other.json").string(), d);
+  // The report makes one section per measure, phase and pooling: the Welch test vanished from
+  // it (the last "welch" won), as did a margin or a Student t declared beside another (review
+  // 2026-12-07). Options of one section are declared once or agree.
+  EXPECT_EXIT2_WITH(r,
+                    "$.analyses[1].welch: false here but true (the default) in $.analyses[0], "
+                    "an analysis of the same measure and phase: the report makes one section "
+                    "of them, and welch is that section's option");
+  spit(d / "margins.json",
+       study(kGroups,
+             R"( "analyses": [{"kind": "descriptives", "measure": "palpation_force", "phase": )"
+             R"("post", "margin": 0.5}, {"kind": "pairwise_t", "measure": "palpation_force", )"
+             R"("phase": "post", "margin": 0.2}],)"));
+  r = cli("validate " + (d / "margins.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.analyses[1].margin: 0.2 here but 0.5 in $.analyses[0]");
+  // Set once, or the same in both, is one section with that option; another phase is another
+  // section.
+  spit(d / "agree.json",
+       study(kGroups,
+             R"( "analyses": [{"kind": "descriptives", "measure": "palpation_force", "phase": )"
+             R"("post", "margin": 0.5}, {"kind": "pairwise_t", "measure": "palpation_force", )"
+             R"("phase": "post", "welch": false}, {"kind": "anova_oneway", "measure": )"
+             R"("palpation_force", "phase": "post", "margin": 0.5, "welch": false}],)"));
+  r = cli("validate " + (d / "agree.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   // Named by their places in the file, also after an entry that is no analysis.
   spit(d / "after.json", study(kGroups, R"( "analyses": ["oops", )" + one + ", " + one + "],"));
