@@ -260,6 +260,10 @@ SceneConfig load_prototype(const std::string& path) {
 
 PrototypeSummary inspect_prototype(const std::string& path) {
   const SceneConfig s = load_prototype(path);
+  // What the model needs of its mesh, said now rather than when the first session builds it (a
+  // run left an empty database behind, and `validate` passed it; review 2026-12-07).
+  if (const ModelKind* kind = find_model_kind(s.model); kind && kind->check_mesh)
+    kind->check_mesh(s, *scene_mesh(s.mesh));
   return {s.id, s.scene, s.model, mesh_region_names(s.mesh), mesh_inner_region_names(s.mesh)};
 }
 

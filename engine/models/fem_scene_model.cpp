@@ -36,6 +36,7 @@
 #include "engine/mesh/tet_mesh.hpp"
 #include "engine/models/fem_model.hpp"
 #include "engine/models/model.hpp"
+#include "engine/models/tet_mesh_checks.hpp"
 #include "engine/solvers/fem_static.hpp"
 
 namespace palplab::engine {
@@ -394,52 +395,54 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
   read_support(c, m, P, cfg.support, regions);
 }
 
-std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm) {
+// What the FEM needs of its mesh, checked by `validate` and `run` before anything runs (the
+// kind's check_mesh) and by make_fem: tets, each positively oriented and not flat (an inverted
+// or zero-volume tet has no element stiffness; the same bound as tet_shape's), of tissue
+// attributes the material table covers.
+void check_fem_mesh(const SceneConfig& cfg, const SceneMesh& cm) {
   if (!cm.tet)
     throw InputError(
         "model \"fem\" needs a tetrahedral mesh (generator model_c or a tet mesh "
         "file); mesh " +
             cfg.mesh.key() + " is a surface",
         cfg.source);
-  const long nm = cm.model_V.rows(), nt = cm.model_T.rows();
-  // An inverted tet has no element stiffness (the FEM needs every tet positively oriented):
-  // refused, naming the file (a TetGen mesh's .ele, where the tets are) and the element.
-  // Where a tet's problem is said: the mesh file (a TetGen mesh's .ele), else the prototype with
-  // its generator.
-  std::string file = cfg.mesh.file, where = "mesh " + cfg.mesh.key() + ": ";
-  if (!file.empty()) {
-    const std::filesystem::path fp(file);
-    if (fp.extension() == ".node" || fp.extension() == ".ele")
-      file = std::filesystem::path(fp).replace_extension(".ele").string();
-    where.clear();
-  } else {
-    file = cfg.source;
-  }
-  for (long t = 0; t < nt; ++t) {
+  for (long t = 0; t < cm.model_T.rows(); ++t) {
     const double v = mesh::signed_volume(cm.model_V, cm.model_T, static_cast<int>(t));
-    if (v < 0) {
-      std::string nodes;
+    double longest = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        longest = std::max(
+            longest, (cm.model_V.row(cm.model_T(t, a)) - cm.model_V.row(cm.model_T(t, b))).norm());
+    const bool flat = !(std::abs(v) > 1e-14 * longest * longest * longest);
+    if (v < 0 || flat) {
+      std::string nodes, where;
       for (int k = 0; k < 4; ++k) {
         if (k) nodes += ' ';
         nodes += std::to_string(cm.model_T(t, k));
       }
+      const std::string file = tet_problem_file(cfg, &where);
       char vol[32];
       std::snprintf(vol, sizeof vol, "%.3g", v);
-      throw InputError(where + "tet " + std::to_string(t) + " (in file order from 0; nodes " +
-                           nodes + "): inverted tetrahedron (signed volume " + vol +
-                           " m^3): model \"fem\" needs every tet positively oriented (swap two "
-                           "of its nodes; `palplab mesh check` lists every inverted tet)",
-                       file);
+      throw InputError(
+          where + "tet " + std::to_string(t) + " (in file order from 0; nodes " + nodes + "): " +
+              (flat ? std::string("degenerate tetrahedron (zero volume, ") + vol +
+                          " m^3): model \"fem\" needs every tet to have a volume (`palplab mesh "
+                          "check` lists every degenerate tet; `mesh tetrahedralize` remeshes)"
+                    : std::string("inverted tetrahedron (signed volume ") + vol +
+                          " m^3): model \"fem\" needs every tet positively oriented (swap two "
+                          "of its nodes; `palplab mesh check` lists every inverted tet)"),
+          file);
     }
   }
+  check_tet_attributes(cfg, cm, false);  // per tet from the attribute, whatever tissue is named
+}
+
+std::unique_ptr<SceneModel> make_fem(const SceneConfig& cfg, const SceneMesh& cm) {
+  check_fem_mesh(cfg, cm);
+  const long nm = cm.model_V.rows(), nt = cm.model_T.rows();
   mesh::TetMesh tm = mesh::make_tet_mesh(cm.model_V, cm.model_T, cm.tet_attribute);
   const mesh::MaterialTable& table = mesh::default_materials();
-  TetMaterials mat;
-  try {
-    mat = tet_materials(tm, table);  // per tet from the attribute (tissue table)
-  } catch (const InputError& e) {
-    throw InputError(where + e.what(), file);  // named (review 2026-12-06, second)
-  }
+  TetMaterials mat = tet_materials(tm, table);  // per tet from the attribute (tissue table)
   const MaterialConfig& mc = cfg.material;
   if (!mc.tissue.empty() || mc.youngs_modulus || mc.density) {
     const mesh::Material* named = mc.tissue.empty() ? nullptr : find_tissue(mc.tissue);
@@ -542,7 +545,8 @@ const ModelKind& fem_model_kind() {
                            &read_fem,
                            nullptr,
                            &make_fem,
-                           &save_fem};
+                           &save_fem,
+                           &check_fem_mesh};
   return k;
 }
 

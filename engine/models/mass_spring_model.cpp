@@ -14,6 +14,7 @@
 #include "engine/models/mass_spring_model.hpp"
 #include "engine/models/model.hpp"
 #include "engine/models/refinement.hpp"
+#include "engine/models/tet_mesh_checks.hpp"
 #include "engine/solvers/far_field.hpp"
 #include "engine/solvers/integrators.hpp"
 #include "engine/solvers/sleeping.hpp"
@@ -724,7 +725,15 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
 
 // Every stiffness, mass and support from the material and the rest geometry
 // (engine/models/mass_spring_material.hpp): nothing per vertex.
+// What the mass-spring model needs of a tet mesh: tissue attributes the material table covers
+// (a tet of another attribute had no stiffness and no mass: a body of 0 kg ran; review
+// 2026-12-07), unless the prototype names one tissue for the whole body.
+static void check_mass_spring_mesh(const SceneConfig& cfg, const SceneMesh& cm) {
+  check_tet_attributes(cfg, cm, true);
+}
+
 AdaptiveMassSpring mass_spring_adaptive(const SceneConfig& cfg, const SceneMesh& cm) {
+  check_mass_spring_mesh(cfg, cm);
   const long nm = cm.model_V.rows();
   const mesh::MaterialTable& table = mesh::default_materials();
   const MaterialConfig& mc = cfg.material;
@@ -880,9 +889,10 @@ void set_lazy_exterior(bool lazy) {
 
 const ModelKind& mass_spring_model_kind() {
   static const ModelKind k{
-      "mass_spring",     "adaptive mass-spring tissue from the material (prototype C)",
-      &read_mass_spring, nullptr,
-      &make_mass_spring, &mass_spring_save};
+      "mass_spring",          "adaptive mass-spring tissue from the material (prototype C)",
+      &read_mass_spring,      nullptr,
+      &make_mass_spring,      &mass_spring_save,
+      &check_mass_spring_mesh};
   return k;
 }
 

@@ -137,6 +137,10 @@ struct ModelKind {
   // a .psim file. make() finds it again in mesh.model_blob and must produce a model that steps
   // bit-identically to one built without it.
   std::string (*save)(const SceneConfig& cfg, const SceneMesh& mesh) = nullptr;
+  // Optional: what the kind needs of the prepared mesh (a tet mesh, tets it can use, tissue
+  // attributes the material table covers), a located InputError otherwise. `validate` and `run`
+  // make it before anything runs (prototypes::inspect_prototype); make() makes it too.
+  void (*check_mesh)(const SceneConfig& cfg, const SceneMesh& mesh) = nullptr;
 };
 
 // Reads the optional "material" member of a model object into mc (engine/models/material_json.cpp).

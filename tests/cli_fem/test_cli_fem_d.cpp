@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -560,7 +561,82 @@ TEST(CliFemD, ATetOfAnUnknownTissueNamesTheMeshFile) {
       run("probe " + (d / "D.json").string() + " --press 0 --force 1 --duration 0.05", d);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find((d / "mc.ele").string() + ": tet " + tet +
-                       " has attribute 999 (tissue type) which the material table does not cover"),
+                       " (in file order from 0) has attribute 999 (tissue type) which the "
+                       "material table does not cover"),
             std::string::npos)
       << r.err;
+  // The mass-spring model (prototype C's) on the same mesh: a tet of no material had no mass and
+  // no stiffness, and a body of 0 kg ran (review 2026-12-07); refused the same way, unless the
+  // prototype names one tissue for the whole body.
+  std::string c = slurp(proto("C"));
+  const std::string cgen = "{\"generator\": \"model_c\", \"vertices\": 1600, \"seed\": 0}";
+  ASSERT_NE(c.find(cgen), std::string::npos) << c.substr(0, 400);
+  c.replace(c.find(cgen), cgen.size(), "{\"file\": \"mc.node\"}");
+  std::ofstream(d / "C.json") << c;  // C names "soft tissue" for the whole body: it runs
+  const std::string press = " --press 0 --force 1 --duration 0.05 --release 0.01";
+  const Result named = run("probe " + (d / "C.json").string() + press, d);
+  EXPECT_EQ(named.code, 0) << named.out << named.err;
+  const std::string tissue = "\"tissue\": \"soft tissue\", ";
+  ASSERT_NE(c.find(tissue), std::string::npos);
+  c.erase(c.find(tissue), tissue.size());
+  std::ofstream(d / "C.json", std::ios::trunc) << c;
+  const Result ms = run("probe " + (d / "C.json").string() + press, d);
+  EXPECT_EQ(ms.code, 2) << ms.out << ms.err;
+  EXPECT_NE(ms.err.find((d / "mc.ele").string() + ": tet " + tet + " (in file order from 0) " +
+                        "has attribute 999"),
+            std::string::npos)
+      << ms.err;
+}
+
+// What a model needs of its mesh is said by `validate`, and by `run` before its database exists
+// (review 2026-12-07: validate passed FEM prototypes on a surface mesh, an inverted or a flat tet
+// and a tissue attribute the table lacks; run refused them only when the first session built the
+// scene, leaving an empty database that the next run needed --force for).
+TEST(CliFemD, ValidateAndRunRefuseAMeshTheModelCannotUse) {
+  const fs::path d = tmp("meshneeds");
+  fs::create_directories(d / "protos");
+  const std::string node = "5 3 0 0\n0 0 0 0\n1 0.02 0 0\n2 0 0.02 0\n3 0 0 0.02\n4 0.02 0.02 0\n";
+  // tet 0 is good; tet 1's nodes lie in the plane z = 0 (flat), or are swapped (inverted).
+  const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
+      {"flat", "fem", "2 4 1\n0 0 1 2 3 101\n1 1 4 2 0 101\n",
+       "flat.ele: tet 1 (in file order from 0; nodes 1 4 2 0): degenerate tetrahedron (zero "
+       "volume"},
+      {"inverted", "fem", "1 4 1\n0 1 0 2 3 101\n",
+       "inverted.ele: tet 0 (in file order from 0; nodes 1 0 2 3): inverted tetrahedron"},
+      {"tissue", "fem", "1 4 1\n0 0 1 2 3 999\n",
+       "tissue.ele: tet 0 (in file order from 0) has attribute 999"},
+      {"tissue_ms", "mass_spring", "1 4 1\n0 0 1 2 3 999\n",
+       "tissue_ms.ele: tet 0 (in file order from 0) has attribute 999"},
+      {"surface", "fem", "",
+       "needs a tetrahedral mesh (generator model_c or a tet mesh file); mesh file:"}};
+  for (const auto& [name, kind, ele, expect] : cases) {
+    SCOPED_TRACE(name);
+    std::string mesh = "{\"file\": \"" + name + ".node\"}";
+    if (ele.empty()) {
+      std::ofstream(d / "protos" / "surface.obj")
+          << "v 0 0 0\nv 0.02 0 0\nv 0 0.02 0\nv 0 0 0.02\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+      mesh = "{\"file\": \"surface.obj\"}";
+    } else {
+      std::ofstream(d / "protos" / (name + ".node")) << node;
+      std::ofstream(d / "protos" / (name + ".ele")) << ele;
+    }
+    std::ofstream(d / "protos" / ("X" + name + ".json"))
+        << R"({"format": "palplab-prototype/1", "id": "X)" << name << R"(", "mesh": )" << mesh
+        << R"(, "model": {"kind": ")" << kind << R"(", "fixed_z_below": 0.001}})";
+    std::ofstream(d / "s.json") << R"({"palplab_study": 1, "id": "mesh_needs", "title": "t",
+  "prototype_dirs": ["protos"],
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 1.5, "MPF": 2.0, "SFT": 3.0}}},
+  "groups": [{"id": "G", "prototype": "X)"
+                                << name << R"(", "size": 1}],
+  "phases": [{"id": "training", "kind": "training", "sessions": 1, "session_duration": 1}]})";
+    const Result v = run("validate " + (d / "s.json").string(), d);
+    EXPECT_EQ(v.code, 2) << v.out << v.err;
+    EXPECT_NE(v.err.find(expect), std::string::npos) << v.err;
+    const Result r =
+        run("run " + (d / "s.json").string() + " --db " + (d / "r.db").string() + " --quiet", d);
+    EXPECT_EQ(r.code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(expect), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(d / "r.db"));
+  }
+  fs::remove_all(d);
 }
