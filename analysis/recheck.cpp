@@ -34,6 +34,10 @@ double to_number(const std::string& s, const std::string& text, const SourceLoca
 }
 
 constexpr const char* kNotRecomputable = "not recomputable";
+// How far a rounding difference may be, as a share of the value (classify_number), and the level
+// whose verdict a printed p may not reverse (classify_p).
+constexpr double kRoundingShare = 0.05;
+constexpr double kVerdictAlpha = 0.05;
 
 int rank(const std::string& v) {
   return v == "consistent" ? 0 : v == "rounding" ? 1 : v == kNotRecomputable ? 2 : 3;
@@ -149,7 +153,14 @@ std::string classify_number(double reported, int decimals, double recomputed) {
   const double rounded = std::round(recomputed / unit) * unit;
   const double slack = 1e-9 * unit;
   if (std::fabs(rounded - reported) <= slack) return "consistent";
-  if (std::fabs(recomputed - reported) <= unit + slack) return "rounding";
+  // A rounding difference: a value cut instead of rounded, or recomputed from data the CSV holds
+  // rounded — off by at most one unit of the last printed digit and by at most kRoundingShare of
+  // the value. With few printed decimals one unit is most of the value: "F = 12" for 11.05 and
+  // "p = .1" for .0016 were graded rounding (review 2026-12-07).
+  const double diff = std::fabs(recomputed - reported);
+  if (diff <= unit + slack &&
+      diff <= kRoundingShare * std::max(std::fabs(reported), std::fabs(recomputed)))
+    return "rounding";
   return "inconsistent";
 }
 
@@ -168,7 +179,12 @@ std::string classify_p(const std::string& relation, double reported, int decimal
   // holds or it is inconsistent; no rounding slack.
   if (relation == "<") return recomputed < reported ? "consistent" : "inconsistent";
   if (relation == ">") return recomputed > reported ? "consistent" : "inconsistent";
-  return classify_number(reported, decimals, recomputed);
+  // A printed p that is not the recomputed one rounded, on the other side of .05, claims the
+  // opposite verdict: never a rounding (statcheck's gross inconsistency).
+  const std::string v = classify_number(reported, decimals, recomputed);
+  if (v == "rounding" && (recomputed < kVerdictAlpha) != (reported < kVerdictAlpha))
+    return "inconsistent";
+  return v;
 }
 
 std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& table,
