@@ -463,7 +463,10 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
       if (fv[i] < best_f) best_f = fv[i], best_z = pts[i];
     res.restarts = restart;
     // A restart that found nothing better ends the search.
-    if (restart > 0 && best_f >= start_f - 1e-9 * (1 + std::abs(start_f))) break;
+    if (restart > 0 && best_f >= start_f - 1e-9 * (1 + std::abs(start_f))) {
+      res.converged = true;
+      break;
+    }
   }
   res.x = to_x(best_z);
   res.f = best_f;
@@ -817,6 +820,7 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   NelderMeadResult nm = nelder_mead(loss, r.start, step, lo, hi, opt.budget);
   r.fitted = nm.x;
   r.restarts = nm.restarts;
+  r.converged = nm.converged;
   // A point whose loss equals the start's up to rounding is no better fit: moving there would
   // report a parameter change the data do not support (a parameter without effect on them).
   const double best_loss = simulate(r.fitted).first;
@@ -839,9 +843,9 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
   r.points_tried = static_cast<int>(memo.size());
   std::tie(r.loss_after, r.fit_after) = simulate(r.fitted);
   r.se.assign(r.fitted.size(), kNaN);
-  r.se_computed = opt.standard_errors;
+  r.se_computed = opt.standard_errors && memo.size() > 1;  // --budget 1 fits nothing
   in_stencil = true;
-  if (opt.standard_errors) standard_errors(r, step, lo, hi, loss);
+  if (r.se_computed) standard_errors(r, step, lo, hi, loss);
   {
     std::vector<std::vector<double>> xs;
     std::vector<double> fs;
@@ -972,6 +976,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
           {"evaluations", r.evaluations},
           {"evaluations_from_journal", r.replayed},
           {"restarts", r.restarts},
+          {"converged", r.converged},
           {"kept_start", r.kept_start},
           {"points_tried", r.points_tried},
           {"loss_flat", r.loss_flat},
@@ -993,13 +998,14 @@ std::string to_text(const CalibrationResult& r) {
                      : r.fitted[i] <= r.lo[i] ? ", AT ITS LOWER BOUND"
                      : r.fitted[i] >= r.hi[i] ? ", AT ITS UPPER BOUND"
                                               : "";
-    std::snprintf(buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %s", r.keys[i].c_str(),
-                  r.fitted[i],
-                  std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str()
-                  : !r.se_computed       ? "not computed (--no-se)"
-                  : *at                  ? "not estimable: on a bound"
-                                         : "not estimable",
-                  fmt_num(r.start[i]).c_str());
+    std::snprintf(
+        buf, sizeof buf, "  %-24s %12.6g  (SE %s, start %s", r.keys[i].c_str(), r.fitted[i],
+        std::isfinite(r.se[i]) ? std::to_string(r.se[i]).c_str()
+        : !r.se_computed
+            ? (r.points_tried <= 1 ? "not computed: nothing fitted" : "not computed (--no-se)")
+        : *at ? "not estimable: on a bound"
+              : "not estimable",
+        fmt_num(r.start[i]).c_str());
     o << buf;
     if (bounded) o << ", bounds " << fmt_num(r.lo[i]) << ":" << fmt_num(r.hi[i]) << at;
     if (i < r.se_quadratic.size() && std::isfinite(r.se_quadratic[i])) {
@@ -1031,6 +1037,10 @@ std::string to_text(const CalibrationResult& r) {
   if (r.replayed > 0 && r.journal_other_build > 0)
     o << r.journal_other_build << " of the journal's lines of this fit were written by another "
       << "palplab build; used, since this one simulates the start exactly as stored\n";
+  if (!r.converged && r.points_tried > 1)
+    o << "STOPPED BY --budget " << r.budget
+      << " before the search converged: the fitted values are the best point so far, not a "
+         "minimum; run the same command with a larger --budget (its journal resumes the fit)\n";
   if (r.kept_start && r.points_tried <= 1)
     o << "only the start was simulated (--budget " << r.budget
       << "): its loss is reported, nothing was fitted\n";

@@ -102,6 +102,9 @@ struct NelderMeadResult {
   std::vector<double> x;
   double f = 0.0;
   int evaluations = 0, restarts = 0;
+  // The search ended by itself (the simplex shrank or its values agreed, and a restart found
+  // nothing better); false when `budget` ran out first.
+  bool converged = false;
 };
 NelderMeadResult nelder_mead(const std::function<double(const std::vector<double>&)>& f,
                              std::vector<double> x0, const std::vector<double>& step,
@@ -174,7 +177,10 @@ struct CalibrationResult {
   std::vector<std::string> keys;
   std::vector<double> start, fitted, se;  // se NaN when the curvature is not positive definite
   std::vector<double> lo, hi;             // the bounds searched (--bounds, else the table's)
-  bool se_computed = true;                // false with CalibrateOptions::standard_errors off
+  // false with CalibrateOptions::standard_errors off, or when only the start was simulated
+  // (--budget 1: nothing fitted, so no curvature of a fit to measure).
+  bool se_computed = true;
+  bool converged = false;  // NelderMeadResult::converged: false = stopped by --budget
   double loss_before = 0.0, loss_after = 0.0;
   int evaluations = 0, restarts = 0;
   std::vector<CellFit> fit_before, fit_after;

@@ -361,18 +361,19 @@ TEST(Calibrate, AStartThatIsTheMinimumIsKeptButNotFlat) {
 
 // The SE stencil's points are simulated too: one with a lower loss than the fit is reported
 // (where, how much lower, how many SEs away), not silently dropped — and not adopted, since the
-// SEs are the fit's curvature. With --budget 1 only the start (0.30) is "fitted", the data are
-// simulated with 0.15: the stencil's step towards the truth (0.30 − 5 %) has the lower loss.
+// SEs are the fit's curvature. With --budget 2 the start (0.30) and one step up are simulated and
+// the start is kept; the data are simulated with 0.15: the stencil's step towards the truth
+// (0.30 − 5 %) has the lower loss. (--budget 1 fits nothing and runs no stencil.)
 TEST(Calibrate, AStencilPointBelowTheFitIsReported) {
   auto d = scratch_dir("calibrate_stencil");
   auto study = nlohmann::json::parse(slurp(data("recovery_study.json")));
   study["participant_model"]["parameters"]["prior_target_cv"] = 0.15;
   simulate_human_data(d, study);
   if (::testing::Test::HasFatalFailure()) return;
-  auto r =
+  Result r =
       run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
                       (d / "csv" / "measures.csv").string() +
-                      " --params prior_target_cv --budget 1 --out " + (d / "fit.json").string(),
+                      " --params prior_target_cv --budget 2 --out " + (d / "fit.json").string(),
                   d);
   ASSERT_EQ(r.code, 0) << r.err;
   auto fit = nlohmann::json::parse(slurp(d / "fit.json"));
@@ -384,12 +385,27 @@ TEST(Calibrate, AStencilPointBelowTheFitIsReported) {
   EXPECT_NE(r.out.find("prior_target_cv 0.285"), std::string::npos) << r.out;
   // The stencil's evaluations are labelled as such in the progress, beside the fit's loss (they
   // were shown as a new "best" the fit then did not report).
-  EXPECT_NE(r.err.find("evaluation 2 (SE stencil): loss "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("evaluation 3 (SE stencil): loss "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(" (fit "), std::string::npos) << r.err;
-  EXPECT_NE(r.out.find("(3 evaluations, 0 restarts)"), std::string::npos) << r.out;
-  // Three points (the start and the stencil's two) do not determine a quadratic with a residual.
-  EXPECT_TRUE(fit["standard_errors_quadratic"]["prior_target_cv"].is_null()) << fit.dump(1);
-  EXPECT_EQ(fit["quadratic_points"], 3);
+  EXPECT_NE(r.out.find("(4 evaluations, 0 restarts)"), std::string::npos) << r.out;
+  // Stopped by its budget of 2: said, and in the JSON.
+  EXPECT_NE(r.out.find("STOPPED BY --budget 2 before the search converged"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(fit["converged"], false);
+  // --budget 1 scores the start: no SE stencil (2 more simulations per parameter, minutes each
+  // on exp2, for the curvature of a fit that was not made; review 2026-12-07), no "stopped".
+  r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                      (d / "csv" / "measures.csv").string() +
+                      " --params prior_target_cv --budget 1 --out " + (d / "one.json").string(),
+                  d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto one = nlohmann::json::parse(slurp(d / "one.json"));
+  EXPECT_EQ(one["evaluations"], 1) << one.dump(1);
+  EXPECT_EQ(one["standard_errors_computed"], false);
+  EXPECT_TRUE(one["stencil_lower"].is_null()) << one.dump(1);
+  EXPECT_NE(r.out.find("(SE not computed: nothing fitted"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("STOPPED"), std::string::npos) << r.out;
+  EXPECT_EQ(r.err.find("SE stencil"), std::string::npos) << r.err;
   fs::remove_all(d);
 }
 

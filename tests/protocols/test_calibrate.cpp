@@ -21,6 +21,12 @@ TEST(NelderMead, FindsTheMinimumOfAQuadraticInsideTheBox) {
   EXPECT_NEAR(r.x[0], 0.3, 2e-3);
   EXPECT_NEAR(r.x[1], -0.2, 2e-3);
   EXPECT_LE(r.evaluations, 200);
+  EXPECT_TRUE(r.converged);
+  // Stopped by its budget while the loss still falls: said (calibrate printed it like a fit).
+  const auto cut = nelder_mead(f, {1.0, 1.0}, {0.25, 0.25}, {-2, -2}, {2, 2}, 8);
+  EXPECT_EQ(cut.evaluations, 8);
+  EXPECT_FALSE(cut.converged);
+  EXPECT_GT(cut.f, r.f + 1e-3);
 }
 
 // A start on its upper bound: the first simplex step goes down (before, the step up was cut back
