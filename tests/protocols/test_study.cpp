@@ -379,14 +379,22 @@ TEST(Study, MeasuresMustBeTheTasks) {
   EXPECT_EQ(ps[0].where.json_path, "$.measures[1]");
   EXPECT_NE(ps[0].what.find("\"tip_to_target_mm\" is not a measure of this study's palpation "
                             "task (its measures: palpation_force, exploration_time, "
-                            "feature_identified, accuracy)"),
+                            "feature_identified, accuracy, palpations, sft_reached)"),
             std::string::npos)
       << ps[0].what;
   EXPECT_EQ(ps[1].where.json_path, "$.measures[2]");
   EXPECT_NE(ps[1].what.find("expected a measure name of the palpation task, one of: "
-                            "palpation_force, exploration_time, feature_identified, accuracy"),
+                            "palpation_force, exploration_time, feature_identified, accuracy, "
+                            "palpations, sft_reached"),
             std::string::npos)
       << ps[1].what;
+  // The task's two counts, recorded for every session and documented, may be declared and
+  // analysed (they were refused: review 2026-12-07); not declared, an analysis of one says that
+  // the list is the default.
+  EXPECT_TRUE(problems_of("meascount",
+                          edit("\"phases\": [",
+                               "\"measures\": [\"palpations\", \"sft_reached\"], \"phases\": ["))
+                  .empty());
 }
 
 // Ids end up in file names, database text and CSV cells: one grammar for every kind of id
