@@ -126,6 +126,28 @@ palplab::app::CommandRegistration reg_validate{
                       << "counts only presses beyond it)\n";
           }
         }
+        // Valid but easy to misread: without "*", the regions the study does not list keep each
+        // prototype's own thresholds (and its sound at ST), which the database does not store
+        // (review 2026-12-07).
+        if (!s.task.thresholds.count("*")) {
+          std::string own;
+          for (const auto& [id, file] : s.prototype_files) {
+            const palplab::engine::SceneConfig cfg = palplab::prototypes::load_prototype(file);
+            const auto it = cfg.thresholds.find("*");
+            const palplab::engine::Thresholds t =
+                it != cfg.thresholds.end() ? it->second : cfg.default_thresholds;
+            char b[96];
+            std::snprintf(b, sizeof b, "%s%s ST %g, MPF %g, SFT %g N", own.empty() ? "" : "; ",
+                          id.c_str(), t.st, t.mpf, t.sft);
+            own += b;
+          }
+          std::cerr << palplab::escape_controls(*study)
+                    << ": warning: $.task.thresholds has no \"*\" entry: the regions it does not "
+                       "list keep each prototype's own thresholds and sound at ST ("
+                    << palplab::escape_controls(own)
+                    << "), which the results database does not store; add \"*\" to give every "
+                       "region the study's\n";
+        }
         *code = 0;
       });
     }};

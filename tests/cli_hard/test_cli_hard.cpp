@@ -1203,6 +1203,26 @@ TEST(HardCli, APalpationOnsetAboveTheTargetForceIsWarnedOf) {
                   "warning: $.task: the default palpation_onset 0.5 N is above the "
                   "feature's target force (MPF 0.4 N, SFT 3.5 N)"))
       << r.err;
+  EXPECT_FALSE(has(r.err, "has no \"*\" entry")) << r.err;
+}
+
+// Review finding (2026-12-07): thresholds for the feature only left every other region with each
+// prototype's own "*" (group A's sound and events at 0.1 N, say), which the database's thresholds
+// table does not hold. Valid, with a warning naming each prototype's.
+TEST(HardCli, ThresholdsWithoutAStarSayWhatTheOtherRegionsKeep) {
+  auto d = tmp("nostar");
+  std::string s = study();
+  const std::string star = R"({"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}})";
+  ASSERT_NE(s.find(star), std::string::npos);
+  s.replace(s.find(star), star.size(), R"({"ovary_left": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}})");
+  spit(d / "nostar.json", s);
+  const Result r = cli("validate " + (d / "nostar.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err,
+                  "warning: $.task.thresholds has no \"*\" entry: the regions it does not list "
+                  "keep each prototype's own thresholds and sound at ST (A ST 2, MPF 2.5, SFT 3 "
+                  "N; B ST 2, MPF 2.5, SFT 3 N), which the results database does not store"))
+      << r.err;
 }
 
 // Review finding (2026-12-06): the same analysis declared twice (a copy-paste) validated and was
