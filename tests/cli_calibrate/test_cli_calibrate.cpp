@@ -549,6 +549,16 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
        "--params weber_fraction", h + ":2:34: column 'unit': palpation_force is in N, got 'kg'"},
       {header + ",G1,test,1,palpation_force,2.4\n" + rows, "--params weber_fraction",
        h + ":2:1: column 'participant': expected the participant's id, got an empty field"},
+      // Review finding (2026-12-07): a NUL in an id passed (the study file refuses it).
+      {header +
+           std::string("H\0"
+                       "9,G1,test,1,palpation_force,2.4\n",
+                       34) +
+           rows,
+       "--params weber_fraction",
+       h + ":2:1: column 'participant': a control character (U+0000) in 'H\\x009'"},
+      {header + "H9,G\x1b[31m1,test,1,palpation_force,2.4\n" + rows, "--params weber_fraction",
+       h + ":2:4: column 'group': a control character (U+001B)"},
       // --bounds (2026-12-04): a fit's own range, checked against the fitted names, the
       // parameter table and the start (recovery_study.json leaves weber_fraction at 0.03).
       {header + rows, "--params weber_fraction --bounds prior_target_cv=0.1:0.5",
