@@ -62,8 +62,18 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
         continue;
       }
     }
-    // Validates, with the line, before use (a long bad field is shown cut, shown_text).
-    parse_number(t, static_cast<int>(r), vc);
+    // Validates, with the line, before use (a long bad field is shown cut, shown_text). An
+    // undefined value (empty or NA, as palplab's own measures.csv writes one) says how to leave
+    // such rows out: stats and recheck both have --skip-empty.
+    try {
+      parse_number(t, static_cast<int>(r), vc);
+    } catch (const InputError& e) {
+      const std::string v = trim_blanks(t.rows[r][vc]);
+      if (!v.empty() && v != "NA") throw;
+      std::vector<Problem> ps = e.problems();
+      ps.front().what += " (an undefined value: --skip-empty leaves such rows out and counts them)";
+      throw InputError(ps);
+    }
     std::string name = trim_blanks(t.rows[r][gc]);
     if (name.empty())
       throw InputError(SourceLocation{t.file, t.line[r]},

@@ -93,7 +93,8 @@ std::string no_row_matches(const CsvTable& t, const std::vector<WhereFilter>& wh
       values.push_back(v);
     }
     held += "; column '" + c + "' holds ";
-    for (size_t k = 0; k < values.size(); ++k) held += (k ? ", '" : "'") + values[k] + "'";
+    for (size_t k = 0; k < values.size(); ++k)
+      held += (k ? ", '" : "'") + shown_text(values[k]) + "'";
     if (more) held += " and more";
   }
   return "no row of " + t.file + " matches " + shown + " (" + std::to_string(t.rows.size()) +
@@ -210,6 +211,11 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
     if (!j[key].is_string()) throw InputError(at(kp), "expected a string");
     return j[key];
   };
+  // A CSV of the header only: nothing to recompute from (it said "column 'phase' holds "
+  // with nothing after it; review 2026-12-07).
+  if (table.rows.empty())
+    throw InputError(SourceLocation{table.file, 1},
+                     "no data rows (the header only): nothing to recompute the statistics from");
   const std::string def_value = rep.contains("value") ? str(rep, "value", "$", "") : "";
   const std::string def_group = rep.contains("group") ? str(rep, "group", "$", "") : "";
   std::vector<RecheckItem> out;

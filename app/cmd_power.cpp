@@ -251,7 +251,7 @@ palplab::app::CommandRegistration reg_power{
         }
         if (a->opt.shards > 1) {
           std::cout << "shard " << a->opt.shard + 1 << "/" << a->opt.shards << ": " << ran
-                    << " replicates run into " << a->out
+                    << (ran == 1 ? " replicate" : " replicates") << " run into " << a->out
                     << "; combine the shards with `palplab merge`\n";
           *code = 0;
           return;
@@ -267,7 +267,7 @@ palplab::app::CommandRegistration reg_power{
         if (left_out.total() > 0)
           std::cout << "\n" << left_out_note(left_out, file, a->opt.replicates) << "\n";
         std::cout << "\nwrote " << a->out << "/power.json, power.md, power.svg (" << ran
-                  << " replicates run now)\n";
+                  << (ran == 1 ? " replicate" : " replicates") << " run now)\n";
         *code = 0;
       });
     }};

@@ -1416,10 +1416,11 @@ void check_out_dir_study(const std::string& out_dir, const std::string& sha) {
                    "summary");
     if (j.at("study_sha256") != sha)
       throw refuse(summary,
-                   "the output directory holds the power summary of another study "
-                   "(SHA-256 " +
-                       j.at("study_sha256").get<std::string>().substr(0, 12) + " vs " +
-                       sha.substr(0, 12) + ")");
+                   "the output directory holds the power summary of another study (its "
+                   "SHA-256 " +
+                       j.at("study_sha256").get<std::string>().substr(0, 12) + "…, this study's " +
+                       sha.substr(0, 12) +
+                       "…: the study file was edited, or another study's --out was given)");
   }
   // The first record of each replicate file tells its study.
   for (const auto& e : fs::directory_iterator(out_dir, ec)) {
@@ -1436,8 +1437,10 @@ void check_out_dir_study(const std::string& out_dir, const std::string& sha) {
     const nlohmann::json r = nlohmann::json::parse(line, nullptr, false);
     if (r.is_object() && r.contains("study_sha256") && r.at("study_sha256") != sha)
       throw refuse(e.path(),
-                   "the output directory holds replicates of another study (SHA-256 "
-                   "differs)");
+                   "the output directory holds replicates of another study (their SHA-256 " +
+                       r.at("study_sha256").dump().substr(1, 12) + "…, this study's " +
+                       sha.substr(0, 12) +
+                       "…: the study file was edited, or another study's --out was given)");
   }
 }
 

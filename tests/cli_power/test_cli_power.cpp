@@ -536,7 +536,7 @@ TEST(Power, MergeRefusesAnIncompleteLastLine) {
       "power " + null_study() + " --n 2 --replicates 2 --quiet " + "--out " + (d / "p").string(),
       d);
   ASSERT_EQ(again.code, 0) << again.err;
-  EXPECT_NE(again.out.find("1 replicates run"), std::string::npos) << again.out;
+  EXPECT_NE(again.out.find("1 replicate run"), std::string::npos) << again.out;
   EXPECT_EQ(slurp(file), whole);
   m = merge({d / "p"}, d / "m", d);
   ASSERT_EQ(m.code, 0) << m.err;

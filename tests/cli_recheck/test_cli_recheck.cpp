@@ -410,7 +410,20 @@ TEST(CliRecheck, SkipEmptyLeavesOutUndefinedValues) {
       "skip_empty.json",
       R"({"value":"value","group":"group","statistics":[{"text":"t(4) = 3.00, p = .040","test":"student_t","pair":["A","B"]}]})");
   expect_exit2(run_palplab("recheck " + f + " --csv " + with_empty),
-               {"empty value; expected a number"});
+               {"empty value; expected a number",
+                "(an undefined value: --skip-empty leaves such rows out and counts them)"});
+  // NA too; a number that is no number gets no such hint.
+  expect_exit2(
+      run_palplab("recheck " + f + " --csv " + write_temp("skip_na.csv", rows + "P7,B,NA\n")),
+      {"got 'NA' (an undefined value: --skip-empty"});
+  const Result bad =
+      run_palplab("recheck " + f + " --csv " + write_temp("skip_x.csv", rows + "P7,B,x\n"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_FALSE(has(bad.err, "--skip-empty")) << bad.err;
+  // The header only (review 2026-12-07: "column 'phase' holds " and nothing after it).
+  expect_exit2(run_palplab("recheck " + f + " --csv " +
+                           write_temp("header_only.csv", "participant,group,value\n")),
+               {"header_only.csv:1: no data rows (the header only)"});
   const Result skipped = run_palplab("recheck " + f + " --csv " + with_empty + " --skip-empty");
   const Result clean = run_palplab("recheck " + f + " --csv " + without);
   ASSERT_NE(skipped.code, 2) << skipped.err;
