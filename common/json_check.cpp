@@ -109,17 +109,20 @@ void Checker::throw_if_any() {
   throw InputError(problems_);
 }
 
+std::string did_you_mean(std::string_view got, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t bd = 3;
+  for (const auto& a : candidates)
+    if (auto d = edit_distance(got, a); d < bd) bd = d, best = a;
+  return best.empty() ? std::string() : " (did you mean \"" + best + "\"?)";
+}
+
 void Checker::keys(const json& o, const std::string& path,
                    const std::vector<std::string>& allowed) {
   if (!o.is_object()) return;
   for (auto it = o.begin(); it != o.end(); ++it) {
     if (std::find(allowed.begin(), allowed.end(), it.key()) != allowed.end()) continue;
-    std::string best;
-    std::size_t bd = 3;
-    for (const auto& a : allowed)
-      if (auto d = edit_distance(it.key(), a); d < bd) bd = d, best = a;
-    std::string msg = "unknown key \"" + it.key() + "\"";
-    msg += best.empty() ? "" : " (did you mean \"" + best + "\"?)";
+    std::string msg = "unknown key \"" + it.key() + "\"" + did_you_mean(it.key(), allowed);
     msg += "; expected one of: " + join(allowed);
     err(path_key(path, it.key()), msg, true);
   }

@@ -30,6 +30,9 @@ const char* kind_name(const nlohmann::json& j);
 
 // Edit distance, for "did you mean" hints.
 std::size_t edit_distance(std::string_view a, std::string_view b);
+// " (did you mean \"x\"?)" for the nearest of `candidates` within an edit distance of 2 of
+// `got`, else "": the hint every "unknown ..." message appends.
+std::string did_you_mean(std::string_view got, const std::vector<std::string>& candidates);
 
 // Reads a JSON file: missing/unreadable file, syntax errors, nesting deeper than kMaxDepth,
 // numbers that overflow a double (1e400) and duplicate keys are located InputErrors (with

@@ -871,8 +871,16 @@ Study parse_study(const std::string& text, const std::string& file,
               "prototype \"" + id +
                   "\" is not a prototype id (a file name without \".json\", no \"/\", not "
                   "starting with \".\"): put the prototype's directory in \"prototype_dirs\"");
-      else
-        c.err(path, "unresolved prototype \"" + id + "\": no " + id + ".json in " + join(dirs));
+      else {
+        // A near miss among the prototypes the directories hold ("Bstif" for Bstiff).
+        std::vector<std::string> held;
+        std::error_code ec;
+        for (const auto& dir : dirs)
+          for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+            if (e.path().extension() == ".json") held.push_back(e.path().stem().string());
+        c.err(path, "unresolved prototype \"" + id + "\": no " + id + ".json in " + join(dirs) +
+                        palplab::json::did_you_mean(id, held));
+      }
       failed.insert(id);
       continue;
     }

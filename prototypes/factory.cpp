@@ -241,7 +241,9 @@ SceneConfig load_prototype(const std::string& path) {
     for (auto it = th->begin(); it != th->end(); ++it) {
       const std::string P = pj::path_key("$.thresholds", it.key());
       if (it.key() != "*" && std::find(regions.begin(), regions.end(), it.key()) == regions.end()) {
-        c.err(P, "unknown region \"" + it.key() + "\" (expected \"*\" or a region of the mesh)",
+        c.err(P,
+              "unknown region \"" + it.key() + "\" (expected \"*\" or a region of the mesh)" +
+                  pj::did_you_mean(it.key(), regions),
               true);
         continue;
       }

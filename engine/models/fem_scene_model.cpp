@@ -383,7 +383,8 @@ void read_fem(json::Checker& c, const nlohmann::json& m, const std::string& P, S
           .value_or(f.operational_radius);
   if (auto r = c.text(m, P, "operational_region", false)) {
     if (std::find(regions.begin(), regions.end(), *r) == regions.end())
-      c.err(P + ".operational_region", "unknown region \"" + *r + "\" of the mesh");
+      c.err(P + ".operational_region",
+            "unknown region \"" + *r + "\" of the mesh" + json::did_you_mean(*r, regions));
     else
       f.operational_region = *r;
   }

@@ -47,7 +47,8 @@ void read_support(json::Checker& c, const nlohmann::json& m, const std::string& 
                          .value_or(sp.fixed_z_below);
   if (auto fr = c.text(m, P, "fixed_region", false)) {
     if (std::find(regions.begin(), regions.end(), *fr) == regions.end())
-      c.err(P + ".fixed_region", "unknown region \"" + *fr + "\" of the mesh");
+      c.err(P + ".fixed_region",
+            "unknown region \"" + *fr + "\" of the mesh" + json::did_you_mean(*fr, regions));
     else
       sp.fixed_region = *fr;
   }

@@ -1206,6 +1206,26 @@ TEST(HardCli, APalpationOnsetAboveTheTargetForceIsWarnedOf) {
   EXPECT_FALSE(has(r.err, "has no \"*\" entry")) << r.err;
 }
 
+// Review finding (2026-12-07): a misspelt prototype id or region got no hint (keys did).
+TEST(HardCli, MisspeltPrototypesAndRegionsGetADidYouMean) {
+  auto d = tmp("didyoumean");
+  spit(d / "s.json", study(R"([{"id": "G1", "prototype": "A", "size": 1},
+                                {"id": "G2", "prototype": "Bb", "size": 1}])"));
+  Result r = cli("validate " + (d / "s.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "unresolved prototype \"Bb\": no Bb.json in ");
+  EXPECT_TRUE(has(r.err, "(did you mean \"B\"?)")) << r.err;
+  std::ifstream in(std::string(PALPLAB_SOURCE_DIR) + "/prototypes/C.json");
+  std::string c((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string fz = "\"fixed_z_below\": 0.02,";
+  ASSERT_NE(c.find(fz), std::string::npos);
+  c.replace(c.find(fz), fz.size(), fz + " \"fixed_region\": \"cervx\",");
+  spit(d / "Cx.json", c);
+  r = cli("probe " + (d / "Cx.json").string() + " --press 0 --force 1 --duration 0.01", d);
+  EXPECT_EXIT2_WITH(r,
+                    "$.model.fixed_region: unknown region \"cervx\" of the mesh (did you mean "
+                    "\"cervix\"?)");
+}
+
 // Review finding (2026-12-07): thresholds for the feature only left every other region with each
 // prototype's own "*" (group A's sound and events at 0.1 N, say), which the database's thresholds
 // table does not hold. Valid, with a warning naming each prototype's.
