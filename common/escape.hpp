@@ -1,36 +1,14 @@
 #pragma once
 // Text from user files (ids, names, paths) shown on a terminal: control characters are written
 // as escapes (\x1b, \u009b) so that an escape sequence in a name can never recolour, move the
-// cursor of, or retitle the researcher's terminal. Newlines and tabs are kept when asked to (for
-// whole multi-line outputs); printable text and other UTF-8 pass unchanged.
+// cursor of, or retitle the researcher's terminal, and bytes that are no UTF-8 (a binary file's,
+// Latin-1 text) as \xNN. Newlines and tabs are kept when asked to (for whole multi-line
+// outputs); printable text and other UTF-8 pass unchanged.
 #include <cstdio>
 #include <string>
 #include <string_view>
 
 namespace palplab {
-
-inline std::string escape_controls(std::string_view s, bool keep_newlines = true) {
-  std::string out;
-  out.reserve(s.size());
-  char buf[8];
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    if ((c == '\n' || c == '\t') && keep_newlines) {
-      out += static_cast<char>(c);
-    } else if (c < 0x20 || c == 0x7f) {
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else if (c == 0xC2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) >= 0x80 &&
-               static_cast<unsigned char>(s[i + 1]) <= 0x9F) {  // C1 controls (U+0080..U+009F)
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned char>(s[i + 1]));
-      out += buf;
-      ++i;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out;
-}
 
 // UTF-8 text counted in characters (code points), as columns and lengths are said to users:
 // a continuation byte (10xxxxxx) belongs to the character before it.
@@ -55,16 +33,6 @@ inline std::size_t utf8_prefix(std::string_view s, std::size_t max_chars) {
   return cut;
 }
 
-// Text from user input (a CSV field, a column name, a trace field, a mesh keyword) as messages
-// show it: control characters escaped (escape_controls), cut after `max_chars` characters
-// (UTF-8 code points, never inside one) with "… (N bytes)": a 10 MB field made a 10 MB message.
-inline std::string shown_text(std::string_view s, std::size_t max_chars = 60) {
-  const std::size_t cut = utf8_prefix(s, max_chars);
-  if (cut == s.size()) return escape_controls(s, false);
-  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
-         " bytes)";
-}
-
 // The code point of the UTF-8 character at s[i] and its length in bytes (*length); an ill-formed
 // or cut sequence is U+FFFD of length 1, so a scan always advances.
 inline char32_t utf8_code_point(std::string_view s, std::size_t i, std::size_t* length) {
@@ -86,6 +54,47 @@ inline char32_t utf8_code_point(std::string_view s, std::size_t i, std::size_t* 
     return 0xFFFD;
   *length = n + 1;
   return cp;
+}
+
+inline std::string escape_controls(std::string_view s, bool keep_newlines = true) {
+  std::string out;
+  out.reserve(s.size());
+  char buf[8];
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if ((c == '\n' || c == '\t') && keep_newlines) {
+      out += static_cast<char>(c);
+    } else if (c < 0x20 || c == 0x7f) {
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else if (c < 0x80) {
+      out += static_cast<char>(c);
+    } else {
+      std::size_t n = 1;
+      const char32_t cp = utf8_code_point(s, i, &n);
+      if (cp >= 0x80 && cp <= 0x9F) {  // C1 controls (U+0080..U+009F)
+        std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(cp));
+        out += buf;
+      } else if (cp == 0xFFFD && n == 1) {  // a byte of no UTF-8 character (binary, Latin-1)
+        std::snprintf(buf, sizeof buf, "\\x%02x", c);
+        out += buf;
+      } else {
+        out.append(s.substr(i, n));
+      }
+      i += n - 1;
+    }
+  }
+  return out;
+}
+
+// Text from user input (a CSV field, a column name, a trace field, a mesh keyword) as messages
+// show it: control characters escaped (escape_controls), cut after `max_chars` characters
+// (UTF-8 code points, never inside one) with "… (N bytes)": a 10 MB field made a 10 MB message.
+inline std::string shown_text(std::string_view s, std::size_t max_chars = 60) {
+  const std::size_t cut = utf8_prefix(s, max_chars);
+  if (cut == s.size()) return escape_controls(s, false);
+  return escape_controls(s.substr(0, cut), false) + "\u2026 (" + std::to_string(s.size()) +
+         " bytes)";
 }
 
 // "UTF-32", "UTF-16" or nullptr: whether `text` is wide Unicode (an editor's "Unicode" save),

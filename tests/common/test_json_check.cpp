@@ -235,4 +235,9 @@ TEST(Escape, ControlCharactersAreShownEscaped) {
             "\\u009b2J ovary \xc3\xa9");
   Problem p{{"s\x1b.json", 1, 1, -1, "$.id"}, "bad \x1b]0;title\x07"};
   EXPECT_EQ(p.format(), "s\\x1b.json:1:1: $.id: bad \\x1b]0;title\\x07");
+  // Bytes of no UTF-8 character (a binary file's, Latin-1 text) are escaped too: a binary .ele's
+  // first line went to the terminal raw (review 2026-12-07); characters around them pass.
+  EXPECT_EQ(escape_controls("a\xff\xfe b \xe9t\xc3\xa9 \xe2\x82 \xf0\x9f\x98\x80"),
+            "a\\xff\\xfe b \\xe9t\xc3\xa9 \\xe2\\x82 \xf0\x9f\x98\x80");
+  EXPECT_EQ(escape_controls("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a surrogate
 }
