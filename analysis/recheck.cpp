@@ -141,6 +141,13 @@ ApaStatistic parse_apa(const std::string& text, const SourceLocation& where) {
   if (a.kind == 'F' && a.value < 0)
     throw InputError(where, "an F statistic is never negative" + got);
   if (a.p > 1) throw InputError(where, "a p-value is at most 1" + got);
+  // "p = 0" or "p = 1" says only that p is below or above .5 (and no p is 0): nothing to check.
+  if (a.p_relation == "=" && a.p_decimals == 0)
+    throw InputError(where,
+                     "a p-value printed without decimals (p = 0 or p = 1) says nothing to "
+                     "check: give it with its decimals (p = .056) or as a bound "
+                     "(p < .001)" +
+                         got);
   if (a.p_relation == "<" && a.p == 0) throw InputError(where, "no p-value is below 0" + got);
   if (a.p_relation == ">" && a.p == 1) throw InputError(where, "no p-value is above 1" + got);
   return a;
@@ -155,9 +162,13 @@ std::string classify_number(double reported, int decimals, double recomputed) {
   const double slack = 1e-9 * unit;
   if (std::fabs(rounded - reported) <= slack) return "consistent";
   // A rounding difference: a value cut instead of rounded, or recomputed from data the CSV holds
-  // rounded — off by at most one unit of the last printed digit and by at most kRoundingShare of
-  // the value. With few printed decimals one unit is most of the value: "F = 12" for 11.05 and
-  // "p = .1" for .0016 were graded rounding (review 2026-12-07).
+  // rounded — its digits cut, or off by at most one unit of the last printed digit and by at
+  // most kRoundingShare of the value. With few printed decimals one unit is most of the value:
+  // "F = 12" for 11.05 and "p = .1" for .0016 were graded rounding (review 2026-12-07).
+  // Cut: the printed digits are the recomputed value's, truncated (MINITAB's Welch df, "p = .02"
+  // for .02506 when the CSV holds the data rounded and the unrounded data gave .024997).
+  const double cut = std::trunc(recomputed / unit + (recomputed >= 0 ? 1e-9 : -1e-9)) * unit;
+  if (std::fabs(cut - reported) <= slack) return "rounding";
   const double diff = std::fabs(recomputed - reported);
   if (diff <= unit + slack &&
       diff <= kRoundingShare * std::max(std::fabs(reported), std::fabs(recomputed)))

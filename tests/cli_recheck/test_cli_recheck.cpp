@@ -141,6 +141,9 @@ TEST(CliRecheck, MalformedReportsAreExitTwoWithTheLocation) {
        ":1:56: $.statistics[0].text:", "no p-value is above 1"},
       {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p < 0"}]})",
        ":1:56: $.statistics[0].text:", "no p-value is below 0"},
+      // "p = 0" was consistent for a recomputed .056 (rounded to no decimals; review 2026-12-07).
+      {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 6) = 7.14, p = 0"}]})",
+       ":1:56: $.statistics[0].text:", "a p-value printed without decimals (p = 0 or p = 1)"},
       {R"({"value":"force","group":"group","statistics":[{"text":"F(0, 0) = 7.14, p = .026"}]})",
        ":1:56: $.statistics[0].text:", "degrees of freedom must be > 0"},
       {R"({"value":"force","group":"group","statistics":[{"text":"t(0) = 1.2, p = .3","pair":["A","B"]}]})",
