@@ -698,7 +698,11 @@ Study parse_study(const std::string& text, const std::string& file,
               a.pooled != b.pooled)
             continue;
           const json& bj = (*an)[source[k]];
-          const bool both_t = a.kind == "pairwise_t" && b.kind == "pairwise_t";
+          // Both make pairwise t-tests (an ANOVA's section has them too), Welch's by default.
+          const auto pairs = [](const Analysis& x) {
+            return x.kind == "pairwise_t" || x.kind == "anova_oneway";
+          };
+          const bool both_t = pairs(a) && pairs(b);
           const auto said = [](const json& e, const char* key, bool welch) {
             return e.contains(key) ? e[key].dump()
                                    : json(welch).dump() + " (the default)";  // welch only

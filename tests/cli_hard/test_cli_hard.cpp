@@ -1280,6 +1280,15 @@ TEST(HardCli, TheSameAnalysisTwiceIsRefused) {
              R"( "analyses": [{"kind": "descriptives", "measure": "palpation_force", "phase": )"
              R"("post", "margin": 0.5}, {"kind": "pairwise_t", "measure": "palpation_force", )"
              R"("phase": "post", "margin": 0.2}],)"));
+  // An ANOVA's section has the pairwise t-tests too (review of the fix: its "welch": false made
+  // a declared pairwise_t Student's without a word).
+  spit(d / "anova.json",
+       study(kGroups,
+             R"( "analyses": [{"kind": "anova_oneway", "measure": "palpation_force", "phase": )"
+             R"("post", "welch": false}, {"kind": "pairwise_t", "measure": "palpation_force", )"
+             R"("phase": "post"}],)"));
+  r = cli("validate " + (d / "anova.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.analyses[1].welch: true (the default) here but false in $.analyses[0]");
   r = cli("validate " + (d / "margins.json").string(), d);
   EXPECT_EXIT2_WITH(r, "$.analyses[1].margin: 0.2 here but 0.5 in $.analyses[0]");
   // Set once, or the same in both, is one section with that option; another phase is another
