@@ -515,9 +515,9 @@ struct PlyBody {
       double v;
       auto r = std::from_chars(s.data(), s.data() + s.size(), v);
       if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v))
-        fail("expected a number, got '" + s + "'");
+        fail("expected a number, got '" + shown_text(s, 40) + "'");
       if (t != PlyType::f32 && t != PlyType::f64 && v != std::floor(v))
-        fail("expected an integer, got '" + s + "'");
+        fail("expected an integer, got '" + shown_text(s, 40) + "'");
       return v;
     }
     const int n = ply_size(t);

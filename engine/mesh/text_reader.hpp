@@ -85,21 +85,22 @@ struct TextReader {
     double v;
     auto r = std::from_chars(t.data(), t.data() + t.size(), v);
     if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
-      fail(std::string("expected ") + what + " (a finite number), got '" + t + "'");
+      fail(std::string("expected ") + what + " (a finite number), got '" + shown_text(t, 40) + "'");
     return v;
   }
   // An integer that fits an int after subtracting `base` (indices, markers).
   int int32(const std::string& t, const char* what, long base = 0) const {
     const long v = integer(t, what);
     if (v < -2147483647L + base || v > 2147483647L + base)
-      fail(std::string("expected ") + what + " (an integer that fits 32 bits), got '" + t + "'");
+      fail(std::string("expected ") + what + " (an integer that fits 32 bits), got '" +
+           shown_text(t, 40) + "'");
     return static_cast<int>(v - base);
   }
   long integer(const std::string& t, const char* what) const {
     long v;
     auto r = std::from_chars(t.data(), t.data() + t.size(), v);
     if (r.ec != std::errc() || r.ptr != t.data() + t.size())
-      fail(std::string("expected ") + what + " (an integer), got '" + t + "'");
+      fail(std::string("expected ") + what + " (an integer), got '" + shown_text(t, 40) + "'");
     return v;
   }
 };

@@ -26,13 +26,19 @@ void check_tet_attributes(const SceneConfig& cfg, const SceneMesh& cm, bool name
     if (!table.find(cm.tet_attribute[t])) {
       std::string where;
       const std::string file = tet_problem_file(cfg, &where);
-      throw InputError(where + "tet " + std::to_string(t) +
-                           " (in file order from 0) has attribute " +
-                           std::to_string(cm.tet_attribute[t]) +
-                           " (tissue type) which the material table does not cover (`palplab "
-                           "mesh materials` lists it; name a \"tissue\" in the model's "
-                           "\"material\" for the whole body, or give the tets a listed attribute)",
-                       file);
+      throw InputError(
+          where + "tet " + std::to_string(t) + " (in file order from 0) has attribute " +
+              std::to_string(cm.tet_attribute[t]) +
+              " (tissue type) which the material table does not cover (`palplab "
+              "mesh materials` lists it; " +
+              (named_tissue_covers
+                   ? std::string("name a \"tissue\" in the model's \"material\" "
+                                 "for the whole body, or give the tets a listed "
+                                 "attribute)")
+                   : std::string("give the tets a listed attribute: model \"" + cfg.model +
+                                 "\" takes each tet's tissue from it, a named "
+                                 "\"tissue\" replacing only its soft ones)")),
+          file);
     }
 }
 

@@ -198,6 +198,20 @@ TEST(CliMesh, TetrahedralizeWithRegionsFile) {
   EXPECT_EQ(run("mesh generate model-a --out " + p("x.xyz")).code, 2);
 }
 
+// A long token in a mesh file is shown cut (a 1 MB one made a 1 MB message; review 2026-12-07).
+TEST(CliMesh, ALongBadTokenIsShownCut) {
+  {
+    std::ofstream f(p("longtok.obj"));
+    f << "v 0 0 " << std::string(100000, '7') << "x\n";
+  }
+  const Result r = run("mesh info " + p("longtok.obj"));
+  EXPECT_EQ(r.code, 2) << r.err.substr(0, 300);
+  EXPECT_NE(r.err.find("got '" + std::string(40, '7') + "\u2026 (100001 bytes)'"),
+            std::string::npos)
+      << r.err.substr(0, 300);
+  EXPECT_LT(r.err.size(), 400u);
+}
+
 // --max-volume is TetGen's target, and the surface is kept as given: a 4 cm cube of 12 faces met
 // a bound of 1e-6 m³ with tets of up to 7e-6 m³ and said nothing (review 2026-12-07). The tets
 // above the bound are counted with the largest; a bound the mesh meets says nothing.
