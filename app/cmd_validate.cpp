@@ -133,6 +133,10 @@ palplab::app::CommandRegistration reg_validate{
           std::string own;
           for (const auto& [id, file] : s.prototype_files) {
             const palplab::engine::SceneConfig cfg = palplab::prototypes::load_prototype(file);
+            const auto& regions = palplab::engine::mesh_region_names(cfg.mesh);
+            if (std::all_of(regions.begin(), regions.end(),
+                            [&](const std::string& r) { return s.task.thresholds.count(r) > 0; }))
+              continue;  // every region listed: nothing is left to the prototype
             const auto it = cfg.thresholds.find("*");
             const palplab::engine::Thresholds t =
                 it != cfg.thresholds.end() ? it->second : cfg.default_thresholds;
@@ -141,12 +145,13 @@ palplab::app::CommandRegistration reg_validate{
                           id.c_str(), t.st, t.mpf, t.sft);
             own += b;
           }
-          std::cerr << palplab::escape_controls(*study)
-                    << ": warning: $.task.thresholds has no \"*\" entry: the regions it does not "
-                       "list keep each prototype's own thresholds and sound at ST ("
-                    << palplab::escape_controls(own)
-                    << "), which the results database does not store; add \"*\" to give every "
-                       "region the study's\n";
+          if (!own.empty())
+            std::cerr << palplab::escape_controls(*study)
+                      << ": warning: $.task.thresholds has no \"*\" entry: the regions it does not "
+                         "list keep each prototype's own thresholds and sound at ST ("
+                      << palplab::escape_controls(own)
+                      << "), which the results database does not store; add \"*\" to give every "
+                         "region the study's\n";
         }
         *code = 0;
       });

@@ -214,17 +214,21 @@ std::vector<HumanCell> read_human_cells(const std::string& csv_path) {
     }
   }
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
-    // Ids and names never hold control characters (a NUL in a participant id passed here, where
-    // the study file refuses it; review 2026-12-07).
-    for (const int c : {col[0], col[1], col[3], col[5]})
-      for (const char ch : t.rows[r][c])
-        if ((static_cast<unsigned char>(ch) < 0x20 && ch != '\t') || ch == 0x7f) {
-          char cp[16];
-          std::snprintf(cp, sizeof cp, "U+%04X", static_cast<unsigned char>(ch));
-          throw InputError(at(r, c), "column '" + t.header[c] + "': a control character (" + cp +
-                                         ") in '" + shown_text(t.rows[r][c]) +
+    // Ids and names never hold control characters, C0, DEL or C1 (a NUL in a participant id
+    // passed here, where the study file refuses it; review 2026-12-07).
+    for (const int c : {col[0], col[1], col[3], col[5]}) {
+      const std::string& f = t.rows[r][c];
+      for (std::size_t i = 0, n = 1; i < f.size(); i += n) {
+        const char32_t cp = utf8_code_point(f, i, &n);
+        if ((cp < 0x20 && cp != '\t') || (cp >= 0x7f && cp <= 0x9f)) {
+          char u[16];
+          std::snprintf(u, sizeof u, "U+%04X", static_cast<unsigned>(cp));
+          throw InputError(at(r, c), "column '" + t.header[c] + "': a control character (" + u +
+                                         ") in '" + shown_text(f) +
                                          "' (ids and names are printable text)");
         }
+      }
+    }
     const int s = session_number(t, r, col[2]);
     auto key = std::make_tuple(t.rows[r][col[0]], t.rows[r][col[1]], s, t.rows[r][col[3]]);
     // Ids are compared without surrounding blanks ("P1 " is P1: a participant given twice or in
@@ -457,6 +461,10 @@ NelderMeadResult nelder_mead(const std::function<double(const std::vector<double
       } else {
         const bool outside = fr < fv[w];
         auto xc = along(outside ? -rho : rho);
+        if (res.evaluations >= budget) {         // the reflection took the last evaluation: kept
+          if (outside) pts[w] = xr, fv[w] = fr;  // when it beats the worst point
+          break;
+        }
         const double fc = eval(xc);
         if (fc < (outside ? fr : fv[w])) {
           pts[w] = xc, fv[w] = fc;

@@ -559,6 +559,8 @@ TEST(Calibrate, HumanDataAndNamesAreChecked) {
        h + ":2:1: column 'participant': a control character (U+0000) in 'H\\x009'"},
       {header + "H9,G\x1b[31m1,test,1,palpation_force,2.4\n" + rows, "--params weber_fraction",
        h + ":2:4: column 'group': a control character (U+001B)"},
+      {header + "H9\xc2\x85,G1,test,1,palpation_force,2.4\n" + rows, "--params weber_fraction",
+       h + ":2:1: column 'participant': a control character (U+0085) in 'H9\\u0085'"},
       // --bounds (2026-12-04): a fit's own range, checked against the fitted names, the
       // parameter table and the start (recovery_study.json leaves weber_fraction at 0.03).
       {header + rows, "--params weber_fraction --bounds prior_target_cv=0.1:0.5",

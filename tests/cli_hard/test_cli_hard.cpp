@@ -1243,6 +1243,19 @@ TEST(HardCli, ThresholdsWithoutAStarSayWhatTheOtherRegionsKeep) {
                   "keep each prototype's own thresholds and sound at ST (A ST 2, MPF 2.5, SFT 3 "
                   "N; B ST 2, MPF 2.5, SFT 3 N), which the results database does not store"))
       << r.err;
+  // Every region listed: nothing is left to the prototypes, no warning (review of the fix).
+  std::string all = "{";
+  for (const char* region :
+       {"ovary_left", "ovary_right", "horn_left", "horn_right", "body", "cervix"})
+    all += std::string(all.size() > 1 ? ", " : "") + "\"" + region +
+           "\": {\"ST\": 2.3, \"MPF\": 2.5, \"SFT\": 3.5}";
+  s.replace(s.find(R"({"ovary_left": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}})"),
+            std::string(R"({"ovary_left": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}})").size(),
+            all + "}");
+  spit(d / "all.json", s);
+  const Result a = cli("validate " + (d / "all.json").string(), d);
+  EXPECT_EQ(a.code, 0) << a.err;
+  EXPECT_FALSE(has(a.err, "has no \"*\" entry")) << a.err;
 }
 
 // Review finding (2026-12-06): the same analysis declared twice (a copy-paste) validated and was

@@ -22,6 +22,15 @@ TEST(NelderMead, FindsTheMinimumOfAQuadraticInsideTheBox) {
   EXPECT_NEAR(r.x[1], -0.2, 2e-3);
   EXPECT_LE(r.evaluations, 200);
   EXPECT_TRUE(r.converged);
+  // Never more evaluations than the budget, whichever step the budget ends in (a contraction
+  // after the reflection that used it up made 13 of 12; review 2026-12-07).
+  for (int budget = 1; budget <= 40; ++budget) {
+    int calls = 0;
+    const auto counted = [&](const std::vector<double>& x) { return ++calls, f(x); };
+    const auto b = nelder_mead(counted, {1.0, 1.0}, {0.25, 0.25}, {-2, -2}, {2, 2}, budget);
+    EXPECT_LE(calls, budget) << "budget " << budget;
+    EXPECT_EQ(b.evaluations, calls);
+  }
   // Stopped by its budget while the loss still falls: said (calibrate printed it like a fit).
   const auto cut = nelder_mead(f, {1.0, 1.0}, {0.25, 0.25}, {-2, -2}, {2, 2}, 8);
   EXPECT_EQ(cut.evaluations, 8);
