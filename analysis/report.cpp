@@ -1025,8 +1025,9 @@ void section_analysis(Context& c, const Unit& u) {
   }
   doc.heading(3, "Assumption checks and nonparametric tests");
   std::vector<std::string> checks = {
-      "Levene (mean-centred): " + apa_anova(s.levene),
-      "Brown–Forsythe (median-centred): " + apa_anova(s.brown_forsythe)};
+      "Levene (mean-centred): " + apa_spread_test(s.levene, s.levene.log10_F),
+      "Brown–Forsythe (median-centred): " +
+          apa_spread_test(s.brown_forsythe, s.brown_forsythe.log10_F)};
   for (size_t g = 0; g < groups.size(); ++g)
     checks.push_back("Shapiro–Wilk " + groups[g] + ": " +
                      (s.shapiro[g].defined

@@ -118,6 +118,13 @@ std::string apa_anova(const Anova& a) {
   return apa_anova_log(a, a.log10_F);
 }
 
+std::string apa_spread_test(const Anova& a, double log10_F) {
+  if (!a.defined)
+    return "undefined (the absolute deviations from each group's centre do not vary within "
+           "any group, as with groups of 2)";
+  return apa_anova_log(a, log10_F);
+}
+
 std::string apa_t(double t, double df, double p) {
   return "t(" + df_text(df) + ") " + t_relation_text(t) + ", " + apa_p(p);
 }
@@ -412,8 +419,8 @@ std::string to_text(const StatsSummary& s) {
     range_table("Games-Howell", s.games_howell);
   }
   o << "\nAssumptions\n";
-  o << "  Levene (mean):           " << apa_anova_log(s.levene, s.levene_log10_F) << "\n";
-  o << "  Brown-Forsythe (median): " << apa_anova_log(s.brown_forsythe, s.brown_forsythe_log10_F)
+  o << "  Levene (mean):           " << apa_spread_test(s.levene, s.levene_log10_F) << "\n";
+  o << "  Brown-Forsythe (median): " << apa_spread_test(s.brown_forsythe, s.brown_forsythe_log10_F)
     << "\n";
   for (size_t i = 0; i < s.shapiro.size(); ++i)
     o << "  Shapiro-Wilk " << names[i] << ": "

@@ -66,6 +66,10 @@ std::string apa_f(double F, double df1, double df2, double p);
 // apa_f of an ANOVA (or Levene / Brown–Forsythe), or "undefined (no variation within
 // groups)" when it has none.
 std::string apa_anova(const Anova& a);
+// Levene's and Brown-Forsythe's test (an ANOVA of the absolute deviations from each group's mean
+// or median): when undefined, it is those deviations that do not vary (groups of 2 never do),
+// not the data.
+std::string apa_spread_test(const Anova& a, double log10_F);
 // "t(17) = 3.43, p = .003".
 std::string apa_t(double t, double df, double p);
 // "1e-300" style for tables: "< 1e-300" when the p-value is an underflow bound.

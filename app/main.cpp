@@ -159,6 +159,18 @@ int main(int argc, char** argv) {
     }
     cli.exit(e);
     return 2;
+  } catch (const CLI::ArgumentMismatch& e) {
+    // An option given twice was CLI11's "--sim-n: At Most 1 required but received 2".
+    const std::string what = e.what();
+    const auto at = what.find(": At Most 1 required but received ");
+    if (at == std::string::npos) {
+      cli.exit(e);
+      return 2;
+    }
+    std::cerr << "error: " << deepest_command(cli) << ": "
+              << palplab::escape_controls(what.substr(0, at), false)
+              << " given more than once (give it once)\n";
+    return 2;
   } catch (const CLI::ParseError& e) {
     // Usage errors are bad input too: exit 2 whatever CLI11's own code would be.
     cli.exit(e);

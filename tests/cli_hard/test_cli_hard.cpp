@@ -1125,6 +1125,19 @@ TEST(HardDb, AFailedWriteDuringARunIsSaidAndResumable) {
 
 // Review findings (2026-12-06): `palplab nosuch` said only "A subcommand is required", and
 // `validate ""` "cannot open file" with no name; a missing file now gives the system's reason.
+// Review finding (2026-12-07): an option given twice was CLI11's "--sim-n: At Most 1 required
+// but received 2".
+TEST(HardCli, AnOptionGivenTwiceIsSaidAsSuch) {
+  auto d = tmp("twice");
+  spit(d / "s.json", study());
+  const Result r = cli("power " + (d / "s.json").string() +
+                           " --replicates 2 --replicates 3 --out " + (d / "p").string(),
+                       d);
+  EXPECT_EXIT2_WITH(r, "error: palplab power: --replicates given more than once (give it once)");
+  EXPECT_FALSE(has(r.err, "At Most")) << r.err;
+  EXPECT_FALSE(fs::exists(d / "p"));
+}
+
 TEST(HardCli, UnknownCommandsAndEmptyPathsAreSaidAsSuch) {
   auto d = tmp("cli_words");
   Result r = cli("nosuch", d);

@@ -122,6 +122,16 @@ TEST(CliStats, ConstantDataGiveUndefinedNotNaN) {
   EXPECT_TRUE(j["pairwise"][0]["t"].is_null());
   EXPECT_TRUE(j["welch_anova"]["F"].is_null());
   std::filesystem::remove(path);
+  // Groups of 2 that vary: Levene's deviations do not (it said "no variation within groups" of
+  // data that vary; review 2026-12-07).
+  path = write_temp("two.csv", "g,v\nA,1\nA,2\nB,3\nB,5\n");
+  r = run_palplab("stats --csv " + path + " --value v --group g");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("Levene (mean):           undefined (the absolute deviations from each "
+                       "group's centre do not vary within any group, as with groups of 2)"),
+            std::string::npos)
+      << r.out;
+  std::filesystem::remove(path);
 }
 
 TEST(CliStats, UnderflowingPIsABound) {
