@@ -763,8 +763,13 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
                                     [&](const auto& g) { return g.size == opt.sim_n; });
   const int sim_n = opt.sim_n > 0 && !own_size ? opt.sim_n : 0;
   Study base = study;
-  if (sim_n > 0)
-    base = resized_study(study, sim_n, study.seed);  // same seed: common random numbers
+  if (sim_n > 0) {
+    try {
+      base = resized_study(study, sim_n, study.seed);  // same seed: common random numbers
+    } catch (const InputError& e) {                    // "group size N: ..." is --sim-n's
+      throw InputError(SourceLocation{"--sim-n"}, e.problems().front().what);
+    }
+  }
   auto with = [&](const std::vector<double>& x) {
     Study s = base;
     for (std::size_t i = 0; i < x.size(); ++i) s.participant_parameters[opt.keys[i]] = x[i];

@@ -487,6 +487,24 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
 // Input checks made before any simulation. Each was accepted (a row given twice counted the
 // participant twice, --params X X fitted two parameters, feature_identified = 5 was averaged)
 // or reported without the file and line.
+// Review finding (2026-12-07): a --sim-n whose resized study plans too many sessions said "group
+// size N: ..." without naming the flag.
+TEST(Calibrate, ASimNTooLargeForThePlanNamesTheFlag) {
+  auto d = scratch_dir("calibrate_simn");
+  const std::string src = PALPLAB_SOURCE_DIR;
+  const Result r = run_palplab("calibrate " + src + "/protocols/studies/exp2_short_term.json" +
+                                   " --human " + src + "/tests/data/calibration/exp2_human.csv" +
+                                   " --params weber_fraction --sim-n 100000 --budget 1 --out " +
+                                   (d / "fit.json").string(),
+                               d);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("error: --sim-n: group size 100000: the study resized to it plans 100000 x "
+                       "3 participants x 6 sessions"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(d / "fit.json"));
+}
+
 TEST(Calibrate, HumanDataAndNamesAreChecked) {
   auto d = scratch_dir("calibrate_checks");
   const std::string header = kHumanHeader, rows = kHumanRows;
