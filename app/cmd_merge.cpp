@@ -3,11 +3,11 @@
 // combines the replicate files of `palplab power --shard I/K` runs (every replicates*.jsonl in
 // the given directories, or the files given) and writes the power summary, identical to a single
 // run. A merge known to lack replicates (a shard's file not among the inputs, or indices missing
-// below the largest of an n: protocols::merge_gaps) is refused (exit 2) unless --allow-partial,
-// which writes it with a warning and marks power.json/md partial. Shard files of different K
-// (replicates.shard-I-of-K.jsonl) among the inputs are refused (exit 2) even then.
-// With --human FILE.csv --study STUDY.json the summary also compares the replicates with the
-// people's results as `palplab power --human` does (the records name their study only by its
+// below the largest of an n or of the records' largest plan: protocols::merge_gaps) is refused
+// (exit 2) unless --allow-partial, which writes it with a warning and marks power.json/md partial.
+// Shard files of different K (replicates.shard-I-of-K.jsonl) among the inputs are refused (exit 2)
+// even then. With --human FILE.csv --study STUDY.json the summary also compares the replicates with
+// the people's results as `palplab power --human` does (the records name their study only by its
 // SHA-256, so the study file is needed for its tests; it must be the records' study).
 #include <algorithm>
 #include <filesystem>

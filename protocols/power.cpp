@@ -221,6 +221,42 @@ void check_replicate(const nlohmann::json& r, const std::string& path, int line)
       !(r.at("seed").is_number_integer() && r.at("seed").get<long long>() >= 0))
     throw fail("$.seed",
                "expected the replicate's seed, an integer >= 0, got " + shown(r.at("seed")));
+  // Optional (records written before 2026-12-07 lack it): what the run that wrote the record
+  // was asked for, so that a merge can see replicates missing above the largest present.
+  if (auto it = r.find("plan"); it != r.end()) {
+    const std::string plan_what =
+        "{\"replicates\": the --replicates asked for, \"n\": the group sizes asked for}";
+    if (!it->is_object() || it->size() != 2 || !it->contains("replicates") || !it->contains("n"))
+      throw fail("$.plan", "expected " + plan_what + ", got " + shown(*it));
+    const std::string reps_what = "an integer from 1 to " + std::to_string(kMaxReplicates);
+    if (!integer_in(it->at("replicates"), 1, kMaxReplicates))
+      throw fail("$.plan.replicates",
+                 "expected " + reps_what + ", got " + shown(it->at("replicates")));
+    if (r.at("replicate").get<long long>() >= it->at("replicates").get<long long>())
+      throw fail("$.replicate", "replicate index " + shown(r.at("replicate")) +
+                                    " is not below the run's $.plan.replicates " +
+                                    shown(it->at("replicates")) + " (an edited record)");
+    const nlohmann::json& ns = it->at("n");
+    if (!ns.is_array() || ns.empty())
+      throw fail("$.plan.n",
+                 "expected the group sizes asked for, a non-empty array, got " + shown(ns));
+    bool own = false;
+    for (std::size_t i = 0; i < ns.size(); ++i) {
+      if (!integer_in(ns[i], 2, kMaxN))
+        throw fail("$.plan.n[" + std::to_string(i) + "]",
+                   "expected " + n_what + ", got " + shown(ns[i]));
+      for (std::size_t j = 0; j < i; ++j)
+        if (ns[j] == ns[i])
+          throw fail("$.plan.n[" + std::to_string(i) + "]", "size " + shown(ns[i]) +
+                                                                " given twice (already $.plan.n[" +
+                                                                std::to_string(j) + "])");
+      own = own || ns[i] == r.at("n");
+    }
+    if (!own)
+      throw fail("$.plan.n", "the record's n " + shown(r.at("n")) +
+                                 " is not among the run's sizes " + shown(ns) +
+                                 " (an edited record)");
+  }
   const nlohmann::json& tests = member("tests", "an array of test outcomes");
   if (!tests.is_array())
     throw fail(
@@ -775,6 +811,7 @@ long run_power(const Study& study, const PowerOptions& opt) {
                                 {"n", t.n},
                                 {"replicate", t.replicate},
                                 {"seed", seed},
+                                {"plan", {{"replicates", opt.replicates}, {"n", ns}}},
                                 {"tests", nlohmann::json::array()},
                                 {"groups", nlohmann::json::array()}};
           const std::vector<SimValue> values = simulate_study(s, 1);
@@ -1142,7 +1179,12 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
       if (auto it = reps.find(key); it != reps.end()) {
         // The same replicate from a palplab before group descriptives (2026-12-05) and after:
         // equal but for "groups", which the newer one adds; keep that one.
+        // Runs asked for different plans (a resume with more --replicates or sizes, shards of
+        // differently sized runs) simulate a replicate alike: the plan is not compared.
         nlohmann::json a = it->second, b = r;
+        a.erase("plan");
+        b.erase("plan");
+        if (a == b) continue;
         if (a.contains("groups") != b.contains("groups")) {
           a.erase("groups");
           b.erase("groups");
@@ -1151,7 +1193,7 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
             continue;
           }
         }
-        if (it->second != r)
+        if (a != b)
           throw InputError(here, "replicate n=" + std::to_string(key.first) + " #" +
                                      std::to_string(key.second) + " differs from the one at " +
                                      where[key] +
@@ -1309,11 +1351,22 @@ MergeGaps merge_gaps(const std::vector<std::string>& files) {
   MergeGaps g;
   std::map<long, std::set<long>> shards_seen;  // K -> I present
   std::map<int, std::set<int>> reps;           // n -> replicate indices present
+  std::set<int> planned_n;                     // the sizes the records' runs asked for
   for (const auto& f : files) {
     if (const auto s = shard_of(f)) shards_seen[s->second].insert(s->first);
-    for (const auto& [r, line] : read_replicates(f))
+    for (const auto& [r, line] : read_replicates(f)) {
       reps[r.at("n").get<int>()].insert(r.at("replicate").get<int>());
+      if (auto plan = r.find("plan"); plan != r.end()) {
+        const int k = plan->at("replicates").get<int>();
+        g.planned_replicates = std::max(g.planned_replicates, k);
+        g.plans_replicates.insert(k);
+        for (const auto& n : plan->at("n")) planned_n.insert(n.get<int>());
+      }
+    }
   }
+  // The largest plan is what the merged runs meant to simulate (a run resumed with more
+  // replicates or sizes extends the smaller one): each planned size needs every index below it.
+  for (const int n : planned_n) reps[n];
   if (shards_seen.size() > 1) {
     std::string ks;
     for (const auto& [k, present] : shards_seen)
@@ -1335,15 +1388,17 @@ MergeGaps merge_gaps(const std::vector<std::string>& files) {
     }
   }
   for (const auto& [n, set] : reps) {
-    const int top = *set.rbegin();
+    // Every index up to the largest present, or to the largest plan's for a planned size.
+    int top = set.empty() ? -1 : *set.rbegin();
+    if (planned_n.count(n)) top = std::max(top, g.planned_replicates - 1);
     g.present[n] = static_cast<long>(set.size());
     g.largest[n] = top;
-    const long below = static_cast<long>(std::distance(set.lower_bound(0), set.find(top)));
-    if (top <= 0 || below == top) continue;
-    g.missing_replicate_count[n] = static_cast<long>(top) - below;
+    const long upto = static_cast<long>(std::distance(set.begin(), set.upper_bound(top)));
+    if (upto == static_cast<long>(top) + 1) continue;
+    g.missing_replicate_count[n] = static_cast<long>(top) + 1 - upto;
     std::vector<int>& list = g.missing_replicates[n];
     auto it = set.lower_bound(0);
-    for (int r = 0; r < top && list.size() < MergeGaps::kListed; ++r) {
+    for (int r = 0; r <= top && list.size() < MergeGaps::kListed; ++r) {
       if (it != set.end() && *it == r)
         ++it;
       else
@@ -1368,9 +1423,18 @@ std::string MergeGaps::message() const {
   }
   for (const auto& [n, gaps] : missing_replicates) {
     const long count = missing_replicate_count.at(n);
-    s += (s.empty() ? "" : "; ") + std::string("n = ") + std::to_string(n) + ": replicate" +
-         (count == 1 ? " " : "s ") + index_list(gaps, count) + " of 0-" +
-         std::to_string(largest.at(n)) + " missing";
+    s += (s.empty() ? "" : "; ") + std::string("n = ") + std::to_string(n) + ": " +
+         (present.at(n) == 0
+              ? "all " + std::to_string(count) + " replicate" + (count == 1 ? "" : "s") + " missing"
+              : std::string("replicate") + (count == 1 ? " " : "s ") + index_list(gaps, count) +
+                    " of 0-" + std::to_string(largest.at(n)) + " missing");
+  }
+  if (!missing_replicates.empty() && planned_replicates > 0) {
+    std::string asked;
+    for (const int k : plans_replicates) asked += (asked.empty() ? "" : ", ") + std::to_string(k);
+    s += plans_replicates.size() == 1
+             ? " (the runs asked for --replicates " + asked + ")"
+             : " (runs asked for --replicates " + asked + ": the largest is what a merge holds)";
   }
   long total = 0;
   std::string per_n;

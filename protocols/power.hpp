@@ -17,6 +17,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -182,8 +183,10 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
 // What a merge of `files` is known to lack (`palplab merge`; docs/PARTICIPANTS.md "Power
 // analysis"): shards I of a `--shard I/K` run whose file replicates.shard-I-of-K.jsonl is not
 // among `files` (K read from the names of those that are), and, per n, replicate indices below
-// the largest one present (a shard missing or stopped early). The total a run meant to simulate
-// is in no record, so missing replicates above the largest of an n cannot be seen.
+// the largest one present (a shard missing or stopped early). Records that carry their run's
+// plan ($.plan, since 2026-12-07) also show replicates missing above the largest present, and
+// sizes with none: the largest plan (most replicates, every size any run asked for) is what
+// the merge must hold — a resume with more replicates extends a run, it is no mismatch.
 struct MergeGaps {
   // Missing shards and replicate indices listed (message, power.json); the rest are counted.
   static constexpr std::size_t kListed = 10;
@@ -193,7 +196,11 @@ struct MergeGaps {
   std::map<int, std::vector<int>> missing_replicates;  // n -> first kListed indices missing
   std::map<int, long> missing_replicate_count;         // n -> all indices missing below the largest
   std::map<int, long> present;                         // n -> replicates present (deduplicated)
-  std::map<int, int> largest;                          // n -> largest replicate index present
+  std::map<int, int> largest;  // n -> largest replicate index expected (present, or planned)
+  // The largest `--replicates` the records' runs asked for ($.plan; 0 when no record has one)
+  // and every value seen (a run resumed with more replicates, shards of differently sized runs).
+  int planned_replicates = 0;
+  std::set<int> plans_replicates;
   bool complete() const { return missing_shard_count == 0 && missing_replicate_count.empty(); }
   // "shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl among the merged files); n = 3:
   // replicates 0, 2 of 0-3 missing: the summary covers only 3 replicates (n = 2: 2, n = 3: 1)";

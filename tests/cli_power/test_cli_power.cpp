@@ -370,6 +370,21 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
       {with_test(base, "effect_name", "cohen_d"),
        "$.tests[0].effect_name: test \"anova_oneway palpation_force test\" reports effect "
        "\"cohen_d\" here but \"eta_squared\""},
+      // The run's plan (records since 2026-12-07).
+      {with(base, "plan", 3), "$.plan: expected {\"replicates\": the --replicates asked for"},
+      {with(base, "plan", {{"replicates", 3}}), "$.plan: expected {"},
+      {with(base, "plan", {{"replicates", 0}, {"n", {2}}}),
+       "$.plan.replicates: expected an integer from 1 to 10000000, got 0"},
+      {with(base, "plan", {{"replicates", 1}, {"n", {2}}}),
+       "$.replicate: replicate index 1 is not below the run's $.plan.replicates 1"},
+      {with(base, "plan", {{"replicates", 3}, {"n", nlohmann::json::array()}}),
+       "$.plan.n: expected the group sizes asked for, a non-empty array, got []"},
+      {with(base, "plan", {{"replicates", 3}, {"n", {2, 1}}}),
+       "$.plan.n[1]: expected the group size, an integer from 2 to 100000, got 1"},
+      {with(base, "plan", {{"replicates", 3}, {"n", {2, 3, 2}}}),
+       "$.plan.n[2]: size 2 given twice (already $.plan.n[0])"},
+      {with(base, "plan", {{"replicates", 3}, {"n", {3, 4}}}),
+       "$.plan.n: the record's n 2 is not among the run's sizes [3,4]"},
       // The group descriptives (records since 2026-12-05).
       {with(base, "groups", "A"), "$.groups: expected an array of"},
       {with(base, "groups", nlohmann::json::array({5})), "$.groups[0]: expected {"},
@@ -740,6 +755,78 @@ TEST(Power, MergeOfSomeShardsIsRefusedUnlessAllowedPartial) {
   r = merge({d / "nothing"}, d / "never", d);
   expect_exit2(r, {(d / "nothing").string() + ": no such file or directory"});
   EXPECT_FALSE(fs::exists(d / "never"));
+  fs::remove_all(d);
+}
+
+// A merge could see replicates missing only below the largest index present: shard 1 of a
+// --replicates 3 run and shard 2 of a --replicates 5 run merged as a complete 4, a run stopped
+// before its last replicate as complete. Records carry their run's plan; the merge expects the
+// largest (a resume with more replicates extends a run) and names what is missing.
+TEST(Power, MergeExpectsTheLargestPlanOfItsRecords) {
+  auto d = scratch_dir("merge_plan");
+  ASSERT_EQ(run_shard(power_cmd("2,3", 3), "1/2", d / "a", d).code, 0);
+  ASSERT_EQ(run_shard(power_cmd("2,3", 5), "2/2", d / "b", d).code, 0);
+  auto r = merge({d / "a", d / "b"}, d / "m", d);
+  expect_exit2(r, {"incomplete merge: n = 2: replicate 4 of 0-4 missing; n = 3: replicate 3 of "
+                   "0-4 missing (runs asked for --replicates 3, 5: the largest is what a merge "
+                   "holds)"});
+  EXPECT_FALSE(fs::exists(d / "m"));
+  // One run stopped before its last replicate.
+  ASSERT_EQ(run_palplab(power_cmd("2", 3) + " --out " + (d / "one").string(), d).code, 0);
+  {
+    std::ifstream in(d / "one" / "replicates.jsonl");
+    std::ofstream out(d / "two.jsonl");
+    std::string l;
+    for (int i = 0; i < 2 && std::getline(in, l); ++i) out << l << "\n";
+  }
+  expect_exit2(merge({d / "two.jsonl"}, d / "m", d),
+               {"incomplete merge: n = 2: replicate 2 of 0-2 missing (the runs asked for "
+                "--replicates 3): the summary covers only 2 replicates (n = 2: 2)"});
+  // A run resumed with more replicates and sizes is one run of the larger plan: complete.
+  const fs::path run = d / "run", file = run / "replicates.jsonl";
+  ASSERT_EQ(run_palplab(power_cmd("2", 2) + " --out " + run.string(), d).code, 0);
+  ASSERT_EQ(run_palplab(power_cmd("2,3", 3) + " --out " + run.string(), d).code, 0);
+  r = merge({file}, d / "m", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(power_json(d / "m"), power_json(run));
+  // Its last replicate cut off (a run stopped early), then a size with none left.
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(file);
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+  }
+  ASSERT_EQ(lines.size(), 6u);
+  auto keep = [&](auto wanted) {
+    std::ofstream out(d / "cut.jsonl", std::ios::trunc);
+    for (const auto& l : lines)
+      if (wanted(nlohmann::json::parse(l))) out << l << "\n";
+  };
+  keep([](const nlohmann::json& j) { return !(j["n"] == 3 && j["replicate"] == 2); });
+  expect_exit2(
+      merge({d / "cut.jsonl"}, d / "c", d),
+      {"n = 3: replicate 2 of 0-2 missing (runs asked for --replicates 2, 3: the largest is "
+       "what a merge holds)"});
+  keep([](const nlohmann::json& j) { return j["n"] == 2; });
+  expect_exit2(merge({d / "cut.jsonl"}, d / "c", d),
+               {"incomplete merge: n = 3: all 3 replicates missing (runs asked for --replicates 2, "
+                "3: the largest is what a merge holds): the summary covers only 3 replicates (n "
+                "= 2: 3, n = 3: 0)"});
+  r = merge({d / "cut.jsonl"}, d / "c", d, " --allow-partial");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(power_json(d / "c")["partial"]["missing_replicate_count"]["3"], 3);
+  // Records written before the plan (none) are merged as before: only gaps below the largest.
+  keep([](const nlohmann::json& j) { return j["n"] == 2 && j["replicate"] != 2; });
+  {
+    std::ifstream in(d / "cut.jsonl");
+    std::ofstream out(d / "old.jsonl");
+    for (std::string l; std::getline(in, l);) {
+      auto j = nlohmann::json::parse(l);
+      j.erase("plan");
+      out << j.dump() << "\n";
+    }
+  }
+  r = merge({d / "old.jsonl"}, d / "o", d);
+  EXPECT_EQ(r.code, 0) << r.err;
   fs::remove_all(d);
 }
 
