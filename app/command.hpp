@@ -107,6 +107,14 @@ inline void require_writable_file(const std::string& flag, const std::string& pa
     throw InputError(SourceLocation{flag}, "\"" + path +
                                                "\" is a FIFO that no process reads (the command "
                                                "would wait for ever); expected a file name");
+  // A missing directory is said as `run --db` says it (file outputs are not given directories
+  // of their own; --out DIR outputs are created).
+  const fs::path parent = fs::path(path).parent_path();
+  if (fd < 0 && why == ENOENT && !parent.empty() && !fs::exists(parent, ec))
+    throw InputError(SourceLocation{flag}, "cannot write \"" + path + "\": its directory " +
+                                               parent.string() +
+                                               " does not exist (create it first), checked "
+                                               "before the work starts");
   if (fd < 0)
     throw InputError(SourceLocation{flag}, "cannot write \"" + path + "\" (" + std::strerror(why) +
                                                "), checked before the work starts");

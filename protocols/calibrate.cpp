@@ -367,20 +367,28 @@ double moment_loss(const Study& study, const std::vector<HumanCell>& cells, int 
                            ", phase " + c.phase + ", session " + std::to_string(c.session) +
                            ", measure " + c.measure);
     f.n_sim = static_cast<int>(x.size());
-    if (x.size() < 2) {
-      f.mean = f.sd = f.z_mean = f.z_sd = kNaN;
-    } else {
+    if (x.size() < 2)
+      f.mean = f.sd = kNaN;
+    else
       mean_sd(x, f.mean, f.sd);
-      const double s2 = std::pow(loss_sd(c), 2);
-      const double var_m = s2 / c.n + s2 / f.n_sim;
-      const double var_s = s2 / (2.0 * (c.n - 1)) + s2 / (2.0 * (f.n_sim - 1));
-      f.z_mean = (f.mean - c.mean) / std::sqrt(var_m);
-      f.z_sd = (f.sd - c.sd) / std::sqrt(var_s);
-    }
+    set_cell_z(f);
     add_cell_loss(loss, f);
     if (fit) fit->push_back(f);
   }
   return loss;
+}
+
+void set_cell_z(CellFit& f) {
+  if (f.n_sim < 2) {
+    f.z_mean = f.z_sd = kNaN;
+    return;
+  }
+  const HumanCell& c = f.human;
+  const double s2 = std::pow(loss_sd(c), 2);
+  const double var_m = s2 / c.n + s2 / f.n_sim;
+  const double var_s = s2 / (2.0 * (c.n - 1)) + s2 / (2.0 * (f.n_sim - 1));
+  f.z_mean = (f.mean - c.mean) / std::sqrt(var_m);
+  f.z_sd = (f.sd - c.sd) / std::sqrt(var_s);
 }
 
 void add_cell_loss(double& loss, const CellFit& f) {

@@ -88,6 +88,9 @@ void check_human_measure(const Study& study, const std::vector<HumanCell>& cells
 // simulate: a group or phase the study does not have, a session beyond the phase's sessions.
 void check_human_cell(const Study& study, const HumanCell& c);
 
+// A cell's z-scores from its simulated mean, SD and count and its human cell (NaN when fewer
+// than 2 simulated values): moment_loss's, and the journal's check of a stored line.
+void set_cell_z(CellFit& f);
 // One cell's terms of the loss, added to `loss` in the order moment_loss adds them (so that a
 // loss recomputed from its cells — the journal's check — is the same to the bit).
 void add_cell_loss(double& loss, const CellFit& f);

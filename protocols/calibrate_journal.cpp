@@ -174,6 +174,18 @@ CalibrationJournal::CalibrationJournal(const std::string& path, const std::strin
       if (f.n_sim < 0 || f.undefined < 0 || f.n_sim + f.undefined == 0)
         bad("cell " + std::to_string(i) + " counts " + c[0].dump() + " and " + c[1].dump() +
             " participants");
+      // Its z-scores are its mean's and SD's against the human cell (an edited z, or a mean
+      // edited without its z, would steer the fit; so would a mean beside fewer than 2 values).
+      CellFit z = f;
+      set_cell_z(z);
+      const auto same = [](double a, double b) {
+        return a == b || (std::isnan(a) && std::isnan(b));
+      };
+      if ((f.n_sim < 2 && !(std::isnan(f.mean) && std::isnan(f.sd))) || !same(z.z_mean, f.z_mean) ||
+          !same(z.z_sd, f.z_sd))
+        bad("cell " + std::to_string(i) + "'s z-scores " + c[4].dump() + ", " + c[5].dump() +
+            " are not those of its mean " + c[2].dump() + " and SD " + c[3].dump() + " (" +
+            nlohmann::json(z.z_mean).dump() + ", " + nlohmann::json(z.z_sd).dump() + ")");
       fit.push_back(std::move(f));
     }
     // The loss is its cells' (an edited loss or cell would steer the fit).

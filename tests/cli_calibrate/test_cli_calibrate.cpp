@@ -1036,6 +1036,22 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
   EXPECT_NE(r.err.find(":2: not a calibration evaluation (its loss -5.0 is not its cells'"),
             std::string::npos)
       << r.err;
+  // Its z-scores edited to 0, the loss made consistent with them (review 2026-12-07: the loss
+  // was checked against the z's, the z's not against the stored means and SDs).
+  {
+    auto e = nlohmann::json::parse(lines[1]);
+    ASSERT_TRUE(e["cells"][0][0].get<int>() >= 2) << e.dump();
+    const double z_mean = e["cells"][0][4].get<double>(), z_sd = e["cells"][0][5].get<double>();
+    e["cells"][0][4] = 0.0;
+    e["cells"][0][5] = 0.0;
+    e["loss"] = e["loss"].get<double>() - z_mean * z_mean - z_sd * z_sd;
+    r = edited("cells", e["cells"]);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find(":2: not a calibration evaluation (cell 0's z-scores 0.0, 0.0 are not "
+                         "those of its mean "),
+              std::string::npos)
+        << r.err;
+  }
   r = edited("setup", 5);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find(":2: not a calibration evaluation (no setup)"), std::string::npos) << r.err;
@@ -1094,5 +1110,25 @@ TEST(Calibrate, AnInterruptedFitResumesFromItsJournal) {
                   d);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(d / "fit.json"))["evaluations_from_journal"], 0);
+  fs::remove_all(d);
+}
+
+// An --out in a directory that does not exist said "(No such file or directory)"; it names the
+// directory now, as `run --db` does, before any simulation (and creates nothing).
+TEST(Calibrate, AnOutputInAMissingDirectoryNamesTheDirectory) {
+  auto d = scratch_dir("calibrate_nodir");
+  write_small_human_csv(d / "human.csv");
+  const fs::path out = d / "new" / "sub" / "fit.json";
+  const Result r =
+      run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                      (d / "human.csv").string() +
+                      " --params prior_target_cv --budget 1 --sim-n 3 --out " + out.string(),
+                  d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--out: cannot write \"" + out.string() + "\": its directory " +
+                       (d / "new" / "sub").string() + " does not exist (create it first)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(d / "new"));
   fs::remove_all(d);
 }
