@@ -279,6 +279,37 @@ ld log_t_two_sided_bound(ld t, ld nu) {
   return a * log_x + (b - 1) * log_1mx - std::log(a) - lbeta;
 }
 
+// Above this q the upper tail is integrated in t = q·s (studentized_range_far_upper).
+constexpr double kFarQ = 1e8;
+
+// P(Q > q) far in the tail: the mass of ∫ f_S(s) P(R > qs) ds lies at s ~ 1/q, below any grid
+// of [0, smax] (q = 1e11 gave 0 or NaN: Tukey's p of groups 1e-11 apart fell to the 1e-300
+// floor while the ANOVA's was 2.7e-44, review 2026-12-07). With t = q·s, exactly,
+// P(Q > q) = c q^-ν ∫ t^(ν-1) e^(-ν t²/(2q²)) P(R > t) dt, c the density's constant
+// (ChiScaled::log_norm), an integrand of scale 1 peaking near t* below; summed relative to its
+// log at t* (ν up to 1e7 would overflow t^(ν-1)).
+ld studentized_range_far_upper(double q, int k, double df) {
+  const ChiScaled chi(df);
+  const ld nu = df, qq = q;
+  const ld tstar = std::sqrt(std::max<ld>(nu - 1, 0.5L) / (nu / (qq * qq) + 0.5L));
+  const RangeUpperTable* table = RangeUpperTable::get(k);
+  auto log_g = [&](ld t) -> ld {
+    const ld r = t < kTableMax ? static_cast<ld>(table->log_upper(static_cast<double>(t)))
+                               : std::log(range_prob(t, k, true));
+    return (nu - 1) * std::log(t) - 0.5L * nu * (t / qq) * (t / qq) + r;
+  };
+  const ld top = log_g(tstar);
+  auto g = [&](ld t) { return t > 0 ? std::exp(log_g(t) - top) : 0.0L; };
+  std::vector<ld> pts{0, tstar + 80};
+  for (ld d : {0.0L, 1.0L, 3.0L, 8.0L, 20.0L})
+    for (ld sign : {-1.0L, 1.0L})
+      if (tstar + sign * d > 0) pts.push_back(tstar + sign * d);
+  if (nu < 2)  // t^(ν-1) singular or not smooth at 0
+    for (int j = 1; j <= 30; ++j) pts.push_back(std::min<ld>(1, tstar) * std::ldexp(1.0L, -j));
+  const ld integral = integrate(g, pts, kOuterTol);
+  return std::clamp<ld>(std::exp(chi.log_norm - nu * std::log(qq) + top) * integral, 0, 1);
+}
+
 ld studentized_range(double q, int k, double df, bool upper) {
   if (k < 2) throw std::invalid_argument("studentized range: k must be >= 2");
   if (!(df > 0)) throw std::invalid_argument("studentized range: df must be > 0");
@@ -292,6 +323,7 @@ ld studentized_range(double q, int k, double df, bool upper) {
       log_t_two_sided_bound(static_cast<ld>(q) / kSqrt2, df > 1e7 ? INFINITY : static_cast<ld>(df));
   if (log_bound < std::log(static_cast<ld>(kPFloor)) - 5) return upper ? 0.0L : 1.0L;
   if (std::isinf(df) || df > 1e7) return range_prob(q, k, upper);
+  if (upper && q > kFarQ) return studentized_range_far_upper(q, k, df);
   ChiScaled chi(df);
   ld nu = df;
   ld smax = chi.upper_limit();

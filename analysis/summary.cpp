@@ -303,6 +303,7 @@ nlohmann::json to_json(const StatsSummary& s) {
                      {"q", json_num(r.q)},
                      {"df", json_num(r.df)},
                      {"p", json_num(r.p)},
+                     {"p_is_bound", p_is_bound(r.p)},
                      {"ci_low", json_num(r.ci_low)},
                      {"ci_high", json_num(r.ci_high)}});
     return arr;

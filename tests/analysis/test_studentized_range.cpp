@@ -76,6 +76,36 @@ TEST(StudentizedRange, TwoMeansClosedForm) {
   }
 }
 
+// Far beyond the s-grid (q = 1e11 gave 0 for ν = 1 and NaN for ν = 4: Tukey's p of groups
+// 1e-11 apart fell to the 1e-300 floor while the ANOVA's was 2.7e-44, review 2026-12-07).
+// k = 2 in closed form, x = q/√2: ν = 1, P(|T| > x) = (2/π) atan(1/x); ν = 2,
+// P(|T| > x) = 2 / (√(2+x²) (√(2+x²) + x)). For k = 3 the tail falls exactly like q^-ν where
+// e^(-ν s²/2) ≈ 1 over s ~ 1/q, and it is continuous where the far-tail integral takes over
+// (q = 1e8).
+TEST(StudentizedRange, HugeQFollowsTheClosedFormAndTheTailLaw) {
+  for (double q : {1e6, 1e8, 3e9, 1e11, 1e13, 1e20, 1e100, 1e250}) {
+    const double x = q / std::sqrt(2.0);
+    const long double one = 2 / std::acos(-1.0L) * std::atan(1 / static_cast<long double>(x));
+    EXPECT_NEAR(studentized_range_sf(q, 2, 1.0), one, 1e-9 * one) << q;
+    if (q > 1e140) continue;  // ν = 2 below the double range
+    const long double r = std::sqrt(2 + static_cast<long double>(x) * x);
+    const long double two = 2 / (r * (r + x));
+    EXPECT_NEAR(studentized_range_sf(q, 2, 2.0), two, 1e-9 * two) << q;
+  }
+  for (double nu : {0.5, 4.0, 12.0})
+    for (double q : {1e9, 1e11, 1e14}) {
+      const double a = studentized_range_sf(q, 3, nu), b = studentized_range_sf(10 * q, 3, nu);
+      ASSERT_GT(b, 0) << nu << " " << q;
+      EXPECT_NEAR(b / a, std::pow(10.0, -nu), 1e-8 * std::pow(10.0, -nu)) << nu << " " << q;
+    }
+  for (double nu : {0.5, 4.0, 1000.0})
+    for (int k : {3, 20}) {
+      const double below = studentized_range_sf(1e8 * (1 - 1e-9), k, nu),
+                   above = studentized_range_sf(1e8 * (1 + 1e-9), k, nu);
+      EXPECT_NEAR(above, below, 1e-7 * below) << nu << " " << k;
+    }
+}
+
 TEST(StudentizedRange, QuantileInvertsCdf) {
   for (int k : {2, 3, 10})
     for (double nu : {3.0, 27.0, 120.0})

@@ -515,3 +515,23 @@ TEST(CliStats, NoColumnMessageIsCutAndAdjustedBoundsAreFlagged) {
   EXPECT_NE(r.out.find("< 1e-300   < 3e-300   < 3e-300"), std::string::npos) << r.out;
   std::filesystem::remove(csv);
 }
+
+// Two groups 1 apart with spreads of 1e-11 (q = 1.7e11): Tukey's and Games–Howell's p fell to
+// the 1e-300 floor while the ANOVA's was 2.7e-44 (review 2026-12-07); with two groups the
+// Tukey p is the ANOVA's. The range entries say whether their p is the floor's bound.
+TEST(CliStats, PostHocPValuesFollowTheAnovaFarInTheTail) {
+  const std::string csv = write_temp("far_tail.csv",
+                                     "group,value\nA,0\nA,1e-11\nA,2e-11\nB,1\nB,1.00000000001\n"
+                                     "B,1.00000000002\n");
+  const Result r = run_palplab("stats --csv " + csv + " --value value --group group --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const double p = j["anova"]["p"].get<double>();
+  ASSERT_GT(p, 1e-50);
+  ASSERT_LT(p, 1e-40);
+  for (const char* test : {"tukey", "games_howell"}) {
+    EXPECT_NEAR(j[test][0]["p"].get<double>(), p, 1e-6 * p) << test;
+    EXPECT_EQ(j[test][0]["p_is_bound"], false) << test;
+  }
+  std::filesystem::remove(csv);
+}
