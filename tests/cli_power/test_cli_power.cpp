@@ -485,6 +485,14 @@ TEST(Power, AnEditedReplicateIndexIsRefused) {
   const std::string first = text.substr(0, text.find('\n'));
   auto copy = nlohmann::json::parse(first);
   copy["replicate"] = 2;
+  // With its run's plan (records since 2026-12-07) the index is beyond what the run asked for.
+  std::ofstream(d / "beyond.jsonl") << text << copy.dump() << "\n";
+  expect_exit2(merge({d / "beyond.jsonl"}, d / "merged", d),
+               {(d / "beyond.jsonl").string() +
+                ":3: $.replicate: replicate index 2 is not below the run's $.plan.replicates 2 "
+                "(an edited record)"});
+  // Records without a plan (written before): the seed gives it away.
+  copy.erase("plan");
   std::ofstream(d / "filled.jsonl") << text << copy.dump() << "\n";
   const auto m = merge({d / "filled.jsonl"}, d / "merged", d);
   EXPECT_EQ(m.code, 2) << m.out << m.err;
@@ -495,11 +503,14 @@ TEST(Power, AnEditedReplicateIndexIsRefused) {
                              "was copied and its n or index edited)"))
       << m.err;
   EXPECT_FALSE(fs::exists(d / "merged" / "power.json"));
-  // The highest record renumbered into the gap below it looks complete without the study;
-  // merge --study checks every seed exactly.
+  // The highest record renumbered into the gap below it: its plan shows the gap it leaves;
+  // without a plan it looks complete; merge --study checks every seed exactly.
   auto second = nlohmann::json::parse(text.substr(text.find('\n') + 1));
   second["replicate"] = 0;
   std::ofstream(d / "renumbered.jsonl") << second.dump() << "\n";
+  expect_exit2(merge({d / "renumbered.jsonl"}, d / "m2", d), {"n = 2: replicate 1 of 0-1 missing"});
+  second.erase("plan");
+  std::ofstream(d / "renumbered.jsonl", std::ios::trunc) << second.dump() << "\n";
   EXPECT_EQ(merge({d / "renumbered.jsonl"}, d / "m2", d).code, 0);
   const auto ms = merge({d / "renumbered.jsonl"}, d / "m3", d, " --study " + null_study());
   EXPECT_EQ(ms.code, 2) << ms.out << ms.err;
