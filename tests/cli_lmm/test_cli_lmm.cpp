@@ -234,3 +234,26 @@ TEST(CliLmm, NamesEscapedAndLongFieldsCut) {
   EXPECT_LT(r.err.size(), 400u) << r.err.substr(0, 400);
   EXPECT_NE(r.err.find("\u2026 (1000000 bytes)'"), std::string::npos) << r.err.substr(0, 400);
 }
+
+// A REML minimum on the boundary (participant variance 0: the profile is lowest at theta = 0)
+// was reported as theta 1.2e-8, an SD of 3.5e-7 and no warning (review 2026-12-07): lme4's
+// isSingular() takes a diagonal element of the relative factor below 1e-4 as singular. The fit
+// is put on the bound, as lme4's bounded optimiser puts it, and says so.
+TEST(CliLmm, ABoundaryOptimumIsASingularFit) {
+  const std::string csv = write_temp("singular.csv",
+                                     "participant,group,session,value\nP01,B,1,44\nP01,B,2,40\n"
+                                     "P01,B,1,53.333333333333336\nP02,A,2,100\nP02,A,1,0\n"
+                                     "P03,A,2,100\nP03,A,1,14.285714285714286\n"
+                                     "P04,B,1,4.3478260869565215\nP04,B,2,17.24137931034483\n"
+                                     "P04,B,1,100\n");
+  const Result r = run_palplab("lmm --csv " + csv +
+                               " --formula \"value ~ group * session + (1 | participant)\" --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["random_effects"]["sd_intercept"].get<double>(), 0.0) << r.out;
+  ASSERT_EQ(j["warnings"].size(), 1u) << r.out;
+  EXPECT_NE(j["warnings"][0].get<std::string>().find("singular fit"), std::string::npos);
+  // On the bound the model is ordinary least squares: REML sigma² = RSS / (n - p).
+  EXPECT_NEAR(j["sigma"].get<double>(), 28.8431, 1e-4);
+  EXPECT_NEAR(j["reml_criterion"].get<double>(), 60.835445, 1e-6);
+}
