@@ -56,8 +56,8 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
     }
     if (!keep) continue;
     if (skip_empty) {
-      std::string v = trim_blanks(t.rows[r][vc]);
-      if (v.empty() || v == "NA") {
+      const std::string v = trim_blanks(t.rows[r][vc]), label = trim_blanks(t.rows[r][gc]);
+      if (v.empty() || v == "NA" || label.empty() || label == "NA") {
         ++g.rows_skipped_empty;
         continue;
       }
@@ -75,9 +75,12 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
       throw InputError(ps);
     }
     std::string name = trim_blanks(t.rows[r][gc]);
-    if (name.empty())
+    // "NA" is R's undefined label (lmm drops such rows): not a group of its own.
+    if (name.empty() || name == "NA")
       throw InputError(SourceLocation{t.file, t.line[r]},
-                       "column '" + group_column + "': empty group label");
+                       "column '" + group_column + "': " +
+                           (name.empty() ? "empty group label" : "undefined group label NA") +
+                           " (--skip-empty leaves such rows out and counts them)");
     auto [it, fresh] = index.emplace(name, static_cast<int>(g.names.size()));
     if (fresh) g.names.push_back(name);
     texts.push_back(t.rows[r][vc]);
@@ -96,10 +99,13 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
             "' the grouping column (not an id)? Use --where to select groups");
   }
   if (texts.empty()) {
+    if (!where.empty() && filter_rows(t, where).empty())
+      throw InputError(no_row_matches(t, where, shown_where_flags(where)));
     std::string what = "no data rows";
     if (!where.empty()) what += " match the --where filters";
     if (g.rows_skipped_empty > 0)
-      what += " (" + std::to_string(g.rows_skipped_empty) + " with an empty value skipped)";
+      what += " (" + std::to_string(g.rows_skipped_empty) +
+              " with an empty value or group label skipped)";
     throw InputError(what, t.file);
   }
   auto cv = centre_decimals(texts);
@@ -148,6 +154,71 @@ GroupedData group_table(const CsvTable& t, const std::string& value_column,
 }  // namespace palplab::analysis
 
 namespace palplab::analysis {
+std::string no_row_matches(const CsvTable& t, const std::vector<WhereFilter>& where,
+                           const std::string& shown) {
+  std::vector<std::string> columns;
+  for (const auto& w : where)
+    if (std::find(columns.begin(), columns.end(), w.column) == columns.end())
+      columns.push_back(w.column);
+  std::string held;
+  for (const auto& c : columns) {
+    const int col = column_index(t, c);
+    std::vector<std::string> values;
+    bool more = false;
+    for (const auto& row : t.rows) {
+      const std::string v = trim_blanks(row[col]);  // as the filters compare
+      if (std::find(values.begin(), values.end(), v) != values.end()) continue;
+      if (values.size() == 10) {
+        more = true;
+        break;
+      }
+      values.push_back(v);
+    }
+    held += "; column '" + shown_text(c) + "' holds ";
+    for (size_t k = 0; k < values.size(); ++k)
+      held += (k ? ", '" : "'") + shown_text(values[k]) + "'";
+    if (more) held += " and more";
+  }
+  return "no row of " + t.file + " matches " + shown + " (" + std::to_string(t.rows.size()) +
+         " data row" + (t.rows.size() == 1 ? "" : "s") +
+         "; filters on the same column are alternatives, filters on different columns must all "
+         "hold)" +
+         held;
+}
+
+std::string shown_where_flags(const std::vector<WhereFilter>& where) {
+  std::string s;
+  for (const auto& w : where)
+    s += (s.empty() ? "" : " ") + std::string("--where ") + shown_text(w.column) + "=" +
+         shown_text(w.value);
+  return s;
+}
+
+void check_one_measure(const CsvTable& t, const std::vector<int>& rows,
+                       const std::string& value_column, const std::string& select,
+                       const std::string& select_end) {
+  auto column = [&](const std::string& name) {
+    for (std::size_t c = 0; c < t.header.size(); ++c)
+      if (t.header[c] == name && name != value_column) return static_cast<int>(c);
+    return -1;
+  };
+  for (const char* name : {"measure", "unit"}) {
+    const int c = column(name);
+    if (c < 0 || rows.empty()) continue;
+    const std::string first = trim_blanks(t.rows[rows[0]][c]);
+    for (const int r : rows) {
+      const std::string v = trim_blanks(t.rows[r][c]);
+      if (v == first) continue;
+      throw InputError(SourceLocation{t.file, t.line[r]},
+                       std::string("the rows analysed mix ") + name + "s: '" + shown_text(first) +
+                           "' (line " + std::to_string(t.line[rows[0]]) + ") and '" +
+                           shown_text(v) + "' (column '" + name +
+                           "'); analyse one at a time with " + select + name + "=" +
+                           shown_text(first) + select_end);
+    }
+  }
+}
+
 std::vector<int> filter_rows(const CsvTable& t, const std::vector<WhereFilter>& where) {
   std::map<int, std::vector<std::string>> filters;
   for (const auto& w : where) filters[column_index(t, w.column)].push_back(w.value);

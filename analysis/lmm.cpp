@@ -651,10 +651,16 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
     else
       used.push_back(r);
   }
+  if (!where.empty() && rows.empty())
+    throw InputError(no_row_matches(t, where, shown_where_flags(where)));
   if (used.empty())
-    throw InputError(
-        std::string("no complete data rows") + (where.empty() ? "" : " match the --where filters"),
-        t.file);
+    throw InputError(std::string("no complete data rows") +
+                         (where.empty() ? "" : " among those matching the --where filters") + " (" +
+                         std::to_string(fit.rows_dropped_na) + " with NA dropped)",
+                     t.file);
+  // One response: a tidy table's rows of several measures pooled into one variable (accuracy
+  // in %, times in s and forces in N) were fitted as one (review 2026-12-07).
+  check_one_measure(t, used, f.response, "--where ");
   const int n = static_cast<int>(used.size());
   std::map<std::string, Column> cols;
   for (auto& v : vars) {

@@ -65,45 +65,6 @@ std::string no_column(const CsvTable& t, const std::string& name) {
          "; its columns are: " + shown_columns(t.header, "'");
 }
 
-std::string trimmed(const std::string& s) {
-  const size_t b = s.find_first_not_of(" \t");
-  return b == std::string::npos ? std::string() : s.substr(b, s.find_last_not_of(" \t") - b + 1);
-}
-
-// Why the statistic's "where" entries (`shown` as written) keep no row of `t`: how they combine
-// and the values their columns hold (the first 10 of each), so a misspelt value is seen.
-std::string no_row_matches(const CsvTable& t, const std::vector<WhereFilter>& where,
-                           const std::string& shown) {
-  std::vector<std::string> columns;
-  for (const auto& w : where)
-    if (std::find(columns.begin(), columns.end(), w.column) == columns.end())
-      columns.push_back(w.column);
-  std::string held;
-  for (const auto& c : columns) {
-    const int col = column_index(t, c);
-    std::vector<std::string> values;
-    bool more = false;
-    for (const auto& row : t.rows) {
-      const std::string v = trimmed(row[col]);  // as the filters compare
-      if (std::find(values.begin(), values.end(), v) != values.end()) continue;
-      if (values.size() == 10) {
-        more = true;
-        break;
-      }
-      values.push_back(v);
-    }
-    held += "; column '" + c + "' holds ";
-    for (size_t k = 0; k < values.size(); ++k)
-      held += (k ? ", '" : "'") + shown_text(values[k]) + "'";
-    if (more) held += " and more";
-  }
-  return "no row of " + t.file + " matches " + shown + " (" + std::to_string(t.rows.size()) +
-         " data row" + (t.rows.size() == 1 ? "" : "s") +
-         "; entries on the same column are alternatives, entries on different columns must all "
-         "hold)" +
-         held;
-}
-
 }  // namespace
 
 ApaStatistic parse_apa(const std::string& text, const SourceLocation& where) {
@@ -319,6 +280,9 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
                                                        "' (select groups with \"where\")");
       // Every group of the rows used with at least 1 value: which groups a test needs (and how
       // many values) is the test's own matter, and too few is "not recomputable", not bad input.
+      // One measure: a tidy table's rows of several measures (% and s and N) pooled into one
+      // variable were recomputed as one (review 2026-12-07).
+      check_one_measure(table, filter_rows(table, where), value, "a \"where\" entry \"", "\"");
       GroupedData d = group_table(table, value, group, where, 1, 1, skip_empty);
       item.rows_skipped_empty = d.rows_skipped_empty;
       double df1 = NAN, df2 = NAN, stat = NAN, p = NAN;

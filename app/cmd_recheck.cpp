@@ -85,7 +85,7 @@ palplab::app::CommandRegistration reg_recheck{
             if (it.rows_skipped_empty > 0)
               std::cout << "    " << it.rows_skipped_empty
                         << (it.rows_skipped_empty == 1 ? " row" : " rows")
-                        << " with an empty value left out (--skip-empty)\n";
+                        << " with an empty value or group left out (--skip-empty)\n";
             for (const auto& p : it.parts)
               if (p.verdict == "not recomputable")
                 std::cout << "    " << p.name << ": printed " << p.reported

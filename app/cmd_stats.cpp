@@ -44,35 +44,17 @@ struct StatsArgs {
   double alpha = 0.05;
 };
 
-// The tidy tables palplab writes (`export`'s measures.csv, `calibrate --human`) hold every
-// measure in one value column: a `measure` or `unit` column with more than one value among the
-// rows used means numbers of different quantities pooled into one analysis (review 2026-12-06:
-// accuracy in %, times in s and forces in N compared as one variable, exit 0). A participant
-// with several rows (sessions, phases) is pooled too: allowed, but said, since the tests take
-// every row as an independent observation.
+// A participant with several rows (sessions, phases) among those analysed is allowed, but said,
+// since the tests take every row as an independent observation; different measures (or units)
+// are an error (analysis::check_one_measure).
 void check_one_measure(const palplab::analysis::CsvTable& t, const std::vector<int>& rows,
                        const std::string& value_column) {
+  palplab::analysis::check_one_measure(t, rows, value_column, "--where ");
   auto column = [&](const std::string& name) {
     for (std::size_t c = 0; c < t.header.size(); ++c)
       if (t.header[c] == name && name != value_column) return static_cast<int>(c);
     return -1;
   };
-  for (const char* name : {"measure", "unit"}) {
-    const int c = column(name);
-    if (c < 0 || rows.empty()) continue;
-    const std::string first = palplab::analysis::trim_blanks(t.rows[rows[0]][c]);
-    for (const int r : rows) {
-      const std::string v = palplab::analysis::trim_blanks(t.rows[r][c]);
-      if (v == first) continue;
-      throw palplab::InputError(palplab::SourceLocation{t.file, t.line[r]},
-                                std::string("the rows analysed mix ") + name + "s: '" +
-                                    palplab::analysis::shown_text(first) + "' (line " +
-                                    std::to_string(t.line[rows[0]]) + ") and '" +
-                                    palplab::analysis::shown_text(v) + "' (column '" + name +
-                                    "'); analyse one at a time with --where " + name + "=" +
-                                    palplab::analysis::shown_text(first));
-    }
-  }
   const int p = column("participant");
   if (p < 0) return;
   std::map<std::string, int> count;
@@ -172,7 +154,7 @@ palplab::app::CommandRegistration reg_stats{
                     << " rows of " << palplab::escape_controls(a->csv, false)
                     << (data.rows_skipped_empty > 0
                             ? ", " + std::to_string(data.rows_skipped_empty) +
-                                  " empty values skipped"
+                                  " rows with an empty value or group skipped"
                             : std::string())
                     << ")\n\n"
                     << to_text(s);

@@ -257,3 +257,25 @@ TEST(CliLmm, ABoundaryOptimumIsASingularFit) {
   EXPECT_NEAR(j["sigma"].get<double>(), 28.8431, 1e-4);
   EXPECT_NEAR(j["reml_criterion"].get<double>(), 60.835445, 1e-6);
 }
+
+// lmm fitted a tidy table's measures (%, s, N) pooled into one response with exit 0, where
+// `stats` refuses (review 2026-12-07); a --where that keeps no row names the filter and what
+// its column holds (it said "no complete data rows match the --where filters").
+TEST(CliLmm, PooledMeasuresAndFiltersKeepingNoRowAreSaid) {
+  const std::string csv =
+      write_temp("lmm_tidy.csv",
+                 "participant,group,session,measure,value\nP1,A,1,force,2.5\nP1,A,2,force,2.4\n"
+                 "P2,A,1,force,2.7\nP2,A,2,force,2.9\nP3,B,1,force,2.9\nP3,B,2,force,3.0\n"
+                 "P4,B,1,force,3.1\nP4,B,2,force,3.3\nP1,A,1,time,30\nP1,A,2,time,31\n");
+  const std::string formula = " --formula \"value ~ group + session + (1 | participant)\"";
+  Result r = run_palplab("lmm --csv " + csv + formula);
+  palplab::testing::expect_exit2(
+      r, {csv + ":10: the rows analysed mix measures: 'force' (line 2) and 'time' (column "
+                "'measure'); analyse one at a time with --where measure=force"});
+  r = run_palplab("lmm --csv " + csv + formula + " --where measure=Force");
+  palplab::testing::expect_exit2(
+      r, {"no row of " + csv + " matches --where measure=Force (10 data rows;",
+          "column 'measure' holds 'force', 'time'"});
+  r = run_palplab("lmm --csv " + csv + formula + " --where measure=force");
+  EXPECT_EQ(r.code, 0) << r.err;
+}

@@ -319,8 +319,8 @@ TEST(CliRecheck, WhereMatchingNoRowNamesTheKeyNotAFlag) {
   const std::vector<Case> cases = {
       {R"({"value":"force","group":"group","statistics":[{"text":"F(2, 13) = 11.05, p = .002","where":["phase=nosuch"]}]})",
        {":1:93: $.statistics[0].where: no row of " + csv_path +
-        " matches [\"phase=nosuch\"] (32 data rows; entries on the same column are "
-        "alternatives, entries on different columns must all hold); column 'phase' holds "
+        " matches [\"phase=nosuch\"] (32 data rows; filters on the same column are "
+        "alternatives, filters on different columns must all hold); column 'phase' holds "
         "'post', 'pre'"}},
       // Each filter matches rows, both together none.
       {R"({"value":"force","group":"group","statistics":[{"id":"a","text":"F(2, 13) = 11.05, p = .002"},{"text":"F(2, 13) = 11.05, p = .002","where":["phase=post","group=Z"]}]})",
@@ -431,7 +431,7 @@ TEST(CliRecheck, SkipEmptyLeavesOutUndefinedValues) {
   const Result clean = run_palplab("recheck " + f + " --csv " + without);
   ASSERT_NE(skipped.code, 2) << skipped.err;
   EXPECT_EQ(skipped.code, clean.code);
-  EXPECT_TRUE(has(skipped.out, "    1 row with an empty value left out (--skip-empty)"))
+  EXPECT_TRUE(has(skipped.out, "    1 row with an empty value or group left out (--skip-empty)"))
       << skipped.out;
   const Result sj = run_palplab("recheck " + f + " --csv " + with_empty + " --skip-empty --json");
   const Result cj = run_palplab("recheck " + f + " --csv " + without + " --json");
@@ -439,4 +439,25 @@ TEST(CliRecheck, SkipEmptyLeavesOutUndefinedValues) {
   EXPECT_EQ(js["statistics"][0]["rows_skipped_empty"], 1);
   EXPECT_EQ(js["statistics"][0]["recomputed"], jc["statistics"][0]["recomputed"]);
   EXPECT_FALSE(jc["statistics"][0].contains("rows_skipped_empty"));
+}
+
+// A tidy table of several measures (palplab export's measures.csv) with no "where" on the
+// measure was recomputed as one variable (%, s and N pooled, a verdict of "inconsistent";
+// review 2026-12-07), which `stats` refuses: recheck refuses it too, naming the way out.
+TEST(CliRecheck, RowsOfSeveralMeasuresAreRefused) {
+  const std::string csv = write_temp("tidy_measures.csv",
+                                     "participant,group,measure,value\nP1,A,force,2.5\n"
+                                     "P2,A,force,2.7\nP3,B,force,2.9\nP4,B,force,3.1\n"
+                                     "P1,A,time,30\nP2,A,time,31\nP3,B,time,40\nP4,B,time,41\n");
+  const std::string f = write_temp("tidy_measures.json", R"({"value": "value", "group": "group",
+    "statistics": [{"text": "F(1, 6) = 0.50, p = .51", "test": "anova"}]})");
+  Result r = run_palplab("recheck " + f + " --csv " + csv);
+  palplab::testing::expect_exit2(
+      r, {csv + ":6: the rows analysed mix measures: 'force' (line 2) and 'time' (column "
+                "'measure'); analyse one at a time with a \"where\" entry \"measure=force\""});
+  const std::string one = write_temp("tidy_measure_one.json", R"({"value": "value",
+    "group": "group", "statistics": [{"text": "F(1, 2) = 8.00, p = .106", "test": "anova",
+    "where": ["measure=force"]}]})");
+  r = run_palplab("recheck " + one + " --csv " + csv);
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
 }
