@@ -158,6 +158,9 @@ std::string with_unit(const std::string& text, const std::string& unit) {
 }
 
 // Everything the sections read: the store's records and the study structure stored at run time.
+// Where the stills are drawn before the report is complete (then moved into stills/).
+constexpr const char* kStillsStage = "stills.partial";
+
 struct Context {
   std::string db_path, out_dir;
   ReportOptions options;
@@ -174,6 +177,13 @@ struct Context {
   std::map<std::string, double> scale_of;  // proportion_scale()
   Doc doc;
   ReportFiles files;
+  // Files written only once the whole report is made (commit_files): a report that fails
+  // half-way (a corrupt sample blob found by the force-trace section) replaced figures of the
+  // previous report with figures of the damaged database, linked from the old report.md
+  // (review 2026-12-07). Figures and stills.json wait here; the PNG stills are rendered into
+  // `stills_stage` and moved into stills/.
+  std::vector<std::pair<std::string, std::string>> pending;  // (file, content)
+  fs::path stills_stage;
 
   int group_index(const std::string& g) const {
     return static_cast<int>(std::find(groups.begin(), groups.end(), g) - groups.begin());
@@ -199,8 +209,8 @@ struct Context {
   }
   void save_figure(const std::string& name, const std::string& svg, const std::string& caption) {
     const fs::path file = fs::path(out_dir) / "figures" / name;
-    write_file(file.string(), svg, "the figure");
-    files.figures.push_back((fs::path(out_dir) / "figures" / name).string());
+    pending.emplace_back(file.string(), svg);
+    files.figures.push_back(file.string());
     doc.figure(svg, name, caption);
   }
 };
@@ -477,7 +487,8 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
                    [&](const auto* a, const auto* b) { return first_user(a) < first_user(b); });
 
   const fs::path dir = fs::path(c.out_dir) / "stills";
-  make_out_dir(dir, "the stills");
+  c.stills_stage = fs::path(c.out_dir) / kStillsStage;
+  make_out_dir(c.stills_stage, "the stills being drawn");
   const int W = c.options.still_width, H = c.options.still_height;
   const std::string force_text = fmt(th->mpf, "%.3g") + " N";
   struct Done {
@@ -514,14 +525,18 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     q.hold = c.options.still_hold;
     q.width = W;
     q.height = H;
-    q.pressed_png = (dir / (slug(p->prototype) + "_pressed.png")).string();
-    q.rest_png = (dir / (slug(p->prototype) + "_rest.png")).string();
+    q.pressed_png = (c.stills_stage / (slug(p->prototype) + "_pressed.png")).string();
+    q.rest_png = (c.stills_stage / (slug(p->prototype) + "_rest.png")).string();
     StillResult r;
     try {
       r = c.options.stills->make(q);
     } catch (const std::exception& e) {
       r.skipped = e.what();
     }
+    // Said of the file the report writes (stills/…), not of its stage.
+    for (const std::string& staged : {q.pressed_png, q.rest_png})
+      for (std::size_t at; (at = r.skipped.find(staged)) != std::string::npos;)
+        r.skipped.replace(at, staged.size(), (dir / fs::path(staged).filename()).string());
     nlohmann::json js = {{"prototype", p->prototype}, {"groups", groups}};
     if (!r.skipped.empty()) {
       missing.push_back(p->prototype + ": " + r.skipped);
@@ -538,8 +553,8 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     js["visible_deformation"] = r.visible_deformation;
     js["camera"] = r.camera;
     side["stills"].push_back(js);
-    c.files.stills.push_back(q.pressed_png);
-    c.files.stills.push_back(q.rest_png);
+    c.files.stills.push_back((dir / fs::path(q.pressed_png).filename()).string());
+    c.files.stills.push_back((dir / fs::path(q.rest_png).filename()).string());
     done.push_back({p, groups, q.pressed_png, q.rest_png, r});
   }
   c.doc.para(
@@ -556,7 +571,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
       "the press and cameras in stills/stills.json.");
   for (const auto& m : missing) c.doc.para("No still of prototype " + m + ".");
   c.files.stills_missing = missing;
-  write_file((dir / "stills.json").string(), side.dump(2) + "\n", "the stills' description");
+  c.pending.emplace_back((dir / "stills.json").string(), side.dump(2) + "\n");
   c.files.stills_listing = (dir / "stills.json").string();
   if (done.empty()) {
     c.files.stills_skipped = "no prototype could be drawn";
@@ -1381,6 +1396,26 @@ void section_force_traces(Context& c, const std::vector<Unit>& units) {
           " points, keeping the peak |F| of each bin)." + thresholds_text);
 }
 
+// The report's files, once everything is made: figures and stills first, the documents that
+// link them last.
+void commit_files(Context& c) {
+  make_out_dir(fs::path(c.out_dir) / "figures", "its SVG figures");
+  if (!c.stills_stage.empty()) {
+    const fs::path dir = fs::path(c.out_dir) / "stills";
+    make_out_dir(dir, "the stills");
+    for (const auto& png : c.files.stills) {
+      std::error_code ec;
+      fs::rename(c.stills_stage / fs::path(png).filename(), png, ec);
+      if (ec) throw InputError("cannot write the still (" + ec.message() + ")", png);
+    }
+    std::error_code ec;
+    fs::remove_all(c.stills_stage, ec);
+  }
+  for (const auto& [file, content] : c.pending)
+    write_file(file, content,
+               fs::path(file).extension() == ".svg" ? "the figure" : "the stills' description");
+}
+
 void write_documents(Context& c) {
   c.files.markdown = (fs::path(c.out_dir) / "report.md").string();
   c.files.html = (fs::path(c.out_dir) / "report.html").string();
@@ -1406,17 +1441,12 @@ void write_documents(Context& c) {
   write_file(c.files.html, html.str(), "the report");
 }
 
-}  // namespace
-
-ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
-                         const ReportOptions& options) {
-  Context c = load(db_path, out_dir, options);
-  check_out_dir(out_dir, options.stills != nullptr);
+// The whole report of the loaded database, every file written at the end (commit_files).
+void make_report(Context& c) {
   const std::vector<Unit> units = analysis_units(c);
   if (c.declared.contains("analyses") && c.declared["analyses"].is_array())
     c.files.declared = static_cast<int>(c.declared["analyses"].size());
   const std::vector<Hypothesis> hypotheses = declared_hypotheses(c);
-  make_out_dir(fs::path(out_dir) / "figures", "its SVG figures");
   section_provenance(c);
   {
     // The stills' press comes from the analysed phases first, then the others from the last.
@@ -1435,7 +1465,24 @@ ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
   for (const auto& u : units) section_analysis(c, u);
   section_learning_curves(c, units);
   section_force_traces(c, units);
+  commit_files(c);
   write_documents(c);
+}
+
+}  // namespace
+
+ReportFiles write_report(const std::string& db_path, const std::string& out_dir,
+                         const ReportOptions& options) {
+  Context c = load(db_path, out_dir, options);
+  check_out_dir(out_dir, options.stills != nullptr);
+  try {
+    make_report(c);
+  } catch (...) {
+    // Nothing of a failed report is left: no file was written, and its stills' stage goes.
+    std::error_code ec;
+    if (!c.stills_stage.empty()) fs::remove_all(c.stills_stage, ec);
+    throw;
+  }
   return c.files;
 }
 

@@ -350,6 +350,8 @@ palplab::app::CommandRegistration reg_report{
         // reports, on the sessions stored, but says so (issue 10).
         const std::string warning = palplab::results::Store::open(a->db).incomplete_warning();
         check_report_out(*a);
+        std::error_code ec;
+        const bool existed = std::filesystem::exists(a->out, ec);
         palplab::app::require_writable_dir("--out", a->out);
         opt.still_width = w;
         opt.still_height = h;
@@ -359,7 +361,14 @@ palplab::app::CommandRegistration reg_report{
           opt.stills = palplab::app::make_still_maker();
         if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
         const auto earlier = earlier_report_files(a->out);
-        auto files = palplab::analysis::write_report(a->db, a->out, opt);
+        palplab::analysis::ReportFiles files;
+        try {
+          files = palplab::analysis::write_report(a->db, a->out, opt);
+        } catch (...) {
+          // A failed report writes no file (analysis/report.cpp): nor leaves a --out it made.
+          if (!existed) std::filesystem::remove(a->out, ec);  // only when empty
+          throw;
+        }
         const StaleFiles stale = remove_stale_report_files(earlier, files, a->db);
         if (!files.stills_skipped.empty())
           std::cerr << "palplab report: stills skipped: "

@@ -746,7 +746,7 @@ void check_tables(sqlite3* db, int version, const std::string& path) {
 // the readers join the tables, so a session of a participant the database does not hold (and
 // its measures, events and samples) would be left out of every export and report without a
 // word. (Samples are stored one row per second of a session: a scan is cheap.)
-void check_references(sqlite3* db, const std::string& path) {
+void check_references(sqlite3* db, int version, const std::string& path) {
   struct Ref {
     const char *table, *held, *sql;
   };
@@ -777,6 +777,55 @@ void check_references(sqlite3* db, const std::string& path) {
                          "left out of every export and report)",
                      path);
   }
+  // The study's structure (schema 2 on): a participant of a group the study does not declare
+  // was dropped from every analysis (its group printed in the provenance only), a session of an
+  // undeclared phase or beyond its phase's sessions was exported and analysed as given, a
+  // status other than complete/running/aborted was taken as not complete (review 2026-12-07).
+  if (version < 2) return;
+  const Ref structure[] = {
+      {"participants", "study_groups",
+       "SELECT 'participant ' || quote(x.participant), 'group ' || quote(x.grp) FROM "
+       "participants x WHERE EXISTS (SELECT 1 FROM study_groups) AND x.grp NOT IN (SELECT grp "
+       "FROM study_groups) LIMIT 1"},
+      {"sessions", "phases",
+       "SELECT 'session ' || x.session, 'phase ' || quote(x.phase) FROM sessions x WHERE EXISTS "
+       "(SELECT 1 FROM phases) AND x.phase NOT IN (SELECT phase FROM phases) LIMIT 1"},
+  };
+  for (const Ref& r : structure) {
+    Stmt q(db, r.sql);
+    if (!q.step()) continue;
+    throw InputError("not a consistent palplab results database: table " + std::string(r.table) +
+                         ": " + escape_controls(q.text(0), false) + " names " +
+                         escape_controls(q.text(1), false) + ", which the study's table " + r.held +
+                         " does not declare (edited by hand or by another tool?)",
+                     path);
+  }
+  {
+    Stmt q(db,
+           "SELECT 'session ' || x.session, quote(x.phase_index), p.sessions, quote(x.phase) FROM "
+           "sessions x JOIN phases p ON p.phase = x.phase WHERE typeof(x.phase_index) = "
+           "'integer' AND typeof(p.sessions) = 'integer' AND (x.phase_index < 0 OR x.phase_index "
+           ">= p.sessions) LIMIT 1");
+    if (q.step())
+      throw InputError("not a consistent palplab results database: table sessions: " +
+                           escape_controls(q.text(0), false) + " has phase_index " + q.text(1) +
+                           " (its session " + std::to_string(q.integer(1) + 1) + " of phase " +
+                           escape_controls(q.text(3), false) + "), which has " + q.text(2) +
+                           " session(s): expected 0 to " + std::to_string(q.integer(2) - 1) +
+                           " (edited by hand or by another tool?)",
+                       path);
+  }
+  if (version < 3) return;
+  Stmt q(db,
+         "SELECT 'session ' || x.session, quote(x.status) FROM sessions x WHERE x.status NOT IN "
+         "('complete', 'running', 'aborted') LIMIT 1");
+  if (q.step())
+    throw InputError("not a consistent palplab results database: table sessions: " +
+                         escape_controls(q.text(0), false) + " has status " +
+                         escape_controls(q.text(1), false) +
+                         ": expected 'complete', 'running' or 'aborted' (edited by hand or by "
+                         "another tool?)",
+                     path);
 }
 
 std::string not_palplab() {
@@ -886,7 +935,7 @@ Store Store::open(const std::string& path, bool exclusive) {
   s.version_ = static_cast<int>(version);
   reading(path, [&] {
     check_tables(db, s.version_, path);
-    check_references(db, path);
+    check_references(db, s.version_, path);
     if (exclusive && s.version_ < 3) {
       migrate_sessions_to_v3(db);
       s.version_ = 3;

@@ -18,6 +18,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace palplab::testing {
 
@@ -130,7 +131,7 @@ inline bool has(const std::string& s, const std::string& part) {
 }
 
 // Exit 2 (bad input), not an internal error, and stderr holds every one of `parts`.
-inline void expect_exit2(const CliResult& r, std::initializer_list<std::string> parts) {
+inline void expect_exit2(const CliResult& r, const std::vector<std::string>& parts) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_FALSE(has(r.err, "internal error")) << r.err;
   for (const auto& p : parts) EXPECT_TRUE(has(r.err, p)) << r.err << "\nmissing: " << p;

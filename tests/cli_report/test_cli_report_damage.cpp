@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -150,6 +151,78 @@ TEST(CliReportDamage, CorruptSampleBlobNamesItsSession) {
   const fs::path db = copy_db(d);
   sql_exec(db, "UPDATE samples SET data = substr(data, 1, 5);");
   expect_both_refuse(d, db, {db.string(), "corrupt sample blob", "participant"});
+}
+
+// Hand edits that every reader took (review 2026-12-07): a participant moved to an undeclared
+// group was dropped from every analysis, a session of an undeclared phase or beyond its phase's
+// sessions was exported and analysed, an unknown status was taken as "not complete".
+TEST(CliReportDamage, RowsOutsideTheStudysStructureAreRefused) {
+  auto d = scratch_dir("dmg_structure");
+  struct Case {
+    const char* sql;
+    std::vector<std::string> parts;
+  };
+  const std::vector<Case> cases = {
+      {"UPDATE participants SET grp = 'ZZ' WHERE participant = (SELECT MIN(participant) FROM "
+       "participants);",
+       {"not a consistent palplab results database: table participants: participant '",
+        "names group 'ZZ', which the study's table study_groups does not declare"}},
+      {"UPDATE sessions SET phase = 'nophase' WHERE session = (SELECT MIN(session) FROM "
+       "sessions);",
+       {"table sessions: session ", "names phase 'nophase', which the study's table phases"}},
+      {"UPDATE sessions SET phase_index = 5 WHERE session = (SELECT MIN(session) FROM sessions);",
+       {"table sessions: session ", " has phase_index 5 (its session 6 of phase '",
+        "session(s): expected 0 to "}},
+      {"UPDATE sessions SET status = 'bogus' WHERE session = (SELECT MIN(session) FROM sessions);",
+       {"table sessions: session ",
+        " has status 'bogus': expected 'complete', 'running' or 'aborted'"}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.sql);
+    const fs::path db = copy_db(d);
+    sql_exec(db, c.sql);
+    std::vector<std::string> parts = c.parts;
+    parts.push_back(db.string());
+    expect_exit2(
+        run_palplab("report " + db.string() + " --out " + (d / "rep").string() + " --no-stills", d),
+        parts);
+    expect_exit2(run_palplab("export " + db.string() + " --csv " + (d / "csv").string(), d), parts);
+    expect_exit2(
+        run_palplab(
+            "trace-export " + db.string() + " --session 1 --out " + (d / "s.trace").string(), d),
+        parts);
+  }
+}
+
+// Every regular file under `dir` (relative path -> content).
+std::map<std::string, std::string> files_under(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) out[fs::relative(e.path(), dir).string()] = slurp(e.path());
+  return out;
+}
+
+// A report that failed half-way (a corrupt sample blob, found when the force traces are drawn)
+// had already replaced the previous report's figures with figures of the damaged database,
+// linked from the old report.md; into a new directory it left figures without a report
+// (review 2026-12-07). Every file is written once the whole report is made.
+TEST(CliReportDamage, AFailedReportChangesNoFile) {
+  auto d = scratch_dir("dmg_atomic");
+  const fs::path db = copy_db(d), rep = d / "rep";
+  ASSERT_EQ(
+      run_palplab("report " + db.string() + " --out " + rep.string() + " --no-stills", d).code, 0);
+  const auto before = files_under(rep);
+  ASSERT_GT(before.size(), 3u);
+  sql_exec(db,
+           "UPDATE measures SET value = value * 3 WHERE name = 'palpation_force'; "
+           "UPDATE samples SET data = substr(data, 1, 5);");
+  expect_exit2(run_palplab("report " + db.string() + " --out " + rep.string() + " --no-stills", d),
+               {"corrupt sample blob"});
+  EXPECT_EQ(files_under(rep), before);
+  expect_exit2(
+      run_palplab("report " + db.string() + " --out " + (d / "new").string() + " --no-stills", d),
+      {"corrupt sample blob"});
+  EXPECT_FALSE(fs::exists(d / "new"));
 }
 
 // Review finding (2026-12-06): a samples row deleted by hand made every later sample of the
