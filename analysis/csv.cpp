@@ -14,6 +14,17 @@
 namespace palplab::analysis {
 
 namespace {
+// A header of one column holding ';' or a tab: a file of another separator (a spreadsheet
+// exported with ';', decimal commas) read as one column said only "expected 1 fields".
+std::string separator_hint(const std::vector<std::string>& header) {
+  if (header.size() != 1) return {};
+  for (const char* sep : {";", "\t"})
+    if (header[0].find(sep) != std::string::npos)
+      return std::string(" (the header is one column, '") + shown_text(header[0]) +
+             "': is the file separated by " + (sep[0] == ';' ? "';'" : "tabs") +
+             "? palplab reads comma-separated files, RFC 4180, with '.' as the decimal point)";
+  return {};
+}
 
 InputError error_at(const std::string& file, int line, int column, std::string what) {
   return InputError(SourceLocation{file, line, column}, std::move(what));
@@ -195,7 +206,8 @@ CsvTable parse_csv(std::string_view text, const std::string& file) {
     if (fields.size() != t.header.size())
       throw error_at(file, record_line, 0,
                      "expected " + std::to_string(t.header.size()) +
-                         " fields (as in the header), got " + std::to_string(fields.size()));
+                         " fields (as in the header), got " + std::to_string(fields.size()) +
+                         separator_hint(t.header));
     t.rows.push_back(std::move(fields));
     t.line.push_back(record_line);
     t.field_line.insert(t.field_line.end(), f_line.begin(), f_line.end());
@@ -228,8 +240,8 @@ int column_index(const CsvTable& t, std::string_view name) {
   for (size_t c = 0; c < t.header.size(); ++c)
     if (t.header[c] == name) return static_cast<int>(c);
   throw InputError(SourceLocation{t.file, 1},
-                   "no column '" + shown_text(name) +
-                       "' in the header; columns are: " + shown_columns(t.header));
+                   "no column '" + shown_text(name) + "' in the header; columns are: " +
+                       shown_columns(t.header) + separator_hint(t.header));
 }
 
 double parse_number(const CsvTable& t, int row, int col) {

@@ -188,9 +188,10 @@ std::string no_row_matches(const CsvTable& t, const std::vector<WhereFilter>& wh
 
 std::string shown_where_flags(const std::vector<WhereFilter>& where) {
   std::string s;
-  for (const auto& w : where)
-    s += (s.empty() ? "" : " ") + std::string("--where ") + shown_text(w.column) + "=" +
-         shown_text(w.value);
+  for (const auto& w : where) {
+    if (!s.empty()) s += ' ';
+    s.append("--where ").append(shown_text(w.column)).append("=").append(shown_text(w.value));
+  }
   return s;
 }
 

@@ -680,6 +680,25 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
                            "as random slope, as in (" +
                            v + " | " + f.group + "), is not supported");
         c.numeric = false;
+        // A numeric covariate with a typo became a factor of every value seen, without a word
+        // (review 2026-12-07: one 'x' among session numbers gave a 5-df session term).
+        if (v != f.group) {
+          int numbers = 0;
+          for (int u : used) {
+            try {
+              parse_number(t, u, ci[v]);
+              ++numbers;
+            } catch (const InputError&) {
+            }
+          }
+          if (numbers > 0)
+            fit.warnings.push_back("column '" + shown_text(v) + "' is taken as a factor: '" +
+                                   shown_text(trim_blanks(t.rows[r][ci[v]])) + "' at line " +
+                                   std::to_string(t.line[r]) + " is no number, though " +
+                                   std::to_string(numbers) + " of its " + std::to_string(n) +
+                                   " values used are (a typo, or a missing value not written "
+                                   "NA?)");
+        }
         break;
       }
     }

@@ -335,9 +335,19 @@ std::vector<RecheckItem> recheck(const nlohmann::json& rep, const CsvTable& tabl
           if (d.names[g] == s["pair"][0].get<std::string>()) ia = static_cast<int>(g);
           if (d.names[g] == s["pair"][1].get<std::string>()) ib = static_cast<int>(g);
         }
-        if (ia < 0 || ib < 0 || ia == ib)
-          throw InputError(at(path + ".pair"),
-                           "both groups must be distinct groups of " + col + " in the rows used");
+        if (ia < 0 || ib < 0 || ia == ib) {
+          // Which one, and what the rows hold (it said only "both groups must be distinct").
+          std::string held;
+          for (const auto& name : d.names)
+            held += (held.empty() ? "'" : ", '") + shown_text(name) + "'";
+          const std::string why_pair =
+              ia == ib && ia >= 0
+                  ? "the same group twice ('" + shown_text(d.names[ia]) + "')"
+                  : "no group '" + shown_text(s["pair"][ia < 0 ? 0 : 1].get<std::string>()) +
+                        "' in " + col + " among the rows used";
+          throw InputError(at(path + ".pair"), "expected two distinct groups, got " + why_pair +
+                                                   "; the rows used hold " + held);
+        }
         for (int g : {ia, ib})
           if (why.empty() && d.values[g].size() < 2)
             why = too_few(d, g) + "; a t-test needs at least 2 per group";

@@ -279,3 +279,28 @@ TEST(CliLmm, PooledMeasuresAndFiltersKeepingNoRowAreSaid) {
   r = run_palplab("lmm --csv " + csv + formula + " --where measure=force");
   EXPECT_EQ(r.code, 0) << r.err;
 }
+
+// One 'x' among session numbers made `session` a factor of every value seen (a 5-df session
+// term) without a word (review 2026-12-07): documented, and now also said.
+TEST(CliLmm, ANumericColumnTakenAsAFactorIsSaid) {
+  std::string csv = "participant,group,session,value\n";
+  const double v[] = {2.1, 2.5, 2.2, 2.9, 2.4, 2.6, 3.1, 2.8};
+  int k = 0;
+  for (const char* p : {"P1", "P2", "P3", "P4"})
+    for (int s = 1; s <= 2; ++s)
+      csv += std::string(p) + "," + (p[1] < '3' ? "A" : "B") + "," +
+             (k == 5 ? std::string("x") : std::to_string(s)) + "," + std::to_string(v[k]) + "\n",
+          ++k;
+  const std::string file = write_temp("lmm_typo.csv", csv);
+  const Result r = run_palplab("lmm --csv " + file +
+                               " --formula \"value ~ group + session + (1 | participant)\" --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  bool said = false;
+  for (const auto& w : j["warnings"])
+    said = said || w.get<std::string>() ==
+                       "column 'session' is taken as a factor: 'x' at line 7 is no number, "
+                       "though 7 of its 8 values used are (a typo, or a missing value not "
+                       "written NA?)";
+  EXPECT_TRUE(said) << r.out;
+}

@@ -189,7 +189,8 @@ TEST(CliRecheck, EveryStatisticsProblemIsSaidAtOnce) {
        {"$.paper: unknown key \"paper\"; expected one of: comment, value, group, statistics",
         "$.statistics[0].typo: unknown key", "$.statistics[0].tset: unknown key",
         "$.statistics[1].text: a p-value is at most 1",
-        "$.statistics[3].pair: both groups must be distinct groups",
+        "$.statistics[3].pair: expected two distinct groups, got no group 'Z' in column 'group' "
+        "among the rows used; the rows used hold 'A', 'B', 'C'",
         "$.statistics[4].value: no column 'nosuch'"})
     EXPECT_NE(r.err.find(want), std::string::npos) << want << " in: " << r.err;
   EXPECT_EQ(r.err.find("$.statistics[2]"), std::string::npos) << r.err;  // a valid one

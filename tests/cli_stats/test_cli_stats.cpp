@@ -554,3 +554,20 @@ TEST(CliStats, AnUndefinedGroupLabelIsNoGroup) {
   EXPECT_EQ(j["groups"].size(), 2u) << r.out;
   std::filesystem::remove(csv);
 }
+
+// A file separated by ';' (a spreadsheet's export with decimal commas) said only "expected 1
+// fields (as in the header), got 2" (review 2026-12-07): the separator is named.
+TEST(CliStats, ASemicolonSeparatedFileIsSaidSo) {
+  const std::string csv = write_temp("semicolon.csv", "group;value\nA;2,5\nA;3\nB;4\nB;5\n");
+  Result r = run_palplab("stats --csv " + csv + " --value value --group group");
+  palplab::testing::expect_exit2(
+      r, {csv + ":2",
+          "expected 1 fields (as in the header), got 2 (the header is one column, "
+          "'group;value': is the file separated by ';'? palplab reads "
+          "comma-separated files, RFC 4180, with '.' as the decimal point)"});
+  const std::string plain = write_temp("semicolon2.csv", "group;value\nA;2\nB;3\n");
+  r = run_palplab("stats --csv " + plain + " --value value --group group");
+  palplab::testing::expect_exit2(r, {"no column 'value'", "is the file separated by ';'?"});
+  std::filesystem::remove(csv);
+  std::filesystem::remove(plain);
+}
