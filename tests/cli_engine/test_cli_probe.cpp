@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -210,4 +211,27 @@ TEST(CliProbe, APositionalAfterSceneStaysThePrototype) {
   // Two --scene values are still one too many for probe.
   r = t::run_palplab("probe --scene A --scene B" + tail);
   t::expect_exit2(r, {"--scene"});
+}
+
+// A pad far stiffer than the 1 kHz step renders (C with contact.stiffness 1e6 N/m) bounced: 44
+// contact starts and 30 clamped forces for a 2.5 N press, reported with exit 0 and only "peak
+// force 8.5 N" (review 2026-12-07). Said, with the events counted, and exit 1; the shipped pad
+// is stable.
+TEST(CliProbe, AnUnstableContactIsSaidAndExitsOne) {
+  const auto d = palplab::testing::scratch_dir("probe_stiff_pad");
+  auto j = nlohmann::json::parse(palplab::testing::slurp(proto("C")));
+  j["contact"]["stiffness"] = 1e6;
+  std::ofstream(d / "Cstiff.json") << j.dump(2);
+  auto r = palplab::testing::run_palplab("probe " + (d / "Cstiff.json").string() +
+                                         " --press ovary_left --force 2.5 --duration 0.3 --json");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out)["contact_stable"].get<bool>()) << r.out;
+  EXPECT_NE(r.err.find("warning: the contact was not stable ("), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("contact.stiffness 1e+06 N/m): the press bounced"), std::string::npos)
+      << r.err;
+  r = palplab::testing::run_palplab("probe " + proto("C") +
+                                    " --press ovary_left --force 2.5 --duration 0.3 --json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["contact_stable"].get<bool>()) << r.out;
+  std::filesystem::remove_all(d);
 }
