@@ -213,12 +213,20 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
                        " tets on the finest level (limit 2e6): use fewer levels (3 at least), "
                        "or a coarser copy of the prototype (mesh \"vertices\") with --grade 0 "
                        "(--grade auto refines its level 0 around the press again)");
-    if (finest > 2e5) {
-      char note[512];
+    // Grading multiplies level 0 around the press (and so every finer level): a 2625-tet copy
+    // of D (finest ungraded 168 000 tets, below this note's 2e5) with --levels 3 and --grade
+    // auto grew past 12 GB in 13 minutes without a word (review 2026-12-07). With grading
+    // possible the note comes from 2e4 tets on.
+    const bool may_grade = grade_rounds > 0 || (grade_rounds < 0 && auto_grading &&
+                                                a.grade == "auto" && a.grade_max > 0);
+    if (finest > (may_grade ? 2e4 : 2e5)) {
+      char note[1024];
       std::snprintf(note, sizeof note,
                     "note: the finest nested level of the prototype's own mesh has %.0f tets (8x "
-                    "per level; a graded level 0, --grade, is larger): this takes "
-                    "minutes and GBs of memory (each level fewer, down to --levels 3, is 8x "
+                    "per level; a graded level 0, --grade, is larger, several times over: a "
+                    "2625-tet mesh with --levels 3 and --grade auto used more than 12 GB): this "
+                    "may take minutes to hours and GBs of memory (each level fewer, down to "
+                    "--levels 3, is 8x "
                     "smaller; a coarser copy of the prototype is only with --grade 0: --grade "
                     "auto refines its level 0 around the press again)\n",
                     finest);

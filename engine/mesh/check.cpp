@@ -1,6 +1,7 @@
 #include "engine/mesh/check.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -16,9 +17,11 @@ namespace palplab::mesh {
 
 const std::vector<std::string>& defect_kinds() {
   static const std::vector<std::string> k{
-      "open_edge",       "non_manifold_edge",        "non_manifold_vertex", "duplicate_vertex",
-      "degenerate_face", "inconsistent_orientation", "self_intersection",   "inverted_tet",
-      "sliver_tet",      "non_finite_vertex",        "empty_mesh",          "inside_out"};
+      "open_edge",         "non_manifold_edge", "non_manifold_vertex",
+      "duplicate_vertex",  "degenerate_face",   "inconsistent_orientation",
+      "self_intersection", "inverted_tet",      "sliver_tet",
+      "non_finite_vertex", "empty_mesh",        "inside_out",
+      "duplicate_tet",     "unused_vertex"};
   return k;
 }
 
@@ -398,6 +401,27 @@ CheckReport check_tets(const TetMesh& m, const CheckOptions& o) {
     }
     const double rr = radius_ratio(a, b, c, d);
     if (rr < o.sliver_ratio) add(r, o, {"sliver_tet", vs, {}, {t}, {centroid}, rr});
+  }
+  // A tet given twice (the same four nodes) counts its mass and stiffness twice (a duplicated
+  // .ele line made a FEM body 3.6x softer in a press, review 2026-12-07), and a node no tet
+  // uses has neither: said, as check_tet_connectivity refuses them for the models.
+  {
+    std::map<std::array<int, 4>, int> first;
+    std::vector<char> used(static_cast<std::size_t>(m.V.rows()), 0);
+    for (int t = 0; t < m.T.rows(); ++t) {
+      std::array<int, 4> key{m.T(t, 0), m.T(t, 1), m.T(t, 2), m.T(t, 3)};
+      for (int v : key)
+        if (v >= 0 && v < m.V.rows()) used[static_cast<std::size_t>(v)] = 1;
+      std::sort(key.begin(), key.end());
+      const auto [it, fresh] = first.emplace(key, t);
+      if (!fresh) {
+        const std::vector<int> vs(key.begin(), key.end());
+        add(r, o, {"duplicate_tet", vs, {}, {it->second, t}, {}, 0.0});
+      }
+    }
+    for (int v = 0; v < m.V.rows(); ++v)
+      if (!used[static_cast<std::size_t>(v)])
+        add(r, o, {"unused_vertex", {v}, {}, {}, {row3(m.V, v)}, 0.0});
   }
   for (auto [i, j] : duplicate_vertex_pairs(m.V, o.duplicate_tolerance))
     add(r, o,

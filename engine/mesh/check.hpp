@@ -13,6 +13,9 @@
 //   non_finite_vertex         vertex with a NaN or infinite coordinate (the geometric checks
 //                             above are skipped then: they mean nothing on such coordinates)
 //   empty_mesh                no faces (surfaces) or no tets (tet meshes)
+//   inside_out                a closed part of a surface whose normals point inwards
+//   duplicate_tet             two tets of the same four nodes (tets: both indices)
+//   unused_vertex             a node of a tet mesh that no tet uses
 #include <map>
 #include <string>
 #include <vector>

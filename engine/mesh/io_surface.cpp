@@ -146,7 +146,9 @@ SurfaceMesh read_obj(const std::string& path) {
         if (i < 0 && i >= -nv) i = nv + i + 1;  // relative index (-1 = the last vertex)
         if (i < 1 || i > nv)
           r.fail("vertex index " + s + " out of range (" + std::to_string(nv) +
-                 " vertices defined so far)");
+                 " vertices defined so far" +
+                 (i == 0 ? std::string("; OBJ indices start at 1, or count back from -1") : "") +
+                 ")");
         idx.push_back(static_cast<int>(i - 1));
       }
       b.polygon(idx, current);

@@ -95,7 +95,10 @@ TetMesh read_tetgen(const std::string& path) {
     for (int k = 0; k < 4; ++k) {
       const long raw = re.integer(t[1 + k], "a node index");
       if (raw < node_base || raw - node_base >= nv)  // (no subtraction that could overflow)
-        re.fail("node index " + t[1 + k] + " out of range");
+        re.fail("node index " + t[1 + k] + " out of range: the .node file numbers its " +
+                std::to_string(nv) + " nodes from " + std::to_string(node_base) + " (" +
+                std::to_string(node_base) + " to " + std::to_string(node_base + nv - 1) +
+                "), and the .ele must use the same numbering");
       const long v = raw - node_base;
       T(i, k) = static_cast<int>(v);
     }

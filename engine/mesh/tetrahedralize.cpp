@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -27,6 +28,7 @@
 #include "engine/mesh/check.hpp"
 #include "engine/mesh/io.hpp"
 #include "engine/mesh/text_reader.hpp"
+#include "engine/mesh/union_find.hpp"
 #include "engine/spatial/octree.hpp"
 
 namespace palplab::mesh {
@@ -433,6 +435,74 @@ void check_region_seeds_inside(const SurfaceMesh& s, const std::vector<RegionSee
   }
 }
 
+namespace {
+// Two seeds of different tissues in one closed region: TetGen floods the region from one seed
+// and the other's tissue vanished (1774 tets of 101, 1 of 102, exit 0; review 2026-12-07).
+// Closed regions are the tets connected across faces that are not the input surface's; two
+// seeds with different region_ids in one are refused, naming both.
+void check_one_seed_per_region(const TetOptions& opt, const SurfaceMesh& s, const Positions& V,
+                               const Tets& T) {
+  if (opt.seeds.size() < 2) return;
+  using Tri = std::array<int, 3>;
+  auto sorted = [](int a, int b, int c) {
+    Tri t{a, b, c};
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  std::set<Tri> surface;
+  for (int f = 0; f < s.F.rows(); ++f) surface.insert(sorted(s.F(f, 0), s.F(f, 1), s.F(f, 2)));
+  std::vector<int> parent(static_cast<std::size_t>(T.rows()));
+  for (int t = 0; t < T.rows(); ++t) parent[static_cast<std::size_t>(t)] = t;
+  std::map<Tri, int> first;
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  for (int t = 0; t < T.rows(); ++t)
+    for (const auto& f : kFace) {
+      const Tri key = sorted(T(t, f[0]), T(t, f[1]), T(t, f[2]));
+      if (surface.count(key)) continue;
+      const auto [it, fresh] = first.emplace(key, t);
+      if (!fresh)
+        parent[static_cast<std::size_t>(detail::find_root(parent, t))] =
+            detail::find_root(parent, it->second);
+    }
+  // The component of each seed: of a tet containing its point.
+  auto component_of = [&](const Vec3& x) {
+    for (int t = 0; t < T.rows(); ++t) {
+      const Vec3 a = row3(V, T(t, 0)), b = row3(V, T(t, 1)), c = row3(V, T(t, 2)),
+                 d = row3(V, T(t, 3));
+      const double v = signed_volume(a, b, c, d);
+      if (!(std::abs(v) > 0)) continue;
+      const double sgn = v > 0 ? 1.0 : -1.0, tol = -1e-12 * std::abs(v);
+      if (sgn * signed_volume(x, b, c, d) < tol || sgn * signed_volume(a, x, c, d) < tol ||
+          sgn * signed_volume(a, b, x, d) < tol || sgn * signed_volume(a, b, c, x) < tol)
+        continue;
+      return detail::find_root(parent, t);
+    }
+    return -1;
+  };
+  auto where = [&](const RegionSeed& g) {
+    std::string w = g.line > 0 ? "line " : "seed ";
+    w += std::to_string(g.line > 0 ? g.line : g.index);
+    return w;
+  };
+  std::map<int, const RegionSeed*> seed_of;  // component -> its first seed
+  for (const RegionSeed& g : opt.seeds) {
+    const int c = component_of(g.point);
+    if (c < 0) continue;
+    const auto [it, fresh] = seed_of.emplace(c, &g);
+    if (fresh || it->second->region_id == g.region_id) continue;
+    const std::string why =
+        "the region seeds of " + where(*it->second) + " (region_id " +
+        std::to_string(it->second->region_id) + ") and " + where(g) + " (region_id " +
+        std::to_string(g.region_id) +
+        ") lie in one closed region (a part of the interior bounded by the surface's faces): "
+        "two seeds in one closed region, and TetGen gives all of it one tissue; give each closed "
+        "region one seed";
+    if (g.line > 0) throw InputError(SourceLocation{opt.regions_file, g.line}, why);
+    throw InputError(why);
+  }
+}
+}  // namespace
+
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
   if (opt.quality < 0 || (opt.quality > 0 && opt.quality < 1.0) || !std::isfinite(opt.quality))
     throw InputError("--quality must be 0 (off) or a radius-edge ratio >= 1.0, got " +
@@ -489,6 +559,7 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& opt) {
       if (a == static_cast<int>(a) && seeded.count(static_cast<int>(a))) A[t] = static_cast<int>(a);
     }
   }
+  check_one_seed_per_region(opt, s, V, T);
   Regions regions;
   if (!s.regions.empty()) {
     regions.names = s.regions.names;

@@ -407,6 +407,7 @@ void check_fem_mesh(const SceneConfig& cfg, const SceneMesh& cm) {
         "file); mesh " +
             cfg.mesh.key() + " is a surface",
         cfg.source);
+  check_tet_connectivity(cfg, cm);
   for (long t = 0; t < cm.model_T.rows(); ++t) {
     const double v = mesh::signed_volume(cm.model_V, cm.model_T, static_cast<int>(t));
     double longest = 0;

@@ -729,6 +729,7 @@ void read_mass_spring(json::Checker& c, const nlohmann::json& m, const std::stri
 // (a tet of another attribute had no stiffness and no mass: a body of 0 kg ran; review
 // 2026-12-07), unless the prototype names one tissue for the whole body.
 static void check_mass_spring_mesh(const SceneConfig& cfg, const SceneMesh& cm) {
+  check_tet_connectivity(cfg, cm);
   check_tet_attributes(cfg, cm, true);
 }
 

@@ -19,4 +19,10 @@ std::string tet_problem_file(const SceneConfig& cfg, std::string* where);
 // Skipped when the prototype names one tissue for the whole body and `named_tissue_covers`.
 void check_tet_attributes(const SceneConfig& cfg, const SceneMesh& cm, bool named_tissue_covers);
 
+// Every tet names four distinct nodes, no two tets the same four (a tet given twice counts its
+// mass and stiffness twice: a FEM press 3.6x deeper), and every node belongs to a tet (one that
+// does not has no mass and no stiffness: the FEM said "stiffness factorisation failed (pin the
+// body ...)" although it was pinned). Review 2026-12-07.
+void check_tet_connectivity(const SceneConfig& cfg, const SceneMesh& cm);
+
 }  // namespace palplab::engine

@@ -601,12 +601,22 @@ TEST(CliFemD, ValidateAndRunRefuseAMeshTheModelCannotUse) {
       {"flat", "fem", "2 4 1\n0 0 1 2 3 101\n1 1 4 2 0 101\n",
        "flat.ele: tet 1 (in file order from 0; nodes 1 4 2 0): degenerate tetrahedron (zero "
        "volume"},
-      {"inverted", "fem", "1 4 1\n0 1 0 2 3 101\n",
+      {"inverted", "fem", "2 4 1\n0 1 0 2 3 101\n1 1 4 2 3 101\n",
        "inverted.ele: tet 0 (in file order from 0; nodes 1 0 2 3): inverted tetrahedron"},
-      {"tissue", "fem", "1 4 1\n0 0 1 2 3 999\n",
+      {"tissue", "fem", "2 4 1\n0 0 1 2 3 999\n1 1 4 2 3 101\n",
        "tissue.ele: tet 0 (in file order from 0) has attribute 999"},
-      {"tissue_ms", "mass_spring", "1 4 1\n0 0 1 2 3 999\n",
+      {"tissue_ms", "mass_spring", "2 4 1\n0 0 1 2 3 999\n1 1 4 2 3 101\n",
        "tissue_ms.ele: tet 0 (in file order from 0) has attribute 999"},
+      // Review 2026-12-07: a duplicated tet (3.6x deeper press), a node in no tet ("stiffness
+      // factorisation failed (pin the body ...)"), a tet naming a node twice (mass-spring).
+      {"dup", "fem", "3 4 1\n0 0 1 2 3 101\n1 1 4 2 3 101\n2 3 1 2 0 101\n",
+       "dup.ele: tet 2 (in file order from 0; nodes 3 1 2 0) repeats tet 0: a tet given twice"},
+      {"dup_ms", "mass_spring", "3 4 1\n0 0 1 2 3 101\n1 1 4 2 3 101\n2 0 1 2 3 101\n",
+       "dup_ms.ele: tet 2 (in file order from 0; nodes 0 1 2 3) repeats tet 0"},
+      {"unused", "fem", "1 4 1\n0 0 1 2 3 101\n",
+       "unused.node: node 4 (in file order from 0) belongs to no tet"},
+      {"rep_ms", "mass_spring", "2 4 1\n0 0 1 2 3 101\n1 1 4 2 2 101\n",
+       "rep_ms.ele: tet 1 (in file order from 0; nodes 1 4 2 2) names a node twice"},
       {"surface", "fem", "",
        "needs a tetrahedral mesh (generator model_c or a tet mesh file); mesh file:"}};
   for (const auto& [name, kind, ele, expect] : cases) {

@@ -747,3 +747,36 @@ TEST(CliMeshOutput, GenerateAndMaterialsNeverReplaceAForeignFile) {
   // --overwrite without a file to write would be ignored: an input error.
   palplab::testing::expect_exit2(run("mesh materials --overwrite"), {"--overwrite: applies only"});
 }
+
+// An OBJ face with index 0 (a 0-based exporter) and a TetGen .ele numbered from 0 beside a
+// .node numbered from 1 said only "out of range" (review 2026-12-07): the numbering is named.
+TEST(CliMesh, IndexNumberingMistakesAreNamed) {
+  std::ofstream(p("zero.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 0 2 1\n";
+  Result r = run("mesh info " + p("zero.obj"));
+  palplab::testing::expect_exit2(
+      r, {"vertex index 0 out of range (4 vertices defined so far; OBJ indices start at 1, or "
+          "count back from -1)"});
+  std::ofstream(p("mix.node")) << "4 3 0 0\n1 0 0 0\n2 0.02 0 0\n3 0 0.02 0\n4 0 0 0.02\n";
+  std::ofstream(p("mix.ele")) << "1 4 0\n0 0 1 2 3\n";
+  r = run("mesh info " + p("mix.ele"));
+  palplab::testing::expect_exit2(
+      r, {"node index 0 out of range: the .node file numbers its 4 nodes from 1 (1 to 4), and "
+          "the .ele must use the same numbering"});
+}
+
+// Two seeds of different tissues in one closed region: TetGen gave the whole region one of
+// them and the other tissue vanished, exit 0 (1774 tets of 101, 1 of 102; review 2026-12-07).
+TEST(CliMesh, TwoSeedsInOneClosedRegionAreRefused) {
+  ASSERT_EQ(run("mesh generate sphere --out " + p("two.stl")).code, 0);
+  std::ofstream(p("two.regions")) << "2\n1 0 0 0 101 0\n2 0.001 0 0 102 0\n";
+  const Result r = run("mesh tetrahedralize " + p("two.stl") + " --out " + p("two_t") +
+                       " --regions " + p("two.regions"));
+  palplab::testing::expect_exit2(
+      r, {p("two.regions") + ":3: the region seeds of line 2 (region_id 101) and line 3 "
+                             "(region_id 102) lie in one closed region"});
+  std::ofstream(p("one.regions")) << "1\n1 0.001 0 0 102 0\n";
+  EXPECT_EQ(run("mesh tetrahedralize " + p("two.stl") + " --out " + p("one_t") + " --regions " +
+                p("one.regions"))
+                .code,
+            0);
+}

@@ -264,6 +264,23 @@ TEST(Check, InvertedAndSliverTets) {
   EXPECT_EQ(first(r, "sliver_tet")->points.size(), 1u);
 }
 
+// A tet given twice and a node no tet uses (review 2026-12-07: both passed `mesh check` clean).
+TEST(Check, DuplicateTetsAndUnusedNodes) {
+  TetMesh g = kuhn_grid(2, [](double, double, double) { return 101; });
+  Tets T(g.T.rows() + 1, 4);
+  T.topRows(g.T.rows()) = g.T;
+  T.row(g.T.rows()) << g.T(3, 2), g.T(3, 0), g.T(3, 3), g.T(3, 1);  // tet 3, nodes reordered
+  Positions V(g.V.rows() + 1, 3);
+  V.topRows(g.V.rows()) = g.V;
+  V.row(g.V.rows()) << 9, 9, 9;
+  const CheckReport r = check_tets(make_tet_mesh(V, T));
+  EXPECT_EQ(count(r, "duplicate_tet"), 1);
+  EXPECT_EQ(first(r, "duplicate_tet")->tets, (std::vector<int>{3, static_cast<int>(g.T.rows())}));
+  EXPECT_EQ(count(r, "unused_vertex"), 1);
+  EXPECT_EQ(first(r, "unused_vertex")->vertices, std::vector<int>{static_cast<int>(g.V.rows())});
+  EXPECT_TRUE(check_tets(g).clean());
+}
+
 TEST(Repair, FixesWhatCheckFinds) {
   SurfaceMesh c = cube();
   // Duplicate of vertex 3 used by one face, a flipped face, a degenerate face, a missing face.
