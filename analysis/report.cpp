@@ -175,6 +175,7 @@ struct Context {
   std::vector<std::string> groups, phase_order;
   std::map<std::string, std::string> unit_of;
   std::map<std::string, double> scale_of;  // proportion_scale()
+  std::map<std::string, bool> binary_of;   // binary_proportion()
   Doc doc;
   ReportFiles files;
   // Files written only once the whole report is made (commit_files): a report that fails
@@ -201,6 +202,15 @@ struct Context {
   double proportion_scale(const std::string& measure) const {
     auto it = scale_of.find(measure);
     return it == scale_of.end() ? 0.0 : it->second;
+  }
+  // A proportion of single trials: every stored value of the measure (all groups and sessions)
+  // 0 or the scale maximum. Only then is a group's share a binomial one (Wilson); decided per
+  // group, two sessions of 100 % of a measure that elsewhere holds 75 % got a Wilson interval
+  // [34, 100] as if they were two trials, and one table two contradictory captions (review
+  // 2026-12-07).
+  bool binary_proportion(const std::string& measure) const {
+    auto it = binary_of.find(measure);
+    return it != binary_of.end() && it->second;
   }
   const results::PhaseRecord* phase(const std::string& id) const {
     for (const auto& p : structure.phases)
@@ -289,6 +299,9 @@ Context load(const std::string& db_path, const std::string& out_dir, const Repor
                                                        : 0.0;
   for (const auto& m : c.measures)
     if (m.value && !(*m.value >= 0 && *m.value <= c.scale_of[m.name])) c.scale_of[m.name] = 0;
+  for (const auto& [name, scale] : c.scale_of) c.binary_of[name] = scale > 0;
+  for (const auto& m : c.measures)
+    if (m.value && *m.value != 0 && *m.value != c.scale_of[m.name]) c.binary_of[m.name] = false;
   for (const auto& p : c.structure.phases) c.phase_order.push_back(p.phase);
   for (const auto& s : c.sessions)
     if (std::find(c.phase_order.begin(), c.phase_order.end(), s.phase) == c.phase_order.end())
@@ -622,10 +635,10 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
 // scale maximum), the t interval clipped to [0, scale] for other proportions (a mean of
 // per-session percentages), the t interval otherwise. `note` says which was used.
 std::string ci_cell(const std::vector<double>& v, const Descriptives& d, double scale,
-                    std::set<std::string>& notes) {
+                    bool binary_measure, std::set<std::string>& notes) {
   if (scale > 0) {
     int k = 0;
-    bool binary = true;
+    bool binary = binary_measure;  // and these values too (a pooled mean is no trial)
     for (double x : v) {
       binary = binary && (x == 0 || x == scale);
       k += x == scale;
@@ -903,7 +916,7 @@ void section_analysis(Context& c, const Unit& u) {
     Descriptives d = describe(data.values[g]);
     rows.push_back({groups[g], std::to_string(d.n), fmt(d.mean), fmt(d.sd), fmt(d.se),
                     fmt(d.median), fmt(d.iqr), fmt(d.min), fmt(d.max),
-                    ci_cell(data.values[g], d, scale, ci_notes)});
+                    ci_cell(data.values[g], d, scale, c.binary_proportion(u.measure), ci_notes)});
   }
   doc.table(
       {"group", "n", with_unit("mean", unit), "SD", "SE", "median", "IQR", "min", "max", "95% CI"},
@@ -1212,7 +1225,7 @@ void section_learning_curves(Context& c, const std::vector<Unit>& units) {
         s.y.push_back(mean(v));
         const double se = v.size() >= 2 ? sd(v) / std::sqrt(v.size()) : NAN;
         int hits = 0;
-        bool binary = scale > 0;
+        bool binary = c.binary_proportion(mname);  // one kind of bar per figure
         for (double x : v) binary = binary && (x == 0 || x == scale), hits += x == scale;
         if (binary) {  // a proportion: Wilson interval, inside [0, scale]
           auto w = wilson_interval(hits, static_cast<int>(v.size()));

@@ -345,9 +345,9 @@ std::string to_text(const StatsSummary& s) {
             "median", "min", "max", "95% CI of mean");
   for (size_t i = 0; i < s.groups.size(); ++i) {
     const auto& d = s.groups[i];
-    o << strf("  %-14s %5d %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g   [%10.5g, %10.5g]\n",
-              names[i].c_str(), d.n, d.mean, d.sd, d.se, d.median, d.min, d.max, d.ci_low,
-              d.ci_high);
+    o << strf("  %-*s %5d %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g   [%10.5g, %10.5g]\n",
+              printf_width(names[i], 14), names[i].c_str(), d.n, d.mean, d.sd, d.se, d.median,
+              d.min, d.max, d.ci_low, d.ci_high);
   }
   const auto& a = s.anova;
   o << "\nOne-way ANOVA\n";
@@ -378,8 +378,8 @@ std::string to_text(const StatsSummary& s) {
   o << strf("  %-22s %10s %9s %8s %10s %10s %10s %9s\n", "pair", "mean diff", "t", "df", "p",
             "p Holm", "p Bonf.", "Hedges g");
   for (const auto& p : s.pairwise)
-    o << strf("  %-22s %10.4g %9s %8s %10s %10s %10s %9s\n", pair_name(p.a, p.b).c_str(),
-              p.test.mean_diff,
+    o << strf("  %-*s %10.4g %9s %8s %10s %10s %10s %9s\n", printf_width(pair_name(p.a, p.b), 22),
+              pair_name(p.a, p.b).c_str(), p.test.mean_diff,
               (std::isinf(p.test.t) ? std::string(p.test.t < 0 ? "< -1.8e+308" : "> 1.8e+308")
                                     : stat_text(p.test.t, 3))
                   .c_str(),
@@ -400,10 +400,10 @@ std::string to_text(const StatsSummary& s) {
               (num_text(100 * (1 - 2 * q0.alpha), "%.0f") + "% CI").c_str(), "verdict");
     for (size_t i = 0; i < s.pairwise.size(); ++i) {
       const auto& q = s.equivalence[i];
-      o << strf("  %-22s %10.4g %10s   [%10s, %10s]  %s\n",
-                pair_name(s.pairwise[i].a, s.pairwise[i].b).c_str(), q.mean_diff,
-                format_p(q.p).c_str(), num_text(q.ci_low).c_str(), num_text(q.ci_high).c_str(),
-                q.verdict.c_str());
+      const std::string pair = pair_name(s.pairwise[i].a, s.pairwise[i].b);
+      o << strf("  %-*s %10.4g %10s   [%10s, %10s]  %s\n", printf_width(pair, 22), pair.c_str(),
+                q.mean_diff, format_p(q.p).c_str(), num_text(q.ci_low).c_str(),
+                num_text(q.ci_high).c_str(), q.verdict.c_str());
     }
   }
   auto range_table = [&](const char* title, const std::vector<RangeComparison>& v) {
@@ -411,9 +411,10 @@ std::string to_text(const StatsSummary& s) {
     o << strf("  %-22s %10s %9s %8s %10s %25s\n", "pair", "mean diff", "q", "df", "p",
               "95% simultaneous CI");
     for (const auto& r : v)
-      o << strf("  %-22s %10.4g %9s %8s %10s   [%10s, %10s]\n", pair_name(r.a, r.b).c_str(),
-                r.mean_diff, stat_text(r.q, 3).c_str(), num_text(r.df, "%.2f").c_str(),
-                format_p(r.p).c_str(), num_text(r.ci_low).c_str(), num_text(r.ci_high).c_str());
+      o << strf("  %-*s %10.4g %9s %8s %10s   [%10s, %10s]\n",
+                printf_width(pair_name(r.a, r.b), 22), pair_name(r.a, r.b).c_str(), r.mean_diff,
+                stat_text(r.q, 3).c_str(), num_text(r.df, "%.2f").c_str(), format_p(r.p).c_str(),
+                num_text(r.ci_low).c_str(), num_text(r.ci_high).c_str());
   };
   if (s.options.post_hoc) {
     range_table("Tukey-Kramer HSD", s.tukey);

@@ -22,9 +22,11 @@ constexpr const char* kSamplesHeader =
     "participant,group,phase,session,t,x,y,z,fx,fy,fz,contact_node\n";
 constexpr ExportFile kExportFiles[] = {
     {"measures.csv", "participant,group,phase,session,measure,value,unit\n"},
+    // (The start of the header: an export before 2026-12-07 ends it here, one since then goes
+    // on with ",session_id".)
     {"sessions.csv",
      "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
-     "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at\n"},
+     "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at"},
     {"events.csv", "participant,group,phase,session,t,kind,value,region\n"},
     {"samples.csv", kSamplesHeader},
 };

@@ -32,7 +32,9 @@ palplab::app::CommandRegistration reg_trace_export{
       cmd->add_option("DB", a->db, "Results database")->required();
       // count_range refuses a number beyond the 64-bit range, which the integer parse silently
       // clamped (99999999999999999999 was read as session 9223372036854775807).
-      cmd->add_option("--session", a->session, "Session id (sessions.session)")
+      cmd->add_option(
+             "--session", a->session,
+             "Session id (the database's sessions.session: session_id in export's sessions.csv)")
           ->required()
           ->check(palplab::app::count_range(1, std::numeric_limits<long long>::max()));
       cmd->add_option("--out", a->out, "Trace file to write")->required();

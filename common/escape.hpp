@@ -56,6 +56,29 @@ inline char32_t utf8_code_point(std::string_view s, std::size_t i, std::size_t* 
   return cp;
 }
 
+// The columns a terminal gives `s`: one per character, two for East Asian wide and fullwidth
+// ones, none for combining marks and zero-width characters (printf's "%-14s" pads by bytes:
+// "Ärzte" and "日本" shifted the columns of a text table; review 2026-12-07).
+inline std::size_t display_width(std::string_view s) {
+  std::size_t w = 0;
+  for (std::size_t i = 0, len = 0; i < s.size(); i += len) {
+    const char32_t cp = utf8_code_point(s, i, &len);
+    if ((cp >= 0x300 && cp <= 0x36F) || (cp >= 0x200B && cp <= 0x200F)) continue;
+    const bool wide = (cp >= 0x1100 && cp <= 0x115F) ||
+                      (cp >= 0x2E80 && cp <= 0xA4CF && cp != 0x303F) ||
+                      (cp >= 0xAC00 && cp <= 0xD7A3) || (cp >= 0xF900 && cp <= 0xFAFF) ||
+                      (cp >= 0xFE30 && cp <= 0xFE4F) || (cp >= 0xFF00 && cp <= 0xFF60) ||
+                      (cp >= 0xFFE0 && cp <= 0xFFE6) || (cp >= 0x1F300 && cp <= 0x1F64F) ||
+                      (cp >= 0x20000 && cp <= 0x3FFFD);
+    w += wide ? 2 : 1;
+  }
+  return w;
+}
+// The printf field width ("%-*s") that makes `s` take `columns` terminal columns.
+inline int printf_width(std::string_view s, int columns) {
+  return columns + static_cast<int>(s.size()) - static_cast<int>(display_width(s));
+}
+
 inline std::string escape_controls(std::string_view s, bool keep_newlines = true) {
   std::string out;
   out.reserve(s.size());

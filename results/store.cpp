@@ -1695,15 +1695,18 @@ ExportSummary export_csv(const Store& store, const std::string& dir, bool sample
   {
     auto o = files.open(fs::path(dir) / "sessions.csv");
     o << "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
-         "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at\n";
+         "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at,"
+         "session_id\n";
     // `ordinal` is written 1-based (the database's is 0-based), like `session`: a contract of
-    // sessions.csv (docs/FORMATS.md), kept for the scripts that read it.
+    // sessions.csv (docs/FORMATS.md), kept for the scripts that read it. `session_id` is the
+    // database's id (sessions.session), which `trace-export --session` takes.
     for (const auto& s : sessions)
       o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
         << (s.phase_index + 1) << ',' << (s.ordinal + 1) << ',' << csv(s.prototype) << ','
         << csv(s.instructor) << ',' << num(s.study_offset) << ',' << s.day << ',' << num(s.duration)
         << ',' << s.steps << ',' << num(s.wall_duration) << ',' << num(s.loop_median) << ','
-        << num(s.loop_p99) << ',' << s.seed << ',' << csv(s.completed_at) << '\n';
+        << num(s.loop_p99) << ',' << s.seed << ',' << csv(s.completed_at) << ',' << s.session
+        << '\n';
     o.flush();
     files.check(o);
   }

@@ -590,3 +590,28 @@ TEST(CliReportDamage, ExportLosesNoFileInItsDirectory) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(has(r.out, "(left by an earlier export")) << r.out;
 }
+
+// A group whose values of a percentage happened to be all 100 got a Wilson interval as if its two
+// sessions were two trials ([34.24, 100]), beside t intervals of the other groups, under two
+// captions (review 2026-12-07). Wilson only for a measure whose every value is 0 or 100 %.
+TEST(CliReportDamage, WilsonOnlyForAMeasureOfSingleTrials) {
+  auto d = scratch_dir("wilson_measure");
+  ASSERT_EQ(run_palplab("run " + std::string(PALPLAB_SOURCE_DIR) +
+                            "/protocols/studies/example_minimal.json --db " +
+                            (d / "ex.db").string() + " --jobs 1 --quiet",
+                        d)
+                .code,
+            0);
+  sql_exec(d / "ex.db",
+           "UPDATE measures SET value = 100 WHERE name = 'accuracy' AND session IN (SELECT "
+           "session FROM sessions WHERE phase = 'test' AND participant IN ('P02', 'P03'));");
+  const Result r = run_palplab(
+      "report " + (d / "ex.db").string() + " --out " + (d / "rep").string() + " --no-stills", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string md = slurp(d / "rep" / "report.md");
+  const std::size_t at = md.find("## Analysis: accuracy");
+  ASSERT_NE(at, std::string::npos) << md.substr(0, 2000);
+  const std::string section = md.substr(at, md.find("\n## ", at + 1) - at);
+  EXPECT_EQ(section.find("Wilson"), std::string::npos) << section;
+  EXPECT_EQ(section.find("34.2"), std::string::npos) << section;
+}

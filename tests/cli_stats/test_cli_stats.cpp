@@ -9,8 +9,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <string>
 
+#include "common/escape.hpp"
 #include "results/store.hpp"
 
 #include "../cli_support.hpp"
@@ -570,4 +572,32 @@ TEST(CliStats, ASemicolonSeparatedFileIsSaidSo) {
   palplab::testing::expect_exit2(r, {"no column 'value'", "is the file separated by ';'?"});
   std::filesystem::remove(csv);
   std::filesystem::remove(plain);
+}
+
+// The descriptives of "Ärzte" and "日本" lined up by bytes (review 2026-12-07): every row's n
+// column ends at the same terminal column.
+TEST(CliStats, TextTablesAlignUnicodeLabels) {
+  const std::string csv = write_temp(
+      "unicode_groups.csv",
+      "group,value\nplain,1\nplain,2\n\xC3\x84rzte,3\n\xC3\x84rzte,4\n\xE6\x97\xA5\xE6\x9C\xAC,5\n"
+      "\xE6\x97\xA5\xE6\x9C\xAC,7\n");
+  const Result r = run_palplab("stats --csv " + csv + " --value value --group group");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::vector<std::size_t> ends;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);) {
+    for (const char* label : {"  plain ", "  \xC3\x84rzte ", "  \xE6\x97\xA5\xE6\x9C\xAC "})
+      if (line.rfind(label, 0) == 0) {
+        // The columns up to the end of the n field ("2").
+        const std::size_t n_end = line.find('2', std::string(label).size());
+        ASSERT_NE(n_end, std::string::npos) << line;
+        ends.push_back(palplab::display_width(line.substr(0, n_end + 1)));
+        break;
+      }
+    if (ends.size() == 3) break;
+  }
+  ASSERT_EQ(ends.size(), 3u) << r.out;
+  EXPECT_EQ(ends[0], ends[1]) << r.out;
+  EXPECT_EQ(ends[0], ends[2]) << r.out;
+  std::filesystem::remove(csv);
 }

@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/seed.hpp"
 
@@ -45,4 +46,15 @@ TEST(MarkdownText, EscapesWhatCouldBeMarkupAndNothingElse) {
   // p-values, comparisons and the report's own words are unchanged.
   for (const char* kept : {"< .001", "p < 0.05", "A & B", "2 <= 3", "η² [95% CI]", "G1 – G2", "<"})
     EXPECT_EQ(palplab::markdown_text(kept), kept);
+}
+
+// Terminal columns of a label (a text table padded by bytes shifted "Ärzte" and "日本" rows;
+// review 2026-12-07): one per character, two for wide East Asian ones, none for combining marks.
+TEST(DisplayWidth, CountsColumnsNotBytes) {
+  using palplab::display_width;
+  EXPECT_EQ(display_width("group"), 5u);
+  EXPECT_EQ(display_width("\xC3\x84rzte"), 5u);              // Ärzte, precomposed
+  EXPECT_EQ(display_width("A\xCC\x88rzte"), 5u);             // Ärzte, A + combining diaeresis
+  EXPECT_EQ(display_width("\xE6\x97\xA5\xE6\x9C\xAC"), 4u);  // 日本
+  EXPECT_EQ(palplab::printf_width("\xC3\x84rzte", 14), 15);  // 6 bytes, 5 columns
 }

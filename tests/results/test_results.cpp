@@ -210,11 +210,20 @@ TEST(Export, SessionsCsvOrdinalIsOneBased) {
   std::getline(in, line);
   EXPECT_EQ(line,
             "participant,group,phase,session,ordinal,prototype,instructor,study_offset_s,day,"
-            "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at");
+            "duration_s,steps,wall_duration_s,loop_median_s,loop_p99_s,seed,completed_at,"
+            "session_id");
+  // Up to the seed; then completed_at (a time) and the database's session id.
+  auto seed_part = [](const std::string& l) {
+    const std::size_t id = l.rfind(',');
+    return l.substr(0, l.rfind(',', id - 1));
+  };
+  auto id_part = [](const std::string& l) { return l.substr(l.rfind(',') + 1); };
   std::getline(in, line);
-  EXPECT_EQ(line.substr(0, line.rfind(',')),
+  EXPECT_EQ(seed_part(line),
             "P01,A,training,1,1,A,,0,0,0.01,10,0.25,2e-06,9e-06,18446744073709551557");
+  EXPECT_EQ(id_part(line), std::to_string(s.read_sessions()[0].session));
   std::getline(in, line);
-  EXPECT_EQ(line.substr(0, line.rfind(',')),
+  EXPECT_EQ(seed_part(line),
             "P01,A,post_training,1,2,A,,600,0,0.01,10,0.25,2e-06,9e-06,18446744073709551557");
+  EXPECT_EQ(id_part(line), std::to_string(s.read_sessions()[1].session));
 }

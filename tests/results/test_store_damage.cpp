@@ -328,9 +328,9 @@ TEST(StoreDamage, PhaseAndThresholdNumbersThatAreNotNumbersAreRefused) {
   const std::string db = make_db(d);
   sql_exec(db,
            "INSERT INTO phases (phase, position, kind, sessions, session_duration, haptic, "
-           "visual_deformation, audio, instructed, feature, transparency) VALUES ('post', 0, "
-           "'post_training', 1, 120.0, 1, 0, NULL, 0, 'ovary_left', NULL);"
-           "INSERT INTO thresholds VALUES ('post', '*', 2.0, 2.5, 3.0);");
+           "visual_deformation, audio, instructed, feature, transparency) VALUES ('post_training', "
+           "0, 'post_training', 1, 120.0, 1, 0, NULL, 0, 'ovary_left', NULL);"
+           "INSERT INTO thresholds VALUES ('post_training', '*', 2.0, 2.5, 3.0);");
   const StudyStructure st = Store::open(db).read_structure();
   ASSERT_EQ(st.phases.size(), 1u);
   ASSERT_EQ(st.phases[0].thresholds.size(), 1u);
