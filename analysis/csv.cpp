@@ -13,9 +13,6 @@
 
 namespace palplab::analysis {
 
-namespace {
-// A header of one column holding ';' or a tab: a file of another separator (a spreadsheet
-// exported with ';', decimal commas) read as one column said only "expected 1 fields".
 std::string separator_hint(const std::vector<std::string>& header) {
   if (header.size() != 1) return {};
   for (const char* sep : {";", "\t"})
@@ -25,6 +22,8 @@ std::string separator_hint(const std::vector<std::string>& header) {
              "? palplab reads comma-separated files, RFC 4180, with '.' as the decimal point)";
   return {};
 }
+
+namespace {
 
 InputError error_at(const std::string& file, int line, int column, std::string what) {
   return InputError(SourceLocation{file, line, column}, std::move(what));

@@ -47,6 +47,10 @@ std::string trim_blanks(const std::string& s);
 // Index of column `name`; throws InputError listing the available columns (shown_columns) when
 // it is absent.
 int column_index(const CsvTable& t, std::string_view name);
+// " (the header is one column, 'a;b': is the file separated by ';'? ...)" when the header is one
+// column holding ';' or a tab (a spreadsheet's export read as one column), else empty: added
+// to the messages that list or count the columns.
+std::string separator_hint(const std::vector<std::string>& header);
 
 // The largest magnitude a CSV number may have: squares and sums of squares of larger values
 // overflow a double (1.8e308).

@@ -635,8 +635,8 @@ LmmFit fit_lmm(const CsvTable& t, const LmmFormula& f, const std::vector<WhereFi
           }
       throw InputError(SourceLocation{"--formula", 0, pos + 1},
                        "no column '" + shown_text(v) + "' in " + t.file + " (at character " +
-                           std::to_string(pos + 1) +
-                           "); its columns are: " + shown_columns(t.header) + hint);
+                           std::to_string(pos + 1) + "); its columns are: " +
+                           shown_columns(t.header) + hint + separator_hint(t.header));
     }
     ci[v] = column_index(t, v);
   }

@@ -62,7 +62,7 @@ bool has_column(const CsvTable& t, const std::string& name) {
 
 std::string no_column(const CsvTable& t, const std::string& name) {
   return "no column '" + shown_text(name) + "' in " + t.file +
-         "; its columns are: " + shown_columns(t.header, "'");
+         "; its columns are: " + shown_columns(t.header, "'") + separator_hint(t.header);
 }
 
 }  // namespace

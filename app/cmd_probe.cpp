@@ -22,6 +22,8 @@
 #include "prototypes/factory.hpp"
 
 namespace {
+// A peak force above this multiple of a renderable target is a bounce, not a press.
+constexpr double kOvershoot = 1.25;
 
 struct ProbeArgs {
   std::string file, press, integrator;
@@ -135,14 +137,19 @@ int run_probe(const ProbeArgs& a) {
     injected += e["kind"] == "energy_injected";
     limited += e["kind"] == "force_limited";
   }
-  const bool unstable = !nan && (injected > 0 || (limited > 0 && a.force <= limit));
+  // A peak far above a target the device can render is the same bounce below the watchdog's
+  // thresholds (C at 3e4-1e5 N/m: 2.6-7.3 N for 2 N, exit 0; review of the fix, 2026-12-07);
+  // the press controller itself overshoots by well under 5 % on the shipped prototypes.
+  const bool overshoot = a.force <= limit && peak_force > kOvershoot * a.force;
+  const bool unstable = !nan && (injected > 0 || (limited > 0 && a.force <= limit) || overshoot);
   if (unstable)
     std::cerr << "warning: the contact was not stable (" << injected << " energy_injected and "
               << limited << " force_limited event" << (injected + limited == 1 ? "" : "s")
-              << "; contact.stiffness " << scene.config().contact.stiffness
+              << ", peak force " << peak_force << " N for a target of " << a.force
+              << " N; contact.stiffness " << scene.config().contact.stiffness
               << " N/m): the press bounced and the numbers reported are not those of a steady "
                  "press; lower contact.stiffness; exit 1\n";
-  out["contact_stable"] = !unstable;
+  out["contact_stable"] = !unstable && !nan;
   if (a.json) {
     std::cout << out.dump(2) << "\n";
   } else {

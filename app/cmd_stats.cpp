@@ -350,8 +350,12 @@ palplab::app::CommandRegistration reg_report{
         // reports, on the sessions stored, but says so (issue 10).
         const std::string warning = palplab::results::Store::open(a->db).incomplete_warning();
         check_report_out(*a);
+        // The outermost directory of --out this run creates (none when --out exists).
         std::error_code ec;
-        const bool existed = std::filesystem::exists(a->out, ec);
+        std::filesystem::path made;
+        for (std::filesystem::path p = a->out; !p.empty() && !std::filesystem::exists(p, ec);
+             p = p.parent_path())
+          made = p;
         palplab::app::require_writable_dir("--out", a->out);
         opt.still_width = w;
         opt.still_height = h;
@@ -365,8 +369,13 @@ palplab::app::CommandRegistration reg_report{
         try {
           files = palplab::analysis::write_report(a->db, a->out, opt);
         } catch (...) {
-          // A failed report writes no file (analysis/report.cpp): nor leaves a --out it made.
-          if (!existed) std::filesystem::remove(a->out, ec);  // only when empty
+          // A failed report writes no file (analysis/report.cpp): nor leaves the directories it
+          // made for --out (each removed only when empty).
+          if (!made.empty())
+            for (std::filesystem::path p = a->out; !p.empty(); p = p.parent_path()) {
+              std::filesystem::remove(p, ec);
+              if (p == made) break;
+            }
           throw;
         }
         const StaleFiles stale = remove_stale_report_files(earlier, files, a->db);

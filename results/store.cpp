@@ -790,6 +790,10 @@ void check_references(sqlite3* db, int version, const std::string& path) {
       {"sessions", "phases",
        "SELECT 'session ' || x.session, 'phase ' || quote(x.phase) FROM sessions x WHERE EXISTS "
        "(SELECT 1 FROM phases) AND x.phase NOT IN (SELECT phase FROM phases) LIMIT 1"},
+      {"sessions", "prototypes",
+       "SELECT 'session ' || x.session, 'prototype ' || quote(x.prototype) FROM sessions x WHERE "
+       "EXISTS (SELECT 1 FROM prototypes) AND x.prototype NOT IN (SELECT prototype FROM "
+       "prototypes) LIMIT 1"},
   };
   for (const Ref& r : structure) {
     Stmt q(db, r.sql);
@@ -809,10 +813,33 @@ void check_references(sqlite3* db, int version, const std::string& path) {
     if (q.step())
       throw InputError("not a consistent palplab results database: table sessions: " +
                            escape_controls(q.text(0), false) + " has phase_index " + q.text(1) +
-                           " (its session " + std::to_string(q.integer(1) + 1) + " of phase " +
+                           (q.integer(1) < 0 ? std::string(" (of phase ")
+                                             : " (its session " + std::to_string(q.integer(1) + 1) +
+                                                   " of phase ") +
                            escape_controls(q.text(3), false) + "), which has " + q.text(2) +
                            " session(s): expected 0 to " + std::to_string(q.integer(2) - 1) +
                            " (edited by hand or by another tool?)",
+                       path);
+  }
+  {
+    // One complete session per participant, phase and number: two were exported as two rows
+    // of one session (review of the fix, 2026-12-07). (Aborted attempts of a human session
+    // share their number with the complete one.)
+    const std::string complete = version >= 3 ? " AND a.status = 'complete' AND b.status = "
+                                                "'complete'"
+                                              : "";
+    const std::string sql =
+        "SELECT 'session ' || b.session, a.session, quote(a.participant), quote(a.phase), "
+        "a.phase_index FROM sessions a JOIN sessions b ON a.participant = b.participant AND "
+        "a.phase = b.phase AND a.phase_index = b.phase_index AND a.session < b.session" +
+        complete + " LIMIT 1";
+    Stmt q(db, sql.c_str());
+    if (q.step())
+      throw InputError("not a consistent palplab results database: table sessions: " +
+                           escape_controls(q.text(0), false) + " is session " + q.text(1) +
+                           " again (participant " + escape_controls(q.text(2), false) + ", phase " +
+                           escape_controls(q.text(3), false) + ", phase_index " + q.text(4) +
+                           "; edited by hand or by another tool?)",
                        path);
   }
   if (version < 3) return;

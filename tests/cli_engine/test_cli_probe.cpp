@@ -229,6 +229,15 @@ TEST(CliProbe, AnUnstableContactIsSaidAndExitsOne) {
   EXPECT_NE(r.err.find("warning: the contact was not stable ("), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("contact.stiffness 1e+06 N/m): the press bounced"), std::string::npos)
       << r.err;
+  // Below the watchdog's thresholds the bounce shows as a peak far above the target (5e4 N/m:
+  // 5.3 N for 2 N, exit 0 in the first version of this check).
+  j["contact"]["stiffness"] = 5e4;
+  std::ofstream(d / "Cstiff.json", std::ios::trunc) << j.dump(2);
+  r = palplab::testing::run_palplab("probe " + (d / "Cstiff.json").string() +
+                                    " --press ovary_left --force 2 --duration 0.5 --json");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out)["contact_stable"].get<bool>()) << r.out;
+  EXPECT_NE(r.err.find("N for a target of 2 N"), std::string::npos) << r.err;
   r = palplab::testing::run_palplab("probe " + proto("C") +
                                     " --press ovary_left --force 2.5 --duration 0.3 --json");
   EXPECT_EQ(r.code, 0) << r.err;

@@ -173,6 +173,17 @@ TEST(CliReportDamage, RowsOutsideTheStudysStructureAreRefused) {
       {"UPDATE sessions SET phase_index = 5 WHERE session = (SELECT MIN(session) FROM sessions);",
        {"table sessions: session ", " has phase_index 5 (its session 6 of phase '",
         "session(s): expected 0 to "}},
+      {"UPDATE sessions SET phase_index = -1 WHERE session = (SELECT MIN(session) FROM sessions);",
+       {" has phase_index -1 (of phase '"}},
+      // Review of the fix: one session number twice, a prototype the database does not hold.
+      {"UPDATE sessions SET phase_index = (SELECT phase_index FROM sessions s2 WHERE s2.session = "
+       "(SELECT MIN(session) FROM sessions)), phase = (SELECT phase FROM sessions s2 WHERE "
+       "s2.session = (SELECT MIN(session) FROM sessions)) WHERE session = (SELECT MIN(session) + 1 "
+       "FROM sessions) AND participant = (SELECT participant FROM sessions WHERE session = (SELECT "
+       "MIN(session) FROM sessions));",
+       {"table sessions: session ", " again (participant '"}},
+      {"UPDATE sessions SET prototype = 'Z' WHERE session = (SELECT MIN(session) FROM sessions);",
+       {"names prototype 'Z', which the study's table prototypes does not declare"}},
       {"UPDATE sessions SET status = 'bogus' WHERE session = (SELECT MIN(session) FROM sessions);",
        {"table sessions: session ",
         " has status 'bogus': expected 'complete', 'running' or 'aborted'"}},
@@ -220,9 +231,11 @@ TEST(CliReportDamage, AFailedReportChangesNoFile) {
                {"corrupt sample blob"});
   EXPECT_EQ(files_under(rep), before);
   expect_exit2(
-      run_palplab("report " + db.string() + " --out " + (d / "new").string() + " --no-stills", d),
+      run_palplab(
+          "report " + db.string() + " --out " + (d / "new" / "sub").string() + " --no-stills", d),
       {"corrupt sample blob"});
-  EXPECT_FALSE(fs::exists(d / "new"));
+  EXPECT_FALSE(fs::exists(d / "new"));  // nor its parent, made for it
+  EXPECT_TRUE(fs::exists(d));
 }
 
 // Review finding (2026-12-06): a samples row deleted by hand made every later sample of the

@@ -570,6 +570,15 @@ TEST(CliStats, ASemicolonSeparatedFileIsSaidSo) {
   const std::string plain = write_temp("semicolon2.csv", "group;value\nA;2\nB;3\n");
   r = run_palplab("stats --csv " + plain + " --value value --group group");
   palplab::testing::expect_exit2(r, {"no column 'value'", "is the file separated by ';'?"});
+  // And where lmm (its formula) and recheck (its "value") name a column the file lacks.
+  r = run_palplab("lmm --csv " + plain + " --formula \"value ~ 1 + (1 | group)\"");
+  palplab::testing::expect_exit2(r, {"no column 'value'", "is the file separated by ';'?"});
+  const std::string rep = write_temp(
+      "semicolon.json",
+      R"({"value": "value", "group": "group", "statistics": [{"text": "F(1, 2) = 1.0, p = .42"}]})");
+  r = run_palplab("recheck " + rep + " --csv " + plain);
+  palplab::testing::expect_exit2(r, {"no column 'value'", "is the file separated by ';'?"});
+  std::filesystem::remove(rep);
   std::filesystem::remove(csv);
   std::filesystem::remove(plain);
 }
