@@ -157,10 +157,10 @@ std::string with_unit(const std::string& text, const std::string& unit) {
   return text + (unit.empty() || unit == "1" ? "" : " (" + unit + ")");
 }
 
-// Everything the sections read: the store's records and the study structure stored at run time.
 // Where the stills are drawn before the report is complete (then moved into stills/).
 constexpr const char* kStillsStage = "stills.partial";
 
+// Everything the sections read: the store's records and the study structure stored at run time.
 struct Context {
   std::string db_path, out_dir;
   ReportOptions options;

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iostream>
 
 #include "app/command.hpp"
@@ -100,6 +101,15 @@ int main(int argc, char** argv) {
   auto& reg = command_registry();
   std::sort(reg.begin(), reg.end(), [](auto& a, auto& b) { return a.name < b.name; });
   for (auto& c : reg) c.setup(cli, &code);
+  // A flag given twice (`--json --json`) was taken where an option given twice is refused
+  // (review 2026-12-07): every flag of every command is refused a second time too.
+  const std::function<void(CLI::App*)> once = [&](CLI::App* app) {
+    for (CLI::Option* o : app->get_options())
+      if (o->get_expected_max() == 0 && o->get_name() != "--help" && o->get_name() != "--version")
+        o->multi_option_policy(CLI::MultiOptionPolicy::Throw);
+    for (CLI::App* sub : app->get_subcommands([](CLI::App*) { return true; })) once(sub);
+  };
+  once(&cli);
   // A first word that is no command: CLI11 said only "A subcommand is required".
   if (argc > 1 && argv[1][0] != '-' &&
       std::none_of(reg.begin(), reg.end(), [&](auto& c) { return c.name == argv[1]; })) {

@@ -767,16 +767,19 @@ void check_references(sqlite3* db, int version, const std::string& path) {
        "SELECT 'samples of second ' || quote(x.second), 'session ' || quote(x.session) FROM "
        "samples x LEFT JOIN sessions s ON s.session = x.session WHERE s.session IS NULL LIMIT 1"},
   };
-  for (const Ref& r : refs) {
+  // The first row `r` finds: "table T: ROW names VALUE" + `why`.
+  const auto refuse = [&](const Ref& r, const std::string& why) {
     Stmt q(db, r.sql);
-    if (!q.step()) continue;
+    if (!q.step()) return;
     throw InputError("not a consistent palplab results database: table " + std::string(r.table) +
                          ": " + escape_controls(q.text(0), false) + " names " +
-                         escape_controls(q.text(1), false) + ", which table " + r.held +
-                         " does not hold (edited by hand or by another tool? its rows would be "
-                         "left out of every export and report)",
+                         escape_controls(q.text(1), false) + why,
                      path);
-  }
+  };
+  for (const Ref& r : refs)
+    refuse(r, ", which table " + std::string(r.held) +
+                  " does not hold (edited by hand or by another tool? its rows would be left out "
+                  "of every export and report)");
   // The study's structure (schema 2 on): a participant of a group the study does not declare
   // was dropped from every analysis (its group printed in the provenance only), a session of an
   // undeclared phase or beyond its phase's sessions was exported and analysed as given, a
@@ -795,15 +798,9 @@ void check_references(sqlite3* db, int version, const std::string& path) {
        "EXISTS (SELECT 1 FROM prototypes) AND x.prototype NOT IN (SELECT prototype FROM "
        "prototypes) LIMIT 1"},
   };
-  for (const Ref& r : structure) {
-    Stmt q(db, r.sql);
-    if (!q.step()) continue;
-    throw InputError("not a consistent palplab results database: table " + std::string(r.table) +
-                         ": " + escape_controls(q.text(0), false) + " names " +
-                         escape_controls(q.text(1), false) + ", which the study's table " + r.held +
-                         " does not declare (edited by hand or by another tool?)",
-                     path);
-  }
+  for (const Ref& r : structure)
+    refuse(r, ", which the study's table " + std::string(r.held) +
+                  " does not declare (edited by hand or by another tool?)");
   {
     Stmt q(db,
            "SELECT 'session ' || x.session, quote(x.phase_index), p.sessions, quote(x.phase) FROM "

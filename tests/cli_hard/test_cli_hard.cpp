@@ -1136,6 +1136,13 @@ TEST(HardCli, AnOptionGivenTwiceIsSaidAsSuch) {
   EXPECT_EXIT2_WITH(r, "error: palplab power: --replicates given more than once (give it once)");
   EXPECT_FALSE(has(r.err, "At Most")) << r.err;
   EXPECT_FALSE(fs::exists(d / "p"));
+  // A flag too (review 2026-12-07: `--json --json` was taken, a value option twice refused).
+  const std::string probe =
+      "probe " + std::string(PALPLAB_SOURCE_DIR) +
+      "/prototypes/A.json --press ovary_left --force 1 --duration 0.05 --json";
+  const Result f = cli(probe + " --json", d);
+  EXPECT_EXIT2_WITH(f, "error: palplab probe: --json given more than once (give it once)");
+  EXPECT_EQ(cli(probe, d).code, 0);
 }
 
 TEST(HardCli, UnknownCommandsAndEmptyPathsAreSaidAsSuch) {
