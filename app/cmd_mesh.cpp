@@ -510,6 +510,9 @@ palplab::app::CommandRegistration reg_mesh{
                     " duplicate): nothing is left to write; see `palplab mesh check`",
                 *in);
           write_surface(*out, r);
+          // What the safe repairs leave (a non-manifold or self-intersecting surface printed
+          // "no changes" and nothing else; review 2026-12-07).
+          const palplab::mesh::CheckReport left = palplab::mesh::check_surface(r);
           if (*js) {
             json j = {{"merged_vertices", log.merged_vertices},
                       {"dropped_degenerate_faces", log.dropped_degenerate_faces},
@@ -521,12 +524,19 @@ palplab::app::CommandRegistration reg_mesh{
                       {"removed_unused_vertices", log.removed_unused_vertices},
                       {"unfilled_holes", log.unfilled_holes},
                       {"vertices", r.V.rows()},
-                      {"faces", r.F.rows()}};
+                      {"faces", r.F.rows()},
+                      {"remaining_defects", left.counts}};
             std::cout << j.dump(2) << "\n";
           } else {
             for (auto& l : log.lines()) std::cout << l << "\n";
             std::cout << "wrote " << *out << ": " << r.V.rows() << " vertices, " << r.F.rows()
                       << " faces\n";
+            if (!left.clean()) {
+              std::cout << "left as they are (not safe to repair automatically):";
+              for (const auto& [kind, n] : left.counts) std::cout << " " << kind << " " << n;
+              std::cout << " (`palplab mesh check " << palplab::escape_controls(*out, false)
+                        << "` locates them)\n";
+            }
           }
           *code = 0;
         });

@@ -170,8 +170,24 @@ TEST(CliMesh, RepairMakesTheMeshClean) {
   EXPECT_NE(r.out.find("duplicate vertices merged"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("holes filled"), std::string::npos) << r.out;
   EXPECT_EQ(run("mesh check " + p("fixed.obj")).code, 0);
+  EXPECT_EQ(r.out.find("left as they are"), std::string::npos) << r.out;
   const json j = json::parse(run("mesh info " + p("fixed.obj") + " --json").out);
   EXPECT_EQ(j["genus"], 0);
+  // Two tetrahedra sharing an edge: nothing a safe repair changes, and that is not all it says
+  // (it printed "no changes" alone; review 2026-12-07).
+  std::ofstream(p("nonman.obj")) << "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nv 0.1 0.1 0\n"
+                                    "v 0.1 0 -0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 2 5\n"
+                                    "f 1 6 2\nf 2 6 5\nf 1 5 6\n";
+  r = run("mesh repair " + p("nonman.obj") + " --out " + p("nonman_r.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("no changes"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("left as they are (not safe to repair automatically): non_manifold_edge 1 "
+                       "non_manifold_vertex 2"),
+            std::string::npos)
+      << r.out;
+  r = run("mesh repair " + p("nonman.obj") + " --out " + p("nonman_r.obj") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out)["remaining_defects"]["non_manifold_edge"], 1) << r.out;
 }
 
 TEST(CliMesh, TetrahedralizeWithRegionsFile) {
