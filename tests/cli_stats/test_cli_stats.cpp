@@ -538,6 +538,17 @@ TEST(CliStats, PostHocPValuesFollowTheAnovaFarInTheTail) {
     EXPECT_EQ(j[test][0]["p_is_bound"], false) << test;
   }
   std::filesystem::remove(csv);
+  // A within-group spread of 1e-162, whose squares underflow a double: Tukey's q, p and
+  // interval were undefined beside an ANOVA p below 1e-300 (review of the fixes).
+  const std::string tiny = write_temp("far_tail_tiny.csv", "g,v\nA,0\nA,1e-162\nB,1\nB,1\n");
+  const Result t = run_palplab("stats --csv " + tiny + " --value v --group g --json");
+  ASSERT_EQ(t.code, 0) << t.err;
+  const auto k = nlohmann::json::parse(t.out);
+  EXPECT_EQ(k["anova"]["p_is_bound"], true) << t.out;
+  EXPECT_EQ(k["tukey"][0]["p_is_bound"], true) << t.out;
+  EXPECT_NEAR(k["tukey"][0]["q"].get<double>(), 2 * std::sqrt(2.0) * 1e162, 1e150) << t.out;
+  EXPECT_EQ(k["tukey"][0]["ci_low"], -1.0) << t.out;
+  std::filesystem::remove(tiny);
 }
 
 // "NA" in the group column was a group of its own in stats (three groups, its Holm and Tukey
