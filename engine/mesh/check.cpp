@@ -406,22 +406,13 @@ CheckReport check_tets(const TetMesh& m, const CheckOptions& o) {
   // .ele line made a FEM body 3.6x softer in a press, review 2026-12-07), and a node no tet
   // uses has neither: said, as check_tet_connectivity refuses them for the models.
   {
-    std::map<std::array<int, 4>, int> first;
-    std::vector<char> used(static_cast<std::size_t>(m.V.rows()), 0);
-    for (int t = 0; t < m.T.rows(); ++t) {
+    const TetConnectivity c = tet_connectivity(m.T, m.V.rows());
+    for (auto [t0, t] : c.duplicate_tet) {
       std::array<int, 4> key{m.T(t, 0), m.T(t, 1), m.T(t, 2), m.T(t, 3)};
-      for (int v : key)
-        if (v >= 0 && v < m.V.rows()) used[static_cast<std::size_t>(v)] = 1;
       std::sort(key.begin(), key.end());
-      const auto [it, fresh] = first.emplace(key, t);
-      if (!fresh) {
-        const std::vector<int> vs(key.begin(), key.end());
-        add(r, o, {"duplicate_tet", vs, {}, {it->second, t}, {}, 0.0});
-      }
+      add(r, o, {"duplicate_tet", {key.begin(), key.end()}, {}, {t0, t}, {}, 0.0});
     }
-    for (int v = 0; v < m.V.rows(); ++v)
-      if (!used[static_cast<std::size_t>(v)])
-        add(r, o, {"unused_vertex", {v}, {}, {}, {row3(m.V, v)}, 0.0});
+    for (int v : c.unused_vertex) add(r, o, {"unused_vertex", {v}, {}, {}, {row3(m.V, v)}, 0.0});
   }
   for (auto [i, j] : duplicate_vertex_pairs(m.V, o.duplicate_tolerance))
     add(r, o,

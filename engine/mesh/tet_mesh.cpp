@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "common/input_error.hpp"
@@ -119,6 +120,24 @@ BoundaryFaces pack(std::vector<std::array<int, 5>>& out) {
 }
 
 }  // namespace
+
+TetConnectivity tet_connectivity(const Tets& T, long n_vertices) {
+  TetConnectivity c;
+  std::map<std::array<int, 4>, int> first;
+  std::vector<char> used(static_cast<std::size_t>(std::max(0L, n_vertices)), 0);
+  for (int t = 0; t < T.rows(); ++t) {
+    std::array<int, 4> key{T(t, 0), T(t, 1), T(t, 2), T(t, 3)};
+    for (int v : key)
+      if (v >= 0 && v < n_vertices) used[static_cast<std::size_t>(v)] = 1;
+    std::sort(key.begin(), key.end());
+    if (std::adjacent_find(key.begin(), key.end()) != key.end()) c.repeated_node.push_back(t);
+    if (const auto [it, fresh] = first.emplace(key, t); !fresh)
+      c.duplicate_tet.emplace_back(it->second, t);
+  }
+  for (long v = 0; v < n_vertices; ++v)
+    if (!used[static_cast<std::size_t>(v)]) c.unused_vertex.push_back(static_cast<int>(v));
+  return c;
+}
 
 Tets tet_neighbours(const TetMesh& m) {
   const Tets& T = m.T;

@@ -6,6 +6,7 @@
 // (b-a)·((c-a)×(d-a)) > 0. Its faces, oriented outwards, are
 //   face 0 (opposite a) = (b,c,d), face 1 = (a,d,c), face 2 = (a,b,d), face 3 = (a,c,b).
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "engine/mesh/types.hpp"
@@ -63,6 +64,17 @@ BoundaryFaces boundary_faces_brute_force(const TetMesh& m, const BoundaryOptions
 
 // #T by 4 neighbour across each local face (face k is opposite vertex k), -1 on the boundary.
 Tets tet_neighbours(const TetMesh& m);
+
+// The tets' connectivity defects: a tet naming a node twice, a tet with the same four nodes as
+// an earlier one (it counts its mass and stiffness twice), and a node no tet names (it has
+// neither). `mesh check` reports them; the tet models refuse them (check_tet_connectivity).
+// Indices outside [0, n_vertices) are skipped (make_tet_mesh refuses them).
+struct TetConnectivity {
+  std::vector<int> repeated_node;                  // tets naming a node twice, ascending
+  std::vector<std::pair<int, int>> duplicate_tet;  // (first tet, its repeat), by the repeat
+  std::vector<int> unused_vertex;                  // ascending
+};
+TetConnectivity tet_connectivity(const Tets& T, long n_vertices);
 
 // Per-vertex named region of a tet mesh derived from the per-tet regions (smallest id).
 Eigen::VectorXi vertex_regions(const TetMesh& m);

@@ -1,13 +1,10 @@
 #include "engine/models/tet_mesh_checks.hpp"
 
-#include <algorithm>
-#include <array>
 #include <filesystem>
-#include <map>
-#include <vector>
 
 #include "common/input_error.hpp"
 #include "engine/mesh/materials.hpp"
+#include "engine/mesh/tet_mesh.hpp"
 
 namespace palplab::engine {
 
@@ -58,36 +55,33 @@ void check_tet_connectivity(const SceneConfig& cfg, const SceneMesh& cm) {
     }
     return s;
   };
-  std::map<std::array<int, 4>, long> first;
-  std::vector<char> used(static_cast<std::size_t>(cm.model_V.rows()), 0);
-  for (long t = 0; t < cm.model_T.rows(); ++t) {
-    std::array<int, 4> key{cm.model_T(t, 0), cm.model_T(t, 1), cm.model_T(t, 2), cm.model_T(t, 3)};
-    for (int v : key) used[static_cast<std::size_t>(v)] = 1;
-    std::sort(key.begin(), key.end());
-    if (std::adjacent_find(key.begin(), key.end()) != key.end())
-      throw InputError(where + "tet " + std::to_string(t) + " (in file order from 0; nodes " +
-                           nodes_of(t) +
-                           ") names a node twice: a tet needs four distinct nodes (`palplab "
-                           "mesh check` lists the degenerate tets)",
-                       file);
-    if (const auto [it, fresh] = first.emplace(key, t); !fresh)
-      throw InputError(where + "tet " + std::to_string(t) + " (in file order from 0; nodes " +
-                           nodes_of(t) + ") repeats tet " + std::to_string(it->second) +
-                           ": a tet given twice counts its mass and stiffness twice (remove "
-                           "the line; `palplab mesh check` lists every duplicate_tet)",
-                       file);
+  const mesh::TetConnectivity c = mesh::tet_connectivity(cm.model_T, cm.model_V.rows());
+  // The first defect in file order is said (a tet's before a node's).
+  const int bad_tet = c.repeated_node.empty() ? -1 : c.repeated_node.front();
+  const int dup_tet = c.duplicate_tet.empty() ? -1 : c.duplicate_tet.front().second;
+  if (bad_tet >= 0 && (dup_tet < 0 || bad_tet <= dup_tet))
+    throw InputError(where + "tet " + std::to_string(bad_tet) + " (in file order from 0; nodes " +
+                         nodes_of(bad_tet) +
+                         ") names a node twice: a tet needs four distinct nodes (`palplab "
+                         "mesh check` lists the degenerate tets)",
+                     file);
+  if (dup_tet >= 0)
+    throw InputError(where + "tet " + std::to_string(dup_tet) + " (in file order from 0; nodes " +
+                         nodes_of(dup_tet) + ") repeats tet " +
+                         std::to_string(c.duplicate_tet.front().first) +
+                         ": a tet given twice counts its mass and stiffness twice (remove "
+                         "the line; `palplab mesh check` lists every duplicate_tet)",
+                     file);
+  if (!c.unused_vertex.empty()) {
+    std::string node_file = file;
+    if (const std::filesystem::path fp(file); fp.extension() == ".ele")
+      node_file = std::filesystem::path(fp).replace_extension(".node").string();
+    throw InputError(where + "node " + std::to_string(c.unused_vertex.front()) +
+                         " (in file order from 0) belongs to no tet: it would have no mass and "
+                         "no stiffness (remove it, or mesh it; `palplab mesh check` lists every "
+                         "unused_vertex)",
+                     node_file);
   }
-  for (long v = 0; v < cm.model_V.rows(); ++v)
-    if (!used[static_cast<std::size_t>(v)]) {
-      std::string node_file = file;
-      if (const std::filesystem::path fp(file); fp.extension() == ".ele")
-        node_file = std::filesystem::path(fp).replace_extension(".node").string();
-      throw InputError(where + "node " + std::to_string(v) +
-                           " (in file order from 0) belongs to no tet: it would have no mass and "
-                           "no stiffness (remove it, or mesh it; `palplab mesh check` lists every "
-                           "unused_vertex)",
-                       node_file);
-    }
 }
 
 }  // namespace palplab::engine

@@ -94,3 +94,25 @@ TEST(TetMesh, RigidFacesAreSkippedOnRequest) {
   // Soft half x < 0.5: the x = 0 side (8 triangles) and half of the four sides around (4 x 4).
   EXPECT_EQ(soft.F.rows(), 24);
 }
+
+// The one scan behind `mesh check`'s duplicate_tet/unused_vertex and the models' refusal.
+TEST(TetMesh, ConnectivityFindsRepeatedNodesDuplicatesAndUnusedVertices) {
+  const TetMesh clean = kuhn_grid(2, [](double, double, double) { return 101; });
+  const TetConnectivity none = tet_connectivity(clean.T, clean.V.rows());
+  EXPECT_TRUE(none.repeated_node.empty());
+  EXPECT_TRUE(none.duplicate_tet.empty());
+  EXPECT_TRUE(none.unused_vertex.empty());
+
+  Tets T(5, 4);
+  T << 0, 1, 2, 3,                                   //
+      3, 2, 1, 0,                                    // tet 0's nodes in another order: a duplicate
+      1, 2, 3, 4,                                    //
+      1, 1, 2, 3,                                    // a node twice
+      4, 3, 2, 1;                                    // tet 2 again
+  const TetConnectivity c = tet_connectivity(T, 7);  // nodes 5 and 6 unused
+  EXPECT_EQ(c.repeated_node, std::vector<int>{3});
+  ASSERT_EQ(c.duplicate_tet.size(), 2u);
+  EXPECT_EQ(c.duplicate_tet[0], std::make_pair(0, 1));
+  EXPECT_EQ(c.duplicate_tet[1], std::make_pair(2, 4));
+  EXPECT_EQ(c.unused_vertex, (std::vector<int>{5, 6}));
+}
