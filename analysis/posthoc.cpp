@@ -185,7 +185,8 @@ std::vector<RangeComparison> tukey_kramer(const Groups& groups, double level) {
   std::vector<RangeComparison> out;
   // MS_within in long double: spreads of ~1e-162 square below the double range, and a pair's
   // se (~1e-162, a double) came out 0, its q, p and interval undefined beside an ANOVA p below
-  // 1e-300 (review of the fixes, 2026-12-07). Equal to the double one otherwise.
+  // 1e-300 (review of the fixes, 2026-12-07). Every pair's se from it (the same digits as the
+  // double MS to a double's rounding where that one is in range).
   long double ss = 0;
   for (const auto& g : groups) ss += sum_sq_dev(g);
   const long double ms = an.df_within > 0 ? ss / an.df_within : 0.0L;
@@ -202,9 +203,7 @@ std::vector<RangeComparison> tukey_kramer(const Groups& groups, double level) {
     const auto &ga = groups[r.a], &gb = groups[r.b];
     r.mean_diff = static_cast<double>(mean_ld(ga) - mean_ld(gb));
     r.df = an.df_within;
-    r.se = an.ms_within >= 1e-290
-               ? std::sqrt(an.ms_within / 2 * (1.0 / ga.size() + 1.0 / gb.size()))
-               : static_cast<double>(std::sqrt(ms / 2 * (1.0L / ga.size() + 1.0L / gb.size())));
+    r.se = static_cast<double>(std::sqrt(ms / 2 * (1.0L / ga.size() + 1.0L / gb.size())));
     if (r.se > 0) {
       r.q = std::fabs(r.mean_diff) / r.se;
       r.p = clamp_p(studentized_range_sf(r.q, k, r.df));

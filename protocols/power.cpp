@@ -1358,7 +1358,6 @@ MergeGaps merge_gaps(const std::vector<std::string>& files) {
       reps[r.at("n").get<int>()].insert(r.at("replicate").get<int>());
       if (auto plan = r.find("plan"); plan != r.end()) {
         const int k = plan->at("replicates").get<int>();
-        g.planned_replicates = std::max(g.planned_replicates, k);
         g.plans_replicates.insert(k);
         for (const auto& n : plan->at("n")) planned_n.insert(n.get<int>());
       }
@@ -1390,7 +1389,7 @@ MergeGaps merge_gaps(const std::vector<std::string>& files) {
   for (const auto& [n, set] : reps) {
     // Every index up to the largest present, or to the largest plan's for a planned size.
     int top = set.empty() ? -1 : *set.rbegin();
-    if (planned_n.count(n)) top = std::max(top, g.planned_replicates - 1);
+    if (planned_n.count(n)) top = std::max(top, g.planned_replicates() - 1);
     g.present[n] = static_cast<long>(set.size());
     g.largest[n] = top;
     const long upto = static_cast<long>(std::distance(set.begin(), set.upper_bound(top)));
@@ -1429,7 +1428,7 @@ std::string MergeGaps::message() const {
               : std::string("replicate") + (count == 1 ? " " : "s ") + index_list(gaps, count) +
                     " of 0-" + std::to_string(largest.at(n)) + " missing");
   }
-  if (!missing_replicates.empty() && planned_replicates > 0) {
+  if (!missing_replicates.empty() && !plans_replicates.empty()) {
     std::string asked;
     for (const int k : plans_replicates) asked += (asked.empty() ? "" : ", ") + std::to_string(k);
     s += plans_replicates.size() == 1

@@ -197,10 +197,12 @@ struct MergeGaps {
   std::map<int, long> missing_replicate_count;         // n -> all indices missing below the largest
   std::map<int, long> present;                         // n -> replicates present (deduplicated)
   std::map<int, int> largest;  // n -> largest replicate index expected (present, or planned)
-  // The largest `--replicates` the records' runs asked for ($.plan; 0 when no record has one)
-  // and every value seen (a run resumed with more replicates, shards of differently sized runs).
-  int planned_replicates = 0;
+  // Every `--replicates` the records' runs asked for ($.plan; a run resumed with more
+  // replicates, shards of differently sized runs); the largest is what a merge must hold.
   std::set<int> plans_replicates;
+  int planned_replicates() const {
+    return plans_replicates.empty() ? 0 : *plans_replicates.rbegin();
+  }
   bool complete() const { return missing_shard_count == 0 && missing_replicate_count.empty(); }
   // "shard 2 of 2 missing (no replicates.shard-2-of-2.jsonl among the merged files); n = 3:
   // replicates 0, 2 of 0-3 missing: the summary covers only 3 replicates (n = 2: 2, n = 3: 1)";
