@@ -341,13 +341,27 @@ std::string to_text(const StatsSummary& s) {
     if (seen[names[i]] > 1) names[i] += " #" + std::to_string(i + 1);
   auto pair_name = [&](int a, int b) { return names[a] + " - " + names[b]; };
   o << "Descriptives\n";
-  o << strf("  %-14s %5s %12s %12s %12s %12s %12s %12s %25s\n", "group", "n", "mean", "sd", "se",
-            "median", "min", "max", "95% CI of mean");
-  for (size_t i = 0; i < s.groups.size(); ++i) {
-    const auto& d = s.groups[i];
-    o << strf("  %-*s %5d %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g   [%10.5g, %10.5g]\n",
-              printf_width(names[i], 14), names[i].c_str(), d.n, d.mean, d.sd, d.se, d.median,
-              d.min, d.max, d.ci_low, d.ci_high);
+  {
+    // Five significant digits, more when the values are large beside their spread (values near
+    // 1e12 that differ by units printed mean, median and CI all as "1e+12"): enough digits that
+    // a group's standard error shows in its mean, at most 15 (a double's).
+    int digits = 5;
+    for (const auto& d : s.groups) {
+      const double big = std::max({std::fabs(d.min), std::fabs(d.max), std::fabs(d.mean)});
+      if (d.se > 0 && std::isfinite(d.se) && std::isfinite(big) && big > 0)
+        digits = std::max(digits, static_cast<int>(std::ceil(std::log10(big / d.se))) + 2);
+    }
+    digits = std::min(digits, 15);
+    const int cw = std::max(12, digits + 7), ciw = cw - 2;  // sign, point, "e+12"
+    o << strf("  %-14s %5s %*s %*s %*s %*s %*s %*s %*s\n", "group", "n", cw, "mean", cw, "sd", cw,
+              "se", cw, "median", cw, "min", cw, "max", 2 * ciw + 5, "95% CI of mean");
+    for (size_t i = 0; i < s.groups.size(); ++i) {
+      const auto& d = s.groups[i];
+      o << strf("  %-*s %5d %*.*g %*.5g %*.5g %*.*g %*.*g %*.*g   [%*.*g, %*.*g]\n",
+                printf_width(names[i], 14), names[i].c_str(), d.n, cw, digits, d.mean, cw, d.sd, cw,
+                d.se, cw, digits, d.median, cw, digits, d.min, cw, digits, d.max, ciw, digits,
+                d.ci_low, ciw, digits, d.ci_high);
+    }
   }
   const auto& a = s.anova;
   o << "\nOne-way ANOVA\n";

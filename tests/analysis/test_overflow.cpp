@@ -358,3 +358,19 @@ TEST(Apa, StatTextAndFText) {
   EXPECT_EQ(f_text(INFINITY, 400 + std::log10(3.0), 3), "3.000e+400");
   EXPECT_EQ(f_text(4.5, NAN, 3), "4.500");
 }
+
+// Values near 1e12 that differ by units: the descriptives printed mean, median and CI all as
+// "1e+12" (review 2026-12-07); they get the digits that show a group's standard error, and the
+// columns widen with them. Ordinary data keep five digits.
+TEST(Descriptives, TextShowsLargeValuesToTheirSpread) {
+  const auto s = summarize_csv(
+      "g,v\nA,1000000000001\nA,1000000000002\nA,1000000000003\nB,1000000000011\nB,"
+      "1000000000012\nB,1000000000014\n");
+  const std::string text = to_text(s);
+  EXPECT_NE(text.find(" 1000000000002 "), std::string::npos) << text;   // A's mean and median
+  EXPECT_NE(text.find(" 1000000000012.3"), std::string::npos) << text;  // B's mean
+  EXPECT_EQ(text.find("1e+12"), std::string::npos) << text;
+  const std::string small = to_text(summarize_csv("g,v\nA,2.51\nA,2.62\nA,2.43\nB,3.1\nB,2.9\n"));
+  EXPECT_NE(small.find("  A                  3         2.52     0.095394 "), std::string::npos)
+      << small;
+}
