@@ -60,12 +60,15 @@ std::vector<std::string> prototype_search_dirs(const std::string& study_file,
   return once;
 }
 
-std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs) {
+std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs,
+                              const std::string& study_file) {
   if (id.empty() || id.find('/') != std::string::npos || id[0] == '.') return {};
   for (const auto& d : search_dirs) {
     fs::path p = fs::path(d) / (id + ".json");
     std::error_code ec;
-    if (fs::is_regular_file(p, ec)) return p.string();
+    if (!fs::is_regular_file(p, ec)) continue;
+    if (!study_file.empty() && fs::equivalent(p, study_file, ec)) continue;
+    return p.string();
   }
   return {};
 }

@@ -15,7 +15,10 @@ std::vector<std::string> prototype_search_dirs(const std::string& study_file,
                                                const std::vector<std::string>& prototype_dirs);
 
 // Empty string when no directory has ID.json. Ids may not contain '/' or start with '.'.
-std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs);
+// `study_file`, when given, is never the answer: a study saved as A.json beside the prototypes
+// it names was taken for prototype "A" (its own errors then reported as the prototype's).
+std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs,
+                              const std::string& study_file = {});
 
 // Source tree this library was compiled from (derived from __FILE__), "" if unknown.
 std::string source_tree_dir();

@@ -867,7 +867,7 @@ Study parse_study(const std::string& text, const std::string& file,
   std::set<std::string> failed;
   for (auto& [id, path] : uses) {
     if (infos.count(id) || failed.count(id)) continue;
-    std::string f = resolve_prototype(id, dirs);
+    std::string f = resolve_prototype(id, dirs, file);
     if (f.empty()) {
       if (id.empty() || id.find('/') != std::string::npos || id[0] == '.' ||
           (id.size() > 5 && id.compare(id.size() - 5, 5, ".json") == 0))
@@ -882,8 +882,10 @@ Study parse_study(const std::string& text, const std::string& file,
         for (const auto& dir : dirs)
           for (const auto& e : std::filesystem::directory_iterator(dir, ec))
             if (e.path().extension() == ".json") held.push_back(e.path().stem().string());
+        const bool self = std::filesystem::path(file).filename() == id + ".json";
         c.err(path, "unresolved prototype \"" + id + "\": no " + id + ".json in " + join(dirs) +
-                        palplab::json::did_you_mean(id, held));
+                        (self ? " (besides this study file itself, which is not a prototype)"
+                              : palplab::json::did_you_mean(id, held)));
       }
       failed.insert(id);
       continue;

@@ -91,6 +91,53 @@ TEST(CliValidate, ReferenceStudiesAreValid) {
   }
 }
 
+// docs/FORMATS.md's annotated study, its `//` comments removed (outside strings), is a valid
+// study: a user copying it got nine errors (a directory that does not exist, an instructor
+// block with "…" ids in a study without instructed phases; review 2026-12-07).
+TEST(StudyDocs, AnnotatedExampleValidates) {
+  auto d = scratch_dir("docs_example");
+  const std::string doc = slurp(fs::path(PALPLAB_SOURCE_DIR) / "docs" / "FORMATS.md");
+  const auto a = doc.find("```jsonc\n");
+  ASSERT_NE(a, std::string::npos);
+  const auto b = doc.find("```", a + 9);
+  ASSERT_NE(b, std::string::npos);
+  std::string json;
+  bool in_string = false, comment = false;
+  for (std::size_t i = a + 9; i < b; ++i) {
+    const char ch = doc[i];
+    if (ch == '\n') comment = in_string = false;
+    if (comment) continue;
+    if (ch == '"' && doc[i - 1] != '\\') in_string = !in_string;
+    if (!in_string && ch == '/' && doc[i + 1] == '/') {
+      comment = true;
+      continue;
+    }
+    json += ch;
+  }
+  ASSERT_GT(json.size(), 1000u);
+  std::ofstream(d / "annotated.json", std::ios::binary) << json;
+  Result r = run_palplab("validate " + (d / "annotated.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err << "\n" << json;
+  EXPECT_NE(r.out.find("valid: "), std::string::npos) << r.out;
+}
+
+// A study saved as A.json names prototype "A": its own directory is searched first, and the
+// study file itself was taken for the prototype (its keys reported as a prototype's errors).
+TEST(CliValidate, StudyFileNamedLikeAPrototypeDoesNotShadowIt) {
+  auto d = scratch_dir("study_named_a");
+  fs::copy_file(ref("example_minimal.json"), d / "A.json");
+  Result r = run_palplab("validate " + (d / "A.json").string(), d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("valid: "), std::string::npos) << r.out;
+  // With no other A.json anywhere the message says the study file is not one.
+  std::string text = slurp(ref("example_minimal.json"));
+  for (auto p = text.find("\"A\""); p != std::string::npos; p = text.find("\"A\"", p))
+    text.replace(p, 3, "\"Zq\"");
+  std::ofstream(d / "Zq.json", std::ios::binary) << text;
+  expect_exit2(run_palplab("validate " + (d / "Zq.json").string(), d),
+               {"unresolved prototype \"Zq\"", "besides this study file itself"});
+}
+
 TEST(CliValidate, AllProblemsLocatedExitTwo) {
   auto d = scratch_dir("invalid");
   std::string s = small_study("A", "B", 2, 10);
