@@ -106,9 +106,10 @@ struct ReferenceArgs {
   double force = 0;
   int levels = 3;
   int steps = 5;
-  int newton_max = 30;     // full Newton iterations per load increment of the curve
-  int bisections = 4;      // halvings of a curve load step that does not converge
-  bool overwrite = false;  // --overwrite: replace an existing --out of another kind
+  int newton_max = 30;      // full Newton iterations per load increment of the curve
+  int bisections = 4;       // halvings of a curve load step that does not converge
+  bool overwrite = false;   // --overwrite: replace an existing --out of another kind
+  double mem_limit_gb = 0;  // address-space limit; 0 = 80 % of the machine's physical memory
   // The curve's material: the engine's default.
   std::string material = palplab::engine::to_string(palplab::engine::kDefaultCurveMaterial);
 };
@@ -228,7 +229,8 @@ ReferenceSetup reference_setup(const ReferenceArgs& a, int built_levels = 0,
                     "may take minutes to hours and GBs of memory (each level fewer, down to "
                     "--levels 3, is 8x "
                     "smaller; a coarser copy of the prototype is only with --grade 0: --grade "
-                    "auto refines its level 0 around the press again)\n",
+                    "auto refines its level 0 around the press again; the command stops at "
+                    "--mem-limit-gb, by default 80 %% of this machine's memory)\n",
                     finest);
       su.note = note;
     }
@@ -290,6 +292,16 @@ bool json_file_of_format(const std::string& path, const std::string& format) {
   return f != j.end() && f->is_string() && f->get<std::string>().rfind(format, 0) == 0;
 }
 
+// fem reference's address-space limit (GB): --mem-limit-gb, else 80 % of physical memory (a
+// graded 2625-tet copy of D at --levels 3 passed 12 GB, review 2026-12-07: without a limit the
+// machine swaps or the kernel kills the process without a word).
+double reference_memory_limit_gb(const ReferenceArgs& a) {
+  if (a.mem_limit_gb > 0) return a.mem_limit_gb;
+  const double bytes =
+      static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+  return bytes > 0 ? 0.8 * bytes / 1073741824.0 : 0.0;
+}
+
 int run_reference(const ReferenceArgs& a) {
   using namespace palplab;
   if (a.out.empty()) throw InputError("--out: expected an output file name");
@@ -303,6 +315,15 @@ int run_reference(const ReferenceArgs& a) {
       [](const std::string& p) { return json_file_of_format(p, "palplab-fem-reference/"); },
       "palplab fem reference JSON (\"format\": \"palplab-fem-reference/1\")", a.overwrite);
   std::fputs(su.note.c_str(), stderr);
+  // The limit from here (the arguments, the prototype and its mesh are read): an allocation
+  // beyond it is std::bad_alloc, said by the command (CHOLMOD's out of memory is too).
+  if (const double gb = reference_memory_limit_gb(a); kAddressLimitWorks && gb > 0) {
+    rlimit rm{};
+    ::getrlimit(RLIMIT_AS, &rm);
+    const rlim_t want = static_cast<rlim_t>(gb * 1073741824.0);
+    if (rm.rlim_max == RLIM_INFINITY || want < rm.rlim_max) rm.rlim_cur = want;
+    ::setrlimit(RLIMIT_AS, &rm);
+  }
   engine::FemReferenceOptions o = su.o;
   const bool nested = a.refinement == "nested";
   // --grade auto on nested levels: the grading rounds chosen by the reference's own trust
@@ -860,6 +881,11 @@ palplab::app::CommandRegistration reg_fem{
           ->required();
       ref->add_flag("--overwrite", ra->overwrite,
                     "Replace an existing --out file that is not a fem reference JSON");
+      ref->add_option("--mem-limit-gb", ra->mem_limit_gb,
+                      "Address-space limit (GB); beyond it the command stops with exit 1 "
+                      "(default: 80 % of this machine's physical memory; not applied under "
+                      "AddressSanitizer)")
+          ->check(palplab::app::finite_range(0.01, 1e6));
       ref->add_option("--refinement", ra->refinement,
                       "nested: red 1->8 refinements of the prototype's mesh (nested, h halved); "
                       "tetgen: TetGen meshes with max tet volume halved (not nested)")
@@ -921,7 +947,22 @@ palplab::app::CommandRegistration reg_fem{
         flag_only_with(newton_opt, ra->steps > 0, "--steps > 0 (the press curve)");
         flag_only_with(bisect_opt, ra->steps > 0, "--steps > 0 (the press curve)");
         flag_only_with(material_opt, ra->steps > 0, "--steps > 0 (the press curve)");
-        *code = run_reference(*ra);
+        try {
+          *code = run_reference(*ra);
+        } catch (const std::bad_alloc&) {
+          char gb[32];
+          std::snprintf(gb, sizeof gb, "%.3g", reference_memory_limit_gb(*ra));
+          const bool nested = ra->refinement == "nested";
+          const std::string less = std::string("fewer --levels") +
+                                   (nested && ra->grade != "0" ? ", --grade 0" : "") +
+                                   (nested ? " or --refinement tetgen" : "") + " need less";
+          std::fprintf(stderr,
+                       "fem reference: out of memory: the levels need more than the limit of %s "
+                       "GB (--mem-limit-gb; the default is 80 %% of this machine's memory); %s. "
+                       "Nothing written.\n",
+                       gb, less.c_str());
+          *code = 1;
+        }
       });
       auto* sol = fem->add_subcommand(
           "solvers",

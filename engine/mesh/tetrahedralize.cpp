@@ -172,18 +172,29 @@ void put(int fd, const T& x) {
 // before TetGen let through (a region's own volume is not known before it runs) ends as "out of
 // memory" instead of growing until --timeout on a shared machine (review 2026-12-06, second:
 // 55 MB/s). Not under AddressSanitizer, whose shadow memory is address space.
-void limit_child_memory() {
+// The child's address-space limit (bytes): half of the machine's memory, or the process's own
+// lower limit (`fem reference --mem-limit-gb`); 0 when none applies.
+rlim_t child_memory_limit() {
 #if !defined(__SANITIZE_ADDRESS__)
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-  if (pages <= 0 || page <= 0) return;
+  if (pages <= 0 || page <= 0) return 0;
   const rlim_t half = static_cast<rlim_t>(pages) / 2 * static_cast<rlim_t>(page);
   struct rlimit lim {};
-  if (::getrlimit(RLIMIT_AS, &lim) != 0) return;
-  if (lim.rlim_cur == RLIM_INFINITY || lim.rlim_cur > half) {
-    lim.rlim_cur = half;
+  if (::getrlimit(RLIMIT_AS, &lim) != 0) return 0;
+  return lim.rlim_cur == RLIM_INFINITY ? half : std::min(lim.rlim_cur, half);
+#else
+  return 0;
+#endif
+}
+
+void limit_child_memory() {
+  const rlim_t want = child_memory_limit();
+  struct rlimit lim {};
+  if (want == 0 || ::getrlimit(RLIMIT_AS, &lim) != 0) return;
+  if (lim.rlim_cur == RLIM_INFINITY || lim.rlim_cur > want) {
+    lim.rlim_cur = want;
     ::setrlimit(RLIMIT_AS, &lim);
   }
-#endif
 }
 
 [[noreturn]] void child_run(int fd, const SurfaceMesh& s, const TetOptions& opt) {
@@ -303,10 +314,18 @@ RawTets run_tetgen_isolated(const SurfaceMesh& s, const TetOptions& opt) {
     throw InputError("TetGen did not finish within " + format_exact(limit) +
                      " s (--timeout); the surface may be nearly degenerate: run `palplab mesh "
                      "check` and `palplab mesh repair`, or relax --quality/--max-volume");
+  // TetGen does not check every allocation: out of memory can end in a crash (a `fem
+  // reference --mem-limit-gb 0.1` was reported as a bad surface).
+  char mem[160] = "";
+  if (const rlim_t cap = child_memory_limit(); cap > 0 && WIFSIGNALED(st))
+    std::snprintf(mem, sizeof mem,
+                  " (or it ran out of memory: its address space is limited to %.3g GB, half of "
+                  "this machine's memory or the command's own limit)",
+                  static_cast<double>(cap) / 1073741824.0);
   if (WIFSIGNALED(st))
     throw InputError(std::string("TetGen crashed on this surface (signal ") +
-                     std::to_string(WTERMSIG(st)) + ", " + strsignal(WTERMSIG(st)) +
-                     "); run `palplab mesh check` and `palplab mesh repair` on it" +
+                     std::to_string(WTERMSIG(st)) + ", " + strsignal(WTERMSIG(st)) + ")" + mem +
+                     "; run `palplab mesh check` and `palplab mesh repair` on it" +
                      (opt.seeds.empty() ? std::string()
                                         : std::string(", and check that every region seed lies "
                                                       "inside the region it seeds")));

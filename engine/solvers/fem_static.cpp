@@ -2,6 +2,7 @@
 
 #include <Eigen/CholmodSupport>
 #include <chrono>
+#include <new>
 #include <stdexcept>
 
 namespace palplab::engine {
@@ -93,6 +94,8 @@ void static_precompute(const SparseMatrixd& K, const std::vector<std::uint8_t>& 
   if (kind == SparseSolverKind::cholmod) {
     auto c = std::make_shared<CholmodFactor>();
     c->compute(s.K_ff);
+    // Out of memory is not a singular matrix (`fem reference --mem-limit-gb`).
+    if (c->cholmod().status == CHOLMOD_OUT_OF_MEMORY) throw std::bad_alloc();
     // LL^T fails on a matrix that is not positive definite; a rigid mode may survive round-off
     // as a tiny positive pivot, which the condition estimate catches.
     if (c->info() != Eigen::Success || (s.K_ff.rows() > 0 && !(c->rcond() > 1e-12)))

@@ -508,6 +508,31 @@ TEST(CliFemD, ArgumentErrorsComeBeforeTheCostNote) {
   fs::remove_all(d);
 }
 
+// fem reference had no memory limit of its own (a graded copy of D passed 12 GB without a word,
+// review 2026-12-07): beyond --mem-limit-gb it stops with "out of memory", exit 1, nothing
+// written. Not under AddressSanitizer (the limit is not applied there, as for fem solvers).
+TEST(CliFemD, ReferenceStopsAtItsMemoryLimit) {
+  namespace t = palplab::testing;
+  const fs::path d = tmp("reference_memory");
+  const fs::path p = d_variant(d, "Dcoarse", 400);
+  const fs::path out = d / "ref.json";
+  const std::string base = "fem reference " + p.string() +
+                           " --press ovary_left --force 1 --grade 0 --steps 0 --out " +
+                           out.string();
+  for (const char* bad : {"--mem-limit-gb 0", "--mem-limit-gb nan", "--mem-limit-gb 1e308"})
+    t::expect_exit2(run(base + " --levels 3 " + bad, d), {"--mem-limit-gb"});
+#if !defined(__SANITIZE_ADDRESS__)
+  // Level 3 of the nested refinement has 5e5 tets: far beyond 0.2 GB.
+  const Result r = run(base + " --levels 4 --mem-limit-gb 0.2", d);
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_TRUE(t::has(r.err, "out of memory: the levels need more than the limit of 0.2 GB"))
+      << r.err;
+  EXPECT_TRUE(t::has(r.err, "Nothing written")) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+#endif
+  fs::remove_all(d);
+}
+
 // --mem-limit-gb 1e308 overflowed the conversion to rlim_t and --cpu-limit-s inf was accepted;
 // an unwritable --out was found after every solver had run.
 TEST(CliFemD, SolversLimitsAndOutputCheckedFirst) {
