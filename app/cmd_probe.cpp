@@ -1,12 +1,17 @@
 // `palplab probe PROTOTYPE.json --press REGION_OR_NODE --force NEWTONS --duration SECONDS
-//  [--release SECONDS] [--integrator NAME] [--json]`: a scripted press and release to
+//  [--release SECONDS] [--integrator NAME] [--json] [--trace FILE.csv]`: a scripted press and
+//  release to
 // sanity-check a prototype. The contact point starts 2 mm outside the surface node nearest to
 // the region's centroid (or the given node), moves in along the inward normal at 2 cm/s until the
 // device force reaches NEWTONS, holds that force (integral control of the depth) for SECONDS,
-// withdraws at 5 cm/s to the start and keeps stepping for the release time.
+// withdraws at 5 cm/s to the start and keeps stepping for the release time. --trace writes
+// every step (time, script phase, device position, rendered force, contact node, visible
+// deformation; SI units) as CSV, written as the steps run.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -19,14 +24,19 @@
 #include "common/input_error.hpp"
 #include "engine/haptics/clock.hpp"
 #include "engine/haptics/press.hpp"
+#include "engine/haptics/scene_file.hpp"
 #include "prototypes/factory.hpp"
 
 namespace {
 // A peak force above this multiple of a renderable target is a bounce, not a press.
 constexpr double kOvershoot = 1.25;
+// --trace's header: its columns (SI units; phase: approach, hold, withdraw, release, done).
+constexpr const char* kTraceHeader =
+    "t_s,phase,x_m,y_m,z_m,fx_n,fy_n,fz_n,force_n,contact_node,visible_deformation_m";
 
 struct ProbeArgs {
-  std::string file, press, integrator;
+  std::string file, press, integrator, trace;
+  bool overwrite = false;          // --overwrite: replace a --trace file of another kind
   std::vector<std::string> scene;  // --scene FILE.psim | KEY (app/scene_option.hpp)
   double force = 0.0, duration = 0.0, release = 1.0;
   bool json = false;
@@ -58,6 +68,23 @@ int run_probe(const ProbeArgs& a) {
   }
   const engine::SceneStats s0 = scene.stats();
   engine::PressDevice press(engine::press_at(g, node, a.force, a.duration, a.release));
+  std::ofstream trace;
+  if (!a.trace.empty()) {
+    // Never an input (the prototype, its mesh, a --scene file), nor a file of another kind
+    // without --overwrite; its own earlier output starts with the header.
+    std::vector<app::CommandInput> inputs;
+    if (!a.file.empty()) inputs.push_back({"the prototype file", a.file});
+    for (const auto& sc : a.scene) inputs.push_back({"the --scene file", sc});
+    for (const auto& src : engine::scene_sources(scene.config()))
+      inputs.push_back({"the " + src.role + " file of the prototype", src.path});
+    app::require_replaceable_output(
+        "--trace", a.trace, inputs,
+        [](const std::string& p) { return app::file_starts_with(p, kTraceHeader); },
+        "probe trace (CSV)", a.overwrite);
+    trace.open(a.trace, std::ios::binary | std::ios::trunc);
+    if (!trace) throw InputError(SourceLocation{"--trace"}, "cannot write \"" + a.trace + "\"");
+    trace << kTraceHeader << "\n";
+  }
 
   std::vector<double> times;
   times.reserve(static_cast<size_t>((a.duration + a.release + 10.0) / scene.dt()));
@@ -70,21 +97,34 @@ int run_probe(const ProbeArgs& a) {
   engine::LockstepOptions opt;
   opt.duration = 1e6;  // the press script ends the run
   opt.frame_period = 0.0;
-  engine::run_lockstep(scene, timed, opt, [&](const engine::Rendered& r, const engine::Sample&) {
-    const double f = r.force.norm();
-    if (!std::isfinite(f)) nan = true;
-    peak_force = std::max(peak_force, f);
-    peak_disp = std::max(peak_disp, r.visible_deformation);
-    for (const auto& e : r.events)
-      events.push_back({{"t", e.t},
-                        {"kind", engine::to_string(e.kind)},
-                        {"region", e.region >= 0 ? g.region_names[e.region] : ""},
-                        {"value", e.value}});
-    if (!loaded_taken && press.phase() == engine::PressPhase::withdraw) {
-      s_loaded = scene.stats();  // the state at the end of the hold
-      loaded_taken = true;
-    }
-  });
+  engine::run_lockstep(
+      scene, timed, opt, [&](const engine::Rendered& r, const engine::Sample& smp) {
+        const double f = r.force.norm();
+        if (!std::isfinite(f)) nan = true;
+        if (trace.is_open()) {
+          char line[320];
+          const Eigen::Vector3d& x = smp.x;  // the device position this step rendered
+          std::snprintf(line, sizeof line, "%.6f,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%.9g\n",
+                        r.t, engine::to_string(press.phase()), x.x(), x.y(), x.z(), r.force.x(),
+                        r.force.y(), r.force.z(), f, r.contact_node, r.visible_deformation);
+          trace << line;
+        }
+        peak_force = std::max(peak_force, f);
+        peak_disp = std::max(peak_disp, r.visible_deformation);
+        for (const auto& e : r.events)
+          events.push_back({{"t", e.t},
+                            {"kind", engine::to_string(e.kind)},
+                            {"region", e.region >= 0 ? g.region_names[e.region] : ""},
+                            {"value", e.value}});
+        if (!loaded_taken && press.phase() == engine::PressPhase::withdraw) {
+          s_loaded = scene.stats();  // the state at the end of the hold
+          loaded_taken = true;
+        }
+      });
+  if (trace.is_open()) {
+    trace.close();
+    if (!trace) throw std::runtime_error("--trace: writing \"" + a.trace + "\" failed");
+  }
   const bool reached = press.force_reached();
   const double time_to_force = press.time_to_force();
   const engine::SceneStats s1 = scene.stats();
@@ -200,6 +240,11 @@ palplab::app::CommandRegistration reg_probe{
       cmd->add_option("--integrator", a->integrator,
                       "symplectic_euler | backward_euler | rk4 (mass-spring models)");
       cmd->add_flag("--json", a->json, "Print JSON");
+      cmd->add_option("--trace", a->trace,
+                      "Write every step as CSV (t_s, phase, device position x/y/z_m, force "
+                      "fx/fy/fz_n and its norm, contact_node, visible_deformation_m)");
+      cmd->add_flag("--overwrite", a->overwrite,
+                    "Replace an existing --trace file that is not a probe trace");
       cmd->callback([a, code] { *code = run_probe(*a); });
     }};
 

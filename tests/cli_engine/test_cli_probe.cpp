@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -243,4 +244,60 @@ TEST(CliProbe, AnUnstableContactIsSaidAndExitsOne) {
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(nlohmann::json::parse(r.out)["contact_stable"].get<bool>()) << r.out;
   std::filesystem::remove_all(d);
+}
+
+// probe --trace writes every step (SI units, the script's phase); on D with a stiff pad the
+// withdrawal's force falls from the hold's (it rose to 2.05 N for a 1 N hold before the FEM
+// contact acted on the gap at the end of the step, 2026-12-07). The trace is refused onto the
+// prototype file, and another kind of file is kept without --overwrite.
+TEST(CliProbe, TraceAndAWithdrawalWithoutRebound) {
+  namespace t = palplab::testing;
+  const auto d = t::scratch_dir("probe_trace");
+  auto j = nlohmann::json::parse(t::slurp(proto("D")));
+  j["contact"]["stiffness"] = 2e4;
+  j["id"] = "Dstiff";
+  std::ofstream(d / "Dstiff.json") << j.dump(2);
+  const std::string trace = (d / "trace.csv").string();
+  auto r = t::run_palplab("probe " + (d / "Dstiff.json").string() +
+                          " --press ovary_left --force 1 --duration 0.5 --release 0.05 --trace " +
+                          trace);
+  ASSERT_TRUE(r.code == 0 || r.code == 1) << r.err;
+  std::istringstream in(t::slurp(trace));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line,
+            "t_s,phase,x_m,y_m,z_m,fx_n,fy_n,fz_n,force_n,contact_node,visible_deformation_m");
+  double hold_end = -1, withdraw_max = 0, last_t = 0;
+  long rows = 0, withdraw_rows = 0;
+  while (std::getline(in, line)) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string f; std::getline(ss, f, ',');) c.push_back(f);
+    ASSERT_EQ(c.size(), 11u) << line;
+    const double tt = std::stod(c[0]), f = std::stod(c[8]);
+    if (rows > 0) {
+      EXPECT_NEAR(tt - last_t, 0.001, 1e-9) << line;  // every 1 ms step
+    }
+    last_t = tt;
+    ++rows;
+    EXPECT_NEAR(f, std::hypot(std::stod(c[5]), std::stod(c[6]), std::stod(c[7])), 1e-6) << line;
+    if (c[1] == "hold") hold_end = f;
+    if (c[1] == "withdraw") {
+      withdraw_max = std::max(withdraw_max, f);
+      ++withdraw_rows;
+    }
+  }
+  EXPECT_GT(rows, 700);
+  EXPECT_GT(withdraw_rows, 10);
+  EXPECT_NEAR(hold_end, 1.0, 0.01);
+  EXPECT_LE(withdraw_max, hold_end + 1e-3);
+  // Never onto an input; a file of another kind is kept unless --overwrite.
+  const std::string base = " --press ovary_left --force 1 --duration 0 --release 0 --trace ";
+  t::expect_exit2(
+      t::run_palplab("probe " + (d / "Dstiff.json").string() + base + (d / "Dstiff.json").string()),
+      {"--trace", "the prototype file"});
+  std::ofstream(d / "notes.txt") << "my notes\n";
+  t::expect_exit2(t::run_palplab("probe " + proto("A") + base + (d / "notes.txt").string()),
+                  {"--trace", "--overwrite"});
+  EXPECT_EQ(t::slurp(d / "notes.txt"), "my notes\n");
 }
