@@ -13,6 +13,15 @@
 
 namespace palplab::json {
 
+namespace {
+// A UTF-8 byte order mark opens the text: it is no character of line 1 (editors do not show
+// it), and a file saved with one (Windows Notepad) had every location at 1:1 and its duplicate
+// keys unseen (review 2026-12-07).
+bool has_bom(std::string_view t) {
+  return t.size() >= 3 && t.compare(0, 3, "\xEF\xBB\xBF") == 0;
+}
+}  // namespace
+
 TextPos offset_to_pos(std::string_view text, std::size_t offset) {
   if (offset > text.size()) offset = text.size();
   TextPos p;
@@ -24,6 +33,7 @@ TextPos offset_to_pos(std::string_view text, std::size_t offset) {
       ++p.line;
       line_start = i + 1;
     }
+  if (line_start == 0 && has_bom(text) && offset >= 3) line_start = 3;
   p.column = 1 + static_cast<int>(utf8_length(text.substr(line_start, offset - line_start)));
   return p;
 }
@@ -49,6 +59,7 @@ class Scanner {
       : t_(t), out_(out), dups_(dups) {}
 
   void run() {
+    if (has_bom(t_)) i_ = 3;  // a UTF-8 byte order mark (Notepad's): nlohmann skips it too
     skip_ws();
     value("$", -1);
   }
@@ -239,7 +250,7 @@ class PosTable {
     std::sort(offsets.begin(), offsets.end());
     offsets.erase(std::unique(offsets.begin(), offsets.end()), offsets.end());
     TextPos p{1, 1, 0};
-    std::size_t i = 0;
+    std::size_t i = has_bom(text) ? 3 : 0;  // the mark is no column
     for (long off : offsets) {
       const std::size_t target = std::min(static_cast<std::size_t>(off), text.size());
       for (; i < target; ++i) {

@@ -241,3 +241,20 @@ TEST(Escape, ControlCharactersAreShownEscaped) {
             "a\\xff\\xfe b \\xe9t\xc3\xa9 \\xe2\\x82 \xf0\x9f\x98\x80");
   EXPECT_EQ(escape_controls("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a surrogate
 }
+
+// A UTF-8 byte order mark (Windows Notepad saves one) hid every duplicate key and put every
+// location at 1:1 (review 2026-12-07): the mark is skipped and is no column.
+TEST(JsonCheck, AByteOrderMarkIsNoCharacter) {
+  const std::string bom = "\xEF\xBB\xBF";
+  const std::string e = located_error(bom + "{\"seed\": 4242,\n  \"seed\": 5}");
+  EXPECT_NE(e.find("t.json:2:3"), std::string::npos) << e;
+  EXPECT_NE(e.find("seed"), std::string::npos) << e;
+  auto ps = problems(bom + "{\"seed\": 18446744073709551616}", [](Checker& c, const Json& j) {
+    c.uint64(j, "$", "seed", true, "an integer >= 0");
+  });
+  ASSERT_EQ(ps.size(), 1u);
+  EXPECT_EQ(ps[0].where.line, 1);
+  EXPECT_EQ(ps[0].where.column, 10);  // as without the mark
+  EXPECT_NE(ps[0].what.find("18446744073709551616"), std::string::npos) << ps[0].what;
+  EXPECT_EQ(located_error(bom + "{\"a\": tru}"), located_error("{\"a\": tru}"));
+}
