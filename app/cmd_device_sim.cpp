@@ -146,7 +146,8 @@ std::vector<std::pair<double, Eigen::Vector3d>> read_script(const std::string& p
   if (c.expect_object(root, "$")) {
     c.keys(root, "$", {"waypoints", "buttons", "axis"});
     // Positions within 10 m of the device origin (as a study's start_position).
-    read_rows(c, root, "waypoints", true, 4, -10.0, 10.0, "[t, x, y, z] (s, m)",
+    read_rows(c, root, "waypoints", true, 4, -engine::kMaxDevicePosition,
+              engine::kMaxDevicePosition, "[t, x, y, z] (s, m)",
               [&](const std::string&, const std::vector<double>& v) {
                 w.emplace_back(v[0], Eigen::Vector3d(v[1], v[2], v[3]));
               });

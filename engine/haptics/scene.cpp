@@ -47,6 +47,8 @@ const char* to_string(EventKind k) {
       return "tip_to_target";
     case EventKind::contact_inside:
       return "contact_inside";
+    case EventKind::device_jump:
+      return "device_jump";
   }
   return "?";
 }
@@ -225,7 +227,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   // A non-finite or absurd device position (a broken driver, a NaN from a bridge; no device
   // reaches a kilometre) is no contact: the hand is taken to be where it last was valid,
   // disengaged.
-  const bool valid = x_in.allFinite() && x_in.cwiseAbs().maxCoeff() < 1e3;
+  const bool valid = x_in.allFinite() && x_in.cwiseAbs().maxCoeff() <= kMaxDevicePosition;
   if (!valid && !s.device_bad) s.events.push_back({s.t, EventKind::device_invalid, -1, -1, 0.0});
   s.device_bad = !valid;
   const Eigen::Vector3d x = valid ? x_in : s.last.x;
@@ -234,6 +236,15 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   // The device's path since the last valid step is tested against the surface, so no speed
   // tunnels through it, and the proxy cannot cross it, so depth never jumps to the far side.
   ContactTracker& tr = *s.tracker;
+  // A jump (review 2026-12-07: a hand reported 2 m away for 0.5 s caught, on its way back, on
+  // the far ovary and was held at the 8.5 N limit in free air until the session ended): the
+  // contact is found anew, and the jump does no work in the passivity observer.
+  if (const double jump = (x - s.x_prev).norm();
+      valid && !s.device_bad && s.step_index > 1 && jump > kMaxDeviceStep) {
+    s.events.push_back({s.t, EventKind::device_jump, -1, -1, jump});
+    tr.invalidate();
+    s.f_prev.setZero();
+  }
   if (valid)
     tr.update(s.x_prev, x);
   else

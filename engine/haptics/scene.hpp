@@ -50,7 +50,7 @@ enum class EventKind {
   divergence,       // value: the offending force (N), -1 if not finite; the model went to rest
   energy_injected,  // value: energy the scene has returned to the hand beyond what it got (J),
                     // once per contact (passivity observer; the scene is not passive)
-  device_invalid,   // value: 0; a non-finite or absurd (> 1 km) device position: no contact
+  device_invalid,   // value: 0; a non-finite or absurd (> 10 m) device position: no contact
   // Tools and the needle (model "needle", prototype N; docs/FORMATS.md "Needle"). Tissue events:
   // region = the tissue's region index (region names of a needle scene are its tissue names),
   // value = the tissue attribute (100 skin, 101 soft tissue, 107 membrane, 200+ bone, 300+ muscle).
@@ -65,7 +65,18 @@ enum class EventKind {
   // A contact that began with the device already inside the organ (its first position after
   // reset, or after device_invalid, is inside): the proxy starts at the closest surface point.
   contact_inside,  // value: the depth (m) the force starts from
+  // The device moved farther than kMaxDeviceStep in one step (no hand does: a bridge's glitch,
+  // a tracker that lost the hand): its path is not taken as a motion through the organ, and the
+  // contact is found anew from where it is (as after device_invalid).
+  device_jump,  // value: the distance jumped (m)
 };
+// The most a device moves in one haptic step before it counts as a jump (m): 5 cm in 1 ms is
+// 50 m/s, ten times a fast hand.
+inline constexpr double kMaxDeviceStep = 0.05;
+// The farthest a device position may be from the device origin (m, per axis): beyond it the
+// position is invalid (device_invalid; a UDP datagram holding one is malformed), as in a trace
+// file or a device-sim script. Organs are centimetres across.
+inline constexpr double kMaxDevicePosition = 10.0;
 const char* to_string(EventKind k);
 
 // An event of one step. Events are for LOGGING, not perception: a participant model must use

@@ -145,3 +145,34 @@ TEST(Watchdog, NonFiniteDeviceInputIsNoContactOnEveryPrototype) {
     EXPECT_TRUE(seen.finite) << id;
   }
 }
+
+// A device that jumps (review 2026-12-07: a hand reported 2 m away for 0.5 s caught, on its way
+// back, on the far side of the organ and was held at the 8.5 N limit in free air until the
+// session ended; C alternated 0 / 8.2 N): each jump is logged, the contact is found anew from
+// where the device is, and back outside the organ there is no force.
+TEST(Watchdog, ADeviceJumpIsLoggedAndLeavesNoForceOutside) {
+  for (const char* id : {"A", "B", "C", "D"}) {
+    Scene s = prototypes::build_scene(proto(id));
+    const SceneGeometry& g = s.geometry();
+    const int node = g.region_node("body");
+    const Eigen::Vector3d p = g.V.row(node).transpose(), n = g.N.row(node).transpose();
+    Seen pressed;
+    press(s, body_press(s, 0.004), 400, pressed);  // pressing, 4 mm deep
+    EXPECT_GT(pressed.fmax, 0.1) << id;
+    Seen away;
+    for (int k = 0; k < 500; ++k) step(s, p + Eigen::Vector3d(2.0, 0.0, 0.0), away);
+    EXPECT_EQ(away.fmax, 0.0) << id;
+    Seen back;  // 1 cm outside the surface it pressed
+    for (int k = 0; k < 300; ++k) step(s, p + 0.01 * n, back);
+    EXPECT_EQ(back.fmax, 0.0) << id;
+    EXPECT_TRUE(away.finite && back.finite) << id;
+    EXPECT_EQ(away.count(EventKind::device_jump) + back.count(EventKind::device_jump), 2) << id;
+    const auto it = std::find(away.kinds.begin(), away.kinds.end(), EventKind::device_jump);
+    ASSERT_NE(it, away.kinds.end()) << id;
+    EXPECT_NEAR(away.values[it - away.kinds.begin()], 2.0, 0.01) << id;  // the distance (m)
+    // A hand that moves 4 cm in a step (40 m/s) is no jump.
+    Seen fast;
+    step(s, p + 0.05 * n, fast);
+    EXPECT_EQ(fast.count(EventKind::device_jump), 0) << id;
+  }
+}

@@ -136,10 +136,10 @@ Trace read_trace(const std::string& path) {
            " ms (a gap, or a device sampled at another rate: resample it)");
     }
     for (int k = 1; k <= 3; ++k)
-      if (std::abs(v[k]) > 10.0)
-        fail("column " + std::to_string(k + 1) +
-             ": expected a position within 10 m of the device origin, got " + std::to_string(v[k]) +
-             " m");
+      if (std::abs(v[k]) > kMaxDevicePosition)
+        fail("column " + std::to_string(k + 1) + ": expected a position within " +
+             format_g(kMaxDevicePosition, 6) + " m of the device origin, got " +
+             std::to_string(v[k]) + " m");
     for (int k = 4; k <= 6; ++k)
       if (std::abs(v[k]) > 1e3)
         fail("column " + std::to_string(k + 1) + ": expected a velocity within 1000 m/s, got " +
