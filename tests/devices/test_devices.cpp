@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <thread>
 
 #include "common/input_error.hpp"
@@ -145,6 +146,61 @@ TEST(UdpDevice, PositionInForceOutWithSequenceNumbers) {
   EXPECT_EQ(ev[0].kind, "device_gap");
   EXPECT_EQ(ev[0].value, 3.0);
   EXPECT_EQ(dev.samples_received(), 2);
+}
+
+// Review 2026-12-07: a second bridge was mixed into the hand unsaid; a restarted bridge
+// (counting from 1 again) or one datagram far ahead stopped the stream for good ("device lost");
+// NaN, 1 km and short datagrams were dropped without a word. Now: the foreign sender is dropped
+// and said once, malformed datagrams are counted in an event, and after a silence longer than
+// the timeout the next stream starts afresh.
+TEST(UdpDevice, ForeignSendersMalformedDatagramsAndRestartedBridges) {
+  e::UdpDevice dev({0, 0.2});  // a loaded machine stays far inside the timeout
+  Bridge a(dev.port()), b(dev.port());
+  const auto settle = [] { std::this_thread::sleep_for(std::chrono::milliseconds(3)); };
+  const auto kinds = [&] {
+    std::string k;
+    for (const auto& ev : dev.take_events()) k += ev.kind + "=" + std::to_string(ev.value) + " ";
+    return k;
+  };
+  a.send({0.01, 0, 0}, 100);
+  settle();
+  EXPECT_EQ(dev.read(0.001).position.x(), 0.01);
+  b.send({0.5, 0, 0}, 1);
+  b.send({0.5, 0, 0}, 2);
+  a.send({0.02, 0, 0}, 101);
+  settle();
+  EXPECT_EQ(dev.read(0.002).position.x(), 0.02);
+  std::string ev = kinds();
+  EXPECT_EQ(std::count(ev.begin(), ev.end(), 'f'), 1) << ev;  // "device_foreign" once
+  EXPECT_NE(ev.find("device_foreign="), std::string::npos) << ev;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  a.send({nan, 0, 0}, 102);
+  a.send({1e6, 0, 0}, 103);
+  const std::uint8_t short_datagram[10] = {};
+  ::sendto(a.fd, short_datagram, sizeof short_datagram, 0, reinterpret_cast<sockaddr*>(&a.to),
+           sizeof a.to);
+  settle();
+  EXPECT_EQ(dev.read(0.003).position.x(), 0.02);
+  EXPECT_NE(kinds().find("device_malformed=3"), std::string::npos);
+  // a stops; b, restarted, counts from 1: after the timeout its stream is taken.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  dev.read(0.3);  // device_timeout
+  b.send({0.03, 0, 0}, 1);
+  settle();
+  EXPECT_EQ(dev.read(0.301).position.x(), 0.03);
+  ev = kinds();
+  EXPECT_NE(ev.find("device_timeout"), std::string::npos) << ev;
+  EXPECT_NE(ev.find("device_resumed"), std::string::npos) << ev;
+  // One datagram far ahead: the next ones look old until the stream falls silent, then resume.
+  b.send({0.04, 0, 0}, 1u << 31);
+  b.send({0.05, 0, 0}, 2);
+  settle();
+  EXPECT_EQ(dev.read(0.302).position.x(), 0.04);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  dev.read(0.6);
+  b.send({0.06, 0, 0}, 3);
+  settle();
+  EXPECT_EQ(dev.read(0.601).position.x(), 0.06);
 }
 
 TEST(UdpDevice, EventsTakenFromAnotherThreadWhileTheHapticThreadReads) {

@@ -149,6 +149,11 @@ UdpDevice::~UdpDevice() {
 
 void UdpDevice::drain(double t) {
   std::uint8_t buf[256];
+  const auto now = std::chrono::steady_clock::now();
+  // The stream is stale once no fresh position arrived for `timeout` (read() says so with
+  // device_timeout; checked here too, before the datagrams of this step are taken).
+  const bool stale =
+      have_sample_ && std::chrono::duration<double>(now - last_rx_).count() > opt_.timeout;
   while (true) {
     sockaddr_in from{};
     socklen_t len = sizeof from;
@@ -159,14 +164,38 @@ void UdpDevice::drain(double t) {
       ++dropped_;
       continue;
     }
-    const auto m = decode_position(buf, static_cast<size_t>(n));
-    // Sequence numbers increase; a datagram not newer than the newest is late or repeated.
-    // (Wrap-around after 2^32 datagrams = 50 days at 1 kHz is handled by serial arithmetic.)
-    if (!m || (have_sample_ && static_cast<std::int32_t>(m->seq - last_.seq) <= 0)) {
+    auto m = decode_position(buf, static_cast<size_t>(n));
+    // A position beyond kMaxDevicePosition (10 m; a trace holds no more) is as malformed as a
+    // NaN: the scene would take it for no contact, and a recorded trace would not replay.
+    if (m && m->x.cwiseAbs().maxCoeff() > kMaxDevicePosition) m.reset();
+    if (!m) {
+      ++dropped_;
+      ++malformed_;
+      continue;
+    }
+    // One bridge at a time: positions from another sender (address and port) while the current
+    // one is live are dropped and said once (two bridges were mixed into one hand: review
+    // 2026-12-07). A sender that follows a stale one takes over (a restarted bridge).
+    const bool same_sender = have_peer_ && std::memcmp(peer_.data(), &from, sizeof from) == 0;
+    if (have_peer_ && !same_sender && !stale) {
+      ++dropped_;
+      if (!foreign_said_) {
+        foreign_said_ = true;
+        add_event(t, "device_foreign", static_cast<double>(ntohs(from.sin_port)));
+      }
+      continue;
+    }
+    // Sequence numbers increase; a datagram not newer than the newest is late or repeated
+    // (wrap-around after 2^32 datagrams = 50 days at 1 kHz is handled by serial arithmetic).
+    // After a silence, or from a new sender, the stream starts afresh: a restarted bridge counts
+    // from 1 again, and one datagram far ahead must not stop every later one (both ended the
+    // session as "device lost").
+    const bool fresh_stream = !have_sample_ || stale || !same_sender;
+    if (!fresh_stream && static_cast<std::int32_t>(m->seq - last_.seq) <= 0) {
       ++dropped_;
       continue;
     }
-    if (have_sample_ && m->seq - last_.seq > 1) {
+    if (!fresh_stream && m->seq - last_.seq > 1) {
       const std::uint32_t gap = m->seq - last_.seq - 1;
       lost_ += gap;
       add_event(t, "device_gap", static_cast<double>(gap));
@@ -181,6 +210,13 @@ void UdpDevice::drain(double t) {
       timed_out_ = false;
       add_event(t, "device_resumed", 0.0);
     }
+  }
+  // Malformed datagrams (a bad size, magic, version or type; a non-finite or absurd value) are
+  // dropped and said, at most once a second with the count since the last time.
+  if (malformed_ > malformed_said_ && (malformed_said_ == 0 || t - malformed_t_ >= 1.0)) {
+    add_event(t, "device_malformed", static_cast<double>(malformed_ - malformed_said_));
+    malformed_said_ = malformed_;
+    malformed_t_ = t;
   }
 }
 

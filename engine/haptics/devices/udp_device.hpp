@@ -18,9 +18,12 @@
 //    56 f64 reserved (0)
 //
 // palplab binds 127.0.0.1:PORT only and ignores datagrams from other addresses, with a bad
-// magic/version/type/size, or with a sequence number not newer than the newest one (late or
-// duplicated). When no fresh position arrived for `timeout` (default 2 ms), every force datagram
-// carries zero force and the "force off" flag until positions arrive again; events
+// magic/version/type/size or a non-finite or absurd (> 10 m) value (device_malformed, at most
+// once a second with the count), from a second sender while the first is live (device_foreign,
+// once), or with a sequence number not newer than the newest one (late or duplicated). After a
+// silence longer than the timeout the next sender's stream starts afresh (a restarted bridge
+// counts from 1 again). When no fresh position arrived for `timeout` (default 2 ms), every force
+// datagram carries zero force and the "force off" flag until positions arrive again; events
 // device_timeout / device_resumed / device_gap are reported through take_events().
 #include <array>
 #include <atomic>
@@ -99,6 +102,9 @@ class UdpDevice : public Device {
   // gap under load pushed into events_ while the writer swapped it out (a crash seen once).
   std::atomic<long> received_{0};
   long dropped_ = 0, lost_ = 0;
+  long malformed_ = 0, malformed_said_ = 0;  // malformed datagrams, and those said in events
+  double malformed_t_ = 0.0;                 // when device_malformed was last logged
+  bool foreign_said_ = false;                // device_foreign logged
   double t_ = 0.0;
   std::mutex events_mu_;
   std::vector<DeviceEvent> events_;
