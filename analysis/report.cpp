@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -22,6 +24,7 @@
 #include "analysis/svg.hpp"
 #include "analysis/two_sample.hpp"
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 #include "common/write_file.hpp"
 #include "palplab/version.hpp"
 #include "results/store.hpp"
@@ -185,6 +188,9 @@ struct Context {
   // `stills_stage` and moved into stills/.
   std::vector<std::pair<std::string, std::string>> pending;  // (file, content)
   fs::path stills_stage;
+  // The stage and the stills in it are removed on SIGINT/SIGTERM/SIGHUP until they are moved
+  // (an interrupted report left OUT/stills.partial/*.png: review 2026-12-07).
+  std::vector<std::unique_ptr<RemoveOnSignal>> stage_on_signal;
 
   int group_index(const std::string& g) const {
     return static_cast<int>(std::find(groups.begin(), groups.end(), g) - groups.begin());
@@ -502,6 +508,7 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
   const fs::path dir = fs::path(c.out_dir) / "stills";
   c.stills_stage = fs::path(c.out_dir) / kStillsStage;
   make_out_dir(c.stills_stage, "the stills being drawn");
+  c.stage_on_signal.push_back(std::make_unique<RemoveOnSignal>(c.stills_stage.string()));
   const int W = c.options.still_width, H = c.options.still_height;
   const std::string force_text = fmt(th->mpf, "%.3g") + " N";
   struct Done {
@@ -541,6 +548,8 @@ void section_stills(Context& c, const std::vector<std::string>& phase_candidates
     q.pressed_png = (c.stills_stage / (slug(p->prototype) + "_pressed.png")).string();
     q.rest_png = (c.stills_stage / (slug(p->prototype) + "_rest.png")).string();
     StillResult r;
+    for (const std::string& png : {q.pressed_png, q.rest_png})
+      c.stage_on_signal.push_back(std::make_unique<RemoveOnSignal>(png));
     try {
       r = c.options.stills->make(q);
     } catch (const std::exception& e) {
@@ -661,17 +670,37 @@ std::string ci_cell(const std::vector<double>& v, const Descriptives& d, double 
 struct Values {
   GroupedData data;
   std::vector<int> undefined;
+  // Participants left out because they lack the phase's planned last session (an incomplete
+  // run), per group; without the study structure (schema 1) the last session stored counts.
+  std::vector<int> missing;
   std::vector<ParticipantPoint> points;
 };
 Values collect_values(const Context& c, const std::string& measure, const std::string& phase,
                       bool pooled, bool pool_sessions) {
-  // Values: per participant the last session of the phase, or every session when pooled.
+  // Values: per participant the last session of the phase, or every session when pooled. The
+  // last session is the phase's planned last: in an incomplete run a participant whose stored
+  // sessions end earlier is left out (counted), not represented by an earlier session (one
+  // group's "post-training" value was P02's session 1 beside another's session 2: review
+  // 2026-12-07).
+  const results::PhaseRecord* planned = c.phase(phase);
   std::map<std::string, int> last_index;
   for (const auto& m : c.measures)
     if (m.phase == phase && m.name == measure)
       last_index[m.participant] =
           std::max(last_index.count(m.participant) ? last_index[m.participant] : -1, m.phase_index);
   Values out;
+  out.missing.assign(c.groups.size(), 0);
+  if (planned && planned->sessions >= 1)
+    for (auto& [who, last] : last_index)
+      if (last != planned->sessions - 1) {
+        // Its group, from any of its rows.
+        for (const auto& m : c.measures)
+          if (m.participant == who) {
+            ++out.missing[c.group_index(m.group)];
+            break;
+          }
+        last = planned->sessions - 1;  // matches none of its rows
+      }
   GroupedData& data = out.data;
   data.names = c.groups;
   data.values.assign(c.groups.size(), {});
@@ -892,6 +921,14 @@ void section_analysis(Context& c, const Unit& u) {
   int total = 0, excluded = 0;
   for (size_t g = 0; g < groups.size(); ++g)
     total += data.values[g].size(), excluded += undefined[g];
+  if (!u.pooled && std::accumulate(vals.missing.begin(), vals.missing.end(), 0) > 0) {
+    std::string t =
+        "Participants left out because the database does not hold their last session "
+        "of the phase (the run is incomplete): ";
+    for (size_t g = 0; g < groups.size(); ++g)
+      t += (g ? ", " : "") + groups[g] + " " + std::to_string(vals.missing[g]);
+    doc.para(t + ".");
+  }
   if (total == 0) {
     doc.para("No defined values of " + u.measure + " in phase " + u.phase + " (" +
              std::to_string(excluded) + " undefined).");
@@ -903,6 +940,7 @@ void section_analysis(Context& c, const Unit& u) {
       t += (g ? ", " : "") + groups[g] + " " + std::to_string(undefined[g]);
     doc.para(t + ".");
   }
+
   // Descriptives (always).
   doc.heading(3, "Descriptives");
   std::vector<std::vector<std::string>> rows;
@@ -1423,6 +1461,7 @@ void commit_files(Context& c) {
     }
     std::error_code ec;
     fs::remove_all(c.stills_stage, ec);
+    c.stage_on_signal.clear();
   }
   for (const auto& [file, content] : c.pending)
     write_file(file, content,

@@ -219,3 +219,43 @@ TEST(CliReport, CountsAreNoProportions) {
             std::string::npos);
   fs::remove_all(d);
 }
+
+// An incomplete run: "last session of the phase" took each participant's last STORED session,
+// so one group's values mixed session 1 and session 2 of the test (review 2026-12-07). The
+// planned last session counts; a participant without it is left out, and the report says so.
+TEST(CliReport, AnIncompleteRunLeavesOutParticipantsWithoutTheirLastSession) {
+  const fs::path d = scratch_dir("report_incomplete");
+  std::ofstream(d / "s.json") << R"({"palplab_study": 1, "id": "inc", "title": "inc",
+  "seed": 3, "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "participant_model": {"model": "pmm1", "parameters": {"landmark_spacing": 0}},
+  "groups": [{"id": "A", "prototype": "A", "size": 2}, {"id": "B", "prototype": "B", "size": 2}],
+  "phases": [
+    {"id": "training", "kind": "training", "sessions": 1, "session_duration": 30},
+    {"id": "test", "kind": "post_training", "sessions": 2, "session_duration": 30,
+     "gap": {"minutes": 5}, "start": {"after_previous": {"minutes": 10}}}]})";
+  Result r = palplab::testing::run_palplab("run " + (d / "s.json").string() + " --db " +
+                                               (d / "r.db").string() +
+                                               " --quiet --samples none --max-sessions 11",
+                                           d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = palplab::testing::run_palplab(
+      "report " + (d / "r.db").string() + " --out " + (d / "rep").string() + " --no-stills", d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string md = slurp(d / "rep" / "report.md");
+  const size_t at = md.find("## Analysis: palpation_force — phase test");
+  ASSERT_NE(at, std::string::npos) << md.substr(0, 3000);
+  const std::string sec = md.substr(at, md.find("\n## ", at + 1) - at);
+  const std::string said =
+      "Participants left out because the database does not hold their last "
+      "session of the phase (the run is incomplete): ";
+  const size_t s = sec.find(said);
+  ASSERT_NE(s, std::string::npos) << sec;
+  const std::string counts = sec.substr(s + said.size(), 8);
+  EXPECT_TRUE(counts == "A 1, B 0" || counts == "A 0, B 1") << counts;
+  // The descriptives hold 2 + 1 participants (n column), not 2 + 2.
+  const std::regex row(R"(\n\| (A|B) \| ([0-9]+) \|)");
+  int n = 0;
+  for (std::sregex_iterator it(sec.begin(), sec.end(), row), end; it != end; ++it)
+    n += std::stoi((*it)[2]);
+  EXPECT_EQ(n, 3) << sec;
+}
