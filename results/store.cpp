@@ -138,7 +138,7 @@ void exec(sqlite3* db, const std::string& sql) {
                          " (sqlite: " + e.detail +
                          "); what it held before this write is kept: make room, then continue "
                          "the run with `palplab run STUDY --db " +
-                         path + " --resume`",
+                         shell_word(path) + " --resume`",
                      path);
   }
 }
@@ -839,6 +839,48 @@ void check_references(sqlite3* db, int version, const std::string& path) {
                            "; edited by hand or by another tool?)",
                        path);
   }
+  {
+    // Values the report and export read as they are: a phase kind 'bogus', a duration of -1 s,
+    // an MPF of -2 N (printed, then said to be missing), feature_identified 2 (a CI of [-4.9,
+    // 7.9]), a measure's unit changed to kN (its column relabelled) were taken (review
+    // 2026-12-07). Each query gives the row and what is wrong with it.
+    const char* const values[] = {
+        "SELECT 'phase ' || quote(phase), 'kind ' || quote(kind) || ': expected pre_training, "
+        "training, post_training or other' FROM phases WHERE kind NOT IN ('pre_training', "
+        "'training', 'post_training', 'other') LIMIT 1",
+        // Numbers out of range (a value that is no number at all is said by the readers,
+        // with the participant it belongs to).
+        "SELECT 'phase ' || quote(phase), 'session_duration ' || quote(session_duration) || ': "
+        "expected a duration in s > 0' FROM phases WHERE typeof(session_duration) IN "
+        "('integer', 'real') AND NOT session_duration > 0 LIMIT 1",
+        "SELECT 'thresholds of phase ' || quote(phase) || ', region ' || quote(region), 'ST ' || "
+        "quote(st) || ', MPF ' || quote(mpf) || ', SFT ' || quote(sft) || ': expected forces in "
+        "N > 0' FROM thresholds WHERE (typeof(st) IN ('integer', 'real') AND NOT st > 0) OR "
+        "(typeof(mpf) IN ('integer', 'real') AND NOT mpf > 0) OR (typeof(sft) IN ('integer', "
+        "'real') AND NOT sft > 0) LIMIT 1",
+        // The measures palplab computes, with their units and ranges (protocols/measures.cpp).
+        "WITH k(name, unit, lo, hi, range) AS (VALUES ('palpation_force', 'N', 0, 1e9, '>= 0'), "
+        "('exploration_time', 's', 0, 1e9, '>= 0'), ('feature_identified', '1', 0, 1, 'in [0, "
+        "1]'), ('accuracy', '%', 0, 100, 'in [0, 100]'), ('palpations', '1', 0, 1e12, '>= 0'), "
+        "('sft_reached', '1', 0, 1e12, '>= 0'), ('insertion_attempts', '1', 0, 1e12, '>= 0'), "
+        "('layers_passed', '1', 0, 1e12, '>= 0'), ('tip_to_target_mm', 'mm', 0, 1e9, '>= 0'), "
+        "('bone_contacts', '1', 0, 1e12, '>= 0'), ('procedure_time', 's', 0, 1e9, '>= 0')) "
+        "SELECT 'measure ' || quote(m.name) || ' of session ' || m.session, 'value ' || "
+        "quote(m.value) || ' with unit ' || quote(m.unit) || ': expected a number ' || k.range "
+        "|| ' with unit ' || k.unit FROM measures m JOIN k ON k.name = m.name WHERE m.unit IS "
+        "NOT k.unit OR (typeof(m.value) IN ('integer', 'real') AND NOT m.value BETWEEN k.lo AND "
+        "k.hi) LIMIT 1",
+    };
+    for (const char* sql : values) {
+      Stmt q(db, sql);
+      if (q.step())
+        throw InputError(
+            "not a consistent palplab results database: " + escape_controls(q.text(0), false) +
+                " has " + escape_controls(q.text(1), false) +
+                " (edited by hand or by another tool?)",
+            path);
+    }
+  }
   if (version < 3) return;
   Stmt q(db,
          "SELECT 'session ' || x.session, quote(x.status) FROM sessions x WHERE x.status NOT IN "
@@ -986,11 +1028,11 @@ std::string Store::incomplete_warning() const {
       if (q.step()) n = static_cast<std::size_t>(q.integer(0));
     }
     return "warning: " + path_ + " is INCOMPLETE: the run started " + st.started_at +
-           " has not finished (" + std::to_string(n) +
-           " sessions stored); results cover only those sessions. Continue it with "
+           " has not finished (" + std::to_string(n) + (n == 1 ? " session" : " sessions") +
+           " stored); results cover only those sessions. Continue it with "
            "`palplab run STUDY --db " +
-           path_ + " --resume` (virtual participants), or `palplab run STUDY --db " + path_ +
-           " --human --participant ID` (a person's sessions).";
+           shell_word(path_) + " --resume` (virtual participants), or `palplab run STUDY --db " +
+           shell_word(path_) + " --human --participant ID` (a person's sessions).";
   });
 }
 

@@ -187,6 +187,21 @@ TEST(CliReportDamage, RowsOutsideTheStudysStructureAreRefused) {
       {"UPDATE sessions SET status = 'bogus' WHERE session = (SELECT MIN(session) FROM sessions);",
        {"table sessions: session ",
         " has status 'bogus': expected 'complete', 'running' or 'aborted'"}},
+      // Values read as they are (review 2026-12-07): a phase kind, a duration, a threshold, a
+      // measure's value and unit.
+      {"UPDATE phases SET kind = 'bogus' WHERE position = 0;",
+       {"not a consistent palplab results database: phase '", "has kind 'bogus': expected "}},
+      {"UPDATE phases SET session_duration = -1 WHERE position = 0;",
+       {"has session_duration -1.0: expected a duration in s > 0"}},
+      {"UPDATE thresholds SET mpf = -2 WHERE rowid = (SELECT MIN(rowid) FROM thresholds);",
+       {"thresholds of phase '", "MPF -2.0", "expected forces in N > 0"}},
+      {"UPDATE measures SET value = 2 WHERE name = 'feature_identified' AND session = (SELECT "
+       "MIN(session) FROM sessions);",
+       {"measure 'feature_identified' of session ",
+        "has value 2.0 with unit '1': expected a "
+        "number in [0, 1] with unit 1"}},
+      {"UPDATE measures SET unit = 'kN' WHERE name = 'palpation_force';",
+       {"measure 'palpation_force' of session ", "with unit 'kN': expected"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.sql);
