@@ -7,6 +7,7 @@
 #include "app/output_dir.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 #include "results/store.hpp"
 
 namespace {
@@ -115,6 +116,13 @@ palplab::app::CommandRegistration reg_export{
           made.top = p;
           if (p == p.parent_path()) break;
         }
+        // Removed on SIGINT/SIGTERM/SIGHUP too, when empty (an interrupted export left them).
+        std::vector<std::unique_ptr<palplab::RemoveOnSignal>> made_on_signal;
+        if (!made.top.empty())
+          for (auto p = made.dir;; p = p.parent_path()) {
+            made_on_signal.push_back(std::make_unique<palplab::RemoveOnSignal>(p.string()));
+            if (p == made.top || !p.has_parent_path() || p == p.parent_path()) break;
+          }
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";
@@ -130,6 +138,7 @@ palplab::app::CommandRegistration reg_export{
         }
         const auto summary = palplab::results::export_csv(store, *dir, *samples);
         made.done = true;
+        made_on_signal.clear();
         std::cout << "wrote " << *dir << "/measures.csv, sessions.csv, events.csv"
                   << (*samples ? ", samples.csv" : "") << "\n";
         // Without --samples, an earlier export's samples.csv is not left beside these files.

@@ -46,6 +46,12 @@ void install() {
 void remove_registered_files() noexcept {
   for (auto& s : g_slots)
     if (s.used.load(std::memory_order_acquire)) ::unlink(s.path);
+  // Then the directories (unlink fails on them, rmdir on files and on directories that are not
+  // empty), in a few passes so that a parent goes once its registered children have gone
+  // (slots are reused, so their order is not the registration order).
+  for (int pass = 0; pass < 4; ++pass)
+    for (int i = kSlots - 1; i >= 0; --i)
+      if (g_slots[i].used.load(std::memory_order_acquire)) ::rmdir(g_slots[i].path);
 }
 
 RemoveOnSignal::RemoveOnSignal(const std::string& path) {

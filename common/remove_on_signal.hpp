@@ -3,7 +3,9 @@
 // report file being written) are removed when the process is ended by SIGINT, SIGTERM or SIGHUP
 // while they are registered, so that an interrupted command leaves no cut-off file behind; the
 // process then ends by the same signal, as it would have without the handler (exit status
-// 128 + signal in a shell).
+// 128 + signal in a shell). A registered directory is removed after the files if it is then
+// empty (a directory the command made for its output: an interrupted `export --csv a/b` left
+// a/ and a/b, a report its stills' stage).
 //
 // The handler is installed at each registration, for each of those signals whose
 // disposition is still the default: a signal the caller ignores (nohup) stays ignored, and a
