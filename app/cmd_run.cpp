@@ -61,16 +61,6 @@ extern "C" void on_interrupt_virtual(int sig) {
   ::_exit(128 + sig);
 }
 
-// `arg` as one shell word (single-quoted unless it is plain).
-std::string shell_word(const std::string& arg) {
-  if (!arg.empty() && arg.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
-                                            "0123456789_./-+=:,@%") == std::string::npos)
-    return arg;
-  std::string q = "'";
-  for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 struct HumanArgs {
   bool human = false;
   std::string participant, device = "mouse", record_trace, mouse_script, size = "1280x800";
@@ -480,10 +470,10 @@ palplab::app::CommandRegistration reg_run{
           };
         }
         // The flags that change what is written come along (--samples is the run's own).
-        std::string again = "palplab run " + shell_word(*study) + " --db " + shell_word(opt->db);
-        for (const auto& sc : *scenes) again += " --scene " + shell_word(sc);
+        std::string again = "palplab run " + palplab::shell_word(*study) + " --db " + palplab::shell_word(opt->db);
+        for (const auto& sc : *scenes) again += " --scene " + palplab::shell_word(sc);
         if (!human->record_trace.empty())
-          again += " --record-trace " + shell_word(human->record_trace);
+          again += " --record-trace " + palplab::shell_word(human->record_trace);
         g_interrupt_text = "\ninterrupted: the sessions completed before this are stored in " +
                            palplab::escape_controls(opt->db, false) +
                            " (the one running is not); continue with:\n  " + again + " --resume\n";
@@ -501,7 +491,7 @@ palplab::app::CommandRegistration reg_run{
             ids += (k ? ", " : "") + r.people_left[k];
           if (r.people_left.size() > 10) ids += ", …";
           how = "the virtual participants are done; people's sessions remain (" + ids +
-                "): `palplab run STUDY --db " + opt->db + " --human --participant ID`";
+                "): `palplab run STUDY --db " + palplab::shell_word(opt->db) + " --human --participant ID`";
         }
         if (!*quiet) {
           std::printf(

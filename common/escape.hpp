@@ -170,4 +170,16 @@ inline std::string markdown_text(std::string_view s) {
   return out;
 }
 
+// `arg` as one shell word (single-quoted unless it is plain), for a command line a message
+// tells the user to run: a database path with a space or a '#' printed unquoted broke the
+// `--resume` command a warning suggested (review 2026-12-07).
+inline std::string shell_word(const std::string& arg) {
+  if (!arg.empty() && arg.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                            "0123456789_./-+=:,@%") == std::string::npos)
+    return arg;
+  std::string q = "'";
+  for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 }  // namespace palplab

@@ -511,9 +511,9 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
     fresh = true;
   }
   if (exists && opt.force && !opt.resume) {
+    std::string what;
     if (opt.notice && fs::is_regular_file(opt.db)) {
-      std::string what;
-      try {  // what is lost, said before it is (remove_existing refuses anything not palplab's)
+      try {  // what is lost (remove_existing refuses anything not palplab's)
         results::Store old = results::Store::open(opt.db);
         const results::StudyRecord rec = old.read_study();
         const std::size_t n = old.read_sessions().size();
@@ -522,9 +522,10 @@ RunSummary run_study(const Study& study, const Plan& plan, const RunOptions& opt
                (rec.finished_at.empty() ? "INCOMPLETE" : "complete");
       } catch (const std::exception&) {
       }
-      if (!what.empty()) opt.notice("replacing " + opt.db + " (--force): " + what);
     }
     results::Store::remove_existing(opt.db);  // a palplab database only, never any file
+    // Said once it is done: "replacing" was printed before a database in use was refused.
+    if (!what.empty()) opt.notice("replaced " + opt.db + " (--force): it held " + what);
   }
   results::Store store =
       fs::exists(opt.db) ? results::Store::open(opt.db, true) : results::Store::create(opt.db);

@@ -934,8 +934,8 @@ TEST(HardDb, ForceSaysWhatItReplaces) {
   const fs::path db = incomplete_db(d);
   Result r = cli("run " + (d / "study.json").string() + " --db " + db.string() + " --force", d);
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_TRUE(has(r.err, "replacing " + db.string() +
-                             " (--force): a run of study \"hard\", 1 session, INCOMPLETE"))
+  EXPECT_TRUE(has(r.err, "replaced " + db.string() +
+                             " (--force): it held a run of study \"hard\", 1 session, INCOMPLETE"))
       << r.err;
 }
 
