@@ -54,12 +54,18 @@ class InputError : public std::runtime_error {
   const std::vector<Problem>& problems() const { return problems_; }
 
  private:
+  // The first kShownProblems problems, then their count: a device-sim script of a million bad
+  // waypoints printed 117 MB (review 2026-12-07). problems() keeps them all.
+  static constexpr size_t kShownProblems = 100;
   static std::string join(const std::vector<Problem>& ps) {
     std::string s;
-    for (size_t i = 0; i < ps.size(); ++i) {
+    for (size_t i = 0; i < ps.size() && i < kShownProblems; ++i) {
       if (i) s += '\n';
       s += ps[i].format();
     }
+    if (ps.size() > kShownProblems)
+      s += "\n... and " + std::to_string(ps.size() - kShownProblems) +
+           " more problems (the first " + std::to_string(kShownProblems) + " are shown)";
     return s;
   }
   std::vector<Problem> problems_;
