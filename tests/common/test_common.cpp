@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 
 #include "common/escape.hpp"
@@ -57,4 +58,19 @@ TEST(DisplayWidth, CountsColumnsNotBytes) {
   EXPECT_EQ(display_width("A\xCC\x88rzte"), 5u);             // Ärzte, A + combining diaeresis
   EXPECT_EQ(display_width("\xE6\x97\xA5\xE6\x9C\xAC"), 4u);  // 日本
   EXPECT_EQ(palplab::printf_width("\xC3\x84rzte", 14), 15);  // 6 bytes, 5 columns
+}
+
+// An error of many problems prints the first 100 and the count of the rest (a device-sim script
+// of a million bad waypoints printed 117 MB, review 2026-12-07); problems() keeps every one.
+TEST(InputError, ManyProblemsArePrintedUpToAHundredWithTheCount) {
+  std::vector<palplab::Problem> ps;
+  for (int i = 0; i < 150; ++i)
+    ps.push_back({palplab::SourceLocation{"s.json", i + 1, 1}, "bad " + std::to_string(i)});
+  const palplab::InputError e(ps);
+  const std::string w = e.what();
+  EXPECT_EQ(e.problems().size(), 150u);
+  EXPECT_NE(w.find("bad 99"), std::string::npos);
+  EXPECT_EQ(w.find("bad 100"), std::string::npos);
+  EXPECT_NE(w.find("... and 50 more problems (the first 100 are shown)"), std::string::npos) << w;
+  EXPECT_EQ(std::count(w.begin(), w.end(), '\n'), 100);
 }
