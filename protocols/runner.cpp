@@ -998,7 +998,15 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     const auto names = g.region_names;
     ro.on_step = [&](const engine::Rendered& r, const engine::Sample& smp) {
       std::lock_guard lock(mu);
-      log_step(r, smp, names, pending, pending_events);
+      // The force the hand got: none while the device is timed out (the simulator's force on a
+      // stale position was logged and measured, review 2026-12-07).
+      if (device.force_withheld()) {
+        engine::Sample got = smp;
+        got.F.setZero();
+        log_step(r, got, names, pending, pending_events);
+      } else {
+        log_step(r, smp, names, pending, pending_events);
+      }
     };
     if (opt.on_session_start) opt.on_session_start(spec, scene);
     const auto wall0 = Clock::now();

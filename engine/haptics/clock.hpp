@@ -76,6 +76,7 @@ class TimedDevice : public Device {
   bool finished() const override { return inner_.finished(); }
   std::vector<DeviceEvent> take_events() override { return inner_.take_events(); }
   long samples_received() const override { return inner_.samples_received(); }
+  bool force_withheld() const override { return inner_.force_withheld(); }
 
  private:
   Device& inner_;

@@ -52,6 +52,9 @@ class Device {
   // Fresh samples received from hardware so far, for the start-up rate self-test
   // (devices/self_test.hpp); -1 for devices whose samples are made by the simulator's own loop.
   virtual long samples_received() const { return -1; }
+  // True when the last write() gave the hand no force although the simulator rendered one (a
+  // UDP device timed out sends "force off"): the session's log records what the hand got.
+  virtual bool force_withheld() const { return false; }
 };
 
 // A device that follows a piecewise-linear path through (t, x) waypoints (s, m), holding the

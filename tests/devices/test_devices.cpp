@@ -182,13 +182,28 @@ TEST(UdpDevice, ForeignSendersMalformedDatagramsAndRestartedBridges) {
   settle();
   EXPECT_EQ(dev.read(0.003).position.x(), 0.02);
   EXPECT_NE(kinds().find("device_malformed=3"), std::string::npos);
+  // A haptic loop delayed past the timeout, with an intruder's datagram queued before the
+  // bridge's: the bridge, whose datagram is in the same batch, stays.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  b.send({0.7, 0, 0}, 10);
+  a.send({0.025, 0, 0}, 104);
+  EXPECT_EQ(dev.read(0.0031).position.x(), 0.025);
+  EXPECT_EQ(kinds().find("device_sender_changed"), std::string::npos);
   // a stops; b, restarted, counts from 1: after the timeout its stream is taken.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   dev.read(0.3);  // device_timeout
+  e::Rendered r;
+  r.t = 0.3;
+  r.force = {0, 0, 2.0};
+  dev.write(r);  // force off: the session logs the zero the hand got
+  EXPECT_TRUE(dev.force_withheld());
   b.send({0.03, 0, 0}, 1);
   settle();
   EXPECT_EQ(dev.read(0.301).position.x(), 0.03);
+  dev.write(r);
+  EXPECT_FALSE(dev.force_withheld());
   ev = kinds();
+  EXPECT_NE(ev.find("device_sender_changed"), std::string::npos) << ev;
   EXPECT_NE(ev.find("device_timeout"), std::string::npos) << ev;
   EXPECT_NE(ev.find("device_resumed"), std::string::npos) << ev;
   // One datagram far ahead: the next ones look old until the stream falls silent, then resume.

@@ -23,6 +23,7 @@ class MonitoredDevice : public Device {
   bool finished() const override { return inner_.finished(); }
   std::vector<DeviceEvent> take_events() override { return inner_.take_events(); }
   long samples_received() const override { return inner_.samples_received(); }
+  bool force_withheld() const override { return inner_.force_withheld(); }
   // Window thread.
   RenderedSummary last_rendered() const;
   Eigen::Vector3d last_position() const;

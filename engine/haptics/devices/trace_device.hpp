@@ -45,6 +45,7 @@ class TraceRecorder : public Device {
   bool finished() const override { return inner_.finished(); }
   std::vector<DeviceEvent> take_events() override { return inner_.take_events(); }
   long samples_received() const override { return inner_.samples_received(); }
+  bool force_withheld() const override { return inner_.force_withheld(); }
   const Trace& trace() const { return trace_; }
   Trace& trace() { return trace_; }
 

@@ -149,11 +149,11 @@ UdpDevice::~UdpDevice() {
 
 void UdpDevice::drain(double t) {
   std::uint8_t buf[256];
-  const auto now = std::chrono::steady_clock::now();
-  // The stream is stale once no fresh position arrived for `timeout` (read() says so with
-  // device_timeout; checked here too, before the datagrams of this step are taken).
-  const bool stale =
-      have_sample_ && std::chrono::duration<double>(now - last_rx_).count() > opt_.timeout;
+  // This step's datagrams first, so that the bridge's liveness is judged by what arrived, not
+  // by when the haptic loop last ran (a loop delayed past the timeout let a queued intruder take
+  // over a live bridge: review of the fixes, 2026-12-07).
+  batch_.clear();
+  bool bridge_sent = false;  // the current bridge has datagrams in this batch
   while (true) {
     sockaddr_in from{};
     socklen_t len = sizeof from;
@@ -173,39 +173,54 @@ void UdpDevice::drain(double t) {
       ++malformed_;
       continue;
     }
-    // One bridge at a time: positions from another sender (address and port) while the current
-    // one is live are dropped and said once (two bridges were mixed into one hand: review
-    // 2026-12-07). A sender that follows a stale one takes over (a restarted bridge).
-    const bool same_sender = have_peer_ && std::memcmp(peer_.data(), &from, sizeof from) == 0;
-    if (have_peer_ && !same_sender && !stale) {
+    bridge_sent = bridge_sent || (have_peer_ && std::memcmp(peer_.data(), &from, sizeof from) == 0);
+    batch_.push_back({from, *m});
+  }
+  const auto now = std::chrono::steady_clock::now();
+  const auto older = [&](std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double>(now - since).count() > opt_.timeout;
+  };
+  if (bridge_sent) last_bridge_rx_ = now;
+  // The bridge is live while its datagrams (taken or not) keep coming within the timeout.
+  bool bridge_live = have_peer_ && !older(last_bridge_rx_);
+  for (const Received& q : batch_) {
+    const UdpPosition& p = q.m;
+    // One bridge at a time: positions from another sender (address and port) while the bridge
+    // is live are dropped and said (at most once a second; two bridges were mixed into one
+    // hand: review 2026-12-07). A sender that follows a silent bridge takes over (a restarted
+    // bridge has a new port), and that is said too.
+    const bool same_sender = have_peer_ && std::memcmp(peer_.data(), &q.from, sizeof q.from) == 0;
+    if (!same_sender && bridge_live) {
       ++dropped_;
-      if (!foreign_said_) {
-        foreign_said_ = true;
-        add_event(t, "device_foreign", static_cast<double>(ntohs(from.sin_port)));
+      if (foreign_said_t_ < 0 || t - foreign_said_t_ >= 1.0) {
+        foreign_said_t_ = t;
+        add_event(t, "device_foreign", static_cast<double>(ntohs(q.from.sin_port)));
       }
       continue;
     }
     // Sequence numbers increase; a datagram not newer than the newest is late or repeated
     // (wrap-around after 2^32 datagrams = 50 days at 1 kHz is handled by serial arithmetic).
-    // After a silence, or from a new sender, the stream starts afresh: a restarted bridge counts
-    // from 1 again, and one datagram far ahead must not stop every later one (both ended the
-    // session as "device lost").
-    const bool fresh_stream = !have_sample_ || stale || !same_sender;
-    if (!fresh_stream && static_cast<std::int32_t>(m->seq - last_.seq) <= 0) {
+    // A new sender's stream, or the bridge's after no position was taken for the timeout,
+    // starts afresh: a restarted bridge counts from 1 again, and one datagram far ahead in seq
+    // must not stop every later one (both ended the session as "device lost").
+    const bool fresh_stream = !have_sample_ || !same_sender || older(last_rx_);
+    if (!fresh_stream && static_cast<std::int32_t>(p.seq - last_.seq) <= 0) {
       ++dropped_;
       continue;
     }
-    if (!fresh_stream && m->seq - last_.seq > 1) {
-      const std::uint32_t gap = m->seq - last_.seq - 1;
+    if (!fresh_stream && p.seq - last_.seq > 1) {
+      const std::uint32_t gap = p.seq - last_.seq - 1;
       lost_ += gap;
       add_event(t, "device_gap", static_cast<double>(gap));
     }
-    last_ = *m;
+    if (have_peer_ && !same_sender)
+      add_event(t, "device_sender_changed", static_cast<double>(ntohs(q.from.sin_port)));
+    last_ = p;
     have_sample_ = true;
     ++received_;
-    last_rx_ = std::chrono::steady_clock::now();
-    std::memcpy(peer_.data(), &from, sizeof from);
-    have_peer_ = true;
+    last_rx_ = last_bridge_rx_ = std::chrono::steady_clock::now();
+    std::memcpy(peer_.data(), &q.from, sizeof q.from);
+    have_peer_ = bridge_live = true;
     if (timed_out_) {
       timed_out_ = false;
       add_event(t, "device_resumed", 0.0);
@@ -239,6 +254,7 @@ DeviceInput UdpDevice::read(double t) {
 }
 
 void UdpDevice::write(const Rendered& r) {
+  withheld_ = false;
   if (!have_peer_) return;
   // Check the timeout again right before sending: the step may have taken a while.
   if (!timed_out_ &&
@@ -252,6 +268,7 @@ void UdpDevice::write(const Rendered& r) {
   f.ack = last_.seq;
   f.t = r.t;
   f.flags = (r.contact ? kUdpContact : 0u) | (r.audio ? kUdpAudio : 0u);
+  withheld_ = timed_out_;
   if (timed_out_) {
     f.flags |= kUdpForceOff;  // the hand may have moved anywhere: no force on stale positions
   } else {

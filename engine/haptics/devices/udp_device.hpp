@@ -20,11 +20,15 @@
 // palplab binds 127.0.0.1:PORT only and ignores datagrams from other addresses, with a bad
 // magic/version/type/size or a non-finite or absurd (> 10 m) value (device_malformed, at most
 // once a second with the count), from a second sender while the first is live (device_foreign,
-// once), or with a sequence number not newer than the newest one (late or duplicated). After a
-// silence longer than the timeout the next sender's stream starts afresh (a restarted bridge
-// counts from 1 again). When no fresh position arrived for `timeout` (default 2 ms), every force
-// datagram carries zero force and the "force off" flag until positions arrive again; events
-// device_timeout / device_resumed / device_gap are reported through take_events().
+// at most once a second), or with a sequence number not newer than the newest one (late or
+// duplicated). The bridge is live while its datagrams keep arriving within the timeout; after
+// that the next sender takes over (device_sender_changed) and a stream starts afresh (a
+// restarted bridge counts from 1 again; one datagram far ahead in seq does not stop the rest).
+// When no fresh position arrived for `timeout` (default 2 ms), every force datagram carries zero
+// force and the "force off" flag until positions arrive again; events device_timeout /
+// device_resumed / device_gap are reported through take_events().
+#include <netinet/in.h>
+
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -79,7 +83,8 @@ class UdpDevice : public Device {
   DeviceInput read(double t) override;
   void write(const Rendered& r) override;
   std::vector<DeviceEvent> take_events() override;
-  long samples_received() const override;  // fresh positions since construction
+  long samples_received() const override;                     // fresh positions since construction
+  bool force_withheld() const override { return withheld_; }  // the last write was force off
 
   int port() const { return port_; }
   bool timed_out() const { return timed_out_; }
@@ -104,7 +109,14 @@ class UdpDevice : public Device {
   long dropped_ = 0, lost_ = 0;
   long malformed_ = 0, malformed_said_ = 0;  // malformed datagrams, and those said in events
   double malformed_t_ = 0.0;                 // when device_malformed was last logged
-  bool foreign_said_ = false;                // device_foreign logged
+  double foreign_said_t_ = -1.0;             // when device_foreign was last logged
+  struct Received {
+    sockaddr_in from;
+    UdpPosition m;
+  };
+  std::vector<Received> batch_;  // one step's well-formed positions (capacity kept)
+  std::chrono::steady_clock::time_point last_bridge_rx_;  // any datagram of the bridge
+  bool withheld_ = false;  // the last force datagram had the force-off flag
   double t_ = 0.0;
   std::mutex events_mu_;
   std::vector<DeviceEvent> events_;
