@@ -229,6 +229,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   // disengaged.
   const bool valid = x_in.allFinite() && x_in.cwiseAbs().maxCoeff() <= kMaxDevicePosition;
   if (!valid && !s.device_bad) s.events.push_back({s.t, EventKind::device_invalid, -1, -1, 0.0});
+  const bool was_bad = s.device_bad;  // the tracker was reset: a return is no jump
   s.device_bad = !valid;
   const Eigen::Vector3d x = valid ? x_in : s.last.x;
 
@@ -240,7 +241,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   // the far ovary and was held at the 8.5 N limit in free air until the session ended): the
   // contact is found anew, and the jump does no work in the passivity observer.
   if (const double jump = (x - s.x_prev).norm();
-      valid && !s.device_bad && s.step_index > 1 && jump > kMaxDeviceStep) {
+      valid && !was_bad && s.step_index > 1 && jump > kMaxDeviceStep) {
     s.events.push_back({s.t, EventKind::device_jump, -1, -1, jump});
     tr.invalidate();
     s.f_prev.setZero();
