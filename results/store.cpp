@@ -805,7 +805,8 @@ void check_references(sqlite3* db, int version, const std::string& path) {
     Stmt q(db,
            "SELECT 'session ' || x.session, quote(x.phase_index), p.sessions, quote(x.phase) FROM "
            "sessions x JOIN phases p ON p.phase = x.phase WHERE typeof(x.phase_index) = "
-           "'integer' AND typeof(p.sessions) = 'integer' AND (x.phase_index < 0 OR x.phase_index "
+           "'integer' AND typeof(p.sessions) = 'integer' AND p.sessions >= 1 AND (x.phase_index < "
+           "0 OR x.phase_index "
            ">= p.sessions) LIMIT 1");
     if (q.step())
       throw InputError("not a consistent palplab results database: table sessions: " +
@@ -855,21 +856,26 @@ void check_references(sqlite3* db, int version, const std::string& path) {
         "('integer', 'real') AND NOT session_duration > 0 LIMIT 1",
         "SELECT 'thresholds of phase ' || quote(phase) || ', region ' || quote(region), 'ST ' || "
         "quote(st) || ', MPF ' || quote(mpf) || ', SFT ' || quote(sft) || ': expected forces in "
-        "N > 0' FROM thresholds WHERE (typeof(st) IN ('integer', 'real') AND NOT st > 0) OR "
-        "(typeof(mpf) IN ('integer', 'real') AND NOT mpf > 0) OR (typeof(sft) IN ('integer', "
-        "'real') AND NOT sft > 0) LIMIT 1",
+        "N > 0 with ST < SFT and MPF <= SFT' FROM thresholds WHERE (typeof(st) IN ('integer', "
+        "'real') AND NOT st > 0) OR (typeof(mpf) IN ('integer', 'real') AND NOT mpf > 0) OR "
+        "(typeof(sft) IN ('integer', 'real') AND NOT sft > 0) OR (typeof(st) IN ('integer', "
+        "'real') AND typeof(sft) IN ('integer', 'real') AND NOT st < sft) OR (typeof(mpf) IN "
+        "('integer', 'real') AND typeof(sft) IN ('integer', 'real') AND NOT mpf <= sft) LIMIT 1",
+        "SELECT 'phase ' || quote(phase), 'sessions ' || quote(sessions) || ': expected a count "
+        ">= 1' FROM phases WHERE typeof(sessions) = 'integer' AND sessions < 1 LIMIT 1",
         // The measures palplab computes, with their units and ranges (protocols/measures.cpp).
-        "WITH k(name, unit, lo, hi, range) AS (VALUES ('palpation_force', 'N', 0, 1e9, '>= 0'), "
-        "('exploration_time', 's', 0, 1e9, '>= 0'), ('feature_identified', '1', 0, 1, 'in [0, "
-        "1]'), ('accuracy', '%', 0, 100, 'in [0, 100]'), ('palpations', '1', 0, 1e12, '>= 0'), "
-        "('sft_reached', '1', 0, 1e12, '>= 0'), ('insertion_attempts', '1', 0, 1e12, '>= 0'), "
-        "('layers_passed', '1', 0, 1e12, '>= 0'), ('tip_to_target_mm', 'mm', 0, 1e9, '>= 0'), "
-        "('bone_contacts', '1', 0, 1e12, '>= 0'), ('procedure_time', 's', 0, 1e9, '>= 0')) "
-        "SELECT 'measure ' || quote(m.name) || ' of session ' || m.session, 'value ' || "
-        "quote(m.value) || ' with unit ' || quote(m.unit) || ': expected a number ' || k.range "
-        "|| ' with unit ' || k.unit FROM measures m JOIN k ON k.name = m.name WHERE m.unit IS "
-        "NOT k.unit OR (typeof(m.value) IN ('integer', 'real') AND NOT m.value BETWEEN k.lo AND "
-        "k.hi) LIMIT 1",
+        "WITH k(name, unit, hi, range) AS (VALUES ('palpation_force', 'N', NULL, '>= 0'), "
+        "('exploration_time', 's', NULL, '>= 0'), ('feature_identified', '1', 1, 'in [0, 1]'), "
+        "('accuracy', '%', 100, 'in [0, 100]'), ('palpations', '1', NULL, '>= 0'), "
+        "('sft_reached', '1', NULL, '>= 0'), ('insertion_attempts', '1', NULL, '>= 0'), "
+        "('layers_passed', '1', NULL, '>= 0'), ('tip_to_target_mm', 'mm', NULL, '>= 0'), "
+        "('bone_contacts', '1', NULL, '>= 0'), ('procedure_time', 's', NULL, '>= 0')) SELECT "
+        "'measure ' || quote(m.name) || ' of session ' || m.session, 'value ' || CASE "
+        "typeof(m.value) WHEN 'real' THEN printf('%.10g', m.value) ELSE quote(m.value) END || "
+        "' with unit ' || quote(m.unit) || ': expected a number ' || k.range || ' with unit ' "
+        "|| k.unit FROM measures m JOIN k ON k.name = m.name WHERE m.unit IS NOT k.unit OR "
+        "(typeof(m.value) IN ('integer', 'real') AND (m.value < 0 OR m.value > "
+        "coalesce(k.hi, m.value))) LIMIT 1",
     };
     for (const char* sql : values) {
       Stmt q(db, sql);

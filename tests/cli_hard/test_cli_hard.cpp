@@ -621,7 +621,7 @@ TEST(HardDb, ReadOnlyDatabaseWithUncheckpointedWritesLosesNothing) {
     ASSERT_EQ(sqlite3_exec(h,
                            "PRAGMA journal_mode=WAL; PRAGMA wal_autocheckpoint=0; UPDATE measures "
                            "SET value = 12.375 WHERE rowid = (SELECT min(rowid) FROM measures "
-                           "WHERE value IS NOT NULL);",
+                           "WHERE name = 'palpations');",
                            nullptr, nullptr, nullptr),
               SQLITE_OK);
     sqlite3_close(h);

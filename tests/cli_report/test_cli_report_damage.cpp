@@ -195,10 +195,18 @@ TEST(CliReportDamage, RowsOutsideTheStudysStructureAreRefused) {
        {"has session_duration -1.0: expected a duration in s > 0"}},
       {"UPDATE thresholds SET mpf = -2 WHERE rowid = (SELECT MIN(rowid) FROM thresholds);",
        {"thresholds of phase '", "MPF -2.0", "expected forces in N > 0"}},
+      {"UPDATE thresholds SET st = 5, sft = 3 WHERE rowid = (SELECT MIN(rowid) FROM thresholds);",
+       {"ST 5", "SFT 3", "with ST < SFT and MPF <= SFT"}},
+      {"UPDATE phases SET sessions = 0 WHERE position = 0;",
+       {"has sessions 0: expected a count >= 1"}},
+      {"UPDATE measures SET value = -1 WHERE name = 'palpation_force';",
+       {"measure 'palpation_force' of session ",
+        "has value -1 with unit 'N': expected a "
+        "number >= 0 with unit N"}},
       {"UPDATE measures SET value = 2 WHERE name = 'feature_identified' AND session = (SELECT "
        "MIN(session) FROM sessions);",
        {"measure 'feature_identified' of session ",
-        "has value 2.0 with unit '1': expected a "
+        "has value 2 with unit '1': expected a "
         "number in [0, 1] with unit 1"}},
       {"UPDATE measures SET unit = 'kN' WHERE name = 'palpation_force';",
        {"measure 'palpation_force' of session ", "with unit 'kN': expected"}},
