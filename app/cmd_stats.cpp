@@ -24,6 +24,7 @@
 #include "app/stills.hpp"
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
+#include "common/remove_on_signal.hpp"
 #include "results/store.hpp"
 
 namespace {
@@ -365,9 +366,18 @@ palplab::app::CommandRegistration reg_report{
           opt.stills = palplab::app::make_still_maker();
         if (!warning.empty()) std::cerr << palplab::escape_controls(warning, false) << "\n";
         const auto earlier = earlier_report_files(a->out);
+        // An interrupted report leaves them neither (removed on SIGINT/SIGTERM/SIGHUP when
+        // empty: review of the fixes, 2026-12-07).
+        std::vector<std::unique_ptr<palplab::RemoveOnSignal>> made_on_signal;
+        if (!made.empty())
+          for (std::filesystem::path p = a->out; !p.empty(); p = p.parent_path()) {
+            made_on_signal.push_back(std::make_unique<palplab::RemoveOnSignal>(p.string()));
+            if (p == made) break;
+          }
         palplab::analysis::ReportFiles files;
         try {
           files = palplab::analysis::write_report(a->db, a->out, opt);
+          made_on_signal.clear();
         } catch (...) {
           // A failed report writes no file (analysis/report.cpp): nor leaves the directories it
           // made for --out (each removed only when empty).
