@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <string>
 
 namespace fs = std::filesystem;
 
@@ -60,6 +62,19 @@ std::vector<std::string> prototype_search_dirs(const std::string& study_file,
   return once;
 }
 
+namespace {
+// A study (its "palplab_study" key near the top) is never a prototype: a study saved as A.json
+// in the working directory was taken for prototype A by `probe --scene A` (review of the
+// fixes, 2026-12-07).
+bool is_study_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return head.find("\"palplab_study\"") != std::string::npos;
+}
+}  // namespace
+
 std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs,
                               const std::string& study_file) {
   if (id.empty() || id.find('/') != std::string::npos || id[0] == '.') return {};
@@ -68,6 +83,7 @@ std::string resolve_prototype(const std::string& id, const std::vector<std::stri
     std::error_code ec;
     if (!fs::is_regular_file(p, ec)) continue;
     if (!study_file.empty() && fs::equivalent(p, study_file, ec)) continue;
+    if (is_study_file(p)) continue;
     return p.string();
   }
   return {};

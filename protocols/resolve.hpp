@@ -16,7 +16,8 @@ std::vector<std::string> prototype_search_dirs(const std::string& study_file,
 
 // Empty string when no directory has ID.json. Ids may not contain '/' or start with '.'.
 // `study_file`, when given, is never the answer: a study saved as A.json beside the prototypes
-// it names was taken for prototype "A" (its own errors then reported as the prototype's).
+// it names was taken for prototype "A" (its own errors then reported as the prototype's); nor is
+// any file that is a study ("palplab_study" in its first 4 KiB).
 std::string resolve_prototype(const std::string& id, const std::vector<std::string>& search_dirs,
                               const std::string& study_file = {});
 

@@ -129,6 +129,12 @@ TEST(CliValidate, StudyFileNamedLikeAPrototypeDoesNotShadowIt) {
   Result r = run_palplab("validate " + (d / "A.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("valid: "), std::string::npos) << r.out;
+  // Nor does `probe --scene A` in that directory take the study for the prototype.
+  r = palplab::testing::run_shell("cd " + d.string() + " && " + PALPLAB_BINARY +
+                                      " probe --scene A --press ovary_left --force 1 --duration "
+                                      "0.05 --release 0.05",
+                                  d);
+  EXPECT_EQ(r.code, 0) << r.err;
   // With no other A.json anywhere the message says the study file is not one.
   std::string text = slurp(ref("example_minimal.json"));
   for (auto p = text.find("\"A\""); p != std::string::npos; p = text.find("\"A\"", p))
