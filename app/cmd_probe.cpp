@@ -8,9 +8,11 @@
 // every step (time, script phase, device position, rendered force, contact node, visible
 // deformation; SI units) as CSV, written as the steps run.
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -37,6 +39,7 @@ constexpr const char* kTraceHeader =
 struct ProbeArgs {
   std::string file, press, integrator, trace;
   bool overwrite = false;          // --overwrite: replace a --trace file of another kind
+  bool trace_given = false;        // --trace was given (an empty name is refused)
   std::vector<std::string> scene;  // --scene FILE.psim | KEY (app/scene_option.hpp)
   double force = 0.0, duration = 0.0, release = 1.0;
   bool json = false;
@@ -69,6 +72,8 @@ int run_probe(const ProbeArgs& a) {
   const engine::SceneStats s0 = scene.stats();
   engine::PressDevice press(engine::press_at(g, node, a.force, a.duration, a.release));
   std::ofstream trace;
+  if (a.trace_given && a.trace.empty())
+    throw InputError(SourceLocation{"--trace"}, "expected a file name, got an empty one");
   if (!a.trace.empty()) {
     // Never an input (the prototype, its mesh, a --scene file), nor a file of another kind
     // without --overwrite; its own earlier output starts with the header.
@@ -123,7 +128,9 @@ int run_probe(const ProbeArgs& a) {
       });
   if (trace.is_open()) {
     trace.close();
-    if (!trace) throw std::runtime_error("--trace: writing \"" + a.trace + "\" failed");
+    if (!trace)
+      throw InputError(SourceLocation{"--trace"},
+                       "cannot write \"" + a.trace + "\" (" + std::strerror(errno) + ")");
   }
   const bool reached = press.force_reached();
   const double time_to_force = press.time_to_force();
@@ -240,12 +247,16 @@ palplab::app::CommandRegistration reg_probe{
       cmd->add_option("--integrator", a->integrator,
                       "symplectic_euler | backward_euler | rk4 (mass-spring models)");
       cmd->add_flag("--json", a->json, "Print JSON");
-      cmd->add_option("--trace", a->trace,
-                      "Write every step as CSV (t_s, phase, device position x/y/z_m, force "
-                      "fx/fy/fz_n and its norm, contact_node, visible_deformation_m)");
+      auto* trace_opt =
+          cmd->add_option("--trace", a->trace,
+                          "Write every step as CSV (t_s, phase, device position x/y/z_m, force "
+                          "fx/fy/fz_n and its norm, contact_node, visible_deformation_m)");
       cmd->add_flag("--overwrite", a->overwrite,
                     "Replace an existing --trace file that is not a probe trace");
-      cmd->callback([a, code] { *code = run_probe(*a); });
+      cmd->callback([a, code, trace_opt] {
+        a->trace_given = trace_opt->count() > 0;
+        *code = run_probe(*a);
+      });
     }};
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The `palplab` command line: a thin layer that parses arguments and calls the libraries.
 // Exit codes: 0 success, 1 a command's own "found something" result (e.g. mesh defects),
-// 2 bad input (flags, files, JSON, CSV) with a located message on stderr, 3 internal error.
+// 2 bad input (flags, files, JSON, CSV) with a located message on stderr, 3 internal error;
+// out of memory is 1 with a message.
 #include <malloc.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <cstring>
 #include <functional>
 #include <iostream>
+#include <new>
 
 #include "app/command.hpp"
 #include "common/input_error.hpp"
@@ -188,6 +190,11 @@ int main(int argc, char** argv) {
   } catch (const palplab::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
+  } catch (const std::bad_alloc&) {
+    // Not an internal error: the machine's memory, or a limit on it (`ulimit -v`), ran out.
+    std::cerr << "error: out of memory (the machine's memory, or a limit on the process's "
+                 "address space such as `ulimit -v`, ran out)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "internal error: " << e.what() << "\n";
     return 3;

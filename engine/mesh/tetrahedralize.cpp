@@ -314,14 +314,20 @@ RawTets run_tetgen_isolated(const SurfaceMesh& s, const TetOptions& opt) {
     throw InputError("TetGen did not finish within " + format_exact(limit) +
                      " s (--timeout); the surface may be nearly degenerate: run `palplab mesh "
                      "check` and `palplab mesh repair`, or relax --quality/--max-volume");
-  // TetGen does not check every allocation: out of memory can end in a crash (a `fem
-  // reference --mem-limit-gb 0.1` was reported as a bad surface).
+  // TetGen does not check every allocation: out of memory can end in a crash. Under a
+  // command's own memory limit (`fem reference --mem-limit-gb`, below half of the memory) the
+  // crash is taken for that (a 0.05 GB limit was reported as a bad surface, exit 2); else it may
+  // still be the half of the machine's memory the child is held to.
   char mem[160] = "";
-  if (const rlim_t cap = child_memory_limit(); cap > 0 && WIFSIGNALED(st))
+  if (const rlim_t cap = child_memory_limit(); cap > 0 && WIFSIGNALED(st)) {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    const rlim_t half =
+        pages > 0 && page > 0 ? static_cast<rlim_t>(pages) / 2 * static_cast<rlim_t>(page) : 0;
+    if (cap < half) throw std::bad_alloc();
     std::snprintf(mem, sizeof mem,
-                  " (or it ran out of memory: its address space is limited to %.3g GB, half of "
-                  "this machine's memory or the command's own limit)",
+                  " (or it ran out of memory: it may use %.3g GB, half of this machine's memory)",
                   static_cast<double>(cap) / 1073741824.0);
+  }
   if (WIFSIGNALED(st))
     throw InputError(std::string("TetGen crashed on this surface (signal ") +
                      std::to_string(WTERMSIG(st)) + ", " + strsignal(WTERMSIG(st)) + ")" + mem +
