@@ -1,6 +1,7 @@
 #include "analysis/summary.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -326,6 +327,18 @@ nlohmann::json to_json(const StatsSummary& s) {
   return j;
 }
 
+namespace {
+// Significant digits of the shortest representation of x that reads back as x.
+int shortest_digits(double x) {
+  if (!std::isfinite(x) || x == 0) return 1;
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::scientific);
+  int n = 0;
+  for (const char* c = buf; c < r.ptr && *c != 'e'; ++c) n += *c >= '0' && *c <= '9';
+  return n;
+}
+}  // namespace
+
 std::string to_text(const StatsSummary& s) {
   std::ostringstream o;
   // Group labels come from the input: control characters (an escape sequence in a label would
@@ -345,13 +358,17 @@ std::string to_text(const StatsSummary& s) {
     // Five significant digits, more when the values are large beside their spread (values near
     // 1e12 that differ by units printed mean, median and CI all as "1e+12"): enough digits that
     // a group's standard error shows in its mean, at most 15 (a double's).
+    // A group without spread (constant values, or one value) shows its values as they read
+    // back (1000000000000.5 printed "1e+12": review of the fixes); at most 17 digits.
     int digits = 5;
     for (const auto& d : s.groups) {
       const double big = std::max({std::fabs(d.min), std::fabs(d.max), std::fabs(d.mean)});
       if (d.se > 0 && std::isfinite(d.se) && std::isfinite(big) && big > 0)
         digits = std::max(digits, static_cast<int>(std::ceil(std::log10(big / d.se))) + 2);
+      else
+        for (double v : {d.mean, d.min, d.max}) digits = std::max(digits, shortest_digits(v));
     }
-    digits = std::min(digits, 15);
+    digits = std::min(digits, 17);
     const int cw = std::max(12, digits + 7), ciw = cw - 2;  // sign, point, "e+12"
     o << strf("  %-14s %5s %*s %*s %*s %*s %*s %*s %*s\n", "group", "n", cw, "mean", cw, "sd", cw,
               "se", cw, "median", cw, "min", cw, "max", 2 * ciw + 5, "95% CI of mean");

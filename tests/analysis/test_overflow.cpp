@@ -370,6 +370,15 @@ TEST(Descriptives, TextShowsLargeValuesToTheirSpread) {
   EXPECT_NE(text.find(" 1000000000002 "), std::string::npos) << text;   // A's mean and median
   EXPECT_NE(text.find(" 1000000000012.3"), std::string::npos) << text;  // B's mean
   EXPECT_EQ(text.find("1e+12"), std::string::npos) << text;
+  // Constant groups read back whole; groups 0.0005 apart near -1e12 are told apart.
+  const std::string flat = to_text(summarize_csv(
+      "g,v\nA,1000000000000.5\nA,1000000000000.5\nB,1000000000003.5\nB,1000000000003.5\n"));
+  EXPECT_NE(flat.find(" 1000000000000.5 "), std::string::npos) << flat;
+  EXPECT_EQ(flat.find("1e+12"), std::string::npos) << flat;
+  const std::string near = to_text(
+      summarize_csv("g,v\nA,-999999999999.9995\nA,-999999999999.9985\nA,-999999999999.9975\n"
+                    "B,-999999999999.9990\nB,-999999999999.9980\nB,-999999999999.9970\n"));
+  EXPECT_EQ(near.find("-1000000000000 "), std::string::npos) << near;
   const std::string small = to_text(summarize_csv("g,v\nA,2.51\nA,2.62\nA,2.43\nB,3.1\nB,2.9\n"));
   EXPECT_NE(small.find("  A                  3         2.52     0.095394 "), std::string::npos)
       << small;
