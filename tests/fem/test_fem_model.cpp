@@ -55,6 +55,58 @@ FemModelOptions options(FemFormulation f, const Column& s) {
   return o;
 }
 
+// A four-node contact patch on the column's top (weights w, normal n) and the plain backward
+// Euler quantities of its free dofs a reference step is written with: K, lumped masses, the
+// patch's gap direction g (gap = sum_q w_q ((x_q - point) . n - off_q)) and A = (1 + h alpha) M +
+// (h beta + h^2) K.
+struct PatchReference {
+  const Column& s;
+  std::vector<int> patch;
+  std::vector<double> w = {0.4, 0.2, 0.25, 0.15};
+  Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, 1).normalized();
+  DofSplit split;
+  SparseMatrixd K;
+  Eigen::VectorXd mass, g;
+  std::vector<double> off;
+  Eigen::Vector3d xp;
+  explicit PatchReference(const Column& c)
+      : s(c),
+        patch{c.top, 0 + 3 * (1 + 3 * 4), 2 + 3 * (1 + 3 * 4), 1 + 3 * (0 + 3 * 4)},
+        split(split_dofs(node_to_dof_flags(c.fixed))),
+        xp(c.m.V.row(c.top).transpose()) {
+    const FemSystem sys = fem_precompute(s.m.V, s.m.T, s.mat);
+    K = submatrix(sys.K, split.free, split.free);
+    mass = gather(sys.m_lumped, split.free);
+    g = Eigen::VectorXd::Zero(K.rows());
+    for (size_t q = 0; q < patch.size(); ++q) {
+      g.segment<3>(split.local[3 * patch[q]]) += w[q] * n;
+      off.push_back(std::max(0.0, (s.m.V.row(patch[q]).transpose() - xp).dot(n)));
+    }
+  }
+  SparseMatrixd A(double h, double alpha, double beta) const {
+    SparseMatrixd a = (h * beta + h * h) * K;
+    for (long j = 0; j < a.rows(); ++j) a.coeffRef(j, j) += (1 + h * alpha) * mass[j];
+    return a;
+  }
+  // The patch's gap for free-dof displacements u and a probe point.
+  double gap(const Eigen::VectorXd& u, const Eigen::Vector3d& point) const {
+    double d = 0;
+    for (size_t q = 0; q < patch.size(); ++q) {
+      const Eigen::Vector3d x =
+          s.m.V.row(patch[q]).transpose() + u.segment<3>(split.local[3 * patch[q]]);
+      d += w[q] * ((x - point).dot(n) - off[q]);
+    }
+    return d;
+  }
+  void attach(FemModel& model, double k) const {
+    model.contact_node = s.top;
+    model.contact_nodes = patch;
+    model.contact_weights = w;
+    model.contact_normal = n;
+    model.contact_k = k;
+  }
+};
+
 double rel(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff();
 }
@@ -282,53 +334,29 @@ TEST(FemModel, LinearStepMatchesPlainBackwardEuler) {
 // first step from rest.
 TEST(FemModel, PatchContactStepMatchesPlainBackwardEuler) {
   const Column s;
-  const std::vector<int> patch = {s.top, 0 + 3 * (1 + 3 * 4), 2 + 3 * (1 + 3 * 4),
-                                  1 + 3 * (0 + 3 * 4)};
-  const std::vector<double> w = {0.4, 0.2, 0.25, 0.15};
+  const PatchReference P(s);
   FemModelOptions o;
   FemModel model(s.m, s.mat, s.fixed, o);
-  const FemSystem sys = fem_precompute(s.m.V, s.m.T, s.mat);
-  const DofSplit split = split_dofs(node_to_dof_flags(s.fixed));
-  const SparseMatrixd K = submatrix(sys.K, split.free, split.free);
-  const Eigen::VectorXd mass = gather(sys.m_lumped, split.free);
-  const double h = 1e-3, k = 300, alpha = o.rayleigh_alpha, beta = o.rayleigh_beta;
-  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, 1).normalized();
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(K.rows());
-  std::vector<double> off;
-  const Eigen::Vector3d xp = s.m.V.row(s.top).transpose();
-  for (size_t q = 0; q < patch.size(); ++q) {
-    g.segment<3>(split.local[3 * patch[q]]) += w[q] * n;
-    off.push_back(std::max(0.0, (s.m.V.row(patch[q]).transpose() - xp).dot(n)));
-  }
-  EXPECT_GT(*std::max_element(off.begin(), off.end()), 0.0);  // the offsets are exercised
-  model.contact_node = s.top;
-  model.contact_nodes = patch;
-  model.contact_weights = w;
-  model.contact_normal = n;
-  model.contact_k = k;
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(K.rows()), v = u;
-  Eigen::Vector3d point = xp - 0.003 * n;
-  SparseMatrixd A = (h * beta + h * h) * K;
-  for (long j = 0; j < A.rows(); ++j) A.coeffRef(j, j) += (1 + h * alpha) * mass[j];
-  const Eigen::MatrixXd Ad = Eigen::MatrixXd(A) + h * h * k * g * g.transpose();
+  const double h = 1e-3, k = 300;
+  EXPECT_GT(*std::max_element(P.off.begin(), P.off.end()), 0.0);  // the offsets are exercised
+  P.attach(model, k);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(P.K.rows()), v = u;
+  Eigen::Vector3d point = P.xp - 0.003 * P.n;
+  const Eigen::MatrixXd Ad = Eigen::MatrixXd(P.A(h, o.rayleigh_alpha, o.rayleigh_beta)) +
+                             h * h * k * P.g * P.g.transpose();
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(Ad);
   for (int i = 0; i < 300; ++i) {
-    if (i == 150) point -= 0.001 * n;
+    if (i == 150) point -= 0.001 * P.n;
     model.contact_point = point;
-    double d = 0;
-    for (size_t q = 0; q < patch.size(); ++q) {
-      const Eigen::Vector3d x =
-          s.m.V.row(patch[q]).transpose() + u.segment<3>(split.local[3 * patch[q]]);
-      d += w[q] * ((x - point).dot(n) - off[q]);
-    }
+    const double d = P.gap(u, point);
     ASSERT_GT(d, 0.0) << i;
     EXPECT_NEAR(model.penetration(), d, 1e-12) << i;
-    const Eigen::VectorXd f = -(K * u) - k * d * g;
-    v = ldlt.solve(Eigen::VectorXd(mass.cwiseProduct(v) + h * f));
+    const Eigen::VectorXd f = -(P.K * u) - k * d * P.g;
+    v = ldlt.solve(Eigen::VectorXd(P.mass.cwiseProduct(v) + h * f));
     u += h * v;
     model.step(h);
   }
-  const Eigen::VectorXd um = gather(model.displacement(), split.free);
+  const Eigen::VectorXd um = gather(model.displacement(), P.split.free);
   EXPECT_LT((um - u).cwiseAbs().maxCoeff(), 1e-9 * u.cwiseAbs().maxCoeff());
   EXPECT_NEAR(model.device_force().norm(), k * model.penetration(), 1e-12);
 
@@ -336,12 +364,8 @@ TEST(FemModel, PatchContactStepMatchesPlainBackwardEuler) {
   m[0] = std::make_unique<FemModel>(s.m, s.mat, s.fixed, options(FemFormulation::linear, s));
   m[1] = std::make_unique<FemModel>(s.m, s.mat, s.fixed, options(FemFormulation::corotational, s));
   for (auto& p : m) {
-    p->contact_node = s.top;
-    p->contact_nodes = patch;
-    p->contact_weights = w;
-    p->contact_normal = n;
-    p->contact_point = xp - 0.002 * n;
-    p->contact_k = 500;
+    P.attach(*p, 500);
+    p->contact_point = P.xp - 0.002 * P.n;
     p->step(1e-3);
   }
   EXPECT_LT(rel(m[1]->displacement(), m[0]->displacement()), 1e-10);
@@ -356,71 +380,42 @@ TEST(FemModel, PatchContactStepMatchesPlainBackwardEuler) {
 // withdrawal faster than the body follows; both of the cases the old rule got wrong occur.
 TEST(FemModel, ContactActsOnTheGapAtTheEndOfTheStep) {
   const Column s;
-  const std::vector<int> patch = {s.top, 0 + 3 * (1 + 3 * 4), 2 + 3 * (1 + 3 * 4),
-                                  1 + 3 * (0 + 3 * 4)};
-  const std::vector<double> w = {0.4, 0.2, 0.25, 0.15};
-  const FemSystem sys = fem_precompute(s.m.V, s.m.T, s.mat);
-  const DofSplit split = split_dofs(node_to_dof_flags(s.fixed));
-  const SparseMatrixd K = submatrix(sys.K, split.free, split.free);
-  const Eigen::VectorXd mass = gather(sys.m_lumped, split.free);
+  const PatchReference P(s);
   const double h = 1e-3, k = 2e4;
-  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, 1).normalized();
-  const Eigen::Vector3d xp = s.m.V.row(s.top).transpose();
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(K.rows());
-  std::vector<double> off;
-  for (size_t q = 0; q < patch.size(); ++q) {
-    g.segment<3>(split.local[3 * patch[q]]) += w[q] * n;
-    off.push_back(std::max(0.0, (s.m.V.row(patch[q]).transpose() - xp).dot(n)));
-  }
   // The linear formulation (the corotational one differs from plain backward Euler by its
   // rotations; its contact code is the same rule).
-  for (FemFormulation form : {FemFormulation::linear}) {
-    FemModelOptions o;  // the default, light damping: the body rebounds
-    o.formulation = form;
-    FemModel model(s.m, s.mat, s.fixed, o);
-    SparseMatrixd A = (h * o.rayleigh_beta + h * h) * K;
-    for (long j = 0; j < A.rows(); ++j) A.coeffRef(j, j) += (1 + h * o.rayleigh_alpha) * mass[j];
-    const Eigen::MatrixXd Ad = Eigen::MatrixXd(A);
-    const Eigen::LDLT<Eigen::MatrixXd> free(Ad), pushed(Ad + h * h * k * g * g.transpose());
-    model.contact_node = s.top;
-    model.contact_nodes = patch;
-    model.contact_weights = w;
-    model.contact_normal = n;
-    model.contact_k = k;
-    Eigen::VectorXd u = Eigen::VectorXd::Zero(K.rows()), v = u;
-    int rebound = 0, left = 0;  // steps the old rule got wrong: d <= 0 < g_free, d > 0 >= g_free
-    for (int i = 0; i < 600; ++i) {
-      // In 1.5 mm deep at 5 cm/s and stopped (the body's inertia carries it on, away from the
-      // probe), held; at 300 the probe steps back 30 um and stays (the body rebounds into it);
-      // from 450 it withdraws at 5 cm/s.
-      const double depth = i < 30    ? 5e-5 * i
-                           : i < 300 ? 1.5e-3
-                           : i < 450 ? 1.47e-3
-                                     : 1.47e-3 - 5e-5 * (i - 449);
-      const Eigen::Vector3d point = xp - depth * n;
-      model.contact_point = point;
-      double d = 0;
-      for (size_t q = 0; q < patch.size(); ++q) {
-        const Eigen::Vector3d x =
-            s.m.V.row(patch[q]).transpose() + u.segment<3>(split.local[3 * patch[q]]);
-        d += w[q] * ((x - point).dot(n) - off[q]);
-      }
-      const Eigen::VectorXd b = mass.cwiseProduct(v) - h * (K * u);
-      const Eigen::VectorXd v_free = free.solve(b);
-      const double g_free = d + h * g.dot(v_free);
-      rebound += d <= 0 && g_free > 0;
-      left += d > 0 && g_free <= 0;
-      v = g_free > 0 ? Eigen::VectorXd(pushed.solve(Eigen::VectorXd(b - h * k * d * g))) : v_free;
-      u += h * v;
-      model.step(h);
-      const Eigen::VectorXd um = gather(model.displacement(), split.free);
-      ASSERT_LT((um - u).cwiseAbs().maxCoeff(), 1e-9 * std::max(1e-6, u.cwiseAbs().maxCoeff()))
-          << to_string(form) << " step " << i;
-      // The force is the end-of-step gap's, never adhesive.
-      const double gap = d + h * g.dot(v);
-      EXPECT_NEAR(model.device_force().norm(), k * std::max(0.0, gap), 1e-9) << i;
-    }
-    EXPECT_GT(rebound, 0) << to_string(form);
-    EXPECT_GT(left, 0) << to_string(form);
+  FemModelOptions o;  // the default, light damping: the body rebounds
+  FemModel model(s.m, s.mat, s.fixed, o);
+  const Eigen::MatrixXd Ad = Eigen::MatrixXd(P.A(h, o.rayleigh_alpha, o.rayleigh_beta));
+  const Eigen::LDLT<Eigen::MatrixXd> free(Ad), pushed(Ad + h * h * k * P.g * P.g.transpose());
+  P.attach(model, k);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(P.K.rows()), v = u;
+  int rebound = 0, left = 0;  // steps the old rule got wrong: d <= 0 < g_free, d > 0 >= g_free
+  for (int i = 0; i < 600; ++i) {
+    // In 1.5 mm deep at 5 cm/s and stopped (the body's inertia carries it on, away from the
+    // probe), held; at 300 the probe steps back 30 um and stays (the body rebounds into it);
+    // from 450 it withdraws at 5 cm/s.
+    const double depth = i < 30    ? 5e-5 * i
+                         : i < 300 ? 1.5e-3
+                         : i < 450 ? 1.47e-3
+                                   : 1.47e-3 - 5e-5 * (i - 449);
+    const Eigen::Vector3d point = P.xp - depth * P.n;
+    model.contact_point = point;
+    const double d = P.gap(u, point);
+    const Eigen::VectorXd b = P.mass.cwiseProduct(v) - h * (P.K * u);
+    const Eigen::VectorXd v_free = free.solve(b);
+    const double g_free = d + h * P.g.dot(v_free);
+    rebound += d <= 0 && g_free > 0;
+    left += d > 0 && g_free <= 0;
+    v = g_free > 0 ? Eigen::VectorXd(pushed.solve(Eigen::VectorXd(b - h * k * d * P.g))) : v_free;
+    u += h * v;
+    model.step(h);
+    const Eigen::VectorXd um = gather(model.displacement(), P.split.free);
+    ASSERT_LT((um - u).cwiseAbs().maxCoeff(), 1e-9 * std::max(1e-6, u.cwiseAbs().maxCoeff()))
+        << "step " << i;
+    // The force is the end-of-step gap's, never adhesive.
+    EXPECT_NEAR(model.device_force().norm(), k * std::max(0.0, d + h * P.g.dot(v)), 1e-9) << i;
   }
+  EXPECT_GT(rebound, 0);
+  EXPECT_GT(left, 0);
 }
