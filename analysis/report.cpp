@@ -940,7 +940,6 @@ void section_analysis(Context& c, const Unit& u) {
       t += (g ? ", " : "") + groups[g] + " " + std::to_string(undefined[g]);
     doc.para(t + ".");
   }
-
   // Descriptives (always).
   doc.heading(3, "Descriptives");
   std::vector<std::vector<std::string>> rows;

@@ -357,9 +357,8 @@ std::string to_text(const StatsSummary& s) {
   {
     // Five significant digits, more when the values are large beside their spread (values near
     // 1e12 that differ by units printed mean, median and CI all as "1e+12"): enough digits that
-    // a group's standard error shows in its mean, at most 15 (a double's).
-    // A group without spread (constant values, or one value) shows its values as they read
-    // back (1000000000000.5 printed "1e+12": review of the fixes); at most 17 digits.
+    // a group's standard error shows in its mean; a group without spread (constant values, or
+    // one value) shows its values as they read back. At most 17 digits (a double's).
     int digits = 5;
     for (const auto& d : s.groups) {
       const double big = std::max({std::fabs(d.min), std::fabs(d.max), std::fabs(d.mean)});
