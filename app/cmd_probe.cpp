@@ -1,9 +1,9 @@
 // `palplab probe PROTOTYPE.json --press REGION_OR_NODE --force NEWTONS --duration SECONDS
 //  [--release SECONDS] [--integrator NAME] [--json] [--trace FILE.csv]`: a scripted press and
-// release to sanity-check a prototype. The contact point starts 2 mm outside the surface node nearest to
-// the region's centroid (or the given node), moves in along the inward normal at 2 cm/s until the
-// device force reaches NEWTONS, holds that force (integral control of the depth) for SECONDS,
-// withdraws at 5 cm/s to the start and keeps stepping for the release time. --trace writes
+// release to sanity-check a prototype. The contact point starts 2 mm outside the surface node
+// nearest to the region's centroid (or the given node), moves in along the inward normal at 2 cm/s
+// until the device force reaches NEWTONS, holds that force (integral control of the depth) for
+// SECONDS, withdraws at 5 cm/s to the start and keeps stepping for the release time. --trace writes
 // every step (time, script phase, device position, rendered force, contact node, visible
 // deformation; SI units) as CSV, written as the steps run.
 #include <algorithm>

@@ -470,7 +470,8 @@ palplab::app::CommandRegistration reg_run{
           };
         }
         // The flags that change what is written come along (--samples is the run's own).
-        std::string again = "palplab run " + palplab::shell_word(*study) + " --db " + palplab::shell_word(opt->db);
+        std::string again =
+            "palplab run " + palplab::shell_word(*study) + " --db " + palplab::shell_word(opt->db);
         for (const auto& sc : *scenes) again += " --scene " + palplab::shell_word(sc);
         if (!human->record_trace.empty())
           again += " --record-trace " + palplab::shell_word(human->record_trace);
@@ -491,7 +492,8 @@ palplab::app::CommandRegistration reg_run{
             ids += (k ? ", " : "") + r.people_left[k];
           if (r.people_left.size() > 10) ids += ", …";
           how = "the virtual participants are done; people's sessions remain (" + ids +
-                "): `palplab run STUDY --db " + palplab::shell_word(opt->db) + " --human --participant ID`";
+                "): `palplab run STUDY --db " + palplab::shell_word(opt->db) +
+                " --human --participant ID`";
         }
         if (!*quiet) {
           std::printf(
