@@ -8,7 +8,7 @@ namespace palplab::protocols {
 PrototypeInspector engine_prototype_inspector() {
   return [](const std::string& path) {
     auto s = prototypes::inspect_prototype(path);
-    return PrototypeInfo{s.region_names, s.scene, s.id, s.inner_regions};
+    return PrototypeInfo{s.region_names, s.scene, s.id, s.inner_regions, s.dt};
   };
 }
 

@@ -159,6 +159,7 @@ struct PrototypeInfo {
   std::string scene;                       // may be empty
   std::string id;                          // the file's "id" (may be empty: not checked)
   std::vector<std::string> inner_regions;  // no vertex on the surface: never a palpation feature
+  double dt = 0.0;                         // s, the haptic step (0: not known, not checked)
 };
 using PrototypeInspector = std::function<PrototypeInfo(const std::string& prototype_path)>;
 PrototypeInspector engine_prototype_inspector();

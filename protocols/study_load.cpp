@@ -961,6 +961,36 @@ Study parse_study(const std::string& text, const std::string& file,
         c.err("$.task.scene", "prototype \"" + id + "\" simulates scene \"" + info.scene +
                                   "\", not \"" + s.task.scene + "\"");
   }
+  // A session runs a whole number of its prototype's haptic steps, and the plan places the next
+  // session at start + session_duration: a duration between two step counts (0.0105 s at 1 kHz)
+  // ran 11 steps and the next session started 0.5 ms before this one ended (review 2026-12-07).
+  for (std::size_t pi = 0; pi < s.phases.size(); ++pi) {
+    const Phase& ph = s.phases[pi];
+    if (!(ph.session_duration > 0)) continue;
+    std::set<std::string> ids;  // the prototypes a session of this phase may run on
+    for (const Group& g : s.groups) {
+      if (auto it = g.by_phase.find(ph.id); it != g.by_phase.end())
+        ids.insert(it->second);
+      else if (ph.prototype)
+        ids.insert(*ph.prototype);
+      else if (!g.prototype.empty())
+        ids.insert(g.prototype);
+    }
+    for (const std::string& id : ids) {
+      auto it = infos.find(id);
+      if (it == infos.end() || !(it->second.dt > 0)) continue;
+      const double dt = it->second.dt, steps = ph.session_duration / dt;
+      const double whole = std::round(steps);
+      if (std::abs(steps - whole) <= 1e-6 * std::max(1.0, steps)) continue;
+      const double below = std::max(1.0, std::floor(steps)) * dt, above = std::ceil(steps) * dt;
+      c.err(path_key(path_index("$.phases", pi), "session_duration"),
+            "expected a whole number of prototype \"" + id + "\"'s haptic steps (" +
+                Ctx::fmt(dt) + " s each), got " + Ctx::fmt(ph.session_duration) + " s = " +
+                Ctx::fmt(steps) + " steps (" + Ctx::fmt(below) + " or " + Ctx::fmt(above) +
+                " s would do)");
+      break;  // one problem per phase
+    }
+  }
 
   c.throw_if_any();  // every problem, in file order
   return s;

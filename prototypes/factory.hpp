@@ -38,6 +38,7 @@ struct PrototypeSummary {
   std::vector<std::string> region_names;
   std::vector<std::string>
       inner_regions;  // regions with no surface vertex (mesh_inner_region_names)
+  double dt = 0.0;    // s, the haptic step
 };
 PrototypeSummary inspect_prototype(const std::string& prototype_json_path);
 

@@ -176,6 +176,19 @@ TEST(HardJson, HugeNumberIsExitTwoNotThree) {
   EXPECT_TRUE(has(r.err, "every session runs at least one step")) << r.err;
 }
 
+TEST(HardJson, SessionDurationBetweenTwoStepCountsIsRefused) {
+  // 10.5 haptic steps: the session ran 11 and the next one started 0.5 ms before it ended.
+  auto d = tmp("halfstep");
+  spit(d / "study.json", study(kGroups, "", 0.0105));
+  Result r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "$.phases[0].session_duration: expected a whole number of prototype");
+  EXPECT_TRUE(has(r.err, "haptic steps (0.001 s each), got 0.0105 s = 10.5 steps (0.01 or 0.011 s"))
+      << r.err;
+  // A whole number of steps written with a rounding error of the decimal is a whole number.
+  spit(d / "study.json", study(kGroups, "", 0.07));
+  EXPECT_EQ(cli("validate " + (d / "study.json").string(), d).code, 0);
+}
+
 TEST(HardJson, AbsurdStartPositionFailsValidateWithItsRange) {
   auto d = tmp("start");
   std::string a = slurp(src("prototypes/A.json"));
