@@ -316,7 +316,7 @@ Context load(const std::string& db_path, const std::string& out_dir, const Repor
 }
 
 // The analyses the study declares, merged per (measure, phase, pooled); a study without any
-// gets ANOVA + pairwise t of every measure in its last phase.
+// gets ANOVA + pairwise t of each of its measures in its last phase.
 std::vector<Unit> analysis_units(const Context& c) {
   std::vector<Unit> units;
   auto unit_for = [&](const std::string& m, const std::string& ph, bool pooled) -> Unit& {
@@ -337,8 +337,29 @@ std::vector<Unit> analysis_units(const Context& c) {
         u.margin = a["margin"].get<double>();
     }
   if (units.empty() && !c.phase_order.empty()) {
+    // The study's measures ($.measures, else its task's default list), those the database
+    // holds. Every measure stored was analysed before: the two counts a palpation session always
+    // records (palpations, sft_reached) too, though the study left them out (review 2026-12-07).
+    std::set<std::string> stored;
+    for (const auto& m : c.measures) stored.insert(m.name);
+    std::vector<std::string> declared;
+    if (sj.contains("measures") && sj["measures"].is_array()) {
+      for (const auto& m : sj["measures"])
+        if (m.is_string()) declared.push_back(m.get<std::string>());
+    } else {
+      const std::string task = sj.contains("task") && sj["task"].is_object() &&
+                                       sj["task"].contains("kind") && sj["task"]["kind"].is_string()
+                                   ? sj["task"]["kind"].get<std::string>()
+                                   : std::string();
+      for (const auto& k : results::kMeasureKinds)
+        if (k.by_default && k.task == results::measure_task(task)) declared.emplace_back(k.name);
+    }
     std::set<std::string> names;
-    for (const auto& m : c.measures) names.insert(m.name);
+    for (const auto& n : declared)
+      if (stored.count(n)) names.insert(n);
+    // A measure the table does not know (a database of a later palplab) is analysed as stored.
+    for (const auto& n : stored)
+      if (!results::find_measure_kind(n)) names.insert(n);
     for (const auto& n : names) {
       Unit& u = unit_for(n, c.phase_order.back(), false);
       u.kinds = {"descriptives", "anova_oneway", "pairwise_t"};

@@ -400,7 +400,7 @@ palplab::app::CommandRegistration reg_report{
                   << (files.declared > 0
                           ? "the study's " + std::to_string(files.declared) +
                                 " declared, one per measure and phase"
-                          : std::string("none declared: every measure in the last phase"))
+                          : std::string("none declared: the study's measures in the last phase"))
                   << "), " << files.figures.size() << " figures, " << files.still_figures
                   << " stills";
         if (files.still_figures > 0)

@@ -18,6 +18,7 @@
 #include "protocols/resolve.hpp"
 #include "protocols/study.hpp"
 #include "prototypes/factory.hpp"
+#include "results/measure_kind.hpp"
 
 namespace palplab::protocols {
 
@@ -25,11 +26,19 @@ using nlohmann::json;
 using palplab::json::path_index;
 using palplab::json::path_key;
 
+// The lists below are views of results::kMeasureKinds, palplab's one table of its measures.
+static std::vector<std::string> measure_names(bool (*keep)(const results::MeasureKind&,
+                                                           std::string_view),
+                                              std::string_view task) {
+  std::vector<std::string> v;
+  for (const results::MeasureKind& m : results::kMeasureKinds)
+    if (keep(m, task)) v.emplace_back(m.name);
+  return v;
+}
+
 const std::vector<std::string>& known_measures() {
-  static const std::vector<std::string> m = {
-      "palpation_force",  "exploration_time", "feature_identified", "accuracy",
-      "palpations",       "sft_reached",      "insertion_attempts", "layers_passed",
-      "tip_to_target_mm", "bone_contacts",    "procedure_time"};
+  static const std::vector<std::string> m =
+      measure_names([](const results::MeasureKind&, std::string_view) { return true; }, "");
   return m;
 }
 
@@ -45,30 +54,24 @@ static std::string not_in_measures(const std::string& m, const json& root) {
 // palpation task's two counts (stored and exported for every session, and refused here before
 // although FORMATS documented them; review 2026-12-07).
 static const std::vector<std::string>& task_measures(const std::string& task_kind) {
-  static const std::vector<std::string> palpation = {"palpation_force",    "exploration_time",
-                                                     "feature_identified", "accuracy",
-                                                     "palpations",         "sft_reached"};
-  return task_kind == "needle_insertion" ? default_measures(task_kind) : palpation;
+  auto of_task = [](const results::MeasureKind& m, std::string_view t) { return m.task == t; };
+  static const std::vector<std::string> palpation = measure_names(of_task, "palpation");
+  static const std::vector<std::string> needle = measure_names(of_task, "needle_insertion");
+  return results::measure_task(task_kind) == "needle_insertion" ? needle : palpation;
 }
 
 const std::vector<std::string>& default_measures(const std::string& task_kind) {
-  static const std::vector<std::string> palpation = {"palpation_force", "exploration_time",
-                                                     "feature_identified", "accuracy"};
-  static const std::vector<std::string> needle = {
-      "insertion_attempts", "layers_passed", "tip_to_target_mm", "bone_contacts", "procedure_time"};
-  return task_kind == "needle_insertion" ? needle : palpation;
+  auto by_default = [](const results::MeasureKind& m, std::string_view t) {
+    return m.task == t && m.by_default;
+  };
+  static const std::vector<std::string> palpation = measure_names(by_default, "palpation");
+  static const std::vector<std::string> needle = measure_names(by_default, "needle_insertion");
+  return results::measure_task(task_kind) == "needle_insertion" ? needle : palpation;
 }
 
 std::string measure_unit(const std::string& m) {
-  if (m == "palpation_force") return "N";
-  if (m == "exploration_time") return "s";
-  if (m == "feature_identified") return "1";
-  if (m == "accuracy") return "%";
-  if (m == "palpations" || m == "sft_reached") return "1";
-  if (m == "insertion_attempts" || m == "layers_passed" || m == "bone_contacts") return "1";
-  if (m == "tip_to_target_mm") return "mm";
-  if (m == "procedure_time") return "s";
-  return "";
+  const results::MeasureKind* k = results::find_measure_kind(m);
+  return k ? std::string(k->unit) : std::string();
 }
 
 namespace {

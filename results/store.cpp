@@ -26,6 +26,7 @@
 #include "common/input_error.hpp"
 #include "common/inputs.hpp"
 #include "common/remove_on_signal.hpp"
+#include "results/measure_kind.hpp"
 
 namespace fs = std::filesystem;
 
@@ -863,21 +864,28 @@ void check_references(sqlite3* db, int version, const std::string& path) {
         "('integer', 'real') AND typeof(sft) IN ('integer', 'real') AND NOT mpf <= sft) LIMIT 1",
         "SELECT 'phase ' || quote(phase), 'sessions ' || quote(sessions) || ': expected a count "
         ">= 1' FROM phases WHERE typeof(sessions) = 'integer' AND sessions < 1 LIMIT 1",
-        // The measures palplab computes, with their units and ranges (protocols/measures.cpp).
-        "WITH k(name, unit, hi, range) AS (VALUES ('palpation_force', 'N', NULL, '>= 0'), "
-        "('exploration_time', 's', NULL, '>= 0'), ('feature_identified', '1', 1, 'in [0, 1]'), "
-        "('accuracy', '%', 100, 'in [0, 100]'), ('palpations', '1', NULL, '>= 0'), "
-        "('sft_reached', '1', NULL, '>= 0'), ('insertion_attempts', '1', NULL, '>= 0'), "
-        "('layers_passed', '1', NULL, '>= 0'), ('tip_to_target_mm', 'mm', NULL, '>= 0'), "
-        "('bone_contacts', '1', NULL, '>= 0'), ('procedure_time', 's', NULL, '>= 0')) SELECT "
-        "'measure ' || quote(m.name) || ' of session ' || m.session, 'value ' || CASE "
+    };
+    // The measures palplab computes, with their units and ranges (results::kMeasureKinds).
+    std::string known;
+    for (const MeasureKind& k : kMeasureKinds) {
+      const bool bounded = std::isfinite(k.hi);
+      char hi[32];
+      std::snprintf(hi, sizeof hi, "%.17g", k.hi);
+      known += std::string(known.empty() ? "" : ", ") + "('" + std::string(k.name) + "', '" +
+               std::string(k.unit) + "', " + (bounded ? hi : "NULL") + ", '" +
+               (bounded ? "in [0, " + std::string(hi) + "]" : std::string(">= 0")) + "')";
+    }
+    const std::string measures_sql =
+        "WITH k(name, unit, hi, range) AS (VALUES " + known +
+        ") SELECT 'measure ' || quote(m.name) || ' of session ' || m.session, 'value ' || CASE "
         "typeof(m.value) WHEN 'real' THEN printf('%.10g', m.value) ELSE quote(m.value) END || "
         "' with unit ' || quote(m.unit) || ': expected a number ' || k.range || ' with unit ' "
         "|| k.unit FROM measures m JOIN k ON k.name = m.name WHERE m.unit IS NOT k.unit OR "
         "(typeof(m.value) IN ('integer', 'real') AND (m.value < 0 OR m.value > "
-        "coalesce(k.hi, m.value))) LIMIT 1",
-    };
-    for (const char* sql : values) {
+        "coalesce(k.hi, m.value))) LIMIT 1";
+    std::vector<const char*> queries(std::begin(values), std::end(values));
+    queries.push_back(measures_sql.c_str());
+    for (const char* sql : queries) {
       Stmt q(db, sql);
       if (q.step())
         throw InputError(

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -144,8 +145,11 @@ results::StudyStructure fixture_structure() {
   return st;
 }
 
+// edit: changes the stored study JSON; with it, every session also stores the palpation task's
+// two counts (palpations, sft_reached), as a run does.
 FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool structure = true,
-                       const nlohmann::json& hypotheses = nullptr) {
+                       const nlohmann::json& hypotheses = nullptr,
+                       const std::function<void(nlohmann::json&)>& edit = {}) {
   FixtureDb f;
   f.dir = fs::temp_directory_path() / ("palplab_report_test_" + std::to_string(::getpid()));
   fs::remove_all(f.dir);
@@ -173,6 +177,7 @@ FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool st
         {{"kind", "anova_oneway"}, {"measure", "exploration_time"}, {"phase", "post_training"}}}}};
   if (pool_sessions) sj["analyses"][0]["pool_sessions"] = true;
   if (!hypotheses.is_null()) sj["hypotheses"] = hypotheses;
+  if (edit) edit(sj);
   auto store = results::Store::create(f.db.string());
   results::StudyRecord st;
   st.study_id = "fixture";
@@ -216,6 +221,10 @@ FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool st
       if (s == 3 && fv) f.post[g].push_back(*fv);
       d.measures.push_back({"palpation_force", fv, "N"});
       d.measures.push_back({"exploration_time", 10.0 + g + 0.7 * i - s, "s"});
+      if (edit) {
+        d.measures.push_back({"palpations", 3.0 + (i + s) % 4, "1"});
+        d.measures.push_back({"sft_reached", static_cast<double>((i + g) % 2), "1"});
+      }
       if (s == 3) {
         d.samples.t0 = 0;
         d.samples.dt = 0.001;
@@ -397,6 +406,37 @@ TEST(Report, StructureFromTheDatabase) {
 
 // A database without the structure tables' contents is not guessed at by phase names: with
 // no phase of kind training stored, there is no learning curve, whatever the phase is called.
+// A study without analyses gets those of its measures, never of the counts every palpation
+// session stores beside them (sft_reached was analysed although the study left it out).
+TEST(Report, WithoutAnalysesTheStudysMeasuresAreAnalysed) {
+  auto sections = [](const std::string& md) {
+    std::vector<std::string> v;
+    for (const char* m : {"palpation_force", "exploration_time", "palpations", "sft_reached"})
+      if (md.find("## Analysis: " + std::string(m) + " —") != std::string::npos) v.push_back(m);
+    return v;
+  };
+  using V = std::vector<std::string>;
+  {
+    FixtureDb f = make_fixture(true, false, true, nullptr,
+                               [](nlohmann::json& sj) { sj.erase("analyses"); });
+    ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+    const std::string md = slurp(files.markdown);
+    EXPECT_EQ(sections(md), (V{"palpation_force", "exploration_time"}));
+    EXPECT_EQ(md.find("learning curve: sft_reached"), std::string::npos);
+    fs::remove_all(f.dir);
+  }
+  {
+    FixtureDb f = make_fixture(true, false, true, nullptr, [](nlohmann::json& sj) {
+      sj.erase("analyses");
+      sj["measures"] = {"palpation_force", "sft_reached"};
+    });
+    ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+    const std::string md = slurp(files.markdown);
+    EXPECT_EQ(sections(md), (V{"palpation_force", "sft_reached"}));
+    fs::remove_all(f.dir);
+  }
+}
+
 TEST(Report, NoNameGuessingOfTrainingPhases) {
   FixtureDb f = make_fixture(true, false, /*structure=*/false);
   {

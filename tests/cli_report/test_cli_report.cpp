@@ -177,6 +177,8 @@ TEST(CliReport, CountsAreNoProportions) {
   const fs::path d = scratch_dir("report_counts");
   std::ofstream(d / "s.json") << R"({"palplab_study": 1, "id": "counts", "title": "counts",
   "seed": 1, "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "measures": ["palpation_force", "exploration_time", "feature_identified", "accuracy",
+               "palpations", "sft_reached"],
   "groups": [{"id": "A", "prototype": "A", "size": 3}, {"id": "B", "prototype": "B", "size": 3}],
   "phases": [
     {"id": "training", "kind": "training", "sessions": 2, "session_duration": 60, "gap": {"minutes": 5}},

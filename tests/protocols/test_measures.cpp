@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "protocols/measures.hpp"
+#include "results/measure_kind.hpp"
 
 using namespace palplab;
 using namespace palplab::protocols;
@@ -85,4 +86,34 @@ TEST(Measures, NotIdentifiedLeavesForceUndefined) {
   EXPECT_FALSE(m[1].value.has_value());  // exploration_time
   EXPECT_EQ(*m[2].value, 0.0);           // feature_identified
   EXPECT_FALSE(m[3].value.has_value());  // accuracy
+}
+
+// What the sessions store is what results::kMeasureKinds (the validator's, the store's and the
+// report's one table) says: every name in it with its unit and task, each of a task's rows once.
+TEST(Measures, EveryComputedMeasureIsInTheTableWithItsUnit) {
+  std::vector<int> region = {0, 1};
+  auto s = blank(2.0);
+  touch(s, 100, 900, 0, 3.0);
+  MeasureInputs in;
+  in.samples = &s;
+  in.vertex_region = &region;
+  in.feature_region = 0;
+  in.mpf = 2.5;
+  const std::vector<results::EventRecord> none;
+  for (const auto& [task, computed] :
+       {std::pair{std::string("palpation"), compute_measures(in)},
+        std::pair{std::string("needle_insertion"), compute_needle_measures(none)}}) {
+    std::size_t rows = 0;
+    for (const auto& k : results::kMeasureKinds) rows += k.task == task;
+    EXPECT_EQ(computed.size(), rows) << task;
+    for (const auto& m : computed) {
+      const results::MeasureKind* k = results::find_measure_kind(m.name);
+      ASSERT_NE(k, nullptr) << m.name;
+      EXPECT_EQ(k->unit, m.unit) << m.name;
+      EXPECT_EQ(k->task, task) << m.name;
+      if (m.value) {
+        EXPECT_LE(*m.value, k->hi) << m.name;
+      }
+    }
+  }
 }
