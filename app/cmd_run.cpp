@@ -49,7 +49,7 @@ extern "C" void on_sigint(int) {
   g_interrupted = true;
 }
 
-// A virtual run interrupted (SIGINT, SIGTERM) stops at once, as the default action would: every
+// A virtual run interrupted (SIGINT, SIGTERM, SIGHUP) stops at once, as the default action would: every
 // session completed before it is already stored (each in its own transaction), the one running
 // is not. The handler only says so and how to continue (write(2), unlink and _exit are
 // async-signal-safe; the text is made before the run).
@@ -310,12 +310,15 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
           std::to_string(std::lround(sp.duration)) + " s)");
     return !g_interrupted.load();
   };
-  std::signal(SIGINT, on_sigint);
-  std::signal(SIGTERM, on_sigint);
+  // SIGHUP too: a closed terminal or a dropped ssh session ended the run silently (exit 129).
+  std::vector<std::pair<int, void (*)(int)>> before;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    before.emplace_back(sig, std::signal(sig, on_sigint));
+    if (before.back().second == SIG_IGN) std::signal(sig, SIG_IGN);  // nohup stays nohup
+  }
   const protocols::HumanSummary r =
       spec.kind == "mouse" ? run_in_window(s, plan, o, h) : protocols::run_human(s, plan, o);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  for (auto [sig, handler] : before) std::signal(sig, handler);
   std::printf("%s: participant %s: %d session(s) completed, %d aborted, %d remaining%s\n",
               palplab::escape_controls(ro.db, false).c_str(), h.participant.c_str(), r.sessions_run,
               r.aborted, r.remaining,
@@ -478,11 +481,15 @@ palplab::app::CommandRegistration reg_run{
         g_interrupt_text = "\ninterrupted: the sessions completed before this are stored in " +
                            palplab::escape_controls(opt->db, false) +
                            " (the one running is not); continue with:\n  " + again + " --resume\n";
-        for (int sig : {SIGINT, SIGTERM})  // a signal the caller ignores (nohup, `&`) stays so
-          if (std::signal(sig, on_interrupt_virtual) == SIG_IGN) std::signal(sig, SIG_IGN);
+        // SIGHUP too: a closed terminal or a dropped ssh session ended the run silently (exit
+        // 129, review 2026-12-07). A signal the caller ignores (nohup, `&`) stays ignored.
+        std::vector<std::pair<int, void (*)(int)>> before;
+        for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+          before.emplace_back(sig, std::signal(sig, on_interrupt_virtual));
+          if (before.back().second == SIG_IGN) std::signal(sig, SIG_IGN);
+        }
         RunSummary r = run_study(s, plan, *opt);
-        std::signal(SIGINT, SIG_DFL);
-        std::signal(SIGTERM, SIG_DFL);
+        for (auto [sig, handler] : before) std::signal(sig, handler);
         if (*bar_open) std::fprintf(stderr, "\n");  // stopped by --max-sessions
         // What is left to run: virtual sessions (--resume), or only people's (run --human).
         std::string how = "continue with --resume";

@@ -679,33 +679,37 @@ TEST(HardDb, RefusedResumeOfAReadOnlyFileLeavesNoWalOrShm) {
 
 // An interrupted virtual run (SIGTERM; SIGINT alike) said nothing: it now says that the
 // completed sessions are stored and prints the command that continues it, exits 128 + signal,
-// and that command completes the run (keeping the run's --samples none).
+// and that command completes the run (keeping the run's --samples none). SIGHUP (a closed
+// terminal, a dropped ssh session) ended it silently with 129 until 2026-12-07.
 TEST(HardDb, InterruptedRunSaysHowToContinue) {
-  auto d = tmp("interrupt");
-  spit(d / "study.json",
-       study(R"([{"id": "G1", "prototype": "A", "size": 2}])", "", 300.0));  // ≈ 1 s of A
-  const fs::path db = d / "r.db";
-  const std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
-                          "/prototypes " + std::string(PALPLAB_BINARY) + " run " +
-                          (d / "study.json").string() + " --db " + db.string() +
-                          " --samples none 2>" + (d / "err.txt").string() + " >/dev/null";
-  const std::string script = "(" + cmd + ") & pid=$!; i=0; while [ ! -s " + db.string() +
-                             " ] && [ $i -lt 300 ]; do sleep 0.02; i=$((i+1)); done; sleep 0.3; "
-                             "kill -TERM $pid; wait $pid; echo $? > " +
-                             (d / "rc.txt").string();
-  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
-  const std::string err = slurp(d / "err.txt");
-  if (slurp(d / "rc.txt") == "0\n") GTEST_SKIP() << "the run finished before the signal";
-  EXPECT_EQ(slurp(d / "rc.txt"), "143\n") << err;
-  EXPECT_TRUE(has(err, "interrupted: the sessions completed before this are stored in")) << err;
-  const std::string resume =
-      "run " + (d / "study.json").string() + " --db " + db.string() + " --resume";
-  EXPECT_TRUE(has(err, "palplab " + resume + "\n")) << err;
-  Result r = cli(resume + " --quiet", d);
-  EXPECT_EQ(r.code, 0) << r.err;
-  const auto st = palplab::results::Store::open(db.string());
-  ASSERT_EQ(st.read_sessions().size(), 6u);
-  for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
+  for (const auto& [sig, code] : {std::pair{"TERM", "143\n"}, std::pair{"HUP", "129\n"}}) {
+    SCOPED_TRACE(sig);
+    auto d = tmp(std::string("interrupt_") + sig);
+    spit(d / "study.json",
+         study(R"([{"id": "G1", "prototype": "A", "size": 2}])", "", 300.0));  // ≈ 1 s of A
+    const fs::path db = d / "r.db";
+    const std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
+                            "/prototypes " + std::string(PALPLAB_BINARY) + " run " +
+                            (d / "study.json").string() + " --db " + db.string() +
+                            " --samples none 2>" + (d / "err.txt").string() + " >/dev/null";
+    const std::string script =
+        "(" + cmd + ") & pid=$!; i=0; while [ ! -s " + db.string() +
+        " ] && [ $i -lt 300 ]; do sleep 0.02; i=$((i+1)); done; sleep 0.3; kill -" + sig +
+        " $pid; wait $pid; echo $? > " + (d / "rc.txt").string();
+    ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+    const std::string err = slurp(d / "err.txt");
+    if (slurp(d / "rc.txt") == "0\n") GTEST_SKIP() << "the run finished before the signal";
+    EXPECT_EQ(slurp(d / "rc.txt"), code) << err;
+    EXPECT_TRUE(has(err, "interrupted: the sessions completed before this are stored in")) << err;
+    const std::string resume =
+        "run " + (d / "study.json").string() + " --db " + db.string() + " --resume";
+    EXPECT_TRUE(has(err, "palplab " + resume + "\n")) << err;
+    Result r = cli(resume + " --quiet", d);
+    EXPECT_EQ(r.code, 0) << r.err;
+    const auto st = palplab::results::Store::open(db.string());
+    ASSERT_EQ(st.read_sessions().size(), 6u);
+    for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
+  }
 }
 
 // An export interrupted by SIGTERM left its NAME.partial files in --csv (review 2026-12-06; the
