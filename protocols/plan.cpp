@@ -209,7 +209,17 @@ std::string plan_summary(const Study& study, const Plan& plan) {
     if (needle) o << " [" << measure_unit(m) << "]";
   }
   o << "\nanalyses:";
-  for (auto& a : study.analyses) o << " " << a.kind << "(" << a.measure << " @ " << a.phase << ")";
+  // What the report analyses of the phase: its last session, or (pooled) every session, as
+  // each participant's mean or (pool_sessions) each session as one observation.
+  for (auto& a : study.analyses) {
+    o << " " << a.kind << "(" << a.measure << " @ " << a.phase;
+    if (a.pooled) o << (a.pool_sessions ? ", every session pooled" : ", participant means");
+    if (a.kind == "pairwise_t" && !a.welch) o << ", pooled variance";
+    if (a.margin > 0) o << ", margin " << a.margin;
+    o << ")";
+  }
+  if (study.analyses.empty())
+    o << " none declared: the report analyses each measure in the last phase";
   o << "\n";
   return o.str();
 }

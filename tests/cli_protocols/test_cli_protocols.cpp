@@ -89,6 +89,12 @@ TEST(CliValidate, ReferenceStudiesAreValid) {
     EXPECT_NE(r.out.find("valid: "), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("timeline per participant"), std::string::npos);
   }
+  // The plan says what each analysis takes of its phase: exp1's are pooled over the sessions as
+  // participant means (the plan left that out, review 2026-12-07).
+  Result r = run_palplab("validate " + ref("exp1_instructor.json"), d);
+  EXPECT_NE(r.out.find("anova_oneway(palpation_force @ training, participant means)"),
+            std::string::npos)
+      << r.out;
 }
 
 // docs/FORMATS.md's annotated study, its `//` comments removed (outside strings), is a valid
