@@ -694,6 +694,9 @@ struct Values {
   // Participants left out because they lack the phase's planned last session (an incomplete
   // run), per group; without the study structure (schema 1) the last session stored counts.
   std::vector<int> missing;
+  // Participant means only: participants none of whose sessions has a defined value (left out
+  // of n, which counts participants, while `undefined` counts sessions), per group.
+  std::vector<int> undefined_participants;
   std::vector<ParticipantPoint> points;
 };
 Values collect_values(const Context& c, const std::string& measure, const std::string& phase,
@@ -733,10 +736,12 @@ Values collect_values(const Context& c, const std::string& measure, const std::s
   // participant order of first appearance (one value per participant).
   std::map<std::string, std::pair<long double, int>> sums;
   std::vector<std::pair<std::string, int>> order;
+  std::map<std::string, int> seen;  // every participant with a row (means): its group
   for (const auto& m : c.measures) {
     if (m.phase != phase || m.name != measure) continue;
     if (!pooled && m.phase_index != last_index[m.participant]) continue;
     int g = c.group_index(m.group);
+    if (means) seen.emplace(m.participant, g);
     if (!m.value || !std::isfinite(*m.value)) {
       undefined[g]++;
       continue;
@@ -762,6 +767,9 @@ Values collect_values(const Context& c, const std::string& measure, const std::s
     data.values[g].push_back(v);
     points.push_back({who, g, v});
   }
+  out.undefined_participants.assign(c.groups.size(), 0);
+  for (const auto& [who, g] : seen)
+    if (!sums.count(who)) ++out.undefined_participants[g];
   return out;
 }
 
@@ -955,7 +963,18 @@ void section_analysis(Context& c, const Unit& u) {
              std::to_string(excluded) + " undefined).");
     return;
   }
-  if (excluded > 0) {
+  if (excluded > 0 && means) {
+    // n counts participants here; the undefined values are sessions (review 2026-12-07).
+    std::string t =
+        "Undefined session values left out of the participant means (e.g. force when the feature "
+        "was not identified), sessions per group: ";
+    for (size_t g = 0; g < groups.size(); ++g)
+      t += (g ? ", " : "") + groups[g] + " " + std::to_string(undefined[g]);
+    t += ". Participants with no defined session, left out of n: ";
+    for (size_t g = 0; g < groups.size(); ++g)
+      t += (g ? ", " : "") + groups[g] + " " + std::to_string(vals.undefined_participants[g]);
+    doc.para(t + ".");
+  } else if (excluded > 0) {
     std::string t = "Undefined values left out (e.g. force when the feature was not identified): ";
     for (size_t g = 0; g < groups.size(); ++g)
       t += (g ? ", " : "") + groups[g] + " " + std::to_string(undefined[g]);

@@ -218,6 +218,8 @@ FixtureDb make_fixture(bool finished = true, bool pool_sessions = false, bool st
       double force = 2.0 + 0.4 * g + 0.1 * i + 0.05 * (3 - s) * (g + 1) + 0.03 * ((i * 7 + s) % 3);
       std::optional<double> fv = force;
       if (s == 3 && g == 2 && i == 4) fv.reset();  // not identified: undefined force
+      // With edit: C5 identifies nothing in training, B1 not in its first session.
+      if (edit && ((s < 3 && g == 2 && i == 4) || (s == 0 && g == 1 && i == 0))) fv.reset();
       if (s == 3 && fv) f.post[g].push_back(*fv);
       d.measures.push_back({"palpation_force", fv, "N"});
       d.measures.push_back({"exploration_time", 10.0 + g + 0.7 * i - s, "s"});
@@ -435,6 +437,26 @@ TEST(Report, WithoutAnalysesTheStudysMeasuresAreAnalysed) {
     EXPECT_EQ(sections(md), (V{"palpation_force", "sft_reached"}));
     fs::remove_all(f.dir);
   }
+}
+
+// In a section of participant means n counts participants: the undefined values left out are
+// said as sessions, and the participants left out (none of their sessions defined) apart.
+TEST(Report, PooledUndefinedValuesAreSessionsAndParticipantsApart) {
+  FixtureDb f = make_fixture(true, false, true, nullptr, [](nlohmann::json& sj) {
+    sj["analyses"] = {{{"kind", "descriptives"},
+                       {"measure", "palpation_force"},
+                       {"phase", "training"},
+                       {"pooled", true}}};
+  });
+  ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
+  const std::string md = slurp(files.markdown);
+  EXPECT_NE(md.find("Undefined session values left out of the participant means (e.g. force when "
+                    "the feature was not identified), sessions per group: A 0, B 1, C 3. "
+                    "Participants with no defined session, left out of n: A 0, B 0, C 1."),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| C | 4 |"), std::string::npos) << md;
+  fs::remove_all(f.dir);
 }
 
 TEST(Report, NoNameGuessingOfTrainingPhases) {
