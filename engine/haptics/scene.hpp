@@ -39,9 +39,14 @@ struct Thresholds {
   double sft = 0.0;  // stopping force threshold (N)
 };
 
+// Contacts separated by less than this are one touch in the event log (contact_start ..
+// contact_end, the threshold events once per touch); the physics knows no such thing.
+inline constexpr double kTouchGap = 0.01;  // s
+
 enum class EventKind {
   contact_start,  // value: 0
-  contact_end,    // value: peak force magnitude of the contact (N)
+  contact_end,    // value: peak force magnitude of the touch (N); t: when the contact was lost,
+                  // logged kTouchGap later (a touch open at the session end has none)
   st_reached,     // value: force magnitude at the crossing (N); region: contact region
   mpf_reached,
   sft_reached,
