@@ -126,15 +126,15 @@ palplab::app::CommandRegistration reg_export{
         palplab::app::require_writable_dir("--csv", *dir);
         if (auto w = store.incomplete_warning(); !w.empty())
           std::cerr << palplab::escape_controls(w, false) << "\n";
-        if (*samples) {  // a run with --samples none has none to export: said, not a bare header
-          const auto sessions = store.read_sessions();
+        // A run with --samples none has none to export: said, not a bare header. The data say
+        // it, not meta "samples" (a database whose meta said none while it held samples was
+        // warned about; review 2026-12-07).
+        if (*samples && !store.read_sessions().empty() && !store.has_samples()) {
           const auto setting = store.read_meta("samples");
-          if (setting
-                  ? *setting == "none"
-                  : !sessions.empty() && store.read_samples(sessions.front().session).size() == 0)
-            std::cerr << "warning: " << palplab::escape_controls(*db, false)
-                      << ": the run stored no device samples (it ran with --samples none): "
-                         "samples.csv holds its header only\n";
+          std::cerr << "warning: " << palplab::escape_controls(*db, false)
+                    << ": the run stored no device samples"
+                    << (setting && *setting == "none" ? " (it ran with --samples none)" : "")
+                    << ": samples.csv holds its header only\n";
         }
         const auto summary = palplab::results::export_csv(store, *dir, *samples);
         made.done = true;

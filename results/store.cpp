@@ -1213,6 +1213,14 @@ std::optional<std::string> Store::read_meta(const std::string& key) const {
   });
 }
 
+bool Store::has_samples() const {
+  return reading(path_, [&] {
+    std::lock_guard lock(*mu_);
+    Stmt q(db_, "SELECT EXISTS (SELECT 1 FROM samples WHERE n > 0)");
+    return q.step() && q.integer(0) != 0;
+  });
+}
+
 void Store::write_meta(const std::string& key, const std::string& value) {
   std::lock_guard lock(*mu_);
   Stmt(db_, "INSERT OR REPLACE INTO meta(key, value) VALUES (?1, ?2)")

@@ -190,6 +190,8 @@ class Store {
   // The run's settings beside the schema's own rows (docs/FORMATS.md, "meta"): `run` stores
   // "samples" (full | none) so that a resume keeps what the run started with.
   std::optional<std::string> read_meta(const std::string& key) const;
+  // Whether any session has device samples stored (what the data say, whatever meta says).
+  bool has_samples() const;
   void write_meta(const std::string& key, const std::string& value);
   // False while a run's start was interrupted before its study record was written.
   bool has_study() const;

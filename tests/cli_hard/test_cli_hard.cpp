@@ -770,6 +770,13 @@ TEST(HardDb, ResumeKeepsTheRunsSamplesSetting) {
   ASSERT_EQ(r.code, 0) << r.err;
   r = cli(run + " --resume --samples none", d);
   EXPECT_EXIT2_WITH(r, "the run started with --samples full");
+  // The warning follows the data, not the meta row (one edited to "none" over stored samples).
+  palplab::testing::sql_exec(db, "UPDATE meta SET value = 'none' WHERE key = 'samples'");
+  r = cli("export " + db.string() + " --csv " + (d / "csv").string() + " --samples --overwrite",
+          d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(has(r.err, "stored no device samples")) << r.err;
+  EXPECT_GT(slurp(d / "csv" / "samples.csv").size(), 1000u);
 }
 
 // An interruption while `run` created its database left an empty file (or an SQLite file
