@@ -5,6 +5,7 @@
 // numbers (protocols/calibrate.hpp); prints the fitted values with standard errors, the loss
 // before and after, and the fit per group and measure; writes them all to PARAMS.json (its
 // "participant_model" object can be pasted into a study).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,7 +14,9 @@
 #include <nlohmann/json.hpp>
 
 #include "app/command.hpp"
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
+#include "common/json_check.hpp"
 #include "common/write_file.hpp"
 #include "protocols/calibrate.hpp"
 #include "protocols/calibrate_journal.hpp"
@@ -215,7 +218,37 @@ palplab::app::CommandRegistration reg_calibrate{
         j["human"] = a->human;
         j["sim_n"] = a->opt.sim_n;
         j["budget"] = a->opt.budget;
+        // A calibration JSON already at --out is replaced (re-running a fit is the workflow),
+        // and said; one whose fit had a lower loss is kept beside it rather than lost (a fit of
+        // 20 evaluations was silently replaced by a run of --budget 1; review 2026-12-07).
+        std::string replaced;
+        {
+          std::ifstream in(a->out, std::ios::binary);
+          const auto old = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+          if (old.is_object() && old.contains("palplab_calibration")) {
+            const auto loss = old.value("loss_after", nlohmann::json());
+            std::string held = "a fit";
+            if (old.contains("fitted") && old["fitted"].is_object()) {
+              held += " of";
+              for (const auto& [k, v] : old["fitted"].items()) held += " " + k;
+            }
+            if (loss.is_number()) held += " with loss " + palplab::json::Checker::fmt(loss.get<double>());
+            if (loss.is_number() && std::isfinite(r.loss_after) &&
+                loss.get<double>() < r.loss_after) {
+              const auto kept = std::filesystem::path(a->out).replace_extension(".previous.json");
+              palplab::write_file(kept.string(), old.dump(2) + "\n", "the replaced fit");
+              replaced = "replaced " + a->out + ": it held " + held + ", lower than this fit's " +
+                         palplab::json::Checker::fmt(r.loss_after) + "; it is kept as " +
+                         kept.string();
+            } else {
+              replaced = "replaced " + a->out + ": it held " + held;
+            }
+          }
+        }
         palplab::write_file(a->out, j.dump(2) + "\n", "the parameter file");
+        if (!replaced.empty())
+          std::cerr << (replaced.find("lower") != std::string::npos ? "warning: " : "")
+                    << palplab::escape_controls(replaced, false) << "\n";
         std::cout << to_text(r) << "wrote " << a->out << "\n";
         if (!a->write_defaults.empty()) {
           write_defaults(r, a->write_defaults);

@@ -24,6 +24,7 @@
 
 #include "app/command.hpp"
 #include "app/output_dir.hpp"
+#include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/json_locate.hpp"
 #include "protocols/calibrate.hpp"
@@ -149,6 +150,31 @@ void check_power_out(const PowerArgs& a, const palplab::protocols::Study& s) {
     for (auto& o : power_summary_outputs()) outputs.push_back(std::move(o));
   std::vector<CommandInput> inputs = {{"the study file", a.study}};
   if (!a.human.empty()) inputs.push_back({"the human data", a.human});
+  // A directory holding the other kind of run: resuming there would simulate again what its
+  // files hold (a whole set of shards was re-run, stored twice; review 2026-12-07).
+  std::error_code ec;
+  std::vector<std::string> shards;
+  bool whole = false;
+  for (const auto& e : std::filesystem::directory_iterator(a.out, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("replicates.shard-", 0) == 0 && name.size() > 6 &&
+        name.compare(name.size() - 6, 6, ".jsonl") == 0)
+      shards.push_back(name);
+    whole = whole || name == "replicates.jsonl";
+  }
+  std::sort(shards.begin(), shards.end());
+  if (a.opt.shards <= 1 && !shards.empty())
+    throw palplab::InputError(
+        palplab::SourceLocation{"--out"},
+        a.out + " holds the replicates of a sharded run (" + shards.front() +
+            (shards.size() > 1 ? ", … " + std::to_string(shards.size()) + " files" : "") +
+            "): combine them with `palplab merge " + palplab::shell_word(a.out) +
+            " --out DIR`, or give another --out for a run without --shard");
+  if (a.opt.shards > 1 && whole)
+    throw palplab::InputError(palplab::SourceLocation{"--out"},
+                              a.out +
+                                  " holds the replicates of a run without --shard "
+                                  "(replicates.jsonl): give each shard another --out");
   require_replaceable_dir_outputs("--out", a.out, "replicates.jsonl and power.json/md/svg", outputs,
                                   inputs, "", false);
   palplab::protocols::check_out_dir_study(a.out, palplab::results::sha256_hex(s.json_text));

@@ -791,7 +791,7 @@ long run_power(const Study& study, const PowerOptions& opt) {
   const int jobs = std::max(1, opt.jobs);
   const long rounds = max_over_ranks(ranks, (static_cast<long>(mine.size()) + jobs - 1) / jobs);
   const auto t0 = Clock::now();
-  long finished = 0, run_here = 0;
+  long finished = 0;
   for (long round = 0; round < rounds; ++round) {
     const std::size_t begin = std::min(mine.size(), static_cast<std::size_t>(round * jobs));
     const std::size_t end = std::min(mine.size(), begin + jobs);
@@ -836,7 +836,6 @@ long run_power(const Study& study, const PowerOptions& opt) {
     if (error) std::rethrow_exception(error);  // under MPI: mpirun aborts the other ranks
     std::string mine_text;
     for (const auto& l : lines) mine_text += l;
-    run_here += static_cast<long>(lines.size());
     const std::string all = gather_to_root(ranks, mine_text);
     if (ranks.rank == 0) {
       std::ofstream out(file, std::ios::app | std::ios::binary);
@@ -856,7 +855,9 @@ long run_power(const Study& study, const PowerOptions& opt) {
     if (ranks.rank != 0) return -1;
   }
 #endif
-  return run_here;
+  // Every rank's replicates, as rank 0 appended them (a count of this rank's own share made the
+  // summary under MPI say "6 replicates run now" for 12; review 2026-12-07).
+  return finished;
 }
 
 namespace {

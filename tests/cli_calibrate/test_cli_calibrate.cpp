@@ -481,6 +481,32 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   EXPECT_LE(fit["evaluations"].get<int>(), 5) << fit.dump(1);
   EXPECT_GE(fit["evaluations"].get<int>(), 2) << fit.dump(1);
   EXPECT_LE(fit["loss_after"].get<double>(), fit["loss_before"].get<double>());
+  // Run again into the same --out: the fit it held is said; one with a lower loss than the new
+  // fit (here made so by hand) is kept as fit.previous.json (a fit was silently replaced by a
+  // run of --budget 1; review 2026-12-07).
+  fit["loss_after"] = 1e-9;
+  std::ofstream(d / "fit.json") << fit.dump(2);
+  const std::string again = "calibrate " + data("recovery_study.json").string() + " --human " +
+                            (d / "human.csv").string() +
+                            " --params prior_target_cv --budget 1 --sim-n 3 --no-se --out " +
+                            (d / "fit.json").string();
+  r = run_palplab(again, d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: replaced " + (d / "fit.json").string() +
+                       ": it held a fit of prior_target_cv with loss 1e-09, lower than this "
+                       "fit's"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(d / "fit.previous.json"))["loss_after"], 1e-9);
+  fs::remove(d / "fit.previous.json");
+  r = run_palplab(again, d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("replaced " + (d / "fit.json").string() + ": it held a fit of "
+                       "prior_target_cv with loss"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("warning: replaced"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "fit.previous.json"));
   fs::remove_all(d);
 }
 

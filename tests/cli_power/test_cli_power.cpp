@@ -111,6 +111,20 @@ TEST(Power, ResumeAndShardsGiveTheSingleRunResult) {
   EXPECT_EQ(power_json(d / "merged"), power_json(d / "single"));
   // A shard alone is not the whole result.
   EXPECT_FALSE(fs::exists(d / "s1" / "power.json"));
+  // A run without --shard into a shard's directory would simulate again what it holds (a whole
+  // set of shards was re-run and stored twice; review 2026-12-07), and a shard into a whole
+  // run's directory likewise: both refused, before anything is simulated.
+  auto again = run_palplab(base + " --replicates 3 --out " + (d / "s1").string(), d);
+  EXPECT_EQ(again.code, 2) << again.err;
+  EXPECT_NE(again.err.find("holds the replicates of a sharded run "
+                           "(replicates.shard-1-of-2.jsonl): combine them with `palplab merge "),
+            std::string::npos)
+      << again.err;
+  EXPECT_FALSE(fs::exists(d / "s1" / "replicates.jsonl"));
+  again = run_palplab(base + " --replicates 3 --shard 1/2 --out " + (d / "single").string(), d);
+  EXPECT_EQ(again.code, 2) << again.err;
+  EXPECT_NE(again.err.find("holds the replicates of a run without --shard"), std::string::npos)
+      << again.err;
   fs::remove_all(d);
 }
 
@@ -293,6 +307,8 @@ TEST(Power, MpiEqualsSingleProcess) {
   auto r = run_shell(mpirun + PALPLAB_BINARY + " " + base + (d / "mpi").string(), d);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_EQ(power_json(d / "mpi"), power_json(d / "single"));
+  // The count is every rank's (it said 3, rank 0's share).
+  EXPECT_NE(r.out.find("(6 replicates run now)"), std::string::npos) << r.out;
   // Shards under MPI (each shard's replicates shared by the ranks), merged.
   for (int i = 1; i <= 2; ++i) {
     auto s =
@@ -300,6 +316,9 @@ TEST(Power, MpiEqualsSingleProcess) {
                       " --shard " + std::to_string(i) + "/2",
                   d);
     ASSERT_EQ(s.code, 0) << s.out << s.err;
+    EXPECT_NE(s.out.find("shard " + std::to_string(i) + "/2: 3 replicates run into"),
+              std::string::npos)
+        << s.out;
   }
   ASSERT_EQ(merge({d / "m1", d / "m2"}, d / "mmerged", d).code, 0);
   EXPECT_EQ(power_json(d / "mmerged"), power_json(d / "single"));
