@@ -398,11 +398,17 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
       throw InputError(SourceLocation{path, no, static_cast<int>(deep) + 1},
                        "not a replicate record (JSON line): nested deeper than " +
                            std::to_string(palplab::json::kMaxDepth) + " levels");
+    // Binary data (a file that is no text: the head of an executable) is no interrupted record.
+    if (line.find('\0') != std::string::npos)
+      throw InputError(SourceLocation{path, no, static_cast<int>(line.find('\0')) + 1},
+                       "not a replicate file: it holds binary data (a NUL byte); expected the "
+                       "replicates*.jsonl of palplab power");
     nlohmann::json r;
     try {
       r = nlohmann::json::parse(line);
     } catch (const std::exception& e) {
-      if (unterminated)
+      // A record cut by an interruption begins as every record does.
+      if (unterminated && line.compare(line.find_first_not_of(" \t"), 2, "{\"") == 0)
         throw InputError(SourceLocation{path, no, 1},
                          "the last line is incomplete (the run writing this file was interrupted "
                          "mid-line); rerun that `palplab power` command with the same --out (and "
@@ -413,6 +419,9 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
       const int column = pe && pe->byte > 0 ? static_cast<int>(pe->byte) : 1;
       std::string why = e.what();
       if (const auto k = why.find("parse error"); k != std::string::npos) why = why.substr(k);
+      // The location is the file's (above): nlohmann's own "at line 1, column 12" is the line's.
+      if (const auto k = why.find(" at line "); k != std::string::npos)
+        if (const auto c = why.find(": ", k); c != std::string::npos) why.erase(k, c - k);
       throw InputError(SourceLocation{path, no, column},
                        "not a replicate record (JSON line): " + why);
     }
@@ -1113,13 +1122,59 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   std::map<std::uint64_t, std::pair<int, int>> seed_of;  // the (n, replicate) of each seed
   std::string sha, study_id;
   std::string first;                     // FILE:LINE of the first replicate read
-  std::vector<std::string> first_ids;    // its test ids, sorted
-  std::vector<std::string> first_cells;  // "cell\tgroup" of the first record with groups, sorted
+  std::vector<std::string> first_ids;    // the test ids most records have, sorted
+  std::vector<std::string> first_cells;  // the "cell\tgroup" most records with groups have, sorted
   std::string first_cells_at;
   std::string protos, protos_at;  // the first record's prototypes_sha256 and its FILE:LINE
   std::map<std::string, std::pair<std::string, std::string>> effect_of;  // id -> (name, FILE:LINE)
-  for (const auto& f : files)
-    for (auto& [r, line] : read_replicates(f)) {
+  // Every record first: the test ids and the cells most records share are what an odd record
+  // is compared with (an edited first record was reported at the second, which was right;
+  // review 2026-12-07).
+  std::vector<std::pair<std::string, std::vector<ReplicateLine>>> all;
+  std::string ids_at;  // FILE:LINE of the first record with the common test ids
+  for (const auto& f : files) all.push_back({f, read_replicates(f)});
+  auto test_ids = [](const nlohmann::json& r) {
+    std::vector<std::string> ids;
+    if (r.contains("tests") && r.at("tests").is_array())
+      for (const auto& t : r.at("tests")) ids.push_back(t.at("id").get<std::string>());
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  };
+  auto cells_of = [](const nlohmann::json& r) {
+    std::vector<std::string> cells;
+    for (const auto& g : r.at("groups"))
+      cells.push_back(g.at("cell").get<std::string>() + "\t" + g.at("group").get<std::string>());
+    std::sort(cells.begin(), cells.end());
+    return cells;
+  };
+  {
+    struct Seen {
+      long count = 0, order = 0;  // how many records; the reading order of the first
+      std::string at;             // FILE:LINE of the first
+    };
+    std::map<std::vector<std::string>, Seen> ids_seen, cells_seen;
+    long order = 0;
+    for (const auto& [f, lines] : all)
+      for (const auto& [r, line] : lines) {
+        const std::string at = f + ":" + std::to_string(line);
+        ++order;
+        ++ids_seen.try_emplace(test_ids(r), Seen{0, order, at}).first->second.count;
+        if (r.contains("groups"))
+          ++cells_seen.try_emplace(cells_of(r), Seen{0, order, at}).first->second.count;
+      }
+    // The most common (ties: the first read), with where it was first read.
+    auto most = [](const auto& seen, std::vector<std::string>& value, std::string& at) {
+      const Seen* best = nullptr;
+      for (const auto& [v, x] : seen)
+        if (!best || x.count > best->count || (x.count == best->count && x.order < best->order))
+          best = &x, value = v;
+      if (best) at = best->at;
+    };
+    most(ids_seen, first_ids, ids_at);
+    most(cells_seen, first_cells, first_cells_at);
+  }
+  for (auto& [f, lines] : all)
+    for (auto& [r, line] : lines) {
       const SourceLocation here{f, line};
       const std::string at = f + ":" + std::to_string(line);
       const std::string s = r.at("study_sha256").get<std::string>();
@@ -1150,21 +1205,12 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
         }
       }
       // Every replicate of one study has the same tested cells and groups (when it has them).
-      if (r.contains("groups")) {
-        std::vector<std::string> cells;
-        for (const auto& g : r.at("groups"))
-          cells.push_back(g.at("cell").get<std::string>() + "\t" +
-                          g.at("group").get<std::string>());
-        std::sort(cells.begin(), cells.end());
-        if (first_cells.empty()) {
-          first_cells = cells, first_cells_at = at;
-        } else if (cells != first_cells) {
-          throw InputError(SourceLocation{f, line, 0, -1, "$.groups"},
-                           "the replicate's groups (cells and groups) differ from those of the "
-                           "replicate at " +
-                               first_cells_at + " (every replicate of a study has the same)");
-        }
-      }
+      if (r.contains("groups") && cells_of(r) != first_cells)
+        throw InputError(SourceLocation{f, line, 0, -1, "$.groups"},
+                         "the replicate's groups (cells and groups) differ from those of the "
+                         "replicate at " +
+                             first_cells_at +
+                             " and most others (every replicate of a study has the same)");
       const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
       // Every replicate has its own seed (derived from the study's, its n and its index): one
       // seed under two (n, index) is a record copied to fill a gap with its index edited.
@@ -1202,16 +1248,10 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
         continue;
       }
       // Every replicate of one study runs the same declared analyses: the same test ids.
-      std::vector<std::string> ids;
-      for (const auto& t : r.at("tests")) ids.push_back(t.at("id").get<std::string>());
-      std::sort(ids.begin(), ids.end());
-      if (first_ids.empty()) {
-        first_ids = ids;
-      } else if (ids != first_ids) {
+      if (test_ids(r) != first_ids)
         throw InputError(SourceLocation{f, line, 0, -1, "$.tests"},
-                         "the replicate's tests differ from those of the replicate at " + first +
-                             " (every replicate of a study has the same tests)");
-      }
+                         "the replicate's tests differ from those of the replicate at " + ids_at +
+                             " and most others (every replicate of a study has the same tests)");
       // ... each with one effect size (the test's kind fixes it).
       const auto& tests = r.at("tests");
       for (std::size_t i = 0; i < tests.size(); ++i) {

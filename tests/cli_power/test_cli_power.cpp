@@ -452,6 +452,37 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
   EXPECT_NE(bad.err.find((d / "r.jsonl").string() + ":2:"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("not a replicate record (JSON line): parse error"), std::string::npos)
       << bad.err;
+  // One location (the file's), not also nlohmann's "at line 1, column N" of the line alone.
+  EXPECT_EQ(bad.err.find("at line 1, column"), std::string::npos) << bad.err;
+  // The record that differs from the others is named, also when it is the first (the second,
+  // which agreed with every other, was blamed; review 2026-12-07).
+  std::ofstream(d / "r.jsonl", std::ios::trunc)
+      << with_test(record(2, 2, 0.01, 0.3), "id", "another test") << "\n"
+      << good << "\n"
+      << base.dump() << "\n";
+  bad = merge({d / "r.jsonl"}, d / "out", d);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find((d / "r.jsonl").string() +
+                         ":1: $.tests: the replicate's tests differ from those of the replicate "
+                         "at " +
+                         (d / "r.jsonl").string() + ":2 and most others"),
+            std::string::npos)
+      << bad.err;
+  // A file of binary data is no interrupted run (the head of an executable was "the last line is
+  // incomplete … rerun that palplab power command").
+  std::ofstream(d / "r.jsonl", std::ios::trunc | std::ios::binary)
+      << std::string("\x7f" "ELF\x02\x01\x01\0\0\0", 12);
+  bad = merge({d / "r.jsonl"}, d / "out", d);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("not a replicate file: it holds binary data"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(bad.err.find("interrupted"), std::string::npos) << bad.err;
+  // Text that is no record, cut without a newline: not an interrupted record either.
+  std::ofstream(d / "r.jsonl", std::ios::trunc) << "hello";
+  bad = merge({d / "r.jsonl"}, d / "out", d);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("not a replicate record (JSON line): parse error"), std::string::npos)
+      << bad.err;
   // A line nested without bound (review 2026-12-06: merge and the power resume died of a stack
   // overflow, SIGSEGV, printing it): refused at the bracket beyond the limit.
   std::ofstream(d / "r.jsonl", std::ios::trunc)
