@@ -97,13 +97,14 @@ pm::Demonstration demonstrate_at(engine::Scene& scene, int node, double mpf, dou
   spec.max_approach_time = 20.0;
   engine::PressDevice press(spec);
   pm::Demonstration d;
-  double deformation = 0.0;
+  double deformation = 0.0, volume = 0.0;
   engine::run_lockstep(scene, press, {.duration = 20.0, .frame_period = 0.0},
                        [&](const engine::Rendered& r, const engine::Sample&) {
                          d.sound = d.sound || r.audio;
                          deformation = r.visible_deformation;
+                         volume = r.visible_volume;
                        });
-  if (press.force_reached()) d.deformation = deformation;
+  if (press.force_reached()) d.deformation = deformation, d.volume = volume;
   scene.reset();
   return d;
 }
@@ -140,14 +141,18 @@ std::vector<int> demonstration_nodes(const engine::SceneGeometry& g, const std::
 pm::Demonstration demonstrate(engine::Scene& scene, const std::string& feature, double mpf,
                               double eps) {
   pm::Demonstration d;
-  double sum = 0.0;
+  double sum = 0.0, sum_volume = 0.0;
   int reached = 0;
   for (int node : demonstration_nodes(scene.geometry(), feature)) {
     const pm::Demonstration one = demonstrate_at(scene, node, mpf, eps);
     d.sound = d.sound || one.sound;
-    if (one.deformation > 0) sum += one.deformation, ++reached, d.seen.push_back(one.deformation);
+    if (one.deformation > 0) {
+      sum += one.deformation, sum_volume += one.volume, ++reached;
+      d.seen.push_back(one.deformation);
+      d.seen_volume.push_back(one.volume);
+    }
   }
-  if (reached > 0) d.deformation = sum / reached;
+  if (reached > 0) d.deformation = sum / reached, d.volume = sum_volume / reached;
   return d;
 }
 
@@ -310,6 +315,8 @@ SessionOutcome run_session(const Study& study, const ModelParams& mp, const Part
     o.track = std::move(nr.track);
     return o;
   }
+  // A trainee who judges the deformation by the whole picture needs the picture's volume.
+  scene.set_visible_volume(mp.trainee.visual_volume_weight > 0.0);
   const engine::SceneGeometry& g = scene.geometry();
   const int feature = g.region_index(study.task.feature);
   if (feature < 0)

@@ -128,6 +128,12 @@ struct SceneImpl {
   double model_depth = 0.0;  // m, depth given to the model last step (0 without contact)
   double model_force = 0.0;  // N, the model's unclamped force last step
   std::vector<Event> events;
+  // Rendered::visible_volume (Scene::set_visible_volume): on, the rest area of each surface
+  // vertex (a third of its faces'), the value of the last frame and the step of the next.
+  bool volume_on = false;
+  Eigen::VectorXd rest_area;
+  double volume = 0.0;
+  long next_frame = 0;
   int pending_tool_event = -1;  // a tool_changed event for the next step (value), -1 = none
   Sample last;
   SceneStats counters;
@@ -177,6 +183,19 @@ void Scene::set_tool(const std::string& tool, const Eigen::Vector3d& stylus_axis
 void Scene::set_realtime(bool realtime) {
   impl_->model->set_realtime(realtime);
 }
+void Scene::set_visible_volume(bool on) {
+  SceneImpl& s = *impl_;
+  s.volume_on = on;
+  if (on && s.rest_area.size() == 0) {
+    const SceneGeometry& g = s.geom;
+    s.rest_area = Eigen::VectorXd::Zero(g.V.rows());
+    for (Eigen::Index f = 0; f < g.F.rows(); ++f) {
+      const Eigen::Vector3d a = g.V.row(g.F(f, 0)), b = g.V.row(g.F(f, 1)), c = g.V.row(g.F(f, 2));
+      const double third = (b - a).cross(c - a).norm() / 6.0;
+      for (int k = 0; k < 3; ++k) s.rest_area[g.F(f, k)] += third;
+    }
+  }
+}
 Sample Scene::last_sample() const {
   return impl_->last;
 }
@@ -218,6 +237,8 @@ void Scene::reset() {
   s.x_prev = s.geom.start_position;
   s.f_prev.setZero();
   s.model_depth = s.model_force = 0.0;
+  s.volume = 0.0;
+  s.next_frame = 0;
   s.counters = SceneStats{};
   s.pending_tool_event = -1;
   s.model->reset();
@@ -378,6 +399,22 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   r.contact_region = region;
   r.visible_deformation =
       (s.cfg.cues.visual_deformation && s.model->deformable() && s.contact) ? deformation : 0.0;
+  if (s.volume_on && s.cfg.cues.visual_deformation && s.model->deformable()) {
+    if (s.step_index >= s.next_frame) {
+      // A frame: the pushed-in volume of the coarse surface (rows in the geometry's order).
+      mesh::Positions V;
+      mesh::Faces F;
+      s.model->surface(V, F);
+      const Eigen::Index n = std::min<Eigen::Index>(V.rows(), g.V.rows());
+      double vol = 0.0;
+      for (Eigen::Index i = 0; i < n; ++i)
+        vol += s.rest_area[i] * std::max(0.0, -(V.row(i) - g.V.row(i)).dot(g.N.row(i)));
+      s.volume = vol;
+      s.next_frame =
+          s.step_index + std::max(1L, std::lround(1.0 / (kVisibleFrameRate * s.cfg.dt)));
+    }
+    if (r.visible_deformation > 0.0) r.visible_volume = s.volume;
+  }
   r.audio =
       s.cfg.cues.audio && s.contact && thresholds(region).st > 0.0 && f >= thresholds(region).st;
   if (s.cfg.cues.transparency) {

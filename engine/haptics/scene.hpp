@@ -78,6 +78,8 @@ enum class EventKind {
 // The most a device moves in one haptic step before it counts as a jump (m): 5 cm in 1 ms is
 // 50 m/s, ten times a fast hand.
 inline constexpr double kMaxDeviceStep = 0.05;
+// Frames per second of the drawn picture that Rendered::visible_volume follows.
+inline constexpr double kVisibleFrameRate = 60.0;
 // The farthest a device position may be from the device origin (m, per axis): beyond it the
 // position is invalid (device_invalid; a UDP datagram holding one is malformed), as in a trace
 // file or a device-sim script. Organs are centimetres across.
@@ -104,6 +106,11 @@ struct Rendered {
   // Visible deformation of the touched region (m): displacement magnitude of the contact node
   // from its rest position as drawn. 0 for prototype A or when the visual-deformation cue is off.
   double visible_deformation = 0.0;
+  // The volume the drawn surface is pushed in by (m^3): the sum over the surface vertices of
+  // their rest area times their inward displacement, updated at the display's frame rate
+  // (kVisibleFrameRate) and held between frames. Computed only when asked for
+  // (Scene::set_visible_volume); otherwise, and when visible_deformation is 0, it is 0.
+  double visible_volume = 0.0;
   bool audio = false;  // the audio cue sounds (force >= ST of the contact region, cue on)
   // Needle scenes with the transparency cue on (soft tissue drawn see-through): the distance of
   // the needle tip to the target (m) and the tissue attribute at the tip; -1 when not shown.
@@ -226,6 +233,9 @@ class Scene {
   // work a model does beside the haptic loop (C's exterior solve) is adopted when ready instead
   // of after a fixed number of steps; faster, but not reproducible run to run.
   void set_realtime(bool realtime);
+  // Rendered::visible_volume is computed (at the display's frame rate) from the next step on;
+  // off by default: it reads the whole drawn surface, which some models bring up to date for it.
+  void set_visible_volume(bool on);
   std::string tool() const;           // "probe" for single-tool models
   const SceneConfig& config() const;  // what the scene was built from (copy it for a variant)
   Thresholds thresholds(int region) const;

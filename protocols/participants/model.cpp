@@ -22,10 +22,17 @@ Percept percept_of(const engine::Rendered& r) {
   p.contact = r.contact;
   p.contact_region = r.contact_region;
   p.visible_deformation = r.visible_deformation;
+  p.visible_volume = r.visible_volume;
   p.audio = r.audio;
   p.visible_tip_to_target = r.visible_tip_to_target;
   p.visible_tip_tissue = r.visible_tip_tissue;
   return p;
+}
+
+double seen_deformation(double d, double v, double w) {
+  if (!(w > 0.0)) return d;
+  if (!(d > 0.0) || !(v > 0.0)) return 0.0;
+  return std::pow(d, 1.0 - w) * std::pow(v / kSeenVolumeArea, w);
 }
 
 namespace {
@@ -173,13 +180,21 @@ void Trainee::begin_session(const SurfaceView& view, double briefed_target, doub
       // Each press of the demonstration is seen with its own visual Weber noise and the mean of
       // what was seen is kept (ensemble averaging over a sequence, Albrecht & Scholl 2010): the
       // remembered picture's error shrinks with the number of presses shown.
+      // What was seen of each press is judged as every press of the trainee's own will be
+      // (seen_deformation: the indentation, or with visual_volume_weight the whole picture).
+      const double w = p_.visual_volume_weight;
+      const auto& sv = demo_->seen_volume;
       if (!demo_->seen.empty()) {
         double sum = 0.0;
-        for (double d : demo_->seen)
+        for (std::size_t i = 0; i < demo_->seen.size(); ++i) {
+          const double d =
+              seen_deformation(demo_->seen[i], i < sv.size() ? sv[i] : demo_->volume, w);
           sum += d * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
+        }
         s_.demo_d = sum / static_cast<double>(demo_->seen.size());
       } else if (demo_->deformation > 0) {
-        s_.demo_d = demo_->deformation * std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
+        s_.demo_d = seen_deformation(demo_->deformation, demo_->volume, w) *
+                    std::max(0.05, 1.0 + p_.visual_weber * brief.normal());
       }
     }
     // How far this person's press goes on awaiting a marker (lognormal, median 1). Drawn last,
@@ -683,7 +698,15 @@ void Trainee::begin_release(double t) {
   release_blocked_ = false;
 }
 
-void Trainee::perceive(const Percept& p, bool call) {
+void Trainee::perceive(const Percept& seen, bool call) {
+  // The deformation as this trainee judges it (the indentation unless visual_volume_weight > 0).
+  Percept mixed;
+  if (p_.visual_volume_weight > 0.0) {
+    mixed = seen;
+    mixed.visible_deformation =
+        seen_deformation(seen.visible_deformation, seen.visible_volume, p_.visual_volume_weight);
+  }
+  const Percept& p = p_.visual_volume_weight > 0.0 ? mixed : seen;
   if (mode_ == Mode::descend && p.contact) {
     mode_ = Mode::dwell;
     mode_start_ = p.t;

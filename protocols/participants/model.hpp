@@ -42,6 +42,7 @@ struct Percept {
   bool contact = false;
   int contact_region = -1;
   double visible_deformation = 0.0;  // m, 0 when nothing is drawn
+  double visible_volume = 0.0;       // m^3, pushed-in volume of the drawn surface (when computed)
   bool audio = false;
   // Needle scenes with transparency: the tip's distance to the target (m) and the tissue at the
   // tip as drawn; -1 when not shown.
@@ -88,7 +89,16 @@ struct Demonstration {
   double deformation = 0.0;  // m, visible deformation when the target force is reached (mean)
   bool sound = false;        // the audio cue came on the way to the target force
   std::vector<double> seen;  // m, that deformation in each press that reached the target
+  double volume = 0.0;              // m^3, the visible volume at the target (mean; when computed)
+  std::vector<double> seen_volume;  // m^3, in each press that reached the target (beside seen)
 };
+
+// The area that turns a pushed-in volume into a depth (a fingertip's, 1 cm^2): only the scale
+// of the judged deformation, which every judgement shares.
+inline constexpr double kSeenVolumeArea = 1e-4;  // m^2
+// The deformation a trainee judges from the indentation d (m) and the pushed-in volume v (m^3)
+// with visual_volume_weight w: d^(1-w) (v / kSeenVolumeArea)^w; exactly d when w = 0.
+double seen_deformation(double d, double v, double w);
 
 // ---- the trainee
 struct TraineeState {

@@ -24,6 +24,11 @@ struct TraineeParams {
   // 0.04 is 2 % higher, within the jumps of the common random numbers (same section).
   double weber_fraction = 0.03;  // 1, haptic force JND / force
   double visual_weber = 0.05;    // 1, relative SD of a perceived visible deformation
+  // How much the judged deformation is the volume the whole drawn surface is pushed in by rather
+  // than the indentation under the probe: seen = d^(1-w) * (V / kSeenVolumeArea)^w (0: the
+  // indentation only, the behaviour before 2026-12-07; docs/PARTICIPANTS.md "Judging the
+  // deformation by the whole picture").
+  double visual_volume_weight = 0.0;  // 1
   // motor
   double motor_noise_cv = 0.05;  // 1, SD of produced / intended force
   // lag-1 correlation of the per-press motor and haptic errors within a session (AR(1); 0 =

@@ -378,6 +378,30 @@ TEST(Trainee, TheRememberedPictureAveragesTheDemonstrationsPresses) {
   EXPECT_NEAR(m5, mean_seen, 4 * expected5 / std::sqrt(1000.0) * mean_seen);
 }
 
+// visual_volume_weight w: a seen deformation is judged as d^(1-w) (V / 1 cm^2)^w from the
+// indentation d and the pushed-in volume V of the drawn surface; the briefing's remembered
+// picture is judged so press by press. w = 0 is the indentation alone, whatever the volume.
+TEST(Trainee, TheDeformationIsJudgedByTheWholePictureWithTheVolumeWeight) {
+  EXPECT_EQ(seen_deformation(0.004, 3e-6, 0.0), 0.004);
+  EXPECT_DOUBLE_EQ(seen_deformation(0.004, 3e-6, 1.0), 3e-6 / kSeenVolumeArea);
+  EXPECT_DOUBLE_EQ(seen_deformation(0.004, 3e-6, 0.5), std::sqrt(0.004 * 3e-6 / kSeenVolumeArea));
+  EXPECT_EQ(seen_deformation(0.004, 0.0, 0.5), 0.0);  // no volume drawn: nothing seen of it
+  // Two identical presses: the same person (seed) sees them with the same Weber draws whatever
+  // w, so the remembered picture scales exactly as the judged deformation does.
+  FlatTissue tissue;
+  const Demonstration demo{0.004, false, {0.004, 0.004}, 3e-6, {3e-6, 3e-6}};
+  auto remembered = [&](double w) {
+    Trainee tr(trainee_params({{"visual_volume_weight", w}}), TraineeState{});
+    tr.set_demonstration(demo);
+    tr.begin_session(tissue.view(), 2.5, 0.0, 1.0, 7, 1, {});
+    return tr.state().demo_d;
+  };
+  const double d0 = remembered(0.0);
+  EXPECT_NE(d0, 0.004);  // seen with visual Weber noise
+  for (double w : {0.5, 1.0})
+    EXPECT_NEAR(remembered(w) / d0, seen_deformation(0.004, 3e-6, w) / 0.004, 1e-12) << w;
+}
+
 TEST(Trainee, APressStoppedShortOfTheRememberedPictureRaisesTheBelief) {
   // A trainee briefed far too low (0.9 N for a 2.5 N target; exp4's P15 in the predictions of
   // 2026-12-02) aims each press at the picture the demonstration showed, bounded at

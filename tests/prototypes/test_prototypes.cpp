@@ -396,3 +396,55 @@ TEST(Prototypes, ContactsSeparatedByLessThanTheTouchGapAreOneTouch) {
   EXPECT_EQ(touches[3].second.kind, EventKind::contact_end);
   EXPECT_DOUBLE_EQ(touches[3].second.t, log[47].t);
 }
+
+// Rendered::visible_volume (Scene::set_visible_volume): the pushed-in volume of the drawn
+// surface, computed at the display's frame rate and held between frames, shown only while the
+// deformation is; asking for it changes nothing of the physics (C's lazily written exterior is
+// brought up to date for it, bit-identically).
+TEST(Prototypes, VisibleVolumeIsTheDrawnSurfacesAtTheFrameRate) {
+  for (const char* id : {"B", "C"}) {
+    SCOPED_TRACE(id);
+    Scene on = prototypes::build_scene(proto(id)), off = prototypes::build_scene(proto(id));
+    on.set_visible_volume(true);
+    const SceneGeometry& g = on.geometry();
+    Eigen::VectorXd area = Eigen::VectorXd::Zero(g.V.rows());  // a third of each face's area
+    for (Eigen::Index f = 0; f < g.F.rows(); ++f) {
+      const Eigen::Vector3d a = g.V.row(g.F(f, 0)), b = g.V.row(g.F(f, 1)), c = g.V.row(g.F(f, 2));
+      for (int k = 0; k < 3; ++k) area[g.F(f, k)] += (b - a).cross(c - a).norm() / 6.0;
+    }
+    const PressSpec spec = press_at(g, g.region_node("ovary_left"), 2.5, 0.2, 1e3);
+    PressDevice d_on(spec), d_off(spec);
+    const long frame = std::lround(1.0 / (kVisibleFrameRate * on.dt()));
+    double last = -1.0, peak = 0.0;
+    int shown = 0;
+    for (long k = 1; k <= 1500 && !d_on.finished(); ++k) {
+      const Rendered r = on.step(d_on.read(on.time()).position);
+      d_on.write(r);
+      const Rendered q = off.step(d_off.read(off.time()).position);
+      d_off.write(q);
+      ASSERT_EQ(r.force, q.force) << k;  // bit for bit
+      EXPECT_EQ(q.visible_volume, 0.0);
+      if (r.visible_deformation == 0.0) {
+        EXPECT_EQ(r.visible_volume, 0.0) << k;
+        continue;
+      }
+      ++shown;
+      if ((k - 1) % frame == 0) {
+        mesh::Positions V;
+        mesh::Faces F;
+        on.current_surface(V, F);
+        double vol = 0.0;
+        for (Eigen::Index i = 0; i < g.V.rows(); ++i)
+          vol += area[i] * std::max(0.0, -(V.row(i) - g.V.row(i)).dot(g.N.row(i)));
+        EXPECT_NEAR(r.visible_volume, vol, 1e-12 * vol + 1e-18) << k;
+        last = r.visible_volume;
+      } else if (last >= 0.0) {
+        EXPECT_EQ(r.visible_volume, last) << k;  // held between frames
+      }
+      peak = std::max(peak, r.visible_volume);
+    }
+    EXPECT_GT(shown, 100);
+    // At 2.5 N B's ring dent is a fraction of a cm^3, C's whole ovary moves: several cm^3.
+    EXPECT_GT(peak, std::string(id) == "B" ? 2e-8 : 1e-6);
+  }
+}
