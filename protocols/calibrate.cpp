@@ -32,6 +32,12 @@ namespace palplab::protocols {
 namespace {
 
 void mean_sd(const std::vector<double>& x, double& m, double& sd) {
+  // Equal values have exactly their value as mean and SD 0 (ten forces of 2.9 N summed to a mean
+  // 4e-16 off, whose "SD 4.681e-16" a warning printed; review 2026-12-07).
+  if (!x.empty() && std::all_of(x.begin(), x.end(), [&](double v) { return v == x.front(); })) {
+    m = x.front(), sd = 0.0;
+    return;
+  }
   m = std::accumulate(x.begin(), x.end(), 0.0) / std::max<std::size_t>(1, x.size());
   double ss = 0;
   for (double v : x) ss += (v - m) * (v - m);
