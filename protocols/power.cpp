@@ -1557,7 +1557,10 @@ std::string write_power_report(const nlohmann::json& s, const std::string& out_d
     char buf[64];
     // Far beyond any measure's range (an edited record): exponent form rather than 300 digits.
     std::snprintf(buf, sizeof buf, std::fabs(x) < 1e12 ? "%.*f" : "%.*e", digits, x);
-    return std::string(buf);
+    std::string t(buf);
+    // A value that rounds to zero is 0, not "-0.00" (a median Hedges' g of -0.001).
+    if (t[0] == '-' && t.find_first_not_of("-0.") == std::string::npos) t.erase(0, 1);
+    return t;
   };
   std::ostringstream md;
   md << "# Power analysis: " << markdown_text(s.at("study").get<std::string>()) << "\n\n";

@@ -1273,3 +1273,24 @@ TEST(Power, ResumeChecksThePrototypesTheCutFirstRecordTheLockAndFifos) {
   }
   fs::remove_all(d);
 }
+
+// An effect that rounds to zero is printed 0.00, not -0.00 (a median Hedges' g of -0.001;
+// review 2026-12-07).
+TEST(Power, AnEffectRoundingToZeroHasNoMinusSign) {
+  auto d = scratch_dir("negzero");
+  {
+    std::ofstream out(d / "r.jsonl");
+    for (int r = 0; r < 2; ++r) {
+      nlohmann::json rec = record(2, r, 0.5, -0.001);
+      rec["tests"][0]["id"] = "pairwise_t palpation_force test A-B";
+      rec["tests"][0]["effect_name"] = "hedges_g";
+      out << rec.dump() << "\n";
+    }
+  }
+  const auto m = merge({d / "r.jsonl"}, d / "out", d);
+  ASSERT_EQ(m.code, 0) << m.err;
+  const std::string md = slurp(d / "out" / "power.md");
+  EXPECT_NE(md.find("| 0.00 [0.00, 0.00] |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("-0.00"), std::string::npos) << md;
+  fs::remove_all(d);
+}
