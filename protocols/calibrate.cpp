@@ -743,6 +743,13 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
       throw InputError("--params: unknown participant parameter \"" + k +
                        "\"; expected one of: " + names);
     }
+    // A parameter of the other task would be "fitted" with a flat loss (pop_drop, and the
+    // integer max_insertions searched as a real, for a palpation study; review 2026-12-07).
+    if (pm::needle_task_param(*s) && study.task.kind != "needle_insertion")
+      throw InputError(SourceLocation{"--params"},
+                       "\"" + k + "\" is a parameter of the needle-insertion task; this study's "
+                       "task is " + study.task.kind +
+                           ", whose sessions do not use it (expected a parameter they use)");
     const double x0 = current.*(s->trainee);
     double l = s->min, h = s->max;
     if (const ParamBound* b = bound_of(k)) {

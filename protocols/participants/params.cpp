@@ -1,6 +1,7 @@
 #include "protocols/participants/params.hpp"
 
 #include <cmath>
+#include <string_view>
 
 #include "common/input_error.hpp"
 
@@ -274,6 +275,10 @@ const std::vector<ParamSpec>& instructor_param_specs() {
             "Jones 1989; Pang, Tan & Durlach 1991"),
   };
   return specs;
+}
+
+bool needle_task_param(const ParamSpec& spec) {
+  return std::string_view(spec.meaning).starts_with("needle task:");
 }
 
 const ParamSpec* find_param(const std::vector<ParamSpec>& specs, const std::string& name) {

@@ -156,6 +156,8 @@ const std::vector<ParamSpec>& trainee_param_specs();
 const std::vector<ParamSpec>& instructor_param_specs();
 // The spec of `name` in `specs`, or nullptr.
 const ParamSpec* find_param(const std::vector<ParamSpec>& specs, const std::string& name);
+// A parameter only the needle-insertion task uses (its meaning begins "needle task:").
+bool needle_task_param(const ParamSpec& spec);
 
 // Defaults overridden by `overrides` (an object name -> number). Study files are validated with
 // located errors when loaded; for any other caller an unknown name, a non-number or a value out

@@ -167,6 +167,19 @@ TEST(Calibrate, BadInputIsExit2) {
                         d)
                 .code,
             2);
+  // A needle-task parameter for a palpation study was "fitted" with a flat loss (review
+  // 2026-12-07).
+  write_small_human_csv(d / "human.csv");
+  const auto r = run_palplab("calibrate " + data("recovery_study.json").string() + " --human " +
+                                 (d / "human.csv").string() + " --params pop_drop --out " +
+                                 (d / "x.json").string(),
+                             d);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--params: \"pop_drop\" is a parameter of the needle-insertion task; this "
+                       "study's task is palpation"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("evaluation"), std::string::npos) << r.err;
   fs::remove_all(d);
 }
 
