@@ -70,6 +70,24 @@ PeopleVerdicts people_verdicts(const Study& study, const std::vector<HumanCell>&
                              " needs at least 2 per group");
     }
   }
+  // The cells no test uses (another phase, an earlier session of an unpooled test, a measure
+  // never tested): said, as `calibrate` lists what it does not fit (review 2026-12-07).
+  for (const auto& c : cells) {
+    bool used = false;
+    for (const Analysis& a : study.analyses) {
+      if ((a.kind != "anova_oneway" && a.kind != "pairwise_t") || a.phase != c.phase ||
+          a.measure != c.measure)
+        continue;
+      int last = 0;
+      for (const auto& o : cells)
+        if (o.phase == a.phase && o.measure == a.measure) last = std::max(last, o.session);
+      used = used || a.pooled || c.session == last;
+    }
+    if (!used)
+      out.untested.push_back(c.measure + " of group " + c.group + " in phase " + c.phase +
+                             " session " + std::to_string(c.session) + " (line " +
+                             std::to_string(c.line) + ")");
+  }
   out.tests = run_declared_analyses(study, all);
   out.groups = tested_group_descriptives(study, all);
   for (const auto& [g, who] : members) out.n[g] = static_cast<int>(who.size());
@@ -133,6 +151,13 @@ std::vector<std::string> people_warnings(const PeopleVerdicts& people) {
       out.push_back("the test \"" + t.id +
                     "\" is undefined on the people's data (a group without variance?): it has no "
                     "verdict and is not compared");
+  if (!people.untested.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < people.untested.size() && i < 5; ++i)
+      list += (i ? "; " : "") + people.untested[i];
+    if (people.untested.size() > 5) list += "; … " + std::to_string(people.untested.size()) + " in all";
+    out.push_back("rows that no test of the study's $.analyses uses are not compared: " + list);
+  }
   std::set<std::string> cells;
   for (const auto& g : people.groups)
     if (cells.insert(g.cell).second && compared_order(people.groups, g.cell).empty())

@@ -145,6 +145,9 @@ struct PeopleVerdicts {
   long resamples = 0;
   std::uint64_t seed = 0;
   std::map<int, RightModel> right;  // n -> what a right model reaches at n per group
+  // The people's cells no declared test uses ("measure in phase P session S (lines …)"):
+  // read, checked, and not compared (people_warnings says so).
+  std::vector<std::string> untested;
 };
 // The people's order of the group means in `cell` as compared: empty when undefined or with a
 // tie (equal means have no order to reach; such a cell is not compared).

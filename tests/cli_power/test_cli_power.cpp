@@ -1099,10 +1099,18 @@ TEST(Power, HumanDataGiveThePeoplesVerdictsAndHowOftenTheReplicatesReachThem) {
     for (int k = 0; k < 4; ++k)
       o << "a" << k << ",G1,test,1,palpation_force," << g1[k] << "\n"
         << "b" << k << ",G2,test,1,palpation_force," << g2[k] << "\n";
+    // A measure no test of the study uses: read, and said not to be compared (it was ignored
+    // without a word; review 2026-12-07).
+    o << "a0,G1,test,1,exploration_time,5\na1,G1,test,1,exploration_time,7\n";
   }
   auto r = run_palplab(
       power_cmd("3", 4) + " --human " + csv.string() + " --out " + (d / "out").string(), d);
   ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: --human: rows that no test of the study's $.analyses uses are "
+                       "not compared: exploration_time of group G1 in phase test session 1 "
+                       "(line 10)"),
+            std::string::npos)
+      << r.err;
   const auto j = power_json(d / "out");
   ASSERT_TRUE(j.contains("people"));
   EXPECT_EQ(j["people"]["n"]["G1"], 4);
