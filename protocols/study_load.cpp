@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -967,6 +968,21 @@ Study parse_study(const std::string& text, const std::string& file,
   // A session runs a whole number of its prototype's haptic steps, and the plan places the next
   // session at start + session_duration: a duration between two step counts (0.0105 s at 1 kHz)
   // ran 11 steps and the next session started 0.5 ms before this one ended (review 2026-12-07).
+  // Whole up to the rounding of the decimals (relative 1e-12: 1000.0005 s at 1 kHz is not).
+  auto whole_steps = [](double duration, double dt) {
+    const double steps = duration / dt;
+    return std::abs(steps - std::round(steps)) <= 1e-12 * std::max(1.0, steps);
+  };
+  // The fewest decimals that give x back within `tol` (relative): 0.009, not
+  // 0.009000000000000001; 1000, not 1e+03.
+  auto shortest = [](double x, double tol = 1e-12) {
+    char b[48];
+    for (int decimals = 0; decimals <= 17; ++decimals) {
+      std::snprintf(b, sizeof b, "%.*f", decimals, x);
+      if (std::abs(std::strtod(b, nullptr) - x) <= tol * std::abs(x)) break;
+    }
+    return std::string(b);
+  };
   for (std::size_t pi = 0; pi < s.phases.size(); ++pi) {
     const Phase& ph = s.phases[pi];
     if (!(ph.session_duration > 0)) continue;
@@ -979,20 +995,45 @@ Study parse_study(const std::string& text, const std::string& file,
       else if (!g.prototype.empty())
         ids.insert(g.prototype);
     }
-    for (const std::string& id : ids) {
-      auto it = infos.find(id);
-      if (it == infos.end() || !(it->second.dt > 0)) continue;
-      const double dt = it->second.dt, steps = ph.session_duration / dt;
-      const double whole = std::round(steps);
-      if (std::abs(steps - whole) <= 1e-6 * std::max(1.0, steps)) continue;
-      const double below = std::max(1.0, std::floor(steps)) * dt, above = std::ceil(steps) * dt;
-      c.err(path_key(path_index("$.phases", pi), "session_duration"),
-            "expected a whole number of prototype \"" + id + "\"'s haptic steps (" +
-                Ctx::fmt(dt) + " s each), got " + Ctx::fmt(ph.session_duration) + " s = " +
-                Ctx::fmt(steps) + " steps (" + Ctx::fmt(below) + " or " + Ctx::fmt(above) +
-                " s would do)");
-      break;  // one problem per phase
-    }
+    std::vector<std::pair<std::string, double>> steps;  // (id, dt) of every prototype known
+    for (const std::string& id : ids)
+      if (auto it = infos.find(id); it != infos.end() && it->second.dt > 0)
+        steps.push_back({id, it->second.dt});
+    const auto bad = std::find_if(steps.begin(), steps.end(), [&](const auto& x) {
+      return !whole_steps(ph.session_duration, x.second);
+    });
+    if (bad == steps.end()) continue;
+    // The nearest durations below and above that are whole numbers of every prototype's steps
+    // (walking the largest step's multiples; none said if none is near).
+    double largest = 0;
+    for (const auto& x : steps) largest = std::max(largest, x.second);
+    auto fits_all = [&](double t) {
+      if (t < kMinSessionSeconds - 1e-12 || t > kMaxSessionSeconds) return false;
+      for (const auto& x : steps)
+        if (!whole_steps(t, x.second)) return false;
+      return true;
+    };
+    std::vector<std::string> would_do;
+    const double m = std::floor(ph.session_duration / largest);
+    for (double k = m; k >= 1 && k > m - 100000; --k)
+      if (fits_all(k * largest)) {
+        would_do.push_back(shortest(k * largest));
+        break;
+      }
+    for (double k = m + 1; k < m + 100001; ++k)
+      if (fits_all(k * largest)) {
+        would_do.push_back(shortest(k * largest));
+        break;
+      }
+    std::string hint;
+    if (!would_do.empty())
+      hint = " (" + would_do.front() + (would_do.size() > 1 ? " or " + would_do.back() : "") +
+             " s would do" + (steps.size() > 1 ? " on every prototype of the phase" : "") + ")";
+    c.err(path_key(path_index("$.phases", pi), "session_duration"),
+          "expected a whole number of prototype \"" + bad->first + "\"'s haptic steps (" +
+              shortest(bad->second) + " s each), got " + shortest(ph.session_duration) +
+              " s = " + shortest(ph.session_duration / bad->second,
+                                               1e-4 / std::max(1.0, ph.session_duration / bad->second)) + " steps" + hint);
   }
 
   c.throw_if_any();  // every problem, in file order

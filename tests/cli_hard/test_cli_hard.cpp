@@ -184,6 +184,14 @@ TEST(HardJson, SessionDurationBetweenTwoStepCountsIsRefused) {
   EXPECT_EXIT2_WITH(r, "$.phases[0].session_duration: expected a whole number of prototype");
   EXPECT_TRUE(has(r.err, "haptic steps (0.001 s each), got 0.0105 s = 10.5 steps (0.01 or 0.011 s"))
       << r.err;
+  // A long session is held to the same whole steps (1000.0005 s passed a relative tolerance
+  // and ran 1000.001 s; review 2026-12-07).
+  std::string long_study = study(kGroups, "", 0.05);  // (the helper prints 6 digits)
+  for (std::size_t k; (k = long_study.find("\"session_duration\": 0.05")) != std::string::npos;)
+    long_study.replace(k, 24, "\"session_duration\": 1000.0005");
+  spit(d / "study.json", long_study);
+  r = cli("validate " + (d / "study.json").string(), d);
+  EXPECT_EXIT2_WITH(r, "got 1000.0005 s = 1000000.5 steps (1000 or 1000.001 s would do");
   // A whole number of steps written with a rounding error of the decimal is a whole number.
   spit(d / "study.json", study(kGroups, "", 0.07));
   EXPECT_EQ(cli("validate " + (d / "study.json").string(), d).code, 0);
