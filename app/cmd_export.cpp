@@ -129,8 +129,11 @@ palplab::app::CommandRegistration reg_export{
         // A run with --samples none has none to export: said, not a bare header. The data say
         // it, not meta "samples" (a database whose meta said none while it held samples was
         // warned about; review 2026-12-07).
-        if (*samples && !store.read_sessions().empty() && !store.has_samples()) {
-          const auto setting = store.read_meta("samples");
+        // (A run with --samples full whose samples are gone is a damaged database: the export
+        // says so below, without this warning first.)
+        const auto setting = store.read_meta("samples");
+        if (*samples && !store.read_sessions().empty() && !store.has_samples() &&
+            setting.value_or("") != "full") {
           std::cerr << "warning: " << palplab::escape_controls(*db, false)
                     << ": the run stored no device samples"
                     << (setting && *setting == "none" ? " (it ran with --samples none)" : "")

@@ -385,7 +385,10 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   // A touch ends when the contact has stayed lost for kTouchGap; the event carries the time of
   // the lift. A hand resting on the surface loses and regains a contact of a few mN step by step
   // (1-3 ms gaps: 9 500 contact events in nine 50 s sessions of exp2, review 2026-12-07).
-  if (s.touch && !s.contact && s.lift_t >= 0.0 && s.t - s.lift_t >= kTouchGap - 1e-9) {
+  // (The lift's step is the first without contact: after kTouchGap / dt such steps the touch
+  // has ended, so a contact back after exactly kTouchGap of none is a new touch.)
+  if (s.touch && !s.contact && s.lift_t >= 0.0 &&
+      s.t - s.lift_t + s.cfg.dt >= kTouchGap - 1e-9) {
     s.events.push_back({s.lift_t, EventKind::contact_end, -1, s.lift_node, s.peak_force});
     s.touch = false;
     s.lift_t = -1.0;

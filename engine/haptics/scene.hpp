@@ -45,8 +45,9 @@ inline constexpr double kTouchGap = 0.01;  // s
 
 enum class EventKind {
   contact_start,  // value: 0
-  contact_end,    // value: peak force magnitude of the touch (N); t: when the contact was lost,
-                  // logged kTouchGap later (a touch open at the session end has none)
+  contact_end,    // value: peak force magnitude of the touch (N); t: when the contact was lost
+                  // (the first step without it), logged once kTouchGap has passed without
+                  // contact (a touch open at the session end has none)
   st_reached,     // value: force magnitude at the crossing (N); region: contact region
   mpf_reached,
   sft_reached,

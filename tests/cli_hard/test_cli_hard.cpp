@@ -785,6 +785,13 @@ TEST(HardDb, ResumeKeepsTheRunsSamplesSetting) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.err, "stored no device samples")) << r.err;
   EXPECT_GT(slurp(d / "csv" / "samples.csv").size(), 1000u);
+  // A run that stored samples whose rows are gone is damaged: said, without the warning that
+  // there were none to store.
+  palplab::testing::sql_exec(db, "UPDATE meta SET value = 'full' WHERE key = 'samples'");
+  palplab::testing::sql_exec(db, "DELETE FROM samples");
+  r = cli("export " + db.string() + " --csv " + (d / "csv2").string() + " --samples", d);
+  EXPECT_EXIT2_WITH(r, "the database is damaged");
+  EXPECT_FALSE(has(r.err, "stored no device samples")) << r.err;
 }
 
 // An interruption while `run` created its database left an empty file (or an SQLite file

@@ -366,14 +366,17 @@ TEST(Prototypes, ContactsSeparatedByLessThanTheTouchGapAreOneTouch) {
       log.push_back({r.t, r.contact, {r.events.begin(), r.events.end()}});
     }
   };
-  // touch 1: in 5, a 2-step lift, in 5; a lift of 30 steps; touch 2: in 5, lifted 30.
+  // touch 1: in 5, a 2-step lift, in 5; a lift of 30 steps; touch 2: in 5, lifted 30; touch 3
+  // after a lift of exactly kTouchGap (10 steps without contact: a new touch), lifted 30.
   run(in, 5);
   run(out, 2);
   run(in, 5);
   run(out, 30);
   run(in, 5);
+  run(out, 10);
+  run(in, 5);
   run(out, 30);
-  ASSERT_EQ(log.size(), 77u);
+  ASSERT_EQ(log.size(), 92u);
   EXPECT_TRUE(log[0].contact);
   EXPECT_FALSE(log[5].contact);  // the physics lost the contact in the short lift
   EXPECT_TRUE(log[7].contact);
@@ -382,19 +385,23 @@ TEST(Prototypes, ContactsSeparatedByLessThanTheTouchGapAreOneTouch) {
     for (const Event& e : log[i].ev)
       if (e.kind == EventKind::contact_start || e.kind == EventKind::contact_end)
         touches.push_back({i, e});
-  ASSERT_EQ(touches.size(), 4u);
+  ASSERT_EQ(touches.size(), 6u);
   EXPECT_EQ(touches[0].second.kind, EventKind::contact_start);
   EXPECT_EQ(touches[0].first, 0u);
   // The end carries the lift's time (step 12, the first of the long lift) and is logged once
   // the contact has stayed lost for kTouchGap.
   EXPECT_EQ(touches[1].second.kind, EventKind::contact_end);
   EXPECT_DOUBLE_EQ(touches[1].second.t, log[12].t);
-  EXPECT_NEAR(log[touches[1].first].t - log[12].t, kTouchGap, 1e-9);
+  EXPECT_NEAR(log[touches[1].first].t - log[12].t, kTouchGap - s.dt(), 1e-9);
   EXPECT_GT(touches[1].second.value, 0.0);  // the touch's peak force
   EXPECT_EQ(touches[2].second.kind, EventKind::contact_start);
   EXPECT_EQ(touches[2].first, 42u);
   EXPECT_EQ(touches[3].second.kind, EventKind::contact_end);
   EXPECT_DOUBLE_EQ(touches[3].second.t, log[47].t);
+  EXPECT_EQ(touches[4].second.kind, EventKind::contact_start);
+  EXPECT_EQ(touches[4].first, 57u);
+  EXPECT_EQ(touches[5].second.kind, EventKind::contact_end);
+  EXPECT_DOUBLE_EQ(touches[5].second.t, log[62].t);
 }
 
 // Rendered::visible_volume (Scene::set_visible_volume): the pushed-in volume of the drawn
