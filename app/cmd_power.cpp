@@ -170,6 +170,18 @@ void check_power_out(const PowerArgs& a, const palplab::protocols::Study& s) {
             (shards.size() > 1 ? ", … " + std::to_string(shards.size()) + " files" : "") +
             "): combine them with `palplab merge " + palplab::shell_word(a.out) +
             " --out DIR`, or give another --out for a run without --shard");
+  if (a.opt.shards > 1)  // shards of another --shard I/K split: merge refuses the mix
+    for (const std::string& f : shards) {
+      const auto of = f.rfind("-of-");
+      if (of != std::string::npos &&
+          f.substr(of + 4, f.size() - 6 - of - 4) != std::to_string(a.opt.shards))
+        throw palplab::InputError(palplab::SourceLocation{"--out"},
+                                  a.out + " holds " + f + ", a shard of another --shard I/K split "
+                                  "than " + std::to_string(a.opt.shard + 1) + "/" +
+                                  std::to_string(a.opt.shards) +
+                                  " (merge takes one split): give this shard another --out, or "
+                                  "run it with the split of the files there");
+    }
   if (a.opt.shards > 1 && whole)
     throw palplab::InputError(palplab::SourceLocation{"--out"},
                               a.out +

@@ -125,6 +125,14 @@ TEST(Power, ResumeAndShardsGiveTheSingleRunResult) {
   EXPECT_EQ(again.code, 2) << again.err;
   EXPECT_NE(again.err.find("holds the replicates of a run without --shard"), std::string::npos)
       << again.err;
+  // Nor a shard of another split beside them (merge refused the mix after the simulation).
+  again = run_palplab(base + " --replicates 3 --shard 1/3 --out " + (d / "s1").string(), d);
+  EXPECT_EQ(again.code, 2) << again.err;
+  EXPECT_NE(again.err.find("holds replicates.shard-1-of-2.jsonl, a shard of another --shard I/K "
+                           "split than 1/3"),
+            std::string::npos)
+      << again.err;
+  EXPECT_FALSE(fs::exists(d / "s1" / "replicates.shard-1-of-3.jsonl"));
   fs::remove_all(d);
 }
 
