@@ -707,15 +707,20 @@ Study parse_study(const std::string& text, const std::string& file,
             return x.kind == "pairwise_t" || x.kind == "anova_oneway";
           };
           const bool both_t = pairs(a) && pairs(b);
-          const auto said = [](const json& e, const char* key, bool welch) {
-            return e.contains(key) ? e[key].dump()
-                                   : json(welch).dump() + " (the default)";  // welch only
+          // What an entry says of a key, its default when it says nothing (welch, pool_sessions).
+          const auto said = [](const json& e, const char* key, const Analysis& x) {
+            const bool value = key == std::string("welch") ? x.welch : x.pool_sessions;
+            return e.contains(key) ? e[key].dump() : json(value).dump() + " (the default)";
           };
+          // pool_sessions by its value, default included: an entry left at the default beside
+          // one that pools every session was shown by validate as participant means while the
+          // report pooled the whole section (review 2026-12-07).
           for (const char* key : {"welch", "pool_sessions", "margin"})
             if ((aj.contains(key) && bj.contains(key) && aj[key] != bj[key]) ||
-                (both_t && key == std::string("welch") && a.welch != b.welch))
+                (both_t && key == std::string("welch") && a.welch != b.welch) ||
+                (key == std::string("pool_sessions") && a.pool_sessions != b.pool_sessions))
               c.err(path_key(A, key),
-                    said(aj, key, a.welch) + " here but " + said(bj, key, b.welch) + " in " +
+                    said(aj, key, a) + " here but " + said(bj, key, b) + " in " +
                         path_index("$.analyses", source[k]) + ", an analysis of the same " +
                         "measure and phase" + (a.pooled ? " (pooled)" : "") +
                         ": the report makes one section of them, and " + key +
@@ -723,6 +728,22 @@ Study parse_study(const std::string& text, const std::string& file,
         }
         s.analyses.push_back(a);
         source.push_back(i);
+      }
+      // A margin is the equivalence test's, which the report runs in a section with an ANOVA or
+      // pairwise t-tests: on a section of descriptives alone it did nothing (review 2026-12-07).
+      for (std::size_t k = 0; k < s.analyses.size(); ++k) {
+        const Analysis& a = s.analyses[k];
+        if (!(a.margin > 0)) continue;
+        const bool tested = std::any_of(s.analyses.begin(), s.analyses.end(), [&](const auto& b) {
+          return b.measure == a.measure && b.phase == a.phase && b.pooled == a.pooled &&
+                 (b.kind == "anova_oneway" || b.kind == "pairwise_t");
+        });
+        if (!tested)
+          c.err(path_key(path_index("$.analyses", source[k]), "margin"),
+                "a margin is that of the equivalence test (TOST) the report runs beside an "
+                "anova_oneway or pairwise_t of the same measure and phase; this study has none "
+                "of " + a.measure + " in phase " + a.phase +
+                    " (declare one, or remove the margin)");
       }
     }
   }

@@ -1373,6 +1373,29 @@ TEST(HardCli, TheSameAnalysisTwiceIsRefused) {
              R"("palpation_force", "phase": "post", "margin": 0.5, "welch": false}],)"));
   r = cli("validate " + (d / "agree.json").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("anova_oneway(palpation_force @ post, pooled variance, margin 0.5)"),
+            std::string::npos)
+      << r.out;
+  // pool_sessions by its value: the default beside true made validate show participant means
+  // where the report pooled every session (review 2026-12-07).
+  spit(d / "pool.json",
+       study(kGroups,
+             R"( "analyses": [{"kind": "descriptives", "measure": "palpation_force", "phase": )"
+             R"("post", "pooled": true}, {"kind": "anova_oneway", "measure": )"
+             R"("palpation_force", "phase": "post", "pooled": true, "pool_sessions": true}],)"));
+  r = cli("validate " + (d / "pool.json").string(), d);
+  EXPECT_EXIT2_WITH(r,
+                    "$.analyses[1].pool_sessions: true here but false (the default) in "
+                    "$.analyses[0]");
+  // A margin with no test of its section is refused (the report ran no TOST for it).
+  spit(d / "lone.json",
+       study(kGroups,
+             R"( "analyses": [{"kind": "descriptives", "measure": "palpation_force", "phase": )"
+             R"("post", "margin": 0.5}],)"));
+  r = cli("validate " + (d / "lone.json").string(), d);
+  EXPECT_EXIT2_WITH(r,
+                    "$.analyses[0].margin: a margin is that of the equivalence test (TOST) the "
+                    "report runs beside an anova_oneway or pairwise_t");
   // Named by their places in the file, also after an entry that is no analysis.
   spit(d / "after.json", study(kGroups, R"( "analyses": ["oops", )" + one + ", " + one + "],"));
   r = cli("validate " + (d / "after.json").string(), d);
