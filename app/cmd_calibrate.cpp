@@ -12,6 +12,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "app/command.hpp"
 #include "common/escape.hpp"
@@ -218,10 +219,15 @@ palplab::app::CommandRegistration reg_calibrate{
         j["human"] = a->human;
         j["sim_n"] = a->opt.sim_n;
         j["budget"] = a->opt.budget;
-        // A calibration JSON already at --out is replaced (re-running a fit is the workflow),
-        // and said; one whose fit had a lower loss is kept beside it rather than lost (a fit of
-        // 20 evaluations was silently replaced by a run of --budget 1; review 2026-12-07).
+        // A calibration JSON already at --out is replaced (re-running a fit is the workflow)
+        // and stderr says what it held. It is kept beside, never lost, unless it was a fit of
+        // the same setup (study, human data, --sim-n, parameters, fitted cells) with no lower
+        // loss: a fit of another setup, or a better one, goes to NAME.previous.json (the first
+        // free NAME.previous-K.json when that exists). A fit of 20 evaluations was silently
+        // replaced by a run of --budget 1, and an older .previous.json overwritten (reviews
+        // 2026-12-07).
         std::string replaced;
+        bool kept = false;
         {
           std::ifstream in(a->out, std::ios::binary);
           const auto old = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
@@ -232,14 +238,44 @@ palplab::app::CommandRegistration reg_calibrate{
               held += " of";
               for (const auto& [k, v] : old["fitted"].items()) held += " " + k;
             }
-            if (loss.is_number()) held += " with loss " + palplab::json::Checker::fmt(loss.get<double>());
-            if (loss.is_number() && std::isfinite(r.loss_after) &&
-                loss.get<double>() < r.loss_after) {
-              const auto kept = std::filesystem::path(a->out).replace_extension(".previous.json");
-              palplab::write_file(kept.string(), old.dump(2) + "\n", "the replaced fit");
-              replaced = "replaced " + a->out + ": it held " + held + ", lower than this fit's " +
-                         palplab::json::Checker::fmt(r.loss_after) + "; it is kept as " +
-                         kept.string();
+            if (loss.is_number())
+              held += " with loss " + palplab::json::Checker::fmt(loss.get<double>());
+            auto cells = [](const nlohmann::json& f) {
+              std::set<std::string> c;
+              if (f.is_array())
+                for (const auto& x : f)
+                  if (x.is_object()) c.insert(x.value("group", "") + "/" + x.value("phase", "") +
+                                              "/" + x.value("session", nlohmann::json()).dump() +
+                                              "/" + x.value("measure", ""));
+              return c;
+            };
+            const bool same_setup =
+                old.value("study", "") == a->study && old.value("human", "") == a->human &&
+                old.value("sim_n", nlohmann::json()) == j["sim_n"] &&
+                old.value("fitted", nlohmann::json()).is_object() &&
+                [&] {
+                  std::set<std::string> keys;
+                  for (const auto& [k, v] : old["fitted"].items()) keys.insert(k);
+                  return keys == std::set<std::string>(a->opt.keys.begin(), a->opt.keys.end());
+                }() &&
+                cells(old.value("fit_after", nlohmann::json())) == cells(j["fit_after"]);
+            const bool better = loss.is_number() && std::isfinite(r.loss_after) &&
+                                loss.get<double>() < r.loss_after;
+            if (!same_setup || better) {
+              std::filesystem::path keep =
+                  std::filesystem::path(a->out).replace_extension(".previous.json");
+              std::error_code ec;
+              for (int k = 2; std::filesystem::exists(keep, ec) && k < 10000; ++k)
+                keep = std::filesystem::path(a->out).replace_extension(".previous-" +
+                                                                       std::to_string(k) + ".json");
+              palplab::write_file(keep.string(), old.dump(2) + "\n", "the replaced fit");
+              kept = better;
+              replaced = "replaced " + a->out + ": it held " + held +
+                         (!same_setup ? " of another setup (study, human data, --sim-n, "
+                                        "parameters or fitted cells: its loss is not comparable)"
+                                      : ", lower than this fit's " +
+                                            palplab::json::Checker::fmt(r.loss_after)) +
+                         "; it is kept as " + keep.string();
             } else {
               replaced = "replaced " + a->out + ": it held " + held;
             }
@@ -247,8 +283,8 @@ palplab::app::CommandRegistration reg_calibrate{
         }
         palplab::write_file(a->out, j.dump(2) + "\n", "the parameter file");
         if (!replaced.empty())
-          std::cerr << (replaced.find("lower") != std::string::npos ? "warning: " : "")
-                    << palplab::escape_controls(replaced, false) << "\n";
+          std::cerr << (kept ? "warning: " : "") << palplab::escape_controls(replaced, false)
+                    << "\n";
         std::cout << to_text(r) << "wrote " << a->out << "\n";
         if (!a->write_defaults.empty()) {
           write_defaults(r, a->write_defaults);

@@ -520,6 +520,26 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
       << r.err;
   EXPECT_EQ(r.err.find("warning: replaced"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(d / "fit.previous.json"));
+  // A kept fit is never overwritten by the next: the first free fit.previous-K.json.
+  for (const char* kept : {"fit.previous.json", "fit.previous-2.json"}) {
+    fit = nlohmann::json::parse(slurp(d / "fit.json"));
+    fit["loss_after"] = 1e-9;
+    std::ofstream(d / "fit.json") << fit.dump(2);
+    r = run_palplab(again, d);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("; it is kept as " + (d / kept).string()), std::string::npos) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(d / kept))["loss_after"], 1e-9) << kept;
+  }
+  // A fit of another setup (here --sim-n) is kept whatever its loss: not comparable.
+  std::string other = again;
+  other.replace(other.find("--sim-n 3"), 9, "--sim-n 4");
+  r = run_palplab(other, d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("of another setup (study, human data, --sim-n, parameters or fitted "
+                       "cells: its loss is not comparable); it is kept as " +
+                       (d / "fit.previous-3.json").string()),
+            std::string::npos)
+      << r.err;
   fs::remove_all(d);
 }
 
