@@ -354,12 +354,13 @@ std::vector<Unit> analysis_units(const Context& c) {
       for (const auto& k : results::kMeasureKinds)
         if (k.by_default && k.task == results::measure_task(task)) declared.emplace_back(k.name);
     }
-    std::set<std::string> names;
+    // In the study's order (then any unknown to the table: a later palplab's, as stored).
+    std::vector<std::string> names;
     for (const auto& n : declared)
-      if (stored.count(n)) names.insert(n);
-    // A measure the table does not know (a database of a later palplab) is analysed as stored.
+      if (stored.count(n) && std::find(names.begin(), names.end(), n) == names.end())
+        names.push_back(n);
     for (const auto& n : stored)
-      if (!results::find_measure_kind(n)) names.insert(n);
+      if (!results::find_measure_kind(n)) names.push_back(n);
     for (const auto& n : names) {
       Unit& u = unit_for(n, c.phase_order.back(), false);
       u.kinds = {"descriptives", "anova_oneway", "pairwise_t"};

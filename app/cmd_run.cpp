@@ -49,9 +49,9 @@ extern "C" void on_sigint(int) {
   g_interrupted = true;
 }
 
-// A virtual run interrupted (SIGINT, SIGTERM, SIGHUP) stops at once, as the default action would: every
-// session completed before it is already stored (each in its own transaction), the one running
-// is not. The handler only says so and how to continue (write(2), unlink and _exit are
+// A virtual run interrupted (SIGINT, SIGTERM, SIGHUP) stops at once, as the default action would:
+// every session completed before it is already stored (each in its own transaction), the one
+// running is not. The handler only says so and how to continue (write(2), unlink and _exit are
 // async-signal-safe; the text is made before the run).
 std::string g_interrupt_text;
 extern "C" void on_interrupt_virtual(int sig) {
@@ -480,7 +480,8 @@ palplab::app::CommandRegistration reg_run{
           again += " --record-trace " + palplab::shell_word(human->record_trace);
         g_interrupt_text = "\ninterrupted: the sessions completed before this are stored in " +
                            palplab::escape_controls(opt->db, false) +
-                           " (the one running is not); continue with:\n  " + again + " --resume\n";
+                           " (those still running are not); continue with:\n  " + again +
+                           " --resume\n";
         // SIGHUP too: a closed terminal or a dropped ssh session ended the run silently (exit
         // 129, review 2026-12-07). A signal the caller ignores (nohup, `&`) stays ignored.
         std::vector<std::pair<int, void (*)(int)>> before;

@@ -401,8 +401,9 @@ palplab::app::CommandRegistration reg_report{
                           ? "the study's " + std::to_string(files.declared) +
                                 " declared, one per measure and phase"
                           : std::string("none declared: the study's measures in the last phase"))
-                  << "), " << files.figures.size() << " figures, " << files.still_figures
-                  << " stills";
+                  << "), " << files.figures.size()
+                  << (files.figures.size() == 1 ? " figure, " : " figures, ") << files.still_figures
+                  << (files.still_figures == 1 ? " still" : " stills");
         if (files.still_figures > 0)
           std::cout << " (" << std::lround(files.stills_seconds * 1000) << " ms)";
         std::cout << "\n  " << files.markdown << "\n  " << files.html << "\n";

@@ -148,7 +148,7 @@ std::string plan_summary(const Study& study, const Plan& plan) {
   o << "study " << study.id << ": " << study.title << "\n";
   o << "seed " << study.seed << ", " << plan.participants.size() << " participants, "
     << plan.session_count() << " sessions, " << plan.simulated_seconds() / 3600.0
-    << " h simulated (1 kHz lock-step)\n";
+    << " h simulated (lock-step at each prototype's haptic rate)\n";
   const bool needle = study.task.kind == "needle_insertion";
   if (needle) {
     // What a needle session does (protocols/needle_session.hpp): two tool phases in one session.
