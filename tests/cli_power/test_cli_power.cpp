@@ -961,8 +961,12 @@ TEST(Power, MergeParsesShardFileNamesStrictly) {
 // also with --allow-partial) with a message naming the K and the way out.
 TEST(Power, MergeOfShardsOfDifferentKIsRefused) {
   auto d = scratch_dir("shard_mix");
-  for (const char* s : {"1/3", "2/3", "3/3", "1/2"})
+  for (const char* s : {"1/3", "2/3", "3/3"})
     ASSERT_EQ(run_shard(power_cmd("2,3", 2), s, d / "s", d).code, 0);
+  // (power refuses a shard of another split into that directory: made apart, copied in.)
+  ASSERT_EQ(run_shard(power_cmd("2,3", 2), "1/2", d / "k2", d).code, 0);
+  fs::copy_file(d / "k2" / "replicates.shard-1-of-2.jsonl",
+                d / "s" / "replicates.shard-1-of-2.jsonl");
   for (const char* extra : {"", " --allow-partial"}) {
     const auto r = merge({d / "s"}, d / "m", d, extra);
     expect_exit2(r, {"shard files of different --shard I/K runs among the merged files (K = 2 "

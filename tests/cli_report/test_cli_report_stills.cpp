@@ -220,7 +220,7 @@ TEST_F(ReportStills, PrototypeFileGoneIsDrawnFromTheStoredCopyOrSkippedWithWhy) 
                     (dir_ / "moved2").string() + " --still-size 160x120",
                 dir_);
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.out.find(", 1 stills"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(", 1 still ("), std::string::npos) << r.out;
   EXPECT_NE(r.err.find("palplab report: no still of prototype A: its file /nonexistent/A.json no "
                        "longer exists, and the JSON stored with the results is not the whole "
                        "prototype as run"),
