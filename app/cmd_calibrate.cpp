@@ -244,9 +244,10 @@ palplab::app::CommandRegistration reg_calibrate{
               std::set<std::string> c;
               if (f.is_array())
                 for (const auto& x : f)
-                  if (x.is_object()) c.insert(x.value("group", "") + "/" + x.value("phase", "") +
-                                              "/" + x.value("session", nlohmann::json()).dump() +
-                                              "/" + x.value("measure", ""));
+                  if (x.is_object())
+                    c.insert(x.value("group", "") + "/" + x.value("phase", "") + "/" +
+                             x.value("session", nlohmann::json()).dump() + "/" +
+                             x.value("measure", ""));
               return c;
             };
             const bool same_setup =

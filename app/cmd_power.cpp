@@ -176,11 +176,13 @@ void check_power_out(const PowerArgs& a, const palplab::protocols::Study& s) {
       if (of != std::string::npos &&
           f.substr(of + 4, f.size() - 6 - of - 4) != std::to_string(a.opt.shards))
         throw palplab::InputError(palplab::SourceLocation{"--out"},
-                                  a.out + " holds " + f + ", a shard of another --shard I/K split "
-                                  "than " + std::to_string(a.opt.shard + 1) + "/" +
-                                  std::to_string(a.opt.shards) +
-                                  " (merge takes one split): give this shard another --out, or "
-                                  "run it with the split of the files there");
+                                  a.out + " holds " + f +
+                                      ", a shard of another --shard I/K split "
+                                      "than " +
+                                      std::to_string(a.opt.shard + 1) + "/" +
+                                      std::to_string(a.opt.shards) +
+                                      " (merge takes one split): give this shard another --out, or "
+                                      "run it with the split of the files there");
     }
   if (a.opt.shards > 1 && whole)
     throw palplab::InputError(palplab::SourceLocation{"--out"},

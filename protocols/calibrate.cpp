@@ -747,8 +747,10 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     // integer max_insertions searched as a real, for a palpation study; review 2026-12-07).
     if (pm::needle_task_param(*s) && study.task.kind != "needle_insertion")
       throw InputError(SourceLocation{"--params"},
-                       "\"" + k + "\" is a parameter of the needle-insertion task; this study's "
-                       "task is " + study.task.kind +
+                       "\"" + k +
+                           "\" is a parameter of the needle-insertion task; this study's "
+                           "task is " +
+                           study.task.kind +
                            ", whose sessions do not use it (expected a parameter they use)");
     const double x0 = current.*(s->trainee);
     double l = s->min, h = s->max;

@@ -155,7 +155,8 @@ std::vector<std::string> people_warnings(const PeopleVerdicts& people) {
     std::string list;
     for (std::size_t i = 0; i < people.untested.size() && i < 5; ++i)
       list += (i ? "; " : "") + people.untested[i];
-    if (people.untested.size() > 5) list += "; … " + std::to_string(people.untested.size()) + " in all";
+    if (people.untested.size() > 5)
+      list += "; … " + std::to_string(people.untested.size()) + " in all";
     out.push_back("rows that no test of the study's $.analyses uses are not compared: " + list);
   }
   std::set<std::string> cells;

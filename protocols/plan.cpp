@@ -214,8 +214,7 @@ std::string plan_summary(const Study& study, const Plan& plan) {
   for (auto& a : study.analyses) {
     o << " " << a.kind << "(" << a.measure << " @ " << a.phase;
     if (a.pooled) o << (a.pool_sessions ? ", every session pooled" : ", participant means");
-    if ((a.kind == "pairwise_t" || a.kind == "anova_oneway") && !a.welch)
-      o << ", pooled variance";
+    if ((a.kind == "pairwise_t" || a.kind == "anova_oneway") && !a.welch) o << ", pooled variance";
     if (a.margin > 0) o << ", margin " << a.margin;
     o << ")";
   }

@@ -742,8 +742,8 @@ Study parse_study(const std::string& text, const std::string& file,
           c.err(path_key(path_index("$.analyses", source[k]), "margin"),
                 "a margin is that of the equivalence test (TOST) the report runs beside an "
                 "anova_oneway or pairwise_t of the same measure and phase; this study has none "
-                "of " + a.measure + " in phase " + a.phase +
-                    " (declare one, or remove the margin)");
+                "of " +
+                    a.measure + " in phase " + a.phase + " (declare one, or remove the margin)");
       }
     }
   }
@@ -1052,9 +1052,10 @@ Study parse_study(const std::string& text, const std::string& file,
              " s would do" + (steps.size() > 1 ? " on every prototype of the phase" : "") + ")";
     c.err(path_key(path_index("$.phases", pi), "session_duration"),
           "expected a whole number of prototype \"" + bad->first + "\"'s haptic steps (" +
-              shortest(bad->second) + " s each), got " + shortest(ph.session_duration) +
-              " s = " + shortest(ph.session_duration / bad->second,
-                                               1e-4 / std::max(1.0, ph.session_duration / bad->second)) + " steps" + hint);
+              shortest(bad->second) + " s each), got " + shortest(ph.session_duration) + " s = " +
+              shortest(ph.session_duration / bad->second,
+                       1e-4 / std::max(1.0, ph.session_duration / bad->second)) +
+              " steps" + hint);
   }
 
   c.throw_if_any();  // every problem, in file order

@@ -266,8 +266,7 @@ PrototypeSummary inspect_prototype(const std::string& path) {
   // run left an empty database behind, and `validate` passed it; review 2026-12-07).
   if (const ModelKind* kind = find_model_kind(s.model); kind && kind->check_mesh)
     kind->check_mesh(s, *scene_mesh(s.mesh));
-  return {s.id,  s.scene, s.model, mesh_region_names(s.mesh), mesh_inner_region_names(s.mesh),
-          s.dt};
+  return {s.id, s.scene, s.model, mesh_region_names(s.mesh), mesh_inner_region_names(s.mesh), s.dt};
 }
 
 engine::Scene build_scene(const std::string& path, const SceneOverrides& ov) {

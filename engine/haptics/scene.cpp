@@ -387,8 +387,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
   // (1-3 ms gaps: 9 500 contact events in nine 50 s sessions of exp2, review 2026-12-07).
   // (The lift's step is the first without contact: after kTouchGap / dt such steps the touch
   // has ended, so a contact back after exactly kTouchGap of none is a new touch.)
-  if (s.touch && !s.contact && s.lift_t >= 0.0 &&
-      s.t - s.lift_t + s.cfg.dt >= kTouchGap - 1e-9) {
+  if (s.touch && !s.contact && s.lift_t >= 0.0 && s.t - s.lift_t + s.cfg.dt >= kTouchGap - 1e-9) {
     s.events.push_back({s.lift_t, EventKind::contact_end, -1, s.lift_node, s.peak_force});
     s.touch = false;
     s.lift_t = -1.0;
@@ -413,8 +412,7 @@ Rendered Scene::step(const Eigen::Vector3d& x_in) {
       for (Eigen::Index i = 0; i < n; ++i)
         vol += s.rest_area[i] * std::max(0.0, -(V.row(i) - g.V.row(i)).dot(g.N.row(i)));
       s.volume = vol;
-      s.next_frame =
-          s.step_index + std::max(1L, std::lround(1.0 / (kVisibleFrameRate * s.cfg.dt)));
+      s.next_frame = s.step_index + std::max(1L, std::lround(1.0 / (kVisibleFrameRate * s.cfg.dt)));
     }
     if (r.visible_deformation > 0.0) r.visible_volume = s.volume;
   }

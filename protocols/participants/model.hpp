@@ -89,7 +89,7 @@ struct Demonstration {
   double deformation = 0.0;  // m, visible deformation when the target force is reached (mean)
   bool sound = false;        // the audio cue came on the way to the target force
   std::vector<double> seen;  // m, that deformation in each press that reached the target
-  double volume = 0.0;              // m^3, the visible volume at the target (mean; when computed)
+  double volume = 0.0;       // m^3, the visible volume at the target (mean; when computed)
   std::vector<double> seen_volume;  // m^3, in each press that reached the target (beside seen)
 };
 

@@ -149,12 +149,13 @@ const std::vector<ParamSpec>& trainee_param_specs() {
             "person's press goes on awaiting a marker (lognormal, median 1, drawn at the briefing)",
             "Park, Shea & Wright 2000 (dependence on concurrent feedback, shown by the error once "
             "it is withdrawn); its spread between people: a model assumption fitted to exp2"),
-      tspec("visual_volume_weight", &T::visual_volume_weight, 0.0, 1.0, "1",
-            "how much a seen deformation is judged by the volume the whole drawn surface is "
-            "pushed in by rather than by the indentation under the probe (log-linear mix)",
-            "softness is seen in the whole object's deformation (J Vis abstract, "
-            "jov.arvojournals.org articleid 2699219: features of the whole mesh predict it, r = "
-            ".93; Bi et al. 2019, J Vis 19(5):18); the weight a model assumption, off until fitted"),
+      tspec(
+          "visual_volume_weight", &T::visual_volume_weight, 0.0, 1.0, "1",
+          "how much a seen deformation is judged by the volume the whole drawn surface is "
+          "pushed in by rather than by the indentation under the probe (log-linear mix)",
+          "softness is seen in the whole object's deformation (J Vis abstract, "
+          "jov.arvojournals.org articleid 2699219: features of the whole mesh predict it, r = "
+          ".93; Bi et al. 2019, J Vis 19(5):18); the weight a model assumption, off until fitted"),
       tspec("visual_spatial_sd", &T::visual_spatial_sd, 1e-5, 1.0, "m",
             "SD of locating the touched point by eye when it visibly deforms; combined with the "
             "haptic SD (spatial_memory_sd) by inverse variances",

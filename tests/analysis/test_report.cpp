@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -419,8 +419,8 @@ TEST(Report, WithoutAnalysesTheStudysMeasuresAreAnalysed) {
   };
   using V = std::vector<std::string>;
   {
-    FixtureDb f = make_fixture(true, false, true, nullptr,
-                               [](nlohmann::json& sj) { sj.erase("analyses"); });
+    FixtureDb f =
+        make_fixture(true, false, true, nullptr, [](nlohmann::json& sj) { sj.erase("analyses"); });
     ReportFiles files = write_report(f.db.string(), (f.dir / "report").string());
     const std::string md = slurp(files.markdown);
     EXPECT_EQ(sections(md), (V{"palpation_force", "exploration_time"}));

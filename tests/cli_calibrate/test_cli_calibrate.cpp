@@ -514,7 +514,8 @@ TEST(Calibrate, EachPointSimulatedOnceAndNoSe) {
   fs::remove(d / "fit.previous.json");
   r = run_palplab(again, d);
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("replaced " + (d / "fit.json").string() + ": it held a fit of "
+  EXPECT_NE(r.err.find("replaced " + (d / "fit.json").string() +
+                       ": it held a fit of "
                        "prior_target_cv with loss"),
             std::string::npos)
       << r.err;
@@ -722,7 +723,8 @@ TEST(Calibrate, SessionsAndSmallCellsSayWhatIsExpected) {
   // Ten values of 2.9 sum to a mean 4e-16 below 2.9: their SD is still 0, not "4.681e-16"
   // (review 2026-12-07).
   std::string same;
-  for (int i = 1; i <= 10; ++i) same += "S" + std::to_string(i) + ",G1,test,1,palpation_force,2.9\n";
+  for (int i = 1; i <= 10; ++i)
+    same += "S" + std::to_string(i) + ",G1,test,1,palpation_force,2.9\n";
   r = run(header + same + rows.substr(rows.find("H3")), "");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_NE(r.err.find("warning: --human: " + h +

@@ -780,8 +780,7 @@ TEST(HardDb, ResumeKeepsTheRunsSamplesSetting) {
   EXPECT_EXIT2_WITH(r, "the run started with --samples full");
   // The warning follows the data, not the meta row (one edited to "none" over stored samples).
   palplab::testing::sql_exec(db, "UPDATE meta SET value = 'none' WHERE key = 'samples'");
-  r = cli("export " + db.string() + " --csv " + (d / "csv").string() + " --samples --overwrite",
-          d);
+  r = cli("export " + db.string() + " --csv " + (d / "csv").string() + " --samples --overwrite", d);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(has(r.err, "stored no device samples")) << r.err;
   EXPECT_GT(slurp(d / "csv" / "samples.csv").size(), 1000u);
@@ -994,7 +993,8 @@ TEST(HardDb, ReportAndExportOfAnIncompleteDatabaseSaySo) {
                   "| participants per group (with sessions stored, of planned) | "
                   "G1: 1 of 1, G2: 0 of 1 |"))
       << md;
-  EXPECT_TRUE(has(r.out, "report: 4 analyses (none declared: the study's measures in the last phase)"))
+  EXPECT_TRUE(
+      has(r.out, "report: 4 analyses (none declared: the study's measures in the last phase)"))
       << r.out;
   r = cli("export " + db.string() + " --csv " + (d / "csv").string(), d);
   EXPECT_EQ(r.code, 0) << r.err;
