@@ -478,10 +478,8 @@ TEST(Power, MergeChecksEveryReplicateRecord) {
       << bad.err;
   // A file of binary data is no interrupted run (the head of an executable was "the last line is
   // incomplete … rerun that palplab power command").
-  std::ofstream(d / "r.jsonl", std::ios::trunc | std::ios::binary) << std::string(
-      "\x7f"
-      "ELF\x02\x01\x01\0\0\0",
-      12);
+  const char elf[] = {'\x7f', 'E', 'L', 'F', '\x02', '\x01', '\x01', '\0', '\0', '\0'};
+  std::ofstream(d / "r.jsonl", std::ios::trunc | std::ios::binary) << std::string(elf, sizeof elf);
   bad = merge({d / "r.jsonl"}, d / "out", d);
   EXPECT_EQ(bad.code, 2) << bad.err;
   EXPECT_NE(bad.err.find("not a replicate file: it holds binary data"), std::string::npos)
