@@ -53,10 +53,14 @@ extern "C" void on_sigint(int) {
 // every session completed before it is already stored (each in its own transaction), the one
 // running is not. The handler only says so and how to continue (write(2), unlink and _exit are
 // async-signal-safe; the text is made before the run).
-std::string g_interrupt_text;
+std::string g_interrupt_text, g_interrupt_text_none;
+// Set once a session of the run is stored (or the run resumes a database): before that the
+// interruption message must not speak of stored sessions (review 2026-12-07).
+volatile std::sig_atomic_t g_stored_any = 0;
 extern "C" void on_interrupt_virtual(int sig) {
   palplab::remove_registered_files();  // a --record-trace FILE.partial being written
-  const ssize_t ignored = ::write(2, g_interrupt_text.data(), g_interrupt_text.size());
+  const std::string& text = g_stored_any ? g_interrupt_text : g_interrupt_text_none;
+  const ssize_t ignored = ::write(2, text.data(), text.size());
   (void)ignored;
   ::_exit(128 + sig);
 }
@@ -237,6 +241,7 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   if (h.participant.empty()) throw InputError("--human needs --participant ID");
   if (ro.resume || ro.force)
     throw InputError("--human continues or creates the database by itself; drop --resume/--force");
+  (void)plan.participant(h.participant);  // an unknown id before the device is measured
   // Everything the arguments name is checked here, before run_human creates (or opens) the
   // database: a bad --device left a fresh database behind its exit 2. (--min-device-rate and
   // --device-lost are range-checked by their validators.)
@@ -482,6 +487,19 @@ palplab::app::CommandRegistration reg_run{
                            palplab::escape_controls(opt->db, false) +
                            " (those still running are not); continue with:\n  " + again +
                            " --resume\n";
+        g_interrupt_text_none =
+            "\ninterrupted before any session was complete: no session "
+            "is stored in " +
+            palplab::escape_controls(opt->db, false) + "; start the run again with:\n  " + again +
+            " --force\n";
+        g_stored_any = opt->resume ? 1 : 0;
+        {  // the flag follows the sessions stored, with or without the progress output
+          std::function<void(const Progress&)> show = std::move(opt->progress);
+          opt->progress = [show](const Progress& p) {
+            if (p.sessions_done > 0) g_stored_any = 1;
+            if (show) show(p);
+          };
+        }
         // SIGHUP too: a closed terminal or a dropped ssh session ended the run silently (exit
         // 129, review 2026-12-07). A signal the caller ignores (nohup, `&`) stays ignored.
         std::vector<std::pair<int, void (*)(int)>> before;

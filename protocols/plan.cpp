@@ -5,6 +5,7 @@
 #include <sstream>
 #include <utility>
 
+#include "common/input_error.hpp"
 #include "common/seed.hpp"
 #include "protocols/rng.hpp"
 
@@ -75,6 +76,15 @@ double Plan::simulated_seconds() const {
   for (const auto& p : participants)
     for (const auto& s : p.sessions) t += s.duration;
   return t;
+}
+
+const ParticipantPlan& Plan::participant(const std::string& id) const {
+  for (const auto& p : participants)
+    if (p.id == id) return p;
+  std::string ids;
+  for (const auto& p : participants) ids += (ids.empty() ? "" : ", ") + p.id;
+  throw InputError("--participant: no participant \"" + id +
+                   "\" in the study's plan (expected one of: " + ids + ")");
 }
 
 Plan make_plan(const Study& study) {

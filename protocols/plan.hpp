@@ -59,6 +59,8 @@ struct Plan {
   std::vector<ParticipantPlan> participants;
   std::size_t session_count() const;
   double simulated_seconds() const;  // sum of all session durations
+  // The participant with this id; InputError naming --participant and the plan's ids if none.
+  const ParticipantPlan& participant(const std::string& id) const;
 };
 
 Plan make_plan(const Study& study);

@@ -454,7 +454,7 @@ std::vector<std::string> participants_left(const Plan& plan, const results::Stor
 // and meta "samples" (full or none), in one transaction.
 void write_new_study(const Study& study, const Plan& plan, const std::string& sha,
                      results::Store& store, std::map<std::string, std::string>& prototype_sha,
-                     bool samples) {
+                     bool samples, const std::string& started_at = results::utc_now()) {
   results::StudyRecord rec;
   rec.study_id = study.id;
   rec.title = study.title;
@@ -463,7 +463,7 @@ void write_new_study(const Study& study, const Plan& plan, const std::string& sh
   rec.palplab_version = kVersion;
   rec.git_commit = kGitCommit;
   rec.seed = study.seed;
-  rec.started_at = results::utc_now();
+  rec.started_at = started_at;
   std::vector<results::PrototypeRecord> protos;
   for (const auto& [id, path] : study.prototype_files) {
     std::string text = slurp(path);
@@ -866,15 +866,14 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
   };
-  const ParticipantPlan* pp = nullptr;
-  for (const auto& p : plan.participants)
-    if (p.id == opt.participant) pp = &p;
-  if (!pp) {
-    std::string ids;
-    for (const auto& p : plan.participants) ids += (ids.empty() ? "" : ", ") + p.id;
-    throw InputError("--participant: no participant \"" + opt.participant +
-                     "\" in the study's plan (expected one of: " + ids + ")");
-  }
+  const ParticipantPlan* pp = &plan.participant(opt.participant);
+  // "Now": the system clock, or one that starts at the tests' and dry runs' PALPLAB_NOW and
+  // runs with it, for every time stored (the study's start and end, each session's).
+  const std::int64_t started = std::time(nullptr);
+  auto now = [&] {
+    const std::int64_t t = std::time(nullptr);
+    return opt.now >= 0 ? opt.now + (t - started) : t;
+  };
   const std::string sha = results::sha256_hex(study.json_text);
   std::map<std::string, std::string> prototype_sha;
   bool exists = fs::exists(opt.db);
@@ -900,7 +899,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
                                        opt.samples_explicit, opt.db);
     for (const auto& p : store.read_prototypes()) prototype_sha[p.prototype] = p.sha256;
   } else {
-    write_new_study(study, plan, sha, store, prototype_sha, keep_samples);
+    write_new_study(study, plan, sha, store, prototype_sha, keep_samples, utc_iso(now()));
   }
   if (int n = store.abort_stale_sessions(pp->id))
     say("note: " + std::to_string(n) + " session(s) of " + pp->id +
@@ -920,7 +919,6 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     const std::int64_t t = parse_utc(r.started_at);
     if (t >= 0 && (first_start < 0 || t < first_start)) first_start = t;
   }
-  auto now = [&] { return opt.now >= 0 ? opt.now : static_cast<std::int64_t>(std::time(nullptr)); };
   auto day_of = [](std::int64_t t) { return t >= 0 ? t / 86400 : 0; };
   const std::int64_t day0 = day_of(first_start >= 0 ? first_start : now());
 
@@ -1090,6 +1088,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     rec.loop_p99 = stats.period_p99_us * 1e-6;
     rec.status = reason.empty() ? "complete" : "aborted";
     rec.abort_reason = reason;
+    rec.completed_at = utc_iso(now());  // PALPLAB_NOW's clock too (it was the system's)
     store.finish_session(data);
     if (opt.on_session_end) opt.on_session_end(rec);
     if (!opt.record_trace_dir.empty()) {
@@ -1125,7 +1124,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     }
   // This person's last session may be the study's last (as run_study marks it).
   if (sum.remaining == 0 && participants_left(plan, store).empty())
-    store.set_finished(results::utc_now());
+    store.set_finished(utc_iso(now()));
   return sum;
 }
 

@@ -107,7 +107,7 @@ struct HumanOptions {
   bool samples = true;
   bool samples_explicit = true;  // as RunOptions::samples_explicit
   std::string record_trace_dir;  // "" = none; else DIR/<participant>_<ordinal>_<attempt>.trace
-  std::int64_t now = -1;         // Unix time "now" (s); -1 = the system clock (tests set it)
+  std::int64_t now = -1;  // Unix time at the start (s), the clock runs on; -1 = the system clock
   std::function<void(const std::string&)> say;  // instructions, progress (stdout)
   // Before each session (after its instructions are said); false = stop here.
   std::function<bool(const SessionSpec&)> before_session;

@@ -700,10 +700,14 @@ TEST(HardDb, InterruptedRunSaysHowToContinue) {
                             "/prototypes " + std::string(PALPLAB_BINARY) + " run " +
                             (d / "study.json").string() + " --db " + db.string() +
                             " --samples none 2>" + (d / "err.txt").string() + " >/dev/null";
-    const std::string script =
-        "(" + cmd + ") & pid=$!; i=0; while [ ! -s " + db.string() +
-        " ] && [ $i -lt 300 ]; do sleep 0.02; i=$((i+1)); done; sleep 0.3; kill -" + sig +
-        " $pid; wait $pid; echo $? > " + (d / "rc.txt").string();
+    // The signal after the first session is stored (its progress line; the sanitizer build
+    // is slow enough that a fixed wait could come before it).
+    const std::string script = "(" + cmd +
+                               ") & pid=$!; i=0; while ! grep -q \"session 1/6 done\" " +
+                               (d / "err.txt").string() +
+                               " 2>/dev/null && [ $i -lt 3000 ]; do sleep 0.01; i=$((i+1)); done; "
+                               "kill -" +
+                               sig + " $pid; wait $pid; echo $? > " + (d / "rc.txt").string();
     ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
     const std::string err = slurp(d / "err.txt");
     if (slurp(d / "rc.txt") == "0\n") GTEST_SKIP() << "the run finished before the signal";
@@ -718,6 +722,44 @@ TEST(HardDb, InterruptedRunSaysHowToContinue) {
     ASSERT_EQ(st.read_sessions().size(), 6u);
     for (const auto& s : st.read_sessions()) EXPECT_EQ(st.read_samples(s.session).size(), 0u);
   }
+}
+
+// Interrupted before its first session was stored, a run said "the sessions completed before
+// this are stored" and offered --resume (review 2026-12-07): it now says that none is and
+// gives the command that starts again, which completes the run.
+TEST(HardDb, RunInterruptedBeforeItsFirstSessionSaysNoneIsStored) {
+  auto d = tmp("interrupt_first");
+  // One session of 60 s on C: seconds of work, the signal comes within it.
+  spit(d / "study.json",
+       R"({"palplab_study": 1, "id": "hard", "title": "hard cases", "seed": 1,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "G1", "prototype": "C", "size": 1}],
+  "phases": [{"id": "pre", "kind": "pre_training", "session_duration": 60, "start": {"day": 0}}]})");
+  const fs::path db = d / "r.db";
+  const std::string cmd = "PALPLAB_PROTOTYPE_PATH=" + std::string(PALPLAB_SOURCE_DIR) +
+                          "/prototypes " + std::string(PALPLAB_BINARY) + " run " +
+                          (d / "study.json").string() + " --db " + db.string() +
+                          " --samples none 2>" + (d / "err.txt").string() + " >/dev/null";
+  const std::string script =
+      "(" + cmd + ") & pid=$!; i=0; while [ ! -s " + db.string() +
+      " ] && [ $i -lt 3000 ]; do sleep 0.01; i=$((i+1)); done; sleep 0.05; kill -TERM $pid; "
+      "wait $pid; echo $? > " +
+      (d / "rc.txt").string();
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  const std::string err = slurp(d / "err.txt");
+  if (slurp(d / "rc.txt") == "0\n" || has(err, "session 1/1 done"))
+    GTEST_SKIP() << "the session finished before the signal";
+  EXPECT_EQ(slurp(d / "rc.txt"), "143\n") << err;
+  EXPECT_FALSE(has(err, "completed before this are stored")) << err;
+  EXPECT_TRUE(has(
+      err, "interrupted before any session was complete: no session is stored in " + db.string()))
+      << err;
+  const std::string again =
+      "run " + (d / "study.json").string() + " --db " + db.string() + " --force";
+  EXPECT_TRUE(has(err, "palplab " + again + "\n")) << err;
+  Result r = cli(again + " --quiet", d);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(palplab::results::Store::open(db.string()).read_sessions().size(), 1u);
 }
 
 // An export interrupted by SIGTERM left its NAME.partial files in --csv (review 2026-12-06; the

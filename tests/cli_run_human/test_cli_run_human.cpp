@@ -305,6 +305,18 @@ TEST(CliRunHuman, BadDeviceOrArgumentsExit2BeforeTheDatabaseExists) {
     for (const char* suffix : {"", "-wal", "-shm", "-journal"})
       EXPECT_FALSE(fs::exists(db.string() + suffix)) << db.string() + suffix;
   }
+  // An unknown participant with a silent bridge: the id is the error (it was reported only
+  // after the device's rate was measured, and failed as "below 900 Hz": review 2026-12-07).
+  {
+    const std::string cmd =
+        "PALPLAB_NOW=" + std::string(t::kHumanNow) + " " + PALPLAB_BINARY + " run " + kDir +
+        "human_study.json --db " + db.string() +
+        " --human --participant NOPE --device udp:" + std::to_string(silent_port);
+    const t::CliResult r = t::run_shell(cmd, tmp.dir);
+    t::expect_exit2(r, {"--participant", "no participant \"NOPE\"", "P01"});
+    EXPECT_EQ(r.err.find("900 Hz"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(db));
+  }
   // The same good trace and arguments without the bad one: the session runs and is stored (the
   // trace read once before the database replays in the session).
   const t::CliResult ok = t::run_shell(
@@ -411,6 +423,17 @@ TEST(CliRunHuman, HumanSessionsKeepTheRunsSamplesSettingAndStartInALeftover) {
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_EQ(one("SELECT COUNT(*) AS v FROM sessions WHERE status = 'complete'"), "2");
   EXPECT_EQ(one("SELECT COUNT(*) AS v FROM samples"), "0");
+  // Every time stored follows PALPLAB_NOW's clock: the study's start and each session's start
+  // and end (completed_at was the system clock's: review 2026-12-07). Sessions of 2.5 s.
+  EXPECT_EQ(one("SELECT started_at AS v FROM study").substr(0, 16), "2026-11-24T10:00");
+  const auto rows = db_rows(db, "SELECT started_at, completed_at FROM sessions ORDER BY ordinal");
+  ASSERT_EQ(rows.size(), 2u);
+  for (const auto& [row, day] :
+       {std::pair{rows[0], "2026-11-24T10:0"}, {rows[1], "2026-11-26T10:0"}}) {
+    EXPECT_EQ(row.at("started_at").substr(0, 15), day);
+    EXPECT_EQ(row.at("completed_at").substr(0, 15), day);
+    EXPECT_LE(row.at("started_at"), row.at("completed_at"));
+  }
 }
 
 // A study whose every participant is run by a person was never marked finished (finished_at
