@@ -18,6 +18,7 @@
 #include "common/escape.hpp"
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
+#include "common/json_locate.hpp"
 #include "common/write_file.hpp"
 #include "protocols/calibrate.hpp"
 #include "protocols/calibrate_journal.hpp"
@@ -99,6 +100,25 @@ palplab::app::CommandRegistration reg_calibrate{
         for (const auto& [id, file] : s.prototype_files)
           not_out.push_back({"prototype " + id + " of the study", file});
         if (defaults) not_out.push_back({"the --write-defaults file", a->write_defaults});
+        // A calibration JSON cut off or edited into invalid JSON was refused as "a JSON file,
+        // not a palplab calibration JSON" (review 2026-12-07): say what it is.
+        std::error_code size_ec;
+        if (!a->overwrite && std::filesystem::is_regular_file(a->out) &&
+            std::filesystem::file_size(a->out, size_ec) <= palplab::json::kMaxJsonFileBytes &&
+            !size_ec) {
+          const std::string text =
+              palplab::app::file_head(a->out, palplab::json::kMaxJsonFileBytes);
+          if (text.find("\"palplab_calibration\"") != std::string::npos) try {
+              (void)palplab::json::parse_located(text, a->out);
+            } catch (const palplab::InputError& e) {
+              throw palplab::InputError(
+                  palplab::SourceLocation{"--out"},
+                  "\"" + a->out + "\" looks like a palplab calibration JSON but is damaged (" +
+                      e.what() +
+                      "); refusing to replace it: repair it, choose another --out, or give "
+                      "--overwrite to replace it");
+            }
+        }
         palplab::app::require_replaceable_output(
             "--out", a->out, not_out,
             [](const std::string& p) {

@@ -217,6 +217,21 @@ TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
             std::string::npos)
       << other.err;
   EXPECT_EQ(other.err.find("evaluation"), std::string::npos) << "the fit ran first: " << other.err;
+  // A calibration JSON cut off: "a JSON file, not a palplab calibration JSON" before (review
+  // 2026-12-07); now named for what it is, with where it breaks, and left as it was.
+  const std::string cut =
+      "{\n  \"palplab_calibration\": 1,\n  \"fitted\": {\"weber_fraction\": 0.1";
+  std::ofstream(d / "cut.json") << cut;
+  const Result damaged = run_palplab(own + "--out " + (d / "cut.json").string(), d);
+  EXPECT_EQ(damaged.code, 2) << damaged.out << damaged.err;
+  EXPECT_NE(damaged.err.find("--out: \"" + (d / "cut.json").string() +
+                             "\" looks like a palplab calibration JSON but is damaged (" +
+                             (d / "cut.json").string() + ":3:"),
+            std::string::npos)
+      << damaged.err;
+  EXPECT_NE(damaged.err.find("give --overwrite to replace it"), std::string::npos) << damaged.err;
+  EXPECT_EQ(damaged.err.find("evaluation"), std::string::npos) << damaged.err;
+  EXPECT_EQ(slurp(d / "cut.json"), cut);
   // Review findings (2026-12-03): --out naming the --write-defaults file replaced the copy of
   // params.hpp with the JSON before failing; a --write-defaults file write_defaults cannot edit
   // was refused only after the fit; an empty --write-defaults was ignored.
