@@ -14,6 +14,7 @@
 #include "analysis/distributions.hpp"
 #include "analysis/parallel.hpp"
 #include "common/escape.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 
 namespace palplab::analysis {
@@ -326,18 +327,6 @@ nlohmann::json to_json(const StatsSummary& s) {
                          {"tie_correction", s.kruskal.tie_correction}};
   return j;
 }
-
-namespace {
-// Significant digits of the shortest representation of x that reads back as x.
-int shortest_digits(double x) {
-  if (!std::isfinite(x) || x == 0) return 1;
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::scientific);
-  int n = 0;
-  for (const char* c = buf; c < r.ptr && *c != 'e'; ++c) n += *c >= '0' && *c <= '9';
-  return n;
-}
-}  // namespace
 
 std::string to_text(const StatsSummary& s) {
   std::ostringstream o;

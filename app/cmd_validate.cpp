@@ -8,6 +8,7 @@
 
 #include "app/command.hpp"
 #include "common/escape.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/study.hpp"
@@ -108,20 +109,15 @@ palplab::app::CommandRegistration reg_validate{
           auto it = s.task.thresholds.find(s.task.feature);
           if (it == s.task.thresholds.end()) it = s.task.thresholds.find("*");
           if (it != s.task.thresholds.end() && s.task.palpation_onset > it->second.mpf) {
-            // The shortest text that reads back as the number (2.5000000001 is not "2.5").
-            auto num = [](double x) {
-              char b[32];
-              const auto r = std::to_chars(b, b + sizeof b, x);
-              return std::string(b, r.ptr);
-            };
             const auto task = nlohmann::json::parse(s.json_text, nullptr, false)
                                   .value("task", nlohmann::json::object());
             const bool set = task.is_object() && task.contains("palpation_onset");
             std::cerr << palplab::escape_controls(*study) << ": warning: "
                       << (set ? "$.task.palpation_onset: " : "$.task: the default palpation_onset ")
-                      << num(s.task.palpation_onset)
-                      << " N is above the feature's target force (MPF " << num(it->second.mpf)
-                      << " N, SFT " << num(it->second.sft)
+                      << palplab::format_shortest(s.task.palpation_onset)
+                      << " N is above the feature's target force (MPF "
+                      << palplab::format_shortest(it->second.mpf) << " N, SFT "
+                      << palplab::format_shortest(it->second.sft)
                       << " N): a press to the target is not counted as a palpation (`palpations` "
                       << "counts only presses beyond it)\n";
           }

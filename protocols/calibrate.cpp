@@ -19,6 +19,7 @@
 #include <tuple>
 
 #include "analysis/csv.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "common/nan.hpp"
 #include "common/write_file.hpp"
@@ -42,14 +43,6 @@ void mean_sd(const std::vector<double>& x, double& m, double& sd) {
   double ss = 0;
   for (double v : x) ss += (v - m) * (v - m);
   sd = x.size() > 1 ? std::sqrt(ss / (x.size() - 1)) : 0.0;
-}
-
-// The shortest text that reads back as exactly `v` (so 0.30000000000000004 is not shown as 0.3
-// in a message that says it differs from 0.3).
-std::string fmt_num(double v) {
-  char b[64];
-  const auto res = std::to_chars(b, b + sizeof b, v);
-  return std::string(b, res.ptr);
 }
 
 }  // namespace
@@ -646,9 +639,9 @@ void check_human_cell(const Study& study, const HumanCell& c) {
     for (std::size_t i = 0; i < c.values.size() && i < c.value_lines.size(); ++i)
       if (c.values[i] > phase->session_duration)
         throw InputError(SourceLocation{c.file, c.value_lines[i]},
-                         "column 'value': " + c.measure + " " + fmt_num(c.values[i]) +
+                         "column 'value': " + c.measure + " " + format_shortest(c.values[i]) +
                              " s is longer than the sessions of phase " + c.phase + " (" +
-                             fmt_num(phase->session_duration) +
+                             format_shortest(phase->session_duration) +
                              " s): expected at most the session's duration");
 }
 
@@ -757,14 +750,14 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
     if (const ParamBound* b = bound_of(k)) {
       if (b->lo < s->min || b->hi > s->max)
         throw InputError(SourceLocation{"--bounds"},
-                         k + "=" + fmt_num(b->lo) + ":" + fmt_num(b->hi) +
-                             " reaches outside the parameter's own bounds " + fmt_num(s->min) +
-                             ":" + fmt_num(s->max) +
+                         k + "=" + format_shortest(b->lo) + ":" + format_shortest(b->hi) +
+                             " reaches outside the parameter's own bounds " +
+                             format_shortest(s->min) + ":" + format_shortest(s->max) +
                              " (protocols/participants/params.cpp); expected a range within them");
       if (x0 < b->lo || x0 > b->hi)
         throw InputError(SourceLocation{"--bounds"},
-                         k + "=" + fmt_num(b->lo) + ":" + fmt_num(b->hi) +
-                             " does not hold the start value " + fmt_num(x0) +
+                         k + "=" + format_shortest(b->lo) + ":" + format_shortest(b->hi) +
+                             " does not hold the start value " + format_shortest(x0) +
                              " (the study's participant_model.parameters, else the default); "
                              "expected bounds around it, or set a start inside them in the study");
       l = b->lo;
@@ -857,8 +850,8 @@ CalibrationResult calibrate(const Study& study, const std::vector<HumanCell>& ce
                        "\"" + journal->path() +
                            "\" holds this fit's evaluations, but its loss at "
                            "the start (" +
-                           fmt_num(stored->first) + ") is not this palplab's (" +
-                           fmt_num(r.loss_before) +
+                           format_shortest(stored->first) + ") is not this palplab's (" +
+                           format_shortest(r.loss_before) +
                            "): it was written by a palplab that simulates differently; remove "
                            "it (or give another --journal) to start the fit afresh");
     replay = true;
@@ -1052,9 +1045,10 @@ std::string to_text(const CalibrationResult& r) {
             ? (r.points_tried <= 1 ? "not computed: nothing fitted" : "not computed (--no-se)")
         : *at ? "not estimable: on a bound"
               : "not estimable",
-        fmt_num(r.start[i]).c_str());
+        format_shortest(r.start[i]).c_str());
     o << buf;
-    if (bounded) o << ", bounds " << fmt_num(r.lo[i]) << ":" << fmt_num(r.hi[i]) << at;
+    if (bounded)
+      o << ", bounds " << format_shortest(r.lo[i]) << ":" << format_shortest(r.hi[i]) << at;
     if (i < r.se_quadratic.size() && std::isfinite(r.se_quadratic[i])) {
       std::snprintf(buf, sizeof buf,
                     "; SE %g over the %d points with a loss within %g of the fit's",
@@ -1101,7 +1095,7 @@ std::string to_text(const CalibrationResult& r) {
                   r.stencil_lower_loss, r.loss_after);
     o << buf;
     for (std::size_t i = 0; i < r.keys.size(); ++i) {
-      o << " " << r.keys[i] << " " << fmt_num(r.stencil_lower[i]);
+      o << " " << r.keys[i] << " " << format_shortest(r.stencil_lower[i]);
       if (std::isfinite(r.se[i])) {
         std::snprintf(buf, sizeof buf, " (%+.2f SE from the fit)",
                       (r.stencil_lower[i] - r.fitted[i]) / r.se[i]);

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "common/json_check.hpp"
 #include "common/json_locate.hpp"
@@ -996,14 +997,6 @@ Study parse_study(const std::string& text, const std::string& file,
   };
   // The fewest decimals that give x back within `tol` (relative): 0.009, not
   // 0.009000000000000001; 1000, not 1e+03.
-  auto shortest = [](double x, double tol = 1e-12) {
-    char b[48];
-    for (int decimals = 0; decimals <= 17; ++decimals) {
-      std::snprintf(b, sizeof b, "%.*f", decimals, x);
-      if (std::abs(std::strtod(b, nullptr) - x) <= tol * std::abs(x)) break;
-    }
-    return std::string(b);
-  };
   for (std::size_t pi = 0; pi < s.phases.size(); ++pi) {
     const Phase& ph = s.phases[pi];
     if (!(ph.session_duration > 0)) continue;
@@ -1038,12 +1031,12 @@ Study parse_study(const std::string& text, const std::string& file,
     const double m = std::floor(ph.session_duration / largest);
     for (double k = m; k >= 1 && k > m - 100000; --k)
       if (fits_all(k * largest)) {
-        would_do.push_back(shortest(k * largest));
+        would_do.push_back(format_fixed_within(k * largest));
         break;
       }
     for (double k = m + 1; k < m + 100001; ++k)
       if (fits_all(k * largest)) {
-        would_do.push_back(shortest(k * largest));
+        would_do.push_back(format_fixed_within(k * largest));
         break;
       }
     std::string hint;
@@ -1052,9 +1045,10 @@ Study parse_study(const std::string& text, const std::string& file,
              " s would do" + (steps.size() > 1 ? " on every prototype of the phase" : "") + ")";
     c.err(path_key(path_index("$.phases", pi), "session_duration"),
           "expected a whole number of prototype \"" + bad->first + "\"'s haptic steps (" +
-              shortest(bad->second) + " s each), got " + shortest(ph.session_duration) + " s = " +
-              shortest(ph.session_duration / bad->second,
-                       1e-4 / std::max(1.0, ph.session_duration / bad->second)) +
+              format_fixed_within(bad->second) + " s each), got " +
+              format_fixed_within(ph.session_duration) + " s = " +
+              format_fixed_within(ph.session_duration / bad->second,
+                                  1e-4 / std::max(1.0, ph.session_duration / bad->second)) +
               " steps" + hint);
   }
 

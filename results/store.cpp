@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "common/escape.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "common/inputs.hpp"
 #include "common/remove_on_signal.hpp"
@@ -144,13 +145,6 @@ void exec(sqlite3* db, const std::string& sql) {
   }
 }
 
-// Shortest text that reads back as the same double (no "15.633000000000001" artefacts).
-std::string num(double v) {
-  char buf[64];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
 // "session 12 (participant P03, phase post_training #1)": where a bad stored value is.
 std::string session_label(long long session, const std::string& participant,
                           const std::string& phase, int phase_index) {
@@ -167,7 +161,7 @@ std::string stored_value(const Stmt& q, int c) {
     case SQLITE_INTEGER:
       return std::to_string(q.integer(c));
     case SQLITE_FLOAT:
-      return num(q.real(c));
+      return format_shortest(q.real(c));
     case SQLITE_TEXT:
       return "'" + shown_text(q.text(c), 40) + "'";
     case SQLITE_BLOB:
@@ -1555,7 +1549,8 @@ std::vector<MeasureRow> Store::read_measures() const {
         r.value = q.real(7);
         if (!std::isfinite(*r.value))  // palplab stores a non-finite value as NULL
           throw InputError(session_label(r) + ": measure \"" + r.name + "\": value " +
-                               num(*r.value) + " is not finite (a value must be a number or NULL)",
+                               format_shortest(*r.value) +
+                               " is not finite (a value must be a number or NULL)",
                            path_);
       } else if (type != SQLITE_NULL) {
         throw InputError(session_label(r) + ": measure \"" + r.name + "\": value " +
@@ -1596,7 +1591,7 @@ std::vector<EventRecord> Store::read_events(long long session) const {
       const int tt = q.type(0);
       const bool t_ok = (tt == SQLITE_FLOAT || tt == SQLITE_INTEGER) && std::isfinite(q.real(0));
       return describe_session(db_, session) + ", kind " + shown_text(q.text(1), 40) +
-             (t_ok ? ", t " + num(q.real(0)) : std::string()) + ", rowid " +
+             (t_ok ? ", t " + format_shortest(q.real(0)) : std::string()) + ", rowid " +
              std::to_string(q.integer(4));
     });
     std::vector<EventRecord> out;
@@ -1645,8 +1640,9 @@ SampleSeries Store::read_samples(long long session) const {
         const double expected = out.t0 + static_cast<double>(out.size()) * out.dt;
         if (dt != out.dt || !(std::abs(t0 - expected) <= 0.5 * dt))
           throw InputError(where(second) + ": the samples are not contiguous (this row starts at " +
-                               num(t0) + " s with step " + num(dt) + " s; the rows before end at " +
-                               num(expected) + " s with step " + num(out.dt) +
+                               format_shortest(t0) + " s with step " + format_shortest(dt) +
+                               " s; the rows before end at " + format_shortest(expected) +
+                               " s with step " + format_shortest(out.dt) +
                                " s): a row is missing or edited; the database is damaged",
                            path_);
       }
@@ -1774,8 +1770,8 @@ ExportSummary export_csv(const Store& store, const std::string& dir, bool sample
     o << "participant,group,phase,session,measure,value,unit\n";
     for (const auto& r : measures)
       o << csv(r.participant) << ',' << csv(r.group) << ',' << csv(r.phase) << ','
-        << (r.phase_index + 1) << ',' << csv(r.name) << ',' << (r.value ? num(*r.value) : "") << ','
-        << csv(r.unit) << '\n';
+        << (r.phase_index + 1) << ',' << csv(r.name) << ','
+        << (r.value ? format_shortest(*r.value) : "") << ',' << csv(r.unit) << '\n';
     o.flush();
     files.check(o);
   }
@@ -1791,10 +1787,10 @@ ExportSummary export_csv(const Store& store, const std::string& dir, bool sample
     for (const auto& s : sessions)
       o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
         << (s.phase_index + 1) << ',' << (s.ordinal + 1) << ',' << csv(s.prototype) << ','
-        << csv(s.instructor) << ',' << num(s.study_offset) << ',' << s.day << ',' << num(s.duration)
-        << ',' << s.steps << ',' << num(s.wall_duration) << ',' << num(s.loop_median) << ','
-        << num(s.loop_p99) << ',' << s.seed << ',' << csv(s.completed_at) << ',' << s.session
-        << '\n';
+        << csv(s.instructor) << ',' << format_shortest(s.study_offset) << ',' << s.day << ','
+        << format_shortest(s.duration) << ',' << s.steps << ',' << format_shortest(s.wall_duration)
+        << ',' << format_shortest(s.loop_median) << ',' << format_shortest(s.loop_p99) << ','
+        << s.seed << ',' << csv(s.completed_at) << ',' << s.session << '\n';
     o.flush();
     files.check(o);
   }
@@ -1804,8 +1800,8 @@ ExportSummary export_csv(const Store& store, const std::string& dir, bool sample
     for (const auto& s : sessions)
       for (const auto& e : store.read_events(s.session))
         o << csv(s.participant) << ',' << csv(group_of[s.participant]) << ',' << csv(s.phase) << ','
-          << (s.phase_index + 1) << ',' << num(e.t) << ',' << csv(e.kind) << ',' << num(e.value)
-          << ',' << csv(e.region) << '\n';
+          << (s.phase_index + 1) << ',' << format_shortest(e.t) << ',' << csv(e.kind) << ','
+          << format_shortest(e.value) << ',' << csv(e.region) << '\n';
     o.flush();
     files.check(o);
   }

@@ -1,9 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <set>
 
 #include "common/escape.hpp"
+#include "common/format.hpp"
 #include "common/input_error.hpp"
 #include "common/seed.hpp"
 
@@ -73,4 +76,27 @@ TEST(InputError, ManyProblemsArePrintedUpToAHundredWithTheCount) {
   EXPECT_EQ(w.find("bad 100"), std::string::npos);
   EXPECT_NE(w.find("... and 50 more problems (the first 100 are shown)"), std::string::npos) << w;
   EXPECT_EQ(std::count(w.begin(), w.end(), '\n'), 100);
+}
+
+// The one formatter of values quoted back (calibrate, validate, the store's checks, stats): the
+// shortest text that reads back exactly; the fixed form within a tolerance for computed values.
+TEST(Format, ShortestTextReadsBackExactly) {
+  EXPECT_EQ(format_shortest(0.1), "0.1");
+  EXPECT_EQ(format_shortest(0.1 + 0.2), "0.30000000000000004");
+  EXPECT_EQ(format_shortest(15.633), "15.633");
+  EXPECT_EQ(format_shortest(-2.5), "-2.5");
+  EXPECT_EQ(format_shortest(1e300), "1e+300");
+  EXPECT_EQ(format_shortest(std::numeric_limits<double>::infinity()), "inf");
+  EXPECT_EQ(format_shortest(std::nan("")), "nan");
+  for (double x : {0.1, 1.0 / 3.0, 2.5000000001, 6.02214076e23, 5e-324, -1.7976931348623157e308})
+    EXPECT_EQ(std::strtod(format_shortest(x).c_str(), nullptr), x) << x;
+  EXPECT_EQ(shortest_digits(0.1), 1);
+  EXPECT_EQ(shortest_digits(1.0 / 3.0), 16);
+  EXPECT_EQ(shortest_digits(0.1 + 0.2), 17);
+  EXPECT_EQ(shortest_digits(0.0), 1);
+  // 21 steps of 0.5 ms carry round-off: shown as the 0.0105 s meant, not 0.010500000000000001.
+  EXPECT_EQ(format_fixed_within(21 * 0.0005), "0.0105");
+  EXPECT_EQ(format_fixed_within(60.0), "60");
+  EXPECT_EQ(format_fixed_within(2.0 / 3.0, 1e-4), "0.6667");
+  EXPECT_EQ(format_fixed_within(-1e300).size(), 302u);  // sign and 301 digits, not cut
 }
