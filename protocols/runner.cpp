@@ -955,7 +955,22 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       throw InputError(
           "prototype \"" + spec.prototype + "\" has no region \"" + study.task.feature + "\"",
           spec.prototype_file);
-    std::unique_ptr<engine::Device> dev = opt.make_device();
+    std::unique_ptr<engine::Device> dev;
+    try {
+      dev = opt.make_device();
+    } catch (const InputError& e) {
+      // A device that fails its self-test before a later session: the sessions this command
+      // completed are stored; say so with the error (it ended without its summary).
+      if (sum.sessions_run == 0) throw;
+      std::vector<Problem> ps = e.problems();
+      int left = 0;
+      for (const auto& sp : pp->sessions) left += !complete.count(sp.ordinal);
+      ps.back().what += "; before it this command completed and stored " +
+                        std::to_string(sum.sessions_run) + " session(s) of " + pp->id + ", " +
+                        std::to_string(left) +
+                        " remain (run the command again when the device works)";
+      throw InputError(std::move(ps));
+    }
     engine::TraceRecorder recorder(*dev);
     engine::Device& raw = opt.record_trace_dir.empty() ? static_cast<engine::Device&>(*dev)
                                                        : static_cast<engine::Device&>(recorder);

@@ -11,10 +11,12 @@
 #include <map>
 
 #include "engine/haptics/clock.hpp"
+#include "engine/haptics/devices/trace_device.hpp"
 #include "protocols/plan.hpp"
 #include "protocols/runner.hpp"
 #include "protocols/study.hpp"
 #include "prototypes/factory.hpp"
+#include "results/store.hpp"
 
 using namespace palplab;
 using namespace palplab::protocols;
@@ -154,5 +156,53 @@ TEST(RunnerLoop, ProgressEtaIsEachPrototypesMeasuredCost) {
   EXPECT_EQ(seen[4].eta, 0.0);
   EXPECT_EQ(seen[5].eta_untimed, "");
   EXPECT_EQ(seen[5].eta, 0.0);
+  std::filesystem::remove_all(dir);
+}
+
+// A person's device that fails its start-up check before a later session (`run --human`; a UDP
+// bridge below the required rate): the command ended with the device error alone, no word of
+// the session it had completed and stored (review 2026-12-07). The error now says it.
+TEST(RunnerLoop, ADeviceFailingBeforeALaterSessionSaysWhatWasStored) {
+  const Study study = reference("exp2_short_term.json");
+  Plan plan;
+  plan.participants = {first_of(study, "A", 3, 0.2)};
+  for (auto& s : plan.participants[0].sessions) s.day = 0;  // all due today
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("palplab_test_dev2_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  HumanOptions opt;
+  opt.db = (dir / "h.db").string();
+  opt.participant = plan.participants[0].id;
+  opt.device_text = "udp:5000";
+  int made = 0;
+  opt.make_device = [&]() -> std::unique_ptr<engine::Device> {
+    if (made++ == 1)
+      throw InputError(SourceLocation{"--device"}, "udp:5000: 0 Hz, below the required 900 Hz");
+    engine::Trace tr;
+    for (int k = 0; k < 200; ++k) tr.samples.push_back({k * 0.001, engine::DeviceInput{}});
+    return std::make_unique<engine::TraceDevice>(tr);
+  };
+  try {
+    run_human(study, plan, opt);
+    FAIL() << "the device error was not raised";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--device: udp:5000: 0 Hz, below the required 900 Hz; before it this command "
+              "completed and stored 1 session(s) of " +
+                  opt.participant + ", 2 remain (run the command again when the device works)");
+  }
+  const auto stored = results::Store::open(opt.db).read_sessions();
+  ASSERT_EQ(stored.size(), 1u);
+  EXPECT_EQ(stored[0].status, "complete");
+  // A device that fails before the first session: the error alone, as before.
+  made = 1;
+  std::filesystem::remove(opt.db);
+  try {
+    run_human(study, plan, opt);
+    FAIL() << "the device error was not raised";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "--device: udp:5000: 0 Hz, below the required 900 Hz");
+  }
   std::filesystem::remove_all(dir);
 }
