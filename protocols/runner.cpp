@@ -1059,7 +1059,8 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       for (auto& e : dev->take_events()) ev.push_back({e.t, e.kind, e.value, ""});
       if (chunk.size() == 0 && ev.empty()) return;
       store.append_session_data(rec.session, ev, keep_samples ? chunk : results::SampleSeries{},
-                                second);
+                                second, static_cast<long long>(all.size() + chunk.size()),
+                                chunk.dt);
       all.x.insert(all.x.end(), chunk.x.begin(), chunk.x.end());
       all.F.insert(all.F.end(), chunk.F.begin(), chunk.F.end());
       all.node.insert(all.node.end(), chunk.node.begin(), chunk.node.end());

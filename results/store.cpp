@@ -1451,7 +1451,8 @@ void Store::begin_session(SessionRecord& r) {
 }
 
 void Store::append_session_data(long long id, const std::vector<EventRecord>& events,
-                                const SampleSeries& ss, long long first_second) {
+                                const SampleSeries& ss, long long first_second, long long steps,
+                                double dt) {
   std::lock_guard lock(*mu_);
   exec(db_, "BEGIN IMMEDIATE");
   try {
@@ -1471,6 +1472,11 @@ void Store::append_session_data(long long id, const std::vector<EventRecord>& ev
         b.bind(5, static_cast<long long>(end - i)).bind_blob(6, encode_samples(ss, i, end)).run();
       }
     }
+    Stmt(db_, "UPDATE sessions SET steps = ?1, duration = ?2 WHERE session = ?3")
+        .bind(1, steps)
+        .bind(2, static_cast<double>(steps) * dt)
+        .bind(3, id)
+        .run();
     exec(db_, "COMMIT");
   } catch (...) {
     roll_back_and_rethrow(db_, path_);

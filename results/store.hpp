@@ -176,12 +176,15 @@ class Store {
 
   // Human sessions, written as they go (docs/FORMATS.md): begin_session inserts the row with
   // status "running" (sets r.session); append_session_data stores events and whole seconds of
-  // samples (chunk.t0 on a second boundary: its first row is second `first_second`);
+  // samples (chunk.t0 on a second boundary: its first row is second `first_second`) and sets
+  // the row's steps and duration to the `steps` logged so far, each step `dt` long (a session
+  // ended by kill -9 keeps steps that match its samples);
   // finish_session updates the row from d.session (status "complete" or "aborted", durations,
   // loop timing, completed_at) and writes d.measures. Each call is one transaction.
   void begin_session(SessionRecord& r);
   void append_session_data(long long session, const std::vector<EventRecord>& events,
-                           const SampleSeries& chunk, long long first_second);
+                           const SampleSeries& chunk, long long first_second, long long steps,
+                           double dt);
   void finish_session(const SessionData& d);
   // Marks `participant`'s sessions left "running" by a process that ended (kill -9, power loss)
   // as aborted; returns how many.

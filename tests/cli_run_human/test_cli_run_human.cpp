@@ -249,6 +249,39 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
   EXPECT_EQ(rows[1]["status"], "complete");
 }
 
+// A human session ended by kill -9 kept its samples, but its row said 0 steps and 0 s (set only
+// at the session's end: review 2026-12-07). The row follows the data written each second.
+TEST(CliRunHuman, ASessionKilledMidwayKeepsStepsThatMatchItsSamples) {
+  Tmp tmp;
+  const fs::path db = tmp.dir / "h.db";
+  const std::string trace = (tmp.dir / "t.trace").string();
+  {
+    e::Trace tr;
+    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+    e::write_trace(trace, tr);
+  }
+  auto r = run(palplab::testing::human_run(kDir + "human_study.json", db, "trace:" + trace, "",
+                                           "2026-11-24T10:00:00Z", "timeout -s KILL 1.7 "));
+  if (r.code == 0) GTEST_SKIP() << "the 2 s session ended before the kill";
+  if (!fs::exists(db)) GTEST_SKIP() << "killed before the database was made";
+  const auto rows =
+      db_rows(db,
+              "SELECT s.status, s.steps, s.duration, (SELECT COALESCE(SUM(n), 0) FROM "
+              "samples WHERE session = s.session) AS logged FROM sessions s");
+  if (rows.empty() || rows[0].at("logged") == "0") GTEST_SKIP() << "killed before a second";
+  EXPECT_EQ(rows[0].at("status"), "running");
+  EXPECT_EQ(rows[0].at("steps"), rows[0].at("logged"));
+  EXPECT_DOUBLE_EQ(std::stod(rows[0].at("duration")), std::stod(rows[0].at("logged")) * 0.001);
+  // The next run marks it aborted and keeps the counts.
+  auto r2 = run(human(db, "trace:" + trace, "2026-11-24T11:00:00Z"));
+  EXPECT_EQ(r2.code, 0) << r2.out;
+  const auto after = db_rows(db, "SELECT status, steps FROM sessions ORDER BY session");
+  ASSERT_EQ(after.size(), 2u);
+  EXPECT_EQ(after[0].at("status"), "aborted");
+  EXPECT_EQ(after[0].at("steps"), rows[0].at("logged"));
+  EXPECT_EQ(after[1].at("steps"), "2000");
+}
+
 // `run --human` created (or opened) the results database before it read the trace of
 // `--device trace:FILE` (and before it bound a UDP device or checked --record-trace), so a bad
 // device left a fresh database behind its exit 2. Every argument is checked first now: no
