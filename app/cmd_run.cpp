@@ -69,6 +69,7 @@ struct HumanArgs {
   bool human = false;
   std::string participant, device = "mouse", record_trace, mouse_script, size = "1280x800";
   double min_rate = 900.0, device_lost = 2.0;
+  bool no_wait = false;
 };
 
 // The mouse device of one session in the window: owns the MouseDevice the window drives and the
@@ -288,6 +289,7 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   o.record_trace_dir = h.record_trace;
   o.device_lost = h.device_lost;
   o.stop = &g_interrupted;
+  o.no_wait = h.no_wait;
   if (const char* now = std::getenv("PALPLAB_NOW")) {
     // Tests and dry runs of a long-term schedule: "today" as a Unix time or ISO 8601 UTC.
     std::tm tm{};
@@ -399,6 +401,10 @@ palplab::app::CommandRegistration reg_run{
                           "Abort the session after this long without device samples (s; "
                           "default 2)")
               ->check(palplab::app::finite_range(0, 3600, true)));
+      human_only.push_back(cmd->add_flag(
+          "--no-wait", human->no_wait,
+          "Start each due session at once, without the study's planned break after the one "
+          "before it (with --human)"));
       cmd->add_option("--record-trace", human->record_trace,
                       "Write each session's device track to DIR (trace files)");
       // Virtual runs only: with --human they would be silently ignored.

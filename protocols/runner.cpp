@@ -907,6 +907,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
 
   std::map<int, int> attempts;  // ordinal -> attempts so far
   std::set<int> complete;
+  std::map<int, std::int64_t> ended;  // ordinal -> when its complete attempt ended (Unix s)
   std::int64_t first_start = -1;
   for (const auto& r : store.read_attempts(pp->id)) {
     if (r.trainee != "human")
@@ -915,7 +916,10 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
                            "human or virtual",
                        opt.db);
     attempts[r.ordinal] = std::max(attempts[r.ordinal], r.attempt + 1);
-    if (r.status == "complete") complete.insert(r.ordinal);
+    if (r.status == "complete") {
+      complete.insert(r.ordinal);
+      if (const std::int64_t e = parse_utc(r.completed_at); e >= 0) ended[r.ordinal] = e;
+    }
     const std::int64_t t = parse_utc(r.started_at);
     if (t >= 0 && (first_start < 0 || t < first_start)) first_start = t;
   }
@@ -941,6 +945,29 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
           "prototype file or its mesh.file changed since the study's database was created "
           "(SHA-256 differs); restore it or start a new database",
           spec.prototype_file);
+    // The study's break before this session, counted from the end of the one before it when
+    // both are planned on one day (they ran back to back before: review 2026-12-07).
+    if (&spec != &pp->sessions.front()) {
+      const SessionSpec& prev = *(&spec - 1);
+      const double planned = spec.offset - (prev.offset + prev.duration);
+      const auto it = ended.find(prev.ordinal);
+      if (prev.day == spec.day && planned > 0 && it != ended.end()) {
+        // Stored times are whole seconds (the end was within the second after `ended`).
+        const std::int64_t from = it->second + 1 + static_cast<std::int64_t>(std::ceil(planned));
+        if (now() < from && opt.no_wait) {
+          say("note: " + spec.phase_id + " #" + std::to_string(spec.index + 1) +
+              " starts without the study's break of " + seconds_text(planned) +
+              " s after the previous session (--no-wait)");
+        } else if (now() < from) {
+          say("break: " + spec.phase_id + " #" + std::to_string(spec.index + 1) + " is planned " +
+              seconds_text(planned) + " s after the previous session ended; it starts at " +
+              utc_iso(from) + " (waiting; Ctrl-C stops, and the command run again continues)");
+          while (now() < from && !(opt.stop && opt.stop->load()))
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+          if (opt.stop && opt.stop->load()) break;
+        }
+      }
+    }
     say("instructions: " + session_instructions(study, spec));
     if (opt.before_session && !opt.before_session(spec)) break;
     engine::Scene scene = session_scene(study, spec);
@@ -987,7 +1014,10 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     rec.phase_index = spec.index;
     rec.prototype = spec.prototype;
     rec.instructor = spec.instructor;
-    rec.study_offset = spec.offset;
+    // When it started, after the participant's first session started (the plan's offset is
+    // what a virtual participant keeps; a person keeps the real time).
+    if (first_start < 0) first_start = now();
+    rec.study_offset = static_cast<double>(now() - first_start);
     rec.day = spec.day;
     rec.seed = spec.seed;
     rec.state_after = "{\"trainee\":\"human\"}";
@@ -1132,6 +1162,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     }
     ++sum.sessions_run;
     complete.insert(spec.ordinal);
+    ended[spec.ordinal] = now();
   }
   for (const auto& spec : pp->sessions)
     if (!complete.count(spec.ordinal)) {

@@ -94,7 +94,11 @@ std::vector<results::SessionData> simulate_participant(const Study& study,
 // run); sessions of earlier days still pending run first; when nothing is due, InputError with
 // the date of the next one. Every session is written as it goes (results::Store::begin_session
 // ...): samples and events every second; stop / device lost / device finished early mark it
-// aborted (kept, flagged) and the next run repeats it as a new attempt.
+// aborted (kept, flagged) and the next run repeats it as a new attempt. A session planned on the
+// same day as the one before it starts no earlier than that one's end plus the study's break
+// between them (exp2: 10 min between training sessions); the command waits, saying until when
+// (`no_wait`: at once). Each session's study_offset is when it started, s after the
+// participant's first session started (the plan's offset for virtual participants).
 struct HumanOptions {
   std::string db;  // created when missing (the same study file otherwise, SHA-256 checked)
   std::string participant;
@@ -102,6 +106,7 @@ struct HumanOptions {
   // A fresh device per session (a trace replays from its start; a UDP socket is re-bound).
   std::function<std::unique_ptr<engine::Device>()> make_device;
   const std::atomic<bool>* stop = nullptr;  // Ctrl-C / window closed: abort the session
+  bool no_wait = false;  // start each due session at once, without the study's planned break
   std::string stop_reason = "interrupted (Ctrl-C)";
   double device_lost = 2.0;  // s without a fresh hardware sample: the session is aborted
   bool samples = true;

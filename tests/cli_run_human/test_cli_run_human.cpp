@@ -249,6 +249,61 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
   EXPECT_EQ(rows[1]["status"], "complete");
 }
 
+// Sessions planned on one day with a break between them (exp2: 10 min between training
+// sessions) ran back to back with a person, and stored the plan's study_offset (review
+// 2026-12-07). The command now waits out the break after the previous session's end, saying
+// until when, and stores when each session started; --no-wait starts at once and says so.
+TEST(CliRunHuman, SessionsOfOneDayKeepTheStudysBreakBetweenThem) {
+  Tmp tmp;
+  const fs::path study = tmp.dir / "breaks.json";
+  std::ofstream(study) << R"({"palplab_study": 1, "id": "breaks", "title": "breaks", "seed": 7,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "A", "prototype": "A", "size": 1}],
+  "phases": [{"id": "training", "kind": "training", "sessions": 2, "session_duration": 1,
+              "gap": {"seconds": 3}}]})";
+  const std::string trace = (tmp.dir / "t.trace").string();
+  {
+    e::Trace tr;
+    for (int k = 0; k < 1000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+    e::write_trace(trace, tr);
+  }
+  for (const bool wait : {true, false}) {
+    SCOPED_TRACE(wait ? "waiting" : "--no-wait");
+    const fs::path db = tmp.dir / (wait ? "w.db" : "n.db");
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = run(palplab::testing::human_run(study.string(), db, "trace:" + trace,
+                                             wait ? "" : "--no-wait", "2026-11-24T10:00:00Z"));
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto rows = db_rows(db,
+                              "SELECT started_at, completed_at, study_offset FROM sessions "
+                              "ORDER BY ordinal");
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_EQ(std::stod(rows[0].at("study_offset")), 0.0);
+    const auto secs = [](const std::string& iso) {  // "2026-11-24T10:00:SSZ"
+      return std::stoi(iso.substr(14, 2)) * 60 + std::stoi(iso.substr(17, 2));
+    };
+    const int second_start = secs(rows[1].at("started_at"));
+    EXPECT_EQ(std::stod(rows[1].at("study_offset")), second_start - secs(rows[0].at("started_at")));
+    if (wait) {
+      EXPECT_NE(r.out.find("break: training #2 is planned 3 s after the previous session ended; "
+                           "it starts at 2026-11-24T10:00:"),
+                std::string::npos)
+          << r.out;
+      EXPECT_GE(second_start - secs(rows[0].at("completed_at")), 3);
+      EXPECT_GE(wall, 5.0);  // two sessions of 1 s and the break
+    } else {
+      EXPECT_EQ(r.out.find("break:"), std::string::npos) << r.out;
+      EXPECT_NE(r.out.find("training #2 starts without the study's break of 3 s after the "
+                           "previous session (--no-wait)"),
+                std::string::npos)
+          << r.out;
+      EXPECT_LT(second_start - secs(rows[0].at("completed_at")), 3);
+    }
+  }
+}
+
 // A human session ended by kill -9 kept its samples, but its row said 0 steps and 0 s (set only
 // at the session's end: review 2026-12-07). The row follows the data written each second.
 TEST(CliRunHuman, ASessionKilledMidwayKeepsStepsThatMatchItsSamples) {

@@ -175,6 +175,7 @@ TEST(RunnerLoop, ADeviceFailingBeforeALaterSessionSaysWhatWasStored) {
   opt.db = (dir / "h.db").string();
   opt.participant = plan.participants[0].id;
   opt.device_text = "udp:5000";
+  opt.no_wait = true;  // exp2's 10 min breaks
   int made = 0;
   opt.make_device = [&]() -> std::unique_ptr<engine::Device> {
     if (made++ == 1)
