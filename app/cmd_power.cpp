@@ -13,10 +13,12 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -36,17 +38,18 @@
 namespace {
 
 // --n: comma-separated group sizes (the option may also be repeated). An empty entry ("6,,8"),
-// a non-integer, a size outside [2, 100000] or a size given twice is an input error.
+// a non-integer, a leading zero ("03", refused as every count of palplab refuses it:
+// app/command.hpp count_range, --replicates, --jobs, --shard), a size outside [2, 100000] or a
+// size given twice is an input error.
 std::vector<int> parse_sizes(const std::vector<std::string>& args) {
   std::vector<int> out;
   std::string all;  // every --n argument, for the message of a size given twice across them
   for (const std::string& arg : args) all += (all.empty() ? "" : " ") + arg;
   for (const std::string& arg : args) {
-    const auto fail = [&](const std::string& what) {
+    const auto fail = [&](const std::string& what, const std::string& digits = "") {
       return palplab::InputError(palplab::SourceLocation{"--n"},
-                                 what + " in \"" + arg +
-                                     "\" (expected group sizes 2 to 100000, separated by commas, "
-                                     "each once)");
+                                 what + " in \"" + arg + "\" (expected group sizes 2 to 100000" +
+                                     digits + ", separated by commas, each once)");
     };
     for (std::size_t i = 0;;) {
       const std::size_t j = std::min(arg.find(',', i), arg.size());
@@ -56,6 +59,9 @@ std::vector<int> parse_sizes(const std::vector<std::string>& args) {
       const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
       if (ec != std::errc() || end != item.data() + item.size() || v < 2 || v > 100000)
         throw fail("\"" + item + "\" is not a group size");
+      if (palplab::protocols::has_leading_zero(item))
+        throw fail("\"" + item + "\" has a leading zero",
+                   " in decimal digits without leading zeros");
       if (std::find(out.begin(), out.end(), v) != out.end())
         throw palplab::InputError(palplab::SourceLocation{"--n"},
                                   "the size " + item + " is given twice in \"" + all +
@@ -229,86 +235,132 @@ palplab::app::CommandRegistration reg_power{
       cmd->add_flag("--quiet", a->quiet, "No progress output");
       cmd->callback([a, shard_opt, human_opt, code] {
         using namespace palplab::protocols;
-        // Given at all, even empty (a job array's unset variable): never the whole run instead.
-        if (shard_opt->count() > 0) {
-          // Strictly: digits only, no wrap-around (sscanf's %d took 1/4294967297 for 1/1).
-          const auto ik = parse_shard(a->shard, "/");
-          if (!ik)
-            throw palplab::InputError("--shard: expected I/K, whole numbers with 1 <= I <= K <= " +
-                                      std::to_string(kMaxShards) + ", got \"" + a->shard + "\"");
-          const auto [i, k] = *ik;
-          a->opt.shard = i - 1;
-          a->opt.shards = k;
-        }
-        a->opt.n = parse_sizes(a->n);
-        a->opt.out_dir = a->out;
-        Study s = load_study(a->study, engine_prototype_inspector());
-        // The tests whose power is simulated (protocols/power.cpp run_declared_analyses).
-        if (std::none_of(s.analyses.begin(), s.analyses.end(), [](const Analysis& x) {
-              return x.kind == "anova_oneway" || x.kind == "pairwise_t";
-            }))
-          throw palplab::InputError(
-              palplab::SourceLocation{a->study, 0, 0, -1, "$.analyses"},
-              "the study declares no test to compute the power of: expected at least one "
-              "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
-        // A one-group study with such a test is refused by the study validator (load_study).
-        // Every size resizes before --out is touched: an explicit assignment, or a plan beyond
-        // the validator's limit, is refused here, not after the directory was made.
-        for (const int n : power_sizes(s, a->opt)) (void)resized_study(s, n, s.seed);
-        // People's verdicts before any simulation: bad data are found at once.
-        std::optional<PeopleVerdicts> people;
-        if (human_opt->count() > 0) {
-          if (a->opt.shards > 1)
-            throw palplab::InputError(
-                "--human: a shard writes no summary to compare with people's verdicts; run "
-                "`palplab power` without --shard (its --out holding every replicate) for that");
-          if (a->human.empty())
-            throw palplab::InputError(palplab::SourceLocation{"--human"},
-                                      "expected the people's CSV file, got an empty path");
-          people =
-              people_verdicts(s, read_human_cells(a->human), a->opt.alpha, power_sizes(s, a->opt));
-          for (const auto& w : people_warnings(*people))
-            std::cerr << "warning: --human: " << w << "\n";
-        }
-        check_power_out(*a, s);
-        palplab::app::require_writable_dir("--out", a->out);
-        if (a->opt.shards <= 1) palplab::app::require_writable_power_summary("--out", a->out);
-        const bool tty = isatty(2);
-        if (!a->quiet)
-          a->opt.progress = [tty](long done, long total, double elapsed) {
-            const double eta = done > 0 ? elapsed / done * (total - done) : NAN;
-            std::fprintf(
-                stderr, "%sreplicates %ld/%ld, %.0f s elapsed, ETA %s%s", tty ? "\r" : "", done,
-                total, elapsed,
-                std::isfinite(eta) ? (std::to_string(std::lround(eta)) + " s").c_str() : "?",
-                tty && done < total ? "   " : "\n");
-            std::fflush(stderr);
-          };
-        const long ran = run_power(s, a->opt);
-        if (ran < 0) {  // an MPI rank other than 0
+        // Under MPI every rank runs this command and checks the same inputs: rank 0 alone says
+        // what is wrong (every rank printed it; review 2026-12-07), the others exit with its
+        // exit code (settle_ranks; run_power settles its own checks and rounds alike).
+        const bool root = power_rank() == 0;
+        try {
+          std::optional<Study> study;
+          std::optional<PeopleVerdicts> people;
+          std::exception_ptr error;
+          try {
+            // Given at all, even empty (a job array's unset variable): never the whole run instead.
+            if (shard_opt->count() > 0) {
+              // Strictly: digits only, no wrap-around (sscanf's %d took 1/4294967297 for 1/1).
+              const auto ik = parse_shard(a->shard, "/");
+              if (!ik) {
+                // "01/2" is refused as count_range refuses "--replicates 01" (review 2026-12-07:
+                // --shard and --n took a leading zero, --replicates did not), and said so.
+                const auto slash = a->shard.find('/');
+                const bool zero =
+                    slash != std::string::npos && (has_leading_zero(a->shard.substr(0, slash)) ||
+                                                   has_leading_zero(a->shard.substr(slash + 1)));
+                throw palplab::InputError(
+                    "--shard: expected I/K, whole numbers with 1 <= I <= K <= " +
+                    std::to_string(kMaxShards) + ", got \"" + a->shard + "\"" +
+                    (zero ? " (decimal digits without leading zeros)" : ""));
+              }
+              const auto [i, k] = *ik;
+              a->opt.shard = i - 1;
+              a->opt.shards = k;
+            }
+            a->opt.n = parse_sizes(a->n);
+            a->opt.out_dir = a->out;
+            study = load_study(a->study, engine_prototype_inspector());
+            const Study& s = *study;
+            // The tests whose power is simulated (protocols/power.cpp run_declared_analyses).
+            if (std::none_of(s.analyses.begin(), s.analyses.end(), [](const Analysis& x) {
+                  return x.kind == "anova_oneway" || x.kind == "pairwise_t";
+                }))
+              throw palplab::InputError(
+                  palplab::SourceLocation{a->study, 0, 0, -1, "$.analyses"},
+                  "the study declares no test to compute the power of: expected at least one "
+                  "analysis of kind \"anova_oneway\" or \"pairwise_t\"");
+            // A one-group study with such a test is refused by the study validator (load_study).
+            // Every size resizes before --out is touched: an explicit assignment, or a plan beyond
+            // the validator's limit, is refused here, not after the directory was made.
+            for (const int n : power_sizes(s, a->opt)) (void)resized_study(s, n, s.seed);
+            // People's verdicts before any simulation: bad data are found at once.
+            if (human_opt->count() > 0) {
+              if (a->opt.shards > 1)
+                throw palplab::InputError(
+                    "--human: a shard writes no summary to compare with people's verdicts; run "
+                    "`palplab power` without --shard (its --out holding every replicate) for that");
+              if (a->human.empty())
+                throw palplab::InputError(palplab::SourceLocation{"--human"},
+                                          "expected the people's CSV file, got an empty path");
+              people = people_verdicts(s, read_human_cells(a->human), a->opt.alpha,
+                                       power_sizes(s, a->opt));
+              if (root)
+                for (const auto& w : people_warnings(*people))
+                  std::cerr << "warning: --human: " << w << "\n";
+            }
+            check_power_out(*a, s);
+            palplab::app::require_writable_dir("--out", a->out);
+            if (a->opt.shards <= 1) palplab::app::require_writable_power_summary("--out", a->out);
+          } catch (...) {
+            error = std::current_exception();
+          }
+          settle_ranks(error);
+          const Study& s = *study;
+          const bool tty = isatty(2);
+          if (!a->quiet)
+            a->opt.progress = [tty](long done, long total, double elapsed) {
+              const double eta = done > 0 ? elapsed / done * (total - done) : NAN;
+              std::fprintf(
+                  stderr, "%sreplicates %ld/%ld, %.0f s elapsed, ETA %s%s", tty ? "\r" : "", done,
+                  total, elapsed,
+                  std::isfinite(eta) ? (std::to_string(std::lround(eta)) + " s").c_str() : "?",
+                  tty && done < total ? "   " : "\n");
+              std::fflush(stderr);
+            };
+          const long ran = run_power(s, a->opt);
+          if (ran < 0) {  // an MPI rank other than 0
+            *code = 0;
+            return;
+          }
+          if (a->opt.shards > 1) {
+            std::cout << "shard " << a->opt.shard + 1 << "/" << a->opt.shards << ": " << ran
+                      << (ran == 1 ? " replicate" : " replicates") << " run into " << a->out
+                      << "; combine the shards with `palplab merge`\n";
+            *code = 0;
+            return;
+          }
+          // Exactly the sizes and replicates asked for: a resume with a smaller --replicates (or
+          // other --n) than the directory holds leaves the others in the file, unused.
+          const std::string file = (std::filesystem::path(a->out) / "replicates.jsonl").string();
+          LeftOut left_out;
+          auto summary = power_summary({file}, a->opt.alpha, a->opt.target_power,
+                                       SummaryScope{power_sizes(s, a->opt), a->opt.replicates},
+                                       &left_out, people ? &*people : nullptr);
+          std::cout << write_power_report(summary, a->out);
+          if (left_out.total() > 0)
+            std::cout << "\n" << left_out_note(left_out, file, a->opt.replicates) << "\n";
+          std::cout << "\nwrote " << a->out << "/power.json, power.md, power.svg (" << ran
+                    << (ran == 1 ? " replicate" : " replicates") << " run now)\n";
           *code = 0;
-          return;
+        } catch (const FailedOnAnotherRank& e) {  // said by rank 0
+          end_ranks();
+          *code = e.code;
+        } catch (const palplab::InputError& e) {
+          if (!power_under_mpi()) throw;
+          // Said here, as app/main.cpp says it, before the other ranks may end (end_ranks waits
+          // for this one): mpirun kills the ranks still running once one has exited non-zero.
+          std::cerr << "error: " << e.what() << "\n" << std::flush;
+          end_ranks();
+          *code = 2;
+        } catch (const std::bad_alloc&) {
+          end_ranks();
+          throw;
+        } catch (const std::exception& e) {
+          if (!power_under_mpi()) throw;
+          std::cerr << "internal error: " << e.what() << "\n" << std::flush;
+          end_ranks();
+          *code = 3;
+        } catch (...) {
+          end_ranks();
+          throw;
         }
-        if (a->opt.shards > 1) {
-          std::cout << "shard " << a->opt.shard + 1 << "/" << a->opt.shards << ": " << ran
-                    << (ran == 1 ? " replicate" : " replicates") << " run into " << a->out
-                    << "; combine the shards with `palplab merge`\n";
-          *code = 0;
-          return;
-        }
-        // Exactly the sizes and replicates asked for: a resume with a smaller --replicates (or
-        // other --n) than the directory holds leaves the others in the file, unused.
-        const std::string file = (std::filesystem::path(a->out) / "replicates.jsonl").string();
-        LeftOut left_out;
-        auto summary = power_summary({file}, a->opt.alpha, a->opt.target_power,
-                                     SummaryScope{power_sizes(s, a->opt), a->opt.replicates},
-                                     &left_out, people ? &*people : nullptr);
-        std::cout << write_power_report(summary, a->out);
-        if (left_out.total() > 0)
-          std::cout << "\n" << left_out_note(left_out, file, a->opt.replicates) << "\n";
-        std::cout << "\nwrote " << a->out << "/power.json, power.md, power.svg (" << ran
-                  << (ran == 1 ? " replicate" : " replicates") << " run now)\n";
-        *code = 0;
       });
     }};
 }  // namespace

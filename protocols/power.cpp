@@ -18,9 +18,11 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #ifdef PALPLAB_MPI
@@ -84,18 +86,22 @@ bool launched_by_mpirun() {
 }
 #endif
 
-Ranks init_ranks() {
-  Ranks r;
+// Once per process: the command starts MPI before its checks (power_rank), run_power asks again.
+const Ranks& init_ranks() {
+  static const Ranks ranks = [] {
+    Ranks r;
 #ifdef PALPLAB_MPI
-  if (!launched_by_mpirun()) return r;
-  int inited = 0;
-  MPI_Initialized(&inited);
-  if (!inited) MPI_Init(nullptr, nullptr);
-  MPI_Comm_rank(MPI_COMM_WORLD, &r.rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &r.size);
-  r.mpi = true;
+    if (!launched_by_mpirun()) return r;
+    int inited = 0;
+    MPI_Initialized(&inited);
+    if (!inited) MPI_Init(nullptr, nullptr);
+    MPI_Comm_rank(MPI_COMM_WORLD, &r.rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &r.size);
+    r.mpi = true;
 #endif
-  return r;
+    return r;
+  }();
+  return ranks;
 }
 
 // Concatenated lines of every rank, on rank 0 (others get "").
@@ -130,6 +136,56 @@ long max_over_ranks(const Ranks& r, long v) {
 #endif
   (void)r;
   return v;
+}
+
+// The exit code app/main.cpp gives what `error` holds (2 bad input, 1 out of memory, 3 an internal
+// error) and its message.
+int exit_code_of(std::exception_ptr error, std::string* message) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const InputError& e) {
+    *message = e.what();
+    return 2;
+  } catch (const FailedOnAnotherRank& e) {
+    *message = e.what();
+    return e.code;
+  } catch (const std::bad_alloc&) {
+    *message = "out of memory";
+    return 1;
+  } catch (const std::exception& e) {
+    *message = e.what();
+    return 3;
+  } catch (...) {
+    *message = "an unknown error";
+    return 3;
+  }
+}
+
+// power.hpp settle_ranks: under MPI a collective, so that one rank's error is said once (by
+// rank 0) and no rank waits for ever in a collective the failed one never reaches.
+void settle(const Ranks& r, std::exception_ptr error) {
+#ifdef PALPLAB_MPI
+  if (r.mpi) {
+    std::string message;
+    const int code = error ? exit_code_of(error, &message) : 0;
+    std::vector<int> codes(r.size);
+    MPI_Allgather(&code, 1, MPI_INT, codes.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    const auto first = std::find_if(codes.begin(), codes.end(), [](int c) { return c != 0; });
+    if (first == codes.end()) return;
+    const int from = static_cast<int>(first - codes.begin()), final_code = *first;
+    // The first failed rank's message, for rank 0 when it has none of its own.
+    const std::string theirs = gather_to_root(r, r.rank == from ? message : std::string());
+    // MPI stays up until end_ranks: rank 0 says the error first (a rank that ended before
+    // rank 0 had printed it made mpirun kill rank 0 before it did).
+    if (r.rank != 0) throw FailedOnAnotherRank(final_code);
+    if (error) std::rethrow_exception(error);
+    if (final_code == 2) throw InputError(theirs);
+    if (final_code == 1) throw std::bad_alloc();
+    throw std::runtime_error(theirs);
+  }
+#endif
+  (void)r;
+  if (error) std::rethrow_exception(error);
 }
 
 std::string replicate_file(const PowerOptions& o) {
@@ -357,6 +413,33 @@ struct ReplicateLine {
   int line = 0;
 };
 
+// The offset of the first byte of `line` that belongs to no UTF-8 character, npos when there is
+// none. With `cut_ok`, a character cut short by the end of the line (a lead byte and fewer
+// continuation bytes than it announces) is not one: a record cut by an interruption.
+std::size_t first_non_utf8(const std::string& line, bool cut_ok) {
+  for (std::size_t i = 0; i < line.size();) {
+    if (static_cast<unsigned char>(line[i]) < 0x80) {
+      ++i;
+      continue;
+    }
+    std::size_t length = 1;
+    const char32_t cp = utf8_code_point(line, i, &length);
+    if (cp != 0xFFFD || length > 1) {  // (U+FFFD itself is three bytes long)
+      i += length;
+      continue;
+    }
+    const auto lead = static_cast<unsigned char>(line[i]);
+    const std::size_t wanted = lead >= 0xC2 && lead <= 0xDF   ? 1
+                               : lead >= 0xE0 && lead <= 0xEF ? 2
+                               : lead >= 0xF0 && lead <= 0xF4 ? 3
+                                                              : 0;
+    bool cut = cut_ok && wanted > 0 && line.size() - i - 1 < wanted;
+    for (std::size_t k = i + 1; cut && k < line.size(); ++k) cut = utf8_continuation(line[k]);
+    return cut ? std::string::npos : i;
+  }
+  return std::string::npos;
+}
+
 // Reads and checks every record. A last line without its newline that is not a whole record was
 // being written when the run was interrupted: `palplab power` cuts it on resume (repair_tail)
 // and simulates that replicate again, so it is an error here rather than silently dropped.
@@ -403,6 +486,17 @@ std::vector<ReplicateLine> read_replicates(const std::string& path) {
       throw InputError(SourceLocation{path, no, static_cast<int>(line.find('\0')) + 1},
                        "not a replicate file: it holds binary data (a NUL byte); expected the "
                        "replicates*.jsonl of palplab power");
+    // Nor are bytes of no UTF-8 character (binary data without a NUL, Latin-1 text): they were
+    // a JSON parse error. A character cut by an interruption ends an unterminated last line.
+    if (const std::size_t bad = first_non_utf8(line, unterminated); bad != std::string::npos) {
+      char byte[8];
+      std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned char>(line[bad]));
+      throw InputError(
+          SourceLocation{path, no, static_cast<int>(utf8_length(line.substr(0, bad))) + 1},
+          std::string("not a replicate file: it is not UTF-8 text (byte ") + byte +
+              " is no UTF-8 character: binary data, or text in another encoding); "
+              "expected the replicates*.jsonl of palplab power");
+    }
     nlohmann::json r;
     try {
       r = nlohmann::json::parse(line);
@@ -667,9 +761,9 @@ Comparison compare_with_people(const PeopleVerdicts& people, const std::vector<T
 std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep) {
   const std::size_t at = text.find(sep);
   if (at == std::string::npos) return std::nullopt;
-  // Digits only, stopping once above kMaxShards (no overflow, no wrap-around).
+  // Digits only, no leading zero, stopping once above kMaxShards (no overflow, no wrap-around).
   auto number = [](const std::string& d) -> std::optional<long> {
-    if (d.empty() || d.size() > 20) return std::nullopt;
+    if (d.empty() || d.size() > 20 || has_leading_zero(d)) return std::nullopt;
     long v = 0;
     for (const char c : d) {
       if (c < '0' || c > '9') return std::nullopt;
@@ -681,6 +775,56 @@ std::optional<std::pair<int, int>> parse_shard(const std::string& text, const st
   const auto i = number(text.substr(0, at)), k = number(text.substr(at + sep.size()));
   if (!i || !k || *i < 1 || *i > *k) return std::nullopt;
   return std::make_pair(static_cast<int>(*i), static_cast<int>(*k));
+}
+
+bool has_leading_zero(const std::string& digits) {
+  return digits.size() > 1 && digits[0] == '0';
+}
+
+ReplicateTasks::ReplicateTasks(const std::vector<int>& ns, int replicates, int shard, int shards,
+                               const std::set<std::pair<int, int>>& done, int rank, int ranks)
+    : ns_(ns),
+      done_(done),
+      replicates_(std::max(0, replicates)),
+      shard_(shard),
+      shards_(std::max(1, shards)),
+      rank_(rank),
+      ranks_(std::max(1, ranks)) {
+  // Counted, not listed: every size's indices of this shard, less those done.
+  for (size_ = 0; size_ < ns_.size(); ++size_) {
+    start_size();
+    if (r_ < replicates_) total_ += (replicates_ - 1 - r_) / shards_ + 1;
+  }
+  for (const auto& [n, r] : done_)
+    for (std::size_t i = 0; i < ns_.size(); ++i)
+      if (ns_[i] == n && r >= 0 && r < replicates_ &&
+          (static_cast<long>(i) * replicates_ + r) % shards_ == shard_)
+        --total_;
+  size_ = 0;
+  start_size();
+}
+
+// The first replicate index of size size_ in this shard: (size_ * R + r) % K == shard.
+void ReplicateTasks::start_size() {
+  const long base = static_cast<long>(size_) * replicates_ % shards_;
+  r_ = ((shard_ - base) % shards_ + shards_) % shards_;
+}
+
+bool ReplicateTasks::next(ReplicateTask& t) {
+  while (size_ < ns_.size()) {
+    if (r_ >= replicates_) {
+      ++size_;
+      start_size();
+      continue;
+    }
+    const int n = ns_[size_], r = static_cast<int>(r_);
+    r_ += shards_;
+    if (done_.count({n, r})) continue;
+    if (position_++ % ranks_ != rank_) continue;
+    t = {n, r};
+    return true;
+  }
+  return false;
 }
 
 std::vector<int> power_sizes(const Study& study, const PowerOptions& opt) {
@@ -712,16 +856,6 @@ std::string prototypes_sha256(const Study& study) {
 
 long run_power(const Study& study, const PowerOptions& opt) {
   const Ranks ranks = init_ranks();
-  const std::vector<int> ns = power_sizes(study, opt);
-  if (opt.replicates < 1) throw InputError("--replicates must be >= 1");
-  if (opt.shards < 1 || opt.shards > kMaxShards || opt.shard < 0 || opt.shard >= opt.shards)
-    throw InputError("--shard I/K needs 1 <= I <= K <= " + std::to_string(kMaxShards));
-  const std::string sha = results::sha256_hex(study.json_text);
-  const std::string protos = prototypes_sha256(study);
-  const std::string file = replicate_file(opt);
-
-  // Every (n, replicate) has a global index; shard I of K takes index % K == I - 1.
-  std::set<std::pair<int, int>> done;
   // Held until the run ends: a second `power` on the same replicate file would simulate the
   // same replicates and interleave its lines (review 2026-12-06, third: every replicate twice).
   struct Lock {
@@ -730,43 +864,63 @@ long run_power(const Study& study, const PowerOptions& opt) {
       if (fd >= 0) ::close(fd);
     }
   } lock;
-  if (ranks.rank == 0) {
-    std::error_code ec;
-    fs::create_directories(opt.out_dir, ec);
-    if (!fs::is_directory(opt.out_dir))
-      throw InputError("cannot create the output directory", opt.out_dir);
-    lock.fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    if (lock.fd < 0)
-      throw InputError(
-          std::string("cannot write the replicate file (") + std::strerror(errno) + ")", file);
-    if (::flock(lock.fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK)
-      throw InputError(
-          "is in use: another palplab power is running with this --out (its "
-          "replicates would be simulated twice); wait for it, or use another --out",
-          file);
-    repair_tail(file);
-    // (The file exists, created above, even when this shard has nothing to run — K above the
-    // replicate count: `palplab merge` takes a shard without its file for a missing one.)
-    if (fs::exists(file))
-      for (const auto& [r, line] : read_replicates(file)) {
-        if (r.at("study_sha256") != sha)
-          throw InputError(
-              "the replicate file holds another study (SHA-256 differs); use another --out", file);
-        // (Records written before the prototypes were pinned have no such key.)
-        if (r.contains("prototypes_sha256") && r.at("prototypes_sha256") != protos)
-          throw InputError(
-              SourceLocation{file, line, 0, -1, "$.prototypes_sha256"},
-              "replicate simulated with other prototype files than the study's now (a prototype "
-              "or its mesh changed since): its results would be mixed with the new ones; restore "
-              "them, or use another --out");
-        // Its seed is the one derived from the study's seed for its n and index: otherwise the
-        // record was edited (a line copied to fill a gap, its index changed) or written for
-        // another seed, and it would stand for a replicate never simulated.
-        require_replicate_seed(study, r, file, line);
-        done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
-      }
-    check_out_dir_study(opt.out_dir, sha);  // its power.json and other shards' files
+  std::vector<int> ns;
+  std::string sha, protos, file;
+  // Every (n, replicate) has a global index; shard I of K takes index % K == I - 1.
+  std::set<std::pair<int, int>> done;
+  // Rank 0 reads and checks the files; an error is said by it alone, and every other rank,
+  // waiting for what it read, learns of it (settle) rather than waiting for ever.
+  std::exception_ptr error;
+  try {
+    ns = power_sizes(study, opt);
+    if (opt.replicates < 1) throw InputError("--replicates must be >= 1");
+    if (opt.shards < 1 || opt.shards > kMaxShards || opt.shard < 0 || opt.shard >= opt.shards)
+      throw InputError("--shard I/K needs 1 <= I <= K <= " + std::to_string(kMaxShards));
+    sha = results::sha256_hex(study.json_text);
+    protos = prototypes_sha256(study);
+    file = replicate_file(opt);
+    if (ranks.rank == 0) {
+      std::error_code ec;
+      fs::create_directories(opt.out_dir, ec);
+      if (!fs::is_directory(opt.out_dir))
+        throw InputError("cannot create the output directory", opt.out_dir);
+      lock.fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+      if (lock.fd < 0)
+        throw InputError(
+            std::string("cannot write the replicate file (") + std::strerror(errno) + ")", file);
+      if (::flock(lock.fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK)
+        throw InputError(
+            "is in use: another palplab power is running with this --out (its "
+            "replicates would be simulated twice); wait for it, or use another --out",
+            file);
+      repair_tail(file);
+      // (The file exists, created above, even when this shard has nothing to run — K above the
+      // replicate count: `palplab merge` takes a shard without its file for a missing one.)
+      if (fs::exists(file))
+        for (const auto& [r, line] : read_replicates(file)) {
+          if (r.at("study_sha256") != sha)
+            throw InputError(
+                "the replicate file holds another study (SHA-256 differs); use another --out",
+                file);
+          // (Records written before the prototypes were pinned have no such key.)
+          if (r.contains("prototypes_sha256") && r.at("prototypes_sha256") != protos)
+            throw InputError(
+                SourceLocation{file, line, 0, -1, "$.prototypes_sha256"},
+                "replicate simulated with other prototype files than the study's now (a "
+                "prototype or its mesh changed since): its results would be mixed with the new "
+                "ones; restore them, or use another --out");
+          // Its seed is the one derived from the study's seed for its n and index: otherwise
+          // the record was edited (a line copied to fill a gap, its index changed) or written
+          // for another seed, and it would stand for a replicate never simulated.
+          require_replicate_seed(study, r, file, line);
+          done.insert({r.at("n").get<int>(), r.at("replicate").get<int>()});
+        }
+      check_out_dir_study(opt.out_dir, sha);  // its power.json and other shards' files
+    }
+  } catch (...) {
+    error = std::current_exception();
   }
+  settle(ranks, error);
   // Every rank needs to know what is done: rank 0 read it; share as text.
   std::string done_text;
   for (const auto& [n, r] : done) done_text += std::to_string(n) + " " + std::to_string(r) + "\n";
@@ -780,82 +934,85 @@ long run_power(const Study& study, const PowerOptions& opt) {
     for (int n, r; in >> n >> r;) done.insert({n, r});
   }
 #endif
-  struct Task {
-    int n, replicate;
-  };
-  // This shard's missing replicates, in index order (the same list on every rank); rank r of
-  // K takes every K-th of them.
-  std::vector<Task> mine;
-  long total = 0;
-  for (std::size_t i = 0; i < ns.size(); ++i)
-    for (int r = 0; r < opt.replicates; ++r) {
-      const long index = static_cast<long>(i) * opt.replicates + r;
-      if (index % opt.shards != opt.shard) continue;
-      if (done.count({ns[i], r})) continue;
-      if (total++ % ranks.size == ranks.rank) mine.push_back({ns[i], r});
-    }
+  // This shard's missing replicates, in index order (the same sequence on every rank); rank r
+  // of K takes every K-th of them. Enumerated round by round, never listed (ReplicateTasks).
+  ReplicateTasks tasks(ns, opt.replicates, opt.shard, opt.shards, done, ranks.rank, ranks.size);
+  const long total = tasks.total();
 
   // Rounds: each rank runs up to `jobs` replicates in parallel, then rank 0 appends everything
   // finished in the round (so an interruption loses at most one round).
   const int jobs = std::max(1, opt.jobs);
-  const long rounds = max_over_ranks(ranks, (static_cast<long>(mine.size()) + jobs - 1) / jobs);
+  const long rounds = max_over_ranks(ranks, (tasks.mine() + jobs - 1) / jobs);
   const auto t0 = Clock::now();
   long finished = 0;
+  // A failed simulation on any rank, or rank 0's failed append (settled in the next round),
+  // ends the run on every rank.
   for (long round = 0; round < rounds; ++round) {
-    const std::size_t begin = std::min(mine.size(), static_cast<std::size_t>(round * jobs));
-    const std::size_t end = std::min(mine.size(), begin + jobs);
-    std::vector<std::string> lines(end - begin);
+    std::vector<ReplicateTask> batch;
+    for (ReplicateTask t; !error && static_cast<int>(batch.size()) < jobs && tasks.next(t);)
+      batch.push_back(t);
+    std::vector<std::string> lines(batch.size());
     std::vector<std::thread> threads;
-    std::exception_ptr error;
     std::mutex mu;
-    for (std::size_t k = begin; k < end; ++k)
-      threads.emplace_back([&, k] {
-        try {
-          const Task t = mine[k];
-          const std::uint64_t seed = replicate_seed(study, t.n, t.replicate);
-          const Study s = resized_study(study, t.n, seed);
-          nlohmann::json rec = {{"study_sha256", sha},
-                                {"prototypes_sha256", protos},
-                                {"study", study.id},
-                                {"n", t.n},
-                                {"replicate", t.replicate},
-                                {"seed", seed},
-                                {"plan", {{"replicates", opt.replicates}, {"n", ns}}},
-                                {"tests", nlohmann::json::array()},
-                                {"groups", nlohmann::json::array()}};
-          const std::vector<SimValue> values = simulate_study(s, 1);
-          for (const auto& o : run_declared_analyses(s, values))
-            rec["tests"].push_back({{"id", o.id},
-                                    {"p", num_or_null(o.p)},
-                                    {"effect", num_or_null(o.effect)},
-                                    {"effect_name", o.effect_name}});
-          for (const auto& d : tested_group_descriptives(s, values))
-            rec["groups"].push_back({{"cell", d.cell},
-                                     {"group", d.group},
-                                     {"n", d.n},
-                                     {"mean", num_or_null(d.mean)},
-                                     {"sd", num_or_null(d.sd)}});
-          lines[k - begin] = rec.dump() + "\n";
-        } catch (...) {
-          std::lock_guard lock(mu);
-          if (!error) error = std::current_exception();
-        }
-      });
+    // (A thread that cannot be started is an error of this rank like any other: settled.)
+    try {
+      for (std::size_t k = 0; k < batch.size(); ++k)
+        threads.emplace_back([&, k] {
+          try {
+            const ReplicateTask t = batch[k];
+            const std::uint64_t seed = replicate_seed(study, t.n, t.replicate);
+            const Study s = resized_study(study, t.n, seed);
+            nlohmann::json rec = {{"study_sha256", sha},
+                                  {"prototypes_sha256", protos},
+                                  {"study", study.id},
+                                  {"n", t.n},
+                                  {"replicate", t.replicate},
+                                  {"seed", seed},
+                                  {"plan", {{"replicates", opt.replicates}, {"n", ns}}},
+                                  {"tests", nlohmann::json::array()},
+                                  {"groups", nlohmann::json::array()}};
+            const std::vector<SimValue> values = simulate_study(s, 1);
+            for (const auto& o : run_declared_analyses(s, values))
+              rec["tests"].push_back({{"id", o.id},
+                                      {"p", num_or_null(o.p)},
+                                      {"effect", num_or_null(o.effect)},
+                                      {"effect_name", o.effect_name}});
+            for (const auto& d : tested_group_descriptives(s, values))
+              rec["groups"].push_back({{"cell", d.cell},
+                                       {"group", d.group},
+                                       {"n", d.n},
+                                       {"mean", num_or_null(d.mean)},
+                                       {"sd", num_or_null(d.sd)}});
+            lines[k] = rec.dump() + "\n";
+          } catch (...) {
+            std::lock_guard lock(mu);
+            if (!error) error = std::current_exception();
+          }
+        });
+    } catch (...) {
+      std::lock_guard lock(mu);
+      if (!error) error = std::current_exception();
+    }
     for (auto& t : threads) t.join();
-    if (error) std::rethrow_exception(error);  // under MPI: mpirun aborts the other ranks
+    settle(ranks, error);
     std::string mine_text;
     for (const auto& l : lines) mine_text += l;
     const std::string all = gather_to_root(ranks, mine_text);
     if (ranks.rank == 0) {
-      std::ofstream out(file, std::ios::app | std::ios::binary);
-      out << all;
-      out.flush();
-      if (!out) throw InputError("cannot append to the replicate file", file);
-      finished += std::count(all.begin(), all.end(), '\n');
-      if (opt.progress)
-        opt.progress(finished, total, std::chrono::duration<double>(Clock::now() - t0).count());
+      try {
+        std::ofstream out(file, std::ios::app | std::ios::binary);
+        out << all;
+        out.flush();
+        if (!out) throw InputError("cannot append to the replicate file", file);
+        finished += std::count(all.begin(), all.end(), '\n');
+        if (opt.progress)
+          opt.progress(finished, total, std::chrono::duration<double>(Clock::now() - t0).count());
+      } catch (...) {
+        error = std::current_exception();
+      }
     }
   }
+  settle(ranks, error);
 #ifdef PALPLAB_MPI
   if (ranks.mpi) {
     MPI_Barrier(MPI_COMM_WORLD);
@@ -867,6 +1024,29 @@ long run_power(const Study& study, const PowerOptions& opt) {
   // Every rank's replicates, as rank 0 appended them (a count of this rank's own share made the
   // summary under MPI say "6 replicates run now" for 12; review 2026-12-07).
   return finished;
+}
+
+int power_rank() {
+  return init_ranks().rank;
+}
+
+bool power_under_mpi() {
+  return init_ranks().mpi;
+}
+
+void end_ranks() {
+#ifdef PALPLAB_MPI
+  if (!init_ranks().mpi) return;
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (finalized) return;
+  MPI_Barrier(MPI_COMM_WORLD);
+  MPI_Finalize();
+#endif
+}
+
+void settle_ranks(std::exception_ptr error) {
+  settle(init_ranks(), error);
 }
 
 namespace {
@@ -1114,6 +1294,59 @@ long LeftOut::total() const {
   return t;
 }
 
+namespace {
+
+// How often a value (the sorted test ids, or cells and groups, of a record) was read.
+struct Seen {
+  long count = 0, order = 0;  // how many records; the reading order of the first
+  std::string at;             // FILE:LINE of the first
+};
+
+// The rest of "the replicate's tests" + " differ from those of the replicate at AT ...": the
+// record holds `mine`, other than `common`, the value most records hold (`seen`: each value's
+// count). " and most others" only when more than half of the records hold `common`; otherwise
+// (a 2-2 tie said "and most others") both values are named, with how many records hold each,
+// and that no value is held by most records.
+std::string held_by(const std::map<std::vector<std::string>, Seen>& seen,
+                    const std::vector<std::string>& common, const std::vector<std::string>& mine,
+                    const std::string& at, const std::string& kind, const std::string& records,
+                    const std::function<std::string(const std::vector<std::string>&)>& show) {
+  long all = 0;
+  for (const auto& [v, x] : seen) all += x.count;
+  const long c = seen.at(common).count, m = seen.at(mine).count;
+  if (2 * c > all) return " differ from those of the replicate at " + at + " and most others";
+  bool tie = false;
+  for (const auto& [v, x] : seen) tie = tie || (v != common && x.count == c);
+  const long rest = all - c - m;
+  return " " + show(mine) + " differ from those of the replicate at " + at + " " + show(common) +
+         ", and no " + kind + " is held by most " + records + (tie ? " (a tie)" : "") + ": " +
+         std::to_string(c) + " of the " + std::to_string(all) + " " + records +
+         (c == 1 ? " holds" : " hold") + " those, " + std::to_string(m) + " these" +
+         (rest > 0 ? ", the other " + std::to_string(rest) + " neither" : std::string()) +
+         ", so which are the study's cannot be told from the records";
+}
+
+// ("a", "b") for a message, cut when long.
+std::string show_list(const std::vector<std::string>& items) {
+  std::string s;
+  for (const auto& i : items) s += (s.empty() ? "\"" : ", \"") + i + "\"";
+  return "(" + shown_text(s, 200) + ")";
+}
+std::string show_ids(const std::vector<std::string>& ids) {
+  return show_list(ids);
+}
+// "cell\tgroup" as ("A" in "f t", ...).
+std::string show_cells(const std::vector<std::string>& cells) {
+  std::vector<std::string> shown;
+  for (const auto& c : cells) {
+    const auto tab = c.find('\t');
+    shown.push_back(c.substr(tab + 1) + "\" in \"" + c.substr(0, tab));
+  }
+  return show_list(shown);
+}
+
+}  // namespace
+
 nlohmann::json power_summary(const std::vector<std::string>& files, double alpha,
                              double target_power, const SummaryScope& scope, LeftOut* left_out,
                              const PeopleVerdicts* people) {
@@ -1122,8 +1355,8 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
   std::map<std::uint64_t, std::pair<int, int>> seed_of;  // the (n, replicate) of each seed
   std::string sha, study_id;
   std::string first;                     // FILE:LINE of the first replicate read
-  std::vector<std::string> first_ids;    // the test ids most records have, sorted
-  std::vector<std::string> first_cells;  // the "cell\tgroup" most records with groups have, sorted
+  std::vector<std::string> first_ids;    // the most common test ids (ties: first read), sorted
+  std::vector<std::string> first_cells;  // the most common "cell\tgroup" of records with groups
   std::string first_cells_at;
   std::string protos, protos_at;  // the first record's prototypes_sha256 and its FILE:LINE
   std::map<std::string, std::pair<std::string, std::string>> effect_of;  // id -> (name, FILE:LINE)
@@ -1147,12 +1380,8 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
     std::sort(cells.begin(), cells.end());
     return cells;
   };
+  std::map<std::vector<std::string>, Seen> ids_seen, cells_seen;
   {
-    struct Seen {
-      long count = 0, order = 0;  // how many records; the reading order of the first
-      std::string at;             // FILE:LINE of the first
-    };
-    std::map<std::vector<std::string>, Seen> ids_seen, cells_seen;
     long order = 0;
     for (const auto& [f, lines] : all)
       for (const auto& [r, line] : lines) {
@@ -1207,10 +1436,10 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
       // Every replicate of one study has the same tested cells and groups (when it has them).
       if (r.contains("groups") && cells_of(r) != first_cells)
         throw InputError(SourceLocation{f, line, 0, -1, "$.groups"},
-                         "the replicate's groups (cells and groups) differ from those of the "
-                         "replicate at " +
-                             first_cells_at +
-                             " and most others (every replicate of a study has the same)");
+                         "the replicate's groups (cells and groups)" +
+                             held_by(cells_seen, first_cells, cells_of(r), first_cells_at,
+                                     "set of groups", "records with groups", show_cells) +
+                             " (every replicate of a study has the same)");
       const std::pair<int, int> key{r.at("n").get<int>(), r.at("replicate").get<int>()};
       // Every replicate has its own seed (derived from the study's, its n and its index): one
       // seed under two (n, index) is a record copied to fill a gap with its index edited.
@@ -1250,8 +1479,10 @@ nlohmann::json power_summary(const std::vector<std::string>& files, double alpha
       // Every replicate of one study runs the same declared analyses: the same test ids.
       if (test_ids(r) != first_ids)
         throw InputError(SourceLocation{f, line, 0, -1, "$.tests"},
-                         "the replicate's tests differ from those of the replicate at " + ids_at +
-                             " and most others (every replicate of a study has the same tests)");
+                         "the replicate's tests" +
+                             held_by(ids_seen, first_ids, test_ids(r), ids_at, "set of tests",
+                                     "records", show_ids) +
+                             " (every replicate of a study has the same tests)");
       // ... each with one effect size (the test's kind fixes it).
       const auto& tests = r.at("tests");
       for (std::size_t i = 0; i < tests.size(); ++i) {

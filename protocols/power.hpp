@@ -13,6 +13,7 @@
 // that file alone — of `palplab power`, only the sizes and replicates it was asked for, the rest
 // of the file kept — so shards merged afterwards give the single-run result exactly.
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -85,9 +86,44 @@ struct PowerOptions {
 };
 // --shard I/K: K is at most this (docs/PARTICIPANTS.md "Power analysis").
 constexpr long kMaxShards = 100000;
-// "I/K" (sep '/') or "I-of-K" (sep "-of-"): digits only, 1 <= I <= K <= kMaxShards, else
-// nullopt (no sign, space, overflow or wrap-around). Returns (I, K), I 1-based.
+// "I/K" (sep '/') or "I-of-K" (sep "-of-"): decimal digits without a leading zero (the rule of
+// every count palplab takes: app/command.hpp count_range), 1 <= I <= K <= kMaxShards, else
+// nullopt (no sign, space, leading zero, overflow or wrap-around). Returns (I, K), I 1-based.
 std::optional<std::pair<int, int>> parse_shard(const std::string& text, const std::string& sep);
+// Whether `digits` (one number of a count option: --n's sizes, --shard's I or K) starts with a
+// zero that is not the whole number ("03"): refused, as count_range refuses it, so that the
+// hint "decimal digits without leading zeros" can be given.
+bool has_leading_zero(const std::string& digits);
+
+// Which replicates a run still lacks, in index order (index = i * replicates + r over the
+// sizes `ns`; shard I of K takes index % K == I - 1), and which of them this MPI rank takes
+// (every `ranks`-th of that list, starting at the `rank`-th) — enumerated as the run goes,
+// never listed: a list of 10^7 replicates x 10 sizes took 1.1 GB before the first replicate.
+// `done` holds the (n, replicate) already in the replicate file (kept by reference).
+struct ReplicateTask {
+  int n = 0, replicate = 0;
+};
+class ReplicateTasks {
+ public:
+  ReplicateTasks(const std::vector<int>& ns, int replicates, int shard, int shards,
+                 const std::set<std::pair<int, int>>& done, int rank = 0, int ranks = 1);
+  // How many replicates this shard lacks (all ranks together), and how many are this rank's.
+  long total() const { return total_; }
+  long mine() const { return total_ / ranks_ + (rank_ < total_ % ranks_ ? 1 : 0); }
+  // This rank's next replicate, false after the last.
+  bool next(ReplicateTask& t);
+
+ private:
+  const std::vector<int>& ns_;
+  const std::set<std::pair<int, int>>& done_;
+  long replicates_, shard_, shards_;
+  int rank_, ranks_;
+  long total_ = 0;
+  std::size_t size_ = 0;  // the size being walked (index into ns_)
+  long r_ = 0;            // its next replicate index of this shard
+  long position_ = 0;     // the next missing replicate's position in the shard's list
+  void start_size();
+};
 
 // The group sizes a run simulates: opt.n, or the study's own size when empty (all groups equal,
 // else an InputError asking for --n).
@@ -96,8 +132,36 @@ std::vector<int> power_sizes(const Study& study, const PowerOptions& opt);
 // Runs the replicates this process is responsible for (skipping those already in
 // DIR/replicates.jsonl) and appends each as it finishes. Under MPI (PALPLAB_MPI, launched by
 // mpirun) ranks share the replicates and rank 0 writes them. Returns the number run here, or
-// -1 on an MPI rank other than 0 (which must not write the summary).
+// -1 on an MPI rank other than 0 (which must not write the summary). An error on any rank
+// (rank 0's file checks, a replicate's simulation) is settled as settle_ranks says: rank 0
+// throws it, every other rank throws FailedOnAnotherRank; no rank waits for ever. After an
+// error the caller ends MPI with end_ranks (after rank 0 said the error); after a run that
+// returns, MPI has ended.
 long run_power(const Study& study, const PowerOptions& opt);
+
+// MPI (a PALPLAB_MPI build launched by mpirun; docs/PARTICIPANTS.md "Power analysis"): every
+// rank runs the whole command, so every rank found the same bad input and printed it. Starts
+// MPI (once) and returns this process's rank; 0 without MPI.
+int power_rank();
+// Whether this process is one of the ranks of an mpirun (MPI started by power_rank).
+bool power_under_mpi();
+// Collective under MPI (every rank calls it at the same point, with what its own work there
+// threw, or nullptr): when no rank failed it returns; otherwise rank 0 rethrows its own error —
+// or, when only other ranks failed, the first one's as an InputError (or an internal error)
+// with the same message — and every other rank throws FailedOnAnotherRank with the exit code
+// rank 0 gives (2 for an InputError), so that the error is printed once and every rank exits
+// with that code. Without MPI it rethrows `error`. MPI is not ended: rank 0 says the error,
+// then every rank calls end_ranks (a rank that ended first made mpirun kill rank 0 before it
+// had printed).
+void settle_ranks(std::exception_ptr error);
+// Collective under MPI: waits for every rank, then ends MPI (nothing when it has ended, or
+// without MPI).
+void end_ranks();
+struct FailedOnAnotherRank : std::exception {
+  int code = 2;
+  explicit FailedOnAnotherRank(int c) : code(c) {}
+  const char* what() const noexcept override { return "failed (said by MPI rank 0)"; }
+};
 
 // Which replicates a summary covers: the group sizes `sizes` (empty = every size found) and the
 // replicate indices 0..replicates-1 (0 = every index found). `palplab power` summarises exactly
