@@ -90,12 +90,43 @@ int checked_stdout(int code, int printed_errno = 0) {
   return code;
 }
 
+// Under mpirun (`mpirun -np K palplab power ...`) every rank parses the same command line, and
+// each printed the same usage error (review 2026-12-07). A rank other than 0 (as the launcher
+// tells it: OpenMPI, MPICH, PMIx) says nothing until the command runs; it still exits 2.
+int launcher_rank() {
+  for (const char* var : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"})
+    if (const char* v = std::getenv(var); v && *v) return std::atoi(v);
+  return 0;
+}
+
+struct Discard : std::streambuf {
+  int overflow(int c) override { return c == EOF ? 0 : c; }
+};
+
+// The root command: `before_run` is called once the command line is parsed and checked, before
+// the command's callback runs (CLI11 calls pre_callback there).
+struct RootApp : CLI::App {
+  using CLI::App::App;
+  std::function<void()> before_run;
+  void pre_callback() override {
+    if (before_run) before_run();
+  }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace palplab::app;
   tune_allocator();
-  CLI::App cli{"palplab — experiment runner and evaluation for haptic palpation-training studies"};
+  Discard discard;
+  std::streambuf* const cerr_buf = std::cerr.rdbuf();
+  if (launcher_rank() > 0) std::cerr.rdbuf(&discard);
+  struct Restore {  // before `discard` ends (std::cerr outlives main)
+    std::streambuf* buf;
+    ~Restore() { std::cerr.rdbuf(buf); }
+  } restore{cerr_buf};
+  RootApp cli{"palplab — experiment runner and evaluation for haptic palpation-training studies"};
+  cli.before_run = [cerr_buf] { std::cerr.rdbuf(cerr_buf); };
   cli.set_version_flag(
       "--version", std::string("palplab ") + palplab::kVersion + " (" + palplab::kGitCommit + ")");
   cli.require_subcommand(1);

@@ -1392,7 +1392,11 @@ TEST(Power, MpiSaysAnInputErrorOnceAndEveryRankExits2) {
        "holds replicates.shard-1-of-3.jsonl, a shard of another --shard I/K split than 1/2"},
       {" --out " + (d / "busy").string(),
        "replicates.jsonl: is in use: another palplab power is running with this --out"},
-      {" --n 03 --out " + (d / "never").string(), "--n: \"03\" has a leading zero"}};
+      {" --n 03 --out " + (d / "never").string(), "--n: \"03\" has a leading zero"},
+      // Usage errors found while the command line is parsed (app/main.cpp: every rank printed
+      // them until 2026-12-07).
+      {" --jobs 0 --out " + (d / "never").string(), "--jobs: expected"},
+      {" --bogus --out " + (d / "never").string(), "unknown option --bogus"}};
   for (const auto& [args, message] : cases) {
     SCOPED_TRACE(args);
     const auto r = run_shell(mpirun + PALPLAB_BINARY + " " + base + args, d);
