@@ -101,21 +101,28 @@ palplab::app::CommandRegistration reg_calibrate{
           not_out.push_back({"prototype " + id + " of the study", file});
         if (defaults) not_out.push_back({"the --write-defaults file", a->write_defaults});
         // A calibration JSON cut off or edited into invalid JSON was refused as "a JSON file,
-        // not a palplab calibration JSON" (review 2026-12-07): say what it is.
+        // not a palplab calibration JSON" (review 2026-12-07): a file that starts as JSON and
+        // does not parse is said to be damaged, with where it breaks (palplab writes the keys
+        // sorted, so a cut one has mostly lost "palplab_calibration").
         std::error_code size_ec;
         if (!a->overwrite && std::filesystem::is_regular_file(a->out) &&
             std::filesystem::file_size(a->out, size_ec) <= palplab::json::kMaxJsonFileBytes &&
             !size_ec) {
           const std::string text =
               palplab::app::file_head(a->out, palplab::json::kMaxJsonFileBytes);
-          if (text.find("\"palplab_calibration\"") != std::string::npos) try {
+          const auto first = text.find_first_not_of(" \t\r\n");
+          if (first != std::string::npos && (text[first] == '{' || text[first] == '[')) try {
               (void)palplab::json::parse_located(text, a->out);
             } catch (const palplab::InputError& e) {
+              const bool ours = text.find("\"palplab_calibration\"") != std::string::npos;
               throw palplab::InputError(
                   palplab::SourceLocation{"--out"},
-                  "\"" + a->out + "\" looks like a palplab calibration JSON but is damaged (" +
-                      e.what() +
-                      "); refusing to replace it: repair it, choose another --out, or give "
+                  "\"" + a->out + "\" " +
+                      (ours ? "looks like a palplab calibration JSON but is damaged ("
+                            : "exists and is not valid JSON (") +
+                      e.what() + ")" +
+                      (ours ? "" : ": a damaged file, perhaps a calibration JSON cut off") +
+                      "; refusing to replace it: repair it, choose another --out, or give "
                       "--overwrite to replace it");
             }
         }

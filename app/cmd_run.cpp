@@ -45,8 +45,25 @@
 namespace {
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) {
+volatile std::sig_atomic_t g_signal = 0;  // the signal that set g_interrupted
+extern "C" void on_sigint(int sig) {
+  g_signal = sig;
   g_interrupted = true;
+}
+
+// What stopped a person's run, as stored with an aborted session and said on stderr (every
+// signal was "interrupted (Ctrl-C)": review 2026-12-07).
+std::string signal_text() {
+  switch (g_signal) {
+    case SIGINT:
+      return "interrupted (SIGINT, Ctrl-C)";
+    case SIGTERM:
+      return "stopped by SIGTERM";
+    case SIGHUP:
+      return "stopped by SIGHUP (the terminal closed)";
+    default:
+      return "interrupted";
+  }
 }
 
 // A virtual run interrupted (SIGINT, SIGTERM, SIGHUP) stops at once, as the default action would:
@@ -118,7 +135,7 @@ palplab::protocols::HumanSummary run_in_window(const palplab::protocols::Study& 
   } sh;
   std::atomic<bool> stop{false};  // the window closed (or Ctrl-C): the session is aborted
   o.stop = &stop;
-  o.stop_reason = "window closed";
+  o.stop_reason = [] { return g_signal ? signal_text() : std::string("window closed"); };
   auto outer_say = o.say;
   o.say = [&](const std::string& m) {
     if (outer_say) outer_say(m);
@@ -289,6 +306,7 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
   o.record_trace_dir = h.record_trace;
   o.device_lost = h.device_lost;
   o.stop = &g_interrupted;
+  o.stop_reason = signal_text;
   o.no_wait = h.no_wait;
   if (const char* now = std::getenv("PALPLAB_NOW")) {
     // Tests and dry runs of a long-term schedule: "today" as a Unix time or ISO 8601 UTC.
@@ -341,6 +359,17 @@ int run_human_cmd(const palplab::protocols::Study& s, const palplab::protocols::
                  r.aborted, h.participant.c_str(),
                  palplab::escape_controls(r.abort_reason, false).c_str(),
                  palplab::escape_controls(ro.db, false).c_str());
+  // A signal ends the command as it ends a virtual run: 128 + its number, and said (stopped
+  // during the study's break, the run exited 0 in silence: review 2026-12-07).
+  if (g_signal) {
+    std::fprintf(stderr,
+                 "palplab run: %s%s: the completed sessions are stored in %s, %d remaining; "
+                 "the same command continues\n",
+                 signal_text().c_str(),
+                 r.stopped ? " before the next session (nothing of it is stored)" : "",
+                 palplab::escape_controls(ro.db, false).c_str(), r.remaining);
+    return 128 + g_signal;
+  }
   return r.aborted > 0 ? 1 : 0;
 }
 
@@ -496,8 +525,8 @@ palplab::app::CommandRegistration reg_run{
         g_interrupt_text_none =
             "\ninterrupted before any session was complete: no session "
             "is stored in " +
-            palplab::escape_controls(opt->db, false) + "; start the run again with:\n  " + again +
-            " --force\n";
+            palplab::escape_controls(opt->db, false) + "; continue with:\n  " + again +
+            " --resume\n";
         g_stored_any = opt->resume ? 1 : 0;
         {  // the flag follows the sessions stored, with or without the progress output
           std::function<void(const Progress&)> show = std::move(opt->progress);

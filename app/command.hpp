@@ -70,8 +70,10 @@ inline CLI::Validator count_range(long long lo, long long hi) {
   return CLI::Validator(
       [lo, hi, range](std::string& text) -> std::string {
         // Decimal digits only: CLI11 converts "010" as octal (8) and "0x10" as hexadecimal (16),
-        // which a user who typed them did not mean; a leading zero is refused rather than read.
-        const std::size_t digits = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+        // which a user who typed them did not mean; a leading zero is refused rather than read,
+        // and so is a '+' (--n and --shard refused "+2" where --replicates took it: review
+        // 2026-12-07); a '-' only starts a negative value.
+        const std::size_t digits = !text.empty() && text[0] == '-' ? 1 : 0;
         const bool decimal = text.size() > digits &&
                              text.find_first_not_of("0123456789", digits) == std::string::npos &&
                              (text[digits] != '0' || text.size() == digits + 1);

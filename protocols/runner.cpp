@@ -862,6 +862,11 @@ std::string session_instructions(const Study& study, const SessionSpec& spec) {
          seconds_text(spec.duration) + " s.";
 }
 
+// The system clock, Unix s with its fraction.
+double unix_seconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
 HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions& opt) {
   auto say = [&](const std::string& m) {
     if (opt.say) opt.say(m);
@@ -869,11 +874,12 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
   const ParticipantPlan* pp = &plan.participant(opt.participant);
   // "Now": the system clock, or one that starts at the tests' and dry runs' PALPLAB_NOW and
   // runs with it, for every time stored (the study's start and end, each session's).
-  const std::int64_t started = std::time(nullptr);
-  auto now = [&] {
-    const std::int64_t t = std::time(nullptr);
-    return opt.now >= 0 ? opt.now + (t - started) : t;
+  const double started = unix_seconds();
+  auto now_exact = [&] {  // s, to the clock's resolution
+    const double t = unix_seconds();
+    return opt.now >= 0 ? static_cast<double>(opt.now) + (t - started) : t;
   };
+  auto now = [&] { return static_cast<std::int64_t>(std::floor(now_exact())); };
   const std::string sha = results::sha256_hex(study.json_text);
   std::map<std::string, std::string> prototype_sha;
   bool exists = fs::exists(opt.db);
@@ -907,8 +913,11 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
 
   std::map<int, int> attempts;  // ordinal -> attempts so far
   std::set<int> complete;
-  std::map<int, std::int64_t> ended;  // ordinal -> when its complete attempt ended (Unix s)
-  std::int64_t first_start = -1;
+  // ordinal -> when its complete attempt ended (Unix s; stored ones to the next whole second,
+  // as stored times are whole seconds; this run's exactly)
+  std::map<int, double> ended;
+  std::int64_t first_start = -1;     // of any attempt: day 0 is that day
+  std::int64_t first_complete = -1;  // of a complete session: study_offset counts from it
   for (const auto& r : store.read_attempts(pp->id)) {
     if (r.trainee != "human")
       throw InputError("participant " + pp->id +
@@ -916,12 +925,13 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
                            "human or virtual",
                        opt.db);
     attempts[r.ordinal] = std::max(attempts[r.ordinal], r.attempt + 1);
-    if (r.status == "complete") {
-      complete.insert(r.ordinal);
-      if (const std::int64_t e = parse_utc(r.completed_at); e >= 0) ended[r.ordinal] = e;
-    }
     const std::int64_t t = parse_utc(r.started_at);
     if (t >= 0 && (first_start < 0 || t < first_start)) first_start = t;
+    if (r.status == "complete") {
+      complete.insert(r.ordinal);
+      if (const std::int64_t e = parse_utc(r.completed_at); e >= 0) ended[r.ordinal] = e + 1.0;
+      if (t >= 0 && (first_complete < 0 || t < first_complete)) first_complete = t;
+    }
   }
   auto day_of = [](std::int64_t t) { return t >= 0 ? t / 86400 : 0; };
   const std::int64_t day0 = day_of(first_start >= 0 ? first_start : now());
@@ -952,24 +962,30 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
       const double planned = spec.offset - (prev.offset + prev.duration);
       const auto it = ended.find(prev.ordinal);
       if (prev.day == spec.day && planned > 0 && it != ended.end()) {
-        // Stored times are whole seconds (the end was within the second after `ended`).
-        const std::int64_t from = it->second + 1 + static_cast<std::int64_t>(std::ceil(planned));
-        if (now() < from && opt.no_wait) {
+        const double from = it->second + planned;
+        if (now_exact() < from && opt.no_wait) {
           say("note: " + spec.phase_id + " #" + std::to_string(spec.index + 1) +
               " starts without the study's break of " + seconds_text(planned) +
               " s after the previous session (--no-wait)");
-        } else if (now() < from) {
+        } else if (now_exact() < from) {
           say("break: " + spec.phase_id + " #" + std::to_string(spec.index + 1) + " is planned " +
               seconds_text(planned) + " s after the previous session ended; it starts at " +
-              utc_iso(from) + " (waiting; Ctrl-C stops, and the command run again continues)");
-          while (now() < from && !(opt.stop && opt.stop->load()))
+              utc_iso(static_cast<std::int64_t>(std::ceil(from))) +
+              " (waiting; Ctrl-C stops, and the command run again continues)");
+          while (now_exact() < from && !(opt.stop && opt.stop->load()))
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
-          if (opt.stop && opt.stop->load()) break;
+          if (opt.stop && opt.stop->load()) {
+            sum.stopped = true;
+            break;
+          }
         }
       }
     }
     say("instructions: " + session_instructions(study, spec));
-    if (opt.before_session && !opt.before_session(spec)) break;
+    if (opt.before_session && !opt.before_session(spec)) {
+      sum.stopped = true;
+      break;
+    }
     engine::Scene scene = session_scene(study, spec);
     const engine::SceneGeometry& g = scene.geometry();
     const bool needle = study.task.kind == "needle_insertion";
@@ -1016,8 +1032,8 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     rec.instructor = spec.instructor;
     // When it started, after the participant's first session started (the plan's offset is
     // what a virtual participant keeps; a person keeps the real time).
-    if (first_start < 0) first_start = now();
-    rec.study_offset = static_cast<double>(now() - first_start);
+    if (first_complete < 0) first_complete = now();
+    rec.study_offset = static_cast<double>(now() - first_complete);
     rec.day = spec.day;
     rec.seed = spec.seed;
     rec.state_after = "{\"trainee\":\"human\"}";
@@ -1100,7 +1116,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     while (!finished) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       if (opt.stop && opt.stop->load() && !stop) {
-        reason = opt.stop_reason;
+        reason = opt.stop_reason ? opt.stop_reason() : "interrupted";
         stop = true;
       }
       const long got = dev->samples_received();
@@ -1162,7 +1178,7 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
     }
     ++sum.sessions_run;
     complete.insert(spec.ordinal);
-    ended[spec.ordinal] = now();
+    ended[spec.ordinal] = now_exact();
   }
   for (const auto& spec : pp->sessions)
     if (!complete.count(spec.ordinal)) {

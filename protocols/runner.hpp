@@ -107,7 +107,8 @@ struct HumanOptions {
   std::function<std::unique_ptr<engine::Device>()> make_device;
   const std::atomic<bool>* stop = nullptr;  // Ctrl-C / window closed: abort the session
   bool no_wait = false;  // start each due session at once, without the study's planned break
-  std::string stop_reason = "interrupted (Ctrl-C)";
+  // Why `stop` was set, asked when it ends a session (stored as the abort reason).
+  std::function<std::string()> stop_reason = [] { return std::string("interrupted"); };
   double device_lost = 2.0;  // s without a fresh hardware sample: the session is aborted
   bool samples = true;
   bool samples_explicit = true;  // as RunOptions::samples_explicit
@@ -130,6 +131,9 @@ std::string session_instructions(const Study& study, const SessionSpec& spec);
 
 struct HumanSummary {
   int sessions_run = 0, aborted = 0, remaining = 0;
+  // `stop` ended the run between sessions (during the study's break, or before a session's
+  // start): nothing of the next session is stored.
+  bool stopped = false;
   std::string next_due;      // "YYYY-MM-DD" of the next pending session; "" when all are done
   std::string abort_reason;  // why the aborted session stopped (as stored); "" when none was
 };

@@ -232,6 +232,20 @@ TEST(Calibrate, OutputsAreCheckedBeforeTheFit) {
   EXPECT_NE(damaged.err.find("give --overwrite to replace it"), std::string::npos) << damaged.err;
   EXPECT_EQ(damaged.err.find("evaluation"), std::string::npos) << damaged.err;
   EXPECT_EQ(slurp(d / "cut.json"), cut);
+  // Cut before its "palplab_calibration" key (palplab writes the keys sorted: most cuts are):
+  // still not "a JSON file", but invalid JSON with where it breaks.
+  const std::string early = "{\n  \"bounds\": {\"weber_fraction\": [0.01, ";
+  std::ofstream(d / "early.json") << early;
+  const Result cut_early = run_palplab(own + "--out " + (d / "early.json").string(), d);
+  EXPECT_EQ(cut_early.code, 2) << cut_early.out << cut_early.err;
+  EXPECT_NE(
+      cut_early.err.find("--out: \"" + (d / "early.json").string() +
+                         "\" exists and is not valid JSON (" + (d / "early.json").string() + ":2:"),
+      std::string::npos)
+      << cut_early.err;
+  EXPECT_NE(cut_early.err.find("perhaps a calibration JSON cut off"), std::string::npos)
+      << cut_early.err;
+  EXPECT_EQ(slurp(d / "early.json"), early);
   // Review findings (2026-12-03): --out naming the --write-defaults file replaced the copy of
   // params.hpp with the JSON before failing; a --write-defaults file write_defaults cannot edit
   // was refused only after the fit; an empty --write-defaults was ignored.

@@ -725,8 +725,9 @@ TEST(HardDb, InterruptedRunSaysHowToContinue) {
 }
 
 // Interrupted before its first session was stored, a run said "the sessions completed before
-// this are stored" and offered --resume (review 2026-12-07): it now says that none is and
-// gives the command that starts again, which completes the run.
+// this are stored" (review 2026-12-07): it now says that none is. It offers --resume (not
+// --force: a session stored in the moment before the signal would be deleted by it), which
+// completes the run.
 TEST(HardDb, RunInterruptedBeforeItsFirstSessionSaysNoneIsStored) {
   auto d = tmp("interrupt_first");
   // One session of 60 s on C: seconds of work, the signal comes within it.
@@ -755,7 +756,7 @@ TEST(HardDb, RunInterruptedBeforeItsFirstSessionSaysNoneIsStored) {
       err, "interrupted before any session was complete: no session is stored in " + db.string()))
       << err;
   const std::string again =
-      "run " + (d / "study.json").string() + " --db " + db.string() + " --force";
+      "run " + (d / "study.json").string() + " --db " + db.string() + " --resume";
   EXPECT_TRUE(has(err, "palplab " + again + "\n")) << err;
   Result r = cli(again + " --quiet", d);
   EXPECT_EQ(r.code, 0) << r.err;

@@ -304,6 +304,67 @@ TEST(CliRunHuman, SessionsOfOneDayKeepTheStudysBreakBetweenThem) {
   }
 }
 
+// A signal during the break exited 0 in silence, and every signal was stored as "interrupted
+// (Ctrl-C)" (review 2026-12-07): the command now exits 128 + the signal, says what is stored,
+// and an aborted session keeps the signal that stopped it.
+TEST(CliRunHuman, ASignalDuringTheBreakOrASessionIsSaidAndStored) {
+  Tmp tmp;
+  const fs::path study = tmp.dir / "breaks.json";
+  std::ofstream(study) << R"({"palplab_study": 1, "id": "breaks", "title": "breaks", "seed": 7,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "A", "prototype": "A", "size": 1}],
+  "phases": [{"id": "training", "kind": "training", "sessions": 2, "session_duration": 1,
+              "gap": {"seconds": 30}}]})";
+  const std::string trace = (tmp.dir / "t.trace").string();
+  {
+    e::Trace tr;
+    for (int k = 0; k < 1000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+    e::write_trace(trace, tr);
+  }
+  const std::string slow = (tmp.dir / "slow.trace").string();  // 20 s: the signal comes within
+  {
+    e::Trace tr;
+    for (int k = 0; k < 20000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+    e::write_trace(slow, tr);
+  }
+  // Runs the command in the background, sends `sig` once `wait_for` is in its output.
+  auto signalled = [&](const fs::path& db, const std::string& device, const char* sig,
+                       const std::string& wait_for) {
+    const fs::path out = tmp.dir / "out.txt", rc = tmp.dir / "rc.txt";
+    const std::string cmd =
+        palplab::testing::human_run(study.string(), db, device, "", "2026-11-24T10:00:00Z");
+    const std::string script = "(" + cmd + " >" + out.string() + " 2>&1) & pid=$!; i=0; " +
+                               "while ! grep -q \"" + wait_for + "\" " + out.string() +
+                               " 2>/dev/null && [ $i -lt 6000 ]; do sleep 0.01; i=$((i+1)); " +
+                               "done; kill -" + sig + " $pid; wait $pid; echo $? > " + rc.string();
+    EXPECT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+    return std::pair{palplab::testing::slurp(rc), palplab::testing::slurp(out)};
+  };
+  const fs::path db = tmp.dir / "h.db";
+  const auto [code, out] = signalled(db, "trace:" + trace, "TERM", "break: training #2");
+  EXPECT_EQ(code, "143\n") << out;
+  EXPECT_NE(out.find("palplab run: stopped by SIGTERM before the next session (nothing of it is "
+                     "stored): the completed sessions are stored in " +
+                     db.string() + ", 1 remaining; the same command continues"),
+            std::string::npos)
+      << out;
+  auto rows = db_rows(db, "SELECT status FROM sessions");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].at("status"), "complete");
+  // Within a session: aborted, with the signal as its reason.
+  const fs::path db2 = tmp.dir / "h2.db";
+  const auto [code2, out2] = signalled(db2, "trace:" + slow, "HUP", "started");
+  EXPECT_EQ(code2, "129\n") << out2;
+  rows = db_rows(db2, "SELECT status, abort_reason FROM sessions");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].at("status"), "aborted");
+  EXPECT_EQ(rows[0].at("abort_reason"), "stopped by SIGHUP (the terminal closed)");
+  EXPECT_NE(out2.find("palplab run: stopped by SIGHUP (the terminal closed): the completed "
+                      "sessions are stored in"),
+            std::string::npos)
+      << out2;
+}
+
 // A human session ended by kill -9 kept its samples, but its row said 0 steps and 0 s (set only
 // at the session's end: review 2026-12-07). The row follows the data written each second.
 TEST(CliRunHuman, ASessionKilledMidwayKeepsStepsThatMatchItsSamples) {
