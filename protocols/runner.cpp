@@ -949,6 +949,12 @@ HumanSummary run_human(const Study& study, const Plan& plan, const HumanOptions&
                          " of the study) is due on " + sum.next_due);
       break;
     }
+    // A missed day's session runs first, said (it ran without a word: review 2026-12-07).
+    if (due_day < day_of(now()))
+      say("note: " + spec.phase_id + " #" + std::to_string(spec.index + 1) +
+          " was planned on day " + std::to_string(spec.day) + " of the study (" +
+          utc_date(due_day * 86400) + "); it was missed and runs now, on day " +
+          std::to_string(day_of(now()) - day0));
     if (auto it = prototype_sha.find(spec.prototype);
         it != prototype_sha.end() && prototype_sha256(spec.prototype_file) != it->second)
       throw InputError(

@@ -365,6 +365,29 @@ TEST(CliRunHuman, ASignalDuringTheBreakOrASessionIsSaidAndStored) {
       << out2;
 }
 
+// A missed day's session ran first without a word (review 2026-12-07): it is said, with the
+// day it was planned on and the day it runs on, and stored with its planned day.
+TEST(CliRunHuman, AMissedDaysSessionIsSaid) {
+  Tmp tmp;
+  const fs::path db = tmp.dir / "h.db";
+  const std::string trace = (tmp.dir / "t.trace").string();
+  {
+    e::Trace tr;
+    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+    e::write_trace(trace, tr);
+  }
+  ASSERT_EQ(run(human(db, "trace:" + trace, "2026-11-24T10:00:00Z")).code, 0);
+  const Result r = run(human(db, "trace:" + trace, "2026-11-27T10:00:00Z"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("note: test #1 was planned on day 2 of the study (2026-11-26); it was "
+                       "missed and runs now, on day 3"),
+            std::string::npos)
+      << r.out;
+  const auto rows = db_rows(db, "SELECT day FROM sessions ORDER BY ordinal");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].at("day"), "2");
+}
+
 // A human session ended by kill -9 kept its samples, but its row said 0 steps and 0 s (set only
 // at the session's end: review 2026-12-07). The row follows the data written each second.
 TEST(CliRunHuman, ASessionKilledMidwayKeepsStepsThatMatchItsSamples) {
@@ -572,6 +595,8 @@ TEST(CliRunHuman, HumanSessionsKeepTheRunsSamplesSettingAndStartInALeftover) {
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_EQ(one("SELECT COUNT(*) AS v FROM sessions WHERE status = 'complete'"), "2");
   EXPECT_EQ(one("SELECT COUNT(*) AS v FROM samples"), "0");
+  // On its planned day (2) the test is no missed day's session.
+  EXPECT_EQ(r.out.find("was missed"), std::string::npos) << r.out;
   // Every time stored follows PALPLAB_NOW's clock: the study's start and each session's start
   // and end (completed_at was the system clock's: review 2026-12-07). Sessions of 2.5 s.
   EXPECT_EQ(one("SELECT started_at AS v FROM study").substr(0, 16), "2026-11-24T10:00");
