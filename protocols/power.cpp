@@ -138,8 +138,9 @@ long max_over_ranks(const Ranks& r, long v) {
   return v;
 }
 
+#ifdef PALPLAB_MPI
 // The exit code app/main.cpp gives what `error` holds (2 bad input, 1 out of memory, 3 an internal
-// error) and its message.
+// error) and its message (MPI only: settle's message to rank 0).
 int exit_code_of(std::exception_ptr error, std::string* message) {
   try {
     std::rethrow_exception(error);
@@ -160,6 +161,7 @@ int exit_code_of(std::exception_ptr error, std::string* message) {
     return 3;
   }
 }
+#endif
 
 // power.hpp settle_ranks: under MPI a collective, so that one rank's error is said once (by
 // rank 0) and no rank waits for ever in a collective the failed one never reaches.
