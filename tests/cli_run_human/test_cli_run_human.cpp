@@ -52,6 +52,26 @@ std::string human(const fs::path& db, const std::string& device, const std::stri
   return palplab::testing::human_run(kDir + "human_study.json", db, device, extra, now);
 }
 
+// A device held at the origin for `steps` samples of 1 ms, written to `path` (returned).
+std::string still_trace(const fs::path& path, int steps) {
+  e::Trace tr;
+  for (int k = 0; k < steps; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
+  e::write_trace(path.string(), tr);
+  return path.string();
+}
+
+// One participant on A, two training sessions of 1 s, `gap_s` between them.
+fs::path break_study(const fs::path& dir, int gap_s) {
+  const fs::path study = dir / "breaks.json";
+  std::ofstream(study) << R"({"palplab_study": 1, "id": "breaks", "title": "breaks", "seed": 7,
+  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
+  "groups": [{"id": "A", "prototype": "A", "size": 1}],
+  "phases": [{"id": "training", "kind": "training", "sessions": 2, "session_duration": 1,
+              "gap": {"seconds": )"
+                       << gap_s << "}}]}";
+  return study;
+}
+
 }  // namespace
 
 TEST(CliRunHuman, UdpSessionMatchesScriptAndTraceReplayIsExact) {
@@ -235,12 +255,7 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
                               "'device_timeout'")[0]["n"]),
             1);
   // Not complete: the analysis tables do not see it; the next run repeats it as attempt 1.
-  const std::string trace = (tmp.dir / "t.trace").string();
-  {
-    e::Trace tr;
-    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(trace, tr);
-  }
+  const std::string trace = still_trace(tmp.dir / "t.trace", 2000);
   auto r2 = run(human(db, "trace:" + trace, "2026-11-24T11:00:00Z"));
   EXPECT_EQ(r2.code, 0) << r2.out;
   rows = db_rows(db, "SELECT attempt, status FROM sessions ORDER BY session");
@@ -255,18 +270,8 @@ TEST(CliRunHuman, SilentDeviceAbortsSessionKeptAndRepeated) {
 // until when, and stores when each session started; --no-wait starts at once and says so.
 TEST(CliRunHuman, SessionsOfOneDayKeepTheStudysBreakBetweenThem) {
   Tmp tmp;
-  const fs::path study = tmp.dir / "breaks.json";
-  std::ofstream(study) << R"({"palplab_study": 1, "id": "breaks", "title": "breaks", "seed": 7,
-  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
-  "groups": [{"id": "A", "prototype": "A", "size": 1}],
-  "phases": [{"id": "training", "kind": "training", "sessions": 2, "session_duration": 1,
-              "gap": {"seconds": 3}}]})";
-  const std::string trace = (tmp.dir / "t.trace").string();
-  {
-    e::Trace tr;
-    for (int k = 0; k < 1000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(trace, tr);
-  }
+  const fs::path study = break_study(tmp.dir, 3);
+  const std::string trace = still_trace(tmp.dir / "t.trace", 1000);
   for (const bool wait : {true, false}) {
     SCOPED_TRACE(wait ? "waiting" : "--no-wait");
     const fs::path db = tmp.dir / (wait ? "w.db" : "n.db");
@@ -309,24 +314,10 @@ TEST(CliRunHuman, SessionsOfOneDayKeepTheStudysBreakBetweenThem) {
 // and an aborted session keeps the signal that stopped it.
 TEST(CliRunHuman, ASignalDuringTheBreakOrASessionIsSaidAndStored) {
   Tmp tmp;
-  const fs::path study = tmp.dir / "breaks.json";
-  std::ofstream(study) << R"({"palplab_study": 1, "id": "breaks", "title": "breaks", "seed": 7,
-  "task": {"feature": "ovary_left", "thresholds": {"*": {"ST": 2.3, "MPF": 2.5, "SFT": 3.5}}},
-  "groups": [{"id": "A", "prototype": "A", "size": 1}],
-  "phases": [{"id": "training", "kind": "training", "sessions": 2, "session_duration": 1,
-              "gap": {"seconds": 30}}]})";
-  const std::string trace = (tmp.dir / "t.trace").string();
-  {
-    e::Trace tr;
-    for (int k = 0; k < 1000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(trace, tr);
-  }
-  const std::string slow = (tmp.dir / "slow.trace").string();  // 20 s: the signal comes within
-  {
-    e::Trace tr;
-    for (int k = 0; k < 20000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(slow, tr);
-  }
+  const fs::path study = break_study(tmp.dir, 30);
+  const std::string trace = still_trace(tmp.dir / "t.trace", 1000);
+  const std::string slow =
+      still_trace(tmp.dir / "slow.trace", 20000);  // 20 s: the signal comes within
   // Runs the command in the background, sends `sig` once `wait_for` is in its output.
   auto signalled = [&](const fs::path& db, const std::string& device, const char* sig,
                        const std::string& wait_for) {
@@ -370,12 +361,7 @@ TEST(CliRunHuman, ASignalDuringTheBreakOrASessionIsSaidAndStored) {
 TEST(CliRunHuman, AMissedDaysSessionIsSaid) {
   Tmp tmp;
   const fs::path db = tmp.dir / "h.db";
-  const std::string trace = (tmp.dir / "t.trace").string();
-  {
-    e::Trace tr;
-    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(trace, tr);
-  }
+  const std::string trace = still_trace(tmp.dir / "t.trace", 2000);
   ASSERT_EQ(run(human(db, "trace:" + trace, "2026-11-24T10:00:00Z")).code, 0);
   const Result r = run(human(db, "trace:" + trace, "2026-11-27T10:00:00Z"));
   ASSERT_EQ(r.code, 0) << r.out;
@@ -393,12 +379,7 @@ TEST(CliRunHuman, AMissedDaysSessionIsSaid) {
 TEST(CliRunHuman, ASessionKilledMidwayKeepsStepsThatMatchItsSamples) {
   Tmp tmp;
   const fs::path db = tmp.dir / "h.db";
-  const std::string trace = (tmp.dir / "t.trace").string();
-  {
-    e::Trace tr;
-    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(trace, tr);
-  }
+  const std::string trace = still_trace(tmp.dir / "t.trace", 2000);
   auto r = run(palplab::testing::human_run(kDir + "human_study.json", db, "trace:" + trace, "",
                                            "2026-11-24T10:00:00Z", "timeout -s KILL 1.7 "));
   if (r.code == 0) GTEST_SKIP() << "the 2 s session ended before the kill";
@@ -429,12 +410,7 @@ TEST(CliRunHuman, BadDeviceOrArgumentsExit2BeforeTheDatabaseExists) {
   namespace t = palplab::testing;
   Tmp tmp;
   const fs::path db = tmp.dir / "h.db";
-  const std::string good = (tmp.dir / "good.trace").string();
-  {
-    e::Trace tr;
-    for (int k = 0; k < 2000; ++k) tr.samples.push_back({k * 0.001, e::DeviceInput{}});
-    e::write_trace(good, tr);
-  }
+  const std::string good = still_trace(tmp.dir / "good.trace", 2000);
   // At 2 kHz: played at half speed before (review 2026-12-06, fourth).
   const std::string half = (tmp.dir / "half.trace").string();
   {
